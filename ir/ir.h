@@ -1,0 +1,183 @@
+// ir/ir.h -- the IL of ldc: devices and the memory image layout, the mnemonic
+// list (ops.def), its text form, its compact binary form, and the reference
+// interpreter that defines what every program means (docs/il.md).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace ldc {
+
+// ---------------------------------------------------------------- devices
+
+// Storage areas of the memory image.  A device spelling maps to one area:
+// T0 is TQ (done bit) where a bit is wanted and TW (elapsed ms) where a word is.
+enum class Area : uint8_t {
+  Sys,            // runtime header: dt (ms) of this scan, scan counter
+  S,              // system bits: S0 arithmetic error (writable), S1 first scan
+  X, Y, M, K,     // bit devices
+  TQ, CQ,         // timer / counter done bits
+  TI,             // timer input memory (IN at its last execution), hidden
+  WX, WY, D,      // INT32 words
+  F,              // REAL (IEEE-754 binary32)
+  TW, CW,         // timer elapsed ms, counter current value (INT32)
+  E,              // edge memory, one byte per edge instruction, hidden
+  Count
+};
+constexpr int kAreaCount = static_cast<int>(Area::Count);
+
+const char* area_name(Area a);         // "X", "TQ", ... (internal name)
+bool area_is_bit(Area a);              // one byte per element, value 0/1
+bool area_is_real(Area a);             // F
+bool area_is_word(Area a);             // 4 bytes per element
+
+// Byte offsets of every area in the memory image.  Bits take one byte (0/1),
+// words four (little-endian INT32 or IEEE binary32).  The edge area is last so
+// that the rest of the layout does not depend on the program.
+struct Layout {
+  uint32_t count[kAreaCount] = {};
+  uint32_t offset[kAreaCount] = {};
+  uint32_t size = 0;  // total bytes
+
+  static Layout standard(uint32_t edge_slots);
+  uint32_t elem_size(Area a) const { return area_is_bit(a) ? 1 : 4; }
+  uint32_t addr(Area a, uint32_t index) const { return offset[int(a)] + index * elem_size(a); }
+  bool operator==(const Layout&) const = default;
+};
+
+// Fixed addresses inside the Sys area.
+constexpr uint32_t kSysDt = 0;      // INT32: ms elapsed before this scan
+constexpr uint32_t kSysScan = 4;    // UINT32: scans completed
+constexpr uint32_t kSysSize = 64;
+
+// System bits.
+constexpr uint32_t kBitError = 0;      // S0
+constexpr uint32_t kBitFirstScan = 1;  // S1
+constexpr uint32_t kSysBits = 16;
+
+// ---------------------------------------------------------------- the IL
+
+enum class Op : uint8_t {
+#define OP(name, opds, push, pop, klass) name,
+#include "ops.def"
+  Count
+};
+constexpr int kOpCount = static_cast<int>(Op::Count);
+
+enum class OpClass : uint8_t { Basic, Compare, Move, Arith, Logic, Special, Timer, Counter, Flow };
+
+struct OpInfo {
+  const char* name;
+  const char* operands;  // signature letters, see ops.def
+  int push, pop;
+  OpClass klass;
+};
+const OpInfo& op_info(Op op);
+std::optional<Op> op_from_name(std::string_view name);  // case-insensitive
+const char* op_class_name(OpClass c);
+
+enum class OpdKind : uint8_t { None, Bit, Int, Real, ConstInt, ConstReal, Edge, Timer, Counter, Label };
+
+struct Operand {
+  OpdKind kind = OpdKind::None;
+  Area area = Area::Sys;  // Bit / Int / Real
+  uint32_t index = 0;     // device index, edge slot, timer/counter number, label target
+  int32_t ival = 0;       // ConstInt
+  float fval = 0;         // ConstReal
+  std::string label;      // Label name
+
+  bool is_real() const { return kind == OpdKind::Real || kind == OpdKind::ConstReal; }
+  bool operator==(const Operand&) const = default;
+};
+
+struct SrcLoc {
+  int line = 0, col = 0;
+  bool operator==(const SrcLoc&) const = default;
+};
+
+struct Instr {
+  Op op{};
+  Operand a[3];
+  SrcLoc loc;  // the element (or rung) this instruction came from
+  int nopd() const;
+  bool operator==(const Instr& o) const;  // op and operands; loc ignored
+};
+
+struct Rung {
+  std::vector<std::string> labels;  // `label NAME` lines directly before this rung
+  std::string title;                // `rung "text"`
+  int line = 0;                     // first source line of the rung
+  std::vector<Instr> code;
+};
+
+struct Program {
+  std::string source;                   // file name, for messages
+  std::vector<Rung> rungs;
+  std::vector<std::string> end_labels;  // labels after the last rung
+  uint32_t edge_slots = 0;
+  Layout layout() const { return Layout::standard(edge_slots); }
+};
+
+// Operand spelling in IL text: X3, T0, D5, F1, 42, 1.5, E7, name.
+std::string operand_text(const Operand& o);
+std::string instr_text(const Instr& in);  // "LOAD X1", "ADD D0 5 D1"
+
+// ---- text form (--emit=il); parse_il_text(print_il_text(p)) == p
+std::string print_il_text(const Program& p);
+
+struct IlError : std::runtime_error {
+  int line, col;
+  IlError(int l, int c, const std::string& m) : std::runtime_error(m), line(l), col(c) {}
+};
+Program parse_il_text(std::string_view text, const std::string& filename);  // throws IlError
+
+// ---- binary form (the image's IL section, run by the interpreter)
+// Each instruction: op byte, then per operand a tag byte and its payload (docs/il.md).
+struct BinaryIl {
+  std::vector<uint8_t> code;
+  std::vector<uint32_t> rung_offset;  // byte offset of each rung's first instruction
+  std::vector<uint32_t> instr_offset; // byte offset of every instruction, in program order
+};
+BinaryIl encode_il(const Program& p);
+// Checks every opcode, tag, index and jump target against the layout; "" if valid,
+// else "offset N: reason".
+std::string validate_il(std::span<const uint8_t> code, const Layout& layout);
+// Decodes one instruction at `off` (code must be valid); returns the next offset.
+uint32_t decode_instr(std::span<const uint8_t> code, uint32_t off, Instr& out);
+
+// ---- the reference interpreter
+// A classic PLC interpreter (paper 003, Fig. 3): fetch a mnemonic, dispatch to
+// its routine through a table, decode each operand with one general routine.
+class Interpreter {
+ public:
+  Interpreter(std::span<const uint8_t> code, const Layout& layout);  // code must be valid
+  void scan(uint8_t* mem) const;  // one pass over the program
+ private:
+  std::span<const uint8_t> code_;
+  Layout layout_;
+};
+
+// ---- runtime helpers shared by every engine (the semantics of docs/il.md)
+int32_t real_to_int(float f);  // truncate toward zero, saturate, NaN -> 0
+float int_to_real(int32_t i);
+
+// Memory image helpers used by runners and tests.
+struct Memory {
+  Layout layout;
+  std::vector<uint8_t> bytes;
+  explicit Memory(const Layout& l) : layout(l), bytes(l.size, 0) {}
+  uint8_t* data() { return bytes.data(); }
+  int32_t get_int(Area a, uint32_t i) const;
+  float get_real(uint32_t i) const;
+  uint8_t get_bit(Area a, uint32_t i) const { return bytes[layout.addr(a, i)]; }
+  void set_int(Area a, uint32_t i, int32_t v);
+  void set_real(uint32_t i, float v);
+  void set_bit(Area a, uint32_t i, bool v) { bytes[layout.addr(a, i)] = v ? 1 : 0; }
+};
+
+}  // namespace ldc
