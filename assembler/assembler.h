@@ -1,0 +1,257 @@
+// ldc assembler: a target-independent, blockwise two-pass assembler core.
+//
+// A program is a list of blocks (one per ladder rung). Each block holds
+// label definitions and target instructions. The core lays the blocks out,
+// relaxes short/long branch forms, resolves fixups and reports structured
+// errors. A target plugs in through one `Target<Inst>` struct: its name, a
+// table of fixup kinds and an encode hook. See docs/assembler.md.
+//
+// The x86-64 target (instruction model, encoder, parser, printer and
+// disassembler) is declared in assembler/x86.h, included at the end.
+#ifndef LDC_ASSEMBLER_ASSEMBLER_H
+#define LDC_ASSEMBLER_ASSEMBLER_H
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace ldc::as {
+
+// ---------------------------------------------------------------- errors
+
+// A structured error. block is -1 for errors not tied to one block
+// (e.g. a duplicate global declaration); line is the block's source line.
+struct Error {
+  int block = -1;
+  int line = 0;
+  std::string message;
+};
+
+// Thrown by the parser and the encoders; the core catches it and turns it
+// into an Error carrying the block index and source line.
+class AsmError : public std::runtime_error {
+ public:
+  explicit AsmError(Error e);
+  explicit AsmError(std::string message) : AsmError(Error{-1, 0, std::move(message)}) {}
+  const Error& error() const { return error_; }
+
+ private:
+  Error error_;
+};
+
+// ----------------------------------------------------------- fixup kinds
+
+// Where a pc-relative field measures from.
+enum class PcBase : uint8_t { InstructionStart, InstructionEnd };
+
+// One kind of field an encoder may leave for the core to fill in.
+// The field lives in a little-endian container of `containerBytes` bytes at
+// the fixup's offset; it is `bitWidth` bits wide starting at bit `bitShift`.
+// value = (target + addend - pc) / scale        if pcRelative
+//       = (target + addend) / scale             otherwise
+// where pc = (start or end of the instruction) + pcBias * scale.
+// Addresses are byte offsets from the start of the code.
+struct FixupKind {
+  std::string_view name;
+  uint8_t containerBytes;  // 1, 2, 4 or 8
+  uint8_t bitShift;
+  uint8_t bitWidth;
+  bool pcRelative;
+  bool isSigned;
+  PcBase pcBase;
+  int32_t pcBias;    // in units of `scale` bytes
+  uint8_t scale;     // bytes per unit of the field (x86: 1, C40: 4)
+  int16_t relaxTo;   // index of the longer kind to grow to, -1 if none
+};
+
+// A field to fill: `label` empty means an absolute code address `addend`.
+struct Fixup {
+  uint32_t offset = 0;  // of the container, from the instruction start
+  uint16_t kind = 0;
+  std::string_view label;  // points into the instruction being encoded
+  int64_t addend = 0;
+};
+
+// What an encode hook produces for one instruction.
+struct Encoding {
+  std::array<uint8_t, 16> bytes{};
+  uint8_t size = 0;
+  std::array<Fixup, 2> fixups{};
+  uint8_t numFixups = 0;
+
+  void put(uint8_t b);
+  void put32(uint32_t v);
+  void addFixup(Fixup f);
+  std::span<const uint8_t> view() const { return {bytes.data(), size}; }
+};
+
+// Computes the value to store for a fixup (before range checking).
+// Returns false if the distance is not a multiple of the kind's scale.
+bool fixupValue(const FixupKind& k, int64_t target, int64_t addend,
+                int64_t instStart, int64_t instSize, int64_t& value);
+// True if value fits the kind's field.
+bool fixupFits(const FixupKind& k, int64_t value);
+// Stores value into the field at code[offset]; the caller checked the range.
+void applyFixup(const FixupKind& k, std::span<uint8_t> code, size_t offset,
+                int64_t value);
+
+// ----------------------------------------------------------------- target
+
+// The data and hooks that describe a target.
+struct TargetInfo {
+  std::string_view name;
+  std::span<const FixupKind> fixupKinds;
+};
+
+template <class Inst>
+struct Target : TargetInfo {
+  // Encodes one instruction. longForm asks for the long variant of a
+  // relaxable instruction (and is set from the start for references to
+  // global labels and absolute addresses). Throws AsmError.
+  void (*encode)(const Inst& inst, bool longForm, Encoding& out) = nullptr;
+};
+
+// ---------------------------------------------------------------- program
+
+enum class ItemKind : uint8_t { Label, Instruction, Comment };
+
+template <class Inst>
+struct Item {
+  ItemKind kind = ItemKind::Comment;
+  std::string label;  // for Label
+  bool global = false;  // for Label: defines a declared global label
+  Inst inst{};          // for Instruction
+  std::string comment;  // optional, for listings
+
+  static Item labelDef(std::string name, bool isGlobal = false) {
+    Item it;
+    it.kind = ItemKind::Label;
+    it.label = std::move(name);
+    it.global = isGlobal;
+    return it;
+  }
+  static Item instr(Inst i, std::string comment = {}) {
+    Item it;
+    it.kind = ItemKind::Instruction;
+    it.inst = std::move(i);
+    it.comment = std::move(comment);
+    return it;
+  }
+  static Item note(std::string comment) {
+    Item it;
+    it.comment = std::move(comment);
+    return it;
+  }
+};
+
+template <class Inst>
+struct Block {
+  int sourceLine = 0;
+  std::vector<Item<Inst>> items;
+};
+
+template <class Inst>
+struct Program {
+  std::vector<std::string> globals;  // declared up front
+  std::vector<Block<Inst>> blocks;
+};
+
+// ----------------------------------------------------------------- result
+
+enum class Mode : uint8_t {
+  Blockwise,     // global table first, then each block with its own table
+  WholeProgram,  // one two-pass over everything, one table
+};
+
+struct Stats {
+  size_t peakLabelEntries = 0;  // max entries alive in the label tables
+  size_t relaxPasses = 0;       // layout passes summed over all units
+  size_t units = 0;             // blocks (blockwise) or 1 (whole program)
+  size_t encodeCalls = 0;
+  size_t globalFixups = 0;      // fixups resolved after layout
+};
+
+struct ItemLayout {
+  uint32_t offset = 0;  // from the start of the code
+  uint32_t size = 0;
+  bool longForm = false;
+};
+
+// An absolute fixup; the loader adds the load address.
+struct Relocation {
+  uint32_t offset = 0;
+  uint16_t kind = 0;
+};
+
+struct Result {
+  std::vector<uint8_t> code;
+  std::vector<uint32_t> blockOffsets;
+  std::vector<std::vector<ItemLayout>> items;  // [block][item]
+  std::vector<int64_t> globalAddresses;  // per declared global, -1 if undefined
+  std::vector<Relocation> relocations;
+  std::vector<Error> errors;
+  Stats stats;
+  bool ok() const { return errors.empty(); }
+};
+
+namespace detail {
+// The program as the target-independent core sees it.
+class ProgramView {
+ public:
+  virtual ~ProgramView() = default;
+  virtual std::span<const std::string> globals() const = 0;
+  virtual size_t numBlocks() const = 0;
+  virtual int sourceLine(size_t block) const = 0;
+  virtual size_t numItems(size_t block) const = 0;
+  virtual ItemKind kind(size_t block, size_t item) const = 0;
+  virtual std::string_view label(size_t block, size_t item) const = 0;
+  virtual bool isGlobal(size_t block, size_t item) const = 0;
+  virtual void encode(size_t block, size_t item, bool longForm,
+                      Encoding& out) const = 0;
+};
+Result assemble(const TargetInfo& target, const ProgramView& program, Mode mode);
+}  // namespace detail
+
+// Assembles a program. Never throws for errors in the input: they are
+// returned in Result::errors.
+template <class Inst>
+Result assemble(const Target<Inst>& target, const Program<Inst>& program,
+                Mode mode = Mode::Blockwise) {
+  class View final : public detail::ProgramView {
+   public:
+    View(const Target<Inst>& t, const Program<Inst>& p) : t_(t), p_(p) {}
+    std::span<const std::string> globals() const override { return p_.globals; }
+    size_t numBlocks() const override { return p_.blocks.size(); }
+    int sourceLine(size_t b) const override { return p_.blocks[b].sourceLine; }
+    size_t numItems(size_t b) const override { return p_.blocks[b].items.size(); }
+    ItemKind kind(size_t b, size_t i) const override {
+      return p_.blocks[b].items[i].kind;
+    }
+    std::string_view label(size_t b, size_t i) const override {
+      return p_.blocks[b].items[i].label;
+    }
+    bool isGlobal(size_t b, size_t i) const override {
+      return p_.blocks[b].items[i].global;
+    }
+    void encode(size_t b, size_t i, bool longForm, Encoding& out) const override {
+      t_.encode(p_.blocks[b].items[i].inst, longForm, out);
+    }
+
+   private:
+    const Target<Inst>& t_;
+    const Program<Inst>& p_;
+  };
+  View view(target, program);
+  return detail::assemble(target, view, mode);
+}
+
+}  // namespace ldc::as
+
+#include "assembler/x86.h"
+
+#endif  // LDC_ASSEMBLER_ASSEMBLER_H

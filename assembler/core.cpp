@@ -1,0 +1,375 @@
+// The target-independent core: label tables, blockwise layout, relaxation
+// and fixup resolution. Knows nothing about any instruction set.
+#include "assembler/assembler.h"
+
+#include <unordered_map>
+
+namespace ldc::as {
+
+AsmError::AsmError(Error e) : std::runtime_error(e.message), error_(std::move(e)) {}
+
+void Encoding::put(uint8_t b) {
+  if (size >= bytes.size()) throw AsmError("instruction longer than 16 bytes");
+  bytes[size++] = b;
+}
+
+void Encoding::put32(uint32_t v) {
+  for (int i = 0; i < 4; ++i) put(uint8_t(v >> (8 * i)));
+}
+
+void Encoding::addFixup(Fixup f) {
+  if (numFixups >= fixups.size()) throw AsmError("too many fixups in one instruction");
+  fixups[numFixups++] = f;
+}
+
+bool fixupValue(const FixupKind& k, int64_t target, int64_t addend,
+                int64_t instStart, int64_t instSize, int64_t& value) {
+  int64_t v = target + addend;
+  if (k.pcRelative) {
+    int64_t pc = (k.pcBase == PcBase::InstructionEnd ? instStart + instSize : instStart) +
+                 int64_t(k.pcBias) * k.scale;
+    v -= pc;
+  }
+  if (k.scale > 1) {
+    if (v % k.scale != 0) return false;
+    v /= k.scale;
+  }
+  value = v;
+  return true;
+}
+
+bool fixupFits(const FixupKind& k, int64_t value) {
+  if (k.bitWidth >= 64) return true;
+  if (k.isSigned) {
+    int64_t lim = int64_t(1) << (k.bitWidth - 1);
+    return value >= -lim && value < lim;
+  }
+  return value >= 0 && uint64_t(value) < (uint64_t(1) << k.bitWidth);
+}
+
+void applyFixup(const FixupKind& k, std::span<uint8_t> code, size_t offset, int64_t value) {
+  uint64_t c = 0;
+  for (unsigned i = 0; i < k.containerBytes; ++i) c |= uint64_t(code[offset + i]) << (8 * i);
+  uint64_t mask = k.bitWidth >= 64 ? ~uint64_t(0) : (uint64_t(1) << k.bitWidth) - 1;
+  c &= ~(mask << k.bitShift);
+  c |= (uint64_t(value) & mask) << k.bitShift;
+  for (unsigned i = 0; i < k.containerBytes; ++i) code[offset + i] = uint8_t(c >> (8 * i));
+}
+
+namespace detail {
+namespace {
+
+enum class RefType : uint8_t { Dead, Local, Global, Absolute };
+
+struct Ref {
+  RefType type = RefType::Dead;
+  uint32_t index = 0;  // local slot or global index
+};
+
+struct InstState {
+  uint32_t block = 0, item = 0;
+  Encoding enc;
+  bool longForm = false;
+  bool bad = false;  // failed to encode
+  bool hasLocal = false;
+  uint32_t offset = 0;  // unit-relative
+  std::array<Ref, 2> refs{};
+};
+
+struct LocalKey {
+  uint32_t block;
+  std::string_view name;
+  bool operator==(const LocalKey&) const = default;
+};
+struct LocalKeyHash {
+  size_t operator()(const LocalKey& k) const {
+    return std::hash<std::string_view>()(k.name) * 31 + k.block;
+  }
+};
+
+struct Pending {
+  uint32_t instStart, instSize, fieldOffset;
+  uint16_t kind;
+  Ref ref;
+  int64_t addend;
+  uint32_t block;
+  std::string_view label;
+};
+
+class Core {
+ public:
+  Core(const TargetInfo& t, const ProgramView& p, Mode mode) : t_(t), p_(p), mode_(mode) {}
+
+  Result run() {
+    size_t nb = p_.numBlocks();
+    r_.blockOffsets.assign(nb, 0);
+    r_.items.resize(nb);
+    for (size_t b = 0; b < nb; ++b) r_.items[b].resize(p_.numItems(b));
+    collectGlobals();
+    if (mode_ == Mode::Blockwise) {
+      for (uint32_t b = 0; b < nb; ++b) assembleUnit(b, b + 1);
+    } else {
+      assembleUnit(0, uint32_t(nb));
+    }
+    resolvePending();
+    return std::move(r_);
+  }
+
+ private:
+  void error(int block, std::string msg) {
+    int line = block >= 0 ? p_.sourceLine(size_t(block)) : 0;
+    r_.errors.push_back(Error{block, line, std::move(msg)});
+  }
+
+  void notePeak() {
+    size_t n = globals_.size() + locals_.size();
+    if (n > r_.stats.peakLabelEntries) r_.stats.peakLabelEntries = n;
+  }
+
+  // Pass 1: the global table, from the declarations and the definitions.
+  void collectGlobals() {
+    auto decl = p_.globals();
+    r_.globalAddresses.assign(decl.size(), -1);
+    globalDefBlock_.assign(decl.size(), -1);
+    for (uint32_t i = 0; i < decl.size(); ++i) {
+      if (!globals_.emplace(std::string_view(decl[i]), i).second)
+        error(-1, "duplicate global label '" + decl[i] + "'");
+    }
+    for (uint32_t b = 0; b < p_.numBlocks(); ++b) {
+      for (size_t i = 0; i < p_.numItems(b); ++i) {
+        if (p_.kind(b, i) != ItemKind::Label || !p_.isGlobal(b, i)) continue;
+        std::string_view name = p_.label(b, i);
+        auto it = globals_.find(name);
+        if (it == globals_.end()) {
+          error(int(b), "global label '" + std::string(name) + "' is not declared");
+        } else if (globalDefBlock_[it->second] >= 0) {
+          error(int(b), "duplicate global label '" + std::string(name) + "'");
+        } else {
+          globalDefBlock_[it->second] = int(b);
+        }
+      }
+    }
+    notePeak();
+  }
+
+  void encodeState(InstState& s) {
+    ++r_.stats.encodeCalls;
+    s.enc = Encoding{};
+    try {
+      p_.encode(s.block, s.item, s.longForm, s.enc);
+    } catch (const AsmError& e) {
+      if (!s.bad) error(int(s.block), "item " + std::to_string(s.item) + ": " + e.what());
+      s.bad = true;
+      s.enc = Encoding{};
+    }
+  }
+
+  Ref resolve(uint32_t block, std::string_view name, bool report) {
+    if (name.empty()) return {RefType::Absolute, 0};
+    auto l = locals_.find(LocalKey{block, name});
+    if (l != locals_.end()) return {RefType::Local, l->second};
+    auto g = globals_.find(name);
+    if (g != globals_.end()) return {RefType::Global, g->second};
+    if (report) error(int(block), "undefined label '" + std::string(name) + "'");
+    return {RefType::Dead, 0};
+  }
+
+  void resolveRefs(InstState& s, bool report = false) {
+    s.hasLocal = false;
+    for (unsigned f = 0; f < s.enc.numFixups; ++f) {
+      s.refs[f] = resolve(s.block, s.enc.fixups[f].label, report);
+      if (s.refs[f].type == RefType::Local) s.hasLocal = true;
+    }
+  }
+
+  // Lays out and relaxes blocks [first, last) as one unit, then emits it.
+  void assembleUnit(uint32_t first, uint32_t last) {
+    ++r_.stats.units;
+    locals_.clear();
+    localAddr_.clear();
+    // Local label table.
+    for (uint32_t b = first; b < last; ++b) {
+      for (size_t i = 0; i < p_.numItems(b); ++i) {
+        if (p_.kind(b, i) != ItemKind::Label || p_.isGlobal(b, i)) continue;
+        std::string_view name = p_.label(b, i);
+        if (globals_.count(name)) {
+          error(int(b), "local label '" + std::string(name) + "' clashes with a global label");
+          continue;
+        }
+        if (!locals_.emplace(LocalKey{b, name}, uint32_t(localAddr_.size())).second) {
+          error(int(b), "duplicate label '" + std::string(name) + "'");
+          continue;
+        }
+        localAddr_.push_back(0);
+      }
+    }
+    notePeak();
+
+    // First encoding: short forms, long ones for non-local targets.
+    std::vector<InstState> insts;
+    for (uint32_t b = first; b < last; ++b) {
+      for (uint32_t i = 0; i < p_.numItems(b); ++i) {
+        if (p_.kind(b, i) != ItemKind::Instruction) continue;
+        InstState s;
+        s.block = b;
+        s.item = i;
+        encodeState(s);
+        resolveRefs(s, true);
+        bool far = false;
+        for (unsigned f = 0; f < s.enc.numFixups; ++f)
+          far |= s.refs[f].type == RefType::Global || s.refs[f].type == RefType::Absolute;
+        if (far && !s.bad) {
+          s.longForm = true;
+          encodeState(s);
+          resolveRefs(s);
+        }
+        insts.push_back(std::move(s));
+      }
+    }
+
+    // Relaxation: grow the forms that do not reach, until nothing changes.
+    std::vector<uint32_t> blockStart(last - first);
+    for (;;) {
+      ++r_.stats.relaxPasses;
+      layout(first, last, insts, blockStart);
+      bool changed = false;
+      for (auto& s : insts) {
+        if (!s.hasLocal || s.longForm || s.bad) continue;
+        for (unsigned f = 0; f < s.enc.numFixups; ++f) {
+          if (s.refs[f].type != RefType::Local) continue;
+          const Fixup& fx = s.enc.fixups[f];
+          const FixupKind& k = t_.fixupKinds[fx.kind];
+          if (k.relaxTo < 0) continue;
+          int64_t v;
+          bool ok = fixupValue(k, localAddr_[s.refs[f].index], fx.addend, s.offset,
+                               s.enc.size, v);
+          if (!ok || !fixupFits(k, v)) {
+            s.longForm = true;
+            encodeState(s);
+            resolveRefs(s);
+            changed = true;
+            break;
+          }
+        }
+      }
+      if (!changed) break;
+    }
+
+    emit(first, last, insts, blockStart);
+  }
+
+  void layout(uint32_t first, uint32_t last, std::vector<InstState>& insts,
+              std::vector<uint32_t>& blockStart) {
+    uint32_t cur = 0;
+    size_t n = 0;
+    for (uint32_t b = first; b < last; ++b) {
+      blockStart[b - first] = cur;
+      for (size_t i = 0; i < p_.numItems(b); ++i) {
+        switch (p_.kind(b, i)) {
+          case ItemKind::Label:
+            if (!p_.isGlobal(b, i)) {
+              auto it = locals_.find(LocalKey{b, p_.label(b, i)});
+              if (it != locals_.end()) localAddr_[it->second] = cur;
+            }
+            break;
+          case ItemKind::Instruction:
+            insts[n].offset = cur;
+            cur += insts[n].enc.size;
+            ++n;
+            break;
+          case ItemKind::Comment:
+            break;
+        }
+      }
+    }
+  }
+
+  void emit(uint32_t first, uint32_t last, std::vector<InstState>& insts,
+            const std::vector<uint32_t>& blockStart) {
+    const uint32_t base = uint32_t(r_.code.size());
+    size_t n = 0;
+    for (uint32_t b = first; b < last; ++b) {
+      r_.blockOffsets[b] = base + blockStart[b - first];
+      uint32_t cur = r_.blockOffsets[b];
+      for (size_t i = 0; i < p_.numItems(b); ++i) {
+        ItemLayout& lay = r_.items[b][i];
+        lay.offset = cur;
+        ItemKind kind = p_.kind(b, i);
+        if (kind == ItemKind::Label && p_.isGlobal(b, i)) {
+          auto g = globals_.find(p_.label(b, i));
+          if (g != globals_.end() && globalDefBlock_[g->second] == int(b))
+            r_.globalAddresses[g->second] = cur;
+        }
+        if (kind != ItemKind::Instruction) continue;
+        InstState& s = insts[n++];
+        lay.size = s.enc.size;
+        lay.longForm = s.longForm;
+        r_.code.insert(r_.code.end(), s.enc.bytes.begin(), s.enc.bytes.begin() + s.enc.size);
+        for (unsigned f = 0; f < s.enc.numFixups; ++f) {
+          const Fixup& fx = s.enc.fixups[f];
+          Pending pd{cur, s.enc.size, cur + fx.offset, fx.kind, s.refs[f], fx.addend, b, fx.label};
+          if (s.refs[f].type == RefType::Local) {
+            const FixupKind& k = t_.fixupKinds[fx.kind];
+            patch(pd, base + localAddr_[s.refs[f].index]);
+            if (!k.pcRelative) r_.relocations.push_back({pd.fieldOffset, pd.kind});
+          } else if (s.refs[f].type != RefType::Dead) {
+            pending_.push_back(pd);
+          }
+        }
+        cur += s.enc.size;
+      }
+    }
+  }
+
+  void patch(const Pending& pd, int64_t target) {
+    const FixupKind& k = t_.fixupKinds[pd.kind];
+    int64_t v;
+    std::string what = pd.label.empty() ? "address " + std::to_string(pd.addend)
+                                        : "label '" + std::string(pd.label) + "'";
+    if (!fixupValue(k, target, pd.addend, pd.instStart, pd.instSize, v)) {
+      error(int(pd.block), what + " is not aligned for fixup " + std::string(k.name));
+      return;
+    }
+    if (!fixupFits(k, v)) {
+      error(int(pd.block), what + " out of range for fixup " + std::string(k.name));
+      return;
+    }
+    applyFixup(k, r_.code, pd.fieldOffset, v);
+  }
+
+  // After all blocks are laid out: references to globals and addresses.
+  void resolvePending() {
+    for (const Pending& pd : pending_) {
+      ++r_.stats.globalFixups;
+      int64_t target = 0;
+      if (pd.ref.type == RefType::Global) {
+        target = r_.globalAddresses[pd.ref.index];
+        if (target < 0) {
+          error(int(pd.block), "undefined label '" + std::string(pd.label) + "'");
+          continue;
+        }
+      }
+      patch(pd, target);
+      if (!t_.fixupKinds[pd.kind].pcRelative) r_.relocations.push_back({pd.fieldOffset, pd.kind});
+    }
+  }
+
+  const TargetInfo& t_;
+  const ProgramView& p_;
+  Mode mode_;
+  Result r_;
+  std::unordered_map<std::string_view, uint32_t> globals_;
+  std::vector<int> globalDefBlock_;
+  std::unordered_map<LocalKey, uint32_t, LocalKeyHash> locals_;
+  std::vector<int64_t> localAddr_;
+  std::vector<Pending> pending_;
+};
+
+}  // namespace
+
+Result assemble(const TargetInfo& target, const ProgramView& program, Mode mode) {
+  return Core(target, program, mode).run();
+}
+
+}  // namespace detail
+}  // namespace ldc::as

@@ -1,0 +1,583 @@
+// x86-64 target: form table, encoder, decoder.
+#include "assembler/x86_forms.h"
+
+namespace ldc::as::x86 {
+namespace detail {
+namespace {
+
+using M = Mnemonic;
+constexpr OT N = OT::None;
+
+constexpr Form F(M mn, OT a, OT b, OT c, uint8_t pfx, uint8_t len, uint8_t o0, uint8_t o1,
+                 Enc e, int8_t digit = -1, bool w = false, bool cc = false) {
+  return Form{mn, {a, b, c}, pfx, len, {o0, o1}, e, digit, w, cc};
+}
+// One-byte opcode.
+constexpr Form F1(M mn, OT a, OT b, uint8_t o, Enc e, int8_t d = -1, bool w = false) {
+  return F(mn, a, b, N, 0, 1, o, 0, e, d, w);
+}
+// 0F-prefixed opcode.
+constexpr Form F2(M mn, OT a, OT b, uint8_t o, Enc e, int8_t d = -1, bool cc = false) {
+  return F(mn, a, b, N, 0, 2, 0x0F, o, e, d, false, cc);
+}
+// SSE: mandatory prefix + 0F opcode.
+constexpr Form FS(M mn, uint8_t pfx, OT a, OT b, uint8_t o, Enc e) {
+  return F(mn, a, b, N, pfx, 2, 0x0F, o, e);
+}
+
+// The order matters: the encoder takes the first form that fits, which
+// reproduces GNU as's choices (imm8 before the accumulator form before
+// imm32, the store direction 89 for register moves, ...).
+#define ALU(MN, D)                                        \
+  F1(MN, OT::RM32, OT::R32, (D) * 8 + 1, Enc::MR),        \
+  F1(MN, OT::R32, OT::RM32, (D) * 8 + 3, Enc::RM),        \
+  F1(MN, OT::RM64, OT::R64, (D) * 8 + 1, Enc::MR, -1, true), \
+  F1(MN, OT::R64, OT::RM64, (D) * 8 + 3, Enc::RM, -1, true), \
+  F1(MN, OT::RM32, OT::I8, 0x83, Enc::M, D),              \
+  F1(MN, OT::Eax, OT::I32, (D) * 8 + 5, Enc::ZO),         \
+  F1(MN, OT::RM32, OT::I32, 0x81, Enc::M, D),             \
+  F1(MN, OT::RM64, OT::I8, 0x83, Enc::M, D, true),        \
+  F1(MN, OT::Rax, OT::I32, (D) * 8 + 5, Enc::ZO, -1, true), \
+  F1(MN, OT::RM64, OT::I32, 0x81, Enc::M, D, true),       \
+  F1(MN, OT::RM8, OT::R8, (D) * 8 + 0, Enc::MR),          \
+  F1(MN, OT::R8, OT::RM8, (D) * 8 + 2, Enc::RM),          \
+  F1(MN, OT::Al, OT::IB, (D) * 8 + 4, Enc::ZO),           \
+  F1(MN, OT::RM8, OT::IB, 0x80, Enc::M, D)
+
+#define SHIFT(MN, D)                                      \
+  F1(MN, OT::RM32, OT::One, 0xD1, Enc::M, D),             \
+  F1(MN, OT::RM32, OT::Cl, 0xD3, Enc::M, D),              \
+  F1(MN, OT::RM32, OT::IB, 0xC1, Enc::M, D),              \
+  F1(MN, OT::RM64, OT::One, 0xD1, Enc::M, D, true),       \
+  F1(MN, OT::RM64, OT::Cl, 0xD3, Enc::M, D, true),        \
+  F1(MN, OT::RM64, OT::IB, 0xC1, Enc::M, D, true)
+
+#define SSE_ARITH(MN, O) FS(MN, 0xF3, OT::X, OT::XM32, O, Enc::RM)
+
+constexpr Form kForms[] = {
+    F1(M::Mov, OT::RM32, OT::R32, 0x89, Enc::MR),
+    F1(M::Mov, OT::R32, OT::RM32, 0x8B, Enc::RM),
+    F1(M::Mov, OT::RM64, OT::R64, 0x89, Enc::MR, -1, true),
+    F1(M::Mov, OT::R64, OT::RM64, 0x8B, Enc::RM, -1, true),
+    F1(M::Mov, OT::R32, OT::I32, 0xB8, Enc::O),
+    F1(M::Mov, OT::RM32, OT::I32, 0xC7, Enc::M, 0),
+    F1(M::Mov, OT::RM8, OT::R8, 0x88, Enc::MR),
+    F1(M::Mov, OT::R8, OT::RM8, 0x8A, Enc::RM),
+    F1(M::Mov, OT::R8, OT::IB, 0xB0, Enc::O),
+    F1(M::Mov, OT::RM8, OT::IB, 0xC6, Enc::M, 0),
+    F2(M::Movzx, OT::R32, OT::RM8, 0xB6, Enc::RM),
+    F2(M::Movsx, OT::R32, OT::RM8, 0xBE, Enc::RM),
+    F1(M::Lea, OT::R32, OT::MA, 0x8D, Enc::RM),
+    F1(M::Lea, OT::R64, OT::MA, 0x8D, Enc::RM, -1, true),
+    ALU(M::Add, 0), ALU(M::Or, 1), ALU(M::And, 4), ALU(M::Sub, 5), ALU(M::Xor, 6),
+    ALU(M::Cmp, 7),
+    F1(M::Test, OT::RM32, OT::R32, 0x85, Enc::MR),
+    F1(M::Test, OT::RM64, OT::R64, 0x85, Enc::MR, -1, true),
+    F1(M::Test, OT::Eax, OT::I32, 0xA9, Enc::ZO),
+    F1(M::Test, OT::RM32, OT::I32, 0xF7, Enc::M, 0),
+    F1(M::Test, OT::Rax, OT::I32, 0xA9, Enc::ZO, -1, true),
+    F1(M::Test, OT::RM64, OT::I32, 0xF7, Enc::M, 0, true),
+    F1(M::Test, OT::RM8, OT::R8, 0x84, Enc::MR),
+    F1(M::Test, OT::Al, OT::IB, 0xA8, Enc::ZO),
+    F1(M::Test, OT::RM8, OT::IB, 0xF6, Enc::M, 0),
+    SHIFT(M::Shl, 4), SHIFT(M::Shr, 5), SHIFT(M::Sar, 7),
+    F1(M::Not, OT::RM32, N, 0xF7, Enc::M, 2),
+    F1(M::Neg, OT::RM32, N, 0xF7, Enc::M, 3),
+    F2(M::Imul, OT::R32, OT::RM32, 0xAF, Enc::RM),
+    F(M::Imul, OT::R32, OT::RM32, OT::I8, 0, 1, 0x6B, 0, Enc::RM),
+    F(M::Imul, OT::R32, OT::RM32, OT::I32, 0, 1, 0x69, 0, Enc::RM),
+    F1(M::Cdq, N, N, 0x99, Enc::ZO),
+    F1(M::Idiv, OT::RM32, N, 0xF7, Enc::M, 7),
+    F2(M::Setcc, OT::RM8, N, 0x90, Enc::M, 0, true),
+    F2(M::Cmovcc, OT::R32, OT::RM32, 0x40, Enc::RM, -1, true),
+    F1(M::Jcc, OT::Rel8, N, 0x70, Enc::D),
+    F2(M::Jcc, OT::Rel32, N, 0x80, Enc::D, -1, true),
+    F1(M::Jmp, OT::Rel8, N, 0xEB, Enc::D),
+    F1(M::Jmp, OT::Rel32, N, 0xE9, Enc::D),
+    F1(M::Jmp, OT::RM64, N, 0xFF, Enc::M, 4),
+    F1(M::Call, OT::Rel32, N, 0xE8, Enc::D),
+    F1(M::Call, OT::RM64, N, 0xFF, Enc::M, 2),
+    F1(M::Ret, N, N, 0xC3, Enc::ZO),
+    F1(M::Push, OT::R64, N, 0x50, Enc::O),
+    F1(M::Pop, OT::R64, N, 0x58, Enc::O),
+    F1(M::Nop, N, N, 0x90, Enc::ZO),
+    FS(M::Movss, 0xF3, OT::X, OT::XM32, 0x10, Enc::RM),
+    FS(M::Movss, 0xF3, OT::M32, OT::X, 0x11, Enc::MR),
+    FS(M::Movd, 0x66, OT::X, OT::RM32, 0x6E, Enc::RM),
+    FS(M::Movd, 0x66, OT::RM32, OT::X, 0x7E, Enc::MR),
+    FS(M::Cvtsi2ss, 0xF3, OT::X, OT::RM32, 0x2A, Enc::RM),
+    FS(M::Cvttss2si, 0xF3, OT::R32, OT::XM32, 0x2C, Enc::RM),
+    SSE_ARITH(M::Addss, 0x58), SSE_ARITH(M::Subss, 0x5C), SSE_ARITH(M::Mulss, 0x59),
+    SSE_ARITH(M::Divss, 0x5E), SSE_ARITH(M::Sqrtss, 0x51), SSE_ARITH(M::Minss, 0x5D),
+    SSE_ARITH(M::Maxss, 0x5F),
+    FS(M::Ucomiss, 0, OT::X, OT::XM32, 0x2E, Enc::RM),
+    FS(M::Andps, 0, OT::X, OT::X, 0x54, Enc::RM),
+    FS(M::Xorps, 0, OT::X, OT::X, 0x57, Enc::RM),
+};
+#undef ALU
+#undef SHIFT
+#undef SSE_ARITH
+
+}  // namespace
+
+std::span<const Form> forms() { return kForms; }
+
+unsigned numOps(const Form& f) {
+  unsigned n = 0;
+  while (n < 3 && f.ops[n] != OT::None) ++n;
+  return n;
+}
+
+namespace {
+
+bool isImmType(OT t) { return t == OT::I8 || t == OT::IB || t == OT::I32; }
+bool isRelType(OT t) { return t == OT::Rel8 || t == OT::Rel32; }
+bool isMemOnly(OT t) { return t == OT::M8 || t == OT::M32 || t == OT::M64 || t == OT::MA; }
+bool isRegOnly(OT t) {
+  return t == OT::R8 || t == OT::R32 || t == OT::R64 || t == OT::X;
+}
+
+// The register class of a register-or-memory type's register half.
+RegClass regClassOf(OT t) {
+  switch (t) {
+    case OT::R8: case OT::RM8: case OT::Al: case OT::Cl: return RegClass::Gp8;
+    case OT::R32: case OT::RM32: case OT::Eax: return RegClass::Gp32;
+    case OT::R64: case OT::RM64: case OT::Rax: return RegClass::Gp64;
+    case OT::X: case OT::XM32: return RegClass::Xmm;
+    default: return RegClass::None;
+  }
+}
+
+Size memSizeOf(OT t) {
+  switch (t) {
+    case OT::M8: case OT::RM8: return Size::Byte;
+    case OT::M32: case OT::RM32: case OT::XM32: return Size::Dword;
+    case OT::M64: case OT::RM64: return Size::Qword;
+    default: return Size::None;
+  }
+}
+
+bool acceptsMem(OT t) { return isMemOnly(t) || t == OT::RM8 || t == OT::RM32 || t == OT::RM64 || t == OT::XM32; }
+bool acceptsReg(OT t) { return isRegOnly(t) || t == OT::RM8 || t == OT::RM32 || t == OT::RM64 || t == OT::XM32; }
+
+bool hasRegOperand(const Instruction& in) {
+  for (unsigned i = 0; i < in.numOperands; ++i)
+    if (in.ops[i].kind == OperandKind::Reg && in.ops[i].reg != r8(CX)) return true;
+  return false;
+}
+
+// Immediate in range for an operand of the form's size.
+bool immFits(OT t, int64_t v, bool w) {
+  switch (t) {
+    case OT::IB: return v >= -128 && v <= 255;
+    case OT::One: return v == 1;
+    case OT::I32:
+      return w ? (v >= INT32_MIN && v <= INT32_MAX) : (v >= INT32_MIN && v <= int64_t(UINT32_MAX));
+    case OT::I8: {
+      if (!immFits(OT::I32, v, w)) return false;
+      int64_t s = w ? v : int64_t(int32_t(uint32_t(v)));
+      return s >= -128 && s <= 127;
+    }
+    default: return false;
+  }
+}
+
+bool matches(OT t, const Operand& o, const Form& f, const Instruction& in, bool longForm) {
+  switch (o.kind) {
+    case OperandKind::Reg:
+      switch (t) {
+        case OT::Al: return o.reg == r8(AX);
+        case OT::Eax: return o.reg == r32(AX);
+        case OT::Rax: return o.reg == r64(AX);
+        case OT::Cl: return o.reg == r8(CX);
+        default: return acceptsReg(t) && o.reg.cls == regClassOf(t);
+      }
+    case OperandKind::Mem:
+      if (!acceptsMem(t)) return false;
+      if (t == OT::MA) return true;
+      if (o.mem.size == Size::None)
+        return hasRegOperand(in) || in.mnemonic == Mnemonic::Jmp || in.mnemonic == Mnemonic::Call;
+      return o.mem.size == memSizeOf(t);
+    case OperandKind::Imm:
+      return (isImmType(t) || t == OT::One) && immFits(t, o.imm, f.w);
+    case OperandKind::Label:
+    case OperandKind::Address:
+      if (t == OT::Rel8) return !longForm && !in.longBranch;
+      return t == OT::Rel32;
+    case OperandKind::None:
+      return false;
+  }
+  return false;
+}
+
+const Form* findForm(const Instruction& in, bool longForm) {
+  for (const Form& f : kForms) {
+    if (f.mn != in.mnemonic || numOps(f) != in.numOperands) continue;
+    bool ok = true;
+    for (unsigned i = 0; i < in.numOperands && ok; ++i)
+      ok = matches(f.ops[i], in.ops[i], f, in, longForm);
+    if (ok) return &f;
+  }
+  return nullptr;
+}
+
+uint8_t hi(Reg r) { return (r.num >> 3) & 1; }
+uint8_t lo(Reg r) { return r.num & 7; }
+bool needsRex(Reg r) { return r.cls == RegClass::Gp8 && r.num >= 4 && r.num <= 7; }
+
+void checkMem(const Mem& m) {
+  if (m.base.valid() && m.base.cls != RegClass::Gp64 && m.base.cls != RegClass::Rip)
+    throw AsmError("memory base must be a 64-bit register or rip");
+  if (m.index.valid()) {
+    if (m.index.cls != RegClass::Gp64) throw AsmError("memory index must be a 64-bit register");
+    if (m.index.num == SP) throw AsmError("rsp cannot be an index register");
+    if (m.base.cls == RegClass::Rip) throw AsmError("rip-relative address cannot have an index");
+  }
+  if (m.scale != 1 && m.scale != 2 && m.scale != 4 && m.scale != 8)
+    throw AsmError("scale must be 1, 2, 4 or 8");
+  if (!m.index.valid() && m.scale != 1) throw AsmError("scale without an index register");
+}
+
+void putModRM(Encoding& out, uint8_t reg, const Operand& rm) {
+  if (rm.kind == OperandKind::Reg) {
+    out.put(uint8_t(0xC0 | (reg & 7) << 3 | lo(rm.reg)));
+    return;
+  }
+  const Mem& m = rm.mem;
+  uint8_t r = uint8_t((reg & 7) << 3);
+  uint8_t ss = m.scale == 8 ? 3 : m.scale == 4 ? 2 : m.scale == 2 ? 1 : 0;
+  if (m.base.cls == RegClass::Rip) {
+    out.put(uint8_t(0x05 | r));
+    out.put32(uint32_t(m.disp));
+    return;
+  }
+  if (!m.base.valid()) {  // [index*scale + disp32] or [disp32]
+    out.put(uint8_t(0x04 | r));
+    uint8_t idx = m.index.valid() ? lo(m.index) : 4;
+    out.put(uint8_t(ss << 6 | idx << 3 | 5));
+    out.put32(uint32_t(m.disp));
+    return;
+  }
+  uint8_t mod;
+  if (m.disp == 0 && lo(m.base) != BP) mod = 0;
+  else if (m.disp >= -128 && m.disp <= 127) mod = 1;
+  else mod = 2;
+  if (m.index.valid() || lo(m.base) == SP) {
+    out.put(uint8_t(mod << 6 | r | 4));
+    uint8_t idx = m.index.valid() ? lo(m.index) : 4;
+    out.put(uint8_t(ss << 6 | idx << 3 | lo(m.base)));
+  } else {
+    out.put(uint8_t(mod << 6 | r | lo(m.base)));
+  }
+  if (mod == 1) out.put(uint8_t(int8_t(m.disp)));
+  if (mod == 2) out.put32(uint32_t(m.disp));
+}
+
+void encodeForm(const Form& f, const Instruction& in, Encoding& out) {
+  const Operand* regOp = nullptr;  // goes in ModRM.reg
+  const Operand* rmOp = nullptr;   // goes in ModRM.rm
+  uint8_t regField = 0;
+  switch (f.enc) {
+    case Enc::MR: rmOp = &in.ops[0]; regOp = &in.ops[1]; break;
+    case Enc::RM: regOp = &in.ops[0]; rmOp = &in.ops[1]; break;
+    case Enc::M: rmOp = &in.ops[0]; regField = uint8_t(f.digit); break;
+    case Enc::O: regOp = &in.ops[0]; break;
+    default: break;
+  }
+  if (regOp) regField = regOp->reg.num;
+  uint8_t rex = f.w ? 0x08 : 0;
+  bool forceRex = false;
+  if (f.enc == Enc::O) {
+    rex |= hi(regOp->reg);
+  } else if (regOp) {
+    rex |= uint8_t(hi(regOp->reg) << 2);
+  }
+  if (rmOp && rmOp->kind == OperandKind::Reg) rex |= hi(rmOp->reg);
+  if (rmOp && rmOp->kind == OperandKind::Mem) {
+    checkMem(rmOp->mem);
+    if (rmOp->mem.index.valid()) rex |= uint8_t(hi(rmOp->mem.index) << 1);
+    if (rmOp->mem.base.cls == RegClass::Gp64) rex |= hi(rmOp->mem.base);
+  }
+  for (unsigned i = 0; i < in.numOperands; ++i)
+    if (in.ops[i].kind == OperandKind::Reg && needsRex(in.ops[i].reg)) forceRex = true;
+
+  if (f.prefix) out.put(f.prefix);
+  if (rex || forceRex) out.put(uint8_t(0x40 | rex));
+  for (unsigned i = 0; i + 1 < f.len; ++i) out.put(f.op[i]);
+  uint8_t last = f.op[f.len - 1];
+  if (f.cc) last = uint8_t(last + uint8_t(in.cond));
+  if (f.enc == Enc::O) last = uint8_t(last + lo(regOp->reg));
+  out.put(last);
+  if (rmOp) putModRM(out, regField, *rmOp);
+  for (unsigned i = 0; i < in.numOperands; ++i) {
+    OT t = f.ops[i];
+    const Operand& o = in.ops[i];
+    if (t == OT::I8 || t == OT::IB) {
+      out.put(uint8_t(o.imm));
+    } else if (t == OT::I32) {
+      out.put32(uint32_t(o.imm));
+    } else if (isRelType(t)) {
+      Fixup fx;
+      fx.offset = out.size;
+      fx.kind = t == OT::Rel8 ? Rel8 : Rel32;
+      if (o.kind == OperandKind::Label) fx.label = o.label;
+      else fx.addend = o.imm;
+      if (t == OT::Rel8) out.put(0);
+      else out.put32(0);
+      out.addFixup(fx);
+    }
+  }
+}
+
+void encodeHook(const Instruction& in, bool longForm, Encoding& out) {
+  if (in.numOperands > 3) throw AsmError("too many operands");
+  const Form* f = findForm(in, longForm);
+  if (!f) throw AsmError("invalid operands for '" + print(in) + "'");
+  encodeForm(*f, in, out);
+}
+
+constexpr FixupKind kFixupKinds[] = {
+    // name   bytes shift width pcrel  signed  pc base                  bias scale relaxTo
+    {"rel8", 1, 0, 8, true, true, PcBase::InstructionEnd, 0, 1, Rel32},
+    {"rel32", 4, 0, 32, true, true, PcBase::InstructionEnd, 0, 1, -1},
+};
+
+const Target<Instruction> kTarget = [] {
+  Target<Instruction> t;
+  t.name = "x86-64";
+  t.fixupKinds = kFixupKinds;
+  t.encode = encodeHook;
+  return t;
+}();
+
+}  // namespace
+}  // namespace detail
+
+using namespace detail;
+
+Instruction make(Mnemonic m, std::initializer_list<Operand> ops) {
+  return makeCc(m, Cond::O, ops);
+}
+
+Instruction makeCc(Mnemonic m, Cond c, std::initializer_list<Operand> ops) {
+  Instruction in;
+  in.mnemonic = m;
+  in.cond = c;
+  if (ops.size() > 3) throw AsmError("too many operands");
+  for (const Operand& o : ops) in.ops[in.numOperands++] = o;
+  return in;
+}
+
+const Target<Instruction>& target() { return kTarget; }
+
+Encoding encode(const Instruction& inst, bool longForm) {
+  Encoding e;
+  encodeHook(inst, longForm, e);
+  return e;
+}
+
+std::vector<uint8_t> encodeAt(const Instruction& inst, uint64_t address) {
+  for (bool longForm : {false, true}) {
+    Encoding e = encode(inst, longForm);
+    std::vector<uint8_t> bytes(e.bytes.begin(), e.bytes.begin() + e.size);
+    bool relax = false;
+    for (unsigned i = 0; i < e.numFixups; ++i) {
+      const Fixup& fx = e.fixups[i];
+      if (!fx.label.empty())
+        throw AsmError("label '" + std::string(fx.label) + "' needs the assembler core");
+      const FixupKind& k = kFixupKinds[fx.kind];
+      int64_t v;
+      if (!fixupValue(k, 0, fx.addend, int64_t(address), e.size, v) || !fixupFits(k, v)) {
+        if (k.relaxTo >= 0 && !longForm) {
+          relax = true;
+          break;
+        }
+        throw AsmError("branch target out of range");
+      }
+      applyFixup(k, bytes, fx.offset, v);
+    }
+    if (!relax) return bytes;
+  }
+  throw AsmError("branch target out of range");
+}
+
+// ------------------------------------------------------------------ decoder
+
+namespace {
+
+struct Reader {
+  std::span<const uint8_t> code;
+  size_t pos;
+  bool ok = true;
+  uint8_t u8() {
+    if (pos >= code.size()) {
+      ok = false;
+      return 0;
+    }
+    return code[pos++];
+  }
+  uint32_t u32() {
+    uint32_t v = 0;
+    for (int i = 0; i < 4; ++i) v |= uint32_t(u8()) << (8 * i);
+    return v;
+  }
+};
+
+bool opcodeMatches(const Form& f, const uint8_t* op, unsigned len) {
+  if (f.len != len) return false;
+  for (unsigned i = 0; i + 1 < len; ++i)
+    if (op[i] != f.op[i]) return false;
+  uint8_t last = op[len - 1], want = f.op[len - 1];
+  if (f.cc) return (last & 0xF0) == want;
+  if (f.enc == Enc::O) return (last & 0xF8) == want;
+  return last == want;
+}
+
+// Decodes with one form; returns false if the bytes do not fit it.
+bool decodeWith(const Form& f, Reader rd, size_t start, uint8_t rex, const uint8_t* op,
+                Instruction& in, size_t& end, bool& truncated) {
+  bool hasModRM = f.enc == Enc::MR || f.enc == Enc::RM || f.enc == Enc::M;
+  in = Instruction{};
+  in.mnemonic = f.mn;
+  in.cond = f.cc ? Cond(op[f.len - 1] & 0x0F) : Cond::O;
+  in.numOperands = uint8_t(numOps(f));
+  unsigned rmIdx = 9, regIdx = 9;
+  if (f.enc == Enc::MR) rmIdx = 0, regIdx = 1;
+  if (f.enc == Enc::RM) rmIdx = 1, regIdx = 0;
+  if (f.enc == Enc::M) rmIdx = 0;
+  Operand rmOp;
+  uint8_t regNum = 0;
+  if (hasModRM) {
+    uint8_t modrm = rd.u8();
+    if (!rd.ok) return truncated = true, false;
+    uint8_t mod = modrm >> 6, reg = (modrm >> 3) & 7, rm = modrm & 7;
+    if (f.enc == Enc::M && reg != uint8_t(f.digit)) return false;
+    regNum = uint8_t(reg | ((rex >> 2) & 1) << 3);
+    OT rmType = f.ops[rmIdx];
+    if (mod == 3) {
+      if (!acceptsReg(rmType)) return false;
+      rmOp = Operand::r(Reg{regClassOf(rmType), uint8_t(rm | (rex & 1) << 3)});
+    } else {
+      if (!acceptsMem(rmType)) return false;
+      Mem m;
+      m.size = memSizeOf(rmType);
+      if (rm == 4) {
+        uint8_t sib = rd.u8();
+        uint8_t idx = uint8_t(((sib >> 3) & 7) | ((rex >> 1) & 1) << 3);
+        if (idx != SP) m.index = r64(idx), m.scale = uint8_t(1 << (sib >> 6));
+        else if (sib >> 6) return false;
+        if ((sib & 7) == 5 && mod == 0) {
+          m.disp = int32_t(rd.u32());
+        } else {
+          m.base = r64((sib & 7) | (rex & 1) << 3);
+        }
+      } else if (rm == 5 && mod == 0) {
+        m.base = rip();
+        m.disp = int32_t(rd.u32());
+      } else {
+        m.base = r64(rm | (rex & 1) << 3);
+      }
+      if (mod == 1) m.disp = int8_t(rd.u8());
+      if (mod == 2) m.disp = int32_t(rd.u32());
+      rmOp = Operand::m(m);
+    }
+  }
+  for (unsigned i = 0; i < in.numOperands; ++i) {
+    OT t = f.ops[i];
+    Operand& o = in.ops[i];
+    if (i == rmIdx) {
+      o = rmOp;
+    } else if (i == regIdx) {
+      o = Operand::r(Reg{regClassOf(t), regNum});
+    } else if (f.enc == Enc::O && i == 0) {
+      o = Operand::r(Reg{regClassOf(t), uint8_t((op[f.len - 1] & 7) | (rex & 1) << 3)});
+    } else if (t == OT::Al || t == OT::Eax || t == OT::Rax) {
+      o = Operand::r(Reg{regClassOf(t), AX});
+    } else if (t == OT::Cl) {
+      o = Operand::r(r8(CX));
+    } else if (t == OT::One) {
+      o = Operand::i(1);
+    } else if (t == OT::IB) {
+      o = Operand::i(rd.u8());
+    } else if (t == OT::I8) {
+      int64_t v = int8_t(rd.u8());
+      o = Operand::i(f.w ? v : int64_t(uint32_t(int32_t(v))));
+    } else if (t == OT::I32) {
+      int64_t v = int32_t(rd.u32());
+      o = Operand::i(f.w ? v : int64_t(uint32_t(v)));
+    } else if (t == OT::Rel8) {
+      int64_t d = int8_t(rd.u8());
+      o = Operand::a(int64_t(rd.pos) + d);
+    } else if (t == OT::Rel32) {
+      int64_t d = int32_t(rd.u32());
+      int64_t target = int64_t(rd.pos) + d;
+      o = Operand::a(target);
+      // Record a long form the short one could have expressed.
+      bool hasShort = in.mnemonic == Mnemonic::Jmp || in.mnemonic == Mnemonic::Jcc;
+      int64_t shortDisp = target - (int64_t(start) + 2);
+      in.longBranch = hasShort && shortDisp >= -128 && shortDisp <= 127;
+    }
+  }
+  if (!rd.ok) return truncated = true, false;
+  end = rd.pos;
+  return true;
+}
+
+}  // namespace
+
+std::optional<Decoded> decode(std::span<const uint8_t> code, size_t offset, DecodeError* error) {
+  auto fail = [&](std::string msg) -> std::optional<Decoded> {
+    if (error) *error = DecodeError{uint32_t(offset), std::move(msg)};
+    return std::nullopt;
+  };
+  if (offset >= code.size()) return fail("offset past the end of the code");
+  Reader rd{code, offset};
+  uint8_t prefix = 0, rex = 0;
+  uint8_t b = rd.u8();
+  if (b == 0x66 || b == 0xF3) prefix = b, b = rd.u8();
+  if ((b & 0xF0) == 0x40) rex = b, b = rd.u8();
+  uint8_t op[2] = {b, 0};
+  unsigned len = 1;
+  if (b == 0x0F) op[1] = rd.u8(), len = 2;
+  if (!rd.ok) return fail("truncated instruction");
+  bool sawOpcode = false, truncated = false;
+  for (const Form& f : kForms) {
+    if (f.prefix != prefix || !opcodeMatches(f, op, len)) continue;
+    if (bool((rex >> 3) & 1) != f.w) continue;
+    sawOpcode = true;
+    Instruction in;
+    size_t end = 0;
+    if (!decodeWith(f, rd, offset, rex, op, in, end, truncated)) continue;
+    // Accept exactly what the encoder produces for this instruction.
+    try {
+      std::vector<uint8_t> again = encodeAt(in, offset);
+      if (again.size() != end - offset ||
+          !std::equal(again.begin(), again.end(), code.begin() + long(offset)))
+        continue;
+    } catch (const AsmError&) {
+      continue;
+    }
+    return Decoded{std::move(in), uint32_t(offset), uint32_t(end - offset)};
+  }
+  if (truncated) return fail("truncated instruction");
+  return fail(sawOpcode ? "invalid or non-canonical encoding"
+                        : "unknown opcode (not in the ldc x86-64 subset)");
+}
+
+Disassembly disassemble(std::span<const uint8_t> code) {
+  Disassembly d;
+  size_t pos = 0;
+  while (pos < code.size()) {
+    DecodeError err;
+    auto r = decode(code, pos, &err);
+    if (!r) {
+      d.error = err;
+      break;
+    }
+    pos += r->length;
+    d.insts.push_back(std::move(*r));
+  }
+  return d;
+}
+
+}  // namespace ldc::as::x86

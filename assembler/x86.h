@@ -1,0 +1,158 @@
+// ldc assembler: the x86-64 target.
+//
+// Instruction model, encoder, one-line parser, printer and disassembler for
+// the subset of x86-64 the ldc code generator uses. Text is Intel syntax as
+// GNU as accepts it under `.intel_syntax noprefix`. See docs/assembler.md.
+#ifndef LDC_ASSEMBLER_X86_H
+#define LDC_ASSEMBLER_X86_H
+
+#include "assembler/assembler.h"
+
+#include <optional>
+
+namespace ldc::as::x86 {
+
+enum class RegClass : uint8_t { None, Gp8, Gp32, Gp64, Xmm, Rip };
+
+// Gp8 numbers 0-15 are al cl dl bl spl bpl sil dil r8b..r15b
+// (ah ch dh bh are not in the subset).
+struct Reg {
+  RegClass cls = RegClass::None;
+  uint8_t num = 0;
+  bool valid() const { return cls != RegClass::None; }
+  friend bool operator==(const Reg&, const Reg&) = default;
+};
+constexpr Reg r8(unsigned n) { return {RegClass::Gp8, uint8_t(n)}; }
+constexpr Reg r32(unsigned n) { return {RegClass::Gp32, uint8_t(n)}; }
+constexpr Reg r64(unsigned n) { return {RegClass::Gp64, uint8_t(n)}; }
+constexpr Reg xmm(unsigned n) { return {RegClass::Xmm, uint8_t(n)}; }
+constexpr Reg rip() { return {RegClass::Rip, 0}; }
+enum RegNum : uint8_t { AX, CX, DX, BX, SP, BP, SI, DI, R8, R9, R10, R11, R12, R13, R14, R15 };
+
+enum class Size : uint8_t { None, Byte, Dword, Qword };
+
+// [base + index*scale + disp]; base may be a Gp64 register, rip or absent,
+// index a Gp64 register other than rsp or absent.
+struct Mem {
+  Size size = Size::None;
+  Reg base;
+  Reg index;
+  uint8_t scale = 1;
+  int32_t disp = 0;
+  friend bool operator==(const Mem&, const Mem&) = default;
+};
+
+enum class OperandKind : uint8_t { None, Reg, Mem, Imm, Label, Address };
+
+// Label: a named label. Address: an absolute branch target (offset from the
+// code start), as the disassembler produces and the parser reads for a
+// numeric branch operand.
+struct Operand {
+  OperandKind kind = OperandKind::None;
+  Reg reg;
+  Mem mem;
+  int64_t imm = 0;    // Imm value, or the Address target
+  std::string label;  // Label name
+  friend bool operator==(const Operand&, const Operand&) = default;
+
+  static Operand r(Reg x) { Operand o; o.kind = OperandKind::Reg; o.reg = x; return o; }
+  static Operand m(Mem x) { Operand o; o.kind = OperandKind::Mem; o.mem = x; return o; }
+  static Operand i(int64_t v) { Operand o; o.kind = OperandKind::Imm; o.imm = v; return o; }
+  static Operand l(std::string n) { Operand o; o.kind = OperandKind::Label; o.label = std::move(n); return o; }
+  static Operand a(int64_t t) { Operand o; o.kind = OperandKind::Address; o.imm = t; return o; }
+};
+
+enum class Mnemonic : uint8_t {
+  Mov, Movzx, Movsx, Lea,
+  Add, Or, And, Sub, Xor, Cmp, Test,
+  Shl, Shr, Sar, Not, Neg, Imul, Cdq, Idiv,
+  Setcc, Cmovcc, Jcc, Jmp, Call, Ret, Push, Pop, Nop,
+  Movss, Movd, Cvtsi2ss, Cvttss2si,
+  Addss, Subss, Mulss, Divss, Sqrtss, Minss, Maxss, Ucomiss, Andps, Xorps,
+  Count_
+};
+
+// Condition codes in encoding order (the low nibble of Jcc/SETcc/CMOVcc).
+enum class Cond : uint8_t { O, NO, B, AE, E, NE, BE, A, S, NS, P, NP, L, GE, LE, G };
+
+struct Instruction {
+  Mnemonic mnemonic = Mnemonic::Nop;
+  Cond cond = Cond::O;  // for Setcc, Cmovcc, Jcc
+  uint8_t numOperands = 0;
+  std::array<Operand, 3> ops{};
+  // Always use the rel32 form of jmp/jcc (printed as `{disp32}`).
+  bool longBranch = false;
+  friend bool operator==(const Instruction&, const Instruction&) = default;
+};
+
+Instruction make(Mnemonic m, std::initializer_list<Operand> ops = {});
+Instruction makeCc(Mnemonic m, Cond c, std::initializer_list<Operand> ops = {});
+
+// Fixup kinds of the x86-64 target (indices into target().fixupKinds).
+enum FixupKindId : uint16_t { Rel8 = 0, Rel32 = 1 };
+
+// The target description for the core.
+const Target<Instruction>& target();
+
+// Encodes one instruction: bytes plus fixups for label/address operands.
+// Throws AsmError if the instruction is not in the subset.
+Encoding encode(const Instruction& inst, bool longForm = false);
+
+// Encodes one instruction placed at `address`, resolving Address operands
+// (short form if it reaches, as GNU as does). Throws AsmError for Label
+// operands or unencodable instructions.
+std::vector<uint8_t> encodeAt(const Instruction& inst, uint64_t address = 0);
+
+// Parses one instruction line (Intel syntax; `#` or `;` starts a comment).
+// Also reads objdump's spelling (`DWORD PTR`, `ds:0x10`, `+0x0`).
+// Throws AsmError with a message naming the problem.
+Instruction parse(std::string_view line);
+
+// Prints in the syntax parse() and GNU as accept. forceLong prints jmp/jcc
+// with the `{disp32}` pseudo-prefix, as inst.longBranch does.
+// addressBase, if given, prints Address operands as `addressBase+0x12`.
+std::string print(const Instruction& inst, bool forceLong = false,
+                  std::string_view addressBase = {});
+std::string_view mnemonicName(Mnemonic m, Cond c = Cond::O);
+std::string_view regName(Reg r);
+
+// ------------------------------------------------------------ disassembly
+
+struct Decoded {
+  Instruction inst;
+  uint32_t offset = 0;
+  uint32_t length = 0;
+};
+struct DecodeError {
+  uint32_t offset = 0;
+  std::string message;
+};
+
+// Decodes the instruction at code[offset]. Branch targets become Address
+// operands (absolute offsets from code[0]). Accepts exactly the encodings
+// encode() produces; anything else is a DecodeError. Never reads past the
+// end of `code`.
+std::optional<Decoded> decode(std::span<const uint8_t> code, size_t offset,
+                              DecodeError* error = nullptr);
+
+struct Disassembly {
+  std::vector<Decoded> insts;
+  std::optional<DecodeError> error;  // set if decoding stopped early
+};
+Disassembly disassemble(std::span<const uint8_t> code);
+
+// ---------------------------------------------------------- whole programs
+
+using X86Program = Program<Instruction>;
+
+// GNU as source for a program (`.intel_syntax noprefix`): local labels are
+// renamed `.L<block>_<name>`, jumps to global labels and addresses get
+// `{disp32}` so as picks the same rel32 forms as the core.
+std::string toGnuAs(const X86Program& program);
+
+// A listing: offset, bytes, text and comment of every item.
+std::string listing(const X86Program& program, const Result& result);
+
+}  // namespace ldc::as::x86
+
+#endif  // LDC_ASSEMBLER_X86_H

@@ -1,0 +1,473 @@
+// x86-64 target: names, one-line parser, printer, GNU as source, listings.
+#include <cctype>
+#include <cstdio>
+#include <set>
+
+#include "assembler/x86_forms.h"
+
+namespace ldc::as::x86 {
+namespace {
+
+constexpr std::string_view kGp64[] = {"rax", "rcx", "rdx", "rbx", "rsp", "rbp", "rsi", "rdi",
+                                      "r8",  "r9",  "r10", "r11", "r12", "r13", "r14", "r15"};
+constexpr std::string_view kGp32[] = {"eax", "ecx", "edx", "ebx", "esp", "ebp", "esi", "edi",
+                                      "r8d", "r9d", "r10d", "r11d", "r12d", "r13d", "r14d", "r15d"};
+constexpr std::string_view kGp8[] = {"al",  "cl",  "dl",   "bl",   "spl",  "bpl",  "sil",  "dil",
+                                     "r8b", "r9b", "r10b", "r11b", "r12b", "r13b", "r14b", "r15b"};
+constexpr std::string_view kXmm[] = {"xmm0", "xmm1", "xmm2",  "xmm3",  "xmm4",  "xmm5",
+                                     "xmm6", "xmm7", "xmm8",  "xmm9",  "xmm10", "xmm11",
+                                     "xmm12", "xmm13", "xmm14", "xmm15"};
+
+constexpr std::string_view kMnemonics[] = {
+    "mov",   "movzx", "movsx", "lea",  "add",  "or",   "and",      "sub",       "xor",
+    "cmp",   "test",  "shl",   "shr",  "sar",  "not",  "neg",      "imul",      "cdq",
+    "idiv",  "set",   "cmov",  "j",    "jmp",  "call", "ret",      "push",      "pop",
+    "nop",   "movss", "movd",  "cvtsi2ss", "cvttss2si", "addss", "subss", "mulss", "divss",
+    "sqrtss", "minss", "maxss", "ucomiss", "andps", "xorps"};
+static_assert(std::size(kMnemonics) == size_t(Mnemonic::Count_));
+
+constexpr std::string_view kConds[] = {"o", "no", "b", "ae", "e", "ne", "be", "a",
+                                       "s", "ns", "p", "np", "l", "ge", "le", "g"};
+struct Alias {
+  std::string_view name;
+  Cond cond;
+};
+constexpr Alias kCondAliases[] = {
+    {"c", Cond::B},   {"nae", Cond::B}, {"nb", Cond::AE}, {"nc", Cond::AE}, {"z", Cond::E},
+    {"nz", Cond::NE}, {"na", Cond::BE}, {"nbe", Cond::A}, {"pe", Cond::P},  {"po", Cond::NP},
+    {"nge", Cond::L}, {"nl", Cond::GE}, {"ng", Cond::LE}, {"nle", Cond::G}};
+
+bool isCc(Mnemonic m) { return m == Mnemonic::Setcc || m == Mnemonic::Cmovcc || m == Mnemonic::Jcc; }
+bool isBranch(Mnemonic m) { return m == Mnemonic::Jcc || m == Mnemonic::Jmp || m == Mnemonic::Call; }
+
+std::string lower(std::string_view s) {
+  std::string r(s);
+  for (char& c : r) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return r;
+}
+
+std::optional<Cond> condByName(std::string_view s) {
+  for (unsigned i = 0; i < 16; ++i)
+    if (kConds[i] == s) return Cond(i);
+  for (const Alias& a : kCondAliases)
+    if (a.name == s) return a.cond;
+  return std::nullopt;
+}
+
+std::optional<std::pair<Mnemonic, Cond>> mnemonicByName(std::string_view s) {
+  for (unsigned i = 0; i < std::size(kMnemonics); ++i) {
+    Mnemonic m = Mnemonic(i);
+    if (!isCc(m) && kMnemonics[i] == s) return std::pair{m, Cond::O};
+  }
+  for (Mnemonic m : {Mnemonic::Setcc, Mnemonic::Cmovcc, Mnemonic::Jcc}) {
+    std::string_view pre = kMnemonics[size_t(m)];
+    if (s.size() > pre.size() && s.substr(0, pre.size()) == pre)
+      if (auto c = condByName(s.substr(pre.size()))) return std::pair{m, *c};
+  }
+  return std::nullopt;
+}
+
+std::optional<Reg> regByName(std::string_view s) {
+  for (unsigned i = 0; i < 16; ++i) {
+    if (kGp64[i] == s) return r64(i);
+    if (kGp32[i] == s) return r32(i);
+    if (kGp8[i] == s) return r8(i);
+    if (kXmm[i] == s) return xmm(i);
+  }
+  if (s == "rip") return rip();
+  return std::nullopt;
+}
+
+std::optional<Size> sizeByName(std::string_view s) {
+  if (s == "byte") return Size::Byte;
+  if (s == "dword") return Size::Dword;
+  if (s == "qword") return Size::Qword;
+  return std::nullopt;
+}
+
+bool isReserved(std::string_view lowered) {
+  return regByName(lowered) || sizeByName(lowered) || lowered == "ptr" || lowered == "word" ||
+         lowered == "xmmword" || lowered == "offset" || lowered == "short" || lowered == "near" ||
+         lowered == "ah" || lowered == "bh" || lowered == "ch" || lowered == "dh";
+}
+
+std::string hex(uint64_t v) {
+  char buf[24];
+  std::snprintf(buf, sizeof buf, "0x%llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+std::string signedHex(int64_t v) {
+  return v < 0 ? "-" + hex(0 - uint64_t(v)) : hex(uint64_t(v));
+}
+
+class Parser {
+ public:
+  explicit Parser(std::string_view s) : s_(s) {}
+
+  Instruction instruction() {
+    Instruction in;
+    ws();
+    if (eat('{')) {
+      if (lower(ident()) != "disp32") fail("only the {disp32} pseudo-prefix is supported");
+      expect('}');
+      in.longBranch = true;
+      ws();
+    }
+    std::string name = lower(ident());
+    if (name.empty()) fail("expected a mnemonic");
+    auto mn = mnemonicByName(name);
+    if (!mn) fail("unknown mnemonic '" + name + "'");
+    in.mnemonic = mn->first;
+    in.cond = mn->second;
+    if (in.longBranch && in.mnemonic != Mnemonic::Jmp && in.mnemonic != Mnemonic::Jcc)
+      fail("{disp32} is only supported on jmp and jcc");
+    ws();
+    if (!atEnd()) {
+      for (;;) {
+        if (in.numOperands == 3) fail("too many operands");
+        in.ops[in.numOperands++] = operand(isBranch(in.mnemonic));
+        ws();
+        if (!eat(',')) break;
+      }
+    }
+    ws();
+    if (!atEnd()) fail("unexpected '" + std::string(s_.substr(i_)) + "'");
+    return in;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& msg) {
+    throw AsmError(msg + " in '" + std::string(s_) + "'");
+  }
+  void ws() {
+    while (i_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[i_]))) ++i_;
+  }
+  bool atEnd() const { return i_ >= s_.size(); }
+  bool eat(char c) {
+    ws();
+    if (i_ < s_.size() && s_[i_] == c) {
+      ++i_;
+      return true;
+    }
+    return false;
+  }
+  void expect(char c) {
+    if (!eat(c)) fail(std::string("expected '") + c + "'");
+  }
+  static bool identStart(char c) {
+    return std::isalpha(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '$' || c == '@';
+  }
+  static bool identChar(char c) {
+    return identStart(c) || std::isdigit(static_cast<unsigned char>(c));
+  }
+  bool peekIdent() {
+    ws();
+    return i_ < s_.size() && identStart(s_[i_]);
+  }
+  bool peekNumber() {
+    ws();
+    return i_ < s_.size() && std::isdigit(static_cast<unsigned char>(s_[i_]));
+  }
+  std::string_view ident() {
+    ws();
+    size_t b = i_;
+    if (i_ < s_.size() && identStart(s_[i_]))
+      while (i_ < s_.size() && identChar(s_[i_])) ++i_;
+    return s_.substr(b, i_ - b);
+  }
+  uint64_t number() {
+    ws();
+    uint64_t v = 0;
+    unsigned base = 10;
+    if (i_ + 1 < s_.size() && s_[i_] == '0' && (s_[i_ + 1] == 'x' || s_[i_ + 1] == 'X')) {
+      base = 16;
+      i_ += 2;
+    }
+    size_t b = i_;
+    for (; i_ < s_.size(); ++i_) {
+      int c = std::tolower(static_cast<unsigned char>(s_[i_]));
+      unsigned d;
+      if (c >= '0' && c <= '9') d = unsigned(c - '0');
+      else if (base == 16 && c >= 'a' && c <= 'f') d = unsigned(c - 'a' + 10);
+      else break;
+      if (v > (UINT64_MAX - d) / base) fail("number too large");
+      v = v * base + d;
+    }
+    if (i_ == b) fail("expected a number");
+    if (i_ < s_.size() && identChar(s_[i_])) fail("malformed number");
+    return v;
+  }
+  int64_t signedNumber() {
+    bool neg = eat('-');
+    if (!neg) eat('+');
+    uint64_t v = number();
+    if (neg) {
+      if (v > uint64_t(INT64_MAX) + 1) fail("number too large");
+      return int64_t(0 - v);
+    }
+    return int64_t(v);
+  }
+
+  Operand operand(bool branch) {
+    size_t save = i_;
+    if (peekIdent()) {
+      std::string_view word = ident();
+      std::string w = lower(word);
+      if (auto sz = sizeByName(w)) {
+        if (lower(ident()) != "ptr") fail("expected 'ptr' after '" + w + "'");
+        Mem m = memory();
+        m.size = *sz;
+        return Operand::m(m);
+      }
+      if (w == "ds") {
+        i_ = save;
+        return Operand::m(memory());
+      }
+      if (w == "ah" || w == "bh" || w == "ch" || w == "dh")
+        fail("register '" + w + "' is not supported");
+      if (auto r = regByName(w)) {
+        if (r->cls == RegClass::Rip) fail("rip is only allowed as a memory base");
+        return Operand::r(*r);
+      }
+      if (w == "word" || w == "xmmword") fail("operand size '" + w + "' is not supported");
+      if (!branch) fail("unexpected '" + std::string(word) + "'");
+      if (isReserved(w)) fail("'" + std::string(word) + "' cannot be a label");
+      return Operand::l(std::string(word));
+    }
+    ws();
+    if (i_ < s_.size() && s_[i_] == '[') return Operand::m(memory());
+    if (i_ < s_.size() && (s_[i_] == '-' || s_[i_] == '+' || peekNumber())) {
+      int64_t v = signedNumber();
+      return branch ? Operand::a(v) : Operand::i(v);
+    }
+    fail("expected an operand");
+  }
+
+  // [ base + index*scale + disp ], or objdump's ds:disp.
+  Mem memory() {
+    Mem m;
+    int64_t disp = 0;
+    size_t save = i_;
+    if (peekIdent() && lower(ident()) == "ds") {
+      expect(':');
+      disp = signedNumber();
+      if (disp < INT32_MIN || disp > INT32_MAX) fail("displacement out of range");
+      m.disp = int32_t(disp);
+      return m;
+    }
+    i_ = save;
+    expect('[');
+    bool first = true;
+    for (;;) {
+      int sign = 1;
+      if (eat('-')) sign = -1;
+      else if (!eat('+') && !first) fail("expected '+', '-' or ']'");
+      first = false;
+      if (peekNumber()) {
+        uint64_t n = number();
+        if (eat('*')) {
+          if (sign < 0) fail("negative scale");
+          setIndex(m, reg(), n);
+        } else {
+          if (n > uint64_t(INT64_MAX) / 2) fail("displacement out of range");
+          disp += sign * int64_t(n);
+        }
+      } else {
+        if (sign < 0) fail("cannot subtract a register");
+        Reg r = reg();
+        if (eat('*')) {
+          setIndex(m, r, number());
+        } else if (!m.base.valid() && !m.index.valid()) {
+          m.base = r;
+        } else if (!m.index.valid()) {
+          setIndex(m, r, 1);
+        } else {
+          fail("too many registers in address");
+        }
+      }
+      if (eat(']')) break;
+    }
+    if (disp < INT32_MIN || disp > INT32_MAX) fail("displacement out of range");
+    m.disp = int32_t(disp);
+    return m;
+  }
+
+  Reg reg() {
+    std::string w = lower(ident());
+    auto r = regByName(w);
+    if (!r) fail(w.empty() ? "expected a register or number" : "'" + w + "' is not a register");
+    if (r->cls != RegClass::Gp64 && r->cls != RegClass::Rip)
+      fail("address registers must be 64-bit");
+    return *r;
+  }
+
+  void setIndex(Mem& m, Reg r, uint64_t scale) {
+    if (m.index.valid()) fail("two index registers");
+    if (r.cls == RegClass::Rip) fail("rip cannot be an index");
+    if (r.num == SP) fail("rsp cannot be an index register");
+    if (scale != 1 && scale != 2 && scale != 4 && scale != 8) fail("scale must be 1, 2, 4 or 8");
+    m.index = r;
+    m.scale = uint8_t(scale);
+  }
+
+  std::string_view s_;
+  size_t i_ = 0;
+};
+
+std::string memText(const Mem& m) {
+  std::string s;
+  switch (m.size) {
+    case Size::Byte: s = "byte ptr "; break;
+    case Size::Dword: s = "dword ptr "; break;
+    case Size::Qword: s = "qword ptr "; break;
+    case Size::None: break;
+  }
+  s += '[';
+  if (m.base.valid()) s += regName(m.base);
+  if (m.index.valid()) {
+    if (m.base.valid()) s += '+';
+    s += regName(m.index);
+    if (m.scale != 1 || !m.base.valid()) s += "*" + std::to_string(m.scale);
+  }
+  if (!m.base.valid() && !m.index.valid()) s += signedHex(m.disp);
+  else if (m.disp > 0) s += "+" + hex(uint64_t(m.disp));
+  else if (m.disp < 0) s += signedHex(m.disp);
+  s += ']';
+  return s;
+}
+
+}  // namespace
+
+std::string_view regName(Reg r) {
+  unsigned n = r.num & 15;
+  switch (r.cls) {
+    case RegClass::Gp8: return kGp8[n];
+    case RegClass::Gp32: return kGp32[n];
+    case RegClass::Gp64: return kGp64[n];
+    case RegClass::Xmm: return kXmm[n];
+    case RegClass::Rip: return "rip";
+    case RegClass::None: break;
+  }
+  return "?";
+}
+
+std::string_view mnemonicName(Mnemonic m, Cond c) {
+  static const std::array<std::array<std::string, 16>, 3> ccNames = [] {
+    std::array<std::array<std::string, 16>, 3> t;
+    for (unsigned i = 0; i < 16; ++i) {
+      t[0][i] = "set" + std::string(kConds[i]);
+      t[1][i] = "cmov" + std::string(kConds[i]);
+      t[2][i] = "j" + std::string(kConds[i]);
+    }
+    return t;
+  }();
+  unsigned ci = unsigned(c) & 15;
+  if (m == Mnemonic::Setcc) return ccNames[0][ci];
+  if (m == Mnemonic::Cmovcc) return ccNames[1][ci];
+  if (m == Mnemonic::Jcc) return ccNames[2][ci];
+  if (size_t(m) < std::size(kMnemonics)) return kMnemonics[size_t(m)];
+  return "?";
+}
+
+Instruction parse(std::string_view line) {
+  size_t hash = line.find('#');
+  if (hash != std::string_view::npos) line = line.substr(0, hash);
+  return Parser(line).instruction();
+}
+
+std::string print(const Instruction& in, bool forceLong, std::string_view addressBase) {
+  std::string s;
+  bool target = in.numOperands > 0 && (in.ops[0].kind == OperandKind::Label ||
+                                       in.ops[0].kind == OperandKind::Address);
+  if ((in.longBranch || forceLong) && target &&
+      (in.mnemonic == Mnemonic::Jmp || in.mnemonic == Mnemonic::Jcc))
+    s = "{disp32} ";
+  s += mnemonicName(in.mnemonic, in.cond);
+  for (unsigned i = 0; i < in.numOperands && i < 3; ++i) {
+    s += i ? ", " : " ";
+    const Operand& o = in.ops[i];
+    switch (o.kind) {
+      case OperandKind::Reg: s += regName(o.reg); break;
+      case OperandKind::Mem: s += memText(o.mem); break;
+      case OperandKind::Imm: s += signedHex(o.imm); break;
+      case OperandKind::Label: s += o.label; break;
+      case OperandKind::Address:
+        if (!addressBase.empty()) {
+          s += addressBase;
+          s += o.imm < 0 ? "" : "+";
+        }
+        s += signedHex(o.imm);
+        break;
+      case OperandKind::None: s += "?"; break;
+    }
+  }
+  return s;
+}
+
+std::string toGnuAs(const X86Program& p) {
+  std::set<std::string_view> globals(p.globals.begin(), p.globals.end());
+  std::string out = ".intel_syntax noprefix\n.text\n.Lcode:\n";
+  for (size_t b = 0; b < p.blocks.size(); ++b) {
+    const auto& blk = p.blocks[b];
+    std::set<std::string_view> locals;
+    for (const auto& it : blk.items)
+      if (it.kind == ItemKind::Label && !it.global) locals.insert(it.label);
+    auto mangle = [&](const std::string& n) {
+      return locals.count(n) ? ".L" + std::to_string(b) + "_" + n : n;
+    };
+    out += "# block " + std::to_string(b) + ", line " + std::to_string(blk.sourceLine) + "\n";
+    for (const auto& it : blk.items) {
+      if (it.kind == ItemKind::Label) {
+        out += mangle(it.label) + ":";
+      } else if (it.kind == ItemKind::Instruction) {
+        Instruction in = it.inst;
+        bool far = false;
+        for (unsigned i = 0; i < in.numOperands && i < 3; ++i) {
+          Operand& o = in.ops[i];
+          if (o.kind == OperandKind::Label) {
+            far = !locals.count(o.label);
+            o.label = mangle(o.label);
+          } else if (o.kind == OperandKind::Address) {
+            far = true;
+          }
+        }
+        out += "\t" + print(in, far, ".Lcode");
+      }
+      if (!it.comment.empty()) out += "\t# " + it.comment;
+      if (it.kind != ItemKind::Comment || !it.comment.empty()) out += "\n";
+    }
+  }
+  return out;
+}
+
+std::string listing(const X86Program& p, const Result& r) {
+  std::string out;
+  char buf[32];
+  for (size_t b = 0; b < p.blocks.size(); ++b) {
+    const auto& blk = p.blocks[b];
+    std::snprintf(buf, sizeof buf, "%08x", b < r.blockOffsets.size() ? r.blockOffsets[b] : 0u);
+    out += std::string(buf) + "  # block " + std::to_string(b) + ", line " +
+           std::to_string(blk.sourceLine) + "\n";
+    for (size_t i = 0; i < blk.items.size(); ++i) {
+      const auto& it = blk.items[i];
+      ItemLayout lay;
+      if (b < r.items.size() && i < r.items[b].size()) lay = r.items[b][i];
+      std::snprintf(buf, sizeof buf, "%08x  ", lay.offset);
+      std::string line = buf, bytes;
+      for (uint32_t k = 0; k < lay.size && lay.offset + k < r.code.size(); ++k) {
+        std::snprintf(buf, sizeof buf, "%02x", r.code[lay.offset + k]);
+        bytes += buf;
+      }
+      bytes.resize(std::max<size_t>(bytes.size(), 20), ' ');
+      line += bytes + "  ";
+      if (it.kind == ItemKind::Label) line += it.label + ":";
+      else if (it.kind == ItemKind::Instruction) line += "\t" + print(it.inst, lay.longForm);
+      if (!it.comment.empty()) line += "\t# " + it.comment;
+      out += line + "\n";
+    }
+  }
+  return out;
+}
+
+}  // namespace ldc::as::x86
