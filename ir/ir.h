@@ -36,6 +36,22 @@ bool area_is_bit(Area a);              // one byte per element, value 0/1
 bool area_is_real(Area a);             // F
 bool area_is_word(Area a);             // 4 bytes per element
 
+// A device as spelled in source: prefix and index ("WX3" -> {WX, 3}).  The area
+// depends on use: T and C are a done bit where a bit is wanted, a word elsewhere.
+enum class Dev : uint8_t { X, Y, M, K, S, T, C, WX, WY, D, F };
+struct DeviceRef {
+  Dev dev;
+  uint32_t index;
+  bool operator==(const DeviceRef&) const = default;
+};
+// Parses a plain device spelling (case-insensitive); nullopt if it is not one.
+// The index is not range-checked (see device_count).
+std::optional<DeviceRef> parse_device(std::string_view s);
+const char* dev_name(Dev d);
+uint32_t device_count(Dev d);         // X: 8192, WX: 1024, T: 256 ...
+Area bit_area(Dev d);                 // X->X, T->TQ, C->CQ; Area::Count if not a bit
+Area word_area(Dev d);                // WX->WX, T->TW, C->CW, F->F; Area::Count if not a word
+
 // Byte offsets of every area in the memory image.  Bits take one byte (0/1),
 // words four (little-endian INT32 or IEEE binary32).  The edge area is last so
 // that the rest of the layout does not depend on the program.
@@ -80,6 +96,8 @@ struct OpInfo {
 const OpInfo& op_info(Op op);
 std::optional<Op> op_from_name(std::string_view name);  // case-insensitive
 const char* op_class_name(OpClass c);
+// May a device of area `a`, index `idx`, stand for signature letter `sig`?
+bool operand_area_ok(char sig, Area a, uint32_t idx);
 
 enum class OpdKind : uint8_t { None, Bit, Int, Real, ConstInt, ConstReal, Edge, Timer, Counter, Label };
 
@@ -100,6 +118,14 @@ struct SrcLoc {
   bool operator==(const SrcLoc&) const = default;
 };
 
+// An error in a source file at line:col (1-based); the driver prints it with the
+// source line and a caret.
+struct CompileError : std::runtime_error {
+  int line, col;
+  CompileError(int l, int c, const std::string& m) : std::runtime_error(m), line(l), col(c) {}
+};
+using IlError = CompileError;
+
 struct Instr {
   Op op{};
   Operand a[3];
@@ -115,26 +141,63 @@ struct Rung {
   std::vector<Instr> code;
 };
 
+// `alias NAME = DEVICE`: kept so traces, --watch and listings can use the names.
+struct Alias {
+  std::string name;
+  DeviceRef dev;
+  bool operator==(const Alias&) const = default;
+};
+
 struct Program {
   std::string source;                   // file name, for messages
+  std::vector<Alias> aliases;
   std::vector<Rung> rungs;
   std::vector<std::string> end_labels;  // labels after the last rung
   uint32_t edge_slots = 0;
   Layout layout() const { return Layout::standard(edge_slots); }
 };
 
+// ---------------------------------------------------------------- the rung tree
+// The series/parallel tree of one rung (paper 003, Fig. 5), built by a front end
+// and lowered to IL by lower_to_il().  Conditions (Bool) and actions:
+//   Leaf      an input element: elem.op is its push form (LOAD, LOADN, LOADP,
+//             LOADF, LDEQ..LDGE); LOADP/LOADF/CTU/CTD get their edge slot when lowered
+//   Series    AND of kids, left to right        Parallel  OR of kids, top to bottom
+//   Output    an output element (OUT, SET, TON, MOV, JMP, ...)
+//   Then      kids[0] (Bool) gates kids[1] (an action)
+//   Fork      actions sharing the power flow that reaches them, top to bottom
+struct TreeNode {
+  enum class Kind : uint8_t { Leaf, Series, Parallel, Output, Then, Fork } kind = Kind::Leaf;
+  Instr elem;  // Leaf / Output
+  std::string text;  // the element as written, for --emit=tree
+  std::vector<TreeNode> kids;
+};
+struct TreeRung {
+  std::vector<std::string> labels;
+  std::string title;
+  int line = 0;
+  TreeNode root;  // an action
+};
+struct TreeProgram {
+  std::string source;
+  std::vector<Alias> aliases;
+  std::vector<TreeRung> rungs;
+  std::vector<std::string> end_labels;
+};
+std::string print_tree(const TreeProgram& p);
+// Tree -> IL.  Throws CompileError if a rung needs more than 32 bit-stack entries.
+Program lower_to_il(const TreeProgram& p);
+constexpr int kMaxStackDepth = 32;
+
 // Operand spelling in IL text: X3, T0, D5, F1, 42, 1.5, E7, name.
 std::string operand_text(const Operand& o);
 std::string instr_text(const Instr& in);  // "LOAD X1", "ADD D0 5 D1"
+std::string real_text(float f);           // %.9g, with ".0" added when needed
 
 // ---- text form (--emit=il); parse_il_text(print_il_text(p)) == p
 std::string print_il_text(const Program& p);
 
-struct IlError : std::runtime_error {
-  int line, col;
-  IlError(int l, int c, const std::string& m) : std::runtime_error(m), line(l), col(c) {}
-};
-Program parse_il_text(std::string_view text, const std::string& filename);  // throws IlError
+Program parse_il_text(std::string_view text, const std::string& filename);  // throws CompileError
 
 // ---- binary form (the image's IL section, run by the interpreter)
 // Each instruction: op byte, then per operand a tag byte and its payload (docs/il.md).

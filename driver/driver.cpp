@@ -1,0 +1,73 @@
+// driver/driver.cpp -- shared by the executables.
+#include "driver/driver.h"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "frontend/frontend.h"
+
+namespace ldc {
+
+std::string read_file(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw UserError(path + ": error: cannot open: " + std::strerror(errno));
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  if (f.bad()) throw UserError(path + ": error: cannot read");
+  return ss.str();
+}
+
+void write_file_atomic(const std::string& path, const std::string& data) {
+  std::string tmp = path + ".tmp." + std::to_string(getpid());
+  FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) throw UserError(path + ": error: cannot create: " + std::strerror(errno));
+  bool ok = std::fwrite(data.data(), 1, data.size(), f) == data.size();
+  ok &= std::fflush(f) == 0;
+  ok &= std::fclose(f) == 0;
+  if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
+    int e = errno;
+    std::remove(tmp.c_str());
+    throw UserError(path + ": error: cannot write: " + std::strerror(e));
+  }
+}
+
+static bool ends_with(const std::string& s, const std::string& suf) {
+  return s.size() >= suf.size() && s.compare(s.size() - suf.size(), suf.size(), suf) == 0;
+}
+
+Compiled compile_source(const std::string& path) {
+  std::string text = read_file(path);
+  Compiled c;
+  try {
+    if (ends_with(path, ".il")) {
+      c.il = parse_il_text(text, path);
+    } else {
+      c.from_ld = true;
+      c.tree = parse_ld(text, path);
+      c.il = lower_to_il(c.tree);
+    }
+  } catch (CompileError& e) {
+    std::string msg = format_error(path, text, e.line, e.col, e.what());
+    if (!msg.empty() && msg.back() == '\n') msg.pop_back();
+    throw UserError(msg);
+  }
+  return c;
+}
+
+std::optional<int32_t> parse_period(const std::string& s) {
+  char* end = nullptr;
+  errno = 0;
+  long long v = std::strtoll(s.c_str(), &end, 10);
+  if (end == s.c_str() || errno || v < 0) return std::nullopt;
+  std::string unit = end;
+  long long ms = unit.empty() || unit == "ms" ? v : unit == "s" ? v * 1000 : -1;
+  if (ms < 0 || ms > INT32_MAX) return std::nullopt;
+  return int32_t(ms);
+}
+
+}  // namespace ldc

@@ -1,0 +1,35 @@
+// driver/driver.h -- what the ldc, ldrun and ldobjdump executables share:
+// reading inputs, turning any accepted source into IL, and writing outputs
+// without leaving a half-written file behind.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ir/ir.h"
+
+namespace ldc {
+
+// Thrown for user errors; the message is printed as is, exit status 1.
+struct UserError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+std::string read_file(const std::string& path);  // throws UserError
+// Writes to path.tmp.PID, then renames, so no half-written output is left.
+void write_file_atomic(const std::string& path, const std::string& data);  // throws UserError
+
+struct Compiled {
+  TreeProgram tree;  // empty for IL input
+  Program il;
+  bool from_ld = false;
+};
+// .ld (grid) or .il (IL text): parse and lower.  Errors are formatted
+// "file:line:col: error: ..." with the source line and a caret.
+Compiled compile_source(const std::string& path);
+
+// "10ms", "10", "2s" -> ms; nullopt if malformed.
+std::optional<int32_t> parse_period(const std::string& s);
+
+}  // namespace ldc

@@ -1,0 +1,51 @@
+// ldc -- the ladder compiler.  The pipeline, one pass after another:
+//   source --parse--> rung trees --lower--> IL --(backend, assembler, loader)--> image
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "driver/driver.h"
+
+using namespace ldc;
+
+static const char kUsage[] =
+    "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il] [--target=x86-64|c40] [-O0|-O1|-O2]\n";
+
+int main(int argc, char** argv) {
+  std::string input, output, emit, target = "x86-64";
+  for (int i = 1; i < argc; i++) {
+    std::string a = argv[i];
+    if (a == "-o" && i + 1 < argc) output = argv[++i];
+    else if (a.rfind("--emit=", 0) == 0) emit = a.substr(7);
+    else if (a.rfind("--target=", 0) == 0) target = a.substr(9);
+    else if (a == "-O0" || a == "-O1" || a == "-O2") {}
+    else if (a == "-h" || a == "--help") { std::fputs(kUsage, stdout); return 0; }
+    else if (!a.empty() && a[0] == '-') { std::fprintf(stderr, "ldc: error: unknown option '%s'\n%s", a.c_str(), kUsage); return 1; }
+    else if (input.empty()) input = a;
+    else { std::fprintf(stderr, "ldc: error: more than one input file\n%s", kUsage); return 1; }
+  }
+  if (input.empty()) { std::fprintf(stderr, "ldc: error: no input file\n%s", kUsage); return 1; }
+  try {
+    if (target != "x86-64" && target != "c40") throw UserError("ldc: error: unknown target '" + target + "' (x86-64 or c40)");
+    Compiled c = compile_source(input);                      // parse + lower
+    std::string text;
+    if (emit == "tree") {
+      if (!c.from_ld) throw UserError("ldc: error: --emit=tree needs a .ld source");
+      text = print_tree(c.tree);
+    } else if (emit == "il") {
+      text = print_il_text(c.il);
+    } else {
+      throw UserError("ldc: error: " + (emit.empty() ? std::string("image output (-o FILE.bin)") : "--emit=" + emit) +
+                      " is not available in this build; use --emit=tree or --emit=il");
+    }
+    if (output.empty()) std::fwrite(text.data(), 1, text.size(), stdout);
+    else write_file_atomic(output, text);
+  } catch (UserError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+  } catch (std::exception& e) {
+    std::fprintf(stderr, "ldc: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,76 @@
+// ldrun -- run a program scan by scan over an input trace and print watched devices.
+#include <cstdio>
+#include <string>
+
+#include "driver/driver.h"
+#include "runtime/runtime.h"
+
+using namespace ldc;
+
+static const char kUsage[] =
+    "usage: ldrun FILE [--engine=interp] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms]\n";
+
+int main(int argc, char** argv) {
+  std::string input, engine = "interp", trace_file, watch;
+  RunOptions opt;
+  try {
+    for (int i = 1; i < argc; i++) {
+      std::string a = argv[i];
+      auto value = [&](const std::string& name) -> std::string {
+        if (a.rfind(name + "=", 0) == 0) return a.substr(name.size() + 1);
+        if (a == name && i + 1 < argc) return argv[++i];
+        throw UserError("ldrun: error: " + name + " needs a value");
+      };
+      if (a.rfind("--engine", 0) == 0) engine = value("--engine");
+      else if (a.rfind("--trace", 0) == 0) trace_file = value("--trace");
+      else if (a.rfind("--watch", 0) == 0) watch = value("--watch");
+      else if (a.rfind("--scans", 0) == 0) {
+        std::string v = value("--scans");
+        auto n = parse_period(v);
+        if (!n || v.find_first_not_of("0123456789") != std::string::npos) throw UserError("ldrun: error: bad --scans '" + v + "'");
+        opt.scans = *n;
+      } else if (a.rfind("--period", 0) == 0) {
+        std::string v = value("--period");
+        auto p = parse_period(v);
+        if (!p) throw UserError("ldrun: error: bad --period '" + v + "' (e.g. 10ms, 1s)");
+        opt.period_ms = *p;
+      } else if (a == "-h" || a == "--help") { std::fputs(kUsage, stdout); return 0; }
+      else if (!a.empty() && a[0] == '-') throw UserError("ldrun: error: unknown option '" + a + "'\n" + kUsage);
+      else if (input.empty()) input = a;
+      else throw UserError("ldrun: error: more than one program");
+    }
+    if (input.empty()) throw UserError(std::string("ldrun: error: no program\n") + kUsage);
+    if (engine != "interp") throw UserError("ldrun: error: engine '" + engine + "' is not available in this build (interp)");
+    Compiled c = compile_source(input);
+    BinaryIl bin = encode_il(c.il);
+    Layout layout = c.il.layout();
+    if (std::string why = validate_il(bin.code, layout); !why.empty()) throw UserError("ldrun: error: IL " + why);
+    auto eng = make_interp_engine(bin.code, layout);
+    size_t s = 0;
+    while (!watch.empty() && s <= watch.size()) {
+      size_t e = watch.find(',', s);
+      std::string name = watch.substr(s, e == std::string::npos ? std::string::npos : e - s);
+      try {
+        opt.watch.push_back(resolve_probe(name, c.il.aliases));
+      } catch (std::exception& ex) { throw UserError("ldrun: error: --watch: " + std::string(ex.what())); }
+      if (e == std::string::npos) break;
+      s = e + 1;
+    }
+    Trace trace;
+    if (!trace_file.empty()) {
+      try {
+        trace = read_trace(read_file(trace_file), trace_file, c.il.aliases);
+      } catch (UserError&) { throw; } catch (std::exception& ex) { throw UserError(ex.what()); }
+    }
+    std::string out;
+    run_trace(*eng, layout, trace_file.empty() ? nullptr : &trace, trace_file, opt, out);
+    std::fwrite(out.data(), 1, out.size(), stdout);
+  } catch (UserError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+  } catch (std::exception& e) {
+    std::fprintf(stderr, "ldrun: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,24 @@
+// frontend/frontend.h -- the .ld ladder grid reader (docs/format.md).
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "ir/ir.h"
+
+namespace ldc {
+
+// Parses a ladder source file into one series/parallel tree per rung, with every
+// device resolved and type-checked.  Throws CompileError (line, col, message).
+TreeProgram parse_ld(std::string_view text, const std::string& filename);
+
+// "file:line:col: error: message", the source line and a caret under the column.
+std::string format_error(const std::string& file, std::string_view text, int line, int col,
+                         const std::string& message);
+
+// Limits that keep hostile input from exhausting the compiler.
+constexpr size_t kMaxSourceBytes = 64u << 20;
+constexpr int kMaxRungRows = 4096;
+constexpr int kMaxRowWidth = 4096;
+
+}  // namespace ldc

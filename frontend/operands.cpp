@@ -1,0 +1,174 @@
+// frontend/operands.cpp -- device spellings, IEC addresses, aliases, constants
+// and durations, and the typed operands of every element (docs/format.md).
+#include "frontend/operands.h"
+
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+
+namespace ldc {
+
+std::string upper(std::string_view s) {
+  std::string u(s);
+  for (char& c : u) c = char(std::toupper((unsigned char)c));
+  return u;
+}
+
+bool is_identifier(std::string_view s) {
+  if (s.empty() || !(std::isalpha((unsigned char)s[0]) || s[0] == '_')) return false;
+  for (char c : s)
+    if (!std::isalnum((unsigned char)c) && c != '_') return false;
+  return true;
+}
+
+// iec_address = "%" ("I"|"Q"|"M") ("X" a "." b | "W" n | "D" n)
+//   %IXa.b = X(8a+b)   %QXa.b = Y(8a+b)   %MXa.b = M(8a+b)
+//   %IWn = WXn         %QWn = WYn         %MWn = Dn          %MDn = Fn
+std::optional<DeviceRef> parse_iec_address(std::string_view s, std::string& why) {
+  std::string u = upper(s);
+  if (u.size() < 4 || u[0] != '%') return std::nullopt;
+  char region = u[1], size = u[2];
+  std::string rest = u.substr(3);
+  auto number = [&](const std::string& t, uint64_t& v) {
+    if (t.empty() || t.size() > 9) return false;
+    v = 0;
+    for (char c : t) {
+      if (!std::isdigit((unsigned char)c)) return false;
+      v = v * 10 + uint64_t(c - '0');
+    }
+    return true;
+  };
+  if (size == 'X') {
+    size_t dot = rest.find('.');
+    uint64_t a = 0, b = 0;
+    if (dot == std::string::npos || !number(rest.substr(0, dot), a) || !number(rest.substr(dot + 1), b)) {
+      why = "a bit address is written %" + std::string(1, region) + "Xbyte.bit, e.g. %IX0.3";
+      return std::nullopt;
+    }
+    if (b > 7) {
+      why = "bit number " + std::to_string(b) + " in " + std::string(s) + " must be 0..7";
+      return std::nullopt;
+    }
+    uint64_t idx = a * 8 + b;
+    Dev d = region == 'I' ? Dev::X : region == 'Q' ? Dev::Y : Dev::M;
+    if (region != 'I' && region != 'Q' && region != 'M') return std::nullopt;
+    return DeviceRef{d, idx > UINT32_MAX ? UINT32_MAX : uint32_t(idx)};
+  }
+  uint64_t n;
+  if (!number(rest, n)) return std::nullopt;
+  uint32_t idx = n > UINT32_MAX ? UINT32_MAX : uint32_t(n);
+  if (size == 'W' && region == 'I') return DeviceRef{Dev::WX, idx};
+  if (size == 'W' && region == 'Q') return DeviceRef{Dev::WY, idx};
+  if (size == 'W' && region == 'M') return DeviceRef{Dev::D, idx};
+  if (size == 'D' && region == 'M') return DeviceRef{Dev::F, idx};
+  why = "unsupported IEC address " + std::string(s) + " (use %IX %QX %MX %IW %QW %MW %MD)";
+  return std::nullopt;
+}
+
+// duration = ["T#" | "TIME#"] { NUMBER unit } | NUMBER unit     unit = d h m s ms
+// Returns milliseconds; sets why and returns false on a malformed duration.
+static bool parse_duration(std::string_view text, int64_t& ms, std::string& why) {
+  std::string u = upper(text);
+  size_t i = 0;
+  if (u.rfind("T#", 0) == 0) i = 2;
+  else if (u.rfind("TIME#", 0) == 0) i = 5;
+  double total = 0;
+  int parts = 0;
+  while (i < u.size()) {
+    if (u[i] == '_') { i++; continue; }
+    size_t start = i;
+    while (i < u.size() && (std::isdigit((unsigned char)u[i]) || u[i] == '.')) i++;
+    if (start == i) { why = "malformed duration '" + std::string(text) + "'"; return false; }
+    double v = std::strtod(u.substr(start, i - start).c_str(), nullptr);
+    double scale;
+    if (u.compare(i, 2, "MS") == 0) { scale = 1; i += 2; }
+    else if (i < u.size() && u[i] == 'D') { scale = 86400000; i++; }
+    else if (i < u.size() && u[i] == 'H') { scale = 3600000; i++; }
+    else if (i < u.size() && u[i] == 'M') { scale = 60000; i++; }
+    else if (i < u.size() && u[i] == 'S') { scale = 1000; i++; }
+    else { why = "duration '" + std::string(text) + "' needs a unit (ms, s, m, h, d)"; return false; }
+    total += v * scale;
+    parts++;
+  }
+  if (parts == 0) { why = "empty duration"; return false; }
+  if (total != std::floor(total)) { why = "duration '" + std::string(text) + "' is not a whole number of ms"; return false; }
+  if (total > 2147483647.0) { why = "duration '" + std::string(text) + "' is too long (at most 2147483647 ms)"; return false; }
+  ms = int64_t(total);
+  return true;
+}
+
+// constant = INT | "16#" HEX | "0x" HEX | "2#" BIN | "8#" OCT | REAL | duration
+// Underscores between digits are allowed (IEC: 1_000).
+std::optional<Operand> parse_constant(std::string_view text, std::string& why) {
+  std::string s;
+  for (char c : text)
+    if (c != '_') s += c;
+  if (s.empty()) return std::nullopt;
+  std::string u = upper(s);
+  bool neg = false;
+  std::string body = u;
+  if (body[0] == '-' || body[0] == '+') { neg = body[0] == '-'; body = body.substr(1); }
+  if (body.empty()) return std::nullopt;
+  auto with_base = [&](const std::string& digits, int base) -> std::optional<Operand> {
+    if (digits.empty()) { why = "missing digits in '" + std::string(text) + "'"; return std::nullopt; }
+    uint64_t v = 0;
+    for (char c : digits) {
+      int d = std::isdigit((unsigned char)c) ? c - '0' : (c >= 'A' && c <= 'F') ? c - 'A' + 10 : 99;
+      if (d >= base) { why = "bad digit '" + std::string(1, c) + "' in '" + std::string(text) + "'"; return std::nullopt; }
+      v = v * base + uint64_t(d);
+      if (v > 0xFFFFFFFFull) { why = "constant '" + std::string(text) + "' does not fit in 32 bits"; return std::nullopt; }
+    }
+    // Based literals are bit patterns: 16#FFFFFFFF is -1.
+    if (base != 10) {
+      Operand o{OpdKind::ConstInt};
+      o.ival = int32_t(uint32_t(neg ? 0u - uint32_t(v) : uint32_t(v)));
+      return o;
+    }
+    int64_t sv = neg ? -int64_t(v) : int64_t(v);
+    if (sv < INT32_MIN || sv > INT32_MAX) { why = "constant '" + std::string(text) + "' is out of the INT32 range"; return std::nullopt; }
+    Operand o{OpdKind::ConstInt};
+    o.ival = int32_t(sv);
+    return o;
+  };
+  if (body.rfind("16#", 0) == 0) return with_base(body.substr(3), 16);
+  if (body.rfind("0X", 0) == 0) return with_base(body.substr(2), 16);
+  if (body.rfind("2#", 0) == 0) return with_base(body.substr(2), 2);
+  if (body.rfind("8#", 0) == 0) return with_base(body.substr(2), 8);
+  if (body.rfind("T#", 0) == 0 || body.rfind("TIME#", 0) == 0) {
+    int64_t ms;
+    if (neg) { why = "a duration cannot be negative"; return std::nullopt; }
+    if (!parse_duration(body, ms, why)) return std::nullopt;
+    Operand o{OpdKind::ConstInt};
+    o.ival = int32_t(ms);
+    return o;
+  }
+  if (!std::isdigit((unsigned char)body[0]) && body[0] != '.') return std::nullopt;
+  bool all_digits = true;
+  for (char c : body) all_digits &= bool(std::isdigit((unsigned char)c));
+  if (all_digits) return with_base(body, 10);
+  // REAL: digits, '.', exponent
+  {
+    char* end = nullptr;
+    std::string num = (neg ? "-" : "") + body;
+    double d = std::strtod(num.c_str(), &end);
+    if (end && *end == '\0' && body.find_first_of(".E") != std::string::npos) {
+      if (std::isinf(float(d)) && !std::isinf(d)) { why = "REAL constant '" + std::string(text) + "' is out of range"; return std::nullopt; }
+      if (std::isinf(d)) { why = "REAL constant '" + std::string(text) + "' is out of range"; return std::nullopt; }
+      Operand o{OpdKind::ConstReal};
+      o.fval = float(d);
+      return o;
+    }
+  }
+  // number with a unit: 500ms, 2s, 1m30s
+  int64_t ms;
+  std::string dwhy;
+  if (!neg && parse_duration(body, ms, dwhy)) {
+    Operand o{OpdKind::ConstInt};
+    o.ival = int32_t(ms);
+    return o;
+  }
+  why = dwhy.empty() ? "malformed constant '" + std::string(text) + "'" : dwhy;
+  return std::nullopt;
+}
+
+}  // namespace ldc

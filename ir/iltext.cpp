@@ -1,0 +1,239 @@
+// ir/iltext.cpp -- the IL text form (--emit=il) and its reader.
+//
+//   program   = { line } ;
+//   line      = ".rung" "line" INT [ STRING ] | ".label" NAME | ".edges" INT
+//             | ".alias" NAME DEVICE
+//             | ".end" | MNEMONIC { operand } ;          (";" starts a comment)
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+
+#include "ir/ir.h"
+
+namespace ldc {
+
+static std::string quote(const std::string& s) {
+  std::string q = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') q += '\\';
+    q += c;
+  }
+  return q + "\"";
+}
+
+std::string print_il_text(const Program& p) {
+  std::string out = "; ldc IL of " + p.source + "\n";
+  if (p.edge_slots) out += ".edges " + std::to_string(p.edge_slots) + "\n";
+  for (const Alias& a : p.aliases)
+    out += ".alias " + a.name + " " + dev_name(a.dev.dev) + std::to_string(a.dev.index) + "\n";
+  for (const Rung& r : p.rungs) {
+    for (const auto& l : r.labels) out += ".label " + l + "\n";
+    out += ".rung line " + std::to_string(r.line);
+    if (!r.title.empty()) out += " " + quote(r.title);
+    out += "\n";
+    for (const Instr& in : r.code) {
+      std::string m = op_info(in.op).name;
+      out += "    " + m;
+      if (in.nopd()) out += std::string(m.size() < 8 ? 8 - m.size() : 1, ' ');
+      for (int i = 0; i < in.nopd(); i++) out += (i ? " " : "") + operand_text(in.a[i]);
+      out += "\n";
+    }
+  }
+  for (const auto& l : p.end_labels) out += ".label " + l + "\n";
+  out += ".end\n";
+  return out;
+}
+
+namespace {
+
+struct Tok {
+  std::string text;
+  int col;  // 1-based
+  bool quoted = false;
+};
+
+std::vector<Tok> split(std::string_view line, int lineno) {
+  std::vector<Tok> t;
+  size_t i = 0;
+  while (i < line.size()) {
+    char c = line[i];
+    if (c == ';') break;
+    if (std::isspace((unsigned char)c)) { i++; continue; }
+    Tok tok;
+    tok.col = int(i) + 1;
+    if (c == '"') {
+      tok.quoted = true;
+      i++;
+      while (i < line.size() && line[i] != '"') {
+        if (line[i] == '\\' && i + 1 < line.size()) i++;
+        tok.text += line[i++];
+      }
+      if (i >= line.size()) throw CompileError(lineno, tok.col, "unterminated string");
+      i++;
+    } else {
+      while (i < line.size() && !std::isspace((unsigned char)line[i]) && line[i] != ';') tok.text += line[i++];
+    }
+    t.push_back(tok);
+  }
+  return t;
+}
+
+bool is_name(const std::string& s) {
+  if (s.empty() || !(std::isalpha((unsigned char)s[0]) || s[0] == '_')) return false;
+  for (char c : s)
+    if (!std::isalnum((unsigned char)c) && c != '_') return false;
+  return true;
+}
+
+// Numeric constant: INT32 or REAL (a '.', an exponent, inf or nan makes it REAL).
+bool parse_number(const std::string& s, Operand& o) {
+  if (s.empty()) return false;
+  char first = s[0];
+  if (!(std::isdigit((unsigned char)first) || first == '-' || first == '+' || first == '.')) return false;
+  bool real = s.find_first_of(".eEnN") != std::string::npos;
+  errno = 0;
+  char* end = nullptr;
+  if (real) {
+    float f = std::strtof(s.c_str(), &end);
+    if (*end || errno == ERANGE) return false;
+    o.kind = OpdKind::ConstReal;
+    o.fval = f;
+  } else {
+    long long v = std::strtoll(s.c_str(), &end, 10);
+    if (*end || errno == ERANGE || v < INT32_MIN || v > INT32_MAX) return false;
+    o.kind = OpdKind::ConstInt;
+    o.ival = int32_t(v);
+  }
+  return true;
+}
+
+Operand parse_operand(char sig, const Tok& t, int lineno, uint32_t edges) {
+  Operand o;
+  auto fail = [&](const std::string& m) -> Operand { throw CompileError(lineno, t.col, m); };
+  if (sig == 'l') {
+    if (!is_name(t.text)) fail("expected a label name, found '" + t.text + "'");
+    o.kind = OpdKind::Label;
+    o.label = t.text;
+    return o;
+  }
+  if (sig == 'e') {
+    if (t.text.size() < 2 || std::toupper((unsigned char)t.text[0]) != 'E') fail("expected an edge slot E<n>");
+    Operand n;
+    if (!parse_number(t.text.substr(1), n) || n.kind != OpdKind::ConstInt || n.ival < 0) fail("bad edge slot '" + t.text + "'");
+    if (uint32_t(n.ival) >= edges) fail("edge slot " + t.text + " outside the .edges count");
+    o.kind = OpdKind::Edge;
+    o.index = uint32_t(n.ival);
+    return o;
+  }
+  if ((sig == 'v' || sig == 'i') && parse_number(t.text, o)) {
+    if (sig == 'i' && o.kind == OpdKind::ConstReal) fail("REAL constant where INT32 is required");
+    return o;
+  }
+  auto d = parse_device(t.text);
+  if (!d) fail("expected a device, found '" + t.text + "'");
+  if (d->index >= device_count(d->dev)) fail("device index out of range: " + t.text);
+  if (sig == 't' || sig == 'c') {
+    if (d->dev != (sig == 't' ? Dev::T : Dev::C)) fail(std::string("expected a ") + (sig == 't' ? "timer" : "counter"));
+    o.kind = sig == 't' ? OpdKind::Timer : OpdKind::Counter;
+    o.index = d->index;
+    return o;
+  }
+  bool bitctx = sig == 'b' || sig == 'w';
+  Area a = bitctx ? bit_area(d->dev) : word_area(d->dev);
+  if (a == Area::Count || !operand_area_ok(sig, a, d->index)) fail("device " + t.text + " is not allowed here");
+  o.area = a;
+  o.index = d->index;
+  o.kind = bitctx ? OpdKind::Bit : (area_is_real(a) ? OpdKind::Real : OpdKind::Int);
+  return o;
+}
+
+}  // namespace
+
+Program parse_il_text(std::string_view text, const std::string& filename) {
+  Program p;
+  p.source = filename;
+  std::vector<std::string> pending_labels, all_labels;
+  Rung* cur = nullptr;
+  bool ended = false;
+  int lineno = 0;
+  size_t pos = 0;
+  while (pos <= text.size()) {
+    size_t nl = text.find('\n', pos);
+    std::string_view line = text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
+    pos = nl == std::string_view::npos ? text.size() + 1 : nl + 1;
+    lineno++;
+    auto toks = split(line, lineno);
+    if (toks.empty()) continue;
+    const Tok& head = toks[0];
+    if (ended) throw CompileError(lineno, head.col, "text after .end");
+    if (head.text == ".end") {
+      if (toks.size() > 1) throw CompileError(lineno, toks[1].col, "unexpected text after .end");
+      ended = true;
+    } else if (head.text == ".edges") {
+      Operand n;
+      if (toks.size() != 2 || !parse_number(toks[1].text, n) || n.kind != OpdKind::ConstInt || n.ival < 0)
+        throw CompileError(lineno, head.col, ".edges needs a count");
+      p.edge_slots = uint32_t(n.ival);
+    } else if (head.text == ".alias") {
+      std::optional<DeviceRef> d;
+      if (toks.size() != 3 || !is_name(toks[1].text) || !(d = parse_device(toks[2].text)) || d->index >= device_count(d->dev))
+        throw CompileError(lineno, head.col, ".alias needs a name and a device");
+      p.aliases.push_back({toks[1].text, *d});
+    } else if (head.text == ".label") {
+      if (toks.size() != 2 || !is_name(toks[1].text)) throw CompileError(lineno, head.col, ".label needs a name");
+      for (auto& l : all_labels)
+        if (l == toks[1].text) throw CompileError(lineno, toks[1].col, "duplicate label '" + l + "'");
+      all_labels.push_back(toks[1].text);
+      pending_labels.push_back(toks[1].text);
+      cur = nullptr;
+    } else if (head.text == ".rung") {
+      Operand n;
+      if (toks.size() < 3 || toks[1].text != "line" || !parse_number(toks[2].text, n) || n.kind != OpdKind::ConstInt)
+        throw CompileError(lineno, head.col, "expected .rung line N [\"title\"]");
+      Rung r;
+      r.line = n.ival;
+      r.labels = std::move(pending_labels);
+      pending_labels.clear();
+      if (toks.size() >= 4) {
+        if (!toks[3].quoted || toks.size() > 4) throw CompileError(lineno, toks[3].col, "expected a quoted rung title");
+        r.title = toks[3].text;
+      }
+      p.rungs.push_back(std::move(r));
+      cur = &p.rungs.back();
+    } else {
+      auto op = op_from_name(head.text);
+      if (!op) throw CompileError(lineno, head.col, "unknown mnemonic '" + head.text + "'");
+      if (!cur) throw CompileError(lineno, head.col, "instruction outside a .rung");
+      Instr in;
+      in.op = *op;
+      in.loc = {lineno, head.col};
+      const char* sig = op_info(*op).operands;
+      int n = in.nopd();
+      if (int(toks.size()) - 1 != n)
+        throw CompileError(lineno, head.col, std::string(op_info(*op).name) + " takes " + std::to_string(n) + " operand(s)");
+      for (int i = 0; i < n; i++) in.a[i] = parse_operand(sig[i], toks[i + 1], lineno, p.edge_slots);
+      cur->code.push_back(in);
+    }
+  }
+  if (!ended) throw CompileError(lineno, 1, "missing .end");
+  p.end_labels = std::move(pending_labels);
+  // Every jump goes forward to a defined label.
+  std::vector<std::pair<std::string, size_t>> where;  // label -> index of the rung it precedes
+  for (size_t r = 0; r < p.rungs.size(); r++)
+    for (auto& l : p.rungs[r].labels) where.emplace_back(l, r);
+  for (auto& l : p.end_labels) where.emplace_back(l, p.rungs.size());
+  for (size_t r = 0; r < p.rungs.size(); r++)
+    for (const Instr& in : p.rungs[r].code)
+      for (int i = 0; i < in.nopd(); i++)
+        if (in.a[i].kind == OpdKind::Label) {
+          const auto& name = in.a[i].label;
+          auto it = std::find_if(where.begin(), where.end(), [&](auto& w) { return w.first == name; });
+          if (it == where.end()) throw CompileError(in.loc.line, in.loc.col, "undefined label '" + name + "'");
+          if (it->second <= r) throw CompileError(in.loc.line, in.loc.col, "backward jump to '" + name + "'");
+        }
+  return p;
+}
+
+}  // namespace ldc

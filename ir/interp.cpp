@@ -1,0 +1,321 @@
+// ir/interp.cpp -- the reference interpreter: the meaning of every mnemonic.
+//
+// Written the way a classic PLC runs its intermediate code (paper 003, Fig. 3):
+// fetch a mnemonic, dispatch to its routine through a table, and decode every
+// operand with one general routine.  It is the baseline native code is measured
+// against, so it is straightforward, not slowed on purpose.
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "ir/ir.h"
+
+namespace ldc {
+namespace {
+
+constexpr int32_t kMin = std::numeric_limits<int32_t>::min();
+constexpr int32_t kMax = std::numeric_limits<int32_t>::max();
+
+struct Ctx {
+  const uint8_t* code;
+  uint32_t size;
+  uint32_t pc;
+  uint8_t* mem;
+  const Layout* L;
+  uint32_t stack;  // the bit stack: top = bit 0
+  bool end;
+};
+
+// A decoded operand: where it lives, or its constant value.
+struct Val {
+  uint8_t* addr;  // nullptr for constants
+  bool real;
+  int32_t i;
+  float f;
+  uint32_t index;  // device, timer, counter, edge slot or label target
+};
+
+uint32_t rd16(const uint8_t* p) { return p[0] | (p[1] << 8); }
+uint32_t rd32(const uint8_t* p) { return p[0] | (p[1] << 8) | (p[2] << 16) | (uint32_t(p[3]) << 24); }
+
+// The general operand decoding routine (tags: docs/il.md, "Binary form").
+Val operand(Ctx& c) {
+  Val v{};
+  uint8_t tag = c.code[c.pc];
+  switch (tag) {
+    case 1: v.i = int32_t(rd32(c.code + c.pc + 1)); c.pc += 5; return v;
+    case 2: { uint32_t u = rd32(c.code + c.pc + 1); std::memcpy(&v.f, &u, 4); v.real = true; c.pc += 5; return v; }
+    case 3: case 4: v.index = rd32(c.code + c.pc + 1); c.pc += 5; return v;
+    default: {
+      Area a = Area(tag - 0x10);
+      v.index = rd16(c.code + c.pc + 1);
+      v.addr = c.mem + c.L->addr(a, v.index);
+      v.real = area_is_real(a);
+      if (area_is_word(a)) {
+        if (v.real) std::memcpy(&v.f, v.addr, 4);
+        else std::memcpy(&v.i, v.addr, 4);
+      }
+      c.pc += 3;
+      return v;
+    }
+  }
+}
+
+bool top(const Ctx& c) { return c.stack & 1; }
+void push(Ctx& c, bool b) { c.stack = (c.stack << 1) | (b ? 1u : 0u); }
+uint32_t pop(Ctx& c) { uint32_t t = c.stack & 1; c.stack >>= 1; return t; }
+bool bit(const Val& v) { return *v.addr != 0; }
+float as_real(const Val& v) { return v.real ? v.f : int_to_real(v.i); }
+int32_t dt(const Ctx& c) { int32_t d; std::memcpy(&d, c.mem + kSysDt, 4); return d; }
+int32_t preset(const Val& v) { return v.i < 0 ? 0 : v.i; }
+void set_error(Ctx& c) { c.mem[c.L->addr(Area::S, kBitError)] = 1; }
+
+void store_int(const Val& d, int32_t x) {
+  if (d.real) { float f = int_to_real(x); std::memcpy(d.addr, &f, 4); }
+  else std::memcpy(d.addr, &x, 4);
+}
+void store_real(const Val& d, float x) {
+  if (d.real) std::memcpy(d.addr, &x, 4);
+  else { int32_t i = real_to_int(x); std::memcpy(d.addr, &i, 4); }
+}
+void skip_operands(Ctx& c, int n) { for (int k = 0; k < n; k++) operand(c); }
+
+// ---- bit logic
+void exec_LOAD(Ctx& c) { push(c, bit(operand(c))); }
+void exec_LOADN(Ctx& c) { push(c, !bit(operand(c))); }
+void exec_AND(Ctx& c) { if (!bit(operand(c))) c.stack &= ~1u; }
+void exec_ANDN(Ctx& c) { if (bit(operand(c))) c.stack &= ~1u; }
+void exec_OR(Ctx& c) { if (bit(operand(c))) c.stack |= 1u; }
+void exec_ORN(Ctx& c) { if (!bit(operand(c))) c.stack |= 1u; }
+void exec_LOADP(Ctx& c) {
+  bool b = bit(operand(c));
+  uint8_t* e = c.mem + c.L->addr(Area::E, operand(c).index);
+  push(c, b && !*e);
+  *e = b;
+}
+void exec_LOADF(Ctx& c) {
+  bool b = bit(operand(c));
+  uint8_t* e = c.mem + c.L->addr(Area::E, operand(c).index);
+  push(c, !b && *e);
+  *e = b;
+}
+void exec_TRUE(Ctx& c) { push(c, true); }
+void exec_ANDBLK(Ctx& c) { uint32_t a = pop(c); c.stack &= ~1u | a; }
+void exec_ORBLK(Ctx& c) { uint32_t a = pop(c); c.stack |= a; }
+void exec_MPS(Ctx& c) { push(c, top(c)); }
+void exec_MRD(Ctx& c) { c.stack = (c.stack & ~1u) | ((c.stack >> 1) & 1u); }
+void exec_MPP(Ctx& c) { pop(c); }
+void exec_OUT(Ctx& c) { *operand(c).addr = top(c); }
+void exec_OUTN(Ctx& c) { *operand(c).addr = !top(c); }
+void exec_SET(Ctx& c) { Val w = operand(c); if (top(c)) *w.addr = 1; }
+void exec_RST(Ctx& c) { Val w = operand(c); if (top(c)) *w.addr = 0; }
+
+// ---- compares
+template <typename Cmp>
+void compare(Ctx& c, Cmp cmp) {
+  Val a = operand(c), b = operand(c);
+  if (a.real || b.real) push(c, cmp(as_real(a), as_real(b)));
+  else push(c, cmp(a.i, b.i));
+}
+void exec_LDEQ(Ctx& c) { compare(c, [](auto x, auto y) { return x == y; }); }
+void exec_LDNE(Ctx& c) { compare(c, [](auto x, auto y) { return x != y; }); }
+void exec_LDLT(Ctx& c) { compare(c, [](auto x, auto y) { return x < y; }); }
+void exec_LDLE(Ctx& c) { compare(c, [](auto x, auto y) { return x <= y; }); }
+void exec_LDGT(Ctx& c) { compare(c, [](auto x, auto y) { return x > y; }); }
+void exec_LDGE(Ctx& c) { compare(c, [](auto x, auto y) { return x >= y; }); }
+
+// ---- application instructions (only when top is 1)
+void exec_MOV(Ctx& c) {
+  if (!top(c)) return skip_operands(c, 2);
+  Val a = operand(c), d = operand(c);
+  if (a.real) store_real(d, a.f); else store_int(d, a.i);
+}
+template <typename IntOp, typename RealOp>
+void arith(Ctx& c, IntOp iop, RealOp rop) {
+  if (!top(c)) return skip_operands(c, 3);
+  Val a = operand(c), b = operand(c), d = operand(c);
+  if (a.real || b.real) store_real(d, rop(as_real(a), as_real(b)));
+  else store_int(d, iop(a.i, b.i));
+}
+int32_t wrap(uint32_t u) { return int32_t(u); }
+void exec_ADD(Ctx& c) { arith(c, [](int32_t x, int32_t y) { return wrap(uint32_t(x) + uint32_t(y)); }, [](float x, float y) { return x + y; }); }
+void exec_SUB(Ctx& c) { arith(c, [](int32_t x, int32_t y) { return wrap(uint32_t(x) - uint32_t(y)); }, [](float x, float y) { return x - y; }); }
+void exec_MUL(Ctx& c) { arith(c, [](int32_t x, int32_t y) { return wrap(uint32_t(x) * uint32_t(y)); }, [](float x, float y) { return x * y; }); }
+void exec_DIV(Ctx& c) {
+  if (!top(c)) return skip_operands(c, 3);
+  Val a = operand(c), b = operand(c), d = operand(c);
+  if (a.real || b.real) {
+    float y = as_real(b);
+    if (y == 0.0f) return set_error(c);
+    store_real(d, as_real(a) / y);
+  } else {
+    if (b.i == 0) return set_error(c);
+    store_int(d, (a.i == kMin && b.i == -1) ? kMin : a.i / b.i);
+  }
+}
+void exec_MOD(Ctx& c) {
+  if (!top(c)) return skip_operands(c, 3);
+  Val a = operand(c), b = operand(c), d = operand(c);
+  if (b.i == 0) return set_error(c);
+  store_int(d, b.i == -1 ? 0 : a.i % b.i);
+}
+template <typename IntOp>
+void logic(Ctx& c, IntOp iop) {
+  if (!top(c)) return skip_operands(c, 3);
+  Val a = operand(c), b = operand(c), d = operand(c);
+  store_int(d, iop(a.i, b.i));
+}
+void exec_WAND(Ctx& c) { logic(c, [](int32_t x, int32_t y) { return x & y; }); }
+void exec_WOR(Ctx& c) { logic(c, [](int32_t x, int32_t y) { return x | y; }); }
+void exec_WXOR(Ctx& c) { logic(c, [](int32_t x, int32_t y) { return x ^ y; }); }
+void exec_SHL(Ctx& c) { logic(c, [](int32_t x, int32_t n) { return n < 0 || n > 31 ? 0 : wrap(uint32_t(x) << n); }); }
+void exec_SHR(Ctx& c) { logic(c, [](int32_t x, int32_t n) { return n < 0 || n > 31 ? 0 : wrap(uint32_t(x) >> n); }); }
+void exec_WNOT(Ctx& c) {
+  if (!top(c)) return skip_operands(c, 2);
+  Val a = operand(c), d = operand(c);
+  store_int(d, ~a.i);
+}
+template <typename Fn>
+void special(Ctx& c, Fn fn) {
+  if (!top(c)) return skip_operands(c, 2);
+  Val a = operand(c), d = operand(c);
+  store_real(d, fn(as_real(a)));
+}
+void exec_SIN(Ctx& c) { special(c, [](float x) { return ::sinf(x); }); }
+void exec_COS(Ctx& c) { special(c, [](float x) { return ::cosf(x); }); }
+void exec_TAN(Ctx& c) { special(c, [](float x) { return ::tanf(x); }); }
+void exec_SQRT(Ctx& c) { special(c, [](float x) { return ::sqrtf(x); }); }
+void exec_EXP(Ctx& c) { special(c, [](float x) { return ::expf(x); }); }
+void exec_LN(Ctx& c) { special(c, [](float x) { return ::logf(x); }); }
+void exec_ABS(Ctx& c) {
+  if (!top(c)) return skip_operands(c, 2);
+  Val a = operand(c), d = operand(c);
+  if (a.real) store_real(d, ::fabsf(a.f));
+  else store_int(d, a.i == kMin ? kMin : (a.i < 0 ? -a.i : a.i));
+}
+
+// ---- timers: state of timer n = ET (TW), Q (TQ), IN memory (TI)
+struct Timer {
+  uint8_t* et;
+  uint8_t* q;
+  uint8_t* in_mem;
+  int32_t get_et() const { int32_t v; std::memcpy(&v, et, 4); return v; }
+  void set_et(int32_t v) const { std::memcpy(et, &v, 4); }
+};
+Timer timer(Ctx& c, uint32_t n) {
+  return {c.mem + c.L->addr(Area::TW, n), c.mem + c.L->addr(Area::TQ, n), c.mem + c.L->addr(Area::TI, n)};
+}
+int32_t advance(int32_t et, int32_t dt, int32_t pt) {  // min(et + dt, pt) without overflow
+  return (et >= pt || pt - et <= dt) ? pt : et + dt;
+}
+void exec_TON(Ctx& c) {
+  Timer t = timer(c, operand(c).index);
+  int32_t pt = preset(operand(c));
+  bool in = top(c);
+  if (in) {
+    int32_t et = t.get_et();
+    if (!*t.in_mem) et = 0;
+    else if (et < pt) et = advance(et, dt(c), pt);
+    t.set_et(et);
+    *t.q = et >= pt;
+  } else {
+    t.set_et(0);
+    *t.q = 0;
+  }
+  *t.in_mem = in;
+}
+void exec_TOF(Ctx& c) {
+  Timer t = timer(c, operand(c).index);
+  int32_t pt = preset(operand(c));
+  bool in = top(c);
+  if (in) {
+    *t.q = 1;
+    t.set_et(0);
+  } else if (*t.in_mem) {
+    t.set_et(0);
+    *t.q = pt > 0;
+  } else if (*t.q) {
+    int32_t et = advance(t.get_et(), dt(c), pt);
+    t.set_et(et);
+    *t.q = et < pt;
+  }
+  *t.in_mem = in;
+}
+void exec_TP(Ctx& c) {
+  Timer t = timer(c, operand(c).index);
+  int32_t pt = preset(operand(c));
+  bool in = top(c);
+  if (*t.q) {
+    int32_t et = advance(t.get_et(), dt(c), pt);
+    t.set_et(et);
+    if (et >= pt) *t.q = 0;
+  } else if (in && !*t.in_mem) {
+    *t.q = pt > 0;
+    t.set_et(0);
+  } else if (!in) {
+    t.set_et(0);
+  }
+  *t.in_mem = in;
+}
+void exec_RSTT(Ctx& c) {
+  Timer t = timer(c, operand(c).index);
+  if (!top(c)) return;
+  t.set_et(0);
+  *t.q = 0;
+  *t.in_mem = 0;
+}
+
+// ---- counters
+template <bool Up>
+void count(Ctx& c) {
+  uint32_t n = operand(c).index;
+  int32_t pv = operand(c).i;
+  uint8_t* e = c.mem + c.L->addr(Area::E, operand(c).index);
+  uint8_t* cvp = c.mem + c.L->addr(Area::CW, n);
+  int32_t cv;
+  std::memcpy(&cv, cvp, 4);
+  bool in = top(c);
+  if (in && !*e) {
+    if (Up && cv != kMax) cv++;
+    if (!Up && cv != kMin) cv--;
+  }
+  std::memcpy(cvp, &cv, 4);
+  c.mem[c.L->addr(Area::CQ, n)] = Up ? cv >= pv : cv <= 0;
+  *e = in;
+}
+void exec_CTU(Ctx& c) { count<true>(c); }
+void exec_CTD(Ctx& c) { count<false>(c); }
+void exec_RSTC(Ctx& c) {
+  uint32_t n = operand(c).index;
+  if (!top(c)) return;
+  std::memset(c.mem + c.L->addr(Area::CW, n), 0, 4);
+  c.mem[c.L->addr(Area::CQ, n)] = 0;
+}
+
+// ---- flow
+void exec_JMP(Ctx& c) {
+  uint32_t target = operand(c).index;
+  if (top(c)) c.pc = target;
+}
+void exec_END(Ctx& c) { if (top(c)) c.end = true; }
+
+// The dispatch table, in ops.def order.
+using Routine = void (*)(Ctx&);
+const Routine kRoutines[kOpCount] = {
+#define OP(name, opds, push, pop, klass) exec_##name,
+#include "ir/ops.def"
+};
+
+}  // namespace
+
+Interpreter::Interpreter(std::span<const uint8_t> code, const Layout& layout) : code_(code), layout_(layout) {}
+
+void Interpreter::scan(uint8_t* mem) const {
+  Ctx c{code_.data(), uint32_t(code_.size()), 0, mem, &layout_, 0, false};
+  while (c.pc < c.size && !c.end) {
+    uint8_t op = c.code[c.pc++];
+    kRoutines[op](c);
+  }
+}
+
+}  // namespace ldc

@@ -1,0 +1,379 @@
+// ir/ir.cpp -- areas, layout, the op table, operand spelling, the binary IL codec.
+#include "ir/ir.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+
+namespace ldc {
+
+static const char* const kAreaNames[kAreaCount] = {"Sys", "S",  "X",  "Y",  "M",  "K",  "TQ", "CQ",
+                                                   "TI",  "WX", "WY", "D",  "F",  "TW", "CW", "E"};
+
+const char* area_name(Area a) { return kAreaNames[int(a)]; }
+
+bool area_is_bit(Area a) {
+  switch (a) {
+    case Area::Sys: case Area::S: case Area::X: case Area::Y: case Area::M: case Area::K:
+    case Area::TQ: case Area::CQ: case Area::TI: case Area::E:
+      return true;
+    default:
+      return false;
+  }
+}
+bool area_is_real(Area a) { return a == Area::F; }
+bool area_is_word(Area a) { return !area_is_bit(a); }
+
+Layout Layout::standard(uint32_t edge_slots) {
+  Layout l;
+  auto set = [&](Area a, uint32_t n) { l.count[int(a)] = n; };
+  set(Area::Sys, kSysSize);
+  set(Area::S, kSysBits);
+  set(Area::X, 8192); set(Area::Y, 8192); set(Area::M, 8192); set(Area::K, 8192);
+  set(Area::TQ, 256); set(Area::CQ, 256); set(Area::TI, 256);
+  set(Area::WX, 1024); set(Area::WY, 1024); set(Area::D, 8192); set(Area::F, 1024);
+  set(Area::TW, 256); set(Area::CW, 256);
+  set(Area::E, edge_slots);
+  uint32_t off = 0;
+  for (int i = 0; i < kAreaCount; i++) {
+    Area a = Area(i);
+    if (area_is_word(a)) off = (off + 3) & ~3u;
+    l.offset[i] = off;
+    off += l.count[i] * l.elem_size(a);
+  }
+  l.size = (off + 15) & ~15u;
+  return l;
+}
+
+// ---------------------------------------------------------------- ops
+
+static const OpInfo kOps[kOpCount] = {
+#define OP(name, opds, push, pop, klass) {#name, opds, push, pop, OpClass::klass},
+#include "ops.def"
+};
+
+const OpInfo& op_info(Op op) { return kOps[int(op)]; }
+
+static bool iequals(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); i++)
+    if (std::toupper((unsigned char)a[i]) != std::toupper((unsigned char)b[i])) return false;
+  return true;
+}
+
+std::optional<Op> op_from_name(std::string_view name) {
+  for (int i = 0; i < kOpCount; i++)
+    if (iequals(name, kOps[i].name)) return Op(i);
+  return std::nullopt;
+}
+
+const char* op_class_name(OpClass c) {
+  static const char* const n[] = {"basic", "compare", "move", "arith", "logic", "special", "timer", "counter", "flow"};
+  return n[int(c)];
+}
+
+int Instr::nopd() const { return int(std::strlen(op_info(op).operands)); }
+
+bool Instr::operator==(const Instr& o) const {
+  if (op != o.op) return false;
+  for (int i = 0; i < 3; i++)
+    if (!(a[i] == o.a[i])) return false;
+  return true;
+}
+
+// ---------------------------------------------------------------- spelling
+
+static std::string device_prefix(Area a) {
+  switch (a) {
+    case Area::TQ: case Area::TW: return "T";
+    case Area::CQ: case Area::CW: return "C";
+    default: return area_name(a);
+  }
+}
+
+std::string real_text(float f) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.9g", double(f));
+  std::string s = buf;
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";  // keep the REAL type visible
+  return s;
+}
+
+std::string operand_text(const Operand& o) {
+  switch (o.kind) {
+    case OpdKind::None: return "";
+    case OpdKind::Bit: case OpdKind::Int: case OpdKind::Real:
+      return device_prefix(o.area) + std::to_string(o.index);
+    case OpdKind::ConstInt: return std::to_string(o.ival);
+    case OpdKind::ConstReal: return real_text(o.fval);
+    case OpdKind::Edge: return "E" + std::to_string(o.index);
+    case OpdKind::Timer: return "T" + std::to_string(o.index);
+    case OpdKind::Counter: return "C" + std::to_string(o.index);
+    case OpdKind::Label: return o.label;
+  }
+  return "?";
+}
+
+std::string instr_text(const Instr& in) {
+  std::string s = op_info(in.op).name;
+  for (int i = 0; i < in.nopd(); i++) s += " " + operand_text(in.a[i]);
+  return s;
+}
+
+// ---------------------------------------------------------------- runtime helpers
+
+int32_t real_to_int(float f) {
+  if (std::isnan(f)) return 0;
+  if (f >= 2147483648.0f) return std::numeric_limits<int32_t>::max();
+  if (f < -2147483648.0f) return std::numeric_limits<int32_t>::min();
+  return static_cast<int32_t>(f);
+}
+float int_to_real(int32_t i) { return static_cast<float>(i); }
+
+int32_t Memory::get_int(Area a, uint32_t i) const {
+  int32_t v;
+  std::memcpy(&v, &bytes[layout.addr(a, i)], 4);
+  return v;
+}
+float Memory::get_real(uint32_t i) const {
+  float v;
+  std::memcpy(&v, &bytes[layout.addr(Area::F, i)], 4);
+  return v;
+}
+void Memory::set_int(Area a, uint32_t i, int32_t v) { std::memcpy(&bytes[layout.addr(a, i)], &v, 4); }
+void Memory::set_real(uint32_t i, float v) { std::memcpy(&bytes[layout.addr(Area::F, i)], &v, 4); }
+
+// ---------------------------------------------------------------- binary IL
+//
+// tag 0x01 + i32   INT constant          tag 0x02 + f32   REAL constant
+// tag 0x03 + u32   edge slot             tag 0x04 + u32   label (byte offset)
+// tag 0x10+area + u16   device (bit, word, timer, counter)
+
+enum : uint8_t { kTagInt = 1, kTagReal = 2, kTagEdge = 3, kTagLabel = 4, kTagArea = 0x10 };
+
+static void put16(std::vector<uint8_t>& v, uint32_t x) { v.push_back(uint8_t(x)); v.push_back(uint8_t(x >> 8)); }
+static void put32(std::vector<uint8_t>& v, uint32_t x) {
+  for (int i = 0; i < 4; i++) v.push_back(uint8_t(x >> (8 * i)));
+}
+static uint32_t get16(const uint8_t* p) { return p[0] | (p[1] << 8); }
+static uint32_t get32(const uint8_t* p) { return p[0] | (p[1] << 8) | (p[2] << 16) | (uint32_t(p[3]) << 24); }
+
+static void encode_operand(std::vector<uint8_t>& out, const Operand& o, std::vector<std::pair<size_t, std::string>>& fix) {
+  switch (o.kind) {
+    case OpdKind::None: break;
+    case OpdKind::Bit: case OpdKind::Int: case OpdKind::Real:
+      out.push_back(uint8_t(kTagArea + int(o.area))); put16(out, o.index); break;
+    case OpdKind::Timer: out.push_back(uint8_t(kTagArea + int(Area::TW))); put16(out, o.index); break;
+    case OpdKind::Counter: out.push_back(uint8_t(kTagArea + int(Area::CW))); put16(out, o.index); break;
+    case OpdKind::ConstInt: out.push_back(kTagInt); put32(out, uint32_t(o.ival)); break;
+    case OpdKind::ConstReal: {
+      uint32_t u; std::memcpy(&u, &o.fval, 4);
+      out.push_back(kTagReal); put32(out, u); break;
+    }
+    case OpdKind::Edge: out.push_back(kTagEdge); put32(out, o.index); break;
+    case OpdKind::Label:
+      out.push_back(kTagLabel); fix.emplace_back(out.size(), o.label); put32(out, 0); break;
+  }
+}
+
+BinaryIl encode_il(const Program& p) {
+  BinaryIl b;
+  std::vector<std::pair<size_t, std::string>> fix;
+  std::vector<std::pair<std::string, uint32_t>> labels;
+  for (const Rung& r : p.rungs) {
+    for (const auto& l : r.labels) labels.emplace_back(l, uint32_t(b.code.size()));
+    b.rung_offset.push_back(uint32_t(b.code.size()));
+    for (const Instr& in : r.code) {
+      b.instr_offset.push_back(uint32_t(b.code.size()));
+      b.code.push_back(uint8_t(in.op));
+      for (int i = 0; i < in.nopd(); i++) encode_operand(b.code, in.a[i], fix);
+    }
+  }
+  for (const auto& l : p.end_labels) labels.emplace_back(l, uint32_t(b.code.size()));
+  for (auto& [pos, name] : fix) {
+    uint32_t target = 0;
+    bool found = false;
+    for (auto& [n, off] : labels)
+      if (n == name) { target = off; found = true; break; }
+    if (!found) throw std::runtime_error("IL refers to undefined label '" + name + "'");
+    for (int i = 0; i < 4; i++) b.code[pos + i] = uint8_t(target >> (8 * i));
+  }
+  return b;
+}
+
+bool operand_area_ok(char sig, Area a, uint32_t idx) {
+  switch (sig) {
+    case 'b': return a == Area::S || a == Area::X || a == Area::Y || a == Area::M || a == Area::K || a == Area::TQ || a == Area::CQ;
+    case 'w': return a == Area::Y || a == Area::M || a == Area::K || (a == Area::S && idx == kBitError);
+    case 'v': return a == Area::WX || a == Area::WY || a == Area::D || a == Area::F || a == Area::TW || a == Area::CW;
+    case 'i': return a == Area::WX || a == Area::WY || a == Area::D || a == Area::TW || a == Area::CW;
+    case 'd': return a == Area::WY || a == Area::D || a == Area::F || a == Area::TW || a == Area::CW;
+    case 't': return a == Area::TW;
+    case 'c': return a == Area::CW;
+  }
+  return false;
+}
+
+// One operand: checks the tag against the signature letter and the index
+// against the layout.  Returns "" or the reason.
+static std::string check_operand(char sig, const uint8_t* p, size_t avail, const Layout& L, size_t& len,
+                                 uint32_t& label_target) {
+  if (avail < 1) return "truncated operand";
+  uint8_t tag = p[0];
+  auto need = [&](size_t n) { return avail >= 1 + n; };
+  if (tag == kTagInt || tag == kTagReal) {
+    if (!need(4)) return "truncated constant";
+    len = 5;
+    if (sig != 'v' && sig != 'i') return "constant where a device is required";
+    if (tag == kTagReal && sig == 'i') return "REAL constant where INT32 is required";
+    return "";
+  }
+  if (tag == kTagEdge || tag == kTagLabel) {
+    if (!need(4)) return "truncated operand";
+    len = 5;
+    uint32_t v = get32(p + 1);
+    if (tag == kTagEdge) {
+      if (sig != 'e') return "edge slot operand out of place";
+      if (v >= L.count[int(Area::E)]) return "edge slot " + std::to_string(v) + " outside the edge area";
+    } else {
+      if (sig != 'l') return "label operand out of place";
+      label_target = v;
+    }
+    return "";
+  }
+  if (tag < kTagArea || tag >= kTagArea + kAreaCount) return "bad operand tag " + std::to_string(tag);
+  if (!need(2)) return "truncated device operand";
+  len = 3;
+  Area a = Area(tag - kTagArea);
+  uint32_t idx = get16(p + 1);
+  if (idx >= L.count[int(a)]) return std::string("device index ") + std::to_string(idx) + " outside area " + area_name(a);
+  bool ok = operand_area_ok(sig, a, idx);
+  if (!ok) return std::string("operand area ") + area_name(a) + " not allowed here";
+  return "";
+}
+
+std::string validate_il(std::span<const uint8_t> code, const Layout& layout) {
+  std::vector<uint32_t> starts;
+  std::vector<std::pair<uint32_t, uint32_t>> jumps;  // (instr offset, target)
+  size_t off = 0;
+  while (off < code.size()) {
+    starts.push_back(uint32_t(off));
+    uint8_t opb = code[off];
+    if (opb >= kOpCount) return "offset " + std::to_string(off) + ": unknown opcode " + std::to_string(opb);
+    const OpInfo& oi = op_info(Op(opb));
+    size_t p = off + 1;
+    for (const char* s = oi.operands; *s; s++) {
+      size_t len = 0;
+      uint32_t target = UINT32_MAX;
+      std::string e = check_operand(*s, code.data() + p, code.size() - p, layout, len, target);
+      if (!e.empty()) return "offset " + std::to_string(p) + ": " + oi.name + ": " + e;
+      if (target != UINT32_MAX) jumps.emplace_back(uint32_t(off), target);
+      p += len;
+    }
+    off = p;
+  }
+  for (auto [from, to] : jumps) {
+    bool at_boundary = to == code.size() || std::binary_search(starts.begin(), starts.end(), to);
+    if (!at_boundary) return "offset " + std::to_string(from) + ": jump target " + std::to_string(to) + " is not an instruction boundary";
+    if (to <= from) return "offset " + std::to_string(from) + ": backward jump";
+  }
+  return "";
+}
+
+uint32_t decode_instr(std::span<const uint8_t> code, uint32_t off, Instr& out) {
+  out = Instr{};
+  out.op = Op(code[off]);
+  uint32_t p = off + 1;
+  const char* sig = op_info(out.op).operands;
+  for (int i = 0; sig[i]; i++) {
+    Operand& o = out.a[i];
+    uint8_t tag = code[p];
+    if (tag == kTagInt) { o.kind = OpdKind::ConstInt; o.ival = int32_t(get32(&code[p + 1])); p += 5; continue; }
+    if (tag == kTagReal) {
+      uint32_t u = get32(&code[p + 1]);
+      o.kind = OpdKind::ConstReal; std::memcpy(&o.fval, &u, 4); p += 5; continue;
+    }
+    if (tag == kTagEdge) { o.kind = OpdKind::Edge; o.index = get32(&code[p + 1]); p += 5; continue; }
+    if (tag == kTagLabel) {
+      o.kind = OpdKind::Label; o.index = get32(&code[p + 1]);
+      o.label = "@" + std::to_string(o.index); p += 5; continue;
+    }
+    Area a = Area(tag - kTagArea);
+    o.area = a;
+    o.index = get16(&code[p + 1]);
+    p += 3;
+    if (sig[i] == 't') o.kind = OpdKind::Timer;
+    else if (sig[i] == 'c') o.kind = OpdKind::Counter;
+    else if (area_is_bit(a)) o.kind = OpdKind::Bit;
+    else o.kind = area_is_real(a) ? OpdKind::Real : OpdKind::Int;
+    if (o.kind == OpdKind::Timer || o.kind == OpdKind::Counter) o.area = Area::Sys;
+  }
+  return p;
+}
+
+}  // namespace ldc
+
+namespace ldc {
+
+// ---------------------------------------------------------------- device spelling
+
+static const char* const kDevNames[] = {"X", "Y", "M", "K", "S", "T", "C", "WX", "WY", "D", "F"};
+const char* dev_name(Dev d) { return kDevNames[int(d)]; }
+
+std::optional<DeviceRef> parse_device(std::string_view s) {
+  size_t n = 0;
+  while (n < s.size() && std::isalpha((unsigned char)s[n])) n++;
+  if (n == 0 || n == s.size() || n > 2) return std::nullopt;
+  std::string_view prefix = s.substr(0, n), digits = s.substr(n);
+  for (char ch : digits)
+    if (!std::isdigit((unsigned char)ch)) return std::nullopt;
+  if (digits.size() > 9) return DeviceRef{Dev::X, UINT32_MAX};  // surely out of range
+  for (int i = 0; i <= int(Dev::F); i++) {
+    if (iequals(prefix, kDevNames[i])) {
+      uint32_t v = 0;
+      for (char ch : digits) v = v * 10 + uint32_t(ch - '0');
+      return DeviceRef{Dev(i), v};
+    }
+  }
+  return std::nullopt;
+}
+
+uint32_t device_count(Dev d) {
+  switch (d) {
+    case Dev::X: case Dev::Y: case Dev::M: case Dev::K: case Dev::D: return 8192;
+    case Dev::S: return kSysBits;
+    case Dev::T: case Dev::C: return 256;
+    case Dev::WX: case Dev::WY: case Dev::F: return 1024;
+  }
+  return 0;
+}
+
+Area bit_area(Dev d) {
+  switch (d) {
+    case Dev::X: return Area::X;
+    case Dev::Y: return Area::Y;
+    case Dev::M: return Area::M;
+    case Dev::K: return Area::K;
+    case Dev::S: return Area::S;
+    case Dev::T: return Area::TQ;
+    case Dev::C: return Area::CQ;
+    default: return Area::Count;
+  }
+}
+
+Area word_area(Dev d) {
+  switch (d) {
+    case Dev::WX: return Area::WX;
+    case Dev::WY: return Area::WY;
+    case Dev::D: return Area::D;
+    case Dev::F: return Area::F;
+    case Dev::T: return Area::TW;
+    case Dev::C: return Area::CW;
+    default: return Area::Count;
+  }
+}
+
+}  // namespace ldc

@@ -1,0 +1,58 @@
+// runtime/runtime.h -- running a program scan by scan: engines, input traces,
+// watched outputs (docs/format.md, section "Traces").
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ir/ir.h"
+
+namespace ldc {
+
+// Something that runs one scan over the memory image.
+class Engine {
+ public:
+  virtual ~Engine() = default;
+  virtual void scan(uint8_t* mem) = 0;
+};
+
+// The reference interpreter over an image's binary IL.
+std::unique_ptr<Engine> make_interp_engine(std::vector<uint8_t> il, const Layout& layout);
+
+// A device named in a trace column or a --watch list.
+struct Probe {
+  std::string name;  // as the user wrote it
+  Area area;         // T and C name their word (elapsed ms, current value)
+  uint32_t index;
+};
+// Resolves a device spelling, IEC address or alias; throws std::runtime_error.
+Probe resolve_probe(std::string_view name, const std::vector<Alias>& aliases);
+
+struct Trace {
+  std::vector<Probe> columns;
+  int dt_column = -1;
+  // one row per scan; std::nullopt-like empty string = keep the previous value
+  std::vector<std::vector<std::string>> rows;
+  std::vector<int> row_line;  // source line of each row, for messages
+};
+// Reads the CSV input trace; errors are "file:line:col: error: ...".
+Trace read_trace(std::string_view text, const std::string& file, const std::vector<Alias>& aliases);
+
+struct RunOptions {
+  int scans = -1;          // -1: as many as the trace has rows (1 without a trace)
+  int32_t period_ms = 10;  // dt when the trace has no dt column
+  std::vector<Probe> watch;
+};
+
+// Runs the scans and writes the CSV of watched values to `out`.  Throws
+// std::runtime_error with a located message on a bad trace value.
+void run_trace(Engine& engine, const Layout& layout, const Trace* trace, const std::string& trace_file,
+               const RunOptions& opt, std::string& out);
+
+// Value of a probe, formatted as ldrun prints it (bits 0/1, INT32 decimal, REAL %g).
+std::string format_probe(const Memory& mem, const Probe& p);
+
+}  // namespace ldc

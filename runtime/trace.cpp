@@ -1,0 +1,200 @@
+// runtime/trace.cpp -- input traces, watched outputs and the scan loop.
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <stdexcept>
+
+#include "runtime/runtime.h"
+
+namespace ldc {
+namespace {
+
+std::string upper(std::string_view s) {
+  std::string u(s);
+  for (char& c : u) c = char(std::toupper((unsigned char)c));
+  return u;
+}
+std::string trim(std::string_view s) {
+  size_t a = s.find_first_not_of(" \t\r"), b = s.find_last_not_of(" \t\r");
+  return a == std::string_view::npos ? std::string() : std::string(s.substr(a, b - a + 1));
+}
+
+class InterpEngine : public Engine {
+ public:
+  InterpEngine(std::vector<uint8_t> il, const Layout& l) : il_(std::move(il)), interp_(il_, l) {}
+  void scan(uint8_t* mem) override { interp_.scan(mem); }
+ private:
+  std::vector<uint8_t> il_;
+  Interpreter interp_;
+};
+
+// IEC addresses in traces: the same spellings as in programs.
+std::optional<DeviceRef> iec(std::string_view s) {
+  std::string u = upper(s);
+  if (u.size() < 4 || u[0] != '%') return std::nullopt;
+  char region = u[1], size = u[2];
+  std::string rest = u.substr(3);
+  char* end = nullptr;
+  if (size == 'X') {
+    size_t dot = rest.find('.');
+    if (dot == std::string::npos) return std::nullopt;
+    long a = std::strtol(rest.substr(0, dot).c_str(), &end, 10);
+    if (*end) return std::nullopt;
+    long b = std::strtol(rest.substr(dot + 1).c_str(), &end, 10);
+    if (*end || b < 0 || b > 7 || a < 0 || a > 100000) return std::nullopt;
+    Dev d = region == 'I' ? Dev::X : region == 'Q' ? Dev::Y : Dev::M;
+    if (region != 'I' && region != 'Q' && region != 'M') return std::nullopt;
+    return DeviceRef{d, uint32_t(a * 8 + b)};
+  }
+  long n = std::strtol(rest.c_str(), &end, 10);
+  if (rest.empty() || *end || n < 0 || n > 100000) return std::nullopt;
+  if (size == 'W' && region == 'I') return DeviceRef{Dev::WX, uint32_t(n)};
+  if (size == 'W' && region == 'Q') return DeviceRef{Dev::WY, uint32_t(n)};
+  if (size == 'W' && region == 'M') return DeviceRef{Dev::D, uint32_t(n)};
+  if (size == 'D' && region == 'M') return DeviceRef{Dev::F, uint32_t(n)};
+  return std::nullopt;
+}
+
+// Decimal, or hex with 0x; never octal (a leading 0 is just a 0).
+long long cell_int(const std::string& v, char** end) {
+  bool neg = !v.empty() && v[0] == '-';
+  size_t at = (neg || (!v.empty() && v[0] == '+')) ? 1 : 0;
+  if (v.size() > at + 2 && v[at] == '0' && (v[at + 1] == 'x' || v[at + 1] == 'X')) {
+    long long x = std::strtoll(v.c_str() + at + 2, end, 16);
+    return neg ? -x : x;
+  }
+  return std::strtoll(v.c_str(), end, 10);
+}
+
+}  // namespace
+
+std::unique_ptr<Engine> make_interp_engine(std::vector<uint8_t> il, const Layout& layout) {
+  return std::make_unique<InterpEngine>(std::move(il), layout);
+}
+
+Probe resolve_probe(std::string_view name, const std::vector<Alias>& aliases) {
+  std::string n = trim(name);
+  std::optional<DeviceRef> d;
+  for (const Alias& a : aliases)
+    if (upper(a.name) == upper(n)) d = a.dev;
+  if (!d) d = parse_device(n);
+  if (!d) d = iec(n);
+  if (!d) throw std::runtime_error("unknown device or alias '" + n + "'");
+  if (d->index >= device_count(d->dev)) throw std::runtime_error("index out of range: '" + n + "'");
+  Area a = (d->dev == Dev::T || d->dev == Dev::C) ? word_area(d->dev) : bit_area(d->dev);
+  if (a == Area::Count) a = word_area(d->dev);
+  return Probe{n, a, d->index};
+}
+
+Trace read_trace(std::string_view text, const std::string& file, const std::vector<Alias>& aliases) {
+  Trace t;
+  size_t pos = 0;
+  int line = 0;
+  bool header = false;
+  auto fail = [&](int col, const std::string& msg) {
+    throw std::runtime_error(file + ":" + std::to_string(line) + ":" + std::to_string(col) + ": error: " + msg);
+  };
+  while (pos < text.size()) {
+    size_t nl = text.find('\n', pos);
+    std::string_view l = text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
+    pos = nl == std::string_view::npos ? text.size() : nl + 1;
+    line++;
+    std::string tl = trim(l);
+    if (tl.empty() || tl[0] == '#') continue;
+    std::vector<std::pair<std::string, int>> cells;
+    size_t s = 0;
+    while (true) {
+      size_t c = l.find(',', s);
+      cells.emplace_back(trim(l.substr(s, c == std::string_view::npos ? std::string_view::npos : c - s)), int(s) + 1);
+      if (c == std::string_view::npos) break;
+      s = c + 1;
+    }
+    if (!header) {
+      header = true;
+      for (size_t i = 0; i < cells.size(); i++) {
+        if (upper(cells[i].first) == "DT") {
+          if (t.dt_column >= 0) fail(cells[i].second, "two dt columns");
+          t.dt_column = int(i);
+          t.columns.push_back(Probe{"dt", Area::Sys, 0});
+          continue;
+        }
+        try {
+          t.columns.push_back(resolve_probe(cells[i].first, aliases));
+        } catch (std::exception& e) { fail(cells[i].second, e.what()); }
+      }
+      continue;
+    }
+    if (cells.size() != t.columns.size())
+      fail(1, "expected " + std::to_string(t.columns.size()) + " values, found " + std::to_string(cells.size()));
+    std::vector<std::string> row;
+    for (size_t i = 0; i < cells.size(); i++) {
+      const std::string& v = cells[i].first;
+      if (!v.empty()) {
+        const Probe& p = t.columns[i];
+        char* end = nullptr;
+        if (p.area == Area::F) {
+          std::strtof(v.c_str(), &end);
+        } else {
+          long long x = cell_int(v, &end);
+          if (!*end && area_is_bit(p.area) && p.area != Area::Sys && x != 0 && x != 1) fail(cells[i].second, "a bit is 0 or 1, not '" + v + "'");
+          if (!*end && (x < INT32_MIN || x > INT32_MAX)) fail(cells[i].second, "value out of the INT32 range: '" + v + "'");
+          if (!*end && p.area == Area::Sys && x < 0) fail(cells[i].second, "dt cannot be negative");
+        }
+        if (*end) fail(cells[i].second, "bad value '" + v + "' for " + p.name);
+      }
+      row.push_back(v);
+    }
+    t.rows.push_back(std::move(row));
+    t.row_line.push_back(line);
+  }
+  if (!header) throw std::runtime_error(file + ":1:1: error: empty trace (the first line names the columns)");
+  return t;
+}
+
+std::string format_probe(const Memory& mem, const Probe& p) {
+  char buf[64];
+  if (area_is_bit(p.area)) return mem.get_bit(p.area, p.index) ? "1" : "0";
+  if (p.area == Area::F) {
+    std::snprintf(buf, sizeof buf, "%g", double(mem.get_real(p.index)));
+    return buf;
+  }
+  return std::to_string(mem.get_int(p.area, p.index));
+}
+
+void run_trace(Engine& engine, const Layout& layout, const Trace* trace, const std::string&, const RunOptions& opt,
+               std::string& out) {
+  Memory mem(layout);
+  int scans = opt.scans >= 0 ? opt.scans : trace ? int(trace->rows.size()) : 1;
+  out += "scan";
+  for (const Probe& p : opt.watch) out += "," + p.name;
+  out += "\n";
+  // A cell is written before its scan; an empty cell writes nothing, so the
+  // device keeps its value.  dt keeps its last value too (the period at first).
+  int32_t dt = opt.period_ms;
+  for (int k = 1; k <= scans; k++) {
+    if (trace && size_t(k - 1) < trace->rows.size()) {
+      const auto& row = trace->rows[k - 1];
+      for (size_t i = 0; i < row.size(); i++) {
+        const std::string& v = row[i];
+        if (v.empty()) continue;
+        const Probe& p = trace->columns[i];
+        if (int(i) == trace->dt_column) dt = int32_t(cell_int(v, nullptr));
+        else if (p.area == Area::F) mem.set_real(p.index, std::strtof(v.c_str(), nullptr));
+        else if (area_is_bit(p.area)) mem.set_bit(p.area, p.index, cell_int(v, nullptr) != 0);
+        else mem.set_int(p.area, p.index, int32_t(cell_int(v, nullptr)));
+      }
+    }
+    std::memcpy(mem.data() + kSysDt, &dt, 4);
+    mem.set_bit(Area::S, kBitFirstScan, k == 1);
+    engine.scan(mem.data());
+    uint32_t n = uint32_t(k);
+    std::memcpy(mem.data() + kSysScan, &n, 4);
+    out += std::to_string(k);
+    for (const Probe& p : opt.watch) out += "," + format_probe(mem, p);
+    out += "\n";
+  }
+}
+
+}  // namespace ldc
