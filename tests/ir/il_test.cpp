@@ -1,0 +1,118 @@
+// IL text and binary forms, the validator, and lowering limits.
+#include <gtest/gtest.h>
+
+#include "ir/ir.h"
+
+using namespace ldc;
+
+namespace {
+
+const char* kAll =
+    ".edges 3\n.alias start X0\n.rung line 4 \"all \\\"ops\\\"\"\n"
+    "LOAD X0\nLOADN Y1\nAND M2\nANDN K3\nOR S0\nORN T4\nLOADP C5 E0\nLOADF X6 E1\nTRUE\nANDBLK\nORBLK\n"
+    "MPS\nMRD\nMPP\nOUT Y0\nOUTN M1\nSET K2\nRST S0\nLDEQ D0 5\nLDNE F1 2.5\nLDLT WX0 WY1\nLDLE T0 C0\n"
+    "LDGT D1 -7\nLDGE F2 1e+30\nMOV D0 F0\nADD D0 D1 D2\nSUB 1 2 D3\nMUL F0 F1 F2\nDIV D0 3 WY0\nMOD D0 3 D4\n"
+    "WAND D0 255 D5\nWOR D0 1 D6\nWXOR D0 1 D7\nWNOT D0 D8\nSHL D0 3 D9\nSHR D0 3 D10\nSIN F0 F3\nCOS F0 F4\n"
+    "TAN F0 F5\nSQRT F0 F6\nEXP F0 F7\nLN F0 F8\nABS D0 D11\nTON T0 100\nTOF T1 D0\nTP T2 5\nRSTT T3\n"
+    "CTU C0 10 E2\nCTD C1 D3\n";
+
+TEST(IlText, EveryMnemonicRoundTrips) {
+  // CTD above lacks its edge operand: the reader must say so
+  EXPECT_THROW(parse_il_text(std::string(kAll) + ".end\n", "a.il"), CompileError);
+  std::string text = std::string(kAll);
+  text.replace(text.find("CTD C1 D3"), 9, "CTD C1 D3 E2");
+  text += "RSTC C1\nJMP out\nEND\n.label out\n.end\n";
+  Program p = parse_il_text(text, "a.il");
+  EXPECT_EQ(p.rungs[0].code.size(), size_t(kOpCount));
+  std::string printed = print_il_text(p);
+  Program q = parse_il_text(printed, "a.il");
+  EXPECT_EQ(print_il_text(q), printed);
+  ASSERT_EQ(q.rungs.size(), 1u);
+  EXPECT_EQ(q.rungs[0].code, p.rungs[0].code);
+  EXPECT_EQ(q.rungs[0].title, "all \"ops\"");
+  EXPECT_EQ(q.aliases, p.aliases);
+  // binary: encode, validate, decode back every instruction
+  BinaryIl b = encode_il(p);
+  EXPECT_EQ(validate_il(b.code, p.layout()), "");
+  uint32_t off = 0;
+  for (const Instr& in : p.rungs[0].code) {
+    Instr got;
+    off = decode_instr(b.code, off, got);
+    if (in.op != Op::JMP) EXPECT_EQ(instr_text(got), instr_text(in));
+  }
+  EXPECT_EQ(off, b.code.size());
+}
+
+TEST(IlText, ErrorsCarryLineAndColumn) {
+  try {
+    parse_il_text(".rung line 1\nLOAD X0\nOUT X1\n.end\n", "b.il");
+    FAIL();
+  } catch (CompileError& e) {
+    EXPECT_EQ(e.line, 3);
+    EXPECT_EQ(e.col, 5);
+  }
+  EXPECT_THROW(parse_il_text(".rung line 1\nFOO X0\n.end\n", "b.il"), CompileError);
+  EXPECT_THROW(parse_il_text(".rung line 1\nLOAD X9000\n.end\n", "b.il"), CompileError);
+  EXPECT_THROW(parse_il_text(".rung line 1\nMOD F0 1 D0\n.end\n", "b.il"), CompileError);
+  EXPECT_THROW(parse_il_text(".rung line 1\nLOAD X0\n", "b.il"), CompileError);  // no .end
+  EXPECT_THROW(parse_il_text(".label a\n.rung line 1\nLOAD X0\nJMP a\n.end\n", "b.il"), CompileError);
+  EXPECT_THROW(parse_il_text(".rung line 1\nLOAD X0\nJMP nowhere\n.end\n", "b.il"), CompileError);
+}
+
+TEST(BinaryIl, ValidatorRefusesBadCode) {
+  Program p = parse_il_text(".edges 1\n.rung line 1\nLOAD X0\nJMP a\n.rung line 2\nLOADP X1 E0\nOUT Y0\n.label a\n.end\n", "c.il");
+  BinaryIl b = encode_il(p);
+  Layout L = p.layout();
+  ASSERT_EQ(validate_il(b.code, L), "");
+  auto bad = [&](auto mutate) {
+    std::vector<uint8_t> c = b.code;
+    mutate(c);
+    return validate_il(c, L);
+  };
+  EXPECT_NE(bad([](auto& c) { c[0] = 200; }), "");                       // opcode
+  EXPECT_NE(bad([](auto& c) { c.resize(c.size() - 1); }), "");            // truncated
+  EXPECT_NE(bad([](auto& c) { c[2] = 0xFF; c[3] = 0xFF; }), "");           // X65535
+  EXPECT_NE(bad([](auto& c) { c[5] = 2; }), "");                          // jump target into an operand
+  EXPECT_NE(bad([](auto& c) { c[5] = 0; }), "");                          // backward jump
+  EXPECT_NE(bad([](auto& c) { c[1] = 0x10 + uint8_t(Area::D); }), "");    // a word where a bit is wanted
+  Layout small = Layout::standard(0);
+  EXPECT_NE(validate_il(b.code, small), "");                              // edge slot outside the area
+}
+
+TreeNode leaf(uint32_t x) {
+  TreeNode n;
+  n.kind = TreeNode::Kind::Leaf;
+  n.elem.op = Op::LOAD;
+  n.elem.a[0] = Operand{OpdKind::Bit, Area::X, x};
+  return n;
+}
+
+TEST(Lower, RefusesRungsDeeperThanTheBitStack) {
+  // (x0 | (x1 & (x2 | (x3 & ...)))) nests one push per level
+  auto build = [](int levels) {
+    TreeNode n = leaf(0);
+    for (int i = 1; i < levels; i++) {
+      TreeNode s;
+      s.kind = (i % 2) ? TreeNode::Kind::Series : TreeNode::Kind::Parallel;
+      TreeNode inner;
+      inner.kind = (i % 2) ? TreeNode::Kind::Parallel : TreeNode::Kind::Series;
+      inner.kids = {leaf(uint32_t(i)), std::move(n)};
+      s.kids = {leaf(uint32_t(100 + i)), std::move(inner)};
+      n = std::move(s);
+    }
+    TreeProgram tp;
+    TreeRung r;
+    r.root.kind = TreeNode::Kind::Then;
+    TreeNode out;
+    out.kind = TreeNode::Kind::Output;
+    out.elem.op = Op::OUT;
+    out.elem.a[0] = Operand{OpdKind::Bit, Area::Y, 0};
+    r.root.kids = {std::move(n), std::move(out)};
+    tp.rungs.push_back(std::move(r));
+    return tp;
+  };
+  EXPECT_NO_THROW(lower_to_il(build(10)));
+  EXPECT_THROW(lower_to_il(build(40)), CompileError);
+}
+
+}  // namespace
