@@ -12,11 +12,11 @@ using namespace ldc;
 namespace {
 
 // A program from IL text, run scan by scan over one memory image.
-struct Run {
+struct Scan {
   Program prog;
   BinaryIl bin;
   Memory mem;
-  explicit Run(const std::string& il)
+  explicit Scan(const std::string& il)
       : prog(parse_il_text(il, "t.il")), bin(encode_il(prog)), mem(prog.layout()) {
     EXPECT_EQ(validate_il(bin.code, prog.layout()), "");
   }
@@ -31,7 +31,7 @@ struct Run {
 
 TEST(Interp, BitLogicAndBlocks) {
   // Y1 = X1 AND (X2 OR (X3 AND X4))
-  Run r(".rung line 1\nLOAD X1\nLOAD X2\nLOAD X3\nAND X4\nORBLK\nANDBLK\nOUT Y1\n.end\n");
+  Scan r(".rung line 1\nLOAD X1\nLOAD X2\nLOAD X3\nAND X4\nORBLK\nANDBLK\nOUT Y1\n.end\n");
   for (int m = 0; m < 16; m++) {
     bool x1 = m & 1, x2 = m & 2, x3 = m & 4, x4 = m & 8;
     r.x(1, x1); r.x(2, x2); r.x(3, x3); r.x(4, x4);
@@ -41,7 +41,7 @@ TEST(Interp, BitLogicAndBlocks) {
 }
 
 TEST(Interp, NegatedFormsAndCoils) {
-  Run r(".rung line 1\nLOADN X0\nORN X1\nANDN X2\nOUT Y0\nOUTN Y1\nSET M0\nRST M1\n.end\n");
+  Scan r(".rung line 1\nLOADN X0\nORN X1\nANDN X2\nOUT Y0\nOUTN Y1\nSET M0\nRST M1\n.end\n");
   r.mem.set_bit(Area::M, 1, true);
   r.x(0, 1); r.x(1, 1); r.x(2, 0);
   r.scan();
@@ -56,7 +56,7 @@ TEST(Interp, NegatedFormsAndCoils) {
 }
 
 TEST(Interp, MpsMrdMpp) {
-  Run r(".rung line 1\nLOAD X0\nMPS\nAND X1\nOUT Y0\nMRD\nANDN X1\nOUT Y1\nMPP\nOUT Y2\n.end\n");
+  Scan r(".rung line 1\nLOAD X0\nMPS\nAND X1\nOUT Y0\nMRD\nANDN X1\nOUT Y1\nMPP\nOUT Y2\n.end\n");
   r.x(0, 1); r.x(1, 0);
   r.scan();
   EXPECT_EQ(r.y(0), 0); EXPECT_EQ(r.y(1), 1); EXPECT_EQ(r.y(2), 1);
@@ -66,7 +66,7 @@ TEST(Interp, MpsMrdMpp) {
 }
 
 TEST(Interp, EdgesFireOnce) {
-  Run r(".edges 2\n.rung line 1\nLOADP X0 E0\nOUT Y0\nLOADF X0 E1\nOUT Y1\n.end\n");
+  Scan r(".edges 2\n.rung line 1\nLOADP X0 E0\nOUT Y0\nLOADF X0 E1\nOUT Y1\n.end\n");
   int seq[] = {0, 1, 1, 0, 0};
   int rise[] = {0, 1, 0, 0, 0}, fall[] = {0, 0, 0, 1, 0};
   for (int i = 0; i < 5; i++) {
@@ -78,7 +78,7 @@ TEST(Interp, EdgesFireOnce) {
 }
 
 TEST(Interp, TonStartsTimingOnTheRisingScan) {
-  Run r(".rung line 1\nLOAD X0\nTON T0 30\nLOAD T0\nOUT Y0\n.end\n");
+  Scan r(".rung line 1\nLOAD X0\nTON T0 30\nLOAD T0\nOUT Y0\n.end\n");
   r.x(0, 1);
   int32_t et[] = {0, 10, 20, 30, 30};
   int q[] = {0, 0, 0, 1, 1};
@@ -94,7 +94,7 @@ TEST(Interp, TonStartsTimingOnTheRisingScan) {
 }
 
 TEST(Interp, TonPresetZeroAndNegativeWord) {
-  Run r(".rung line 1\nLOAD X0\nTON T0 D0\n.end\n");
+  Scan r(".rung line 1\nLOAD X0\nTON T0 D0\n.end\n");
   r.mem.set_int(Area::D, 0, -5);
   r.x(0, 1);
   r.scan();
@@ -102,7 +102,7 @@ TEST(Interp, TonPresetZeroAndNegativeWord) {
 }
 
 TEST(Interp, TofHoldsThenDrops) {
-  Run r(".rung line 1\nLOAD X0\nTOF T1 20\n.end\n");
+  Scan r(".rung line 1\nLOAD X0\nTOF T1 20\n.end\n");
   int in[] = {1, 0, 0, 0, 1, 0, 0};
   int q[] = {1, 1, 1, 0, 1, 1, 1};
   int32_t et[] = {0, 0, 10, 20, 0, 0, 10};
@@ -115,7 +115,7 @@ TEST(Interp, TofHoldsThenDrops) {
 }
 
 TEST(Interp, TpIgnoresRetrigger) {
-  Run r(".rung line 1\nLOAD X0\nTP T2 30\n.end\n");
+  Scan r(".rung line 1\nLOAD X0\nTP T2 30\n.end\n");
   int in[] = {1, 0, 1, 0, 0, 0, 1};
   int q[] = {1, 1, 1, 0, 0, 0, 1};
   for (int i = 0; i < 7; i++) {
@@ -126,7 +126,7 @@ TEST(Interp, TpIgnoresRetrigger) {
 }
 
 TEST(Interp, TimerDoesNotOverflow) {
-  Run r(".rung line 1\nLOAD X0\nTON T0 2147483647\n.end\n");
+  Scan r(".rung line 1\nLOAD X0\nTON T0 2147483647\n.end\n");
   r.x(0, 1);
   r.scan();
   r.scan(2147483000);
@@ -136,7 +136,7 @@ TEST(Interp, TimerDoesNotOverflow) {
 }
 
 TEST(Interp, CountersCountRisingEdges) {
-  Run r(".edges 2\n.rung line 1\nLOAD X0\nCTU C0 3 E0\n.rung line 2\nLOAD X1\nCTD C0 3 E1\n.rung line 3\nLOAD X2\nRSTC C0\n.end\n");
+  Scan r(".edges 2\n.rung line 1\nLOAD X0\nCTU C0 3 E0\n.rung line 2\nLOAD X1\nCTD C0 3 E1\n.rung line 3\nLOAD X2\nRSTC C0\n.end\n");
   int up[] = {1, 1, 0, 1, 0, 1};
   int32_t cv[] = {1, 1, 1, 2, 2, 3};
   for (int i = 0; i < 6; i++) {
@@ -156,7 +156,7 @@ TEST(Interp, CountersCountRisingEdges) {
 }
 
 TEST(Interp, CounterSaturates) {
-  Run r(".edges 1\n.rung line 1\nLOAD X0\nCTU C0 5 E0\n.end\n");
+  Scan r(".edges 1\n.rung line 1\nLOAD X0\nCTU C0 5 E0\n.end\n");
   r.mem.set_int(Area::CW, 0, std::numeric_limits<int32_t>::max());
   r.x(0, 1);
   r.scan();
@@ -164,7 +164,7 @@ TEST(Interp, CounterSaturates) {
 }
 
 TEST(Interp, IntArithmeticWrapsAndDivisionByZero) {
-  Run r(".rung line 1\nTRUE\nADD D0 1 D1\nMUL D0 2 D2\nDIV D3 D4 D5\nMOD D3 D4 D6\nDIV D0 -1 D7\nSUB D8 1 D8\n.end\n");
+  Scan r(".rung line 1\nTRUE\nADD D0 1 D1\nMUL D0 2 D2\nDIV D3 D4 D5\nMOD D3 D4 D6\nDIV D0 -1 D7\nSUB D8 1 D8\n.end\n");
   r.mem.set_int(Area::D, 0, std::numeric_limits<int32_t>::max());
   r.mem.set_int(Area::D, 3, 7);
   r.mem.set_int(Area::D, 5, 42);
@@ -181,7 +181,7 @@ TEST(Interp, IntArithmeticWrapsAndDivisionByZero) {
 }
 
 TEST(Interp, IntMinDividedByMinusOne) {
-  Run r(".rung line 1\nTRUE\nDIV D0 -1 D1\nMOD D0 -1 D2\nDIV -7 2 D3\nMOD -7 2 D4\n.end\n");
+  Scan r(".rung line 1\nTRUE\nDIV D0 -1 D1\nMOD D0 -1 D2\nDIV -7 2 D3\nMOD -7 2 D4\n.end\n");
   r.mem.set_int(Area::D, 0, std::numeric_limits<int32_t>::min());
   r.mem.set_int(Area::D, 2, 9);
   r.scan();
@@ -193,7 +193,7 @@ TEST(Interp, IntMinDividedByMinusOne) {
 }
 
 TEST(Interp, ShiftsOutOfRangeGiveZero) {
-  Run r(".rung line 1\nTRUE\nSHL 1 31 D0\nSHL 1 32 D1\nSHR -1 28 D2\nSHR 5 -1 D3\nWNOT 0 D4\nWXOR 12 10 D5\n.end\n");
+  Scan r(".rung line 1\nTRUE\nSHL 1 31 D0\nSHL 1 32 D1\nSHR -1 28 D2\nSHR 5 -1 D3\nWNOT 0 D4\nWXOR 12 10 D5\n.end\n");
   r.mem.set_int(Area::D, 1, 99);
   r.scan();
   EXPECT_EQ(r.d(0), std::numeric_limits<int32_t>::min());
@@ -205,7 +205,7 @@ TEST(Interp, ShiftsOutOfRangeGiveZero) {
 }
 
 TEST(Interp, RealConversions) {
-  Run r(".rung line 1\nTRUE\nMOV 3.75 D0\nMOV -3.75 D1\nMOV 1e+20 D2\nMOV -1e+20 D3\nMOV F0 D4\nMOV 7 F1\nADD D5 0.5 F2\n.end\n");
+  Scan r(".rung line 1\nTRUE\nMOV 3.75 D0\nMOV -3.75 D1\nMOV 1e+20 D2\nMOV -1e+20 D3\nMOV F0 D4\nMOV 7 F1\nADD D5 0.5 F2\n.end\n");
   r.mem.set_real(0, std::nanf(""));
   r.mem.set_int(Area::D, 5, 2);
   r.scan();
@@ -219,7 +219,7 @@ TEST(Interp, RealConversions) {
 }
 
 TEST(Interp, RealDivisionByZeroAndNanCompares) {
-  Run r(".rung line 1\nTRUE\nDIV 1.0 -0.0 F1\n.rung line 2\nLDEQ F0 F0\nOUT Y0\nLDNE F0 F0\nOUT Y1\nLDLT F0 1.0\nOUT Y2\n.end\n");
+  Scan r(".rung line 1\nTRUE\nDIV 1.0 -0.0 F1\n.rung line 2\nLDEQ F0 F0\nOUT Y0\nLDNE F0 F0\nOUT Y1\nLDLT F0 1.0\nOUT Y2\n.end\n");
   r.mem.set_real(0, std::nanf(""));
   r.mem.set_real(1, 5.0f);
   r.scan();
@@ -231,7 +231,7 @@ TEST(Interp, RealDivisionByZeroAndNanCompares) {
 }
 
 TEST(Interp, MixedCompareIsReal) {
-  Run r(".rung line 1\nLDGT D0 1.5\nOUT Y0\nLDEQ D0 2\nOUT Y1\n.end\n");
+  Scan r(".rung line 1\nLDGT D0 1.5\nOUT Y0\nLDEQ D0 2\nOUT Y1\n.end\n");
   r.mem.set_int(Area::D, 0, 2);
   r.scan();
   EXPECT_EQ(r.y(0), 1);
@@ -239,7 +239,7 @@ TEST(Interp, MixedCompareIsReal) {
 }
 
 TEST(Interp, SpecialFunctions) {
-  Run r(".rung line 1\nTRUE\nSQRT 16 F0\nABS -2.5 F1\nABS D0 D1\nEXP 0.0 F2\nLN 1.0 F3\nSIN 0.0 F4\nCOS 0.0 F5\n.end\n");
+  Scan r(".rung line 1\nTRUE\nSQRT 16 F0\nABS -2.5 F1\nABS D0 D1\nEXP 0.0 F2\nLN 1.0 F3\nSIN 0.0 F4\nCOS 0.0 F5\n.end\n");
   r.mem.set_int(Area::D, 0, std::numeric_limits<int32_t>::min());
   r.scan();
   EXPECT_EQ(r.mem.get_real(0), 4.0f);
@@ -252,14 +252,14 @@ TEST(Interp, SpecialFunctions) {
 }
 
 TEST(Interp, ApplicationInstructionsNeedPower) {
-  Run r(".rung line 1\nLOAD X0\nMOV 5 D0\nDIV 1 0 D1\n.end\n");
+  Scan r(".rung line 1\nLOAD X0\nMOV 5 D0\nDIV 1 0 D1\n.end\n");
   r.scan();
   EXPECT_EQ(r.d(0), 0);
   EXPECT_EQ(r.mem.get_bit(Area::S, kBitError), 0);
 }
 
 TEST(Interp, JumpSkipsRungsAndEndStopsTheScan) {
-  Run r(".rung line 1\nLOAD X0\nJMP L\n.rung line 2\nTRUE\nOUT Y0\n.label L\n.rung line 3\nLOAD X1\nEND\n.rung line 4\nTRUE\nOUT Y1\n.end\n");
+  Scan r(".rung line 1\nLOAD X0\nJMP L\n.rung line 2\nTRUE\nOUT Y0\n.label L\n.rung line 3\nLOAD X1\nEND\n.rung line 4\nTRUE\nOUT Y1\n.end\n");
   r.x(0, 1);
   r.scan();
   EXPECT_EQ(r.y(0), 0);
