@@ -41,16 +41,10 @@ using K = TreeNode::Kind;
 
 [[noreturn]] void fail(int line, int col, const std::string& msg) { throw CompileError(line, col, msg); }
 
-const char* const kKeywords[] = {"S", "R", "P", "N", "SET", "RESET", "RST", "TON", "TOF", "TP", "CTU", "CTD", "MOV",
-                                 "ADD", "SUB", "MUL", "DIV", "MOD", "AND", "OR", "XOR", "NOT", "SHL", "SHR", "SIN",
-                                 "COS", "TAN", "SQRT", "EXP", "LN", "ABS", "JMP", "END", "ALIAS", "LABEL", "RUNG"};
-
-bool is_keyword(std::string_view s) {
-  std::string u = upper(s);
-  for (const char* k : kKeywords)
-    if (u == k) return true;
-  return false;
-}
+// Element keywords are read by position (the first word of a multi-word
+// element), so an alias may be called `start`, `reset` or `S`.  Only `END`,
+// a one-word output of its own, would be ambiguous.
+bool is_keyword(std::string_view s) { return upper(s) == "END"; }
 
 struct Word {
   std::string text;
