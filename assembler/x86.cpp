@@ -90,7 +90,7 @@ constexpr Form kForms[] = {
     F1(M::Idiv, OT::RM32, N, 0xF7, Enc::M, 7),
     F2(M::Setcc, OT::RM8, N, 0x90, Enc::M, 0, true),
     F2(M::Cmovcc, OT::R32, OT::RM32, 0x40, Enc::RM, -1, true),
-    F1(M::Jcc, OT::Rel8, N, 0x70, Enc::D),
+    F(M::Jcc, OT::Rel8, N, N, 0, 1, 0x70, 0, Enc::D, -1, false, true),
     F2(M::Jcc, OT::Rel32, N, 0x80, Enc::D, -1, true),
     F1(M::Jmp, OT::Rel8, N, 0xEB, Enc::D),
     F1(M::Jmp, OT::Rel32, N, 0xE9, Enc::D),
