@@ -59,6 +59,19 @@ Compiled compile_source(const std::string& path) {
   return c;
 }
 
+NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode) {
+  NativeBuild b;
+  b.gen = generate_x86(p, p.layout());
+  b.asm_result = as::assemble(as::x86::target(), b.gen.program, mode);
+  if (!b.asm_result.ok()) {
+    std::string msg;
+    for (const auto& e : b.asm_result.errors)
+      msg += (msg.empty() ? "" : "\n") + source_name + ":" + std::to_string(e.line) + ":1: error: " + e.message;
+    throw UserError(msg);
+  }
+  return b;
+}
+
 std::optional<int32_t> parse_period(const std::string& s) {
   char* end = nullptr;
   errno = 0;

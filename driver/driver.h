@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "backend-x86/backend_x86.h"
 #include "ir/ir.h"
 
 namespace ldc {
@@ -28,6 +29,14 @@ struct Compiled {
 // .ld (grid) or .il (IL text): parse and lower.  Errors are formatted
 // "file:line:col: error: ..." with the source line and a caret.
 Compiled compile_source(const std::string& path);
+
+// The x86-64 route: macro compiler then the blockwise assembler.  Assembly
+// errors become UserError with the rung's source line.
+struct NativeBuild {
+  X86Code gen;
+  as::Result asm_result;
+};
+NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode = as::Mode::Blockwise);
 
 // "10ms", "10", "2s" -> ms; nullopt if malformed.
 std::optional<int32_t> parse_period(const std::string& s);

@@ -8,10 +8,10 @@
 using namespace ldc;
 
 static const char kUsage[] =
-    "usage: ldrun FILE [--engine=interp] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms]\n";
+    "usage: ldrun FILE [--engine=native|interp] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms]\n";
 
 int main(int argc, char** argv) {
-  std::string input, engine = "interp", trace_file, watch;
+  std::string input, engine = "native", trace_file, watch;
   RunOptions opt;
   try {
     for (int i = 1; i < argc; i++) {
@@ -40,12 +40,19 @@ int main(int argc, char** argv) {
       else throw UserError("ldrun: error: more than one program");
     }
     if (input.empty()) throw UserError(std::string("ldrun: error: no program\n") + kUsage);
-    if (engine != "interp") throw UserError("ldrun: error: engine '" + engine + "' is not available in this build (interp)");
+    if (engine != "interp" && engine != "native")
+      throw UserError("ldrun: error: unknown engine '" + engine + "' (native or interp)");
     Compiled c = compile_source(input);
-    BinaryIl bin = encode_il(c.il);
     Layout layout = c.il.layout();
-    if (std::string why = validate_il(bin.code, layout); !why.empty()) throw UserError("ldrun: error: IL " + why);
-    auto eng = make_interp_engine(bin.code, layout);
+    std::unique_ptr<Engine> eng;
+    if (engine == "interp") {
+      BinaryIl bin = encode_il(c.il);
+      if (std::string why = validate_il(bin.code, layout); !why.empty()) throw UserError("ldrun: error: IL " + why);
+      eng = make_interp_engine(bin.code, layout);
+    } else {
+      NativeBuild nb = build_x86(c.il, input);
+      eng = make_native_engine(nb.asm_result.code, 0);
+    }
     size_t s = 0;
     while (!watch.empty() && s <= watch.size()) {
       size_t e = watch.find(',', s);

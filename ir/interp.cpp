@@ -205,8 +205,10 @@ struct Timer {
 Timer timer(Ctx& c, uint32_t n) {
   return {c.mem + c.L->addr(Area::TW, n), c.mem + c.L->addr(Area::TQ, n), c.mem + c.L->addr(Area::TI, n)};
 }
-int32_t advance(int32_t et, int32_t dt, int32_t pt) {  // min(et + dt, pt) without overflow
-  return (et >= pt || pt - et <= dt) ? pt : et + dt;
+int32_t advance(int32_t et, int32_t dt, int32_t pt) {  // et >= pt ? pt : min(et + dt, pt), exactly
+  if (et >= pt) return pt;
+  int64_t s = int64_t(et) + int64_t(dt);
+  return s > pt ? pt : int32_t(s);
 }
 void exec_TON(Ctx& c) {
   Timer t = timer(c, operand(c).index);
@@ -215,7 +217,7 @@ void exec_TON(Ctx& c) {
   if (in) {
     int32_t et = t.get_et();
     if (!*t.in_mem) et = 0;
-    else if (et < pt) et = advance(et, dt(c), pt);
+    else et = advance(et, dt(c), pt);
     t.set_et(et);
     *t.q = et >= pt;
   } else {

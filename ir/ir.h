@@ -69,7 +69,12 @@ struct Layout {
 // Fixed addresses inside the Sys area.
 constexpr uint32_t kSysDt = 0;      // INT32: ms elapsed before this scan
 constexpr uint32_t kSysScan = 4;    // UINT32: scans completed
+// Native code calls the REAL functions that have no instruction through this
+// table of 8-byte function pointers (float f(float)), filled by the runtime.
+constexpr uint32_t kSysCallTable = 16;
+enum class RealFn : uint8_t { Sin, Cos, Tan, Exp, Ln, Count };
 constexpr uint32_t kSysSize = 64;
+static_assert(kSysCallTable + 8 * uint32_t(RealFn::Count) <= kSysSize);
 
 // System bits.
 constexpr uint32_t kBitError = 0;      // S0

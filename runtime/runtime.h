@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -21,6 +22,13 @@ class Engine {
 
 // The reference interpreter over an image's binary IL.
 std::unique_ptr<Engine> make_interp_engine(std::vector<uint8_t> il, const Layout& layout);
+
+// Native x86-64 scan code, called as void scan(uint8_t* image).
+std::unique_ptr<Engine> make_native_engine(std::span<const uint8_t> code, uint32_t entry);
+// Fills the image's table of REAL functions that native code calls
+// (sin cos tan exp ln at kSysCallTable).  Every engine's image gets it, so
+// images compare equal across engines.
+void install_call_table(uint8_t* mem);
 
 // A device named in a trace column or a --watch list.
 struct Probe {

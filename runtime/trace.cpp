@@ -166,6 +166,7 @@ std::string format_probe(const Memory& mem, const Probe& p) {
 void run_trace(Engine& engine, const Layout& layout, const Trace* trace, const std::string&, const RunOptions& opt,
                std::string& out) {
   Memory mem(layout);
+  install_call_table(mem.data());
   int scans = opt.scans >= 0 ? opt.scans : trace ? int(trace->rows.size()) : 1;
   out += "scan";
   for (const Probe& p : opt.watch) out += "," + p.name;

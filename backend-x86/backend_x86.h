@@ -1,0 +1,32 @@
+// backend-x86/backend_x86.h -- the macro compiler for x86-64 (paper 003, step 2):
+// every IL mnemonic becomes a fixed assembly template.
+//
+// The generated function is `void scan(uint8_t* image)` (System V ABI):
+//   rbx  base of the memory image (every device is [rbx + offset])
+//   ebp  the bit stack (top = bit 0), as paper 003 keeps it in R10 on the C40
+//   eax ecx edx xmm0-2  scratch
+// REAL functions with no instruction (sin, cos, tan, exp, ln) are called through
+// the table at image + kSysCallTable; no absolute address is baked in.
+#pragma once
+
+#include <vector>
+
+#include "assembler/assembler.h"
+#include "ir/ir.h"
+
+namespace ldc {
+
+struct X86Code {
+  as::x86::X86Program program;  // block 0 prologue, one block per rung, last block epilogue
+  // For rung r and its IL instruction i, the item index in block r + 1 where
+  // the instruction's code starts (a comment item holding the IL text).
+  std::vector<std::vector<uint32_t>> il_items;
+};
+
+X86Code generate_x86(const Program& p, const Layout& layout);
+
+// Names of the global labels the backend defines.
+inline constexpr const char* kX86ExitLabel = "scan_exit";
+std::string x86_label_name(const std::string& il_label);  // user label -> assembly label
+
+}  // namespace ldc

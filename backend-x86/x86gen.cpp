@@ -1,0 +1,625 @@
+// backend-x86/x86gen.cpp -- IL mnemonics -> x86-64 assembly templates.
+#include <cstring>
+#include <map>
+#include <stdexcept>
+
+#include "backend-x86/backend_x86.h"
+
+namespace ldc {
+namespace {
+
+using namespace as::x86;
+using as::x86::Operand;
+using as::x86::Instruction;
+using M = Mnemonic;
+using Item = as::Item<Instruction>;
+
+// ------------------------------------------------------------ bit templates
+//
+// The bit instructions are pure templates, one row per mnemonic, written in
+// the assembler's own syntax (GNU as, Intel, noprefix).  Instructions are
+// separated by ';'.  `%0` and `%1` stand for the memory operand
+// `[rbx + address]` of the IL instruction's operand 0 and 1: a bit device or
+// an edge slot, one byte each.  The bit stack is ebp, top in bit 0:
+// a push is `lea ebp, [rax+rbp*2]` with the new bit in eax.
+struct Template {
+  Op op;
+  const char* text;
+};
+const Template kBitTemplates[] = {
+    {Op::LOAD,   "movzx eax, byte ptr %0; lea ebp, [rax+rbp*2]"},
+    {Op::LOADN,  "movzx eax, byte ptr %0; xor eax, 1; lea ebp, [rax+rbp*2]"},
+    {Op::AND,    "movzx eax, byte ptr %0; or eax, -2; and ebp, eax"},
+    {Op::ANDN,   "movzx eax, byte ptr %0; not eax; and ebp, eax"},
+    {Op::OR,     "movzx eax, byte ptr %0; or ebp, eax"},
+    {Op::ORN,    "movzx eax, byte ptr %0; xor eax, 1; or ebp, eax"},
+    {Op::LOADP,  "movzx eax, byte ptr %0; movzx ecx, byte ptr %1; mov byte ptr %1, al; not ecx; and eax, ecx; lea ebp, [rax+rbp*2]"},
+    {Op::LOADF,  "movzx eax, byte ptr %0; movzx ecx, byte ptr %1; mov byte ptr %1, al; not eax; and eax, ecx; lea ebp, [rax+rbp*2]"},
+    {Op::TRUE,   "lea ebp, [rbp+rbp*1+1]"},
+    {Op::ANDBLK, "mov eax, ebp; shr ebp, 1; or eax, -2; and ebp, eax"},
+    {Op::ORBLK,  "mov eax, ebp; shr ebp, 1; and eax, 1; or ebp, eax"},
+    {Op::MPS,    "mov eax, ebp; and eax, 1; lea ebp, [rax+rbp*2]"},
+    {Op::MRD,    "mov eax, ebp; shr eax, 1; and eax, 1; and ebp, -2; or ebp, eax"},
+    {Op::MPP,    "shr ebp, 1"},
+    {Op::OUT,    "mov eax, ebp; and eax, 1; mov byte ptr %0, al"},
+    {Op::OUTN,   "mov eax, ebp; not eax; and eax, 1; mov byte ptr %0, al"},
+    {Op::SET,    "mov eax, ebp; and eax, 1; or byte ptr %0, al"},
+    {Op::RST,    "mov eax, ebp; not eax; and byte ptr %0, al"},
+};
+
+constexpr int32_t kMark[2] = {0x10000000, 0x20000000};
+
+// The templates, parsed once.
+const std::vector<Instruction>& bit_template(Op op) {
+  static const auto table = [] {
+    std::map<Op, std::vector<Instruction>> t;
+    for (const Template& row : kBitTemplates) {
+      std::string s = row.text;
+      for (int k = 0; k < 2; k++) {
+        std::string key = "%" + std::to_string(k), val = "[rbx+" + std::to_string(kMark[k]) + "]";
+        for (size_t p; (p = s.find(key)) != std::string::npos;) s.replace(p, key.size(), val);
+      }
+      size_t start = 0;
+      while (start < s.size()) {
+        size_t semi = s.find(';', start);
+        t[row.op].push_back(parse(s.substr(start, semi == std::string::npos ? std::string::npos : semi - start)));
+        start = semi == std::string::npos ? s.size() : semi + 1;
+      }
+    }
+    return t;
+  }();
+  return table.at(op);
+}
+
+bool has_template(Op op) {
+  for (const Template& row : kBitTemplates)
+    if (row.op == op) return true;
+  return false;
+}
+
+// ------------------------------------------------------------ application code
+
+Operand R(Reg r) { return Operand::r(r); }
+Operand I(int64_t v) { return Operand::i(v); }
+Operand L(std::string s) { return Operand::l(std::move(s)); }
+Mem mem_at(Size size, uint32_t addr) {
+  Mem m;
+  m.size = size;
+  m.base = r64(BX);
+  m.disp = int32_t(addr);
+  return m;
+}
+Operand B(uint32_t addr) { return Operand::m(mem_at(Size::Byte, addr)); }
+Operand Dw(uint32_t addr) { return Operand::m(mem_at(Size::Dword, addr)); }
+const Reg eax = r32(AX), ecx = r32(CX), edx = r32(DX), ebp = r32(BP), al = r8(AX), cl = r8(CX);
+const Reg xmm0 = xmm(0), xmm1 = xmm(1), xmm2 = xmm(2);
+
+uint32_t float_bits(float f) {
+  uint32_t u;
+  std::memcpy(&u, &f, 4);
+  return u;
+}
+
+class Gen {
+ public:
+  Gen(const Layout& l, std::vector<Item>& items) : L_(l), items_(items) {}
+
+  void instr(const ldc::Instr& in);
+
+ private:
+  const Layout& L_;
+  std::vector<Item>& items_;
+  int next_label_ = 0;
+
+  void emit(Instruction i) { items_.push_back(Item::instr(std::move(i))); }
+  void emit(M m, std::initializer_list<Operand> ops) { emit(make(m, ops)); }
+  void jcc(Cond c, const std::string& label) { emit(makeCc(M::Jcc, c, {L(label)})); }
+  void jmp(const std::string& label) { emit(M::Jmp, {L(label)}); }
+  void label(const std::string& l) { items_.push_back(Item::labelDef(l)); }
+  std::string fresh() { return "L" + std::to_string(next_label_++); }
+
+  uint32_t addr(const ldc::Operand& o) const {
+    switch (o.kind) {
+      case OpdKind::Edge: return L_.addr(Area::E, o.index);
+      case OpdKind::Timer: return L_.addr(Area::TW, o.index);
+      case OpdKind::Counter: return L_.addr(Area::CW, o.index);
+      default: return L_.addr(o.area, o.index);
+    }
+  }
+  static bool is_const(const ldc::Operand& o) { return o.kind == OpdKind::ConstInt || o.kind == OpdKind::ConstReal; }
+
+  // eax = INT32 value of o (REAL converted: truncate, saturate, NaN -> 0)
+  void load_int(const ldc::Operand& o, Reg r) {
+    if (o.kind == OpdKind::ConstInt) emit(M::Mov, {R(r), I(o.ival)});
+    else if (o.kind == OpdKind::ConstReal) emit(M::Mov, {R(r), I(real_to_int(o.fval))});
+    else if (o.kind == OpdKind::Real) { load_real(o, xmm0); real_to_int_eax(); if (r != eax) emit(M::Mov, {R(r), R(eax)}); }
+    else emit(M::Mov, {R(r), Dw(addr(o))});
+  }
+  // x = REAL value of o
+  void load_real(const ldc::Operand& o, Reg x) {
+    if (o.kind == OpdKind::ConstReal || o.kind == OpdKind::ConstInt) {
+      float f = o.kind == OpdKind::ConstReal ? o.fval : int_to_real(o.ival);
+      uint32_t bits = float_bits(f);
+      if (bits == 0) emit(M::Xorps, {R(x), R(x)});
+      else { emit(M::Mov, {R(edx), I(int32_t(bits))}); emit(M::Movd, {R(x), R(edx)}); }
+    } else if (o.kind == OpdKind::Real) emit(M::Movss, {R(x), Dw(addr(o))});
+    else emit(M::Cvtsi2ss, {R(x), Dw(addr(o))});
+  }
+  // xmm0 -> eax with the IL's REAL -> INT32 rule
+  void real_to_int_eax() {
+    std::string done = fresh(), nan = fresh();
+    emit(M::Cvttss2si, {R(eax), R(xmm0)});
+    emit(M::Cmp, {R(eax), I(INT32_MIN)});
+    jcc(Cond::NE, done);
+    emit(M::Ucomiss, {R(xmm0), R(xmm0)});
+    jcc(Cond::P, nan);
+    emit(M::Xorps, {R(xmm2), R(xmm2)});
+    emit(M::Ucomiss, {R(xmm0), R(xmm2)});
+    jcc(Cond::BE, done);  // negative: INT32_MIN is right
+    emit(M::Mov, {R(eax), I(INT32_MAX)});
+    jmp(done);
+    label(nan);
+    emit(M::Xor, {R(eax), R(eax)});
+    label(done);
+  }
+  // store eax (INT32) into d, converting to REAL for F
+  void store_int(const ldc::Operand& d) {
+    if (d.kind == OpdKind::Real) {
+      emit(M::Cvtsi2ss, {R(xmm0), R(eax)});
+      emit(M::Movss, {Dw(addr(d)), R(xmm0)});
+    } else emit(M::Mov, {Dw(addr(d)), R(eax)});
+  }
+  // store xmm0 (REAL) into d, converting to INT32 for words
+  void store_real(const ldc::Operand& d) {
+    if (d.kind == OpdKind::Real) emit(M::Movss, {Dw(addr(d)), R(xmm0)});
+    else { real_to_int_eax(); emit(M::Mov, {Dw(addr(d)), R(eax)}); }
+  }
+  // the source operand form for `op eax, <b>`: an immediate or a dword in the image
+  Operand int_src(const ldc::Operand& b) {
+    if (b.kind == OpdKind::ConstInt) return I(b.ival);
+    return Dw(addr(b));
+  }
+  void set_error() { emit(M::Mov, {B(L_.addr(Area::S, kBitError)), I(1)}); }
+  void push_al() {
+    emit(M::Movzx, {R(eax), R(al)});
+    emit(M::Lea, {R(ebp), Operand::m(Mem{Size::None, r64(AX), r64(BP), 2, 0})});
+  }
+  // if the top of the stack is 0, skip to the returned label
+  std::string skip_unless_power() {
+    std::string skip = fresh();
+    emit(M::Test, {R(ebp), I(1)});
+    jcc(Cond::E, skip);
+    return skip;
+  }
+
+  void compare(const ldc::Instr& in);
+  void move(const ldc::Instr& in);
+  void arith(const ldc::Instr& in);
+  void divmod(const ldc::Instr& in);
+  void logic(const ldc::Instr& in);
+  void special(const ldc::Instr& in);
+  void timer(const ldc::Instr& in);
+  void counter(const ldc::Instr& in);
+  void preset_ecx(const ldc::Operand& pt);
+  void advance_eax(uint32_t tw);
+};
+
+void Gen::compare(const ldc::Instr& in) {
+  const ldc::Operand &a = in.a[0], &b = in.a[1];
+  if (!a.is_real() && !b.is_real()) {
+    load_int(a, eax);
+    emit(M::Cmp, {R(eax), int_src(b)});
+    Cond c = in.op == Op::LDEQ ? Cond::E : in.op == Op::LDNE ? Cond::NE : in.op == Op::LDLT ? Cond::L
+           : in.op == Op::LDLE ? Cond::LE : in.op == Op::LDGT ? Cond::G : Cond::GE;
+    emit(makeCc(M::Setcc, c, {R(al)}));
+    return push_al();
+  }
+  load_real(a, xmm0);
+  load_real(b, xmm1);
+  switch (in.op) {  // unordered (NaN) sets ZF, PF and CF
+    case Op::LDGT: emit(M::Ucomiss, {R(xmm0), R(xmm1)}); emit(makeCc(M::Setcc, Cond::A, {R(al)})); break;
+    case Op::LDGE: emit(M::Ucomiss, {R(xmm0), R(xmm1)}); emit(makeCc(M::Setcc, Cond::AE, {R(al)})); break;
+    case Op::LDLT: emit(M::Ucomiss, {R(xmm1), R(xmm0)}); emit(makeCc(M::Setcc, Cond::A, {R(al)})); break;
+    case Op::LDLE: emit(M::Ucomiss, {R(xmm1), R(xmm0)}); emit(makeCc(M::Setcc, Cond::AE, {R(al)})); break;
+    case Op::LDEQ:
+      emit(M::Ucomiss, {R(xmm0), R(xmm1)});
+      emit(makeCc(M::Setcc, Cond::E, {R(al)}));
+      emit(makeCc(M::Setcc, Cond::NP, {R(cl)}));
+      emit(M::And, {R(al), R(cl)});
+      break;
+    default:
+      emit(M::Ucomiss, {R(xmm0), R(xmm1)});
+      emit(makeCc(M::Setcc, Cond::NE, {R(al)}));
+      emit(makeCc(M::Setcc, Cond::P, {R(cl)}));
+      emit(M::Or, {R(al), R(cl)});
+      break;
+  }
+  push_al();
+}
+
+void Gen::move(const ldc::Instr& in) {
+  const ldc::Operand &a = in.a[0], &d = in.a[1];
+  std::string skip = skip_unless_power();
+  if (a.is_real()) {
+    if (d.kind == OpdKind::Real && a.kind == OpdKind::Real) {
+      emit(M::Mov, {R(eax), Dw(addr(a))});
+      emit(M::Mov, {Dw(addr(d)), R(eax)});
+    } else if (d.kind == OpdKind::Real) {
+      emit(M::Mov, {Dw(addr(d)), I(int32_t(float_bits(a.fval)))});
+    } else {
+      load_real(a, xmm0);
+      store_real(d);
+    }
+  } else if (a.kind == OpdKind::ConstInt) {
+    if (d.kind == OpdKind::Real) emit(M::Mov, {Dw(addr(d)), I(int32_t(float_bits(int_to_real(a.ival))))});
+    else emit(M::Mov, {Dw(addr(d)), I(a.ival)});
+  } else {
+    load_int(a, eax);
+    store_int(d);
+  }
+  label(skip);
+}
+
+void Gen::arith(const ldc::Instr& in) {
+  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
+  std::string skip = skip_unless_power();
+  if (a.is_real() || b.is_real()) {
+    load_real(a, xmm0);
+    load_real(b, xmm1);
+    M m = in.op == Op::ADD ? M::Addss : in.op == Op::SUB ? M::Subss : M::Mulss;
+    emit(m, {R(xmm0), R(xmm1)});
+    store_real(d);
+  } else {
+    load_int(a, eax);
+    if (in.op == Op::MUL) {
+      if (b.kind == OpdKind::ConstInt) emit(M::Imul, {R(eax), R(eax), I(b.ival)});
+      else emit(M::Imul, {R(eax), Dw(addr(b))});
+    } else {
+      emit(in.op == Op::ADD ? M::Add : M::Sub, {R(eax), int_src(b)});
+    }
+    store_int(d);
+  }
+  label(skip);
+}
+
+void Gen::divmod(const ldc::Instr& in) {
+  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
+  bool mod = in.op == Op::MOD;
+  std::string skip = skip_unless_power();
+  if (!mod && (a.is_real() || b.is_real())) {
+    std::string divide = fresh(), err = fresh();
+    load_real(a, xmm0);
+    load_real(b, xmm1);
+    emit(M::Xorps, {R(xmm2), R(xmm2)});
+    emit(M::Ucomiss, {R(xmm1), R(xmm2)});
+    jcc(Cond::P, divide);  // NaN divisor: not zero
+    jcc(Cond::E, err);
+    label(divide);
+    emit(M::Divss, {R(xmm0), R(xmm1)});
+    store_real(d);
+    jmp(skip);
+    label(err);
+    set_error();
+    label(skip);
+    return;
+  }
+  std::string err = fresh(), minus_one = fresh();
+  load_int(a, eax);
+  load_int(b, ecx);
+  emit(M::Test, {R(ecx), R(ecx)});
+  jcc(Cond::E, err);
+  emit(M::Cmp, {R(ecx), I(-1)});
+  jcc(Cond::E, minus_one);
+  emit(M::Cdq, {});
+  emit(M::Idiv, {R(ecx)});
+  if (mod) emit(M::Mov, {R(eax), R(edx)});
+  std::string store = fresh();
+  label(store);
+  store_int(d);
+  jmp(skip);
+  label(minus_one);  // x / -1 = -x (wrapping), x MOD -1 = 0
+  if (mod) emit(M::Xor, {R(eax), R(eax)});
+  else emit(M::Neg, {R(eax)});
+  jmp(store);
+  label(err);
+  set_error();
+  label(skip);
+}
+
+void Gen::logic(const ldc::Instr& in) {
+  const ldc::Operand& a = in.a[0];
+  std::string skip = skip_unless_power();
+  load_int(a, eax);
+  if (in.op == Op::WNOT) {
+    emit(M::Not, {R(eax)});
+    store_int(in.a[1]);
+  } else if (in.op == Op::SHL || in.op == Op::SHR) {
+    const ldc::Operand& n = in.a[1];
+    M m = in.op == Op::SHL ? M::Shl : M::Shr;
+    if (n.kind == OpdKind::ConstInt) {
+      if (n.ival < 0 || n.ival > 31) emit(M::Xor, {R(eax), R(eax)});
+      else if (n.ival > 0) emit(m, {R(eax), I(n.ival)});
+    } else {
+      std::string zero = fresh(), store = fresh();
+      load_int(n, ecx);
+      emit(M::Cmp, {R(ecx), I(31)});
+      jcc(Cond::A, zero);  // unsigned: negative counts too
+      emit(m, {R(eax), R(cl)});
+      jmp(store);
+      label(zero);
+      emit(M::Xor, {R(eax), R(eax)});
+      label(store);
+    }
+    store_int(in.a[2]);
+  } else {
+    M m = in.op == Op::WAND ? M::And : in.op == Op::WOR ? M::Or : M::Xor;
+    emit(m, {R(eax), int_src(in.a[1])});
+    store_int(in.a[2]);
+  }
+  label(skip);
+}
+
+void Gen::special(const ldc::Instr& in) {
+  const ldc::Operand &a = in.a[0], &d = in.a[1];
+  std::string skip = skip_unless_power();
+  if (in.op == Op::ABS && !a.is_real()) {
+    load_int(a, eax);
+    emit(M::Mov, {R(ecx), R(eax)});
+    emit(M::Sar, {R(ecx), I(31)});
+    emit(M::Xor, {R(eax), R(ecx)});
+    emit(M::Sub, {R(eax), R(ecx)});
+    store_int(d);
+    label(skip);
+    return;
+  }
+  load_real(a, xmm0);
+  if (in.op == Op::ABS) {
+    emit(M::Movd, {R(eax), R(xmm0)});
+    emit(M::And, {R(eax), I(0x7fffffff)});
+    emit(M::Movd, {R(xmm0), R(eax)});
+  } else if (in.op == Op::SQRT) {
+    emit(M::Sqrtss, {R(xmm0), R(xmm0)});
+  } else {
+    RealFn fn = in.op == Op::SIN ? RealFn::Sin : in.op == Op::COS ? RealFn::Cos : in.op == Op::TAN ? RealFn::Tan
+              : in.op == Op::EXP ? RealFn::Exp : RealFn::Ln;
+    Mem m = mem_at(Size::Qword, kSysCallTable + 8 * uint32_t(fn));
+    emit(M::Call, {Operand::m(m)});
+  }
+  store_real(d);
+  label(skip);
+}
+
+// ecx = timer preset, negative counted as 0
+void Gen::preset_ecx(const ldc::Operand& pt) {
+  if (pt.kind == OpdKind::ConstInt) {
+    emit(M::Mov, {R(ecx), I(pt.ival < 0 ? 0 : pt.ival)});
+    return;
+  }
+  load_int(pt, ecx);
+  emit(M::Xor, {R(edx), R(edx)});
+  emit(M::Test, {R(ecx), R(ecx)});
+  emit(makeCc(M::Cmovcc, Cond::S, {R(ecx), R(edx)}));
+}
+
+// eax = advance(ET, dt, PT) (docs/il.md); ET at tw, PT in ecx; stores it too
+void Gen::advance_eax(uint32_t tw) {
+  std::string cap = fresh(), store = fresh();
+  emit(M::Mov, {R(eax), Dw(tw)});
+  emit(M::Cmp, {R(eax), R(ecx)});
+  jcc(Cond::GE, cap);
+  emit(M::Add, {R(eax), Dw(kSysDt)});
+  jcc(Cond::O, cap);
+  emit(M::Cmp, {R(eax), R(ecx)});
+  jcc(Cond::LE, store);
+  label(cap);
+  emit(M::Mov, {R(eax), R(ecx)});
+  label(store);
+  emit(M::Mov, {Dw(tw), R(eax)});
+}
+
+void Gen::timer(const ldc::Instr& in) {
+  uint32_t n = in.a[0].index;
+  uint32_t tw = L_.addr(Area::TW, n), tq = L_.addr(Area::TQ, n), ti = L_.addr(Area::TI, n);
+  if (in.op == Op::RSTT) {
+    std::string skip = skip_unless_power();
+    emit(M::Mov, {Dw(tw), I(0)});
+    emit(M::Mov, {B(tq), I(0)});
+    emit(M::Mov, {B(ti), I(0)});
+    label(skip);
+    return;
+  }
+  preset_ecx(in.a[1]);
+  std::string off = fresh(), done = fresh();
+  if (in.op == Op::TON) {
+    std::string running = fresh(), q = fresh();
+    emit(M::Test, {R(ebp), I(1)});
+    jcc(Cond::E, off);
+    emit(M::Cmp, {B(ti), I(0)});
+    jcc(Cond::NE, running);
+    emit(M::Mov, {Dw(tw), I(0)});  // rising scan: timing starts
+    emit(M::Xor, {R(eax), R(eax)});
+    jmp(q);
+    label(running);
+    advance_eax(tw);
+    label(q);
+    emit(M::Cmp, {R(eax), R(ecx)});
+    emit(makeCc(M::Setcc, Cond::GE, {R(al)}));
+    emit(M::Mov, {B(tq), R(al)});
+    emit(M::Mov, {B(ti), I(1)});
+    jmp(done);
+    label(off);
+    emit(M::Mov, {Dw(tw), I(0)});
+    emit(M::Mov, {B(tq), I(0)});
+    emit(M::Mov, {B(ti), I(0)});
+    label(done);
+  } else if (in.op == Op::TOF) {
+    std::string not_falling = fresh(), ti0 = fresh();
+    emit(M::Test, {R(ebp), I(1)});
+    jcc(Cond::E, off);
+    emit(M::Mov, {B(tq), I(1)});
+    emit(M::Mov, {Dw(tw), I(0)});
+    emit(M::Mov, {B(ti), I(1)});
+    jmp(done);
+    label(off);
+    emit(M::Cmp, {B(ti), I(0)});
+    jcc(Cond::E, not_falling);
+    emit(M::Mov, {Dw(tw), I(0)});  // falling scan: timing starts
+    emit(M::Test, {R(ecx), R(ecx)});
+    emit(makeCc(M::Setcc, Cond::G, {R(al)}));
+    emit(M::Mov, {B(tq), R(al)});
+    jmp(ti0);
+    label(not_falling);
+    emit(M::Cmp, {B(tq), I(0)});
+    jcc(Cond::E, ti0);
+    advance_eax(tw);
+    emit(M::Cmp, {R(eax), R(ecx)});
+    emit(makeCc(M::Setcc, Cond::L, {R(al)}));
+    emit(M::Mov, {B(tq), R(al)});
+    label(ti0);
+    emit(M::Mov, {B(ti), I(0)});
+    label(done);
+  } else {  // TP
+    std::string idle = fresh(), remember = fresh();
+    emit(M::Cmp, {B(tq), I(0)});
+    jcc(Cond::E, idle);
+    advance_eax(tw);
+    emit(M::Cmp, {R(eax), R(ecx)});
+    jcc(Cond::L, remember);
+    emit(M::Mov, {B(tq), I(0)});
+    jmp(remember);
+    label(idle);
+    emit(M::Test, {R(ebp), I(1)});
+    jcc(Cond::E, off);
+    emit(M::Cmp, {B(ti), I(0)});
+    jcc(Cond::NE, remember);
+    emit(M::Test, {R(ecx), R(ecx)});  // rising scan: the pulse starts
+    emit(makeCc(M::Setcc, Cond::G, {R(al)}));
+    emit(M::Mov, {B(tq), R(al)});
+    emit(M::Mov, {Dw(tw), I(0)});
+    jmp(remember);
+    label(off);
+    emit(M::Mov, {Dw(tw), I(0)});
+    label(remember);
+    emit(M::Mov, {R(eax), R(ebp)});
+    emit(M::And, {R(eax), I(1)});
+    emit(M::Mov, {B(ti), R(al)});
+  }
+}
+
+void Gen::counter(const ldc::Instr& in) {
+  uint32_t n = in.a[0].index;
+  uint32_t cw = L_.addr(Area::CW, n), cq = L_.addr(Area::CQ, n);
+  if (in.op == Op::RSTC) {
+    std::string skip = skip_unless_power();
+    emit(M::Mov, {Dw(cw), I(0)});
+    emit(M::Mov, {B(cq), I(0)});
+    label(skip);
+    return;
+  }
+  bool up = in.op == Op::CTU;
+  uint32_t e = addr(in.a[2]);
+  std::string q = fresh();
+  emit(M::Mov, {R(eax), R(ebp)});
+  emit(M::And, {R(eax), I(1)});
+  emit(M::Movzx, {R(ecx), B(e)});
+  emit(M::Mov, {B(e), R(al)});
+  emit(M::Not, {R(ecx)});
+  emit(M::And, {R(eax), R(ecx)});  // rising edge of the input
+  emit(M::Mov, {R(edx), Dw(cw)});
+  jcc(Cond::E, q);
+  emit(M::Cmp, {R(edx), I(up ? INT32_MAX : INT32_MIN)});
+  jcc(Cond::E, q);
+  emit(up ? M::Add : M::Sub, {R(edx), I(1)});
+  emit(M::Mov, {Dw(cw), R(edx)});
+  label(q);
+  if (up) {
+    load_int(in.a[1], eax);
+    emit(M::Cmp, {R(edx), R(eax)});
+    emit(makeCc(M::Setcc, Cond::GE, {R(al)}));
+  } else {
+    emit(M::Test, {R(edx), R(edx)});
+    emit(makeCc(M::Setcc, Cond::LE, {R(al)}));
+  }
+  emit(M::Mov, {B(cq), R(al)});
+}
+
+void Gen::instr(const ldc::Instr& in) {
+  if (has_template(in.op)) {
+    for (Instruction i : bit_template(in.op)) {
+      for (int k = 0; k < i.numOperands; k++) {
+        Mem& m = i.ops[k].mem;
+        if (i.ops[k].kind != OperandKind::Mem) continue;
+        if (m.disp == kMark[0]) m.disp = int32_t(addr(in.a[0]));
+        else if (m.disp == kMark[1]) m.disp = int32_t(addr(in.a[1]));
+      }
+      emit(std::move(i));
+    }
+    return;
+  }
+  switch (op_info(in.op).klass) {
+    case OpClass::Compare: return compare(in);
+    case OpClass::Move: return move(in);
+    case OpClass::Arith:
+      if (in.op == Op::DIV || in.op == Op::MOD) return divmod(in);
+      return arith(in);
+    case OpClass::Logic: return logic(in);
+    case OpClass::Special: return special(in);
+    case OpClass::Timer: return timer(in);
+    case OpClass::Counter: return counter(in);
+    case OpClass::Flow: {
+      emit(M::Test, {R(ebp), I(1)});
+      Instruction j = makeCc(M::Jcc, Cond::NE, {L(in.op == Op::JMP ? x86_label_name(in.a[0].label) : kX86ExitLabel)});
+      j.longBranch = true;
+      return emit(std::move(j));
+    }
+    case OpClass::Basic: break;
+  }
+  throw std::logic_error(std::string("x86 backend: no template for ") + op_info(in.op).name);
+}
+
+}  // namespace
+
+std::string x86_label_name(const std::string& il_label) { return "lbl_" + il_label; }
+
+X86Code generate_x86(const Program& p, const Layout& layout) {
+  X86Code out;
+  auto& prog = out.program;
+  prog.globals.push_back(kX86ExitLabel);
+  for (const Rung& r : p.rungs)
+    for (const auto& l : r.labels) prog.globals.push_back(x86_label_name(l));
+  for (const auto& l : p.end_labels) prog.globals.push_back(x86_label_name(l));
+
+  // prologue: keep rbx/rbp for the caller, 16-byte stack alignment for calls
+  as::Block<Instruction> pro;
+  pro.sourceLine = p.rungs.empty() ? 0 : p.rungs[0].line;
+  pro.items.push_back(Item::note("scan(image): rbx = image, ebp = bit stack"));
+  for (const char* t : {"push rbx", "push rbp", "push rax", "mov rbx, rdi", "xor ebp, ebp"})
+    pro.items.push_back(Item::instr(parse(t)));
+  prog.blocks.push_back(std::move(pro));
+
+  for (const Rung& r : p.rungs) {
+    as::Block<Instruction> b;
+    b.sourceLine = r.line;
+    for (const auto& l : r.labels) b.items.push_back(Item::labelDef(x86_label_name(l), true));
+    b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
+    std::vector<uint32_t> starts;
+    Gen g(layout, b.items);
+    for (const ldc::Instr& in : r.code) {
+      starts.push_back(uint32_t(b.items.size()));
+      b.items.push_back(Item::note(instr_text(in)));
+      g.instr(in);
+    }
+    out.il_items.push_back(std::move(starts));
+    prog.blocks.push_back(std::move(b));
+  }
+
+  as::Block<Instruction> epi;
+  epi.sourceLine = p.rungs.empty() ? 0 : p.rungs.back().line;
+  for (const auto& l : p.end_labels) epi.items.push_back(Item::labelDef(x86_label_name(l), true));
+  epi.items.push_back(Item::labelDef(kX86ExitLabel, true));
+  for (const char* t : {"pop rax", "pop rbp", "pop rbx", "ret"}) epi.items.push_back(Item::instr(parse(t)));
+  prog.blocks.push_back(std::move(epi));
+  return out;
+}
+
+}  // namespace ldc

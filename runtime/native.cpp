@@ -1,0 +1,61 @@
+// runtime/native.cpp -- running native scan code: the code is mapped writable,
+// copied, then made read+execute (never writable and executable at once).
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+#include "runtime/runtime.h"
+
+namespace ldc {
+namespace {
+
+class NativeEngine : public Engine {
+ public:
+  NativeEngine(std::span<const uint8_t> code, uint32_t entry) {
+    if (code.empty() || entry >= code.size()) throw std::runtime_error("native code: empty, or entry outside the code");
+    size_t page = size_t(sysconf(_SC_PAGESIZE));
+    size_ = (code.size() + page - 1) / page * page;
+    void* p = mmap(nullptr, size_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) throw std::runtime_error(std::string("cannot map code: ") + std::strerror(errno));
+    std::memcpy(p, code.data(), code.size());
+    if (mprotect(p, size_, PROT_READ | PROT_EXEC) != 0) {
+      int e = errno;
+      munmap(p, size_);
+      throw std::runtime_error(std::string("cannot make code executable: ") + std::strerror(e));
+    }
+    base_ = p;
+    fn_ = reinterpret_cast<void (*)(uint8_t*)>(static_cast<uint8_t*>(p) + entry);
+  }
+  ~NativeEngine() override { munmap(base_, size_); }
+  void scan(uint8_t* mem) override { fn_(mem); }
+
+ private:
+  void* base_ = nullptr;
+  size_t size_ = 0;
+  void (*fn_)(uint8_t*) = nullptr;
+};
+
+float fn_sin(float x) { return ::sinf(x); }
+float fn_cos(float x) { return ::cosf(x); }
+float fn_tan(float x) { return ::tanf(x); }
+float fn_exp(float x) { return ::expf(x); }
+float fn_ln(float x) { return ::logf(x); }
+
+}  // namespace
+
+std::unique_ptr<Engine> make_native_engine(std::span<const uint8_t> code, uint32_t entry) {
+  return std::make_unique<NativeEngine>(code, entry);
+}
+
+void install_call_table(uint8_t* mem) {
+  using Fn = float (*)(float);
+  const Fn table[] = {fn_sin, fn_cos, fn_tan, fn_exp, fn_ln};
+  static_assert(sizeof table / sizeof table[0] == size_t(RealFn::Count));
+  std::memcpy(mem + kSysCallTable, table, sizeof table);
+}
+
+}  // namespace ldc
