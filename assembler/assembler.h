@@ -174,6 +174,7 @@ struct Stats {
   size_t units = 0;             // blocks (blockwise) or 1 (whole program)
   size_t encodeCalls = 0;
   size_t globalFixups = 0;      // fixups resolved after layout
+  int64_t elapsedNs = 0;        // wall time of assemble()
 };
 
 struct ItemLayout {

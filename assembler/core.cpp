@@ -2,6 +2,7 @@
 // and fixup resolution. Knows nothing about any instruction set.
 #include "assembler/assembler.h"
 
+#include <chrono>
 #include <unordered_map>
 
 namespace ldc::as {
@@ -368,7 +369,12 @@ class Core {
 }  // namespace
 
 Result assemble(const TargetInfo& target, const ProgramView& program, Mode mode) {
-  return Core(target, program, mode).run();
+  auto t0 = std::chrono::steady_clock::now();
+  Result r = Core(target, program, mode).run();
+  r.stats.elapsedNs = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                          std::chrono::steady_clock::now() - t0)
+                          .count();
+  return r;
 }
 
 }  // namespace detail
