@@ -270,8 +270,10 @@ class Parser {
           if (sign < 0) fail("negative scale");
           setIndex(m, reg(), n);
         } else {
-          if (n > uint64_t(INT64_MAX) / 2) fail("displacement out of range");
+          if (n > (uint64_t(1) << 40)) fail("displacement out of range");
           disp += sign * int64_t(n);
+          if (disp > (int64_t(1) << 40) || disp < -(int64_t(1) << 40))
+            fail("displacement out of range");
         }
       } else {
         if (sign < 0) fail("cannot subtract a register");
