@@ -9,7 +9,7 @@
 using namespace ldc;
 
 static const char kUsage[] =
-    "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il] [--target=x86-64|c40] [-O0|-O1|-O2]\n";
+    "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il|asm|listing] [--target=x86-64|c40] [-O0|-O1|-O2]\n";
 
 int main(int argc, char** argv) {
   std::string input, output, emit, target = "x86-64";
@@ -34,9 +34,15 @@ int main(int argc, char** argv) {
       text = print_tree(c.tree);
     } else if (emit == "il") {
       text = print_il_text(c.il);
+    } else if (emit == "asm" && target == "x86-64") {        // macro compiler
+      text = "# ldc " + input + ": x86-64, GNU as syntax (.intel_syntax noprefix)\n" +
+             as::x86::toGnuAs(generate_x86(c.il, c.il.layout()).program);
+    } else if (emit == "listing" && target == "x86-64") {    // + blockwise assembler
+      NativeBuild nb = build_x86(c.il, input);
+      text = as::x86::listing(nb.gen.program, nb.asm_result);
     } else {
       throw UserError("ldc: error: " + (emit.empty() ? std::string("image output (-o FILE.bin)") : "--emit=" + emit) +
-                      " is not available in this build; use --emit=tree or --emit=il");
+                      " is not available in this build (for this target)");
     }
     if (output.empty()) std::fwrite(text.data(), 1, text.size(), stdout);
     else write_file_atomic(output, text);
