@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <regex>
+#include <set>
 #include <sstream>
 
 namespace ldc::as::test {
@@ -74,6 +75,83 @@ std::vector<uint8_t> fromHex(const std::string& hex) {
   for (size_t i = 0; i + 1 < hex.size(); i += 2)
     v.push_back(uint8_t(std::stoul(hex.substr(i, 2), nullptr, 16)));
   return v;
+}
+
+std::vector<x86::Instruction> variants(const x86::Instruction& in) {
+  using namespace x86;
+  std::vector<Instruction> out;
+  std::set<std::string> seen;
+  auto add = [&](const Instruction& v) {
+    try {
+      x86::encode(v);
+    } catch (const AsmError&) {
+      return;
+    }
+    if (seen.insert(print(v)).second) out.push_back(v);
+  };
+  add(in);
+  for (unsigned i = 0; i < in.numOperands; ++i) {
+    const Operand& o = in.ops[i];
+    Instruction v = in;
+    Operand& w = v.ops[i];
+    switch (o.kind) {
+      case OperandKind::Reg:
+        for (unsigned n = 0; n < 16; ++n) {
+          w.reg.num = uint8_t(n);
+          add(v);
+        }
+        break;
+      case OperandKind::Mem: {
+        std::vector<Reg> regs = {Reg{}, rip()};
+        for (unsigned n = 0; n < 16; ++n) regs.push_back(r64(n));
+        for (Reg b : regs) {
+          w.mem = o.mem;
+          w.mem.base = b;
+          add(v);
+        }
+        for (Reg x : regs) {
+          if (x.cls == RegClass::Rip || (x.valid() && x.num == SP)) continue;
+          w.mem = o.mem;
+          w.mem.index = x;
+          w.mem.scale = x.valid() ? o.mem.scale : 1;
+          add(v);
+          if (x.valid())
+            for (uint8_t s : {1, 2, 4, 8}) {
+              w.mem.scale = s;
+              add(v);
+            }
+        }
+        for (int32_t d : {0, 1, -1, 0x7f, 0x80, -0x80, -0x81, 0x12345678, INT32_MIN}) {
+          w.mem = o.mem;
+          w.mem.disp = d;
+          add(v);
+        }
+        break;
+      }
+      case OperandKind::Imm:
+        for (int64_t imm : {0ll, 1ll, 2ll, 0x7fll, 0x80ll, 0xffll, 0x100ll, 0x7fffffffll, 0x80000000ll,
+                            0xffffff80ll, 0xffffffffll, -1ll, -0x80ll, -0x81ll, -0x80000000ll}) {
+          w.imm = imm;
+          add(v);
+        }
+        break;
+      default:
+        break;
+    }
+  }
+  return out;
+}
+
+std::vector<x86::Instruction> allRowVariants() {
+  std::vector<x86::Instruction> all;
+  std::set<std::string> seen;
+  for (const Row& r : loadRows()) {
+    x86::Instruction in = x86::parse(r.text);
+    if (in.numOperands && in.ops[0].kind == x86::OperandKind::Address) continue;
+    for (auto& v : variants(in))
+      if (seen.insert(x86::print(v)).second) all.push_back(v);
+  }
+  return all;
 }
 
 x86::X86Program buildProgram(std::vector<std::string> globals, const std::vector<BlockText>& blocks) {

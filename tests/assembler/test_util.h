@@ -23,6 +23,13 @@ void rewriteRows(const std::vector<std::string>& hexes, const std::string& path 
 std::string toHex(const std::vector<uint8_t>& bytes);
 std::vector<uint8_t> fromHex(const std::string& hex);
 
+// Variants of an instruction: each operand swept on its own over every
+// register of its class, memory bases/indexes/scales/displacements and
+// boundary immediates. Only those that encode are returned (deduplicated).
+std::vector<x86::Instruction> variants(const x86::Instruction& in);
+// All variants of all golden rows.
+std::vector<x86::Instruction> allRowVariants();
+
 // A program from text. Each block is lines of: `name:` (local label),
 // `name::` (global label), `# text` (comment item) or an instruction.
 struct BlockText {

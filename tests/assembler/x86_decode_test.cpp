@@ -76,6 +76,21 @@ TEST(X86Decode, TruncatedInstructionsAreErrors) {
   EXPECT_FALSE(x86::decode(fromHex("90"), 5, &err));
 }
 
+// Whatever the encoder produces, the decoder reads back exactly.
+TEST(X86Decode, EveryEncodableVariantDecodes) {
+  auto all = allRowVariants();
+  EXPECT_GT(all.size(), 5000u);
+  for (const auto& in : all) {
+    auto bytes = x86::encodeAt(in, 0);
+    x86::DecodeError err;
+    auto d = x86::decode(bytes, 0, &err);
+    ASSERT_TRUE(d) << x86::print(in) << " (" << toHex(bytes) << "): " << err.message;
+    EXPECT_EQ(d->length, bytes.size()) << x86::print(in);
+    EXPECT_EQ(toHex(x86::encodeAt(d->inst, 0)), toHex(bytes)) << x86::print(in);
+    EXPECT_TRUE(x86::parse(x86::print(d->inst)) == d->inst) << x86::print(d->inst);
+  }
+}
+
 // Random bytes: the decoder never crashes, and whatever it accepts
 // re-encodes to exactly the bytes it consumed.
 TEST(X86Decode, RandomBytesNeverCrash) {
