@@ -1,0 +1,89 @@
+// loader/loader.h -- the ldc binary image: what `ldc prog.ld -o prog.bin` writes
+// and `ldrun prog.bin` loads, its Intel HEX form, and the checks that make the
+// runtime refuse a bad image before anything runs (docs/image-format.md).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ir/ir.h"
+
+namespace ldc {
+
+enum class ImageTarget : uint8_t { X86_64 = 1, C40 = 2 };
+
+// One per IL instruction: where its machine code starts, where it starts in the
+// IL section, the source line of its element and the index of its rung.
+struct LineEntry {
+  uint32_t code_offset;
+  uint32_t il_offset;
+  int32_t line;
+  uint32_t rung;
+  bool operator==(const LineEntry&) const = default;
+};
+
+// Elements first .. first+count-1 of `area` keep their value across a restart.
+struct RetentiveRange {
+  Area area;
+  uint32_t first, count;
+  bool operator==(const RetentiveRange&) const = default;
+};
+
+struct Image {
+  ImageTarget target = ImageTarget::X86_64;
+  std::string source;                    // source file name
+  Layout layout;                         // the memory image layout
+  std::vector<uint8_t> code;             // machine code (x86-64 bytes; C40: little-endian 32-bit words)
+  uint32_t entry = 0;                    // entry offset of the scan function in code
+  std::vector<uint8_t> il;               // binary IL (encode_il), run by --engine=interp
+  std::vector<LineEntry> lines;          // rung/line/address map for listings
+  std::vector<std::string> rung_titles;  // one per rung ("" if none)
+  std::vector<Alias> aliases;            // so traces and --watch can use the program's names
+  std::vector<RetentiveRange> retentive = {{Area::K, 0, 8192}};  // the K area by default
+  bool operator==(const Image&) const = default;
+};
+
+// A refused image or HEX file.  what() names the file and the place:
+//   "prog.bin: section 'code' at offset 0x140: at code offset 0x1c: ..."
+//   "prog.bin: offset 0x18: bad checksum ..."
+//   "prog.hex:3:10: error: bad checksum ..."
+struct ImageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Serializes an image.  Writes the fields as they are (read_image does the
+// checking); throws ImageError only if the image is too large for the format.
+std::vector<uint8_t> write_image(const Image& image);
+
+// Parses and checks an image; `name` is the file name used in messages.
+// Never reads outside `bytes`; throws ImageError for anything not exactly right.
+Image read_image(std::span<const uint8_t> bytes, const std::string& name);
+
+// The x86-64 code check read_image applies: every byte decodes, every memory
+// operand is [rbx+disp] inside [0, layout.size), every direct branch lands on an
+// instruction boundary inside the code, the entry is an instruction boundary.
+// Returns "" if the code passes, else "at code offset 0x..: reason".
+std::string check_x86_code(std::span<const uint8_t> code, uint32_t entry, const Layout& layout);
+
+// CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), as in the image header.
+uint32_t crc32(std::span<const uint8_t> bytes, uint32_t crc = 0);
+
+// Intel HEX: 16-byte type-00 data records from address 0, a type-04 record at
+// each 64 KiB boundary, a type-01 end record.  Lines end in "\n".
+std::string write_intel_hex(std::span<const uint8_t> bytes);
+// Reads what write_intel_hex writes (any data record length, CRLF accepted).
+// Refuses bad digits, lengths, checksums, record types, gaps or overlaps, a
+// missing end record and anything after it: "name:line:col: error: ...".
+std::vector<uint8_t> read_intel_hex(std::string_view text, const std::string& name);
+// True if the first non-blank character is ':'.
+bool looks_like_intel_hex(std::span<const uint8_t> bytes);
+
+// Limits of format version 1.
+constexpr uint32_t kImageMaxSize = 256u << 20;    // whole file, bytes
+constexpr uint32_t kImageMaxEdgeSlots = 1u << 20;  // count of the E area
+
+}  // namespace ldc

@@ -1,0 +1,121 @@
+// loader/x86_check.cpp -- the x86-64 code check of the loader: every byte
+// decodes with our disassembler, every memory operand is [rbx+disp] inside the
+// memory image, every direct branch lands on an instruction boundary inside the
+// code.  A full NaCl-style validator comes later (issue 9).
+#include <algorithm>
+#include <cstdio>
+
+#include "assembler/x86.h"
+#include "loader/checks.h"
+#include "loader/loader.h"
+
+namespace ldc {
+
+namespace detail {
+
+namespace {
+
+namespace x86 = ldc::as::x86;
+
+std::string hex(uint64_t v) {
+  char buf[24];
+  std::snprintf(buf, sizeof buf, "0x%llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+std::string text_of(const x86::Instruction& in) {
+  try {
+    return "'" + x86::print(in) + "'";
+  } catch (const std::exception&) {
+    return "'" + std::string(x86::mnemonicName(in.mnemonic, in.cond)) + " ...'";
+  }
+}
+
+uint32_t width(x86::Size s) {
+  switch (s) {
+    case x86::Size::Byte: return 1;
+    case x86::Size::Dword: return 4;
+    case x86::Size::Qword: return 8;
+    case x86::Size::None: return 1;  // lea: the address must name a byte of the image
+  }
+  return 1;
+}
+
+// "" if the memory operand is [rbx+disp] with [disp, disp+width) inside the image.
+std::string check_mem(const x86::Mem& m, uint32_t image_size) {
+  const x86::Reg& base = m.base;
+  if (base.cls == x86::RegClass::Rip) return "rip-relative memory operand (only [rbx+disp] may address memory)";
+  if (!base.valid()) return "absolute memory operand (only [rbx+disp] may address memory)";
+  if (base.cls == x86::RegClass::Gp64 && (base.num == x86::SP || base.num == x86::BP))
+    return "stack-relative memory operand based on " + std::string(x86::regName(base)) +
+           " (only [rbx+disp] may address memory)";
+  if (base != x86::r64(x86::BX))
+    return "memory operand based on " + std::string(x86::regName(base)) + ", not rbx";
+  if (m.index.valid())
+    return "indexed memory operand (index " + std::string(x86::regName(m.index)) +
+           "): its address cannot be checked";
+  int64_t lo = m.disp, hi = int64_t(m.disp) + width(m.size);
+  if (lo < 0 || hi > int64_t(image_size))
+    return "memory operand [rbx" + std::string(m.disp < 0 ? "-" : "+") + hex(m.disp < 0 ? -int64_t(m.disp) : m.disp) +
+           "] (" + std::to_string(width(m.size)) + " bytes) outside the memory image [0, " + hex(image_size) + ")";
+  return "";
+}
+
+}  // namespace
+
+std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layout& layout,
+                      std::vector<uint32_t>* starts_out) {
+  auto at = [](uint64_t off) { return "at code offset " + hex(off) + ": "; };
+  x86::Disassembly d = x86::disassemble(code);
+  if (d.error) {
+    const x86::DecodeError& e = *d.error;
+    std::string bytes;
+    for (size_t i = e.offset; i < code.size() && i < size_t(e.offset) + 8; i++) {
+      char buf[4];
+      std::snprintf(buf, sizeof buf, "%s%02x", bytes.empty() ? "" : " ", code[i]);
+      bytes += buf;
+    }
+    return at(e.offset) + "undecodable bytes " + bytes + (code.size() - e.offset > 8 ? " ..." : "") + " (" + e.message + ")";
+  }
+  std::vector<uint32_t> starts;
+  starts.reserve(d.insts.size());
+  for (const x86::Decoded& di : d.insts) starts.push_back(di.offset);
+
+  for (const x86::Decoded& di : d.insts) {
+    const x86::Instruction& in = di.inst;
+    bool branch = in.mnemonic == x86::Mnemonic::Jmp || in.mnemonic == x86::Mnemonic::Jcc || in.mnemonic == x86::Mnemonic::Call;
+    for (unsigned i = 0; i < in.numOperands && i < in.ops.size(); i++) {
+      const x86::Operand& o = in.ops[i];
+      if (o.kind == x86::OperandKind::Mem) {
+        if (branch) return at(di.offset) + text_of(in) + ": indirect branch through memory";
+        if (std::string why = check_mem(o.mem, layout.size); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
+      } else if (o.kind == x86::OperandKind::Reg && in.mnemonic == x86::Mnemonic::Jmp) {
+        return at(di.offset) + text_of(in) + ": indirect jump through a register";
+      } else if (o.kind == x86::OperandKind::Address) {
+        int64_t t = o.imm;
+        if (t < 0 || uint64_t(t) >= code.size())
+          return at(di.offset) + text_of(in) + ": branch target " + (t < 0 ? "-" + hex(uint64_t(-(t + 1)) + 1) : hex(uint64_t(t))) +
+                 " outside the code (" + std::to_string(code.size()) + " bytes)";
+        if (!std::binary_search(starts.begin(), starts.end(), uint32_t(t)))
+          return at(di.offset) + text_of(in) + ": branch target " + hex(uint64_t(t)) +
+                 " is inside an instruction, not on an instruction boundary";
+      } else if (o.kind == x86::OperandKind::Label) {
+        return at(di.offset) + text_of(in) + ": unresolved label operand";
+      }
+    }
+  }
+  if (entry >= code.size())
+    return "entry point " + hex(entry) + " is outside the code (" + std::to_string(code.size()) + " bytes)";
+  if (!std::binary_search(starts.begin(), starts.end(), entry))
+    return "entry point " + hex(entry) + " is inside an instruction, not on an instruction boundary";
+  if (starts_out) *starts_out = std::move(starts);
+  return "";
+}
+
+}  // namespace detail
+
+std::string check_x86_code(std::span<const uint8_t> code, uint32_t entry, const Layout& layout) {
+  return detail::check_x86(code, entry, layout, nullptr);
+}
+
+}  // namespace ldc
