@@ -158,6 +158,12 @@ class Core {
     s.enc = Encoding{};
     try {
       p_.encode(s.block, s.item, s.longForm, s.enc);
+      for (unsigned f = 0; f < s.enc.numFixups; ++f) {
+        const Fixup& fx = s.enc.fixups[f];
+        if (fx.kind >= t_.fixupKinds.size() ||
+            fx.offset + t_.fixupKinds[fx.kind].containerBytes > s.enc.size)
+          throw AsmError("encoder produced an invalid fixup");
+      }
     } catch (const AsmError& e) {
       if (!s.bad) error(int(s.block), "item " + std::to_string(s.item) + ": " + e.what());
       s.bad = true;

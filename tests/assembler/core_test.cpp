@@ -365,6 +365,19 @@ TEST(Core, OutOfRangeFieldWithoutLongerFormIsAnError) {
       << r.errors[0].message;
 }
 
+TEST(Core, InvalidFixupFromAnEncoderIsAnError) {
+  using I = Item<WordInst>;
+  Program<WordInst> p;
+  Block<WordInst> b;
+  b.sourceLine = 7;
+  b.items = {I::labelDef("x"), I::instr({0, "x", 99})};
+  p.blocks = {b};
+  Result r = assemble(wordTarget(), p);
+  ASSERT_EQ(r.errors.size(), 1u);
+  EXPECT_EQ(r.errors[0].line, 7);
+  EXPECT_NE(r.errors[0].message.find("invalid fixup"), std::string::npos);
+}
+
 TEST(Core, FixupHelpers) {
   const FixupKind& k = kWordKinds[Disp16];
   int64_t v = 0;
