@@ -1,7 +1,9 @@
 // Tests of the binary image: round trips, and one refusal per class of bad input.
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <random>
+#include <sstream>
 
 #include "test_image.h"
 
@@ -438,6 +440,52 @@ TEST(Image, RetentiveRangeOutsideItsArea) {
 }
 
 // ------------------------------------------------------------------ robustness
+
+TEST(Image, RandomCodeNeverCrashes) {
+  Layout layout = Layout::standard(0);
+  std::mt19937 rng(5);
+  std::vector<uint8_t> good = tiny_image().code;
+  for (int iter = 0; iter < 20000; iter++) {
+    std::vector<uint8_t> code = good;
+    if (iter % 2) {
+      code.resize(rng() % 24);
+      for (auto& x : code) x = uint8_t(rng());
+    } else {
+      code[rng() % code.size()] = uint8_t(rng());
+    }
+    std::string why = check_x86_code(code, 0, layout);
+    if (!why.empty()) {
+      EXPECT_TRUE(why.rfind("at code offset", 0) == 0 || why.rfind("entry point", 0) == 0) << why;
+    }
+  }
+}
+
+// docs/image-format.md shows the bytes of an example image; they must be what
+// the writer produces.
+TEST(Image, DocExampleMatchesWriter) {
+  std::ifstream f(LDC_IMAGE_DOC);
+  ASSERT_TRUE(f) << LDC_IMAGE_DOC;
+  std::stringstream ss;
+  ss << f.rdbuf();
+  std::string doc = ss.str();
+  size_t begin = doc.find("<!-- image-dump-begin -->"), end = doc.find("<!-- image-dump-end -->");
+  ASSERT_NE(begin, std::string::npos);
+  ASSERT_NE(end, std::string::npos);
+  std::vector<uint8_t> dumped;
+  std::istringstream lines(doc.substr(begin, end - begin));
+  for (std::string line; std::getline(lines, line);) {
+    if (line.size() < 5 || line[4] != ':') continue;
+    std::istringstream in(line.substr(5));
+    for (std::string byte; in >> byte;) dumped.push_back(uint8_t(std::stoul(byte, nullptr, 16)));
+  }
+  Image im = tiny_image();
+  im.aliases = {{"start", {Dev::X, 0}}};
+  im.retentive = {{Area::K, 0, 8192}};
+  std::vector<uint8_t> b = write_image(im);
+  EXPECT_EQ(dumped, b);
+  std::string hex = write_intel_hex(b);
+  EXPECT_NE(doc.find("\n" + hex.substr(0, hex.find('\n') + 1)), std::string::npos) << "first HEX record not in the doc";
+}
 
 // Random edits with the checksum fixed up reach the structural and semantic
 // checks; every outcome must be an accepted image or an ImageError.
