@@ -101,6 +101,7 @@ std::vector<uint8_t> read_intel_hex(std::string_view text, const std::string& na
       int l = digit(line[p + 1]);
       if (l < 0) throw err(p + 1, std::string("bad hex digit '") + (std::isprint((unsigned char)line[p + 1]) ? std::string(1, line[p + 1]) : "?") + "'");
       rec.push_back(uint8_t(h << 4 | l));
+      if (rec.size() > 255 + 5) throw err(first, "record too long (more than 255 data bytes)");
     }
     if (rec.size() < 5) throw err(first, "record too short (" + std::to_string(rec.size()) + " bytes; at least 5)");
     size_t n = rec[0];

@@ -73,6 +73,7 @@ TEST(IntelHex, OtherRefusals) {
             "t.hex:1:4: error: data at address 0x5, expected 0x0 (a gap; images are contiguous)");
   EXPECT_EQ(refusal(":0100000001FE\n:0100000001FE\n:00000001FF\n"),
             "t.hex:2:4: error: data at address 0x0, expected 0x1 (an overlap; images are contiguous)");
+  EXPECT_EQ(refusal(":" + std::string(600, '0') + "\n"), "t.hex:1:1: error: record too long (more than 255 data bytes)");
   EXPECT_EQ(refusal(":FF\n"), "t.hex:1:1: error: record too short (1 bytes; at least 5)");
   EXPECT_EQ(refusal(":0100000001FE\n:01000001AA54\n"), "t.hex:2:2: error: end-of-file record with data");
 }
