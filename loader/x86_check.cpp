@@ -36,7 +36,7 @@ uint32_t width(x86::Size s) {
     case x86::Size::Byte: return 1;
     case x86::Size::Dword: return 4;
     case x86::Size::Qword: return 8;
-    case x86::Size::None: return 1;  // lea: the address must name a byte of the image
+    case x86::Size::None: return 1;
   }
   return 1;
 }
@@ -86,11 +86,22 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     bool branch = in.mnemonic == x86::Mnemonic::Jmp || in.mnemonic == x86::Mnemonic::Jcc || in.mnemonic == x86::Mnemonic::Call;
     for (unsigned i = 0; i < in.numOperands && i < in.ops.size(); i++) {
       const x86::Operand& o = in.ops[i];
-      if (o.kind == x86::OperandKind::Mem) {
+      if (o.kind == x86::OperandKind::Mem && in.mnemonic == x86::Mnemonic::Lea) {
+        continue;  // lea is arithmetic: it computes an address but touches no memory
+      } else if (o.kind == x86::OperandKind::Mem) {
+        if (in.mnemonic == x86::Mnemonic::Call) {
+          // the one indirect branch: a call through the image's table of REAL functions
+          const x86::Mem& m = o.mem;
+          bool table = m.base == x86::r64(x86::BX) && !m.index.valid() && m.size == x86::Size::Qword &&
+                       m.disp >= int32_t(kSysCallTable) && m.disp < int32_t(kSysCallTable + 8 * uint32_t(RealFn::Count)) &&
+                       (m.disp - int32_t(kSysCallTable)) % 8 == 0;
+          if (!table) return at(di.offset) + text_of(in) + ": indirect call not through the REAL function table";
+          continue;
+        }
         if (branch) return at(di.offset) + text_of(in) + ": indirect branch through memory";
         if (std::string why = check_mem(o.mem, layout.size); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
-      } else if (o.kind == x86::OperandKind::Reg && in.mnemonic == x86::Mnemonic::Jmp) {
-        return at(di.offset) + text_of(in) + ": indirect jump through a register";
+      } else if (o.kind == x86::OperandKind::Reg && branch) {
+        return at(di.offset) + text_of(in) + ": indirect branch through a register";
       } else if (o.kind == x86::OperandKind::Address) {
         int64_t t = o.imm;
         if (t < 0 || uint64_t(t) >= code.size())

@@ -362,9 +362,26 @@ TEST(Image, CodeJumpIntoTheMiddleOfAnInstruction) {
   im.code = assemble({"call 0x5", "ret", "ret"});  // call into the code, on a boundary
   EXPECT_EQ(refusal(im), "");
   im.code = assemble({"jmp rax", "ret"});
-  EXPECT_REFUSED(refusal(im), "indirect jump");
-  im.code = assemble({"call qword ptr [rbx+0x40]", "ret"});
+  EXPECT_REFUSED(refusal(im), "indirect branch through a register");
+  im.code = assemble({"call rax", "ret"});
+  EXPECT_REFUSED(refusal(im), "indirect branch through a register");
+  im.code = assemble({"call qword ptr [rbx+0x40]", "ret"});  // past the call table
+  EXPECT_REFUSED(refusal(im), "indirect call not through the REAL function table");
+  im.code = assemble({"call qword ptr [rbx+0x14]", "ret"});  // inside a slot
+  EXPECT_REFUSED(refusal(im), "indirect call not through the REAL function table");
+  im.code = assemble({"jmp qword ptr [rbx+0x10]", "ret"});
   EXPECT_REFUSED(refusal(im), "indirect branch through memory");
+  im.code = assemble({"call qword ptr [rbx+0x10]", "call qword ptr [rbx+0x30]", "ret"});  // sinf, logf
+  EXPECT_EQ(refusal(im), "");
+}
+
+TEST(Image, LeaIsArithmeticNotAMemoryAccess) {
+  Image im = tiny_image();
+  im.lines.clear();
+  im.code = assemble({"lea ebp, [rax+rbp*2]", "lea ebp, [rbp+rbp*1+0x1]", "ret"});
+  EXPECT_EQ(refusal(im), "");
+  im.code = assemble({"movzx eax, byte ptr [rax+rbp*2]", "ret"});
+  EXPECT_REFUSED(refusal(im), "not rbx");
 }
 
 TEST(Image, EntryPoint) {
