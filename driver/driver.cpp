@@ -72,6 +72,54 @@ NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode
   return b;
 }
 
+Image make_x86_image(const Program& p, const NativeBuild& nb) {
+  Image img;
+  img.target = ImageTarget::X86_64;
+  img.source = p.source;
+  img.layout = p.layout();
+  img.code = nb.asm_result.code;
+  img.entry = 0;
+  BinaryIl bin = encode_il(p);
+  img.il = bin.code;
+  img.aliases = p.aliases;
+  size_t k = 0;
+  for (size_t r = 0; r < p.rungs.size(); r++) {
+    img.rung_titles.push_back(p.rungs[r].title);
+    const auto& items = nb.asm_result.items[r + 1];  // block 0 is the prologue
+    for (size_t i = 0; i < p.rungs[r].code.size(); i++, k++) {
+      const Instr& in = p.rungs[r].code[i];
+      img.lines.push_back({items[nb.gen.il_items[r][i]].offset, bin.instr_offset[k],
+                           in.loc.line ? in.loc.line : p.rungs[r].line, uint32_t(r)});
+    }
+  }
+  return img;
+}
+
+bool is_image_file(const std::string& path) {
+  if (ends_with(path, ".bin") || ends_with(path, ".hex")) return true;
+  std::ifstream f(path, std::ios::binary);
+  char magic[6] = {};
+  f.read(magic, 6);
+  return f.gcount() == 6 && std::string(magic, 6) == "LDCIMG";
+}
+
+Image load_image_file(const std::string& path) {
+  std::string data = read_file(path);
+  std::span<const uint8_t> bytes(reinterpret_cast<const uint8_t*>(data.data()), data.size());
+  try {
+    if (looks_like_intel_hex(bytes)) {
+      std::vector<uint8_t> raw = read_intel_hex(data, path);
+      return read_image(raw, path);
+    }
+    return read_image(bytes, path);
+  } catch (ImageError& e) {
+    std::string m = e.what();  // "prog.bin: section ...": make it "prog.bin: error: section ..."
+    if (m.find(" error: ") == std::string::npos && m.rfind(path + ": ", 0) == 0)
+      m = path + ": error: " + m.substr(path.size() + 2);
+    throw UserError(m);
+  }
+}
+
 std::optional<int32_t> parse_period(const std::string& s) {
   char* end = nullptr;
   errno = 0;

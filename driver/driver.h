@@ -9,6 +9,7 @@
 
 #include "backend-x86/backend_x86.h"
 #include "ir/ir.h"
+#include "loader/loader.h"
 
 namespace ldc {
 
@@ -37,6 +38,15 @@ struct NativeBuild {
   as::Result asm_result;
 };
 NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode = as::Mode::Blockwise);
+
+// The image ldc writes for the x86-64 target: code, binary IL, line map, names.
+Image make_x86_image(const Program& p, const NativeBuild& nb);
+
+// Reads an image file (binary, or Intel HEX by its first character) and checks
+// it fully; errors are UserError naming the file and the place.
+Image load_image_file(const std::string& path);
+// True for files ldrun treats as an image: *.bin, *.hex, or the image magic.
+bool is_image_file(const std::string& path);
 
 // "10ms", "10", "2s" -> ms; nullopt if malformed.
 std::optional<int32_t> parse_period(const std::string& s);

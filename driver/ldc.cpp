@@ -9,7 +9,7 @@
 using namespace ldc;
 
 static const char kUsage[] =
-    "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il|asm|listing] [--target=x86-64|c40] [-O0|-O1|-O2]\n";
+    "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il|asm|listing|hex] [--target=x86-64|c40] [-O0|-O1|-O2]\n";
 
 int main(int argc, char** argv) {
   std::string input, output, emit, target = "x86-64";
@@ -40,6 +40,14 @@ int main(int argc, char** argv) {
     } else if (emit == "listing" && target == "x86-64") {    // + blockwise assembler
       NativeBuild nb = build_x86(c.il, input);
       text = as::x86::listing(nb.gen.program, nb.asm_result);
+    } else if ((emit.empty() || emit == "hex") && target == "x86-64") {  // + loader
+      NativeBuild nb = build_x86(c.il, input);
+      std::vector<uint8_t> bin = write_image(make_x86_image(c.il, nb));
+      if (emit == "hex") text = write_intel_hex(bin);
+      else {
+        if (output.empty()) throw UserError("ldc: error: an image needs -o FILE (or --emit=hex for text on stdout)");
+        text.assign(bin.begin(), bin.end());
+      }
     } else {
       throw UserError("ldc: error: " + (emit.empty() ? std::string("image output (-o FILE.bin)") : "--emit=" + emit) +
                       " is not available in this build (for this target)");

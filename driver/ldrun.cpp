@@ -42,23 +42,32 @@ int main(int argc, char** argv) {
     if (input.empty()) throw UserError(std::string("ldrun: error: no program\n") + kUsage);
     if (engine != "interp" && engine != "native")
       throw UserError("ldrun: error: unknown engine '" + engine + "' (native or interp)");
-    Compiled c = compile_source(input);
-    Layout layout = c.il.layout();
-    std::unique_ptr<Engine> eng;
-    if (engine == "interp") {
-      BinaryIl bin = encode_il(c.il);
-      if (std::string why = validate_il(bin.code, layout); !why.empty()) throw UserError("ldrun: error: IL " + why);
-      eng = make_interp_engine(bin.code, layout);
+    // The program: an image (checked in full before anything runs), or a
+    // source file compiled in memory.
+    Image img;
+    if (is_image_file(input)) {
+      img = load_image_file(input);
+      if (img.target != ImageTarget::X86_64 && engine == "native")
+        throw UserError("ldrun: error: " + input + " is not an x86-64 image; use --engine=interp");
     } else {
-      NativeBuild nb = build_x86(c.il, input);
-      eng = make_native_engine(nb.asm_result.code, 0);
+      Compiled c = compile_source(input);
+      if (engine == "native") img = make_x86_image(c.il, build_x86(c.il, input));
+      else {
+        img.layout = c.il.layout();
+        img.il = encode_il(c.il).code;
+        img.aliases = c.il.aliases;
+        if (std::string why = validate_il(img.il, img.layout); !why.empty()) throw UserError("ldrun: error: IL " + why);
+      }
     }
+    const Layout& layout = img.layout;
+    std::unique_ptr<Engine> eng = engine == "interp" ? make_interp_engine(img.il, layout)
+                                                     : make_native_engine(img.code, img.entry);
     size_t s = 0;
     while (!watch.empty() && s <= watch.size()) {
       size_t e = watch.find(',', s);
       std::string name = watch.substr(s, e == std::string::npos ? std::string::npos : e - s);
       try {
-        opt.watch.push_back(resolve_probe(name, c.il.aliases));
+        opt.watch.push_back(resolve_probe(name, img.aliases));
       } catch (std::exception& ex) { throw UserError("ldrun: error: --watch: " + std::string(ex.what())); }
       if (e == std::string::npos) break;
       s = e + 1;
@@ -66,7 +75,7 @@ int main(int argc, char** argv) {
     Trace trace;
     if (!trace_file.empty()) {
       try {
-        trace = read_trace(read_file(trace_file), trace_file, c.il.aliases);
+        trace = read_trace(read_file(trace_file), trace_file, img.aliases);
       } catch (UserError&) { throw; } catch (std::exception& ex) { throw UserError(ex.what()); }
     }
     std::string out;

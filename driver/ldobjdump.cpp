@@ -1,0 +1,70 @@
+// ldobjdump -- an objdump-style listing of an ldc image: address, bytes and
+// instruction, with each rung's source line and IL interleaved.
+#include <cstdio>
+#include <map>
+#include <string>
+
+#include "driver/driver.h"
+
+using namespace ldc;
+
+static const char kUsage[] = "usage: ldobjdump IMAGE.bin|IMAGE.hex\n";
+
+static std::string x86_listing(const Image& img, const std::string& path) {
+  std::string out;
+  char buf[64];
+  out += "\n" + path + ":     file format ldc-x86-64 (image of " + img.source + ")\n\n";
+  out += "Disassembly of section .code:\n\n";
+  std::snprintf(buf, sizeof buf, "%016x <scan>:\n", img.entry);
+  out += buf;
+  // what to print before the instruction at each code offset
+  std::multimap<uint32_t, std::string> notes;
+  uint32_t last_rung = UINT32_MAX;
+  for (const LineEntry& e : img.lines) {
+    if (e.rung != last_rung) {
+      std::string t = "; rung " + std::to_string(e.rung + 1) + ", line " + std::to_string(e.line);
+      if (e.rung < img.rung_titles.size() && !img.rung_titles[e.rung].empty()) t += " \"" + img.rung_titles[e.rung] + "\"";
+      notes.emplace(e.code_offset, t);
+      last_rung = e.rung;
+    }
+    Instr in;
+    decode_instr(img.il, e.il_offset, in);
+    notes.emplace(e.code_offset, ";   " + instr_text(in));
+  }
+  as::x86::Disassembly d = as::x86::disassemble(img.code);
+  for (const auto& di : d.insts) {
+    auto [lo, hi] = notes.equal_range(di.offset);
+    for (auto it = lo; it != hi; ++it) out += it->second + "\n";
+    std::snprintf(buf, sizeof buf, "%8x:\t", di.offset);
+    out += buf;
+    std::string bytes;
+    for (uint32_t i = 0; i < di.length; i++) {
+      std::snprintf(buf, sizeof buf, "%02x ", img.code[di.offset + i]);
+      bytes += buf;
+    }
+    if (bytes.size() < 21) bytes.resize(21, ' ');
+    out += bytes + "\t" + as::x86::print(di.inst) + "\n";
+  }
+  if (d.error) out += "  (cannot decode at offset " + std::to_string(d.error->offset) + ": " + d.error->message + ")\n";
+  return out;
+}
+
+int main(int argc, char** argv) {
+  if (argc != 2 || argv[1][0] == '-') {
+    std::fputs(kUsage, argc == 2 && std::string(argv[1]) == "--help" ? stdout : stderr);
+    return argc == 2 && std::string(argv[1]) == "--help" ? 0 : 1;
+  }
+  try {
+    Image img = load_image_file(argv[1]);
+    if (img.target != ImageTarget::X86_64) throw UserError(std::string("ldobjdump: error: ") + argv[1] + ": no disassembler for this target");
+    std::string out = x86_listing(img, argv[1]);
+    std::fwrite(out.data(), 1, out.size(), stdout);
+  } catch (UserError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+  } catch (std::exception& e) {
+    std::fprintf(stderr, "ldobjdump: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
