@@ -1,15 +1,21 @@
 #!/bin/sh
-# check_example.sh LDRUN EXAMPLE.ld ENGINE
-# Runs the example over its trace on ENGINE and compares with EXAMPLE.expected,
-# whose header names the watched devices.
+# check_example.sh BINDIR EXAMPLE.ld ENGINE
+# Compiles the example to an image with ldc, runs the image over the example's
+# trace on ENGINE and compares with EXAMPLE.expected, whose header names the
+# watched devices.  ENGINE "source" runs the .ld directly on the interpreter.
 set -eu
-ldrun=$1 src=$2 engine=$3
+bindir=$1 src=$2 engine=$3
 base=${src%.ld}
 watch=$(head -n 1 "$base.expected" | cut -d, -f2-)
-out=$(mktemp)
-trap 'rm -f "$out"' EXIT
-"$ldrun" "$src" --engine="$engine" --trace "$base.csv" --watch "$watch" > "$out"
-if ! diff -u "$base.expected" "$out"; then
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+if [ "$engine" = source ]; then
+  "$bindir/ldrun" "$src" --engine=interp --trace "$base.csv" --watch "$watch" > "$tmp/out"
+else
+  "$bindir/ldc" "$src" -o "$tmp/prog.bin"
+  "$bindir/ldrun" "$tmp/prog.bin" --engine="$engine" --trace "$base.csv" --watch "$watch" > "$tmp/out"
+fi
+if ! diff -u "$base.expected" "$tmp/out"; then
   echo "FAIL: $src on $engine differs from $base.expected" >&2
   exit 1
 fi

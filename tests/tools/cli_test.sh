@@ -1,0 +1,60 @@
+#!/bin/sh
+# cli_test.sh BINDIR SRCDIR -- end-to-end checks of ldc, ldrun and ldobjdump.
+set -u
+bin=$1 src=$2
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fails=0 checks=0
+ok() { checks=$((checks + 1)); }
+bad() { checks=$((checks + 1)); fails=$((fails + 1)); echo "FAIL: $*" >&2; }
+expect_fail() {  # expect_fail NAME PATTERN CMD... : exit 1 and PATTERN on stderr
+  name=$1 pat=$2; shift 2
+  "$@" > "$tmp/out" 2> "$tmp/err"; rc=$?
+  if [ $rc -ne 1 ]; then bad "$name: exit $rc, expected 1"; return; fi
+  if ! grep -q -- "$pat" "$tmp/err"; then bad "$name: stderr lacks '$pat':"; cat "$tmp/err" >&2; return; fi
+  ok
+}
+
+# a compile error leaves no output file, not even a temporary one
+printf '|--[X0]--(Y0)--(Y1)\n' > "$tmp/bad.ld"
+expect_fail "series outputs" "bad.ld:1:16: error: outputs cannot be in series" "$bin/ldc" "$tmp/bad.ld" -o "$tmp/bad.bin"
+if ls "$tmp" | grep -q 'bad.bin'; then bad "output file left behind after an error"; else ok; fi
+grep -q '^|--\[X0\]--(Y0)--(Y1)$' "$tmp/err" && grep -q '^               \^$' "$tmp/err" && ok || bad "source line and caret missing"
+
+# an image round trip on every engine, from .bin and from Intel HEX
+"$bin/ldc" "$src/examples/traffic.ld" -o "$tmp/t.bin" && ok || bad "ldc -o"
+"$bin/ldc" "$src/examples/traffic.ld" --emit=hex -o "$tmp/t.hex" && ok || bad "ldc --emit=hex"
+for f in t.bin t.hex; do
+  for e in native interp; do
+    "$bin/ldrun" "$tmp/$f" --engine=$e --trace "$src/examples/traffic.csv" --watch Y0,Y1,Y2,T0 > "$tmp/$f.$e" || bad "ldrun $f $e"
+    cmp -s "$tmp/$f.$e" "$tmp/t.bin.native" && ok || bad "$f on $e differs from t.bin on native"
+  done
+done
+
+# ldobjdump lists every rung with its IL
+"$bin/ldobjdump" "$tmp/t.bin" > "$tmp/dump" && ok || bad "ldobjdump"
+grep -q '; rung 1, line' "$tmp/dump" && grep -q ';   TON T' "$tmp/dump" && ok || bad "ldobjdump lacks rung/IL lines"
+
+# bad images are refused before anything runs
+printf 'garbage' > "$tmp/g.bin"
+expect_fail "garbage image" "g.bin: error: truncated header" "$bin/ldrun" "$tmp/g.bin"
+head -c 200 "$tmp/t.bin" > "$tmp/trunc.bin"
+expect_fail "truncated image" "trunc.bin: error: truncated file" "$bin/ldrun" "$tmp/trunc.bin"
+cp "$tmp/t.bin" "$tmp/flip.bin"
+printf '\377' | dd of="$tmp/flip.bin" bs=1 seek=300 conv=notrunc 2>/dev/null
+expect_fail "flipped byte" "flip.bin: error:" "$bin/ldrun" "$tmp/flip.bin"
+expect_fail "flipped byte in ldobjdump" "flip.bin: error:" "$bin/ldobjdump" "$tmp/flip.bin"
+sed '2s/^:10/:11/' "$tmp/t.hex" > "$tmp/bad.hex"
+expect_fail "bad hex" "bad.hex:2:" "$bin/ldrun" "$tmp/bad.hex"
+
+# usage errors
+expect_fail "no input" "no input file" "$bin/ldc"
+expect_fail "unknown engine" "unknown engine" "$bin/ldrun" "$tmp/t.bin" --engine=foo
+expect_fail "bad watch" "unknown device or alias 'Q9'" "$bin/ldrun" "$tmp/t.bin" --watch Q9
+printf 'X0,dt\n1,abc\n' > "$tmp/bad.csv"
+expect_fail "bad trace" "bad.csv:2:3: error: bad value 'abc'" "$bin/ldrun" "$tmp/t.bin" --trace "$tmp/bad.csv"
+expect_fail "missing file" "cannot open" "$bin/ldc" "$tmp/nope.ld"
+
+echo "$checks checks, $fails failed"
+echo "$((checks - fails)) passed, $fails failed"
+[ $fails -eq 0 ]
