@@ -1,0 +1,78 @@
+// bench/ldgen.h -- a seeded random ladder program generator (docs/testing.md).
+//
+// The generator draws a random series/parallel tree per rung and renders it as
+// a text grid, so the programs it makes go through the whole front end: the
+// grid reader, the series/parallel reduction and the lowering to IL.  The same
+// seed and options always give the same text, on every platform (the random
+// numbers come from a fixed generator, not from <random>'s distributions).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace ldc {
+
+// Element classes the generator may draw from (GenOptions::classes).
+enum GenClass : uint32_t {
+  kGenContacts = 1u << 0,   // [X1] [/X1] on every bit kind; always used as a fallback
+  kGenEdges = 1u << 1,      // [P X1] [N X1]
+  kGenCompares = 1u << 2,   // [a op b], INT32, REAL and mixed
+  kGenCoils = 1u << 3,      // (Y1) (/Y1)
+  kGenSetReset = 1u << 4,   // (S Y1) (R Y1) (RST Y1) ...
+  kGenTimers = 1u << 5,     // TON TOF TP, (RST T0)
+  kGenCounters = 1u << 6,   // CTU CTD, (RST C0)
+  kGenMove = 1u << 7,       // MOV
+  kGenArith = 1u << 8,      // ADD SUB MUL DIV MOD
+  kGenLogic = 1u << 9,      // AND OR XOR NOT SHL SHR
+  kGenRealFn = 1u << 10,    // SIN COS TAN SQRT EXP LN ABS
+  kGenJumps = 1u << 11,     // (JMP L) with a later `label L`
+  kGenEnd = 1u << 12,       // a rare conditional (END)
+  kGenAll = (1u << 13) - 1,
+};
+
+struct GenOptions {
+  int rungs = 50;
+  int max_depth = 4;  // nesting of a rung's condition tree, 0..6 (drawn per rung)
+  uint32_t classes = kGenAll;
+  // Device ranges: indices 0..n-1 are used (X0..X7, ...).  Small sets make
+  // rungs read what other rungs write.
+  int x = 8, y = 8, m = 8, k = 4, d = 8, f = 4, t = 4, c = 4, wx = 4, wy = 2;
+};
+
+// A generated program as a list of items, so that a minimizer can drop rungs
+// and keep every label in place (a jump stays forward when rungs go away).
+struct GenItem {
+  enum class Kind : uint8_t { Rung, Label } kind = Kind::Rung;
+  std::string text;   // Rung: its lines (title and rows), each ending in '\n'; Label: the name
+  int number = 0;     // Rung: its index in the generated program, 0-based (also its title)
+  int outputs = 0;    // Rung: output elements (...) drawn
+  int inputs = 0;     // Rung: input elements [...] drawn
+  std::vector<std::string> jumps;  // Rung: the labels its (JMP L) outputs name
+};
+struct GenProgram {
+  std::string header;  // comment lines, each ending in '\n'
+  std::vector<GenItem> items;
+  int rungs() const;
+  int outputs() const;
+  int inputs() const;
+};
+
+// Checks the options (ranges, depth); "" if they are usable, else the reason.
+std::string check_options(const GenOptions& opt);
+
+GenProgram generate_program(uint64_t seed, const GenOptions& opt = {});
+std::string render(const GenProgram& p);  // the .ld text
+std::string generate_ld(uint64_t seed, const GenOptions& opt = {});  // render(generate_program(..))
+
+// An input trace for `scans` scans (CSV, docs/format.md section 5): random X
+// bits, WX words, D and F cells (on the first row, rarely later), sometimes
+// empty cells, and a dt column of 0..60 ms.  Uses the options' device ranges.
+std::string generate_trace(uint64_t seed, int scans, const GenOptions& opt = {});
+
+// "timers,arith" -> mask; false and `err` on an unknown name.  Names: contacts
+// edges compares coils setreset timers counters move arith logic realfn jumps end all.
+bool parse_gen_classes(std::string_view list, uint32_t& mask, std::string& err);
+
+}  // namespace ldc
