@@ -1,0 +1,89 @@
+// tests/diff/harness.h -- the differential test's machinery: run two engines
+// side by side over one program and trace, compare their memory images after
+// every scan, shrink a failing case and print a reproducer (docs/testing.md).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bench/ldgen.h"
+#include "ir/ir.h"
+#include "runtime/runtime.h"
+
+namespace ldc::diff {
+
+// Makes an engine for a compiled program (throws on failure).
+using EngineFactory = std::function<std::unique_ptr<Engine>(const Program&)>;
+std::unique_ptr<Engine> make_interp(const Program& p);  // encode_il + make_interp_engine
+std::unique_ptr<Engine> make_native(const Program& p);  // build_x86 + make_native_engine
+
+// A byte of the memory image, named for people.
+struct Place {
+  Area area = Area::Count;  // Area::Count: padding between areas
+  uint32_t index = 0;
+  std::string name;   // "D3", "T0 done bit", "E2 edge memory", "Sys+0 dt"
+  std::string watch;  // a --watch spelling that shows it ("D3", "T0"), or ""
+};
+Place describe(const Layout& l, uint32_t offset);
+// The value of the element holding `offset`, as "7 (0x00000007)" or "1.5 (0x3fc00000)".
+std::string value_at(const Layout& l, const std::vector<uint8_t>& image, uint32_t offset);
+
+struct Outcome {
+  enum class Kind : uint8_t {
+    Same,           // every image matched after every scan
+    Differ,         // the images differ after `scan`
+    TestError,      // the engine under test could not be built or threw
+    Crash,          // the run died (signal, time limit) in its child process
+    FrontEndError,  // the program or trace was refused: a generator bug, not an engine one
+  } kind = Kind::Same;
+  int scans = 0;        // scans run (the trace's rows)
+  int scan = 0;         // Differ: first differing scan, 1-based
+  uint32_t offset = 0;  // Differ: first differing byte
+  Place place;
+  std::string ref_value, test_value;
+  std::vector<std::string> also;  // other differing devices in that scan (a few)
+  std::string message;            // TestError / Crash / FrontEndError
+  bool failed() const { return kind == Kind::Differ || kind == Kind::TestError || kind == Kind::Crash; }
+};
+
+// Compiles `ld` (parse_ld -> lower_to_il), reads `csv` and runs one scan per
+// trace row on both engines, each on its own Memory, writing the row, dt and S1
+// as ldrun's run_trace does; compares the images byte for byte after every scan.
+Outcome compare_run(const std::string& ld, const std::string& csv, const EngineFactory& ref,
+                    const EngineFactory& test);
+// The same in a forked child, so a crash or a hang of native code becomes an
+// Outcome (Crash) instead of killing the test.  LDC_DIFF_NOFORK=1 runs in process.
+Outcome compare_isolated(const std::string& ld, const std::string& csv, const EngineFactory& ref,
+                         const EngineFactory& test, int time_limit_s = 60);
+
+using Runner = std::function<Outcome(const std::string& ld, const std::string& csv)>;
+
+struct Reduced {
+  GenProgram prog;
+  std::string csv;
+  Outcome outcome;  // of the reduced case
+  int runs = 0;     // candidate runs tried
+};
+// Shrinks a failing case: cuts the trace after the first differing scan, drops
+// rungs one at a time while the case still fails (labels stay in place, so
+// every kept jump stays forward; labels no kept jump names go at the end),
+// cuts the trace again, then drops trace columns that do not matter.
+Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& first, const Runner& run);
+
+// Where reproducers are written: $LDC_DIFF_OUT, else the current directory.
+std::string output_dir();
+
+// The report for a failing case: what differs, the minimal .ld and trace
+// (also written to <dir>/<stem>.ld and .csv), and the ldrun commands.
+// `origin` says how to make the original case again (an ldgen command line).
+std::string reproducer(const std::string& title, const std::string& origin, const GenProgram& original,
+                       const Reduced& r, const std::string& dir, const std::string& stem,
+                       const char* ref_name = "interp", const char* test_name = "native");
+
+// `ldgen ...` arguments that make this case again.
+std::string ldgen_command(uint64_t seed, const GenOptions& opt, int scans);
+
+}  // namespace ldc::diff
