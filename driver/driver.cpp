@@ -1,14 +1,21 @@
 // driver/driver.cpp -- shared by the executables.
 #include "driver/driver.h"
 
+#include <dirent.h>
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdlib>
+#include <fcntl.h>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <sstream>
 
+#include "backend-c/backend_c.h"
 #include "frontend/frontend.h"
 
 namespace ldc {
@@ -118,6 +125,53 @@ Image load_image_file(const std::string& path) {
       m = path + ": error: " + m.substr(path.size() + 2);
     throw UserError(m);
   }
+}
+
+std::string make_temp_dir() {
+  const char* t = std::getenv("TMPDIR");
+  std::string tmpl = std::string(t && *t ? t : "/tmp") + "/ldc.XXXXXX";
+  if (!mkdtemp(tmpl.data())) throw UserError(std::string("error: cannot create a temporary directory: ") + std::strerror(errno));
+  return tmpl;
+}
+
+void remove_tree(const std::string& dir) {
+  if (DIR* d = opendir(dir.c_str())) {
+    while (dirent* e = readdir(d)) {
+      std::string n = e->d_name;
+      if (n != "." && n != "..") std::remove((dir + "/" + n).c_str());
+    }
+    closedir(d);
+  }
+  rmdir(dir.c_str());
+}
+
+extern "C" char** environ;
+
+std::string build_c_shared_object(const Program& p, const std::string& dir) {
+  std::string c = dir + "/prog.c", so = dir + "/prog.so", log = dir + "/cc.log";
+  write_file_atomic(c, generate_c(p, p.layout()));
+  const char* cc_env = std::getenv("CC");
+  std::string cc = cc_env && *cc_env ? cc_env : "cc";
+  std::vector<std::string> args = {cc, "-O2", "-shared", "-fPIC", "-ffp-contract=off", "-o", so, c, "-lm"};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  pid_t pid;
+  int rc = posix_spawnp(&pid, cc.c_str(), &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) throw UserError("error: cannot run the C compiler '" + cc + "': " + std::strerror(rc));
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::string out;
+    try { out = read_file(log); } catch (...) {}
+    throw UserError("error: the C compiler failed on the generated C (" + c + "):\n" + out);
+  }
+  return so;
 }
 
 std::optional<int32_t> parse_period(const std::string& s) {

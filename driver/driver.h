@@ -48,6 +48,14 @@ Image load_image_file(const std::string& path);
 // True for files ldrun treats as an image: *.bin, *.hex, or the image magic.
 bool is_image_file(const std::string& path);
 
+// The C route: writes `ldc --emit=c` to DIR/prog.c and compiles it with the
+// system C compiler (${CC:-cc} -O2 -shared -fPIC) into DIR/prog.so; returns its path.
+std::string build_c_shared_object(const Program& p, const std::string& dir);
+
+// A fresh private directory under $TMPDIR (or /tmp), removed with remove_tree.
+std::string make_temp_dir();
+void remove_tree(const std::string& dir);
+
 // "10ms", "10", "2s" -> ms; nullopt if malformed.
 std::optional<int32_t> parse_period(const std::string& s);
 

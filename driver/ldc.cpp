@@ -4,12 +4,13 @@
 #include <cstring>
 #include <string>
 
+#include "backend-c/backend_c.h"
 #include "driver/driver.h"
 
 using namespace ldc;
 
 static const char kUsage[] =
-    "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il|asm|listing|hex] [--target=x86-64|c40] [-O0]\n";
+    "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il|asm|listing|hex|c] [--target=x86-64|c40] [-O0]\n";
 
 int main(int argc, char** argv) {
   std::string input, output, emit, target = "x86-64";
@@ -38,6 +39,8 @@ int main(int argc, char** argv) {
       text = print_tree(c.tree);
     } else if (emit == "il") {
       text = print_il_text(c.il);
+    } else if (emit == "c") {                                   // the C route
+      text = generate_c(c.il, c.il.layout());
     } else if (emit == "asm" && target == "x86-64") {        // macro compiler
       text = "# ldc " + input + ": x86-64, GNU as syntax (.intel_syntax noprefix)\n" +
              as::x86::toGnuAs(generate_x86(c.il, c.il.layout()).program);

@@ -2,16 +2,21 @@
 #include <cstdio>
 #include <string>
 
+#include "backend-c/backend_c.h"
 #include "driver/driver.h"
 #include "runtime/runtime.h"
 
 using namespace ldc;
 
 static const char kUsage[] =
-    "usage: ldrun FILE [--engine=native|interp] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms]\n";
+    "usage: ldrun FILE [--engine=native|interp|c] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms]\n";
 
 int main(int argc, char** argv) {
-  std::string input, engine = "native", trace_file, watch;
+  std::string input, engine = "native", trace_file, watch, tmpdir, so_path;
+  struct Cleanup {
+    std::string& dir;
+    ~Cleanup() { if (!dir.empty()) remove_tree(dir); }
+  } cleanup{tmpdir};
   RunOptions opt;
   try {
     for (int i = 1; i < argc; i++) {
@@ -40,15 +45,22 @@ int main(int argc, char** argv) {
       else throw UserError("ldrun: error: more than one program");
     }
     if (input.empty()) throw UserError(std::string("ldrun: error: no program\n") + kUsage);
-    if (engine != "interp" && engine != "native")
-      throw UserError("ldrun: error: unknown engine '" + engine + "' (native or interp)");
+    if (engine != "interp" && engine != "native" && engine != "c")
+      throw UserError("ldrun: error: unknown engine '" + engine + "' (native, interp or c)");
     // The program: an image (checked in full before anything runs), or a
     // source file compiled in memory.
     Image img;
     if (is_image_file(input)) {
       img = load_image_file(input);
+      if (engine == "c") throw UserError("ldrun: error: --engine=c needs the program's source (.ld or .il), not an image");
       if (img.target != ImageTarget::X86_64 && engine == "native")
         throw UserError("ldrun: error: " + input + " is not an x86-64 image; use --engine=interp");
+    } else if (engine == "c") {
+      Compiled c = compile_source(input);
+      img.layout = c.il.layout();
+      img.aliases = c.il.aliases;
+      tmpdir = make_temp_dir();
+      so_path = build_c_shared_object(c.il, tmpdir);
     } else {
       Compiled c = compile_source(input);
       if (engine == "native") img = make_x86_image(c.il, build_x86(c.il, input));
@@ -61,6 +73,7 @@ int main(int argc, char** argv) {
     }
     const Layout& layout = img.layout;
     std::unique_ptr<Engine> eng = engine == "interp" ? make_interp_engine(img.il, layout)
+                                  : engine == "c"    ? make_shared_object_engine(so_path, kCScanSymbol)
                                                      : make_native_engine(img.code, img.entry);
     size_t s = 0;
     while (!watch.empty() && s <= watch.size()) {

@@ -25,6 +25,8 @@ std::unique_ptr<Engine> make_interp_engine(std::vector<uint8_t> il, const Layout
 
 // Native x86-64 scan code, called as void scan(uint8_t* image).
 std::unique_ptr<Engine> make_native_engine(std::span<const uint8_t> code, uint32_t entry);
+// A scan function `void symbol(uint8_t* image)` in a shared object (the C route).
+std::unique_ptr<Engine> make_shared_object_engine(const std::string& path, const std::string& symbol);
 // Fills the image's table of REAL functions that native code calls
 // (sin cos tan exp ln at kSysCallTable).  Every engine's image gets it, so
 // images compare equal across engines.

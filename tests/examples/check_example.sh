@@ -2,7 +2,8 @@
 # check_example.sh BINDIR EXAMPLE.ld ENGINE
 # Compiles the example to an image with ldc, runs the image over the example's
 # trace on ENGINE and compares with EXAMPLE.expected, whose header names the
-# watched devices.  ENGINE "source" runs the .ld directly on the interpreter.
+# watched devices.  ENGINE "source" runs the .ld directly on the interpreter;
+# "c" is the C route (ldc --emit=c compiled by the system cc -O2).
 set -eu
 bindir=$1 src=$2 engine=$3
 base=${src%.ld}
@@ -11,6 +12,8 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 if [ "$engine" = source ]; then
   "$bindir/ldrun" "$src" --engine=interp --trace "$base.csv" --watch "$watch" > "$tmp/out"
+elif [ "$engine" = c ]; then
+  "$bindir/ldrun" "$src" --engine=c --trace "$base.csv" --watch "$watch" > "$tmp/out"
 else
   "$bindir/ldc" "$src" -o "$tmp/prog.bin"
   "$bindir/ldrun" "$tmp/prog.bin" --engine="$engine" --trace "$base.csv" --watch "$watch" > "$tmp/out"
