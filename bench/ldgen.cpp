@@ -138,6 +138,47 @@ std::string rstrip(std::string s) {
   return s;
 }
 
+Block render_node(const GenNode& n) {
+  std::vector<Block> kids;
+  for (const auto& k : n.kids) kids.push_back(render_node(k));
+  switch (n.kind) {
+    case GenNode::Kind::Series: return series(kids, n.wires);
+    case GenNode::Kind::Parallel: return stack(kids, 1 + n.wires[0], 1 + n.wires[1], true);
+    case GenNode::Kind::Fork: return stack(kids, 1 + n.wires[0], 0, false);
+    default: return leaf(n.text);
+  }
+}
+
+bool is_action(const GenNode& n) {
+  switch (n.kind) {
+    case GenNode::Kind::Elem: return !n.text.empty() && n.text[0] == '(';
+    case GenNode::Kind::Series: return !n.kids.empty() && is_action(n.kids.back());
+    case GenNode::Kind::Parallel: return false;
+    default: return true;
+  }
+}
+
+void count(const GenNode& n, GenItem& it) {
+  if (n.kind == GenNode::Kind::Elem) {
+    if (n.text[0] == '[') it.inputs++;
+    else {
+      it.outputs++;
+      if (n.text.rfind("(JMP ", 0) == 0) it.jumps.push_back(n.text.substr(5, n.text.size() - 6));
+    }
+  }
+  for (const auto& k : n.kids) count(k, it);
+}
+
+// Every node of the tree, parents before their kids, by path.
+void paths(const GenNode& n, std::vector<int>& at, std::vector<std::vector<int>>& out) {
+  out.push_back(at);
+  for (size_t i = 0; i < n.kids.size(); i++) {
+    at.push_back(int(i));
+    paths(n.kids[i], at, out);
+    at.pop_back();
+  }
+}
+
 // ------------------------------------------------------------------ the generator
 
 class Gen {
@@ -152,10 +193,9 @@ class Gen {
   // state of the rung being drawn
   int depth_ = 0;        // nesting allowed for its conditions
   int leaves_left_ = 0;  // input elements it may still draw before staying small
-  int outputs_ = 0, inputs_ = 0;
+  int outputs_ = 0;
   std::string special_;  // a (JMP L) or (END) still to place
   int special_at_ = 0;   // ... as this rung's output number
-  std::vector<std::string> jumps_;
 
   bool on(uint32_t c) const { return (o_.classes & c) != 0; }
 
@@ -176,13 +216,19 @@ class Gen {
   std::string input_text();
   std::string output_text();
 
-  Block cond(int depth, int parent);  // parent: 0 none, 1 series, 2 parallel
-  Block output();
-  Block special_block();
-  Block tail(int forks);
-  Block then(int forks, int depth);
-  Block fork(int forks);
-  Block group();
+  GenNode elem(std::string text) {
+    GenNode n;
+    n.text = std::move(text);
+    return n;
+  }
+  GenNode cond(int depth, int parent);  // parent: 0 none, 1 series, 2 parallel
+  GenNode output();
+  GenNode special_block();
+  GenNode then_of(std::vector<GenNode> kids);
+  GenNode tail(int forks);
+  GenNode then(int forks, int depth);
+  GenNode fork(int forks);
+  GenNode group();
   int wire() { return r_.pct(80) ? 2 : r_.range(1, 4); }
   GenItem rung(int index);
 };
@@ -297,7 +343,6 @@ std::string Gen::counter_preset() {
 }
 
 std::string Gen::input_text() {
-  inputs_++;
   int kind = r_.pick({40, 25, on(kGenEdges) ? 12 : 0, on(kGenCompares) ? 22 : 0});
   bool loose = r_.pct(5);  // blanks inside the brackets are free
   switch (kind) {
@@ -359,64 +404,67 @@ std::string Gen::output_text() {
 }
 
 // A condition: a contact, or a series or parallel block of 2..3 conditions.
-Block Gen::cond(int depth, int parent) {
+GenNode Gen::cond(int depth, int parent) {
   if (depth <= 0 || leaves_left_ <= 1 || r_.pct(35)) {
     leaves_left_--;
-    return leaf(input_text());
+    return elem(input_text());
   }
   int kind = parent == 1 ? 2 : parent == 2 ? 1 : r_.range(1, 2);  // alternate: same kinds would merge
   int n = r_.pct(70) ? 2 : 3;
-  std::vector<Block> kids;
-  for (int i = 0; i < n; i++) kids.push_back(cond(depth - 1, kind));
-  if (kind == 1) {
-    std::vector<int> wires;
-    for (int i = 1; i < n; i++) wires.push_back(wire());
-    return series(kids, wires);
-  }
-  return stack(kids, 1 + wire(), 1 + wire(), true);
+  GenNode b;
+  b.kind = kind == 1 ? GenNode::Kind::Series : GenNode::Kind::Parallel;
+  for (int i = 0; i < n; i++) b.kids.push_back(cond(depth - 1, kind));
+  if (kind == 1)
+    for (int i = 1; i < n; i++) b.wires.push_back(wire());
+  else
+    b.wires = {wire(), wire()};
+  return b;
 }
 
-Block Gen::special_block() {
+GenNode Gen::special_block() {
   std::string s = std::move(special_);
   special_.clear();
-  outputs_++;
-  if (s == "(END)") {  // rare and conditional: two inputs in series
-    inputs_ += 2;
-    return series({leaf("[" + dev("X", o_.x) + "]"), leaf("[" + dev("X", o_.x) + "]"), leaf(s)}, {2, 2});
-  }
-  if (r_.pct(75)) {
-    inputs_++;
-    std::string c = r_.pct(70) ? "[" + dev("X", o_.x) + "]" : "[/" + dev("X", o_.x) + "]";
-    return series({leaf(c), leaf(s)}, {2});
-  }
-  return leaf(s);
+  if (s == "(END)")  // rare and conditional: two inputs in series
+    return then_of({elem("[" + dev("X", o_.x) + "]"), elem("[" + dev("X", o_.x) + "]"), elem(s)});
+  if (r_.pct(75)) return then_of({elem(r_.pct(70) ? "[" + dev("X", o_.x) + "]" : "[/" + dev("X", o_.x) + "]"), elem(s)});
+  return elem(s);
 }
 
-Block Gen::output() {
+GenNode Gen::then_of(std::vector<GenNode> kids) {
+  GenNode b;
+  b.kind = GenNode::Kind::Series;
+  b.kids = std::move(kids);
+  for (size_t i = 1; i < b.kids.size(); i++) b.wires.push_back(wire());
+  return b;
+}
+
+GenNode Gen::output() {
   if (!special_.empty() && outputs_ >= special_at_) return special_block();
   outputs_++;
-  return leaf(output_text());
+  return elem(output_text());
 }
 
 // What follows a condition: one output, or a fork of outputs.
-Block Gen::tail(int forks) { return forks < 2 && r_.pct(30) ? fork(forks + 1) : output(); }
+GenNode Gen::tail(int forks) { return forks < 2 && r_.pct(30) ? fork(forks + 1) : output(); }
 
-Block Gen::then(int forks, int depth) {
-  Block c = cond(depth, 0);
-  Block t = tail(forks);
-  return series({c, t}, {wire()});
+GenNode Gen::then(int forks, int depth) {
+  GenNode c = cond(depth, 0);
+  GenNode t = tail(forks);
+  return then_of({std::move(c), std::move(t)});
 }
 
 // Actions sharing one power flow: bare outputs and conditions with their own tails.
-Block Gen::fork(int forks) {
+GenNode Gen::fork(int forks) {
   int n = r_.pick({0, 0, 50, 30, 20});
-  std::vector<Block> kids;
-  for (int i = 0; i < n; i++) kids.push_back(r_.pct(40) ? output() : then(forks, std::min(depth_, 2)));
-  return stack(kids, 1 + wire(), 0, false);
+  GenNode b;
+  b.kind = GenNode::Kind::Fork;
+  for (int i = 0; i < n; i++) b.kids.push_back(r_.pct(40) ? output() : then(forks, std::min(depth_, 2)));
+  b.wires = {wire()};
+  return b;
 }
 
 // One group of rows reached from the left rail.
-Block Gen::group() {
+GenNode Gen::group() {
   int p = r_.below(100);
   if (p < 8) return output();
   if (p < 20) return fork(1);
@@ -426,31 +474,18 @@ Block Gen::group() {
 GenItem Gen::rung(int index) {
   depth_ = r_.range(0, std::clamp(o_.max_depth, 0, 6));
   leaves_left_ = r_.range(3, 24);
-  outputs_ = inputs_ = 0;
+  outputs_ = 0;
   special_at_ = r_.below(3);
-  std::vector<Block> groups;
-  int n = r_.pct(85) ? 1 : r_.range(2, 3);
-  for (int i = 0; i < n; i++) groups.push_back(group());
-  if (!special_.empty()) groups.push_back(special_block());
   GenItem it;
   it.kind = GenItem::Kind::Rung;
   it.number = index;
-  it.text = "rung \"" + std::to_string(index) + "\"\n";
-  std::vector<std::string> prev;
-  for (const Block& b : groups) {
-    // A row joined to the rail starts "|-" or with an element right at the rail.
-    bool tight = b.rows[0][0] != '+' && r_.pct(10);
-    std::string lead = tight ? "" : std::string(size_t(wire()), '-');
-    std::vector<std::string> lines;
-    for (size_t r = 0; r < b.rows.size(); r++)
-      lines.push_back(rstrip("|" + (r == 0 ? lead : std::string(lead.size(), ' ')) + b.rows[r]));
-    if (!prev.empty() && touches(prev.back().substr(1), lines[0].substr(1))) it.text += "|\n";
-    for (const auto& l : lines) it.text += l + "\n";
-    prev = std::move(lines);
-  }
-  it.outputs = outputs_;
-  it.inputs = inputs_;
-  it.jumps = jumps_;
+  it.root.kind = GenNode::Kind::Rail;
+  int n = r_.pct(85) ? 1 : r_.range(2, 3);
+  for (int i = 0; i < n; i++) it.root.kids.push_back(group());
+  if (!special_.empty()) it.root.kids.push_back(special_block());
+  // A row joined to the rail starts "|-" or with an element right at the rail (0).
+  for (size_t i = 0; i < it.root.kids.size(); i++) it.root.wires.push_back(r_.pct(10) ? 0 : wire());
+  update_rung(it);
   return it;
 }
 
@@ -464,7 +499,6 @@ GenProgram Gen::program(uint64_t seed) {
   std::map<int, std::string> label_at;  // rung index -> label placed right before it (n: at the end)
   std::vector<GenItem> rungs;
   for (int i = 0; i < n; i++) {
-    jumps_.clear();
     special_.clear();
     if (on(kGenJumps) && r_.pct(5)) {
       int lo = std::min(i + 2, n), hi = std::min(i + 9, n);
@@ -472,7 +506,6 @@ GenProgram Gen::program(uint64_t seed) {
       auto it = label_at.find(j);
       if (it == label_at.end()) it = label_at.emplace(j, "L" + std::to_string(label_at.size())).first;
       special_ = "(JMP " + it->second + ")";
-      jumps_.push_back(it->second);
     } else if (on(kGenEnd) && r_.below(1000) < 4) {
       special_ = "(END)";
     }
@@ -512,6 +545,54 @@ std::string real_cell(Rng& r) {
 }
 
 }  // namespace
+
+void update_rung(GenItem& it) {
+  it.text = "rung \"" + std::to_string(it.number) + "\"\n";
+  std::vector<std::string> prev;
+  for (size_t g = 0; g < it.root.kids.size(); g++) {
+    Block b = render_node(it.root.kids[g]);
+    int dashes = g < it.root.wires.size() ? it.root.wires[g] : 2;
+    if (dashes <= 0 && b.rows[0][0] == '+') dashes = 2;  // '+' right at the rail would not be joined to it
+    std::string lead(size_t(std::max(dashes, 0)), '-');
+    std::vector<std::string> lines;
+    for (size_t r = 0; r < b.rows.size(); r++)
+      lines.push_back(rstrip("|" + (r == 0 ? lead : std::string(lead.size(), ' ')) + b.rows[r]));
+    // rows of two groups that would touch get a spacer row (just the rail)
+    if (!prev.empty() && touches(prev.back().substr(1), lines[0].substr(1))) it.text += "|\n";
+    for (const auto& l : lines) it.text += l + "\n";
+    prev = std::move(lines);
+  }
+  it.outputs = it.inputs = 0;
+  it.jumps.clear();
+  count(it.root, it);
+}
+
+std::vector<GenNode> rung_reductions(const GenNode& root) {
+  std::vector<GenNode> out;
+  std::vector<int> at;
+  std::vector<std::vector<int>> all;
+  paths(root, at, all);
+  for (const auto& path : all) {
+    const GenNode* n = &root;
+    for (int i : path) n = &n->kids[size_t(i)];
+    for (size_t i = 0; i < n->kids.size(); i++) {
+      if (n->kind == GenNode::Kind::Rail && n->kids.size() < 2) continue;
+      if (n->kind == GenNode::Kind::Series && is_action(*n) && i + 1 == n->kids.size()) continue;
+      GenNode copy = root;
+      GenNode* m = &copy;
+      for (int j : path) m = &m->kids[size_t(j)];
+      m->kids.erase(m->kids.begin() + long(i));
+      if (m->kind == GenNode::Kind::Series && !m->wires.empty()) m->wires.erase(m->wires.begin() + long(i == 0 ? 0 : i - 1));
+      if (m->kind == GenNode::Kind::Rail && i < m->wires.size()) m->wires.erase(m->wires.begin() + long(i));
+      if (m->kind != GenNode::Kind::Rail && m->kids.size() == 1) {
+        GenNode only = std::move(m->kids[0]);
+        *m = std::move(only);
+      }
+      out.push_back(std::move(copy));
+    }
+  }
+  return out;
+}
 
 int GenProgram::rungs() const {
   int n = 0;

@@ -41,16 +41,41 @@ struct GenOptions {
   int x = 8, y = 8, m = 8, k = 4, d = 8, f = 4, t = 4, c = 4, wx = 4, wy = 2;
 };
 
+// A rung as drawn: the tree the grid is rendered from.  Conditions are Elem
+// "[...]", Series and Parallel; actions are Elem "(...)", Fork, and a Series
+// whose last kid is an action (a condition, then what it drives).
+struct GenNode {
+  enum class Kind : uint8_t {
+    Elem,      // text: "[X1]", "(Y0)"
+    Series,    // kids side by side; wires[i]: dashes between kid i and i+1
+    Parallel,  // kids stacked; wires: {dashes after the left '+', dashes before the right '+'}
+    Fork,      // actions stacked, left '+' column only; wires: {dashes after the '+'}
+    Rail,      // the rung: groups of rows from the left rail; wires[i]: dashes after the rail (0: none)
+  } kind = Kind::Elem;
+  std::string text;
+  std::vector<GenNode> kids;
+  std::vector<int> wires;
+};
+
 // A generated program as a list of items, so that a minimizer can drop rungs
 // and keep every label in place (a jump stays forward when rungs go away).
 struct GenItem {
   enum class Kind : uint8_t { Rung, Label } kind = Kind::Rung;
   std::string text;   // Rung: its lines (title and rows), each ending in '\n'; Label: the name
   int number = 0;     // Rung: its index in the generated program, 0-based (also its title)
+  GenNode root;       // Rung: kind Rail
   int outputs = 0;    // Rung: output elements (...) drawn
   int inputs = 0;     // Rung: input elements [...] drawn
   std::vector<std::string> jumps;  // Rung: the labels its (JMP L) outputs name
 };
+// Renders a rung's root again and recounts its elements (after an edit of root).
+void update_rung(GenItem& rung);
+
+// Every smaller rung that one edit of the tree makes: a group, a fork branch,
+// a parallel branch or a series condition left out.  Each is still a valid
+// grid (a minimizer tries them in order).
+std::vector<GenNode> rung_reductions(const GenNode& root);
+
 struct GenProgram {
   std::string header;  // comment lines, each ending in '\n'
   std::vector<GenItem> items;

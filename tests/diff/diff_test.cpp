@@ -148,6 +148,44 @@ TEST(Generator, DrawsEveryMnemonic) {
   for (int i = 0; i < kOpCount; i++) EXPECT_TRUE(seen.count(Op(i))) << op_info(Op(i)).name << " never drawn";
 }
 
+// Every one-edit reduction the minimizer may try is a valid grid with the
+// elements it claims, and re-rendering an unchanged rung gives the same text.
+TEST(Generator, EveryRungReductionParses) {
+  int tried = 0;
+  for (uint64_t seed = 1; seed <= 12; seed++) {
+    GenOptions o = options_for(seed);
+    o.rungs = 25;
+    GenProgram gp = generate_program(seed, o);
+    for (const GenItem& it : gp.items) {
+      if (it.kind != GenItem::Kind::Rung) continue;
+      GenItem same = it;
+      update_rung(same);
+      EXPECT_EQ(same.text, it.text);
+      for (GenNode& c : rung_reductions(it.root)) {
+        GenItem r = it;
+        r.root = std::move(c);
+        update_rung(r);
+        EXPECT_LT(r.outputs + r.inputs, it.outputs + it.inputs);
+        // labels are declared so that kept jumps resolve
+        std::string ld;
+        for (const auto& j : r.jumps) ld += "label " + j + "\n";
+        ld = r.text + "\n" + ld;
+        tried++;
+        try {
+          int outputs, inputs, rungs;
+          count_tree(print_tree(parse_ld(ld, "red.ld")), outputs, inputs, rungs);
+          EXPECT_EQ(outputs, r.outputs) << ld;
+          EXPECT_EQ(inputs, r.inputs) << ld;
+        } catch (CompileError& e) {
+          ADD_FAILURE() << "seed " << seed << ": a reduction is refused:\n"
+                        << format_error("red.ld", ld, e.line, e.col, e.what()) << "from\n" << it.text;
+        }
+      }
+    }
+  }
+  EXPECT_GT(tried, 1000);
+}
+
 // ------------------------------------------------------------------ the minimizer
 
 // An engine that is wrong on one instruction kind: the interpreter running the
@@ -174,7 +212,8 @@ TEST(Minimizer, ShrinksToTheWrongInstruction) {
     Reduced r = minimize(gp, csv, first, run);
     std::string min_ld = render(r.prog);
     EXPECT_EQ(r.outcome.kind, Outcome::Kind::Differ);
-    EXPECT_LE(r.prog.rungs(), 3) << min_ld;
+    EXPECT_LE(r.prog.rungs(), 3) << min_ld;  // e.g. a timer rung that sets the shifted word
+    EXPECT_LE(r.prog.outputs(), 4) << min_ld;
     EXPECT_NE(min_ld.find("SHR"), std::string::npos) << min_ld;
     EXPECT_LE(r.outcome.scan, first.scan);
     EXPECT_EQ(r.outcome.scans, r.outcome.scan) << "the trace ends at the first differing scan";
@@ -196,6 +235,26 @@ TEST(Minimizer, ShrinksToTheWrongInstruction) {
     if (found == 1) std::printf("%s", rep.c_str());
   }
   EXPECT_GT(found, 0) << "no seed made the fake SHR engine differ";
+}
+
+// The harness sees a wrong native engine: native code for the program with
+// every ORN turned into OR.
+TEST(Harness, CatchesAWrongNativeEngine) {
+  EngineFactory bad = [](const Program& p) {
+    Program q = p;
+    for (Rung& r : q.rungs)
+      for (Instr& in : r.code)
+        if (in.op == Op::ORN) in.op = Op::OR;
+    return make_native(q);
+  };
+  int caught = 0;
+  for (uint64_t seed = 1; seed <= 10; seed++) {
+    GenOptions o = options_for(seed);
+    std::string ld = generate_ld(seed, o), csv = generate_trace(seed, scans_for(seed), o);
+    EXPECT_EQ(compare_isolated(ld, csv, make_interp, make_native).kind, Outcome::Kind::Same) << "seed " << seed;
+    caught += compare_isolated(ld, csv, make_interp, bad).kind == Outcome::Kind::Differ;
+  }
+  EXPECT_GE(caught, 5);
 }
 
 // A crash of the engine under test is caught in the child process and shrunk too.

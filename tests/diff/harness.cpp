@@ -185,7 +185,7 @@ Outcome compare_run(const std::string& ld, const std::string& csv, const EngineF
     o.kind = Outcome::Kind::Differ;
     o.scan = k;
     bool first = true;
-    std::set<std::string> seen;
+    std::set<std::pair<int, uint32_t>> seen;  // (area, index): one line per element
     for (uint32_t i = 0; i < layout.size; i++) {
       if (ma.bytes[i] == mb.bytes[i]) continue;
       Place p = describe(layout, i);
@@ -195,9 +195,10 @@ Outcome compare_run(const std::string& ld, const std::string& csv, const EngineF
         o.place = p;
         o.ref_value = value_at(layout, ma.bytes, i);
         o.test_value = value_at(layout, mb.bytes, i);
-        seen.insert(p.name);
-      } else if (seen.insert(p.name).second && o.also.size() < 12) {
-        o.also.push_back(p.name + ": " + value_at(layout, ma.bytes, i) + " vs " + value_at(layout, mb.bytes, i));
+        seen.insert({int(p.area), p.index});
+      } else if (seen.insert({int(p.area), p.index}).second && o.also.size() < 12) {
+        std::string name = p.area == Area::Count ? p.name : describe(layout, layout.addr(p.area, p.index)).name;
+        o.also.push_back(name + ": " + value_at(layout, ma.bytes, i) + " vs " + value_at(layout, mb.bytes, i));
       }
     }
     return o;
@@ -425,19 +426,42 @@ Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& 
     return o.failed() && o.kind == first.kind;
   };
   cut(trace, r.outcome);
-  // Rungs, last to first, until no single rung can go.
   for (bool changed = true; changed;) {
     changed = false;
-    for (size_t i = r.prog.items.size(); i-- > 0;) {
-      if (r.prog.items[i].kind != GenItem::Kind::Rung || r.prog.rungs() <= 1) continue;
-      GenProgram p = r.prog;
-      p.items.erase(p.items.begin() + long(i));
-      Outcome o;
-      if (attempt(p, trace, o)) {
-        r.prog = std::move(p);
-        r.outcome = o;
-        cut(trace, o);
-        changed = true;
+    // Rungs, last to first, until no single rung can go.
+    for (bool again = true; again;) {
+      again = false;
+      for (size_t i = r.prog.items.size(); i-- > 0;) {
+        if (r.prog.items[i].kind != GenItem::Kind::Rung || r.prog.rungs() <= 1) continue;
+        GenProgram p = r.prog;
+        p.items.erase(p.items.begin() + long(i));
+        Outcome o;
+        if (attempt(p, trace, o)) {
+          r.prog = std::move(p);
+          r.outcome = o;
+          cut(trace, o);
+          again = changed = true;
+        }
+      }
+    }
+    // Inside each rung: leave out a group, a branch or a condition while it fails.
+    for (size_t i = 0; i < r.prog.items.size(); i++) {
+      if (r.prog.items[i].kind != GenItem::Kind::Rung) continue;
+      for (bool again = true; again;) {
+        again = false;
+        for (GenNode& c : rung_reductions(r.prog.items[i].root)) {
+          GenProgram p = r.prog;
+          p.items[i].root = std::move(c);
+          update_rung(p.items[i]);
+          Outcome o;
+          if (attempt(p, trace, o)) {
+            r.prog = std::move(p);
+            r.outcome = o;
+            cut(trace, o);
+            again = changed = true;
+            break;
+          }
+        }
       }
     }
   }

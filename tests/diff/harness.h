@@ -67,10 +67,12 @@ struct Reduced {
   Outcome outcome;  // of the reduced case
   int runs = 0;     // candidate runs tried
 };
-// Shrinks a failing case: cuts the trace after the first differing scan, drops
-// rungs one at a time while the case still fails (labels stay in place, so
-// every kept jump stays forward; labels no kept jump names go at the end),
-// cuts the trace again, then drops trace columns that do not matter.
+// Shrinks a failing case while it still fails the same way: cuts the trace
+// after the first differing scan; drops rungs one at a time (labels stay in
+// place, so every kept jump stays forward); inside the rungs left, leaves out
+// groups of rows, fork and parallel branches and series conditions
+// (rung_reductions); repeats both until nothing goes; drops the labels no kept
+// jump names, trailing scans, and trace columns that do not matter.
 Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& first, const Runner& run);
 
 // Where reproducers are written: $LDC_DIFF_OUT, else the current directory.
