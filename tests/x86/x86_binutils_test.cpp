@@ -5,7 +5,9 @@
 #include <algorithm>
 
 #include "../assembler/test_util.h"
+#include "bench/ldgen.h"
 #include "driver/driver.h"
+#include "frontend/frontend.h"
 
 using namespace ldc;
 
@@ -27,13 +29,12 @@ std::vector<std::string> programs() {
   return files;
 }
 
-class Binutils : public ::testing::TestWithParam<std::string> {};
-
-TEST_P(Binutils, GnuAsGivesOurBytesAndObjdumpOurInstructions) {
+// as on our --emit=asm gives our bytes; objdump -d of our bytes gives our
+// disassembler's instructions.
+void check_against_binutils(const Program& p, const std::string& name) {
   std::string why;
   ASSERT_TRUE(as::test::binutilsAvailable(&why)) << why;
-  Compiled c = compile_source(GetParam());
-  NativeBuild nb = build_x86(c.il, GetParam());
+  NativeBuild nb = build_x86(p, name);
   const auto& ours = nb.asm_result.code;
   std::string err;
   auto theirs = as::test::gnuAssemble(as::x86::toGnuAs(nb.gen.program), &err);
@@ -52,6 +53,23 @@ TEST_P(Binutils, GnuAsGivesOurBytesAndObjdumpOurInstructions) {
     as::x86::Instruction mine = dis.insts[i].inst;
     mine.longBranch = false;  // objdump does not spell the rel32 choice; the bytes above agree
     EXPECT_EQ(as::x86::print(theirs_inst), as::x86::print(mine)) << "at " << od[i].address << ": objdump says " << od[i].text;
+  }
+}
+
+class Binutils : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(Binutils, GnuAsGivesOurBytesAndObjdumpOurInstructions) {
+  check_against_binutils(compile_source(GetParam()).il, GetParam());
+}
+
+// Random programs over every element class (bench/ldgen.h), 24 seeds x 60 rungs.
+TEST(BinutilsGenerated, GnuAsAndObjdumpAgreeOnRandomPrograms) {
+  for (uint64_t seed = 1; seed <= 24; seed++) {
+    SCOPED_TRACE("ldgen --seed " + std::to_string(seed) + " --rungs 60");
+    GenOptions o;
+    o.rungs = 60;
+    check_against_binutils(lower_to_il(parse_ld(generate_ld(seed, o), "gen.ld")), "gen.ld");
+    if (HasFatalFailure()) return;
   }
 }
 
