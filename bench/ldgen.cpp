@@ -343,7 +343,9 @@ std::string Gen::counter_preset() {
 }
 
 std::string Gen::input_text() {
-  int kind = r_.pick({40, 25, on(kGenEdges) ? 12 : 0, on(kGenCompares) ? 22 : 0});
+  // NO/NC contacts also stand in when no input class is chosen at all
+  int kind = r_.pick({on(kGenContacts) ? 40 : 0, on(kGenContacts) ? 25 : 0, on(kGenEdges) ? 12 : 0,
+                      on(kGenCompares) ? 22 : 0});
   bool loose = r_.pct(5);  // blanks inside the brackets are free
   switch (kind) {
     case 0: return loose ? "[ " + bit_read() + " ]" : "[" + bit_read() + "]";
@@ -366,7 +368,7 @@ std::string Gen::output_text() {
                       on(kGenLogic) ? 10 : 0, on(kGenRealFn) ? 8 : 0});
   switch (kind) {
     case 0:
-    default: return std::string(r_.pct(25) ? "(/" : "(") + bit_write() + ")";
+    default: return std::string(r_.pct(25) ? "(/" : "(") + bit_write() + ")";  // also when no output class is on
     case 1: {
       static const char* const kw[] = {"S", "SET", "R", "RESET", "RST"};
       return "(" + std::string(r_.of(kw)) + " " + bit_write() + ")";
@@ -492,10 +494,7 @@ GenItem Gen::rung(int index) {
 GenProgram Gen::program(uint64_t seed) {
   GenProgram p;
   int n = std::max(1, o_.rungs);
-  char buf[160];
-  std::snprintf(buf, sizeof buf, "# ldgen --seed %llu --rungs %d --depth %d --classes 0x%x\n", (unsigned long long)seed, n,
-                o_.max_depth, o_.classes);
-  p.header = buf;
+  p.header = "# ldgen " + ldgen_args(seed, o_) + "\n";
   std::map<int, std::string> label_at;  // rung index -> label placed right before it (n: at the end)
   std::vector<GenItem> rungs;
   for (int i = 0; i < n; i++) {
@@ -676,12 +675,39 @@ std::string generate_trace(uint64_t seed, int scans, const GenOptions& o) {
   return s;
 }
 
+namespace {
+const std::pair<const char*, uint32_t> kClassNames[] = {
+    {"contacts", kGenContacts}, {"edges", kGenEdges},   {"compares", kGenCompares}, {"coils", kGenCoils},
+    {"setreset", kGenSetReset}, {"timers", kGenTimers}, {"counters", kGenCounters}, {"move", kGenMove},
+    {"arith", kGenArith},       {"logic", kGenLogic},   {"realfn", kGenRealFn},     {"jumps", kGenJumps},
+    {"end", kGenEnd},           {"all", kGenAll}};
+}  // namespace
+
+std::string gen_classes_text(uint32_t mask) {
+  if ((mask & kGenAll) == kGenAll) return "all";
+  std::string s;
+  for (const auto& [n, m] : kClassNames)
+    if (m != kGenAll && (mask & m)) s += (s.empty() ? "" : ",") + std::string(n);
+  return s;
+}
+
+std::string ldgen_args(uint64_t seed, const GenOptions& o) {
+  std::string s = "--seed " + std::to_string(seed) + " --rungs " + std::to_string(o.rungs) + " --depth " +
+                  std::to_string(o.max_depth);
+  if ((o.classes & kGenAll) != kGenAll) s += " --classes " + gen_classes_text(o.classes);
+  GenOptions d;
+  const std::pair<const char*, int> r[] = {{"x", o.x}, {"y", o.y}, {"m", o.m},   {"k", o.k},   {"d", o.d},
+                                           {"f", o.f}, {"t", o.t}, {"c", o.c},   {"wx", o.wx}, {"wy", o.wy}};
+  const int def[] = {d.x, d.y, d.m, d.k, d.d, d.f, d.t, d.c, d.wx, d.wy};
+  std::string range;
+  for (size_t i = 0; i < 10; i++)
+    if (r[i].second != def[i]) range += (range.empty() ? "" : ",") + std::string(r[i].first) + "=" + std::to_string(r[i].second);
+  if (!range.empty()) s += " --range " + range;
+  return s;
+}
+
 bool parse_gen_classes(std::string_view list, uint32_t& mask, std::string& err) {
-  static const std::pair<const char*, uint32_t> names[] = {
-      {"contacts", kGenContacts}, {"edges", kGenEdges},   {"compares", kGenCompares}, {"coils", kGenCoils},
-      {"setreset", kGenSetReset}, {"timers", kGenTimers}, {"counters", kGenCounters}, {"move", kGenMove},
-      {"arith", kGenArith},       {"logic", kGenLogic},   {"realfn", kGenRealFn},     {"jumps", kGenJumps},
-      {"end", kGenEnd},           {"all", kGenAll}};
+  const auto& names = kClassNames;
   mask = 0;
   size_t s = 0;
   while (s <= list.size()) {

@@ -16,10 +16,10 @@ namespace ldc {
 
 // Element classes the generator may draw from (GenOptions::classes).
 enum GenClass : uint32_t {
-  kGenContacts = 1u << 0,   // [X1] [/X1] on every bit kind; always used as a fallback
+  kGenContacts = 1u << 0,   // [X1] [/X1] on every bit kind (also used when no input class is on)
   kGenEdges = 1u << 1,      // [P X1] [N X1]
   kGenCompares = 1u << 2,   // [a op b], INT32, REAL and mixed
-  kGenCoils = 1u << 3,      // (Y1) (/Y1)
+  kGenCoils = 1u << 3,      // (Y1) (/Y1) (also used when no output class is on)
   kGenSetReset = 1u << 4,   // (S Y1) (R Y1) (RST Y1) ...
   kGenTimers = 1u << 5,     // TON TOF TP, (RST T0)
   kGenCounters = 1u << 6,   // CTU CTD, (RST C0)
@@ -99,5 +99,10 @@ std::string generate_trace(uint64_t seed, int scans, const GenOptions& opt = {})
 // "timers,arith" -> mask; false and `err` on an unknown name.  Names: contacts
 // edges compares coils setreset timers counters move arith logic realfn jumps end all.
 bool parse_gen_classes(std::string_view list, uint32_t& mask, std::string& err);
+std::string gen_classes_text(uint32_t mask);  // the inverse: "timers,arith"
+
+// The ldgen arguments that make this program again: "--seed 7 --rungs 50 --depth 4 ..."
+// (options left at their defaults are left out).
+std::string ldgen_args(uint64_t seed, const GenOptions& opt);
 
 }  // namespace ldc

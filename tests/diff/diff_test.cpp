@@ -5,6 +5,8 @@
 //   LDC_DIFF_SEEDS  programs in all (default 240, split over 8 shards)
 //   LDC_DIFF_SEED0  first seed (default 1)
 //   LDC_DIFF_RUNGS  rungs per program (default 50)
+//   LDC_DIFF_DEPTH  maximum nesting depth 0..6 (default: 2..6, varying with the seed)
+//   LDC_DIFF_CLASSES element classes, as ldgen --classes (default all)
 //   LDC_DIFF_OUT    where reproducers are written (default: the current directory)
 //   LDC_DIFF_NOFORK run in process instead of one child process per program
 #include <gtest/gtest.h>
@@ -43,7 +45,11 @@ long env_int(const char* name, long def) {
 GenOptions options_for(uint64_t s) {
   GenOptions o;
   o.rungs = int(env_int("LDC_DIFF_RUNGS", kDefaultRungs));
-  o.max_depth = 2 + int(s % 5);
+  o.max_depth = int(env_int("LDC_DIFF_DEPTH", 2 + long(s % 5)));
+  if (const char* c = std::getenv("LDC_DIFF_CLASSES"); c && *c) {
+    std::string err;
+    if (!parse_gen_classes(c, o.classes, err)) throw std::invalid_argument("LDC_DIFF_CLASSES: " + err);
+  }
   return o;
 }
 int scans_for(uint64_t s) { return 30 + int(s % 31); }

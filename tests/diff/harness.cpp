@@ -510,27 +510,12 @@ std::string output_dir() {
 }
 
 std::string ldgen_command(uint64_t seed, const GenOptions& o, int scans) {
-  std::string s = "ldgen --seed " + std::to_string(seed) + " --rungs " + std::to_string(o.rungs) + " --depth " +
-                  std::to_string(o.max_depth);
-  static const std::pair<const char*, uint32_t> names[] = {
-      {"contacts", kGenContacts}, {"edges", kGenEdges},   {"compares", kGenCompares}, {"coils", kGenCoils},
-      {"setreset", kGenSetReset}, {"timers", kGenTimers}, {"counters", kGenCounters}, {"move", kGenMove},
-      {"arith", kGenArith},       {"logic", kGenLogic},   {"realfn", kGenRealFn},     {"jumps", kGenJumps},
-      {"end", kGenEnd}};
-  if ((o.classes & kGenAll) != kGenAll) {
-    std::string list;
-    for (const auto& [n, m] : names)
-      if (o.classes & m) list += (list.empty() ? "" : ",") + std::string(n);
-    s += " --classes " + list;
-  }
-  GenOptions d;
-  if (o.x != d.x || o.y != d.y || o.m != d.m || o.k != d.k || o.d != d.d || o.f != d.f || o.t != d.t || o.c != d.c ||
-      o.wx != d.wx || o.wy != d.wy)
-    s += " --range x=" + std::to_string(o.x) + ",y=" + std::to_string(o.y) + ",m=" + std::to_string(o.m) +
-         ",k=" + std::to_string(o.k) + ",d=" + std::to_string(o.d) + ",f=" + std::to_string(o.f) +
-         ",t=" + std::to_string(o.t) + ",c=" + std::to_string(o.c) + ",wx=" + std::to_string(o.wx) +
-         ",wy=" + std::to_string(o.wy);
-  return s + " --scans " + std::to_string(scans);
+#ifdef LDC_LDGEN_PATH
+  std::string ldgen = LDC_LDGEN_PATH;
+#else
+  std::string ldgen = "build/bench/ldgen";
+#endif
+  return ldgen + " " + ldgen_args(seed, o) + " -o prog.ld --trace trace.csv --scans " + std::to_string(scans);
 }
 
 namespace {
