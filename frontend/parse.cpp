@@ -579,13 +579,11 @@ TreeNode Parser::reduce(const Grid& g, int line0) {
     }
   }
   // nodes and edges
-  std::map<int, int> node_of;
+  std::vector<int> node_of(size_t(npts), -1);
+  int nodes = 0;
   auto node = [&](int pt) {
-    int root = uf.find(pt);
-    auto it = node_of.find(root);
-    if (it != node_of.end()) return it->second;
-    int id = int(node_of.size());
-    node_of[root] = id;
+    int& id = node_of[size_t(uf.find(pt))];
+    if (id < 0) id = nodes++;
     return id;
   };
   int rail = node(RAIL);
@@ -612,7 +610,7 @@ TreeNode Parser::reduce(const Grid& g, int line0) {
     edges.push_back(std::move(e));
   }
   if (outputs_at.empty()) fail(line0, g.rail + 1, "rung has no output");
-  const int SINK = int(node_of.size());
+  const int SINK = nodes;
   int nn = SINK + 1;
   for (auto& e : edges)
     if (e.action) e.to = SINK;
@@ -642,37 +640,35 @@ TreeNode Parser::reduce(const Grid& g, int line0) {
     if (!from_rail[e.from]) fail(l.line, l.col, "not connected to the left power rail");
     if (!to_out[e.to]) fail(l.line, l.col, "element reaches no output");
   }
-  // series/parallel reduction
+  // series/parallel reduction, keeping the adjacency lists up to date
+  std::vector<std::vector<int>> out(nn), in(nn);
+  for (size_t i = 0; i < edges.size(); i++) {
+    out[edges[i].from].push_back(int(i));
+    in[edges[i].to].push_back(int(i));
+  }
+  auto unlink = [](std::vector<int>& v, int e) { v.erase(std::find(v.begin(), v.end(), e)); };
   for (bool changed = true; changed;) {
     changed = false;
-    std::vector<std::vector<int>> out(nn), in(nn);
-    for (size_t i = 0; i < edges.size(); i++)
-      if (edges[i].alive) {
-        out[edges[i].from].push_back(int(i));
-        in[edges[i].to].push_back(int(i));
-      }
-    // parallel: edges with the same ends
     for (int u = 0; u < nn; u++) {
+      // parallel: edges from u with the same far end become one
       auto& o = out[u];
       for (size_t a = 0; a < o.size(); a++) {
-        Edge& ea = edges[o[a]];
-        if (!ea.alive) continue;
-        for (size_t b = a + 1; b < o.size(); b++) {
+        for (size_t b = a + 1; b < o.size();) {
+          Edge& ea = edges[o[a]];
           Edge& eb = edges[o[b]];
-          if (!eb.alive || eb.to != ea.to) continue;
+          if (eb.to != ea.to) { b++; continue; }
           ea.term = combine(ea.action ? K::Fork : K::Parallel, std::move(ea.term), std::move(eb.term), true);
           eb.alive = false;
+          unlink(in[eb.to], o[b]);
+          o.erase(o.begin() + long(b));
           changed = true;
         }
       }
-    }
-    if (changed) continue;
-    // series: a node with one edge in and one edge out
-    for (int v = 0; v < nn; v++) {
-      if (v == rail || v == SINK || in[v].size() != 1 || out[v].size() != 1) continue;
-      Edge& e1 = edges[in[v][0]];
-      Edge& e2 = edges[out[v][0]];
-      if (!e1.alive || !e2.alive || &e1 == &e2) continue;
+      // series: u with one edge in and one edge out joins them
+      if (u == rail || u == SINK || in[u].size() != 1 || out[u].size() != 1 || in[u][0] == out[u][0]) continue;
+      int i1 = in[u][0], i2 = out[u][0];
+      Edge& e1 = edges[i1];
+      Edge& e2 = edges[i2];
       if (e2.action) {
         TreeNode t;
         t.kind = K::Then;
@@ -683,10 +679,13 @@ TreeNode Parser::reduce(const Grid& g, int line0) {
       } else {
         e1.term = combine(K::Series, std::move(e1.term), std::move(e2.term), false);
       }
+      unlink(in[e2.to], i2);
+      in[e2.to].push_back(i1);
       e1.to = e2.to;
       e2.alive = false;
+      in[u].clear();
+      out[u].clear();
       changed = true;
-      break;  // degrees changed; recompute
     }
   }
   std::vector<Edge*> left;
