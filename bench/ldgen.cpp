@@ -389,6 +389,16 @@ std::string Gen::output_text() {
       bool int_only = op == "MOD";
       std::string a = int_only ? int_value() : value();
       std::string b = op == "DIV" || op == "MOD" ? divisor(int_only) : int_only ? int_value() : value();
+      if (r_.pct(12)) {  // a pair at an edge of the arithmetic: wrap, overflow, INT32_MIN / -1, inf, NaN
+        static const std::pair<const char*, const char*> pairs[] = {
+            {"-2147483648", "-1"}, {"16#80000000", "-1"}, {"2147483647", "1"},  {"-2147483648", "1"},
+            {"65536", "65536"},    {"46341", "46341"},    {"-7", "2"},          {"7", "-2"},
+            {"3.4e38", "3.4e38"},  {"1e30", "-1e30"},     {"-7.5", "-0.0"},     {"1e-40", "1e-40"}};
+        const auto& [x, y] = pairs[size_t(r_.below(int_only ? 8 : 12))];
+        a = r_.pct(60) ? x : int_only ? int_word() : value();
+        b = r_.pct(60) ? y : int_only ? int_word() : value();
+        if (r_.pct(50) && op != "DIV" && op != "MOD") std::swap(a, b);
+      }
       return "(" + op + " " + a + " " + b + " " + dest_word() + ")";
     }
     case 6: {
@@ -535,8 +545,9 @@ std::string wx_cell(Rng& r) {
 }
 
 std::string real_cell(Rng& r) {
-  static const char* const special[] = {"0", "-0", "1e30", "-1e30", "3.4e38", "1e-40", "nan", "inf", "-inf", "0.5", "-2.5", "1e10", "3.0e9"};
-  switch (r.pick({20, 50, 30})) {
+  static const char* const special[] = {"0",   "-0",   "1e30", "-1e30", "3.4e38", "1e-40", "nan", "-nan",
+                                        "inf", "-inf", "0.5",  "-2.5",  "1e10",   "3.0e9", "-3.0e9", "2147483520"};
+  switch (r.pick({30, 45, 25})) {
     case 0: return r.of(special);
     case 1: return real_spelling(r.range(-8000, 8000) / 8.0, false);
     default: return real_spelling(double(r.range(-9999, 9999)) * std::pow(10.0, r.range(-8, 8)) / 1000.0, true);

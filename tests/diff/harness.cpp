@@ -491,8 +491,10 @@ Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& 
     if (attempt(r.prog, t, o)) {
       trace = std::move(t);
       r.outcome = o;
+      cut(trace, o);
     }
   }
+  if (r.outcome.kind == Outcome::Kind::Differ) r.outcome.scans = r.outcome.scan;  // what the cut trace runs
   r.prog.header = "# minimized reproducer (" + std::to_string(r.prog.rungs()) + " of " + std::to_string(prog.rungs()) +
                   " rungs)\n" + prog.header;
   r.csv = trace.text();
