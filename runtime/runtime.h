@@ -23,6 +23,10 @@ class Engine {
 // The reference interpreter over an image's binary IL.
 std::unique_ptr<Engine> make_interp_engine(std::vector<uint8_t> il, const Layout& layout);
 
+// The fast interpreter (runtime/fastinterp.h): the same binary IL, decoded
+// once into type-specialized records with resolved offsets, threaded dispatch.
+std::unique_ptr<Engine> make_fast_interp_engine(std::span<const uint8_t> il, const Layout& layout);
+
 // Native x86-64 scan code, called as void scan(uint8_t* image).
 std::unique_ptr<Engine> make_native_engine(std::span<const uint8_t> code, uint32_t entry);
 // A scan function `void symbol(uint8_t* image)` in a shared object (the C route).

@@ -1,0 +1,576 @@
+// runtime/fastinterp.cpp -- the fast interpreter (fastinterp.h): pre-decoded,
+// type-specialized handlers, threaded dispatch.  The meaning of every handler is
+// the reference interpreter's (ir/interp.cpp, docs/il.md), instruction by
+// instruction; only the decoding moved from run time to load time.
+#include "runtime/fastinterp.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+
+#if defined(__GNUC__) && !defined(LDC_FASTINTERP_SWITCH)
+#define LDC_FAST_GOTO 1
+#else
+#define LDC_FAST_GOTO 0
+#endif
+
+namespace ldc {
+namespace {
+
+constexpr int32_t kMin = std::numeric_limits<int32_t>::min();
+constexpr int32_t kMax = std::numeric_limits<int32_t>::max();
+
+// Value operand kinds (2 bits): where the 32-bit field points or what it holds.
+enum : unsigned { kIntMem = 0, kRealMem = 1, kIntConst = 2, kRealConst = 3 };
+// Destination kinds (1 bit).
+enum : unsigned { kDstInt = 0, kDstReal = 1 };
+
+// The handlers.  _MM: two INT32 words; _MK: a word and a constant; _KM: a
+// constant and a word (destination an INT32 word).  _F: REAL words.
+#define LDC_INT3(X, N) X(N##_MM) X(N##_MK) X(N##_KM)
+#define LDC_FAST_OPS(X)                                                                                  \
+  X(HALT) X(LD) X(LDN) X(AND) X(ANDN) X(OR) X(ORN) X(LDP) X(LDF) X(TRUE) X(PUSH0) X(ANDB) X(ORB)        \
+  X(MPS) X(MRD) X(MPP) X(OUT) X(OUTN) X(SET) X(RST)                                                     \
+  X(EQ_MM) X(NE_MM) X(LT_MM) X(LE_MM) X(GT_MM) X(GE_MM)                                                 \
+  X(EQ_MK) X(NE_MK) X(LT_MK) X(LE_MK) X(GT_MK) X(GE_MK) X(CMP_F)                                        \
+  X(MOVK) X(MOV32) X(MOVI2F) X(MOVF2I)                                                                  \
+  LDC_INT3(X, ADD) LDC_INT3(X, SUB) LDC_INT3(X, MUL) LDC_INT3(X, DIV) LDC_INT3(X, MOD)                  \
+  LDC_INT3(X, WAND) LDC_INT3(X, WOR) LDC_INT3(X, WXOR) LDC_INT3(X, SHL) LDC_INT3(X, SHR)                \
+  X(ADD_F) X(SUB_F) X(MUL_F) X(DIV_F) X(WNOT_M)                                                         \
+  X(SIN_F) X(COS_F) X(TAN_F) X(SQRT_F) X(EXP_F) X(LN_F) X(ABS_F) X(GEN)                                 \
+  X(TON_K) X(TON_M) X(TOF_K) X(TOF_M) X(TP_K) X(TP_M) X(RSTT)                                           \
+  X(CTU_K) X(CTU_M) X(CTD_K) X(CTD_M) X(RSTC) X(JMP) X(END)
+
+enum FOp : uint16_t {
+#define LDC_ENUM(n) F_##n,
+  LDC_FAST_OPS(LDC_ENUM)
+#undef LDC_ENUM
+  F_Count
+};
+
+inline int32_t ld_i(const uint8_t* m, uint32_t off) { int32_t v; std::memcpy(&v, m + off, 4); return v; }
+inline float ld_f(const uint8_t* m, uint32_t off) { float v; std::memcpy(&v, m + off, 4); return v; }
+inline void st_i(uint8_t* m, uint32_t off, int32_t v) { std::memcpy(m + off, &v, 4); }
+inline void st_f(uint8_t* m, uint32_t off, float v) { std::memcpy(m + off, &v, 4); }
+inline float bits_f(uint32_t u) { float f; std::memcpy(&f, &u, 4); return f; }
+inline uint32_t f_bits(float f) { uint32_t u; std::memcpy(&u, &f, 4); return u; }
+
+// A value operand as REAL / as INT32, as the reference's as_real / Val::i
+// (Val::i of a REAL operand is 0; valid IL never asks for it).
+inline float get_f(const uint8_t* m, unsigned k, uint32_t v) {
+  switch (k) {
+    case kIntMem: return int_to_real(ld_i(m, v));
+    case kRealMem: return ld_f(m, v);
+    case kIntConst: return int_to_real(int32_t(v));
+    default: return bits_f(v);
+  }
+}
+inline int32_t get_i(const uint8_t* m, unsigned k, uint32_t v) {
+  return k == kIntMem ? ld_i(m, v) : k == kIntConst ? int32_t(v) : 0;
+}
+inline void store_int(uint8_t* m, unsigned dk, uint32_t off, int32_t x) {
+  if (dk == kDstReal) st_f(m, off, int_to_real(x));
+  else st_i(m, off, x);
+}
+inline void store_real(uint8_t* m, unsigned dk, uint32_t off, float x) {
+  if (dk == kDstReal) st_f(m, off, x);
+  else st_i(m, off, real_to_int(x));
+}
+
+inline int32_t i_add(int32_t x, int32_t y) { return int32_t(uint32_t(x) + uint32_t(y)); }
+inline int32_t i_sub(int32_t x, int32_t y) { return int32_t(uint32_t(x) - uint32_t(y)); }
+inline int32_t i_mul(int32_t x, int32_t y) { return int32_t(uint32_t(x) * uint32_t(y)); }
+inline int32_t i_shl(int32_t x, int32_t n) { return n < 0 || n > 31 ? 0 : int32_t(uint32_t(x) << n); }
+inline int32_t i_shr(int32_t x, int32_t n) { return n < 0 || n > 31 ? 0 : int32_t(uint32_t(x) >> n); }
+inline int32_t i_div(int32_t x, int32_t y) { return (x == kMin && y == -1) ? kMin : x / y; }
+inline int32_t i_mod(int32_t x, int32_t y) { return y == -1 ? 0 : x % y; }
+inline int32_t i_abs(int32_t x) { return x == kMin ? kMin : (x < 0 ? -x : x); }
+
+inline int32_t advance(int32_t et, int32_t dt, int32_t pt) {  // as the reference interpreter
+  if (et >= pt) return pt;
+  int64_t s = int64_t(et) + int64_t(dt);
+  return s > pt ? pt : int32_t(s);
+}
+inline int32_t dt_of(const uint8_t* m) { return ld_i(m, kSysDt); }
+
+// The application instructions without a specialized handler: any operand
+// kinds.  x = IL opcode | ka << 8 | kb << 10 | kd << 12; a and b the sources,
+// c the destination.  Called with power on.
+__attribute__((noinline)) void generic(uint8_t* m, const FastInterpreter::Ins& in, uint32_t s0) {
+  Op op = Op(in.x & 0xff);
+  unsigned ka = (in.x >> 8) & 3, kb = (in.x >> 10) & 3, kd = (in.x >> 12) & 1;
+  bool real = (ka | kb) & 1;
+  switch (op) {
+    case Op::MOV:
+      if (ka & 1) store_real(m, kd, in.c, get_f(m, ka, in.a));
+      else store_int(m, kd, in.c, get_i(m, ka, in.a));
+      return;
+    case Op::ADD: case Op::SUB: case Op::MUL:
+      if (real) {
+        float x = get_f(m, ka, in.a), y = get_f(m, kb, in.b);
+        store_real(m, kd, in.c, op == Op::ADD ? x + y : op == Op::SUB ? x - y : x * y);
+      } else {
+        int32_t x = get_i(m, ka, in.a), y = get_i(m, kb, in.b);
+        store_int(m, kd, in.c, op == Op::ADD ? i_add(x, y) : op == Op::SUB ? i_sub(x, y) : i_mul(x, y));
+      }
+      return;
+    case Op::DIV:
+      if (real) {
+        float y = get_f(m, kb, in.b);
+        if (y == 0.0f) { m[s0] = 1; return; }
+        store_real(m, kd, in.c, get_f(m, ka, in.a) / y);
+      } else {
+        int32_t y = get_i(m, kb, in.b);
+        if (y == 0) { m[s0] = 1; return; }
+        store_int(m, kd, in.c, i_div(get_i(m, ka, in.a), y));
+      }
+      return;
+    case Op::MOD: {
+      int32_t y = get_i(m, kb, in.b);
+      if (y == 0) { m[s0] = 1; return; }
+      store_int(m, kd, in.c, i_mod(get_i(m, ka, in.a), y));
+      return;
+    }
+    case Op::WAND: case Op::WOR: case Op::WXOR: case Op::SHL: case Op::SHR: {
+      int32_t x = get_i(m, ka, in.a), y = get_i(m, kb, in.b);
+      int32_t r = op == Op::WAND ? x & y : op == Op::WOR ? x | y : op == Op::WXOR ? x ^ y
+                : op == Op::SHL ? i_shl(x, y) : i_shr(x, y);
+      store_int(m, kd, in.c, r);
+      return;
+    }
+    case Op::WNOT: store_int(m, kd, in.c, ~get_i(m, ka, in.a)); return;
+    case Op::ABS:
+      if (ka & 1) store_real(m, kd, in.c, ::fabsf(get_f(m, ka, in.a)));
+      else store_int(m, kd, in.c, i_abs(get_i(m, ka, in.a)));
+      return;
+    case Op::SIN: store_real(m, kd, in.c, ::sinf(get_f(m, ka, in.a))); return;
+    case Op::COS: store_real(m, kd, in.c, ::cosf(get_f(m, ka, in.a))); return;
+    case Op::TAN: store_real(m, kd, in.c, ::tanf(get_f(m, ka, in.a))); return;
+    case Op::SQRT: store_real(m, kd, in.c, ::sqrtf(get_f(m, ka, in.a))); return;
+    case Op::EXP: store_real(m, kd, in.c, ::expf(get_f(m, ka, in.a))); return;
+    case Op::LN: store_real(m, kd, in.c, ::logf(get_f(m, ka, in.a))); return;
+    default: break;
+  }
+}
+
+// A REAL compare: x = ka | kb << 2 | (compare opcode - LDEQ) << 4.
+__attribute__((noinline)) bool compare_real(const uint8_t* m, const FastInterpreter::Ins& in) {
+  float x = get_f(m, in.x & 3, in.a), y = get_f(m, (in.x >> 2) & 3, in.b);
+  switch (in.x >> 4) {
+    case 0: return x == y;
+    case 1: return x != y;
+    case 2: return x < y;
+    case 3: return x <= y;
+    case 4: return x > y;
+    default: return x >= y;
+  }
+}
+
+bool fold_compare(Op op, int32_t x, int32_t y) {
+  switch (op) {
+    case Op::LDEQ: return x == y;
+    case Op::LDNE: return x != y;
+    case Op::LDLT: return x < y;
+    case Op::LDLE: return x <= y;
+    case Op::LDGT: return x > y;
+    default: return x >= y;
+  }
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------ decoding
+
+FastInterpreter::FastInterpreter(std::span<const uint8_t> il, const Layout& L) {
+  s0_ = L.addr(Area::S, kBitError);
+  tw_ = L.offset[int(Area::TW)];
+  tq_ = L.offset[int(Area::TQ)];
+  ti_ = L.offset[int(Area::TI)];
+  cw_ = L.offset[int(Area::CW)];
+  cq_ = L.offset[int(Area::CQ)];
+
+  // Instruction starts, so jump targets (byte offsets) become indices.
+  std::vector<uint32_t> starts;
+  std::vector<Instr> instrs;
+  for (uint32_t off = 0; off < il.size();) {
+    starts.push_back(off);
+    instrs.emplace_back();
+    off = decode_instr(il, off, instrs.back());
+  }
+  il_count_ = instrs.size();
+  auto index_of = [&](uint32_t target) -> uint32_t {  // target == il.size(): the HALT
+    auto it = std::lower_bound(starts.begin(), starts.end(), target);
+    if (it != starts.end() && *it != target) throw std::invalid_argument("fast interpreter: jump inside an instruction");
+    return uint32_t(it - starts.begin());
+  };
+  auto where = [&](const Operand& o) -> uint32_t {  // byte offset of a device or edge slot
+    if (o.kind == OpdKind::Edge) return L.addr(Area::E, o.index);
+    return L.addr(o.area, o.index);
+  };
+  // A value operand: its kind and its 32-bit field.
+  auto value = [&](const Operand& o, unsigned& kind) -> uint32_t {
+    switch (o.kind) {
+      case OpdKind::ConstInt: kind = kIntConst; return uint32_t(o.ival);
+      case OpdKind::ConstReal: kind = kRealConst; return f_bits(o.fval);
+      case OpdKind::Real: kind = kRealMem; return where(o);
+      default: kind = kIntMem; return where(o);
+    }
+  };
+  auto dest = [&](const Operand& o, unsigned& kind) -> uint32_t {
+    kind = o.kind == OpdKind::Real ? kDstReal : kDstInt;
+    return where(o);
+  };
+
+  code_.reserve(instrs.size() + 1);
+  for (const Instr& in : instrs) {
+    Ins d{};
+    bool special = true;
+    auto set = [&](FOp op, uint32_t a = 0, uint32_t b = 0, uint32_t c = 0, uint16_t x = 0) {
+      d.op = op; d.a = a; d.b = b; d.c = c; d.x = x;
+    };
+    auto gen = [&](unsigned ka, uint32_t a, unsigned kb, uint32_t b, unsigned kd, uint32_t c) {
+      set(F_GEN, a, b, c, uint16_t(unsigned(in.op) | ka << 8 | kb << 10 | kd << 12));
+      special = false;
+    };
+    const Operand* o = in.a;
+    switch (in.op) {
+      case Op::LOAD: set(F_LD, where(o[0])); break;
+      case Op::LOADN: set(F_LDN, where(o[0])); break;
+      case Op::AND: set(F_AND, where(o[0])); break;
+      case Op::ANDN: set(F_ANDN, where(o[0])); break;
+      case Op::OR: set(F_OR, where(o[0])); break;
+      case Op::ORN: set(F_ORN, where(o[0])); break;
+      case Op::LOADP: set(F_LDP, where(o[0]), where(o[1])); break;
+      case Op::LOADF: set(F_LDF, where(o[0]), where(o[1])); break;
+      case Op::TRUE: set(F_TRUE); break;
+      case Op::ANDBLK: set(F_ANDB); break;
+      case Op::ORBLK: set(F_ORB); break;
+      case Op::MPS: set(F_MPS); break;
+      case Op::MRD: set(F_MRD); break;
+      case Op::MPP: set(F_MPP); break;
+      case Op::OUT: set(F_OUT, where(o[0])); break;
+      case Op::OUTN: set(F_OUTN, where(o[0])); break;
+      case Op::SET: set(F_SET, where(o[0])); break;
+      case Op::RST: set(F_RST, where(o[0])); break;
+      case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE: {
+        unsigned ka, kb, rel = unsigned(in.op) - unsigned(Op::LDEQ);
+        uint32_t a = value(o[0], ka), b = value(o[1], kb);
+        if ((ka | kb) & 1) {
+          set(F_CMP_F, a, b, 0, uint16_t(ka | kb << 2 | rel << 4));
+        } else if (ka == kIntConst && kb == kIntConst) {
+          set(fold_compare(in.op, int32_t(a), int32_t(b)) ? F_TRUE : F_PUSH0);
+        } else if (ka == kIntMem && kb == kIntMem) {
+          set(FOp(F_EQ_MM + rel), a, b);
+        } else if (ka == kIntMem) {
+          set(FOp(F_EQ_MK + rel), a, b);
+        } else {  // constant op word: the mirrored compare, word op constant
+          static const unsigned mirror[6] = {0, 1, 4, 5, 2, 3};  // EQ NE LT LE GT GE -> EQ NE GT GE LT LE
+          set(FOp(F_EQ_MK + mirror[rel]), b, a);
+        }
+        break;
+      }
+      case Op::MOV: {
+        unsigned ka, kd;
+        uint32_t a = value(o[0], ka), dst = dest(o[1], kd);
+        if (ka == kIntConst) set(F_MOVK, dst, kd == kDstReal ? f_bits(int_to_real(int32_t(a))) : a);
+        else if (ka == kRealConst) set(F_MOVK, dst, kd == kDstReal ? a : uint32_t(real_to_int(bits_f(a))));
+        else if ((ka == kRealMem) == (kd == kDstReal)) set(F_MOV32, a, dst);
+        else if (ka == kIntMem) set(F_MOVI2F, a, dst);
+        else set(F_MOVF2I, a, dst);
+        break;
+      }
+      case Op::ADD: case Op::SUB: case Op::MUL: case Op::DIV: case Op::MOD:
+      case Op::WAND: case Op::WOR: case Op::WXOR: case Op::SHL: case Op::SHR: {
+        unsigned ka, kb, kd;
+        uint32_t a = value(o[0], ka), b = value(o[1], kb), c = dest(o[2], kd);
+        FOp base = in.op == Op::ADD ? F_ADD_MM : in.op == Op::SUB ? F_SUB_MM : in.op == Op::MUL ? F_MUL_MM
+                 : in.op == Op::DIV ? F_DIV_MM : in.op == Op::MOD ? F_MOD_MM : in.op == Op::WAND ? F_WAND_MM
+                 : in.op == Op::WOR ? F_WOR_MM : in.op == Op::WXOR ? F_WXOR_MM : in.op == Op::SHL ? F_SHL_MM : F_SHR_MM;
+        bool ints = !((ka | kb) & 1) && kd == kDstInt;
+        if (ints && ka == kIntMem && kb == kIntMem) set(base, a, b, c);
+        else if (ints && ka == kIntMem && kb == kIntConst) set(FOp(base + 1), a, b, c);
+        else if (ints && ka == kIntConst && kb == kIntMem) set(FOp(base + 2), a, b, c);
+        else if (ka == kRealMem && kb == kRealMem && kd == kDstReal && unsigned(in.op) <= unsigned(Op::DIV))
+          set(FOp(F_ADD_F + (unsigned(in.op) - unsigned(Op::ADD))), a, b, c);
+        else gen(ka, a, kb, b, kd, c);
+        break;
+      }
+      case Op::WNOT: {
+        unsigned ka, kd;
+        uint32_t a = value(o[0], ka), dst = dest(o[1], kd);
+        if (ka == kIntMem && kd == kDstInt) set(F_WNOT_M, a, dst);
+        else gen(ka, a, 0, 0, kd, dst);
+        break;
+      }
+      case Op::SIN: case Op::COS: case Op::TAN: case Op::SQRT: case Op::EXP: case Op::LN: case Op::ABS: {
+        unsigned ka, kd;
+        uint32_t a = value(o[0], ka), dst = dest(o[1], kd);
+        if (ka == kRealMem && kd == kDstReal) {
+          FOp f = in.op == Op::SIN ? F_SIN_F : in.op == Op::COS ? F_COS_F : in.op == Op::TAN ? F_TAN_F
+                : in.op == Op::SQRT ? F_SQRT_F : in.op == Op::EXP ? F_EXP_F : in.op == Op::LN ? F_LN_F : F_ABS_F;
+          set(f, a, dst);
+        } else {
+          gen(ka, a, 0, 0, kd, dst);
+        }
+        break;
+      }
+      case Op::TON: case Op::TOF: case Op::TP: {
+        unsigned kp;
+        uint32_t pt = value(o[1], kp);
+        FOp k = in.op == Op::TON ? F_TON_K : in.op == Op::TOF ? F_TOF_K : F_TP_K;
+        if (kp == kIntConst) set(k, uint32_t(int32_t(pt) < 0 ? 0 : int32_t(pt)), 0, 0, uint16_t(o[0].index));
+        else set(FOp(k + 1), pt, 0, 0, uint16_t(o[0].index));
+        break;
+      }
+      case Op::RSTT: set(F_RSTT, 0, 0, 0, uint16_t(o[0].index)); break;
+      case Op::CTU: case Op::CTD: {
+        unsigned kp;
+        uint32_t pv = value(o[1], kp);
+        FOp k = in.op == Op::CTU ? F_CTU_K : F_CTD_K;
+        set(kp == kIntConst ? k : FOp(k + 1), pv, where(o[2]), 0, uint16_t(o[0].index));
+        break;
+      }
+      case Op::RSTC: set(F_RSTC, 0, 0, 0, uint16_t(o[0].index)); break;
+      case Op::JMP: set(F_JMP, index_of(o[0].index)); break;
+      case Op::END: set(F_END); break;
+      case Op::Count: throw std::invalid_argument("fast interpreter: bad opcode");
+    }
+    specialized_ += special;
+    code_.push_back(d);
+  }
+  code_.push_back(Ins{F_HALT, 0, 0, 0, 0});
+}
+
+// ------------------------------------------------------------------ running
+
+#if LDC_FAST_GOTO
+#define HANDLER(name) LH_##name:
+#define DISPATCH() goto* kLabels[ip->op]
+#define NEXT() { ++ip; DISPATCH(); }
+#else
+#define HANDLER(name) case F_##name:
+#define DISPATCH() continue
+#define NEXT() { ++ip; continue; }
+#endif
+
+void FastInterpreter::scan(uint8_t* mem) {
+  uint8_t* const m = mem;
+  const Ins* const base = code_.data();
+  const Ins* ip = base;
+  uint32_t st = 0;  // the bit stack, top = bit 0
+  const uint32_t s0 = s0_, tw = tw_, tq = tq_, ti = ti_, cw = cw_, cq = cq_;
+
+#if LDC_FAST_GOTO
+  static const void* const kLabels[F_Count] = {
+#define LDC_LABEL(n) &&LH_##n,
+      LDC_FAST_OPS(LDC_LABEL)
+#undef LDC_LABEL
+  };
+  DISPATCH();
+#else
+  for (;;) switch (ip->op) {
+#endif
+
+  HANDLER(HALT) { return; }
+  // ---- bit logic (bits are 0/1 bytes)
+  HANDLER(LD) { st = (st << 1) | m[ip->a]; NEXT(); }
+  HANDLER(LDN) { st = (st << 1) | (m[ip->a] ^ 1u); NEXT(); }
+  HANDLER(AND) { st &= ~1u | m[ip->a]; NEXT(); }
+  HANDLER(ANDN) { st &= ~uint32_t(m[ip->a]); NEXT(); }
+  HANDLER(OR) { st |= m[ip->a]; NEXT(); }
+  HANDLER(ORN) { st |= m[ip->a] ^ 1u; NEXT(); }
+  HANDLER(LDP) { uint32_t b = m[ip->a], e = m[ip->b]; st = (st << 1) | (b & (e ^ 1u)); m[ip->b] = uint8_t(b); NEXT(); }
+  HANDLER(LDF) { uint32_t b = m[ip->a], e = m[ip->b]; st = (st << 1) | ((b ^ 1u) & e); m[ip->b] = uint8_t(b); NEXT(); }
+  HANDLER(TRUE) { st = (st << 1) | 1u; NEXT(); }
+  HANDLER(PUSH0) { st <<= 1; NEXT(); }
+  HANDLER(ANDB) { uint32_t t = st & 1u; st >>= 1; st &= ~1u | t; NEXT(); }
+  HANDLER(ORB) { uint32_t t = st & 1u; st >>= 1; st |= t; NEXT(); }
+  HANDLER(MPS) { st = (st << 1) | (st & 1u); NEXT(); }
+  HANDLER(MRD) { st = (st & ~1u) | ((st >> 1) & 1u); NEXT(); }
+  HANDLER(MPP) { st >>= 1; NEXT(); }
+  HANDLER(OUT) { m[ip->a] = uint8_t(st & 1u); NEXT(); }
+  HANDLER(OUTN) { m[ip->a] = uint8_t((st & 1u) ^ 1u); NEXT(); }
+  HANDLER(SET) { m[ip->a] |= uint8_t(st & 1u); NEXT(); }
+  HANDLER(RST) { m[ip->a] &= uint8_t((st & 1u) ^ 1u); NEXT(); }
+
+  // ---- compares
+#define LDC_CMP(N, OPR)                                                                              \
+  HANDLER(N##_MM) { st = (st << 1) | uint32_t(ld_i(m, ip->a) OPR ld_i(m, ip->b)); NEXT(); }          \
+  HANDLER(N##_MK) { st = (st << 1) | uint32_t(ld_i(m, ip->a) OPR int32_t(ip->b)); NEXT(); }
+  LDC_CMP(EQ, ==) LDC_CMP(NE, !=) LDC_CMP(LT, <) LDC_CMP(LE, <=) LDC_CMP(GT, >) LDC_CMP(GE, >=)
+#undef LDC_CMP
+  HANDLER(CMP_F) { st = (st << 1) | uint32_t(compare_real(m, *ip)); NEXT(); }
+
+  // ---- application instructions: only with power
+  HANDLER(MOVK) { if (st & 1u) st_i(m, ip->a, int32_t(ip->b)); NEXT(); }
+  HANDLER(MOV32) { if (st & 1u) std::memcpy(m + ip->b, m + ip->a, 4); NEXT(); }
+  HANDLER(MOVI2F) { if (st & 1u) st_f(m, ip->b, int_to_real(ld_i(m, ip->a))); NEXT(); }
+  HANDLER(MOVF2I) { if (st & 1u) st_i(m, ip->b, real_to_int(ld_f(m, ip->a))); NEXT(); }
+
+#define LDC_ARITH(N, FN)                                                                                   \
+  HANDLER(N##_MM) { if (st & 1u) st_i(m, ip->c, FN(ld_i(m, ip->a), ld_i(m, ip->b))); NEXT(); }             \
+  HANDLER(N##_MK) { if (st & 1u) st_i(m, ip->c, FN(ld_i(m, ip->a), int32_t(ip->b))); NEXT(); }             \
+  HANDLER(N##_KM) { if (st & 1u) st_i(m, ip->c, FN(int32_t(ip->a), ld_i(m, ip->b))); NEXT(); }
+#define LDC_DIVIDE(N, FN)                                                                                  \
+  HANDLER(N##_MM) {                                                                                        \
+    if (st & 1u) { int32_t y = ld_i(m, ip->b); if (y == 0) m[s0] = 1; else st_i(m, ip->c, FN(ld_i(m, ip->a), y)); } \
+    NEXT();                                                                                                \
+  }                                                                                                        \
+  HANDLER(N##_MK) {                                                                                        \
+    if (st & 1u) { int32_t y = int32_t(ip->b); if (y == 0) m[s0] = 1; else st_i(m, ip->c, FN(ld_i(m, ip->a), y)); } \
+    NEXT();                                                                                                \
+  }                                                                                                        \
+  HANDLER(N##_KM) {                                                                                        \
+    if (st & 1u) { int32_t y = ld_i(m, ip->b); if (y == 0) m[s0] = 1; else st_i(m, ip->c, FN(int32_t(ip->a), y)); } \
+    NEXT();                                                                                                \
+  }
+#define LDC_AND(x, y) ((x) & (y))
+#define LDC_OR(x, y) ((x) | (y))
+#define LDC_XOR(x, y) ((x) ^ (y))
+  LDC_ARITH(ADD, i_add) LDC_ARITH(SUB, i_sub) LDC_ARITH(MUL, i_mul)
+  LDC_DIVIDE(DIV, i_div) LDC_DIVIDE(MOD, i_mod)
+  LDC_ARITH(WAND, LDC_AND) LDC_ARITH(WOR, LDC_OR) LDC_ARITH(WXOR, LDC_XOR) LDC_ARITH(SHL, i_shl) LDC_ARITH(SHR, i_shr)
+#undef LDC_ARITH
+#undef LDC_DIVIDE
+#undef LDC_AND
+#undef LDC_OR
+#undef LDC_XOR
+  HANDLER(ADD_F) { if (st & 1u) st_f(m, ip->c, ld_f(m, ip->a) + ld_f(m, ip->b)); NEXT(); }
+  HANDLER(SUB_F) { if (st & 1u) st_f(m, ip->c, ld_f(m, ip->a) - ld_f(m, ip->b)); NEXT(); }
+  HANDLER(MUL_F) { if (st & 1u) st_f(m, ip->c, ld_f(m, ip->a) * ld_f(m, ip->b)); NEXT(); }
+  HANDLER(DIV_F) {
+    if (st & 1u) { float y = ld_f(m, ip->b); if (y == 0.0f) m[s0] = 1; else st_f(m, ip->c, ld_f(m, ip->a) / y); }
+    NEXT();
+  }
+  HANDLER(WNOT_M) { if (st & 1u) st_i(m, ip->b, ~ld_i(m, ip->a)); NEXT(); }
+  HANDLER(SIN_F) { if (st & 1u) st_f(m, ip->b, ::sinf(ld_f(m, ip->a))); NEXT(); }
+  HANDLER(COS_F) { if (st & 1u) st_f(m, ip->b, ::cosf(ld_f(m, ip->a))); NEXT(); }
+  HANDLER(TAN_F) { if (st & 1u) st_f(m, ip->b, ::tanf(ld_f(m, ip->a))); NEXT(); }
+  HANDLER(SQRT_F) { if (st & 1u) st_f(m, ip->b, ::sqrtf(ld_f(m, ip->a))); NEXT(); }
+  HANDLER(EXP_F) { if (st & 1u) st_f(m, ip->b, ::expf(ld_f(m, ip->a))); NEXT(); }
+  HANDLER(LN_F) { if (st & 1u) st_f(m, ip->b, ::logf(ld_f(m, ip->a))); NEXT(); }
+  HANDLER(ABS_F) { if (st & 1u) st_f(m, ip->b, ::fabsf(ld_f(m, ip->a))); NEXT(); }
+  HANDLER(GEN) { if (st & 1u) generic(m, *ip, s0); NEXT(); }
+
+  // ---- timers: x = timer number; a = preset (K: a constant, already >= 0; M: its word)
+#define LDC_TIMER(N, ...)                                                                           \
+  HANDLER(N##_K) { int32_t pt = int32_t(ip->a); __VA_ARGS__ NEXT(); }                               \
+  HANDLER(N##_M) { int32_t pt = ld_i(m, ip->a); if (pt < 0) pt = 0; __VA_ARGS__ NEXT(); }
+  LDC_TIMER(TON, {
+    const uint32_t n = ip->x, et_off = tw + 4 * n;
+    uint8_t* q = m + tq + n;
+    uint8_t* in_mem = m + ti + n;
+    const uint32_t in = st & 1u;
+    if (in) {
+      int32_t et = *in_mem ? advance(ld_i(m, et_off), dt_of(m), pt) : 0;
+      st_i(m, et_off, et);
+      *q = et >= pt;
+    } else {
+      st_i(m, et_off, 0);
+      *q = 0;
+    }
+    *in_mem = uint8_t(in);
+  })
+  LDC_TIMER(TOF, {
+    const uint32_t n = ip->x, et_off = tw + 4 * n;
+    uint8_t* q = m + tq + n;
+    uint8_t* in_mem = m + ti + n;
+    const uint32_t in = st & 1u;
+    if (in) {
+      *q = 1;
+      st_i(m, et_off, 0);
+    } else if (*in_mem) {
+      st_i(m, et_off, 0);
+      *q = pt > 0;
+    } else if (*q) {
+      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
+      st_i(m, et_off, et);
+      *q = et < pt;
+    }
+    *in_mem = uint8_t(in);
+  })
+  LDC_TIMER(TP, {
+    const uint32_t n = ip->x, et_off = tw + 4 * n;
+    uint8_t* q = m + tq + n;
+    uint8_t* in_mem = m + ti + n;
+    const uint32_t in = st & 1u;
+    if (*q) {
+      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
+      st_i(m, et_off, et);
+      if (et >= pt) *q = 0;
+    } else if (in && !*in_mem) {
+      *q = pt > 0;
+      st_i(m, et_off, 0);
+    } else if (!in) {
+      st_i(m, et_off, 0);
+    }
+    *in_mem = uint8_t(in);
+  })
+#undef LDC_TIMER
+  HANDLER(RSTT) {
+    if (st & 1u) {
+      const uint32_t n = ip->x;
+      st_i(m, tw + 4 * n, 0);
+      m[tq + n] = 0;
+      m[ti + n] = 0;
+    }
+    NEXT();
+  }
+
+  // ---- counters: x = counter number, a = preset (K) or its word (M), b = edge slot
+#define LDC_COUNTER(N, PV, UP)                                                                  \
+  HANDLER(N) {                                                                                   \
+    const uint32_t n = ip->x, cv_off = cw + 4 * n;                                               \
+    const int32_t pv = PV;                                                                       \
+    const uint32_t in = st & 1u;                                                                 \
+    int32_t cv = ld_i(m, cv_off);                                                                \
+    if (in && !m[ip->b]) {                                                                       \
+      if (UP && cv != kMax) cv++;                                                                \
+      if (!UP && cv != kMin) cv--;                                                               \
+    }                                                                                            \
+    st_i(m, cv_off, cv);                                                                         \
+    m[cq + n] = UP ? cv >= pv : cv <= 0;                                                         \
+    m[ip->b] = uint8_t(in);                                                                      \
+    NEXT();                                                                                      \
+  }
+  LDC_COUNTER(CTU_K, int32_t(ip->a), true)
+  LDC_COUNTER(CTU_M, ld_i(m, ip->a), true)
+  LDC_COUNTER(CTD_K, int32_t(ip->a), false)
+  LDC_COUNTER(CTD_M, ld_i(m, ip->a), false)
+#undef LDC_COUNTER
+  HANDLER(RSTC) {
+    if (st & 1u) {
+      const uint32_t n = ip->x;
+      st_i(m, cw + 4 * n, 0);
+      m[cq + n] = 0;
+    }
+    NEXT();
+  }
+
+  // ---- flow
+  HANDLER(JMP) {
+    if (st & 1u) { ip = base + ip->a; DISPATCH(); }
+    NEXT();
+  }
+  HANDLER(END) {
+    if (st & 1u) return;
+    NEXT();
+  }
+
+#if !LDC_FAST_GOTO
+    default: return;
+  }
+#endif
+}
+
+#undef HANDLER
+#undef DISPATCH
+#undef NEXT
+
+std::unique_ptr<Engine> make_fast_interp_engine(std::span<const uint8_t> il, const Layout& layout) {
+  return std::make_unique<FastInterpreter>(il, layout);
+}
+
+}  // namespace ldc
