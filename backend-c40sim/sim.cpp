@@ -1,0 +1,853 @@
+// The C40 instruction-set simulator. Semantics: TMS320C4x User's Guide
+// (instruction descriptions, condition codes, data formats, pipeline); see
+// docs/c40.md for what is modelled and how.
+#include "backend-c40sim/sim.h"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+
+namespace ldc::c40sim {
+
+using namespace as::c40;
+using i128 = __int128;
+
+// =============================================================== floats
+
+namespace fp {
+namespace {
+
+// A value m * 2^e (m == 0: zero).
+struct Val {
+  i128 m = 0;
+  int e = 0;
+};
+
+int msb(unsigned __int128 v) {
+  int p = -1;
+  while (v) {
+    v >>= 1;
+    ++p;
+  }
+  return p;
+}
+
+i128 shr(i128 v, int s) {  // arithmetic (floor) shift, any s >= 0
+  if (s <= 0) return v;
+  if (s >= 127) return v < 0 ? -1 : 0;
+  return v >> s;
+}
+
+int expOf(Ext x) { return int(int8_t(x.exp)); }
+
+// The 33-bit signed mantissa: value = sm * 2^(exp - 31).
+int64_t sm(Ext x) {
+  int64_t f = x.man & 0x7FFFFFFF;
+  return (x.man >> 31) ? f - (int64_t(1) << 32) : f + (int64_t(1) << 31);
+}
+
+Val val(Ext x) {
+  if (isZero(x)) return {};
+  return {sm(x), expOf(x) - 31};
+}
+
+// Normalizes with truncation toward -infinity (dropping low bits of the
+// two's complement mantissa), saturating on overflow and flushing to zero
+// on underflow.
+Res normalize(Val v) {
+  Res r;
+  if (v.m == 0) {
+    r.v = kZero;
+    return r;
+  }
+  int k;
+  if (v.m > 0) {
+    k = msb((unsigned __int128)v.m) - 31;
+  } else {
+    unsigned __int128 mag = (unsigned __int128)(-v.m);
+    bool pow2 = (mag & (mag - 1)) == 0;
+    k = msb(mag) - (pow2 ? 32 : 31);
+  }
+  i128 s = k >= 0 ? shr(v.m, k) : v.m << -k;
+  int e = v.e + k + 31;
+  if (e > 127) {
+    r.overflow = true;
+    r.v = v.m > 0 ? Ext{0x7F, 0x7FFFFFFF} : Ext{0x7F, 0x80000000};
+    return r;
+  }
+  if (e < -127) {
+    r.underflow = true;
+    r.v = kZero;
+    return r;
+  }
+  r.v = Ext{uint8_t(int8_t(e)), uint32_t(uint64_t(int64_t(s))) ^ 0x80000000u};
+  return r;
+}
+
+}  // namespace
+
+bool isZero(Ext x) { return x.exp == 0x80; }
+bool isNegative(Ext x) { return !isZero(x) && (x.man >> 31); }
+
+double toDouble(Ext x) {
+  if (isZero(x)) return 0.0;
+  return std::ldexp(double(sm(x)), expOf(x) - 31);
+}
+
+Res fromDouble(double v) {
+  if (v == 0 || std::isnan(v)) return {};
+  if (std::isinf(v)) return normalize(Val{v > 0 ? 1 : -1, 1000});
+  int e = 0;
+  double f = std::frexp(v, &e);  // v = f * 2^e, |f| in [0.5, 1)
+  int64_t m = int64_t(std::ldexp(f, 53));
+  return normalize(Val{m, e - 53});
+}
+
+Ext fromSingle(uint32_t w) { return Ext{uint8_t(w >> 24), (w & 0xFFFFFF) << 8}; }
+uint32_t toSingle(Ext x) { return uint32_t(x.exp) << 24 | x.man >> 8; }
+
+Ext fromShort(uint16_t bits) {
+  int e = int(bits >> 12 & 0xF);
+  if (e >= 8) e -= 16;
+  if (e == -8) return kZero;
+  int32_t f = bits & 0x7FF;
+  int32_t m = (bits & 0x800) ? f - 4096 : f + 2048;  // 12-bit mantissa
+  return Ext{uint8_t(int8_t(e)), uint32_t(m << 20) ^ 0x80000000u};
+}
+
+Res fromInt(int32_t i) { return normalize(Val{i, 0}); }
+
+int32_t fix(Ext x, bool* overflow) {
+  *overflow = false;
+  if (isZero(x)) return 0;
+  int e = expOf(x);
+  if (e > 30) {
+    *overflow = true;
+    return isNegative(x) ? std::numeric_limits<int32_t>::min() : std::numeric_limits<int32_t>::max();
+  }
+  return int32_t(shr(sm(x), 31 - e));
+}
+
+Res add(Ext a, Ext b) {
+  Val x = val(a), y = val(b);
+  if (x.m == 0) return normalize(y);
+  if (y.m == 0) return normalize(x);
+  if (x.e < y.e) std::swap(x, y);
+  constexpr int G = 40;  // guard bits: the result is still exactly truncated
+  int d = x.e - y.e;
+  i128 big = x.m << G;
+  i128 small = d <= G ? y.m << (G - d) : shr(y.m, d - G);
+  return normalize(Val{big + small, x.e - G});
+}
+
+Res neg(Ext a) {
+  Val x = val(a);
+  x.m = -x.m;
+  return normalize(x);
+}
+
+Res sub(Ext a, Ext b) {
+  Val y = val(b);
+  if (y.m == 0) return normalize(val(a));
+  Val x = val(a);
+  y.m = -y.m;
+  if (x.m == 0) return normalize(y);
+  if (x.e < y.e) std::swap(x, y);
+  constexpr int G = 40;
+  int d = x.e - y.e;
+  i128 big = x.m << G;
+  i128 small = d <= G ? y.m << (G - d) : shr(y.m, d - G);
+  return normalize(Val{big + small, x.e - G});
+}
+
+Res abs(Ext a) { return isNegative(a) ? neg(a) : normalize(val(a)); }
+
+Res mul(Ext a, Ext b) {
+  if (isZero(a) || isZero(b)) return {};
+  // Operands truncated to single precision: 25-bit mantissas.
+  int64_t ma = sm(a) >> 8, mb = sm(b) >> 8;
+  return normalize(Val{i128(ma) * mb, (expOf(a) - 23) + (expOf(b) - 23)});
+}
+
+Res rcp(Ext a) {
+  if (isZero(a)) {
+    Res r;
+    r.overflow = true;
+    r.v = Ext{0x7F, 0x7FFFFFFF};
+    return r;
+  }
+  // 1/a = 2^95 / sm * 2^(31 - e - 95) (floor division toward -infinity).
+  i128 num = i128(1) << 95;
+  i128 d = sm(a);
+  i128 q = num / d;
+  if ((num % d != 0) && ((num < 0) != (d < 0))) --q;
+  Res r = normalize(Val{q, 31 - expOf(a) - 95});
+  if (!r.overflow && !r.underflow && !isZero(r.v)) {
+    int64_t s = sm(r.v);
+    s = (s >> 23) << 23;  // keep 8 fraction bits
+    r.v.man = uint32_t(uint64_t(s)) ^ 0x80000000u;
+  }
+  return r;
+}
+
+int compare(Ext a, Ext b) {
+  double x = toDouble(a), y = toDouble(b);
+  return x < y ? -1 : x > y ? 1 : 0;
+}
+
+uint32_t toIeee(Ext x) {
+  uint32_t w = toSingle(x);
+  int e = int(int8_t(w >> 24));
+  uint32_t s = w >> 23 & 1, f = w & 0x7FFFFF;
+  if (e <= -127) return 0;  // zero and the values too small for IEEE normals
+  if (!s) return uint32_t(e + 127) << 23 | f;
+  if (f) return 0x80000000u | uint32_t(e + 127) << 23 | ((0x800000 - f) & 0x7FFFFF);
+  if (e == 127) return 0xFF800000u;  // the most negative value: -infinity
+  return 0x80000000u | uint32_t(e + 128) << 23;
+}
+
+Res fromIeee(uint32_t w) {
+  Res r;
+  uint32_t e8 = w >> 23 & 0xFF, s = w >> 31, f = w & 0x7FFFFF;
+  if (e8 == 255) {  // NaN and infinity: saturate, signal overflow
+    r.overflow = true;
+    r.v = s ? Ext{0x7F, 0x80000000} : Ext{0x7F, 0x7FFFFF00};
+    return r;
+  }
+  if (e8 == 0) return r;  // zeros and denormals
+  if (!s) {
+    r.v = Ext{uint8_t(int8_t(int(e8) - 127)), f << 8};
+  } else if (f) {
+    r.v = Ext{uint8_t(int8_t(int(e8) - 127)), 0x80000000u | (((0x800000 - f) & 0x7FFFFF) << 8)};
+  } else {
+    r.v = Ext{uint8_t(int8_t(int(e8) - 128)), 0x80000000u};
+  }
+  return r;
+}
+
+}  // namespace fp
+
+// ============================================================ simulator
+
+namespace {
+
+constexpr uint32_t kC = 0x01, kV = 0x02, kZ = 0x04, kN = 0x08, kUF = 0x10, kLV = 0x20, kLUF = 0x40;
+
+int extIndex(Reg r) {
+  unsigned n = unsigned(r);
+  if (n <= 7) return int(n);
+  if (n >= 28 && n <= 31) return int(n - 20);
+  return -1;
+}
+
+std::string hex(uint64_t v) {
+  char buf[24];
+  std::snprintf(buf, sizeof buf, "0x%08llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+// Register groups of the pipeline's address-register conflicts.
+enum Group { kGroupAux = 0, kGroupDp = 1, kGroupSp = 2, kNoGroup = 3 };
+Group groupOf(Reg r) {
+  unsigned n = unsigned(r);
+  if ((n >= 8 && n <= 15) || r == Reg::IR0 || r == Reg::IR1 || r == Reg::BK) return kGroupAux;
+  if (r == Reg::DP) return kGroupDp;
+  if (r == Reg::SP) return kGroupSp;
+  return kNoGroup;
+}
+
+struct SimError {
+  Stop stop;
+  std::string message;
+};
+
+bool condTrue(Cond c, uint32_t st) {
+  bool C = st & kC, V = st & kV, Z = st & kZ, N = st & kN, UF = st & kUF, LV = st & kLV,
+       LUF = st & kLUF;
+  switch (c) {
+    case Cond::U: return true;
+    case Cond::LO: return C;
+    case Cond::LS: return C || Z;
+    case Cond::HI: return !C && !Z;
+    case Cond::HS: return !C;
+    case Cond::EQ: return Z;
+    case Cond::NE: return !Z;
+    case Cond::LT: return N;
+    case Cond::LE: return N || Z;
+    case Cond::GT: return !N && !Z;
+    case Cond::GE: return !N;
+    case Cond::NV: return !V;
+    case Cond::V: return V;
+    case Cond::NUF: return !UF;
+    case Cond::UF: return UF;
+    case Cond::NLV: return !LV;
+    case Cond::LV: return LV;
+    case Cond::NLUF: return !LUF;
+    case Cond::LUF: return LUF;
+    case Cond::ZUF: return Z || UF;
+  }
+  return false;
+}
+
+int32_t sext(uint32_t v, unsigned bits) {
+  uint32_t m = 1u << (bits - 1);
+  return int32_t((v & ((m << 1) - 1)) ^ m) - int32_t(m);
+}
+
+}  // namespace
+
+std::string_view stopName(Stop s) {
+  switch (s) {
+    case Stop::Returned: return "returned";
+    case Stop::CycleLimit: return "cycle limit";
+    case Stop::InstructionLimit: return "instruction limit";
+    case Stop::MemoryFault: return "memory fault";
+    case Stop::IllegalInstruction: return "illegal instruction";
+    case Stop::Unsupported: return "unsupported";
+  }
+  return "?";
+}
+
+C40Sim::C40Sim(Config config) : cfg_(std::move(config)) {
+  for (const Region& r : cfg_.regions) mem_.emplace_back(r.size, 0u);
+  for (Ext& e : ext_) e = Ext{0, 0};
+}
+
+Region* C40Sim::region(uint32_t a) {
+  for (Region& r : cfg_.regions)
+    if (a >= r.base && uint64_t(a) - r.base < r.size) return &r;
+  return nullptr;
+}
+const Region* C40Sim::region(uint32_t a) const {
+  for (const Region& r : cfg_.regions)
+    if (a >= r.base && uint64_t(a) - r.base < r.size) return &r;
+  return nullptr;
+}
+
+void C40Sim::load(std::span<const uint32_t> words, uint32_t base) {
+  for (size_t i = 0; i < words.size(); ++i) write(uint32_t(base + i), words[i]);
+}
+
+void C40Sim::write(uint32_t a, uint32_t v) {
+  const Region* r = region(a);
+  if (!r) throw std::out_of_range("no memory at " + hex(a));
+  mem_[size_t(r - cfg_.regions.data())][a - r->base] = v;
+}
+
+uint32_t C40Sim::read(uint32_t a) const {
+  const Region* r = region(a);
+  if (!r) throw std::out_of_range("no memory at " + hex(a));
+  return mem_[size_t(r - cfg_.regions.data())][a - r->base];
+}
+
+void C40Sim::setReg(Reg r, uint32_t v) {
+  int x = extIndex(r);
+  if (x >= 0) ext_[x].man = v;
+  else r32_[unsigned(r)] = v;
+}
+uint32_t C40Sim::reg(Reg r) const {
+  int x = extIndex(r);
+  return x >= 0 ? ext_[x].man : r32_[unsigned(r)];
+}
+void C40Sim::setExt(Reg r, Ext v) {
+  int x = extIndex(r);
+  if (x < 0) throw std::invalid_argument("not an extended-precision register");
+  ext_[x] = v;
+}
+Ext C40Sim::ext(Reg r) const {
+  int x = extIndex(r);
+  if (x < 0) throw std::invalid_argument("not an extended-precision register");
+  return ext_[x];
+}
+
+uint32_t C40Sim::memRead(uint32_t a) {
+  Region* r = region(a);
+  if (!r) throw SimError{Stop::MemoryFault, "read of " + hex(a) + " outside memory"};
+  waits_ += r->waitStates;
+  return mem_[size_t(r - cfg_.regions.data())][a - r->base];
+}
+
+void C40Sim::memWrite(uint32_t a, uint32_t v) {
+  Region* r = region(a);
+  if (!r) throw SimError{Stop::MemoryFault, "write of " + hex(a) + " outside memory"};
+  waits_ += r->waitStates;
+  mem_[size_t(r - cfg_.regions.data())][a - r->base] = v;
+}
+
+const C40Sim::Cached& C40Sim::fetch(uint32_t pc) {
+  Region* r = region(pc);
+  if (!r) throw SimError{Stop::MemoryFault, "fetch of " + hex(pc) + " outside memory"};
+  waits_ += r->waitStates;
+  uint32_t w = mem_[size_t(r - cfg_.regions.data())][pc - r->base];
+  Cached& c = cache_[pc];
+  if (c.word != w || (!c.ok && c.error.empty())) {
+    c.word = w;
+    DecodeError e;
+    auto in = decodeWord(w, pc, &e);
+    c.ok = bool(in);
+    if (in) c.inst = *in;
+    c.error = in ? "" : e.message;
+  }
+  return c;
+}
+
+namespace {
+
+// Per-instruction operand access, flags and semantics.
+class Exec {
+ public:
+  Exec(uint32_t* r32, Ext* ext, std::function<uint32_t(uint32_t)> rd,
+       std::function<void(uint32_t, uint32_t)> wr)
+      : r32_(r32), ext_(ext), rd_(std::move(rd)), wr_(std::move(wr)) {}
+
+  uint32_t& st() { return r32_[unsigned(Reg::ST)]; }
+
+  uint32_t ireg(Reg r) const {
+    int x = extIndex(r);
+    return x >= 0 ? ext_[x].man : r32_[unsigned(r)];
+  }
+  void setIreg(Reg r, uint32_t v) {
+    int x = extIndex(r);
+    if (x >= 0) ext_[x].man = v;
+    else r32_[unsigned(r)] = v;
+  }
+  Ext freg(Reg r) const {
+    int x = extIndex(r);
+    return x >= 0 ? ext_[x] : fp::fromSingle(r32_[unsigned(r)]);
+  }
+  void setFreg(Reg r, Ext v) {
+    int x = extIndex(r);
+    if (x >= 0) ext_[x] = v;
+    else r32_[unsigned(r)] = fp::toSingle(v);
+  }
+
+  // Effective address of an indirect operand; applies the AR update.
+  uint32_t ea(const Ind& i) {
+    uint32_t& a = r32_[8 + i.ar];
+    if (i.mod == kPlain) return a;
+    if (i.mod == kBitRev) throw SimError{Stop::Unsupported, "bit-reversed addressing is not modelled"};
+    uint32_t d = i.mod >= kIr1 ? r32_[unsigned(Reg::IR1)] : i.mod >= kIr0 ? r32_[unsigned(Reg::IR0)] : i.disp;
+    switch (i.mod & 7) {
+      case kPreAdd: return a + d;
+      case kPreSub: return a - d;
+      case kPreAddMod: a += d; return a;
+      case kPreSubMod: a -= d; return a;
+      case kPostAdd: { uint32_t x = a; a += d; return x; }
+      case kPostSub: { uint32_t x = a; a -= d; return x; }
+      default: throw SimError{Stop::Unsupported, "circular addressing is not modelled"};
+    }
+  }
+  uint32_t direct(int64_t off) { return (r32_[unsigned(Reg::DP)] & 0xFFFF) << 16 | uint32_t(off); }
+  uint32_t addrOf(const Operand& o) { return o.kind == OperandKind::Direct ? direct(o.imm) : ea(o.ind); }
+
+  uint32_t ival(const Operand& o) {
+    switch (o.kind) {
+      case OperandKind::Reg: return ireg(o.reg);
+      case OperandKind::Imm: return uint32_t(int32_t(o.imm));
+      case OperandKind::Direct: case OperandKind::Ind: return rd_(addrOf(o));
+      default: throw SimError{Stop::Unsupported, "operand"};
+    }
+  }
+  Ext fval(const Operand& o) {
+    switch (o.kind) {
+      case OperandKind::Reg: return freg(o.reg);
+      case OperandKind::Float: return fp::fromShort(uint16_t(o.imm));
+      case OperandKind::Direct: case OperandKind::Ind: return fp::fromSingle(rd_(addrOf(o)));
+      default: throw SimError{Stop::Unsupported, "operand"};
+    }
+  }
+
+  // Flags are set when the destination is R0-R11 (SET COND = 0) or always
+  // for compares (dst == nullptr).
+  void flags(const Reg* dst, uint32_t set, uint32_t mask) {
+    if (dst && extIndex(*dst) < 0) return;
+    uint32_t& s = st();
+    s = (s & ~mask) | (set & mask);
+    if (set & kV) s |= kLV;
+    if (set & kUF) s |= kLUF;
+  }
+  void intFlags(const Reg* dst, uint32_t res, bool n, bool v, bool c, bool setC) {
+    uint32_t f = (n ? kN : 0) | (res == 0 ? kZ : 0) | (v ? kV : 0) | (c ? kC : 0);
+    flags(dst, f, kN | kZ | kV | kUF | (setC ? kC : 0));
+  }
+  void logicFlags(const Reg* dst, uint32_t res) { intFlags(dst, res, res >> 31, false, false, false); }
+  void floatFlags(const Reg* dst, const fp::Res& r) {
+    uint32_t f = (fp::isNegative(r.v) ? kN : 0) | (fp::isZero(r.v) ? kZ : 0) |
+                 (r.overflow ? kV : 0) | (r.underflow ? kUF : 0);
+    flags(dst, f, kN | kZ | kV | kUF);
+  }
+
+  uint32_t rd(uint32_t a) { return rd_(a); }
+  void wr(uint32_t a, uint32_t v) { wr_(a, v); }
+
+ private:
+  uint32_t* r32_;
+  Ext* ext_;
+  std::function<uint32_t(uint32_t)> rd_;
+  std::function<void(uint32_t, uint32_t)> wr_;
+};
+
+uint32_t shiftL(uint32_t v, int32_t count, bool arith, bool* carry) {
+  *carry = false;
+  if (count > 0) {
+    if (count <= 32) *carry = (uint64_t(v) << count) >> 32 & 1;
+    return count >= 32 ? 0 : v << count;
+  }
+  if (count < 0) {
+    int n = -count;
+    if (arith) {
+      int32_t s = int32_t(v);
+      *carry = n <= 32 ? (int64_t(s) >> (n - 1)) & 1 : s < 0;
+      return uint32_t(n >= 32 ? (s < 0 ? -1 : 0) : s >> n);
+    }
+    *carry = n <= 32 ? (uint64_t(v) >> (n - 1)) & 1 : false;
+    return n >= 32 ? 0 : v >> n;
+  }
+  return v;
+}
+
+}  // namespace
+
+// Executes one instruction (not its control transfer: that is left in
+// taken_/target_). Returns the decode-phase register groups it used as a
+// bit set in the high bits and the groups it writes in the low bits.
+unsigned C40Sim::execute(const Instruction& in, uint32_t pc) {
+  Exec x(r32_, ext_, [this](uint32_t a) { return memRead(a); },
+         [this](uint32_t a, uint32_t v) { memWrite(a, v); });
+  const Operand& a = in.ops[0];
+  const Operand& b = in.ops[1];
+  const Operand& c = in.ops[2];
+  unsigned uses = 0, writes = 0;
+  for (unsigned i = 0; i < in.numOperands; ++i) {
+    if (in.ops[i].kind == OperandKind::Ind) uses |= 1u << kGroupAux;
+    if (in.ops[i].kind == OperandKind::Direct) uses |= 1u << kGroupDp;
+  }
+  auto wrote = [&](Reg r) {
+    Group g = groupOf(r);
+    if (g != kNoGroup) writes |= 1u << g;
+  };
+  auto setI = [&](Reg r, uint32_t v) {
+    x.setIreg(r, v);
+    wrote(r);
+  };
+  auto setF = [&](Reg r, Ext v) {
+    x.setFreg(r, v);
+    wrote(r);
+  };
+  auto branch = [&](uint32_t t) {
+    taken_ = true;
+    target_ = t;
+  };
+  auto targetOf = [&](const Operand& o) -> uint32_t {
+    return o.kind == OperandKind::Reg ? x.ireg(o.reg) : uint32_t(o.imm);
+  };
+  auto push = [&](uint32_t v) {
+    uint32_t& sp = r32_[unsigned(Reg::SP)];
+    sp += 1;
+    x.wr(sp, v);
+  };
+  auto pop = [&]() {
+    uint32_t& sp = r32_[unsigned(Reg::SP)];
+    uint32_t v = x.rd(sp);
+    sp -= 1;
+    return v;
+  };
+  // Integer arithmetic on int64 for the flags (N from the exact result).
+  auto arith = [&](const Reg* dst, int64_t exact, uint32_t out, bool carry, bool setC) {
+    bool v = exact < INT32_MIN || exact > INT32_MAX;
+    x.intFlags(dst, out, exact < 0, v, carry, setC);
+  };
+  auto addOp = [&](const Reg* dst, uint32_t p, uint32_t q) {
+    uint32_t out = p + q;
+    arith(dst, int64_t(int32_t(p)) + int32_t(q), out, (uint64_t(p) + q) >> 32, true);
+    return out;
+  };
+  auto subOp = [&](const Reg* dst, uint32_t p, uint32_t q) {  // p - q
+    uint32_t out = p - q;
+    arith(dst, int64_t(int32_t(p)) - int32_t(q), out, p < q, true);
+    return out;
+  };
+  auto mpyOp = [&](const Reg* dst, uint32_t p, uint32_t q) {  // 24 x 24 bits
+    int64_t prod = int64_t(sext(p, 24)) * sext(q, 24);
+    uint32_t out = uint32_t(uint64_t(prod));
+    arith(dst, prod, out, false, false);
+    return out;
+  };
+  auto shiftOp = [&](const Reg* dst, uint32_t v, uint32_t count, bool ar) {
+    bool carry = false;
+    uint32_t out = shiftL(v, sext(count & 0x7F, 7), ar, &carry);
+    x.intFlags(dst, out, out >> 31, false, carry, true);
+    return out;
+  };
+  auto logic = [&](const Reg* dst, uint32_t out) {
+    x.logicFlags(dst, out);
+    return out;
+  };
+  auto fres = [&](const Reg* dst, const fp::Res& r) {
+    x.floatFlags(dst, r);
+    return r.v;
+  };
+  auto fcmp = [&](Ext p, Ext q) {  // flags of p - q
+    fp::Res r = fp::sub(p, q);
+    int s = fp::compare(p, q);
+    uint32_t f = (s < 0 ? kN : 0) | (s == 0 ? kZ : 0) | (r.overflow ? kV : 0) | (r.underflow ? kUF : 0);
+    x.flags(nullptr, f, kN | kZ | kV | kUF);
+  };
+
+  using M = Mnemonic;
+  switch (in.mnemonic) {
+    case M::Ldi: case M::Ldic: {
+      if (in.mnemonic == M::Ldic && !condTrue(in.cond, x.st())) {
+        if (a.kind == OperandKind::Ind) x.ea(a.ind);  // the address update still happens
+        break;
+      }
+      uint32_t v = x.ival(a);
+      setI(b.reg, v);
+      x.intFlags(&b.reg, v, v >> 31, false, false, false);
+      break;
+    }
+    case M::Absi: {
+      int32_t s = int32_t(x.ival(a));
+      uint32_t out = s < 0 ? uint32_t(0) - uint32_t(s) : uint32_t(s);
+      setI(b.reg, out);
+      arith(&b.reg, s < 0 ? -int64_t(s) : s, out, false, false);
+      break;
+    }
+    case M::Negi: {
+      uint32_t s = x.ival(a);
+      setI(b.reg, subOp(&b.reg, 0, s));
+      break;
+    }
+    case M::Addi: { uint32_t s = x.ival(a); setI(b.reg, addOp(&b.reg, x.ireg(b.reg), s)); break; }
+    case M::Subi: { uint32_t s = x.ival(a); setI(b.reg, subOp(&b.reg, x.ireg(b.reg), s)); break; }
+    case M::Cmpi: { uint32_t s = x.ival(a); subOp(nullptr, x.ireg(b.reg), s); break; }
+    case M::Mpyi: { uint32_t s = x.ival(a); setI(b.reg, mpyOp(&b.reg, x.ireg(b.reg), s)); break; }
+    case M::And: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) & s)); break; }
+    case M::Andn: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) & ~s)); break; }
+    case M::Or: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) | s)); break; }
+    case M::Xor: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) ^ s)); break; }
+    case M::Not: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, ~s)); break; }
+    case M::Tstb: { uint32_t s = x.ival(a); logic(nullptr, x.ireg(b.reg) & s); break; }
+    case M::Lsh: { uint32_t s = x.ival(a); setI(b.reg, shiftOp(&b.reg, x.ireg(b.reg), s, false)); break; }
+    case M::Ash: { uint32_t s = x.ival(a); setI(b.reg, shiftOp(&b.reg, x.ireg(b.reg), s, true)); break; }
+
+    case M::Addi3: case M::Subi3: case M::Mpyi3: case M::And3: case M::Andn3: case M::Or3:
+    case M::Xor3: case M::Lsh3: case M::Ash3: case M::Cmpi3: case M::Tstb3: {
+      uint32_t s2 = x.ival(a), s1 = x.ival(b);
+      const Reg* d = (in.mnemonic == M::Cmpi3 || in.mnemonic == M::Tstb3) ? nullptr : &c.reg;
+      uint32_t out = 0;
+      switch (in.mnemonic) {
+        case M::Addi3: out = addOp(d, s1, s2); break;
+        case M::Subi3: case M::Cmpi3: out = subOp(d, s1, s2); break;
+        case M::Mpyi3: out = mpyOp(d, s1, s2); break;
+        case M::And3: case M::Tstb3: out = logic(d, s1 & s2); break;
+        case M::Andn3: out = logic(d, s1 & ~s2); break;
+        case M::Or3: out = logic(d, s1 | s2); break;
+        case M::Xor3: out = logic(d, s1 ^ s2); break;
+        case M::Lsh3: out = shiftOp(d, s1, s2, false); break;
+        default: out = shiftOp(d, s1, s2, true); break;
+      }
+      if (d) setI(*d, out);
+      break;
+    }
+
+    case M::Ldf: case M::Ldfc: {
+      if (in.mnemonic == M::Ldfc && !condTrue(in.cond, x.st())) {
+        if (a.kind == OperandKind::Ind) x.ea(a.ind);
+        break;
+      }
+      fp::Res r{x.fval(a), false, false};
+      setF(b.reg, fres(&b.reg, r));
+      break;
+    }
+    case M::Absf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::abs(s))); break; }
+    case M::Negf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::neg(s))); break; }
+    case M::Addf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::add(x.freg(b.reg), s))); break; }
+    case M::Subf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::sub(x.freg(b.reg), s))); break; }
+    case M::Mpyf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::mul(x.freg(b.reg), s))); break; }
+    case M::Cmpf: { Ext s = x.fval(a); fcmp(x.freg(b.reg), s); break; }
+    case M::Rcpf: {
+      Ext s = a.kind == OperandKind::Reg ? x.freg(a.reg) : x.fval(a);
+      setF(b.reg, fres(&b.reg, fp::rcp(s)));
+      break;
+    }
+    case M::Addf3: case M::Subf3: case M::Mpyf3: case M::Cmpf3: {
+      Ext s2 = x.fval(a), s1 = x.fval(b);
+      if (in.mnemonic == M::Cmpf3) {
+        fcmp(s1, s2);
+        break;
+      }
+      fp::Res r = in.mnemonic == M::Addf3 ? fp::add(s1, s2)
+                  : in.mnemonic == M::Subf3 ? fp::sub(s1, s2) : fp::mul(s1, s2);
+      setF(c.reg, fres(&c.reg, r));
+      break;
+    }
+    case M::Fix: {
+      Ext s = x.fval(a);
+      bool ov = false;
+      uint32_t out = uint32_t(fp::fix(s, &ov));
+      setI(b.reg, out);
+      x.intFlags(&b.reg, out, out >> 31, ov, false, false);
+      break;
+    }
+    case M::Float: {
+      uint32_t s = x.ival(a);
+      setF(b.reg, fres(&b.reg, fp::fromInt(int32_t(s))));
+      break;
+    }
+    case M::Toieee: {
+      uint32_t w = fp::toIeee(x.fval(a));
+      setF(b.reg, fp::fromSingle(w));
+      x.flags(&b.reg, (w >> 31 ? kN : 0) | ((w & 0x7FFFFFFF) == 0 ? kZ : 0), kN | kZ | kV | kUF);
+      break;
+    }
+    case M::Frieee: {
+      fp::Res r = fp::fromIeee(x.rd(x.addrOf(a)));
+      setF(b.reg, fres(&b.reg, r));
+      break;
+    }
+
+    case M::Sti: x.wr(x.addrOf(b), x.ireg(a.reg)); break;
+    case M::Stf: x.wr(x.addrOf(b), fp::toSingle(x.freg(a.reg))); break;
+    case M::Lda: setI(b.reg, x.ival(a)); break;
+    case M::Ldhi: {
+      uint32_t v = uint32_t(a.imm) << 16;
+      setI(b.reg, v);
+      x.intFlags(&b.reg, v, v >> 31, false, false, false);
+      break;
+    }
+    case M::Ldpk: {
+      uint32_t& dp = r32_[unsigned(Reg::DP)];
+      dp = (dp & 0xFFFF0000u) | uint32_t(a.imm);
+      writes |= 1u << kGroupDp;
+      break;
+    }
+
+    case M::Push: uses |= 1u << kGroupSp; push(x.ireg(a.reg)); break;
+    case M::Pushf: uses |= 1u << kGroupSp; push(fp::toSingle(x.freg(a.reg))); break;
+    case M::Pop: {
+      uses |= 1u << kGroupSp;
+      uint32_t v = pop();
+      setI(a.reg, v);
+      x.intFlags(&a.reg, v, v >> 31, false, false, false);
+      break;
+    }
+    case M::Popf: {
+      uses |= 1u << kGroupSp;
+      fp::Res r{fp::fromSingle(pop()), false, false};
+      setF(a.reg, fres(&a.reg, r));
+      break;
+    }
+    case M::Nop:
+      if (in.numOperands == 1) x.ea(a.ind);
+      break;
+
+    case M::Br: case M::Brd: branch(uint32_t(a.imm)); break;
+    case M::Bc: case M::Bcd:
+      if (condTrue(in.cond, x.st())) branch(targetOf(a));
+      break;
+    case M::Call:
+      uses |= 1u << kGroupSp;
+      push(pc + 1);
+      branch(uint32_t(a.imm));
+      break;
+    case M::Callc:
+      uses |= 1u << kGroupSp;
+      if (condTrue(in.cond, x.st())) {
+        push(pc + 1);
+        branch(targetOf(a));
+      }
+      break;
+    case M::Retsc:
+      uses |= 1u << kGroupSp;
+      if (condTrue(in.cond, x.st())) branch(pop());
+      break;
+    case M::Dbc: case M::Dbcd: {
+      uses |= 1u << kGroupAux;
+      uint32_t& r = r32_[unsigned(a.reg)];
+      r -= 1;
+      if (condTrue(in.cond, x.st()) && int32_t(r) >= 0) branch(uint32_t(b.imm));
+      break;
+    }
+    case M::Word: case M::Count_:
+      throw SimError{Stop::IllegalInstruction, "not an instruction"};
+  }
+  return uses << 8 | writes;
+}
+
+RunResult C40Sim::call(uint32_t entry, uint64_t maxCycles) {
+  RunResult res;
+  uint64_t cycles = 0, count = 0;
+  // The cycle (end of execute) of the last write to each register group.
+  int64_t lastWrite[3] = {INT64_MIN / 2, INT64_MIN / 2, INT64_MIN / 2};
+  uint32_t pc = entry;
+  int delay = 0;  // instructions left in the delay slots of a taken delayed branch
+  uint32_t delayedTarget = 0;
+  auto finish = [&](Stop s, std::string err) {
+    res.stop = s;
+    res.cycles = cycles;
+    res.instructions = count;
+    res.pc = pc;
+    res.error = std::move(err);
+    res.ns = double(cycles) * cfg_.nsPerCycle;
+    return res;
+  };
+  try {
+    uint32_t& sp = r32_[unsigned(Reg::SP)];
+    sp += 1;
+    memWrite(sp, cfg_.returnAddress);
+  } catch (const SimError& e) {
+    return finish(e.stop, "call: " + e.message + " (SP " + hex(r32_[unsigned(Reg::SP)]) + ")");
+  }
+  for (;;) {
+    if (pc == cfg_.returnAddress && delay == 0) return finish(Stop::Returned, "");
+    if (cycles >= maxCycles)
+      return finish(Stop::CycleLimit, "cycle limit " + std::to_string(maxCycles) + " reached at PC " + hex(pc));
+    if (count >= cfg_.maxInstructions)
+      return finish(Stop::InstructionLimit,
+                    "instruction limit " + std::to_string(cfg_.maxInstructions) + " reached at PC " + hex(pc));
+    waits_ = 0;
+    taken_ = false;
+    unsigned cost = 1;
+    const Instruction* inst = nullptr;
+    try {
+      const Cached& c = fetch(pc);
+      if (!c.ok) return finish(Stop::IllegalInstruction, "illegal instruction at " + hex(pc) + ": " + c.error);
+      inst = &c.inst;
+      if (delay > 0 && isControl(inst->mnemonic))
+        return finish(Stop::Unsupported, "branch in a delay slot at " + hex(pc));
+      unsigned ug = execute(*inst, pc);
+      unsigned uses = ug >> 8, writes = ug & 0xFF;
+      // Register conflicts: a register of a group that an instruction wrote
+      // in its execute phase can be used for addressing (decode phase) two
+      // cycles later.
+      int64_t stall = 0;
+      for (int g = 0; g < 3; ++g)
+        if (uses >> g & 1) stall = std::max<int64_t>(stall, lastWrite[g] + 2 - int64_t(cycles));
+      cost += unsigned(stall) + waits_;
+      if (isControl(inst->mnemonic) && !isDelayed(inst->mnemonic)) cost += 3;  // pipeline flush
+      cycles += cost;
+      for (int g = 0; g < 3; ++g)
+        if (writes >> g & 1) lastWrite[g] = int64_t(cycles);
+    } catch (const SimError& e) {
+      return finish(e.stop, e.message + " at PC " + hex(pc));
+    }
+    ++count;
+    if (trace_) trace_(TraceEntry{pc, inst, cycles - cost, cost});
+    uint32_t next = pc + 1;
+    if (taken_) {
+      if (isDelayed(inst->mnemonic)) {
+        delay = 3;
+        delayedTarget = target_;
+      } else {
+        next = target_;
+      }
+    } else if (delay > 0 && --delay == 0) {
+      next = delayedTarget;
+    }
+    pc = next;
+  }
+}
+
+}  // namespace ldc::c40sim

@@ -1,0 +1,166 @@
+// ldc_c40sim: a cycle-counting instruction-set simulator for the TMS320C40
+// subset of assembler/c40.h. See docs/c40.md for the semantics, the float
+// format and the cycle model (and what it does not model).
+#ifndef LDC_BACKEND_C40SIM_SIM_H
+#define LDC_BACKEND_C40SIM_SIM_H
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "assembler/c40.h"
+
+namespace ldc::c40sim {
+
+using as::c40::Reg;
+
+// ------------------------------------------------------------- floats
+
+// A 40-bit extended-precision register: an 8-bit two's complement exponent
+// (bits 39-32) and a 32-bit part (bits 31-0) that holds either an integer or
+// the sign bit and the 31-bit fraction of a float. Exponent -128 is zero.
+struct Ext {
+  uint8_t exp = 0x80;
+  uint32_t man = 0;
+  friend bool operator==(const Ext&, const Ext&) = default;
+};
+
+namespace fp {
+// Results carry the exponent overflow (V) and underflow (UF) conditions.
+struct Res {
+  Ext v;
+  bool overflow = false;
+  bool underflow = false;
+};
+constexpr Ext kZero{0x80, 0};
+bool isZero(Ext x);
+bool isNegative(Ext x);
+double toDouble(Ext x);         // exact
+Res fromDouble(double v);       // rounds toward -infinity (the C40's truncation)
+Ext fromSingle(uint32_t word);  // 32-bit memory float -> register (LDF)
+uint32_t toSingle(Ext x);       // register -> 32-bit memory float (STF, truncates)
+Ext fromShort(uint16_t bits);   // 16-bit short float immediate
+Res fromInt(int32_t i);         // FLOAT (exact)
+int32_t fix(Ext x, bool* overflow);  // FIX: floor, saturating
+Res add(Ext a, Ext b);
+Res sub(Ext a, Ext b);  // a - b
+Res mul(Ext a, Ext b);  // inputs truncated to single precision first
+Res neg(Ext a);
+Res abs(Ext a);
+Res rcp(Ext a);  // RCPF model: 1/a truncated to 8 fraction bits
+int compare(Ext a, Ext b);  // sign of a - b, exact
+// TOIEEE / FRIEEE (TMS320C3x/C4x conversion tables; see docs/c40.md).
+uint32_t toIeee(Ext x);
+Res fromIeee(uint32_t ieee);
+}  // namespace fp
+
+// ------------------------------------------------------------ simulator
+
+struct Region {
+  std::string name;
+  uint32_t base = 0;
+  uint32_t size = 0;        // words
+  unsigned waitStates = 0;  // extra cycles per access (fetch, read or write)
+};
+
+struct Config {
+  std::vector<Region> regions;
+  double nsPerCycle = 50.0;              // TMS320C40-40
+  uint32_t returnAddress = 0xFFFFFFFFu;  // call() returns here; must not be code
+  uint64_t maxInstructions = 100000000;  // runaway guard besides max_cycles
+};
+
+enum class Stop : uint8_t {
+  Returned,          // RETS came back to Config::returnAddress
+  CycleLimit,
+  InstructionLimit,
+  MemoryFault,       // access outside every region
+  IllegalInstruction,
+  Unsupported,       // e.g. circular addressing, a branch in a delay slot
+};
+
+struct RunResult {
+  Stop stop = Stop::Returned;
+  uint64_t cycles = 0;
+  uint64_t instructions = 0;
+  uint32_t pc = 0;
+  std::string error;  // empty when stop == Returned
+  double ns = 0;      // cycles * nsPerCycle
+  bool ok() const { return stop == Stop::Returned; }
+};
+
+struct TraceEntry {
+  uint32_t pc;
+  const as::c40::Instruction* inst;
+  uint64_t cyclesBefore;
+  unsigned cycles;  // this instruction, stalls and wait states included
+};
+
+class C40Sim {
+ public:
+  explicit C40Sim(Config config);
+
+  // Copies words into memory at base. Throws std::out_of_range if any word
+  // falls outside the regions.
+  void load(std::span<const uint32_t> words, uint32_t base);
+  void write(uint32_t address, uint32_t value);  // throws std::out_of_range
+  uint32_t read(uint32_t address) const;         // throws std::out_of_range
+
+  // Integer view of a register (bits 31-0); setting an extended register
+  // keeps its exponent.
+  void setReg(Reg r, uint32_t value);
+  uint32_t reg(Reg r) const;
+  // Extended registers R0-R11 as 40-bit values (others: std::invalid_argument).
+  void setExt(Reg r, Ext value);
+  Ext ext(Reg r) const;
+  void setFloat(Reg r, double v) { setExt(r, fp::fromDouble(v).v); }
+  double getFloat(Reg r) const { return fp::toDouble(ext(r)); }
+  uint32_t st() const { return reg(Reg::ST); }
+
+  // Pushes Config::returnAddress (SP is incremented first, as CALL does),
+  // jumps to entry and runs until RETS returns there, or a limit or an error
+  // stops it. Cycles count the executed instructions only.
+  RunResult call(uint32_t entry, uint64_t maxCycles);
+
+  void setTrace(std::function<void(const TraceEntry&)> t) { trace_ = std::move(t); }
+  const Config& config() const { return cfg_; }
+
+ private:
+  struct Cached {
+    uint32_t word = 0;
+    bool ok = false;
+    as::c40::Instruction inst;
+    std::string error;
+  };
+  struct Fault {
+    Stop stop;
+    std::string message;
+  };
+  Region* region(uint32_t address);
+  const Region* region(uint32_t address) const;
+  uint32_t memRead(uint32_t address);
+  void memWrite(uint32_t address, uint32_t value);
+  const Cached& fetch(uint32_t pc);
+  unsigned execute(const as::c40::Instruction& in, uint32_t pc);
+
+  Config cfg_;
+  std::vector<std::vector<uint32_t>> mem_;
+  std::unordered_map<uint32_t, Cached> cache_;
+  uint32_t r32_[as::c40::kNumRegs] = {};
+  Ext ext_[12];
+  // per instruction
+  unsigned waits_ = 0;
+  bool taken_ = false;
+  uint32_t target_ = 0;
+  uint32_t nextPc_ = 0;
+  std::function<void(const TraceEntry&)> trace_;
+};
+
+std::string_view stopName(Stop s);
+
+}  // namespace ldc::c40sim
+
+#endif  // LDC_BACKEND_C40SIM_SIM_H
