@@ -11,7 +11,7 @@
 # Needs: binutils-source, a C compiler, make, xz. Takes about a minute on
 # 2 cores. No network access.
 set -eu
-dir=${1:-${LDC_TIC4X_DIR:-$HOME/.cache/ldc-tic4x}}
+dir=${1:-${LDC_TIC4X_DIR:-${HOME:-/tmp}/.cache/ldc-tic4x}}
 if [ -x "$dir/bin/tic4x-as" ] && [ -x "$dir/bin/tic4x-objdump" ] && [ -x "$dir/bin/tic4x-objcopy" ]; then
   echo "tic4x tools in $dir/bin"
   exit 0

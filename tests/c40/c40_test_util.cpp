@@ -114,6 +114,7 @@ std::string tic4xTool(const std::string& name) {
   std::string dir;
   if (const char* e = std::getenv("LDC_TIC4X_DIR")) dir = e;
   else if (const char* h = std::getenv("HOME")) dir = std::string(h) + "/.cache/ldc-tic4x";
+  else dir = "/tmp/.cache/ldc-tic4x";
   std::string path = dir + "/bin/tic4x-" + name;
   if (access(path.c_str(), X_OK) != 0) {
     ADD_FAILURE() << "the tic4x GNU " << name << " is missing (" << path

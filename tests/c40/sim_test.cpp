@@ -399,7 +399,8 @@ never:
 RETSU
 )");
   ASSERT_TRUE(r.ok()) << r.error;
-  // 0: bits 1,2,4 (slots) and 16; BNED not taken (Z clear? R0=23 so NE holds: taken)
+  // BUD: its three slots run (1, 2, 4), 8 is skipped; BNED (R0 = 23, NE
+  // holds) is taken: 32, 64, 128 run, 256 is skipped.
   EXPECT_EQ(sim.reg(Reg::R0), 1u + 2 + 4 + 16 + 32 + 64 + 128);
   EXPECT_EQ(r.cycles, 1u + 1 + 3 + 1 + 1 + 3 + 4);
   EXPECT_EQ(r.instructions, 11u);
