@@ -53,6 +53,10 @@ Compiled compile_source(const std::string& path) {
   try {
     if (ends_with(path, ".il")) {
       c.il = parse_il_text(text, path);
+    } else if (text.compare(text.compare(0, 3, "\xEF\xBB\xBF") ? 0 : 3, 7, "LDmicro") == 0) {
+      c.from_ld = true;
+      c.tree = parse_ldmicro(text, path);
+      c.il = lower_to_il(c.tree);
     } else {
       c.from_ld = true;
       c.tree = parse_ld(text, path);

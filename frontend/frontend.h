@@ -21,4 +21,9 @@ constexpr size_t kMaxSourceBytes = 64u << 20;
 constexpr int kMaxRungRows = 4096;
 constexpr int kMaxRowWidth = 4096;
 
+// Imports an LDmicro program (a file whose first line starts with "LDmicro"):
+// its rungs become trees over ldc devices, its names aliases (docs/ldmicro.md).
+// Throws CompileError (line, col, message).
+TreeProgram parse_ldmicro(std::string_view text, const std::string& filename);
+
 }  // namespace ldc

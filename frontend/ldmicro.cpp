@@ -1,0 +1,1259 @@
+// frontend/ldmicro.cpp -- the LDmicro importer (docs/ldmicro.md).
+//
+// An LDmicro file lists each rung as a series of elements, with PARALLEL and
+// SERIES blocks.  LDmicro runs a rung by passing one "rung state" bit through
+// that list from left to right: a contact or a compare clears it, a coil copies
+// it into a bit, a timer or counter replaces it by its own output, a one-shot
+// by an edge of it.  Every element executes on every scan.
+//
+// We translate a rung into a chain of our tree nodes that computes exactly the
+// same sequence: the rung state lives on our bit stack (Then/Fork), conditions
+// narrow it (a nested Then), outputs hang on it (Fork items), and an element
+// whose output is not "state AND something" (a TOF, a counter, a falling
+// one-shot...) ends the chain: the next chain starts from the rail with the
+// element's output as its condition.  Where a value must survive a chain break
+// it is copied into an internal relay of its own (an M allocated after every
+// named device).  No new IL is needed; docs/ldmicro.md lists each mapping.
+#include <algorithm>
+#include <cctype>
+#include <climits>
+#include <functional>
+#include <map>
+#include <optional>
+#include <set>
+
+#include "frontend/frontend.h"
+#include "frontend/operands.h"
+
+namespace ldc {
+namespace {
+
+using K = TreeNode::Kind;
+
+[[noreturn]] void fail(int line, int col, const std::string& msg) { throw CompileError(line, col, msg); }
+
+std::string trim(std::string_view s) {
+  size_t a = s.find_first_not_of(" \t"), b = s.find_last_not_of(" \t");
+  return a == std::string_view::npos ? std::string() : std::string(s.substr(a, b - a + 1));
+}
+
+// ------------------------------------------------------------------ source
+
+struct Elem {
+  std::string kw;                 // CONTACTS, COIL, ..., SERIES, PARALLEL
+  std::vector<std::string> args;  // words after the keyword
+  std::vector<int> cols;          // their columns
+  std::string rest;               // the text after the keyword (COMMENT)
+  int line = 0, col = 0;
+  std::vector<Elem> kids;  // SERIES / PARALLEL
+  SrcLoc loc() const { return {line, col}; }
+};
+
+struct SrcRung {
+  int line = 0;
+  std::vector<Elem> series;
+};
+
+// ------------------------------------------------------------------ conditions
+
+Operand bit_opd(Area a, uint32_t i) { return Operand{OpdKind::Bit, a, i}; }
+Operand int_opd(Area a, uint32_t i) { return Operand{OpdKind::Int, a, i}; }
+Operand const_opd(int32_t v) {
+  Operand o{OpdKind::ConstInt};
+  o.ival = v;
+  return o;
+}
+Operand timer_opd(uint32_t i) {
+  Operand o{OpdKind::Timer};
+  o.index = i;
+  return o;
+}
+Operand counter_opd(uint32_t i) {
+  Operand o{OpdKind::Counter};
+  o.index = i;
+  return o;
+}
+
+TreeNode make_combined(K k, TreeNode a, TreeNode b) {
+  TreeNode n;
+  n.kind = k;
+  for (TreeNode* x : {&a, &b}) {
+    if (x->kind == k) for (auto& kid : x->kids) n.kids.push_back(std::move(kid));
+    else n.kids.push_back(std::move(*x));
+  }
+  return n;
+}
+
+// A Boolean condition with the constants kept apart, so that SHORT and OPEN
+// and an empty rail cost nothing.
+struct Cond {
+  enum Kind { True, False, Expr } k = True;
+  TreeNode n;
+  static Cond yes() { return {}; }
+  static Cond no() { return {False, {}}; }
+  static Cond of(TreeNode t) { return {Expr, std::move(t)}; }
+};
+
+Cond c_and(Cond a, Cond b) {
+  if (a.k == Cond::False || b.k == Cond::False) return Cond::no();
+  if (a.k == Cond::True) return b;
+  if (b.k == Cond::True) return a;
+  return Cond::of(make_combined(K::Series, std::move(a.n), std::move(b.n)));
+}
+Cond c_or(Cond a, Cond b) {
+  if (a.k == Cond::True || b.k == Cond::True) return Cond::yes();
+  if (a.k == Cond::False) return b;
+  if (b.k == Cond::False) return a;
+  return Cond::of(make_combined(K::Parallel, std::move(a.n), std::move(b.n)));
+}
+
+// FALSE as a leaf: a compare that never holds.  (TRUE never needs one: a
+// chain without a condition starts at the rail.)
+TreeNode false_leaf(SrcLoc loc) {
+  TreeNode n;
+  n.kind = K::Leaf;
+  n.elem.op = Op::LDNE;
+  n.elem.a[0] = const_opd(0);
+  n.elem.a[1] = const_opd(0);
+  n.elem.loc = loc;
+  n.text = "0 <> 0";
+  return n;
+}
+
+TreeNode then_node(Cond c, TreeNode action, SrcLoc loc) {
+  if (c.k == Cond::True) return action;
+  TreeNode cn = c.k == Cond::False ? false_leaf(loc) : std::move(c.n);
+  if (action.kind == K::Then) {  // Then(a, Then(b, X)) = Then(a AND b, X): same order of evaluation
+    TreeNode t;
+    t.kind = K::Then;
+    t.kids.push_back(make_combined(K::Series, std::move(cn), std::move(action.kids[0])));
+    t.kids.push_back(std::move(action.kids[1]));
+    return t;
+  }
+  TreeNode t;
+  t.kind = K::Then;
+  t.kids.push_back(std::move(cn));
+  t.kids.push_back(std::move(action));
+  return t;
+}
+
+TreeNode fork_of(std::vector<TreeNode> items) {
+  if (items.size() == 1) return std::move(items[0]);
+  TreeNode f;
+  f.kind = K::Fork;
+  for (auto& i : items) {
+    if (i.kind == K::Fork) for (auto& k : i.kids) f.kids.push_back(std::move(k));
+    else f.kids.push_back(std::move(i));
+  }
+  return f;
+}
+
+// The chains of one rung.  `frames` is the open chain: frames[0] starts at the
+// rail, each further frame narrows the rung state by its condition; actions
+// are added to the innermost frame and run under the state it holds.
+struct Frame {
+  Cond cond;
+  std::vector<TreeNode> items;
+  SrcLoc loc;
+};
+
+class RungBuilder {
+ public:
+  std::vector<TreeNode> top;  // finished chains, in order
+  std::vector<Frame> frames;
+  int gen = 0;  // bumped whenever the open chain is closed
+
+  void start(Cond c, SrcLoc loc) {
+    frames.clear();
+    frames.push_back({std::move(c), {}, loc});
+  }
+  void narrow(Cond c, SrcLoc loc) { frames.push_back({std::move(c), {}, loc}); }
+  void add(TreeNode action) { frames.back().items.push_back(std::move(action)); }
+  void pop_to(size_t depth) {
+    while (frames.size() > depth) {
+      Frame f = std::move(frames.back());
+      frames.pop_back();
+      if (auto n = close(std::move(f))) frames.back().items.push_back(std::move(*n));
+    }
+  }
+  void close_chain() {
+    if (frames.empty()) return;
+    pop_to(1);
+    if (auto n = close(std::move(frames[0]))) top.push_back(std::move(*n));
+    frames.clear();
+    gen++;
+  }
+  void restart(Cond c, SrcLoc loc) {
+    close_chain();
+    start(std::move(c), loc);
+  }
+  // A chain of its own: close the open one first; the caller restarts.
+  void chain(Cond c, TreeNode action, SrcLoc loc) {
+    close_chain();
+    top.push_back(then_node(std::move(c), std::move(action), loc));
+  }
+
+ private:
+  static std::optional<TreeNode> close(Frame f) {
+    if (f.items.empty()) return std::nullopt;  // a condition nobody reads
+    return then_node(std::move(f.cond), fork_of(std::move(f.items)), f.loc);
+  }
+};
+
+// ------------------------------------------------------------------ names
+
+enum class NK { Bit, Timer, Counter, Var, Adc, Pwm };
+
+struct Name {
+  NK kind = NK::Var;
+  DeviceRef dev{Dev::D, 0};
+  DeviceRef held{Dev::D, 0};  // Adc: the variable READ_ADC writes
+  std::string timer_kind;     // TON, TOF, RTO, TCY
+  int line = 0, col = 0;      // first use
+};
+
+const char* kind_word(NK k) {
+  switch (k) {
+    case NK::Bit: return "a bit";
+    case NK::Timer: return "a timer";
+    case NK::Counter: return "a counter";
+    case NK::Var: return "an integer variable";
+    case NK::Adc: return "an A/D input";
+    case NK::Pwm: return "a PWM output";
+  }
+  return "";
+}
+
+// Elements ldc refuses, with the reason.
+const std::map<std::string, std::string>& unsupported() {
+  static const std::map<std::string, std::string> m = [] {
+    std::map<std::string, std::string> r;
+    const char* uart = "ldc has no serial port: its I/O is the memory image, bits and words written before each scan, which "
+                       "cannot model a UART's receive buffer and transmit busy time";
+    for (const char* k : {"UART_SEND", "UART_RECV", "UART_SENDn", "UART_RECVn", "UART_RECV_AVAIL", "UART_SEND_READY",
+                          "UART_SEND_BUSY", "UART_UDRE", "UART_PRINTF"})
+      r[k] = uart;
+    r["PERSIST"] = "ldc keeps only K relays across restarts; an LDmicro variable kept in EEPROM has no retentive word to live in";
+    for (const char* k : {"FORMATTED_STRING", "STRING", "CPRINTF", "SPRINTF", "FPRINTF", "PRINTF", "I2C_PRINTF", "ISP_PRINTF"})
+      r[k] = "ldc has no strings and no serial output";
+    for (const char* k : {"SPI", "SPI_WR", "I2C_RD", "I2C_WR"}) r[k] = "ldc has no SPI or I2C bus";
+    for (const char* k : {"RANDOM", "SEED_RANDOM"}) r[k] = "an ldc program is deterministic; there is no random source";
+    for (const char* k : {"GOTO", "GOSUB", "RETURN", "LABEL", "SUBPROG", "ENDSUB"})
+      r[k] = "jumps and subroutines between LDmicro rungs are not translated";
+    for (const char* k : {"SLEEP", "DELAY", "CLRWDT", "LOCK"}) r[k] = "microcontroller sleep, delay and watchdog control have no ldc equivalent";
+    for (const char* k : {"STEPPER", "PULSER", "NPULSE", "NPULSE_OFF", "QUAD_ENCOD"})
+      r[k] = "pulse generators and encoders are microcontroller hardware with no ldc equivalent";
+    for (const char* k : {"7SEGMENTS", "9SEGMENTS", "14SEGMENTS", "16SEGMENTS", "BUS"})
+      r[k] = "display and bus encodings are not translated";
+    for (const char* k : {"BIN2BCD", "BCD2BIN", "OPPOSITE", "SWAP", "ROL", "ROR", "SHR", "SR0"})
+      r[k] = "its result depends on the byte size of the LDmicro variable, which ldc's 32-bit words do not keep";
+    for (const char* k : {"RTL", "THI", "TLO", "TIME2COUNT", "TIME2DELAY", "OSL", "OSC"}) r[k] = "ldc has no translation for it";
+    for (const char* k : {"RSFR", "WSFR", "SSFR", "CSFR", "TSFR", "TCSFR"}) r[k] = "microcontroller special function registers do not exist in ldc";
+    return r;
+  }();
+  return m;
+}
+
+bool is_pure_kw(const std::string& kw) {
+  static const std::set<std::string> s = {"CONTACTS", "EQU", "NEQ", "GRT", "GEQ", "LES", "LEQ", "SHORT", "OPEN", "COMMENT"};
+  return s.count(kw) > 0;
+}
+
+// ------------------------------------------------------------------ importer
+
+class Importer {
+ public:
+  Importer(std::string_view text, std::string file) : text_(text), file_(std::move(file)) {}
+  TreeProgram run();
+
+ private:
+  struct Line {
+    std::string text;
+    int no;
+  };
+  std::string_view text_;
+  std::string file_;
+  std::vector<Line> lines_;
+  bool v01_ = false;          // "LDmicro0.1": the classic semantics (docs/ldmicro.md)
+  int64_t cycle_us_ = 10000;  // LDmicro's default
+  int cycle_line_ = 0;
+  std::vector<std::pair<std::string, int>> io_list_;  // names in IO LIST order, with their line
+  std::vector<SrcRung> rungs_;
+  std::vector<std::string> titles_;  // per rung: the COMMENT rung above it, if any
+
+  std::map<std::string, Name> names_;
+  std::vector<std::string> order_;  // first appearance
+  uint32_t next_[11] = {};          // next free index per Dev
+  std::set<std::pair<int, uint32_t>> used_;
+  std::vector<Alias> aliases_;
+  std::map<std::pair<int, uint32_t>, std::string> spelled_;  // device -> LDmicro name (for --emit=tree)
+  bool mcr_used_ = false;
+  uint32_t mcr_ = 0;
+  std::vector<TreeNode> init_;  // first-scan initialisations
+
+  RungBuilder rb_;
+
+  // source
+  void read_lines();
+  size_t header();
+  void program(size_t i);
+  size_t series(size_t i, std::vector<Elem>& out, int open_line);
+  size_t parallel(size_t i, std::vector<Elem>& out, int open_line);
+  Elem leaf(const Line& l);
+  void check_leaf(const Elem& e);
+
+  // names
+  void note(const std::string& name, NK kind, int line, int col, const std::string& tkind = "");
+  void collect(const Elem& e);
+  void allocate();
+  uint32_t take(Dev d, int line, int col);
+  uint32_t temp_m(const Elem& e) { return take(Dev::M, e.line, e.col); }
+  uint32_t temp_d(const Elem& e) { return take(Dev::D, e.line, e.col); }
+  bool is_number(const std::string& s) const;
+  int32_t number(const std::string& s, int line, int col) const;
+  Operand value(const Elem& e, size_t arg, bool dest = false);
+  Name& name_of(const Elem& e, size_t arg);
+  std::string spell(const Operand& o) const;
+
+  // translation
+  void translate(const SrcRung& r, size_t index);
+  void series_code(const std::vector<Elem>& s, bool need_out);
+  void element(const Elem& e, bool need_out);
+  void parallel_code(const Elem& e, bool need_out);
+  std::optional<Cond> pure(const Elem& e);
+  bool breaks(const Elem& e) const;
+  Cond materialize(const Elem& e);
+  TreeNode leaf_node(Op op, std::vector<Operand> a, const Elem& e);
+  TreeNode out_node(Op op, std::vector<Operand> a, const Elem& e);
+  Cond bit_leaf(Op op, Area a, uint32_t i, const Elem& e) { return Cond::of(leaf_node(op, {bit_opd(a, i)}, e)); }
+  int32_t timer_ms(const Elem& e, const Name& n);
+  int32_t cycle_ms(const Elem& e);
+  void timer(const Elem& e);
+  void counter(const Elem& e);
+  void coil(const Elem& e);
+};
+
+void Importer::read_lines() {
+  if (text_.size() > kMaxSourceBytes) fail(1, 1, "source file too large (at most 64 MiB)");
+  size_t pos = 0;
+  int no = 0;
+  while (pos < text_.size()) {
+    size_t nl = text_.find('\n', pos);
+    std::string l(text_.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos));
+    if (!l.empty() && l.back() == '\r') l.pop_back();
+    lines_.push_back({l, ++no});
+    pos = nl == std::string_view::npos ? text_.size() : nl + 1;
+  }
+}
+
+// header = "LDmicro" [version] { setting | IO LIST | VAR LIST | other } "PROGRAM"
+// Returns the index of the PROGRAM line.
+size_t Importer::header() {
+  std::string first = lines_.empty() ? "" : lines_[0].text;
+  if (first.rfind("\xEF\xBB\xBF", 0) == 0) first = first.substr(3);
+  first = trim(first);
+  v01_ = first == "LDmicro0.1";
+  for (size_t i = 1; i < lines_.size(); i++) {
+    const Line& l = lines_[i];
+    std::string t = trim(l.text);
+    if (t.empty()) continue;
+    if (t == "PROGRAM") return i;
+    if (t.rfind("CYCLE=", 0) == 0) {
+      size_t e = 6;
+      while (e < t.size() && std::isdigit((unsigned char)t[e])) e++;
+      if (e == 6 || e - 6 > 12) fail(l.no, 7, "expected the cycle time in microseconds after CYCLE=");
+      cycle_us_ = std::stoll(t.substr(6, e - 6));
+      cycle_line_ = l.no;
+      continue;
+    }
+    if (t == "IO LIST" || t == "VAR LIST" || t == "PULL-UP LIST") {
+      bool io = t == "IO LIST";
+      size_t j = i + 1;
+      for (; j < lines_.size(); j++) {
+        std::string u = trim(lines_[j].text);
+        if (u == "END") break;
+        if (u.empty() || !io) continue;
+        // "name at pin [...]"
+        size_t sp = u.find_first_of(" \t");
+        std::string name = u.substr(0, sp);
+        std::string after = sp == std::string::npos ? "" : trim(u.substr(sp));
+        if (after.rfind("at", 0) != 0) fail(lines_[j].no, int(lines_[j].text.find(u)) + 1, "expected 'name at pin' in the IO LIST");
+        io_list_.push_back({name, lines_[j].no});
+      }
+      if (j == lines_.size()) fail(l.no, 1, t + " is not closed by END");
+      i = j;
+      continue;
+    }
+    // MICRO=, CRYSTAL=, BAUD=, COMPILED=, COMPILER= and anything newer: LDmicro
+    // ignores lines it does not know, and so do we.
+  }
+  fail(int(lines_.size()), 1, "no PROGRAM line: an LDmicro file lists its rungs after a line 'PROGRAM'");
+}
+
+Elem Importer::leaf(const Line& l) {
+  Elem e;
+  e.line = l.no;
+  size_t st = l.text.find_first_not_of(" \t");
+  e.col = int(st) + 1;
+  size_t i = st;
+  auto word = [&](std::string& w, int& c) {
+    while (i < l.text.size() && (l.text[i] == ' ' || l.text[i] == '\t')) i++;
+    if (i >= l.text.size()) return false;
+    size_t s = i;
+    while (i < l.text.size() && l.text[i] != ' ' && l.text[i] != '\t') i++;
+    w = l.text.substr(s, i - s);
+    c = int(s) + 1;
+    return true;
+  };
+  int c;
+  word(e.kw, c);
+  e.rest = i < l.text.size() ? l.text.substr(std::min(l.text.size(), i + 1)) : "";
+  std::string w;
+  while (word(w, c)) {
+    e.args.push_back(w);
+    e.cols.push_back(c);
+  }
+  return e;
+}
+
+size_t Importer::series(size_t i, std::vector<Elem>& out, int open_line) {
+  for (; i < lines_.size(); i++) {
+    const Line& l = lines_[i];
+    std::string t = trim(l.text);
+    if (t.empty() || t[0] == ';') continue;
+    int col = int(l.text.find_first_not_of(" \t")) + 1;
+    if (t == "END") return i;
+    if (t == "PARALLEL" || t == "SERIES") {
+      Elem e;
+      e.kw = t;
+      e.line = l.no;
+      e.col = col;
+      i = t == "PARALLEL" ? parallel(i + 1, e.kids, l.no) : series(i + 1, e.kids, l.no);
+      out.push_back(std::move(e));
+      continue;
+    }
+    Elem e = leaf(l);
+    check_leaf(e);
+    out.push_back(std::move(e));
+  }
+  fail(open_line, 1, "not closed by END before the end of the file");
+}
+
+size_t Importer::parallel(size_t i, std::vector<Elem>& out, int open_line) {
+  for (; i < lines_.size(); i++) {
+    const Line& l = lines_[i];
+    std::string t = trim(l.text);
+    if (t.empty() || t[0] == ';') continue;
+    int col = int(l.text.find_first_not_of(" \t")) + 1;
+    if (t == "END") return i;
+    if (t == "PARALLEL") fail(l.no, col, "PARALLEL directly inside PARALLEL; LDmicro nests them through SERIES");
+    if (t == "SERIES") {
+      Elem e;
+      e.kw = t;
+      e.line = l.no;
+      e.col = col;
+      i = series(i + 1, e.kids, l.no);
+      out.push_back(std::move(e));
+      continue;
+    }
+    Elem e = leaf(l);
+    check_leaf(e);
+    out.push_back(std::move(e));
+  }
+  fail(open_line, 1, "not closed by END before the end of the file");
+}
+
+// The arity of every element we translate; unknown and refused ones end here.
+void Importer::check_leaf(const Elem& e) {
+  auto arity = [&](size_t lo, size_t hi, const char* form) {
+    if (e.args.size() < lo || e.args.size() > hi)
+      fail(e.line, e.col, std::string("expected ") + form + " (" + std::to_string(e.args.size()) + " field" +
+                              (e.args.size() == 1 ? "" : "s") + " found)");
+  };
+  const std::string& k = e.kw;
+  if (auto it = unsupported().find(k); it != unsupported().end())
+    fail(e.line, e.col, "LDmicro element '" + k + "' is not supported: " + it->second);
+  if (k == "COMMENT") return;
+  if (k == "CONTACTS") arity(2, 3, "CONTACTS name negated [set1]");
+  else if (k == "COIL") arity(4, 5, "COIL name negated setOnly resetOnly [toggle]");
+  else if (k == "TON" || k == "TOF" || k == "RTO" || k == "TCY") arity(2, 3, (k + " name delay [adjust]").c_str());
+  else if (k == "CTU" || k == "CTD" || k == "CTC" || k == "CTR") arity(2, 4, (k + " name max [init [inputKind]]").c_str());
+  else if (k == "RES") arity(1, 1, "RES name");
+  else if (k == "MOVE") arity(2, 2, "MOVE destination source");
+  else if (k == "ADD" || k == "SUB" || k == "MUL" || k == "DIV" || k == "MOD" || k == "AND" || k == "OR" || k == "XOR" || k == "SHL")
+    arity(3, 3, (k + " destination operand1 operand2").c_str());
+  else if (k == "NOT" || k == "NEG") arity(2, 2, (k + " destination operand").c_str());
+  else if (k == "EQU" || k == "NEQ" || k == "GRT" || k == "GEQ" || k == "LES" || k == "LEQ") arity(2, 2, (k + " operand1 operand2").c_str());
+  else if (k == "OSR" || k == "OSF" || k == "SHORT" || k == "OPEN" || k == "MASTER_RELAY") arity(0, 0, k.c_str());
+  else if (k == "PLACEHOLDER") fail(e.line, e.col, "empty row (PLACEHOLDER); delete it or add instructions, as LDmicro itself requires");
+  else if (k == "SHIFT_REGISTER") arity(2, 2, "SHIFT_REGISTER name stages");
+  else if (k == "LOOK_UP_TABLE") {
+    if (e.args.size() < 4) fail(e.line, e.col, "expected LOOK_UP_TABLE destination index count asString values...");
+  } else if (k == "PIECEWISE_LINEAR") {
+    if (e.args.size() < 3) fail(e.line, e.col, "expected PIECEWISE_LINEAR destination index count points...");
+  } else if (k == "READ_ADC") arity(1, 2, "READ_ADC name [refs]");
+  else if (k == "SET_PWM") arity(2, 4, "SET_PWM duty frequency [name [resolution]]");
+  else if (k == "SET_BIT" || k == "CLEAR_BIT" || k == "IF_BIT_SET" || k == "IF_BIT_CLEAR") arity(2, 2, (k + " variable bit").c_str());
+  else fail(e.line, e.col, "unknown LDmicro element '" + k + "'");
+}
+
+// program = { "RUNG" [n] series "END" }
+void Importer::program(size_t i) {
+  std::string title;
+  for (i++; i < lines_.size(); i++) {
+    const Line& l = lines_[i];
+    std::string t = trim(l.text);
+    if (t.empty() || t[0] == ';') continue;
+    int col = int(l.text.find_first_not_of(" \t")) + 1;
+    if (t.rfind("RUNG", 0) != 0 || (t.size() > 4 && t[4] != ' ' && t[4] != '\t'))
+      fail(l.no, col, "expected RUNG, found '" + t + "'");
+    SrcRung r;
+    r.line = l.no;
+    i = series(i + 1, r.series, l.no);
+    if (r.series.size() == 1 && r.series[0].kw == "COMMENT") {
+      // a comment rung: its first line titles the next rung
+      std::string c = r.series[0].rest;
+      size_t cut = c.find("\\r\\n");
+      if (cut == std::string::npos) cut = c.find("\\n");
+      title = trim(c.substr(0, cut));
+      continue;
+    }
+    rungs_.push_back(std::move(r));
+    titles_.push_back(title);
+    title.clear();
+  }
+}
+
+// ------------------------------------------------------------------ names
+
+bool Importer::is_number(const std::string& s) const {
+  if (s.empty()) return false;
+  if (s[0] == '\'') return true;
+  size_t i = (s[0] == '-' || s[0] == '+') ? 1 : 0;
+  return i < s.size() && std::isdigit((unsigned char)s[i]);
+}
+
+// LDmicro 0.1 reads numbers with atoi (decimal); newer versions also take
+// 0x.. 0b.. 0o.. and a leading 0 for octal, and 'c' with C escapes.
+int32_t Importer::number(const std::string& s, int line, int col) const {
+  if (s[0] == '\'') {
+    std::string body = s.size() >= 2 && s.back() == '\'' ? s.substr(1, s.size() - 2) : "";
+    int v = -1;
+    if (body.size() == 1) v = (unsigned char)body[0];
+    else if (body.size() == 2 && body[0] == '\\') {
+      static const std::map<char, int> esc = {{'n', 10}, {'r', 13}, {'t', 9}, {'0', 0}, {'\\', 92}, {'\'', 39}, {'"', 34}, {'a', 7}, {'b', 8}, {'f', 12}, {'v', 11}, {'e', 27}};
+      if (auto it = esc.find(body[1]); it != esc.end()) v = it->second;
+    }
+    if (v < 0) fail(line, col, "bad character literal " + s + "; expected one character in single quotes, like 'A' or '\\n'");
+    return v;
+  }
+  bool neg = s[0] == '-';
+  size_t i = (s[0] == '-' || s[0] == '+') ? 1 : 0;
+  std::string body = s.substr(i);
+  int base = 10;
+  if (!v01_ && body.size() > 1 && body[0] == '0') {
+    char p = char(std::tolower((unsigned char)body[1]));
+    if (p == 'x') base = 16, body = body.substr(2);
+    else if (p == 'b') base = 2, body = body.substr(2);
+    else if (p == 'o') base = 8, body = body.substr(2);
+    else base = 8, body = body.substr(1);
+  }
+  if (body.empty()) fail(line, col, "malformed number '" + s + "'");
+  int64_t v = 0;
+  for (char c : body) {
+    int d = std::isdigit((unsigned char)c) ? c - '0' : (std::tolower((unsigned char)c) >= 'a' && std::tolower((unsigned char)c) <= 'f') ? std::tolower((unsigned char)c) - 'a' + 10 : 99;
+    if (d >= base) fail(line, col, "malformed number '" + s + "'" + (v01_ && base == 10 ? " (LDmicro 0.1 files use decimal numbers)" : ""));
+    v = v * base + d;
+    if (v > 0x100000000LL) break;
+  }
+  if (neg) v = -v;
+  if (v < INT32_MIN || v > INT32_MAX) fail(line, col, "number '" + s + "' does not fit in 32 bits");
+  return int32_t(v);
+}
+
+void Importer::note(const std::string& name, NK kind, int line, int col, const std::string& tkind) {
+  auto it = names_.find(name);
+  if (it == names_.end()) {
+    Name n;
+    n.kind = kind;
+    n.timer_kind = tkind;
+    n.line = line;
+    n.col = col;
+    names_[name] = n;
+    order_.push_back(name);
+    return;
+  }
+  Name& n = it->second;
+  if (n.kind == kind) {
+    if (kind == NK::Timer && n.timer_kind != tkind)
+      fail(line, col, "timer '" + name + "' is used by both " + n.timer_kind + " (line " + std::to_string(n.line) + ") and " + tkind);
+    return;
+  }
+  // A variable may turn out to be a counter, an A/D input or a PWM output
+  // (their values are integers); any other mix is an error.
+  if (n.kind == NK::Var && (kind == NK::Counter || kind == NK::Adc || kind == NK::Timer)) {
+    n.kind = kind;
+    n.timer_kind = tkind;
+    return;
+  }
+  if (kind == NK::Var && (n.kind == NK::Counter || n.kind == NK::Adc || n.kind == NK::Timer)) return;
+  fail(line, col, "'" + name + "' is used as " + kind_word(kind) + " here but as " + kind_word(n.kind) + " on line " + std::to_string(n.line));
+}
+
+void Importer::collect(const Elem& e) {
+  const std::string& k = e.kw;
+  auto var = [&](size_t i) {
+    if (i < e.args.size() && !is_number(e.args[i])) note(e.args[i], NK::Var, e.line, e.cols[i]);
+  };
+  if (k == "SERIES" || k == "PARALLEL") {
+    for (const Elem& x : e.kids) collect(x);
+  } else if (k == "CONTACTS" || k == "COIL") {
+    note(e.args[0], NK::Bit, e.line, e.cols[0]);
+  } else if (k == "TON" || k == "TOF" || k == "RTO" || k == "TCY") {
+    note(e.args[0], NK::Timer, e.line, e.cols[0], k);
+  } else if (k == "CTU" || k == "CTD" || k == "CTC" || k == "CTR") {
+    note(e.args[0], NK::Counter, e.line, e.cols[0]);
+    var(1);
+    var(2);
+  } else if (k == "RES") {
+    // resolved after every element is seen
+  } else if (k == "READ_ADC") {
+    note(e.args[0], NK::Adc, e.line, e.cols[0]);
+  } else if (k == "SET_PWM") {
+    var(0);
+    std::string n = e.args.size() >= 3 ? e.args[2] : "P";
+    if (n[0] != 'P') n = "P" + n;
+    note(n, NK::Pwm, e.line, e.args.size() >= 3 ? e.cols[2] : e.col);
+  } else if (k == "SHIFT_REGISTER") {
+    int n = number(e.args[1], e.line, e.cols[1]);
+    if (n < 1 || n > 256) fail(e.line, e.cols[1], "a shift register has 1 to 256 stages");
+    for (int i = 0; i < n; i++) note(e.args[0] + std::to_string(i), NK::Var, e.line, e.cols[0]);
+  } else if (k == "LOOK_UP_TABLE" || k == "PIECEWISE_LINEAR") {
+    var(0);
+    var(1);
+  } else if (k != "COMMENT" && !e.args.empty() && k != "OSR" && k != "OSF") {
+    for (size_t i = 0; i < e.args.size(); i++) var(i);
+  }
+}
+
+uint32_t Importer::take(Dev d, int line, int col) {
+  uint32_t& n = next_[int(d)];
+  while (n < device_count(d) && used_.count({int(d), n})) n++;
+  if (n >= device_count(d))
+    fail(line, col, std::string("out of ") + dev_name(d) + " devices (" + dev_name(d) + "0.." + dev_name(d) +
+                        std::to_string(device_count(d) - 1) + ") for this program");
+  used_.insert({int(d), n});
+  return n++;
+}
+
+void Importer::allocate() {
+  auto dev_of = [](const std::string& name, NK k) -> Dev {
+    switch (k) {
+      case NK::Bit: return name[0] == 'X' ? Dev::X : name[0] == 'Y' ? Dev::Y : Dev::M;
+      case NK::Timer: return Dev::T;
+      case NK::Counter: return Dev::C;
+      case NK::Adc: return Dev::WX;
+      case NK::Pwm: return Dev::WY;
+      case NK::Var: return Dev::D;
+    }
+    return Dev::D;
+  };
+  for (const std::string& nm : order_) {
+    Name& n = names_[nm];
+    if (n.kind == NK::Bit && nm[0] != 'X' && nm[0] != 'Y' && nm[0] != 'R')
+      fail(n.line, n.col, "bit '" + nm + "' must be named X... (input), Y... (output) or R... (internal relay)");
+  }
+  // names that already spell an ldc device of their kind keep it
+  std::set<std::string> placed;
+  for (const std::string& nm : order_) {
+    Name& n = names_[nm];
+    Dev d = dev_of(nm, n.kind);
+    auto p = parse_device(nm);
+    if (p && p->dev == d && p->index < device_count(d) && !used_.count({int(d), p->index})) {
+      n.dev = *p;
+      used_.insert({int(d), p->index});
+      placed.insert(nm);
+    }
+  }
+  for (const std::string& nm : order_) {
+    Name& n = names_[nm];
+    if (placed.count(nm)) continue;
+    Dev d = dev_of(nm, n.kind);
+    n.dev = DeviceRef{d, take(d, n.line, n.col)};
+  }
+  for (const std::string& nm : order_) {  // the variables READ_ADC fills come after the named ones
+    Name& n = names_[nm];
+    if (n.kind == NK::Adc) n.held = DeviceRef{Dev::D, take(Dev::D, n.line, n.col)};
+  }
+  std::set<std::string> seen;
+  for (const std::string& nm : order_) {
+    const Name& n = names_[nm];
+    spelled_[{int(n.dev.dev), n.dev.index}] = nm;
+    std::string why;
+    std::string u = upper(nm);
+    bool spells_device = parse_device(nm) || parse_iec_address(nm, why);
+    if (!is_identifier(nm) || u == "DT" || seen.count(u)) continue;
+    if (spells_device && !(parse_device(nm) && *parse_device(nm) == n.dev)) continue;
+    seen.insert(u);
+    if (!spells_device) aliases_.push_back({nm, n.dev});
+  }
+}
+
+Name& Importer::name_of(const Elem& e, size_t arg) {
+  auto it = names_.find(e.args[arg]);
+  if (it == names_.end()) fail(e.line, e.cols[arg], "internal: unknown name '" + e.args[arg] + "'");
+  return it->second;
+}
+
+// An integer operand: a number, a variable, a counter's value, an A/D input's
+// last reading.  A timer's value is refused: LDmicro counts it in cycles, ldc in ms.
+Operand Importer::value(const Elem& e, size_t arg, bool dest) {
+  const std::string& s = e.args[arg];
+  int col = e.cols[arg];
+  if (is_number(s)) {
+    if (dest) fail(e.line, col, "'" + s + "' is a number; it cannot be a destination");
+    return const_opd(number(s, e.line, col));
+  }
+  const Name& n = name_of(e, arg);
+  switch (n.kind) {
+    case NK::Var: return int_opd(Area::D, n.dev.index);
+    case NK::Counter: return int_opd(Area::CW, n.dev.index);
+    case NK::Adc:
+      if (dest) fail(e.line, col, "'" + s + "' is an A/D input; only READ_ADC writes it");
+      return int_opd(Area::D, n.held.index);
+    case NK::Timer:
+      fail(e.line, col, "timer '" + s + "' used as a number: LDmicro counts a timer in cycles, ldc in milliseconds, so its "
+                                       "value has no exact translation");
+    case NK::Bit: fail(e.line, col, "'" + s + "' is a bit; an integer is needed here");
+    case NK::Pwm: break;
+  }
+  fail(e.line, col, "'" + s + "' is a PWM output; only SET_PWM writes it");
+}
+
+std::string Importer::spell(const Operand& o) const {
+  int dev = -1;
+  switch (o.kind) {
+    case OpdKind::Bit:
+      dev = o.area == Area::X ? int(Dev::X) : o.area == Area::Y ? int(Dev::Y) : o.area == Area::M ? int(Dev::M)
+            : o.area == Area::TQ ? int(Dev::T) : o.area == Area::CQ ? int(Dev::C) : -1;
+      break;
+    case OpdKind::Int:
+      dev = o.area == Area::D ? int(Dev::D) : o.area == Area::TW ? int(Dev::T) : o.area == Area::CW ? int(Dev::C)
+            : o.area == Area::WX ? int(Dev::WX) : o.area == Area::WY ? int(Dev::WY) : -1;
+      break;
+    case OpdKind::Timer: dev = int(Dev::T); break;
+    case OpdKind::Counter: dev = int(Dev::C); break;
+    default: break;
+  }
+  if (dev >= 0)
+    if (auto it = spelled_.find({dev, o.index}); it != spelled_.end()) return it->second;
+  return operand_text(o);
+}
+
+TreeNode Importer::leaf_node(Op op, std::vector<Operand> a, const Elem& e) {
+  TreeNode n;
+  n.kind = K::Leaf;
+  n.elem.op = op;
+  n.elem.loc = e.loc();
+  for (size_t i = 0; i < a.size(); i++) n.elem.a[i] = a[i];
+  static const std::map<Op, const char*> cmp = {{Op::LDEQ, "=="}, {Op::LDNE, "<>"}, {Op::LDLT, "<"},
+                                                {Op::LDLE, "<="}, {Op::LDGT, ">"},  {Op::LDGE, ">="}};
+  if (auto it = cmp.find(op); it != cmp.end()) n.text = spell(a[0]) + " " + it->second + " " + spell(a[1]);
+  else n.text = std::string(op == Op::LOADN ? "/" : op == Op::LOADP ? "P " : op == Op::LOADF ? "N " : "") + spell(a[0]);
+  return n;
+}
+
+TreeNode Importer::out_node(Op op, std::vector<Operand> a, const Elem& e) {
+  TreeNode n;
+  n.kind = K::Output;
+  n.elem.op = op;
+  n.elem.loc = e.loc();
+  std::string t = op == Op::OUT ? "" : op == Op::OUTN ? "/" : std::string(op_info(op).name) + " ";
+  for (size_t i = 0; i < a.size(); i++) {
+    n.elem.a[i] = a[i];
+    t += (i ? " " : "") + spell(a[i]);
+  }
+  n.text = t;
+  return n;
+}
+
+// ------------------------------------------------------------------ translation
+
+bool Importer::breaks(const Elem& e) const {
+  const std::string& k = e.kw;
+  if (k == "SERIES" || k == "PARALLEL") {
+    for (const Elem& x : e.kids)
+      if (breaks(x)) return true;
+    return false;
+  }
+  if (k == "TOF" || k == "RTO" || k == "TCY" || k == "OSF" || k == "MASTER_RELAY") return true;
+  if (k == "CTU" || k == "CTD" || k == "CTR") return true;
+  if (k == "CTC") return !(v01_ && e.args.size() == 2);
+  if (k == "COIL") return e.args.size() == 5 && e.args[4] != "0";
+  return false;
+}
+
+Cond Importer::materialize(const Elem& e) {
+  uint32_t m = temp_m(e);
+  rb_.add(out_node(Op::OUT, {bit_opd(Area::M, m)}, e));
+  return bit_leaf(Op::LOAD, Area::M, m, e);
+}
+
+std::optional<Cond> Importer::pure(const Elem& e) {
+  const std::string& k = e.kw;
+  if (k == "SERIES") {
+    Cond c = Cond::yes();
+    for (const Elem& x : e.kids) {
+      auto p = pure(x);
+      if (!p) return std::nullopt;
+      c = c_and(std::move(c), std::move(*p));
+    }
+    return c;
+  }
+  if (k == "PARALLEL") {
+    Cond c = Cond::no();
+    for (const Elem& x : e.kids) {
+      auto p = pure(x);
+      if (!p) return std::nullopt;
+      c = c_or(std::move(c), std::move(*p));
+    }
+    return c;
+  }
+  if (!is_pure_kw(k)) return std::nullopt;
+  if (k == "SHORT" || k == "COMMENT") return Cond::yes();
+  if (k == "OPEN") return Cond::no();
+  if (k == "CONTACTS") {
+    const Name& n = name_of(e, 0);
+    int neg = number(e.args[1], e.line, e.cols[1]);
+    Area a = n.dev.dev == Dev::X ? Area::X : n.dev.dev == Dev::Y ? Area::Y : Area::M;
+    return bit_leaf(neg ? Op::LOADN : Op::LOAD, a, n.dev.index, e);
+  }
+  static const std::map<std::string, Op> cmp = {{"EQU", Op::LDEQ}, {"NEQ", Op::LDNE}, {"GRT", Op::LDGT},
+                                                {"GEQ", Op::LDGE}, {"LES", Op::LDLT}, {"LEQ", Op::LDLE}};
+  return Cond::of(leaf_node(cmp.at(k), {value(e, 0), value(e, 1)}, e));
+}
+
+int32_t Importer::cycle_ms(const Elem& e) {
+  if (cycle_us_ <= 0) fail(e.line, e.col, e.kw + " needs a cycle time, and this file has CYCLE=" + std::to_string(cycle_us_));
+  if (cycle_us_ % 1000)
+    fail(e.line, e.col, e.kw + " counts cycles of CYCLE=" + std::to_string(cycle_us_) +
+                            " us, which is not a whole number of milliseconds; ldc timers count whole milliseconds");
+  return int32_t(cycle_us_ / 1000);
+}
+
+// LDmicro turns a delay into a number of cycles, P = (delay + adjust * cycle) / cycle
+// (integer division; adjust is -1 in LDmicro 0.1 files unless given), and the
+// timer's output changes after P cycles.  ldc's preset is P cycles in ms.
+int32_t Importer::timer_ms(const Elem& e, const Name&) {
+  int32_t cyc = cycle_ms(e);
+  if (!is_number(e.args[1]))
+    fail(e.line, e.cols[1], e.kw + " with a variable delay '" + e.args[1] + "' is not supported: LDmicro counts it in cycles");
+  int64_t delay = number(e.args[1], e.line, e.cols[1]);
+  int64_t adjust = e.args.size() >= 3 ? number(e.args[2], e.line, e.cols[2]) : (v01_ ? -1 : 0);
+  if (delay <= 0) fail(e.line, e.cols[1], "timer delay must be positive (it is in microseconds)");
+  int64_t p = (delay + cycle_us_ * adjust) / cycle_us_;
+  if (p < 1)
+    fail(e.line, e.cols[1], e.kw + " " + e.args[0] + ": a delay of " + e.args[1] + " us is less than " + (adjust < 0 ? "two cycles" : "one cycle") +
+                                " of " + std::to_string(cycle_us_) + " us (LDmicro refuses it too: timer period too short)");
+  int64_t ms = p * cyc;
+  if (ms > INT32_MAX) fail(e.line, e.cols[1], "timer delay too long (at most 2147483647 ms)");
+  return int32_t(ms);
+}
+
+void Importer::timer(const Elem& e) {
+  Name& n = name_of(e, 0);
+  uint32_t t = n.dev.index;
+  int32_t pt = timer_ms(e, n);
+  SrcLoc loc = e.loc();
+  if (e.kw == "TON") {  // output = input AND done: the state narrows
+    rb_.add(out_node(Op::TON, {timer_opd(t), const_opd(pt)}, e));
+    rb_.narrow(bit_leaf(Op::LOAD, Area::TQ, t, e), loc);
+  } else if (e.kw == "TOF") {  // the output outlives the input: a new chain
+    rb_.add(out_node(Op::TOF, {timer_opd(t), const_opd(pt)}, e));
+    rb_.restart(bit_leaf(Op::LOAD, Area::TQ, t, e), loc);
+  } else if (e.kw == "RTO") {
+    // Retentive: count cycles while the input is on, keep the count while it
+    // is off; the output is (count before this cycle) >= P, whatever the input.
+    // The count lives in the timer's word, in ms (one cycle = CYCLE ms).
+    int32_t cyc = cycle_ms(e);
+    Cond s = materialize(e);
+    uint32_t o = temp_m(e);
+    Operand tw = int_opd(Area::TW, t);
+    rb_.chain(Cond::of(leaf_node(Op::LDGE, {tw, const_opd(pt)}, e)), out_node(Op::OUT, {bit_opd(Area::M, o)}, e), loc);
+    rb_.chain(c_and(std::move(s), Cond::of(leaf_node(Op::LDLT, {tw, const_opd(pt)}, e))),
+              out_node(Op::ADD, {tw, const_opd(cyc), tw}, e), loc);
+    rb_.restart(bit_leaf(Op::LOAD, Area::M, o, e), loc);
+  } else {  // TCY: while on, toggle a bit every P+1 cycles; the output is input AND that bit
+    int32_t cyc = cycle_ms(e);
+    Cond s = materialize(e);
+    uint32_t sm = s.n.elem.a[0].index;
+    uint32_t w = temp_m(e), st = temp_m(e);
+    Operand tw = int_opd(Area::TW, t);
+    rb_.chain(c_and(bit_leaf(Op::LOAD, Area::M, sm, e), Cond::of(leaf_node(Op::LDGE, {tw, const_opd(pt)}, e))),
+              out_node(Op::OUT, {bit_opd(Area::M, w)}, e), loc);
+    rb_.chain(c_and(bit_leaf(Op::LOAD, Area::M, sm, e), Cond::of(leaf_node(Op::LDLT, {tw, const_opd(pt)}, e))),
+              out_node(Op::ADD, {tw, const_opd(cyc), tw}, e), loc);
+    rb_.chain(c_or(bit_leaf(Op::LOADN, Area::M, sm, e), bit_leaf(Op::LOAD, Area::M, w, e)), out_node(Op::MOV, {const_opd(0), tw}, e), loc);
+    Cond flip = c_or(c_and(bit_leaf(Op::LOAD, Area::M, w, e), bit_leaf(Op::LOADN, Area::M, st, e)),
+                     c_and(bit_leaf(Op::LOADN, Area::M, w, e), bit_leaf(Op::LOAD, Area::M, st, e)));
+    rb_.chain(std::move(flip), out_node(Op::OUT, {bit_opd(Area::M, st)}, e), loc);
+    rb_.restart(c_and(bit_leaf(Op::LOAD, Area::M, sm, e), bit_leaf(Op::LOAD, Area::M, st, e)), loc);
+  }
+}
+
+void Importer::counter(const Elem& e) {
+  Name& n = name_of(e, 0);
+  uint32_t c = n.dev.index;
+  Operand cw = int_opd(Area::CW, c);
+  Operand max = value(e, 1);
+  SrcLoc loc = e.loc();
+  if (v01_ && e.args.size() == 2) {
+    // LDmicro 0.1: CTU/CTD count rising edges without limit, output count >= max;
+    // CTC counts rising edges and wraps past max to 0, passing its input on.
+    if (e.kw == "CTU") {
+      rb_.add(out_node(Op::CTU, {counter_opd(c), max}, e));
+      rb_.restart(bit_leaf(Op::LOAD, Area::CQ, c, e), loc);
+    } else if (e.kw == "CTD") {
+      rb_.add(out_node(Op::CTD, {counter_opd(c), const_opd(0)}, e));
+      rb_.restart(Cond::of(leaf_node(Op::LDGE, {cw, max}, e)), loc);
+    } else if (e.kw == "CTC") {
+      Cond s = materialize(e);
+      TreeNode wrap = then_node(Cond::of(leaf_node(Op::LDGT, {cw, max}, e)), out_node(Op::MOV, {const_opd(0), cw}, e), loc);
+      std::vector<TreeNode> items;
+      items.push_back(out_node(Op::ADD, {cw, const_opd(1), cw}, e));
+      items.push_back(std::move(wrap));
+      rb_.add(then_node(bit_leaf(Op::LOADP, Area::M, s.n.elem.a[0].index, e), fork_of(std::move(items)), loc));
+    } else {
+      fail(e.line, e.col, "CTR is not an LDmicro 0.1 element");
+    }
+    return;
+  }
+  // LDmicro 2.x+ (and 0.1 files using the newer fields): the counter starts at
+  // `init`, counts on the input's edge of the given kind, and saturates (CTU,
+  // CTD) or wraps to init with a one-cycle output pulse (CTC, CTR).
+  Operand init = e.args.size() >= 3 ? value(e, 2) : const_opd(0);
+  char kind = e.args.size() >= 4 ? e.args[3][0] : '/';
+  if (kind != '/' && kind != '\\' && kind != '-' && kind != 'o')
+    fail(e.line, e.cols[3], "unknown counter input kind '" + e.args[3] + "' (expected / \\ - or o)");
+  Cond s = materialize(e);
+  if (init.kind == OpdKind::ConstInt) {
+    if (init.ival != 0) init_.push_back(out_node(Op::MOV, {init, cw}, e));
+  } else {  // LDmicro loads a variable init when the counter first runs
+    rb_.chain(bit_leaf(Op::LOAD, Area::S, kBitFirstScan, e), out_node(Op::MOV, {init, cw}, e), loc);
+  }
+  uint32_t sm = s.n.elem.a[0].index;
+  auto edge = [&]() {
+    return kind == '/' ? bit_leaf(Op::LOADP, Area::M, sm, e) : kind == '\\' ? bit_leaf(Op::LOADF, Area::M, sm, e)
+           : kind == '-' ? bit_leaf(Op::LOAD, Area::M, sm, e) : bit_leaf(Op::LOADN, Area::M, sm, e);
+  };
+  if (e.kw == "CTU") {
+    rb_.chain(c_and(edge(), Cond::of(leaf_node(Op::LDLT, {cw, max}, e))), out_node(Op::ADD, {cw, const_opd(1), cw}, e), loc);
+    rb_.restart(Cond::of(leaf_node(Op::LDGE, {cw, max}, e)), loc);
+  } else if (e.kw == "CTD") {
+    rb_.chain(c_and(edge(), Cond::of(leaf_node(Op::LDGT, {cw, max}, e))), out_node(Op::SUB, {cw, const_opd(1), cw}, e), loc);
+    rb_.restart(Cond::of(leaf_node(Op::LDGT, {cw, max}, e)), loc);
+  } else {
+    bool up = e.kw == "CTC";
+    uint32_t w = temp_m(e);
+    std::vector<TreeNode> wrap;
+    wrap.push_back(out_node(Op::OUT, {bit_opd(Area::M, w)}, e));
+    wrap.push_back(out_node(Op::MOV, {init, cw}, e));
+    std::vector<TreeNode> items;
+    items.push_back(out_node(up ? Op::ADD : Op::SUB, {cw, const_opd(1), cw}, e));
+    items.push_back(then_node(Cond::of(leaf_node(up ? Op::LDGT : Op::LDLT, {cw, max}, e)), fork_of(std::move(wrap)), loc));
+    rb_.chain(edge(), fork_of(std::move(items)), loc);
+    rb_.restart(bit_leaf(Op::LOAD, Area::M, w, e), loc);
+  }
+}
+
+void Importer::coil(const Elem& e) {
+  Name& n = name_of(e, 0);
+  if (n.dev.dev == Dev::X) fail(e.line, e.cols[0], "'" + e.args[0] + "' is an input; a coil drives Y... outputs or R... relays");
+  Area a = n.dev.dev == Dev::Y ? Area::Y : Area::M;
+  int neg = number(e.args[1], e.line, e.cols[1]), set = number(e.args[2], e.line, e.cols[2]),
+      reset = number(e.args[3], e.line, e.cols[3]);
+  int toggle = e.args.size() == 5 ? number(e.args[4], e.line, e.cols[4]) : 0;
+  Operand b = bit_opd(a, n.dev.index);
+  if (neg) rb_.add(out_node(Op::OUTN, {b}, e));
+  else if (set) rb_.add(out_node(Op::SET, {b}, e));
+  else if (reset) rb_.add(out_node(Op::RST, {b}, e));
+  else if (toggle) {  // flip the bit on each rising edge of the rung state
+    Cond s = materialize(e);
+    uint32_t sm = s.n.elem.a[0].index, p = temp_m(e);
+    rb_.chain(bit_leaf(Op::LOADP, Area::M, sm, e), out_node(Op::OUT, {bit_opd(Area::M, p)}, e), e.loc());
+    Cond flip = c_or(c_and(bit_leaf(Op::LOAD, Area::M, p, e), bit_leaf(Op::LOADN, a, n.dev.index, e)),
+                     c_and(bit_leaf(Op::LOADN, Area::M, p, e), bit_leaf(Op::LOAD, a, n.dev.index, e)));
+    rb_.chain(std::move(flip), out_node(Op::OUT, {b}, e), e.loc());
+    rb_.restart(std::move(s), e.loc());
+  } else rb_.add(out_node(Op::OUT, {b}, e));
+}
+
+void Importer::element(const Elem& e, bool need_out) {
+  const std::string& k = e.kw;
+  SrcLoc loc = e.loc();
+  if (k == "SERIES") return series_code(e.kids, need_out);
+  if (k == "PARALLEL") return parallel_code(e, need_out);
+  if (auto c = pure(e)) {
+    if (c->k != Cond::True) rb_.narrow(std::move(*c), loc);
+    return;
+  }
+  if (k == "COIL") return coil(e);
+  if (k == "TON" || k == "TOF" || k == "RTO" || k == "TCY") return timer(e);
+  if (k == "CTU" || k == "CTD" || k == "CTC" || k == "CTR") return counter(e);
+  if (k == "OSR") {
+    Cond s = materialize(e);
+    rb_.narrow(bit_leaf(Op::LOADP, Area::M, s.n.elem.a[0].index, e), loc);
+    return;
+  }
+  if (k == "OSF") {
+    Cond s = materialize(e);
+    rb_.restart(bit_leaf(Op::LOADF, Area::M, s.n.elem.a[0].index, e), loc);
+    return;
+  }
+  if (k == "MASTER_RELAY") {
+    // LDmicro: if the master relay is off, turn it on; else it takes the rung state.
+    Cond s = materialize(e);
+    uint32_t sm = s.n.elem.a[0].index;
+    rb_.chain(c_or(std::move(s), bit_leaf(Op::LOADN, Area::M, mcr_, e)), out_node(Op::OUT, {bit_opd(Area::M, mcr_)}, e), loc);
+    rb_.restart(bit_leaf(Op::LOAD, Area::M, sm, e), loc);
+    return;
+  }
+  if (k == "RES") {
+    auto it = names_.find(e.args[0]);
+    if (it == names_.end()) fail(e.line, e.cols[0], "RES of '" + e.args[0] + "', which no element uses");
+    const Name& n = it->second;
+    if (n.kind == NK::Timer) {
+      if (n.timer_kind == "TON") rb_.add(out_node(Op::RSTT, {timer_opd(n.dev.index)}, e));
+      else if (n.timer_kind == "RTO" || n.timer_kind == "TCY") rb_.add(out_node(Op::MOV, {const_opd(0), int_opd(Area::TW, n.dev.index)}, e));
+      else fail(e.line, e.cols[0], "RES of the TOF timer '" + e.args[0] + "' is not supported: LDmicro restarts its off-delay, which ldc's TOF cannot be made to do");
+    } else if (n.kind == NK::Counter) {
+      if (v01_) rb_.add(out_node(Op::RSTC, {counter_opd(n.dev.index)}, e));
+      else {
+        // newer LDmicro resets a counter to its init value
+        Operand init = const_opd(0);
+        std::function<void(const std::vector<Elem>&)> find = [&](const std::vector<Elem>& s) {
+          for (const Elem& x : s) {
+            if ((x.kw == "CTU" || x.kw == "CTD" || x.kw == "CTC" || x.kw == "CTR") && x.args[0] == e.args[0] && x.args.size() >= 3)
+              init = value(x, 2);
+            find(x.kids);
+          }
+        };
+        for (const SrcRung& r : rungs_) find(r.series);
+        rb_.add(out_node(Op::MOV, {init, int_opd(Area::CW, n.dev.index)}, e));
+      }
+    } else if (n.kind == NK::Var) {
+      rb_.add(out_node(Op::MOV, {const_opd(0), int_opd(Area::D, n.dev.index)}, e));
+    } else {
+      fail(e.line, e.cols[0], "RES of " + std::string(kind_word(n.kind)) + " '" + e.args[0] + "' is not supported");
+    }
+    return;
+  }
+  if (k == "MOVE") {
+    rb_.add(out_node(Op::MOV, {value(e, 1), value(e, 0, true)}, e));
+    return;
+  }
+  static const std::map<std::string, Op> math = {{"ADD", Op::ADD}, {"SUB", Op::SUB}, {"MUL", Op::MUL}, {"DIV", Op::DIV},
+                                                 {"MOD", Op::MOD}, {"AND", Op::WAND}, {"OR", Op::WOR}, {"XOR", Op::WXOR}, {"SHL", Op::SHL}};
+  if (auto it = math.find(k); it != math.end()) {
+    rb_.add(out_node(it->second, {value(e, 1), value(e, 2), value(e, 0, true)}, e));
+    return;
+  }
+  if (k == "NOT") {
+    rb_.add(out_node(Op::WNOT, {value(e, 1), value(e, 0, true)}, e));
+    return;
+  }
+  if (k == "NEG") {
+    rb_.add(out_node(Op::SUB, {const_opd(0), value(e, 1), value(e, 0, true)}, e));
+    return;
+  }
+  if (k == "SET_BIT" || k == "CLEAR_BIT" || k == "IF_BIT_SET" || k == "IF_BIT_CLEAR") {
+    Operand var = value(e, 0, k == "SET_BIT" || k == "CLEAR_BIT");
+    Operand mask;
+    if (is_number(e.args[1])) {
+      int b = number(e.args[1], e.line, e.cols[1]);
+      if (b < 0 || b > 31) fail(e.line, e.cols[1], "bit number " + e.args[1] + " must be 0..31");
+      mask = const_opd(int32_t(uint32_t(1) << b));
+      if (k == "CLEAR_BIT") mask.ival = ~mask.ival;
+    } else {
+      mask = int_opd(Area::D, temp_d(e));
+      rb_.add(out_node(Op::SHL, {const_opd(1), value(e, 1), mask}, e));
+      if (k == "CLEAR_BIT") rb_.add(out_node(Op::WNOT, {mask, mask}, e));
+    }
+    if (k == "SET_BIT") rb_.add(out_node(Op::WOR, {var, mask, var}, e));
+    else if (k == "CLEAR_BIT") rb_.add(out_node(Op::WAND, {var, mask, var}, e));
+    else {
+      Operand t = int_opd(Area::D, temp_d(e));
+      rb_.add(out_node(Op::WAND, {var, mask, t}, e));
+      rb_.narrow(Cond::of(leaf_node(k == "IF_BIT_SET" ? Op::LDNE : Op::LDEQ, {t, const_opd(0)}, e)), loc);
+    }
+    return;
+  }
+  if (k == "SHIFT_REGISTER") {
+    // on each rising edge: name{i+1} := name{i}, from the last stage down
+    int stages = number(e.args[1], e.line, e.cols[1]);
+    Cond s = materialize(e);
+    std::vector<TreeNode> moves;
+    for (int i = stages - 2; i >= 0; i--) {
+      const Name& src = names_.at(e.args[0] + std::to_string(i));
+      const Name& dst = names_.at(e.args[0] + std::to_string(i + 1));
+      moves.push_back(out_node(Op::MOV, {int_opd(Area::D, src.dev.index), int_opd(Area::D, dst.dev.index)}, e));
+    }
+    if (!moves.empty()) rb_.add(then_node(bit_leaf(Op::LOADP, Area::M, s.n.elem.a[0].index, e), fork_of(std::move(moves)), loc));
+    return;
+  }
+  if (k == "LOOK_UP_TABLE") {
+    int count = number(e.args[2], e.line, e.cols[2]);
+    if (count < 1 || e.args.size() < size_t(4 + count))
+      fail(e.line, e.col, "LOOK_UP_TABLE lists " + std::to_string(e.args.size() >= 4 ? e.args.size() - 4 : 0) + " values but says " + e.args[2]);
+    Operand dest = value(e, 0, true), index = value(e, 1);
+    std::vector<TreeNode> items;
+    for (int i = 0; i < count; i++) {
+      Operand v = const_opd(number(e.args[4 + i], e.line, e.cols[4 + i]));
+      items.push_back(then_node(Cond::of(leaf_node(Op::LDEQ, {index, const_opd(i)}, e)), out_node(Op::MOV, {v, dest}, e), loc));
+    }
+    rb_.add(fork_of(std::move(items)));
+    return;
+  }
+  if (k == "PIECEWISE_LINEAR") {
+    int count = number(e.args[2], e.line, e.cols[2]);
+    if (count < 1 || e.args.size() < size_t(3 + 2 * count))
+      fail(e.line, e.col, "PIECEWISE_LINEAR needs " + e.args[2] + " (x, y) points");
+    std::vector<int32_t> v;
+    for (int i = 0; i < 2 * count; i++) v.push_back(number(e.args[3 + i], e.line, e.cols[3 + i]));
+    for (int i = 1; i < count; i++)
+      if (v[2 * i] <= v[2 * (i - 1)]) fail(e.line, e.cols[3 + 2 * i], "x values in a piecewise linear table must increase strictly");
+    Operand dest = value(e, 0, true), index = value(e, 1);
+    std::vector<TreeNode> items;
+    for (int i = count - 1; i >= 1; i--) {
+      int32_t dx = v[2 * i] - v[2 * (i - 1)], dy = v[2 * i + 1] - v[2 * (i - 1) + 1];
+      std::vector<TreeNode> body;
+      body.push_back(out_node(Op::SUB, {index, const_opd(v[2 * (i - 1)]), dest}, e));
+      body.push_back(out_node(Op::MUL, {dest, const_opd(dy), dest}, e));
+      body.push_back(out_node(Op::DIV, {dest, const_opd(dx), dest}, e));
+      body.push_back(out_node(Op::ADD, {dest, const_opd(v[2 * (i - 1) + 1]), dest}, e));
+      items.push_back(then_node(Cond::of(leaf_node(Op::LDLE, {index, const_opd(v[2 * i])}, e)), fork_of(std::move(body)), loc));
+    }
+    if (!items.empty()) rb_.add(fork_of(std::move(items)));
+    return;
+  }
+  if (k == "READ_ADC") {
+    const Name& n = name_of(e, 0);
+    rb_.add(out_node(Op::MOV, {int_opd(Area::WX, n.dev.index), int_opd(Area::D, n.held.index)}, e));
+    return;
+  }
+  if (k == "SET_PWM") {
+    std::string pn = e.args.size() >= 3 ? e.args[2] : "P";
+    if (pn[0] != 'P') pn = "P" + pn;
+    const Name& n = names_.at(pn);
+    rb_.add(out_node(Op::MOV, {value(e, 0), int_opd(Area::WY, n.dev.index)}, e));
+    return;
+  }
+  fail(e.line, e.col, "internal: no translation for '" + k + "'");
+}
+
+void Importer::series_code(const std::vector<Elem>& s, bool need_out) {
+  for (size_t i = 0; i < s.size(); i++) element(s[i], need_out || i + 1 < s.size());
+}
+
+// LDmicro: every branch starts from a copy of the state; the state after the
+// block is the OR of the branches' final states, each taken when its branch ends.
+void Importer::parallel_code(const Elem& e, bool need_out) {
+  SrcLoc loc = e.loc();
+  if (auto c = pure(e)) {
+    if (c->k != Cond::True) rb_.narrow(std::move(*c), loc);
+    return;
+  }
+  size_t n = e.kids.size();
+  bool saved_needed = false;
+  for (size_t i = 0; i + 1 < n; i++) saved_needed |= breaks(e.kids[i]);
+  Cond saved;
+  if (saved_needed) saved = materialize(e);
+  size_t depth = rb_.frames.size();
+  int gen0 = rb_.gen;
+  uint32_t po = need_out ? temp_m(e) : 0;
+  for (size_t i = 0; i < n; i++) {
+    if (rb_.gen == gen0) rb_.pop_to(depth);
+    else if (saved_needed) rb_.restart(saved, loc);
+    else fail(e.line, e.col, "internal: a parallel branch ended its chain unexpectedly");
+    element(e.kids[i], need_out);
+    if (need_out) rb_.add(out_node(i == 0 ? Op::OUT : Op::SET, {bit_opd(Area::M, po)}, e));
+  }
+  if (rb_.gen == gen0) {
+    rb_.pop_to(depth);
+    if (need_out) rb_.narrow(bit_leaf(Op::LOAD, Area::M, po, e), loc);
+  } else if (need_out) {
+    rb_.restart(bit_leaf(Op::LOAD, Area::M, po, e), loc);
+  }
+}
+
+void Importer::translate(const SrcRung& r, size_t) {
+  Elem at;
+  at.line = r.line;
+  at.col = 1;
+  rb_ = RungBuilder();
+  rb_.start(mcr_used_ ? bit_leaf(Op::LOAD, Area::M, mcr_, at) : Cond::yes(), at.loc());
+  series_code(r.series, false);
+  rb_.close_chain();
+}
+
+TreeProgram Importer::run() {
+  read_lines();
+  if (lines_.empty() || trim(lines_[0].text).find("LDmicro") == std::string::npos)
+    fail(1, 1, "not an LDmicro file: the first line should be LDmicro0.1, LDmicro0.2 or LDmicro");
+  size_t prog = header();
+  program(prog);
+  if (rungs_.empty()) fail(int(lines_.size()), 1, "no rungs in this program");
+  for (const auto& [nm, line] : io_list_) {
+    char c = nm.empty() ? 0 : nm[0];
+    NK k = c == 'X' || c == 'Y' ? NK::Bit : c == 'A' ? NK::Adc : c == 'P' ? NK::Pwm : NK::Var;
+    if (k != NK::Var) note(nm, k, line, 1);
+  }
+  std::function<void(const std::vector<Elem>&)> walk = [&](const std::vector<Elem>& s) {
+    for (const Elem& e : s) {
+      collect(e);
+      if (e.kw == "MASTER_RELAY") mcr_used_ = true;
+    }
+  };
+  for (const SrcRung& r : rungs_) walk(r.series);
+  allocate();
+  TreeProgram p;
+  p.source = file_;
+  p.aliases = aliases_;
+  Elem top;
+  top.line = rungs_[0].line;
+  top.col = 1;
+  if (mcr_used_) {
+    // LDmicro sets its master control relay at the start of every cycle
+    mcr_ = temp_m(top);
+    TreeRung tr;
+    tr.line = rungs_[0].line;
+    tr.title = "master control relay on";
+    tr.root = out_node(Op::OUT, {bit_opd(Area::M, mcr_)}, top);
+    p.rungs.push_back(std::move(tr));
+  }
+  size_t init_at = p.rungs.size();
+  for (size_t i = 0; i < rungs_.size(); i++) {
+    translate(rungs_[i], i);
+    if (rb_.top.empty()) continue;  // only conditions: nothing to do
+    TreeRung tr;
+    tr.line = rungs_[i].line;
+    tr.title = titles_[i];
+    tr.root = fork_of(std::move(rb_.top));
+    p.rungs.push_back(std::move(tr));
+  }
+  if (!init_.empty()) {
+    TreeRung tr;
+    tr.line = rungs_[0].line;
+    tr.title = "counter initial values";
+    tr.root = then_node(bit_leaf(Op::LOAD, Area::S, kBitFirstScan, top), fork_of(std::move(init_)), top.loc());
+    p.rungs.insert(p.rungs.begin() + long(init_at), std::move(tr));
+  }
+  if (p.rungs.empty()) fail(int(lines_.size()), 1, "this program has no outputs");
+  return p;
+}
+
+}  // namespace
+
+TreeProgram parse_ldmicro(std::string_view text, const std::string& filename) { return Importer(text, filename).run(); }
+
+}  // namespace ldc
