@@ -23,7 +23,10 @@ struct X86Code {
   std::vector<std::vector<uint32_t>> il_items;
 };
 
-X86Code generate_x86(const Program& p, const Layout& layout);
+// opt_level 0: paper 003's pure macro expansion (the bit stack shifted in ebp).
+// opt_level 2: rung by rung, the bit stack in callee-saved byte registers
+// (r12b r13b r14b r15b bpl) when the rung's live stack fits, else as -O0.
+X86Code generate_x86(const Program& p, const Layout& layout, int opt_level = 0);
 
 // Names of the global labels the backend defines.
 inline constexpr const char* kX86ExitLabel = "scan_exit";

@@ -1,4 +1,6 @@
 // backend-x86/x86gen.cpp -- IL mnemonics -> x86-64 assembly templates.
+#include <algorithm>
+#include <climits>
 #include <cstring>
 #include <map>
 #include <stdexcept>
@@ -100,9 +102,15 @@ uint32_t float_bits(float f) {
   return u;
 }
 
+// -O2 keeps the bit stack in callee-saved byte registers: the entry at
+// stack position p lives in kSlots[p % kNumSlots] (0 or 1 in the low byte).
+// They survive the calls to the REAL functions.
+const Reg kSlots[] = {r8(R12), r8(R13), r8(R14), r8(R15), r8(BP)};
+constexpr int kNumSlots = 5;
+
 class Gen {
  public:
-  Gen(const Layout& l, std::vector<Item>& items) : L_(l), items_(items) {}
+  Gen(const Layout& l, std::vector<Item>& items, bool slots) : L_(l), items_(items), slots_(slots) {}
 
   void instr(const ldc::Instr& in);
 
@@ -110,6 +118,22 @@ class Gen {
   const Layout& L_;
   std::vector<Item>& items_;
   int next_label_ = 0;
+  bool slots_;     // -O2: the stack in kSlots; else the -O0 shift register in ebp
+  int depth_ = 0;  // stack positions in use before the current instruction
+
+  Reg slot(int pos) const { return kSlots[((pos % kNumSlots) + kNumSlots) % kNumSlots]; }
+  Reg top8() const { return slot(depth_ - 1); }
+  void test_top() {
+    if (slots_) emit(M::Test, {R(top8()), R(top8())});
+    else emit(M::Test, {R(ebp), I(1)});
+  }
+  // eax = the top, 0 or 1
+  void top_to_eax() {
+    if (slots_) emit(M::Movzx, {R(eax), R(top8())});
+    else { emit(M::Mov, {R(eax), R(ebp)}); emit(M::And, {R(eax), I(1)}); }
+  }
+  void bit_slots(const ldc::Instr& in);
+  void gen(const ldc::Instr& in);
 
   void emit(Instruction i) { items_.push_back(Item::instr(std::move(i))); }
   void emit(M m, std::initializer_list<Operand> ops) { emit(make(m, ops)); }
@@ -181,13 +205,14 @@ class Gen {
   }
   void set_error() { emit(M::Mov, {B(L_.addr(Area::S, kBitError)), I(1)}); }
   void push_al() {
+    if (slots_) return emit(M::Mov, {R(slot(depth_)), R(al)});
     emit(M::Movzx, {R(eax), R(al)});
     emit(M::Lea, {R(ebp), Operand::m(Mem{Size::None, r64(AX), r64(BP), 2, 0})});
   }
   // if the top of the stack is 0, skip to the returned label
   std::string skip_unless_power() {
     std::string skip = fresh();
-    emit(M::Test, {R(ebp), I(1)});
+    test_top();
     jcc(Cond::E, skip);
     return skip;
   }
@@ -211,6 +236,7 @@ void Gen::compare(const ldc::Instr& in) {
     emit(M::Cmp, {R(eax), int_src(b)});
     Cond c = in.op == Op::LDEQ ? Cond::E : in.op == Op::LDNE ? Cond::NE : in.op == Op::LDLT ? Cond::L
            : in.op == Op::LDLE ? Cond::LE : in.op == Op::LDGT ? Cond::G : Cond::GE;
+    if (slots_) return emit(makeCc(M::Setcc, c, {R(slot(depth_))}));
     emit(makeCc(M::Setcc, c, {R(al)}));
     return push_al();
   }
@@ -432,7 +458,7 @@ void Gen::timer(const ldc::Instr& in) {
   std::string off = fresh(), done = fresh();
   if (in.op == Op::TON) {
     std::string running = fresh(), q = fresh();
-    emit(M::Test, {R(ebp), I(1)});
+    test_top();
     jcc(Cond::E, off);
     emit(M::Cmp, {B(ti), I(0)});
     jcc(Cond::NE, running);
@@ -454,7 +480,7 @@ void Gen::timer(const ldc::Instr& in) {
     label(done);
   } else if (in.op == Op::TOF) {
     std::string not_falling = fresh(), ti0 = fresh();
-    emit(M::Test, {R(ebp), I(1)});
+    test_top();
     jcc(Cond::E, off);
     emit(M::Mov, {B(tq), I(1)});
     emit(M::Mov, {Dw(tw), I(0)});
@@ -488,7 +514,7 @@ void Gen::timer(const ldc::Instr& in) {
     emit(M::Mov, {B(tq), I(0)});
     jmp(remember);
     label(idle);
-    emit(M::Test, {R(ebp), I(1)});
+    test_top();
     jcc(Cond::E, off);
     emit(M::Cmp, {B(ti), I(0)});
     jcc(Cond::NE, remember);
@@ -500,9 +526,8 @@ void Gen::timer(const ldc::Instr& in) {
     label(off);
     emit(M::Mov, {Dw(tw), I(0)});
     label(remember);
-    emit(M::Mov, {R(eax), R(ebp)});
-    emit(M::And, {R(eax), I(1)});
-    emit(M::Mov, {B(ti), R(al)});
+    if (slots_) emit(M::Mov, {B(ti), R(top8())});
+    else { top_to_eax(); emit(M::Mov, {B(ti), R(al)}); }
   }
 }
 
@@ -519,8 +544,7 @@ void Gen::counter(const ldc::Instr& in) {
   bool up = in.op == Op::CTU;
   uint32_t e = addr(in.a[2]);
   std::string q = fresh();
-  emit(M::Mov, {R(eax), R(ebp)});
-  emit(M::And, {R(eax), I(1)});
+  top_to_eax();
   emit(M::Movzx, {R(ecx), B(e)});
   emit(M::Mov, {B(e), R(al)});
   emit(M::Not, {R(ecx)});
@@ -544,6 +568,54 @@ void Gen::counter(const ldc::Instr& in) {
 }
 
 void Gen::instr(const ldc::Instr& in) {
+  gen(in);
+  depth_ += op_info(in.op).push - op_info(in.op).pop;
+}
+
+// -O2 bit instructions: one or two byte operations on the slot registers.
+void Gen::bit_slots(const ldc::Instr& in) {
+  Reg d = slot(depth_), t = slot(depth_ - 1), u = slot(depth_ - 2);
+  Operand b0 = in.nopd() > 0 ? B(addr(in.a[0])) : Operand{}, b1 = in.nopd() > 1 ? B(addr(in.a[1])) : Operand{};
+  switch (in.op) {
+    case Op::LOAD: return emit(M::Mov, {R(d), b0});
+    case Op::LOADN: emit(M::Mov, {R(d), b0}); return emit(M::Xor, {R(d), I(1)});
+    case Op::AND: return emit(M::And, {R(t), b0});
+    case Op::OR: return emit(M::Or, {R(t), b0});
+    case Op::ANDN: case Op::ORN:
+      emit(M::Mov, {R(al), b0});
+      emit(M::Xor, {R(al), I(1)});
+      return emit(in.op == Op::ANDN ? M::And : M::Or, {R(t), R(al)});
+    case Op::LOADP:  // d = b & !e; e = b
+      emit(M::Mov, {R(d), b0});
+      emit(M::Mov, {R(al), b1});
+      emit(M::Mov, {b1, R(d)});
+      emit(M::Xor, {R(al), I(1)});
+      return emit(M::And, {R(d), R(al)});
+    case Op::LOADF:  // d = !b & e; e = b
+      emit(M::Mov, {R(al), b0});
+      emit(M::Mov, {R(d), b1});
+      emit(M::Mov, {b1, R(al)});
+      emit(M::Xor, {R(al), I(1)});
+      return emit(M::And, {R(d), R(al)});
+    case Op::TRUE: return emit(M::Mov, {R(d), I(1)});
+    case Op::ANDBLK: return emit(M::And, {R(u), R(t)});
+    case Op::ORBLK: return emit(M::Or, {R(u), R(t)});
+    case Op::MPS: return emit(M::Mov, {R(d), R(t)});
+    case Op::MRD: return emit(M::Mov, {R(t), R(u)});
+    case Op::MPP: return;
+    case Op::OUT: return emit(M::Mov, {b0, R(t)});
+    case Op::SET: return emit(M::Or, {b0, R(t)});
+    case Op::OUTN: case Op::RST:
+      emit(M::Mov, {R(al), R(t)});
+      emit(M::Xor, {R(al), I(1)});
+      return emit(in.op == Op::OUTN ? M::Mov : M::And, {b0, R(al)});
+    default: break;
+  }
+  throw std::logic_error(std::string("x86 backend: no -O2 form for ") + op_info(in.op).name);
+}
+
+void Gen::gen(const ldc::Instr& in) {
+  if (slots_ && has_template(in.op)) return bit_slots(in);
   if (has_template(in.op)) {
     for (Instruction i : bit_template(in.op)) {
       for (int k = 0; k < i.numOperands; k++) {
@@ -567,7 +639,7 @@ void Gen::instr(const ldc::Instr& in) {
     case OpClass::Timer: return timer(in);
     case OpClass::Counter: return counter(in);
     case OpClass::Flow: {
-      emit(M::Test, {R(ebp), I(1)});
+      test_top();
       Instruction j = makeCc(M::Jcc, Cond::NE, {L(in.op == Op::JMP ? x86_label_name(in.a[0].label) : kX86ExitLabel)});
       j.longBranch = true;
       return emit(std::move(j));
@@ -577,11 +649,51 @@ void Gen::instr(const ldc::Instr& in) {
   throw std::logic_error(std::string("x86 backend: no template for ") + op_info(in.op).name);
 }
 
+// Can this rung keep its stack in the kNumSlots registers?  Stack position p
+// maps to slot p % kNumSlots, so the positions live at any one time must span
+// fewer than kNumSlots (what lies deeper is never read again, as with the
+// interpreter's shift register).
+bool fits_slots(const std::vector<ldc::Instr>& code) {
+  struct Ev { size_t at; int pos; bool write; };
+  std::vector<Ev> ev;
+  int d = 0;
+  for (size_t i = 0; i < code.size(); i++) {
+    auto rd = [&](int p) { ev.push_back({i, p, false}); return p >= 0; };
+    auto wr = [&](int p) { ev.push_back({i, p, true}); };
+    switch (code[i].op) {
+      case Op::LOAD: case Op::LOADN: case Op::LOADP: case Op::LOADF: case Op::TRUE:
+      case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE:
+        wr(d++); break;
+      case Op::ANDBLK: case Op::ORBLK:
+        if (!rd(d - 1) || !rd(d - 2)) return false;
+        wr(d - 2); d--; break;
+      case Op::MPS: if (!rd(d - 1)) return false; wr(d); d++; break;
+      case Op::MRD: if (!rd(d - 2)) return false; wr(d - 1); break;
+      case Op::MPP: d--; break;
+      default: if (!rd(d - 1)) return false; break;  // AND.., outputs, applications, flow
+    }
+  }
+  // for every point between instructions: the positions read again before
+  // they are written must lie within one window of kNumSlots
+  for (size_t at = 0; at <= code.size(); at++) {
+    int lo = INT32_MAX, hi = INT32_MIN;
+    std::vector<int> decided;
+    for (const Ev& e : ev) {
+      if (e.at < at || std::find(decided.begin(), decided.end(), e.pos) != decided.end()) continue;
+      decided.push_back(e.pos);  // the first event at or after `at` decides
+      if (!e.write) { lo = std::min(lo, e.pos); hi = std::max(hi, e.pos); }
+    }
+    if (lo <= hi && hi - lo >= kNumSlots) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 std::string x86_label_name(const std::string& il_label) { return "lbl_" + il_label; }
 
-X86Code generate_x86(const Program& p, const Layout& layout) {
+X86Code generate_x86(const Program& p, const Layout& layout, int opt_level) {
+  const bool o2 = opt_level >= 2;
   X86Code out;
   auto& prog = out.program;
   prog.globals.push_back(kX86ExitLabel);
@@ -592,9 +704,13 @@ X86Code generate_x86(const Program& p, const Layout& layout) {
   // prologue: keep rbx/rbp for the caller, 16-byte stack alignment for calls
   as::Block<Instruction> pro;
   pro.sourceLine = p.rungs.empty() ? 0 : p.rungs[0].line;
-  pro.items.push_back(Item::note("scan(image): rbx = image, ebp = bit stack"));
-  for (const char* t : {"push rbx", "push rbp", "push rax", "mov rbx, rdi", "xor ebp, ebp"})
-    pro.items.push_back(Item::instr(parse(t)));
+  pro.items.push_back(Item::note(o2 ? "scan(image): rbx = image, bit stack in r12b r13b r14b r15b bpl (-O2)"
+                                    : "scan(image): rbx = image, ebp = bit stack"));
+  static const char* const kPro0[] = {"push rbx", "push rbp", "push rax", "mov rbx, rdi", "xor ebp, ebp"};
+  static const char* const kPro2[] = {"push rbx", "push rbp", "push r12", "push r13", "push r14", "push r15",
+                                      "push rax", "mov rbx, rdi", "xor ebp, ebp"};
+  if (o2) for (const char* t : kPro2) pro.items.push_back(Item::instr(parse(t)));
+  else for (const char* t : kPro0) pro.items.push_back(Item::instr(parse(t)));
   prog.blocks.push_back(std::move(pro));
 
   for (const Rung& r : p.rungs) {
@@ -603,7 +719,7 @@ X86Code generate_x86(const Program& p, const Layout& layout) {
     for (const auto& l : r.labels) b.items.push_back(Item::labelDef(x86_label_name(l), true));
     b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
     std::vector<uint32_t> starts;
-    Gen g(layout, b.items);
+    Gen g(layout, b.items, o2 && fits_slots(r.code));
     for (const ldc::Instr& in : r.code) {
       starts.push_back(uint32_t(b.items.size()));
       b.items.push_back(Item::note(instr_text(in)));
@@ -617,7 +733,10 @@ X86Code generate_x86(const Program& p, const Layout& layout) {
   epi.sourceLine = p.rungs.empty() ? 0 : p.rungs.back().line;
   for (const auto& l : p.end_labels) epi.items.push_back(Item::labelDef(x86_label_name(l), true));
   epi.items.push_back(Item::labelDef(kX86ExitLabel, true));
-  for (const char* t : {"pop rax", "pop rbp", "pop rbx", "ret"}) epi.items.push_back(Item::instr(parse(t)));
+  static const char* const kEpi0[] = {"pop rax", "pop rbp", "pop rbx", "ret"};
+  static const char* const kEpi2[] = {"pop rax", "pop r15", "pop r14", "pop r13", "pop r12", "pop rbp", "pop rbx", "ret"};
+  if (o2) for (const char* t : kEpi2) epi.items.push_back(Item::instr(parse(t)));
+  else for (const char* t : kEpi0) epi.items.push_back(Item::instr(parse(t)));
   prog.blocks.push_back(std::move(epi));
   return out;
 }

@@ -70,9 +70,9 @@ Compiled compile_source(const std::string& path) {
   return c;
 }
 
-NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode) {
+NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode, int opt_level) {
   NativeBuild b;
-  b.gen = generate_x86(p, p.layout());
+  b.gen = generate_x86(p, p.layout(), opt_level);
   b.asm_result = as::assemble(as::x86::target(), b.gen.program, mode);
   if (!b.asm_result.ok()) {
     std::string msg;

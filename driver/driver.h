@@ -37,7 +37,8 @@ struct NativeBuild {
   X86Code gen;
   as::Result asm_result;
 };
-NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode = as::Mode::Blockwise);
+NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode = as::Mode::Blockwise,
+                      int opt_level = 0);
 
 // The image ldc writes for the x86-64 target: code, binary IL, line map, names.
 Image make_x86_image(const Program& p, const NativeBuild& nb);

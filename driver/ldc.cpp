@@ -10,18 +10,19 @@
 using namespace ldc;
 
 static const char kUsage[] =
-    "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il|asm|listing|hex|c] [--target=x86-64|c40] [-O0]\n";
+    "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il|asm|listing|hex|c] [--target=x86-64|c40] [-O0|-O2]\n";
 
 int main(int argc, char** argv) {
   std::string input, output, emit, target = "x86-64";
+  int opt = 0;
   for (int i = 1; i < argc; i++) {
     std::string a = argv[i];
     if (a == "-o" && i + 1 < argc) output = argv[++i];
     else if (a.rfind("--emit=", 0) == 0) emit = a.substr(7);
     else if (a.rfind("--target=", 0) == 0) target = a.substr(9);
-    else if (a == "-O0") {}
-    else if (a == "-O1" || a == "-O2") {
-      std::fprintf(stderr, "ldc: error: %s is not available yet; -O0 (paper 003's macro expansion) is the only level\n", a.c_str());
+    else if (a == "-O0" || a == "-O2") opt = a[2] - '0';
+    else if (a == "-O1") {
+      std::fprintf(stderr, "ldc: error: -O1 is not available yet; use -O0 (paper 003's macro expansion) or -O2\n");
       return 1;
     }
     else if (a == "-h" || a == "--help") { std::fputs(kUsage, stdout); return 0; }
@@ -43,12 +44,12 @@ int main(int argc, char** argv) {
       text = generate_c(c.il, c.il.layout());
     } else if (emit == "asm" && target == "x86-64") {        // macro compiler
       text = "# ldc " + input + ": x86-64, GNU as syntax (.intel_syntax noprefix)\n" +
-             as::x86::toGnuAs(generate_x86(c.il, c.il.layout()).program);
+             as::x86::toGnuAs(generate_x86(c.il, c.il.layout(), opt).program);
     } else if (emit == "listing" && target == "x86-64") {    // + blockwise assembler
-      NativeBuild nb = build_x86(c.il, input);
+      NativeBuild nb = build_x86(c.il, input, as::Mode::Blockwise, opt);
       text = as::x86::listing(nb.gen.program, nb.asm_result);
     } else if ((emit.empty() || emit == "hex") && target == "x86-64") {  // + loader
-      NativeBuild nb = build_x86(c.il, input);
+      NativeBuild nb = build_x86(c.il, input, as::Mode::Blockwise, opt);
       std::vector<uint8_t> bin = write_image(make_x86_image(c.il, nb));
       if (emit == "hex") text = write_intel_hex(bin);
       else {

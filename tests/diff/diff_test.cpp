@@ -334,9 +334,9 @@ TEST(Found, EveryKeptReproducerMatches) {
 
 class DiffShard : public ::testing::TestWithParam<int> {};
 
-TEST_P(DiffShard, NativeMatchesInterpreter) {
+// One shard of the seeds: `test` against the interpreter after every scan.
+void run_shard(int shard, EngineFactory test, const std::string& what) {
   const long total = env_int("LDC_DIFF_SEEDS", kDefaultPrograms), seed0 = env_int("LDC_DIFF_SEED0", 1);
-  const int shard = GetParam();
   const std::string dir = output_dir();
   long programs = 0, rungs = 0, scans = 0, failures = 0;
   auto t0 = std::chrono::steady_clock::now();
@@ -345,7 +345,7 @@ TEST_P(DiffShard, NativeMatchesInterpreter) {
     GenOptions o = options_for(seed);
     GenProgram gp = generate_program(seed, o);
     std::string ld = render(gp), csv = generate_trace(seed, scans_for(seed), o);
-    Outcome out = compare_isolated(ld, csv, make_interp, make_native);
+    Outcome out = compare_isolated(ld, csv, make_interp, test);
     programs++;
     rungs += gp.rungs();
     scans += out.scans;
@@ -354,9 +354,9 @@ TEST_P(DiffShard, NativeMatchesInterpreter) {
       continue;
     }
     if (!out.failed()) continue;
-    Runner run = [](const std::string& l, const std::string& c) { return compare_isolated(l, c, make_interp, make_native); };
+    Runner run = [&](const std::string& l, const std::string& c) { return compare_isolated(l, c, make_interp, test); };
     Reduced r = minimize(gp, csv, out, run);
-    std::string rep = reproducer("native differs from the interpreter: ldgen seed " + std::to_string(seed),
+    std::string rep = reproducer(what + " differs from the interpreter: ldgen seed " + std::to_string(seed),
                                  ldgen_command(seed, o, scans_for(seed)), gp, r, dir, "diff_seed" + std::to_string(seed));
     ADD_FAILURE() << rep;
     if (++failures >= 3) {
@@ -365,8 +365,12 @@ TEST_P(DiffShard, NativeMatchesInterpreter) {
     }
   }
   double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("shard %d: %ld programs, %ld rungs, %ld scans compared in %.1f s\n", shard, programs, rungs, scans, secs);
+  std::printf("%s shard %d: %ld programs, %ld rungs, %ld scans compared in %.1f s\n", what.c_str(), shard, programs,
+              rungs, scans, secs);
 }
+
+TEST_P(DiffShard, NativeMatchesInterpreter) { run_shard(GetParam(), make_native, "native -O0"); }
+TEST_P(DiffShard, NativeO2MatchesInterpreter) { run_shard(GetParam(), make_native_o2, "native -O2"); }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, DiffShard, ::testing::Range(0, kShards));
 

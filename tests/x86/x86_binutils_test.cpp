@@ -31,10 +31,11 @@ std::vector<std::string> programs() {
 
 // as on our --emit=asm gives our bytes; objdump -d of our bytes gives our
 // disassembler's instructions.
-void check_against_binutils(const Program& p, const std::string& name) {
+void check_against_binutils(const Program& p, const std::string& name, int opt_level) {
   std::string why;
   ASSERT_TRUE(as::test::binutilsAvailable(&why)) << why;
-  NativeBuild nb = build_x86(p, name);
+  SCOPED_TRACE("-O" + std::to_string(opt_level));
+  NativeBuild nb = build_x86(p, name, as::Mode::Blockwise, opt_level);
   const auto& ours = nb.asm_result.code;
   std::string err;
   auto theirs = as::test::gnuAssemble(as::x86::toGnuAs(nb.gen.program), &err);
@@ -59,16 +60,18 @@ void check_against_binutils(const Program& p, const std::string& name) {
 class Binutils : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(Binutils, GnuAsGivesOurBytesAndObjdumpOurInstructions) {
-  check_against_binutils(compile_source(GetParam()).il, GetParam());
+  Program p = compile_source(GetParam()).il;
+  for (int level : {0, 2}) check_against_binutils(p, GetParam(), level);
 }
 
-// Random programs over every element class (bench/ldgen.h), 24 seeds x 60 rungs.
+// Random programs over every element class (bench/ldgen.h), 24 seeds x 60 rungs,
+// half at -O0 and half at -O2.
 TEST(BinutilsGenerated, GnuAsAndObjdumpAgreeOnRandomPrograms) {
   for (uint64_t seed = 1; seed <= 24; seed++) {
     SCOPED_TRACE("ldgen --seed " + std::to_string(seed) + " --rungs 60");
     GenOptions o;
     o.rungs = 60;
-    check_against_binutils(lower_to_il(parse_ld(generate_ld(seed, o), "gen.ld")), "gen.ld");
+    check_against_binutils(lower_to_il(parse_ld(generate_ld(seed, o), "gen.ld")), "gen.ld", seed % 2 ? 0 : 2);
     if (HasFatalFailure()) return;
   }
 }
