@@ -26,4 +26,8 @@ constexpr int kMaxRowWidth = 4096;
 // Throws CompileError (line, col, message).
 TreeProgram parse_ldmicro(std::string_view text, const std::string& filename);
 
+// Imports the LD bodies of a PLCopen TC6 XML project (docs/plcopen.md).
+// Throws CompileError (line, col, message naming the XML element path).
+TreeProgram parse_plcopen(std::string_view text, const std::string& filename);
+
 }  // namespace ldc

@@ -1,0 +1,1484 @@
+// frontend/plcopen.cpp -- the PLCopen TC6 XML importer (docs/plcopen.md).
+//
+// A PLCopen <LD> body is a graph: every element has a localId, and every input
+// names the outputs that feed it (<connection refLocalId=.. formalParameter=..>;
+// several connections on one input are a wired OR).  We run it the way Beremiz
+// and OpenPLC (the tools that write these files) compile it to Structured Text:
+//   * one statement per coil, output variable and block, in their order:
+//     executionOrderId first, then coils and output variables by position
+//     (top to bottom, left to right), then the remaining blocks by position;
+//     a block feeding a statement is generated just before it;
+//   * a statement's condition is the power flow from the left rail through the
+//     contacts feeding it, which we reduce to a series/parallel tree (and refuse
+//     when it does not reduce);
+//   * standard function blocks keep their state in our devices (timers, counters,
+//     relays), functions compute into temporary devices; edges on contacts and
+//     coils are R_TRIG / F_TRIG instances of their own, as Beremiz makes them.
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <optional>
+#include <set>
+
+#include "frontend/frontend.h"
+#include "frontend/operands.h"
+#include "frontend/xml.h"
+
+namespace ldc {
+namespace {
+
+using K = TreeNode::Kind;
+using xml::Element;
+
+[[noreturn]] void fail_at(const Element* e, const std::string& msg) {
+  throw CompileError(e ? e->line : 1, e ? e->col : 1, msg);
+}
+
+// "contact localId 13 (/project/types/pous/pou/body/LD/contact[7])"
+std::string where(const Element* e) {
+  std::string s(e->local_name());
+  if (auto id = e->attr("localId")) s += " localId " + *id;
+  return s + " (" + e->path() + ")";
+}
+
+std::string trim(std::string_view s) {
+  size_t a = s.find_first_not_of(" \t\r\n"), b = s.find_last_not_of(" \t\r\n");
+  return a == std::string_view::npos ? std::string() : std::string(s.substr(a, b - a + 1));
+}
+
+// ------------------------------------------------------------------ conditions
+
+Operand bit_opd(Area a, uint32_t i) { return Operand{OpdKind::Bit, a, i}; }
+Operand const_opd(int32_t v) {
+  Operand o{OpdKind::ConstInt};
+  o.ival = v;
+  return o;
+}
+
+TreeNode make_combined(K k, TreeNode a, TreeNode b) {
+  TreeNode n;
+  n.kind = k;
+  for (TreeNode* x : {&a, &b}) {
+    if (x->kind == k) for (auto& kid : x->kids) n.kids.push_back(std::move(kid));
+    else n.kids.push_back(std::move(*x));
+  }
+  return n;
+}
+
+struct Cond {
+  enum Kind { True, False, Expr } k = True;
+  TreeNode n;
+  static Cond yes() { return {}; }
+  static Cond no() { return {False, {}}; }
+  static Cond of(TreeNode t) { return {Expr, std::move(t)}; }
+};
+
+Cond c_and(Cond a, Cond b) {
+  if (a.k == Cond::False || b.k == Cond::False) return Cond::no();
+  if (a.k == Cond::True) return b;
+  if (b.k == Cond::True) return a;
+  return Cond::of(make_combined(K::Series, std::move(a.n), std::move(b.n)));
+}
+Cond c_or(Cond a, Cond b) {
+  if (a.k == Cond::True || b.k == Cond::True) return Cond::yes();
+  if (a.k == Cond::False) return b;
+  if (b.k == Cond::False) return a;
+  return Cond::of(make_combined(K::Parallel, std::move(a.n), std::move(b.n)));
+}
+
+TreeNode false_leaf(SrcLoc loc) {
+  TreeNode n;
+  n.kind = K::Leaf;
+  n.elem.op = Op::LDNE;
+  n.elem.a[0] = const_opd(0);
+  n.elem.a[1] = const_opd(0);
+  n.elem.loc = loc;
+  n.text = "FALSE";
+  return n;
+}
+
+TreeNode then_node(Cond c, TreeNode action, SrcLoc loc) {
+  if (c.k == Cond::True) return action;
+  TreeNode t;
+  t.kind = K::Then;
+  t.kids.push_back(c.k == Cond::False ? false_leaf(loc) : std::move(c.n));
+  t.kids.push_back(std::move(action));
+  return t;
+}
+
+TreeNode fork_of(std::vector<TreeNode> items) {
+  if (items.size() == 1) return std::move(items[0]);
+  TreeNode f;
+  f.kind = K::Fork;
+  for (auto& i : items) {
+    if (i.kind == K::Fork) for (auto& k : i.kids) f.kids.push_back(std::move(k));
+    else f.kids.push_back(std::move(i));
+  }
+  return f;
+}
+
+bool is_leaf(const Cond& c) { return c.k == Cond::Expr && c.n.kind == K::Leaf; }
+
+// ------------------------------------------------------------------ types
+
+enum class Ty { None, Bool, Int, Real };
+
+// Elementary types we hold: BOOL in a bit, the integers and TIME (ms) in an
+// INT32 word, REAL in a binary32 word.
+Ty elementary(const std::string& t) {
+  static const std::set<std::string> ints = {"SINT", "INT", "DINT", "USINT", "UINT", "UDINT", "BYTE", "WORD", "DWORD", "TIME"};
+  if (t == "BOOL") return Ty::Bool;
+  if (ints.count(t)) return Ty::Int;
+  if (t == "REAL") return Ty::Real;
+  return Ty::None;
+}
+
+const char* ty_name(Ty t) { return t == Ty::Bool ? "BOOL" : t == Ty::Int ? "integer" : t == Ty::Real ? "REAL" : "?"; }
+
+// A value: a device or a constant, with its type.
+struct Val {
+  Operand o;
+  Ty ty = Ty::Int;
+};
+
+// ------------------------------------------------------------------ declarations
+
+enum class FbKind { None, Timer, Counter, Latch, Trig };
+
+struct Var {
+  std::string name;  // as declared
+  std::string type;  // upper-case elementary type, or the derived type name as written
+  bool derived = false;
+  Ty ty = Ty::None;
+  bool constant = false;
+  Operand cval;                  // constant
+  std::optional<DeviceRef> dev;  // data: the device; FB: T / C / M of its state
+  uint32_t aux = 0, aux2 = 0;    // CTUD: QU, QD relays
+  std::string init;              // initialValue/simpleValue/@value
+  std::string address;
+  const Element* el = nullptr;
+  std::string pou;  // "" for globals
+};
+
+FbKind fb_kind(const std::string& t) {
+  if (t == "TON" || t == "TOF" || t == "TP") return FbKind::Timer;
+  if (t == "CTU" || t == "CTD" || t == "CTUD") return FbKind::Counter;
+  if (t == "SR" || t == "RS") return FbKind::Latch;
+  if (t == "R_TRIG" || t == "F_TRIG") return FbKind::Trig;
+  return FbKind::None;
+}
+
+// ------------------------------------------------------------------ LD body
+
+struct Conn {
+  int ref = 0;
+  std::string param;
+  bool has_param = false;
+  const Element* el = nullptr;
+  bool has_pos = false;
+  double px = 0, py = 0;  // the last <position> of the connection: its source end
+};
+
+struct Pin {
+  std::string name;
+  bool negated = false;
+  std::string edge;
+  std::vector<Conn> conns;
+  const Element* el = nullptr;
+  double rx = 0, ry = 0;  // output pins: relPosition of the connection point
+};
+
+struct Node {
+  const Element* el = nullptr;
+  std::string kind;  // local name: contact, coil, block, ...
+  int id = 0;
+  double x = 0, y = 0;
+  int order = 0;  // executionOrderId
+  std::vector<Conn> in;
+  std::vector<Pin> inputs, outputs;  // block
+  std::string text;  // variable, expression, connector name
+  bool negated = false, negated_in = false;
+  std::string edge, storage;
+  std::string type, instance;  // block
+};
+
+struct Out {  // a block output as its consumers see it
+  bool boolean = false;
+  Cond cond;  // boolean: a leaf (or a constant)
+  Val val;
+};
+
+// ------------------------------------------------------------------ importer
+
+class Importer {
+ public:
+  Importer(std::string_view text, std::string file) : text_(text), file_(std::move(file)) {}
+  TreeProgram run();
+
+ private:
+  std::string_view text_;
+  std::string file_;
+  xml::Document doc_;
+
+  // declarations
+  std::vector<std::unique_ptr<Var>> vars_;
+  std::map<std::string, Var*> globals_;  // upper-case name
+  std::map<std::string, const Element*> pou_lang_el_;
+  std::map<std::string, std::string> pou_lang_;  // upper POU name -> body language
+  std::set<std::pair<int, uint32_t>> used_;
+  uint32_t next_[11] = {};
+
+  // program
+  std::vector<TreeRung> rungs_;
+  std::vector<std::string> pending_labels_;
+  std::string pending_title_;
+  int labels_ = 0;
+  std::vector<TreeNode> init_;
+
+  // the POU being translated
+  std::string pou_;
+  std::map<std::string, Var*> scope_;
+  std::map<int, Node> nodes_;
+  std::map<std::string, int> connectors_;  // name -> localId
+  std::set<int> computed_;
+  std::map<std::pair<int, std::string>, Out> outs_;
+  std::set<std::pair<int, std::string>> consumed_;  // block outputs someone reads
+  std::set<int> generating_;
+
+  // declarations
+  void declare(const Element* list, const std::string& pou, bool global);
+  void allocate();
+  uint32_t take(Dev d, const Element* el);
+  uint32_t temp_m(const Element* el) { return take(Dev::M, el); }
+  std::optional<DeviceRef> location(const Var& v);
+  Var* lookup(const std::string& name);
+  void aliases(TreeProgram& p);
+
+  // expressions
+  std::optional<Operand> literal(const std::string& s, Ty& ty, const Element* el);
+  Val value_of(const std::string& expr, const Element* el, bool write = false);
+  Operand bit_of(const std::string& expr, const Element* el, bool write);
+  std::string spell(const Operand& o) const;
+  std::map<std::pair<int, uint32_t>, std::string> spelled_;
+
+  // tree pieces
+  TreeNode leaf(Op op, std::vector<Operand> a, const Element* el, std::string text = "");
+  TreeNode out(Op op, std::vector<Operand> a, const Element* el, const std::string& text = "");
+  Cond bit_leaf(Op op, Operand o, const Element* el) { return Cond::of(leaf(op, {o}, el)); }
+  void rung(TreeNode root, const Element* el);
+  void rung(Cond c, TreeNode action, const Element* el) { rung(then_node(std::move(c), std::move(action), {el->line, el->col}), el); }
+  Cond materialize(Cond c, const Element* el);
+  Cond negate(Cond c, const Element* el);
+  Cond trigger(Cond c, bool rising, const Element* el, std::optional<Operand> into = std::nullopt);
+  std::string new_label();
+
+  // the body
+  void body(const Element* pou, const Element* ld);
+  void read_node(const Element* e);
+  void read_conns(const Element* cpi, std::vector<Conn>& out);
+  const Node& node(const Conn& c);
+  bool is_bool_source(const Conn& c, int depth = 0);
+  bool out_is_bool(const Node& b, const std::string& pin);
+  Cond bool_expr(const std::vector<Conn>& conns, bool order, const Element* consumer);
+  Val value_expr(const std::vector<Conn>& conns, bool order, const Element* consumer, const std::string& what);
+  Out block_out(const Node& b, const Conn& c, bool order);
+  const Pin* out_pin(const Node& b, const Conn& c);
+  void statement(const Node& n);
+  void block(const Node& b);
+  void fb_block(const Node& b, Var& inst);
+  void fn_block(const Node& b);
+};
+
+// ------------------------------------------------------------------ declarations
+
+uint32_t Importer::take(Dev d, const Element* el) {
+  uint32_t& n = next_[int(d)];
+  while (n < device_count(d) && used_.count({int(d), n})) n++;
+  if (n >= device_count(d)) fail_at(el, std::string("out of ") + dev_name(d) + " devices for this project");
+  used_.insert({int(d), n});
+  return n++;
+}
+
+void Importer::declare(const Element* list, const std::string& pou, bool global) {
+  bool constant = list->attr("constant") && (*list->attr("constant") == "true" || *list->attr("constant") == "1");
+  for (const Element* v : list->children_named("variable")) {
+    auto u = std::make_unique<Var>();
+    const std::string* nm = v->attr("name");
+    if (!nm || nm->empty()) fail_at(v, "variable without a name (" + v->path() + ")");
+    u->name = *nm;
+    u->el = v;
+    u->pou = global ? "" : pou;
+    u->constant = constant;
+    if (auto a = v->attr("address")) u->address = *a;
+    const Element* t = v->child("type");
+    if (!t || t->children.empty()) fail_at(v, "variable '" + *nm + "' has no type");
+    const Element* te = t->children[0].get();
+    if (te->local_name() == "derived") {
+      u->derived = true;
+      u->type = te->attr("name") ? *te->attr("name") : "";
+    } else {
+      u->type = upper(te->local_name());
+    }
+    u->ty = u->derived ? Ty::None : elementary(u->type);
+    if (const Element* iv = v->child("initialValue"))
+      if (const Element* sv = iv->child("simpleValue"))
+        if (auto val = sv->attr("value")) u->init = *val;
+    Var* raw = u.get();
+    vars_.push_back(std::move(u));
+    std::string key = upper(*nm);
+    if (global) {
+      if (globals_.count(key)) fail_at(v, "global variable '" + *nm + "' is declared twice");
+      globals_[key] = raw;
+    } else {
+      if (scope_.count(key)) fail_at(v, "variable '" + *nm + "' is declared twice in POU '" + pou + "'");
+      scope_[key] = raw;
+    }
+  }
+}
+
+// %IX0.1 %QX0.0 %MX1.2 %IW3 %QW0 %MW5 %MD2, and %I0.1 (no size: a bit).
+std::optional<DeviceRef> Importer::location(const Var& v) {
+  std::string a = upper(v.address);
+  if (a.size() >= 3 && a[0] == '%' && (a[1] == 'I' || a[1] == 'Q' || a[1] == 'M') && std::isdigit((unsigned char)a[2]))
+    a.insert(2, "X");
+  std::string why;
+  auto d = parse_iec_address(a, why);
+  if (!d) fail_at(v.el, "variable '" + v.name + "': " + (why.empty() ? "unsupported location " + v.address : why));
+  if (d->index >= device_count(d->dev))
+    fail_at(v.el, "variable '" + v.name + "' at " + v.address + " is outside " + dev_name(d->dev) + "0.." + dev_name(d->dev) +
+                      std::to_string(device_count(d->dev) - 1));
+  bool bit = d->dev == Dev::X || d->dev == Dev::Y || d->dev == Dev::M;
+  if (v.ty == Ty::Bool && !bit) fail_at(v.el, "BOOL variable '" + v.name + "' at " + v.address + ": a BOOL is located at a bit address (%IX, %QX, %MX)");
+  if (v.ty == Ty::Int && (bit || d->dev == Dev::F))
+    fail_at(v.el, v.type + " variable '" + v.name + "' at " + v.address + ": integers are located at %IW, %QW or %MW");
+  if (v.ty == Ty::Real && d->dev != Dev::F) fail_at(v.el, "REAL variable '" + v.name + "' at " + v.address + ": a REAL is located at %MD");
+  return d;
+}
+
+void Importer::allocate() {
+  // located variables first, so the rest avoid their devices
+  for (auto& v : vars_) {
+    if (v->address.empty() || v->constant) continue;
+    if (v->ty == Ty::None) fail_at(v->el, "variable '" + v->name + "' of type " + v->type + " cannot be located at " + v->address);
+    v->dev = location(*v);
+    used_.insert({int(v->dev->dev), v->dev->index});
+  }
+  for (auto& v : vars_) {
+    if (v->dev || v->constant) continue;
+    if (v->derived) {
+      FbKind k = fb_kind(v->type);
+      if (k == FbKind::Timer) v->dev = DeviceRef{Dev::T, take(Dev::T, v->el)};
+      else if (k == FbKind::Counter) {
+        v->dev = DeviceRef{Dev::C, take(Dev::C, v->el)};
+        if (v->type == "CTUD") v->aux = take(Dev::M, v->el), v->aux2 = take(Dev::M, v->el);
+      } else if (k != FbKind::None) v->dev = DeviceRef{Dev::M, take(Dev::M, v->el)};
+      continue;  // other derived types get nothing; using them is an error
+    }
+    if (v->ty == Ty::Bool) v->dev = DeviceRef{Dev::M, take(Dev::M, v->el)};
+    else if (v->ty == Ty::Int) v->dev = DeviceRef{Dev::D, take(Dev::D, v->el)};
+    else if (v->ty == Ty::Real) v->dev = DeviceRef{Dev::F, take(Dev::F, v->el)};
+  }
+}
+
+Var* Importer::lookup(const std::string& name) {
+  std::string k = upper(name);
+  if (auto it = scope_.find(k); it != scope_.end()) return it->second;
+  if (auto it = globals_.find(k); it != globals_.end()) return it->second;
+  return nullptr;
+}
+
+// Aliases: each variable's name, or POU_name when the name is declared in more
+// than one translated POU; names that spell an ldc device get none.
+void Importer::aliases(TreeProgram& p) {
+  std::map<std::string, int> count;
+  for (auto& v : vars_)
+    if (v->dev) count[upper(v->name)]++;
+  std::set<std::string> seen;
+  for (auto& v : vars_) {
+    if (!v->dev) continue;
+    std::string name = count[upper(v->name)] > 1 && !v->pou.empty() ? v->pou + "_" + v->name : v->name;
+    std::string why, u = upper(name);
+    if (!is_identifier(name) || u == "DT" || seen.count(u) || parse_device(name) || parse_iec_address(name, why)) continue;
+    seen.insert(u);
+    p.aliases.push_back({name, *v->dev});
+  }
+}
+
+// ------------------------------------------------------------------ expressions
+
+// TRUE FALSE 42 -7 16#FF 2#1010 8#17 1.5 T#1s500ms, typed (INT#5, REAL#2.5, BOOL#1).
+std::optional<Operand> Importer::literal(const std::string& s0, Ty& ty, const Element* el) {
+  std::string s = trim(s0), u = upper(s);
+  std::string prefix;
+  size_t hash = u.find('#');
+  if (hash != std::string::npos) {
+    std::string p = u.substr(0, hash);
+    if (p == "BOOL" || elementary(p) != Ty::None) {
+      prefix = p;
+      if (p != "T" && p != "TIME") {
+        s = s.substr(hash + 1);
+        u = u.substr(hash + 1);
+      }
+    }
+  }
+  if (u == "TRUE" || u == "FALSE" || (prefix == "BOOL" && (u == "1" || u == "0"))) {
+    ty = Ty::Bool;
+    return const_opd(u == "TRUE" || u == "1");
+  }
+  if (u.empty() || !(std::isdigit((unsigned char)u[0]) || u[0] == '-' || u[0] == '+' || u.rfind("T#", 0) == 0 || u.rfind("TIME#", 0) == 0))
+    return std::nullopt;
+  std::string why;
+  auto c = parse_constant(s, why);
+  if (!c) fail_at(el, why.empty() ? "malformed literal '" + s0 + "'" : why);
+  ty = c->kind == OpdKind::ConstReal ? Ty::Real : Ty::Int;
+  if (prefix == "REAL" && ty == Ty::Int) {
+    Operand r{OpdKind::ConstReal};
+    r.fval = float(c->ival);
+    ty = Ty::Real;
+    return r;
+  }
+  if ((prefix == "LREAL") || (elementary(prefix) == Ty::Int && ty == Ty::Real))
+    fail_at(el, "literal '" + s0 + "' does not fit its type");
+  return c;
+}
+
+// A variable reference: NAME, INSTANCE.OUTPUT (TON0.Q, CTU0.CV, SR0.Q1) or a
+// direct address; or a literal.
+Val Importer::value_of(const std::string& expr, const Element* el, bool write) {
+  std::string e = trim(expr);
+  Ty ty;
+  if (auto c = literal(e, ty, el)) {
+    if (write) fail_at(el, "'" + e + "' is a literal; it cannot be written (" + where(el) + ")");
+    return {*c, ty};
+  }
+  if (!e.empty() && e[0] == '%') {
+    std::string a = upper(e);
+    std::string why;
+    if (a.size() >= 3 && std::isdigit((unsigned char)a[2])) a.insert(2, "X");
+    auto d = parse_iec_address(a, why);
+    if (!d) fail_at(el, why.empty() ? "unsupported address " + e : why);
+    if (d->index >= device_count(d->dev)) fail_at(el, "address " + e + " is out of range");
+    Area ar = bit_area(d->dev);
+    if (ar != Area::Count) return {bit_opd(ar, d->index), Ty::Bool};
+    Area w = word_area(d->dev);
+    return {Operand{w == Area::F ? OpdKind::Real : OpdKind::Int, w, d->index}, w == Area::F ? Ty::Real : Ty::Int};
+  }
+  size_t dot = e.find('.');
+  if (dot != std::string::npos) {
+    Var* inst = lookup(e.substr(0, dot));
+    std::string m = upper(e.substr(dot + 1));
+    if (!inst || !inst->derived || fb_kind(inst->type) == FbKind::None || !inst->dev)
+      fail_at(el, "'" + e + "' is not a variable ldc knows (structures and arrays are not supported) in " + where(el));
+    if (write) fail_at(el, "'" + e + "' is a function block output; it cannot be written (" + where(el) + ")");
+    FbKind k = fb_kind(inst->type);
+    uint32_t i = inst->dev->index;
+    if (k == FbKind::Timer && m == "Q") return {bit_opd(Area::TQ, i), Ty::Bool};
+    if (k == FbKind::Timer && m == "ET") return {Operand{OpdKind::Int, Area::TW, i}, Ty::Int};
+    if (k == FbKind::Counter && m == "CV") return {Operand{OpdKind::Int, Area::CW, i}, Ty::Int};
+    if (k == FbKind::Counter && (m == "Q" || m == "QU") && inst->type != "CTUD") return {bit_opd(Area::CQ, i), Ty::Bool};
+    if (inst->type == "CTUD" && m == "QU") return {bit_opd(Area::M, inst->aux), Ty::Bool};
+    if (inst->type == "CTUD" && m == "QD") return {bit_opd(Area::M, inst->aux2), Ty::Bool};
+    if ((k == FbKind::Latch && m == "Q1") || (k == FbKind::Trig && m == "Q")) return {bit_opd(Area::M, i), Ty::Bool};
+    fail_at(el, "'" + e + "': " + inst->type + " has no output " + m);
+  }
+  Var* v = lookup(e);
+  if (!v) fail_at(el, "unknown variable '" + e + "' in " + where(el));
+  if (v->constant) {
+    if (write) fail_at(el, "'" + e + "' is a constant; it cannot be written (" + where(el) + ")");
+    Ty t;
+    auto c = literal(v->init, t, v->el);
+    if (!c) fail_at(v->el, "constant '" + v->name + "' needs a literal initial value");
+    return {*c, v->ty == Ty::Real && t != Ty::Real ? Ty::Real : v->ty};
+  }
+  if (v->ty == Ty::None || !v->dev)
+    fail_at(el, "variable '" + v->name + "' has type " + v->type + ", which ldc cannot hold (" + where(el) + ")");
+  if (v->ty == Ty::Bool) return {bit_opd(bit_area(v->dev->dev), v->dev->index), Ty::Bool};
+  Area w = word_area(v->dev->dev);
+  if (write && w == Area::WX) fail_at(el, "'" + e + "' is an input word; it cannot be written (" + where(el) + ")");
+  return {Operand{v->ty == Ty::Real ? OpdKind::Real : OpdKind::Int, w, v->dev->index}, v->ty};
+}
+
+Operand Importer::bit_of(const std::string& expr, const Element* el, bool write) {
+  Val v = value_of(expr, el, write);
+  if (v.ty != Ty::Bool) fail_at(el, "'" + trim(expr) + "' is " + ty_name(v.ty) + "; a BOOL is needed for " + where(el));
+  if (v.o.kind == OpdKind::ConstInt) fail_at(el, "a literal cannot be used by " + where(el));
+  if (write) {
+    if (v.o.area == Area::X) fail_at(el, "'" + trim(expr) + "' is an input; it cannot be written (" + where(el) + ")");
+    if (v.o.area != Area::Y && v.o.area != Area::M) fail_at(el, "'" + trim(expr) + "' cannot be written (" + where(el) + ")");
+  }
+  return v.o;
+}
+
+std::string Importer::spell(const Operand& o) const {
+  int dev = -1;
+  switch (o.kind) {
+    case OpdKind::Bit:
+      dev = o.area == Area::X ? int(Dev::X) : o.area == Area::Y ? int(Dev::Y) : o.area == Area::M ? int(Dev::M)
+            : o.area == Area::TQ ? int(Dev::T) : o.area == Area::CQ ? int(Dev::C) : -1;
+      break;
+    case OpdKind::Int:
+    case OpdKind::Real:
+      dev = o.area == Area::D ? int(Dev::D) : o.area == Area::TW ? int(Dev::T) : o.area == Area::CW ? int(Dev::C)
+            : o.area == Area::WX ? int(Dev::WX) : o.area == Area::WY ? int(Dev::WY) : o.area == Area::F ? int(Dev::F) : -1;
+      break;
+    case OpdKind::Timer: dev = int(Dev::T); break;
+    case OpdKind::Counter: dev = int(Dev::C); break;
+    default: break;
+  }
+  if (dev >= 0)
+    if (auto it = spelled_.find({dev, o.index}); it != spelled_.end()) return it->second;
+  return operand_text(o);
+}
+
+// ------------------------------------------------------------------ tree pieces
+
+TreeNode Importer::leaf(Op op, std::vector<Operand> a, const Element* el, std::string text) {
+  TreeNode n;
+  n.kind = K::Leaf;
+  n.elem.op = op;
+  n.elem.loc = {el->line, el->col};
+  for (size_t i = 0; i < a.size(); i++) n.elem.a[i] = a[i];
+  if (!text.empty()) n.text = text;
+  else {
+    static const std::map<Op, const char*> cmp = {{Op::LDEQ, "=="}, {Op::LDNE, "<>"}, {Op::LDLT, "<"},
+                                                  {Op::LDLE, "<="}, {Op::LDGT, ">"},  {Op::LDGE, ">="}};
+    if (auto it = cmp.find(op); it != cmp.end()) n.text = spell(a[0]) + " " + it->second + " " + spell(a[1]);
+    else n.text = std::string(op == Op::LOADN ? "/" : op == Op::LOADP ? "P " : op == Op::LOADF ? "N " : "") + spell(a[0]);
+  }
+  return n;
+}
+
+TreeNode Importer::out(Op op, std::vector<Operand> a, const Element* el, const std::string& text) {
+  TreeNode n;
+  n.kind = K::Output;
+  n.elem.op = op;
+  n.elem.loc = {el->line, el->col};
+  std::string t = op == Op::OUT ? "" : op == Op::OUTN ? "/" : std::string(op_info(op).name) + " ";
+  for (size_t i = 0; i < a.size(); i++) {
+    n.elem.a[i] = a[i];
+    t += (i ? " " : "") + (a[i].kind == OpdKind::Label ? a[i].label : i == 0 && !text.empty() ? text : spell(a[i]));
+  }
+  n.text = t;
+  return n;
+}
+
+void Importer::rung(TreeNode root, const Element* el) {
+  TreeRung r;
+  r.line = el->line;
+  r.labels = std::move(pending_labels_);
+  pending_labels_.clear();
+  r.title = std::move(pending_title_);
+  pending_title_.clear();
+  r.root = std::move(root);
+  rungs_.push_back(std::move(r));
+}
+
+// The condition's value now, in a relay of its own.
+Cond Importer::materialize(Cond c, const Element* el) {
+  if (c.k != Cond::Expr) return c;
+  uint32_t m = temp_m(el);
+  rung(std::move(c), out(Op::OUT, {bit_opd(Area::M, m)}, el), el);
+  return bit_leaf(Op::LOAD, bit_opd(Area::M, m), el);
+}
+
+Cond Importer::negate(Cond c, const Element* el) {
+  if (c.k == Cond::True) return Cond::no();
+  if (c.k == Cond::False) return Cond::yes();
+  if (is_leaf(c) && (c.n.elem.op == Op::LOAD || c.n.elem.op == Op::LOADN)) {
+    c.n.elem.op = c.n.elem.op == Op::LOAD ? Op::LOADN : Op::LOAD;
+    c.n.text = c.n.elem.op == Op::LOADN ? "/" + c.n.text : c.n.text.substr(1);
+    return c;
+  }
+  Cond m = materialize(std::move(c), el);
+  m.n.elem.op = Op::LOADN;
+  m.n.text = "/" + m.n.text;
+  return m;
+}
+
+// R_TRIG / F_TRIG of a condition, as a statement of its own (Beremiz calls the
+// trigger instance before the statement that reads it).  F_TRIG is IEC's
+// "Q := NOT CLK AND NOT M; M := NOT CLK": it pulses on the first scan if CLK is FALSE.
+Cond Importer::trigger(Cond c, bool rising, const Element* el, std::optional<Operand> into) {
+  // rising: Q := CLK AND NOT M; M := CLK        falling: Q := NOT CLK AND NOT M; M := NOT CLK
+  // Both are "rising edge of X" with X = CLK or NOT CLK and M starting FALSE.
+  if (!rising) c = negate(std::move(c), el);
+  if (!into) {
+    if (c.k == Cond::False) return Cond::no();
+    if (c.k == Cond::True) return bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), el);  // TRUE rises on the first scan
+  }
+  if (c.k != Cond::Expr) {
+    Cond k = c.k == Cond::True ? bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), el) : Cond::no();
+    rung(std::move(k), out(Op::OUT, {*into}, el), el);
+    return bit_leaf(Op::LOAD, *into, el);
+  }
+  uint32_t q = into ? into->index : temp_m(el);
+  Cond x = is_leaf(c) && c.n.elem.op == Op::LOAD ? std::move(c) : materialize(std::move(c), el);
+  x.n.elem.op = Op::LOADP;
+  x.n.text = "P " + x.n.text;
+  Operand qo = into ? *into : bit_opd(Area::M, q);
+  rung(std::move(x), out(Op::OUT, {qo}, el), el);
+  return bit_leaf(Op::LOAD, qo, el);
+}
+
+std::string Importer::new_label() { return "en" + std::to_string(++labels_); }
+
+// ------------------------------------------------------------------ the body
+
+void Importer::read_conns(const Element* cpi, std::vector<Conn>& outv) {
+  if (!cpi) return;
+  for (const Element* c : cpi->children_named("connection")) {
+    Conn k;
+    k.el = c;
+    const std::string* r = c->attr("refLocalId");
+    if (!r) fail_at(c, "connection without refLocalId (" + c->path() + ")");
+    try {
+      size_t used = 0;
+      k.ref = std::stoi(*r, &used);
+      if (used != r->size()) throw std::invalid_argument("");
+    } catch (...) { fail_at(c, "bad refLocalId '" + *r + "' (" + c->path() + ")"); }
+    if (auto p = c->attr("formalParameter")) k.param = *p, k.has_param = true;
+    auto pos = c->children_named("position");
+    if (!pos.empty()) {
+      const Element* last = pos.back();
+      if (last->attr("x") && last->attr("y")) {
+        k.has_pos = true;
+        k.px = std::atof(last->attr("x")->c_str());
+        k.py = std::atof(last->attr("y")->c_str());
+      }
+    }
+    outv.push_back(k);
+  }
+}
+
+void Importer::read_node(const Element* e) {
+  std::string k(e->local_name());
+  static const std::set<std::string> known = {"leftPowerRail", "rightPowerRail", "contact", "coil", "block", "inVariable",
+                                              "outVariable", "inOutVariable", "connector", "continuation", "comment"};
+  if (!known.count(k)) {
+    if (k == "jump" || k == "label" || k == "return")
+      fail_at(e, "LD element '" + k + "' is not supported: ldc runs every statement of a POU on every scan (" + e->path() + ")");
+    fail_at(e, "unknown LD element '" + k + "' (" + e->path() + ")");
+  }
+  if (k == "comment") return;
+  Node n;
+  n.el = e;
+  n.kind = k;
+  const std::string* id = e->attr("localId");
+  if (!id) fail_at(e, k + " without a localId (" + e->path() + ")");
+  try {
+    size_t used = 0;
+    n.id = std::stoi(*id, &used);
+    if (used != id->size()) throw std::invalid_argument("");
+  } catch (...) { fail_at(e, "bad localId '" + *id + "' (" + e->path() + ")"); }
+  if (nodes_.count(n.id)) fail_at(e, "localId " + *id + " is used twice (" + e->path() + " and " + nodes_[n.id].el->path() + ")");
+  if (auto o = e->attr("executionOrderId")) n.order = std::atoi(o->c_str());
+  if (const Element* p = e->child("position")) {
+    if (auto x = p->attr("x")) n.x = std::atof(x->c_str());
+    if (auto y = p->attr("y")) n.y = std::atof(y->c_str());
+  }
+  auto flag = [&](const char* a) { auto v = e->attr(a); return v && (*v == "true" || *v == "1"); };
+  n.negated = flag("negated");
+  if (auto v = e->attr("edge")) n.edge = *v;
+  if (auto v = e->attr("storage")) n.storage = *v;
+  if (k == "contact" || k == "coil") {
+    const Element* v = e->child("variable");
+    if (!v || trim(v->text).empty()) fail_at(e, k + " localId " + *id + " has no variable (" + e->path() + ")");
+    n.text = trim(v->text);
+  } else if (k == "inVariable" || k == "outVariable" || k == "inOutVariable") {
+    const Element* x = e->child("expression");
+    if (!x || trim(x->text).empty()) fail_at(e, k + " localId " + *id + " has no expression (" + e->path() + ")");
+    n.text = trim(x->text);
+    if (k == "inOutVariable") {
+      n.negated = flag("negatedOut");
+      n.negated_in = flag("negatedIn");
+    }
+  } else if (k == "connector" || k == "continuation") {
+    if (!e->attr("name")) fail_at(e, k + " localId " + *id + " has no name (" + e->path() + ")");
+    n.text = *e->attr("name");
+  }
+  if (k == "block") {
+    if (!e->attr("typeName")) fail_at(e, "block localId " + *id + " has no typeName (" + e->path() + ")");
+    n.type = *e->attr("typeName");
+    if (auto in = e->attr("instanceName")) n.instance = *in;
+    auto pins = [&](const char* list, std::vector<Pin>& v, bool input) {
+      if (const Element* l = e->child(list))
+        for (const Element* pv : l->children_named("variable")) {
+          Pin p;
+          p.el = pv;
+          if (!pv->attr("formalParameter")) fail_at(pv, "block variable without formalParameter (" + pv->path() + ")");
+          p.name = *pv->attr("formalParameter");
+          p.negated = pv->attr("negated") && (*pv->attr("negated") == "true" || *pv->attr("negated") == "1");
+          if (auto ed = pv->attr("edge")) p.edge = *ed;
+          if (input) read_conns(pv->child("connectionPointIn"), p.conns);
+          else if (const Element* cpo = pv->child("connectionPointOut"))
+            if (const Element* rp = cpo->child("relPosition")) {
+              if (auto x = rp->attr("x")) p.rx = std::atof(x->c_str());
+              if (auto y = rp->attr("y")) p.ry = std::atof(y->c_str());
+            }
+          v.push_back(std::move(p));
+        }
+    };
+    pins("inputVariables", n.inputs, true);
+    pins("outputVariables", n.outputs, false);
+    if (const Element* io = e->child("inOutVariables"))
+      if (!io->children_named("variable").empty())
+        fail_at(io, "block " + n.type + " localId " + *id + " has in-out parameters, which ldc does not support (" + io->path() + ")");
+  } else {
+    for (const Element* cpi : e->children_named("connectionPointIn")) read_conns(cpi, n.in);
+  }
+  if (k == "connector") connectors_[upper(n.text)] = n.id;
+  nodes_[n.id] = std::move(n);
+}
+
+const Node& Importer::node(const Conn& c) {
+  auto it = nodes_.find(c.ref);
+  if (it == nodes_.end()) fail_at(c.el, "connection to localId " + std::to_string(c.ref) + ", which is not in this body (" + c.el->path() + ")");
+  return it->second;
+}
+
+const Pin* Importer::out_pin(const Node& b, const Conn& c) {
+  if (c.has_param) {
+    for (const Pin& p : b.outputs)
+      if (p.name == c.param) return &p;
+    if (c.param == "ENO") return nullptr;  // ENO need not be declared
+    fail_at(c.el, "block " + b.type + " localId " + std::to_string(b.id) + " has no output '" + c.param + "' (" + c.el->path() + ")");
+  }
+  // Beremiz: an unnamed connection takes the output whose connection point is at its end
+  const Pin* found = nullptr;
+  for (const Pin& p : b.outputs)
+    if (!c.has_pos || (b.x + p.rx == c.px && b.y + p.ry == c.py)) found = &p;
+  if (!found) fail_at(c.el, "cannot tell which output of block " + b.type + " localId " + std::to_string(b.id) + " this connection uses; give it a formalParameter (" + c.el->path() + ")");
+  return found;
+}
+
+// Does this source deliver power flow (BOOL) rather than a value?
+bool Importer::is_bool_source(const Conn& c, int depth) {
+  if (depth > 64) fail_at(c.el, "connectors nested too deeply (" + c.el->path() + ")");
+  const Node& n = node(c);
+  if (n.kind == "leftPowerRail" || n.kind == "contact" || n.kind == "coil") return true;
+  if (n.kind == "inVariable" || n.kind == "inOutVariable") return value_of(n.text, n.el).ty == Ty::Bool;
+  if (n.kind == "continuation") {
+    auto it = connectors_.find(upper(n.text));
+    if (it == connectors_.end()) fail_at(n.el, "continuation '" + n.text + "' has no connector of that name (" + n.el->path() + ")");
+    const Node& k = nodes_.at(it->second);
+    if (k.in.empty()) fail_at(k.el, "connector '" + k.text + "' is not connected (" + k.el->path() + ")");
+    return is_bool_source(k.in[0], depth + 1);
+  }
+  if (n.kind == "block") {
+    const Pin* p = out_pin(n, c);
+    return out_is_bool(n, p ? p->name : "ENO");
+  }
+  fail_at(c.el, n.kind + " localId " + std::to_string(n.id) + " has no output to connect (" + c.el->path() + ")");
+}
+
+bool Importer::out_is_bool(const Node& b, const std::string& pin) {
+  std::string t = upper(b.type);
+  if (pin == "ENO") return true;
+  if (fb_kind(t) != FbKind::None) return !(pin == "ET" || pin == "CV");
+  static const std::set<std::string> cmp = {"GT", "GE", "EQ", "NE", "LE", "LT"};
+  if (cmp.count(t)) return true;
+  size_t to = t.find("_TO_");
+  if (to != std::string::npos) return t.substr(to + 4) == "BOOL";
+  if (t == "AND" || t == "OR" || t == "XOR" || t == "NOT" || t == "MOVE" || t == "SEL") {
+    for (const Pin& p : b.inputs)
+      if (p.name != "EN" && p.name != "G" && !p.conns.empty()) return is_bool_source(p.conns[0]);
+  }
+  return false;
+}
+
+// The power flow from the left rail to `conns` (one input's connections), as a
+// series/parallel tree.  Contacts are edges between junction nodes, every other
+// source is an edge from the rail, several connections meet in a junction of
+// their own; series/parallel reduction must leave one rail-to-input edge.
+Cond Importer::bool_expr(const std::vector<Conn>& conns, bool order, const Element* consumer) {
+  if (conns.empty()) fail_at(consumer, "nothing is connected to " + where(consumer));
+  struct E {
+    int from, to;
+    Cond label;
+    const Element* el;  // the contact, or nullptr for wires and sources
+    bool alive = true;
+  };
+  std::vector<E> edges;
+  int nn = 1;  // node 0: the left rail
+  std::map<std::pair<int, std::string>, int> memo;
+  std::set<int> visiting;
+  int depth = 0;
+  std::function<int(const Conn&)> out_of;
+  std::function<int(const std::vector<Conn>&, const Element*)> input_of = [&](const std::vector<Conn>& cs, const Element* who) {
+    if (cs.empty()) fail_at(who, where(who) + " has no input connection");
+    if (++depth > 10000) fail_at(who, "power flow too long (more than 10000 elements in a row) at " + where(who));
+    struct Leave { int& d; ~Leave() { d--; } } leave{depth};
+    if (cs.size() == 1) return out_of(cs[0]);
+    int j = nn++;
+    for (const Conn& c : cs) {
+      int f = out_of(c);
+      edges.push_back({f, j, Cond::yes(), nullptr});
+    }
+    return j;
+  };
+  out_of = [&](const Conn& c) -> int {
+    const Node& n = node(c);
+    std::pair<int, std::string> key{n.id, n.kind == "block" ? c.param : ""};
+    if (auto it = memo.find(key); it != memo.end()) return it->second;
+    int r;
+    if (n.kind == "leftPowerRail") {
+      r = 0;
+    } else if (n.kind == "contact" || n.kind == "coil" || n.kind == "continuation") {
+      if (visiting.count(n.id)) fail_at(n.el, "power flow loops back through " + where(n.el));
+      visiting.insert(n.id);
+      if (n.kind == "contact") {
+        // Beremiz: NOT(var), else R_TRIG / F_TRIG of var, computed before the statement
+        Operand b = bit_of(n.text, n.el, false);
+        Cond lab = Cond::of(leaf(n.negated ? Op::LOADN : Op::LOAD, {b}, n.el, (n.negated ? "/" : "") + n.text));
+        if (!n.negated && (n.edge == "rising" || n.edge == "falling")) lab = trigger(std::move(lab), n.edge == "rising", n.el);
+        int from = input_of(n.in, n.el);
+        r = nn++;
+        edges.push_back({from, r, std::move(lab), n.el});
+      } else if (n.kind == "coil") {
+        r = input_of(n.in, n.el);  // power passes through a coil
+      } else {
+        auto it = connectors_.find(upper(n.text));
+        if (it == connectors_.end()) fail_at(n.el, "continuation '" + n.text + "' has no connector of that name (" + n.el->path() + ")");
+        const Node& k = nodes_.at(it->second);
+        r = input_of(k.in, k.el);
+      }
+      visiting.erase(n.id);
+    } else {
+      Cond lab;
+      if (n.kind == "inVariable" || n.kind == "inOutVariable") {
+        Val v = value_of(n.text, n.el);
+        if (v.ty != Ty::Bool) fail_at(n.el, "'" + n.text + "' is " + ty_name(v.ty) + " but feeds the power flow of " + where(consumer));
+        if (v.o.kind == OpdKind::ConstInt) lab = (v.o.ival != 0) != n.negated ? Cond::yes() : Cond::no();
+        else lab = Cond::of(leaf(n.negated ? Op::LOADN : Op::LOAD, {v.o}, n.el, (n.negated ? "/" : "") + n.text));
+      } else if (n.kind == "block") {
+        Out o = block_out(n, c, order);
+        if (!o.boolean) fail_at(c.el, "a value output of block " + n.type + " localId " + std::to_string(n.id) + " feeds the power flow of " + where(consumer));
+        lab = o.cond;
+      } else {
+        fail_at(c.el, n.kind + " localId " + std::to_string(n.id) + " has no output to connect (" + c.el->path() + ")");
+      }
+      r = nn++;
+      edges.push_back({0, r, std::move(lab), nullptr});
+    }
+    memo[key] = r;
+    return r;
+  };
+  int sink = nn++;
+  for (const Conn& c : conns) edges.push_back({out_of(c), sink, Cond::yes(), nullptr});
+  // series/parallel reduction
+  for (bool changed = true; changed;) {
+    changed = false;
+    std::vector<int> indeg(nn), outdeg(nn);
+    for (auto& e : edges)
+      if (e.alive) outdeg[e.from]++, indeg[e.to]++;
+    for (size_t a = 0; a < edges.size(); a++) {
+      if (!edges[a].alive) continue;
+      for (size_t b = a + 1; b < edges.size(); b++) {
+        if (!edges[b].alive || edges[b].from != edges[a].from || edges[b].to != edges[a].to) continue;
+        edges[a].label = c_or(std::move(edges[a].label), std::move(edges[b].label));
+        if (!edges[a].el) edges[a].el = edges[b].el;
+        edges[b].alive = false;
+        changed = true;
+      }
+    }
+    if (changed) continue;
+    for (int v = 1; v < nn && !changed; v++) {
+      if (v == sink || indeg[v] != 1 || outdeg[v] != 1) continue;
+      E *in = nullptr, *o = nullptr;
+      for (auto& e : edges) {
+        if (!e.alive) continue;
+        if (e.to == v) in = &e;
+        if (e.from == v) o = &e;
+      }
+      in->label = c_and(std::move(in->label), std::move(o->label));
+      in->to = o->to;
+      if (!in->el) in->el = o->el;
+      o->alive = false;
+      changed = true;
+    }
+  }
+  std::vector<E*> left;
+  for (auto& e : edges)
+    if (e.alive) left.push_back(&e);
+  if (left.size() == 1 && left[0]->from == 0 && left[0]->to == sink) return std::move(left[0]->label);
+  const Element* culprit = nullptr;
+  std::vector<int> outdeg(nn);
+  for (E* e : left) outdeg[e->from]++;
+  for (E* e : left)
+    if (e->el && outdeg[e->from] >= 2 && e->from != 0) { culprit = e->el; break; }
+  for (E* e : left)
+    if (!culprit && e->el) culprit = e->el;
+  if (!culprit) culprit = consumer;
+  fail_at(culprit, "the network feeding " + where(consumer) + " is not series-parallel at " + where(culprit) +
+                       "; ldc needs each output's contacts to reduce to series and parallel blocks");
+}
+
+Val Importer::value_expr(const std::vector<Conn>& conns, bool order, const Element* consumer, const std::string& what) {
+  if (conns.empty()) fail_at(consumer, what + " of " + where(consumer) + " is not connected");
+  if (conns.size() > 1) fail_at(conns[1].el, what + " of " + where(consumer) + " is a value: it takes one connection, not " + std::to_string(conns.size()));
+  const Conn& c = conns[0];
+  const Node& n = node(c);
+  if (n.kind == "inVariable" || n.kind == "inOutVariable") {
+    Val v = value_of(n.text, n.el);
+    if (v.ty == Ty::Bool) fail_at(n.el, "'" + n.text + "' is BOOL but " + what + " of " + where(consumer) + " takes a value");
+    return v;
+  }
+  if (n.kind == "block") {
+    Out o = block_out(n, c, order);
+    if (o.boolean) fail_at(c.el, "a BOOL output of block " + n.type + " localId " + std::to_string(n.id) + " feeds " + what + " of " + where(consumer) + ", which takes a value");
+    return o.val;
+  }
+  if (n.kind == "continuation") {
+    auto it = connectors_.find(upper(n.text));
+    if (it == connectors_.end()) fail_at(n.el, "continuation '" + n.text + "' has no connector of that name (" + n.el->path() + ")");
+    const Node& k = nodes_.at(it->second);
+    return value_expr(k.in, order, k.el, "the input");
+  }
+  fail_at(c.el, "power flow from " + where(n.el) + " feeds " + what + " of " + where(consumer) + ", which takes a value");
+}
+
+// A block output, generating the block first (Beremiz: on demand, unless the
+// reading statement has its own execution order).
+Out Importer::block_out(const Node& b, const Conn& c, bool order) {
+  if (!order && !computed_.count(b.id)) {
+    if (generating_.count(b.id)) fail_at(b.el, "block " + b.type + " localId " + std::to_string(b.id) + " feeds its own input through a loop of blocks");
+    block(b);
+  }
+  const Pin* p = out_pin(b, c);
+  std::string name = p ? p->name : "ENO";
+  auto it = outs_.find({b.id, name});
+  if (it == outs_.end() && !computed_.count(b.id) && fb_kind(upper(b.type)) != FbKind::None && name != "ENO") {
+    // read before its execution order runs it: a function block's outputs are
+    // its devices, as they stand from the previous scan
+    Var* inst = b.instance.empty() ? nullptr : lookup(b.instance);
+    if (inst && inst->dev) {
+      Val v = value_of(b.instance + "." + name, b.el);
+      outs_[{b.id, name}] = v.ty == Ty::Bool ? Out{true, bit_leaf(Op::LOAD, v.o, b.el), {}} : Out{false, {}, v};
+      it = outs_.find({b.id, name});
+    }
+  }
+  if (it == outs_.end()) {
+    if (!computed_.count(b.id))
+      fail_at(c.el, "block " + b.type + " localId " + std::to_string(b.id) + " is read before its executionOrderId computes it (" + c.el->path() + ")");
+    fail_at(c.el, "block " + b.type + " localId " + std::to_string(b.id) + " has no output '" + name + "' (" + c.el->path() + ")");
+  }
+  Out o = it->second;
+  if (p && p->negated) {
+    if (!o.boolean) fail_at(p->el, "a negated output must be BOOL (" + p->el->path() + ")");
+    o.cond = negate(std::move(o.cond), b.el);
+  }
+  return o;
+}
+
+void Importer::block(const Node& b) {
+  if (generating_.size() > 1000) fail_at(b.el, "blocks feed each other too deeply (more than 1000) at " + where(b.el));
+  computed_.insert(b.id);
+  generating_.insert(b.id);
+  std::string t = upper(b.type);
+  if (fb_kind(t) != FbKind::None) {
+    Var* inst = b.instance.empty() ? nullptr : lookup(b.instance);
+    if (!inst) fail_at(b.el, t + " block localId " + std::to_string(b.id) + " needs an instance declared in the POU ('" + b.instance + "' is not) (" + b.el->path() + ")");
+    if (!inst->derived || upper(inst->type) != t)
+      fail_at(b.el, "instance '" + b.instance + "' is declared as " + inst->type + ", but block localId " + std::to_string(b.id) + " is a " + t);
+    fb_block(b, *inst);
+  } else {
+    auto lang = pou_lang_.find(t);
+    if (lang != pou_lang_.end())
+      fail_at(b.el, "block '" + b.type + "' localId " + std::to_string(b.id) + (b.instance.empty() ? "" : " (instance " + b.instance + ")") +
+                        " calls POU '" + b.type + "', written in " + lang->second +
+                        "; ldc translates the standard blocks only, not calls of the project's own POUs (" + b.el->path() + ")");
+    fn_block(b);
+  }
+  generating_.erase(b.id);
+}
+
+// The pins of a block by name; absent pins have no connections.
+struct Pins {
+  const Node& b;
+  const Pin* get(const std::string& n) const {
+    for (const Pin& p : b.inputs)
+      if (p.name == n) return &p;
+    return nullptr;
+  }
+  bool has(const std::string& n) const {
+    const Pin* p = get(n);
+    return p && !p->conns.empty();
+  }
+};
+
+void Importer::fb_block(const Node& b, Var& inst) {
+  std::string t = upper(inst.type);
+  Pins pins{b};
+  bool order = b.order > 0;
+  static const std::map<std::string, std::vector<std::string>> known = {
+      {"TON", {"EN", "IN", "PT"}}, {"TOF", {"EN", "IN", "PT"}}, {"TP", {"EN", "IN", "PT"}},
+      {"CTU", {"EN", "CU", "R", "PV"}}, {"CTD", {"EN", "CD", "LD", "PV"}}, {"CTUD", {"EN", "CU", "CD", "R", "LD", "PV"}},
+      {"SR", {"EN", "S1", "R"}}, {"RS", {"EN", "S", "R1"}}, {"R_TRIG", {"EN", "CLK"}}, {"F_TRIG", {"EN", "CLK"}}};
+  for (const Pin& p : b.inputs)
+    if (std::find(known.at(t).begin(), known.at(t).end(), p.name) == known.at(t).end())
+      fail_at(p.el, t + " has no input '" + p.name + "' (" + p.el->path() + ")");
+  // input conditions, with the pins' own negation and edge modifiers
+  auto cond = [&](const std::string& n) -> Cond {
+    const Pin* p = pins.get(n);
+    if (!p || p->conns.empty()) return Cond::no();
+    Cond c = bool_expr(p->conns, order, p->el);
+    if (p->negated) c = negate(std::move(c), p->el);
+    else if (p->edge == "rising" || p->edge == "falling") c = trigger(std::move(c), p->edge == "rising", p->el);
+    return c;
+  };
+  auto value = [&](const std::string& n) -> Val {
+    const Pin* p = pins.get(n);
+    if (!p || p->conns.empty()) return {const_opd(0), Ty::Int};
+    Val v = value_expr(p->conns, order, p->el, n);
+    if (v.ty == Ty::Real) fail_at(p->el, n + " of " + t + " must be an integer or TIME, not REAL (" + p->el->path() + ")");
+    return v;
+  };
+  // All inputs are evaluated first (their edge contacts and the blocks feeding
+  // them run whatever EN says), then EN decides whether the block runs.
+  uint32_t i = inst.dev->index;
+  const Element* el = b.el;
+  FbKind k = fb_kind(t);
+  std::map<std::string, Cond> c;
+  std::map<std::string, Val> v;
+  Cond en = Cond::yes();
+  for (const Pin& p : b.inputs) {
+    if (p.name == "PT" || p.name == "PV") v[p.name] = value(p.name);
+    else if (p.name == "EN") en = materialize(cond("EN"), el);
+    else c[p.name] = (k == FbKind::Latch || p.name == "R" || p.name == "LD") ? materialize(cond(p.name), el) : cond(p.name);
+  }
+  auto in = [&](const std::string& n) { return c.count(n) ? c[n] : Cond::no(); };
+  auto val = [&](const std::string& n) { return v.count(n) ? v[n] : Val{const_opd(0), Ty::Int}; };
+  std::string skip;
+  if (pins.has("EN")) {
+    if (en.k != Cond::True) {
+      skip = new_label();
+      Operand l{OpdKind::Label};
+      l.label = skip;
+      rung(negate(en, el), out(Op::JMP, {l}, el), el);
+    }
+  }
+  auto bool_out = [&](const std::string& pin, Operand o) { outs_[{b.id, pin}] = Out{true, bit_leaf(Op::LOAD, o, el), {}}; };
+  auto val_out = [&](const std::string& pin, Operand o) { outs_[{b.id, pin}] = Out{false, {}, Val{o, Ty::Int}}; };
+  Operand cw{OpdKind::Int, Area::CW, i};
+  Operand cn{OpdKind::Counter};
+  cn.index = i;
+  if (k == FbKind::Timer) {
+    Operand tm{OpdKind::Timer};
+    tm.index = i;
+    rung(in("IN"), out(t == "TON" ? Op::TON : t == "TOF" ? Op::TOF : Op::TP, {tm, val("PT").o}, el), el);
+    bool_out("Q", bit_opd(Area::TQ, i));
+    val_out("ET", Operand{OpdKind::Int, Area::TW, i});
+  } else if (t == "CTU" || t == "CTD") {
+    // IEC: IF R THEN CV := 0 ELSIF (edge of CU) AND CV < 32767 THEN CV := CV + 1;
+    // Q := CV >= PV (CTD: IF LD THEN CV := PV ELSIF (edge of CD) AND CV > -32768
+    // THEN CV := CV - 1; Q := CV <= 0).  Our CTU/CTD count on their input's
+    // rising edge; the input here is already a one-scan pulse, so they count
+    // exactly the IEC edges, and compute Q on every scan.
+    bool up = t == "CTU";
+    Cond r = in(up ? "R" : "LD");
+    Val pv = val("PV");
+    if (r.k != Cond::False) rung(r, up ? out(Op::RSTC, {cn}, el) : out(Op::MOV, {pv.o, cw}, el), el);
+    Cond pulse = trigger(in(up ? "CU" : "CD"), true, el);
+    Cond limit = Cond::of(leaf(up ? Op::LDLT : Op::LDGT, {cw, const_opd(up ? 32767 : -32768)}, el));
+    rung(c_and(c_and(std::move(pulse), negate(r, el)), std::move(limit)), out(up ? Op::CTU : Op::CTD, {cn, pv.o}, el), el);
+    bool_out("Q", bit_opd(Area::CQ, i));
+    val_out("CV", cw);
+  } else if (t == "CTUD") {
+    Cond r = in("R"), ld = in("LD");
+    Cond eu = materialize(trigger(in("CU"), true, el), el), ed = materialize(trigger(in("CD"), true, el), el);
+    Val pv = val("PV");
+    if (r.k != Cond::False) rung(r, out(Op::RSTC, {cn}, el), el);
+    Cond idle = c_and(negate(r, el), negate(ld, el));
+    if (ld.k != Cond::False) rung(c_and(negate(r, el), ld), out(Op::MOV, {pv.o, cw}, el), el);
+    rung(c_and(c_and(idle, c_and(eu, negate(ed, el))), Cond::of(leaf(Op::LDLT, {cw, const_opd(32767)}, el))),
+         out(Op::ADD, {cw, const_opd(1), cw}, el), el);
+    rung(c_and(c_and(idle, c_and(ed, negate(eu, el))), Cond::of(leaf(Op::LDGT, {cw, const_opd(-32768)}, el))),
+         out(Op::SUB, {cw, const_opd(1), cw}, el), el);
+    rung(Cond::of(leaf(Op::LDGE, {cw, pv.o}, el)), out(Op::OUT, {bit_opd(Area::M, inst.aux)}, el), el);
+    rung(Cond::of(leaf(Op::LDLE, {cw, const_opd(0)}, el)), out(Op::OUT, {bit_opd(Area::M, inst.aux2)}, el), el);
+    bool_out("QU", bit_opd(Area::M, inst.aux));
+    bool_out("QD", bit_opd(Area::M, inst.aux2));
+    val_out("CV", cw);
+  } else if (k == FbKind::Latch) {
+    // SR: Q1 := S1 OR (NOT R AND Q1)    RS: Q1 := NOT R1 AND (S OR Q1)
+    // (both inputs were read into relays before Q1 changes)
+    Operand q = bit_opd(Area::M, i);
+    Cond s = in(t == "SR" ? "S1" : "S"), r = in(t == "SR" ? "R" : "R1");
+    if (t == "SR") {
+      if (r.k != Cond::False) rung(r, out(Op::RST, {q}, el), el);
+      if (s.k != Cond::False) rung(s, out(Op::SET, {q}, el), el);
+    } else {
+      if (s.k != Cond::False) rung(s, out(Op::SET, {q}, el), el);
+      if (r.k != Cond::False) rung(r, out(Op::RST, {q}, el), el);
+    }
+    bool_out("Q1", q);
+  } else {  // R_TRIG / F_TRIG: the instance's relay holds Q
+    Operand q = bit_opd(Area::M, i);
+    trigger(in("CLK"), t == "R_TRIG", el, q);
+    bool_out("Q", q);
+  }
+  if (!skip.empty()) pending_labels_.push_back(skip);
+  if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, en, {}};
+}
+
+void Importer::fn_block(const Node& b) {
+  std::string t = upper(b.type);
+  Pins pins{b};
+  bool order = b.order > 0;
+  const Element* el = b.el;
+  static const std::set<std::string> cmp = {"GT", "GE", "EQ", "NE", "LE", "LT"};
+  static const std::set<std::string> arith = {"ADD", "SUB", "MUL", "DIV", "MOD", "MAX", "MIN"};
+  size_t to = t.find("_TO_");
+  bool conv = to != std::string::npos;
+  if (!cmp.count(t) && !arith.count(t) && !conv && t != "MOVE" && t != "SEL" && t != "LIMIT" && t != "ABS" && t != "AND" &&
+      t != "OR" && t != "XOR" && t != "NOT")
+    fail_at(el, "block '" + b.type + "' localId " + std::to_string(b.id) + " is not supported: ldc translates TON TOF TP CTU CTD CTUD SR RS R_TRIG F_TRIG, "
+                "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL, AND OR XOR NOT and type conversions (" + el->path() + ")");
+  // inputs other than EN, in order
+  std::vector<const Pin*> ins;
+  for (const Pin& p : b.inputs)
+    if (p.name != "EN") ins.push_back(&p);
+  auto cond_of = [&](const Pin* p) {
+    Cond c = bool_expr(p->conns, order, p->el);
+    if (p->negated) c = negate(std::move(c), p->el);
+    else if (p->edge == "rising" || p->edge == "falling") c = trigger(std::move(c), p->edge == "rising", p->el);
+    return c;
+  };
+  auto val_of = [&](const Pin* p) {
+    if (p->negated) fail_at(p->el, "a negated input must be BOOL (" + p->el->path() + ")");
+    return value_expr(p->conns, order, p->el, p->name);
+  };
+  Cond en = Cond::yes();
+  if (pins.has("EN")) en = materialize(cond_of(pins.get("EN")), el);
+  Cond eno = en;
+  for (const Pin* p : ins)
+    if (p->conns.empty()) fail_at(p->el, "input " + p->name + " of " + t + " localId " + std::to_string(b.id) + " is not connected (" + p->el->path() + ")");
+  bool boolean = out_is_bool(b, "OUT");
+  std::string outname = "OUT";
+  if (!b.outputs.empty()) {
+    for (const Pin& p : b.outputs)
+      if (p.name != "ENO") outname = p.name;
+  }
+  if (boolean) {
+    uint32_t m = temp_m(el);
+    Operand q = bit_opd(Area::M, m);
+    Cond c;
+    if (cmp.count(t)) {
+      // GT(a, b, c) = a > b AND b > c; FALSE when EN is off
+      static const std::map<std::string, Op> ops = {{"GT", Op::LDGT}, {"GE", Op::LDGE}, {"EQ", Op::LDEQ},
+                                                    {"NE", Op::LDNE}, {"LE", Op::LDLE}, {"LT", Op::LDLT}};
+      if (ins.size() < 2) fail_at(el, t + " needs two inputs (" + el->path() + ")");
+      std::vector<Val> v;
+      for (const Pin* p : ins) v.push_back(val_of(p));
+      c = en;
+      for (size_t k = 0; k + 1 < v.size(); k++) c = c_and(std::move(c), Cond::of(leaf(ops.at(t), {v[k].o, v[k + 1].o}, el)));
+    } else if (conv) {  // INT_TO_BOOL & co: the value is not zero
+      Val v = val_of(ins.at(0));
+      c = c_and(en, Cond::of(leaf(Op::LDNE, {v.o, v.ty == Ty::Real ? [] { Operand z{OpdKind::ConstReal}; z.fval = 0; return z; }() : const_opd(0)}, el)));
+    } else if (t == "NOT") {
+      c = c_and(en, negate(cond_of(ins.at(0)), el));
+    } else if (t == "AND" || t == "OR") {
+      c = t == "AND" ? Cond::yes() : Cond::no();
+      for (const Pin* p : ins) c = t == "AND" ? c_and(std::move(c), cond_of(p)) : c_or(std::move(c), cond_of(p));
+      c = c_and(en, std::move(c));
+    } else if (t == "XOR") {
+      Cond acc = materialize(cond_of(ins.at(0)), el);
+      for (size_t k = 1; k < ins.size(); k++) {
+        Cond x = materialize(cond_of(ins[k]), el);
+        acc = materialize(c_or(c_and(acc, negate(x, el)), c_and(negate(acc, el), x)), el);
+      }
+      c = c_and(en, std::move(acc));
+    } else if (t == "MOVE") {
+      c = c_and(en, cond_of(ins.at(0)));
+    } else if (t == "SEL") {
+      const Pin* g = pins.get("G");
+      if (!g || ins.size() != 3) fail_at(el, "SEL needs G, IN0 and IN1 (" + el->path() + ")");
+      Cond gc = materialize(cond_of(g), el);
+      Cond a = cond_of(ins[1]), bb = cond_of(ins[2]);
+      c = c_and(en, c_or(c_and(negate(gc, el), std::move(a)), c_and(gc, std::move(bb))));
+    } else {
+      fail_at(el, t + " with BOOL inputs is not supported (" + el->path() + ")");
+    }
+    rung(std::move(c), out(Op::OUT, {q}, el), el);
+    outs_[{b.id, outname}] = Out{true, bit_leaf(Op::LOAD, q, el), {}};
+  } else {
+    // values: the result goes to a temporary word; 0 when EN is off (as MatIEC)
+    std::vector<Val> v;
+    const Pin* g = nullptr;
+    for (const Pin* p : ins) {
+      if (t == "SEL" && p->name == "G") { g = p; continue; }
+      v.push_back(val_of(p));
+    }
+    bool real = false;
+    for (const Val& x : v) real |= x.ty == Ty::Real;
+    std::string target = conv ? t.substr(to + 4) : "";
+    if (conv) {
+      std::string from = t.substr(0, to);
+      Ty ft = from == "BOOL" ? Ty::Bool : elementary(from), tt = elementary(target);
+      if (ft == Ty::None || tt == Ty::None || tt == Ty::Bool || (ft == Ty::Real && tt != Ty::Real))
+        fail_at(el, "conversion " + t + " is not supported (" + el->path() + ")");
+      real = tt == Ty::Real;
+    }
+    Operand res = real ? Operand{OpdKind::Real, Area::F, take(Dev::F, el)} : Operand{OpdKind::Int, Area::D, take(Dev::D, el)};
+    Operand zero = real ? [] { Operand z{OpdKind::ConstReal}; z.fval = 0; return z; }() : const_opd(0);
+    std::vector<TreeNode> acts;
+    Cond when = en;
+    if (conv && t.rfind("BOOL_TO_", 0) == 0) {
+      Cond in = materialize(cond_of(ins.at(0)), el);
+      rung(Cond::yes(), out(Op::MOV, {zero, res}, el), el);
+      rung(c_and(en, in), out(Op::MOV, {real ? [] { Operand z{OpdKind::ConstReal}; z.fval = 1; return z; }() : const_opd(1), res}, el), el);
+    } else {
+      if (en.k != Cond::True) rung(negate(en, el), out(Op::MOV, {zero, res}, el), el);
+      if (conv || t == "MOVE") {
+        rung(en, out(Op::MOV, {v.at(0).o, res}, el), el);
+      } else if (t == "ABS") {
+        rung(en, out(Op::ABS, {v.at(0).o, res}, el), el);
+      } else if (t == "SEL") {
+        if (!g || v.size() != 2) fail_at(el, "SEL needs G, IN0 and IN1 (" + el->path() + ")");
+        Cond gc = materialize(cond_of(g), el);
+        rung(c_and(en, negate(gc, el)), out(Op::MOV, {v[0].o, res}, el), el);
+        rung(c_and(en, gc), out(Op::MOV, {v[1].o, res}, el), el);
+      } else if (t == "LIMIT") {  // IN > MN ? (IN < MX ? IN : MX) : MN
+        if (v.size() != 3) fail_at(el, "LIMIT needs MN, IN and MX (" + el->path() + ")");
+        rung(c_and(en, Cond::of(leaf(Op::LDLE, {v[1].o, v[0].o}, el))), out(Op::MOV, {v[0].o, res}, el), el);
+        rung(c_and(c_and(en, Cond::of(leaf(Op::LDGT, {v[1].o, v[0].o}, el))), Cond::of(leaf(Op::LDGE, {v[1].o, v[2].o}, el))),
+             out(Op::MOV, {v[2].o, res}, el), el);
+        rung(c_and(c_and(en, Cond::of(leaf(Op::LDGT, {v[1].o, v[0].o}, el))), Cond::of(leaf(Op::LDLT, {v[1].o, v[2].o}, el))),
+             out(Op::MOV, {v[1].o, res}, el), el);
+      } else if (t == "MAX" || t == "MIN") {
+        rung(en, out(Op::MOV, {v.at(0).o, res}, el), el);
+        for (size_t k = 1; k < v.size(); k++)
+          rung(c_and(en, Cond::of(leaf(t == "MAX" ? Op::LDLT : Op::LDGT, {res, v[k].o}, el))), out(Op::MOV, {v[k].o, res}, el), el);
+      } else if (t == "AND" || t == "OR" || t == "XOR" || t == "NOT") {
+        if (real) fail_at(el, t + " of REAL values is not defined (" + el->path() + ")");
+        if (t == "NOT") rung(en, out(Op::WNOT, {v.at(0).o, res}, el), el);
+        else {
+          Op op = t == "AND" ? Op::WAND : t == "OR" ? Op::WOR : Op::WXOR;
+          rung(en, out(op, {v.at(0).o, v.at(1).o, res}, el), el);
+          for (size_t k = 2; k < v.size(); k++) rung(en, out(op, {res, v[k].o, res}, el), el);
+        }
+      } else if (t == "DIV" || t == "MOD") {
+        // MatIEC: a zero divisor gives 0 (and ENO FALSE for DIV), not an error
+        if (v.size() != 2) fail_at(el, t + " takes two inputs (" + el->path() + ")");
+        if (t == "MOD" && real) fail_at(el, "MOD of REAL values is not defined (" + el->path() + ")");
+        Operand z = v[1].ty == Ty::Real ? zero : const_opd(0);
+        rung(c_and(en, Cond::of(leaf(Op::LDEQ, {v[1].o, z}, el))), out(Op::MOV, {zero, res}, el), el);
+        rung(c_and(en, Cond::of(leaf(Op::LDNE, {v[1].o, z}, el))), out(t == "DIV" ? Op::DIV : Op::MOD, {v[0].o, v[1].o, res}, el), el);
+        if (t == "DIV") eno = c_and(en, Cond::of(leaf(Op::LDNE, {v[1].o, z}, el)));
+      } else {  // ADD MUL (extensible), SUB
+        if (v.size() < 2 || (t == "SUB" && v.size() != 2)) fail_at(el, t + " needs " + (t == "SUB" ? "two" : "two or more") + " inputs (" + el->path() + ")");
+        Op op = t == "ADD" ? Op::ADD : t == "SUB" ? Op::SUB : Op::MUL;
+        rung(en, out(op, {v[0].o, v[1].o, res}, el), el);
+        for (size_t k = 2; k < v.size(); k++) rung(en, out(op, {res, v[k].o, res}, el), el);
+      }
+    }
+    outs_[{b.id, outname}] = Out{false, {}, Val{res, real ? Ty::Real : Ty::Int}};
+  }
+  if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, materialize(eno, el), {}};
+}
+
+void Importer::statement(const Node& n) {
+  const Element* el = n.el;
+  if (n.kind == "block") {
+    if (!computed_.count(n.id)) block(n);
+    return;
+  }
+  if (n.in.empty()) return;  // an unconnected coil or variable does nothing (Beremiz skips it)
+  bool order = n.order > 0 && n.kind != "coil";
+  if (n.kind == "coil") {
+    Operand q = bit_of(n.text, el, true);
+    Cond c = bool_expr(n.in, false, el);
+    // Beremiz: NOT(expr), else IF expr THEN var := TRUE/FALSE, else R_TRIG/F_TRIG(expr)
+    if (n.negated) return rung(std::move(c), out(Op::OUTN, {q}, el, n.text), el);
+    if (n.storage == "set" || n.storage == "reset") return rung(std::move(c), out(n.storage == "set" ? Op::SET : Op::RST, {q}, el, n.text), el);
+    if (n.edge == "rising" || n.edge == "falling") c = trigger(std::move(c), n.edge == "rising", el);
+    return rung(std::move(c), out(Op::OUT, {q}, el, n.text), el);
+  }
+  // outVariable / inOutVariable: var := expression
+  Val dst = value_of(n.text, el, true);
+  bool neg = n.kind == "inOutVariable" ? n.negated_in : n.negated;
+  if (dst.ty == Ty::Bool) {
+    if (!is_bool_source(n.in[0])) fail_at(el, "'" + n.text + "' is BOOL but a value feeds " + where(el));
+    if (dst.o.area != Area::Y && dst.o.area != Area::M) fail_at(el, "'" + n.text + "' cannot be written (" + where(el) + ")");
+    Cond c = bool_expr(n.in, order, el);
+    return rung(std::move(c), out(neg ? Op::OUTN : Op::OUT, {dst.o}, el, n.text), el);
+  }
+  if (neg) fail_at(el, "a negated " + n.kind + " must be BOOL (" + el->path() + ")");
+  Val v = value_expr(n.in, order, el, "the input");
+  TreeNode mv = out(Op::MOV, {v.o, dst.o}, el);
+  mv.text = "MOV " + spell(v.o) + " " + n.text;
+  rung(Cond::yes(), std::move(mv), el);
+}
+
+// Beremiz's order of statements (PLCGenerator.ComputeProgram), positions
+// compared as its SortInstances does: rows within 10 units, left to right.
+bool before(const Node* a, const Node* b) {
+  if (std::abs(a->y - b->y) < 10) return a->x < b->x;
+  return a->y < b->y;
+}
+
+void Importer::body(const Element* pou, const Element* ld) {
+  nodes_.clear();
+  connectors_.clear();
+  computed_.clear();
+  outs_.clear();
+  consumed_.clear();
+  generating_.clear();
+  for (const auto& c : ld->children) read_node(c.get());
+  for (auto& [id, n] : nodes_) {
+    for (const Conn& c : n.in) consumed_.insert({c.ref, c.param});
+    for (const Pin& p : n.inputs)
+      for (const Conn& c : p.conns) consumed_.insert({c.ref, c.param});
+  }
+  std::vector<const Node*> ordered, stmts, blocks;
+  for (const auto& [id, n] : nodes_) {
+    bool stmt = n.kind == "outVariable" || n.kind == "inOutVariable" || n.kind == "block";
+    if (stmt && n.order > 0) ordered.push_back(&n);
+    else if (n.kind == "outVariable" || n.kind == "inOutVariable" || n.kind == "coil") stmts.push_back(&n);
+    else if (n.kind == "block") blocks.push_back(&n);
+  }
+  // document order first (std::map sorted them by localId), then stable sorts
+  auto doc = [&](std::vector<const Node*>& v) {
+    std::vector<const Node*> r;
+    for (const auto& c : ld->children)
+      for (const Node* n : v)
+        if (n->el == c.get()) r.push_back(n);
+    v = r;
+  };
+  doc(ordered), doc(stmts), doc(blocks);
+  std::stable_sort(ordered.begin(), ordered.end(), [](const Node* a, const Node* b) { return a->order < b->order; });
+  auto insertion = [](std::vector<const Node*>& v) {  // stable, and safe for a comparator that is not transitive
+    for (size_t i = 1; i < v.size(); i++)
+      for (size_t j = i; j > 0 && before(v[j], v[j - 1]); j--) std::swap(v[j], v[j - 1]);
+  };
+  insertion(stmts);
+  insertion(blocks);
+  size_t first = rungs_.size();
+  pending_title_ = "POU " + *pou->attr("name");
+  for (const Node* n : ordered) statement(*n);
+  for (const Node* n : stmts) statement(*n);
+  for (const Node* n : blocks) statement(*n);
+  if (rungs_.size() == first) pending_title_.clear();
+}
+
+TreeProgram Importer::run() {
+  if (text_.size() > kMaxSourceBytes) fail_at(nullptr, "source file too large (at most 64 MiB)");
+  doc_ = xml::parse(text_);
+  const Element* root = doc_.root.get();
+  if (root->local_name() != "project")
+    fail_at(root, "expected a PLCopen TC6 <project>, found <" + root->name + ">");
+  // global variables of configurations and resources
+  if (const Element* inst = root->child("instances"))
+    if (const Element* cfgs = inst->child("configurations"))
+      for (const Element* cfg : cfgs->children_named("configuration")) {
+        for (const Element* g : cfg->children_named("globalVars")) declare(g, "", true);
+        for (const Element* res : cfg->children_named("resource"))
+          for (const Element* g : res->children_named("globalVars")) declare(g, "", true);
+      }
+  // POUs and their languages
+  const Element* types = root->child("types");
+  const Element* pous = types ? types->child("pous") : nullptr;
+  std::vector<const Element*> all, ld;
+  if (pous)
+    for (const Element* p : pous->children_named("pou")) {
+      if (!p->attr("name")) fail_at(p, "POU without a name (" + p->path() + ")");
+      const Element* b = p->child("body");
+      std::string lang = "no body";
+      if (b)
+        for (const auto& c : b->children)
+          if (c->local_name() != "documentation" && c->local_name() != "addData") {
+            lang = std::string(c->local_name());
+            break;
+          }
+      pou_lang_[upper(*p->attr("name"))] = lang;
+      all.push_back(p);
+      if (lang == "LD") ld.push_back(p);
+    }
+  if (ld.empty()) {
+    std::string list;
+    for (const Element* p : all) list += std::string(list.empty() ? "" : ", ") + "'" + *p->attr("name") + "' is " + pou_lang_[upper(*p->attr("name"))];
+    fail_at(pous ? pous : root, all.empty() ? "the project has no POU" : "no POU of this project has an LD body (" + list +
+                                                                               "); ldc imports LD bodies only");
+  }
+  // declarations of the LD POUs, then devices for all of them
+  std::map<const Element*, std::map<std::string, Var*>> scopes;
+  for (const Element* p : ld) {
+    scope_.clear();
+    std::string name = *p->attr("name");
+    if (const Element* itf = p->child("interface")) {
+      for (const auto& sec : itf->children) {
+        std::string s(sec->local_name());
+        if (s == "returnType") {
+          if (sec->children.empty()) continue;
+          auto u = std::make_unique<Var>();
+          u->name = name;
+          u->el = sec.get();
+          u->pou = name;
+          const Element* te = sec->children[0].get();
+          u->derived = te->local_name() == "derived";
+          u->type = u->derived ? (te->attr("name") ? *te->attr("name") : "") : upper(te->local_name());
+          u->ty = u->derived ? Ty::None : elementary(u->type);
+          scope_[upper(name)] = u.get();
+          vars_.push_back(std::move(u));
+        } else if (s == "externalVars") {
+          for (const Element* v : sec->children_named("variable")) {
+            const std::string* nm = v->attr("name");
+            if (!nm) fail_at(v, "variable without a name (" + v->path() + ")");
+            auto it = globals_.find(upper(*nm));
+            if (it == globals_.end()) fail_at(v, "external variable '" + *nm + "' of POU '" + name + "' is not a global variable of the project");
+            scope_[upper(*nm)] = it->second;
+          }
+        } else if (s == "localVars" || s == "inputVars" || s == "outputVars" || s == "inOutVars" || s == "tempVars") {
+          declare(sec.get(), name, false);
+        } else if (s != "documentation" && s != "addData" && s != "accessVars" && s != "globalVars") {
+          fail_at(sec.get(), "unknown interface section <" + sec->name + "> (" + sec->path() + ")");
+        }
+      }
+    }
+    scopes[p] = scope_;
+  }
+  allocate();
+  for (auto& v : vars_)
+    if (v->dev) spelled_[{int(v->dev->dev), v->dev->index}] = v->name;
+  // initial values: set on the first scan, before anything else runs
+  for (auto& v : vars_) {
+    if (!v->dev || v->init.empty() || v->derived || v->constant) continue;
+    if (v->dev->dev == Dev::X || v->dev->dev == Dev::WX) continue;  // inputs belong to the I/O
+    Ty t;
+    auto c = literal(v->init, t, v->el);
+    if (!c) fail_at(v->el, "initial value '" + v->init + "' of '" + v->name + "' is not a literal");
+    if (v->ty == Ty::Bool) {
+      if (c->ival) init_.push_back(out(Op::SET, {bit_opd(bit_area(v->dev->dev), v->dev->index)}, v->el));
+    } else if (c->kind == OpdKind::ConstReal ? c->fval != 0 : c->ival != 0) {
+      init_.push_back(out(Op::MOV, {*c, Operand{v->ty == Ty::Real ? OpdKind::Real : OpdKind::Int, word_area(v->dev->dev), v->dev->index}}, v->el));
+    }
+  }
+  TreeProgram p;
+  p.source = file_;
+  if (!init_.empty()) {
+    TreeRung r;
+    r.line = init_[0].elem.loc.line;
+    r.title = "initial values";
+    r.root = then_node(bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), root), fork_of(std::move(init_)), {r.line, 1});
+    rungs_.push_back(std::move(r));
+  }
+  for (const Element* pe : ld) {
+    pou_ = *pe->attr("name");
+    scope_ = scopes[pe];
+    const Element* b = pe->child("body");
+    body(pe, b->child("LD"));
+  }
+  if (rungs_.empty()) fail_at(ld[0], "the LD bodies of this project have no coils, variables or blocks to run");
+  p.rungs = std::move(rungs_);
+  p.end_labels = std::move(pending_labels_);
+  aliases(p);
+  return p;
+}
+
+}  // namespace
+
+TreeProgram parse_plcopen(std::string_view text, const std::string& filename) { return Importer(text, filename).run(); }
+
+}  // namespace ldc
