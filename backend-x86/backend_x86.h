@@ -24,8 +24,9 @@ struct X86Code {
 };
 
 // opt_level 0: paper 003's pure macro expansion (the bit stack shifted in ebp).
+// opt_level 1: -O0 plus a peephole pass over each rung's templates.
 // opt_level 2: rung by rung, the bit stack in callee-saved byte registers
-// (r12b r13b r14b r15b bpl) when the rung's live stack fits, else as -O0.
+// (r12b r13b r14b r15b bpl) when the rung's live stack fits, else as -O1.
 X86Code generate_x86(const Program& p, const Layout& layout, int opt_level = 0);
 
 // Names of the global labels the backend defines.

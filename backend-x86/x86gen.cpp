@@ -649,6 +649,125 @@ void Gen::gen(const ldc::Instr& in) {
   throw std::logic_error(std::string("x86 backend: no template for ") + op_info(in.op).name);
 }
 
+// ------------------------------------------------------------ -O1 peephole
+//
+// Over the -O0 templates of one rung:
+//  * `mov eax, ebp; and eax, 1` when eax already holds the top (after a push,
+//    or after the same pair) is dropped; `test ebp, 1` becomes `test eax, eax`;
+//  * `movzx eax, byte ptr [m]` when eax already holds that byte is dropped;
+//  * a push (`lea ebp, ...`) whose stack is never read again is dropped: the
+//    stack is dead at the end of a rung and at jumps out of it;
+//  * a jump to the label right after it is dropped.
+// Notes (the IL text items) stay, so IL instructions keep their places.
+bool is_reg(const Operand& o, uint8_t num) { return o.kind == OperandKind::Reg && o.reg.cls != RegClass::Xmm && o.reg.num == num; }
+bool mem_uses(const Operand& o, uint8_t num) {
+  return o.kind == OperandKind::Mem && ((o.mem.base.valid() && o.mem.base.cls == RegClass::Gp64 && o.mem.base.num == num) ||
+                                        (o.mem.index.valid() && o.mem.index.num == num));
+}
+bool writes_reg(const Instruction& i, uint8_t num) {
+  if (i.mnemonic == M::Call || (i.mnemonic == M::Idiv && (num == AX || num == DX)) || (i.mnemonic == M::Cdq && num == DX)) return true;
+  if (i.mnemonic == M::Cmp || i.mnemonic == M::Test || i.mnemonic == M::Push || i.numOperands == 0) return false;
+  if (i.mnemonic == M::Jmp || i.mnemonic == M::Jcc || i.mnemonic == M::Ucomiss) return false;
+  return is_reg(i.ops[0], num);
+}
+bool reads_reg(const Instruction& i, uint8_t num) {
+  for (unsigned k = 0; k < i.numOperands; k++) {
+    if (mem_uses(i.ops[k], num)) return true;
+    if (is_reg(i.ops[k], num)) {
+      bool pure_write = k == 0 && (i.mnemonic == M::Mov || i.mnemonic == M::Movzx || i.mnemonic == M::Lea ||
+                                   i.mnemonic == M::Setcc || i.mnemonic == M::Movd || i.mnemonic == M::Cvttss2si || i.mnemonic == M::Pop);
+      if (!pure_write) return true;
+    }
+  }
+  return i.mnemonic == M::Idiv && num == DX;
+}
+bool same_text(const Instruction& i, const char* text) {
+  static std::map<std::string, Instruction> cache;
+  auto it = cache.find(text);
+  if (it == cache.end()) it = cache.emplace(text, parse(text)).first;
+  return i == it->second;
+}
+
+void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
+  std::vector<char> drop(items.size(), 0);
+  auto next_instr = [&](size_t i) {
+    for (size_t j = i + 1; j < items.size(); j++)
+      if (items[j].kind != as::ItemKind::Comment && !drop[j]) return j;
+    return items.size();
+  };
+  // forward: what eax holds
+  bool eax_top = false;
+  int64_t eax_byte = -1;
+  for (size_t i = 0; i < items.size(); i++) {
+    Item& it = items[i];
+    if (it.kind == as::ItemKind::Label) { eax_top = false; eax_byte = -1; continue; }
+    if (it.kind != as::ItemKind::Instruction) continue;
+    Instruction& in = it.inst;
+    size_t j = next_instr(i);
+    if (same_text(in, "mov eax, ebp") && j < items.size() && items[j].kind == as::ItemKind::Instruction &&
+        same_text(items[j].inst, "and eax, 1")) {
+      if (eax_top) drop[i] = drop[j] = 1;
+      eax_top = true;
+      eax_byte = -1;
+      i = j;
+      continue;
+    }
+    if (same_text(in, "test ebp, 1") && eax_top) { in = parse("test eax, eax"); continue; }
+    if (in.mnemonic == M::Movzx && is_reg(in.ops[0], AX) && in.ops[1].kind == OperandKind::Mem && mem_uses(in.ops[1], BX)) {
+      if (eax_byte == in.ops[1].mem.disp) { drop[i] = 1; continue; }
+      eax_top = false;
+      eax_byte = in.ops[1].mem.disp;
+      continue;
+    }
+    if (in.mnemonic == M::Lea && is_reg(in.ops[0], BP) && mem_uses(in.ops[1], AX)) { eax_top = true; continue; }  // a push of eax
+    if (writes_reg(in, AX)) { eax_top = false; eax_byte = -1; }
+    if (writes_reg(in, BP)) eax_top = false;
+    if (in.numOperands && in.ops[0].kind == OperandKind::Mem) eax_byte = -1;  // a store may change that byte
+    if (in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) { eax_top = false; eax_byte = -1; }
+  }
+  // backward: is the stack (ebp) read again?
+  std::map<std::string, bool> live_at;
+  bool live = false;
+  for (size_t k = items.size(); k-- > 0;) {
+    Item& it = items[k];
+    if (drop[k]) continue;
+    if (it.kind == as::ItemKind::Label) { live_at[it.label] = live; continue; }
+    if (it.kind != as::ItemKind::Instruction) continue;
+    const Instruction& in = it.inst;
+    if (in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) {
+      bool target = false;  // global targets (other rungs, scan_exit): the stack is dead there
+      if (in.ops[0].kind == OperandKind::Label) {
+        auto t = live_at.find(in.ops[0].label);
+        if (t != live_at.end()) target = t->second;
+      }
+      live = in.mnemonic == M::Jmp ? target : (live || target);
+      continue;
+    }
+    if (in.mnemonic == M::Lea && is_reg(in.ops[0], BP) && !live) { drop[k] = 1; continue; }
+    if (writes_reg(in, BP) && !reads_reg(in, BP)) live = false;
+    if (reads_reg(in, BP)) live = true;
+  }
+  // jumps to the very next item
+  for (size_t i = 0; i < items.size(); i++) {
+    const Item& it = items[i];
+    if (drop[i] || it.kind != as::ItemKind::Instruction || (it.inst.mnemonic != M::Jmp && it.inst.mnemonic != M::Jcc)) continue;
+    if (it.inst.ops[0].kind != OperandKind::Label) continue;
+    for (size_t j = i + 1; j < items.size(); j++) {
+      if (items[j].kind == as::ItemKind::Comment || drop[j]) continue;
+      if (items[j].kind == as::ItemKind::Label && items[j].label == it.inst.ops[0].label) drop[i] = 1;
+      break;
+    }
+  }
+  std::vector<uint32_t> new_index(items.size() + 1);
+  std::vector<Item> kept;
+  for (size_t i = 0; i < items.size(); i++) {
+    new_index[i] = uint32_t(kept.size());
+    if (!drop[i]) kept.push_back(std::move(items[i]));
+  }
+  for (auto& s : starts) s = new_index[s];
+  items = std::move(kept);
+}
+
 // Can this rung keep its stack in the kNumSlots registers?  Stack position p
 // maps to slot p % kNumSlots, so the positions live at any one time must span
 // fewer than kNumSlots (what lies deeper is never read again, as with the
@@ -719,12 +838,14 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level) {
     for (const auto& l : r.labels) b.items.push_back(Item::labelDef(x86_label_name(l), true));
     b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
     std::vector<uint32_t> starts;
-    Gen g(layout, b.items, o2 && fits_slots(r.code));
+    bool slots = o2 && fits_slots(r.code);
+    Gen g(layout, b.items, slots);
     for (const ldc::Instr& in : r.code) {
       starts.push_back(uint32_t(b.items.size()));
       b.items.push_back(Item::note(instr_text(in)));
       g.instr(in);
     }
+    if (opt_level >= 1 && !slots) peephole(b.items, starts);
     out.il_items.push_back(std::move(starts));
     prog.blocks.push_back(std::move(b));
   }

@@ -10,7 +10,7 @@
 using namespace ldc;
 
 static const char kUsage[] =
-    "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il|asm|listing|hex|c] [--target=x86-64|c40] [-O0|-O2]\n";
+    "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il|asm|listing|hex|c] [--target=x86-64|c40] [-O0|-O1|-O2]\n";
 
 int main(int argc, char** argv) {
   std::string input, output, emit, target = "x86-64";
@@ -20,11 +20,7 @@ int main(int argc, char** argv) {
     if (a == "-o" && i + 1 < argc) output = argv[++i];
     else if (a.rfind("--emit=", 0) == 0) emit = a.substr(7);
     else if (a.rfind("--target=", 0) == 0) target = a.substr(9);
-    else if (a == "-O0" || a == "-O2") opt = a[2] - '0';
-    else if (a == "-O1") {
-      std::fprintf(stderr, "ldc: error: -O1 is not available yet; use -O0 (paper 003's macro expansion) or -O2\n");
-      return 1;
-    }
+    else if (a == "-O0" || a == "-O1" || a == "-O2") opt = a[2] - '0';
     else if (a == "-h" || a == "--help") { std::fputs(kUsage, stdout); return 0; }
     else if (!a.empty() && a[0] == '-') { std::fprintf(stderr, "ldc: error: unknown option '%s'\n%s", a.c_str(), kUsage); return 1; }
     else if (input.empty()) input = a;

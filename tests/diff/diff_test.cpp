@@ -370,6 +370,7 @@ void run_shard(int shard, EngineFactory test, const std::string& what) {
 }
 
 TEST_P(DiffShard, NativeMatchesInterpreter) { run_shard(GetParam(), make_native, "native -O0"); }
+TEST_P(DiffShard, NativeO1MatchesInterpreter) { run_shard(GetParam(), make_native_o1, "native -O1"); }
 TEST_P(DiffShard, NativeO2MatchesInterpreter) { run_shard(GetParam(), make_native_o2, "native -O2"); }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, DiffShard, ::testing::Range(0, kShards));

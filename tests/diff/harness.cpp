@@ -31,6 +31,11 @@ std::unique_ptr<Engine> make_native(const Program& p) {
   return make_native_engine(nb.asm_result.code, 0);
 }
 
+std::unique_ptr<Engine> make_native_o1(const Program& p) {
+  NativeBuild nb = build_x86(p, p.source, as::Mode::Blockwise, 1);
+  return make_native_engine(nb.asm_result.code, 0);
+}
+
 std::unique_ptr<Engine> make_native_o2(const Program& p) {
   NativeBuild nb = build_x86(p, p.source, as::Mode::Blockwise, 2);
   return make_native_engine(nb.asm_result.code, 0);

@@ -19,6 +19,7 @@ namespace ldc::diff {
 using EngineFactory = std::function<std::unique_ptr<Engine>(const Program&)>;
 std::unique_ptr<Engine> make_interp(const Program& p);  // encode_il + make_interp_engine
 std::unique_ptr<Engine> make_native(const Program& p);     // build_x86 -O0 + make_native_engine
+std::unique_ptr<Engine> make_native_o1(const Program& p);  // the same at -O1
 std::unique_ptr<Engine> make_native_o2(const Program& p);  // the same at -O2
 
 // A byte of the memory image, named for people.

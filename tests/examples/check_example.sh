@@ -3,7 +3,8 @@
 # Compiles the example to an image with ldc, runs the image over the example's
 # trace on ENGINE and compares with EXAMPLE.expected, whose header names the
 # watched devices.  ENGINE "source" runs the .ld directly on the interpreter;
-# "c" is the C route (ldc --emit=c compiled by the system cc -O2).
+# "c" is the C route (ldc --emit=c compiled by the system cc -O2);
+# "native-O1", "native-O2" compile at that level.
 set -eu
 bindir=$1 src=$2 engine=$3
 base=${src%.ld}
@@ -15,7 +16,9 @@ if [ "$engine" = source ]; then
 elif [ "$engine" = c ]; then
   "$bindir/ldrun" "$src" --engine=c --trace "$base.csv" --watch "$watch" > "$tmp/out"
 else
-  "$bindir/ldc" "$src" -o "$tmp/prog.bin"
+  level=-O0
+  case $engine in native-O*) level=-${engine#native-}; engine=native;; esac
+  "$bindir/ldc" "$src" $level -o "$tmp/prog.bin"
   "$bindir/ldrun" "$tmp/prog.bin" --engine="$engine" --trace "$base.csv" --watch "$watch" > "$tmp/out"
 fi
 if ! diff -u "$base.expected" "$tmp/out"; then
