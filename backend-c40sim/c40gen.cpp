@@ -1,0 +1,782 @@
+// backend-c40sim/c40gen.cpp -- IL mnemonics -> TMS320C40 assembly templates.
+#include "backend-c40sim/c40gen.h"
+
+#include <cstring>
+#include <map>
+#include <stdexcept>
+
+#include "backend-c40sim/mathrom.h"
+
+namespace ldc::c40gen {
+
+// ---------------------------------------------------------------- REAL semantics
+
+namespace fp = c40sim::fp;
+
+Ext real_from_ieee(uint32_t bits) { return fp::fromIeee(bits).v; }
+Ext real_from_int(int32_t i) { return fp::fromInt(i).v; }
+uint32_t real_to_ieee(Ext x) { return fp::toIeee(x); }
+Ext real_add(Ext a, Ext b) { return fp::add(a, b).v; }
+Ext real_sub(Ext a, Ext b) { return fp::sub(a, b).v; }
+Ext real_mul(Ext a, Ext b) { return fp::mul(a, b).v; }
+int real_compare(Ext a, Ext b) { return fp::compare(a, b); }
+
+int32_t real_to_int32(Ext x) {
+  bool ov = false;
+  int32_t fl = fp::fix(x, &ov);                         // FIX   R0, R1
+  Ext f = fp::fromInt(fl).v;                            // FLOAT R1, R2
+  int32_t plus = int32_t(uint32_t(fl) + 1u);            // ADDI3 1, R1, R3
+  if (fp::compare(x, fp::kZero) >= 0) plus = fl;        // CMPF 0.0, R0; LDIGE R1, R3
+  if (fp::compare(x, f) > 0) fl = plus;                 // CMPF R2, R0;  LDIGT R3, R1
+  return fl;
+}
+
+namespace {
+Ext kHalf() { return fp::fromShort(*as::c40::shortFloatFromDouble(0.5)); }
+Ext kOne() { return fp::fromShort(*as::c40::shortFloatFromDouble(1.0)); }
+Ext kTwo() { return fp::fromShort(*as::c40::shortFloatFromDouble(2.0)); }
+}  // namespace
+
+Ext real_div(Ext a, Ext b) {
+  a = fp::mul(a, kHalf()).v;                            // MPYF 0.5, R0
+  b = fp::mul(b, kHalf()).v;                            // MPYF 0.5, R1
+  Ext x = fp::rcp(b).v;                                 // RCPF R1, R2
+  for (int k = 0; k < 2; k++) {
+    Ext t = fp::mul(x, b).v;                            // MPYF3 R2, R1, R3
+    t = fp::neg(t).v;                                   // NEGF  R3, R3
+    t = fp::add(t, kTwo()).v;                           // ADDF  2.0, R3
+    x = fp::mul(x, t).v;                                // MPYF  R3, R2
+  }
+  Ext q = fp::mul(x, a).v;                              // MPYF3 R2, R0, R3
+  q = fp::mul(q, kOne()).v;                             // MPYF  1.0, R3
+  Ext r = fp::mul(q, b).v;                              // MPYF3 R3, R1, R4
+  r = fp::sub(a, r).v;                                  // SUBF3 R4, R0, R4
+  r = fp::mul(r, x).v;                                  // MPYF  R2, R4
+  return fp::add(q, r).v;                               // ADDF  R4, R3
+}
+
+std::string label_name(const std::string& il_label) { return "lbl_" + il_label; }
+
+namespace {
+
+using namespace as::c40;
+using as::c40::Instruction;
+using as::c40::Operand;
+using M = Mnemonic;
+using Item = as::Item<Instruction>;
+
+Operand R(Reg r) { return Operand::r(r); }
+Operand I(int64_t v) { return Operand::i(v); }
+Operand L(std::string s) { return Operand::l(std::move(s)); }
+Operand A(uint32_t addr) { return Operand::a(addr); }
+Operand F(double v) {
+  auto b = shortFloatFromDouble(v);
+  if (!b) throw std::logic_error("c40 backend: not a short float");
+  return Operand::f(*b);
+}
+constexpr Reg r0 = Reg::R0, r1 = Reg::R1, r2 = Reg::R2, r3 = Reg::R3, r4 = Reg::R4, r10 = Reg::R10,
+              r11 = Reg::R11;
+
+uint32_t float_bits(float f) {
+  uint32_t u;
+  std::memcpy(&u, &f, 4);
+  return u;
+}
+
+// ------------------------------------------------------------ bit templates
+//
+// Paper 003's Fig. 6 style: one row per bit mnemonic, in TI syntax, `;`
+// between instructions.  %0 and %1 stand for the direct operand (@offset in
+// the data page) of the IL instruction's operand 0 and 1 (a bit device or an
+// edge slot; one word each, 0 or 1).  R10 is the bit stack, top in bit 0;
+// R11 holds the mask ~1.
+struct Template {
+  Op op;
+  const char* text;
+};
+const Template kBitTemplates[] = {
+    {Op::LOAD,   "LSH 1, R10; OR %0, R10"},
+    {Op::LOADN,  "LSH 1, R10; OR 1, R10; XOR %0, R10"},
+    {Op::AND,    "LDI %0, R0; OR R11, R0; AND R0, R10"},
+    {Op::ANDN,   "ANDN %0, R10"},
+    {Op::OR,     "OR %0, R10"},
+    {Op::ORN,    "LDI %0, R0; XOR 1, R0; OR R0, R10"},
+    {Op::LOADP,  "LDI %1, R0; LDI %0, R1; STI R1, %1; ANDN R0, R1; LSH 1, R10; OR R1, R10"},
+    {Op::LOADF,  "LDI %1, R0; LDI %0, R1; STI R1, %1; ANDN R1, R0; LSH 1, R10; OR R0, R10"},
+    {Op::TRUE,   "LSH 1, R10; OR 1, R10"},
+    {Op::ANDBLK, "OR3 R11, R10, R0; LSH -1, R10; AND R0, R10"},
+    {Op::ORBLK,  "AND3 1, R10, R0; LSH -1, R10; OR R0, R10"},
+    {Op::MPS,    "AND3 1, R10, R0; LSH 1, R10; OR R0, R10"},
+    {Op::MRD,    "LSH3 -1, R10, R0; XOR R10, R0; AND 1, R0; XOR R0, R10"},
+    {Op::MPP,    "LSH -1, R10"},
+    {Op::OUT,    "AND3 1, R10, R0; STI R0, %0"},
+    {Op::OUTN,   "XOR3 1, R10, R0; AND 1, R0; STI R0, %0"},
+    {Op::SET,    "AND3 1, R10, R0; OR %0, R0; STI R0, %0"},
+    {Op::RST,    "LDI %0, R0; ANDN R10, R0; STI R0, %0"},
+};
+
+const std::vector<Instruction>* bit_template(Op op) {
+  static const auto table = [] {
+    std::map<Op, std::vector<Instruction>> t;
+    for (const Template& row : kBitTemplates) {
+      std::string s = row.text;
+      for (size_t p; (p = s.find('%')) != std::string::npos;) s.replace(p, 1, "@");  // %k -> @k: a marker
+      size_t start = 0;
+      while (start < s.size()) {
+        size_t semi = s.find(';', start);
+        t[row.op].push_back(parse(s.substr(start, semi == std::string::npos ? std::string::npos : semi - start)));
+        start = semi == std::string::npos ? s.size() : semi + 1;
+      }
+    }
+    return t;
+  }();
+  auto it = table.find(op);
+  return it == table.end() ? nullptr : &it->second;
+}
+
+// ------------------------------------------------------------ application code
+
+class Gen {
+ public:
+  Gen(const C40Layout& w, std::vector<Item>& items, int& next_label) : W_(w), items_(items), next_label_(next_label) {}
+  void instr(const ldc::Instr& in);
+  void ldpk_main() { items_.push_back(Item::instr(make(M::Ldpk, {I(kDataPage)}))); }
+
+ private:
+  const C40Layout& W_;
+  std::vector<Item>& items_;
+  int& next_label_;
+  uint32_t page_ = kDataPage;  // page of the direct operand of the instruction being built
+
+  // Emits one instruction; a direct operand outside the data page gets its
+  // own LDPK before and LDPK back after it.
+  void emit(Instruction i) {
+    bool direct = false;
+    for (unsigned k = 0; k < i.numOperands; k++) direct |= i.ops[k].kind == OperandKind::Direct;
+    if (direct && page_ != kDataPage) {
+      items_.push_back(Item::instr(make(M::Ldpk, {I(page_)})));
+      items_.push_back(Item::instr(std::move(i)));
+      ldpk_main();
+    } else {
+      items_.push_back(Item::instr(std::move(i)));
+    }
+    page_ = kDataPage;
+  }
+  void op(M m, std::initializer_list<Operand> ops) { emit(make(m, ops)); }
+  void opc(M m, Cond c, std::initializer_list<Operand> ops) { emit(makeCc(m, c, ops)); }
+  void label(const std::string& l) { items_.push_back(Item::labelDef(l)); }
+  std::string fresh() { return "L" + std::to_string(next_label_++); }
+  void branch(Cond c, const std::string& l) { opc(M::Bc, c, {L(l)}); }
+  void jump(const std::string& l) { op(M::Br, {L(l)}); }
+
+  // @offset of a word address (records its page for emit)
+  Operand D(uint32_t addr) {
+    page_ = addr >> 16;
+    return Operand::d(uint16_t(addr & 0xFFFF));
+  }
+  uint32_t addr(const ldc::Operand& o) const {
+    switch (o.kind) {
+      case OpdKind::Edge: return W_.addr(Area::E, o.index);
+      case OpdKind::Timer: return W_.addr(Area::TW, o.index);
+      case OpdKind::Counter: return W_.addr(Area::CW, o.index);
+      default: return W_.addr(o.area, o.index);
+    }
+  }
+  Operand Dv(const ldc::Operand& o) { return D(addr(o)); }
+
+  static int32_t const_int(const ldc::Operand& o) {
+    return o.kind == OpdKind::ConstInt ? o.ival : real_to_int32(real_from_ieee(float_bits(o.fval)));
+  }
+  static bool is_const(const ldc::Operand& o) { return o.kind == OpdKind::ConstInt || o.kind == OpdKind::ConstReal; }
+
+  void load_imm32(int32_t v, Reg r) {
+    if (v >= -32768 && v <= 32767) return op(M::Ldi, {I(v), R(r)});
+    op(M::Ldhi, {I((uint32_t(v) >> 16) & 0xFFFF), R(r)});
+    if (v & 0xFFFF) op(M::Or, {I(v & 0xFFFF), R(r)});
+  }
+  // The source operand of an integer instruction: an immediate when it fits the
+  // form (signed or unsigned 16 bits), a direct word, or `scratch` loaded first.
+  Operand int_src(const ldc::Operand& b, bool unsigned_imm, Reg scratch) {
+    if (is_const(b)) {
+      int32_t v = const_int(b);
+      if (unsigned_imm ? (v >= 0 && v <= 65535) : (v >= -32768 && v <= 32767)) return I(v);
+      load_imm32(v, scratch);
+      return R(scratch);
+    }
+    if (b.kind == OpdKind::Real) {  // only MOV reaches here with a REAL word (load_int)
+      load_int(b, scratch);
+      return R(scratch);
+    }
+    return Dv(b);
+  }
+  // r = INT32 value of o.  A REAL word is converted (clobbers R0-R3).
+  void load_int(const ldc::Operand& o, Reg r) {
+    if (is_const(o)) return load_imm32(const_int(o), r);
+    if (o.kind == OpdKind::Real) {
+      op(M::Frieee, {Dv(o), R(r0)});
+      trunc_r0_r1();
+      if (r != r1) op(M::Ldi, {R(r1), R(r)});
+      return;
+    }
+    op(M::Ldi, {Dv(o), R(r)});
+  }
+  // r = the REAL value of o as a C40 float (INT32: FLOAT, exact).
+  void load_real(const ldc::Operand& o, Reg r) {
+    switch (o.kind) {
+      case OpdKind::Real: return op(M::Frieee, {Dv(o), R(r)});
+      case OpdKind::ConstInt:
+        if (o.ival >= -32768 && o.ival <= 32767) return op(M::Float, {I(o.ival), R(r)});
+        load_imm32(o.ival, r);
+        return op(M::Float, {R(r), R(r)});
+      case OpdKind::ConstReal: {
+        Ext e = real_from_ieee(float_bits(o.fval));
+        double v = fp::toDouble(e);
+        if (auto sb = shortFloatFromDouble(v); sb && fp::fromShort(*sb) == e) return op(M::Ldf, {Operand::f(*sb), R(r)});
+        uint32_t w = fp::toSingle(e);  // exact: FRIEEE leaves the 8 low bits 0
+        load_imm32(int32_t(w), r);
+        op(M::Sti, {R(r), D(kDataBase + W_.offset[int(Area::Sys)] + kSysScratchWord)});
+        return op(M::Ldf, {D(kDataBase + W_.offset[int(Area::Sys)] + kSysScratchWord), R(r)});
+      }
+      default: return op(M::Float, {Dv(o), R(r)});
+    }
+  }
+  // R1 = R0 (C40 float) converted to INT32: truncated toward zero, saturated
+  // (FIX rounds down; add 1 for a negative non-integer).  Uses R2, R3.
+  void trunc_r0_r1() {
+    op(M::Fix, {R(r0), R(r1)});
+    op(M::Float, {R(r1), R(r2)});
+    op(M::Addi3, {I(1), R(r1), R(r3)});
+    op(M::Cmpf, {F(0.0), R(r0)});
+    opc(M::Ldic, Cond::GE, {R(r1), R(r3)});
+    op(M::Cmpf, {R(r2), R(r0)});
+    opc(M::Ldic, Cond::GT, {R(r3), R(r1)});
+  }
+  // Stores R0 (C40 float) into d: TOIEEE for F, else converted to INT32.
+  void store_real(const ldc::Operand& d) {
+    if (d.kind == OpdKind::Real) {
+      op(M::Toieee, {R(r0), R(r0)});
+      return op(M::Stf, {R(r0), Dv(d)});
+    }
+    trunc_r0_r1();
+    op(M::Sti, {R(r1), Dv(d)});
+  }
+  // Stores R0 (INT32) into d, converted to REAL for F.
+  void store_int(const ldc::Operand& d) {
+    if (d.kind == OpdKind::Real) {
+      op(M::Float, {R(r0), R(r0)});
+      op(M::Toieee, {R(r0), R(r0)});
+      return op(M::Stf, {R(r0), Dv(d)});
+    }
+    op(M::Sti, {R(r0), Dv(d)});
+  }
+  // Stores a constant word.
+  void store_word(uint32_t w, const ldc::Operand& d) {
+    load_imm32(int32_t(w), r0);
+    op(M::Sti, {R(r0), Dv(d)});
+  }
+  void set_error() {
+    op(M::Ldi, {I(1), R(r4)});
+    op(M::Sti, {R(r4), D(W_.addr(Area::S, kBitError))});
+  }
+  // if the top of the stack is 0, skip to the returned label
+  std::string skip_unless_power() {
+    std::string skip = fresh();
+    op(M::Tstb, {I(1), R(r10)});
+    branch(Cond::EQ, skip);
+    return skip;
+  }
+  // R0 = R0 * R1 modulo 2^32 (MPYI multiplies 24-bit operands): 16-bit halves.
+  void mul32() {
+    op(M::Ldi, {R(r0), R(r2)});
+    op(M::And, {I(0xFFFF), R(r2)});   // al
+    op(M::Ldi, {R(r1), R(r3)});
+    op(M::And, {I(0xFFFF), R(r3)});   // bl
+    op(M::Lsh, {I(-16), R(r0)});      // ah
+    op(M::Lsh, {I(-16), R(r1)});      // bh
+    op(M::Mpyi, {R(r3), R(r0)});      // ah * bl
+    op(M::Mpyi, {R(r2), R(r1)});      // al * bh
+    op(M::Addi, {R(r1), R(r0)});
+    op(M::Lsh, {I(16), R(r0)});
+    op(M::Mpyi, {R(r3), R(r2)});      // al * bl
+    op(M::Addi, {R(r2), R(r0)});
+  }
+
+  void compare(const ldc::Instr& in);
+  void move(const ldc::Instr& in);
+  void arith(const ldc::Instr& in);
+  void divmod(const ldc::Instr& in);
+  void logic(const ldc::Instr& in);
+  void special(const ldc::Instr& in);
+  void timer(const ldc::Instr& in);
+  void counter(const ldc::Instr& in);
+  void preset_r1(const ldc::Operand& pt);
+  void advance_r2(uint32_t tw);
+};
+
+Cond cond_of(Op op) {
+  switch (op) {
+    case Op::LDEQ: return Cond::EQ;
+    case Op::LDNE: return Cond::NE;
+    case Op::LDLT: return Cond::LT;
+    case Op::LDLE: return Cond::LE;
+    case Op::LDGT: return Cond::GT;
+    default: return Cond::GE;
+  }
+}
+
+// push (a op b): the push is prepared in R2 (R10 << 1 | 1) and taken with LDIcond.
+void Gen::compare(const ldc::Instr& in) {
+  const ldc::Operand &a = in.a[0], &b = in.a[1];
+  Cond c = cond_of(in.op);
+  if (!a.is_real() && !b.is_real()) {
+    load_int(a, r0);
+    op(M::Lsh, {I(1), R(r10)});
+    op(M::Or3, {I(1), R(r10), R(r2)});
+    op(M::Cmpi, {int_src(b, false, r1), R(r0)});
+  } else {
+    load_real(a, r0);
+    load_real(b, r1);
+    op(M::Lsh, {I(1), R(r10)});
+    op(M::Or3, {I(1), R(r10), R(r2)});
+    op(M::Cmpf, {R(r1), R(r0)});
+  }
+  opc(M::Ldic, c, {R(r2), R(r10)});
+}
+
+void Gen::move(const ldc::Instr& in) {
+  const ldc::Operand &a = in.a[0], &d = in.a[1];
+  std::string skip = skip_unless_power();
+  bool dreal = d.kind == OpdKind::Real;
+  if (a.kind == OpdKind::Real && dreal) {  // REAL -> REAL: the IEEE word, exactly
+    op(M::Ldi, {Dv(a), R(r0)});
+    op(M::Sti, {R(r0), Dv(d)});
+  } else if (a.kind == OpdKind::ConstReal && dreal) {
+    store_word(float_bits(a.fval), d);
+  } else if (a.kind == OpdKind::ConstInt && dreal) {  // FLOAT then TOIEEE, folded
+    store_word(real_to_ieee(real_from_int(a.ival)), d);
+  } else if (is_const(a)) {
+    store_word(uint32_t(const_int(a)), d);
+  } else if (a.kind == OpdKind::Real) {
+    load_int(a, r1);  // FRIEEE and the truncation
+    op(M::Sti, {R(r1), Dv(d)});
+  } else {
+    load_int(a, r0);
+    store_int(d);
+  }
+  label(skip);
+}
+
+void Gen::arith(const ldc::Instr& in) {
+  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
+  std::string skip = skip_unless_power();
+  if (a.is_real() || b.is_real()) {
+    load_real(a, r0);
+    load_real(b, r1);
+    op(in.op == Op::ADD ? M::Addf : in.op == Op::SUB ? M::Subf : M::Mpyf, {R(r1), R(r0)});
+    store_real(d);
+  } else if (in.op == Op::MUL) {
+    load_int(a, r0);
+    load_int(b, r1);
+    mul32();
+    store_int(d);
+  } else {
+    load_int(a, r0);
+    op(in.op == Op::ADD ? M::Addi : M::Subi, {int_src(b, false, r1), R(r0)});
+    store_int(d);
+  }
+  label(skip);
+}
+
+void Gen::divmod(const ldc::Instr& in) {
+  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
+  bool mod = in.op == Op::MOD;
+  std::string skip = skip_unless_power(), err = fresh();
+  if (!mod && (a.is_real() || b.is_real())) {
+    load_real(a, r0);
+    load_real(b, r1);
+    op(M::Cmpf, {F(0.0), R(r1)});
+    branch(Cond::EQ, err);
+    op(M::Mpyf, {F(0.5), R(r0)});  // halve both: RCPF of |b| >= 2^127 would underflow
+    op(M::Mpyf, {F(0.5), R(r1)});
+    op(M::Rcpf, {R(r1), R(r2)});   // 8-bit estimate of 1/b, two Newton steps
+    for (int k = 0; k < 2; k++) {
+      op(M::Mpyf3, {R(r2), R(r1), R(r3)});
+      op(M::Negf, {R(r3), R(r3)});
+      op(M::Addf, {F(2.0), R(r3)});
+      op(M::Mpyf, {R(r3), R(r2)});
+    }
+    op(M::Mpyf3, {R(r2), R(r0), R(r3)});  // q = a / b, then one correction
+    op(M::Mpyf, {F(1.0), R(r3)});         // q as MPYF will see it (single)
+    op(M::Mpyf3, {R(r3), R(r1), R(r4)});
+    op(M::Subf3, {R(r4), R(r0), R(r4)});  // r = a - b q
+    op(M::Mpyf, {R(r2), R(r4)});
+    op(M::Addf, {R(r4), R(r3)});          // q + r / b
+    op(M::Ldf, {R(r3), R(r0)});
+    store_real(d);
+    jump(skip);
+  } else {
+    std::string minus_one = fresh(), store = fresh();
+    load_int(a, r0);
+    load_int(b, r1);
+    op(M::Cmpi, {I(0), R(r1)});
+    branch(Cond::EQ, err);
+    op(M::Cmpi, {I(-1), R(r1)});
+    branch(Cond::EQ, minus_one);
+    op(M::Call, {L(kDivLabel)});  // R0 = quotient, R1 = remainder
+    if (mod) op(M::Ldi, {R(r1), R(r0)});
+    label(store);
+    store_int(d);
+    jump(skip);
+    label(minus_one);  // x / -1 = -x (wrapping), x MOD -1 = 0
+    if (mod) op(M::Ldi, {I(0), R(r0)});
+    else op(M::Negi, {R(r0), R(r0)});
+    jump(store);
+  }
+  label(err);
+  set_error();
+  label(skip);
+}
+
+void Gen::logic(const ldc::Instr& in) {
+  std::string skip = skip_unless_power();
+  if (in.op == Op::WNOT) {
+    op(M::Not, {int_src(in.a[0], true, r0), R(r0)});
+    store_int(in.a[1]);
+  } else if (in.op == Op::SHL || in.op == Op::SHR) {
+    const ldc::Operand& n = in.a[1];
+    load_int(in.a[0], r0);
+    if (is_const(n)) {
+      int32_t c = const_int(n);
+      if (c < 0 || c > 31) op(M::Ldi, {I(0), R(r0)});
+      else if (c > 0) op(M::Lsh, {I(in.op == Op::SHL ? c : -c), R(r0)});
+    } else {
+      load_int(n, r1);
+      if (in.op == Op::SHR) {
+        op(M::Negi, {R(r1), R(r2)});
+        op(M::Lsh3, {R(r2), R(r0), R(r0)});
+      } else {
+        op(M::Lsh3, {R(r1), R(r0), R(r0)});
+      }
+      op(M::Cmpi, {I(31), R(r1)});
+      opc(M::Ldic, Cond::HI, {I(0), R(r0)});  // unsigned: negative counts too
+    }
+    store_int(in.a[2]);
+  } else {
+    load_int(in.a[0], r0);
+    M m = in.op == Op::WAND ? M::And : in.op == Op::WOR ? M::Or : M::Xor;
+    op(m, {int_src(in.a[1], true, r1), R(r0)});
+    store_int(in.a[2]);
+  }
+  label(skip);
+}
+
+void Gen::special(const ldc::Instr& in) {
+  const ldc::Operand &a = in.a[0], &d = in.a[1];
+  std::string skip = skip_unless_power();
+  if (in.op == Op::ABS && !a.is_real()) {
+    if (a.kind == OpdKind::ConstInt) {
+      int32_t v = a.ival == INT32_MIN ? INT32_MIN : (a.ival < 0 ? -a.ival : a.ival);
+      if (d.kind == OpdKind::Real) store_word(real_to_ieee(real_from_int(v)), d);
+      else store_word(uint32_t(v), d);
+    } else {
+      op(M::Absi, {Dv(a), R(r0)});
+      store_int(d);
+    }
+  } else if (in.op == Op::ABS && d.kind == OpdKind::Real) {  // fabsf: the IEEE sign bit cleared
+    if (a.kind == OpdKind::ConstReal) {
+      store_word(float_bits(a.fval) & 0x7FFFFFFFu, d);
+    } else {
+      op(M::Ldi, {Dv(a), R(r0)});
+      op(M::Lsh, {I(1), R(r0)});
+      op(M::Lsh, {I(-1), R(r0)});
+      op(M::Sti, {R(r0), Dv(d)});
+    }
+  } else if (in.op == Op::ABS) {  // REAL -> INT32
+    if (a.kind == OpdKind::ConstReal) {
+      store_word(uint32_t(real_to_int32(fp::abs(real_from_ieee(float_bits(a.fval))).v)), d);
+    } else {
+      load_real(a, r0);
+      op(M::Absf, {R(r0), R(r0)});
+      store_real(d);
+    }
+  } else {
+    RomFn fn = in.op == Op::SIN ? RomFn::Sin : in.op == Op::COS ? RomFn::Cos : in.op == Op::TAN ? RomFn::Tan
+             : in.op == Op::SQRT ? RomFn::Sqrt : in.op == Op::EXP ? RomFn::Exp : RomFn::Ln;
+    load_real(a, r0);
+    op(M::Call, {A(rom_entry(fn))});
+    store_real(d);
+  }
+  label(skip);
+}
+
+// R1 = timer preset, a negative one counted as 0
+void Gen::preset_r1(const ldc::Operand& pt) {
+  if (is_const(pt)) return load_imm32(std::max(const_int(pt), 0), r1);
+  load_int(pt, r1);
+  opc(M::Ldic, Cond::LT, {I(0), R(r1)});
+}
+
+// R2 = advance(ET, dt, PT) (docs/il.md) with ET at tw, PT in R1; stored too.
+// Uses R0.  ADDI sets V when ET + dt overflows (dt is never negative).
+void Gen::advance_r2(uint32_t tw) {
+  op(M::Ldi, {D(tw), R(r0)});
+  op(M::Ldi, {R(r0), R(r2)});
+  op(M::Addi, {D(W_.addr(Area::Sys, kSysDtWord)), R(r2)});
+  opc(M::Ldic, Cond::V, {R(r1), R(r2)});
+  op(M::Cmpi, {R(r1), R(r2)});
+  opc(M::Ldic, Cond::GT, {R(r1), R(r2)});
+  op(M::Cmpi, {R(r1), R(r0)});
+  opc(M::Ldic, Cond::GE, {R(r1), R(r2)});
+  op(M::Sti, {R(r2), D(tw)});
+}
+
+void Gen::timer(const ldc::Instr& in) {
+  uint32_t n = in.a[0].index;
+  uint32_t tw = W_.addr(Area::TW, n), tq = W_.addr(Area::TQ, n), ti = W_.addr(Area::TI, n);
+  if (in.op == Op::RSTT) {
+    std::string skip = skip_unless_power();
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Sti, {R(r0), D(tw)});
+    op(M::Sti, {R(r0), D(tq)});
+    op(M::Sti, {R(r0), D(ti)});
+    label(skip);
+    return;
+  }
+  preset_r1(in.a[1]);
+  std::string off = fresh(), done = fresh();
+  if (in.op == Op::TON) {
+    std::string running = fresh(), q = fresh();
+    op(M::Tstb, {I(1), R(r10)});
+    branch(Cond::EQ, off);
+    op(M::Ldi, {D(ti), R(r0)});
+    branch(Cond::NE, running);
+    op(M::Ldi, {I(0), R(r2)});  // rising scan: timing starts
+    op(M::Sti, {R(r2), D(tw)});
+    jump(q);
+    label(running);
+    advance_r2(tw);
+    label(q);
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Cmpi, {R(r1), R(r2)});
+    opc(M::Ldic, Cond::GE, {I(1), R(r0)});
+    op(M::Sti, {R(r0), D(tq)});
+    op(M::Ldi, {I(1), R(r0)});
+    op(M::Sti, {R(r0), D(ti)});
+    jump(done);
+    label(off);
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Sti, {R(r0), D(tw)});
+    op(M::Sti, {R(r0), D(tq)});
+    op(M::Sti, {R(r0), D(ti)});
+    label(done);
+  } else if (in.op == Op::TOF) {
+    std::string not_falling = fresh(), ti0 = fresh();
+    op(M::Tstb, {I(1), R(r10)});
+    branch(Cond::EQ, off);
+    op(M::Ldi, {I(1), R(r0)});
+    op(M::Sti, {R(r0), D(tq)});
+    op(M::Sti, {R(r0), D(ti)});
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Sti, {R(r0), D(tw)});
+    jump(done);
+    label(off);
+    op(M::Ldi, {D(ti), R(r0)});
+    branch(Cond::EQ, not_falling);
+    op(M::Ldi, {I(0), R(r0)});  // falling scan: timing starts
+    op(M::Sti, {R(r0), D(tw)});
+    op(M::Cmpi, {I(0), R(r1)});
+    opc(M::Ldic, Cond::GT, {I(1), R(r0)});
+    op(M::Sti, {R(r0), D(tq)});
+    jump(ti0);
+    label(not_falling);
+    op(M::Ldi, {D(tq), R(r0)});
+    branch(Cond::EQ, ti0);
+    advance_r2(tw);
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Cmpi, {R(r1), R(r2)});
+    opc(M::Ldic, Cond::LT, {I(1), R(r0)});
+    op(M::Sti, {R(r0), D(tq)});
+    label(ti0);
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Sti, {R(r0), D(ti)});
+    label(done);
+  } else {  // TP
+    std::string idle = fresh(), remember = fresh();
+    op(M::Ldi, {D(tq), R(r0)});
+    branch(Cond::EQ, idle);
+    advance_r2(tw);
+    op(M::Cmpi, {R(r1), R(r2)});
+    branch(Cond::LT, remember);
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Sti, {R(r0), D(tq)});
+    jump(remember);
+    label(idle);
+    op(M::Tstb, {I(1), R(r10)});
+    branch(Cond::EQ, off);
+    op(M::Ldi, {D(ti), R(r0)});
+    branch(Cond::NE, remember);
+    op(M::Ldi, {I(0), R(r0)});  // rising scan: the pulse starts
+    op(M::Cmpi, {I(0), R(r1)});
+    opc(M::Ldic, Cond::GT, {I(1), R(r0)});
+    op(M::Sti, {R(r0), D(tq)});
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Sti, {R(r0), D(tw)});
+    jump(remember);
+    label(off);
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Sti, {R(r0), D(tw)});
+    label(remember);
+    op(M::And3, {I(1), R(r10), R(r0)});
+    op(M::Sti, {R(r0), D(ti)});
+  }
+}
+
+void Gen::counter(const ldc::Instr& in) {
+  uint32_t n = in.a[0].index;
+  uint32_t cw = W_.addr(Area::CW, n), cq = W_.addr(Area::CQ, n);
+  if (in.op == Op::RSTC) {
+    std::string skip = skip_unless_power();
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Sti, {R(r0), D(cw)});
+    op(M::Sti, {R(r0), D(cq)});
+    label(skip);
+    return;
+  }
+  bool up = in.op == Op::CTU;
+  uint32_t e = addr(in.a[2]);
+  op(M::And3, {I(1), R(r10), R(r0)});  // IN
+  op(M::Ldi, {D(e), R(r1)});
+  op(M::Sti, {R(r0), D(e)});
+  op(M::Andn, {R(r1), R(r0)});          // rising edge: 0 or 1
+  op(M::Ldi, {D(cw), R(r2)});
+  op(up ? M::Addi3 : M::Subi3, {R(r0), R(r2), R(r3)});  // CV +- edge; V at the INT32 limit
+  opc(M::Ldic, Cond::NV, {R(r3), R(r2)});
+  op(M::Sti, {R(r2), D(cw)});
+  op(M::Ldi, {I(0), R(r0)});
+  if (up) {
+    op(M::Cmpi, {int_src(in.a[1], false, r1), R(r2)});
+    opc(M::Ldic, Cond::GE, {I(1), R(r0)});
+  } else {
+    op(M::Cmpi, {I(0), R(r2)});
+    opc(M::Ldic, Cond::LE, {I(1), R(r0)});
+  }
+  op(M::Sti, {R(r0), D(cq)});
+}
+
+void Gen::instr(const ldc::Instr& in) {
+  if (const auto* t = bit_template(in.op)) {
+    for (Instruction i : *t) {
+      for (unsigned k = 0; k < i.numOperands; k++)
+        if (i.ops[k].kind == OperandKind::Direct) i.ops[k] = Dv(in.a[i.ops[k].imm]);
+      emit(std::move(i));
+    }
+    return;
+  }
+  switch (op_info(in.op).klass) {
+    case OpClass::Compare: return compare(in);
+    case OpClass::Move: return move(in);
+    case OpClass::Arith:
+      if (in.op == Op::DIV || in.op == Op::MOD) return divmod(in);
+      return arith(in);
+    case OpClass::Logic: return logic(in);
+    case OpClass::Special: return special(in);
+    case OpClass::Timer: return timer(in);
+    case OpClass::Counter: return counter(in);
+    case OpClass::Flow:
+      op(M::Tstb, {I(1), R(r10)});
+      if (in.op == Op::END) return opc(M::Retsc, Cond::NE, {});
+      {
+        std::string skip = fresh();
+        branch(Cond::EQ, skip);
+        jump(label_name(in.a[0].label));  // BR: 24-bit reach across the program
+        label(skip);
+      }
+      return;
+    case OpClass::Basic: break;
+  }
+  throw std::logic_error(std::string("c40 backend: no template for ") + op_info(in.op).name);
+}
+
+// The shift-subtract division (docs/c40.md): R0 = a, R1 = b (b != 0, -1);
+// returns R0 = a / b truncated toward zero, R1 = a % b (sign of a).
+// Uses R2-R5 and AR0.  32 steps of 10 cycles (a delayed DB).
+const char* const kDivRoutine[] = {
+    "LDI R0, R4",          // sign of the remainder: sign of a
+    "XOR3 R1, R0, R5",     // sign of the quotient: bit 31 of a ^ b
+    "ABSI R0, R0",         // |a| (INT32_MIN stays 0x80000000 = 2^31 unsigned)
+    "ABSI R1, R1",         // |b|
+    "LDI 0, R2",           // partial remainder
+    "LDI 31, AR0",         // 32 steps
+    "div_step: LSH3 -31, R0, R3",
+    "LSH 1, R2",
+    "OR R3, R2",           // remainder:dividend <<= 1
+    "LSH 1, R0",
+    "SUBI3 R1, R2, R3",    // remainder - |b|, C = borrow
+    "LDIHS R3, R2",        // no borrow: subtract (LDI leaves C alone)
+    "DBUD AR0, div_step",
+    "LDI 0, R3",
+    "LDIHS 1, R3",         // the quotient bit
+    "OR R3, R0",
+    "NEGI R0, R3",
+    "NEGI R2, R1",
+    "CMPI 0, R5",
+    "LDILT R3, R0",
+    "CMPI 0, R4",
+    "LDIGE R2, R1",
+    "RETSU",
+};
+
+}  // namespace
+
+C40Code generate_c40(const Program& p, const Layout& layout) {
+  C40Layout w = C40Layout::of(layout);
+  C40Code out;
+  auto& prog = out.program;
+  prog.globals.push_back(kExitLabel);
+  prog.globals.push_back(kDivLabel);
+  for (const Rung& r : p.rungs)
+    for (const auto& l : r.labels) prog.globals.push_back(label_name(l));
+  for (const auto& l : p.end_labels) prog.globals.push_back(label_name(l));
+
+  as::Block<Instruction> pro;
+  pro.sourceLine = p.rungs.empty() ? 0 : p.rungs[0].line;
+  pro.items.push_back(Item::note("scan: R10 = bit stack, R11 = mask ~1, DP = data page"));
+  for (const char* t : {"LDI 0, R10", "LDHI 0FFFFh, R11", "OR 0FFFEh, R11"})
+    pro.items.push_back(Item::instr(parse(t)));
+  prog.blocks.push_back(std::move(pro));
+
+  int next_label = 0;
+  for (const Rung& r : p.rungs) {
+    as::Block<Instruction> b;
+    b.sourceLine = r.line;
+    for (const auto& l : r.labels) b.items.push_back(Item::labelDef(label_name(l), true));
+    b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
+    Gen g(w, b.items, next_label);
+    g.ldpk_main();  // once per block: the block does not depend on DP from elsewhere
+    std::vector<uint32_t> starts;
+    for (const ldc::Instr& in : r.code) {
+      starts.push_back(uint32_t(b.items.size()));
+      b.items.push_back(Item::note(instr_text(in)));
+      g.instr(in);
+    }
+    out.il_items.push_back(std::move(starts));
+    prog.blocks.push_back(std::move(b));
+  }
+
+  as::Block<Instruction> epi;
+  epi.sourceLine = p.rungs.empty() ? 0 : p.rungs.back().line;
+  for (const auto& l : p.end_labels) epi.items.push_back(Item::labelDef(label_name(l), true));
+  epi.items.push_back(Item::labelDef(kExitLabel, true));
+  epi.items.push_back(Item::instr(parse("RETSU")));
+  epi.items.push_back(Item::note("__divi: R0 = R0 / R1, R1 = R0 % R1 (INT32, shift-subtract)"));
+  epi.items.push_back(Item::labelDef(kDivLabel, true));
+  for (const char* t : kDivRoutine) {
+    Line l = parseLine(t);
+    if (!l.label.empty()) epi.items.push_back(Item::labelDef(l.label));
+    epi.items.push_back(Item::instr(*l.inst));
+  }
+  prog.blocks.push_back(std::move(epi));
+  return out;
+}
+
+}  // namespace ldc::c40gen

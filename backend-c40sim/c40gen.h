@@ -1,0 +1,59 @@
+// backend-c40sim/c40gen.h -- the macro compiler for the TMS320C40 (paper 003,
+// step 2, Fig. 6): every IL mnemonic becomes a fixed C40 assembly template.
+//
+// The generated code is one function, entered at word 0 with CALL and left with
+// RETS (docs/c40.md, "Code generation"):
+//   R10  the bit stack, top in bit 0 (paper 003's R10)
+//   R11  the mask ~1 (0xFFFFFFFE), loaded by the prologue (paper 003's masks in R11)
+//   DP   the data page of the memory image: LDPK once at the start of every rung
+//        block; an access to another page (edge slots past 64K words) is wrapped
+//        in LDPK page / LDPK back
+//   R0-R7, AR0  scratch within one template (and the routines it calls)
+// Devices are read and written with direct addressing (@offset), one word per
+// element (c40layout.h).  INT32 division and remainder call the shift-subtract
+// routine __divi in the last block; REAL functions without an instruction call
+// the math ROM (mathrom.h) at fixed addresses.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "assembler/c40.h"
+#include "backend-c40sim/c40layout.h"
+#include "backend-c40sim/sim.h"
+#include "ir/ir.h"
+
+namespace ldc::c40gen {
+
+struct C40Code {
+  // block 0 prologue, one block per rung, then the epilogue and the routines
+  as::c40::C40Program program;
+  // For rung r and its IL instruction i, the item index in block r + 1 where
+  // the instruction's code starts (a comment item holding the IL text).
+  std::vector<std::vector<uint32_t>> il_items;
+};
+
+C40Code generate_c40(const Program& p, const Layout& layout);
+
+// Global labels the backend defines.
+inline constexpr const char* kExitLabel = "scan_exit";
+inline constexpr const char* kDivLabel = "__divi";
+std::string label_name(const std::string& il_label);  // user label -> assembly label
+
+// ---------------------------------------------------------------- REAL on the C40
+// What the generated instruction sequences compute, step for step, with the
+// simulator's arithmetic (c40sim::fp).  The code generator folds constants with
+// these, the C40 semantic model (c40model.h) runs them, and the tests hold the
+// simulated code to them bit for bit.
+using c40sim::Ext;
+Ext real_from_ieee(uint32_t bits);   // FRIEEE
+Ext real_from_int(int32_t i);        // FLOAT (exact in the 40-bit register)
+uint32_t real_to_ieee(Ext x);        // TOIEEE + STF: the IEEE word stored
+int32_t real_to_int32(Ext x);        // FIX with the truncation fix-up (7 instructions)
+Ext real_div(Ext a, Ext b);          // b != 0: halve both, RCPF, two Newton steps, one correction
+Ext real_add(Ext a, Ext b);          // ADDF
+Ext real_sub(Ext a, Ext b);          // SUBF: a - b
+Ext real_mul(Ext a, Ext b);          // MPYF
+int real_compare(Ext a, Ext b);      // CMPF: sign of a - b
+
+}  // namespace ldc::c40gen
