@@ -297,8 +297,9 @@ class Importer {
   void read_lines();
   size_t header();
   void program(size_t i);
-  size_t series(size_t i, std::vector<Elem>& out, int open_line);
-  size_t parallel(size_t i, std::vector<Elem>& out, int open_line);
+  size_t series(size_t i, std::vector<Elem>& out, const Line& open);
+  size_t parallel(size_t i, std::vector<Elem>& out, const Line& open);
+  [[noreturn]] void unclosed(const Line& open);
   Elem leaf(const Line& l);
   void check_leaf(const Elem& e);
 
@@ -416,7 +417,12 @@ Elem Importer::leaf(const Line& l) {
   return e;
 }
 
-size_t Importer::series(size_t i, std::vector<Elem>& out, int open_line) {
+void Importer::unclosed(const Line& open) {
+  std::string t = trim(open.text);
+  fail(open.no, int(open.text.find_first_not_of(" \t")) + 1, t.substr(0, t.find(' ')) + " is not closed by END before the end of the file");
+}
+
+size_t Importer::series(size_t i, std::vector<Elem>& out, const Line& open) {
   for (; i < lines_.size(); i++) {
     const Line& l = lines_[i];
     std::string t = trim(l.text);
@@ -428,7 +434,7 @@ size_t Importer::series(size_t i, std::vector<Elem>& out, int open_line) {
       e.kw = t;
       e.line = l.no;
       e.col = col;
-      i = t == "PARALLEL" ? parallel(i + 1, e.kids, l.no) : series(i + 1, e.kids, l.no);
+      i = t == "PARALLEL" ? parallel(i + 1, e.kids, l) : series(i + 1, e.kids, l);
       out.push_back(std::move(e));
       continue;
     }
@@ -436,10 +442,10 @@ size_t Importer::series(size_t i, std::vector<Elem>& out, int open_line) {
     check_leaf(e);
     out.push_back(std::move(e));
   }
-  fail(open_line, 1, "not closed by END before the end of the file");
+  unclosed(open);
 }
 
-size_t Importer::parallel(size_t i, std::vector<Elem>& out, int open_line) {
+size_t Importer::parallel(size_t i, std::vector<Elem>& out, const Line& open) {
   for (; i < lines_.size(); i++) {
     const Line& l = lines_[i];
     std::string t = trim(l.text);
@@ -452,7 +458,7 @@ size_t Importer::parallel(size_t i, std::vector<Elem>& out, int open_line) {
       e.kw = t;
       e.line = l.no;
       e.col = col;
-      i = series(i + 1, e.kids, l.no);
+      i = series(i + 1, e.kids, l);
       out.push_back(std::move(e));
       continue;
     }
@@ -460,7 +466,7 @@ size_t Importer::parallel(size_t i, std::vector<Elem>& out, int open_line) {
     check_leaf(e);
     out.push_back(std::move(e));
   }
-  fail(open_line, 1, "not closed by END before the end of the file");
+  unclosed(open);
 }
 
 // The arity of every element we translate; unknown and refused ones end here.
@@ -509,7 +515,7 @@ void Importer::program(size_t i) {
       fail(l.no, col, "expected RUNG, found '" + t + "'");
     SrcRung r;
     r.line = l.no;
-    i = series(i + 1, r.series, l.no);
+    i = series(i + 1, r.series, l);
     if (r.series.size() == 1 && r.series[0].kw == "COMMENT") {
       // a comment rung: its first line titles the next rung
       std::string c = r.series[0].rest;

@@ -1392,6 +1392,19 @@ TreeProgram Importer::run() {
             lang = std::string(c->local_name());
             break;
           }
+      if (lang == "SFC") {  // say so when the LD is only in SFC actions or transitions
+        std::vector<std::string> parts;
+        for (const char* list : {"actions", "transitions"})
+          if (const Element* l = p->child(list))
+            for (const auto& a : l->children)
+              if (const Element* ab = a->child("body"))
+                if (ab->child("LD") && a->attr("name")) parts.push_back(std::string(a->local_name()) + " '" + *a->attr("name") + "'");
+        if (!parts.empty()) {
+          lang += " (its ";
+          for (size_t i = 0; i < parts.size(); i++) lang += (i ? ", " : "") + parts[i];
+          lang += parts.size() == 1 ? " is LD, but runs only while its SFC step is active)" : " are LD, but run only while their SFC steps are active)";
+        }
+      }
       pou_lang_[upper(*p->attr("name"))] = lang;
       all.push_back(p);
       if (lang == "LD") ld.push_back(p);

@@ -1,0 +1,20 @@
+#!/bin/sh
+# check_trace.sh BINDIR SOURCE BASE ENGINE
+# Runs SOURCE (an LDmicro .ld or PLCopen .xml) over BASE.csv and compares the
+# watched values with BASE.expected, whose header names them.  ENGINE interp or
+# native runs an image written by ldc; "source" runs the file on the interpreter.
+set -eu
+bindir=$1 src=$2 base=$3 engine=$4
+watch=$(head -n 1 "$base.expected" | cut -d, -f2-)
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+if [ "$engine" = source ]; then
+  "$bindir/ldrun" "$src" --engine=interp --trace "$base.csv" --watch "$watch" > "$tmp/out"
+else
+  "$bindir/ldc" "$src" -o "$tmp/prog.bin"
+  "$bindir/ldrun" "$tmp/prog.bin" --engine="$engine" --trace "$base.csv" --watch "$watch" > "$tmp/out"
+fi
+if ! diff -u "$base.expected" "$tmp/out"; then
+  echo "FAIL: $src on $engine differs from $base.expected" >&2
+  exit 1
+fi
