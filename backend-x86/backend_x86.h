@@ -19,7 +19,8 @@ namespace ldc {
 struct X86Code {
   as::x86::X86Program program;  // block 0 prologue, one block per rung, last block epilogue
   // For rung r and its IL instruction i, the item index in block r + 1 where
-  // the instruction's code starts (a comment item holding the IL text).
+  // the instruction's code starts (with notes, the comment item holding the IL
+  // text; an index equal to the block's item count means the block's end).
   std::vector<std::vector<uint32_t>> il_items;
 };
 
@@ -27,7 +28,9 @@ struct X86Code {
 // opt_level 1: -O0 plus a peephole pass over each rung's templates.
 // opt_level 2: rung by rung, the bit stack in callee-saved byte registers
 // (r12b r13b r14b r15b bpl) when the rung's live stack fits, else as -O1.
-X86Code generate_x86(const Program& p, const Layout& layout, int opt_level = 0);
+// notes: comment items with each rung's line and each IL instruction's text,
+// for --emit=asm and listings; an image does not need them.
+X86Code generate_x86(const Program& p, const Layout& layout, int opt_level = 0, bool notes = true);
 
 // Names of the global labels the backend defines.
 inline constexpr const char* kX86ExitLabel = "scan_exit";

@@ -764,6 +764,7 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
     new_index[i] = uint32_t(kept.size());
     if (!drop[i]) kept.push_back(std::move(items[i]));
   }
+  new_index[items.size()] = uint32_t(kept.size());
   for (auto& s : starts) s = new_index[s];
   items = std::move(kept);
 }
@@ -811,7 +812,7 @@ bool fits_slots(const std::vector<ldc::Instr>& code) {
 
 std::string x86_label_name(const std::string& il_label) { return "lbl_" + il_label; }
 
-X86Code generate_x86(const Program& p, const Layout& layout, int opt_level) {
+X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool notes) {
   const bool o2 = opt_level >= 2;
   X86Code out;
   auto& prog = out.program;
@@ -836,13 +837,13 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level) {
     as::Block<Instruction> b;
     b.sourceLine = r.line;
     for (const auto& l : r.labels) b.items.push_back(Item::labelDef(x86_label_name(l), true));
-    b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
+    if (notes) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
     std::vector<uint32_t> starts;
     bool slots = o2 && fits_slots(r.code);
     Gen g(layout, b.items, slots);
     for (const ldc::Instr& in : r.code) {
       starts.push_back(uint32_t(b.items.size()));
-      b.items.push_back(Item::note(instr_text(in)));
+      if (notes) b.items.push_back(Item::note(instr_text(in)));
       g.instr(in);
     }
     if (opt_level >= 1 && !slots) peephole(b.items, starts);

@@ -919,6 +919,7 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
   std::vector<Subject*> head;
   for (Subject* s : R.of("scaling")) head.push_back(s);
   for (Subject* s : R.of("inputs")) head.push_back(s);
+  for (Subject* s : R.of("repeat")) head.push_back(s);
   for (Subject* s : R.of("large")) head.push_back(s);
   for (Subject* s : head) {
     md += md_row({s->name, std::to_string(s->n), fixed(s->counts.p_basic(), 3), cell(s->t[kClassic]),
@@ -1406,6 +1407,16 @@ int main(int argc, char** argv) {
     if (o.want("scaling")) run_scaling(R);
     if (o.want("large")) run_large(R);
     if (o.want("examples")) run_examples(R);
+    if (o.want("scaling")) {  // the same program as at the start of the scaling run: the drift over the run
+      say("repeat, to see the drift\n");
+      int n = o.smoke ? 300 : 3000;
+      auto s = synth_subject("repeat", n, synth::kTypicalPBasic, uint64_t(n) + 77);
+      s->name += " (again, at the end)";
+      bool c = o.c_route;
+      if (o.smoke) o.c_route = false;
+      R.add(std::move(s));
+      o.c_route = c;
+    }
     std::vector<CompileRow> compile;
     if (o.want("compile")) compile = run_compile(R);
     std::vector<MemRow> mem;

@@ -74,9 +74,9 @@ Compiled compile_source(const std::string& path) {
   return c;
 }
 
-NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode, int opt_level) {
+NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode, int opt_level, bool notes) {
   NativeBuild b;
-  b.gen = generate_x86(p, p.layout(), opt_level);
+  b.gen = generate_x86(p, p.layout(), opt_level, notes);
   b.asm_result = as::assemble(as::x86::target(), b.gen.program, mode);
   if (!b.asm_result.ok()) {
     std::string msg;
@@ -101,9 +101,11 @@ Image make_x86_image(const Program& p, const NativeBuild& nb) {
   for (size_t r = 0; r < p.rungs.size(); r++) {
     img.rung_titles.push_back(p.rungs[r].title);
     const auto& items = nb.asm_result.items[r + 1];  // block 0 is the prologue
+    uint32_t block_end = nb.asm_result.blockOffsets[r + 2];
     for (size_t i = 0; i < p.rungs[r].code.size(); i++, k++) {
       const Instr& in = p.rungs[r].code[i];
-      img.lines.push_back({items[nb.gen.il_items[r][i]].offset, bin.instr_offset[k],
+      uint32_t at = nb.gen.il_items[r][i];
+      img.lines.push_back({at < items.size() ? items[at].offset : block_end, bin.instr_offset[k],
                            in.loc.line ? in.loc.line : p.rungs[r].line, uint32_t(r)});
     }
   }

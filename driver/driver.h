@@ -38,7 +38,7 @@ struct NativeBuild {
   as::Result asm_result;
 };
 NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode = as::Mode::Blockwise,
-                      int opt_level = 0);
+                      int opt_level = 0, bool notes = true);
 
 // The image ldc writes for the x86-64 target: code, binary IL, line map, names.
 Image make_x86_image(const Program& p, const NativeBuild& nb);

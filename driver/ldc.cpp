@@ -45,7 +45,7 @@ int main(int argc, char** argv) {
       NativeBuild nb = build_x86(c.il, input, as::Mode::Blockwise, opt);
       text = as::x86::listing(nb.gen.program, nb.asm_result);
     } else if ((emit.empty() || emit == "hex") && target == "x86-64") {  // + loader
-      NativeBuild nb = build_x86(c.il, input, as::Mode::Blockwise, opt);
+      NativeBuild nb = build_x86(c.il, input, as::Mode::Blockwise, opt, /*notes=*/false);
       std::vector<uint8_t> bin = write_image(make_x86_image(c.il, nb));
       if (emit == "hex") text = write_intel_hex(bin);
       else {

@@ -63,7 +63,7 @@ int main(int argc, char** argv) {
       so_path = build_c_shared_object(c.il, tmpdir);
     } else {
       Compiled c = compile_source(input);
-      if (engine == "native") img = make_x86_image(c.il, build_x86(c.il, input));
+      if (engine == "native") img = make_x86_image(c.il, build_x86(c.il, input, as::Mode::Blockwise, 0, /*notes=*/false));
       else {
         img.layout = c.il.layout();
         img.il = encode_il(c.il).code;
