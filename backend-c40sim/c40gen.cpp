@@ -32,16 +32,25 @@ int32_t real_to_int32(Ext x) {
 }
 
 namespace {
-Ext kHalf() { return fp::fromShort(*as::c40::shortFloatFromDouble(0.5)); }
 Ext kOne() { return fp::fromShort(*as::c40::shortFloatFromDouble(1.0)); }
 Ext kTwo() { return fp::fromShort(*as::c40::shortFloatFromDouble(2.0)); }
 }  // namespace
 
+// x = m 2^e with the exponent field cleared (PUSHF, POP, ASH3 -24, LSH 8, LSH -8, PUSH, POPF)
+static Ext split_exponent(Ext x, int32_t& e) {
+  uint32_t w = fp::toSingle(x);
+  e = int32_t(w) >> 24;
+  return fp::fromSingle((w << 8) >> 8);
+}
+
 Ext real_div(Ext a, Ext b) {
-  a = fp::mul(a, kHalf()).v;                            // MPYF 0.5, R0
-  b = fp::mul(b, kHalf()).v;                            // MPYF 0.5, R1
+  Ext a0 = a;                                           // LDF R0, R6
+  int32_t ea, eb;
+  a = split_exponent(a, ea);                            // m_a in [1, 2) or [-2, -1)
+  b = split_exponent(b, eb);                            // m_b
+  int32_t k = ea - eb;                                  // SUBI R5, R4
   Ext x = fp::rcp(b).v;                                 // RCPF R1, R2
-  for (int k = 0; k < 2; k++) {
+  for (int i = 0; i < 2; i++) {
     Ext t = fp::mul(x, b).v;                            // MPYF3 R2, R1, R3
     t = fp::neg(t).v;                                   // NEGF  R3, R3
     t = fp::add(t, kTwo()).v;                           // ADDF  2.0, R3
@@ -49,10 +58,15 @@ Ext real_div(Ext a, Ext b) {
   }
   Ext q = fp::mul(x, a).v;                              // MPYF3 R2, R0, R3
   q = fp::mul(q, kOne()).v;                             // MPYF  1.0, R3
-  Ext r = fp::mul(q, b).v;                              // MPYF3 R3, R1, R4
-  r = fp::sub(a, r).v;                                  // SUBF3 R4, R0, R4
-  r = fp::mul(r, x).v;                                  // MPYF  R2, R4
-  return fp::add(q, r).v;                               // ADDF  R4, R3
+  Ext r = fp::mul(q, b).v;                              // MPYF3 R3, R1, R5
+  r = fp::sub(a, r).v;                                  // SUBF3 R5, R0, R5
+  r = fp::mul(r, x).v;                                  // MPYF  R2, R5
+  q = fp::add(q, r).v;                                  // ADDF  R5, R3: m_a / m_b in (1/2, 2)
+  int32_t k1 = k >> 1, k2 = k - k1;                     // ASH3 -1, R4, R5; SUBI3 R5, R4, R4
+  q = fp::mul(q, fp::fromSingle(uint32_t(k1) << 24)).v; // 2^k1 via LSH 24, PUSH, POPF; MPYF
+  q = fp::mul(q, fp::fromSingle(uint32_t(k2) << 24)).v; // 2^k2
+  if (fp::compare(a0, fp::kZero) == 0) q = fp::kZero;   // CMPF 0.0, R6; LDFEQ 0.0, R0
+  return q;
 }
 
 std::string label_name(const std::string& il_label) { return "lbl_" + il_label; }
@@ -396,22 +410,7 @@ void Gen::divmod(const ldc::Instr& in) {
     load_real(b, r1);
     op(M::Cmpf, {F(0.0), R(r1)});
     branch(Cond::EQ, err);
-    op(M::Mpyf, {F(0.5), R(r0)});  // halve both: RCPF of |b| >= 2^127 would underflow
-    op(M::Mpyf, {F(0.5), R(r1)});
-    op(M::Rcpf, {R(r1), R(r2)});   // 8-bit estimate of 1/b, two Newton steps
-    for (int k = 0; k < 2; k++) {
-      op(M::Mpyf3, {R(r2), R(r1), R(r3)});
-      op(M::Negf, {R(r3), R(r3)});
-      op(M::Addf, {F(2.0), R(r3)});
-      op(M::Mpyf, {R(r3), R(r2)});
-    }
-    op(M::Mpyf3, {R(r2), R(r0), R(r3)});  // q = a / b, then one correction
-    op(M::Mpyf, {F(1.0), R(r3)});         // q as MPYF will see it (single)
-    op(M::Mpyf3, {R(r3), R(r1), R(r4)});
-    op(M::Subf3, {R(r4), R(r0), R(r4)});  // r = a - b q
-    op(M::Mpyf, {R(r2), R(r4)});
-    op(M::Addf, {R(r4), R(r3)});          // q + r / b
-    op(M::Ldf, {R(r3), R(r0)});
+    op(M::Call, {L(kDivfLabel)});  // R0 = a / b
     store_real(d);
     jump(skip);
   } else {
@@ -726,6 +725,58 @@ const char* const kDivRoutine[] = {
     "RETSU",
 };
 
+// REAL division (docs/c40.md): R0 = a, R1 = b (b != 0); returns R0 = a / b.
+// Both are split into mantissa and exponent through the stack, the mantissas
+// divided (RCPF, two Newton steps, one correction: no underflow inside for any
+// operands), and the quotient scaled by 2^(ea - eb) in two exact steps, so
+// MPYF saturates or flushes as the range requires.  Uses R2-R6, two stack words.
+const char* const kDivfRoutine[] = {
+    "LDF R0, R6",
+    "PUSHF R0",
+    "POP R2",
+    "ASH3 -24, R2, R4",    // ea
+    "LSH 8, R2",
+    "LSH -8, R2",
+    "PUSH R2",
+    "POPF R0",             // ma
+    "PUSHF R1",
+    "POP R2",
+    "ASH3 -24, R2, R5",    // eb
+    "LSH 8, R2",
+    "LSH -8, R2",
+    "PUSH R2",
+    "POPF R1",             // mb
+    "SUBI R5, R4",         // k = ea - eb
+    "RCPF R1, R2",
+    "MPYF3 R2, R1, R3",
+    "NEGF R3, R3",
+    "ADDF 2.0, R3",
+    "MPYF R3, R2",
+    "MPYF3 R2, R1, R3",
+    "NEGF R3, R3",
+    "ADDF 2.0, R3",
+    "MPYF R3, R2",         // x = 1 / mb
+    "MPYF3 R2, R0, R3",
+    "MPYF 1.0, R3",        // q = ma x, as MPYF sees it
+    "MPYF3 R3, R1, R5",
+    "SUBF3 R5, R0, R5",    // r = ma - mb q
+    "MPYF R2, R5",
+    "ADDF R5, R3",         // q + r x
+    "ASH3 -1, R4, R5",     // k1 = k >> 1
+    "SUBI3 R5, R4, R4",    // k2 = k - k1
+    "LSH 24, R5",
+    "PUSH R5",
+    "POPF R5",             // 2^k1
+    "MPYF R5, R3",
+    "LSH 24, R4",
+    "PUSH R4",
+    "POPF R4",             // 2^k2
+    "MPYF3 R4, R3, R0",
+    "CMPF 0.0, R6",
+    "LDFEQ 0.0, R0",       // a = 0: 0
+    "RETSU",
+};
+
 }  // namespace
 
 C40Code generate_c40(const Program& p, const Layout& layout) {
@@ -734,6 +785,7 @@ C40Code generate_c40(const Program& p, const Layout& layout) {
   auto& prog = out.program;
   prog.globals.push_back(kExitLabel);
   prog.globals.push_back(kDivLabel);
+  prog.globals.push_back(kDivfLabel);
   for (const Rung& r : p.rungs)
     for (const auto& l : r.labels) prog.globals.push_back(label_name(l));
   for (const auto& l : p.end_labels) prog.globals.push_back(label_name(l));
@@ -775,6 +827,9 @@ C40Code generate_c40(const Program& p, const Layout& layout) {
     if (!l.label.empty()) epi.items.push_back(Item::labelDef(l.label));
     epi.items.push_back(Item::instr(*l.inst));
   }
+  epi.items.push_back(Item::note("__divf: R0 = R0 / R1 (C40 floats)"));
+  epi.items.push_back(Item::labelDef(kDivfLabel, true));
+  for (const char* t : kDivfRoutine) epi.items.push_back(Item::instr(parse(t)));
   prog.blocks.push_back(std::move(epi));
   return out;
 }

@@ -11,8 +11,8 @@
 //   R0-R7, AR0  scratch within one template (and the routines it calls)
 // Devices are read and written with direct addressing (@offset), one word per
 // element (c40layout.h).  INT32 division and remainder call the shift-subtract
-// routine __divi in the last block; REAL functions without an instruction call
-// the math ROM (mathrom.h) at fixed addresses.
+// routine __divi in the last block, REAL division the routine __divf; REAL
+// functions without an instruction call the math ROM (mathrom.h).
 #pragma once
 
 #include <string>
@@ -38,6 +38,7 @@ C40Code generate_c40(const Program& p, const Layout& layout);
 // Global labels the backend defines.
 inline constexpr const char* kExitLabel = "scan_exit";
 inline constexpr const char* kDivLabel = "__divi";
+inline constexpr const char* kDivfLabel = "__divf";
 std::string label_name(const std::string& il_label);  // user label -> assembly label
 
 // ---------------------------------------------------------------- REAL on the C40
@@ -50,7 +51,7 @@ Ext real_from_ieee(uint32_t bits);   // FRIEEE
 Ext real_from_int(int32_t i);        // FLOAT (exact in the 40-bit register)
 uint32_t real_to_ieee(Ext x);        // TOIEEE + STF: the IEEE word stored
 int32_t real_to_int32(Ext x);        // FIX with the truncation fix-up (7 instructions)
-Ext real_div(Ext a, Ext b);          // b != 0: halve both, RCPF, two Newton steps, one correction
+Ext real_div(Ext a, Ext b);          // b != 0: the __divf routine
 Ext real_add(Ext a, Ext b);          // ADDF
 Ext real_sub(Ext a, Ext b);          // SUBF: a - b
 Ext real_mul(Ext a, Ext b);          // MPYF
