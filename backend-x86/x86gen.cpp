@@ -816,6 +816,8 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
   const bool o2 = opt_level >= 2;
   X86Code out;
   auto& prog = out.program;
+  prog.blocks.reserve(p.rungs.size() + 2);
+  out.il_items.reserve(p.rungs.size());
   prog.globals.push_back(kX86ExitLabel);
   for (const Rung& r : p.rungs)
     for (const auto& l : r.labels) prog.globals.push_back(x86_label_name(l));
@@ -836,6 +838,7 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
   for (const Rung& r : p.rungs) {
     as::Block<Instruction> b;
     b.sourceLine = r.line;
+    b.items.reserve(r.code.size() * (notes ? 12 : 10) + 4);  // items are large: grow once
     for (const auto& l : r.labels) b.items.push_back(Item::labelDef(x86_label_name(l), true));
     if (notes) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
     std::vector<uint32_t> starts;
