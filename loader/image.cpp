@@ -32,11 +32,12 @@ constexpr uint32_t kOffSections = kOffLayout + kLayoutSize;
 constexpr uint32_t kSectionEntrySize = 12;
 constexpr uint32_t kMaxSections = 64;
 
-enum SectionId : uint32_t { kCode = 1, kIl, kLines, kStrings, kAliases, kRetentive, kEntry, kSectionIdEnd };
-constexpr const char* kSectionNames[] = {"?", "code", "il", "lines", "strings", "aliases", "retentive", "entry"};
+enum SectionId : uint32_t { kCode = 1, kIl, kLines, kStrings, kAliases, kRetentive, kEntry, kConfig, kSectionIdEnd };
+constexpr const char* kSectionNames[] = {"?", "code", "il", "lines", "strings", "aliases", "retentive", "entry", "config"};
 
 constexpr uint32_t kLineEntrySize = 16;
 constexpr uint32_t kRetentiveEntrySize = 12;
+constexpr uint32_t kConfigRowSize = 16;
 
 std::string hex(uint64_t v) {
   char buf[24];
@@ -153,9 +154,12 @@ std::vector<uint8_t> write_image(const Image& im) {
   w.u16(kVersion);
   w.u8(uint8_t(im.target));
   w.u8(0);  // flags
-  w.u32(kOffSections + (kSectionIdEnd - 1) * kSectionEntrySize);
+  // Sections 1..7 always; 'config' only when the image has a configuration
+  // table, so images without one are byte for byte what they always were.
+  const uint32_t nsections = im.config ? kConfig : kConfig - 1;
+  w.u32(kOffSections + nsections * kSectionEntrySize);
   w.u32(0);  // total size, patched below
-  w.u32(kSectionIdEnd - 1);
+  w.u32(nsections);
   w.u32(0);  // checksum, patched below
   w.u32(0);  // reserved
   w.u32(kAreaCount);
@@ -163,9 +167,9 @@ std::vector<uint8_t> write_image(const Image& im) {
   for (uint32_t o : im.layout.offset) w.u32(o);
   w.u32(im.layout.size);
   size_t table = w.out.size();
-  for (uint32_t i = 1; i < kSectionIdEnd; i++) w.u32(i), w.u32(0), w.u32(0);
+  for (uint32_t i = 1; i <= nsections; i++) w.u32(i), w.u32(0), w.u32(0);
 
-  for (uint32_t id = 1; id < kSectionIdEnd; id++) {
+  for (uint32_t id = 1; id <= nsections; id++) {
     w.align4();
     size_t start = w.out.size();
     switch (SectionId(id)) {
@@ -189,6 +193,17 @@ std::vector<uint8_t> write_image(const Image& im) {
         for (const RetentiveRange& r : im.retentive) w.u32(uint32_t(r.area)), w.u32(r.first), w.u32(r.count);
         break;
       case kEntry: w.u32(im.entry); break;
+      case kConfig: {
+        const IoConfig& c = *im.config;
+        w.u32(c.block_size), w.u32(c.processor), w.u32(c.period_us), w.u32(c.priority);
+        w.str(c.resource), w.str(c.task), w.str(c.program);
+        w.u32(count32(c.rows.size(), "configuration rows"));
+        for (const ConfigRow& r : c.rows) {
+          w.u8(uint8_t(r.area)), w.u8(r.flags), w.u16(0);
+          w.u32(r.block), w.u32(r.writer), w.u32(r.period_us);
+        }
+        break;
+      }
       case kSectionIdEnd: break;
     }
     if (w.out.size() > kImageMaxSize) throw ImageError("image: larger than the format allows (" + hex(kImageMaxSize) + " bytes)");
@@ -343,6 +358,35 @@ Image read_image(std::span<const uint8_t> b, const std::string& name) {
     im.entry = r.u32("entry point");
     finish(r, *s);
   }
+  if (const SectionEntry* s = by_id[kConfig]) {
+    SectionReader r{bytes_of(*s), s->offset};
+    IoConfig c;
+    c.block_size = r.u32("block size");
+    c.processor = r.u32("processor");
+    c.period_us = r.u32("period");
+    c.priority = r.u32("priority");
+    c.resource = r.str("resource name");
+    c.task = r.str("task name");
+    c.program = r.str("program name");
+    uint32_t n = r.u32("row count");
+    if (r.error.empty() && n > (r.data.size() - r.pos) / kConfigRowSize)
+      r.error = "row count " + std::to_string(n) + " does not fit in the section";
+    for (uint32_t i = 0; i < n && r.error.empty(); i++) {
+      ConfigRow row;
+      row.area = Area(r.u8("row"));
+      row.flags = r.u8("row");
+      uint32_t reserved = uint32_t(r.u8("row")) | uint32_t(r.u8("row")) << 8;
+      row.block = r.u32("row");
+      row.writer = r.u32("row");
+      row.period_us = r.u32("row");
+      if (r.error.empty() && reserved != 0)
+        r.error = "row " + std::to_string(i) + " at file offset " + hex(uint64_t(s->offset) + r.pos - kConfigRowSize) +
+                  ": reserved field is " + hex(reserved) + ", not 0";
+      c.rows.push_back(row);
+    }
+    finish(r, *s);
+    im.config = std::move(c);
+  }
   if (const SectionEntry* s = by_id[kLines]) {
     if (s->size % kLineEntrySize)
       throw sfail(*s, "size " + std::to_string(s->size) + " is not a multiple of the " + std::to_string(kLineEntrySize) +
@@ -410,6 +454,8 @@ Image read_image(std::span<const uint8_t> b, const std::string& name) {
 
   // ---- meaning
   if (std::string why = validate_il(im.il, im.layout); !why.empty()) throw sfail(il_sec, "invalid IL: " + why);
+  if (im.config)
+    if (std::string why = check_io_config(*im.config, im.il); !why.empty()) throw sfail(*by_id[kConfig], why);
   std::vector<uint32_t> il_starts;
   for (uint32_t off = 0; off < im.il.size();) {
     il_starts.push_back(off);

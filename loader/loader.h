@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "ir/ir.h"
+#include "loader/config.h"
 
 namespace ldc {
 
@@ -44,6 +46,7 @@ struct Image {
   std::vector<std::string> rung_titles;  // one per rung ("" if none)
   std::vector<Alias> aliases;            // so traces and --watch can use the program's names
   std::vector<RetentiveRange> retentive = {{Area::K, 0, 8192}};  // the K area by default
+  std::optional<IoConfig> config;        // the configuration table (ldc --project); section written only if set
   bool operator==(const Image&) const = default;
 };
 
