@@ -1,0 +1,116 @@
+// runtime/control.cpp -- the stdin/stdout line protocol of ldrun
+// (docs/runtime.md, "The line protocol"): one command per line, one reply line.
+#include <cctype>
+#include <stdexcept>
+
+#include "runtime/plc.h"
+
+namespace ldc::plc {
+namespace {
+
+std::vector<std::string> words(const std::string& line) {
+  std::vector<std::string> w;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) i++;
+    if (i >= line.size() || line[i] == '#') break;
+    size_t s = i;
+    while (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i]))) i++;
+    w.push_back(line.substr(s, i - s));
+  }
+  return w;
+}
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+constexpr const char* kHelp =
+    "commands: set DEV VALUE | get [TASK.]DEV | run | stop | status | stats | load [TASK] FILE | wait N | save | quit";
+
+}  // namespace
+
+std::string Control::execute(const std::string& line, bool& quit) {
+  std::vector<std::string> w = words(line);
+  if (w.empty()) return "";
+  std::string cmd = lower(w[0]);
+  auto args = [&](size_t lo, size_t hi, const char* form) {
+    if (w.size() - 1 < lo || w.size() - 1 > hi) throw std::runtime_error(std::string("usage: ") + form);
+  };
+  try {
+    if (cmd == "set") {
+      args(2, 2, "set DEV VALUE");
+      rt.set(w[1], w[2]);
+      return "ok";
+    }
+    if (cmd == "get") {
+      args(1, 1, "get [TASK.]DEV");
+      return w[1] + " = " + rt.get(w[1]);
+    }
+    if (cmd == "run") {
+      args(0, 0, "run");
+      rt.run();
+      return "ok RUN";
+    }
+    if (cmd == "stop") {
+      args(0, 0, "stop");
+      rt.stop();
+      return "ok STOP";
+    }
+    if (cmd == "status") {
+      args(0, 0, "status");
+      return rt.status();
+    }
+    if (cmd == "stats") {
+      args(0, 0, "stats");
+      std::string s;
+      for (const TaskStats& t : rt.stats()) {
+        if (!s.empty()) s += "; ";
+        s += "task " + t.task + ": " + std::to_string(t.scans) + " scans, " + std::to_string(t.overruns) +
+             " overruns, scan us min/median/p99/max " + format_us(t.scan_us.min) + "/" + format_us(t.scan_us.median) +
+             "/" + format_us(t.scan_us.p99) + "/" + format_us(t.scan_us.max) + ", jitter " + format_us(t.jitter_us.min) +
+             "/" + format_us(t.jitter_us.median) + "/" + format_us(t.jitter_us.p99) + "/" + format_us(t.jitter_us.max);
+      }
+      return s;
+    }
+    if (cmd == "load") {
+      args(1, 2, "load [TASK] FILE");
+      std::string task = w.size() == 3 ? w[1] : "", file = w.back();
+      if (task.empty()) {
+        if (rt.task_count() != 1) throw std::runtime_error("the project has several tasks: load TASK FILE");
+        task = rt.task_name(0);
+      }
+      if (rt.find_task(task) == SIZE_MAX) throw std::runtime_error("no task named '" + task + "'");
+      Image img = loader(file);  // read and checked in full before anything changes
+      return "ok " + rt.replace(task, std::move(img), file).text();
+    }
+    if (cmd == "wait") {
+      args(1, 1, "wait N");
+      const std::string& n = w[1];
+      if (n.empty() || n.size() > 9 || n.find_first_not_of("0123456789") != std::string::npos)
+        throw std::runtime_error("bad scan count '" + n + "'");
+      if (!rt.wait_scans(std::stoull(n), 30000)) throw std::runtime_error("timeout waiting for " + n + " scans");
+      return "ok";
+    }
+    if (cmd == "save") {
+      args(0, 0, "save");
+      std::string e = rt.save_retentive();
+      if (!e.empty()) throw std::runtime_error(e);
+      return "ok saved";
+    }
+    if (cmd == "quit" || cmd == "exit") {
+      quit = true;
+      return "ok bye";
+    }
+    if (cmd == "help") return kHelp;
+    return "error: unknown command '" + w[0] + "' (" + kHelp + ")";
+  } catch (std::exception& e) {
+    std::string m = e.what();
+    for (char& c : m)
+      if (c == '\n') c = ' ';
+    return "error: " + m;
+  }
+}
+
+}  // namespace ldc::plc

@@ -1,0 +1,1119 @@
+// runtime/plc.cpp -- the soft-PLC runtime: tasks, the global image, the
+// scan loop, online download, the watchdog and retentive saving
+// (runtime/plc.h, docs/runtime.md).
+//
+// Threads: one per task (scan loop), a watchdog monitor, a retentive saver,
+// and the caller's (control).  Data ownership:
+//   the global image (X Y M K WX WY)  -- under the image lock (a priority-
+//       inheriting mutex), taken twice per scan for short copies;
+//   a task's private memory           -- its own thread only; the control
+//       thread reaches it through requests run at the task's scan boundary;
+//   state and epoch                   -- changed under the image lock, read
+//       atomically; a scan publishes its results only if the state is still
+//       RUN and the epoch the one it started in.
+#include "runtime/plc.h"
+
+#include <pthread.h>
+#include <sched.h>
+#include <sys/mman.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <cstring>
+#include <future>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+namespace ldc::plc {
+
+const char* state_name(State s) {
+  switch (s) {
+    case State::Stop: return "STOP";
+    case State::Run: return "RUN";
+    case State::Fault: return "FAULT";
+  }
+  return "?";
+}
+
+std::string format_us(double us) {
+  char buf[48];
+  if (std::fabs(us) >= 10000) std::snprintf(buf, sizeof buf, "%.2f ms", us / 1000);
+  else if (std::fabs(us) >= 100) std::snprintf(buf, sizeof buf, "%.0f us", us);
+  else std::snprintf(buf, sizeof buf, "%.1f us", us);
+  return buf;
+}
+
+std::string SwapReport::text() const {
+  return "task " + task + " switched at scan " + std::to_string(at_scan) + ": latency " + format_us(latency_us) +
+         " (switch " + format_us(work_us) + ")";
+}
+
+namespace {
+
+int64_t now_ns() {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return int64_t(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+}
+
+void sleep_until(int64_t t) {
+  timespec ts{time_t(t / 1000000000), long(t % 1000000000)};
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {}
+}
+
+// The image lock: a mutex with priority inheritance, so a low-priority task
+// holding it is boosted while a high-priority one waits (no inversion).
+class ImageLock {
+ public:
+  ImageLock() {
+    pthread_mutexattr_t a;
+    pthread_mutexattr_init(&a);
+    pthread_mutexattr_setprotocol(&a, PTHREAD_PRIO_INHERIT);
+    pthread_mutex_init(&m_, &a);
+    pthread_mutexattr_destroy(&a);
+  }
+  ~ImageLock() { pthread_mutex_destroy(&m_); }
+  void lock() { pthread_mutex_lock(&m_); }
+  void unlock() { pthread_mutex_unlock(&m_); }
+
+ private:
+  pthread_mutex_t m_;
+};
+
+// A ring of the last samples (ns, clamped to int32) plus exact extremes.
+struct Ring {
+  std::vector<int32_t> v;
+  size_t n = 0;
+  int64_t lo = INT64_MAX, hi = INT64_MIN;
+  Ring() : v(size_t(1) << 16) {}
+  void add(int64_t ns) {
+    lo = std::min(lo, ns), hi = std::max(hi, ns);
+    v[n++ % v.size()] = int32_t(std::clamp<int64_t>(ns, INT32_MIN, INT32_MAX));
+  }
+  Quantiles quantiles() const {
+    Quantiles q;
+    size_t k = std::min(n, v.size());
+    q.n = n;
+    if (!k) return q;
+    std::vector<int32_t> s(v.begin(), v.begin() + k);
+    auto at = [&](double f) {
+      size_t i = std::min(k - 1, size_t(f * double(k - 1) + 0.5));
+      std::nth_element(s.begin(), s.begin() + i, s.end());
+      return s[i] / 1000.0;
+    };
+    q.median = at(0.5), q.p99 = at(0.99);
+    q.min = lo / 1000.0, q.max = hi / 1000.0;
+    return q;
+  }
+};
+
+// Edge slot identities: what each slot remembers (the last value of a bit,
+// or the last input of a counter).  Two programs may share edge memory only
+// where they agree.
+struct EdgeUse {
+  std::string what;
+  uint32_t il_offset;
+};
+std::map<uint32_t, EdgeUse> edge_uses(std::span<const uint8_t> il) {
+  std::map<uint32_t, EdgeUse> m;
+  for (uint32_t off = 0; off < il.size();) {
+    Instr in;
+    uint32_t next = decode_instr(il, off, in);
+    if (in.op == Op::LOADP || in.op == Op::LOADF)
+      m[in.a[1].index] = {"the last value of " + point_name(in.a[0].area, in.a[0].index), off};
+    else if (in.op == Op::CTU || in.op == Op::CTD)
+      m[in.a[2].index] = {"the last input of counter C" + std::to_string(in.a[0].index), off};
+    off = next;
+  }
+  return m;
+}
+
+int line_of(const Image& img, uint32_t il_offset) {
+  for (const LineEntry& e : img.lines)
+    if (e.il_offset == il_offset) return e.line;
+  return 0;
+}
+
+// A program ready to run: its engine and the runs its configuration rows give.
+struct Prog {
+  Image image;
+  std::unique_ptr<Engine> engine;
+  std::string file;
+  std::vector<ConfigRow> own;
+  std::vector<IoAccess> accesses;
+  std::vector<Run> in_runs;      // read or written blocks: global -> private before the scan
+  std::vector<Run> out_runs;     // written blocks: private -> global after it (changed bytes only)
+  std::vector<Run> input_runs;   // X/WX blocks read: the driver refreshes them
+  std::vector<Run> output_runs;  // Y/WY blocks written: the driver publishes them
+  std::vector<RetentiveRange> private_ranges, shared_ranges;
+  std::vector<Run> private_retain;  // byte runs of private_ranges
+  size_t out_bytes = 0, retain_bytes = 0;
+};
+
+void add_run(std::vector<Run>& runs, uint32_t off, uint32_t size) {
+  if (!runs.empty() && runs.back().offset + runs.back().size == off) runs.back().size += size;
+  else runs.push_back(Run{off, size});
+}
+
+std::unique_ptr<Prog> make_prog(Image img, const std::string& file, uint32_t block_size, const EngineFactory& engines) {
+  auto p = std::make_unique<Prog>();
+  p->file = file;
+  p->accesses = io_accesses(img.il);
+  if (img.config) {
+    // The image's own rows, checked against its IL by read_image.
+    for (const ConfigRow& r : img.config->rows)
+      if (r.flags & (kBlockRead | kBlockWrite)) p->own.push_back(ConfigRow{r.area, r.block, uint8_t(r.flags & 3), 0, 0});
+  } else {
+    p->own = own_rows(p->accesses, block_size);
+  }
+  const Layout& L = img.layout;
+  for (const ConfigRow& r : p->own) {
+    uint32_t first = r.block * block_size, n = std::min(block_size, L.count[int(r.area)] - first);
+    uint32_t off = L.addr(r.area, first), size = n * L.elem_size(r.area);
+    add_run(p->in_runs, off, size);
+    bool input = r.area == Area::X || r.area == Area::WX, output = r.area == Area::Y || r.area == Area::WY;
+    if (r.flags & kBlockWrite) add_run(p->out_runs, off, size), p->out_bytes += size;
+    if (input && (r.flags & kBlockRead)) add_run(p->input_runs, off, size);
+    if (output && (r.flags & kBlockWrite)) add_run(p->output_runs, off, size);
+  }
+  for (const RetentiveRange& r : img.retentive) {
+    if (area_is_shared(r.area)) {
+      p->shared_ranges.push_back(r);
+    } else {
+      p->private_ranges.push_back(r);
+      uint32_t size = r.count * L.elem_size(r.area);
+      p->private_retain.push_back(Run{L.addr(r.area, r.first), size});
+      p->retain_bytes += size;
+    }
+  }
+  p->engine = engines(img);
+  p->image = std::move(img);
+  return p;
+}
+
+struct Task {
+  TaskSpec spec;  // its image moved into prog
+  std::unique_ptr<Prog> prog;
+  std::vector<uint8_t> mem, snapshot, retain_shadow, retain_tmp;
+  uint32_t watchdog_us = 0;
+  std::thread th;
+
+  // requests run at the scan boundary
+  std::mutex req_mu;
+  std::condition_variable req_cv;
+  std::vector<std::function<void()>> reqs;
+  std::atomic<bool> has_req{false};
+
+  // status, read by other threads
+  std::atomic<uint64_t> scans{0};      // since the last (re)start
+  std::atomic<uint64_t> total_scans{0}, overruns{0}, skipped{0};
+  std::atomic<int64_t> scan_begin{0};  // of the scan under way, 0 if none
+  std::atomic<int64_t> last_scan_ns{0}, max_scan_ns{0};
+  std::atomic<bool> finished{false};
+
+  // the task thread's own
+  uint64_t epoch = 0;
+  bool first = true;
+  int64_t carry_ns = 0, last_start = 0, release = 0;
+  Ring scan_ring, jitter_ring, wake_ring;
+  std::mutex stats_mu;  // the rings; the task only try_locks it
+
+  // control-side copies (under Impl::ctl_mu), so control never reads prog
+  std::string ctl_file;
+  std::vector<IoAccess> ctl_accesses;
+  std::map<uint32_t, EdgeUse> ctl_edges;
+  std::vector<Alias> ctl_aliases;
+  Image ctl_image;  // for messages (lines), without code
+};
+
+void clear_shared_outputs(uint8_t* g, const Layout& L) {
+  std::memset(g + L.offset[int(Area::Y)], 0, L.count[int(Area::Y)]);
+  std::memset(g + L.offset[int(Area::WY)], 0, 4 * L.count[int(Area::WY)]);
+}
+
+}  // namespace
+
+struct Runtime::Impl {
+  Options opt;
+  EngineFactory engines;
+  std::unique_ptr<IoDriver> io;
+  Layout glayout = Layout::standard(0);
+  std::vector<uint8_t> global;
+  ImageLock glock;
+  std::vector<std::unique_ptr<Task>> tasks;
+  std::atomic<State> state{State::Stop};
+  std::atomic<uint64_t> epoch{1};
+  std::string fault_msg;                 // under glock
+  std::vector<RetentiveRange> global_ranges;  // shared retentive ranges (union), under glock
+
+  std::mutex mu;  // quit / finished / fault notifications
+  std::condition_variable cv;
+  bool quit = false;
+  std::atomic<bool> stopping{false};
+  bool started = false, shut = false;
+  std::thread saver, monitor;
+  std::mutex ctl_mu;   // control operations (replace, get, status) among themselves
+  std::mutex save_mu;  // one retentive save at a time
+  uint64_t retain_seq = 0;
+  std::vector<RetainRecord> last_saved;
+  std::atomic<bool> warned_rt{false};
+
+  void log(const std::string& m) {
+    if (opt.log) opt.log(m);
+  }
+
+  // ---- configuration
+  void check_conflicts(const std::vector<const std::vector<IoAccess>*>& acc, size_t only_task, const std::string& new_file) {
+    std::vector<ConfigTask> cts;
+    for (size_t i = 0; i < tasks.size(); i++) {
+      const TaskSpec& s = tasks[i]->spec;
+      ConfigTask c;
+      c.program = s.program, c.task = s.name, c.resource = s.resource;
+      c.processor = s.processor, c.period_us = s.period_us, c.priority = s.priority, c.exclusive = s.exclusive;
+      c.accesses = *acc[i];
+      cts.push_back(std::move(c));
+    }
+    SystemConfig sc = configure(cts, opt.block_size);
+    std::string msg;
+    for (const WriteConflict& c : sc.conflicts) {
+      if (only_task != SIZE_MAX && c.first != only_task && c.second != only_task) continue;
+      const TaskSpec &a = tasks[c.first]->spec, &b = tasks[c.second]->spec;
+      auto who = [](const TaskSpec& t) {
+        return "program '" + t.program + "' (task " + t.name + ", processor " + std::to_string(t.processor) + ")";
+      };
+      std::string why = a.processor != b.processor ? "a block is written by one processor only"
+                        : a.exclusive ? "task '" + a.name + "' is exclusive" : "task '" + b.name + "' is exclusive";
+      if (!msg.empty()) msg += "\n";
+      msg += (new_file.empty() ? std::string() : new_file + ": error: ") + "I/O block " +
+             block_name(c.area, c.block, opt.block_size) + " is written by " + who(a) + " and by " + who(b) + "; " + why;
+      const auto& mine = c.first == only_task ? c.first_writes : c.second_writes;
+      if (only_task != SIZE_MAX && !mine.empty()) msg += " (the new image writes " + point_name(mine[0].area, mine[0].index) + ")";
+    }
+    if (!msg.empty()) throw std::runtime_error(msg);
+  }
+
+  // ---- state changes (all under glock)
+  void fault(const std::string& msg) {
+    {
+      std::lock_guard<ImageLock> g(glock);
+      if (state.load() == State::Fault) return;
+      state.store(State::Fault);
+      fault_msg = msg;
+      clear_shared_outputs(global.data(), glayout);
+      io->safe_outputs(global.data());
+      io->state_changed(State::Fault);
+    }
+    log(msg);
+    std::lock_guard<std::mutex> l(mu);
+    cv.notify_all();
+  }
+
+  void clear_nonretentive_shared() {
+    // A warm restart: Y, M, WY and the non-retentive part of K start at
+    // 0; the inputs keep what the field says.
+    std::vector<uint8_t> keep;
+    for (const RetentiveRange& r : global_ranges) {
+      uint32_t off = glayout.addr(r.area, r.first), n = r.count * glayout.elem_size(r.area);
+      keep.insert(keep.end(), global.begin() + off, global.begin() + off + n);
+    }
+    for (Area a : {Area::Y, Area::M, Area::K, Area::WY})
+      std::memset(global.data() + glayout.offset[int(a)], 0, glayout.count[int(a)] * glayout.elem_size(a));
+    size_t k = 0;
+    for (const RetentiveRange& r : global_ranges) {
+      uint32_t off = glayout.addr(r.area, r.first), n = r.count * glayout.elem_size(r.area);
+      std::memcpy(global.data() + off, keep.data() + k, n);
+      k += n;
+    }
+  }
+
+  // ---- the task thread
+  void warm_restart(Task& t) {
+    Prog& p = *t.prog;
+    size_t k = 0;
+    for (const Run& r : p.private_retain) std::memcpy(t.retain_tmp.data() + k, t.mem.data() + r.offset, r.size), k += r.size;
+    std::fill(t.mem.begin(), t.mem.end(), 0);
+    k = 0;
+    for (const Run& r : p.private_retain) std::memcpy(t.mem.data() + r.offset, t.retain_tmp.data() + k, r.size), k += r.size;
+    install_call_table(t.mem.data());
+    t.first = true;
+    t.carry_ns = 0;
+    t.scans.store(0);
+  }
+
+  void service(Task& t) {
+    if (!t.has_req.load(std::memory_order_acquire)) return;
+    std::vector<std::function<void()>> rs;
+    {
+      std::lock_guard<std::mutex> l(t.req_mu);
+      rs.swap(t.reqs);
+      t.has_req.store(false, std::memory_order_relaxed);
+    }
+    for (auto& f : rs) f();
+  }
+
+  void set_rt_priority(Task& t) {
+    if (!opt.rt) return;
+    sched_param sp{};
+    sp.sched_priority = std::clamp(80 - int(t.spec.priority), 1, 80);
+    int e = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);
+    if (e != 0 && !warned_rt.exchange(true))
+      log("ldrun: warning: cannot use SCHED_FIFO (" + std::string(std::strerror(e)) +
+          "); tasks run under the normal scheduler");
+  }
+
+  void task_main(size_t ti) {
+    Task& t = *tasks[ti];
+    set_rt_priority(t);
+    const int64_t period = int64_t(t.spec.period_us) * 1000;
+    bool idle = true;
+    while (!stopping.load()) {
+      State s = state.load();
+      if (s != State::Run || t.finished.load()) {
+        // STOP, FAULT or done: serve requests, wait for RUN.
+        std::unique_lock<std::mutex> l(t.req_mu);
+        t.req_cv.wait_for(l, std::chrono::milliseconds(50), [&] {
+          return t.has_req.load() || stopping.load() || (state.load() == State::Run && !t.finished.load());
+        });
+        l.unlock();
+        service(t);
+        idle = true;
+        continue;
+      }
+      if (idle) {
+        t.release = now_ns();  // a new time grid from RUN on
+        idle = false;
+      }
+      if (!opt.free_run) sleep_until(t.release);
+      const int64_t start = now_ns();
+      service(t);  // online download, probes: at the scan boundary, never mid-scan
+      if (state.load() != State::Run || stopping.load()) continue;
+      const uint64_t ep = epoch.load();
+      if (ep != t.epoch) warm_restart(t), t.epoch = ep;
+      Prog& p = *t.prog;
+      uint8_t* mem = t.mem.data();
+      const int64_t begin = now_ns();
+      t.scan_begin.store(begin);
+
+      // dt: the elapsed time (or the period) in whole ms, the rest carried.
+      int64_t elapsed = (t.first || opt.clock == Options::Clock::Virtual) ? period : start - t.last_start;
+      t.carry_ns += elapsed;
+      int64_t dt_ms = std::min<int64_t>(t.carry_ns / 1000000, INT32_MAX);
+      t.carry_ns -= dt_ms * 1000000;
+      const uint64_t scan_no = t.scans.load() + 1;
+
+      bool published = false;
+      {
+        std::lock_guard<ImageLock> g(glock);
+        if (state.load() == State::Run && epoch.load() == t.epoch) {
+          io->read_inputs(global.data(), ScanContext{ti, scan_no, p.input_runs});
+          for (const Run& r : p.in_runs) std::memcpy(mem + r.offset, global.data() + r.offset, r.size);
+        }
+      }
+      size_t k = 0;
+      for (const Run& r : p.out_runs) std::memcpy(t.snapshot.data() + k, mem + r.offset, r.size), k += r.size;
+      std::optional<int32_t> dt;
+      io->before_scan(ScanContext{ti, scan_no, {}}, mem, dt);
+      int32_t dtv = dt ? *dt : int32_t(dt_ms);
+      std::memcpy(mem + kSysDt, &dtv, 4);
+      mem[t.prog->image.layout.addr(Area::S, kBitFirstScan)] = t.first ? 1 : 0;
+
+      p.engine->scan(mem);
+
+      uint32_t n32 = uint32_t(scan_no);
+      std::memcpy(mem + kSysScan, &n32, 4);
+      {
+        std::lock_guard<ImageLock> g(glock);
+        if (state.load() == State::Run && epoch.load() == t.epoch) {
+          // Changed bytes only: another task on this processor may write
+          // other points of a block this task writes.
+          size_t j = 0;
+          for (const Run& r : p.out_runs) {
+            const uint8_t* now = mem + r.offset;
+            const uint8_t* was = t.snapshot.data() + j;
+            uint8_t* gl = global.data() + r.offset;
+            for (uint32_t b = 0; b < r.size; b++)
+              if (now[b] != was[b]) gl[b] = now[b];
+            j += r.size;
+          }
+          size_t q = 0;
+          for (const Run& r : p.private_retain) std::memcpy(t.retain_shadow.data() + q, mem + r.offset, r.size), q += r.size;
+          io->write_outputs(global.data(), ScanContext{ti, scan_no, p.output_runs});
+          io->after_scan(ScanContext{ti, scan_no, {}}, mem, global.data());
+          published = true;
+        }
+      }
+      const int64_t end = now_ns();
+      t.scan_begin.store(0);
+      t.first = false;
+      if (!published) continue;  // stopped or faulted meanwhile: this scan does not count
+      t.scans.store(scan_no);
+      t.total_scans.fetch_add(1);
+      const int64_t took = end - begin;
+      t.last_scan_ns.store(took);
+      if (took > t.max_scan_ns.load()) t.max_scan_ns.store(took);
+      if (t.stats_mu.try_lock()) {
+        t.scan_ring.add(took);
+        if (!opt.free_run) {
+          t.wake_ring.add(start - t.release);
+          if (t.last_start) t.jitter_ring.add(start - t.last_start - period);
+        }
+        t.stats_mu.unlock();
+      }
+      t.last_start = start;
+      if (t.watchdog_us && took > int64_t(t.watchdog_us) * 1000) {
+        fault("ldrun: watchdog: task '" + t.spec.name + "' scan " + std::to_string(scan_no) + " took " +
+              format_us(double(took) / 1000) + ", limit " + format_us(t.watchdog_us) +
+              "; outputs driven to the safe state (all Y off, WY 0); the runtime is in FAULT");
+      }
+      if (!opt.free_run) {
+        if (end > t.release + period) t.overruns.fetch_add(1);
+        t.release += period;
+        if (t.release <= end) {  // late: skip the releases already past
+          int64_t missed = (end - t.release) / period + 1;
+          t.release += missed * period;
+          t.skipped.fetch_add(uint64_t(missed));
+        }
+      }
+      if (opt.scans >= 0 && t.scans.load() >= uint64_t(opt.scans)) {
+        t.finished.store(true);
+        std::lock_guard<std::mutex> l(mu);
+        cv.notify_all();
+      }
+    }
+  }
+
+  // ---- the watchdog monitor: catches a scan that does not end
+  void monitor_main() {
+    uint32_t lim = UINT32_MAX;
+    for (auto& t : tasks)
+      if (t->watchdog_us) lim = std::min(lim, t->watchdog_us);
+    if (lim == UINT32_MAX) return;
+    int64_t tick = std::clamp<int64_t>(int64_t(lim) * 1000 / 4, 1000000, 50000000);
+    while (!stopping.load()) {
+      {
+        std::unique_lock<std::mutex> l(mu);
+        cv.wait_for(l, std::chrono::nanoseconds(tick), [&] { return stopping.load(); });
+      }
+      int64_t now = now_ns();
+      for (auto& t : tasks) {
+        int64_t b = t->scan_begin.load();
+        if (b && t->watchdog_us && now - b > int64_t(t->watchdog_us) * 1000 && state.load() == State::Run)
+          fault("ldrun: watchdog: task '" + t->spec.name + "' has been in its scan for " + format_us(double(now - b) / 1000) +
+                ", limit " + format_us(t->watchdog_us) +
+                "; outputs driven to the safe state (all Y off, WY 0); the runtime is in FAULT");
+      }
+    }
+  }
+
+  // ---- requests at a task's scan boundary
+  // Runs f on the task's thread at its next boundary; false on timeout
+  // (f then never runs).
+  bool at_boundary(Task& t, std::function<void()> f, int64_t timeout_ms) {
+    struct Shared {
+      std::atomic<int> phase{0};  // 0 queued, 1 taken, 2 cancelled
+      std::promise<void> done;
+    };
+    auto sh = std::make_shared<Shared>();
+    std::future<void> fut = sh->done.get_future();
+    {
+      std::lock_guard<std::mutex> l(t.req_mu);
+      t.reqs.push_back([sh, f = std::move(f)] {
+        int expect = 0;
+        if (!sh->phase.compare_exchange_strong(expect, 1)) return;
+        f();
+        sh->done.set_value();
+      });
+      t.has_req.store(true, std::memory_order_release);
+    }
+    t.req_cv.notify_all();
+    if (fut.wait_for(std::chrono::milliseconds(timeout_ms)) == std::future_status::ready) return true;
+    int expect = 0;
+    if (sh->phase.compare_exchange_strong(expect, 2)) return false;
+    fut.wait();  // taken just now: it finishes soon
+    return true;
+  }
+
+  // ---- retentive memory
+  std::vector<RetainRecord> snapshot_retain() {
+    std::vector<RetainRecord> recs;
+    std::lock_guard<ImageLock> g(glock);
+    for (const RetentiveRange& r : global_ranges) {
+      uint32_t off = glayout.addr(r.area, r.first), n = r.count * glayout.elem_size(r.area);
+      recs.push_back(RetainRecord{"", r.area, r.first, r.count, {global.begin() + off, global.begin() + off + n}});
+    }
+    for (auto& t : tasks) {
+      size_t k = 0;
+      for (const RetentiveRange& r : t->prog->private_ranges) {
+        uint32_t n = r.count * t->prog->image.layout.elem_size(r.area);
+        recs.push_back(RetainRecord{t->spec.name, r.area, r.first, r.count,
+                                    {t->retain_shadow.begin() + k, t->retain_shadow.begin() + k + n}});
+        k += n;
+      }
+    }
+    return recs;
+  }
+
+  std::string save(bool force) {
+    if (opt.retain_file.empty()) return "";
+    std::lock_guard<std::mutex> l(save_mu);
+    std::vector<RetainRecord> recs = snapshot_retain();
+    if (!force && recs == last_saved) return "";
+    RetainSnapshot s;
+    s.sequence = ++retain_seq;
+    timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    s.saved_ns = uint64_t(ts.tv_sec) * 1000000000 + uint64_t(ts.tv_nsec);
+    s.records = recs;
+    std::string err = write_retain_file(opt.retain_file, s);
+    if (err.empty()) last_saved = std::move(recs);
+    return err;
+  }
+
+  void saver_main() {
+    while (true) {
+      {
+        std::unique_lock<std::mutex> l(mu);
+        cv.wait_for(l, std::chrono::microseconds(opt.retain_every_us), [&] { return stopping.load(); });
+      }
+      if (stopping.load()) return;
+      if (state.load() != State::Run) continue;
+      std::string e = save(false);
+      if (!e.empty()) log("ldrun: warning: retentive save failed: " + e);
+    }
+  }
+
+  void restore_retain() {
+    if (opt.retain_file.empty()) return;
+    FILE* f = std::fopen(opt.retain_file.c_str(), "rb");
+    if (!f) {
+      if (errno != ENOENT)
+        throw std::runtime_error(opt.retain_file + ": error: cannot open the retentive file: " + std::strerror(errno));
+      log("ldrun: " + opt.retain_file + ": no retentive file yet; retentive memory starts cleared");
+      return;
+    }
+    std::vector<uint8_t> bytes;
+    uint8_t buf[65536];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) bytes.insert(bytes.end(), buf, buf + n);
+    std::fclose(f);
+    if (opt.cold) {
+      log("ldrun: " + opt.retain_file + ": cold start as asked (--cold): retentive memory starts cleared");
+      return;
+    }
+    RetainSnapshot s;
+    try {
+      s = decode_retain(bytes, opt.retain_file);
+    } catch (std::exception& e) {
+      throw std::runtime_error(std::string(e.what()) +
+                               "; refusing to start (--cold starts with cleared retentive memory)");
+    }
+    retain_seq = s.sequence;
+    size_t applied = 0;
+    for (const RetainRecord& r : s.records) {
+      bool done = false;
+      if (r.scope.empty()) {
+        for (const RetentiveRange& g : global_ranges)
+          if (g.area == r.area && g.first == r.first && g.count == r.count) {
+            std::memcpy(global.data() + glayout.addr(r.area, r.first), r.bytes.data(), r.bytes.size());
+            done = true;
+          }
+      } else {
+        for (auto& t : tasks) {
+          if (t->spec.name != r.scope) continue;
+          size_t k = 0;
+          for (const RetentiveRange& g : t->prog->private_ranges) {
+            uint32_t nb = g.count * t->prog->image.layout.elem_size(g.area);
+            if (g.area == r.area && g.first == r.first && g.count == r.count) {
+              std::memcpy(t->mem.data() + t->prog->image.layout.addr(r.area, r.first), r.bytes.data(), nb);
+              std::memcpy(t->retain_shadow.data() + k, r.bytes.data(), nb);
+              done = true;
+            }
+            k += nb;
+          }
+        }
+      }
+      if (done) applied++;
+      else
+        log("ldrun: warning: " + opt.retain_file + ": record " + (r.scope.empty() ? "global" : r.scope) + " " +
+            area_name(r.area) + "[" + std::to_string(r.first) + ".." + std::to_string(r.first + r.count - 1) +
+            "] matches no retentive range of the running configuration; ignored");
+    }
+    last_saved = snapshot_retain();
+    log("ldrun: " + opt.retain_file + ": retentive memory restored (save " + std::to_string(s.sequence) + ", " +
+        std::to_string(applied) + " record" + (applied == 1 ? "" : "s") + ")");
+  }
+
+  void add_global_ranges(const std::vector<RetentiveRange>& rs) {
+    // Union per shared area, kept as disjoint sorted ranges.
+    std::map<int, std::vector<uint8_t>> mask;
+    for (const auto& lists : {global_ranges, rs})
+      for (const RetentiveRange& r : lists) {
+        auto& m = mask[int(r.area)];
+        m.resize(glayout.count[int(r.area)]);
+        std::fill(m.begin() + r.first, m.begin() + r.first + r.count, 1);
+      }
+    global_ranges.clear();
+    for (auto& [a, m] : mask)
+      for (uint32_t i = 0; i < m.size();) {
+        if (!m[i]) { i++; continue; }
+        uint32_t j = i;
+        while (j < m.size() && m[j]) j++;
+        global_ranges.push_back(RetentiveRange{Area(a), i, j - i});
+        i = j;
+      }
+  }
+
+  void install(Task& t, std::unique_ptr<Prog> p) {
+    t.mem.assign(p->image.layout.size, 0);
+    install_call_table(t.mem.data());
+    t.snapshot.assign(p->out_bytes, 0);
+    t.retain_shadow.assign(p->retain_bytes, 0);
+    t.retain_tmp.assign(p->retain_bytes, 0);
+    t.ctl_file = p->file;
+    t.ctl_accesses = p->accesses;
+    t.ctl_edges = edge_uses(p->image.il);
+    t.ctl_aliases = p->image.aliases;
+    t.ctl_image.lines = p->image.lines;
+    t.ctl_image.source = p->image.source;
+    t.prog = std::move(p);
+  }
+};
+
+// ---------------------------------------------------------------- Runtime
+
+Runtime::Runtime(std::vector<TaskSpec> specs, Options opt, EngineFactory engines, std::unique_ptr<IoDriver> io)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.opt = std::move(opt);
+  m.engines = std::move(engines);
+  m.io = io ? std::move(io) : make_null_driver();
+  if (specs.empty()) throw std::runtime_error("no task to run");
+  if (m.opt.block_size < 16 || m.opt.block_size % 16 || m.opt.block_size > kMaxBlockSize)
+    throw std::runtime_error("bad I/O block size " + std::to_string(m.opt.block_size));
+  m.global.assign(m.glayout.size, 0);
+  for (TaskSpec& s : specs) {
+    auto t = std::make_unique<Task>();
+    if (s.period_us == 0) throw std::runtime_error("task '" + s.name + "': the period must be above 0");
+    if (s.image.config) {
+      const IoConfig& c = *s.image.config;
+      if (c.block_size != m.opt.block_size)
+        throw std::runtime_error(s.file + ": error: the image was configured with I/O blocks of " +
+                                 std::to_string(c.block_size) + " points, the runtime uses " +
+                                 std::to_string(m.opt.block_size) + " (rebuild with ldc --project)");
+      if (c.processor != s.processor)
+        throw std::runtime_error(s.file + ": error: the image was configured for processor " + std::to_string(c.processor) +
+                                 ", task '" + s.name + "' runs on processor " + std::to_string(s.processor));
+    }
+    for (auto& o : m.tasks)
+      if (o->spec.name == s.name) throw std::runtime_error("two tasks named '" + s.name + "'");
+    Image img = std::move(s.image);
+    s.image = Image{};
+    t->spec = s;
+    t->watchdog_us = s.watchdog_us ? s.watchdog_us : m.opt.watchdog_us;
+    m.install(*t, make_prog(std::move(img), s.file, m.opt.block_size, m.engines));
+    m.tasks.push_back(std::move(t));
+  }
+  std::vector<const std::vector<IoAccess>*> acc;
+  for (auto& t : m.tasks) acc.push_back(&t->ctl_accesses);
+  m.check_conflicts(acc, SIZE_MAX, "");
+  for (auto& t : m.tasks) m.add_global_ranges(t->prog->shared_ranges);
+  m.io->attach(m.global.data(), m.glayout, m.opt.block_size);
+  m.restore_retain();
+}
+
+Runtime::~Runtime() {
+  try {
+    shutdown();
+  } catch (...) {
+  }
+}
+
+void Runtime::start() {
+  Impl& m = *impl_;
+  if (m.started) return;
+  m.started = true;
+  if (m.opt.rt) {
+    if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
+      m.log(std::string("ldrun: warning: mlockall failed (") + std::strerror(errno) + "); memory may be paged");
+  }
+  {
+    std::lock_guard<ImageLock> g(m.glock);
+    m.state.store(m.opt.start_stopped ? State::Stop : State::Run);
+    m.io->state_changed(m.state.load());
+  }
+  for (size_t i = 0; i < m.tasks.size(); i++) m.tasks[i]->th = std::thread([&m, i] { m.task_main(i); });
+  m.monitor = std::thread([&m] { m.monitor_main(); });
+  if (!m.opt.retain_file.empty()) m.saver = std::thread([&m] { m.saver_main(); });
+}
+
+void Runtime::run() {
+  Impl& m = *impl_;
+  {
+    std::lock_guard<ImageLock> g(m.glock);
+    if (m.state.load() == State::Run) return;
+    m.clear_nonretentive_shared();
+    m.fault_msg.clear();
+    for (auto& t : m.tasks) t->finished.store(false);
+    m.epoch.fetch_add(1);
+    m.state.store(State::Run);
+    m.io->state_changed(State::Run);
+  }
+  for (auto& t : m.tasks) t->req_cv.notify_all();
+}
+
+void Runtime::stop() {
+  Impl& m = *impl_;
+  bool was_run = false;
+  {
+    std::lock_guard<ImageLock> g(m.glock);
+    if (m.state.load() == State::Run) {
+      was_run = true;
+      m.state.store(State::Stop);
+      clear_shared_outputs(m.global.data(), m.glayout);
+      m.io->safe_outputs(m.global.data());
+      m.io->state_changed(State::Stop);
+    }
+  }
+  if (was_run) {
+    std::string e = m.save(false);
+    if (!e.empty()) m.log("ldrun: warning: retentive save failed: " + e);
+  }
+}
+
+void Runtime::shutdown() {
+  Impl& m = *impl_;
+  if (m.shut) return;
+  m.shut = true;
+  State before = m.state.load();
+  if (before == State::Run) stop();
+  m.stopping.store(true);
+  {
+    std::lock_guard<std::mutex> l(m.mu);
+    m.cv.notify_all();
+  }
+  for (auto& t : m.tasks) {
+    t->req_cv.notify_all();
+    if (t->th.joinable()) t->th.join();
+  }
+  if (m.monitor.joinable()) m.monitor.join();
+  if (m.saver.joinable()) m.saver.join();
+  if (m.started && before != State::Run) {
+    std::string e = m.save(false);
+    if (!e.empty()) m.log("ldrun: warning: retentive save failed: " + e);
+  }
+  {
+    std::lock_guard<ImageLock> g(m.glock);
+    clear_shared_outputs(m.global.data(), m.glayout);
+    m.io->safe_outputs(m.global.data());
+  }
+  m.io->detach();
+}
+
+State Runtime::state() const { return impl_->state.load(); }
+
+std::string Runtime::fault_message() const {
+  std::lock_guard<ImageLock> g(impl_->glock);
+  return impl_->fault_msg;
+}
+
+bool Runtime::wait_scans(uint64_t n, int64_t timeout_ms) {
+  Impl& m = *impl_;
+  std::vector<uint64_t> goal;
+  for (auto& t : m.tasks) goal.push_back(t->total_scans.load() + n);
+  auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  while (true) {
+    bool all = true;
+    for (size_t i = 0; i < m.tasks.size(); i++) {
+      Task& t = *m.tasks[i];
+      bool scanning = m.state.load() == State::Run && !t.finished.load();
+      if (scanning && t.total_scans.load() < goal[i]) all = false;
+    }
+    if (all) return true;
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+}
+
+bool Runtime::wait_finished(int64_t timeout_ms, bool fault_ends) {
+  Impl& m = *impl_;
+  std::unique_lock<std::mutex> l(m.mu);
+  auto done = [&] {
+    if (m.quit || (fault_ends && m.state.load() == State::Fault)) return true;
+    if (m.opt.scans < 0) return false;
+    for (auto& t : m.tasks)
+      if (!t->finished.load()) return false;
+    return true;
+  };
+  if (timeout_ms < 0) {
+    m.cv.wait(l, done);
+    return true;
+  }
+  return m.cv.wait_for(l, std::chrono::milliseconds(timeout_ms), done);
+}
+
+void Runtime::request_quit() {
+  std::lock_guard<std::mutex> l(impl_->mu);
+  impl_->quit = true;
+  impl_->cv.notify_all();
+}
+
+bool Runtime::quit_requested() const {
+  std::lock_guard<std::mutex> l(impl_->mu);
+  return impl_->quit;
+}
+
+size_t Runtime::task_count() const { return impl_->tasks.size(); }
+const std::string& Runtime::task_name(size_t i) const { return impl_->tasks.at(i)->spec.name; }
+size_t Runtime::find_task(const std::string& name) const {
+  for (size_t i = 0; i < impl_->tasks.size(); i++)
+    if (impl_->tasks[i]->spec.name == name) return i;
+  return SIZE_MAX;
+}
+
+SwapReport Runtime::replace(const std::string& task, Image img, const std::string& file, int64_t timeout_ms) {
+  Impl& m = *impl_;
+  std::lock_guard<std::mutex> cl(m.ctl_mu);
+  size_t ti = find_task(task);
+  if (ti == SIZE_MAX) throw std::runtime_error("no task named '" + task + "'");
+  Task& t = *m.tasks[ti];
+  auto refuse = [&](const std::string& why) {
+    return std::runtime_error(file + ": refused for task '" + task + "': " + why + "; task '" + task +
+                              "' keeps running its current image");
+  };
+  if (img.config) {
+    if (img.config->block_size != m.opt.block_size)
+      throw refuse("configured with I/O blocks of " + std::to_string(img.config->block_size) + " points, the runtime uses " +
+                   std::to_string(m.opt.block_size));
+    if (img.config->processor != t.spec.processor)
+      throw refuse("configured for processor " + std::to_string(img.config->processor) + ", the task runs on processor " +
+                   std::to_string(t.spec.processor));
+  }
+  // Edge memory is kept across the switch: a slot must mean the same in both.
+  std::map<uint32_t, EdgeUse> edges = edge_uses(img.il);
+  for (auto& [slot, use] : edges) {
+    auto it = t.ctl_edges.find(slot);
+    if (it == t.ctl_edges.end() || it->second.what == use.what) continue;
+    int lo = line_of(t.ctl_image, it->second.il_offset), ln = line_of(img, use.il_offset);
+    throw refuse("its memory layout would corrupt state: edge slot E" + std::to_string(slot) + " holds " + it->second.what +
+                 " in the running program" + (lo ? " (line " + std::to_string(lo) + ")" : std::string()) + " but " +
+                 use.what + " in the new one" + (ln ? " (line " + std::to_string(ln) + ")" : std::string()) +
+                 "; keep edge contacts and counters in the same order, or stop and restart");
+  }
+  std::vector<IoAccess> acc = io_accesses(img.il);
+  {
+    std::vector<const std::vector<IoAccess>*> all;
+    for (auto& o : m.tasks) all.push_back(o.get() == &t ? &acc : &o->ctl_accesses);
+    try {
+      m.check_conflicts(all, ti, "");
+    } catch (std::exception& e) {
+      throw refuse(e.what());
+    }
+  }
+  std::vector<RetentiveRange> shared_ranges;
+  std::unique_ptr<Prog> np;
+  try {
+    np = make_prog(std::move(img), file, m.opt.block_size, m.engines);
+  } catch (std::exception& e) {
+    throw refuse(e.what());
+  }
+  // Everything the switch needs is prepared here, off the task's thread.
+  struct Prepared {
+    std::unique_ptr<Prog> prog;
+    std::vector<uint8_t> mem, snapshot, shadow, tmp;
+    uint64_t at_scan = 0;
+    int64_t t_done = 0, work = 0;
+  };
+  auto pr = std::make_shared<Prepared>();
+  const Layout& nl = np->image.layout;
+  pr->mem.assign(nl.size, 0);
+  pr->snapshot.assign(np->out_bytes, 0);
+  pr->shadow.assign(np->retain_bytes, 0);
+  pr->tmp.assign(np->retain_bytes, 0);
+  pr->prog = std::move(np);
+  std::vector<RetentiveRange> new_shared = pr->prog->shared_ranges;
+  std::vector<IoAccess> new_acc = pr->prog->accesses;
+  std::map<uint32_t, EdgeUse> new_edges = edge_uses(pr->prog->image.il);
+  std::vector<LineEntry> new_lines = pr->prog->image.lines;
+  std::vector<Alias> new_aliases = pr->prog->image.aliases;
+  std::string new_source = pr->prog->image.source;
+  const int64_t t0 = now_ns();
+  bool ok = m.at_boundary(
+      t,
+      [&m, &t, pr] {
+        const int64_t w0 = now_ns();
+        Prog& op = *t.prog;
+        const Layout &ol = op.image.layout, &nl2 = pr->prog->image.layout;
+        // Every area but the edge memory sits at the same offset in both.
+        uint32_t e_old = ol.offset[int(Area::E)], e_new = nl2.offset[int(Area::E)];
+        std::memcpy(pr->mem.data(), t.mem.data(), std::min(e_old, e_new));
+        std::memcpy(pr->mem.data() + e_new, t.mem.data() + e_old,
+                    std::min(ol.count[int(Area::E)], nl2.count[int(Area::E)]));
+        size_t k = 0;
+        for (const Run& r : pr->prog->private_retain)
+          std::memcpy(pr->shadow.data() + k, pr->mem.data() + r.offset, r.size), k += r.size;
+        {
+          // The saver reads the program's retentive ranges and shadow under the image lock.
+          std::lock_guard<ImageLock> g(m.glock);
+          std::swap(t.mem, pr->mem);
+          std::swap(t.snapshot, pr->snapshot);
+          std::swap(t.retain_shadow, pr->shadow);
+          std::swap(t.retain_tmp, pr->tmp);
+          std::swap(t.prog, pr->prog);  // the old program leaves with pr, freed by the caller
+        }
+        pr->at_scan = t.scans.load() + 1;
+        pr->t_done = now_ns();
+        pr->work = pr->t_done - w0;
+      },
+      timeout_ms);
+  if (!ok)
+    throw refuse("the task did not reach a scan boundary within " + std::to_string(timeout_ms) + " ms");
+  t.ctl_file = file;
+  t.ctl_accesses = std::move(new_acc);
+  t.ctl_edges = std::move(new_edges);
+  t.ctl_image.lines = std::move(new_lines);
+  t.ctl_image.source = std::move(new_source);
+  t.ctl_aliases = std::move(new_aliases);
+  {
+    std::lock_guard<ImageLock> g(m.glock);
+    m.add_global_ranges(new_shared);
+  }
+  SwapReport rep;
+  rep.task = task;
+  rep.at_scan = pr->at_scan;
+  rep.latency_us = double(pr->t_done - t0) / 1000;
+  rep.work_us = double(pr->work) / 1000;
+  pr.reset();  // the old engine and memory are released here, not on the task's thread
+  return rep;
+}
+
+namespace {
+
+std::string format_value(const uint8_t* base, const Layout& L, const Probe& p) {
+  const uint8_t* at = base + L.addr(p.area, p.index);
+  if (area_is_bit(p.area)) return *at ? "1" : "0";
+  if (p.area == Area::F) {
+    float f;
+    std::memcpy(&f, at, 4);
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%g", double(f));
+    return buf;
+  }
+  int32_t v;
+  std::memcpy(&v, at, 4);
+  return std::to_string(v);
+}
+
+}  // namespace
+
+std::string Runtime::get(const std::string& device, int64_t timeout_ms) {
+  Impl& m = *impl_;
+  std::lock_guard<std::mutex> cl(m.ctl_mu);
+  std::string dev = device;
+  size_t ti = 0;
+  if (size_t dot = device.find('.'); dot != std::string::npos && device[0] != '%') {
+    ti = find_task(device.substr(0, dot));
+    if (ti == SIZE_MAX) throw std::runtime_error("no task named '" + device.substr(0, dot) + "'");
+    dev = device.substr(dot + 1);
+  }
+  Task& t = *m.tasks[ti];
+  Probe p = resolve_probe(dev, t.ctl_aliases);
+  if (area_is_shared(p.area)) {
+    std::lock_guard<ImageLock> g(m.glock);
+    return format_value(m.global.data(), m.glayout, p);
+  }
+  if (m.tasks.size() > 1 && device.find('.') == std::string::npos)
+    throw std::runtime_error("'" + dev + "' is private to each task: name one, e.g. " + t.spec.name + "." + dev);
+  std::string out;
+  if (!m.at_boundary(t, [&] { out = format_value(t.mem.data(), t.prog->image.layout, p); }, timeout_ms))
+    throw std::runtime_error("task '" + t.spec.name + "' did not reach a scan boundary in time");
+  return out;
+}
+
+void Runtime::set(const std::string& device, const std::string& value) {
+  Impl& m = *impl_;
+  std::lock_guard<std::mutex> cl(m.ctl_mu);
+  Probe p = resolve_probe(device, m.tasks[0]->ctl_aliases);
+  if (p.area != Area::X && p.area != Area::WX && p.area != Area::M && p.area != Area::K)
+    throw std::runtime_error("'" + device + "' cannot be set: set writes inputs (X, WX) and global relays (M, K)");
+  char* end = nullptr;
+  errno = 0;
+  long long v = value.size() > 2 && value[0] == '0' && (value[1] == 'x' || value[1] == 'X')
+                    ? std::strtoll(value.c_str() + 2, &end, 16)
+                    : std::strtoll(value.c_str(), &end, 10);
+  if (value.empty() || *end || errno) throw std::runtime_error("bad value '" + value + "'");
+  if (area_is_bit(p.area) && v != 0 && v != 1) throw std::runtime_error("a bit is 0 or 1, not '" + value + "'");
+  if (v < INT32_MIN || v > INT32_MAX) throw std::runtime_error("value out of the INT32 range: '" + value + "'");
+  std::lock_guard<ImageLock> g(m.glock);
+  uint8_t* at = m.global.data() + m.glayout.addr(p.area, p.index);
+  if (area_is_bit(p.area)) *at = uint8_t(v);
+  else {
+    int32_t w = int32_t(v);
+    std::memcpy(at, &w, 4);
+  }
+}
+
+std::string Runtime::status() const {
+  Impl& m = *impl_;
+  std::string s = std::string("state ") + state_name(m.state.load());
+  for (auto& t : m.tasks) {
+    s += "; task " + t->spec.name + ": " + std::to_string(t->total_scans.load()) + " scans, " +
+         std::to_string(t->overruns.load()) + " overruns, scan " + format_us(double(t->last_scan_ns.load()) / 1000) +
+         " (max " + format_us(double(t->max_scan_ns.load()) / 1000) + ")";
+  }
+  if (m.state.load() == State::Fault) s += "; fault: " + fault_message();
+  return s;
+}
+
+std::vector<TaskStats> Runtime::stats() const {
+  std::vector<TaskStats> out;
+  for (auto& t : impl_->tasks) {
+    TaskStats s;
+    s.task = t->spec.name;
+    s.period_us = t->spec.period_us;
+    s.scans = t->total_scans.load();
+    s.overruns = t->overruns.load();
+    s.skipped_periods = t->skipped.load();
+    std::lock_guard<std::mutex> l(t->stats_mu);
+    s.scan_us = t->scan_ring.quantiles();
+    s.jitter_us = t->jitter_ring.quantiles();
+    s.wake_us = t->wake_ring.quantiles();
+    out.push_back(s);
+  }
+  return out;
+}
+
+std::string Runtime::format_stats(const std::vector<TaskStats>& v) {
+  std::string s;
+  char buf[256];
+  auto q = [&](const char* what, const Quantiles& x) {
+    if (!x.n) return;
+    std::snprintf(buf, sizeof buf, "  %-17s min %9.1f  median %9.1f  p99 %9.1f  max %9.1f  (us, last %zu samples)\n", what,
+                  x.min, x.median, x.p99, x.max, std::min<size_t>(x.n, size_t(1) << 16));
+    s += buf;
+  };
+  for (const TaskStats& t : v) {
+    std::snprintf(buf, sizeof buf, "task %s: period %u us, %llu scans, %llu overruns, %llu skipped periods\n", t.task.c_str(),
+                  t.period_us, (unsigned long long)t.scans, (unsigned long long)t.overruns,
+                  (unsigned long long)t.skipped_periods);
+    s += buf;
+    q("scan time", t.scan_us);
+    q("period jitter", t.jitter_us);
+    q("wake-up latency", t.wake_us);
+  }
+  return s;
+}
+
+std::string Runtime::save_retentive() {
+  if (impl_->opt.retain_file.empty()) return "no retentive file (--retain FILE)";
+  return impl_->save(true);
+}
+
+}  // namespace ldc::plc
