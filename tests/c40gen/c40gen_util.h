@@ -1,0 +1,38 @@
+// tests/c40gen/c40gen_util.h -- engines and checks shared by the C40 tests.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "backend-c40sim/c40model.h"
+#include "ir/ir.h"
+#include "runtime/runtime.h"
+#include "tests/diff/harness.h"
+
+namespace ldc::c40gen::test {
+
+// Engines for a compiled program (harness.h EngineFactory shape).
+std::unique_ptr<Engine> make_native(const Program& p);  // generate_c40 + assemble + make_c40sim_engine
+std::unique_ptr<Engine> make_interp(const Program& p);  // make_c40interp_engine over the binary IL
+std::unique_ptr<Engine> make_model(const Program& p);   // C40Model, Mode::C40
+// C40Model in Mode::Check; its report is written to *report after every scan.
+diff::EngineFactory make_check(CheckReport* report);
+
+// The three comparisons of docs/c40.md, "How the C40 engines are tested",
+// each after every scan of the trace:
+//   native   == model (C40)     byte for byte
+//   interp   == model (C40)     byte for byte
+//   model (Check) == reference  byte for byte, and no step outside the bound
+struct Verdict {
+  diff::Outcome native, interp, check;
+  CheckReport report;
+  int scans = 0;
+  bool ok() const;
+  std::string text() const;  // what failed, for messages
+  // The first failure as one Outcome (a precision violation is a Differ at
+  // scan 0 with the message), for the minimizer.
+  diff::Outcome first_failure() const;
+};
+Verdict check_c40(const std::string& ld, const std::string& csv);
+
+}  // namespace ldc::c40gen::test
