@@ -1,5 +1,8 @@
 // ldc -- the ladder compiler.  The pipeline, one pass after another:
 //   source --parse--> rung trees --lower--> IL --(backend, assembler, loader)--> image
+#include <sys/stat.h>
+
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -10,21 +13,59 @@
 using namespace ldc;
 
 static const char kUsage[] =
-    "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il|asm|listing|hex|c] [--target=x86-64|c40] [-O0|-O1|-O2]\n";
+    "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il|asm|listing|hex|c] [--target=x86-64|c40] [-O0|-O1|-O2]\n"
+    "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n";
+
+// ldc --project: compile every program of the project, run the configuration
+// system of paper 002 (refusing write conflicts) and, with -o DIR, write one
+// image per task with its 'config' section and the project file that runs them.
+static int build_project_main(const std::string& project, const std::string& outdir) {
+  try {
+    Project p = parse_project(project);
+    std::vector<BuiltTask> built = build_project(p);
+    if (outdir.empty()) {
+      std::string t = print_configuration(p, built);
+      std::fwrite(t.data(), 1, t.size(), stdout);
+      return 0;
+    }
+    if (mkdir(outdir.c_str(), 0777) != 0 && errno != EEXIST)
+      throw UserError("ldc: error: cannot create " + outdir + ": " + std::strerror(errno));
+    std::vector<std::string> files;
+    for (const BuiltTask& b : built) {
+      std::vector<uint8_t> bin = write_image(b.image);
+      files.push_back(b.spec.name + ".bin");
+      write_file_atomic(outdir + "/" + files.back(), std::string(bin.begin(), bin.end()));
+    }
+    write_file_atomic(outdir + "/" + p.name + ".ldp", print_project(p, files));
+  } catch (UserError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+  } catch (std::exception& e) {
+    std::fprintf(stderr, "ldc: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
 
 int main(int argc, char** argv) {
-  std::string input, output, emit, target = "x86-64";
+  std::string input, output, emit, target = "x86-64", project;
   int opt = 0;
   for (int i = 1; i < argc; i++) {
     std::string a = argv[i];
     if (a == "-o" && i + 1 < argc) output = argv[++i];
     else if (a.rfind("--emit=", 0) == 0) emit = a.substr(7);
     else if (a.rfind("--target=", 0) == 0) target = a.substr(9);
+    else if (a == "--project" && i + 1 < argc) project = argv[++i];
+    else if (a.rfind("--project=", 0) == 0) project = a.substr(10);
     else if (a == "-O0" || a == "-O1" || a == "-O2") opt = a[2] - '0';
     else if (a == "-h" || a == "--help") { std::fputs(kUsage, stdout); return 0; }
     else if (!a.empty() && a[0] == '-') { std::fprintf(stderr, "ldc: error: unknown option '%s'\n%s", a.c_str(), kUsage); return 1; }
     else if (input.empty()) input = a;
     else { std::fprintf(stderr, "ldc: error: more than one input file\n%s", kUsage); return 1; }
+  }
+  if (!project.empty()) {
+    if (!input.empty() || !emit.empty()) { std::fprintf(stderr, "ldc: error: --project takes no input file or --emit\n%s", kUsage); return 1; }
+    return build_project_main(project, output);
   }
   if (input.empty()) { std::fprintf(stderr, "ldc: error: no input file\n%s", kUsage); return 1; }
   try {

@@ -1,15 +1,325 @@
-// ldrun -- run a program scan by scan over an input trace and print watched devices.
+// ldrun -- run a program scan by scan over an input trace and print watched
+// devices; with --io or --project, the soft-PLC runtime (docs/runtime.md):
+// periodic scan tasks, I/O drivers, online download, retentive memory.
+#include <poll.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <string>
+#include <thread>
 
 #include "backend-c/backend_c.h"
 #include "driver/driver.h"
+#include "runtime/plc.h"
 #include "runtime/runtime.h"
 
 using namespace ldc;
 
 static const char kUsage[] =
-    "usage: ldrun FILE [--engine=native|interp|c] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms]\n";
+    "usage: ldrun FILE [--engine=native|interp|c] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms]\n"
+    "       ldrun FILE|--project P.ldp --io=stdio|shm[:/NAME]|trace|none [--period 1ms|500us] [--clock=real|virtual]\n"
+    "             [--free-run] [--rt] [--watchdog 200ms] [--retain FILE] [--retain-every 1s] [--cold] [--stop]\n"
+    "             [--control=stdin|none] [--reload] [--stats] [--out FILE] [--block 16] [--scans N]\n";
+
+namespace {
+
+// Options of the soft-PLC runtime mode.
+struct RtArgs {
+  bool on = false;
+  std::string project, io, control, clock, period, watchdog, retain, retain_every, out, block;
+  bool free_run = false, rt = false, cold = false, stop = false, stats = false, reload = false;
+};
+
+// An image for a task: an image file as it is, or a source compiled in memory.
+Image load_program(const std::string& file) {
+  if (is_image_file(file)) return load_image_file(file);
+  Compiled c = compile_source(file);
+  return make_x86_image(c.il, build_x86(c.il, file));
+}
+
+std::string stem(const std::string& path) {
+  size_t slash = path.rfind('/');
+  std::string b = slash == std::string::npos ? path : path.substr(slash + 1);
+  std::string s = b.substr(0, b.find('.'));
+  std::string n;
+  for (char c : s) n += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  return n.empty() || std::isdigit(static_cast<unsigned char>(n[0])) ? "main" : n;
+}
+
+// Reads lines from fd 0 without blocking shutdown: poll with a timeout.
+class LineReader {
+ public:
+  // 1: a line, 0: nothing yet, -1: end of input.
+  int next(std::string& line, int timeout_ms) {
+    while (true) {
+      size_t nl = buf_.find('\n');
+      if (nl != std::string::npos) {
+        line = buf_.substr(0, nl);
+        buf_.erase(0, nl + 1);
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        return 1;
+      }
+      if (eof_) {
+        if (buf_.empty()) return -1;
+        line.swap(buf_);
+        buf_.clear();
+        return 1;
+      }
+      pollfd p{0, POLLIN, 0};
+      int r = poll(&p, 1, timeout_ms);
+      if (r < 0 && errno == EINTR) continue;
+      if (r <= 0) return 0;
+      char tmp[4096];
+      ssize_t n = read(0, tmp, sizeof tmp);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) eof_ = true;
+      else buf_.append(tmp, size_t(n));
+    }
+  }
+
+ private:
+  std::string buf_;
+  bool eof_ = false;
+};
+
+int run_runtime(const std::string& input, const std::string& engine, const std::string& trace_file,
+                const std::string& watch, int scans, const RtArgs& a) {
+  using namespace ldc::plc;
+  if (engine != "native" && engine != "interp")
+    throw UserError("ldrun: error: the runtime runs --engine=native or --engine=interp, not '" + engine + "'");
+  if (!a.project.empty() && !input.empty()) throw UserError("ldrun: error: give a program or --project, not both");
+  if (a.project.empty() && input.empty()) throw UserError(std::string("ldrun: error: no program\n") + kUsage);
+  Options opt;
+  opt.log = [](const std::string& m) { std::fprintf(stderr, "%s\n", m.c_str()); };
+  auto duration = [](const std::string& v, const char* what, int64_t min) {
+    auto d = parse_duration_us(v);
+    if (!d || *d < min) throw UserError(std::string("ldrun: error: bad ") + what + " '" + v + "' (e.g. 500us, 10ms, 1s)");
+    return *d;
+  };
+  int64_t period_us = a.period.empty() ? 10000 : duration(a.period, "--period", 50);
+  if (!a.watchdog.empty()) opt.watchdog_us = uint32_t(std::min<int64_t>(duration(a.watchdog, "--watchdog", 0), UINT32_MAX));
+  if (a.clock == "virtual") opt.clock = Options::Clock::Virtual;
+  else if (!a.clock.empty() && a.clock != "real") throw UserError("ldrun: error: --clock is real or virtual, not '" + a.clock + "'");
+  opt.free_run = a.free_run;
+  opt.rt = a.rt;
+  if (a.rt && a.free_run) throw UserError("ldrun: error: --rt with --free-run would keep a CPU busy forever; choose one");
+  opt.start_stopped = a.stop;
+  opt.cold = a.cold;
+  opt.scans = scans;
+
+  // The tasks: a project's, or one task "main" running the program.
+  std::vector<TaskSpec> specs;
+  if (!a.project.empty()) {
+    Project p = parse_project(a.project);
+    opt.block_size = p.block_size;
+    opt.retain_file = p.retain_file;
+    opt.retain_every_us = p.retain_every_us;
+    for (BuiltTask& b : build_project(p)) {
+      TaskSpec s;
+      s.name = b.spec.name, s.program = b.spec.program, s.resource = b.spec.resource;
+      s.processor = b.spec.processor, s.period_us = b.spec.period_us, s.priority = b.spec.priority;
+      s.watchdog_us = b.spec.watchdog_us, s.exclusive = b.spec.exclusive, s.file = b.spec.path;
+      s.image = std::move(b.image);
+      specs.push_back(std::move(s));
+    }
+    if (!a.period.empty()) throw UserError("ldrun: error: --period is for one program; a project gives each task its period");
+  } else {
+    TaskSpec s;
+    s.name = "main";
+    s.program = stem(input);
+    s.resource = "cpu0";
+    s.period_us = uint32_t(period_us);
+    s.file = input;
+    s.image = load_program(input);
+    if (s.image.config) {
+      s.processor = s.image.config->processor;
+      opt.block_size = s.image.config->block_size;
+    }
+    specs.push_back(std::move(s));
+  }
+  if (!a.block.empty()) {
+    const std::string& b = a.block;
+    if (b.find_first_not_of("0123456789") != std::string::npos || b.size() > 5 || std::stoul(b) < 16 ||
+        std::stoul(b) % 16 || std::stoul(b) > kMaxBlockSize)
+      throw UserError("ldrun: error: bad --block '" + b + "' (a multiple of 16 in 16..8192)");
+    opt.block_size = uint32_t(std::stoul(b));
+  }
+  if (!a.retain.empty()) opt.retain_file = a.retain;
+  if (!a.retain_every.empty()) opt.retain_every_us = duration(a.retain_every, "--retain-every", 1000);
+  for (const TaskSpec& s : specs)
+    if (engine == "native" && s.image.target != ImageTarget::X86_64)
+      throw UserError("ldrun: error: " + s.file + " is not an x86-64 image; use --engine=interp");
+
+  // The I/O driver.
+  std::string io = a.io.empty() ? (trace_file.empty() ? "none" : "trace") : a.io;
+  bool control = a.control.empty() ? io == "stdio" : a.control == "stdin";
+  if (!a.control.empty() && a.control != "stdin" && a.control != "none")
+    throw UserError("ldrun: error: --control is stdin or none, not '" + a.control + "'");
+  std::unique_ptr<IoDriver> driver;
+  Trace trace;
+  FILE* out = nullptr;
+  struct CloseOut {
+    FILE*& f;
+    ~CloseOut() { if (f && f != stdout) std::fclose(f); }
+  } close_out{out};
+  if (io == "trace") {
+    if (specs.size() != 1) throw UserError("ldrun: error: the trace driver drives one task; the project has " + std::to_string(specs.size()));
+    std::vector<Probe> probes;
+    size_t s = 0;
+    while (!watch.empty() && s <= watch.size()) {
+      size_t e = watch.find(',', s);
+      std::string name = watch.substr(s, e == std::string::npos ? std::string::npos : e - s);
+      try {
+        probes.push_back(resolve_probe(name, specs[0].image.aliases));
+      } catch (std::exception& ex) { throw UserError("ldrun: error: --watch: " + std::string(ex.what())); }
+      if (e == std::string::npos) break;
+      s = e + 1;
+    }
+    if (!trace_file.empty()) {
+      try {
+        trace = read_trace(read_file(trace_file), trace_file, specs[0].image.aliases);
+      } catch (UserError&) { throw; } catch (std::exception& ex) { throw UserError(ex.what()); }
+      if (opt.scans < 0) opt.scans = int64_t(trace.rows.size());
+    }
+    if (a.out.empty()) {
+      if (control) throw UserError("ldrun: error: the trace CSV and the line protocol both want stdout: give --out FILE");
+      out = stdout;
+    } else if (!(out = std::fopen(a.out.c_str(), "w"))) {
+      throw UserError("ldrun: error: cannot create " + a.out + ": " + std::strerror(errno));
+    }
+    driver = make_trace_driver(trace_file.empty() ? nullptr : &trace, probes, nullptr, out);
+  } else if (io == "shm" || io.rfind("shm:", 0) == 0) {
+    driver = make_shm_driver(io.size() > 4 ? io.substr(4) : "/ldc");
+  } else if (io == "stdio" || io == "none") {
+    driver = make_null_driver();
+  } else {
+    throw UserError("ldrun: error: unknown --io '" + io + "' (stdio, shm[:/NAME], trace or none)");
+  }
+
+  EngineFactory engines = [engine](const Image& img) -> std::unique_ptr<Engine> {
+    if (engine == "interp") return make_interp_engine(img.il, img.layout);
+    if (img.target != ImageTarget::X86_64) throw std::runtime_error("not an x86-64 image");
+    return make_native_engine(img.code, img.entry);
+  };
+
+  // SIGINT and SIGTERM end the run in order (outputs safe, retentive memory
+  // saved): blocked here, so every thread inherits the mask, and taken by sigtimedwait.
+  sigset_t sigs;
+  sigemptyset(&sigs);
+  sigaddset(&sigs, SIGINT);
+  sigaddset(&sigs, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &sigs, nullptr);
+
+  std::unique_ptr<Runtime> rt;
+  try {
+    rt = std::make_unique<Runtime>(std::move(specs), opt, engines, std::move(driver));
+  } catch (UserError&) { throw; } catch (std::exception& e) {
+    std::string m = e.what();
+    throw UserError(m.find("error:") == std::string::npos ? "ldrun: error: " + m : m);
+  }
+  rt->start();
+  std::atomic<bool> done{false};
+  std::thread sig_thread([&] {
+    timespec ts{0, 100000000};
+    while (!done.load()) {
+      int s = sigtimedwait(&sigs, nullptr, &ts);
+      if (s == SIGINT || s == SIGTERM) {
+        std::fprintf(stderr, "ldrun: %s: stopping\n", s == SIGINT ? "SIGINT" : "SIGTERM");
+        rt->request_quit();
+      }
+    }
+  });
+  std::thread ctl_thread;
+  if (control) {
+    ctl_thread = std::thread([&] {
+      Control c{*rt, [](const std::string& f) { return load_program(f); }};
+      LineReader in;
+      std::string line;
+      while (!done.load()) {
+        int r = in.next(line, 100);
+        if (r == 0) continue;
+        if (r < 0) {
+          rt->request_quit();
+          break;
+        }
+        bool quit = false;
+        std::string reply;
+        try {
+          reply = c.execute(line, quit);
+        } catch (std::exception& e) { reply = std::string("error: ") + e.what(); }
+        if (!reply.empty()) {
+          std::fprintf(stdout, "%s\n", reply.c_str());
+          std::fflush(stdout);
+        }
+        if (quit) {
+          rt->request_quit();
+          break;
+        }
+      }
+    });
+  }
+  std::thread reload_thread;
+  if (a.reload) {
+    reload_thread = std::thread([&] {
+      // A watched file: a task's image (or source) that changes is loaded
+      // and switched in, like `load`.
+      struct Seen { std::string file; int64_t mtime_ns = 0, size = -1; bool pending = false; };
+      std::vector<Seen> seen;
+      auto stat_of = [](const std::string& f, int64_t& mt, int64_t& sz) {
+        struct stat st;
+        if (::stat(f.c_str(), &st) != 0) return false;
+        mt = int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec, sz = st.st_size;
+        return true;
+      };
+      std::vector<std::string> files;
+      for (size_t i = 0; i < rt->task_count(); i++) files.push_back(!a.project.empty() ? "" : input);
+      if (!a.project.empty()) {
+        Project p = parse_project(a.project);
+        for (size_t i = 0; i < p.tasks.size(); i++) files[i] = p.tasks[i].path;
+      }
+      for (auto& f : files) {
+        Seen s{f};
+        stat_of(f, s.mtime_ns, s.size);
+        seen.push_back(s);
+      }
+      while (!done.load()) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(250));
+        for (size_t i = 0; i < seen.size(); i++) {
+          int64_t mt, sz;
+          if (!stat_of(seen[i].file, mt, sz) || (mt == seen[i].mtime_ns && sz == seen[i].size)) continue;
+          seen[i].mtime_ns = mt, seen[i].size = sz;
+          try {
+            SwapReport r = rt->replace(rt->task_name(i), load_program(seen[i].file), seen[i].file);
+            std::fprintf(stderr, "ldrun: reloaded %s: %s\n", seen[i].file.c_str(), r.text().c_str());
+          } catch (std::exception& e) {
+            std::fprintf(stderr, "ldrun: reload of %s refused: %s\n", seen[i].file.c_str(), e.what());
+          }
+        }
+      }
+    });
+  }
+  // With the line protocol a fault leaves the runtime up (status, run, quit);
+  // without it, a fault ends the run (exit status 2).
+  rt->wait_finished(-1, !control);
+  bool faulted = rt->faulted();
+  done.store(true);
+  sig_thread.join();
+  if (ctl_thread.joinable()) ctl_thread.join();
+  if (reload_thread.joinable()) reload_thread.join();
+  rt->shutdown();
+  if (a.stats) {
+    std::string s = Runtime::format_stats(rt->stats());
+    std::fputs(s.c_str(), stderr);
+  }
+  return faulted && !control ? 2 : 0;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   std::string input, engine = "native", trace_file, watch, tmpdir, so_path;
@@ -18,6 +328,8 @@ int main(int argc, char** argv) {
     ~Cleanup() { if (!dir.empty()) remove_tree(dir); }
   } cleanup{tmpdir};
   RunOptions opt;
+  RtArgs rta;
+  std::string period_text;
   try {
     for (int i = 1; i < argc; i++) {
       std::string a = argv[i];
@@ -26,7 +338,22 @@ int main(int argc, char** argv) {
         if (a == name && i + 1 < argc) return argv[++i];
         throw UserError("ldrun: error: " + name + " needs a value");
       };
-      if (a.rfind("--engine", 0) == 0) engine = value("--engine");
+      auto flag = [&](const char* name, bool& f) {
+        if (a != name) return false;
+        f = true, rta.on = true;
+        return true;
+      };
+      auto opt_value = [&](const char* name, std::string& v) {
+        if (a != name && a.rfind(std::string(name) + "=", 0) != 0) return false;
+        v = value(name), rta.on = true;
+        return true;
+      };
+      if (flag("--free-run", rta.free_run) || flag("--rt", rta.rt) || flag("--cold", rta.cold) || flag("--stop", rta.stop) ||
+          flag("--stats", rta.stats) || flag("--reload", rta.reload) || opt_value("--project", rta.project) ||
+          opt_value("--io", rta.io) || opt_value("--control", rta.control) || opt_value("--clock", rta.clock) ||
+          opt_value("--watchdog", rta.watchdog) || opt_value("--retain-every", rta.retain_every) ||
+          opt_value("--retain", rta.retain) || opt_value("--out", rta.out) || opt_value("--block", rta.block)) {
+      } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");
       else if (a.rfind("--trace", 0) == 0) trace_file = value("--trace");
       else if (a.rfind("--watch", 0) == 0) watch = value("--watch");
       else if (a.rfind("--scans", 0) == 0) {
@@ -35,14 +362,20 @@ int main(int argc, char** argv) {
         if (!n || v.find_first_not_of("0123456789") != std::string::npos) throw UserError("ldrun: error: bad --scans '" + v + "'");
         opt.scans = *n;
       } else if (a.rfind("--period", 0) == 0) {
-        std::string v = value("--period");
-        auto p = parse_period(v);
-        if (!p) throw UserError("ldrun: error: bad --period '" + v + "' (e.g. 10ms, 1s)");
-        opt.period_ms = *p;
+        period_text = value("--period");
       } else if (a == "-h" || a == "--help") { std::fputs(kUsage, stdout); return 0; }
       else if (!a.empty() && a[0] == '-') throw UserError("ldrun: error: unknown option '" + a + "'\n" + kUsage);
       else if (input.empty()) input = a;
       else throw UserError("ldrun: error: more than one program");
+    }
+    if (rta.on) {
+      rta.period = period_text;
+      return run_runtime(input, engine, trace_file, watch, opt.scans, rta);
+    }
+    if (!period_text.empty()) {
+      auto p = parse_period(period_text);
+      if (!p) throw UserError("ldrun: error: bad --period '" + period_text + "' (e.g. 10ms, 1s)");
+      opt.period_ms = *p;
     }
     if (input.empty()) throw UserError(std::string("ldrun: error: no program\n") + kUsage);
     if (engine != "interp" && engine != "native" && engine != "c")
