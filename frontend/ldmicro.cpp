@@ -288,6 +288,7 @@ class Importer {
   std::vector<Alias> aliases_;
   std::map<std::pair<int, uint32_t>, std::string> spelled_;  // device -> LDmicro name (for --emit=tree)
   bool mcr_used_ = false;
+  std::set<uint32_t> frozen_;  // relays written once per scan, before they are read
   uint32_t mcr_ = 0;
   std::vector<TreeNode> init_;  // first-scan initialisations
 
@@ -800,7 +801,15 @@ bool Importer::breaks(const Elem& e) const {
 }
 
 Cond Importer::materialize(const Elem& e) {
+  // a chain that starts from a saved state and has done nothing yet holds it already
+  if (rb_.frames.size() == 1 && rb_.frames[0].items.empty()) {
+    const Cond& c = rb_.frames[0].cond;
+    if (c.k == Cond::Expr && c.n.kind == K::Leaf && c.n.elem.op == Op::LOAD && c.n.elem.a[0].area == Area::M &&
+        frozen_.count(c.n.elem.a[0].index))
+      return c;
+  }
   uint32_t m = temp_m(e);
+  frozen_.insert(m);
   rb_.add(out_node(Op::OUT, {bit_opd(Area::M, m)}, e));
   return bit_leaf(Op::LOAD, Area::M, m, e);
 }
@@ -884,6 +893,7 @@ void Importer::timer(const Elem& e) {
     int32_t cyc = cycle_ms(e);
     Cond s = materialize(e);
     uint32_t o = temp_m(e);
+    frozen_.insert(o);
     Operand tw = int_opd(Area::TW, t);
     rb_.chain(Cond::of(leaf_node(Op::LDGE, {tw, const_opd(pt)}, e)), out_node(Op::OUT, {bit_opd(Area::M, o)}, e), loc);
     rb_.chain(c_and(std::move(s), Cond::of(leaf_node(Op::LDLT, {tw, const_opd(pt)}, e))),
@@ -961,6 +971,7 @@ void Importer::counter(const Elem& e) {
   } else {
     bool up = e.kw == "CTC";
     uint32_t w = temp_m(e);
+    frozen_.insert(w);
     std::vector<TreeNode> wrap;
     wrap.push_back(out_node(Op::OUT, {bit_opd(Area::M, w)}, e));
     wrap.push_back(out_node(Op::MOV, {init, cw}, e));
@@ -1177,6 +1188,7 @@ void Importer::parallel_code(const Elem& e, bool need_out) {
   size_t depth = rb_.frames.size();
   int gen0 = rb_.gen;
   uint32_t po = need_out ? temp_m(e) : 0;
+  if (need_out) frozen_.insert(po);  // complete when the block ends, and read only then
   for (size_t i = 0; i < n; i++) {
     if (rb_.gen == gen0) rb_.pop_to(depth);
     else if (saved_needed) rb_.restart(saved, loc);

@@ -36,8 +36,15 @@ using xml::Element;
   throw CompileError(e ? e->line : 1, e ? e->col : 1, msg);
 }
 
-// "contact localId 13 (/project/types/pous/pou/body/LD/contact[7])"
+// "contact localId 13 (/project/types/pous/pou/body/LD/contact[7])", or for a
+// block's pin "input PT of block TON localId 3 (.../block/inputVariables/variable[2])"
 std::string where(const Element* e) {
+  const Element* blk = e->parent && e->parent->parent ? e->parent->parent : nullptr;
+  if (e->local_name() == "variable" && e->attr("formalParameter") && blk && blk->local_name() == "block") {
+    std::string s = "input " + *e->attr("formalParameter") + " of block " + (blk->attr("typeName") ? *blk->attr("typeName") : "?");
+    if (auto id = blk->attr("localId")) s += " localId " + *id;
+    return s + " (" + e->path() + ")";
+  }
   std::string s(e->local_name());
   if (auto id = e->attr("localId")) s += " localId " + *id;
   return s + " (" + e->path() + ")";
@@ -251,7 +258,12 @@ class Importer {
   void declare(const Element* list, const std::string& pou, bool global);
   void allocate();
   uint32_t take(Dev d, const Element* el);
-  uint32_t temp_m(const Element* el) { return take(Dev::M, el); }
+  uint32_t temp_m(const Element* el) {
+    uint32_t m = take(Dev::M, el);
+    temps_.insert(m);
+    return m;
+  }
+  std::set<uint32_t> temps_;  // relays holding a value computed once per scan
   std::optional<DeviceRef> location(const Var& v);
   Var* lookup(const std::string& name);
   void aliases(TreeProgram& p);
@@ -282,7 +294,7 @@ class Importer {
   bool is_bool_source(const Conn& c, int depth = 0);
   bool out_is_bool(const Node& b, const std::string& pin);
   Cond bool_expr(const std::vector<Conn>& conns, bool order, const Element* consumer);
-  Val value_expr(const std::vector<Conn>& conns, bool order, const Element* consumer, const std::string& what);
+  Val value_expr(const std::vector<Conn>& conns, bool order, const Element* consumer);
   Out block_out(const Node& b, const Conn& c, bool order);
   const Pin* out_pin(const Node& b, const Conn& c);
   void statement(const Node& n);
@@ -578,6 +590,8 @@ void Importer::rung(TreeNode root, const Element* el) {
 // The condition's value now, in a relay of its own.
 Cond Importer::materialize(Cond c, const Element* el) {
   if (c.k != Cond::Expr) return c;
+  if (is_leaf(c) && c.n.elem.op == Op::LOAD && c.n.elem.a[0].area == Area::M && temps_.count(c.n.elem.a[0].index))
+    return c;  // already a value of its own
   uint32_t m = temp_m(el);
   rung(std::move(c), out(Op::OUT, {bit_opd(Area::M, m)}, el), el);
   return bit_leaf(Op::LOAD, bit_opd(Area::M, m), el);
@@ -915,28 +929,30 @@ Cond Importer::bool_expr(const std::vector<Conn>& conns, bool order, const Eleme
                        "; ldc needs each output's contacts to reduce to series and parallel blocks");
 }
 
-Val Importer::value_expr(const std::vector<Conn>& conns, bool order, const Element* consumer, const std::string& what) {
-  if (conns.empty()) fail_at(consumer, what + " of " + where(consumer) + " is not connected");
-  if (conns.size() > 1) fail_at(conns[1].el, what + " of " + where(consumer) + " is a value: it takes one connection, not " + std::to_string(conns.size()));
+Val Importer::value_expr(const std::vector<Conn>& conns, bool order, const Element* consumer) {
+  if (conns.empty()) fail_at(consumer, "nothing is connected to " + where(consumer));
+  if (conns.size() > 1)
+    fail_at(conns[1].el, where(consumer) + " takes a value: one connection, not " + std::to_string(conns.size()));
   const Conn& c = conns[0];
   const Node& n = node(c);
   if (n.kind == "inVariable" || n.kind == "inOutVariable") {
     Val v = value_of(n.text, n.el);
-    if (v.ty == Ty::Bool) fail_at(n.el, "'" + n.text + "' is BOOL but " + what + " of " + where(consumer) + " takes a value");
+    if (v.ty == Ty::Bool) fail_at(n.el, "'" + n.text + "' is BOOL but " + where(consumer) + " takes a value");
     return v;
   }
   if (n.kind == "block") {
     Out o = block_out(n, c, order);
-    if (o.boolean) fail_at(c.el, "a BOOL output of block " + n.type + " localId " + std::to_string(n.id) + " feeds " + what + " of " + where(consumer) + ", which takes a value");
+    if (o.boolean)
+      fail_at(c.el, "a BOOL output of block " + n.type + " localId " + std::to_string(n.id) + " feeds " + where(consumer) + ", which takes a value");
     return o.val;
   }
   if (n.kind == "continuation") {
     auto it = connectors_.find(upper(n.text));
     if (it == connectors_.end()) fail_at(n.el, "continuation '" + n.text + "' has no connector of that name (" + n.el->path() + ")");
     const Node& k = nodes_.at(it->second);
-    return value_expr(k.in, order, k.el, "the input");
+    return value_expr(k.in, order, k.el);
   }
-  fail_at(c.el, "power flow from " + where(n.el) + " feeds " + what + " of " + where(consumer) + ", which takes a value");
+  fail_at(c.el, "power flow from " + where(n.el) + " feeds " + where(consumer) + ", which takes a value");
 }
 
 // A block output, generating the block first (Beremiz: on demand, unless the
@@ -1031,7 +1047,7 @@ void Importer::fb_block(const Node& b, Var& inst) {
   auto value = [&](const std::string& n) -> Val {
     const Pin* p = pins.get(n);
     if (!p || p->conns.empty()) return {const_opd(0), Ty::Int};
-    Val v = value_expr(p->conns, order, p->el, n);
+    Val v = value_expr(p->conns, order, p->el);
     if (v.ty == Ty::Real) fail_at(p->el, n + " of " + t + " must be an integer or TIME, not REAL (" + p->el->path() + ")");
     return v;
   };
@@ -1148,7 +1164,7 @@ void Importer::fn_block(const Node& b) {
   };
   auto val_of = [&](const Pin* p) {
     if (p->negated) fail_at(p->el, "a negated input must be BOOL (" + p->el->path() + ")");
-    return value_expr(p->conns, order, p->el, p->name);
+    return value_expr(p->conns, order, p->el);
   };
   Cond en = Cond::yes();
   if (pins.has("EN")) en = materialize(cond_of(pins.get("EN")), el);
@@ -1162,8 +1178,6 @@ void Importer::fn_block(const Node& b) {
       if (p.name != "ENO") outname = p.name;
   }
   if (boolean) {
-    uint32_t m = temp_m(el);
-    Operand q = bit_opd(Area::M, m);
     Cond c;
     if (cmp.count(t)) {
       // GT(a, b, c) = a > b AND b > c; FALSE when EN is off
@@ -1201,15 +1215,21 @@ void Importer::fn_block(const Node& b) {
     } else {
       fail_at(el, t + " with BOOL inputs is not supported (" + el->path() + ")");
     }
-    rung(std::move(c), out(Op::OUT, {q}, el), el);
-    outs_[{b.id, outname}] = Out{true, bit_leaf(Op::LOAD, q, el), {}};
+    Cond r = materialize(std::move(c), el);  // the function's result, computed here
+    if (r.k != Cond::Expr) {  // a constant result still needs its own relay (MatIEC's OUT variable)
+      Operand q = bit_opd(Area::M, temp_m(el));
+      rung(r, out(Op::OUT, {q}, el), el);
+      r = bit_leaf(Op::LOAD, q, el);
+    }
+    outs_[{b.id, outname}] = Out{true, r, {}};
   } else {
     // values: the result goes to a temporary word; 0 when EN is off (as MatIEC)
     std::vector<Val> v;
     const Pin* g = nullptr;
+    bool from_bool = conv && t.rfind("BOOL_TO_", 0) == 0;
     for (const Pin* p : ins) {
       if (t == "SEL" && p->name == "G") { g = p; continue; }
-      v.push_back(val_of(p));
+      if (!from_bool) v.push_back(val_of(p));
     }
     bool real = false;
     for (const Val& x : v) real |= x.ty == Ty::Real;
@@ -1225,7 +1245,7 @@ void Importer::fn_block(const Node& b) {
     Operand zero = real ? [] { Operand z{OpdKind::ConstReal}; z.fval = 0; return z; }() : const_opd(0);
     std::vector<TreeNode> acts;
     Cond when = en;
-    if (conv && t.rfind("BOOL_TO_", 0) == 0) {
+    if (from_bool) {
       Cond in = materialize(cond_of(ins.at(0)), el);
       rung(Cond::yes(), out(Op::MOV, {zero, res}, el), el);
       rung(c_and(en, in), out(Op::MOV, {real ? [] { Operand z{OpdKind::ConstReal}; z.fval = 1; return z; }() : const_opd(1), res}, el), el);
@@ -1306,7 +1326,7 @@ void Importer::statement(const Node& n) {
     return rung(std::move(c), out(neg ? Op::OUTN : Op::OUT, {dst.o}, el, n.text), el);
   }
   if (neg) fail_at(el, "a negated " + n.kind + " must be BOOL (" + el->path() + ")");
-  Val v = value_expr(n.in, order, el, "the input");
+  Val v = value_expr(n.in, order, el);
   TreeNode mv = out(Op::MOV, {v.o, dst.o}, el);
   mv.text = "MOV " + spell(v.o) + " " + n.text;
   rung(Cond::yes(), std::move(mv), el);
