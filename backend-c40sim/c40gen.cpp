@@ -804,11 +804,12 @@ C40Code generate_c40(const Program& p, const Layout& layout) {
     for (const auto& l : r.labels) b.items.push_back(Item::labelDef(label_name(l), true));
     b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
     Gen g(w, b.items, next_label);
-    g.ldpk_main();  // once per block: the block does not depend on DP from elsewhere
     std::vector<uint32_t> starts;
     for (const ldc::Instr& in : r.code) {
       starts.push_back(uint32_t(b.items.size()));
       b.items.push_back(Item::note(instr_text(in)));
+      // once per block, with the first instruction: the block does not depend on DP from elsewhere
+      if (starts.size() == 1) g.ldpk_main();
       g.instr(in);
     }
     out.il_items.push_back(std::move(starts));

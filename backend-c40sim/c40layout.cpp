@@ -5,18 +5,6 @@
 
 namespace ldc::c40gen {
 
-C40Layout C40Layout::of(const Layout& bytes) {
-  C40Layout w;
-  uint32_t off = 0;
-  for (int i = 0; i < kAreaCount; i++) {
-    w.count[i] = Area(i) == Area::Sys ? kSysWords : bytes.count[i];
-    w.offset[i] = off;
-    off += w.count[i];
-  }
-  w.words = off;
-  return w;
-}
-
 void bytes_to_words(const Layout& l, const C40Layout& w, const uint8_t* bytes, uint32_t* words) {
   std::memset(words + w.offset[int(Area::Sys)], 0, kSysWords * 4);
   std::memcpy(words + kSysDtWord, bytes + kSysDt, 4);

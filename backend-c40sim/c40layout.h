@@ -47,7 +47,17 @@ struct C40Layout {
   uint32_t offset[kAreaCount] = {};  // words from kDataBase
   uint32_t words = 0;                // total
 
-  static C40Layout of(const Layout& bytes);
+  static C40Layout of(const Layout& bytes) {  // inline: the loader uses it without the backend
+    C40Layout w;
+    uint32_t off = 0;
+    for (int i = 0; i < kAreaCount; i++) {
+      w.count[i] = Area(i) == Area::Sys ? kSysWords : bytes.count[i];
+      w.offset[i] = off;
+      off += w.count[i];
+    }
+    w.words = off;
+    return w;
+  }
   uint32_t addr(Area a, uint32_t index) const { return kDataBase + offset[int(a)] + index; }
   bool operator==(const C40Layout&) const = default;
 };

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "backend-c/backend_c.h"
+#include "driver/c40_driver.h"
 #include "driver/driver.h"
 
 using namespace ldc;
@@ -93,6 +94,9 @@ int main(int argc, char** argv) {
         if (output.empty()) throw UserError("ldc: error: an image needs -o FILE (or --emit=hex for text on stdout)");
         text.assign(bin.begin(), bin.end());
       }
+    } else if (target == "c40" && (emit.empty() || emit == "asm" || emit == "listing" || emit == "hex")) {  // the C40
+      if (opt != 0) throw UserError("ldc: error: -O" + std::to_string(opt) + " is not available for --target=c40 (its templates are -O0)");
+      text = c40_output(c.il, input, emit, !output.empty());
     } else {
       throw UserError("ldc: error: " + (emit.empty() ? std::string("image output (-o FILE.bin)") : "--emit=" + emit) +
                       " is not available in this build (for this target)");

@@ -4,6 +4,7 @@
 #include <map>
 #include <string>
 
+#include "driver/c40_driver.h"
 #include "driver/driver.h"
 
 using namespace ldc;
@@ -56,8 +57,7 @@ int main(int argc, char** argv) {
   }
   try {
     Image img = load_image_file(argv[1]);
-    if (img.target != ImageTarget::X86_64) throw UserError(std::string("ldobjdump: error: ") + argv[1] + ": no disassembler for this target");
-    std::string out = x86_listing(img, argv[1]);
+    std::string out = img.target == ImageTarget::C40 ? c40_objdump(img, argv[1]) : x86_listing(img, argv[1]);
     std::fwrite(out.data(), 1, out.size(), stdout);
   } catch (UserError& e) {
     std::fprintf(stderr, "%s\n", e.what());

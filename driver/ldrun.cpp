@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "backend-c/backend_c.h"
+#include "driver/c40_driver.h"
 #include "driver/driver.h"
 #include "runtime/plc.h"
 #include "runtime/runtime.h"
@@ -21,7 +22,7 @@
 using namespace ldc;
 
 static const char kUsage[] =
-    "usage: ldrun FILE [--engine=native|interp|c] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms]\n"
+    "usage: ldrun FILE [--engine=native|interp|c|c40sim|c40interp] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms] [--cycles]\n"
     "       ldrun FILE|--project P.ldp --io=stdio|shm[:/NAME]|trace|none [--period 1ms|500us] [--clock=real|virtual]\n"
     "             [--free-run] [--rt] [--watchdog 200ms] [--retain FILE] [--retain-every 1s] [--cold] [--stop]\n"
     "             [--control=stdin|none] [--reload] [--stats] [--out FILE] [--block 16] [--scans N]\n";
@@ -323,6 +324,7 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
 
 int main(int argc, char** argv) {
   std::string input, engine = "native", trace_file, watch, tmpdir, so_path;
+  bool cycles = false;
   struct Cleanup {
     std::string& dir;
     ~Cleanup() { if (!dir.empty()) remove_tree(dir); }
@@ -354,6 +356,7 @@ int main(int argc, char** argv) {
           opt_value("--watchdog", rta.watchdog) || opt_value("--retain-every", rta.retain_every) ||
           opt_value("--retain", rta.retain) || opt_value("--out", rta.out) || opt_value("--block", rta.block)) {
       } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");
+      else if (a == "--cycles") cycles = true;  // C40 engines: cycles and us per scan
       else if (a.rfind("--trace", 0) == 0) trace_file = value("--trace");
       else if (a.rfind("--watch", 0) == 0) watch = value("--watch");
       else if (a.rfind("--scans", 0) == 0) {
@@ -378,8 +381,11 @@ int main(int argc, char** argv) {
       opt.period_ms = *p;
     }
     if (input.empty()) throw UserError(std::string("ldrun: error: no program\n") + kUsage);
+    if (engine == "c40sim" || engine == "c40interp" || (engine == "native" && is_c40_image(input)))
+      return run_c40(input, engine, trace_file, watch, opt, cycles);  // the TMS320C40 simulator
+    if (cycles) throw UserError("ldrun: error: --cycles needs --engine=c40sim or --engine=c40interp");
     if (engine != "interp" && engine != "native" && engine != "c")
-      throw UserError("ldrun: error: unknown engine '" + engine + "' (native, interp or c)");
+      throw UserError("ldrun: error: unknown engine '" + engine + "' (native, interp, c, c40sim or c40interp)");
     // The program: an image (checked in full before anything runs), or a
     // source file compiled in memory.
     Image img;

@@ -10,6 +10,7 @@
 
 #include "loader/checks.h"
 #include "loader/loader.h"
+#include "loader/c40_check.h"
 
 namespace ldc {
 
@@ -476,6 +477,7 @@ Image read_image(std::span<const uint8_t> b, const std::string& name) {
     if (im.code.size() % 4)
       throw sfail(code_sec, "C40 code is 32-bit words, but the section has " + std::to_string(im.code.size()) + " bytes");
     if (im.entry % 4) throw sfail(by_id[kEntry] ? *by_id[kEntry] : code_sec, "C40 entry point " + hex(im.entry) + " is not word-aligned");
+    if (std::string why = check_c40_code(im.code, im.entry, im.layout); !why.empty()) throw sfail(code_sec, why);
   }
 
   if (const SectionEntry* s = by_id[kLines]) {

@@ -1,0 +1,42 @@
+// driver/c40_driver.h -- the TMS320C40 route of ldc, ldrun and ldobjdump
+// (docs/c40.md): the C40 macro compiler and the blockwise assembler, the
+// ImageTarget::C40 image, its listing, and running it on the simulator.
+#pragma once
+
+#include <string>
+
+#include "backend-c40sim/c40gen.h"
+#include "driver/driver.h"
+#include "runtime/runtime.h"
+
+namespace ldc {
+
+struct C40Build {
+  c40gen::C40Code gen;
+  as::Result asm_result;
+};
+// Assembly errors become UserError with the rung's source line.
+C40Build build_c40(const Program& p, const std::string& source_name);
+
+// The image ldc writes for --target=c40: code words, binary IL, line map, names.
+Image make_c40_image(const Program& p, const C40Build& b);
+
+// ldc --target=c40: --emit=asm (GNU as tic4x source), --emit=listing,
+// --emit=hex, or (emit empty) the image bytes, which need -o.
+std::string c40_output(const Program& p, const std::string& input, const std::string& emit, bool to_file);
+
+// ldobjdump of a C40 image: word address, word and instruction, with the
+// rungs and IL interleaved.
+std::string c40_objdump(const Image& img, const std::string& path);
+
+// ldrun --engine=c40sim|c40interp (and --engine=native on a C40 image, which
+// is refused with a hint): loads or compiles the program, runs the trace and
+// prints the watched devices, with --cycles two more columns: the scan's
+// cycles and microseconds on a 40 MHz TMS320C40 (50 ns per cycle).
+int run_c40(const std::string& input, const std::string& engine, const std::string& trace_file,
+            const std::string& watch, RunOptions opt, bool cycles);
+
+// True if the program is a C40 image (read cheaply: only its header).
+bool is_c40_image(const std::string& path);
+
+}  // namespace ldc

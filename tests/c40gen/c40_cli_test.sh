@@ -1,0 +1,65 @@
+#!/bin/sh
+# c40_cli_test.sh BINDIR SRCDIR -- the C40 route of the command-line tools:
+# ldc --target=c40 (image, --emit=hex|asm|listing), ldrun --engine=c40sim |
+# c40interp | interp on the same image (and on the .ld), --cycles, ldobjdump,
+# and the messages of what is refused.  Every example's expected output must
+# come out of both C40 engines.
+set -eu
+bin=$1 src=$2
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+expect_fail() {  # WHAT PATTERN CMD...
+  what=$1 pat=$2; shift 2
+  if "$@" > "$tmp/out" 2> "$tmp/err"; then fail "$what: exit 0"; fi
+  grep -q -- "$pat" "$tmp/err" || { cat "$tmp/err" >&2; fail "$what: no '$pat' in the message"; }
+}
+for f in "$src"/examples/*.ld; do
+  n=$(basename "$f" .ld)
+  base=${f%.ld}
+  watch=$(head -n 1 "$base.expected" | cut -d, -f2-)
+  "$bin/ldc" "$f" --target=c40 -o "$tmp/$n.bin" || fail "ldc $n"
+  "$bin/ldc" "$f" --target=c40 --emit=hex > "$tmp/$n.hex" || fail "ldc --emit=hex $n"
+  for e in c40sim c40interp interp; do
+    "$bin/ldrun" "$tmp/$n.bin" --engine=$e --trace "$base.csv" --watch "$watch" > "$tmp/out" || fail "ldrun $n $e"
+    diff -u "$base.expected" "$tmp/out" || fail "$n on $e (image) differs from $n.expected"
+  done
+  "$bin/ldrun" "$tmp/$n.hex" --engine=c40sim --trace "$base.csv" --watch "$watch" > "$tmp/out" || fail "ldrun $n.hex"
+  diff -u "$base.expected" "$tmp/out" || fail "$n (HEX) differs"
+  "$bin/ldrun" "$f" --engine=c40sim --trace "$base.csv" --watch "$watch" > "$tmp/out" || fail "ldrun $n.ld c40sim"
+  diff -u "$base.expected" "$tmp/out" || fail "$n from source on c40sim differs"
+  "$bin/ldobjdump" "$tmp/$n.bin" > "$tmp/dump" || fail "ldobjdump $n"
+  grep -q "file format ldc-c40" "$tmp/dump" || fail "ldobjdump $n: format line"
+  grep -q "; rung 1, line" "$tmp/dump" || fail "ldobjdump $n: rung notes"
+done
+# --cycles: two more columns, 50 ns per cycle
+"$bin/ldrun" "$tmp/motor.bin" --engine=c40sim --trace "$src/examples/motor.csv" --watch Y0 --cycles > "$tmp/cyc"
+head -n 1 "$tmp/cyc" | grep -qx "scan,Y0,cycles,us" || fail "--cycles header: $(head -n 1 "$tmp/cyc")"
+awk -F, 'NR > 1 { if ($3 + 0 <= 0 || $4 + 0 != $3 * 0.05) exit 1 }' "$tmp/cyc" || fail "--cycles values"
+"$bin/ldrun" "$tmp/motor.bin" --engine=c40interp --trace "$src/examples/motor.csv" --watch Y0 --cycles > "$tmp/cyci"
+awk -F, 'NR == FNR { if (FNR > 1) n[FNR] = $3; next } FNR > 1 && $3 + 0 <= n[FNR] * 5 { exit 1 }' "$tmp/cyc" "$tmp/cyci" ||
+  fail "the C40-hosted interpreter should take several times the cycles of native code"
+# --emit=asm and --emit=listing
+"$bin/ldc" "$src/examples/motor.ld" --target=c40 --emit=asm > "$tmp/m.s"
+grep -q "TMS320C40, GNU as syntax" "$tmp/m.s" || fail "--emit=asm header"
+grep -q "LDPK 0x80" "$tmp/m.s" || fail "--emit=asm LDPK"
+"$bin/ldc" "$src/examples/motor.ld" --target=c40 --emit=listing > "$tmp/m.lst"
+grep -q "^000000  087e0000" "$tmp/m.lst" || fail "--emit=listing first word"
+# refused, with a message
+"$bin/ldc" "$src/examples/motor.ld" -o "$tmp/x86.bin"
+expect_fail "c40sim on an x86-64 image" "is not a C40 image" "$bin/ldrun" "$tmp/x86.bin" --engine=c40sim
+expect_fail "native on a C40 image" "is a C40 image; use --engine=c40sim" "$bin/ldrun" "$tmp/motor.bin"
+expect_fail "--cycles on x86" "--cycles needs" "$bin/ldrun" "$tmp/x86.bin" --cycles
+expect_fail "-O2 for c40" "not available for --target=c40" "$bin/ldc" "$src/examples/motor.ld" --target=c40 -O2 -o "$tmp/o.bin"
+expect_fail "image without -o" "needs -o FILE" "$bin/ldc" "$src/examples/motor.ld" --target=c40
+expect_fail "--emit=c40 tree is fine, --emit=bogus is not" "not available" "$bin/ldc" "$src/examples/motor.ld" --target=c40 --emit=bogus
+# a damaged C40 image is refused before anything runs (here by its checksum;
+# c40image_test.cpp refuses code the checksum does not catch)
+cp "$tmp/motor.bin" "$tmp/bad.bin"
+code=$(od -An -tu4 -j 172 -N 4 "$tmp/motor.bin" | tr -d ' ')  # the 'code' section's file offset (table entry 0)
+printf '\377\377\377\377' | dd of="$tmp/bad.bin" bs=1 seek=$((code + 20)) conv=notrunc 2> /dev/null
+expect_fail "damaged image" "checksum" "$bin/ldrun" "$tmp/bad.bin" --engine=c40sim
+# the IL interpreter runs the x86 image's IL on the C40 too
+"$bin/ldrun" "$tmp/x86.bin" --engine=c40interp --trace "$src/examples/motor.csv" --watch "$(head -n 1 "$src/examples/motor.expected" | cut -d, -f2-)" > "$tmp/out"
+diff -u "$src/examples/motor.expected" "$tmp/out" || fail "c40interp on an x86 image"
+echo "c40 cli: ok"
