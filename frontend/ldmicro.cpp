@@ -287,6 +287,8 @@ class Importer {
   std::set<std::pair<int, uint32_t>> used_;
   std::vector<Alias> aliases_;
   std::map<std::pair<int, uint32_t>, std::string> spelled_;  // device -> LDmicro name (for --emit=tree)
+  int depth_ = 0;
+  static constexpr int kMaxNesting = 100;
   bool mcr_used_ = false;
   std::set<uint32_t> frozen_;  // relays written once per scan, before they are read
   uint32_t mcr_ = 0;
@@ -365,6 +367,7 @@ size_t Importer::header() {
       while (e < t.size() && std::isdigit((unsigned char)t[e])) e++;
       if (e == 6 || e - 6 > 12) fail(l.no, 7, "expected the cycle time in microseconds after CYCLE=");
       cycle_us_ = std::stoll(t.substr(6, e - 6));
+      if (cycle_us_ > 2000000000) fail(l.no, 7, "cycle time too long (at most 2000000000 us)");
       cycle_line_ = l.no;
       continue;
     }
@@ -424,6 +427,8 @@ void Importer::unclosed(const Line& open) {
 }
 
 size_t Importer::series(size_t i, std::vector<Elem>& out, const Line& open) {
+  if (++depth_ > kMaxNesting) fail(open.no, 1, "SERIES and PARALLEL nested too deeply (more than " + std::to_string(kMaxNesting) + " levels)");
+  struct Leave { int& d; ~Leave() { d--; } } leave{depth_};
   for (; i < lines_.size(); i++) {
     const Line& l = lines_[i];
     std::string t = trim(l.text);
@@ -447,6 +452,8 @@ size_t Importer::series(size_t i, std::vector<Elem>& out, const Line& open) {
 }
 
 size_t Importer::parallel(size_t i, std::vector<Elem>& out, const Line& open) {
+  if (++depth_ > kMaxNesting) fail(open.no, 1, "SERIES and PARALLEL nested too deeply (more than " + std::to_string(kMaxNesting) + " levels)");
+  struct Leave { int& d; ~Leave() { d--; } } leave{depth_};
   for (; i < lines_.size(); i++) {
     const Line& l = lines_[i];
     std::string t = trim(l.text);
@@ -866,7 +873,9 @@ int32_t Importer::timer_ms(const Elem& e, const Name&) {
   int64_t delay = number(e.args[1], e.line, e.cols[1]);
   int64_t adjust = e.args.size() >= 3 ? number(e.args[2], e.line, e.cols[2]) : (v01_ ? -1 : 0);
   if (delay <= 0) fail(e.line, e.cols[1], "timer delay must be positive (it is in microseconds)");
-  int64_t p = (delay + cycle_us_ * adjust) / cycle_us_;
+  __int128 p128 = (__int128(delay) + __int128(cycle_us_) * adjust) / cycle_us_;
+  if (p128 > INT32_MAX) fail(e.line, e.cols[1], "timer delay too long (at most 2147483647 ms)");
+  int64_t p = int64_t(p128);
   if (p < 1)
     fail(e.line, e.cols[1], e.kw + " " + e.args[0] + ": a delay of " + e.args[1] + " us is less than " + (adjust < 0 ? "two cycles" : "one cycle") +
                                 " of " + std::to_string(cycle_us_) + " us (LDmicro refuses it too: timer period too short)");
@@ -1119,12 +1128,12 @@ void Importer::element(const Elem& e, bool need_out) {
     return;
   }
   if (k == "LOOK_UP_TABLE") {
-    int count = number(e.args[2], e.line, e.cols[2]);
-    if (count < 1 || e.args.size() < size_t(4 + count))
+    int64_t count = number(e.args[2], e.line, e.cols[2]);
+    if (count < 1 || int64_t(e.args.size()) < 4 + count)
       fail(e.line, e.col, "LOOK_UP_TABLE lists " + std::to_string(e.args.size() >= 4 ? e.args.size() - 4 : 0) + " values but says " + e.args[2]);
     Operand dest = value(e, 0, true), index = value(e, 1);
     std::vector<TreeNode> items;
-    for (int i = 0; i < count; i++) {
+    for (int i = 0; i < int(count); i++) {
       Operand v = const_opd(number(e.args[4 + i], e.line, e.cols[4 + i]));
       items.push_back(then_node(Cond::of(leaf_node(Op::LDEQ, {index, const_opd(i)}, e)), out_node(Op::MOV, {v, dest}, e), loc));
     }
@@ -1132,17 +1141,20 @@ void Importer::element(const Elem& e, bool need_out) {
     return;
   }
   if (k == "PIECEWISE_LINEAR") {
-    int count = number(e.args[2], e.line, e.cols[2]);
-    if (count < 1 || e.args.size() < size_t(3 + 2 * count))
+    int64_t count = number(e.args[2], e.line, e.cols[2]);
+    if (count < 1 || int64_t(e.args.size()) < 3 + 2 * count)
       fail(e.line, e.col, "PIECEWISE_LINEAR needs " + e.args[2] + " (x, y) points");
     std::vector<int32_t> v;
-    for (int i = 0; i < 2 * count; i++) v.push_back(number(e.args[3 + i], e.line, e.cols[3 + i]));
-    for (int i = 1; i < count; i++)
-      if (v[2 * i] <= v[2 * (i - 1)]) fail(e.line, e.cols[3 + 2 * i], "x values in a piecewise linear table must increase strictly");
+    for (int i = 0; i < 2 * int(count); i++) v.push_back(number(e.args[3 + i], e.line, e.cols[3 + i]));
+    for (int i = 1; i < int(count); i++)
+      if (int64_t(v[2 * i]) <= v[2 * (i - 1)]) fail(e.line, e.cols[3 + 2 * i], "x values in a piecewise linear table must increase strictly");
     Operand dest = value(e, 0, true), index = value(e, 1);
     std::vector<TreeNode> items;
-    for (int i = count - 1; i >= 1; i--) {
-      int32_t dx = v[2 * i] - v[2 * (i - 1)], dy = v[2 * i + 1] - v[2 * (i - 1) + 1];
+    for (int i = int(count) - 1; i >= 1; i--) {
+      int64_t dx64 = int64_t(v[2 * i]) - v[2 * (i - 1)], dy64 = int64_t(v[2 * i + 1]) - v[2 * (i - 1) + 1];
+      if (dx64 > INT32_MAX || dy64 > INT32_MAX || dy64 < INT32_MIN)
+        fail(e.line, e.col, "PIECEWISE_LINEAR points too far apart for 32-bit arithmetic");
+      int32_t dx = int32_t(dx64), dy = int32_t(dy64);
       std::vector<TreeNode> body;
       body.push_back(out_node(Op::SUB, {index, const_opd(v[2 * (i - 1)]), dest}, e));
       body.push_back(out_node(Op::MUL, {dest, const_opd(dy), dest}, e));

@@ -292,9 +292,9 @@ class Importer {
   void read_conns(const Element* cpi, std::vector<Conn>& out);
   const Node& node(const Conn& c);
   bool is_bool_source(const Conn& c, int depth = 0);
-  bool out_is_bool(const Node& b, const std::string& pin);
+  bool out_is_bool(const Node& b, const std::string& pin, int depth = 0);
   Cond bool_expr(const std::vector<Conn>& conns, bool order, const Element* consumer);
-  Val value_expr(const std::vector<Conn>& conns, bool order, const Element* consumer);
+  Val value_expr(const std::vector<Conn>& conns, bool order, const Element* consumer, int depth = 0);
   Out block_out(const Node& b, const Conn& c, bool order);
   const Pin* out_pin(const Node& b, const Conn& c);
   void statement(const Node& n);
@@ -769,7 +769,7 @@ const Pin* Importer::out_pin(const Node& b, const Conn& c) {
 
 // Does this source deliver power flow (BOOL) rather than a value?
 bool Importer::is_bool_source(const Conn& c, int depth) {
-  if (depth > 64) fail_at(c.el, "connectors nested too deeply (" + c.el->path() + ")");
+  if (depth > 64) fail_at(c.el, "connectors or blocks nested too deeply, or in a loop (" + c.el->path() + ")");
   const Node& n = node(c);
   if (n.kind == "leftPowerRail" || n.kind == "contact" || n.kind == "coil") return true;
   if (n.kind == "inVariable" || n.kind == "inOutVariable") return value_of(n.text, n.el).ty == Ty::Bool;
@@ -782,12 +782,12 @@ bool Importer::is_bool_source(const Conn& c, int depth) {
   }
   if (n.kind == "block") {
     const Pin* p = out_pin(n, c);
-    return out_is_bool(n, p ? p->name : "ENO");
+    return out_is_bool(n, p ? p->name : "ENO", depth + 1);
   }
   fail_at(c.el, n.kind + " localId " + std::to_string(n.id) + " has no output to connect (" + c.el->path() + ")");
 }
 
-bool Importer::out_is_bool(const Node& b, const std::string& pin) {
+bool Importer::out_is_bool(const Node& b, const std::string& pin, int depth) {
   std::string t = upper(b.type);
   if (pin == "ENO") return true;
   if (fb_kind(t) != FbKind::None) return !(pin == "ET" || pin == "CV");
@@ -797,7 +797,7 @@ bool Importer::out_is_bool(const Node& b, const std::string& pin) {
   if (to != std::string::npos) return t.substr(to + 4) == "BOOL";
   if (t == "AND" || t == "OR" || t == "XOR" || t == "NOT" || t == "MOVE" || t == "SEL") {
     for (const Pin& p : b.inputs)
-      if (p.name != "EN" && p.name != "G" && !p.conns.empty()) return is_bool_source(p.conns[0]);
+      if (p.name != "EN" && p.name != "G" && !p.conns.empty()) return is_bool_source(p.conns[0], depth + 1);
   }
   return false;
 }
@@ -822,7 +822,7 @@ Cond Importer::bool_expr(const std::vector<Conn>& conns, bool order, const Eleme
   std::function<int(const Conn&)> out_of;
   std::function<int(const std::vector<Conn>&, const Element*)> input_of = [&](const std::vector<Conn>& cs, const Element* who) {
     if (cs.empty()) fail_at(who, where(who) + " has no input connection");
-    if (++depth > 10000) fail_at(who, "power flow too long (more than 10000 elements in a row) at " + where(who));
+    if (++depth > 2000) fail_at(who, "power flow too long (more than 2000 elements in a row) at " + where(who));
     struct Leave { int& d; ~Leave() { d--; } } leave{depth};
     if (cs.size() == 1) return out_of(cs[0]);
     int j = nn++;
@@ -929,7 +929,8 @@ Cond Importer::bool_expr(const std::vector<Conn>& conns, bool order, const Eleme
                        "; ldc needs each output's contacts to reduce to series and parallel blocks");
 }
 
-Val Importer::value_expr(const std::vector<Conn>& conns, bool order, const Element* consumer) {
+Val Importer::value_expr(const std::vector<Conn>& conns, bool order, const Element* consumer, int depth) {
+  if (depth > 64) fail_at(consumer, "connectors nested too deeply, or in a loop, at " + where(consumer));
   if (conns.empty()) fail_at(consumer, "nothing is connected to " + where(consumer));
   if (conns.size() > 1)
     fail_at(conns[1].el, where(consumer) + " takes a value: one connection, not " + std::to_string(conns.size()));
@@ -950,7 +951,7 @@ Val Importer::value_expr(const std::vector<Conn>& conns, bool order, const Eleme
     auto it = connectors_.find(upper(n.text));
     if (it == connectors_.end()) fail_at(n.el, "continuation '" + n.text + "' has no connector of that name (" + n.el->path() + ")");
     const Node& k = nodes_.at(it->second);
-    return value_expr(k.in, order, k.el);
+    return value_expr(k.in, order, k.el, depth + 1);
   }
   fail_at(c.el, "power flow from " + where(n.el) + " feeds " + where(consumer) + ", which takes a value");
 }
@@ -989,7 +990,7 @@ Out Importer::block_out(const Node& b, const Conn& c, bool order) {
 }
 
 void Importer::block(const Node& b) {
-  if (generating_.size() > 1000) fail_at(b.el, "blocks feed each other too deeply (more than 1000) at " + where(b.el));
+  if (generating_.size() > 200) fail_at(b.el, "blocks feed each other too deeply (more than 200) at " + where(b.el));
   computed_.insert(b.id);
   generating_.insert(b.id);
   std::string t = upper(b.type);
@@ -1171,6 +1172,12 @@ void Importer::fn_block(const Node& b) {
   Cond eno = en;
   for (const Pin* p : ins)
     if (p->conns.empty()) fail_at(p->el, "input " + p->name + " of " + t + " localId " + std::to_string(b.id) + " is not connected (" + p->el->path() + ")");
+  size_t want = t == "SEL" || t == "LIMIT" ? 3 : (conv || t == "NOT" || t == "MOVE" || t == "ABS") ? 1
+                : (t == "SUB" || t == "DIV" || t == "MOD") ? 2 : 0;
+  size_t n_in = ins.size();
+  if ((want && n_in != want) || (!want && n_in < 2))
+    fail_at(el, t + " localId " + std::to_string(b.id) + " takes " + (want ? std::to_string(want) : std::string("two or more")) +
+                    " input" + (want == 1 ? "" : "s") + ", not " + std::to_string(n_in) + " (" + el->path() + ")");
   bool boolean = out_is_bool(b, "OUT");
   std::string outname = "OUT";
   if (!b.outputs.empty()) {
