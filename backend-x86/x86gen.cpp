@@ -339,14 +339,13 @@ void Gen::divmod(const ldc::Instr& in) {
   emit(M::Cdq, {});
   emit(M::Idiv, {R(ecx)});
   if (mod) emit(M::Mov, {R(eax), R(edx)});
-  std::string store = fresh();
-  label(store);
   store_int(d);
   jmp(skip);
-  label(minus_one);  // x / -1 = -x (wrapping), x MOD -1 = 0
+  label(minus_one);  // x / -1 = -x (wrapping), x MOD -1 = 0; every branch goes forward
   if (mod) emit(M::Xor, {R(eax), R(eax)});
   else emit(M::Neg, {R(eax)});
-  jmp(store);
+  store_int(d);
+  jmp(skip);
   label(err);
   set_error();
   label(skip);
