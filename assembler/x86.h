@@ -141,6 +141,15 @@ struct Disassembly {
 };
 Disassembly disassemble(std::span<const uint8_t> code);
 
+// ------------------------------------------------------- the scan frame
+// The frame of ldc's scan function `void scan(uint8_t* image)`: the prologue
+// at its entry and the epilogue at scan_exit, the only pushes, pops and ret
+// that generated code contains (docs/x86.md).  withSlots is the -O2 frame,
+// which also saves r12-r15 for the bit-stack slots.  The backend emits these;
+// the loader's validator accepts nothing else.
+std::span<const Instruction> scanPrologue(bool withSlots);
+std::span<const Instruction> scanEpilogue(bool withSlots);
+
 // ---------------------------------------------------------- whole programs
 
 using X86Program = Program<Instruction>;

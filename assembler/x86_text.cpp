@@ -472,4 +472,35 @@ std::string listing(const X86Program& p, const Result& r) {
   return out;
 }
 
+std::span<const Instruction> scanPrologue(bool withSlots) {
+  static const std::vector<Instruction> o0 = [] {
+    std::vector<Instruction> v;
+    for (const char* t : {"push rbx", "push rbp", "push rax", "mov rbx, rdi", "xor ebp, ebp"}) v.push_back(parse(t));
+    return v;
+  }();
+  static const std::vector<Instruction> o2 = [] {
+    std::vector<Instruction> v;
+    for (const char* t : {"push rbx", "push rbp", "push r12", "push r13", "push r14", "push r15", "push rax",
+                          "mov rbx, rdi", "xor ebp, ebp"})
+      v.push_back(parse(t));
+    return v;
+  }();
+  return withSlots ? o2 : o0;
+}
+
+std::span<const Instruction> scanEpilogue(bool withSlots) {
+  static const std::vector<Instruction> o0 = [] {
+    std::vector<Instruction> v;
+    for (const char* t : {"pop rax", "pop rbp", "pop rbx", "ret"}) v.push_back(parse(t));
+    return v;
+  }();
+  static const std::vector<Instruction> o2 = [] {
+    std::vector<Instruction> v;
+    for (const char* t : {"pop rax", "pop r15", "pop r14", "pop r13", "pop r12", "pop rbp", "pop rbx", "ret"})
+      v.push_back(parse(t));
+    return v;
+  }();
+  return withSlots ? o2 : o0;
+}
+
 }  // namespace ldc::as::x86

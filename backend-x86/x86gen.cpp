@@ -827,11 +827,7 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
   pro.sourceLine = p.rungs.empty() ? 0 : p.rungs[0].line;
   pro.items.push_back(Item::note(o2 ? "scan(image): rbx = image, bit stack in r12b r13b r14b r15b bpl (-O2)"
                                     : "scan(image): rbx = image, ebp = bit stack"));
-  static const char* const kPro0[] = {"push rbx", "push rbp", "push rax", "mov rbx, rdi", "xor ebp, ebp"};
-  static const char* const kPro2[] = {"push rbx", "push rbp", "push r12", "push r13", "push r14", "push r15",
-                                      "push rax", "mov rbx, rdi", "xor ebp, ebp"};
-  if (o2) for (const char* t : kPro2) pro.items.push_back(Item::instr(parse(t)));
-  else for (const char* t : kPro0) pro.items.push_back(Item::instr(parse(t)));
+  for (const Instruction& i : scanPrologue(o2)) pro.items.push_back(Item::instr(i));
   prog.blocks.push_back(std::move(pro));
 
   for (const Rung& r : p.rungs) {
@@ -857,10 +853,7 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
   epi.sourceLine = p.rungs.empty() ? 0 : p.rungs.back().line;
   for (const auto& l : p.end_labels) epi.items.push_back(Item::labelDef(x86_label_name(l), true));
   epi.items.push_back(Item::labelDef(kX86ExitLabel, true));
-  static const char* const kEpi0[] = {"pop rax", "pop rbp", "pop rbx", "ret"};
-  static const char* const kEpi2[] = {"pop rax", "pop r15", "pop r14", "pop r13", "pop r12", "pop rbp", "pop rbx", "ret"};
-  if (o2) for (const char* t : kEpi2) epi.items.push_back(Item::instr(parse(t)));
-  else for (const char* t : kEpi0) epi.items.push_back(Item::instr(parse(t)));
+  for (const Instruction& i : scanEpilogue(o2)) epi.items.push_back(Item::instr(i));
   prog.blocks.push_back(std::move(epi));
   return out;
 }

@@ -81,6 +81,62 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
   starts.reserve(d.insts.size());
   for (const x86::Decoded& di : d.insts) starts.push_back(di.offset);
 
+  if (entry >= code.size())
+    return "entry point " + hex(entry) + " is outside the code (" + std::to_string(code.size()) + " bytes)";
+  if (!std::binary_search(starts.begin(), starts.end(), entry))
+    return "entry point " + hex(entry) + " is inside an instruction, not on an instruction boundary";
+
+  // The frame: the scan function starts with a canonical prologue at the entry
+  // and ends with the matching epilogue; only they push, pop or return.
+  size_t first = size_t(std::lower_bound(starts.begin(), starts.end(), entry) - starts.begin());
+  auto matches = [&](size_t at, std::span<const x86::Instruction> seq) {
+    if (at + seq.size() > d.insts.size()) return false;
+    for (size_t k = 0; k < seq.size(); k++) {
+      x86::Instruction a = d.insts[at + k].inst;
+      a.longBranch = false;
+      if (!(a == seq[k])) return false;
+    }
+    return true;
+  };
+  bool slots = first < d.insts.size() && d.insts[first].offset == entry && matches(first, x86::scanPrologue(true));
+  if (!slots && !(first < d.insts.size() && d.insts[first].offset == entry && matches(first, x86::scanPrologue(false))))
+    return at(entry) + "the entry is not the scan function's prologue (push rbx; push rbp; ...; mov rbx, rdi)";
+  size_t body_first = first + x86::scanPrologue(slots).size();
+  size_t epi = x86::scanEpilogue(slots).size();
+  if (d.insts.size() < body_first + epi || !matches(d.insts.size() - epi, x86::scanEpilogue(slots)))
+    return at(d.insts.empty() ? 0 : d.insts.back().offset) + "the code does not end with the scan function's epilogue (pop ...; ret)";
+  size_t body_end = d.insts.size() - epi;
+  if (first > body_end) return at(entry) + "the prologue is not before the epilogue";
+  uint32_t body_lo = body_first < d.insts.size() ? d.insts[body_first].offset : uint32_t(code.size());
+  uint32_t exit_at = d.insts[body_end].offset;
+  for (size_t k = 0; k < d.insts.size(); k++) {
+    if (k >= first && k < body_first) continue;  // the prologue
+    if (k >= body_end) break;                    // the epilogue
+    const x86::Decoded& di = d.insts[k];
+    const x86::Instruction& in = di.inst;
+    if (k < first) return at(di.offset) + text_of(in) + ": code before the scan function's entry";
+    using M = x86::Mnemonic;
+    if (in.mnemonic == M::Push || in.mnemonic == M::Pop || in.mnemonic == M::Ret)
+      return at(di.offset) + text_of(in) + ": the stack is touched only by the prologue and the epilogue";
+    // rbx holds the image base and rsp the frame: no instruction of the body may change them
+    bool writes_first = in.numOperands > 0 && in.mnemonic != M::Cmp && in.mnemonic != M::Test &&
+                        in.mnemonic != M::Ucomiss && in.mnemonic != M::Jmp && in.mnemonic != M::Jcc &&
+                        in.mnemonic != M::Call;
+    if (writes_first && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm &&
+        (in.ops[0].reg.num == x86::BX || in.ops[0].reg.num == x86::SP))
+      return at(di.offset) + text_of(in) + ": writes " + std::string(x86::regName(in.ops[0].reg)) +
+             " (the image base and the stack pointer are fixed in the scan body)";
+    if (in.mnemonic == M::Call && in.numOperands && in.ops[0].kind == x86::OperandKind::Address)
+      return at(di.offset) + text_of(in) + ": a direct call (generated code calls only the REAL function table)";
+    // branches go forward, inside the body or to the epilogue, so a scan always ends
+    if ((in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) && in.numOperands && in.ops[0].kind == x86::OperandKind::Address) {
+      int64_t t = in.ops[0].imm;
+      if (t <= int64_t(di.offset)) return at(di.offset) + text_of(in) + ": backward branch (a scan runs straight through)";
+      if (t < int64_t(body_lo) || t > int64_t(exit_at))
+        return at(di.offset) + text_of(in) + ": branch target " + hex(uint64_t(t)) + " outside the scan body";
+    }
+  }
+
   for (const x86::Decoded& di : d.insts) {
     const x86::Instruction& in = di.inst;
     bool branch = in.mnemonic == x86::Mnemonic::Jmp || in.mnemonic == x86::Mnemonic::Jcc || in.mnemonic == x86::Mnemonic::Call;

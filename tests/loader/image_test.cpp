@@ -72,7 +72,7 @@ TEST(Image, RoundTripThroughIntelHex) {
   EXPECT_TRUE(read_image(back, "t.hex") == im);
 }
 
-TEST(Image, RoundTripEdgeSlotsAndNonZeroEntry) {
+TEST(Image, RoundTripEdgeSlots) {
   Program p = parse_il_text(".edges 2\n.rung line 1\nLOADP X0 E0\nLOADF X1 E1\nORBLK\nOUT Y0\n.end\n", "t.il");
   ASSERT_EQ(p.edge_slots, 2u);
   Image im = tiny_image();
@@ -80,8 +80,7 @@ TEST(Image, RoundTripEdgeSlotsAndNonZeroEntry) {
   im.il = encode_il(p).code;
   im.lines.clear();
   uint32_t e1 = im.layout.addr(Area::E, 1);
-  im.code = assemble({"ret", "mov byte ptr [rbx+" + disp(e1) + "], 1", "ret"});
-  im.entry = 1;
+  im.code = framed({"mov byte ptr [rbx+" + disp(e1) + "], 1"});  // a non-zero entry: RoundTripC40
   Image back = read_image(write_image(im), "t.bin");
   EXPECT_TRUE(back == im);
   EXPECT_EQ(back.layout.count[int(Area::E)], 2u);
@@ -308,31 +307,31 @@ TEST(Image, InvalidIl) {
 TEST(Image, CodeMemoryOperandOutsideTheImage) {
   Image im = tiny_image();
   uint32_t size = im.layout.size;
-  im.code = assemble({"movzx eax, byte ptr [rbx+" + disp(size) + "]", "ret"});
+  im.code = framed({"movzx eax, byte ptr [rbx+" + disp(size) + "]"});
   im.lines.clear();
-  EXPECT_REFUSED(refusal(im), "section 'code'", "at code offset 0x0", "outside the memory image");
-  im.code = assemble({"ret", "mov dword ptr [rbx+" + disp(size - 2) + "], eax", "ret"});  // straddles the end
-  EXPECT_REFUSED(refusal(im), "at code offset 0x1", "(4 bytes) outside the memory image");
-  im.code = assemble({"mov eax, dword ptr [rbx-0x4]", "ret"});
+  EXPECT_REFUSED(refusal(im), "section 'code'", "at code offset 0x8", "outside the memory image");
+  im.code = framed({"nop", "mov dword ptr [rbx+" + disp(size - 2) + "], eax"});  // straddles the end
+  EXPECT_REFUSED(refusal(im), "at code offset 0x9", "(4 bytes) outside the memory image");
+  im.code = framed({"mov eax, dword ptr [rbx-0x4]"});
   EXPECT_REFUSED(refusal(im), "[rbx-0x4]", "outside the memory image");
-  im.code = assemble({"mov dword ptr [rbx+" + disp(size - 4) + "], eax", "ret"});  // the last word is fine
+  im.code = framed({"mov dword ptr [rbx+" + disp(size - 4) + "], eax"});  // the last word is fine
   EXPECT_EQ(refusal(im), "");
 }
 
 TEST(Image, CodeWrongBaseRegister) {
   Image im = tiny_image();
   im.lines.clear();
-  im.code = assemble({"movzx eax, byte ptr [rcx+0x10]", "ret"});
+  im.code = framed({"movzx eax, byte ptr [rcx+0x10]"});
   EXPECT_REFUSED(refusal(im), "based on rcx, not rbx");
-  im.code = assemble({"mov eax, dword ptr [r11+0x10]", "ret"});
+  im.code = framed({"mov eax, dword ptr [r11+0x10]"});
   EXPECT_REFUSED(refusal(im), "based on r11, not rbx");
-  im.code = assemble({"mov dword ptr [rsp+0x8], eax", "ret"});
+  im.code = framed({"mov dword ptr [rsp+0x8], eax"});
   EXPECT_REFUSED(refusal(im), "stack-relative");
-  im.code = assemble({"mov eax, dword ptr [rbp-0x8]", "ret"});
+  im.code = framed({"mov eax, dword ptr [rbp-0x8]"});
   EXPECT_REFUSED(refusal(im), "stack-relative");
-  im.code = assemble({"mov eax, dword ptr [rip+0x10]", "ret"});
+  im.code = framed({"mov eax, dword ptr [rip+0x10]"});
   EXPECT_REFUSED(refusal(im), "rip-relative");
-  im.code = assemble({"mov eax, dword ptr [rbx+rcx*4+0x10]", "ret"});
+  im.code = framed({"mov eax, dword ptr [rbx+rcx*4+0x10]"});
   EXPECT_REFUSED(refusal(im), "indexed memory operand");
 }
 
@@ -354,34 +353,61 @@ TEST(Image, CodeJumpIntoTheMiddleOfAnInstruction) {
   Image im = tiny_image();
   im.lines.clear();
   // 0: test al, al (2)  2: je 7 (2)  4: mov eax, 0x1 (5)  9: ret -- 7 is inside the mov.
-  im.code = assemble({"test al, al", "je 0x7", "mov eax, 0x1", "ret"});
-  EXPECT_REFUSED(refusal(im), "at code offset 0x2", "branch target 0x7 is inside an instruction");
-  im.code = assemble({"test al, al", "je 0x9", "mov eax, 0x1", "ret"});
+  // body offsets: test al, al 0; je 2; mov eax, 0x1 4..8; the epilogue at 9
+  im.code = framed({"test al, al", "je 0x7", "mov eax, 0x1"});
+  EXPECT_REFUSED(refusal(im), "at code offset 0xa", "branch target 0xf is inside an instruction");
+  im.code = framed({"test al, al", "je 0x9", "mov eax, 0x1"});  // to the epilogue: scan_exit
   EXPECT_EQ(refusal(im), "");
-  im.code = assemble({"jmp 0x40", "ret"});
-  EXPECT_REFUSED(refusal(im), "branch target 0x40 outside the code");
-  im.code = assemble({"call 0x5", "ret", "ret"});  // call into the code, on a boundary
-  EXPECT_EQ(refusal(im), "");
-  im.code = assemble({"jmp rax", "ret"});
+  im.code = framed({"jmp 0x40"});
+  EXPECT_REFUSED(refusal(im), "branch target 0x48 outside the scan body");
+  im.code = framed({"nop", "jmp 0x0"});  // backward: a loop
+  EXPECT_REFUSED(refusal(im), "backward branch");
+  im.code = framed({"jmp 0x5", "nop"});  // onto itself or behind: still backward/not forward
+  EXPECT_NE(refusal(im), "");
+  im.code = framed({"call 0x5", "nop", "nop", "nop", "nop", "nop"});  // a direct call: never emitted
+  EXPECT_REFUSED(refusal(im), "direct call");
+  im.code = framed({"jmp rax"});
   EXPECT_REFUSED(refusal(im), "indirect branch through a register");
-  im.code = assemble({"call rax", "ret"});
+  im.code = framed({"call rax"});
   EXPECT_REFUSED(refusal(im), "indirect branch through a register");
-  im.code = assemble({"call qword ptr [rbx+0x40]", "ret"});  // past the call table
+  im.code = framed({"call qword ptr [rbx+0x40]"});  // past the call table
   EXPECT_REFUSED(refusal(im), "indirect call not through the REAL function table");
-  im.code = assemble({"call qword ptr [rbx+0x14]", "ret"});  // inside a slot
+  im.code = framed({"call qword ptr [rbx+0x14]"});  // inside a slot
   EXPECT_REFUSED(refusal(im), "indirect call not through the REAL function table");
-  im.code = assemble({"jmp qword ptr [rbx+0x10]", "ret"});
+  im.code = framed({"jmp qword ptr [rbx+0x10]"});
   EXPECT_REFUSED(refusal(im), "indirect branch through memory");
-  im.code = assemble({"call qword ptr [rbx+0x10]", "call qword ptr [rbx+0x30]", "ret"});  // sinf, logf
+  im.code = framed({"call qword ptr [rbx+0x10]", "call qword ptr [rbx+0x30]"});  // sinf, logf
   EXPECT_EQ(refusal(im), "");
+}
+
+TEST(Image, TheScanBodyKeepsTheFrame) {
+  Image im = tiny_image();
+  im.lines.clear();
+  im.code = framed({"push rax"});
+  EXPECT_REFUSED(refusal(im), "the stack is touched only by the prologue and the epilogue");
+  im.code = framed({"pop rax"});
+  EXPECT_REFUSED(refusal(im), "the stack is touched only");
+  im.code = framed({"ret"});
+  EXPECT_REFUSED(refusal(im), "the stack is touched only");
+  for (const char* w : {"mov rbx, rax", "xor ebx, ebx", "lea rbx, [rbx+0x10]", "add rsp, 0x8", "mov bl, al", "setne bl"}) {
+    im.code = framed({w});
+    SCOPED_TRACE(w);
+    EXPECT_REFUSED(refusal(im), "the image base and the stack pointer are fixed");
+  }
+  im.code = framed({"mov r12b, byte ptr [rbx+0x50]"});  // an -O2 slot needs the -O2 frame
+  EXPECT_EQ(refusal(im), "");                           // (writing r12 is harmless: the epilogue restores it)
+  std::vector<uint8_t> no_epilogue = framed({"nop"});
+  no_epilogue.pop_back();  // drop the ret
+  im.code = no_epilogue;
+  EXPECT_REFUSED(refusal(im), "does not end with the scan function's epilogue");
 }
 
 TEST(Image, LeaIsArithmeticNotAMemoryAccess) {
   Image im = tiny_image();
   im.lines.clear();
-  im.code = assemble({"lea ebp, [rax+rbp*2]", "lea ebp, [rbp+rbp*1+0x1]", "ret"});
+  im.code = framed({"lea ebp, [rax+rbp*2]", "lea ebp, [rbp+rbp*1+0x1]"});
   EXPECT_EQ(refusal(im), "");
-  im.code = assemble({"movzx eax, byte ptr [rax+rbp*2]", "ret"});
+  im.code = framed({"movzx eax, byte ptr [rax+rbp*2]"});
   EXPECT_REFUSED(refusal(im), "not rbx");
 }
 
@@ -389,8 +415,10 @@ TEST(Image, EntryPoint) {
   Image im = tiny_image();
   im.entry = uint32_t(im.code.size());
   EXPECT_REFUSED(refusal(im), "section 'entry'", "entry point", "outside the code");
-  im.entry = 2;  // inside `mov rbx, rdi`
-  EXPECT_REFUSED(refusal(im), "section 'code'", "entry point 0x2 is inside an instruction");
+  im.entry = 4;  // inside `mov rbx, rdi`
+  EXPECT_REFUSED(refusal(im), "section 'code'", "entry point 0x4 is inside an instruction");
+  im.entry = 8;  // a boundary, but not the prologue
+  EXPECT_REFUSED(refusal(im), "section 'code'", "not the scan function's prologue");
   im = tiny_image();
   im.code.clear();
   im.lines.clear();
@@ -410,8 +438,8 @@ TEST(Image, LineMapOutsideCodeOrIl) {
   im.lines[1].code_offset = uint32_t(im.code.size()) + 1;
   EXPECT_REFUSED(refusal(im), "section 'lines'", "entry 1", "outside the code");
   im = tiny_image();
-  im.lines[1].code_offset = 5;  // inside the movzx
-  EXPECT_REFUSED(refusal(im), "code offset 0x5 is not an instruction boundary");
+  im.lines[1].code_offset = 9;  // inside the movzx
+  EXPECT_REFUSED(refusal(im), "code offset 0x9 is not an instruction boundary");
   im = tiny_image();
   im.lines[0].code_offset = uint32_t(im.code.size());  // an instruction with no code, at the end: fine
   EXPECT_EQ(refusal(im), "");

@@ -19,6 +19,28 @@ inline std::vector<uint8_t> assemble(const std::vector<std::string>& lines) {
   return code;
 }
 
+// A scan function: the canonical -O0 prologue (8 bytes), the body, the
+// epilogue.  Branch operands in the body are offsets from the body's start.
+inline std::vector<uint8_t> framed(const std::vector<std::string>& body) {
+  std::vector<uint8_t> code;
+  for (const auto& in : as::x86::scanPrologue(false)) {
+    auto b = as::x86::encodeAt(in, code.size());
+    code.insert(code.end(), b.begin(), b.end());
+  }
+  const size_t base = code.size();
+  for (const std::string& l : body) {
+    as::x86::Instruction in = as::x86::parse(l);
+    if (in.numOperands && in.ops[0].kind == as::x86::OperandKind::Address) in.ops[0].imm += int64_t(base);
+    auto b = as::x86::encodeAt(in, code.size());
+    code.insert(code.end(), b.begin(), b.end());
+  }
+  for (const auto& in : as::x86::scanEpilogue(false)) {
+    auto b = as::x86::encodeAt(in, code.size());
+    code.insert(code.end(), b.begin(), b.end());
+  }
+  return code;
+}
+
 inline std::string disp(uint32_t v) {
   char buf[16];
   std::snprintf(buf, sizeof buf, "0x%x", v);
@@ -33,12 +55,11 @@ inline Image tiny_image() {
   im.source = "t.ld";
   im.layout = p.layout();
   uint32_t x0 = im.layout.addr(Area::X, 0), y0 = im.layout.addr(Area::Y, 0);
-  im.code = assemble({"push rbx", "mov rbx, rdi", "movzx eax, byte ptr [rbx+" + disp(x0) + "]",
-                      "mov byte ptr [rbx+" + disp(y0) + "], al", "pop rbx", "ret"});
+  im.code = framed({"movzx eax, byte ptr [rbx+" + disp(x0) + "]", "mov byte ptr [rbx+" + disp(y0) + "], al"});
   im.entry = 0;
   im.il = bil.code;
-  // movzx starts at 4 (push rbx: 1, mov rbx, rdi: 3), the mov after it at 4+4.
-  im.lines = {{4, bil.instr_offset.at(0), 2, 0}, {8, bil.instr_offset.at(1), 2, 0}};
+  // movzx starts after the 8-byte prologue, the mov after it at 8+4.
+  im.lines = {{8, bil.instr_offset.at(0), 2, 0}, {12, bil.instr_offset.at(1), 2, 0}};
   im.rung_titles = {"copy"};
   im.aliases = {{"start", {Dev::X, 0}}, {"lamp", {Dev::Y, 0}}, {"count", {Dev::C, 255}}};
   im.retentive = {{Area::K, 0, 8192}, {Area::CW, 3, 2}};
