@@ -28,13 +28,16 @@ enum : unsigned { kIntMem = 0, kRealMem = 1, kIntConst = 2, kRealConst = 3 };
 enum : unsigned { kDstInt = 0, kDstReal = 1 };
 
 // The handlers.  _MM: two INT32 words; _MK: a word and a constant; _KM: a
-// constant and a word (destination an INT32 word).  _F: REAL words.
+// constant and a word (destination an INT32 word).  _F: REAL words; _FF, _FK:
+// compares of two REAL words, of a REAL word and a REAL constant.
 #define LDC_INT3(X, N) X(N##_MM) X(N##_MK) X(N##_KM)
 #define LDC_FAST_OPS(X)                                                                                  \
   X(HALT) X(LD) X(LDN) X(AND) X(ANDN) X(OR) X(ORN) X(LDP) X(LDF) X(TRUE) X(PUSH0) X(ANDB) X(ORB)        \
   X(MPS) X(MRD) X(MPP) X(OUT) X(OUTN) X(SET) X(RST)                                                     \
   X(EQ_MM) X(NE_MM) X(LT_MM) X(LE_MM) X(GT_MM) X(GE_MM)                                                 \
-  X(EQ_MK) X(NE_MK) X(LT_MK) X(LE_MK) X(GT_MK) X(GE_MK) X(CMP_F)                                        \
+  X(EQ_MK) X(NE_MK) X(LT_MK) X(LE_MK) X(GT_MK) X(GE_MK)                                                 \
+  X(EQ_FF) X(NE_FF) X(LT_FF) X(LE_FF) X(GT_FF) X(GE_FF)                                                 \
+  X(EQ_FK) X(NE_FK) X(LT_FK) X(LE_FK) X(GT_FK) X(GE_FK) X(CMP_F)                                        \
   X(MOVK) X(MOV32) X(MOVI2F) X(MOVF2I)                                                                  \
   LDC_INT3(X, ADD) LDC_INT3(X, SUB) LDC_INT3(X, MUL) LDC_INT3(X, DIV) LDC_INT3(X, MOD)                  \
   LDC_INT3(X, WAND) LDC_INT3(X, WOR) LDC_INT3(X, WXOR) LDC_INT3(X, SHL) LDC_INT3(X, SHR)                \
@@ -257,7 +260,14 @@ FastInterpreter::FastInterpreter(std::span<const uint8_t> il, const Layout& L) {
       case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE: {
         unsigned ka, kb, rel = unsigned(in.op) - unsigned(Op::LDEQ);
         uint32_t a = value(o[0], ka), b = value(o[1], kb);
-        if ((ka | kb) & 1) {
+        static const unsigned mirror[6] = {0, 1, 4, 5, 2, 3};  // EQ NE LT LE GT GE -> EQ NE GT GE LT LE
+        if (ka == kRealMem && kb == kRealMem) {
+          set(FOp(F_EQ_FF + rel), a, b);
+        } else if (ka == kRealMem && kb == kRealConst) {
+          set(FOp(F_EQ_FK + rel), a, b);
+        } else if (ka == kRealConst && kb == kRealMem) {
+          set(FOp(F_EQ_FK + mirror[rel]), b, a);
+        } else if ((ka | kb) & 1) {
           set(F_CMP_F, a, b, 0, uint16_t(ka | kb << 2 | rel << 4));
         } else if (ka == kIntConst && kb == kIntConst) {
           set(fold_compare(in.op, int32_t(a), int32_t(b)) ? F_TRUE : F_PUSH0);
@@ -266,7 +276,6 @@ FastInterpreter::FastInterpreter(std::span<const uint8_t> il, const Layout& L) {
         } else if (ka == kIntMem) {
           set(FOp(F_EQ_MK + rel), a, b);
         } else {  // constant op word: the mirrored compare, word op constant
-          static const unsigned mirror[6] = {0, 1, 4, 5, 2, 3};  // EQ NE LT LE GT GE -> EQ NE GT GE LT LE
           set(FOp(F_EQ_MK + mirror[rel]), b, a);
         }
         break;
@@ -401,6 +410,11 @@ void FastInterpreter::scan(uint8_t* mem) {
   HANDLER(N##_MK) { st = (st << 1) | uint32_t(ld_i(m, ip->a) OPR int32_t(ip->b)); NEXT(); }
   LDC_CMP(EQ, ==) LDC_CMP(NE, !=) LDC_CMP(LT, <) LDC_CMP(LE, <=) LDC_CMP(GT, >) LDC_CMP(GE, >=)
 #undef LDC_CMP
+#define LDC_FCMP(N, OPR)                                                                             \
+  HANDLER(N##_FF) { st = (st << 1) | uint32_t(ld_f(m, ip->a) OPR ld_f(m, ip->b)); NEXT(); }          \
+  HANDLER(N##_FK) { st = (st << 1) | uint32_t(ld_f(m, ip->a) OPR bits_f(ip->b)); NEXT(); }
+  LDC_FCMP(EQ, ==) LDC_FCMP(NE, !=) LDC_FCMP(LT, <) LDC_FCMP(LE, <=) LDC_FCMP(GT, >) LDC_FCMP(GE, >=)
+#undef LDC_FCMP
   HANDLER(CMP_F) { st = (st << 1) | uint32_t(compare_real(m, *ip)); NEXT(); }
 
   // ---- application instructions: only with power

@@ -211,6 +211,12 @@ const char kEdgeIl[] = R"(.edges 4
     LDGE    2 F3
     LDGT    D3 F4
     LDEQ    F5 2.0
+    ORBLK
+    LDGT    1.5 F6
+    LDLE    F7 F6
+    LDNE    2.5 F7
+    ORBLK
+    ANDBLK
     OUT     Y0
     OUTN    Y1
     MPS
