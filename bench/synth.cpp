@@ -50,6 +50,10 @@ class Writer {
  public:
   explicit Writer(uint64_t seed) : r(seed) {}
   Rng r;
+  // One-class programs: every result goes to a device of its own (a compiler
+  // cannot drop a store that a later one overwrites) and INT32 sources are the
+  // WX inputs (data words nobody writes would only hold 0).
+  bool fresh = false;
 
   void rung() { body_ += ".rung line " + num(++rungs_) + "\n"; }
   void ins(const std::string& s) { body_ += "    " + s + "\n"; count_++; }
@@ -71,11 +75,18 @@ class Writer {
       default: return "C" + num(r.below(256));
     }
   }
-  std::string bit_dst() { return r.pct(60) ? "M" + num(r.below(D::kBitsM)) : "Y" + num(r.below(D::kBitsY)); }
-  std::string int_word() { return r.pct(30) ? "WX" + num(r.below(D::kInWX)) : "D" + num(r.below(D::kWordsD)); }
+  std::string bit_dst() {
+    if (fresh) return "M" + num(next_m_++ % 8192);
+    return r.pct(60) ? "M" + num(r.below(D::kBitsM)) : "Y" + num(r.below(D::kBitsY));
+  }
+  std::string wx() { return "WX" + num(r.below(D::kInWX)); }
+  std::string d_src() { return fresh ? wx() : "D" + num(r.below(D::kWordsD)); }
+  std::string d_dst() { return fresh ? "D" + num(D::kWordsD + next_d_++ % (8192 - D::kWordsD)) : "D" + num(r.below(D::kWordsD)); }
+  std::string wy_dst() { return fresh ? "WY" + num(next_wy_++ % 1024) : "WY" + num(r.below(D::kWordsWY)); }
+  std::string int_word() { return r.pct(30) ? wx() : d_src(); }
   std::string int_const() { return num(r.pct(20) ? r.range(-1000, 1000) : r.range(1, 100)); }
   std::string int_src() { return r.pct(35) ? int_const() : int_word(); }
-  std::string int_dst() { return r.pct(85) ? "D" + num(r.below(D::kWordsD)) : "WY" + num(r.below(D::kWordsWY)); }
+  std::string int_dst() { return r.pct(85) ? d_dst() : wy_dst(); }
   std::string real_in() { return "F" + num(D::kInFPos + r.below(D::kInF - D::kInFPos)); }     // [-8, 8]
   std::string real_pos() { return "F" + num(r.below(D::kInFPos)); }                          // [0.1, 8]
   std::string real_const() {
@@ -84,7 +95,10 @@ class Writer {
     return b;
   }
   std::string real_src() { return r.pct(30) ? real_const() : real_in(); }
-  std::string real_dst() { return "F" + num(r.range(D::kFirstFOut, D::kLastFOut)); }
+  std::string real_dst() {
+    if (fresh) return "F" + num(D::kFirstFOut + next_f_++ % (1024 - D::kFirstFOut));
+    return "F" + num(r.range(D::kFirstFOut, D::kLastFOut));
+  }
   std::string edge() { return "E" + num(edges_++); }
   std::string timer() { return "T" + num(timers_++ % 256); }
   std::string counter() { return "C" + num(counters_++ % 256); }
@@ -149,13 +163,13 @@ class Writer {
   }
   void move() {
     switch (r.pick({25, 20, 20, 15, 10, 5, 5})) {
-      case 0: return ins("MOV WX" + num(r.below(D::kInWX)) + " D" + num(r.below(D::kWordsD)));
-      case 1: return ins("MOV D" + num(r.below(D::kWordsD)) + " D" + num(r.below(D::kWordsD)));
+      case 0: return ins("MOV " + wx() + " " + d_dst());
+      case 1: return ins("MOV " + d_src() + " " + d_dst());
       case 2: return ins("MOV " + int_const() + " " + int_dst());
-      case 3: return ins("MOV D" + num(r.below(D::kWordsD)) + " WY" + num(r.below(D::kWordsWY)));
+      case 3: return ins("MOV " + d_src() + " " + wy_dst());
       case 4: return ins("MOV " + real_in() + " " + real_dst());
-      case 5: return ins("MOV D" + num(r.below(D::kWordsD)) + " " + real_dst());
-      default: return ins("MOV " + real_in() + " D" + num(r.below(D::kWordsD)));
+      case 5: return ins("MOV " + d_src() + " " + real_dst());
+      default: return ins("MOV " + real_in() + " " + d_dst());
     }
   }
   void arith() {
@@ -212,6 +226,7 @@ class Writer {
  private:
   std::string body_;
   int rungs_ = 0, count_ = 0, edges_ = 0, timers_ = 0, counters_ = 0;
+  int next_m_ = 0, next_d_ = 0, next_wy_ = 0, next_f_ = 0;
 };
 
 }  // namespace
@@ -329,6 +344,7 @@ std::string synth_il(const SynthOptions& o) {
 std::string synth_class_il(OpClass c, int n, uint64_t seed, bool powered) {
   if (n < 1) throw std::invalid_argument("synth: n must be at least 1");
   Writer w(seed);
+  w.fresh = true;
   std::string title = std::string("synth: class ") + op_class_name(c) + ", " + num(n) + " instructions" +
                       (powered ? "" : ", power off");
   if (c == OpClass::Basic) {

@@ -66,7 +66,9 @@ std::string synth_il(const SynthOptions& o);
 // Basic: ordinary bit rungs.  Compare: n compares (each pushes).  The
 // application classes: one `TRUE` (powered) or one `LOAD M8191` (never set:
 // every instruction is skipped) and then n instructions of the class; timers and
-// counters run either way, with IN = 1 or 0.
+// counters run either way, with IN = 1 or 0.  Every result goes to a device of
+// its own (no store is overwritten by a later one) and INT32 sources are the WX
+// inputs.
 std::string synth_class_il(OpClass c, int n, uint64_t seed, bool powered = true);
 
 // Counts of a program: instructions per class.
