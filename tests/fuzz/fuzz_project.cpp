@@ -1,0 +1,28 @@
+// Fuzz the project file reader (driver.h parse_project).  It reads a path, so
+// the input goes to a per-process temporary file first.
+#include <unistd.h>
+
+#include <cstdio>
+#include <string>
+
+#include "driver/driver.h"
+#include "tests/fuzz/fuzz_common.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  static const std::string path = [] {
+    const char* tmp = getenv("TMPDIR");
+    return std::string(tmp && *tmp ? tmp : "/tmp") + "/ldc_fuzz_project_" + std::to_string(getpid()) + ".ldp";
+  }();
+  FILE* f = fopen(path.c_str(), "wb");
+  if (!f) return 0;
+  if (size) fwrite(data, 1, size, f);
+  fclose(f);
+  try {
+    ldc::Project p = ldc::parse_project(path);
+    std::vector<std::string> files;
+    for (const auto& t : p.tasks) files.push_back(t.file);
+    (void)ldc::print_project(p, files);
+  } catch (const ldc::UserError&) {
+  }
+  return 0;
+}

@@ -1,0 +1,35 @@
+#!/bin/sh
+# tools/fuzz.sh NAME SECONDS -- fuzz one reader with libFuzzer (docs/fuzzing.md).
+#   NAME: ld ldmicro plcopen iltext ilbin trace image hex project
+# Builds build-fuzz/ with clang (-fsanitize=fuzzer,address,undefined) if needed,
+# seeds fuzz-corpus/NAME/ (git-ignored) from the reader's seed directories,
+# runs for SECONDS and prints the executions.  Crashes land in fuzz-corpus/NAME-crashes/.
+set -eu
+name=${1:?usage: tools/fuzz.sh NAME SECONDS}
+secs=${2:-60}
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${LDC_FUZZ_BUILD:-$root/build-fuzz}
+if [ ! -f "$build/CMakeCache.txt" ]; then
+  CXX=clang++ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLDC_FUZZ=ON -DLDC_SANITIZE=ON >/dev/null
+fi
+cmake --build "$build" --target "fuzz_$name" -j"${LDC_FUZZ_JOBS:-2}" >/dev/null
+corpus=$root/fuzz-corpus/$name
+crashes=$root/fuzz-corpus/$name-crashes
+mkdir -p "$corpus" "$crashes"
+# seeds: the directories tests/fuzz/CMakeLists.txt lists for this reader
+seeds=$(sed -n "s/^set(_fuzz_seeds_$name \(.*\))$/\1/p" "$root/tests/fuzz/CMakeLists.txt")
+for d in $seeds "tests/fuzz/regressions/$name"; do
+  [ -d "$root/$d" ] || continue
+  find "$root/$d" -type f ! -name '*.md' | while read -r f; do
+    cp "$f" "$corpus/seed_$(echo "$f" | cksum | cut -d' ' -f1)"
+  done
+done
+log=$root/fuzz-corpus/$name.log
+set +e
+"$build/tests/fuzz/fuzz_$name" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 \
+  -artifact_prefix="$crashes/" -print_final_stats=1 "$corpus" >"$log" 2>&1
+rc=$?
+set -e
+grep -E '^stat::number_of_executed_units|^stat::peak_rss_mb|ERROR|SUMMARY' "$log" || true
+echo "corpus: $(ls "$corpus" | wc -l) files; crashes: $(ls "$crashes" | wc -l); exit $rc; log $log"
+exit $rc
