@@ -697,15 +697,38 @@ void Gen::instr(const ldc::Instr& in) {
 }
 
 // The shift-subtract division (docs/c40.md): R0 = a, R1 = b (b != 0, -1);
-// returns R0 = a / b truncated toward zero, R1 = a % b (sign of a).
-// Uses R2-R5 and AR0.  32 steps of 10 cycles (a delayed DB).
+// returns R0 = a / b truncated toward zero, R1 = a % b (sign of a).  The bit
+// lengths of |a| and |b| come from FLOAT's exponent (through the stack), so
+// only the k = len|a| - len|b| + 1 quotient bits that can be 1 take a step:
+// the remainder starts as |a| >> k, the dividend as |a| << (32 - k).  Steps
+// of 10 cycles (a delayed DB).  Uses R2-R6, AR0 and two stack words.
 const char* const kDivRoutine[] = {
     "LDI R0, R4",          // sign of the remainder: sign of a
     "XOR3 R1, R0, R5",     // sign of the quotient: bit 31 of a ^ b
     "ABSI R0, R0",         // |a| (INT32_MIN stays 0x80000000 = 2^31 unsigned)
     "ABSI R1, R1",         // |b|
-    "LDI 0, R2",           // partial remainder
-    "LDI 31, AR0",         // 32 steps
+    "FLOAT R0, R2",
+    "PUSHF R2",
+    "POP R2",
+    "ASH -24, R2",         // ea = len|a| - 1 (-128 for 0)
+    "LDI R0, R3",
+    "LDILT 31, R2",        // |a| = 2^31
+    "FLOAT R1, R3",
+    "PUSHF R3",
+    "POP R3",
+    "ASH -24, R3",         // eb
+    "CMPI 0, R1",
+    "LDILT 31, R3",        // |b| = 2^31
+    "SUBI3 R3, R2, R3",    // ea - eb
+    "BLT div_zero",        // |a| < |b|: quotient 0
+    "ADDI 1, R3",          // k steps, 1..32
+    "NEGI R3, R2",
+    "LSH3 R2, R0, R2",     // remainder = |a| >> k
+    "ADDI3 -32, R3, R6",
+    "NEGI R6, R6",
+    "LSH3 R6, R0, R0",     // dividend = |a| << (32 - k)
+    "SUBI 1, R3",
+    "LDI R3, AR0",         // DB counts k - 1 down to -1
     "div_step: LSH3 -31, R0, R3",
     "LSH 1, R2",
     "OR R3, R2",           // remainder:dividend <<= 1
@@ -716,13 +739,16 @@ const char* const kDivRoutine[] = {
     "LDI 0, R3",
     "LDIHS 1, R3",         // the quotient bit
     "OR R3, R0",
-    "NEGI R0, R3",
+    "div_signs: NEGI R0, R3",
     "NEGI R2, R1",
     "CMPI 0, R5",
     "LDILT R3, R0",
     "CMPI 0, R4",
     "LDIGE R2, R1",
     "RETSU",
+    "div_zero: LDI R0, R2",
+    "LDI 0, R0",
+    "BR div_signs",
 };
 
 // REAL division (docs/c40.md): R0 = a, R1 = b (b != 0); returns R0 = a / b.

@@ -7,12 +7,12 @@ namespace ldc::c40gen {
 
 c40sim::Config board_config(const C40Layout& w, uint32_t code_words, uint32_t il_words) {
   c40sim::Config cfg;
-  cfg.regions = {
+  cfg.regions = {  // the data first: the simulator looks regions up in order
+      {"data", kDataBase, w.words, kDataWaitStates},
       {"code", kCodeBase, std::max<uint32_t>(code_words, 1), 0},
       {"il", kIlBase, std::max<uint32_t>(il_words, 1), 0},
-      {"stack", kStackBase, kStackWords, 0},
       {"rom", kRomBase, kRomWords, 0},
-      {"data", kDataBase, w.words, kDataWaitStates},
+      {"stack", kStackBase, kStackWords, 0},
   };
   cfg.nsPerCycle = kNsPerCycle;
   cfg.maxInstructions = UINT64_MAX;
@@ -29,13 +29,18 @@ C40Machine::C40Machine(const Layout& layout, std::span<const uint32_t> code, uin
   if (!il.empty()) sim_->load(il, kIlBase);
   rom_.install(*sim_);
   c40sim::C40Sim* s = sim_.get();
-  sim_->setTrace([this, s](const c40sim::TraceEntry& t) { rom_.on_instruction(*s, t.pc); });
-  buf_.resize(w_.words);
+  sim_->setTrace([this, s](const c40sim::TraceEntry& t) {
+    rom_.on_instruction(*s, t.pc);
+    if (observer) observer(t);
+  });
+  buf_.assign(w_.words, 0);
+  in_.resize(w_.words);
 }
 
 ScanCost C40Machine::scan(uint8_t* mem) {
-  bytes_to_words(layout_, w_, mem, buf_.data());
-  sim_->load(buf_, kDataBase);
+  bytes_to_words(layout_, w_, mem, in_.data());
+  for (uint32_t i = 0; i < w_.words; i++)  // buf_ holds what the simulator's memory holds
+    if (in_[i] != buf_[i]) sim_->write(kDataBase + i, buf_[i] = in_[i]);
   sim_->setReg(as::c40::Reg::SP, kStackBase);
   c40sim::RunResult r = sim_->call(entry_, max_cycles);
   if (!r.ok())

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <vector>
@@ -35,6 +36,9 @@ class C40Machine {
   const C40Layout& words() const { return w_; }
   RomService& rom() { return rom_; }
   uint64_t max_cycles = 2000000000ull;  // per scan
+  // Called for every executed instruction (after the math ROM service), e.g.
+  // to attribute cycles to IL instructions (bench/c40bench.cpp).
+  std::function<void(const c40sim::TraceEntry&)> observer;
 
  private:
   Layout layout_;
@@ -42,7 +46,7 @@ class C40Machine {
   uint32_t entry_;
   std::unique_ptr<c40sim::C40Sim> sim_;
   RomService rom_;
-  std::vector<uint32_t> buf_;
+  std::vector<uint32_t> buf_, in_;
 };
 
 // The regions of the board for a program of `code_words` code words and

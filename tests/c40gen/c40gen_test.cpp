@@ -164,6 +164,26 @@ TEST(C40Real, UlpDistance) {
   EXPECT_EQ(ulp_distance(std::nextafter(0.0f, 1.0f), std::nextafter(0.0f, -1.0f)), 2u);
 }
 
+// INT32 DIV and MOD through __divi (and the interpreter's divi): every edge
+// pair and random ones of every bit length, on both engines, against the model.
+TEST(C40Divide, IntegerDivisionIsExact) {
+  std::string ld =
+      "rung \"divide\"\n|--+--(DIV D0 D1 D2)\n|  +--(MOD D0 D1 D3)\n|  +--(DIV D1 D0 D4)\n|  +--(MOD D1 D0 D5)\n";
+  std::string csv = "D0,D1\n";
+  const int32_t edge[] = {0, 1, -1, 2, -2, 3, 7, -7, 100, 65535, 65536, INT32_MAX, INT32_MIN, INT32_MIN + 1,
+                          1 << 30, -(1 << 30), 46341};
+  for (int32_t a : edge)
+    for (int32_t b : edge) csv += std::to_string(a) + "," + std::to_string(b) + "\n";
+  std::mt19937 rng(77);
+  for (int i = 0; i < 600; i++) {
+    int32_t a = int32_t(rng()) >> (rng() % 32), b = int32_t(rng()) >> (rng() % 32);
+    csv += std::to_string(a) + "," + std::to_string(b) + "\n";
+  }
+  test::Verdict v = test::check_c40(ld, csv);
+  EXPECT_TRUE(v.ok()) << v.text();
+  EXPECT_GT(v.scans, 800);
+}
+
 // ------------------------------------------------------------------ word IL
 
 TEST(C40WordIl, EncodesOperandsAndJumpTargets) {
