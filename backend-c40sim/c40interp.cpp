@@ -50,7 +50,7 @@ const InterpProgram& interp_program() {
   return prog;
 }
 
-std::vector<uint32_t> word_il(std::span<const uint8_t> il, const Layout&) {
+std::vector<uint32_t> word_il(std::span<const uint8_t> il, const Layout&, std::vector<uint32_t>* starts) {
   auto rd32 = [&](uint32_t p) {
     return uint32_t(il[p]) | uint32_t(il[p + 1]) << 8 | uint32_t(il[p + 2]) << 16 | uint32_t(il[p + 3]) << 24;
   };
@@ -59,6 +59,7 @@ std::vector<uint32_t> word_il(std::span<const uint8_t> il, const Layout&) {
   uint32_t off = 0, words = 0;
   while (off < il.size()) {
     word_at[off] = words;
+    if (starts) starts->push_back(words);
     const char* sig = op_info(Op(il[off])).operands;
     off++, words++;
     for (int i = 0; sig[i]; i++) {

@@ -27,6 +27,9 @@ const InterpProgram& interp_program();
 // one word per operand (tag << 24 | payload), a constant followed by its value
 // word, a jump target as a word offset from the first instruction.  `il` must
 // be valid (validate_il).
-std::vector<uint32_t> word_il(std::span<const uint8_t> il, const Layout& layout);
+// `starts`, if given, receives the word offset (from the first instruction)
+// of every instruction, in program order.
+std::vector<uint32_t> word_il(std::span<const uint8_t> il, const Layout& layout,
+                              std::vector<uint32_t>* starts = nullptr);
 
 }  // namespace ldc::c40gen
