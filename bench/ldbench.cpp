@@ -2,8 +2,10 @@
 // the classic reference interpreter (ir/interp.cpp), the fast interpreter
 // (runtime/fastinterp.h), native x86-64 code (build_x86) and the C route
 // (ldc --emit=c through cc -O2), on the same programs and the same input
-// traces; plus code size, compile speed and compile memory.  Writes CSV files,
-// SVG plots and tables.md into --out (docs/BENCHMARKS.md presents one run).
+// traces; the simulated TMS320C40 (its native code and its C40-hosted
+// interpreter, in cycles); plus code size, compile speed and compile memory.
+// Writes CSV files, SVG plots and tables.md into --out (docs/BENCHMARKS.md
+// presents one run).
 //
 //   ldbench --out docs/bench            the full run (several minutes)
 //   ldbench --smoke --out DIR           tiny sizes, a few seconds (the test suite)
@@ -47,6 +49,7 @@
 #include "bench/ldgen.h"
 #include "bench/svgplot.h"
 #include "bench/synth.h"
+#include "driver/c40_driver.h"
 #include "driver/driver.h"
 #include "frontend/frontend.h"
 #include "loader/loader.h"
@@ -79,7 +82,7 @@ struct Options {
   double batch_us = 25;
   bool c_route = true;
   long c_max_il = 70000;
-  bool c40 = false;
+  bool c40 = true;
   std::string source_dir = LDC_SOURCE_DIR;
   std::string only;  // experiments to run, comma separated; "" = all
   std::string command;
@@ -322,16 +325,6 @@ size_t elf_symbol_size(const std::string& path, const std::string& sym, const st
   return total;
 }
 
-// ------------------------------------------------------------------ the C40 column
-//
-// C40 CYCLES: NOT MEASURED YET.  A TMS320C40 cycle-counting simulator
-// (backend-c40sim/) is being written; there is no C40 code generator or engine
-// to run a Program on it yet.  When there is, make this return the simulated
-// cycles of one scan (the median over the trace), and `ldbench --c40` fills the
-// c40_cycles column of every CSV and table.  Until then the column stays empty
-// and docs/BENCHMARKS.md says "not yet measured".
-std::optional<double> c40_cycles_per_scan(const Program& /*p*/, const RawTrace& /*trace*/) { return std::nullopt; }
-
 // ------------------------------------------------------------------ subjects
 
 class NullEngine : public Engine {
@@ -358,7 +351,9 @@ struct Subject {
   double overhead_ns = NAN;
   size_t il_bytes = 0, fast_bytes = 0, native_bytes = 0, image_bytes = 0, c_bytes = 0;
   double native_build_s = NAN, c_build_s = NAN;
-  std::optional<double> c40_cycles;
+  double c40_cycles = NAN, c40_interp_cycles = NAN;  // simulated cycles per scan (median)
+  size_t c40_bytes = 0;
+  std::string c40_status;
   double p_target = NAN;  // the synth's p_basic, for grouping
   int n_target = 0;
   std::string klass;  // class programs: the class name; "" otherwise
@@ -401,7 +396,54 @@ void prepare(Subject& s, const Options& o) {
     }
     remove_tree(dir);  // a loaded shared object stays mapped
   }
-  if (o.c40) s.c40_cycles = c40_cycles_per_scan(s.prog, s.trace);
+}
+
+// ------------------------------------------------------------------ the TMS320C40
+//
+// Simulated cycles per scan of the C40 native code (build_c40) and of the
+// C40-hosted interpreter running the same IL, on the board of docs/c40.md
+// (backend-c40sim: code in zero-wait SRAM, the memory image in SRAM with one
+// wait state, 50 ns per cycle on a TMS320C40-40, cache off as in paper 003).
+// The simulator is deterministic: the median over a few scans of the trace
+// (the first, with S1 set, left out).  REAL arithmetic on the C40 uses its own
+// float format, so C40 images are not compared with the classic interpreter's
+// here; tests/c40gen holds them to the C40 semantic model.
+void measure_c40(Subject& s, const Options& o) {
+  if (!o.c40) {
+    s.c40_status = "off (--no-c40)";
+    return;
+  }
+  Layout L = s.prog.layout();
+  int scans = o.smoke ? 3 : s.n > 30000 ? 5 : 17;
+  auto run = [&](C40Engine& e) {
+    Memory m(L);
+    install_call_table(m.data());
+    std::vector<double> cyc;
+    for (int k = 0; k < scans; k++) {
+      s.trace.apply(m.data(), size_t(k) % s.trace.size());
+      m.set_bit(Area::S, kBitFirstScan, k == 0);
+      e.scan(m.data());
+      if (k > 0) cyc.push_back(double(e.last_scan().cycles));
+    }
+    return median(cyc);
+  };
+  try {
+    C40Build b = build_c40(s.prog, s.name);
+    s.c40_bytes = b.asm_result.code.size();
+    auto native = make_c40sim_engine(b.asm_result.code, 0, L);
+    s.c40_cycles = run(*native);
+    BinaryIl bin = encode_il(s.prog);
+    auto interp = make_c40interp_engine(bin.code, L);
+    s.c40_interp_cycles = run(*interp);
+  } catch (std::exception& e) {
+    s.c40_status = std::string("failed: ") + e.what();
+  }
+}
+constexpr double kC40NsPerCycle = 50.0;  // TMS320C40-40
+
+std::string cycles_text(double c) {  // "617 µs (12.3k cyc)"
+  if (!std::isfinite(c)) return "–";
+  return human_ns(c * kC40NsPerCycle) + " (" + plot::tick_label(std::round(c * 1000) / 1000) + " cyc)";
 }
 
 // Every engine from a zero image over the first scans of the trace, images
@@ -511,8 +553,14 @@ struct Run {
     say("  %-24s %7d IL  built %5.1fs", s->name.c_str(), s->n, secs_since(t0));
     check_agreement(*s, o.smoke ? 8 : agree_scans);
     measure(*s, o);
-    say("  timed %.1fs: classic %s, fast %s, native %s, C %s\n", secs_since(t0), human_ns(s->t[kClassic].median).c_str(),
-        human_ns(s->t[kFast].median).c_str(), human_ns(s->t[kNative].median).c_str(), human_ns(s->t[kC].median).c_str());
+    auto tc = Clock::now();
+    measure_c40(*s, o);
+    double c40_s = secs_since(tc);
+    say("  timed %.1fs: classic %s, fast %s, native %s, C %s; C40 %.0f / %.0f cycles (%.1fs)\n", secs_since(t0),
+        human_ns(s->t[kClassic].median).c_str(), human_ns(s->t[kFast].median).c_str(),
+        human_ns(s->t[kNative].median).c_str(), human_ns(s->t[kC].median).c_str(), s->c40_interp_cycles, s->c40_cycles,
+        c40_s);
+    if (!s->c40_status.empty() && o.c40) say("  C40: %s\n", s->c40_status.c_str());
     for (int e = 0; e < kEngines; e++) {
       const Timing& t = s->t[e];
       timings.row({s->experiment, s->name, std::to_string(s->n), fmt(s->counts.p_basic(), 4), kEngineName[e],
@@ -520,6 +568,14 @@ struct Run {
                    fmt(t.median / s->n, 4), std::to_string(t.batch), std::to_string(t.samples),
                    t.ok ? "ok" : s->status[e]});
     }
+    // the simulated C40: time = cycles x 50 ns
+    const char* c40_names[2] = {"c40", "c40interp"};
+    double c40_cyc[2] = {s->c40_cycles, s->c40_interp_cycles};
+    for (int k = 0; k < 2; k++)
+      timings.row({s->experiment, s->name, std::to_string(s->n), fmt(s->counts.p_basic(), 4), c40_names[k],
+                   fmt(c40_cyc[k] * kC40NsPerCycle, 6), "", "", "", "", fmt(c40_cyc[k] * kC40NsPerCycle / s->n, 4), "", "",
+                   std::isfinite(c40_cyc[k]) ? "simulated: " + fmt(c40_cyc[k], 10) + " cycles x 50 ns"
+                                             : (s->c40_status.empty() ? "not measured" : s->c40_status)});
     // the engines (the C route's shared object, native code) are not needed any more
     for (auto& e : s->eng) e.reset();
     subjects.push_back(std::move(s));
@@ -916,15 +972,14 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
   std::string& md = R.tables;
   auto info = [&](const char* k) { auto it = machine.find(k); return it == machine.end() ? std::string("?") : it->second; };
   std::string note = info("cpu") + ", " + info("date");
-  std::string c40_note = o.c40 ? "C40: no engine in this build" : "C40: not measured";
 
   // --- timings.csv
   R.write("timings.csv", R.timings.text());
 
   // --- headline: the typical mix
   md += "## Headline: the typical mix (P_basic = 0.689)\n\n";
-  md += md_head({"program", "N_exe", "P_basic", "classic", "fast", "native", "C -O2", "C40 cycles", "classic/native",
-                 "fast/native", "C/native", "native ns/IL"});
+  md += md_head({"program", "N_exe", "P_basic", "classic", "fast", "native", "C -O2", "classic/native", "fast/native",
+                 "C/native", "native ns/IL", "C40 interp", "C40 native", "C40 interp/native"});
   auto cell = [](const Timing& t) { return t.ok ? mp(t.median, t.p99) : std::string("–"); };
   std::vector<Subject*> head;
   for (Subject* s : R.of("scaling")) head.push_back(s);
@@ -933,16 +988,19 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
   for (Subject* s : R.of("large")) head.push_back(s);
   for (Subject* s : head) {
     md += md_row({s->name, std::to_string(s->n), fixed(s->counts.p_basic(), 3), cell(s->t[kClassic]),
-                  cell(s->t[kFast]), cell(s->t[kNative]), cell(s->t[kC]), s->c40_cycles ? fmt(*s->c40_cycles) : "not yet measured",
+                  cell(s->t[kFast]), cell(s->t[kNative]), cell(s->t[kC]),
                   ratio(s->t[kClassic].median, s->t[kNative].median), ratio(s->t[kFast].median, s->t[kNative].median),
-                  ratio(s->t[kC].median, s->t[kNative].median), fixed(s->t[kNative].median / s->n, 3)});
+                  ratio(s->t[kC].median, s->t[kNative].median), fixed(s->t[kNative].median / s->n, 3),
+                  cycles_text(s->c40_interp_cycles), cycles_text(s->c40_cycles), ratio(s->c40_interp_cycles, s->c40_cycles)});
   }
-  md += "\nMedian / p99 time per scan (the input-writing overhead subtracted).\n\n";
+  md += "\nMedian / p99 time per scan on this machine (the input-writing overhead subtracted); C40: the simulated "
+        "TMS320C40-40 (50 ns per cycle), median cycles per scan of its native code and of the C40-hosted interpreter.\n\n";
 
   // --- scaling.csv and plot
   {
     Csv c({"n_exe", "p_basic", "classic_ns", "fast_ns", "native_ns", "c_ns", "classic_p99_ns", "fast_p99_ns",
-           "native_p99_ns", "c_p99_ns", "c40_cycles", "classic_over_native", "fast_over_native", "c_over_native"});
+           "native_p99_ns", "c_p99_ns", "c40_cycles", "c40_interp_cycles", "classic_over_native", "fast_over_native",
+           "c_over_native", "c40_interp_over_native"});
     plot::LinePlot lp;
     lp.title = "Time per scan vs program size (typical mix, P_basic = 0.689)";
     lp.xlabel = "N_exe (IL instructions)";
@@ -954,9 +1012,9 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     for (Subject* s : R.of("scaling")) {
       c.row({std::to_string(s->n), fmt(s->counts.p_basic(), 4), fmt(s->t[kClassic].median, 6), fmt(s->t[kFast].median, 6),
              fmt(s->t[kNative].median, 6), fmt(s->t[kC].median, 6), fmt(s->t[kClassic].p99, 6), fmt(s->t[kFast].p99, 6),
-             fmt(s->t[kNative].p99, 6), fmt(s->t[kC].p99, 6), s->c40_cycles ? fmt(*s->c40_cycles) : "",
+             fmt(s->t[kNative].p99, 6), fmt(s->t[kC].p99, 6), fmt(s->c40_cycles, 10), fmt(s->c40_interp_cycles, 10),
              fmt(s->t[kClassic].median / s->t[kNative].median, 4), fmt(s->t[kFast].median / s->t[kNative].median, 4),
-             fmt(s->t[kC].median / s->t[kNative].median, 4)});
+             fmt(s->t[kC].median / s->t[kNative].median, 4), fmt(s->c40_interp_cycles / s->c40_cycles, 4)});
       for (int e = 0; e < kEngines; e++) {
         ser[e].x.push_back(s->n);
         ser[e].y.push_back(s->t[e].ok ? s->t[e].median : NAN);
@@ -988,38 +1046,52 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
       }
       sp.series.push_back(q);
     }
+    {
+      plot::Series q;
+      q.name = "C40: interpreter / native";
+      q.color = plot::palette()[4];
+      q.dashed = true;
+      for (Subject* s : R.of("scaling")) {
+        q.x.push_back(s->n);
+        q.y.push_back(s->c40_interp_cycles / s->c40_cycles);
+      }
+      sp.series.push_back(q);
+    }
     R.write("speedup.svg", plot::render(sp));
   }
 
   // --- classes (Fig. 8)
   {
     Csv c({"class", "powered", "n", "classic_ns_per_instr", "fast_ns_per_instr", "native_ns_per_instr", "c_ns_per_instr",
-           "c40_cycles_per_instr", "classic_over_native", "fast_over_native", "c_over_native", "native_code_bytes_per_instr"});
+           "c40_cycles_per_instr", "c40_interp_cycles_per_instr", "classic_over_native", "fast_over_native",
+           "c_over_native", "c40_interp_over_native", "native_code_bytes_per_instr", "c40_code_bytes_per_instr"});
     md += "## Per class (paper 003, Fig. 8): time per instruction\n\n";
     md += "One-class programs of " + std::to_string(o.smoke ? 60 : 3000) +
           " instructions; *off*: the same with no power (application instructions skipped).\n\n";
-    md += md_head({"class", "classic ns", "fast ns", "native ns", "C ns", "C40", "classic/native", "fast/native",
-                   "C/native", "native bytes/instr"});
+    md += md_head({"class", "classic ns", "fast ns", "native ns", "C ns", "classic/native", "fast/native", "C/native",
+                   "native bytes/instr", "C40 interp cyc", "C40 native cyc", "C40 interp/native"});
     plot::BarPlot bp;
     bp.title = "Time per instruction by class (one-class programs, powered)";
     bp.ylabel = "ns per IL instruction";
     bp.logy = true;
-    bp.note = note + "; " + c40_note;
+    bp.note = note;
     std::vector<plot::Series> ser(kEngines);
     for (int e = 0; e < kEngines; e++) ser[e].name = kEngineTitle[e];
     for (Subject* s : R.of("classes")) {
       double v[kEngines];
       for (int e = 0; e < kEngines; e++) v[e] = s->t[e].median / s->n;
       double cb = double(s->native_bytes) / s->n;
+      double ci = s->c40_interp_cycles / s->n, cn = s->c40_cycles / s->n;
       c.row({s->klass, s->powered ? "1" : "0", std::to_string(s->n), fmt(v[0], 5), fmt(v[1], 5), fmt(v[2], 5),
-             fmt(v[3], 5), "", fmt(v[0] / v[2], 4), fmt(v[1] / v[2], 4), fmt(v[3] / v[2], 4), fmt(cb, 4)});
+             fmt(v[3], 5), fmt(cn, 5), fmt(ci, 5), fmt(v[0] / v[2], 4), fmt(v[1] / v[2], 4), fmt(v[3] / v[2], 4),
+             fmt(ci / cn, 4), fmt(cb, 4), fmt(double(s->c40_bytes) / s->n, 4)});
       // cc -O2 drops compares nobody reads and tests the power of a run of
       // instructions under one condition once: those C cells measure the optimizer.
       bool c_optimized = s->klass == op_class_name(OpClass::Compare) || !s->powered;
       md += md_row({s->klass + (s->powered ? "" : " (off)"), fixed(v[0], 2), fixed(v[1], 2), fixed(v[2], 3),
-                    s->t[kC].ok ? fixed(v[3], 3) + (c_optimized ? " *" : "") : "–", "not yet measured",
-                    ratio(v[0], v[2]), ratio(v[1], v[2]), s->t[kC].ok ? ratio(v[3], v[2]) + (c_optimized ? " *" : "") : "–",
-                    fixed(cb, 1)});
+                    s->t[kC].ok ? fixed(v[3], 3) + (c_optimized ? " *" : "") : "–", ratio(v[0], v[2]), ratio(v[1], v[2]),
+                    s->t[kC].ok ? ratio(v[3], v[2]) + (c_optimized ? " *" : "") : "–", fixed(cb, 1), fixed(ci, 1),
+                    fixed(cn, 1), ratio(ci, cn)});
       if (s->powered) {
         bp.categories.push_back(s->klass);
         for (int e = 0; e < kEngines; e++) ser[e].y.push_back(s->t[e].ok && !(e == kC && c_optimized) ? v[e] : NAN);
@@ -1028,9 +1100,27 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     bp.series = ser;
     md += "\n\\* The C compiler removes compares whose results no instruction reads, and tests the power of a run of "
           "instructions under one condition once: these C figures show the optimizer at work, not the instruction's "
-          "cost (left out of the plot).\n\n";
+          "cost (left out of the plot).  C40: simulated cycles per instruction.\n\n";
     R.write("classes.csv", c.text());
     R.write("classes.svg", plot::render(bp));
+    plot::BarPlot cp;
+    cp.title = "Simulated TMS320C40: cycles per instruction by class (powered)";
+    cp.ylabel = "cycles per IL instruction";
+    cp.logy = true;
+    cp.note = "backend-c40sim cycle model (docs/c40.md); 50 ns per cycle on a TMS320C40-40";
+    plot::Series ci, cn;
+    ci.name = "C40-hosted interpreter";
+    cn.name = "C40 native code";
+    ci.color = plot::palette()[0];
+    cn.color = plot::palette()[2];
+    for (Subject* s : R.of("classes")) {
+      if (!s->powered) continue;
+      cp.categories.push_back(s->klass);
+      ci.y.push_back(s->c40_interp_cycles / s->n);
+      cn.y.push_back(s->c40_cycles / s->n);
+    }
+    cp.series = {ci, cn};
+    R.write("classes_c40.svg", plot::render(cp));
   }
 
   // --- Fig. 10 and eq. (2)
@@ -1051,8 +1141,8 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
       return n * (p * tb + (1 - p) * app / wsum);
     };
     Csv c({"n_exe", "p_basic_target", "p_basic", "classic_ns", "fast_ns", "native_ns", "c_ns", "c40_cycles",
-           "classic_eq2_ns", "fast_eq2_ns", "native_eq2_ns", "c_eq2_ns", "native_code_bytes", "image_bytes", "il_bytes",
-           "fast_decoded_bytes", "c_scan_bytes"});
+           "c40_interp_cycles", "classic_eq2_ns", "fast_eq2_ns", "native_eq2_ns", "native_code_bytes", "image_bytes",
+           "il_bytes", "fast_decoded_bytes", "c_scan_bytes", "c40_code_bytes"});
     std::vector<double> ps;
     for (Subject* s : R.of("fig10"))
       if (std::find(ps.begin(), ps.end(), s->p_target) == ps.end()) ps.push_back(s->p_target);
@@ -1089,12 +1179,40 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     for (Subject* s : R.of("fig10")) {
       double p = s->counts.p_basic();
       c.row({std::to_string(s->n), fmt(s->p_target, 4), fmt(p, 4), fmt(s->t[kClassic].median, 6), fmt(s->t[kFast].median, 6),
-             fmt(s->t[kNative].median, 6), fmt(s->t[kC].median, 6), s->c40_cycles ? fmt(*s->c40_cycles) : "",
+             fmt(s->t[kNative].median, 6), fmt(s->t[kC].median, 6), fmt(s->c40_cycles, 10), fmt(s->c40_interp_cycles, 10),
              fmt(predict(kClassic, s->n, p), 6), fmt(predict(kFast, s->n, p), 6), fmt(predict(kNative, s->n, p), 6),
-             fmt(predict(kC, s->n, p), 6), std::to_string(s->native_bytes), std::to_string(s->image_bytes),
-             std::to_string(s->il_bytes), std::to_string(s->fast_bytes), s->c_bytes ? std::to_string(s->c_bytes) : ""});
+             std::to_string(s->native_bytes), std::to_string(s->image_bytes), std::to_string(s->il_bytes),
+             std::to_string(s->fast_bytes), s->c_bytes ? std::to_string(s->c_bytes) : "",
+             s->c40_bytes ? std::to_string(s->c40_bytes) : ""});
     }
     R.write("fig10.csv", c.text());
+    {  // the simulated C40, as paper 003 measured it: its interpreter and its native code
+      plot::LinePlot lp;
+      lp.title = "Fig. 10 on the simulated TMS320C40: time per scan vs N_exe";
+      lp.xlabel = "N_exe (IL instructions)";
+      lp.ylabel = "simulated time per scan (µs, 50 ns per cycle)";
+      lp.logy = true;
+      lp.note = "backend-c40sim cycle model; solid: C40 native code, dashed: C40-hosted interpreter";
+      for (size_t k = 0; k < ps.size(); k++) {
+        plot::Series nat, itp;
+        char nm[64];
+        std::snprintf(nm, sizeof nm, "P_basic %.3g", ps[k]);
+        nat.name = std::string(nm) + " native";
+        itp.name = std::string(nm) + " interp";
+        nat.color = itp.color = plot::palette()[k % plot::palette().size()];
+        itp.dashed = true;
+        for (Subject* s : R.of("fig10")) {
+          if (s->p_target != ps[k]) continue;
+          nat.x.push_back(s->n);
+          nat.y.push_back(s->c40_cycles * kC40NsPerCycle / 1e3);
+          itp.x.push_back(s->n);
+          itp.y.push_back(s->c40_interp_cycles * kC40NsPerCycle / 1e3);
+        }
+        lp.series.push_back(nat);
+        lp.series.push_back(itp);
+      }
+      R.write("fig10_c40.svg", plot::render(lp));
+    }
 
     // time per instruction vs P_basic at the largest N of the grid
     int nmax = 0;
@@ -1107,7 +1225,7 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     pp.note = note;
     md += "## Time vs P_basic (paper 003, Fig. 10) at N_exe = " + std::to_string(nmax) + "\n\n";
     md += md_head({"P_basic", "classic", "fast", "native", "C -O2", "classic/native", "fast/native", "C/native",
-                   "native eq. (2)", "native ns/IL"});
+                   "native eq. (2)", "native ns/IL", "C40 interp", "C40 native", "C40 interp/native"});
     for (int e = 0; e < kEngines; e++) {
       plot::Series q;
       q.name = kEngineTitle[e];
@@ -1124,7 +1242,9 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
                     human_ns(s->t[kNative].median), s->t[kC].ok ? human_ns(s->t[kC].median) : "–",
                     ratio(s->t[kClassic].median, s->t[kNative].median), ratio(s->t[kFast].median, s->t[kNative].median),
                     ratio(s->t[kC].median, s->t[kNative].median),
-                    human_ns(predict(kNative, s->n, s->counts.p_basic())), fixed(s->t[kNative].median / s->n, 3)});
+                    human_ns(predict(kNative, s->n, s->counts.p_basic())), fixed(s->t[kNative].median / s->n, 3),
+                    cycles_text(s->c40_interp_cycles), cycles_text(s->c40_cycles),
+                    ratio(s->c40_interp_cycles, s->c40_cycles)});
     }
     md += "\n";
     R.write("pbasic.svg", plot::render(pp));
@@ -1143,7 +1263,7 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
 
   // --- code size (eq. 3, 4)
   if (!R.of("fig10").empty() || !R.of("scaling").empty()) {
-    std::vector<double> x, native, image, il, fast, cx, cb;
+    std::vector<double> x, native, image, il, fast, cx, cb, kx, kb;
     for (Subject* s : R.of("fig10")) {
       x.push_back(s->n);
       native.push_back(double(s->native_bytes));
@@ -1151,6 +1271,7 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
       il.push_back(double(s->il_bytes));
       fast.push_back(double(s->fast_bytes));
       if (s->c_bytes) { cx.push_back(s->n); cb.push_back(double(s->c_bytes)); }
+      if (s->c40_bytes) { kx.push_back(s->n); kb.push_back(double(s->c40_bytes)); }
     }
     for (Subject* s : R.of("scaling")) {
       x.push_back(s->n);
@@ -1159,6 +1280,7 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
       il.push_back(double(s->il_bytes));
       fast.push_back(double(s->fast_bytes));
       if (s->c_bytes) { cx.push_back(s->n); cb.push_back(double(s->c_bytes)); }
+      if (s->c40_bytes) { kx.push_back(s->n); kb.push_back(double(s->c40_bytes)); }
     }
     Csv c({"quantity", "slope_bytes_per_il", "intercept_bytes", "r2", "slope_through_origin", "points"});
     md += "## Memory: bytes vs N_exe (paper 003, eq. 3 and 4)\n\n";
@@ -1172,7 +1294,8 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
                     fixed(f.r2, 4), fixed(f.slope0, 3) + " N_exe", paper});
       return f;
     };
-    Fit fn = line("native code", x, native, "M = 9.790 N_exe");
+    Fit fn = line("native x86-64 code", x, native, "M = 9.790 N_exe (C40)");
+    if (!kx.empty()) line("native C40 code (4 bytes a word)", kx, kb, "M = 9.790 N_exe");
     Fit fi = line("image file", x, image, "");
     line("binary IL (classic interpreter's program)", x, il, "M' = 2.114 N_exe + 18.973 N_PLC + 183");
     line("fast interpreter's decoded program", x, fast, "");
@@ -1217,7 +1340,8 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
       }
       lp.series.push_back(s);
     };
-    pts("native code", x, native, 2);
+    pts("native x86-64 code", x, native, 2);
+    if (!kx.empty()) pts("native C40 code", kx, kb, 5);
     fitline("native fit", fn, 2, false);
     pts("image file", x, image, 4);
     fitline("image fit", fi, 4, false);
@@ -1231,23 +1355,25 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     R.write("codesize.svg", plot::render(lp));
     // per-subject sizes
     Csv all({"experiment", "program", "n_exe", "p_basic", "il_bytes", "fast_decoded_bytes", "native_code_bytes",
-             "image_bytes", "c_scan_bytes", "native_bytes_per_il", "native_build_s", "c_build_s"});
+             "image_bytes", "c_scan_bytes", "c40_code_bytes", "native_bytes_per_il", "native_build_s", "c_build_s"});
     for (auto& s : R.subjects)
       all.row({s->experiment, s->name, std::to_string(s->n), fmt(s->counts.p_basic(), 4), std::to_string(s->il_bytes),
                std::to_string(s->fast_bytes), std::to_string(s->native_bytes), std::to_string(s->image_bytes),
-               s->c_bytes ? std::to_string(s->c_bytes) : "", fmt(double(s->native_bytes) / s->n, 5),
+               s->c_bytes ? std::to_string(s->c_bytes) : "", s->c40_bytes ? std::to_string(s->c40_bytes) : "",
+               fmt(double(s->native_bytes) / s->n, 5),
                fmt(s->native_build_s, 4), fmt(s->c_build_s, 4)});
     R.write("codesize.csv", all.text());
     // bytes per instruction by P_basic
-    md += md_head({"P_basic", "native bytes/IL (fit over N)", "R²"});
-    std::map<double, std::pair<std::vector<double>, std::vector<double>>> byp;
+    md += md_head({"P_basic", "x86-64 bytes/IL (fit over N)", "R²", "C40 bytes/IL (fit over N)", "R²"});
+    std::map<double, std::array<std::vector<double>, 3>> byp;
     for (Subject* s : R.of("fig10")) {
-      byp[s->p_target].first.push_back(s->n);
-      byp[s->p_target].second.push_back(double(s->native_bytes));
+      byp[s->p_target][0].push_back(s->n);
+      byp[s->p_target][1].push_back(double(s->native_bytes));
+      byp[s->p_target][2].push_back(double(s->c40_bytes));
     }
     for (auto& [p, v] : byp) {
-      Fit f = fit(v.first, v.second);
-      md += md_row({fixed(p, 3), fixed(f.slope, 2), fixed(f.r2, 4)});
+      Fit f = fit(v[0], v[1]), g = fit(v[0], v[2]);
+      md += md_row({fixed(p, 3), fixed(f.slope, 2), fixed(f.r2, 4), fixed(g.slope, 2), fixed(g.r2, 4)});
     }
     md += "\n";
   }
@@ -1255,19 +1381,20 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
   // --- examples
   {
     Csv c({"example", "n_exe", "p_basic", "classic_ns", "fast_ns", "native_ns", "c_ns", "classic_p99_ns", "fast_p99_ns",
-           "native_p99_ns", "c_p99_ns", "c40_cycles", "native_code_bytes"});
+           "native_p99_ns", "c_p99_ns", "c40_cycles", "c40_interp_cycles", "native_code_bytes"});
     md += "## Shipped examples (their own input traces, cycled)\n\n";
     md += md_head({"example", "N_exe", "P_basic", "classic", "fast", "native", "C -O2", "classic/native", "fast/native",
-                   "C/native", "code bytes"});
+                   "C/native", "code bytes", "C40 interp/native"});
     for (Subject* s : R.of("examples")) {
       c.row({s->name, std::to_string(s->n), fmt(s->counts.p_basic(), 4), fmt(s->t[kClassic].median, 6),
              fmt(s->t[kFast].median, 6), fmt(s->t[kNative].median, 6), fmt(s->t[kC].median, 6), fmt(s->t[kClassic].p99, 6),
-             fmt(s->t[kFast].p99, 6), fmt(s->t[kNative].p99, 6), fmt(s->t[kC].p99, 6), "", std::to_string(s->native_bytes)});
+             fmt(s->t[kFast].p99, 6), fmt(s->t[kNative].p99, 6), fmt(s->t[kC].p99, 6), fmt(s->c40_cycles, 10),
+             fmt(s->c40_interp_cycles, 10), std::to_string(s->native_bytes)});
       auto cell = [](const Timing& t) { return t.ok ? mp(t.median, t.p99) : std::string("–"); };
       md += md_row({s->name, std::to_string(s->n), fixed(s->counts.p_basic(), 2), cell(s->t[kClassic]),
                     cell(s->t[kFast]), cell(s->t[kNative]), cell(s->t[kC]), ratio(s->t[kClassic].median, s->t[kNative].median),
                     ratio(s->t[kFast].median, s->t[kNative].median), ratio(s->t[kC].median, s->t[kNative].median),
-                    std::to_string(s->native_bytes)});
+                    std::to_string(s->native_bytes), ratio(s->c40_interp_cycles, s->c40_cycles)});
     }
     md += "\nMedian per scan; the input-writing overhead (" +
           (R.of("examples").empty() ? std::string("–") : human_ns(R.of("examples")[0]->overhead_ns)) +
@@ -1355,7 +1482,7 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     c.row({"command", o.command});
     c.row({"samples", std::to_string(o.samples)});
     c.row({"batch_us", fmt(o.batch_us)});
-    c.row({"c40", "not yet measured (no C40 engine)"});
+    c.row({"c40", o.c40 ? "simulated TMS320C40-40 (backend-c40sim, docs/c40.md), 50 ns per cycle" : "off (--no-c40)"});
     R.write("machine.csv", c.text());
   }
   R.write("tables.md", "<!-- generated by ldbench; " + o.command + " -->\n\n" + md);
@@ -1364,7 +1491,7 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
 int usage() {
   std::fprintf(stderr,
                "usage: ldbench [--out DIR] [--smoke] [--samples N] [--batch-us US] [--no-c] [--c-max-il N]\n"
-               "               [--only examples,classes,fig10,scaling,large,compile,memory] [--c40] [--source DIR]\n");
+               "               [--only examples,classes,fig10,scaling,large,compile,memory] [--no-c40] [--source DIR]\n");
   return 2;
 }
 
@@ -1396,6 +1523,7 @@ int main(int argc, char** argv) {
     else if (a == "--c-max-il") o.c_max_il = std::atol(val().c_str());
     else if (a == "--only") o.only = val();
     else if (a == "--c40") o.c40 = true;
+    else if (a == "--no-c40") o.c40 = false;
     else if (a == "--source") o.source_dir = val();
     else return usage();
   }
@@ -1409,7 +1537,6 @@ int main(int argc, char** argv) {
     if (stat(o.out.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) throw std::runtime_error("cannot create " + o.out);
     auto machine = machine_info();
     say("ldbench: %s, %s cpus, %s\n", machine["cpu"].c_str(), machine["logical_cpus"].c_str(), machine["date"].c_str());
-    if (o.c40) say("ldbench: --c40: there is no C40 engine in this build yet; the C40 columns stay empty\n");
     auto t0 = Clock::now();
     // the one-class programs first: eq. (2) needs them
     if (o.want("classes")) run_classes(R);
