@@ -496,6 +496,12 @@ struct Runtime::Impl {
     for (auto& t : tasks)
       if (t->watchdog_us) lim = std::min(lim, t->watchdog_us);
     if (lim == UINT32_MAX) return;
+    if (opt.rt) {
+      // Above every task, so a task that never ends its scan cannot starve it.
+      sched_param sp{};
+      sp.sched_priority = 90;
+      pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);
+    }
     int64_t tick = std::clamp<int64_t>(int64_t(lim) * 1000 / 4, 1000000, 50000000);
     while (!stopping.load()) {
       {
@@ -749,6 +755,8 @@ void Runtime::start() {
     m.state.store(m.opt.start_stopped ? State::Stop : State::Run);
     m.io->state_changed(m.state.load());
   }
+  if (m.opt.scans == 0)
+    for (auto& t : m.tasks) t->finished.store(true);
   for (size_t i = 0; i < m.tasks.size(); i++) m.tasks[i]->th = std::thread([&m, i] { m.task_main(i); });
   m.monitor = std::thread([&m] { m.monitor_main(); });
   if (!m.opt.retain_file.empty()) m.saver = std::thread([&m] { m.saver_main(); });
