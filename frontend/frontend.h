@@ -20,6 +20,7 @@ std::string format_error(const std::string& file, std::string_view text, int lin
 constexpr size_t kMaxSourceBytes = 64u << 20;
 constexpr int kMaxRungRows = 4096;
 constexpr int kMaxRowWidth = 4096;
+constexpr size_t kMaxRungs = 65536;  // rungs in one program (every reader)
 
 // Imports an LDmicro program (a file whose first line starts with "LDmicro"):
 // its rungs become trees over ldc devices, its names aliases (docs/ldmicro.md).

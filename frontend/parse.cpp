@@ -741,6 +741,7 @@ TreeProgram Parser::program() {
         if (c != rail) fail(lines_[j].no, c + 1, "left rail out of line: this rung's rail is in column " + std::to_string(rail + 1));
         j++;
       }
+      if (p.rungs.size() >= kMaxRungs) fail(l.no, col0, "too many rungs (at most " + std::to_string(kMaxRungs) + ")");
       TreeRung r = rung(i, j, rail);
       r.labels = std::move(labels);
       labels.clear();

@@ -4,6 +4,7 @@
 # Builds build-fuzz/ with clang (-fsanitize=fuzzer,address,undefined) if needed,
 # seeds fuzz-corpus/NAME/ (git-ignored) from the reader's seed directories,
 # runs for SECONDS and prints the executions.  Crashes land in fuzz-corpus/NAME-crashes/.
+# LDC_FUZZ_ARGS adds libFuzzer flags (e.g. "-fork=1 -ignore_crashes=1" to go on past a known crash).
 set -eu
 name=${1:?usage: tools/fuzz.sh NAME SECONDS}
 secs=${2:-60}
@@ -27,7 +28,7 @@ done
 log=$root/fuzz-corpus/$name.log
 set +e
 "$build/tests/fuzz/fuzz_$name" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 \
-  -artifact_prefix="$crashes/" -print_final_stats=1 "$corpus" >"$log" 2>&1
+  -artifact_prefix="$crashes/" -print_final_stats=1 ${LDC_FUZZ_ARGS:-} "$corpus" >"$log" 2>&1
 rc=$?
 set -e
 grep -E '^stat::number_of_executed_units|^stat::peak_rss_mb|ERROR|SUMMARY' "$log" || true
