@@ -24,11 +24,13 @@
 
 #include "frontend/frontend.h"
 #include "frontend/operands.h"
+#include "frontend/treebuild.h"
 
 namespace ldc {
 namespace {
 
 using K = TreeNode::Kind;
+using namespace treebuild;
 
 [[noreturn]] void fail(int line, int col, const std::string& msg) { throw CompileError(line, col, msg); }
 
@@ -56,73 +58,9 @@ struct SrcRung {
 
 // ------------------------------------------------------------------ conditions
 
-Operand bit_opd(Area a, uint32_t i) { return Operand{OpdKind::Bit, a, i}; }
-Operand int_opd(Area a, uint32_t i) { return Operand{OpdKind::Int, a, i}; }
-Operand const_opd(int32_t v) {
-  Operand o{OpdKind::ConstInt};
-  o.ival = v;
-  return o;
-}
-Operand timer_opd(uint32_t i) {
-  Operand o{OpdKind::Timer};
-  o.index = i;
-  return o;
-}
-Operand counter_opd(uint32_t i) {
-  Operand o{OpdKind::Counter};
-  o.index = i;
-  return o;
-}
-
-TreeNode make_combined(K k, TreeNode a, TreeNode b) {
-  TreeNode n;
-  n.kind = k;
-  for (TreeNode* x : {&a, &b}) {
-    if (x->kind == k) for (auto& kid : x->kids) n.kids.push_back(std::move(kid));
-    else n.kids.push_back(std::move(*x));
-  }
-  return n;
-}
-
-// A Boolean condition with the constants kept apart, so that SHORT and OPEN
-// and an empty rail cost nothing.
-struct Cond {
-  enum Kind { True, False, Expr } k = True;
-  TreeNode n;
-  static Cond yes() { return {}; }
-  static Cond no() { return {False, {}}; }
-  static Cond of(TreeNode t) { return {Expr, std::move(t)}; }
-};
-
-Cond c_and(Cond a, Cond b) {
-  if (a.k == Cond::False || b.k == Cond::False) return Cond::no();
-  if (a.k == Cond::True) return b;
-  if (b.k == Cond::True) return a;
-  return Cond::of(make_combined(K::Series, std::move(a.n), std::move(b.n)));
-}
-Cond c_or(Cond a, Cond b) {
-  if (a.k == Cond::True || b.k == Cond::True) return Cond::yes();
-  if (a.k == Cond::False) return b;
-  if (b.k == Cond::False) return a;
-  return Cond::of(make_combined(K::Parallel, std::move(a.n), std::move(b.n)));
-}
-
-// FALSE as a leaf: a compare that never holds.  (TRUE never needs one: a
-// chain without a condition starts at the rail.)
-TreeNode false_leaf(SrcLoc loc) {
-  TreeNode n;
-  n.kind = K::Leaf;
-  n.elem.op = Op::LDNE;
-  n.elem.a[0] = const_opd(0);
-  n.elem.a[1] = const_opd(0);
-  n.elem.loc = loc;
-  n.text = "0 <> 0";
-  return n;
-}
-
 TreeNode then_node(Cond c, TreeNode action, SrcLoc loc) {
   if (c.k == Cond::True) return action;
-  TreeNode cn = c.k == Cond::False ? false_leaf(loc) : std::move(c.n);
+  TreeNode cn = c.k == Cond::False ? false_leaf(loc, "0 <> 0") : std::move(c.n);
   if (action.kind == K::Then) {  // Then(a, Then(b, X)) = Then(a AND b, X): same order of evaluation
     TreeNode t;
     t.kind = K::Then;
@@ -135,17 +73,6 @@ TreeNode then_node(Cond c, TreeNode action, SrcLoc loc) {
   t.kids.push_back(std::move(cn));
   t.kids.push_back(std::move(action));
   return t;
-}
-
-TreeNode fork_of(std::vector<TreeNode> items) {
-  if (items.size() == 1) return std::move(items[0]);
-  TreeNode f;
-  f.kind = K::Fork;
-  for (auto& i : items) {
-    if (i.kind == K::Fork) for (auto& k : i.kids) f.kids.push_back(std::move(k));
-    else f.kids.push_back(std::move(i));
-  }
-  return f;
 }
 
 // The chains of one rung.  `frames` is the open chain: frames[0] starts at the

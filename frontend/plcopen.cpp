@@ -24,12 +24,14 @@
 
 #include "frontend/frontend.h"
 #include "frontend/operands.h"
+#include "frontend/treebuild.h"
 #include "frontend/xml.h"
 
 namespace ldc {
 namespace {
 
 using K = TreeNode::Kind;
+using namespace treebuild;
 using xml::Element;
 
 [[noreturn]] void fail_at(const Element* e, const std::string& msg) {
@@ -57,73 +59,13 @@ std::string trim(std::string_view s) {
 
 // ------------------------------------------------------------------ conditions
 
-Operand bit_opd(Area a, uint32_t i) { return Operand{OpdKind::Bit, a, i}; }
-Operand const_opd(int32_t v) {
-  Operand o{OpdKind::ConstInt};
-  o.ival = v;
-  return o;
-}
-
-TreeNode make_combined(K k, TreeNode a, TreeNode b) {
-  TreeNode n;
-  n.kind = k;
-  for (TreeNode* x : {&a, &b}) {
-    if (x->kind == k) for (auto& kid : x->kids) n.kids.push_back(std::move(kid));
-    else n.kids.push_back(std::move(*x));
-  }
-  return n;
-}
-
-struct Cond {
-  enum Kind { True, False, Expr } k = True;
-  TreeNode n;
-  static Cond yes() { return {}; }
-  static Cond no() { return {False, {}}; }
-  static Cond of(TreeNode t) { return {Expr, std::move(t)}; }
-};
-
-Cond c_and(Cond a, Cond b) {
-  if (a.k == Cond::False || b.k == Cond::False) return Cond::no();
-  if (a.k == Cond::True) return b;
-  if (b.k == Cond::True) return a;
-  return Cond::of(make_combined(K::Series, std::move(a.n), std::move(b.n)));
-}
-Cond c_or(Cond a, Cond b) {
-  if (a.k == Cond::True || b.k == Cond::True) return Cond::yes();
-  if (a.k == Cond::False) return b;
-  if (b.k == Cond::False) return a;
-  return Cond::of(make_combined(K::Parallel, std::move(a.n), std::move(b.n)));
-}
-
-TreeNode false_leaf(SrcLoc loc) {
-  TreeNode n;
-  n.kind = K::Leaf;
-  n.elem.op = Op::LDNE;
-  n.elem.a[0] = const_opd(0);
-  n.elem.a[1] = const_opd(0);
-  n.elem.loc = loc;
-  n.text = "FALSE";
-  return n;
-}
-
 TreeNode then_node(Cond c, TreeNode action, SrcLoc loc) {
   if (c.k == Cond::True) return action;
   TreeNode t;
   t.kind = K::Then;
-  t.kids.push_back(c.k == Cond::False ? false_leaf(loc) : std::move(c.n));
+  t.kids.push_back(c.k == Cond::False ? false_leaf(loc, "FALSE") : std::move(c.n));
   t.kids.push_back(std::move(action));
   return t;
-}
-
-TreeNode fork_of(std::vector<TreeNode> items) {
-  if (items.size() == 1) return std::move(items[0]);
-  TreeNode f;
-  f.kind = K::Fork;
-  for (auto& i : items) {
-    if (i.kind == K::Fork) for (auto& k : i.kids) f.kids.push_back(std::move(k));
-    else f.kids.push_back(std::move(i));
-  }
-  return f;
 }
 
 bool is_leaf(const Cond& c) { return c.k == Cond::Expr && c.n.kind == K::Leaf; }
