@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 
 #include "backend-c40sim/c40gen.h"
 #include "frontend/frontend.h"
@@ -115,6 +116,52 @@ TEST_P(C40DiffShard, EnginesMatchTheModelAndTheModelTheReference) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, C40DiffShard, ::testing::Range(0, kShards));
+
+// The test catches a wrong C40 engine and shrinks the case: a native engine
+// whose MUL results are off by one (as if mul32 dropped a carry).
+TEST(C40DiffHarness, CatchesAndShrinksAWrongEngine) {
+  class OffByOne : public Engine {
+   public:
+    OffByOne(std::unique_ptr<Engine> e, std::vector<uint32_t> muls) : e_(std::move(e)), muls_(std::move(muls)) {}
+    void scan(uint8_t* mem) override {
+      e_->scan(mem);
+      for (uint32_t a : muls_) {
+        int32_t v;
+        std::memcpy(&v, mem + a, 4);
+        v++;
+        std::memcpy(mem + a, &v, 4);
+      }
+    }
+   private:
+    std::unique_ptr<Engine> e_;
+    std::vector<uint32_t> muls_;
+  };
+  EngineFactory bad = [](const Program& p) -> std::unique_ptr<Engine> {
+    std::vector<uint32_t> muls;  // INT32 destinations of INT32 MULs
+    for (const Rung& r : p.rungs)
+      for (const Instr& in : r.code)
+        if (in.op == Op::MUL && !in.a[0].is_real() && !in.a[1].is_real() && in.a[2].kind == OpdKind::Int)
+          muls.push_back(p.layout().addr(in.a[2].area, in.a[2].index));
+    return std::make_unique<OffByOne>(test::make_native(p), muls);
+  };
+  int caught = 0;
+  for (uint64_t seed = 5001; seed <= 5040 && !caught; seed++) {
+    GenOptions o;
+    o.rungs = 30;
+    o.classes = kGenContacts | kGenArith | kGenCoils;
+    std::string ld = generate_ld(seed, o), csv = generate_trace(seed, 10, o);
+    test::Verdict v = test::check_c40(ld, csv, bad);
+    if (v.ok()) continue;
+    caught++;
+    EXPECT_EQ(v.native.kind, Outcome::Kind::Differ);
+    GenProgram gp = generate_program(seed, o);
+    Runner run = [&](const std::string& l, const std::string& c) { return test::check_c40(l, c, bad).first_failure(); };
+    Reduced r = minimize(gp, csv, v.first_failure(), run);
+    EXPECT_LE(r.prog.rungs(), 2) << render(r.prog);
+    EXPECT_NE(render(r.prog).find("MUL"), std::string::npos) << render(r.prog);
+  }
+  EXPECT_EQ(caught, 1);
+}
 
 // Long programs: two thousand rungs each (the code is past 32K words, out of
 // reach of Bcond's 16-bit displacement: jumps go through BR), few scans.

@@ -83,9 +83,9 @@ diff::Outcome Verdict::first_failure() const {
   return o;
 }
 
-Verdict check_c40(const std::string& ld, const std::string& csv) {
+Verdict check_c40(const std::string& ld, const std::string& csv, const diff::EngineFactory& native) {
   Verdict v;
-  v.native = diff::compare_run(ld, csv, make_model, make_native);
+  v.native = diff::compare_run(ld, csv, make_model, native);
   v.scans = v.native.scans;
   v.interp = diff::compare_run(ld, csv, make_model, make_interp);
   v.check = diff::compare_run(ld, csv, diff::make_interp, make_check(&v.report));

@@ -33,6 +33,7 @@ struct Verdict {
   // scan 0 with the message), for the minimizer.
   diff::Outcome first_failure() const;
 };
-Verdict check_c40(const std::string& ld, const std::string& csv);
+// `native` replaces the native engine (to test the test).
+Verdict check_c40(const std::string& ld, const std::string& csv, const diff::EngineFactory& native = make_native);
 
 }  // namespace ldc::c40gen::test
