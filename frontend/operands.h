@@ -11,8 +11,6 @@ namespace ldc {
 
 std::string upper(std::string_view s);
 bool is_identifier(std::string_view s);
-// %IX0.3, %QW2, ... ; nullopt with `why` set when it looks like one but is wrong.
-std::optional<DeviceRef> parse_iec_address(std::string_view s, std::string& why);
 // 42, -7, 16#FF, 0xFF, 2#1010, 1.5, -2.0e3, 500ms, 2s, T#1m30s (durations in ms).
 std::optional<Operand> parse_constant(std::string_view s, std::string& why);
 

@@ -351,6 +351,51 @@ uint32_t device_count(Dev d) {
   return 0;
 }
 
+// iec_address = "%" ("I"|"Q"|"M") ("X" a "." b | "W" n | "D" n)
+//   %IXa.b = X(8a+b)   %QXa.b = Y(8a+b)   %MXa.b = M(8a+b)
+//   %IWn = WXn         %QWn = WYn         %MWn = Dn          %MDn = Fn
+std::optional<DeviceRef> parse_iec_address(std::string_view s, std::string& why) {
+  std::string u(s);
+  for (char& c : u) c = char(std::toupper((unsigned char)c));
+  if (u.size() < 4 || u[0] != '%') return std::nullopt;
+  char region = u[1], size = u[2];
+  std::string rest = u.substr(3);
+  auto number = [&](const std::string& t, uint64_t& v) {
+    if (t.empty() || t.size() > 9) return false;
+    v = 0;
+    for (char c : t) {
+      if (!std::isdigit((unsigned char)c)) return false;
+      v = v * 10 + uint64_t(c - '0');
+    }
+    return true;
+  };
+  if (size == 'X') {
+    size_t dot = rest.find('.');
+    uint64_t a = 0, b = 0;
+    if (dot == std::string::npos || !number(rest.substr(0, dot), a) || !number(rest.substr(dot + 1), b)) {
+      why = "a bit address is written %" + std::string(1, region) + "Xbyte.bit, e.g. %IX0.3";
+      return std::nullopt;
+    }
+    if (b > 7) {
+      why = "bit number " + std::to_string(b) + " in " + std::string(s) + " must be 0..7";
+      return std::nullopt;
+    }
+    uint64_t idx = a * 8 + b;
+    Dev d = region == 'I' ? Dev::X : region == 'Q' ? Dev::Y : Dev::M;
+    if (region != 'I' && region != 'Q' && region != 'M') return std::nullopt;
+    return DeviceRef{d, idx > UINT32_MAX ? UINT32_MAX : uint32_t(idx)};
+  }
+  uint64_t n;
+  if (!number(rest, n)) return std::nullopt;
+  uint32_t idx = n > UINT32_MAX ? UINT32_MAX : uint32_t(n);
+  if (size == 'W' && region == 'I') return DeviceRef{Dev::WX, idx};
+  if (size == 'W' && region == 'Q') return DeviceRef{Dev::WY, idx};
+  if (size == 'W' && region == 'M') return DeviceRef{Dev::D, idx};
+  if (size == 'D' && region == 'M') return DeviceRef{Dev::F, idx};
+  why = "unsupported IEC address " + std::string(s) + " (use %IX %QX %MX %IW %QW %MW %MD)";
+  return std::nullopt;
+}
+
 Area bit_area(Dev d) {
   switch (d) {
     case Dev::X: return Area::X;

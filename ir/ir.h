@@ -47,6 +47,10 @@ struct DeviceRef {
 // Parses a plain device spelling (case-insensitive); nullopt if it is not one.
 // The index is not range-checked (see device_count).
 std::optional<DeviceRef> parse_device(std::string_view s);
+// An IEC 61131-3 direct address: %IXa.b %QXa.b %MXa.b (bit b of byte a),
+// %IWn %QWn %MWn (INT32 words) and %MDn (REAL), as docs/format.md maps them.
+// nullopt if `s` is not one; `why` says what is wrong when it looks like one.
+std::optional<DeviceRef> parse_iec_address(std::string_view s, std::string& why);
 const char* dev_name(Dev d);
 uint32_t device_count(Dev d);         // X: 8192, WX: 1024, T: 256 ...
 Area bit_area(Dev d);                 // X->X, T->TQ, C->CQ; Area::Count if not a bit

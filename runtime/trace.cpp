@@ -30,33 +30,6 @@ class InterpEngine : public Engine {
   Interpreter interp_;
 };
 
-// IEC addresses in traces: the same spellings as in programs.
-std::optional<DeviceRef> iec(std::string_view s) {
-  std::string u = upper(s);
-  if (u.size() < 4 || u[0] != '%') return std::nullopt;
-  char region = u[1], size = u[2];
-  std::string rest = u.substr(3);
-  char* end = nullptr;
-  if (size == 'X') {
-    size_t dot = rest.find('.');
-    if (dot == std::string::npos) return std::nullopt;
-    long a = std::strtol(rest.substr(0, dot).c_str(), &end, 10);
-    if (*end) return std::nullopt;
-    long b = std::strtol(rest.substr(dot + 1).c_str(), &end, 10);
-    if (*end || b < 0 || b > 7 || a < 0 || a > 100000) return std::nullopt;
-    Dev d = region == 'I' ? Dev::X : region == 'Q' ? Dev::Y : Dev::M;
-    if (region != 'I' && region != 'Q' && region != 'M') return std::nullopt;
-    return DeviceRef{d, uint32_t(a * 8 + b)};
-  }
-  long n = std::strtol(rest.c_str(), &end, 10);
-  if (rest.empty() || *end || n < 0 || n > 100000) return std::nullopt;
-  if (size == 'W' && region == 'I') return DeviceRef{Dev::WX, uint32_t(n)};
-  if (size == 'W' && region == 'Q') return DeviceRef{Dev::WY, uint32_t(n)};
-  if (size == 'W' && region == 'M') return DeviceRef{Dev::D, uint32_t(n)};
-  if (size == 'D' && region == 'M') return DeviceRef{Dev::F, uint32_t(n)};
-  return std::nullopt;
-}
-
 // Decimal, or hex with 0x; never octal (a leading 0 is just a 0).
 long long cell_int(const std::string& v, char** end) {
   bool neg = !v.empty() && v[0] == '-';
@@ -80,7 +53,8 @@ Probe resolve_probe(std::string_view name, const std::vector<Alias>& aliases) {
   for (const Alias& a : aliases)
     if (upper(a.name) == upper(n)) d = a.dev;
   if (!d) d = parse_device(n);
-  if (!d) d = iec(n);
+  std::string why;
+  if (!d) d = parse_iec_address(n, why);
   if (!d) throw std::runtime_error("unknown device or alias '" + n + "'");
   if (d->index >= device_count(d->dev)) throw std::runtime_error("index out of range: '" + n + "'");
   Area a = (d->dev == Dev::T || d->dev == Dev::C) ? word_area(d->dev) : bit_area(d->dev);
