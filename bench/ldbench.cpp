@@ -443,7 +443,11 @@ constexpr double kC40NsPerCycle = 50.0;  // TMS320C40-40
 
 std::string cycles_text(double c) {  // "617 µs (12.3k cyc)"
   if (!std::isfinite(c)) return "–";
-  return human_ns(c * kC40NsPerCycle) + " (" + plot::tick_label(std::round(c * 1000) / 1000) + " cyc)";
+  char b[32];
+  if (c >= 1e6) std::snprintf(b, sizeof b, "%.3gM", c / 1e6);
+  else if (c >= 1e3) std::snprintf(b, sizeof b, "%.3gk", c / 1e3);
+  else std::snprintf(b, sizeof b, "%.0f", c);
+  return human_ns(c * kC40NsPerCycle) + " (" + b + " cyc)";
 }
 
 // Every engine from a zero image over the first scans of the trace, images
@@ -993,8 +997,10 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
                   ratio(s->t[kC].median, s->t[kNative].median), fixed(s->t[kNative].median / s->n, 3),
                   cycles_text(s->c40_interp_cycles), cycles_text(s->c40_cycles), ratio(s->c40_interp_cycles, s->c40_cycles)});
   }
-  md += "\nMedian / p99 time per scan on this machine (the input-writing overhead subtracted); C40: the simulated "
-        "TMS320C40-40 (50 ns per cycle), median cycles per scan of its native code and of the C40-hosted interpreter.\n\n";
+  md += "\nMedian / p99 time per scan on this machine (the input-writing overhead subtracted; a sample is one batch "
+        "of scans, so p99 is over batch means, and on a shared machine it mostly shows the scheduler); C40: the "
+        "simulated TMS320C40-40 (50 ns per cycle), median cycles per scan of its native code and of the C40-hosted "
+        "interpreter.\n\n";
 
   // --- scaling.csv and plot
   {
@@ -1265,6 +1271,7 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
   if (!R.of("fig10").empty() || !R.of("scaling").empty()) {
     std::vector<double> x, native, image, il, fast, cx, cb, kx, kb;
     for (Subject* s : R.of("fig10")) {
+      if (std::fabs(s->p_target - synth::kTypicalPBasic) > 1e-9) continue;
       x.push_back(s->n);
       native.push_back(double(s->native_bytes));
       image.push_back(double(s->image_bytes));
@@ -1284,7 +1291,8 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     }
     Csv c({"quantity", "slope_bytes_per_il", "intercept_bytes", "r2", "slope_through_origin", "points"});
     md += "## Memory: bytes vs N_exe (paper 003, eq. 3 and 4)\n\n";
-    md += "Least squares over the Fig. 10 grid and the scaling programs (every P_basic).\n\n";
+    md += "Least squares over the typical-mix programs (P_basic = 0.689: the Fig. 10 row and the scaling programs, "
+          "N_exe 300 to 100,000); per P_basic below.  Bytes, except where words are said.\n\n";
     md += md_head({"quantity", "fit (bytes)", "R²", "through 0", "paper"});
     auto line = [&](const std::string& q, const std::vector<double>& xs, const std::vector<double>& ys,
                     const std::string& paper) {
@@ -1313,7 +1321,7 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
           std::to_string(fast_code) + " bytes.\n\n";
     R.write("codesize_fits.csv", c.text());
     plot::LinePlot lp;
-    lp.title = "Memory vs N_exe";
+    lp.title = "Memory vs N_exe (typical mix, P_basic = 0.689)";
     lp.xlabel = "N_exe (IL instructions)";
     lp.ylabel = "bytes";
     lp.logx = lp.logy = true;
@@ -1351,7 +1359,9 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     Fit paper;
     paper.slope = 9.790;
     paper.intercept = 0;
-    fitline("paper: M = 9.790 N_exe", paper, 7, true);
+    fitline("paper eq. 4 (bytes)", paper, 7, true);
+    paper.slope = 4 * 9.790;
+    fitline("paper eq. 4 (C40 words)", paper, 8, true);
     R.write("codesize.svg", plot::render(lp));
     // per-subject sizes
     Csv all({"experiment", "program", "n_exe", "p_basic", "il_bytes", "fast_decoded_bytes", "native_code_bytes",
@@ -1440,8 +1450,10 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     ser[5].color = "#000000";
     lp.series = ser;
     Fit f = fit(fx, fy);
-    md += "\nPlant programs: total = " + fmt(f.slope * 1e9, 4) + " ns × IL + " + fmt(f.intercept * 1e3, 3) +
-          " ms (R² " + fixed(f.r2, 4) + ").\n\n";
+    md += "\nPlant programs: total = " + fmt(f.slope * 1e9, 4) + " ns × IL " + (f.intercept < 0 ? "− " : "+ ") +
+          fmt(std::fabs(f.intercept) * 1e3, 3) + " ms (R² " + fixed(f.r2, 4) + "); per IL instruction " +
+          fixed(compile.front().ph.total() / compile.front().ph.il * 1e9, 0) + " ns at the smallest, " +
+          fixed(fy.empty() ? NAN : fy.back() / fx.back() * 1e9, 0) + " ns at the largest plant.\n\n";
     R.write("compile.csv", c.text());
     R.write("compile.svg", plot::render(lp));
   }

@@ -120,8 +120,9 @@ void legend(std::string& o, const Frame& fr, const std::vector<Series>& ss, bool
     if (bars) {
       o += "<rect x=\"" + f(x) + "\" y=\"" + f(yy - 9) + "\" width=\"22\" height=\"12\" fill=\"" + col + "\"/>\n";
     } else {
-      o += "<line x1=\"" + f(x) + "\" y1=\"" + f(yy - 4) + "\" x2=\"" + f(x + 22) + "\" y2=\"" + f(yy - 4) +
-           "\" stroke=\"" + col + "\" stroke-width=\"2\"" + (s.dashed ? " stroke-dasharray=\"6 4\"" : "") + "/>\n";
+      if (s.line)
+        o += "<line x1=\"" + f(x) + "\" y1=\"" + f(yy - 4) + "\" x2=\"" + f(x + 22) + "\" y2=\"" + f(yy - 4) +
+             "\" stroke=\"" + col + "\" stroke-width=\"2\"" + (s.dashed ? " stroke-dasharray=\"6 4\"" : "") + "/>\n";
       if (s.markers) o += "<circle cx=\"" + f(x + 11) + "\" cy=\"" + f(yy - 4) + "\" r=\"3\" fill=\"" + col + "\"/>\n";
     }
     o += "<text x=\"" + f(x + 28) + "\" y=\"" + f(yy) + "\" font-size=\"12\" " + kFont + ">" + esc(s.name) +
