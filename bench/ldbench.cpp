@@ -223,25 +223,34 @@ uint64_t splitmix(uint64_t& s) {
   return z ^ (z >> 31);
 }
 
-// The synthetic programs' inputs (synth::SynthDevices): X0..X63 (each bit flips
-// with probability 0.2 per scan), WX0..WX15 (a random walk), F0..F3 in
-// [0.1, 8], F4..F7 in [-8, 8], dt 5..15 ms.  Three block copies and dt a scan.
-RawTrace synth_trace(const Layout& L, int rows, uint64_t seed) {
+// The synthetic programs' inputs (synth::SynthDevices): X0..X63, WX0..WX15
+// (a random walk), F0..F3 in [0.1, 8], F4..F7 in [-8, 8], dt 5..15 ms.  Each
+// input changes with probability change_permille / 1000 per scan (an X bit
+// flips, a WX word takes a step, an F word is drawn again); the default 20% a
+// scan is far livelier than a plant, whose inputs change every few hundred
+// scans, so it is the hard case for branch prediction.  Three block copies and
+// dt a scan.
+RawTrace synth_trace(const Layout& L, int rows, uint64_t seed, int change_permille = 200) {
   using D = synth::SynthDevices;
   RawTrace t;
   t.rows.resize(size_t(rows));
   uint64_t s = seed * 7919 + 17;
   uint8_t x[D::kInX] = {};
   int32_t wx[D::kInWX] = {};
+  float f[D::kInF];
+  auto draw_f = [&](int i) {
+    double u = double(splitmix(s) % 1000000) / 1e6;
+    f[i] = i < D::kInFPos ? float(0.1 + 7.9 * u) : float(-8 + 16 * u);
+  };
+  for (int i = 0; i < D::kInF; i++) draw_f(i);
+  auto change = [&] { return int(splitmix(s) % 1000) < change_permille; };
   for (int r = 0; r < rows; r++) {
     for (auto& b : x)
-      if (splitmix(s) % 10 < 2) b ^= 1;
-    for (auto& w : wx) w = std::clamp<int32_t>(w + int32_t(splitmix(s) % 101) - 50, -2000, 2000);
-    float f[D::kInF];
-    for (int i = 0; i < D::kInF; i++) {
-      double u = double(splitmix(s) % 1000000) / 1e6;
-      f[i] = i < D::kInFPos ? float(0.1 + 7.9 * u) : float(-8 + 16 * u);
-    }
+      if (change()) b ^= 1;
+    for (auto& w : wx)
+      if (change()) w = std::clamp<int32_t>(w + int32_t(splitmix(s) % 101) - 50, -2000, 2000);
+    for (int i = 0; i < D::kInF; i++)
+      if (change()) draw_f(i);
     int32_t dt = 5 + int32_t(splitmix(s) % 11);
     t.add(size_t(r), L.addr(Area::X, 0), x, sizeof x);
     t.add(size_t(r), L.addr(Area::WX, 0), wx, sizeof wx);
@@ -690,9 +699,14 @@ void run_scaling(Run& R) {
   bool c = R.o.c_route;
   if (R.o.smoke) R.o.c_route = false;
   for (int n : ns) R.add(synth_subject("scaling", n, synth::kTypicalPBasic, uint64_t(n) + 77));
-  // The same program as the scaling one of 3000 instructions, its inputs never
-  // changing: every data-dependent branch becomes predictable.
+  // The same program as the scaling one of 3000 instructions, its inputs
+  // changing 10 times less often, and never: data-dependent branches become
+  // predictable.
   int n = R.o.smoke ? 300 : 3000;
+  auto slow = synth_subject("inputs", n, synth::kTypicalPBasic, uint64_t(n) + 77);
+  slow->name += " (inputs 2% a scan)";
+  slow->trace = synth_trace(slow->prog.layout(), 1024, uint64_t(n) + 77, 20);
+  R.add(std::move(slow));
   auto s = synth_subject("inputs", n, synth::kTypicalPBasic, uint64_t(n) + 77);
   s->name += " (inputs constant)";
   s->trace.rows.resize(1);
