@@ -426,6 +426,16 @@ struct Runtime::Impl {
       mem[t.prog->image.layout.addr(Area::S, kBitFirstScan)] = t.first ? 1 : 0;
 
       p.engine->scan(mem);
+      // The watchdog judges the scan before it publishes anything: a scan
+      // over its limit neither drives outputs nor counts as done.
+      const int64_t ran = now_ns() - begin;
+      if (t.watchdog_us && ran > int64_t(t.watchdog_us) * 1000) {
+        t.scan_begin.store(0);
+        fault("ldrun: watchdog: task '" + t.spec.name + "' scan " + std::to_string(scan_no) + " took " +
+              format_us(double(ran) / 1000) + ", limit " + format_us(t.watchdog_us) +
+              "; outputs driven to the safe state (all Y off, WY 0); the runtime is in FAULT");
+        continue;
+      }
 
       uint32_t n32 = uint32_t(scan_no);
       std::memcpy(mem + kSysScan, &n32, 4);
@@ -468,11 +478,6 @@ struct Runtime::Impl {
         t.stats_mu.unlock();
       }
       t.last_start = start;
-      if (t.watchdog_us && took > int64_t(t.watchdog_us) * 1000) {
-        fault("ldrun: watchdog: task '" + t.spec.name + "' scan " + std::to_string(scan_no) + " took " +
-              format_us(double(took) / 1000) + ", limit " + format_us(t.watchdog_us) +
-              "; outputs driven to the safe state (all Y off, WY 0); the runtime is in FAULT");
-      }
       if (!opt.free_run) {
         if (end > t.release + period) t.overruns.fetch_add(1);
         t.release += period;
