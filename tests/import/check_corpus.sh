@@ -1,14 +1,15 @@
 #!/bin/sh
 # check_corpus.sh BINDIR SOURCE [EXPECTED_ERROR]
-# Without EXPECTED_ERROR: SOURCE compiles to an image, which runs 300 scans on
-# the interpreter and on native code with the same values for every alias.
+# Without EXPECTED_ERROR: SOURCE compiles to images that run 300 scans of a
+# pseudo-random input trace on the interpreter, on native code at -O0/-O1/-O2
+# and on the C40 simulator, with the same values for every alias.
 # With it: ldc refuses SOURCE with exactly that message (the file named as in
 # its own directory) and leaves no output behind.
 set -eu
 bindir=$1 src=$2
 dir=$(dirname "$src") file=$(basename "$src")
 tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
+[ -n "${KEEP:-}" ] || trap 'rm -rf "$tmp"' EXIT
 if [ $# -ge 3 ]; then
   status=0
   (cd "$dir" && "$bindir/ldc" "$file" -o "$tmp/prog.bin") 2> "$tmp/err" || status=$?
@@ -17,14 +18,40 @@ if [ $# -ge 3 ]; then
   if ! diff -u "$3" "$tmp/err"; then echo "FAIL: $src: message differs from $3" >&2; exit 1; fi
   exit 0
 fi
-"$bindir/ldc" "$src" -o "$tmp/prog.bin"
-watch=$("$bindir/ldc" "$src" --emit=il | sed -n 's/^\.alias \([^ ]*\) .*/\1/p' | paste -sd, -)
-for engine in interp native; do
+# A pseudo-random input trace (a fixed LCG): every input alias (X, WX) set in
+# 300 scans, bits toggling, words over a small range; dt 10 ms.
+"$bindir/ldc" "$src" --emit=il > "$tmp/il"
+watch=$(sed -n 's/^\.alias \([^ ]*\) .*/\1/p' "$tmp/il" | paste -sd, -)
+inputs=$(sed -n 's/^\.alias \([^ ]*\) \(W\{0,1\}X[0-9]*\)$/\1 \2/p' "$tmp/il")
+echo "$inputs" | awk 'BEGIN { s = 12345; n = 0 }
+  NF == 2 { name[n] = $1; word[n] = ($2 ~ /^WX/); n++ }
+  END {
+    if (n == 0) { print "dt"; for (r = 0; r < 300; r++) print 10; exit }
+    h = "dt"; for (i = 0; i < n; i++) h = h "," name[i]; print h
+    for (r = 0; r < 300; r++) {
+      line = 10
+      for (i = 0; i < n; i++) {
+        s = (s * 69069 + 1) % 4294967296  # exact in doubles
+        v = word[i] ? int(s / 65536) % 200 - 100 : (int(s / 65536) % 4 == 0)
+        line = line "," v
+      }
+      print line
+    }
+  }' > "$tmp/trace.csv"
+# The interpreter defines the meaning; native code at every level and the C40
+# simulator must give the same values scan by scan.
+run() {  # run NAME LDC-FLAGS ENGINE
+  "$bindir/ldc" "$src" $2 -o "$tmp/$1.bin"
   if [ -n "$watch" ]; then
-    "$bindir/ldrun" "$tmp/prog.bin" --engine=$engine --scans 300 --watch "$watch" > "$tmp/$engine"
+    "$bindir/ldrun" "$tmp/$1.bin" --engine=$3 --trace "$tmp/trace.csv" --watch "$watch" > "$tmp/$1"
   else
-    "$bindir/ldrun" "$tmp/prog.bin" --engine=$engine --scans 300 > "$tmp/$engine"
+    "$bindir/ldrun" "$tmp/$1.bin" --engine=$3 --trace "$tmp/trace.csv" > "$tmp/$1"
   fi
-done
+}
+run interp -O0 interp
 if [ "$(wc -l < "$tmp/interp")" -ne 301 ]; then echo "FAIL: $src: expected 300 scans" >&2; exit 1; fi
-if ! diff -u "$tmp/interp" "$tmp/native"; then echo "FAIL: $src: native code differs from the interpreter" >&2; exit 1; fi
+for v in "native-O0 -O0 native" "native-O1 -O1 native" "native-O2 -O2 native" "c40sim --target=c40 c40sim"; do
+  set -- $v
+  run $1 $2 $3
+  if ! diff -u "$tmp/interp" "$tmp/$1"; then echo "FAIL: $src: $1 differs from the interpreter" >&2; exit 1; fi
+done
