@@ -71,9 +71,14 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-enum EngineKind { kClassic, kFast, kNative, kC, kEngines };
-const char* const kEngineName[] = {"classic", "fast", "native", "c"};
-const char* const kEngineTitle[] = {"classic interpreter", "fast interpreter", "native x86-64", "C route (cc -O2)"};
+// native is ldc's -O0 (paper 003's pure macro expansion); native-O1 and
+// native-O2 the optimizing levels of docs/x86.md.
+enum EngineKind { kClassic, kFast, kNative, kNativeO1, kNativeO2, kC, kEngines };
+const char* const kEngineName[] = {"classic", "fast", "native", "native-O1", "native-O2", "c"};
+const char* const kEngineTitle[] = {"classic interpreter", "fast interpreter", "native x86-64 -O0",
+                                    "native x86-64 -O1",   "native x86-64 -O2", "C route (cc -O2)"};
+constexpr int kLevels = 3;
+constexpr EngineKind kNativeAt[kLevels] = {kNative, kNativeO1, kNativeO2};
 
 struct Options {
   std::string out = "bench-out";
@@ -360,6 +365,8 @@ struct Subject {
   double overhead_ns = NAN;
   size_t il_bytes = 0, fast_bytes = 0, native_bytes = 0, image_bytes = 0, c_bytes = 0;
   double native_build_s = NAN, c_build_s = NAN;
+  size_t native_bytes_at[kLevels] = {};                 // code bytes at -O0, -O1, -O2
+  double native_build_at[kLevels] = {NAN, NAN, NAN};  // build_x86 seconds (generate + assemble)
   double c40_cycles = NAN, c40_interp_cycles = NAN;  // simulated cycles per scan (median)
   size_t c40_bytes = 0;
   std::string c40_status;
@@ -383,11 +390,16 @@ void prepare(Subject& s, const Options& o) {
     s.eng[kFast] = std::move(fast);
   }
   auto t0 = Clock::now();
-  NativeBuild nb = build_x86(s.prog, s.name);
-  s.native_build_s = secs_since(t0);
-  s.native_bytes = nb.asm_result.code.size();
-  s.image_bytes = write_image(make_x86_image(s.prog, nb)).size();
-  s.eng[kNative] = make_native_engine(nb.asm_result.code, 0);
+  for (int lvl = 0; lvl < kLevels; lvl++) {
+    t0 = Clock::now();
+    NativeBuild nb = build_x86(s.prog, s.name, as::Mode::Blockwise, lvl, false);
+    s.native_build_at[lvl] = secs_since(t0);
+    s.native_bytes_at[lvl] = nb.asm_result.code.size();
+    if (lvl == 0) s.image_bytes = write_image(make_x86_image(s.prog, nb)).size();
+    s.eng[kNativeAt[lvl]] = make_native_engine(nb.asm_result.code, 0);
+  }
+  s.native_build_s = s.native_build_at[0];
+  s.native_bytes = s.native_bytes_at[0];
   if (!o.c_route) {
     s.status[kC] = "off (--no-c)";
   } else if (s.n > o.c_max_il) {
@@ -569,10 +581,11 @@ struct Run {
     auto tc = Clock::now();
     measure_c40(*s, o);
     double c40_s = secs_since(tc);
-    say("  timed %.1fs: classic %s, fast %s, native %s, C %s; C40 %.0f / %.0f cycles (%.1fs)\n", secs_since(t0),
-        human_ns(s->t[kClassic].median).c_str(), human_ns(s->t[kFast].median).c_str(),
-        human_ns(s->t[kNative].median).c_str(), human_ns(s->t[kC].median).c_str(), s->c40_interp_cycles, s->c40_cycles,
-        c40_s);
+    say("  timed %.1fs: classic %s, fast %s, native %s / %s / %s, C %s; C40 %.0f / %.0f cycles (%.1fs)\n",
+        secs_since(t0), human_ns(s->t[kClassic].median).c_str(), human_ns(s->t[kFast].median).c_str(),
+        human_ns(s->t[kNative].median).c_str(), human_ns(s->t[kNativeO1].median).c_str(),
+        human_ns(s->t[kNativeO2].median).c_str(), human_ns(s->t[kC].median).c_str(), s->c40_interp_cycles,
+        s->c40_cycles, c40_s);
     if (!s->c40_status.empty() && o.c40) say("  C40: %s\n", s->c40_status.c_str());
     for (int e = 0; e < kEngines; e++) {
       const Timing& t = s->t[e];
@@ -781,7 +794,7 @@ struct Phases {
   double total() const { return parse + lower + generate + assemble + image; }
 };
 
-Phases compile_once(const std::string& text, bool is_ld) {
+Phases compile_once(const std::string& text, bool is_ld, int opt = 0) {
   Phases ph;
   auto cpu_now = [] {
     timespec ts{};
@@ -806,7 +819,7 @@ Phases compile_once(const std::string& text, bool is_ld) {
     ph.parse = lap();
   }
   NativeBuild nb;
-  nb.gen = generate_x86(p, p.layout());
+  nb.gen = generate_x86(p, p.layout(), opt);
   ph.generate = lap();
   nb.asm_result = as::assemble(as::x86::target(), nb.gen.program, as::Mode::Blockwise);
   ph.assemble = lap();
@@ -823,6 +836,8 @@ Phases compile_once(const std::string& text, bool is_ld) {
 
 struct CompileRow {
   std::string source;
+  int opt = 0;          // -O level
+  bool levels = false;  // one of the per-level rows (not in the size fit)
   Phases ph;  // the median of the repeats, phase by phase
   int repeats = 0;
 };
@@ -834,11 +849,13 @@ std::vector<CompileRow> run_compile(Run& R) {
   if (R.o.smoke) { plant = {20, 60}; il = {60}; big_plant = 100; }
   int repeats = R.o.smoke ? 1 : 3;
   say("compile speed\n");
-  auto one = [&](const std::string& source, const std::string& text, bool is_ld) {
+  auto one = [&](const std::string& source, const std::string& text, bool is_ld, int opt = 0, bool levels = false) {
     std::vector<Phases> v;
-    for (int k = 0; k < repeats; k++) v.push_back(compile_once(text, is_ld));
+    for (int k = 0; k < repeats; k++) v.push_back(compile_once(text, is_ld, opt));
     CompileRow row;
     row.source = source;
+    row.opt = opt;
+    row.levels = levels;
     row.repeats = repeats;
     row.ph = v[0];
     auto med = [&](double Phases::*m) {
@@ -852,8 +869,8 @@ std::vector<CompileRow> run_compile(Run& R) {
     row.ph.assemble = med(&Phases::assemble);
     row.ph.image = med(&Phases::image);
     row.ph.wall = med(&Phases::wall);
-    say("  %-26s %8zu IL  %.3f s CPU, %.3f s wall  (%.2f M IL/s)\n", source.c_str(), row.ph.il, row.ph.total(),
-        row.ph.wall, row.ph.il / row.ph.total() / 1e6);
+    say("  %-26s -O%d %8zu IL  %.3f s CPU, %.3f s wall  (%.2f M IL/s)\n", source.c_str(), opt, row.ph.il,
+        row.ph.total(), row.ph.wall, row.ph.il / row.ph.total() / 1e6);
     rows.push_back(row);
   };
   for (int n : plant) one("plant .ld " + std::to_string(n) + " rungs", synth::synth_plant_ld(n, 1), true);
@@ -863,6 +880,20 @@ std::vector<CompileRow> run_compile(Run& R) {
     so.n_exe = n;
     so.seed = 5;
     one("synth .il n=" + std::to_string(n), synth::synth_il(so), false);
+  }
+  // The cost of each optimization level (issue 8): the 20,000-rung plant and
+  // the typical mix of 30,000 instructions at -O1 and -O2.
+  {
+    int pr = R.o.smoke ? 40 : 20000, sn = R.o.smoke ? 60 : 30000;
+    std::string ptext = synth::synth_plant_ld(pr, 1);
+    synth::SynthOptions so;
+    so.n_exe = sn;
+    so.seed = 5;
+    std::string stext = synth::synth_il(so);
+    for (int opt = 0; opt < kLevels; opt++) {
+      one("plant .ld " + std::to_string(pr) + " rungs", ptext, true, opt, true);
+      one("synth .il n=" + std::to_string(sn), stext, false, opt, true);
+    }
   }
   return rows;
 }
@@ -1056,6 +1087,54 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
         "simulated TMS320C40-40 (50 ns per cycle), median cycles per scan of its native code and of the C40-hosted "
         "interpreter.\n\n";
 
+  // --- optimization levels (issue 8)
+  {
+    Csv c({"program", "n_exe", "p_basic", "o0_ns", "o1_ns", "o2_ns", "c_ns", "o0_p99_ns", "o1_p99_ns", "o2_p99_ns",
+           "c_p99_ns", "o0_bytes", "o1_bytes", "o2_bytes", "o0_build_s", "o1_build_s", "o2_build_s", "c_build_s"});
+    md += "## Optimization levels: -O0, -O1, -O2 against the C route\n\n";
+    md += md_head({"program", "N_exe", "-O0", "-O1", "-O2", "C -O2", "C/-O2", "-O0/-O2", "-O2 ns/IL",
+                   "bytes/IL -O0 · -O1 · -O2", "build ms -O0 · -O1 · -O2", "cc -O2 build"});
+    std::vector<Subject*> lv = head;
+    for (Subject* s : R.of("classes"))
+      if (s->powered) lv.push_back(s);
+    for (Subject* s : lv) {
+      auto per = [&](const size_t* b) {
+        return fixed(double(b[0]) / s->n, 1) + " · " + fixed(double(b[1]) / s->n, 1) + " · " + fixed(double(b[2]) / s->n, 1);
+      };
+      const double* bt = s->native_build_at;
+      c.row({s->name, std::to_string(s->n), fmt(s->counts.p_basic(), 4), fmt(s->t[kNative].median, 6),
+             fmt(s->t[kNativeO1].median, 6), fmt(s->t[kNativeO2].median, 6), fmt(s->t[kC].median, 6),
+             fmt(s->t[kNative].p99, 6), fmt(s->t[kNativeO1].p99, 6), fmt(s->t[kNativeO2].p99, 6), fmt(s->t[kC].p99, 6),
+             std::to_string(s->native_bytes_at[0]), std::to_string(s->native_bytes_at[1]),
+             std::to_string(s->native_bytes_at[2]), fmt(bt[0], 4), fmt(bt[1], 4), fmt(bt[2], 4), fmt(s->c_build_s, 4)});
+      md += md_row({s->name, std::to_string(s->n), cell(s->t[kNative]), cell(s->t[kNativeO1]), cell(s->t[kNativeO2]),
+                    cell(s->t[kC]), ratio(s->t[kC].median, s->t[kNativeO2].median),
+                    ratio(s->t[kNative].median, s->t[kNativeO2].median), fixed(s->t[kNativeO2].median / s->n, 3),
+                    per(s->native_bytes_at),
+                    fixed(bt[0] * 1e3, 1) + " · " + fixed(bt[1] * 1e3, 1) + " · " + fixed(bt[2] * 1e3, 1),
+                    std::isfinite(s->c_build_s) ? fixed(s->c_build_s * 1e3, 0) + " ms" : "–"});
+    }
+    md += "\nMedian / p99 per scan as above; C/-O2 above 1.0× means -O2 is faster than the C route.  bytes/IL: "
+          "machine code bytes per IL instruction.  build: `build_x86` (generate and assemble, no listing notes) at "
+          "each level, one run; cc -O2 build: `ldc --emit=c` and the system C compiler making the shared object.  "
+          "The one-class programs (the last rows) are powered; their C cells are subject to the note under the "
+          "per-class table.\n\n";
+    // code bytes per IL on the typical mix, per level: least squares over the scaling programs
+    md += md_head({"level", "code bytes per IL (fit over the typical-mix programs)", "R²", "basic class ns/IL"});
+    for (int lvl = 0; lvl < kLevels; lvl++) {
+      std::vector<double> x, y;
+      for (Subject* s : R.of("scaling")) {
+        x.push_back(s->n);
+        y.push_back(double(s->native_bytes_at[lvl]));
+      }
+      Fit f = fit(x, y);
+      md += md_row({"-O" + std::to_string(lvl), fixed(f.slope, 2), fixed(f.r2, 4),
+                    fixed(class_ns(R, op_class_name(OpClass::Basic), true, kNativeAt[lvl]), 3)});
+    }
+    md += "\n";
+    R.write("levels.csv", c.text());
+  }
+
   // --- scaling.csv and plot
   {
     Csv c({"n_exe", "p_basic", "classic_ns", "fast_ns", "native_ns", "c_ns", "classic_p99_ns", "fast_p99_ns",
@@ -1124,12 +1203,14 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
   {
     Csv c({"class", "powered", "n", "classic_ns_per_instr", "fast_ns_per_instr", "native_ns_per_instr", "c_ns_per_instr",
            "c40_cycles_per_instr", "c40_interp_cycles_per_instr", "classic_over_native", "fast_over_native",
-           "c_over_native", "c40_interp_over_native", "native_code_bytes_per_instr", "c40_code_bytes_per_instr"});
+           "c_over_native", "c40_interp_over_native", "native_code_bytes_per_instr", "c40_code_bytes_per_instr",
+           "native_o1_ns_per_instr", "native_o2_ns_per_instr", "native_o2_code_bytes_per_instr"});
     md += "## Per class (paper 003, Fig. 8): time per instruction\n\n";
     md += "One-class programs of " + std::to_string(o.smoke ? 60 : 3000) +
           " instructions; *off*: the same with no power (application instructions skipped).\n\n";
-    md += md_head({"class", "classic ns", "fast ns", "native ns", "C ns", "classic/native", "fast/native", "C/native",
-                   "native bytes/instr", "C40 interp cyc", "C40 native cyc", "C40 interp/native"});
+    md += md_head({"class", "classic ns", "fast ns", "native ns", "-O2 ns", "C ns", "classic/native", "fast/native",
+                   "C/native", "C/-O2", "native bytes/instr", "-O2 bytes/instr", "C40 interp cyc", "C40 native cyc",
+                   "C40 interp/native"});
     plot::BarPlot bp;
     bp.title = "Time per instruction by class (one-class programs, powered)";
     bp.ylabel = "ns per IL instruction";
@@ -1142,15 +1223,20 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
       for (int e = 0; e < kEngines; e++) v[e] = s->t[e].median / s->n;
       double cb = double(s->native_bytes) / s->n;
       double ci = s->c40_interp_cycles / s->n, cn = s->c40_cycles / s->n;
-      c.row({s->klass, s->powered ? "1" : "0", std::to_string(s->n), fmt(v[0], 5), fmt(v[1], 5), fmt(v[2], 5),
-             fmt(v[3], 5), fmt(cn, 5), fmt(ci, 5), fmt(v[0] / v[2], 4), fmt(v[1] / v[2], 4), fmt(v[3] / v[2], 4),
-             fmt(ci / cn, 4), fmt(cb, 4), fmt(double(s->c40_bytes) / s->n, 4)});
+      double cb2 = double(s->native_bytes_at[2]) / s->n;
+      c.row({s->klass, s->powered ? "1" : "0", std::to_string(s->n), fmt(v[kClassic], 5), fmt(v[kFast], 5),
+             fmt(v[kNative], 5), fmt(v[kC], 5), fmt(cn, 5), fmt(ci, 5), fmt(v[kClassic] / v[kNative], 4),
+             fmt(v[kFast] / v[kNative], 4), fmt(v[kC] / v[kNative], 4), fmt(ci / cn, 4), fmt(cb, 4),
+             fmt(double(s->c40_bytes) / s->n, 4), fmt(v[kNativeO1], 5), fmt(v[kNativeO2], 5), fmt(cb2, 4)});
       // cc -O2 drops compares nobody reads and tests the power of a run of
       // instructions under one condition once: those C cells measure the optimizer.
       bool c_optimized = s->klass == op_class_name(OpClass::Compare) || !s->powered;
-      md += md_row({s->klass + (s->powered ? "" : " (off)"), fixed(v[0], 2), fixed(v[1], 2), fixed(v[2], 3),
-                    s->t[kC].ok ? fixed(v[3], 3) + (c_optimized ? " *" : "") : "–", ratio(v[0], v[2]), ratio(v[1], v[2]),
-                    s->t[kC].ok ? ratio(v[3], v[2]) + (c_optimized ? " *" : "") : "–", fixed(cb, 1), fixed(ci, 1),
+      std::string star = c_optimized ? " *" : "";
+      md += md_row({s->klass + (s->powered ? "" : " (off)"), fixed(v[kClassic], 2), fixed(v[kFast], 2),
+                    fixed(v[kNative], 3), fixed(v[kNativeO2], 3), s->t[kC].ok ? fixed(v[kC], 3) + star : "–",
+                    ratio(v[kClassic], v[kNative]), ratio(v[kFast], v[kNative]),
+                    s->t[kC].ok ? ratio(v[kC], v[kNative]) + star : "–",
+                    s->t[kC].ok ? ratio(v[kC], v[kNativeO2]) + star : "–", fixed(cb, 1), fixed(cb2, 1), fixed(ci, 1),
                     fixed(cn, 1), ratio(ci, cn)});
       if (s->powered) {
         bp.categories.push_back(s->klass);
@@ -1468,10 +1554,11 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
 
   // --- compile speed
   if (!compile.empty()) {
-    Csv c({"source", "rungs", "il", "parse_s", "lower_s", "generate_s", "assemble_s", "image_s", "total_s",
+    Csv c({"source", "opt", "rungs", "il", "parse_s", "lower_s", "generate_s", "assemble_s", "image_s", "total_s",
            "il_per_s", "wall_s", "code_bytes", "image_bytes", "repeats"});
     md += "## Compile speed (ldc's own pipeline, CPU time, median of " + std::to_string(compile[0].repeats) + ")\n\n";
-    md += md_head({"source", "IL", "parse", "lower", "generate", "assemble", "image", "total", "IL/s", "wall"});
+    md += md_head({"source", "level", "IL", "parse", "lower", "generate", "assemble", "image", "total", "IL/s", "wall",
+                   "code bytes/IL"});
     plot::LinePlot lp;
     lp.title = "Compile time vs program size (plant .ld, all phases)";
     lp.xlabel = "IL instructions";
@@ -1484,14 +1571,15 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     std::vector<double> fx, fy;
     for (const CompileRow& r : compile) {
       const Phases& p = r.ph;
-      c.row({r.source, std::to_string(p.rungs), std::to_string(p.il), fmt(p.parse, 5), fmt(p.lower, 5),
+      c.row({r.source, std::to_string(r.opt), std::to_string(p.rungs), std::to_string(p.il), fmt(p.parse, 5), fmt(p.lower, 5),
              fmt(p.generate, 5), fmt(p.assemble, 5), fmt(p.image, 5), fmt(p.total(), 5), fmt(p.il / p.total(), 5),
              fmt(p.wall, 5), std::to_string(p.code), std::to_string(p.image_bytes), std::to_string(r.repeats)});
-      md += md_row({r.source, std::to_string(p.il), fixed(p.parse * 1e3, 1) + " ms", fixed(p.lower * 1e3, 1) + " ms",
-                    fixed(p.generate * 1e3, 1) + " ms", fixed(p.assemble * 1e3, 1) + " ms",
-                    fixed(p.image * 1e3, 1) + " ms", fixed(p.total() * 1e3, 1) + " ms",
-                    fixed(p.il / p.total() / 1e6, 2) + " M", fixed(p.wall * 1e3, 1) + " ms"});
-      if (r.source.rfind("plant .ld", 0) == 0) {
+      md += md_row({r.source, "-O" + std::to_string(r.opt), std::to_string(p.il), fixed(p.parse * 1e3, 1) + " ms",
+                    fixed(p.lower * 1e3, 1) + " ms", fixed(p.generate * 1e3, 1) + " ms",
+                    fixed(p.assemble * 1e3, 1) + " ms", fixed(p.image * 1e3, 1) + " ms",
+                    fixed(p.total() * 1e3, 1) + " ms", fixed(p.il / p.total() / 1e6, 2) + " M",
+                    fixed(p.wall * 1e3, 1) + " ms", fixed(double(p.code) / double(p.il), 2)});
+      if (r.source.rfind("plant .ld", 0) == 0 && !r.levels) {
         double v[6] = {p.parse, p.lower, p.generate, p.assemble, p.image, p.total()};
         for (int k = 0; k < 6; k++) {
           ser[k].x.push_back(double(p.il));

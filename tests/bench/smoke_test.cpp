@@ -131,6 +131,7 @@ TEST(Ldbench, SmokeRunWritesCsvAndSvgThatParse) {
       {"compile.csv", {"source", "il", "parse_s", "generate_s", "assemble_s", "total_s", "il_per_s"}},
       {"memory.csv", {"rungs", "il", "rss_before_kb", "hwm_after_image_kb"}},
       {"machine.csv", {"key", "value"}},
+      {"levels.csv", {"program", "n_exe", "o0_ns", "o1_ns", "o2_ns", "c_ns", "o0_bytes", "o2_bytes", "o2_build_s"}},
   };
   for (const auto& [name, cols] : csvs) {
     SCOPED_TRACE(name);
@@ -157,7 +158,7 @@ TEST(Ldbench, SmokeRunWritesCsvAndSvgThatParse) {
   std::set<std::string> engines;
   for (size_t r = 1; r < t.size(); r++)
     if (t[r][col("status")] == "ok") engines.insert(t[r][col("engine")]);
-  for (const char* e : {"classic", "fast", "native"}) EXPECT_TRUE(engines.count(e)) << e << " never timed";
+  for (const char* e : {"classic", "fast", "native", "native-O1", "native-O2"}) EXPECT_TRUE(engines.count(e)) << e << " never timed";
   // the simulated C40: cycles for both its engines on every program
   int c40 = 0;
   for (size_t r = 1; r < t.size(); r++)
