@@ -1648,13 +1648,31 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
 int usage() {
   std::fprintf(stderr,
                "usage: ldbench [--out DIR] [--smoke] [--samples N] [--batch-us US] [--no-c] [--c-max-il N]\n"
-               "               [--only examples,classes,fig10,scaling,large,compile,memory] [--no-c40] [--source DIR]\n");
+               "               [--only examples,classes,fig10,scaling,large,compile,memory] [--no-c40] [--source DIR]\n"
+               "       ldbench --synth N_EXE P_BASIC [SEED]   (a synthetic program's IL text, to stdout)\n"
+               "       ldbench --plant RUNGS                  (the synthetic plant's .ld text, to stdout)\n");
   return 2;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  // The benchmark programs themselves, for a look with ldc --emit=listing.
+  if ((argc == 4 || argc == 5) && std::string(argv[1]) == "--synth") {
+    synth::SynthOptions so;
+    so.n_exe = std::atoi(argv[2]);
+    so.p_basic = std::atof(argv[3]);
+    so.seed = argc == 5 ? std::strtoull(argv[4], nullptr, 10) : uint64_t(so.n_exe) + 77;
+    if (so.n_exe < 1 || so.n_exe > 10000000 || !(so.p_basic >= 0 && so.p_basic <= 1)) return usage();
+    std::fputs(synth::synth_il(so).c_str(), stdout);
+    return 0;
+  }
+  if (argc == 3 && std::string(argv[1]) == "--plant") {
+    int rungs = std::atoi(argv[2]);
+    if (rungs < 1 || rungs > int(kMaxRungs)) return usage();
+    std::fputs(synth::synth_plant_ld(rungs, 1).c_str(), stdout);
+    return 0;
+  }
   if (argc == 3 && std::string(argv[1]) == "--compile-child") {
     try {
       return compile_child(argv[2]);
