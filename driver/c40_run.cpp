@@ -2,6 +2,7 @@
 #include <cstdio>
 
 #include "driver/c40_driver.h"
+#include "driver/ldrun_io.h"
 
 namespace ldc {
 namespace {
@@ -33,32 +34,13 @@ int run_c40(const std::string& input, const std::string& engine, const std::stri
       throw UserError("ldrun: error: " + input + " is not a C40 image; compile it with ldc --target=c40, or use --engine=c40interp");
   } else {
     Compiled c = compile_source(input);
-    if (engine == "c40sim") img = make_c40_image(c.il, build_c40(c.il, input));
-    else {
-      img.layout = c.il.layout();
-      img.il = encode_il(c.il).code;
-      img.aliases = c.il.aliases;
-      if (std::string why = validate_il(img.il, img.layout); !why.empty()) throw UserError("ldrun: error: IL " + why);
-    }
+    img = engine == "c40sim" ? make_c40_image(c.il, build_c40(c.il, input)) : il_image(c.il);
   }
   std::unique_ptr<C40Engine> eng = engine == "c40sim" ? make_c40sim_engine(img.code, img.entry, img.layout)
                                                       : make_c40interp_engine(img.il, img.layout);
-  size_t s = 0;
-  while (!watch.empty() && s <= watch.size()) {
-    size_t e = watch.find(',', s);
-    std::string name = watch.substr(s, e == std::string::npos ? std::string::npos : e - s);
-    try {
-      opt.watch.push_back(resolve_probe(name, img.aliases));
-    } catch (std::exception& ex) { throw UserError("ldrun: error: --watch: " + std::string(ex.what())); }
-    if (e == std::string::npos) break;
-    s = e + 1;
-  }
+  for (Probe& p : parse_watch(watch, img.aliases)) opt.watch.push_back(p);
   Trace trace;
-  if (!trace_file.empty()) {
-    try {
-      trace = read_trace(read_file(trace_file), trace_file, img.aliases);
-    } catch (UserError&) { throw; } catch (std::exception& ex) { throw UserError(ex.what()); }
-  }
+  if (!trace_file.empty()) trace = load_trace(trace_file, img.aliases);
   Recorder rec(*eng);
   std::string out;
   run_trace(rec, img.layout, trace_file.empty() ? nullptr : &trace, trace_file, opt, out);

@@ -15,6 +15,7 @@
 
 #include "backend-c/backend_c.h"
 #include "driver/c40_driver.h"
+#include "driver/ldrun_io.h"
 #include "driver/driver.h"
 #include "runtime/plc.h"
 #include "runtime/runtime.h"
@@ -402,34 +403,16 @@ int main(int argc, char** argv) {
       so_path = build_c_shared_object(c.il, tmpdir);
     } else {
       Compiled c = compile_source(input);
-      if (engine == "native") img = make_x86_image(c.il, build_x86(c.il, input, as::Mode::Blockwise, 0, /*notes=*/false));
-      else {
-        img.layout = c.il.layout();
-        img.il = encode_il(c.il).code;
-        img.aliases = c.il.aliases;
-        if (std::string why = validate_il(img.il, img.layout); !why.empty()) throw UserError("ldrun: error: IL " + why);
-      }
+      img = engine == "native" ? make_x86_image(c.il, build_x86(c.il, input, as::Mode::Blockwise, 0, /*notes=*/false))
+                               : il_image(c.il);
     }
     const Layout& layout = img.layout;
     std::unique_ptr<Engine> eng = engine == "interp" ? make_interp_engine(img.il, layout)
                                   : engine == "c"    ? make_shared_object_engine(so_path, kCScanSymbol)
                                                      : make_native_engine(img.code, img.entry);
-    size_t s = 0;
-    while (!watch.empty() && s <= watch.size()) {
-      size_t e = watch.find(',', s);
-      std::string name = watch.substr(s, e == std::string::npos ? std::string::npos : e - s);
-      try {
-        opt.watch.push_back(resolve_probe(name, img.aliases));
-      } catch (std::exception& ex) { throw UserError("ldrun: error: --watch: " + std::string(ex.what())); }
-      if (e == std::string::npos) break;
-      s = e + 1;
-    }
+    for (Probe& p : parse_watch(watch, img.aliases)) opt.watch.push_back(p);
     Trace trace;
-    if (!trace_file.empty()) {
-      try {
-        trace = read_trace(read_file(trace_file), trace_file, img.aliases);
-      } catch (UserError&) { throw; } catch (std::exception& ex) { throw UserError(ex.what()); }
-    }
+    if (!trace_file.empty()) trace = load_trace(trace_file, img.aliases);
     std::string out;
     run_trace(*eng, layout, trace_file.empty() ? nullptr : &trace, trace_file, opt, out);
     std::fwrite(out.data(), 1, out.size(), stdout);

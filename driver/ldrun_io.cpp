@@ -1,0 +1,38 @@
+// driver/ldrun_io.cpp -- see ldrun_io.h.
+#include "driver/ldrun_io.h"
+
+#include "driver/driver.h"
+
+namespace ldc {
+
+Image il_image(const Program& p) {
+  Image img;
+  img.layout = p.layout();
+  img.il = encode_il(p).code;
+  img.aliases = p.aliases;
+  if (std::string why = validate_il(img.il, img.layout); !why.empty()) throw UserError("ldrun: error: IL " + why);
+  return img;
+}
+
+std::vector<Probe> parse_watch(const std::string& watch, const std::vector<Alias>& aliases) {
+  std::vector<Probe> probes;
+  size_t s = 0;
+  while (!watch.empty() && s <= watch.size()) {
+    size_t e = watch.find(',', s);
+    std::string name = watch.substr(s, e == std::string::npos ? std::string::npos : e - s);
+    try {
+      probes.push_back(resolve_probe(name, aliases));
+    } catch (std::exception& ex) { throw UserError("ldrun: error: --watch: " + std::string(ex.what())); }
+    if (e == std::string::npos) break;
+    s = e + 1;
+  }
+  return probes;
+}
+
+Trace load_trace(const std::string& path, const std::vector<Alias>& aliases) {
+  try {
+    return read_trace(read_file(path), path, aliases);
+  } catch (UserError&) { throw; } catch (std::exception& ex) { throw UserError(ex.what()); }
+}
+
+}  // namespace ldc
