@@ -1485,17 +1485,11 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
   // --- code size (eq. 3, 4)
   if (!R.of("fig10").empty() || !R.of("scaling").empty()) {
     std::vector<double> x, native, image, il, fast, cx, cb, kx, kb;
-    for (Subject* s : R.of("fig10")) {
-      if (std::fabs(s->p_target - synth::kTypicalPBasic) > 1e-9) continue;
-      x.push_back(s->n);
-      native.push_back(double(s->native_bytes));
-      image.push_back(double(s->image_bytes));
-      il.push_back(double(s->il_bytes));
-      fast.push_back(double(s->fast_bytes));
-      if (s->c_bytes) { cx.push_back(s->n); cb.push_back(double(s->c_bytes)); }
-      if (s->c40_bytes) { kx.push_back(s->n); kb.push_back(double(s->c40_bytes)); }
-    }
-    for (Subject* s : R.of("scaling")) {
+    std::vector<Subject*> typical;
+    for (Subject* s : R.of("fig10"))
+      if (std::fabs(s->p_target - synth::kTypicalPBasic) <= 1e-9) typical.push_back(s);
+    for (Subject* s : R.of("scaling")) typical.push_back(s);
+    for (Subject* s : typical) {
       x.push_back(s->n);
       native.push_back(double(s->native_bytes));
       image.push_back(double(s->image_bytes));
