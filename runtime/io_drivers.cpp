@@ -53,21 +53,6 @@ void put_cell(uint8_t* base, const Layout& L, const Probe& p, const std::string&
   }
 }
 
-std::string value_text(const uint8_t* base, const Layout& L, const Probe& p) {
-  const uint8_t* at = base + L.addr(p.area, p.index);
-  if (area_is_bit(p.area)) return *at ? "1" : "0";
-  if (p.area == Area::F) {
-    float f;
-    std::memcpy(&f, at, 4);
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%g", double(f));
-    return buf;
-  }
-  int32_t x;
-  std::memcpy(&x, at, 4);
-  return std::to_string(x);
-}
-
 class TraceDriver : public IoDriver {
  public:
   TraceDriver(const Trace* trace, std::vector<Probe> watch, std::string* out, FILE* file)
@@ -102,7 +87,7 @@ class TraceDriver : public IoDriver {
   void after_scan(const ScanContext& c, const uint8_t* mem, const uint8_t* global) override {
     if (c.task != 0) return;
     std::string line = std::to_string(c.scan);
-    for (const Probe& p : watch_) line += "," + value_text(area_is_shared(p.area) ? global : mem, layout_, p);
+    for (const Probe& p : watch_) line += "," + format_probe(area_is_shared(p.area) ? global : mem, layout_, p);
     emit(line + "\n");
   }
   void detach() override {

@@ -1009,21 +1009,6 @@ SwapReport Runtime::replace(const std::string& task, Image img, const std::strin
 
 namespace {
 
-std::string format_value(const uint8_t* base, const Layout& L, const Probe& p) {
-  const uint8_t* at = base + L.addr(p.area, p.index);
-  if (area_is_bit(p.area)) return *at ? "1" : "0";
-  if (p.area == Area::F) {
-    float f;
-    std::memcpy(&f, at, 4);
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%g", double(f));
-    return buf;
-  }
-  int32_t v;
-  std::memcpy(&v, at, 4);
-  return std::to_string(v);
-}
-
 }  // namespace
 
 std::string Runtime::get(const std::string& device, int64_t timeout_ms) {
@@ -1040,12 +1025,12 @@ std::string Runtime::get(const std::string& device, int64_t timeout_ms) {
   Probe p = resolve_probe(dev, t.ctl_aliases);
   if (area_is_shared(p.area)) {
     std::lock_guard<ImageLock> g(m.glock);
-    return format_value(m.global.data(), m.glayout, p);
+    return format_probe(m.global.data(), m.glayout, p);
   }
   if (m.tasks.size() > 1 && device.find('.') == std::string::npos)
     throw std::runtime_error("'" + dev + "' is private to each task: name one, e.g. " + t.spec.name + "." + dev);
   std::string out;
-  if (!m.at_boundary(t, [&] { out = format_value(t.mem.data(), t.prog->image.layout, p); }, timeout_ms))
+  if (!m.at_boundary(t, [&] { out = format_probe(t.mem.data(), t.prog->image.layout, p); }, timeout_ms))
     throw std::runtime_error("task '" + t.spec.name + "' did not reach a scan boundary in time");
   return out;
 }

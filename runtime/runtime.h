@@ -68,6 +68,8 @@ void run_trace(Engine& engine, const Layout& layout, const Trace* trace, const s
 
 // Value of a probe, formatted as ldrun prints it (bits 0/1, INT32 decimal, REAL %g).
 std::string format_probe(const Memory& mem, const Probe& p);
+// The same, for a probe of the memory image at `base` laid out as `layout`.
+std::string format_probe(const uint8_t* base, const Layout& layout, const Probe& p);
 
 }  // namespace ldc
 

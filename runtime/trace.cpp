@@ -127,15 +127,22 @@ Trace read_trace(std::string_view text, const std::string& file, const std::vect
   return t;
 }
 
-std::string format_probe(const Memory& mem, const Probe& p) {
-  char buf[64];
-  if (area_is_bit(p.area)) return mem.get_bit(p.area, p.index) ? "1" : "0";
+std::string format_probe(const uint8_t* base, const Layout& layout, const Probe& p) {
+  const uint8_t* at = base + layout.addr(p.area, p.index);
+  if (area_is_bit(p.area)) return *at ? "1" : "0";
   if (p.area == Area::F) {
-    std::snprintf(buf, sizeof buf, "%g", double(mem.get_real(p.index)));
+    float f;
+    std::memcpy(&f, at, 4);
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%g", double(f));
     return buf;
   }
-  return std::to_string(mem.get_int(p.area, p.index));
+  int32_t v;
+  std::memcpy(&v, at, 4);
+  return std::to_string(v);
 }
+
+std::string format_probe(const Memory& mem, const Probe& p) { return format_probe(mem.bytes.data(), mem.layout, p); }
 
 void run_trace(Engine& engine, const Layout& layout, const Trace* trace, const std::string&, const RunOptions& opt,
                std::string& out) {
