@@ -1,6 +1,8 @@
 // bench/synth.cpp -- synthetic programs for the benchmarks (synth.h).
 #include "bench/synth.h"
 
+#include "bench/rng.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -10,34 +12,8 @@
 namespace ldc::synth {
 namespace {
 
-// splitmix64, as ldgen: the same numbers on every platform.
-class Rng {
- public:
-  explicit Rng(uint64_t seed) : s_(seed * 0x2545F4914F6CDD1Dull + 1) {}
-  uint64_t next() {
-    uint64_t z = (s_ += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  int below(int n) { return n <= 1 ? 0 : int(next() % uint64_t(n)); }
-  int range(int lo, int hi) { return lo + below(hi - lo + 1); }
-  bool pct(int p) { return below(100) < p; }
-  int pick(std::initializer_list<int> weights) {
-    int total = 0;
-    for (int w : weights) total += w;
-    int x = below(total), i = 0;
-    for (int w : weights) {
-      if (x < w) return i;
-      x -= w;
-      i++;
-    }
-    return 0;
-  }
-
- private:
-  uint64_t s_;
-};
+// The generators' splitmix64 (bench/rng.h), its seed spread first.
+Rng synth_rng(uint64_t seed) { return Rng(seed * 0x2545F4914F6CDD1Dull + 1); }
 
 using D = SynthDevices;
 std::string num(long v) { return std::to_string(v); }
@@ -48,7 +24,7 @@ constexpr int kApp[] = {int(OpClass::Compare), int(OpClass::Move), int(OpClass::
 // Writes one program: rung headers, instructions, edge slots, timer numbers.
 class Writer {
  public:
-  explicit Writer(uint64_t seed) : r(seed) {}
+  explicit Writer(uint64_t seed) : r(synth_rng(seed)) {}
   Rng r;
   // One-class programs: every result goes to a device of its own (a compiler
   // cannot drop a store that a later one overwrites) and INT32 sources are the
@@ -407,7 +383,7 @@ std::string line_rung(const std::string& title, const std::string& row) {
 
 std::string synth_plant_ld(int rungs, uint64_t seed) {
   if (rungs < 1) throw std::invalid_argument("synth: a plant needs at least one rung");
-  Rng r(seed);
+  Rng r = synth_rng(seed);
   std::string out = "# synthetic plant: " + num(rungs) + " rungs (bench/synth.cpp)\n\n";
   int made = 0;
   for (int g = 0; made < rungs; g++) {
