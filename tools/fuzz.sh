@@ -4,7 +4,10 @@
 # Builds build-fuzz/ with clang (-fsanitize=fuzzer,address,undefined) if needed,
 # seeds fuzz-corpus/NAME/ (git-ignored) from the reader's seed directories,
 # runs for SECONDS and prints the executions.  Crashes land in fuzz-corpus/NAME-crashes/.
-# LDC_FUZZ_ARGS adds libFuzzer flags (e.g. "-fork=1 -ignore_crashes=1" to go on past a known crash).
+# LDC_FUZZ_ARGS adds libFuzzer flags (e.g. "-fork=1 -ignore_crashes=1" to go on past a known crash,
+# "-max_len=4096" to keep the slow readers' mutants small).
+# LDC_FUZZ_CORPUS puts the corpora elsewhere than fuzz-corpus/ (e.g. outside the worktree);
+# LDC_FUZZ_BUILD names another fuzz build directory.
 set -eu
 name=${1:?usage: tools/fuzz.sh NAME SECONDS}
 secs=${2:-60}
@@ -14,8 +17,9 @@ if [ ! -f "$build/CMakeCache.txt" ]; then
   CXX=clang++ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLDC_FUZZ=ON -DLDC_SANITIZE=ON >/dev/null
 fi
 cmake --build "$build" --target "fuzz_$name" -j"${LDC_FUZZ_JOBS:-2}" >/dev/null
-corpus=$root/fuzz-corpus/$name
-crashes=$root/fuzz-corpus/$name-crashes
+corpora=${LDC_FUZZ_CORPUS:-$root/fuzz-corpus}
+corpus=$corpora/$name
+crashes=$corpora/$name-crashes
 mkdir -p "$corpus" "$crashes"
 # seeds: the directories tests/fuzz/CMakeLists.txt lists for this reader
 seeds=$(sed -n "s/^set(_fuzz_seeds_$name \(.*\))$/\1/p" "$root/tests/fuzz/CMakeLists.txt")
@@ -25,7 +29,7 @@ for d in $seeds "tests/fuzz/regressions/$name"; do
     cp "$f" "$corpus/seed_$(echo "$f" | cksum | cut -d' ' -f1)"
   done
 done
-log=$root/fuzz-corpus/$name.log
+log=$corpora/$name-$(date +%Y%m%d-%H%M%S).log
 set +e
 "$build/tests/fuzz/fuzz_$name" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 \
   -artifact_prefix="$crashes/" -print_final_stats=1 ${LDC_FUZZ_ARGS:-} "$corpus" >"$log" 2>&1
