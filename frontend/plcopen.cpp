@@ -195,6 +195,18 @@ class Importer {
   std::map<std::pair<int, std::string>, Out> outs_;
   std::set<std::pair<int, std::string>> consumed_;  // block outputs someone reads
   std::set<int> generating_;
+  // The native stack: bool_expr recurses once per power-flow element it
+  // follows, block_out once per block that feeds a block being generated.  A
+  // block's frames are about ten times a flow element's, so it costs
+  // kBlockNest; the total stays under kMaxNest (docs/fuzzing.md has the
+  // measured stack: about 4 MiB at the limit under ASan, 1 MiB without).
+  int nest_ = 0;
+  static constexpr int kMaxNest = 500, kBlockNest = 10;
+  struct Nest {
+    int& n;
+    int cost;
+    ~Nest() { n -= cost; }
+  };
 
   // declarations
   void declare(const Element* list, const std::string& pou, bool global);
@@ -760,12 +772,11 @@ Cond Importer::bool_expr(const std::vector<Conn>& conns, bool order, const Eleme
   int nn = 1;  // node 0: the left rail
   std::map<std::pair<int, std::string>, int> memo;
   std::set<int> visiting;
-  int depth = 0;
   std::function<int(const Conn&)> out_of;
   std::function<int(const std::vector<Conn>&, const Element*)> input_of = [&](const std::vector<Conn>& cs, const Element* who) {
     if (cs.empty()) fail_at(who, where(who) + " has no input connection");
-    if (++depth > 2000) fail_at(who, "power flow too long (more than 2000 elements in a row) at " + where(who));
-    struct Leave { int& d; ~Leave() { d--; } } leave{depth};
+    Nest leave{++nest_, 1};
+    if (nest_ > kMaxNest) fail_at(who, "power flow too long (more than " + std::to_string(kMaxNest) + " elements in a row, a block counting as " + std::to_string(kBlockNest) + ") at " + where(who));
     if (cs.size() == 1) return out_of(cs[0]);
     int j = nn++;
     for (const Conn& c : cs) {
@@ -823,36 +834,57 @@ Cond Importer::bool_expr(const std::vector<Conn>& conns, bool order, const Eleme
   };
   int sink = nn++;
   for (const Conn& c : conns) edges.push_back({out_of(c), sink, Cond::yes(), nullptr});
-  // series/parallel reduction
-  for (bool changed = true; changed;) {
-    changed = false;
+  // Series/parallel reduction: the merges, in the order, of "join all parallel
+  // edges, else the series node of lowest number, until nothing changes", kept
+  // incremental so that a long power flow costs O(E log E), not O(E^3).
+  {
     std::vector<int> indeg(nn), outdeg(nn);
-    for (auto& e : edges)
-      if (e.alive) outdeg[e.from]++, indeg[e.to]++;
-    for (size_t a = 0; a < edges.size(); a++) {
-      if (!edges[a].alive) continue;
-      for (size_t b = a + 1; b < edges.size(); b++) {
-        if (!edges[b].alive || edges[b].from != edges[a].from || edges[b].to != edges[a].to) continue;
-        edges[a].label = c_or(std::move(edges[a].label), std::move(edges[b].label));
-        if (!edges[a].el) edges[a].el = edges[b].el;
-        edges[b].alive = false;
-        changed = true;
-      }
+    std::vector<std::vector<size_t>> ins(nn), outs(nn);  // edges by end; dead ones are skipped
+    std::map<std::pair<int, int>, size_t> between;        // the alive edge of each (from, to)
+    auto join_parallel = [&](size_t a, size_t b) {       // a < b, same ends: b joins a
+      edges[a].label = c_or(std::move(edges[a].label), std::move(edges[b].label));
+      if (!edges[a].el) edges[a].el = edges[b].el;
+      edges[b].alive = false;
+      outdeg[edges[a].from]--;
+      indeg[edges[a].to]--;
+    };
+    for (size_t e = 0; e < edges.size(); e++) {
+      outdeg[edges[e].from]++;
+      indeg[edges[e].to]++;
+      ins[edges[e].to].push_back(e);
+      outs[edges[e].from].push_back(e);
+      auto [it, fresh] = between.try_emplace({edges[e].from, edges[e].to}, e);
+      if (!fresh) join_parallel(it->second, e);
     }
-    if (changed) continue;
-    for (int v = 1; v < nn && !changed; v++) {
-      if (v == sink || indeg[v] != 1 || outdeg[v] != 1) continue;
-      E *in = nullptr, *o = nullptr;
-      for (auto& e : edges) {
-        if (!e.alive) continue;
-        if (e.to == v) in = &e;
-        if (e.from == v) o = &e;
-      }
-      in->label = c_and(std::move(in->label), std::move(o->label));
-      in->to = o->to;
-      if (!in->el) in->el = o->el;
-      o->alive = false;
-      changed = true;
+    auto series_node = [&](int v) { return v != 0 && v != sink && indeg[v] == 1 && outdeg[v] == 1; };
+    std::set<int> ready;
+    for (int v = 1; v < nn; v++)
+      if (series_node(v)) ready.insert(v);
+    auto alive = [&](const std::vector<size_t>& list, bool in, int v) {
+      for (size_t e : list)
+        if (edges[e].alive && (in ? edges[e].to : edges[e].from) == v) return e;
+      return edges.size();  // not reached: degree 1 means one alive edge
+    };
+    while (!ready.empty()) {
+      int v = *ready.begin();
+      ready.erase(ready.begin());
+      size_t i = alive(ins[v], true, v), o = alive(outs[v], false, v);
+      int from = edges[i].from, to = edges[o].to;
+      between.erase({from, v});
+      between.erase({v, to});
+      edges[i].label = c_and(std::move(edges[i].label), std::move(edges[o].label));
+      edges[i].to = to;
+      if (!edges[i].el) edges[i].el = edges[o].el;
+      edges[o].alive = false;
+      indeg[v] = outdeg[v] = 0;
+      ins[to].push_back(i);
+      auto [it, fresh] = between.try_emplace({from, to}, i);
+      if (fresh) continue;
+      size_t a = std::min(it->second, i), b = std::max(it->second, i);
+      join_parallel(a, b);
+      it->second = a;
+      for (int x : {from, to})
+        if (series_node(x)) ready.insert(x);
     }
   }
   std::vector<E*> left;
@@ -932,7 +964,9 @@ Out Importer::block_out(const Node& b, const Conn& c, bool order) {
 }
 
 void Importer::block(const Node& b) {
-  if (generating_.size() > 200) fail_at(b.el, "blocks feed each other too deeply (more than 200) at " + where(b.el));
+  Nest leave{nest_ += kBlockNest, kBlockNest};
+  if (nest_ > kMaxNest)
+    fail_at(b.el, "blocks feed each other too deeply (more than " + std::to_string(kMaxNest / kBlockNest) + ", less with power flow between them) at " + where(b.el));
   computed_.insert(b.id);
   generating_.insert(b.id);
   std::string t = upper(b.type);
