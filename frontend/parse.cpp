@@ -504,13 +504,12 @@ void Parser::check_cells(const Grid& g, int line0) {
   };
   for (int r = 0; r < rows; r++) {
     int no = line0 + r;
+    bool tail = false;  // this run of wire is drawn after an output (found once per run: linear in the width)
     for (int c = g.rail + 1; c < g.width; c++) {
       Cell k = g.cell[r][c];
       if (k == Cell::Wire) {
         if (!left_ok(r, c)) fail(no, c + 1, "dangling wire: nothing connects to its left end");
-        int b = c;
-        while (g.at(r, b) == Cell::Wire) b--;
-        bool tail = g.out_ends(r, b);  // wire drawn after an output
+        if (g.at(r, c - 1) != Cell::Wire) tail = g.out_ends(r, c - 1);
         if (!tail && !right_ok(r, c)) fail(no, c + 1, "dangling wire: it leads nowhere");
       } else if (k == Cell::Junction) {
         int links = (c > g.rail + 1 && left_ok(r, c)) + right_ok(r, c) + g.vertical(r - 1, c) + g.vertical(r + 1, c);

@@ -221,6 +221,7 @@ int main() {
   for (int n : {100, 817})
     expect_ok(".ld right staircase " + std::to_string(n), ldc::parse_ld, ld_right_staircase(n));
   expect_error(".ld right staircase 818", ldc::parse_ld, ld_right_staircase(818), "too wide");
+  expect_ok(".ld full grid 4096 x 4096", ldc::parse_ld, ld_full_grid(ldc::kMaxRungRows, ldc::kMaxRowWidth));
 
   // LDmicro: the RUNG is the first level
   for (int n : {10, 99})
