@@ -29,6 +29,9 @@ for d in $seeds "tests/fuzz/regressions/$name"; do
     cp "$f" "$corpus/seed_$(echo "$f" | cksum | cut -d' ' -f1)"
   done
 done
+# the project harness writes every input to $TMPDIR: keep that in memory
+# (/tmp on disk ran it at ~220 exec/s on a busy machine, /dev/shm at ~7,000)
+if [ -z "${TMPDIR:-}" ] && [ -d /dev/shm ] && [ -w /dev/shm ]; then export TMPDIR=/dev/shm; fi
 log=$corpora/$name-$(date +%Y%m%d-%H%M%S).log
 set +e
 "$build/tests/fuzz/fuzz_$name" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 \
