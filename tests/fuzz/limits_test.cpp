@@ -16,6 +16,10 @@
 
 static int failures = 0;
 
+// The deepest input a reader accepts must leave a quarter of an 8 MiB stack
+// free, under ASan too (whose frames are 4-10 times larger).
+constexpr size_t kStackBudget = 6u << 20;
+
 using Reader = ldc::TreeProgram (*)(std::string_view, const std::string&);
 
 // Runs fn on a thread of its own with a painted stack of `bytes` (guard page
@@ -91,6 +95,9 @@ static void expect_ok(const std::string& what, Reader read, const std::string& t
   std::string err = compile(read, text, &depth, &stack);
   if (!err.empty()) {
     std::printf("FAIL %s: %s\n", what.c_str(), err.c_str());
+    failures++;
+  } else if (stack > kStackBudget) {
+    std::printf("FAIL %s: %zu bytes of stack, more than %zu\n", what.c_str(), stack, kStackBudget);
     failures++;
   } else {
     std::printf("ok   %s: tree depth %d, %zu bytes of stack\n", what.c_str(), depth, stack);
