@@ -768,45 +768,6 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
   items = std::move(kept);
 }
 
-// Can this rung keep its stack in the kNumSlots registers?  Stack position p
-// maps to slot p % kNumSlots, so the positions live at any one time must span
-// fewer than kNumSlots (what lies deeper is never read again, as with the
-// interpreter's shift register).
-bool fits_slots(const std::vector<ldc::Instr>& code) {
-  struct Ev { size_t at; int pos; bool write; };
-  std::vector<Ev> ev;
-  int d = 0;
-  for (size_t i = 0; i < code.size(); i++) {
-    auto rd = [&](int p) { ev.push_back({i, p, false}); return p >= 0; };
-    auto wr = [&](int p) { ev.push_back({i, p, true}); };
-    switch (code[i].op) {
-      case Op::LOAD: case Op::LOADN: case Op::LOADP: case Op::LOADF: case Op::TRUE:
-      case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE:
-        wr(d++); break;
-      case Op::ANDBLK: case Op::ORBLK:
-        if (!rd(d - 1) || !rd(d - 2)) return false;
-        wr(d - 2); d--; break;
-      case Op::MPS: if (!rd(d - 1)) return false; wr(d); d++; break;
-      case Op::MRD: if (!rd(d - 2)) return false; wr(d - 1); break;
-      case Op::MPP: d--; break;
-      default: if (!rd(d - 1)) return false; break;  // AND.., outputs, applications, flow
-    }
-  }
-  // for every point between instructions: the positions read again before
-  // they are written must lie within one window of kNumSlots
-  for (size_t at = 0; at <= code.size(); at++) {
-    int lo = INT32_MAX, hi = INT32_MIN;
-    std::vector<int> decided;
-    for (const Ev& e : ev) {
-      if (e.at < at || std::find(decided.begin(), decided.end(), e.pos) != decided.end()) continue;
-      decided.push_back(e.pos);  // the first event at or after `at` decides
-      if (!e.write) { lo = std::min(lo, e.pos); hi = std::max(hi, e.pos); }
-    }
-    if (lo <= hi && hi - lo >= kNumSlots) return false;
-  }
-  return true;
-}
-
 }  // namespace
 
 std::string x86_label_name(const std::string& il_label) { return "lbl_" + il_label; }
@@ -837,7 +798,7 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
     for (const auto& l : r.labels) b.items.push_back(Item::labelDef(x86_label_name(l), true));
     if (notes) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
     std::vector<uint32_t> starts;
-    bool slots = o2 && fits_slots(r.code);
+    bool slots = o2 && stack_fits_slots(r.code, kNumSlots);
     Gen g(layout, b.items, slots);
     for (const ldc::Instr& in : r.code) {
       starts.push_back(uint32_t(b.items.size()));

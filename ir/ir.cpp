@@ -421,4 +421,45 @@ Area word_area(Dev d) {
   }
 }
 
+bool stack_fits_slots(const std::vector<Instr>& code, int slots) {
+  struct Ev { size_t at; int pos; bool write; };
+  std::vector<Ev> ev;
+  int d = 0;
+  for (size_t i = 0; i < code.size(); i++) {
+    auto rd = [&](int p) { ev.push_back({i, p, false}); return p >= 0; };
+    auto wr = [&](int p) { ev.push_back({i, p, true}); };
+    switch (code[i].op) {
+      case Op::LOAD: case Op::LOADN: case Op::LOADP: case Op::LOADF: case Op::TRUE:
+      case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE:
+        wr(d++);
+        if (d > kMaxStackDepth) return false;
+        break;
+      case Op::ANDBLK: case Op::ORBLK:
+        if (!rd(d - 1) || !rd(d - 2)) return false;
+        wr(d - 2); d--; break;
+      case Op::MPS:
+        if (!rd(d - 1)) return false;
+        wr(d); d++;
+        if (d > kMaxStackDepth) return false;
+        break;
+      case Op::MRD: if (!rd(d - 2)) return false; wr(d - 1); break;
+      case Op::MPP: if (--d < 0) return false; break;
+      default: if (!rd(d - 1)) return false; break;  // AND.., outputs, applications, flow
+    }
+  }
+  // for every point between instructions: the positions read again before
+  // they are written must lie within one window of `slots`
+  for (size_t at = 0; at <= code.size(); at++) {
+    int lo = std::numeric_limits<int>::max(), hi = std::numeric_limits<int>::min();
+    std::vector<int> decided;
+    for (const Ev& e : ev) {
+      if (e.at < at || std::find(decided.begin(), decided.end(), e.pos) != decided.end()) continue;
+      decided.push_back(e.pos);  // the first event at or after `at` decides
+      if (!e.write) { lo = std::min(lo, e.pos); hi = std::max(hi, e.pos); }
+    }
+    if (lo <= hi && hi - lo >= slots) return false;
+  }
+  return true;
+}
+
 }  // namespace ldc

@@ -198,6 +198,15 @@ std::string print_tree(const TreeProgram& p);
 Program lower_to_il(const TreeProgram& p);
 constexpr int kMaxStackDepth = 32;
 
+// Can a code generator keep this rung's bit stack in `slots` registers, stack
+// position p (0 = the rung's first push) in register p % slots?  True when
+// the rung reads no entry below its own first push, never holds more than
+// kMaxStackDepth entries (the shift register would lose the deepest), and at
+// every point between instructions the positions read again before they are
+// written lie within one window of `slots` (what lies deeper is never read
+// again).  Such a rung does not depend on the stack the rungs before it left.
+bool stack_fits_slots(const std::vector<Instr>& code, int slots);
+
 // Operand spelling in IL text: X3, T0, D5, F1, 42, 1.5, E7, name.
 std::string operand_text(const Operand& o);
 std::string instr_text(const Instr& in);  // "LOAD X1", "ADD D0 5 D1"
