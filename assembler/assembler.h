@@ -149,6 +149,34 @@ struct Item {
   }
 };
 
+// For peephole passes: is the first item after `i` that is neither a
+// comment nor dropped the definition of `label`?
+template <class Inst>
+bool labelFollows(const std::vector<Item<Inst>>& items, size_t i, const std::string& label,
+                  const std::vector<char>& drop) {
+  for (size_t j = i + 1; j < items.size(); j++) {
+    if (items[j].kind == ItemKind::Comment || drop[j]) continue;
+    return items[j].kind == ItemKind::Label && items[j].label == label;
+  }
+  return false;
+}
+
+// Removes the items marked in `drop` (one flag per item); `index` holds item
+// indices (e.g. where each IL instruction's code starts) and is moved along.
+template <class Inst>
+void removeItems(std::vector<Item<Inst>>& items, const std::vector<char>& drop, std::vector<uint32_t>& index) {
+  std::vector<uint32_t> newIndex(items.size() + 1);
+  std::vector<Item<Inst>> kept;
+  kept.reserve(items.size());
+  for (size_t i = 0; i < items.size(); i++) {
+    newIndex[i] = uint32_t(kept.size());
+    if (!drop[i]) kept.push_back(std::move(items[i]));
+  }
+  newIndex[items.size()] = uint32_t(kept.size());
+  for (auto& s : index) s = newIndex[s];
+  items = std::move(kept);
+}
+
 template <class Inst>
 struct Block {
   int sourceLine = 0;

@@ -150,23 +150,85 @@ const std::vector<Instruction>* bit_template(Op op) {
 
 // ------------------------------------------------------------ application code
 
+// Does the instruction write register r?  (Calls: every register, as far as
+// the generator's bookkeeping is concerned.)
+bool writes_reg(const Instruction& i, Reg r) {
+  switch (i.mnemonic) {
+    case M::Cmpi: case M::Cmpf: case M::Tstb: case M::Cmpi3: case M::Cmpf3: case M::Tstb3: case M::Sti: case M::Stf:
+    case M::Ldpk: case M::Push: case M::Pushf: case M::Nop: case M::Br: case M::Brd: case M::Bc: case M::Bcd:
+    case M::Retsc: case M::Word:
+      return false;
+    case M::Call: case M::Callc: return true;
+    case M::Pop: case M::Popf: return i.ops[0].kind == OperandKind::Reg && i.ops[0].reg == r;
+    default: break;
+  }
+  const Operand& d = i.ops[i.numOperands ? i.numOperands - 1 : 0];
+  return d.kind == OperandKind::Reg && d.reg == r;
+}
+
+// -O2 keeps a rung's bit stack in registers, 0 or 1 each: stack position p
+// (0 = the rung's first push) in kSlots[p % kNumSlots].  Nothing else uses
+// them: R8 and R9 are free, R10 (the -O0 bit stack) is dead between rungs
+// whose stack is their own, AR1-AR5 are neither scratch nor used by the
+// routines and the math ROM.  R8-R10 set the flags when written.
+const Reg kSlots[] = {Reg::R8, Reg::R9, Reg::R10, ar(1), ar(2), ar(3), ar(4), ar(5)};
+constexpr int kNumSlots = 8;
+
+// -O1 role of an IL instruction in a fused contact run (Gen::plan_runs): a
+// LOAD/LOADN, the AND/ANDN/OR/ORN contacts after it and an ANDBLK/ORBLK
+// ending it are computed in R0 instead of the shift register R10.
+enum class Fuse : uint8_t { None, Start, Contact, Push, Combine };
+
 class Gen {
  public:
-  Gen(const C40Layout& w, std::vector<Item>& items, int& next_label) : W_(w), items_(items), next_label_(next_label) {}
+  // opt: the -O level; slots: this rung keeps its stack in kSlots (-O2)
+  Gen(const C40Layout& w, std::vector<Item>& items, int& next_label, int opt, bool slots)
+      : W_(w), items_(items), next_label_(next_label), opt_(opt), slots_(slots) {}
   void instr(const ldc::Instr& in);
   void ldpk_main() { items_.push_back(Item::instr(make(M::Ldpk, {I(kDataPage)}))); }
+  // -O1: which instructions of the rung run in R0 (before the first instr())
+  void plan_runs(const std::vector<ldc::Instr>& code);
+  // -O1: before the code of `in` (and its note): ends a run of application
+  // instructions that share one power test when `in` does not continue it
+  void before(const ldc::Instr& in) {
+    if (group_open_ && !guarded(in.op)) close_group();
+  }
+  void finish() { close_group(); }
 
  private:
   const C40Layout& W_;
   std::vector<Item>& items_;
   int& next_label_;
+  const int opt_;
+  const bool slots_;
   uint32_t page_ = kDataPage;  // page of the direct operand of the instruction being built
+  int depth_ = 0;              // stack positions in use before the current instruction (-O2)
+  int z_of_ = -1;              // register whose value the Z flag reflects (-1: none)
+  bool r0_top_ = false;        // R0 holds the top of the stack, 0 or 1 (-O1)
+  bool group_open_ = false;    // a power test's branch to group_ is pending (-O1)
+  std::string group_;
+  std::vector<Fuse> fuse_;     // per IL instruction of the rung (-O1)
+  size_t at_ = 0;              // index of the IL instruction being built
+
+  // Application instructions: executed only when the top is 1, stack unchanged.
+  static bool guarded(Op op) {
+    switch (op_info(op).klass) {
+      case OpClass::Move: case OpClass::Arith: case OpClass::Logic: case OpClass::Special: return true;
+      default: return op == Op::RSTT || op == Op::RSTC;
+    }
+  }
+  void close_group() {
+    if (group_open_) label(group_);
+    group_open_ = false;
+  }
 
   // Emits one instruction; a direct operand outside the data page gets its
   // own LDPK before and LDPK back after it.
   void emit(Instruction i) {
     bool direct = false;
     for (unsigned k = 0; k < i.numOperands; k++) direct |= i.ops[k].kind == OperandKind::Direct;
+    if (writes_reg(i, r0) || writes_reg(i, Reg::R10)) r0_top_ = false;
+    if (i.mnemonic != M::Sti && i.mnemonic != M::Stf) z_of_ = -1;  // stores leave the flags alone
     if (direct && page_ != kDataPage) {
       items_.push_back(Item::instr(make(M::Ldpk, {I(page_)})));
       items_.push_back(Item::instr(std::move(i)));
@@ -176,9 +238,20 @@ class Gen {
     }
     page_ = kDataPage;
   }
+  // emit, then remember that Z reflects the destination (an integer operation
+  // on R0-R11 sets Z from its result)
+  void emit_z(Instruction i) {
+    Reg d = i.ops[i.numOperands - 1].reg;
+    emit(std::move(i));
+    if (isExtended(d)) z_of_ = int(d);
+  }
   void op(M m, std::initializer_list<Operand> ops) { emit(make(m, ops)); }
   void opc(M m, Cond c, std::initializer_list<Operand> ops) { emit(makeCc(m, c, ops)); }
-  void label(const std::string& l) { items_.push_back(Item::labelDef(l)); }
+  void label(const std::string& l) {
+    items_.push_back(Item::labelDef(l));
+    z_of_ = -1;
+    r0_top_ = false;
+  }
   std::string fresh() { return "L" + std::to_string(next_label_++); }
   void branch(Cond c, const std::string& l) { opc(M::Bc, c, {L(l)}); }
   void jump(const std::string& l) { op(M::Br, {L(l)}); }
@@ -292,12 +365,38 @@ class Gen {
     op(M::Ldi, {I(1), R(r4)});
     op(M::Sti, {R(r4), D(W_.addr(Area::S, kBitError))});
   }
-  // if the top of the stack is 0, skip to the returned label
+  // -O2: the register of stack position p
+  static Reg slot(int p) { return kSlots[((p % kNumSlots) + kNumSlots) % kNumSlots]; }
+  Reg top() const { return slot(depth_ - 1); }
+  // flags: Z set when the top is 0
+  void test_top() {
+    if (!slots_) return op(M::Tstb, {I(1), R(r10)});
+    if (z_of_ != int(top())) op(M::Tstb, {I(1), R(top())});
+  }
+  // r = the top, 0 or 1
+  void top_to(Reg r) {
+    if (slots_) return op(M::Ldi, {R(top()), R(r)});
+    if (r == r0 && r0_top_) return;
+    op(M::And3, {I(1), R(r10), R(r)});
+    if (r == r0 && opt_ >= 1) r0_top_ = true;
+  }
+  // if the top of the stack is 0, skip to the returned label.  From -O1 on,
+  // consecutive application instructions share one test: they change neither
+  // the stack nor the slot registers.
   std::string skip_unless_power() {
     std::string skip = fresh();
-    op(M::Tstb, {I(1), R(r10)});
-    branch(Cond::EQ, skip);
-    return skip;
+    if (opt_ == 0) {
+      test_top();
+      branch(Cond::EQ, skip);
+      return skip;
+    }
+    if (!group_open_) {
+      test_top();
+      group_ = fresh();
+      branch(Cond::EQ, group_);
+      group_open_ = true;
+    }
+    return skip;  // the instruction's own end (its internal jumps)
   }
   // R0 = R0 * R1 modulo 2^32 (MPYI multiplies 24-bit operands): 16-bit halves.
   void mul32() {
@@ -325,6 +424,9 @@ class Gen {
   void counter(const ldc::Instr& in);
   void preset_r1(const ldc::Operand& pt);
   void advance_r2(uint32_t tw);
+  void bit_slots(const ldc::Instr& in);
+  bool bit_fused(const ldc::Instr& in, Fuse f);
+  void gen(const ldc::Instr& in);
 };
 
 Cond cond_of(Op op) {
@@ -342,19 +444,24 @@ Cond cond_of(Op op) {
 void Gen::compare(const ldc::Instr& in) {
   const ldc::Operand &a = in.a[0], &b = in.a[1];
   Cond c = cond_of(in.op);
-  if (!a.is_real() && !b.is_real()) {
-    load_int(a, r0);
+  Reg d = slot(depth_);
+  auto prepare = [&] {
+    if (slots_) return op(M::Ldi, {I(0), R(d)});  // -O2: 0, or 1 if the condition holds
     op(M::Lsh, {I(1), R(r10)});
     op(M::Or3, {I(1), R(r10), R(r2)});
+  };
+  if (!a.is_real() && !b.is_real()) {
+    load_int(a, r0);
+    prepare();
     op(M::Cmpi, {int_src(b, false, r1), R(r0)});
   } else {
     load_real(a, r0);
     load_real(b, r1);
-    op(M::Lsh, {I(1), R(r10)});
-    op(M::Or3, {I(1), R(r10), R(r2)});
+    prepare();
     op(M::Cmpf, {R(r1), R(r0)});
   }
-  opc(M::Ldic, c, {R(r2), R(r10)});
+  if (slots_) opc(M::Ldic, c, {I(1), R(d)});
+  else opc(M::Ldic, c, {R(r2), R(r10)});
 }
 
 void Gen::move(const ldc::Instr& in) {
@@ -545,7 +652,7 @@ void Gen::timer(const ldc::Instr& in) {
   std::string off = fresh(), done = fresh();
   if (in.op == Op::TON) {
     std::string running = fresh(), q = fresh();
-    op(M::Tstb, {I(1), R(r10)});
+    test_top();
     branch(Cond::EQ, off);
     op(M::Ldi, {D(ti), R(r0)});
     branch(Cond::NE, running);
@@ -570,7 +677,7 @@ void Gen::timer(const ldc::Instr& in) {
     label(done);
   } else if (in.op == Op::TOF) {
     std::string not_falling = fresh(), ti0 = fresh();
-    op(M::Tstb, {I(1), R(r10)});
+    test_top();
     branch(Cond::EQ, off);
     op(M::Ldi, {I(1), R(r0)});
     op(M::Sti, {R(r0), D(tq)});
@@ -610,7 +717,7 @@ void Gen::timer(const ldc::Instr& in) {
     op(M::Sti, {R(r0), D(tq)});
     jump(remember);
     label(idle);
-    op(M::Tstb, {I(1), R(r10)});
+    test_top();
     branch(Cond::EQ, off);
     op(M::Ldi, {D(ti), R(r0)});
     branch(Cond::NE, remember);
@@ -625,8 +732,12 @@ void Gen::timer(const ldc::Instr& in) {
     op(M::Ldi, {I(0), R(r0)});
     op(M::Sti, {R(r0), D(tw)});
     label(remember);
-    op(M::And3, {I(1), R(r10), R(r0)});
-    op(M::Sti, {R(r0), D(ti)});
+    if (slots_) {
+      op(M::Sti, {R(top()), D(ti)});
+    } else {
+      top_to(r0);
+      op(M::Sti, {R(r0), D(ti)});
+    }
   }
 }
 
@@ -643,7 +754,7 @@ void Gen::counter(const ldc::Instr& in) {
   }
   bool up = in.op == Op::CTU;
   uint32_t e = addr(in.a[2]);
-  op(M::And3, {I(1), R(r10), R(r0)});  // IN
+  top_to(r0);  // IN
   op(M::Ldi, {D(e), R(r1)});
   op(M::Sti, {R(r0), D(e)});
   op(M::Andn, {R(r1), R(r0)});          // rising edge: 0 or 1
@@ -663,14 +774,128 @@ void Gen::counter(const ldc::Instr& in) {
 }
 
 void Gen::instr(const ldc::Instr& in) {
+  Fuse f = at_ < fuse_.size() ? fuse_[at_] : Fuse::None;
+  if (slots_ && bit_template(in.op)) bit_slots(in);
+  else if (f == Fuse::None || !bit_fused(in, f)) gen(in);
+  depth_ += op_info(in.op).push - op_info(in.op).pop;
+  at_++;
+}
+
+// -O1: where a LOAD or LOADN starts a run of contacts that pays to compute in
+// R0 (docs/c40.md, "Optimization levels"): the run is pushed once at its end
+// (`LSH 1, R10; OR R0, R10`), or an ANDBLK/ORBLK right after it combines R0
+// with the top without pushing.  Per contact the -O0 templates spend AND 4
+// cycles, ANDN and OR 2 (direct reads wait 1), ORN 4; in R0 they cost 2, 2, 2,
+// 4, the start 1 less for LOADN and the same for LOAD, and the push 1 more
+// than LOAD's shift: a run pays when it has an AND or ends in a block.
+void Gen::plan_runs(const std::vector<ldc::Instr>& code) {
+  fuse_.assign(code.size(), Fuse::None);
+  if (opt_ < 1 || slots_) return;
+  for (size_t i = 0; i < code.size(); i++) {
+    if (code[i].op != Op::LOAD && code[i].op != Op::LOADN) continue;
+    size_t j = i + 1;
+    int ands = 0;
+    for (; j < code.size(); j++) {
+      Op o = code[j].op;
+      if (o != Op::AND && o != Op::ANDN && o != Op::OR && o != Op::ORN) break;
+      ands += o == Op::AND;
+    }
+    bool block = j < code.size() && (code[j].op == Op::ANDBLK || code[j].op == Op::ORBLK);
+    if (!block && ands == 0) continue;
+    fuse_[i] = Fuse::Start;
+    for (size_t k = i + 1; k < j; k++) fuse_[k] = Fuse::Contact;
+    if (block) fuse_[j] = Fuse::Combine;
+    else fuse_[j - 1] = Fuse::Push;  // the last contact pushes
+    i = j - 1;
+  }
+}
+
+// The fused forms; false where the instruction has none (then the template).
+bool Gen::bit_fused(const ldc::Instr& in, Fuse f) {
+  auto contact = [&] {
+    switch (in.op) {
+      case Op::LOAD: return op(M::Ldi, {Dv(in.a[0]), R(r0)});
+      case Op::LOADN: op(M::Ldi, {Dv(in.a[0]), R(r0)}); return op(M::Xor, {I(1), R(r0)});
+      case Op::AND: return op(M::And, {Dv(in.a[0]), R(r0)});
+      case Op::ANDN: return op(M::Andn, {Dv(in.a[0]), R(r0)});
+      case Op::OR: return op(M::Or, {Dv(in.a[0]), R(r0)});
+      default:  // ORN
+        op(M::Ldi, {Dv(in.a[0]), R(r1)});
+        op(M::Xor, {I(1), R(r1)});
+        return op(M::Or, {R(r1), R(r0)});
+    }
+  };
+  switch (f) {
+    case Fuse::Start: case Fuse::Contact: contact(); return true;
+    case Fuse::Push:
+      contact();
+      op(M::Lsh, {I(1), R(r10)});
+      op(M::Or, {R(r0), R(r10)});
+      r0_top_ = true;
+      return true;
+    case Fuse::Combine:
+      if (in.op == Op::ANDBLK) op(M::Or, {R(Reg::R11), R(r0)});  // ~1 | run: AND keeps or clears the top
+      op(in.op == Op::ANDBLK ? M::And : M::Or, {R(r0), R(r10)});
+      return true;
+    case Fuse::None: break;
+  }
+  return false;
+}
+
+// -O2 bit instructions on the slot registers (0 or 1 each).
+void Gen::bit_slots(const ldc::Instr& in) {
+  Reg d = slot(depth_), t = slot(depth_ - 1), u = slot(depth_ - 2);
+  auto b = [&](int k) { return Dv(in.a[k]); };
+  switch (in.op) {
+    case Op::LOAD: return emit_z(make(M::Ldi, {b(0), R(d)}));
+    case Op::LOADN: op(M::Ldi, {b(0), R(d)}); return emit_z(make(M::Xor, {I(1), R(d)}));
+    case Op::AND: return emit_z(make(M::And, {b(0), R(t)}));
+    case Op::ANDN: return emit_z(make(M::Andn, {b(0), R(t)}));
+    case Op::OR: return emit_z(make(M::Or, {b(0), R(t)}));
+    case Op::ORN:
+      op(M::Ldi, {b(0), R(r0)});
+      op(M::Xor, {I(1), R(r0)});
+      return emit_z(make(M::Or, {R(r0), R(t)}));
+    case Op::LOADP:  // d = b & !e; e = b
+      op(M::Ldi, {b(0), R(d)});
+      op(M::Ldi, {b(1), R(r0)});
+      op(M::Sti, {R(d), b(1)});
+      return emit_z(make(M::Andn, {R(r0), R(d)}));
+    case Op::LOADF:  // d = !b & e; e = b
+      op(M::Ldi, {b(1), R(d)});
+      op(M::Ldi, {b(0), R(r0)});
+      op(M::Sti, {R(r0), b(1)});
+      return emit_z(make(M::Andn, {R(r0), R(d)}));
+    case Op::TRUE: return emit_z(make(M::Ldi, {I(1), R(d)}));
+    case Op::ANDBLK: return emit_z(make(M::And, {R(t), R(u)}));
+    case Op::ORBLK: return emit_z(make(M::Or, {R(t), R(u)}));
+    case Op::MPS: return emit_z(make(M::Ldi, {R(t), R(d)}));
+    case Op::MRD: return emit_z(make(M::Ldi, {R(u), R(t)}));
+    case Op::MPP: return;
+    case Op::OUT: return op(M::Sti, {R(t), b(0)});
+    case Op::OUTN:
+      op(M::Xor3, {I(1), R(t), R(r0)});
+      return op(M::Sti, {R(r0), b(0)});
+    case Op::SET: case Op::RST:  // w | t, w & !t
+      op(M::Ldi, {b(0), R(r0)});
+      op(in.op == Op::SET ? M::Or : M::Andn, {R(t), R(r0)});
+      return op(M::Sti, {R(r0), b(0)});
+    default: break;
+  }
+  throw std::logic_error(std::string("c40 backend: no -O2 form for ") + op_info(in.op).name);
+}
+
+void Gen::gen(const ldc::Instr& in) {
   if (const auto* t = bit_template(in.op)) {
     for (Instruction i : *t) {
+      if (r0_top_ && i == make(M::And3, {I(1), R(r10), R(r0)})) continue;  // -O1: R0 holds the top
       for (unsigned k = 0; k < i.numOperands; k++)
         if (i.ops[k].kind == OperandKind::Direct) i.ops[k] = Dv(in.a[i.ops[k].imm]);
       emit(std::move(i));
     }
     return;
   }
+
   switch (op_info(in.op).klass) {
     case OpClass::Compare: return compare(in);
     case OpClass::Move: return move(in);
@@ -682,7 +907,7 @@ void Gen::instr(const ldc::Instr& in) {
     case OpClass::Timer: return timer(in);
     case OpClass::Counter: return counter(in);
     case OpClass::Flow:
-      op(M::Tstb, {I(1), R(r10)});
+      test_top();
       if (in.op == Op::END) return opc(M::Retsc, Cond::NE, {});
       {
         std::string skip = fresh();
@@ -803,9 +1028,20 @@ const char* const kDivfRoutine[] = {
     "RETSU",
 };
 
+// -O1, after generation: a branch to the label right after it is dropped.
+void drop_jumps_to_next(std::vector<Item>& items, std::vector<uint32_t>& starts) {
+  std::vector<char> drop(items.size(), 0);
+  for (size_t i = 0; i < items.size(); i++) {
+    const Item& it = items[i];
+    if (it.kind != as::ItemKind::Instruction || (it.inst.mnemonic != M::Br && it.inst.mnemonic != M::Bc)) continue;
+    if (it.inst.ops[0].kind == OperandKind::Label && as::labelFollows(items, i, it.inst.ops[0].label, drop)) drop[i] = 1;
+  }
+  as::removeItems(items, drop, starts);
+}
+
 }  // namespace
 
-C40Code generate_c40(const Program& p, const Layout& layout) {
+C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
   C40Layout w = C40Layout::of(layout);
   C40Code out;
   auto& prog = out.program;
@@ -818,7 +1054,15 @@ C40Code generate_c40(const Program& p, const Layout& layout) {
 
   as::Block<Instruction> pro;
   pro.sourceLine = p.rungs.empty() ? 0 : p.rungs[0].line;
-  pro.items.push_back(Item::note("scan: R10 = bit stack, R11 = mask ~1, DP = data page"));
+  // -O2 keeps a rung's stack in the slot registers where it fits, but only
+  // when no rung reads stack entries that the rungs before it pushed (IL text
+  // can say that; .ld rungs never do): then nothing reads R10 across rungs.
+  bool slots_ok = opt_level >= 2;
+  for (const Rung& r : p.rungs) slots_ok = slots_ok && stack_fits_slots(r.code, kMaxStackDepth + 1);
+  pro.items.push_back(Item::note(opt_level == 0 ? "scan: R10 = bit stack, R11 = mask ~1, DP = data page"
+                                 : opt_level == 1 ? "scan: R10 = bit stack, R11 = mask ~1, DP = data page for all rungs (-O1)"
+                                                  : "scan: bit stack in R8 R9 R10 AR1-AR5 or R10, R11 = mask ~1, DP = data page (-O2)"));
+  if (opt_level >= 1) pro.items.push_back(Item::instr(parse("LDPK 080h")));  // once: the rungs restore it after far pages
   for (const char* t : {"LDI 0, R10", "LDHI 0FFFFh, R11", "OR 0FFFEh, R11"})
     pro.items.push_back(Item::instr(parse(t)));
   prog.blocks.push_back(std::move(pro));
@@ -828,16 +1072,22 @@ C40Code generate_c40(const Program& p, const Layout& layout) {
     as::Block<Instruction> b;
     b.sourceLine = r.line;
     for (const auto& l : r.labels) b.items.push_back(Item::labelDef(label_name(l), true));
-    b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
-    Gen g(w, b.items, next_label);
+    bool slots = slots_ok && stack_fits_slots(r.code, kNumSlots);
+    b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title) +
+                                 (slots ? " (stack in registers)" : "")));
+    Gen g(w, b.items, next_label, opt_level, slots);
+    g.plan_runs(r.code);
     std::vector<uint32_t> starts;
     for (const ldc::Instr& in : r.code) {
+      g.before(in);
       starts.push_back(uint32_t(b.items.size()));
       b.items.push_back(Item::note(instr_text(in)));
-      // once per block, with the first instruction: the block does not depend on DP from elsewhere
-      if (starts.size() == 1) g.ldpk_main();
+      // -O0: once per block, with the first instruction: the block does not depend on DP from elsewhere
+      if (starts.size() == 1 && opt_level == 0) g.ldpk_main();
       g.instr(in);
     }
+    g.finish();
+    if (opt_level >= 1) drop_jumps_to_next(b.items, starts);
     out.il_items.push_back(std::move(starts));
     prog.blocks.push_back(std::move(b));
   }

@@ -6,8 +6,9 @@
 //   R10  the bit stack, top in bit 0 (paper 003's R10)
 //   R11  the mask ~1 (0xFFFFFFFE), loaded by the prologue (paper 003's masks in R11)
 //   DP   the data page of the memory image: LDPK once at the start of every rung
-//        block; an access to another page (edge slots past 64K words) is wrapped
-//        in LDPK page / LDPK back
+//        block (-O1, -O2: once in the prologue); an access to another page (edge
+//        slots past 64K words) is wrapped in LDPK page / LDPK back
+//   R8 R9 R10 AR1-AR5  -O2: the bit stack of a rung that fits, 0/1 words
 //   R0-R7, AR0  scratch within one template (and the routines it calls)
 // Devices are read and written with direct addressing (@offset), one word per
 // element (c40layout.h).  INT32 division and remainder call the shift-subtract
@@ -33,7 +34,10 @@ struct C40Code {
   std::vector<std::vector<uint32_t>> il_items;
 };
 
-C40Code generate_c40(const Program& p, const Layout& layout);
+// opt_level 0: paper 003's templates; 1: the templates with the peephole
+// rules of docs/c40.md ("Optimization levels"); 2: the bit stack of every
+// rung that fits in registers, the -O1 code for the rest.
+C40Code generate_c40(const Program& p, const Layout& layout, int opt_level = 0);
 
 // Global labels the backend defines.
 inline constexpr const char* kExitLabel = "scan_exit";

@@ -750,22 +750,9 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
   for (size_t i = 0; i < items.size(); i++) {
     const Item& it = items[i];
     if (drop[i] || it.kind != as::ItemKind::Instruction || (it.inst.mnemonic != M::Jmp && it.inst.mnemonic != M::Jcc)) continue;
-    if (it.inst.ops[0].kind != OperandKind::Label) continue;
-    for (size_t j = i + 1; j < items.size(); j++) {
-      if (items[j].kind == as::ItemKind::Comment || drop[j]) continue;
-      if (items[j].kind == as::ItemKind::Label && items[j].label == it.inst.ops[0].label) drop[i] = 1;
-      break;
-    }
+    if (it.inst.ops[0].kind == OperandKind::Label && as::labelFollows(items, i, it.inst.ops[0].label, drop)) drop[i] = 1;
   }
-  std::vector<uint32_t> new_index(items.size() + 1);
-  std::vector<Item> kept;
-  for (size_t i = 0; i < items.size(); i++) {
-    new_index[i] = uint32_t(kept.size());
-    if (!drop[i]) kept.push_back(std::move(items[i]));
-  }
-  new_index[items.size()] = uint32_t(kept.size());
-  for (auto& s : starts) s = new_index[s];
-  items = std::move(kept);
+  as::removeItems(items, drop, starts);
 }
 
 }  // namespace

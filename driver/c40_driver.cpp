@@ -7,9 +7,9 @@
 
 namespace ldc {
 
-C40Build build_c40(const Program& p, const std::string& source_name) {
+C40Build build_c40(const Program& p, const std::string& source_name, int opt_level) {
   C40Build b;
-  b.gen = c40gen::generate_c40(p, p.layout());
+  b.gen = c40gen::generate_c40(p, p.layout(), opt_level);
   b.asm_result = as::assemble(as::c40::target(), b.gen.program, as::Mode::Blockwise);
   if (!b.asm_result.ok()) {
     std::string msg;
@@ -43,11 +43,12 @@ Image make_c40_image(const Program& p, const C40Build& b) {
   return img;
 }
 
-std::string c40_output(const Program& p, const std::string& input, const std::string& emit, bool to_file) {
+std::string c40_output(const Program& p, const std::string& input, const std::string& emit, bool to_file,
+                       int opt_level) {
   if (emit == "asm")
-    return "; ldc " + input + ": TMS320C40, GNU as syntax (tic4x, as -mcpu=40)\n" +
-           as::c40::toGnuAs(c40gen::generate_c40(p, p.layout()).program);
-  C40Build b = build_c40(p, input);
+    return "; ldc " + input + ": TMS320C40, GNU as syntax (tic4x, as -mcpu=40), -O" + std::to_string(opt_level) + "\n" +
+           as::c40::toGnuAs(c40gen::generate_c40(p, p.layout(), opt_level).program);
+  C40Build b = build_c40(p, input, opt_level);
   if (emit == "listing") return as::c40::listing(b.gen.program, b.asm_result);
   std::vector<uint8_t> bin = write_image(make_c40_image(p, b));
   if (emit == "hex") return write_intel_hex(bin);

@@ -15,15 +15,17 @@ struct C40Build {
   c40gen::C40Code gen;
   as::Result asm_result;
 };
-// Assembly errors become UserError with the rung's source line.
-C40Build build_c40(const Program& p, const std::string& source_name);
+// Assembly errors become UserError with the rung's source line.  opt_level
+// 0, 1, 2: the code generator's level (c40gen.h, docs/c40.md).
+C40Build build_c40(const Program& p, const std::string& source_name, int opt_level = 0);
 
 // The image ldc writes for --target=c40: code words, binary IL, line map, names.
 Image make_c40_image(const Program& p, const C40Build& b);
 
 // ldc --target=c40: --emit=asm (GNU as tic4x source), --emit=listing,
 // --emit=hex, or (emit empty) the image bytes, which need -o.
-std::string c40_output(const Program& p, const std::string& input, const std::string& emit, bool to_file);
+std::string c40_output(const Program& p, const std::string& input, const std::string& emit, bool to_file,
+                       int opt_level = 0);
 
 // ldobjdump of a C40 image: word address, word and instruction, with the
 // rungs and IL interleaved.

@@ -15,6 +15,7 @@ using namespace ldc;
 
 static const char kUsage[] =
     "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il|asm|listing|hex|c] [--target=x86-64|c40] [-O0|-O1|-O2]\n"
+    "       -O0 templates (paper 003), -O1 peephole, -O2 bit stack in registers; for both targets\n"
     "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n";
 
 // ldc --project: compile every program of the project, run the configuration
@@ -95,8 +96,7 @@ int main(int argc, char** argv) {
         text.assign(bin.begin(), bin.end());
       }
     } else if (target == "c40" && (emit.empty() || emit == "asm" || emit == "listing" || emit == "hex")) {  // the C40
-      if (opt != 0) throw UserError("ldc: error: -O" + std::to_string(opt) + " is not available for --target=c40 (its templates are -O0)");
-      text = c40_output(c.il, input, emit, !output.empty());
+      text = c40_output(c.il, input, emit, !output.empty(), opt);
     } else {
       throw UserError("ldc: error: " + (emit.empty() ? std::string("image output (-o FILE.bin)") : "--emit=" + emit) +
                       " is not available in this build (for this target)");

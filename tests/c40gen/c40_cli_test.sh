@@ -2,8 +2,8 @@
 # c40_cli_test.sh BINDIR SRCDIR -- the C40 route of the command-line tools:
 # ldc --target=c40 (image, --emit=hex|asm|listing), ldrun --engine=c40sim |
 # c40interp | interp on the same image (and on the .ld), --cycles, ldobjdump,
-# and the messages of what is refused.  Every example's expected output must
-# come out of both C40 engines.
+# -O1/-O2, and the messages of what is refused.  Every example's expected
+# output must come out of both C40 engines, native code at every level.
 set -eu
 bin=$1 src=$2
 tmp=$(mktemp -d)
@@ -31,6 +31,19 @@ for f in "$src"/examples/*.ld; do
   "$bin/ldobjdump" "$tmp/$n.bin" > "$tmp/dump" || fail "ldobjdump $n"
   grep -q "file format ldc-c40" "$tmp/dump" || fail "ldobjdump $n: format line"
   grep -q "; rung 1, line" "$tmp/dump" || fail "ldobjdump $n: rung notes"
+  for O in 1 2; do
+    "$bin/ldc" "$f" --target=c40 -O$O -o "$tmp/$n.O$O.bin" || fail "ldc -O$O $n"
+    "$bin/ldrun" "$tmp/$n.O$O.bin" --engine=c40sim --trace "$base.csv" --watch "$watch" > "$tmp/out" || fail "ldrun $n -O$O"
+    diff -u "$base.expected" "$tmp/out" || fail "$n at -O$O on c40sim differs from $n.expected"
+  done
+  # fewer cycles per level over the whole trace
+  for O in 0 1 2; do
+    [ $O = 0 ] && img="$tmp/$n.bin" || img="$tmp/$n.O$O.bin"
+    "$bin/ldrun" "$img" --engine=c40sim --trace "$base.csv" --watch "$watch" --cycles |
+      awk -F, 'NR > 1 { s += $(NF - 1) } END { print s }' > "$tmp/cyc$O"
+  done
+  [ "$(cat "$tmp/cyc1")" -lt "$(cat "$tmp/cyc0")" ] && [ "$(cat "$tmp/cyc2")" -lt "$(cat "$tmp/cyc1")" ] ||
+    fail "$n: cycles -O0 $(cat "$tmp/cyc0"), -O1 $(cat "$tmp/cyc1"), -O2 $(cat "$tmp/cyc2")"
 done
 # --cycles: two more columns, 50 ns per cycle
 "$bin/ldrun" "$tmp/motor.bin" --engine=c40sim --trace "$src/examples/motor.csv" --watch Y0 --cycles > "$tmp/cyc"
@@ -45,12 +58,21 @@ grep -q "TMS320C40, GNU as syntax" "$tmp/m.s" || fail "--emit=asm header"
 grep -q "LDPK 0x80" "$tmp/m.s" || fail "--emit=asm LDPK"
 "$bin/ldc" "$src/examples/motor.ld" --target=c40 --emit=listing > "$tmp/m.lst"
 grep -q "^000000  087e0000" "$tmp/m.lst" || fail "--emit=listing first word"
+# the optimized code keeps its rung and IL notes; -O2 says which rungs keep the stack in registers
+"$bin/ldc" "$src/examples/motor.ld" --target=c40 -O2 --emit=asm > "$tmp/m2.s"
+grep -q "TMS320C40, GNU as syntax (tic4x, as -mcpu=40), -O2" "$tmp/m2.s" || fail "-O2 --emit=asm header"
+grep -q "; rung, line 38: start/stop with seal-in (stack in registers)" "$tmp/m2.s" || fail "-O2 --emit=asm rung note"
+grep -q "; LOAD X3" "$tmp/m2.s" || fail "-O2 --emit=asm IL note"
+[ "$(grep -c "LDPK" "$tmp/m2.s")" = 1 ] || fail "-O2: one LDPK per scan"
+"$bin/ldc" "$src/examples/motor.ld" --target=c40 -O1 --emit=listing > "$tmp/m1.lst"
+grep -q "^000000  1f700080.*LDPK 0x80" "$tmp/m1.lst" || fail "-O1 --emit=listing first word: $(grep -m1 "^000000" "$tmp/m1.lst")"
+grep -q "; ANDN X2" "$tmp/m1.lst" || fail "-O1 --emit=listing IL note"
 # refused, with a message
 "$bin/ldc" "$src/examples/motor.ld" -o "$tmp/x86.bin"
 expect_fail "c40sim on an x86-64 image" "is not a C40 image" "$bin/ldrun" "$tmp/x86.bin" --engine=c40sim
 expect_fail "native on a C40 image" "is a C40 image; use --engine=c40sim" "$bin/ldrun" "$tmp/motor.bin"
 expect_fail "--cycles on x86" "--cycles needs" "$bin/ldrun" "$tmp/x86.bin" --cycles
-expect_fail "-O2 for c40" "not available for --target=c40" "$bin/ldc" "$src/examples/motor.ld" --target=c40 -O2 -o "$tmp/o.bin"
+expect_fail "-O3" "unknown option '-O3'" "$bin/ldc" "$src/examples/motor.ld" --target=c40 -O3 -o "$tmp/o.bin"
 expect_fail "image without -o" "needs -o FILE" "$bin/ldc" "$src/examples/motor.ld" --target=c40
 expect_fail "--emit=c40 tree is fine, --emit=bogus is not" "not available" "$bin/ldc" "$src/examples/motor.ld" --target=c40 --emit=bogus
 # a damaged C40 image is refused before anything runs (here by its checksum;

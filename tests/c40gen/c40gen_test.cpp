@@ -53,8 +53,9 @@ float flt(uint32_t u) {
 
 // ------------------------------------------------------------------ examples
 
-// Every example: the simulated native code and the C40-hosted interpreter give
-// the C40 model's image after every scan, byte for byte; the model in its
+// Every example: the simulated native code (at -O0, -O1 and -O2) and the
+// C40-hosted interpreter give the C40 model's image after every scan, byte for
+// byte; the model in its
 // checking mode gives the reference interpreter's image, and every REAL step
 // is within the bound.
 TEST(C40Examples, NativeAndInterpreterMatchTheModelAndTheReference) {
@@ -95,11 +96,11 @@ TEST(C40Examples, EnginesPrintTheExpectedOutputs) {
     std::string col;
     std::getline(hs, col, ',');  // "scan"
     while (std::getline(hs, col, ',')) opt.watch.push_back(resolve_probe(col, p.aliases));
-    for (int engine = 0; engine < 2; engine++) {
-      std::unique_ptr<Engine> eng = engine == 0 ? test::make_native(p) : test::make_interp(p);
+    for (int engine = 0; engine < 4; engine++) {  // native -O0, -O1, -O2, the interpreter
+      std::unique_ptr<Engine> eng = engine < 3 ? test::make_native(p, engine) : test::make_interp(p);
       std::string out;
       run_trace(*eng, p.layout(), &t, n + ".csv", opt, out);
-      EXPECT_EQ(out, expected) << n << (engine == 0 ? " c40sim" : " c40interp");
+      EXPECT_EQ(out, expected) << n << (engine < 3 ? " c40sim -O" + std::to_string(engine) : " c40interp");
     }
   }
 }
@@ -239,20 +240,113 @@ TEST(C40Gen, AccessesOutsideTheDataPageSwitchAndRestoreDp) {
   Program p = parse_il_text(il, "t.il");
   C40Layout w = C40Layout::of(p.layout());
   ASSERT_GT(w.addr(Area::E, 30000) >> 16, kDataPage);
-  C40Code c = generate_c40(p, p.layout());
-  std::string text = as::c40::toGnuAs(c.program);
-  EXPECT_NE(text.find("LDPK 0x81"), std::string::npos) << text;
-  // run the far edge on the simulator
-  auto res = as::assemble(as::c40::target(), c.program);
-  ASSERT_TRUE(res.ok());
-  auto words = as::c40::wordsOf(res.code);
-  C40Machine m(p.layout(), words, 0);
-  Memory mem(p.layout());
-  for (int k = 0; k < 4; k++) {
-    mem.set_bit(Area::X, 1, k % 2 == 1);
-    m.scan(mem.data());
-    EXPECT_EQ(mem.get_bit(Area::Y, 0), k % 2 == 1) << k;
-    EXPECT_EQ(mem.get_bit(Area::E, 30000), k % 2 == 1) << k;
+  for (int opt = 0; opt <= 2; opt++) {
+    C40Code c = generate_c40(p, p.layout(), opt);
+    std::string text = as::c40::toGnuAs(c.program);
+    EXPECT_NE(text.find("LDPK 0x81"), std::string::npos) << text;
+    // run the far edge on the simulator
+    auto res = as::assemble(as::c40::target(), c.program);
+    ASSERT_TRUE(res.ok());
+    auto words = as::c40::wordsOf(res.code);
+    C40Machine m(p.layout(), words, 0);
+    Memory mem(p.layout());
+    for (int k = 0; k < 4; k++) {
+      mem.set_bit(Area::X, 1, k % 2 == 1);
+      m.scan(mem.data());
+      EXPECT_EQ(mem.get_bit(Area::Y, 0), k % 2 == 1) << k << " -O" << opt;
+      EXPECT_EQ(mem.get_bit(Area::E, 30000), k % 2 == 1) << k << " -O" << opt;
+    }
+  }
+}
+
+// ------------------------------------------------------------------ optimization levels
+
+// The instructions of a program's rung blocks at a level, as GNU as text
+// (labels, notes and the prologue left out).
+std::string rung_text(const std::string& il, int opt) {
+  Program p = parse_il_text(il, "t.il");
+  C40Code c = generate_c40(p, p.layout(), opt);
+  std::string s;
+  for (size_t b = 1; b + 1 < c.program.blocks.size(); b++)
+    for (const auto& it : c.program.blocks[b].items)
+      if (it.kind == as::ItemKind::Instruction) s += as::c40::print(it.inst) + "\n";
+  return s;
+}
+
+// -O1 computes a run of contacts with an AND in R0 and pushes it once; the
+// OUT after it stores R0 (no AND3 of the top); DP is set once per scan; two
+// application instructions share one power test.  -O2 keeps the stack in R8...
+TEST(C40Opt, TheLevelsHaveTheirShape) {
+  std::string il = ".rung line 1\n    LOAD X1\n    AND X2\n    OUT Y0\n    MOV 5 D1\n    ADD D1 D2 D3\n.end\n";
+  EXPECT_EQ(rung_text(il, 0),
+            "LDPK 0x80\nLSH 1, R10\nOR @0x21, R10\nLDI @0x22, R0\nOR R11, R0\nAND R0, R10\nAND3 1, R10, R0\n"
+            "STI R0, @0x2020\nTSTB 0x1, R10\nBEQ L0\nLDI 5, R0\nSTI R0, @0x8b21\nTSTB 0x1, R10\nBEQ L1\n"
+            "LDI @0x8b21, R0\nADDI @0x8b22, R0\nSTI R0, @0x8b23\n");
+  EXPECT_EQ(rung_text(il, 1),
+            "LDI @0x21, R0\nAND @0x22, R0\nLSH 1, R10\nOR R0, R10\nSTI R0, @0x2020\nTSTB 0x1, R10\nBEQ L1\n"
+            "LDI 5, R0\nSTI R0, @0x8b21\nLDI @0x8b21, R0\nADDI @0x8b22, R0\nSTI R0, @0x8b23\n");
+  EXPECT_EQ(rung_text(il, 2),
+            "LDI @0x21, R8\nAND @0x22, R8\nSTI R8, @0x2020\nBEQ L1\n"  // Z is still that of AND: no TSTB
+            "LDI 5, R0\nSTI R0, @0x8b21\nLDI @0x8b21, R0\nADDI @0x8b22, R0\nSTI R0, @0x8b23\n");
+}
+
+// Rungs that read stack entries an earlier rung pushed (IL text can say so)
+// keep R10 for the whole program at -O2: the native code still matches the
+// C40 model scan by scan at every level.
+TEST(C40Opt, RungsThatReadAnEarlierRungsStackStayExact) {
+  std::string il =
+      ".rung line 1\n    LOAD X1\n    LOAD X2\n    OUT Y0\n"
+      ".rung line 2\n    ORBLK\n    AND X3\n    OUT Y1\n"
+      ".rung line 3\n    LOAD X4\n    OUT Y2\n.end\n";
+  Program p = parse_il_text(il, "t.il");
+  for (int opt = 0; opt <= 2; opt++) {
+    std::string text = as::c40::toGnuAs(generate_c40(p, p.layout(), opt).program);
+    EXPECT_EQ(text.find("stack in registers"), std::string::npos) << text;
+    std::unique_ptr<Engine> nat = test::make_native(p, opt), model = test::make_model(p);
+    Memory a(p.layout()), b(p.layout());
+    for (int k = 0; k < 32; k++) {
+      for (uint32_t x = 1; x <= 4; x++) {
+        a.set_bit(Area::X, x, (k >> (x - 1)) & 1);
+        b.set_bit(Area::X, x, (k >> (x - 1)) & 1);
+      }
+      nat->scan(a.data());
+      model->scan(b.data());
+      ASSERT_EQ(a.bytes, b.bytes) << "scan " << k << " -O" << opt;
+    }
+  }
+  // without the second rung the same program keeps its stack in registers
+  Program q = parse_il_text(".rung line 1\n    LOAD X1\n    LOAD X2\n    OUT Y0\n.end\n", "t.il");
+  EXPECT_NE(as::c40::toGnuAs(generate_c40(q, q.layout(), 2).program).find("stack in registers"), std::string::npos);
+}
+
+// Each level is faster than the one below on every example (the cycles of the
+// whole trace on the simulated board), and no level is larger in words.
+TEST(C40Opt, EveryLevelPaysOnEveryExample) {
+  for (const std::string& n : examples()) {
+    std::string base = std::string(LDC_EXAMPLES_DIR) + "/" + n;
+    Program p = lower_to_il(parse_ld(read(base + ".ld"), n + ".ld"));
+    Trace t = read_trace(read(base + ".csv"), n + ".csv", p.aliases);
+    uint64_t cycles[3], words[3];
+    for (int opt = 0; opt <= 2; opt++) {
+      auto res = as::assemble(as::c40::target(), generate_c40(p, p.layout(), opt).program);
+      ASSERT_TRUE(res.ok()) << n;
+      words[opt] = res.code.size() / 4;
+      class Counting : public Engine {
+       public:
+        explicit Counting(std::unique_ptr<C40Engine> e) : e_(std::move(e)) {}
+        void scan(uint8_t* mem) override { e_->scan(mem); cycles += e_->last_scan().cycles; }
+        uint64_t cycles = 0;
+       private:
+        std::unique_ptr<C40Engine> e_;
+      } eng(make_c40sim_engine(res.code, 0, p.layout()));
+      std::string out;
+      run_trace(eng, p.layout(), &t, n + ".csv", RunOptions{}, out);
+      cycles[opt] = eng.cycles;
+    }
+    EXPECT_LT(cycles[1], cycles[0]) << n;
+    EXPECT_LT(cycles[2], cycles[1]) << n;
+    EXPECT_LE(words[1], words[0]) << n;
+    EXPECT_LE(words[2], words[1]) << n;
   }
 }
 
@@ -279,8 +373,8 @@ std::vector<uint32_t> gnu_words(const std::string& source) {
   return w;
 }
 
-// `ldc --emit=asm --target=c40` of every example (and of random programs)
-// assembles with GNU as for tic4x to exactly our words.
+// `ldc --emit=asm --target=c40` of every example (and of random programs), at
+// -O0, -O1 and -O2, assembles with GNU as for tic4x to exactly our words.
 TEST(C40GnuAs, EveryExampleAssemblesToOurWords) {
   std::vector<std::pair<std::string, std::string>> progs;
   for (const std::string& n : examples()) progs.emplace_back(n, read(std::string(LDC_EXAMPLES_DIR) + "/" + n + ".ld"));
@@ -291,13 +385,15 @@ TEST(C40GnuAs, EveryExampleAssemblesToOurWords) {
   }
   for (const auto& [name, ld] : progs) {
     Program p = lower_to_il(parse_ld(ld, name));
-    C40Code c = generate_c40(p, p.layout());
-    auto res = as::assemble(as::c40::target(), c.program);
-    ASSERT_TRUE(res.ok()) << name;
-    auto ours = as::c40::wordsOf(res.code);
-    auto theirs = gnu_words(as::c40::toGnuAs(c.program));
-    EXPECT_EQ(theirs.size(), ours.size()) << name;
-    EXPECT_TRUE(theirs == ours) << name;
+    for (int opt = 0; opt <= 2; opt++) {
+      C40Code c = generate_c40(p, p.layout(), opt);
+      auto res = as::assemble(as::c40::target(), c.program);
+      ASSERT_TRUE(res.ok()) << name << " -O" << opt;
+      auto ours = as::c40::wordsOf(res.code);
+      auto theirs = gnu_words(as::c40::toGnuAs(c.program));
+      EXPECT_EQ(theirs.size(), ours.size()) << name << " -O" << opt;
+      EXPECT_TRUE(theirs == ours) << name << " -O" << opt;
+    }
   }
 }
 

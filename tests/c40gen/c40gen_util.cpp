@@ -25,11 +25,15 @@ class ModelEngine : public Engine {
 
 }  // namespace
 
-std::unique_ptr<Engine> make_native(const Program& p) {
-  C40Code c = generate_c40(p, p.layout());
+std::unique_ptr<Engine> make_native(const Program& p, int opt_level) {
+  C40Code c = generate_c40(p, p.layout(), opt_level);
   as::Result r = as::assemble(as::c40::target(), c.program);
   if (!r.ok()) throw std::runtime_error("C40 assembly: " + r.errors[0].message);
   return make_c40sim_engine(r.code, 0, p.layout());
+}
+
+diff::EngineFactory native_at(int opt_level) {
+  return [opt_level](const Program& p) { return make_native(p, opt_level); };
 }
 
 std::unique_ptr<Engine> make_interp(const Program& p) {
@@ -48,8 +52,8 @@ diff::EngineFactory make_check(CheckReport* report) {
 }
 
 bool Verdict::ok() const {
-  return !native.failed() && !interp.failed() && !check.failed() && report.violations == 0 &&
-         native.kind != diff::Outcome::Kind::FrontEndError;
+  return !native.failed() && !native_o1.failed() && !native_o2.failed() && !interp.failed() && !check.failed() &&
+         report.violations == 0 && native.kind != diff::Outcome::Kind::FrontEndError;
 }
 
 static std::string outcome_text(const char* what, const diff::Outcome& o) {
@@ -65,14 +69,15 @@ static std::string outcome_text(const char* what, const diff::Outcome& o) {
 }
 
 std::string Verdict::text() const {
-  std::string s = outcome_text("native vs C40 model", native) + outcome_text("c40interp vs C40 model", interp) +
+  std::string s = outcome_text("native vs C40 model", native) + outcome_text("native -O1 vs C40 model", native_o1) +
+                  outcome_text("native -O2 vs C40 model", native_o2) + outcome_text("c40interp vs C40 model", interp) +
                   outcome_text("C40 model (check) vs reference", check);
   for (const std::string& v : report.first_violations) s += "precision: " + v + "\n";
   return s;
 }
 
 diff::Outcome Verdict::first_failure() const {
-  for (const diff::Outcome* o : {&native, &interp, &check})
+  for (const diff::Outcome* o : {&native, &native_o1, &native_o2, &interp, &check})
     if (o->failed() || o->kind == diff::Outcome::Kind::FrontEndError) return *o;
   diff::Outcome o;
   if (report.violations) {
@@ -85,8 +90,12 @@ diff::Outcome Verdict::first_failure() const {
 
 Verdict check_c40(const std::string& ld, const std::string& csv, const diff::EngineFactory& native) {
   Verdict v;
-  v.native = diff::compare_run(ld, csv, make_model, native);
+  v.native = diff::compare_run(ld, csv, make_model, native ? native : native_at(0));
   v.scans = v.native.scans;
+  if (!native) {
+    v.native_o1 = diff::compare_run(ld, csv, make_model, native_at(1));
+    v.native_o2 = diff::compare_run(ld, csv, make_model, native_at(2));
+  }
   v.interp = diff::compare_run(ld, csv, make_model, make_interp);
   v.check = diff::compare_run(ld, csv, diff::make_interp, make_check(&v.report));
   return v;
