@@ -54,7 +54,7 @@ Compiled compile_source(const std::string& path) {
   Compiled c;
   try {
     if (ends_with(path, ".il")) {
-      c.il = parse_il_text(text, path);
+      c.il = looks_like_ldc_il(text) ? parse_il_text(text, path) : parse_iec_il(text, path);
     } else if (text.compare(text.compare(0, 3, "\xEF\xBB\xBF") ? 0 : 3, 7, "LDmicro") == 0) {
       c.from_ld = true;
       c.tree = parse_ldmicro(text, path);

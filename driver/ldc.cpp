@@ -10,11 +10,13 @@
 #include "backend-c/backend_c.h"
 #include "driver/c40_driver.h"
 #include "driver/driver.h"
+#include "frontend/frontend.h"
 
 using namespace ldc;
 
 static const char kUsage[] =
-    "usage: ldc FILE.ld|FILE.il [-o OUT] [--emit=tree|il|asm|listing|hex|c] [--target=x86-64|c40] [-O0|-O1|-O2]\n"
+    "usage: ldc FILE [-o OUT] [--emit=tree|il|iec-il|asm|listing|hex|c] [--target=x86-64|c40] [-O0|-O1|-O2]\n"
+    "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .xml (PLCopen TC6)\n"
     "       -O0 templates (paper 003), -O1 peephole, -O2 bit stack in registers; for both targets\n"
     "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n";
 
@@ -79,6 +81,8 @@ int main(int argc, char** argv) {
       text = print_tree(c.tree);
     } else if (emit == "il") {
       text = print_il_text(c.il);
+    } else if (emit == "iec-il") {                           // IEC 61131-3 IL
+      text = print_iec_il(c.il);
     } else if (emit == "c") {                                   // the C route
       text = generate_c(c.il, c.il.layout());
     } else if (emit == "asm" && target == "x86-64") {        // macro compiler

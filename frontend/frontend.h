@@ -31,4 +31,15 @@ TreeProgram parse_ldmicro(std::string_view text, const std::string& filename);
 // Throws CompileError (line, col, message naming the XML element path).
 TreeProgram parse_plcopen(std::string_view text, const std::string& filename);
 
+// IEC 61131-3 Instruction List (docs/iec-il.md).  A `.il` file is ldc's own IL
+// text when its first character other than blanks and `;` comment lines is
+// '.', and IEC IL otherwise.
+bool looks_like_ldc_il(std::string_view text);
+// Reads IEC IL straight into ldc IL.  Throws CompileError (line, col, message).
+Program parse_iec_il(std::string_view text, const std::string& filename);
+// Prints any program as IEC IL that parse_iec_il reads back to the same
+// behaviour (`ldc --emit=iec-il`).  Throws std::runtime_error naming the rung
+// and the instruction when the program has no IEC IL form.
+std::string print_iec_il(const Program& p);
+
 }  // namespace ldc

@@ -211,6 +211,19 @@ static std::string plcopen_blocks(int n, bool values) {
   return plcopen_project(ld);
 }
 
+// IEC IL is read straight into IL (no tree): its own check
+static void expect_iec_error(const std::string& what, const std::string& text, const std::string& needle) {
+  try {
+    (void)ldc::parse_iec_il(text, "limits.il");
+    std::printf("FAIL %s: accepted\n", what.c_str());
+    failures++;
+  } catch (const ldc::CompileError& e) {
+    bool ok = std::string(e.what()).find(needle) != std::string::npos;
+    std::printf("%s %s: %d:%d: %s\n", ok ? "ok  " : "FAIL", what.c_str(), e.line, e.col, e.what());
+    failures += !ok;
+  }
+}
+
 int main() {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // every line out before a crash
   std::string rungs;
@@ -264,5 +277,13 @@ int main() {
     }
   });
   std::printf("ok   IL text, one rung of 2,000,003 instructions: %zu bytes of stack\n", il_stack);
+
+  // IEC IL: rung count (every LD starts a rung), parenthesis depth
+  std::string iec;
+  for (size_t i = 0; i <= ldc::kMaxRungs; i++) iec += "LD %IX0.0\nST %QX0.0\n";
+  expect_iec_error("IEC IL rung count", iec, "more than 65536 rungs");
+  std::string deep = "LD %IX0.0\n";
+  for (int i = 0; i < 1000; i++) deep += "AND( %IX0.1\n";
+  expect_iec_error("IEC IL parentheses", deep, "parentheses nested deeper than 16");
   return failures ? 1 : 0;
 }
