@@ -350,7 +350,6 @@ struct Reader {
       if (at_tok.kind == Tok::Word) at = at_tok.text[0] == '%' ? parse_iec_address(at_tok.text, why) : parse_device(at_tok.text);
       if (!at) fail(at_tok, why.empty() ? "expected a location (%IX0.0, %QW2, %MD1 ... or an ldc device)" + found(at_tok) : why);
       if (at->index >= device_count(at->dev)) fail(at_tok, "location " + at_tok.text + " is outside ldc's devices");
-      if (at->dev == Dev::T || at->dev == Dev::C) fail(at_tok, "timers and counters are declared as instances (T1 : TON;)");
     }
     skip_eols();
     expect_punct(":");
@@ -365,7 +364,11 @@ struct Reader {
     bool inst = T == "TON" || T == "TOF" || T == "TP" || T == "CTU" || T == "CTD";
     if (vty == Ty::None && !inst)
       fail(ty, "unsupported type '" + ty.text + "' (BOOL, INT/DINT/WORD/TIME..., REAL, TON, TOF, TP, CTU, CTD)");
-    if (inst && at) fail(at_tok, "a function block instance has no location");
+    bool timer_type = T == "TON" || T == "TOF" || T == "TP";
+    if (at && inst && at->dev != (timer_type ? Dev::T : Dev::C))
+      fail(at_tok, std::string("a ") + T + " instance is located at a " + (timer_type ? "timer (AT T3)" : "counter (AT C3)") + " or nowhere");
+    if (at && !inst && (at->dev == Dev::T || at->dev == Dev::C))
+      fail(at_tok, "timers and counters are declared as instances (t1 AT T1 : TON;)");
     skip_eols();
     Val init;
     bool has_init = false;
@@ -388,7 +391,7 @@ struct Reader {
       if (inst) {
         Instance in{n.text, T, 0};
         bool timer = in.timer();
-        auto d = parse_device(n.text);  // an instance named T3 (C3) is that device
+        auto d = at ? at : parse_device(n.text);  // an instance at T3 or named T3 is that device
         if (d && d->dev == (timer ? Dev::T : Dev::C) && d->index < device_count(d->dev)) {
           in.index = d->index;
           for (const Instance& o : insts)
@@ -1053,8 +1056,8 @@ struct Writer {
       case OpdKind::ConstReal:
         if (!std::isfinite(o.fval)) fail("a non-finite REAL constant has no IEC IL spelling");
         return real_text(o.fval);
-      case OpdKind::Timer: note_timer(o.index, nullptr); return "T" + std::to_string(o.index);
-      case OpdKind::Counter: note_counter(o.index, nullptr); return "C" + std::to_string(o.index);
+      case OpdKind::Timer: note_timer(o.index, nullptr); return inst_name('T', o.index);
+      case OpdKind::Counter: note_counter(o.index, nullptr); return inst_name('C', o.index);
       case OpdKind::Bit: case OpdKind::Int: case OpdKind::Real: break;
       default: fail("operand '" + operand_text(o) + "' has no IEC IL spelling");
     }
@@ -1071,12 +1074,17 @@ struct Writer {
       case Area::WY: return "%QW" + n;
       case Area::D: return "%MW" + n;
       case Area::F: return "%MD" + n;
-      case Area::TQ: note_timer(o.index, nullptr); return "T" + n + ".Q";
-      case Area::TW: note_timer(o.index, nullptr); return "T" + n + ".ET";
-      case Area::CQ: note_counter(o.index, nullptr); return "C" + n + ".Q";
-      case Area::CW: note_counter(o.index, nullptr); return "C" + n + ".CV";
+      case Area::TQ: note_timer(o.index, nullptr); return inst_name('T', o.index) + ".Q";
+      case Area::TW: note_timer(o.index, nullptr); return inst_name('T', o.index) + ".ET";
+      case Area::CQ: note_counter(o.index, nullptr); return inst_name('C', o.index) + ".Q";
+      case Area::CW: note_counter(o.index, nullptr); return inst_name('C', o.index) + ".CV";
       default: fail("operand '" + operand_text(o) + "' has no IEC IL spelling");
     }
+  }
+  std::map<std::pair<char, uint32_t>, std::string> inst_alias;  // a timer's or counter's first alias
+  std::string inst_name(char kind, uint32_t i) {
+    auto it = inst_alias.find({kind, i});
+    return it != inst_alias.end() ? it->second : kind + std::to_string(i);
   }
   std::set<std::pair<char, uint32_t>> typed;  // instances whose type a call fixed
   void note(std::map<uint32_t, std::string>& m, char kind, uint32_t i, const char* type, const char* dflt) {
@@ -1254,6 +1262,11 @@ struct Writer {
     std::set<std::string> taken;
     for (const Alias& a : p.aliases) {
       std::string u = upper(a.name);
+      if ((a.dev.dev == Dev::T || a.dev.dev == Dev::C) && !taken.count(u) && a.dev.index < device_count(a.dev.dev) &&
+          inst_alias.emplace(std::make_pair(dev_name(a.dev.dev)[0], a.dev.index), a.name).second) {
+        taken.insert(u);  // the instance is declared with this name, located at its device
+        continue;
+      }
       if (taken.count(u) || a.dev.dev == Dev::T || a.dev.dev == Dev::C || a.dev.index >= device_count(a.dev.dev)) {
         vars += "    (* " + a.name + " = " + dev_name(a.dev.dev) + std::to_string(a.dev.index) + ": no IEC declaration *)\n";
         continue;
@@ -1270,8 +1283,12 @@ struct Writer {
     for (const Rung& r : p.rungs) write_rung(r);
     rung = nullptr, instr = nullptr;
     for (const auto& l : p.end_labels) body += l + ":\n";
-    for (const auto& [i, ty] : timer_type) vars += "    T" + std::to_string(i) + " : " + ty + ";\n";
-    for (const auto& [i, ty] : counter_type) vars += "    C" + std::to_string(i) + " : " + ty + ";\n";
+    auto instance = [&](char kind, uint32_t i, const std::string& ty) {
+      std::string n = inst_name(kind, i), dev = kind + std::to_string(i);
+      vars += "    " + n + (n == dev ? "" : " AT " + dev) + " : " + ty + ";\n";
+    };
+    for (const auto& [i, ty] : timer_type) instance('T', i, ty);
+    for (const auto& [i, ty] : counter_type) instance('C', i, ty);
     for (const auto& t : temps)
       if (taken.count(upper(t))) fail("the name " + t + " is needed for a temporary");
     for (const auto& t : temps) vars += "    " + t + " : BOOL;\n";

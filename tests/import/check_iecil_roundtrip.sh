@@ -1,11 +1,11 @@
 #!/bin/sh
-# check_iecil_roundtrip.sh BINDIR EXAMPLE.ld ENGINE
-# Prints the example as IEC IL (ldc --emit=iec-il), compiles that IEC IL and
-# runs it over the example's trace on ENGINE (interp or native): the watched
-# values must be the example's expected ones, as the .ld gives them.
+# check_iecil_roundtrip.sh BINDIR SOURCE ENGINE [BASE]
+# Prints SOURCE (any program ldc reads) as IEC IL (ldc --emit=iec-il), compiles
+# that IEC IL and runs it over BASE.csv (default: SOURCE without .ld) on ENGINE
+# (interp or native): the watched values must be BASE.expected, the source's own.
 set -eu
 bindir=$1 src=$2 engine=$3
-base=${src%.ld}
+base=${4:-${src%.ld}}
 watch=$(head -n 1 "$base.expected" | cut -d, -f2-)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
