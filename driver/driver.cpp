@@ -59,6 +59,10 @@ Compiled compile_source(const std::string& path) {
       c.from_ld = true;
       c.tree = parse_ldmicro(text, path);
       c.il = lower_to_il(c.tree);
+    } else if (ends_with(path, ".rtsp")) {
+      c.from_ld = true;
+      c.tree = parse_rtsp(text, path);
+      c.il = lower_to_il(c.tree);
     } else if (ends_with(path, ".xml")) {
       c.from_ld = true;
       c.tree = parse_plcopen(text, path);

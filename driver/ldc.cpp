@@ -16,7 +16,7 @@ using namespace ldc;
 
 static const char kUsage[] =
     "usage: ldc FILE [-o OUT] [--emit=tree|il|iec-il|asm|listing|hex|c] [--target=x86-64|c40] [-O0|-O1|-O2]\n"
-    "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .xml (PLCopen TC6)\n"
+    "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .xml (PLCopen TC6), .rtsp (paper 000)\n"
     "       -O0 templates (paper 003), -O1 peephole, -O2 bit stack in registers; for both targets\n"
     "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n";
 

@@ -42,4 +42,9 @@ Program parse_iec_il(std::string_view text, const std::string& filename);
 // and the instruction when the program has no IEC IL form.
 std::string print_iec_il(const Program& p);
 
+// The RTSP language of paper 000 (`.rtsp`, docs/rtsp.md): its preprocessor,
+// statements and data groups, as rung trees over ldc devices.
+// Throws CompileError (line, col, message).
+TreeProgram parse_rtsp(std::string_view text, const std::string& filename);
+
 }  // namespace ldc

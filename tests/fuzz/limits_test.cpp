@@ -285,5 +285,25 @@ int main() {
   std::string deep = "LD %IX0.0\n";
   for (int i = 0; i < 1000; i++) deep += "AND( %IX0.1\n";
   expect_iec_error("IEC IL parentheses", deep, "parentheses nested deeper than 16");
+
+  // RTSP: if statements and #if groups 64 deep; macro expansion bounded
+  auto nested_ifs = [](int n) {
+    std::string t;
+    for (int i = 0; i < n; i++) t += "if IsGt(I0, " + std::to_string(i) + ") then\n";
+    t += "Set(I1, 1);\n";
+    for (int i = 0; i < n; i++) t += "fi\n";
+    return t;
+  };
+  expect_ok("RTSP if nesting 64", ldc::parse_rtsp, nested_ifs(64));
+  expect_error("RTSP if nesting 65", ldc::parse_rtsp, nested_ifs(65), "nested deeper than 64");
+  std::string groups;
+  for (int i = 0; i < 65; i++) groups += "#if 1\n";
+  expect_error("RTSP #if nesting 65", ldc::parse_rtsp, groups, "#if groups nested deeper than 64");
+  std::string bomb = "#define M0 I0\n";  // each macro twice the one before: 2^40 tokens
+  for (int i = 1; i <= 40; i++) bomb += "#define M" + std::to_string(i) + " M" + std::to_string(i - 1) + " M" + std::to_string(i - 1) + "\n";
+  bomb += "Set(M40, 1);\n";
+  expect_error("RTSP macro expansion", ldc::parse_rtsp, bomb, "too large after macro expansion");
+  expect_error("RTSP expression depth", ldc::parse_rtsp, "Set(I0, " + std::string(1000, '(') + "1" + std::string(1000, ')') + ");\n",
+               "nested deeper than 64");
   return failures ? 1 : 0;
 }
