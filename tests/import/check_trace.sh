@@ -1,9 +1,10 @@
 #!/bin/sh
 # check_trace.sh BINDIR SOURCE BASE ENGINE
-# Runs SOURCE (an LDmicro .ld or PLCopen .xml) over BASE.csv and compares the
+# Runs SOURCE (any program ldc reads) over BASE.csv and compares the
 # watched values with BASE.expected, whose header names them.  ENGINE interp or
 # native runs an image written by ldc (-O0; native-O1, native-O2 at those levels),
-# c40sim a C40 image on the simulator; "source" runs the file on the interpreter.
+# c40sim a C40 image on the simulator; "source" runs the file on the interpreter,
+# "c" through the C route (ldc --emit=c and the system cc).
 set -eu
 bindir=$1 src=$2 base=$3 engine=$4
 watch=$(head -n 1 "$base.expected" | cut -d, -f2-)
@@ -11,6 +12,8 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 if [ "$engine" = source ]; then
   "$bindir/ldrun" "$src" --engine=interp --trace "$base.csv" --watch "$watch" > "$tmp/out"
+elif [ "$engine" = c ]; then
+  "$bindir/ldrun" "$src" --engine=c --trace "$base.csv" --watch "$watch" > "$tmp/out"
 else
   case "$engine" in
     c40sim) flags=--target=c40 run=c40sim ;;
