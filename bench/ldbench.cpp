@@ -370,6 +370,8 @@ struct Subject {
   double native_build_at[kLevels] = {NAN, NAN, NAN};  // build_x86 seconds (generate + assemble)
   double c40_cycles = NAN, c40_interp_cycles = NAN;  // simulated cycles per scan (median)
   size_t c40_bytes = 0;
+  double c40_cycles_at[kLevels] = {NAN, NAN, NAN};  // C40 native code at -O0, -O1, -O2
+  size_t c40_bytes_at[kLevels] = {};
   std::string c40_status;
   double p_target = NAN;  // the synth's p_basic, for grouping
   int n_target = 0;
@@ -450,10 +452,14 @@ void measure_c40(Subject& s, const Options& o) {
     return median(cyc);
   };
   try {
-    C40Build b = build_c40(s.prog, s.name);
-    s.c40_bytes = b.asm_result.code.size();
-    auto native = make_c40sim_engine(b.asm_result.code, 0, L);
-    s.c40_cycles = run(*native);
+    for (int lvl = 0; lvl < kLevels; lvl++) {
+      C40Build b = build_c40(s.prog, s.name, lvl);
+      s.c40_bytes_at[lvl] = b.asm_result.code.size();
+      auto native = make_c40sim_engine(b.asm_result.code, 0, L);
+      s.c40_cycles_at[lvl] = run(*native);
+    }
+    s.c40_bytes = s.c40_bytes_at[0];
+    s.c40_cycles = s.c40_cycles_at[0];
     BinaryIl bin = encode_il(s.prog);
     auto interp = make_c40interp_engine(bin.code, L);
     s.c40_interp_cycles = run(*interp);
@@ -1165,7 +1171,8 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
   // --- optimization levels (issue 8)
   {
     Csv c({"program", "n_exe", "p_basic", "o0_ns", "o1_ns", "o2_ns", "c_ns", "o0_p99_ns", "o1_p99_ns", "o2_p99_ns",
-           "c_p99_ns", "o0_bytes", "o1_bytes", "o2_bytes", "o0_build_s", "o1_build_s", "o2_build_s", "c_build_s"});
+           "c_p99_ns", "o0_bytes", "o1_bytes", "o2_bytes", "o0_build_s", "o1_build_s", "o2_build_s", "c_build_s",
+           "c40_o0_cycles", "c40_o1_cycles", "c40_o2_cycles", "c40_o0_bytes", "c40_o1_bytes", "c40_o2_bytes"});
     md += "## Optimization levels: -O0, -O1, -O2 against the C route\n\n";
     md += md_head({"program", "N_exe", "-O0", "-O1", "-O2", "C -O2", "C/-O2", "-O0/-O2", "-O2 ns/IL",
                    "bytes/IL -O0 · -O1 · -O2", "build ms -O0 · -O1 · -O2", "cc -O2 build"});
@@ -1181,7 +1188,9 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
              fmt(s->t[kNativeO1].median, 6), fmt(s->t[kNativeO2].median, 6), fmt(s->t[kC].median, 6),
              fmt(s->t[kNative].p99, 6), fmt(s->t[kNativeO1].p99, 6), fmt(s->t[kNativeO2].p99, 6), fmt(s->t[kC].p99, 6),
              std::to_string(s->native_bytes_at[0]), std::to_string(s->native_bytes_at[1]),
-             std::to_string(s->native_bytes_at[2]), fmt(bt[0], 4), fmt(bt[1], 4), fmt(bt[2], 4), fmt(s->c_build_s, 4)});
+             std::to_string(s->native_bytes_at[2]), fmt(bt[0], 4), fmt(bt[1], 4), fmt(bt[2], 4), fmt(s->c_build_s, 4),
+             fmt(s->c40_cycles_at[0], 10), fmt(s->c40_cycles_at[1], 10), fmt(s->c40_cycles_at[2], 10),
+             std::to_string(s->c40_bytes_at[0]), std::to_string(s->c40_bytes_at[1]), std::to_string(s->c40_bytes_at[2])});
       md += md_row({s->name, std::to_string(s->n), cell(s->t[kNative]), cell(s->t[kNativeO1]), cell(s->t[kNativeO2]),
                     cell(s->t[kC]), ratio(s->t[kC].median, s->t[kNativeO2].median),
                     ratio(s->t[kNative].median, s->t[kNativeO2].median), fixed(s->t[kNativeO2].median / s->n, 3),
@@ -1205,6 +1214,19 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
       Fit f = fit(x, y);
       md += md_row({"-O" + std::to_string(lvl), fixed(f.slope, 2), fixed(f.r2, 4),
                     fixed(class_ns(R, op_class_name(OpClass::Basic), true, kNativeAt[lvl]), 3)});
+    }
+    md += "\n";
+    // the same levels on the simulated C40 (docs/c40.md, "Optimization levels")
+    md += "On the simulated TMS320C40 (cycles per scan of its native code, 50 ns each; words: 32-bit code "
+          "words per IL instruction):\n\n";
+    md += md_head({"program", "N_exe", "C40 -O0", "C40 -O1", "C40 -O2", "-O0/-O2", "words/IL -O0 · -O1 · -O2",
+                   "C40 interp/-O2"});
+    for (Subject* s : lv) {
+      const size_t* w = s->c40_bytes_at;
+      md += md_row({s->name, std::to_string(s->n), cycles_text(s->c40_cycles_at[0]), cycles_text(s->c40_cycles_at[1]),
+                    cycles_text(s->c40_cycles_at[2]), ratio(s->c40_cycles_at[0], s->c40_cycles_at[2]),
+                    fixed(w[0] / 4.0 / s->n, 2) + " · " + fixed(w[1] / 4.0 / s->n, 2) + " · " + fixed(w[2] / 4.0 / s->n, 2),
+                    ratio(s->c40_interp_cycles, s->c40_cycles_at[2])});
     }
     md += "\n";
     R.write("levels.csv", c.text());

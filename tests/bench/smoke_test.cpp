@@ -131,7 +131,7 @@ TEST(Ldbench, SmokeRunWritesCsvAndSvgThatParse) {
       {"compile.csv", {"source", "il", "parse_s", "generate_s", "assemble_s", "total_s", "il_per_s"}},
       {"memory.csv", {"rungs", "il", "rss_before_kb", "hwm_after_image_kb"}},
       {"machine.csv", {"key", "value"}},
-      {"levels.csv", {"program", "n_exe", "o0_ns", "o1_ns", "o2_ns", "c_ns", "o0_bytes", "o2_bytes", "o2_build_s"}},
+      {"levels.csv", {"program", "n_exe", "o0_ns", "o1_ns", "o2_ns", "c_ns", "o0_bytes", "o2_bytes", "o2_build_s", "c40_o2_cycles"}},
   };
   for (const auto& [name, cols] : csvs) {
     SCOPED_TRACE(name);
