@@ -1,6 +1,7 @@
 // backend-c40sim/c40gen.cpp -- IL mnemonics -> TMS320C40 assembly templates.
 #include "backend-c40sim/c40gen.h"
 
+#include <algorithm>
 #include <cstring>
 #include <map>
 #include <stdexcept>
@@ -1039,6 +1040,197 @@ void drop_jumps_to_next(std::vector<Item>& items, std::vector<uint32_t>& starts)
   as::removeItems(items, drop, starts);
 }
 
+// ------------------------------------------------------------ delay slots (-O1)
+//
+// A standard branch costs 4 cycles, a delayed one (BcondD, BRD) 1 and always
+// runs the three instructions after it.  fill_delay_slots turns a branch into
+// its delayed form when at least two slots get useful instructions (so the
+// code grows by one NOP word at most), and neither path gets slower:
+//  * from before the branch: an instruction that commutes with the ones it is
+//    moved past (for a conditional branch, the one that sets its flags) runs
+//    on both paths as before, one cycle of flush saved on both;
+//  * from after a conditional branch: an instruction without a memory access
+//    (no wait state) whose results are dead where the branch goes, saved on
+//    the fall-through path, the same cycle on the taken one as the flush;
+//  * a NOP fills the rest (1 cycle, as the flush it replaces).
+// Moves stay between two IL notes, so every IL instruction keeps its code.
+
+constexpr unsigned kFlagsBit = 32;
+constexpr uint64_t kFlags = uint64_t(1) << kFlagsBit;
+uint64_t bit(Reg r) { return uint64_t(1) << unsigned(r); }
+
+// Registers an instruction reads and writes (bits 0-31 by register number,
+// kFlags the status flags), its memory accesses, and whether it may not move.
+struct Effect {
+  uint64_t use = 0, def = 0;
+  bool mem = false, store = false, fixed = false;
+};
+Effect effect_of(const Instruction& i) {
+  Effect e;
+  for (unsigned k = 0; k < i.numOperands; k++) {
+    const Operand& o = i.ops[k];
+    if (o.kind == OperandKind::Direct) e.mem = true, e.use |= bit(Reg::DP);
+    if (o.kind == OperandKind::Ind) e.fixed = true;
+  }
+  auto reg_use = [&](unsigned k) {
+    if (k < i.numOperands && i.ops[k].kind == OperandKind::Reg) e.use |= bit(i.ops[k].reg);
+  };
+  switch (i.mnemonic) {
+    case M::Br: case M::Brd: case M::Bc: case M::Bcd: case M::Call: case M::Callc: case M::Retsc: case M::Dbc:
+    case M::Dbcd: case M::Push: case M::Pop: case M::Pushf: case M::Popf: case M::Ldpk: case M::Lda: case M::Nop:
+    case M::Word: case M::Count_:
+      e.fixed = true;
+      return e;
+    case M::Sti: case M::Stf: reg_use(0); e.store = true; return e;
+    case M::Cmpi: case M::Cmpf: case M::Tstb: case M::Cmpi3: case M::Cmpf3: case M::Tstb3:
+      reg_use(0), reg_use(1), e.def |= kFlags;
+      return e;
+    default: break;
+  }
+  unsigned n = i.numOperands;
+  for (unsigned k = 0; k + 1 < n; k++) reg_use(k);
+  Reg d = i.ops[n - 1].reg;
+  e.def |= bit(d);
+  if (isExtended(d)) e.def |= kFlags;
+  switch (i.mnemonic) {  // these write their destination without reading it
+    case M::Ldi: case M::Ldf: case M::Ldhi: case M::Float: case M::Fix: case M::Frieee: case M::Toieee: case M::Absi:
+    case M::Negi: case M::Not: case M::Absf: case M::Negf: case M::Rcpf: case M::Addi3: case M::And3: case M::Andn3:
+    case M::Ash3: case M::Lsh3: case M::Mpyi3: case M::Or3: case M::Subi3: case M::Xor3: case M::Addf3: case M::Mpyf3:
+    case M::Subf3:
+      break;
+    case M::Ldic: case M::Ldfc: e.use |= bit(d) | kFlags; break;  // keep the destination when false
+    default: e.use |= bit(d); break;                               // d = d op src
+  }
+  return e;
+}
+
+bool is_branch(const Instruction& i) { return (i.mnemonic == M::Bc || i.mnemonic == M::Br) && i.ops[0].kind == OperandKind::Label; }
+
+// What lives across rung blocks: the stack registers, the mask, DP, SP.
+constexpr uint64_t kLiveAcross = (uint64_t(1) << unsigned(Reg::R8)) | (uint64_t(1) << unsigned(Reg::R9)) |
+                                 (uint64_t(1) << unsigned(Reg::R10)) | (uint64_t(1) << unsigned(Reg::R11)) |
+                                 (uint64_t(0x3E) << unsigned(Reg::AR0)) | (uint64_t(1) << unsigned(Reg::DP)) |
+                                 (uint64_t(1) << unsigned(Reg::SP));
+
+// live[i]: what is live before item i (labels and notes: before what follows).
+std::vector<uint64_t> liveness(const std::vector<Item>& items) {
+  std::map<std::string, size_t> at;
+  for (size_t i = 0; i < items.size(); i++)
+    if (items[i].kind == as::ItemKind::Label) at[items[i].label] = i;
+  std::vector<uint64_t> live(items.size() + 1, 0);
+  live[items.size()] = kLiveAcross;
+  auto target = [&](const Instruction& in) {
+    auto t = in.ops[0].kind == OperandKind::Label ? at.find(in.ops[0].label) : at.end();
+    return t == at.end() ? kLiveAcross : live[t->second];
+  };
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (size_t i = items.size(); i-- > 0;) {
+      uint64_t l = live[i + 1];
+      if (items[i].kind == as::ItemKind::Instruction) {
+        const Instruction& in = items[i].inst;
+        switch (in.mnemonic) {
+          case M::Br: l = target(in); break;
+          case M::Bc: l |= target(in) | kFlags; break;
+          case M::Retsc: l = (in.cond == Cond::U ? 0 : l | kFlags) | kLiveAcross; break;
+          case M::Call: case M::Callc: l = ~uint64_t(0); break;  // whatever the routine may read
+          default: {
+            Effect e = effect_of(in);
+            l = (l & ~(e.def & ~e.use)) | e.use;
+            if (e.fixed) l = ~uint64_t(0);  // LDPK, NOP, a delayed branch: taken as reading everything
+          }
+        }
+      }
+      if (l != live[i]) live[i] = l, changed = true;
+    }
+  }
+  return live;
+}
+
+// Is item k in the delay slots of a delayed branch (one of the three
+// instructions after it)?  Those stay where they are.
+bool in_slot(const std::vector<Item>& items, size_t k) {
+  int seen = 0;
+  for (size_t j = k; j-- > 0 && seen < 3;) {
+    if (items[j].kind != as::ItemKind::Instruction) continue;
+    if (isDelayed(items[j].inst.mnemonic)) return true;
+    seen++;
+  }
+  return false;
+}
+
+// Tries to make the branch at item b delayed; true if it did.
+bool delay_branch(std::vector<Item>& items, size_t b, std::vector<uint32_t>& starts) {
+  const Instruction br = items[b].inst;
+  const bool cond = br.mnemonic == M::Bc;
+  std::vector<uint64_t> live = liveness(items);
+  uint64_t at_target = kLiveAcross;
+  for (size_t i = 0; i < items.size(); i++)
+    if (items[i].kind == as::ItemKind::Label && items[i].label == br.ops[0].label) at_target = live[i];
+  const uint64_t dead_after = ~(at_target | (cond ? live[b + 1] : 0));
+  // from before: walk back over instructions of this IL note
+  std::vector<size_t> moved, stay;
+  for (size_t k = b; k-- > 0 && moved.size() < 3;) {
+    if (items[k].kind != as::ItemKind::Instruction || in_slot(items, k)) break;
+    Effect x = effect_of(items[k].inst);
+    if (x.fixed) break;
+    bool ok = true;
+    uint64_t shadow = 0;  // defined by instructions that stay, between x and here
+    auto past = [&](const Effect& y) {
+      if ((x.use & y.def) || (y.use & ~shadow & x.def)) ok = false;
+      if ((x.store && (y.mem || y.store)) || (y.store && x.mem)) ok = false;
+      shadow |= y.def;
+    };
+    for (auto it = stay.rbegin(); it != stay.rend(); ++it) past(effect_of(items[*it].inst));
+    Effect be;
+    if (cond) be.use = kFlags;
+    past(be);
+    if ((x.def & shadow) & ~dead_after) ok = false;  // x's result would now be the last one
+    if (ok) moved.insert(moved.begin(), k);
+    else stay.push_back(k);
+  }
+  // from after a conditional branch: no memory, results dead at the target
+  size_t z_end = b + 1;
+  if (cond)
+    while (z_end < items.size() && moved.size() + (z_end - b - 1) < 3 && items[z_end].kind == as::ItemKind::Instruction) {
+      Effect z = effect_of(items[z_end].inst);
+      if (z.fixed || z.mem || z.store || (z.def & at_target)) break;
+      z_end++;
+    }
+  size_t filled = moved.size() + (z_end - b - 1);
+  if (filled < 2) return false;
+  std::vector<Item> out;
+  out.reserve(items.size() + 3);
+  std::vector<uint32_t> index(items.size() + 1);
+  for (size_t i = 0; i < items.size(); i++) {
+    index[i] = uint32_t(out.size());
+    if (std::find(moved.begin(), moved.end(), i) != moved.end()) continue;
+    if (i == b) {
+      Item d = items[i];
+      d.inst.mnemonic = cond ? M::Bcd : M::Brd;
+      out.push_back(std::move(d));
+      for (size_t m : moved) out.push_back(items[m]);
+    } else {
+      out.push_back(std::move(items[i]));
+    }
+    if (i + 1 == z_end)
+      for (size_t p = filled; p < 3; p++) out.push_back(Item::instr(make(M::Nop)));
+  }
+  index[items.size()] = uint32_t(out.size());
+  for (auto& s : starts) s = index[s];
+  items = std::move(out);
+  return true;
+}
+
+void fill_delay_slots(std::vector<Item>& items, std::vector<uint32_t>& starts) {
+  for (size_t i = 0; i < items.size(); i++)
+    if (items[i].kind == as::ItemKind::Instruction && is_branch(items[i].inst) && delay_branch(items, i, starts)) {
+      // the branch moved up by the instructions taken from before it; go on after its slots
+      while (items[i].kind != as::ItemKind::Instruction || !isDelayed(items[i].inst.mnemonic)) i--;
+      i += 3;
+    }
+}
+
 }  // namespace
 
 C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
@@ -1087,7 +1279,10 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
       g.instr(in);
     }
     g.finish();
-    if (opt_level >= 1) drop_jumps_to_next(b.items, starts);
+    if (opt_level >= 1) {
+      drop_jumps_to_next(b.items, starts);
+      fill_delay_slots(b.items, starts);
+    }
     out.il_items.push_back(std::move(starts));
     prog.blocks.push_back(std::move(b));
   }

@@ -290,6 +290,21 @@ TEST(C40Opt, TheLevelsHaveTheirShape) {
             "LDI 5, R0\nSTI R0, @0x8b21\nLDI @0x8b21, R0\nADDI @0x8b22, R0\nSTI R0, @0x8b23\n");
 }
 
+// -O1 (and -O2) turn a branch into its delayed form where two or three
+// useful instructions fill the slots: TOF's jump over its off branch takes
+// the three instructions before it, the test of IN the preset load before
+// it and the first load after it (and a NOP); -O0 has no delayed branch.
+TEST(C40Opt, DelayedBranchesWhereTheSlotsFill) {
+  std::string il = ".rung line 1\n    LOAD X1\n    TOF T1 300\n.end\n";
+  EXPECT_EQ(rung_text(il, 0).find("D "), std::string::npos);
+  for (int opt = 1; opt <= 2; opt++) {
+    std::string t = rung_text(il, opt);
+    EXPECT_NE(t.find("BEQD L0\nLDI 300, R1\nLDI 1, R0\nNOP\nSTI R0, @0x8021\nBRD L1\nSTI R0, @0x8221\nLDI 0, R0\nSTI R0, @0xaf21\n"),
+              std::string::npos) << t;
+    EXPECT_EQ(t.find("BR "), std::string::npos) << t;
+  }
+}
+
 // Rungs that read stack entries an earlier rung pushed (IL text can say so)
 // keep R10 for the whole program at -O2: the native code still matches the
 // C40 model scan by scan at every level.

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "bench/ldgen.h"
 #include "driver/c40_driver.h"
 #include "frontend/frontend.h"
 #include "loader/c40_check.h"
@@ -74,6 +75,22 @@ TEST(C40Image, EveryExampleReadsBack) {
   for (int opt = 0; opt <= 2; opt++) {
     Image img = make_c40_image(p, build_c40(p, "t.il", opt));
     EXPECT_EQ(check_c40_code(img.code, img.entry, img.layout), "") << "far edge -O" << opt;
+  }
+}
+
+// Random programs of every element class at every level pass the loader's
+// check: -O1/-O2 delay slots hold no control instruction and stay inside the
+// code, DP is known on every path.
+TEST(C40Image, RandomProgramsAtEveryLevelPassTheCodeCheck) {
+  for (uint64_t seed = 300; seed < 340; seed++) {
+    GenOptions o;
+    o.rungs = 40;
+    o.max_depth = 2 + int(seed % 4);
+    Program p = lower_to_il(parse_ld(generate_ld(seed, o), "r.ld"));
+    for (int opt = 0; opt <= 2; opt++) {
+      Image img = make_c40_image(p, build_c40(p, "r.ld", opt));
+      EXPECT_EQ(check_c40_code(img.code, img.entry, img.layout), "") << "seed " << seed << " -O" << opt;
+    }
   }
 }
 
