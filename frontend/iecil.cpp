@@ -118,9 +118,11 @@ struct Val {
 };
 
 struct Instance {
-  std::string name, type;  // TON TOF TP CTU CTD
-  uint32_t index;          // T or C number (maybe virtual)
+  std::string name, type;  // TON TOF TP CTU CTD R_TRIG F_TRIG
+  uint32_t index;          // T or C number, or the M of a trigger's Q (maybe virtual)
   bool timer() const { return type[0] == 'T'; }
+  bool trig() const { return type[1] == '_'; }
+  Dev dev() const { return trig() ? Dev::M : timer() ? Dev::T : Dev::C; }
 };
 
 struct Var {
@@ -290,7 +292,7 @@ struct Reader {
       var_block();
       skip_eols();
     }
-    for (size_t i = 0; i < insts.size(); i++) alias_of(insts[i].name, DeviceRef{insts[i].timer() ? Dev::T : Dev::C, insts[i].index});
+    for (size_t i = 0; i < insts.size(); i++) alias_of(insts[i].name, DeviceRef{insts[i].dev(), insts[i].index});
     initial_values();
     bool ended = false;
     while (peek().kind != Tok::End) {
@@ -361,10 +363,12 @@ struct Reader {
              : T == "REAL" ? Ty::Real
              : (T == "INT" || T == "DINT" || T == "SINT" || T == "UINT" || T == "UDINT" || T == "USINT" || T == "WORD" ||
                 T == "DWORD" || T == "BYTE" || T == "TIME") ? Ty::Int : Ty::None;
-    bool inst = T == "TON" || T == "TOF" || T == "TP" || T == "CTU" || T == "CTD";
+    bool trig = T == "R_TRIG" || T == "F_TRIG";
+    bool inst = T == "TON" || T == "TOF" || T == "TP" || T == "CTU" || T == "CTD" || trig;
     if (vty == Ty::None && !inst)
-      fail(ty, "unsupported type '" + ty.text + "' (BOOL, INT/DINT/WORD/TIME..., REAL, TON, TOF, TP, CTU, CTD)");
+      fail(ty, "unsupported type '" + ty.text + "' (BOOL, INT/DINT/WORD/TIME..., REAL, TON, TOF, TP, CTU, CTD, R_TRIG, F_TRIG)");
     bool timer_type = T == "TON" || T == "TOF" || T == "TP";
+    if (at && trig) fail(at_tok, "an " + T + " instance has no location");
     if (at && inst && at->dev != (timer_type ? Dev::T : Dev::C))
       fail(at_tok, std::string("a ") + T + " instance is located at a " + (timer_type ? "timer (AT T3)" : "counter (AT C3)") + " or nowhere");
     if (at && !inst && (at->dev == Dev::T || at->dev == Dev::C))
@@ -392,10 +396,12 @@ struct Reader {
         Instance in{n.text, T, 0};
         bool timer = in.timer();
         auto d = at ? at : parse_device(n.text);  // an instance at T3 or named T3 is that device
-        if (d && d->dev == (timer ? Dev::T : Dev::C) && d->index < device_count(d->dev)) {
+        if (in.trig()) {
+          in.index = new_virtual(Dev::M);  // its Q
+        } else if (d && d->dev == (timer ? Dev::T : Dev::C) && d->index < device_count(d->dev)) {
           in.index = d->index;
           for (const Instance& o : insts)
-            if (o.timer() == timer && o.index == in.index) fail(n, "'" + n.text + "' is already the device of '" + o.name + "'");
+            if (!o.trig() && o.timer() == timer && o.index == in.index) fail(n, "'" + n.text + "' is already the device of '" + o.name + "'");
           note_used(d->dev, d->index);
         } else {
           in.index = new_virtual(timer ? Dev::T : Dev::C);
@@ -468,13 +474,14 @@ struct Reader {
       auto it = inst_of.find(base);
       if (it == inst_of.end()) fail(k, "'" + k.text.substr(0, dot) + "' is not a declared timer or counter");
       const Instance& in = insts[it->second];
-      if (field == "Q") v.o = Operand{OpdKind::Bit, in.timer() ? Area::TQ : Area::CQ, in.index};
+      if (field == "Q" && in.trig()) v.o = Operand{OpdKind::Bit, Area::M, in.index};
+      else if (field == "Q") v.o = Operand{OpdKind::Bit, in.timer() ? Area::TQ : Area::CQ, in.index};
       else if ((field == "ET" && in.timer()) || (field == "CV" && !in.timer())) {
         v.kind = Val::Word;
         v.o = Operand{OpdKind::Int, in.timer() ? Area::TW : Area::CW, in.index};
       } else {
         fail(k, in.type + " instance '" + in.name + "' has no output '" + k.text.substr(dot + 1) + "' (" +
-                    (in.timer() ? "Q, ET" : "Q, CV") + ")");
+                    (in.trig() ? "Q" : in.timer() ? "Q, ET" : "Q, CV") + ")");
       }
       return v;
     }
@@ -727,6 +734,7 @@ struct Reader {
     if (v.kind == Val::Inst) {
       if (set) fail(k, "S on a function block instance: only R (reset) is supported");
       const Instance& in = insts[v.inst];
+      if (in.trig()) fail(k, "R on an " + in.type + " instance: only timers and counters are reset");
       return emit(in.timer() ? Op::RSTT : Op::RSTC, in.timer() ? Operand{OpdKind::Timer, Area::Sys, in.index}
                                                                : Operand{OpdKind::Counter, Area::Sys, in.index});
     }
@@ -859,7 +867,7 @@ struct Reader {
   void call(const Tok& op, const Tok& k) {
     if (!parens.empty()) fail(op, "CAL inside parentheses");
     auto it = inst_of.find(upper(k.text));
-    if (it == inst_of.end()) fail(k, "'" + k.text + "' is not a declared TON, TOF, TP, CTU or CTD instance");
+    if (it == inst_of.end()) fail(k, "'" + k.text + "' is not a declared TON, TOF, TP, CTU, CTD, R_TRIG or F_TRIG instance");
     const Instance in = insts[it->second];
     std::map<std::string, std::pair<Val, Tok>> args;
     if (!is_punct(peek(), "(")) fail(peek(), "expected '(' and the parameters of " + in.type + found(peek()));
@@ -867,11 +875,12 @@ struct Reader {
     while (!is_punct(peek(), ")")) {
       const Tok& name = next();
       std::string pn = upper(name.text);
-      bool ok = in.timer() ? (pn == "IN" || pn == "PT")
-                           : (pn == "PV" || (in.type == "CTU" ? (pn == "CU" || pn == "R") : (pn == "CD" || pn == "LD")));
+      bool ok = in.trig() ? pn == "CLK"
+                : in.timer() ? (pn == "IN" || pn == "PT")
+                             : (pn == "PV" || (in.type == "CTU" ? (pn == "CU" || pn == "R") : (pn == "CD" || pn == "LD")));
       if (name.kind != Tok::Word || !ok)
         fail(name, in.type + " has no input '" + name.text + "' (" +
-                       (in.timer() ? "IN, PT" : in.type == "CTU" ? "CU, R, PV" : "CD, LD, PV") + ")");
+                       (in.trig() ? "CLK" : in.timer() ? "IN, PT" : in.type == "CTU" ? "CU, R, PV" : "CD, LD, PV") + ")");
       if (args.count(pn)) fail(name, "second value for " + pn);
       expect_punct(":=");
       const Tok& vt = next();
@@ -910,6 +919,25 @@ struct Reader {
       if (keep) emit(Op::MPP);
       else rung = nullptr;
     };
+    if (in.trig()) {  // R_TRIG: Q := CLK AND NOT M, M := CLK; F_TRIG the same of NOT CLK (IEC)
+      auto clk = bit_arg("CLK");
+      if (!clk) fail(k, "CAL of " + in.type + " '" + in.name + "' needs CLK :=");
+      if (clk->kind == Val::BoolLit) fail(args["CLK"].second, "CLK needs a BOOL variable");
+      if (!keep) start_rung(here);
+      Operand q{OpdKind::Bit, Area::M, in.index};
+      Operand in_bit = clk->o;
+      if (in.type == "F_TRIG") {  // h := NOT CLK, then its rising edge
+        in_bit = hidden_bit(0);
+        emit(Op::LOADN, clk->o);
+        emit(Op::OUT, in_bit);
+        if (keep) emit(Op::MPP);
+        else start_rung(here);
+      }
+      emit(Op::LOADP, in_bit, Operand{OpdKind::Edge});
+      emit(Op::OUT, q);
+      done();
+      return;
+    }
     if (in.timer()) {
       auto inb = bit_arg("IN");
       if (!inb) fail(k, "CAL of " + in.type + " '" + in.name + "' needs IN :=");
