@@ -26,7 +26,8 @@ static const char kUsage[] =
     "usage: ldrun FILE [--engine=native|interp|c|c40sim|c40interp] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms] [--cycles]\n"
     "       ldrun FILE|--project P.ldp --io=stdio|shm[:/NAME]|trace|none [--period 1ms|500us] [--clock=real|virtual]\n"
     "             [--free-run] [--rt] [--watchdog 200ms] [--retain FILE] [--retain-every 1s] [--cold] [--stop]\n"
-    "             [--control=stdin|none] [--reload] [--stats] [--out FILE] [--block 16] [--scans N]\n";
+    "             [--control=stdin|none] [--reload] [--stats] [--out FILE] [--block 16] [--scans N]\n"
+    "       FILE: an image (.bin, .hex) or a source ldc reads (.ld, .il, .xml, .rtsp), compiled in memory\n";
 
 namespace {
 
