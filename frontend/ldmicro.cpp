@@ -265,16 +265,8 @@ class Importer {
 };
 
 void Importer::read_lines() {
-  if (text_.size() > kMaxSourceBytes) fail(1, 1, "source file too large (at most 64 MiB)");
-  size_t pos = 0;
   int no = 0;
-  while (pos < text_.size()) {
-    size_t nl = text_.find('\n', pos);
-    std::string l(text_.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos));
-    if (!l.empty() && l.back() == '\r') l.pop_back();
-    lines_.push_back({l, ++no});
-    pos = nl == std::string_view::npos ? text_.size() : nl + 1;
-  }
+  for (std::string& l : source_lines(text_)) lines_.push_back({std::move(l), ++no});
 }
 
 // header = "LDmicro" [version] { setting | IO LIST | VAR LIST | other } "PROGRAM"

@@ -2,6 +2,8 @@
 // and durations, and the typed operands of every element (docs/format.md).
 #include "frontend/operands.h"
 
+#include "frontend/frontend.h"
+
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -12,6 +14,35 @@ std::string upper(std::string_view s) {
   std::string u(s);
   for (char& c : u) c = char(std::toupper((unsigned char)c));
   return u;
+}
+
+std::vector<std::string> source_lines(std::string_view text) {
+  if (text.size() > kMaxSourceBytes) throw CompileError(1, 1, "source file too large (at most 64 MiB)");
+  std::vector<std::string> lines;
+  size_t pos = 0;
+  while (pos < text.size()) {
+    size_t nl = text.find('\n', pos);
+    std::string l(text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos));
+    if (!l.empty() && l.back() == '\r') l.pop_back();
+    lines.push_back(std::move(l));
+    pos = nl == std::string_view::npos ? text.size() : nl + 1;
+  }
+  return lines;
+}
+
+DeviceRef resolve_device(const std::string& text, int col, const std::map<std::string, DeviceRef>& names,
+                         const std::string& what) {
+  auto it = names.find(upper(text));
+  if (it != names.end()) return it->second;
+  std::string why;
+  DeviceRef d;
+  if (auto p = parse_device(text)) d = *p;
+  else if (auto q = parse_iec_address(text, why)) d = *q;
+  else throw CompileError(0, col, why.empty() ? "unknown " + what + " '" + text + "'" : why);
+  if (d.index >= device_count(d.dev))
+    throw CompileError(0, col, "index out of range: " + text + " (" + dev_name(d.dev) + "0.." + dev_name(d.dev) +
+                                   std::to_string(device_count(d.dev) - 1) + ")");
+  return d;
 }
 
 bool is_identifier(std::string_view s) {
