@@ -6,6 +6,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "ir/ir.h"
 
@@ -16,5 +17,22 @@ namespace ldc {
 std::string generate_c(const Program& p, const Layout& layout);
 
 inline constexpr const char* kCScanSymbol = "ldc_scan";
+
+// Pieces of generate_c for generators that lay out their own scan function:
+// the run-time helpers, the function head (declares the bit stack s0..s31), and
+// the statements of rungs or of one instruction list (a condition leaves its
+// value in s0).  Every line starts with `indent`.
+std::string c_prelude();
+std::string c_scan_head();
+std::string c_rungs(const std::vector<Rung>& rungs, const std::vector<std::string>& end_labels, const Layout& layout,
+                    const std::string& indent);
+std::string c_code(const std::vector<Instr>& code, const Layout& layout, const std::string& indent);
+
+// A sequential function chart as the C of paper 001 (docs/sfc.md): one
+// `switch (step_status)` per scope, one case per step running its actions and
+// testing its transitions; simultaneous branches as switches of their own
+// inside their sequence's case, joined when all wait in their last step.
+// Behaves scan by scan like lower_chart(c) on the same memory image.
+std::string generate_sfc_c(const Chart& c, const Layout& layout);
 
 }  // namespace ldc

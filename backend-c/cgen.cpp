@@ -88,16 +88,28 @@ static inline void ctd(u8 *m, uint32_t cw, uint32_t cq, uint32_t e, int32_t pv, 
 
 class CGen {
  public:
-  CGen(const Layout& l) : L_(l) {}
+  CGen(const Layout& l, std::string indent = "  ") : L_(l), ind_(std::move(indent)) {}
   std::string out;
 
-  void rung(const Rung& r) {
+  void code(const std::vector<Instr>& c) {
     depth_ = 0;
-    for (const Instr& in : r.code) instr(in);
+    for (const Instr& in : c) instr(in);
+  }
+  // rungs with their labels and titles, then labels after the last rung
+  void rungs(const std::vector<Rung>& rs, const std::vector<std::string>& end_labels) {
+    for (const Rung& r : rs) {
+      for (const auto& l : r.labels) out += "lbl_" + l + ":;\n";
+      std::string title = r.title;
+      for (size_t at; (at = title.find("*/")) != std::string::npos;) title.replace(at, 2, "* /");
+      out += ind_ + "/* rung, line " + std::to_string(r.line) + (title.empty() ? "" : ": " + title) + " */\n";
+      code(r.code);
+    }
+    for (const auto& l : end_labels) out += "lbl_" + l + ":;\n";
   }
 
  private:
   const Layout& L_;
+  std::string ind_;
   int depth_ = 0;
 
   static std::string u(uint32_t v) { return std::to_string(v) + "u"; }
@@ -137,12 +149,12 @@ class CGen {
     if (dreal) return "wr_f(m, " + u(addr(d)) + ", " + (real ? e : "(float)(" + e + ")") + ");";
     return "wr_i(m, " + u(addr(d)) + ", " + (real ? "r2i(" + e + ")" : e) + ");";
   }
-  void line(const std::string& l) { out += "  " + l + "\n"; }
+  void line(const std::string& l) { out += ind_ + l + "\n"; }
   void guarded(const std::string& body) { line("if (" + top() + ") { " + body + " }"); }
 
   void instr(const Instr& in) {
     const Operand *a = in.a;
-    out += "  /* " + instr_text(in) + " */\n";
+    out += ind_ + "/* " + instr_text(in) + " */\n";
     auto push = [&](const std::string& e) { line(s(depth_) + " = " + e + ";"); depth_++; };
     bool real = a[0].is_real() || a[1].is_real();
     switch (in.op) {
@@ -239,22 +251,30 @@ class CGen {
 
 }  // namespace
 
-std::string generate_c(const Program& p, const Layout& layout) {
-  CGen g(layout);
-  g.out = std::string("/* ldc: ") + p.source + " as C (the C route). */\n" + kPrelude + "\n";
-  g.out += "void ldc_scan(u8 *m) {\n  int s0";
-  for (int i = 1; i < 32; i++) g.out += ", s" + std::to_string(i);
-  g.out += ";\n";
-  for (const Rung& r : p.rungs) {
-    for (const auto& l : r.labels) g.out += "lbl_" + l + ":;\n";
-    std::string title = r.title;
-    for (size_t at; (at = title.find("*/")) != std::string::npos;) title.replace(at, 2, "* /");
-    g.out += "  /* rung, line " + std::to_string(r.line) + (title.empty() ? "" : ": " + title) + " */\n";
-    g.rung(r);
-  }
-  for (const auto& l : p.end_labels) g.out += "lbl_" + l + ":;\n";
-  g.out += "  (void)s0;\n}\n";
+std::string c_prelude() { return kPrelude; }
+
+std::string c_scan_head() {
+  std::string s = "void " + std::string(kCScanSymbol) + "(u8 *m) {\n  int s0";
+  for (int i = 1; i < 32; i++) s += ", s" + std::to_string(i);
+  return s + ";\n";
+}
+
+std::string c_rungs(const std::vector<Rung>& rungs, const std::vector<std::string>& end_labels, const Layout& layout,
+                    const std::string& indent) {
+  CGen g(layout, indent);
+  g.rungs(rungs, end_labels);
   return g.out;
+}
+
+std::string c_code(const std::vector<Instr>& code, const Layout& layout, const std::string& indent) {
+  CGen g(layout, indent);
+  g.code(code);
+  return g.out;
+}
+
+std::string generate_c(const Program& p, const Layout& layout) {
+  return std::string("/* ldc: ") + p.source + " as C (the C route). */\n" + kPrelude + "\n" + c_scan_head() +
+         c_rungs(p.rungs, p.end_labels, layout, "  ") + "  (void)s0;\n}\n";
 }
 
 }  // namespace ldc

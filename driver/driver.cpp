@@ -55,6 +55,9 @@ Compiled compile_source(const std::string& path) {
   try {
     if (ends_with(path, ".il")) {
       c.il = looks_like_ldc_il(text) ? parse_il_text(text, path) : parse_iec_il(text, path);
+    } else if (ends_with(path, ".sfc")) {
+      c.chart = parse_sfc(text, path);
+      c.il = lower_chart(*c.chart);
     } else if (text.compare(text.compare(0, 3, "\xEF\xBB\xBF") ? 0 : 3, 7, "LDmicro") == 0) {
       c.from_ld = true;
       c.tree = parse_ldmicro(text, path);
@@ -163,9 +166,21 @@ void remove_tree(const std::string& dir) {
 
 extern "C" char** environ;
 
+std::string c_source(const Compiled& c) {
+  return c.chart ? generate_sfc_c(*c.chart, c.il.layout()) : generate_c(c.il, c.il.layout());
+}
+
+static std::string build_c_text(const std::string& text, const std::string& dir);
+
 std::string build_c_shared_object(const Program& p, const std::string& dir) {
+  return build_c_text(generate_c(p, p.layout()), dir);
+}
+
+std::string build_c_shared_object(const Compiled& c, const std::string& dir) { return build_c_text(c_source(c), dir); }
+
+static std::string build_c_text(const std::string& text, const std::string& dir) {
   std::string c = dir + "/prog.c", so = dir + "/prog.so", log = dir + "/cc.log";
-  write_file_atomic(c, generate_c(p, p.layout()));
+  write_file_atomic(c, text);
   const char* cc_env = std::getenv("CC");
   std::string cc = cc_env && *cc_env ? cc_env : "cc";
   std::vector<std::string> args = {cc, "-O2", "-shared", "-fPIC", "-ffp-contract=off", "-o", so, c, "-lm"};

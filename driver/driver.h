@@ -26,6 +26,7 @@ struct Compiled {
   TreeProgram tree;  // empty for IL input
   Program il;
   bool from_ld = false;
+  std::optional<Chart> chart;  // a .sfc source (docs/sfc.md)
 };
 // .ld (grid) or .il (IL text): parse and lower.  Errors are formatted
 // "file:line:col: error: ..." with the source line and a caret.
@@ -52,6 +53,10 @@ bool is_image_file(const std::string& path);
 // The C route: writes `ldc --emit=c` to DIR/prog.c and compiles it with the
 // system C compiler (${CC:-cc} -O2 -shared -fPIC) into DIR/prog.so; returns its path.
 std::string build_c_shared_object(const Program& p, const std::string& dir);
+// `ldc --emit=c` of a source: the SFC switch form for a chart, else the C route.
+std::string c_source(const Compiled& c);
+// ... of a compiled source (a chart as its switch form).
+std::string build_c_shared_object(const Compiled& c, const std::string& dir);
 
 // A fresh private directory under $TMPDIR (or /tmp), removed with remove_tree.
 std::string make_temp_dir();

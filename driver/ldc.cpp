@@ -16,7 +16,7 @@ using namespace ldc;
 
 static const char kUsage[] =
     "usage: ldc FILE [-o OUT] [--emit=tree|il|iec-il|asm|listing|hex|c] [--target=x86-64|c40] [-O0|-O1|-O2]\n"
-    "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .xml (PLCopen TC6), .rtsp (paper 000)\n"
+    "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .xml (PLCopen TC6), .rtsp (paper 000), .sfc (SFC chart)\n"
     "       -O0 templates (paper 003), -O1 peephole, -O2 bit stack in registers; for both targets\n"
     "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n";
 
@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
     } else if (emit == "iec-il") {                           // IEC 61131-3 IL
       text = print_iec_il(c.il);
     } else if (emit == "c") {                                   // the C route
-      text = generate_c(c.il, c.il.layout());
+      text = c_source(c);
     } else if (emit == "asm" && target == "x86-64") {        // macro compiler
       text = "# ldc " + input + ": x86-64, GNU as syntax (.intel_syntax noprefix)\n" +
              as::x86::toGnuAs(generate_x86(c.il, c.il.layout(), opt).program);

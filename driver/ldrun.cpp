@@ -401,7 +401,7 @@ int main(int argc, char** argv) {
       img.layout = c.il.layout();
       img.aliases = c.il.aliases;
       tmpdir = make_temp_dir();
-      so_path = build_c_shared_object(c.il, tmpdir);
+      so_path = build_c_shared_object(c, tmpdir);
     } else {
       Compiled c = compile_source(input);
       img = engine == "native" ? make_x86_image(c.il, build_x86(c.il, input, as::Mode::Blockwise, 0, /*notes=*/false))

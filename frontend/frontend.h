@@ -3,6 +3,7 @@
 
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "ir/ir.h"
 
@@ -11,6 +12,9 @@ namespace ldc {
 // Parses a ladder source file into one series/parallel tree per rung, with every
 // device resolved and type-checked.  Throws CompileError (line, col, message).
 TreeProgram parse_ld(std::string_view text, const std::string& filename);
+// ... with names known beforehand (an SFC's aliases and steps); the file may
+// not redefine them.
+TreeProgram parse_ld(std::string_view text, const std::string& filename, const std::vector<Alias>& predefined);
 
 // "file:line:col: error: message", the source line and a caret under the column.
 std::string format_error(const std::string& file, std::string_view text, int line, int col,
@@ -46,5 +50,13 @@ std::string print_iec_il(const Program& p);
 // statements and data groups, as rung trees over ldc devices.
 // Throws CompileError (line, col, message).
 TreeProgram parse_rtsp(std::string_view text, const std::string& filename);
+
+// Reads a sequential function chart (docs/sfc.md): steps, transitions,
+// selections, simultaneous sequences, jumps, and actions in ladder or IL text.
+// Throws CompileError (line, col, message); errors inside an action point into
+// the .sfc file.
+constexpr size_t kMaxSfcSteps = 1024;  // steps and simultaneous sequences
+constexpr int kMaxSfcNesting = 32;     // select/parallel inside each other
+Chart parse_sfc(std::string_view text, const std::string& filename);
 
 }  // namespace ldc

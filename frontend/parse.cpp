@@ -110,6 +110,10 @@ struct UnionFind {
 class Parser {
  public:
   Parser(std::string_view text, std::string file) : text_(text), file_(std::move(file)) {}
+  // names the file may use without declaring them (not listed in its aliases)
+  void predefine(const std::vector<Alias>& names) {
+    for (const Alias& a : names) aliases_[upper(a.name)] = a.dev;
+  }
   TreeProgram program();
 
  private:
@@ -146,16 +150,8 @@ class Parser {
 };
 
 void Parser::read_lines() {
-  if (text_.size() > kMaxSourceBytes) fail(1, 1, "source file too large (at most 64 MiB)");
-  size_t pos = 0;
   int no = 0;
-  while (pos < text_.size()) {
-    size_t nl = text_.find('\n', pos);
-    std::string l(text_.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos));
-    if (!l.empty() && l.back() == '\r') l.pop_back();
-    lines_.push_back({l, ++no});
-    pos = nl == std::string_view::npos ? text_.size() : nl + 1;
-  }
+  for (std::string& l : source_lines(text_)) lines_.push_back({std::move(l), ++no});
 }
 
 bool is_comment(const std::string& s) {
@@ -203,20 +199,7 @@ void Parser::declarations() {
   }
 }
 
-DeviceRef Parser::device(const Word& w) {
-  auto it = aliases_.find(upper(w.text));
-  DeviceRef d;
-  if (it != aliases_.end()) return it->second;
-  std::string why;
-  if (auto p = parse_device(w.text)) d = *p;
-  else if (auto q = parse_iec_address(w.text, why)) d = *q;
-  else if (!why.empty()) fail(0, w.col, why);
-  else fail(0, w.col, "unknown device or alias '" + w.text + "'");
-  if (d.index >= device_count(d.dev))
-    fail(0, w.col, "index out of range: " + w.text + " (" + dev_name(d.dev) + "0.." + dev_name(d.dev) +
-                       std::to_string(device_count(d.dev) - 1) + ")");
-  return d;
-}
+DeviceRef Parser::device(const Word& w) { return resolve_device(w.text, w.col, aliases_, "device or alias"); }
 
 std::string spell(DeviceRef d) { return std::string(dev_name(d.dev)) + std::to_string(d.index); }
 
@@ -773,5 +756,11 @@ TreeProgram Parser::program() {
 }  // namespace
 
 TreeProgram parse_ld(std::string_view text, const std::string& filename) { return Parser(text, filename).program(); }
+
+TreeProgram parse_ld(std::string_view text, const std::string& filename, const std::vector<Alias>& predefined) {
+  Parser p(text, filename);
+  p.predefine(predefined);
+  return p.program();
+}
 
 }  // namespace ldc

@@ -207,6 +207,60 @@ constexpr int kMaxStackDepth = 32;
 // again).  Such a rung does not depend on the stack the rungs before it left.
 bool stack_fits_slots(const std::vector<Instr>& code, int slots);
 
+// ---------------------------------------------------------------- SFC charts
+// A sequential function chart (paper 001; docs/sfc.md) after the front end has
+// resolved it: steps grouped into scopes (the main sequence and every branch of a
+// simultaneous sequence; one step of a scope is active at a time), action bodies
+// and transition conditions already as IL.  lower_chart() makes the Program every
+// backend runs; backend-c prints the same chart as paper 001's switch (step) C.
+// Memory: step i (n steps) has its active flag at M[flag_base + i], its run bit
+// (active when its scope started this scan) at M[flag_base + n + i] and its entry
+// bit (entered, first scan not yet run) at M[flag_base + 2n + i].
+struct SfcBody {                       // rungs of a ladder or IL action, labels made unique
+  std::vector<Rung> rungs;
+  std::vector<std::string> end_labels;
+};
+struct SfcTransition {
+  int line = 0;
+  std::string text;                    // the condition as written (for comments)
+  std::vector<Instr> cond;             // pushes one bit
+  uint32_t target = 0;                 // step entered when it fires
+};
+struct SfcStep {
+  std::string name;
+  int line = 0;
+  uint32_t scope = 0;
+  bool parallel = false;               // a simultaneous sequence: runs `branches`, then its join
+  std::vector<uint32_t> branches;      // scopes of a simultaneous sequence
+  int32_t timer = -1;                  // Tn: elapsed time since the step's first scan
+  std::vector<Instr> bits;             // SET/RST of S/R bit actions, run while active
+  SfcBody on_entry, body;              // P and N bodies
+  std::vector<SfcTransition> out;      // in priority order
+};
+struct SfcScope {
+  std::vector<uint32_t> steps;         // in source order
+  uint32_t first = 0, last = 0;        // entered first / waited on by the join
+};
+struct SfcNBit {                       // `N bit`: the bit is 1 while any of these steps is active
+  Operand bit;
+  std::vector<uint32_t> steps;
+};
+struct Chart {
+  std::string source;
+  std::vector<Alias> aliases;          // the file's aliases and one per step (its flag)
+  uint32_t flag_base = 0;
+  uint32_t initial = 0;
+  uint32_t edge_slots = 0;
+  std::vector<SfcStep> steps;
+  std::vector<SfcScope> scopes;        // scopes[0] is the main sequence
+  std::vector<SfcNBit> nbits;
+  uint32_t flag(uint32_t i) const { return flag_base + i; }
+  uint32_t run(uint32_t i) const { return flag_base + uint32_t(steps.size()) + i; }
+  uint32_t entry(uint32_t i) const { return flag_base + 2 * uint32_t(steps.size()) + i; }
+};
+// Chart -> IL (docs/sfc.md, "one scan").
+Program lower_chart(const Chart& c);
+
 // Operand spelling in IL text: X3, T0, D5, F1, 42, 1.5, E7, name.
 std::string operand_text(const Operand& o);
 std::string instr_text(const Instr& in);  // "LOAD X1", "ADD D0 5 D1"

@@ -14,9 +14,9 @@ expect_fail() {  # WHAT PATTERN CMD...
   if "$@" > "$tmp/out" 2> "$tmp/err"; then fail "$what: exit 0"; fi
   grep -q -- "$pat" "$tmp/err" || { cat "$tmp/err" >&2; fail "$what: no '$pat' in the message"; }
 }
-for f in "$src"/examples/*.ld; do
-  n=$(basename "$f" .ld)
-  base=${f%.ld}
+for f in "$src"/examples/*.ld "$src"/examples/*.sfc; do
+  n=$(basename "$f"); n=${n%.*}
+  base=${f%.*}
   watch=$(head -n 1 "$base.expected" | cut -d, -f2-)
   "$bin/ldc" "$f" --target=c40 -o "$tmp/$n.bin" || fail "ldc $n"
   "$bin/ldc" "$f" --target=c40 --emit=hex > "$tmp/$n.hex" || fail "ldc --emit=hex $n"
@@ -26,7 +26,7 @@ for f in "$src"/examples/*.ld; do
   done
   "$bin/ldrun" "$tmp/$n.hex" --engine=c40sim --trace "$base.csv" --watch "$watch" > "$tmp/out" || fail "ldrun $n.hex"
   diff -u "$base.expected" "$tmp/out" || fail "$n (HEX) differs"
-  "$bin/ldrun" "$f" --engine=c40sim --trace "$base.csv" --watch "$watch" > "$tmp/out" || fail "ldrun $n.ld c40sim"
+  "$bin/ldrun" "$f" --engine=c40sim --trace "$base.csv" --watch "$watch" > "$tmp/out" || fail "ldrun $n source c40sim"
   diff -u "$base.expected" "$tmp/out" || fail "$n from source on c40sim differs"
   "$bin/ldobjdump" "$tmp/$n.bin" > "$tmp/dump" || fail "ldobjdump $n"
   grep -q "file format ldc-c40" "$tmp/dump" || fail "ldobjdump $n: format line"

@@ -1,13 +1,14 @@
 #!/bin/sh
-# check_example.sh BINDIR EXAMPLE.ld ENGINE
+# check_example.sh BINDIR EXAMPLE.ld|EXAMPLE.sfc ENGINE
 # Compiles the example to an image with ldc, runs the image over the example's
 # trace on ENGINE and compares with EXAMPLE.expected, whose header names the
 # watched devices.  ENGINE "source" runs the .ld directly on the interpreter;
-# "c" is the C route (ldc --emit=c compiled by the system cc -O2);
+# "c" is the C route (ldc --emit=c compiled by the system cc -O2; for a chart,
+# the switch form of docs/sfc.md);
 # "native-O1", "native-O2" compile at that level.
 set -eu
 bindir=$1 src=$2 engine=$3
-base=${src%.ld}
+base=${src%.*}
 watch=$(head -n 1 "$base.expected" | cut -d, -f2-)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT

@@ -1,6 +1,7 @@
 // Golden tests in the style of LLVM lit / cproc: foo.ld beside foo.tree and
 // foo.il (what ldc --emit=tree / --emit=il print) or foo.err (the exact error);
 // an IEC IL source foo.il has its ldc IL in foo.out.il and no tree.
+// a chart foo.sfc beside foo.il and foo.c (ldc --emit=c, docs/sfc.md).
 // `golden --update FILE...` rewrites the expected files, to be reviewed as a diff.
 // `golden --roundtrip FILE...` only compiles and checks the round trip.
 // Every IL is also printed, read back and compared (the IL text round trip).
@@ -56,6 +57,7 @@ int main(int argc, char** argv) {
           // an IL source (IEC IL) has no tree, and its expected IL is NAME.out.il
           bool il_source = file.size() > 3 && file.compare(file.size() - 3, 3, ".il") == 0;
           if (c.from_ld) failures += check(file, stem + ".tree", print_tree(c.tree), update);
+          if (c.chart) failures += check(file, stem + ".c", c_source(c), update);
           failures += check(file, stem + (il_source ? ".out.il" : ".il"), il, update);
         }
         Program back = parse_il_text(il, file);
