@@ -224,6 +224,23 @@ static void expect_iec_error(const std::string& what, const std::string& text, c
   }
 }
 
+// ---------------------------------------------------------------- SFC charts
+
+// parse_sfc + lower_chart on a measured stack: refused with `needle`, within the budget.
+static void expect_sfc_error(const std::string& what, const std::string& text, const std::string& needle) {
+  std::string err;
+  size_t used = stack_used(8u << 20, [&] {
+    try {
+      (void)ldc::lower_chart(ldc::parse_sfc(text, "limits.sfc"));
+    } catch (const ldc::CompileError& e) {
+      err = std::to_string(e.line) + ":" + std::to_string(e.col) + ": " + e.what();
+    }
+  });
+  bool ok = err.find(needle) != std::string::npos && used <= kStackBudget;
+  std::printf("%s %s: %s (%zu bytes of stack)\n", ok ? "ok  " : "FAIL", what.c_str(), err.empty() ? "accepted" : err.c_str(), used);
+  failures += !ok;
+}
+
 int main() {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // every line out before a crash
   std::string rungs;
@@ -305,5 +322,18 @@ int main() {
   expect_error("RTSP macro expansion", ldc::parse_rtsp, bomb, "too large after macro expansion");
   expect_error("RTSP expression depth", ldc::parse_rtsp, "Set(I0, " + std::string(1000, '(') + "1" + std::string(1000, ')') + ");\n",
                "nested deeper than 64");
+  // SFC (docs/sfc.md): step count, nesting of selections and simultaneous sequences, condition depth
+  std::string steps = "flags M0\ninitial step Step0\n";
+  for (size_t i = 1; i <= ldc::kMaxSfcSteps; i++) steps += "transition X0\nstep Step" + std::to_string(i) + "\n";
+  expect_sfc_error("sfc steps", steps, "too many steps");
+  std::string nest = "initial step A\ntransition X0\n", tail;
+  for (int i = 0; i <= ldc::kMaxSfcNesting; i++) {
+    nest += "parallel\nbranch\n  step P" + std::to_string(i) + "\nbranch\n";
+    tail = "end\n" + tail;
+  }
+  expect_sfc_error("sfc nesting", nest + "  step Z\n" + tail, "nested too deeply");
+  expect_sfc_error("sfc condition depth",
+                   "initial step A\ntransition " + std::string(100, '(') + "X0" + std::string(100, ')') + "\nstep B\n",
+                   "nested too deeply");
   return failures ? 1 : 0;
 }
