@@ -38,7 +38,9 @@ TEST(IlText, EveryMnemonicRoundTrips) {
   for (const Instr& in : p.rungs[0].code) {
     Instr got;
     off = decode_instr(b.code, off, got);
-    if (in.op != Op::JMP) EXPECT_EQ(instr_text(got), instr_text(in));
+    if (in.op != Op::JMP) {
+      EXPECT_EQ(instr_text(got), instr_text(in));
+    }
   }
   EXPECT_EQ(off, b.code.size());
 }
