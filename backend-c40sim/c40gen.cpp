@@ -1222,13 +1222,136 @@ bool delay_branch(std::vector<Item>& items, size_t b, std::vector<uint32_t>& sta
   return true;
 }
 
-void fill_delay_slots(std::vector<Item>& items, std::vector<uint32_t>& starts) {
+// A block with a backward branch (the sign fix-up after __divi): the analysis
+// again after every change.
+void fill_delay_slots_slow(std::vector<Item>& items, std::vector<uint32_t>& starts) {
   for (size_t i = 0; i < items.size(); i++)
     if (items[i].kind == as::ItemKind::Instruction && is_branch(items[i].inst) && delay_branch(items, i, starts)) {
       // the branch moved up by the instructions taken from before it; go on after its slots
       while (items[i].kind != as::ItemKind::Instruction || !isDelayed(items[i].inst.mnemonic)) i--;
       i += 3;
     }
+}
+
+// fill_delay_slots makes one pass over a rung block.  The branches of rung
+// code only go forward (JMP and the templates' own), so what is live after a
+// branch and at its target depends only on the code after the branch, which
+// the pass has not changed yet: one liveness analysis of the block serves
+// every branch.  (A block with a backward branch, which only the signed
+// division's fix-up makes, takes the slow path above.)  The instructions taken
+// from before a branch are among the last ones already emitted.
+void fill_delay_slots(std::vector<Item>& items, std::vector<uint32_t>& starts) {
+  std::map<std::string, size_t> label_at;
+  for (size_t i = 0; i < items.size(); i++)
+    if (items[i].kind == as::ItemKind::Label) label_at[items[i].label] = i;
+  bool forward = true;
+  for (size_t i = 0; i < items.size(); i++)
+    if (items[i].kind == as::ItemKind::Instruction) {
+      const Instruction& in = items[i].inst;
+      for (unsigned k = 0; k < in.numOperands; k++)
+        if (in.ops[k].kind == OperandKind::Label) {
+          auto t = label_at.find(in.ops[k].label);
+          if (t != label_at.end() && t->second <= i) forward = false;
+        }
+    }
+  if (!forward) return fill_delay_slots_slow(items, starts);
+  std::vector<uint64_t> live = liveness(items);
+  std::vector<Item> out;
+  out.reserve(items.size() + items.size() / 8 + 4);
+  std::vector<size_t> src;  // for each item of `out`, its index in `items` (SIZE_MAX: a NOP added here)
+  std::vector<uint32_t> index(items.size() + 1, 0);
+  auto emit = [&](size_t i) {
+    index[i] = uint32_t(out.size());
+    src.push_back(i);
+    out.push_back(std::move(items[i]));
+  };
+  for (size_t b = 0; b < items.size();) {
+    if (items[b].kind != as::ItemKind::Instruction || !is_branch(items[b].inst)) {
+      emit(b++);
+      continue;
+    }
+    const Instruction br = items[b].inst;
+    const bool cond = br.mnemonic == M::Bc;
+    auto t = label_at.find(br.ops[0].label);
+    const uint64_t at_target = t == label_at.end() ? kLiveAcross : live[t->second];
+    const uint64_t dead_after = ~(at_target | (cond ? live[b + 1] : 0));
+    // from before: walk back over the instructions just emitted (of this IL note)
+    std::vector<size_t> moved, stay;  // positions in `out`
+    for (size_t k = out.size(); k-- > 0 && moved.size() < 3;) {
+      if (out[k].kind != as::ItemKind::Instruction || in_slot(out, k)) break;
+      Effect x = effect_of(out[k].inst);
+      if (x.fixed) break;
+      bool ok = true;
+      uint64_t shadow = 0;  // defined by instructions that stay, between x and here
+      auto past = [&](const Effect& y) {
+        if ((x.use & y.def) || (y.use & ~shadow & x.def)) ok = false;
+        if ((x.store && (y.mem || y.store)) || (y.store && x.mem)) ok = false;
+        shadow |= y.def;
+      };
+      for (auto it = stay.rbegin(); it != stay.rend(); ++it) past(effect_of(out[*it].inst));
+      Effect be;
+      if (cond) be.use = kFlags;
+      past(be);
+      if ((x.def & shadow) & ~dead_after) ok = false;  // x's result would now be the last one
+      if (ok) moved.insert(moved.begin(), k);
+      else stay.push_back(k);
+    }
+    // from after a conditional branch: no memory, results dead at the target
+    size_t z_end = b + 1;
+    if (cond)
+      while (z_end < items.size() && moved.size() + (z_end - b - 1) < 3 && items[z_end].kind == as::ItemKind::Instruction) {
+        Effect z = effect_of(items[z_end].inst);
+        if (z.fixed || z.mem || z.store || (z.def & at_target)) break;
+        z_end++;
+      }
+    const size_t filled = moved.size() + (z_end - b - 1);
+    if (filled < 2) {
+      emit(b++);
+      continue;
+    }
+    // Re-emit the tail from the first moved instruction: those that stay,
+    // the delayed branch, the moved ones, the ones from after, NOPs.  An item
+    // moved into the slots keeps the index of the item that now follows it in
+    // its old place (as removing it and inserting it after the branch would).
+    const size_t from = moved.empty() ? out.size() : moved.front();
+    std::vector<Item> tail;
+    std::vector<size_t> tail_src;
+    for (size_t k = from; k < out.size(); k++) tail.push_back(std::move(out[k])), tail_src.push_back(src[k]);
+    out.resize(from);
+    src.resize(from);
+    std::vector<size_t> pending;  // moved items waiting for the next kept one
+    auto place = [&](Item&& it, size_t orig) {
+      if (orig != SIZE_MAX) {
+        index[orig] = uint32_t(out.size());
+        for (size_t m : pending) index[m] = uint32_t(out.size());
+        pending.clear();
+      }
+      src.push_back(orig);
+      out.push_back(std::move(it));
+    };
+    std::vector<std::pair<Item, size_t>> slot;
+    for (size_t k = 0; k < tail.size(); k++) {
+      if (std::find(moved.begin(), moved.end(), from + k) != moved.end()) {
+        pending.push_back(tail_src[k]);
+        slot.emplace_back(std::move(tail[k]), tail_src[k]);
+      } else {
+        place(std::move(tail[k]), tail_src[k]);
+      }
+    }
+    Item d = std::move(items[b]);
+    d.inst.mnemonic = cond ? M::Bcd : M::Brd;
+    place(std::move(d), b);
+    for (auto& [it, orig] : slot) {  // their index is already the branch's
+      src.push_back(orig);
+      out.push_back(std::move(it));
+    }
+    for (size_t z = b + 1; z < z_end; z++) emit(z);
+    for (size_t n = filled; n < 3; n++) src.push_back(SIZE_MAX), out.push_back(Item::instr(make(M::Nop)));
+    b = z_end;
+  }
+  index[items.size()] = uint32_t(out.size());
+  for (auto& s : starts) s = index[s];
+  items = std::move(out);
 }
 
 }  // namespace
