@@ -30,6 +30,7 @@ Image make_c40_image(const Program& p, const C40Build& b) {
   BinaryIl bin = encode_il(p);
   img.il = bin.code;
   img.aliases = p.aliases;
+  img.retentive = retentive_ranges(p);
   size_t k = 0;
   for (size_t r = 0; r < p.rungs.size(); r++) {
     img.rung_titles.push_back(p.rungs[r].title);

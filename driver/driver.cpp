@@ -96,6 +96,19 @@ NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode
   return b;
 }
 
+std::vector<RetentiveRange> retentive_ranges(const Program& p) {
+  std::vector<RetentiveRange> r = {{Area::K, 0, device_count(Dev::K)}};
+  std::vector<uint32_t> words;
+  for (const DeviceRef& d : p.retain) words.push_back(d.index);
+  std::sort(words.begin(), words.end());
+  words.erase(std::unique(words.begin(), words.end()), words.end());
+  for (size_t i = 0; i < words.size(); i++) {
+    if (i && words[i] == words[i - 1] + 1) r.back().count++;
+    else r.push_back({Area::D, words[i], 1});
+  }
+  return r;
+}
+
 Image make_x86_image(const Program& p, const NativeBuild& nb) {
   Image img;
   img.target = ImageTarget::X86_64;
@@ -106,6 +119,7 @@ Image make_x86_image(const Program& p, const NativeBuild& nb) {
   BinaryIl bin = encode_il(p);
   img.il = bin.code;
   img.aliases = p.aliases;
+  img.retentive = retentive_ranges(p);
   size_t k = 0;
   for (size_t r = 0; r < p.rungs.size(); r++) {
     img.rung_titles.push_back(p.rungs[r].title);

@@ -400,6 +400,7 @@ int main(int argc, char** argv) {
       Compiled c = compile_source(input);
       img.layout = c.il.layout();
       img.aliases = c.il.aliases;
+      img.retentive = retentive_ranges(c.il);
       tmpdir = make_temp_dir();
       so_path = build_c_shared_object(c, tmpdir);
     } else {

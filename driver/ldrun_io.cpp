@@ -10,6 +10,7 @@ Image il_image(const Program& p) {
   img.layout = p.layout();
   img.il = encode_il(p).code;
   img.aliases = p.aliases;
+  img.retentive = retentive_ranges(p);
   if (std::string why = validate_il(img.il, img.layout); !why.empty()) throw UserError("ldrun: error: IL " + why);
   return img;
 }

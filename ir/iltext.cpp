@@ -2,7 +2,7 @@
 //
 //   program   = { line } ;
 //   line      = ".rung" "line" INT [ STRING ] | ".label" NAME | ".edges" INT
-//             | ".alias" NAME DEVICE
+//             | ".alias" NAME DEVICE | ".retain" DEVICE
 //             | ".end" | MNEMONIC { operand } ;          (";" starts a comment)
 #include <algorithm>
 #include <cctype>
@@ -28,6 +28,7 @@ std::string print_il_text(const Program& p) {
   if (p.edge_slots) out += ".edges " + std::to_string(p.edge_slots) + "\n";
   for (const Alias& a : p.aliases)
     out += ".alias " + a.name + " " + dev_name(a.dev.dev) + std::to_string(a.dev.index) + "\n";
+  for (const DeviceRef& d : p.retain) out += ".retain " + std::string(dev_name(d.dev)) + std::to_string(d.index) + "\n";
   for (const Rung& r : p.rungs) {
     for (const auto& l : r.labels) out += ".label " + l + "\n";
     out += ".rung line " + std::to_string(r.line);
@@ -181,6 +182,11 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
       if (toks.size() != 3 || !is_name(toks[1].text) || !(d = parse_device(toks[2].text)) || d->index >= device_count(d->dev))
         throw CompileError(lineno, head.col, ".alias needs a name and a device");
       p.aliases.push_back({toks[1].text, *d});
+    } else if (head.text == ".retain") {
+      std::optional<DeviceRef> d;
+      if (toks.size() != 2 || !(d = parse_device(toks[1].text)) || d->dev != Dev::D || d->index >= device_count(Dev::D))
+        throw CompileError(lineno, head.col, ".retain needs a D word (D0..D" + std::to_string(device_count(Dev::D) - 1) + ")");
+      if (std::find(p.retain.begin(), p.retain.end(), *d) == p.retain.end()) p.retain.push_back(*d);
     } else if (head.text == ".label") {
       if (toks.size() != 2 || !is_name(toks[1].text)) throw CompileError(lineno, head.col, ".label needs a name");
       for (auto& l : all_labels)

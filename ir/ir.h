@@ -163,6 +163,7 @@ struct Program {
   std::vector<Rung> rungs;
   std::vector<std::string> end_labels;  // labels after the last rung
   uint32_t edge_slots = 0;
+  std::vector<DeviceRef> retain;        // D words kept across restarts (.retain, docs/il.md)
   Layout layout() const { return Layout::standard(edge_slots); }
 };
 
@@ -192,6 +193,7 @@ struct TreeProgram {
   std::vector<Alias> aliases;
   std::vector<TreeRung> rungs;
   std::vector<std::string> end_labels;
+  std::vector<DeviceRef> retain;  // D words kept across restarts
 };
 std::string print_tree(const TreeProgram& p);
 // Tree -> IL.  Throws CompileError if a rung needs more than 32 bit-stack entries.

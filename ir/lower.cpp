@@ -164,6 +164,7 @@ Program lower_to_il(const TreeProgram& tp) {
   p.source = tp.source;
   p.end_labels = tp.end_labels;
   p.aliases = tp.aliases;
+  p.retain = tp.retain;
   Lowering low;
   for (const auto& tr : tp.rungs) {
     Rung r;
