@@ -155,12 +155,10 @@ const char* kind_word(NK k) {
 const std::map<std::string, std::string>& unsupported() {
   static const std::map<std::string, std::string> m = [] {
     std::map<std::string, std::string> r;
-    const char* uart = "ldc has no serial port: its I/O is the memory image, bits and words written before each scan, which "
-                       "cannot model a UART's receive buffer and transmit busy time";
-    for (const char* k : {"UART_SEND", "UART_RECV", "UART_SENDn", "UART_RECVn", "UART_RECV_AVAIL", "UART_SEND_READY",
-                          "UART_SEND_BUSY", "UART_UDRE", "UART_PRINTF"})
-      r[k] = uart;
-    r["PERSIST"] = "ldc keeps only K relays across restarts; an LDmicro variable kept in EEPROM has no retentive word to live in";
+    for (const char* k : {"UART_SENDn", "UART_RECVn"})
+      r[k] = "it moves as many bytes as the LDmicro variable is wide, which ldc's 32-bit words do not keep; use UART_SEND or "
+             "UART_RECV, one byte at a time";
+    r["UART_PRINTF"] = "ldc has no strings and no serial output";
     for (const char* k : {"FORMATTED_STRING", "STRING", "CPRINTF", "SPRINTF", "FPRINTF", "PRINTF", "I2C_PRINTF", "ISP_PRINTF"})
       r[k] = "ldc has no strings and no serial output";
     for (const char* k : {"SPI", "SPI_WR", "I2C_RD", "I2C_WR"}) r[k] = "ldc has no SPI or I2C bus";
@@ -180,6 +178,20 @@ const std::map<std::string, std::string>& unsupported() {
   }();
   return m;
 }
+
+// The UART elements whose output is a UART flag, whatever their input
+// (LDmicro's loader reads UART_SEND_BUSY and UART_UDRE as UART_SEND_READY).
+bool is_uart_flag(const std::string& kw) {
+  return kw == "UART_RECV_AVAIL" || kw == "UART_SEND_READY" || kw == "UART_SEND_BUSY" || kw == "UART_UDRE";
+}
+bool is_uart(const std::string& kw) { return kw == "UART_SEND" || kw == "UART_RECV" || is_uart_flag(kw); }
+
+// The UART's fixed devices (docs/ldmicro.md, "UART"): reserved before any
+// name is allocated, so that no LDmicro name can land on them.
+constexpr uint32_t kUartRx = 1023;    // WX: (sequence << 8) | byte, written by the environment
+constexpr uint32_t kUartTx = 1023;    // WY: (sequence << 8) | byte, written by UART_SEND
+constexpr uint32_t kUartSeen = 8191;  // D: the last receive word consumed
+constexpr uint32_t kUartBusy = 8191;  // M: a byte was sent in this scan
 
 bool is_pure_kw(const std::string& kw) {
   static const std::set<std::string> s = {"CONTACTS", "EQU", "NEQ", "GRT", "GEQ", "LES", "LEQ", "SHORT", "OPEN", "COMMENT"};
@@ -217,6 +229,8 @@ class Importer {
   int depth_ = 0;
   static constexpr int kMaxNesting = 100;
   bool mcr_used_ = false;
+  bool uart_used_ = false;
+  std::vector<DeviceRef> persist_;  // PERSIST variables, in order
   std::set<uint32_t> frozen_;  // relays written once per scan, before they are read
   uint32_t mcr_ = 0;
   std::vector<TreeNode> init_;  // first-scan initialisations
@@ -262,6 +276,7 @@ class Importer {
   void timer(const Elem& e);
   void counter(const Elem& e);
   void coil(const Elem& e);
+  void uart(const Elem& e);
 };
 
 void Importer::read_lines() {
@@ -427,6 +442,9 @@ void Importer::check_leaf(const Elem& e) {
   } else if (k == "READ_ADC") arity(1, 2, "READ_ADC name [refs]");
   else if (k == "SET_PWM") arity(2, 4, "SET_PWM duty frequency [name [resolution]]");
   else if (k == "SET_BIT" || k == "CLEAR_BIT" || k == "IF_BIT_SET" || k == "IF_BIT_CLEAR") arity(2, 2, (k + " variable bit").c_str());
+  else if (k == "UART_SEND" || k == "UART_RECV") arity(1, 3, (k + " variable [bytes wait]").c_str());
+  else if (is_uart_flag(k)) arity(0, 0, k.c_str());
+  else if (k == "PERSIST") arity(1, 1, "PERSIST variable");
   else fail(e.line, e.col, "unknown LDmicro element '" + k + "'");
 }
 
@@ -723,7 +741,7 @@ bool Importer::breaks(const Elem& e) const {
   if (k == "CTU" || k == "CTD" || k == "CTR") return true;
   if (k == "CTC") return !(v01_ && e.args.size() == 2);
   if (k == "COIL") return e.args.size() == 5 && e.args[4] != "0";
-  return false;
+  return is_uart(k);
 }
 
 Cond Importer::materialize(const Elem& e) {
@@ -933,6 +951,47 @@ void Importer::coil(const Elem& e) {
   } else rb_.add(out_node(Op::OUT, {b}, e));
 }
 
+// The UART as word I/O (docs/ldmicro.md, "UART"): the environment writes
+// (seq << 8) | byte into WX1023 and counts seq up for each new byte; a byte
+// is there while that word differs from D8191, the last word consumed.
+// UART_SEND writes (tx_seq << 8) | byte into WY1023, tx_seq counting up modulo
+// 2^23, at most once per scan: M8191, cleared at the start of each scan, says
+// a byte was sent (the UART is busy) and the element outputs it.
+void Importer::uart(const Elem& e) {
+  const std::string& k = e.kw;
+  SrcLoc loc = e.loc();
+  Operand rx = int_opd(Area::WX, kUartRx), tx = int_opd(Area::WY, kUartTx), seen = int_opd(Area::D, kUartSeen);
+  auto fresh = [&] { return Cond::of(leaf_node(Op::LDNE, {rx, seen}, e)); };
+  if (k == "UART_RECV_AVAIL") return rb_.restart(fresh(), loc);
+  if (is_uart_flag(k)) return rb_.restart(bit_leaf(Op::LOADN, Area::M, kUartBusy, e), loc);
+  if (e.args.size() >= 2 && number(e.args[1], e.line, e.cols[1]) != 1)
+    fail(e.line, e.cols[1], k + " of " + e.args[1] + " bytes is not supported: ldc's UART moves one byte at a time");
+  if (e.args.size() >= 3 && number(e.args[2], e.line, e.cols[2]) != 0)
+    fail(e.line, e.cols[2], k + " with wait " + e.args[2] + " is not supported: a scan never waits for the UART");
+  Cond s = materialize(e);
+  if (k == "UART_RECV") {
+    Operand var = value(e, 0, true);
+    uint32_t got = temp_m(e);
+    frozen_.insert(got);
+    rb_.chain(c_and(std::move(s), fresh()), out_node(Op::OUT, {bit_opd(Area::M, got)}, e), loc);
+    std::vector<TreeNode> take;
+    take.push_back(out_node(Op::WAND, {rx, const_opd(255), var}, e));
+    take.push_back(out_node(Op::MOV, {rx, seen}, e));
+    rb_.chain(bit_leaf(Op::LOAD, Area::M, got, e), fork_of(std::move(take)), loc);
+    rb_.restart(bit_leaf(Op::LOAD, Area::M, got, e), loc);
+    return;
+  }
+  Operand byte = int_opd(Area::D, temp_d(e));
+  std::vector<TreeNode> send;
+  send.push_back(out_node(Op::WAND, {value(e, 0), const_opd(255), byte}, e));
+  send.push_back(out_node(Op::ADD, {tx, const_opd(256), tx}, e));
+  send.push_back(out_node(Op::WAND, {tx, const_opd(0x7FFFFF00), tx}, e));
+  send.push_back(out_node(Op::WOR, {tx, byte, tx}, e));
+  send.push_back(out_node(Op::SET, {bit_opd(Area::M, kUartBusy)}, e));
+  rb_.chain(c_and(std::move(s), bit_leaf(Op::LOADN, Area::M, kUartBusy, e)), fork_of(std::move(send)), loc);
+  rb_.restart(bit_leaf(Op::LOAD, Area::M, kUartBusy, e), loc);
+}
+
 void Importer::element(const Elem& e, bool need_out) {
   const std::string& k = e.kw;
   SrcLoc loc = e.loc();
@@ -943,6 +1002,16 @@ void Importer::element(const Elem& e, bool need_out) {
     return;
   }
   if (k == "COIL") return coil(e);
+  if (is_uart(k)) return uart(e);
+  if (k == "PERSIST") {  // the variable is retentive; the state passes on
+    auto it = names_.find(e.args[0]);
+    if (is_number(e.args[0]) || it == names_.end() || it->second.kind != NK::Var)
+      fail(e.line, e.cols[0], "PERSIST needs an integer variable; '" + e.args[0] + "' is " +
+                                  (is_number(e.args[0]) ? std::string("a number") : kind_word(it->second.kind)));
+    DeviceRef d{Dev::D, it->second.dev.index};
+    if (std::find(persist_.begin(), persist_.end(), d) == persist_.end()) persist_.push_back(d);
+    return;
+  }
   if (k == "TON" || k == "TOF" || k == "RTO" || k == "TCY") return timer(e);
   if (k == "CTU" || k == "CTD" || k == "CTC" || k == "CTR") return counter(e);
   if (k == "OSR") {
@@ -1163,8 +1232,24 @@ TreeProgram Importer::run() {
       if (e.kw == "MASTER_RELAY") mcr_used_ = true;
     }
   };
-  for (const SrcRung& r : rungs_) walk(r.series);
+  std::function<void(const std::vector<Elem>&)> find_uart = [&](const std::vector<Elem>& s) {
+    for (const Elem& e : s) {
+      uart_used_ |= is_uart(e.kw);
+      find_uart(e.kids);
+    }
+  };
+  for (const SrcRung& r : rungs_) walk(r.series), find_uart(r.series);
+  if (uart_used_)
+    for (DeviceRef r : {DeviceRef{Dev::WX, kUartRx}, DeviceRef{Dev::WY, kUartTx}, DeviceRef{Dev::D, kUartSeen}, DeviceRef{Dev::M, kUartBusy}})
+      used_.insert({int(r.dev), r.index});
   allocate();
+  if (uart_used_) {  // their aliases, unless an LDmicro name has taken one
+    std::set<std::string> taken;
+    for (const Alias& a : aliases_) taken.insert(upper(a.name));
+    for (const Alias& a : {Alias{"uart_rx", {Dev::WX, kUartRx}}, Alias{"uart_tx", {Dev::WY, kUartTx}},
+                           Alias{"uart_rx_seen", {Dev::D, kUartSeen}}, Alias{"uart_tx_busy", {Dev::M, kUartBusy}}})
+      if (!taken.count(upper(a.name))) aliases_.push_back(a);
+  }
   TreeProgram p;
   p.source = file_;
   p.aliases = aliases_;
@@ -1178,6 +1263,13 @@ TreeProgram Importer::run() {
     tr.line = rungs_[0].line;
     tr.title = "master control relay on";
     tr.root = out_node(Op::OUT, {bit_opd(Area::M, mcr_)}, top);
+    p.rungs.push_back(std::move(tr));
+  }
+  if (uart_used_) {
+    TreeRung tr;
+    tr.line = rungs_[0].line;
+    tr.title = "UART transmitter free at the start of the scan";
+    tr.root = out_node(Op::OUTN, {bit_opd(Area::M, kUartBusy)}, top);
     p.rungs.push_back(std::move(tr));
   }
   size_t init_at = p.rungs.size();
@@ -1198,6 +1290,7 @@ TreeProgram Importer::run() {
     p.rungs.insert(p.rungs.begin() + long(init_at), std::move(tr));
   }
   if (p.rungs.empty()) fail(int(lines_.size()), 1, "this program has no outputs");
+  p.retain = persist_;
   return p;
 }
 

@@ -415,6 +415,36 @@ TEST(Retentive, KillNineDuringSavesRestartsFromACompleteState) {
   EXPECT_GE(s.records.size(), 2u);
 }
 
+// An LDmicro PERSIST variable (docs/ldmicro.md): its D word is listed in the
+// image's retentive section and survives a restart with --retain; the other
+// counter starts again from 0.
+TEST(Retentive, LdmicroPersistVariableSurvivesARestart) {
+  TmpDir d;
+  Image im = compile_text(d, "persist.ld",
+                          "LDmicro0.2\nCYCLE=10000 us\nPROGRAM\nRUNG 1\n  ADD kept kept 1\n  ADD lost lost 1\nEND\n"
+                          "RUNG 2\n  PERSIST kept\nEND\n");
+  std::vector<RetentiveRange> want = {{Area::K, 0, 8192}, {Area::D, 0, 1}};
+  EXPECT_EQ(im.retentive, want);
+  write_image_file(d / "persist.bin", im);
+  const std::string ret = d / "state.ret";
+  Proc p = Proc::spawn({LDRUN, d / "persist.bin", "--io=stdio", "--stop", "--retain", ret}, d / "err");
+  EXPECT_EQ(p.ask("run"), "ok RUN");
+  EXPECT_EQ(p.ask("wait 5"), "ok");
+  EXPECT_EQ(p.ask("stop"), "ok STOP");  // saves
+  std::string kept = p.ask("get kept"), lost = p.ask("get lost");
+  EXPECT_EQ(p.ask("quit"), "ok bye");
+  ASSERT_EQ(p.wait(), 0) << p.err();
+  ASSERT_EQ(kept.rfind("kept = ", 0), 0u) << kept;
+  EXPECT_GE(std::stol(kept.substr(7)), 5) << kept;
+  EXPECT_EQ(kept.substr(7), lost.substr(7));  // both counted the same scans
+  Proc q = Proc::spawn({LDRUN, d / "persist.bin", "--io=stdio", "--stop", "--retain", ret}, d / "err2");
+  EXPECT_EQ(q.ask("get kept"), kept);
+  EXPECT_EQ(q.ask("get lost"), "lost = 0");
+  EXPECT_EQ(q.ask("quit"), "ok bye");
+  ASSERT_EQ(q.wait(), 0) << q.err();
+  EXPECT_NE(q.err().find("retentive memory restored"), std::string::npos) << q.err();
+}
+
 // ---------------------------------------------------------------- shared memory
 
 TEST(SharedMemory, ClientWritesInputsAndReadsOutputsWithoutTornUpdates) {
