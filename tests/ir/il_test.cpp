@@ -61,6 +61,26 @@ TEST(IlText, ErrorsCarryLineAndColumn) {
   EXPECT_THROW(parse_il_text(".rung line 1\nLOAD X0\nJMP nowhere\n.end\n", "b.il"), CompileError);
 }
 
+// .retain Dn (docs/il.md): printed after the aliases, read back once per word;
+// anything but an existing D word is refused.
+TEST(IlText, RetainRoundTripsAndRefusesNonDWords) {
+  Program p = parse_il_text(".retain D5\n.retain d7\n.retain D5\n.rung line 1\nTRUE\nOUT Y0\n.end\n", "r.il");
+  std::vector<DeviceRef> want = {{Dev::D, 5}, {Dev::D, 7}};
+  EXPECT_EQ(p.retain, want);
+  std::string text = print_il_text(p);
+  EXPECT_NE(text.find(".retain D5\n.retain D7\n"), std::string::npos) << text;
+  EXPECT_EQ(parse_il_text(text, "r.il").retain, want);
+  for (const char* bad : {".retain M5\n", ".retain D8192\n", ".retain\n", ".retain D1 D2\n", ".retain WY3\n"}) {
+    try {
+      parse_il_text(std::string(bad) + ".rung line 1\nTRUE\nOUT Y0\n.end\n", "r.il");
+      ADD_FAILURE() << bad;
+    } catch (CompileError& e) {
+      EXPECT_EQ(e.line, 1) << bad;
+      EXPECT_STREQ(e.what(), ".retain needs a D word (D0..D8191)") << bad;
+    }
+  }
+}
+
 TEST(BinaryIl, ValidatorRefusesBadCode) {
   Program p = parse_il_text(".edges 1\n.rung line 1\nLOAD X0\nJMP a\n.rung line 2\nLOADP X1 E0\nOUT Y0\n.label a\n.end\n", "c.il");
   BinaryIl b = encode_il(p);

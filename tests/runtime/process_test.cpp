@@ -19,6 +19,7 @@
 #include <sstream>
 #include <thread>
 
+#include "driver/c40_driver.h"
 #include "driver/driver.h"
 #include "runtime/plc.h"
 #include "runtime/runtime.h"
@@ -425,6 +426,9 @@ TEST(Retentive, LdmicroPersistVariableSurvivesARestart) {
                           "RUNG 2\n  PERSIST kept\nEND\n");
   std::vector<RetentiveRange> want = {{Area::K, 0, 8192}, {Area::D, 0, 1}};
   EXPECT_EQ(im.retentive, want);
+  Compiled c = compile_source(d / "persist.ld");  // the C40 image lists it too, and both read back
+  EXPECT_EQ(read_image(write_image(make_c40_image(c.il, build_c40(c.il, d / "persist.ld"))), "c40.bin").retentive, want);
+  EXPECT_EQ(read_image(write_image(im), "x86.bin").retentive, want);
   write_image_file(d / "persist.bin", im);
   const std::string ret = d / "state.ret";
   Proc p = Proc::spawn({LDRUN, d / "persist.bin", "--io=stdio", "--stop", "--retain", ret}, d / "err");
