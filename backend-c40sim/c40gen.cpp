@@ -1159,6 +1159,47 @@ bool in_slot(const std::vector<Item>& items, size_t k) {
   return false;
 }
 
+// The instructions among v[0..end) that can move into the delay slots of a
+// branch placed at `end` (its three after it), ascending: walking back over
+// the instructions of this IL note, each one that commutes with those that
+// stay and with the branch's flag test.
+std::vector<size_t> movable_before(const std::vector<Item>& v, size_t end, bool cond, uint64_t dead_after) {
+  std::vector<size_t> moved, stay;
+  for (size_t k = end; k-- > 0 && moved.size() < 3;) {
+    if (v[k].kind != as::ItemKind::Instruction || in_slot(v, k)) break;
+    Effect x = effect_of(v[k].inst);
+    if (x.fixed) break;
+    bool ok = true;
+    uint64_t shadow = 0;  // defined by instructions that stay, between x and here
+    auto past = [&](const Effect& y) {
+      if ((x.use & y.def) || (y.use & ~shadow & x.def)) ok = false;
+      if ((x.store && (y.mem || y.store)) || (y.store && x.mem)) ok = false;
+      shadow |= y.def;
+    };
+    for (auto it = stay.rbegin(); it != stay.rend(); ++it) past(effect_of(v[*it].inst));
+    Effect be;
+    if (cond) be.use = kFlags;
+    past(be);
+    if ((x.def & shadow) & ~dead_after) ok = false;  // x's result would now be the last one
+    if (ok) moved.insert(moved.begin(), k);
+    else stay.push_back(k);
+  }
+  return moved;
+}
+
+// From after a conditional branch at b: instructions without memory access
+// whose results are dead at the target, while slots are left; returns the end.
+size_t movable_after(const std::vector<Item>& items, size_t b, bool cond, size_t taken, uint64_t at_target) {
+  size_t z_end = b + 1;
+  if (cond)
+    while (z_end < items.size() && taken + (z_end - b - 1) < 3 && items[z_end].kind == as::ItemKind::Instruction) {
+      Effect z = effect_of(items[z_end].inst);
+      if (z.fixed || z.mem || z.store || (z.def & at_target)) break;
+      z_end++;
+    }
+  return z_end;
+}
+
 // Tries to make the branch at item b delayed; true if it did.
 bool delay_branch(std::vector<Item>& items, size_t b, std::vector<uint32_t>& starts) {
   const Instruction br = items[b].inst;
@@ -1168,35 +1209,8 @@ bool delay_branch(std::vector<Item>& items, size_t b, std::vector<uint32_t>& sta
   for (size_t i = 0; i < items.size(); i++)
     if (items[i].kind == as::ItemKind::Label && items[i].label == br.ops[0].label) at_target = live[i];
   const uint64_t dead_after = ~(at_target | (cond ? live[b + 1] : 0));
-  // from before: walk back over instructions of this IL note
-  std::vector<size_t> moved, stay;
-  for (size_t k = b; k-- > 0 && moved.size() < 3;) {
-    if (items[k].kind != as::ItemKind::Instruction || in_slot(items, k)) break;
-    Effect x = effect_of(items[k].inst);
-    if (x.fixed) break;
-    bool ok = true;
-    uint64_t shadow = 0;  // defined by instructions that stay, between x and here
-    auto past = [&](const Effect& y) {
-      if ((x.use & y.def) || (y.use & ~shadow & x.def)) ok = false;
-      if ((x.store && (y.mem || y.store)) || (y.store && x.mem)) ok = false;
-      shadow |= y.def;
-    };
-    for (auto it = stay.rbegin(); it != stay.rend(); ++it) past(effect_of(items[*it].inst));
-    Effect be;
-    if (cond) be.use = kFlags;
-    past(be);
-    if ((x.def & shadow) & ~dead_after) ok = false;  // x's result would now be the last one
-    if (ok) moved.insert(moved.begin(), k);
-    else stay.push_back(k);
-  }
-  // from after a conditional branch: no memory, results dead at the target
-  size_t z_end = b + 1;
-  if (cond)
-    while (z_end < items.size() && moved.size() + (z_end - b - 1) < 3 && items[z_end].kind == as::ItemKind::Instruction) {
-      Effect z = effect_of(items[z_end].inst);
-      if (z.fixed || z.mem || z.store || (z.def & at_target)) break;
-      z_end++;
-    }
+  std::vector<size_t> moved = movable_before(items, b, cond, dead_after);
+  size_t z_end = movable_after(items, b, cond, moved.size(), at_target);
   size_t filled = moved.size() + (z_end - b - 1);
   if (filled < 2) return false;
   std::vector<Item> out;
@@ -1275,35 +1289,9 @@ void fill_delay_slots(std::vector<Item>& items, std::vector<uint32_t>& starts) {
     auto t = label_at.find(br.ops[0].label);
     const uint64_t at_target = t == label_at.end() ? kLiveAcross : live[t->second];
     const uint64_t dead_after = ~(at_target | (cond ? live[b + 1] : 0));
-    // from before: walk back over the instructions just emitted (of this IL note)
-    std::vector<size_t> moved, stay;  // positions in `out`
-    for (size_t k = out.size(); k-- > 0 && moved.size() < 3;) {
-      if (out[k].kind != as::ItemKind::Instruction || in_slot(out, k)) break;
-      Effect x = effect_of(out[k].inst);
-      if (x.fixed) break;
-      bool ok = true;
-      uint64_t shadow = 0;  // defined by instructions that stay, between x and here
-      auto past = [&](const Effect& y) {
-        if ((x.use & y.def) || (y.use & ~shadow & x.def)) ok = false;
-        if ((x.store && (y.mem || y.store)) || (y.store && x.mem)) ok = false;
-        shadow |= y.def;
-      };
-      for (auto it = stay.rbegin(); it != stay.rend(); ++it) past(effect_of(out[*it].inst));
-      Effect be;
-      if (cond) be.use = kFlags;
-      past(be);
-      if ((x.def & shadow) & ~dead_after) ok = false;  // x's result would now be the last one
-      if (ok) moved.insert(moved.begin(), k);
-      else stay.push_back(k);
-    }
-    // from after a conditional branch: no memory, results dead at the target
-    size_t z_end = b + 1;
-    if (cond)
-      while (z_end < items.size() && moved.size() + (z_end - b - 1) < 3 && items[z_end].kind == as::ItemKind::Instruction) {
-        Effect z = effect_of(items[z_end].inst);
-        if (z.fixed || z.mem || z.store || (z.def & at_target)) break;
-        z_end++;
-      }
+    // from before: the instructions just emitted; from after: those not yet
+    std::vector<size_t> moved = movable_before(out, out.size(), cond, dead_after);
+    size_t z_end = movable_after(items, b, cond, moved.size(), at_target);
     const size_t filled = moved.size() + (z_end - b - 1);
     if (filled < 2) {
       emit(b++);

@@ -172,21 +172,9 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
   } close_out{out};
   if (io == "trace") {
     if (specs.size() != 1) throw UserError("ldrun: error: the trace driver drives one task; the project has " + std::to_string(specs.size()));
-    std::vector<Probe> probes;
-    size_t s = 0;
-    while (!watch.empty() && s <= watch.size()) {
-      size_t e = watch.find(',', s);
-      std::string name = watch.substr(s, e == std::string::npos ? std::string::npos : e - s);
-      try {
-        probes.push_back(resolve_probe(name, specs[0].image.aliases));
-      } catch (std::exception& ex) { throw UserError("ldrun: error: --watch: " + std::string(ex.what())); }
-      if (e == std::string::npos) break;
-      s = e + 1;
-    }
+    std::vector<Probe> probes = parse_watch(watch, specs[0].image.aliases);
     if (!trace_file.empty()) {
-      try {
-        trace = read_trace(read_file(trace_file), trace_file, specs[0].image.aliases);
-      } catch (UserError&) { throw; } catch (std::exception& ex) { throw UserError(ex.what()); }
+      trace = load_trace(trace_file, specs[0].image.aliases);
       if (opt.scans < 0) opt.scans = int64_t(trace.rows.size());
     }
     if (a.out.empty()) {
