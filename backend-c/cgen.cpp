@@ -36,7 +36,7 @@ static inline int32_t i_shl(int32_t a, int32_t n) { return n < 0 || n > 31 ? 0 :
 static inline int32_t i_shr(int32_t a, int32_t n) { return n < 0 || n > 31 ? 0 : (int32_t)((uint32_t)a >> n); }
 static inline int32_t i_abs(int32_t a) { return a == INT32_MIN ? INT32_MIN : (a < 0 ? -a : a); }
 typedef float (*realfn)(float);
-static inline float call_fn(const u8 *m, uint32_t slot, float x) { realfn f; memcpy(&f, m + slot, sizeof f); return f(x); }
+static inline float call_fn(const u8 *m, int32_t slot, float x) { realfn f; memcpy(&f, m + slot, sizeof f); return f(x); }
 static inline int32_t adv(int32_t et, int32_t dt, int32_t pt) {
   if (et >= pt) return pt;
   int64_t s = (int64_t)et + dt;
@@ -219,7 +219,7 @@ class CGen {
       case Op::SIN: case Op::COS: case Op::TAN: case Op::EXP: case Op::LN: {
         RealFn fn = in.op == Op::SIN ? RealFn::Sin : in.op == Op::COS ? RealFn::Cos : in.op == Op::TAN ? RealFn::Tan
                   : in.op == Op::EXP ? RealFn::Exp : RealFn::Ln;
-        return guarded(store(a[1], "call_fn(m, " + u(kSysCallTable + 8 * uint32_t(fn)) + ", " + val(a[0], true) + ")", true));
+        return guarded(store(a[1], "call_fn(m, " + std::to_string(kCallTableDisp + 8 * int32_t(fn)) + ", " + val(a[0], true) + ")", true));
       }
       case Op::TON: case Op::TOF: case Op::TP: {
         uint32_t n = a[0].index;

@@ -6,7 +6,8 @@
 //   ebp  the bit stack (top = bit 0), as paper 003 keeps it in R10 on the C40
 //   eax ecx edx xmm0-2  scratch
 // REAL functions with no instruction (sin, cos, tan, exp, ln) are called through
-// the table at image + kSysCallTable; no absolute address is baked in.
+// the read-only table below the image (image + kCallTableDisp, ir.h); no absolute
+// address is baked in.
 #pragma once
 
 #include <vector>

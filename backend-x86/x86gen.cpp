@@ -407,7 +407,7 @@ void Gen::special(const ldc::Instr& in) {
   } else {
     RealFn fn = in.op == Op::SIN ? RealFn::Sin : in.op == Op::COS ? RealFn::Cos : in.op == Op::TAN ? RealFn::Tan
               : in.op == Op::EXP ? RealFn::Exp : RealFn::Ln;
-    Mem m = mem_at(Size::Qword, kSysCallTable + 8 * uint32_t(fn));
+    Mem m = mem_at(Size::Qword, uint32_t(kCallTableDisp + 8 * int32_t(fn)));
     emit(M::Call, {Operand::m(m)});
   }
   store_real(d);

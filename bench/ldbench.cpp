@@ -441,7 +441,6 @@ void measure_c40(Subject& s, const Options& o) {
   int scans = o.smoke ? 3 : s.n > 30000 ? 5 : 17;
   auto run = [&](C40Engine& e) {
     Memory m(L);
-    install_call_table(m.data());
     std::vector<double> cyc;
     for (int k = 0; k < scans; k++) {
       s.trace.apply(m.data(), size_t(k) % s.trace.size());
@@ -486,7 +485,6 @@ void check_agreement(Subject& s, int scans) {
   std::vector<Memory> mem;
   for (int e = 0; e < kEngines; e++) {
     mem.emplace_back(L);
-    install_call_table(mem.back().data());
   }
   for (int k = 1; k <= scans; k++) {
     for (int e = 0; e < kEngines; e++) {
@@ -522,7 +520,6 @@ void measure(Subject& s, const Options& o) {
   std::vector<int> batch(ne, 1);
   for (size_t i = 0; i < ne; i++) {
     mem.emplace_back(L);
-    install_call_table(mem.back().data());
   }
   auto run = [&](size_t i, int scans) {
     Engine* e = engines[i];

@@ -73,12 +73,18 @@ struct Layout {
 // Fixed addresses inside the Sys area.
 constexpr uint32_t kSysDt = 0;      // INT32: ms elapsed before this scan
 constexpr uint32_t kSysScan = 4;    // UINT32: scans completed
-// Native code calls the REAL functions that have no instruction through this
-// table of 8-byte function pointers (float f(float)), filled by the runtime.
-constexpr uint32_t kSysCallTable = 16;
+constexpr uint32_t kSysSize = 64;   // bytes 8..63 are reserved (0)
+
+// Native code calls the REAL functions that have no instruction (float f(float))
+// through a table of 8-byte pointers that lies OUTSIDE the memory image, in the
+// last 40 bytes of a read-only page right below it (ImageBytes): slot k is at
+// image + kCallTableDisp + 8k, `call qword ptr [rbx-0x40]` for sin.  Generated
+// code can write only inside the image, so it can never redirect these calls
+// (docs/image-format.md, "Threat model").
 enum class RealFn : uint8_t { Sin, Cos, Tan, Exp, Ln, Count };
-constexpr uint32_t kSysSize = 64;
-static_assert(kSysCallTable + 8 * uint32_t(RealFn::Count) <= kSysSize);
+constexpr int32_t kCallTableDisp = -64;
+using RealFnPtr = float (*)(float);
+RealFnPtr real_fn(RealFn f);  // sinf cosf tanf expf logf
 
 // System bits.
 constexpr uint32_t kBitError = 0;      // S0
@@ -303,11 +309,53 @@ class Interpreter {
 int32_t real_to_int(float f);  // truncate toward zero, saturate, NaN -> 0
 float int_to_real(int32_t i);
 
+// The bytes of a memory image, on pages of their own:
+//   guard page (no access) | table page (read-only; the REAL function table in
+//   its last bytes, at image + kCallTableDisp) | the image (read-write, from a
+//   page boundary, rounded up to whole pages, the slack after it filled with
+//   kSlackByte) | guard page (no access)
+// Every engine runs on this storage, so native code always finds its call
+// table and a stray access past either end of the pages faults.  Copies are
+// deep; == compares the image bytes.  Throws std::bad_alloc if it cannot map.
+class ImageBytes {
+ public:
+  static constexpr uint8_t kSlackByte = 0xA5;
+  explicit ImageBytes(size_t size = 0);
+  ImageBytes(const ImageBytes& o);
+  ImageBytes(ImageBytes&& o) noexcept;
+  ImageBytes& operator=(const ImageBytes& o);
+  ImageBytes& operator=(ImageBytes&& o) noexcept;
+  ~ImageBytes();
+
+  uint8_t* data() { return image_; }
+  const uint8_t* data() const { return image_; }
+  size_t size() const { return size_; }
+  uint8_t& operator[](size_t i) { return image_[i]; }
+  const uint8_t& operator[](size_t i) const { return image_[i]; }
+  uint8_t* begin() { return image_; }
+  uint8_t* end() { return image_ + size_; }
+  const uint8_t* begin() const { return image_; }
+  const uint8_t* end() const { return image_ + size_; }
+  operator std::span<const uint8_t>() const { return {image_, size_}; }
+  bool operator==(const ImageBytes& o) const;
+  // The slack between the end of the image and its last page still holds
+  // kSlackByte (nothing wrote past the image inside its pages).
+  bool slack_intact() const;
+
+ private:
+  void map(size_t size);
+  void unmap();
+  uint8_t* base_ = nullptr;   // the first guard page
+  size_t mapped_ = 0;         // bytes mapped from base_
+  uint8_t* image_ = nullptr;  // the image, one guard page and one table page after base_
+  size_t size_ = 0;
+};
+
 // Memory image helpers used by runners and tests.
 struct Memory {
   Layout layout;
-  std::vector<uint8_t> bytes;
-  explicit Memory(const Layout& l) : layout(l), bytes(l.size, 0) {}
+  ImageBytes bytes;
+  explicit Memory(const Layout& l) : layout(l), bytes(l.size) {}
   uint8_t* data() { return bytes.data(); }
   int32_t get_int(Area a, uint32_t i) const;
   float get_real(uint32_t i) const;

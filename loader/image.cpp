@@ -19,7 +19,7 @@ namespace {
 // ---------------------------------------------------------------- the format
 
 constexpr uint8_t kMagic[8] = {'L', 'D', 'C', 'I', 'M', 'G', 0x00, 0x01};
-constexpr uint16_t kVersion = 1;
+constexpr uint16_t kVersion = 2;
 
 // Fixed header.
 constexpr uint32_t kOffMagic = 0, kOffVersion = 8, kOffTarget = 10, kOffFlags = 11, kOffHeaderSize = 12,
@@ -238,7 +238,7 @@ Image read_image(std::span<const uint8_t> b, const std::string& name) {
   uint8_t target = b[kOffTarget];
   if (target != uint8_t(ImageTarget::X86_64) && target != uint8_t(ImageTarget::C40))
     throw fail(kOffTarget, "unknown target " + std::to_string(target) + " (1 = x86-64, 2 = C40)");
-  if (b[kOffFlags] != 0) throw fail(kOffFlags, "unknown flags " + hex(b[kOffFlags]) + " (version 1 defines none)");
+  if (b[kOffFlags] != 0) throw fail(kOffFlags, "unknown flags " + hex(b[kOffFlags]) + " (version " + std::to_string(kVersion) + " defines none)");
   uint32_t total = get32(b, kOffTotalSize);
   if (total > kImageMaxSize) throw fail(kOffTotalSize, "total size " + hex(total) + " exceeds the limit " + hex(kImageMaxSize));
   if (b.size() < total)
@@ -267,7 +267,7 @@ Image read_image(std::span<const uint8_t> b, const std::string& name) {
 
   // ---- layout
   if (uint32_t n = get32(b, kOffLayout); n != uint32_t(kAreaCount))
-    throw fail(kOffLayout, "layout has " + std::to_string(n) + " areas, version 1 has " + std::to_string(kAreaCount));
+    throw fail(kOffLayout, "layout has " + std::to_string(n) + " areas, version " + std::to_string(kVersion) + " has " + std::to_string(kAreaCount));
   const uint32_t off_count = kOffLayout + 4, off_offset = off_count + 4 * kAreaCount, off_size = off_offset + 4 * kAreaCount;
   for (int i = 0; i < kAreaCount; i++) im.layout.count[i] = get32(b, off_count + 4 * i);
   for (int i = 0; i < kAreaCount; i++) im.layout.offset[i] = get32(b, off_offset + 4 * i);
@@ -298,7 +298,7 @@ Image read_image(std::span<const uint8_t> b, const std::string& name) {
     SectionEntry s{get32(b, at), get32(b, at + 4), get32(b, at + 8), i};
     std::string where = "section table entry " + std::to_string(i);
     if (s.id == 0 || s.id >= kSectionIdEnd)
-      throw fail(at, where + ": unknown section id " + std::to_string(s.id) + " (version 1 has ids 1.." +
+      throw fail(at, where + ": unknown section id " + std::to_string(s.id) + " (version " + std::to_string(kVersion) + " has ids 1.." +
                          std::to_string(kSectionIdEnd - 1) + ")");
     where += " ('" + std::string(kSectionNames[s.id]) + "')";
     if (s.offset % 4) throw fail(at + 4, where + ": section offset " + hex(s.offset) + " is not 4-byte aligned");

@@ -146,11 +146,12 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
         continue;  // lea is arithmetic: it computes an address but touches no memory
       } else if (o.kind == x86::OperandKind::Mem) {
         if (in.mnemonic == x86::Mnemonic::Call) {
-          // the one indirect branch: a call through the image's table of REAL functions
+          // the one indirect branch: a call through the read-only table of REAL
+          // functions below the image (ir.h, kCallTableDisp)
           const x86::Mem& m = o.mem;
           bool table = m.base == x86::r64(x86::BX) && !m.index.valid() && m.size == x86::Size::Qword &&
-                       m.disp >= int32_t(kSysCallTable) && m.disp < int32_t(kSysCallTable + 8 * uint32_t(RealFn::Count)) &&
-                       (m.disp - int32_t(kSysCallTable)) % 8 == 0;
+                       m.disp >= kCallTableDisp && m.disp < kCallTableDisp + 8 * int32_t(RealFn::Count) &&
+                       (m.disp - kCallTableDisp) % 8 == 0;
           if (!table) return at(di.offset) + text_of(in) + ": indirect call not through the REAL function table";
           continue;
         }

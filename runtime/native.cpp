@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
@@ -39,23 +38,10 @@ class NativeEngine : public Engine {
   void (*fn_)(uint8_t*) = nullptr;
 };
 
-float fn_sin(float x) { return ::sinf(x); }
-float fn_cos(float x) { return ::cosf(x); }
-float fn_tan(float x) { return ::tanf(x); }
-float fn_exp(float x) { return ::expf(x); }
-float fn_ln(float x) { return ::logf(x); }
-
 }  // namespace
 
 std::unique_ptr<Engine> make_native_engine(std::span<const uint8_t> code, uint32_t entry) {
   return std::make_unique<NativeEngine>(code, entry);
-}
-
-void install_call_table(uint8_t* mem) {
-  using Fn = float (*)(float);
-  const Fn table[] = {fn_sin, fn_cos, fn_tan, fn_exp, fn_ln};
-  static_assert(sizeof table / sizeof table[0] == size_t(RealFn::Count));
-  std::memcpy(mem + kSysCallTable, table, sizeof table);
 }
 
 }  // namespace ldc

@@ -202,7 +202,8 @@ std::unique_ptr<Prog> make_prog(Image img, const std::string& file, uint32_t blo
 struct Task {
   TaskSpec spec;  // its image moved into prog
   std::unique_ptr<Prog> prog;
-  std::vector<uint8_t> mem, snapshot, retain_shadow, retain_tmp;
+  ImageBytes mem;  // the task's memory image, between guard pages
+  std::vector<uint8_t> snapshot, retain_shadow, retain_tmp;
   uint32_t watchdog_us = 0;
   std::thread th;
 
@@ -342,7 +343,6 @@ struct Runtime::Impl {
     std::fill(t.mem.begin(), t.mem.end(), 0);
     k = 0;
     for (const Run& r : p.private_retain) std::memcpy(t.mem.data() + r.offset, t.retain_tmp.data() + k, r.size), k += r.size;
-    install_call_table(t.mem.data());
     t.first = true;
     t.carry_ns = 0;
     t.scans.store(0);
@@ -683,8 +683,7 @@ struct Runtime::Impl {
   }
 
   void install(Task& t, std::unique_ptr<Prog> p) {
-    t.mem.assign(p->image.layout.size, 0);
-    install_call_table(t.mem.data());
+    t.mem = ImageBytes(p->image.layout.size);
     t.snapshot.assign(p->out_bytes, 0);
     t.retain_shadow.assign(p->retain_bytes, 0);
     t.retain_tmp.assign(p->retain_bytes, 0);
@@ -940,13 +939,14 @@ SwapReport Runtime::replace(const std::string& task, Image img, const std::strin
   // Everything the switch needs is prepared here, off the task's thread.
   struct Prepared {
     std::unique_ptr<Prog> prog;
-    std::vector<uint8_t> mem, snapshot, shadow, tmp;
+    ImageBytes mem;
+    std::vector<uint8_t> snapshot, shadow, tmp;
     uint64_t at_scan = 0;
     int64_t t_done = 0, work = 0;
   };
   auto pr = std::make_shared<Prepared>();
   const Layout& nl = np->image.layout;
-  pr->mem.assign(nl.size, 0);
+  pr->mem = ImageBytes(nl.size);
   pr->snapshot.assign(np->out_bytes, 0);
   pr->shadow.assign(np->retain_bytes, 0);
   pr->tmp.assign(np->retain_bytes, 0);

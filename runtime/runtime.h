@@ -27,14 +27,12 @@ std::unique_ptr<Engine> make_interp_engine(std::vector<uint8_t> il, const Layout
 // once into type-specialized records with resolved offsets, threaded dispatch.
 std::unique_ptr<Engine> make_fast_interp_engine(std::span<const uint8_t> il, const Layout& layout);
 
-// Native x86-64 scan code, called as void scan(uint8_t* image).
+// Native x86-64 scan code, called as void scan(uint8_t* image).  The image must
+// live in ImageBytes (ir.h): the code calls the REAL functions through the
+// read-only table below it.
 std::unique_ptr<Engine> make_native_engine(std::span<const uint8_t> code, uint32_t entry);
 // A scan function `void symbol(uint8_t* image)` in a shared object (the C route).
 std::unique_ptr<Engine> make_shared_object_engine(const std::string& path, const std::string& symbol);
-// Fills the image's table of REAL functions that native code calls
-// (sin cos tan exp ln at kSysCallTable).  Every engine's image gets it, so
-// images compare equal across engines.
-void install_call_table(uint8_t* mem);
 
 // A device named in a trace column or a --watch list.
 struct Probe {

@@ -147,7 +147,6 @@ std::string format_probe(const Memory& mem, const Probe& p) { return format_prob
 void run_trace(Engine& engine, const Layout& layout, const Trace* trace, const std::string&, const RunOptions& opt,
                std::string& out) {
   Memory mem(layout);
-  install_call_table(mem.data());
   int scans = opt.scans >= 0 ? opt.scans : trace ? int(trace->rows.size()) : 1;
   out += "scan";
   for (const Probe& p : opt.watch) out += "," + p.name;

@@ -119,8 +119,6 @@ std::string compare_il(const Program& p, uint64_t seed, int scans, bool edgy) {
   auto ref = make_interp_engine(bin.code, L);
   auto fast = make_fast_interp_engine(bin.code, L);
   Memory a(L), b(L);
-  install_call_table(a.data());
-  install_call_table(b.data());
   Rng r{seed};
   const int32_t ints[] = {0, 1, -1, 2, 7, -7, 31, 32, 100, -100, INT32_MIN, INT32_MAX, INT32_MIN + 1, 65536};
   const float reals[] = {0.0f, -0.0f, 1.5f, -2.25f, 0.1f, 7.9f, -8.0f, 1e30f, -1e30f, 3e9f, -3e9f,

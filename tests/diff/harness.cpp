@@ -54,8 +54,7 @@ Place describe(const Layout& l, uint32_t off) {
     std::string n = std::to_string(p.index);
     switch (a) {
       case Area::Sys:
-        p.name = "Sys+" + n + (p.index < 4 ? " (dt)" : p.index < 8 ? " (scans completed)"
-                               : p.index >= kSysCallTable && p.index < kSysCallTable + 40 ? " (call table)" : "");
+        p.name = "Sys+" + n + (p.index < 4 ? " (dt)" : p.index < 8 ? " (scans completed)" : " (reserved)");
         break;
       case Area::TQ: p.name = "T" + n + " done bit"; p.watch = ""; break;
       case Area::CQ: p.name = "C" + n + " done bit"; break;
@@ -72,7 +71,7 @@ Place describe(const Layout& l, uint32_t off) {
   return p;
 }
 
-std::string value_at(const Layout& l, const std::vector<uint8_t>& img, uint32_t off) {
+std::string value_at(const Layout& l, std::span<const uint8_t> img, uint32_t off) {
   Place p = describe(l, off);
   char buf[96];
   if (p.area == Area::Count || p.area == Area::Sys || area_is_bit(p.area)) {
@@ -162,8 +161,6 @@ Outcome compare_run(const std::string& ld, const std::string& csv, const EngineF
   }
   Layout layout = prog.layout();
   Memory ma(layout), mb(layout);
-  install_call_table(ma.data());
-  install_call_table(mb.data());
   int32_t dt_a = 10, dt_b = 10;  // ldrun's default --period
   int scans = int(trace.rows.size());
   o.scans = scans;

@@ -31,7 +31,7 @@ struct Place {
 };
 Place describe(const Layout& l, uint32_t offset);
 // The value of the element holding `offset`, as "7 (0x00000007)" or "1.5 (0x3fc00000)".
-std::string value_at(const Layout& l, const std::vector<uint8_t>& image, uint32_t offset);
+std::string value_at(const Layout& l, std::span<const uint8_t> image, uint32_t offset);
 
 struct Outcome {
   enum class Kind : uint8_t {

@@ -22,7 +22,7 @@ static inline int32_t i_shl(int32_t a, int32_t n) { return n < 0 || n > 31 ? 0 :
 static inline int32_t i_shr(int32_t a, int32_t n) { return n < 0 || n > 31 ? 0 : (int32_t)((uint32_t)a >> n); }
 static inline int32_t i_abs(int32_t a) { return a == INT32_MIN ? INT32_MIN : (a < 0 ? -a : a); }
 typedef float (*realfn)(float);
-static inline float call_fn(const u8 *m, uint32_t slot, float x) { realfn f; memcpy(&f, m + slot, sizeof f); return f(x); }
+static inline float call_fn(const u8 *m, int32_t slot, float x) { realfn f; memcpy(&f, m + slot, sizeof f); return f(x); }
 static inline int32_t adv(int32_t et, int32_t dt, int32_t pt) {
   if (et >= pt) return pt;
   int64_t s = (int64_t)et + dt;

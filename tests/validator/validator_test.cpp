@@ -52,32 +52,24 @@ TEST(Validator, AcceptsEveryImageLdcMakes) {
 }
 
 // Runs an accepted image for a few scans in a child process, with the memory
-// image between PROT_NONE guard pages: once flush against the lower guard, once
-// against the upper one.  Returns "" if the child ran and exited normally.
+// image between PROT_NONE guard pages (ImageBytes); the bytes after the image
+// in its last page must be untouched.  Returns "" if the child ran and exited normally.
 std::string run_guarded(const Image& img, uint64_t seed) {
   pid_t pid = fork();
   if (pid < 0) return "fork failed";
   if (pid == 0) {
     alarm(10);  // an accepted image always ends its scan; a hang is a failure
-    size_t page = size_t(sysconf(_SC_PAGESIZE));
-    size_t size = img.layout.size, span = (size + page - 1) / page * page;
-    for (int side = 0; side < 2; side++) {
-      uint8_t* region = static_cast<uint8_t*>(mmap(nullptr, span + 2 * page, PROT_READ | PROT_WRITE,
-                                                   MAP_PRIVATE | MAP_ANONYMOUS, -1, 0));
-      if (region == MAP_FAILED) _exit(3);
-      mprotect(region, page, PROT_NONE);
-      mprotect(region + page + span, page, PROT_NONE);
-      uint8_t* mem = side == 0 ? region + page : region + page + span - size;
-      install_call_table(mem);
-      auto eng = make_native_engine(img.code, img.entry);
-      std::mt19937_64 rng(seed);
-      for (int scan = 0; scan < 8; scan++) {
-        for (uint32_t i = 0; i < 16; i++) mem[img.layout.addr(Area::X, i)] = rng() & 1;
-        int32_t dt = int32_t(rng() % 50);
-        std::memcpy(mem + kSysDt, &dt, 4);
-        eng->scan(mem);
-      }
+    Memory m(img.layout);  // between guard pages, the call table below it
+    uint8_t* mem = m.data();
+    auto eng = make_native_engine(img.code, img.entry);
+    std::mt19937_64 rng(seed);
+    for (int scan = 0; scan < 8; scan++) {
+      for (uint32_t i = 0; i < 16; i++) mem[img.layout.addr(Area::X, i)] = rng() & 1;
+      int32_t dt = int32_t(rng() % 50);
+      std::memcpy(mem + kSysDt, &dt, 4);
+      eng->scan(mem);
     }
+    if (!m.bytes.slack_intact()) _exit(4);
     _exit(0);
   }
   int status = 0;

@@ -1,0 +1,108 @@
+// ir/image_bytes.cpp -- the pages a memory image lives on (ImageBytes in ir.h):
+// guard, read-only call table, the image, guard.
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstring>
+#include <new>
+
+#include "ir/ir.h"
+
+namespace ldc {
+namespace {
+
+float fn_sin(float x) { return ::sinf(x); }
+float fn_cos(float x) { return ::cosf(x); }
+float fn_tan(float x) { return ::tanf(x); }
+float fn_exp(float x) { return ::expf(x); }
+float fn_ln(float x) { return ::logf(x); }
+
+size_t page_size() {
+  static const size_t page = size_t(sysconf(_SC_PAGESIZE));
+  return page;
+}
+
+}  // namespace
+
+RealFnPtr real_fn(RealFn f) {
+  static const RealFnPtr table[] = {fn_sin, fn_cos, fn_tan, fn_exp, fn_ln};
+  static_assert(sizeof table / sizeof table[0] == size_t(RealFn::Count));
+  return table[size_t(f)];
+}
+
+static_assert(kCallTableDisp + 8 * int32_t(RealFn::Count) <= 0, "the call table lies below the image");
+
+void ImageBytes::map(size_t size) {
+  const size_t page = page_size();
+  size_t pages = (size + page - 1) / page;
+  mapped_ = (pages + 3) * page;  // guard, table, image, guard
+  void* p = mmap(nullptr, mapped_, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (p == MAP_FAILED) throw std::bad_alloc();
+  base_ = static_cast<uint8_t*>(p);
+  uint8_t* table = base_ + page;
+  image_ = table + page;
+  size_ = size;
+  if (mprotect(table, page, PROT_READ | PROT_WRITE) != 0 ||
+      (pages && mprotect(image_, pages * page, PROT_READ | PROT_WRITE) != 0)) {
+    unmap();
+    throw std::bad_alloc();
+  }
+  for (int k = 0; k < int(RealFn::Count); k++) {
+    RealFnPtr f = real_fn(RealFn(k));
+    std::memcpy(image_ + kCallTableDisp + 8 * k, &f, sizeof f);
+  }
+  std::memset(image_ + size, kSlackByte, pages * page - size);
+  if (mprotect(table, page, PROT_READ) != 0) {
+    unmap();
+    throw std::bad_alloc();
+  }
+}
+
+void ImageBytes::unmap() {
+  if (base_) munmap(base_, mapped_);
+  base_ = image_ = nullptr;
+  mapped_ = size_ = 0;
+}
+
+ImageBytes::ImageBytes(size_t size) { map(size); }
+ImageBytes::ImageBytes(const ImageBytes& o) {
+  map(o.size_);
+  std::memcpy(image_, o.image_, size_);
+}
+ImageBytes::ImageBytes(ImageBytes&& o) noexcept
+    : base_(o.base_), mapped_(o.mapped_), image_(o.image_), size_(o.size_) {
+  o.base_ = o.image_ = nullptr;
+  o.mapped_ = o.size_ = 0;
+}
+ImageBytes& ImageBytes::operator=(const ImageBytes& o) {
+  if (this != &o) {
+    ImageBytes copy(o);
+    *this = std::move(copy);
+  }
+  return *this;
+}
+ImageBytes& ImageBytes::operator=(ImageBytes&& o) noexcept {
+  if (this != &o) {
+    unmap();
+    base_ = o.base_, mapped_ = o.mapped_, image_ = o.image_, size_ = o.size_;
+    o.base_ = o.image_ = nullptr;
+    o.mapped_ = o.size_ = 0;
+  }
+  return *this;
+}
+ImageBytes::~ImageBytes() { unmap(); }
+
+bool ImageBytes::operator==(const ImageBytes& o) const {
+  return size_ == o.size_ && (size_ == 0 || std::memcmp(image_, o.image_, size_) == 0);
+}
+
+bool ImageBytes::slack_intact() const {
+  const size_t page = page_size();
+  size_t end = (size_ + page - 1) / page * page;
+  for (size_t i = size_; i < end; i++)
+    if (image_[i] != kSlackByte) return false;
+  return true;
+}
+
+}  // namespace ldc
