@@ -21,7 +21,8 @@ c40sim::Config board_config(const C40Layout& w, uint32_t code_words, uint32_t il
 
 C40Machine::C40Machine(const Layout& layout, std::span<const uint32_t> code, uint32_t entry,
                        std::span<const uint32_t> il)
-    : layout_(layout), w_(C40Layout::of(layout)), entry_(entry) {
+    : max_cycles(kBudgetBase + kBudgetPerWord * (uint64_t(code.size()) + il.size())),
+      layout_(layout), w_(C40Layout::of(layout)), entry_(entry) {
   if (code.size() > kCodeMaxWords) throw std::runtime_error("C40 code larger than the code SRAM");
   if (il.size() > kIlMaxWords) throw std::runtime_error("C40 IL larger than its SRAM");
   sim_ = std::make_unique<c40sim::C40Sim>(board_config(w_, uint32_t(code.size()), uint32_t(il.size())));

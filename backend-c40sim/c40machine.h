@@ -35,7 +35,14 @@ class C40Machine {
   c40sim::C40Sim& sim() { return *sim_; }
   const C40Layout& words() const { return w_; }
   RomService& rom() { return rom_; }
-  uint64_t max_cycles = 2000000000ull;  // per scan
+  // The cycle budget of one scan: the C40 code check (loader/c40_check.h) does
+  // not refuse backward branches (the division routines loop), so a hostile
+  // image could loop; a scan that runs past this stops with an error.  Code
+  // ldc makes runs each word at most once per scan, besides the division
+  // loops (<= 32 steps) and the math ROM (a few hundred cycles per call), so
+  // it stays far below: docs/c40.md, "The loader's C40 code check".
+  static constexpr uint64_t kBudgetBase = 100000, kBudgetPerWord = 1000;
+  uint64_t max_cycles;  // per scan: kBudgetBase + kBudgetPerWord * (code + IL words)
   // Called for every executed instruction (after the math ROM service), e.g.
   // to attribute cycles to IL instructions (bench/c40bench.cpp).
   std::function<void(const c40sim::TraceEntry&)> observer;

@@ -19,15 +19,17 @@
 #include "driver/driver.h"
 #include "runtime/plc.h"
 #include "runtime/runtime.h"
+#include "runtime/sandbox.h"
 
 using namespace ldc;
 
 static const char kUsage[] =
-    "usage: ldrun FILE [--engine=native|interp|c|c40sim|c40interp] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms] [--cycles]\n"
+    "usage: ldrun FILE [--engine=native|interp|c|c40sim|c40interp] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms] [--cycles] [--sandbox]\n"
     "       ldrun FILE|--project P.ldp --io=stdio|shm[:/NAME]|trace|none [--period 1ms|500us] [--clock=real|virtual]\n"
     "             [--free-run] [--rt] [--watchdog 200ms] [--retain FILE] [--retain-every 1s] [--cold] [--stop]\n"
     "             [--control=stdin|none] [--reload] [--stats] [--out FILE] [--block 16] [--scans N]\n"
-    "       FILE: an image (.bin, .hex) or a source ldc reads (.ld, .il, .xml, .rtsp, .sfc), compiled in memory\n";
+    "       FILE: an image (.bin, .hex) or a source ldc reads (.ld, .il, .xml, .rtsp, .sfc), compiled in memory\n"
+    "       --sandbox: run the scans in a child process that seccomp confines to its socket (native, interp, c)\n";
 
 namespace {
 
@@ -36,6 +38,7 @@ struct RtArgs {
   bool on = false;
   std::string project, io, control, clock, period, watchdog, retain, retain_every, out, block;
   bool free_run = false, rt = false, cold = false, stop = false, stats = false, reload = false;
+  bool sandbox = false;  // also in trace mode: it does not select the runtime
 };
 
 // An image for a task: an image file as it is, or a source compiled in memory.
@@ -192,10 +195,12 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
     throw UserError("ldrun: error: unknown --io '" + io + "' (stdio, shm[:/NAME], trace or none)");
   }
 
-  EngineFactory engines = [engine](const Image& img) -> std::unique_ptr<Engine> {
-    if (engine == "interp") return make_interp_engine(img.il, img.layout);
-    if (img.target != ImageTarget::X86_64) throw std::runtime_error("not an x86-64 image");
-    return make_native_engine(img.code, img.entry);
+  EngineFactory engines = [engine, sandbox = a.sandbox](const Image& img) -> std::unique_ptr<Engine> {
+    std::unique_ptr<Engine> e;
+    if (engine == "interp") e = make_interp_engine(img.il, img.layout);
+    else if (img.target != ImageTarget::X86_64) throw std::runtime_error("not an x86-64 image");
+    else e = make_native_engine(img.code, img.entry);
+    return sandbox ? make_sandboxed_engine(std::move(e), img.layout) : std::move(e);
   };
 
   // SIGINT and SIGTERM end the run in order (outputs safe, retentive memory
@@ -347,6 +352,7 @@ int main(int argc, char** argv) {
           opt_value("--retain", rta.retain) || opt_value("--out", rta.out) || opt_value("--block", rta.block)) {
       } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");
       else if (a == "--cycles") cycles = true;  // C40 engines: cycles and us per scan
+      else if (a == "--sandbox") rta.sandbox = true;
       else if (a.rfind("--trace", 0) == 0) trace_file = value("--trace");
       else if (a.rfind("--watch", 0) == 0) watch = value("--watch");
       else if (a.rfind("--scans", 0) == 0) {
@@ -371,6 +377,8 @@ int main(int argc, char** argv) {
       opt.period_ms = *p;
     }
     if (input.empty()) throw UserError(std::string("ldrun: error: no program\n") + kUsage);
+    if (rta.sandbox && (engine == "c40sim" || engine == "c40interp" || is_c40_image(input)))
+      throw UserError("ldrun: error: --sandbox is for the engines that run on this machine (native, interp, c); the C40 engines are simulated");
     if (engine == "c40sim" || engine == "c40interp" || (engine == "native" && is_c40_image(input)))
       return run_c40(input, engine, trace_file, watch, opt, cycles);  // the TMS320C40 simulator
     if (cycles) throw UserError("ldrun: error: --cycles needs --engine=c40sim or --engine=c40interp");
@@ -400,6 +408,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<Engine> eng = engine == "interp" ? make_interp_engine(img.il, layout)
                                   : engine == "c"    ? make_shared_object_engine(so_path, kCScanSymbol)
                                                      : make_native_engine(img.code, img.entry);
+    if (rta.sandbox) eng = make_sandboxed_engine(std::move(eng), layout);
     for (Probe& p : parse_watch(watch, img.aliases)) opt.watch.push_back(p);
     Trace trace;
     if (!trace_file.empty()) trace = load_trace(trace_file, img.aliases);

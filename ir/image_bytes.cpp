@@ -33,7 +33,7 @@ RealFnPtr real_fn(RealFn f) {
 
 static_assert(kCallTableDisp + 8 * int32_t(RealFn::Count) <= 0, "the call table lies below the image");
 
-void ImageBytes::map(size_t size) {
+void ImageBytes::map(size_t size, Sharing sharing) {
   const size_t page = page_size();
   size_t pages = (size + page - 1) / page;
   mapped_ = (pages + 3) * page;  // guard, table, image, guard
@@ -43,8 +43,11 @@ void ImageBytes::map(size_t size) {
   uint8_t* table = base_ + page;
   image_ = table + page;
   size_ = size;
-  if (mprotect(table, page, PROT_READ | PROT_WRITE) != 0 ||
-      (pages && mprotect(image_, pages * page, PROT_READ | PROT_WRITE) != 0)) {
+  bool image_ok = pages == 0 ||
+                  (sharing == Sharing::Shared
+                       ? mmap(image_, pages * page, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS | MAP_FIXED, -1, 0) == image_
+                       : mprotect(image_, pages * page, PROT_READ | PROT_WRITE) == 0);
+  if (mprotect(table, page, PROT_READ | PROT_WRITE) != 0 || !image_ok) {
     unmap();
     throw std::bad_alloc();
   }
@@ -65,9 +68,9 @@ void ImageBytes::unmap() {
   mapped_ = size_ = 0;
 }
 
-ImageBytes::ImageBytes(size_t size) { map(size); }
+ImageBytes::ImageBytes(size_t size, Sharing sharing) { map(size, sharing); }
 ImageBytes::ImageBytes(const ImageBytes& o) {
-  map(o.size_);
+  map(o.size_, Sharing::Private);
   std::memcpy(image_, o.image_, size_);
 }
 ImageBytes::ImageBytes(ImageBytes&& o) noexcept

@@ -316,11 +316,15 @@ float int_to_real(int32_t i);
 //   kSlackByte) | guard page (no access)
 // Every engine runs on this storage, so native code always finds its call
 // table and a stray access past either end of the pages faults.  Copies are
-// deep; == compares the image bytes.  Throws std::bad_alloc if it cannot map.
+// deep (and private); == compares the image bytes.  A shared image's pages are
+// MAP_SHARED, so a child forked after it sees the parent's writes and the parent
+// the child's (the sandbox, runtime/sandbox.h).  Throws std::bad_alloc if it
+// cannot map.
 class ImageBytes {
  public:
   static constexpr uint8_t kSlackByte = 0xA5;
-  explicit ImageBytes(size_t size = 0);
+  enum class Sharing : uint8_t { Private, Shared };
+  explicit ImageBytes(size_t size = 0, Sharing sharing = Sharing::Private);
   ImageBytes(const ImageBytes& o);
   ImageBytes(ImageBytes&& o) noexcept;
   ImageBytes& operator=(const ImageBytes& o);
@@ -343,7 +347,7 @@ class ImageBytes {
   bool slack_intact() const;
 
  private:
-  void map(size_t size);
+  void map(size_t size, Sharing sharing);
   void unmap();
   uint8_t* base_ = nullptr;   // the first guard page
   size_t mapped_ = 0;         // bytes mapped from base_

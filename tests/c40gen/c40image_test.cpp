@@ -12,6 +12,8 @@
 #include "frontend/frontend.h"
 #include "loader/c40_check.h"
 #include "loader/loader.h"
+#include "runtime/runtime.h"
+#include "backend-c40sim/c40machine.h"
 
 namespace {
 
@@ -174,6 +176,45 @@ TEST(C40Image, RefusesControlInDelaySlots) {
   ASSERT_NE(i, UINT32_MAX);
   put(img, i + 1, enc("RETSU"));
   EXPECT_NE(refusal(img).find("in the delay slot"), std::string::npos);
+}
+
+// The C40 check lets backward branches through (the division routines loop),
+// so the simulator's per-scan cycle budget is what stops a looping image: a
+// branch to itself passes the check and its first scan stops at the budget.
+TEST(C40Image, ALoopStopsAtTheScanCycleBudget) {
+  Program p = parse_il_text(".rung line 1\n    LOAD X1\n    OUT Y0\n.end\n", "t.il");
+  Image img = make_c40_image(p, build_c40(p, "t.il"));
+  put(img, img.entry / 4, encodeAt(make(Mnemonic::Br, {as::c40::Operand::a(img.entry / 4)}), img.entry / 4));
+  ASSERT_EQ(refusal(img), "");
+  auto eng = make_c40sim_engine(img.code, img.entry, img.layout);
+  Memory m(img.layout);
+  try {
+    eng->scan(m.data());
+    ADD_FAILURE() << "a scan that branches to itself ended";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("cycle limit"), std::string::npos) << e.what();
+  }
+}
+
+// Code ldc makes stays far inside that budget: every example at every level,
+// over scans with changing inputs, uses less than a tenth of it.
+TEST(C40Image, ExamplesStayFarBelowTheCycleBudget) {
+  for (const char* n : {"motor", "timers", "realmath", "wordlogic", "sorter", "traffic", "updown", "jumps"})
+    for (int opt : {0, 1, 2}) {
+      Image img = example_image(n, opt);
+      uint64_t budget = c40gen::C40Machine::kBudgetBase + c40gen::C40Machine::kBudgetPerWord * (img.code.size() / 4);
+      auto eng = make_c40sim_engine(img.code, img.entry, img.layout);
+      Memory m(img.layout);
+      uint64_t worst = 0;
+      for (int k = 0; k < 40; k++) {
+        for (uint32_t x = 0; x < 16; x++) m.set_bit(Area::X, x, ((k * 7 + x * 3) % 5) < 2);
+        for (uint32_t d = 0; d < 8; d++) m.set_int(Area::D, d, k * 977 - int32_t(d) * 3001);
+        std::memcpy(m.data() + kSysDt, &k, 4);
+        eng->scan(m.data());
+        worst = std::max(worst, eng->last_scan().cycles);
+      }
+      EXPECT_LT(worst * 10, budget) << n << " -O" << opt << ": " << worst << " cycles, budget " << budget;
+    }
 }
 
 }  // namespace

@@ -1,0 +1,366 @@
+// Hostile images, built by hand: each is valid in every field (magic, version,
+// layout, sections, IL, CRC) except its intent, one per class of escape of the
+// threat model (docs/image-format.md, "Threat model").  Each must be refused
+// by read_image with a message naming the file, the section, the offset of the
+// hostile instruction and the reason.  Positive controls beside them show that
+// the same frame with a harmless body is accepted, so no case passes by being
+// malformed in some other way.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include "assembler/c40.h"
+#include "assembler/x86.h"
+#include "loader/loader.h"
+#include "runtime/runtime.h"
+#include "runtime/sandbox.h"
+
+#include <fcntl.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+using namespace ldc;
+namespace x86 = ldc::as::x86;
+
+namespace {
+
+// ------------------------------------------------------------------ x86-64
+
+// One instruction of a hostile body: GNU-as-style Intel syntax that our
+// assembler encodes (branch targets are offsets from the body's start), or
+// "raw: 0f 05" for bytes it would never produce.
+std::vector<uint8_t> piece(const std::string& text, size_t at, size_t body) {
+  if (text.rfind("raw:", 0) == 0) {
+    std::vector<uint8_t> b;
+    std::istringstream in(text.substr(4));
+    for (std::string h; in >> h;) b.push_back(uint8_t(std::stoul(h, nullptr, 16)));
+    return b;
+  }
+  x86::Instruction in = x86::parse(text);
+  if (in.numOperands && in.ops[0].kind == x86::OperandKind::Address) in.ops[0].imm += int64_t(body);
+  return x86::encodeAt(in, at);
+}
+
+// A scan function: the -O0 prologue, the body, the epilogue; `offsets` gets
+// the code offset of every body piece.
+std::vector<uint8_t> scan_function(const std::vector<std::string>& body, std::vector<uint32_t>& offsets) {
+  std::vector<uint8_t> code;
+  auto put = [&](const std::vector<uint8_t>& b) { code.insert(code.end(), b.begin(), b.end()); };
+  for (const auto& in : x86::scanPrologue(false)) put(x86::encodeAt(in, code.size()));
+  const size_t base = code.size();
+  offsets.clear();
+  for (const std::string& t : body) {
+    offsets.push_back(uint32_t(code.size()));
+    put(piece(t, code.size(), base));
+  }
+  for (const auto& in : x86::scanEpilogue(false)) put(x86::encodeAt(in, code.size()));
+  return code;
+}
+
+// An image valid in every field: the IL `LOAD X0 / OUT Y0`, `edges` edge slots.
+Image image_around(std::vector<uint8_t> code, uint32_t edges = 0) {
+  Program p = parse_il_text(".rung line 1 \"hostile\"\nLOAD X0\nOUT Y0\n.end\n", "hostile.il");
+  p.edge_slots = edges;
+  Image im;
+  im.source = "hostile.ld";
+  im.layout = p.layout();
+  im.code = std::move(code);
+  im.entry = 0;
+  im.il = encode_il(p).code;
+  return im;
+}
+
+std::string refusal(const Image& im) {
+  try {
+    read_image(write_image(im), "hostile.bin");
+  } catch (const ImageError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string hex(uint64_t v) {
+  char b[24];
+  std::snprintf(b, sizeof b, "0x%llx", (unsigned long long)v);
+  return b;
+}
+
+struct Case {
+  const char* klass;
+  std::vector<std::string> body;
+  size_t hostile;      // index of the piece the validator must name
+  const char* reason;  // in the message after the offset
+};
+
+const uint32_t kSize = Layout::standard(0).size;
+const std::string S = hex(kSize);             // one past the image
+const std::string S1 = hex(kSize - 1);        // its last byte
+const std::string S3 = hex(kSize - 3), S4 = hex(kSize - 4), S7 = hex(kSize - 7), S8 = hex(kSize - 8);
+
+const std::vector<Case>& cases() {
+  static const std::vector<Case> c = {
+      // writes to control data: the REAL function table, the frame, the code
+      {"control data: the table hijack of issue 12",
+       {"mov dword ptr [rbx+0x10], 0x41414141", "mov dword ptr [rbx+0x14], 0x0", "call qword ptr [rbx+0x10]"}, 2,
+       "indirect call not through the REAL function table"},
+      {"control data: overwrite a slot of the read-only table", {"mov dword ptr [rbx-0x40], 0x41414141"}, 0,
+       "outside the memory image"},
+      {"control data: overwrite the table with a qword", {"mov qword ptr [rbx-0x38], rax"}, 0, "outside the memory image"},
+      {"control data: the return address", {"mov qword ptr [rsp+0x18], rax"}, 0, "stack-relative memory operand based on rsp"},
+      {"control data: the saved registers through rbp", {"mov dword ptr [rbp+0x8], eax"}, 0, "stack-relative memory operand based on rbp"},
+      {"control data: the code itself", {"mov byte ptr [rip+0x0], 0x0"}, 0, "rip-relative memory operand"},
+      {"control data: through another base register", {"mov byte ptr [rcx+0x10], al"}, 0, "memory operand based on rcx, not rbx"},
+      // indirect branches, every form
+      {"indirect branch: jmp reg", {"jmp rax"}, 0, "indirect branch through a register"},
+      {"indirect branch: call reg", {"call rax"}, 0, "indirect branch through a register"},
+      {"indirect branch: jmp r11", {"raw: 41 ff e3"}, 0, "indirect branch through a register"},
+      {"indirect branch: jmp mem", {"jmp qword ptr [rbx-0x40]"}, 0, "indirect branch through memory"},
+      {"indirect branch: call through the image", {"call qword ptr [rbx+0x40]"}, 0, "indirect call not through the REAL function table"},
+      {"indirect branch: call inside a slot", {"call qword ptr [rbx-0x3c]"}, 0, "indirect call not through the REAL function table"},
+      {"indirect branch: call below the table", {"call qword ptr [rbx-0x48]"}, 0, "indirect call not through the REAL function table"},
+      {"indirect branch: call past the table", {"call qword ptr [rbx-0x18]"}, 0, "indirect call not through the REAL function table"},
+      {"indirect branch: indexed call into the table", {"call qword ptr [rbx+rcx*8-0x40]"}, 0, "indirect call not through the REAL function table"},
+      {"indirect branch: call through another base", {"call qword ptr [rcx-0x40]"}, 0, "indirect call not through the REAL function table"},
+      {"indirect branch: ret in the body", {"ret"}, 0, "the stack is touched only by the prologue and the epilogue"},
+      {"indirect branch: far call", {"raw: ff 1b"}, 0, "undecodable bytes ff 1b"},
+      {"indirect branch: far jmp", {"raw: ff 2b"}, 0, "undecodable bytes ff 2b"},
+      {"indirect branch: iret", {"raw: 48 cf"}, 0, "undecodable bytes 48 cf"},
+      {"indirect branch: syscall", {"raw: 0f 05"}, 0, "undecodable bytes 0f 05"},
+      {"indirect branch: int 0x80", {"raw: cd 80"}, 0, "undecodable bytes cd 80"},
+      // backward branches and loops
+      {"loop: jmp to itself", {"raw: eb fe"}, 0, "backward branch"},
+      {"loop: jcc back", {"nop", "jne 0x0"}, 1, "backward branch"},
+      {"loop: jmp rel32 into the prologue", {"jmp -0x8"}, 0, "backward branch"},
+      {"loop: the loop instruction", {"raw: e2 fe"}, 0, "undecodable bytes e2 fe"},
+      {"loop: jrcxz", {"raw: e3 00"}, 0, "undecodable bytes e3 00"},
+      {"loop: a direct call", {"call 0x5", "nop"}, 0, "a direct call"},
+      {"loop: a branch past the epilogue", {"jmp 0x40"}, 0, "outside the scan body"},
+      // writes to rbx or rsp, every width, and implicit writes
+      {"fixed registers: mov rbx", {"mov rbx, rax"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: mov ebx", {"mov ebx, eax"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: mov bl", {"mov bl, al"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: mov bh (no REX)", {"raw: 88 c7"}, 0, "undecodable bytes 88 c7"},
+      {"fixed registers: movzx ebx", {"movzx ebx, al"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: lea rbx", {"lea rbx, [rbx+0x10]"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: setcc bl", {"setne bl"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: cmovcc ebx", {"cmovne ebx, eax"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: xor ebx", {"xor ebx, ebx"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: not ebx", {"not ebx"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: shl ebx", {"shl ebx, 0x1"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: imul ebx", {"imul ebx, eax"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: movd ebx", {"movd ebx, xmm0"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: cvttss2si ebx", {"cvttss2si ebx, xmm0"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: add esp", {"add esp, 0x8"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: mov spl", {"mov spl, al"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: mov rsp", {"mov rsp, rax"}, 0, "the image base and the stack pointer are fixed"},
+      {"fixed registers: pop rbx", {"pop rbx"}, 0, "the stack is touched only by the prologue and the epilogue"},
+      {"fixed registers: push", {"push rax"}, 0, "the stack is touched only by the prologue and the epilogue"},
+      {"implicit write: xchg rbx, rax", {"raw: 48 93"}, 0, "undecodable bytes 48 93"},
+      {"implicit write: cpuid", {"raw: 0f a2"}, 0, "undecodable bytes 0f a2"},
+      {"implicit write: div ebx", {"raw: f7 f3"}, 0, "undecodable bytes f7 f3"},
+      {"implicit write: leave", {"raw: c9"}, 0, "undecodable bytes c9"},
+      {"implicit write: popf", {"raw: 9d"}, 0, "undecodable bytes 9d"},
+      {"implicit write: pop rsp", {"raw: 5c"}, 0, "the stack is touched only by the prologue and the epilogue"},
+      {"implicit write: bswap ebx", {"raw: 0f cb"}, 0, "undecodable bytes 0f cb"},
+      {"implicit write: xadd", {"raw: 48 0f c1 d8"}, 0, "undecodable bytes 48 0f c1 d8"},
+      {"string instruction: stosb", {"raw: aa"}, 0, "undecodable bytes aa"},
+      {"string instruction: rep movsb", {"raw: f3 a4"}, 0, "undecodable bytes f3 a4"},
+      {"string instruction: rep stosq", {"raw: f3 48 ab"}, 0, "undecodable bytes f3 48 ab"},
+      // branches into the middle of an instruction
+      {"mid-instruction: jmp", {"jmp 0x4", "mov eax, 0xc3c3c3c3"}, 0, "is inside an instruction, not on an instruction boundary"},
+      {"mid-instruction: jcc rel32", {"raw: 0f 85 01 00 00 00", "mov eax, 0x90909090"}, 0,
+       "is inside an instruction, not on an instruction boundary"},
+      // prefixes
+      {"prefix: fs segment", {"raw: 64 8b 43 50"}, 0, "undecodable bytes 64 8b 43 50"},
+      {"prefix: gs segment", {"raw: 65 8b 43 50"}, 0, "undecodable bytes 65 8b 43 50"},
+      {"prefix: cs branch hint", {"raw: 2e 74 00"}, 0, "undecodable bytes 2e 74 00"},
+      {"prefix: lock", {"raw: f0 01 43 50"}, 0, "undecodable bytes f0 01 43 50"},
+      {"prefix: rep on a mov", {"raw: f3 89 43 50"}, 0, "undecodable bytes f3 89 43 50"},
+      {"prefix: repne", {"raw: f2 89 43 50"}, 0, "undecodable bytes f2 89 43 50"},
+      {"prefix: address size ([ebx])", {"raw: 67 8b 43 50"}, 0, "undecodable bytes 67 8b 43 50"},
+      {"prefix: operand size (a word store)", {"raw: 66 89 43 50"}, 0, "undecodable bytes 66 89 43 50"},
+      {"prefix: two REX", {"raw: 40 48 89 c0"}, 0, "undecodable bytes 40 48 89 c0"},
+      // rip-relative and absolute operands
+      {"addressing: rip-relative read", {"mov eax, dword ptr [rip+0x10]"}, 0, "rip-relative memory operand"},
+      {"addressing: absolute (SIB, no base)", {"raw: 8b 04 25 00 10 00 00"}, 0, "absolute memory operand"},
+      {"addressing: moffs", {"raw: a1 00 10 00 00 00 00 00 00"}, 0, "undecodable bytes a1"},
+      {"addressing: indexed", {"movzx eax, byte ptr [rbx+rcx*1]"}, 0, "indexed memory operand"},
+      // displacements one byte outside the layout
+      {"displacement: a byte one past the image", {"movzx eax, byte ptr [rbx+" + S + "]"}, 0, "outside the memory image"},
+      {"displacement: a dword one byte past", {"mov dword ptr [rbx+" + S3 + "], eax"}, 0, "outside the memory image"},
+      {"displacement: a REAL one byte past", {"movss dword ptr [rbx+" + S3 + "], xmm0"}, 0, "outside the memory image"},
+      {"displacement: a qword one byte past", {"mov qword ptr [rbx+" + S7 + "], rax"}, 0, "outside the memory image"},
+      {"displacement: one byte below", {"mov byte ptr [rbx-0x1], al"}, 0, "outside the memory image"},
+      {"displacement: a huge disp32", {"mov byte ptr [rbx+0x7fffffff], al"}, 0, "outside the memory image"},
+  };
+  return c;
+}
+
+TEST(Hostile, EveryClassOfEscapeIsRefusedAtItsOffset) {
+  int n = 0;
+  for (const Case& c : cases()) {
+    SCOPED_TRACE(c.klass);
+    std::vector<uint32_t> at;
+    std::string why = refusal(image_around(scan_function(c.body, at)));
+    std::string where = "hostile.bin: section 'code' at offset ";
+    ASSERT_EQ(why.rfind(where, 0), 0u) << why;
+    std::string off = ": at code offset " + hex(at[c.hostile]) + ": ";
+    EXPECT_NE(why.find(off), std::string::npos) << why << "\n(want the offset " << hex(at[c.hostile]) << ")";
+    EXPECT_NE(why.find(c.reason), std::string::npos) << why;
+    if (getenv("LDC_HOSTILE_VERBOSE")) std::printf("%-48s %s\n", c.klass, why.c_str());
+    n++;
+  }
+  EXPECT_GE(n, 80);
+}
+
+// The frame and the checks are not refusing everything: the harmless twins of
+// the cases above are accepted.
+TEST(Hostile, HarmlessTwinsAreAccepted) {
+  const std::vector<std::vector<std::string>> ok = {
+      {"call qword ptr [rbx-0x40]", "call qword ptr [rbx-0x20]"},           // sinf, logf
+      {"mov dword ptr [rbx+0x10], 0x41414141"},                             // Sys+16 is plain reserved memory now
+      {"movzx eax, byte ptr [rbx+" + S1 + "]", "mov dword ptr [rbx+" + S4 + "], eax"},
+      {"movss dword ptr [rbx+" + S4 + "], xmm0", "mov qword ptr [rbx+" + S8 + "], rax"},
+      {"jmp 0x2", "nop", "nop", "jne 0x6"},                                  // forward, to boundaries and to the exit
+      {"mov eax, ebx", "lea eax, [rbx+0x10]", "cmp ebx, eax", "test ebx, ebx"},  // rbx read, not written
+  };
+  for (const auto& body : ok) {
+    std::vector<uint32_t> at;
+    EXPECT_EQ(refusal(image_around(scan_function(body, at))), "") << body[0];
+  }
+}
+
+TEST(Hostile, EntryPointsMustBeTheFrame) {
+  std::vector<uint32_t> at;
+  Image im = image_around(scan_function({"nop"}, at));
+  im.entry = 1;  // inside push rbp? no: after push rbx, a boundary, but not the prologue
+  EXPECT_NE(refusal(im).find("the entry is not the scan function's prologue"), std::string::npos) << refusal(im);
+  im = image_around(scan_function({"mov eax, 0x12345678"}, at));
+  im.entry = at[0] + 1;
+  EXPECT_NE(refusal(im).find("entry point " + hex(at[0] + 1) + " is inside an instruction"), std::string::npos) << refusal(im);
+}
+
+TEST(Hostile, HugeEdgeCounts) {
+  std::vector<uint32_t> at;
+  Layout big = Layout::standard(kImageMaxEdgeSlots);
+  uint32_t last_edge = big.addr(Area::E, kImageMaxEdgeSlots - 1);
+  // the largest edge memory is allowed, and its last byte is addressable ...
+  Image im = image_around(scan_function({"mov byte ptr [rbx+" + hex(last_edge) + "], al"}, at), kImageMaxEdgeSlots);
+  EXPECT_EQ(refusal(im), "");
+  // ... one byte past its image is not
+  im = image_around(scan_function({"mov byte ptr [rbx+" + hex(big.size) + "], al"}, at), kImageMaxEdgeSlots);
+  EXPECT_NE(refusal(im).find("outside the memory image"), std::string::npos);
+  // a larger count is refused before the code is looked at, naming the field
+  std::vector<uint8_t> b = write_image(image_around(scan_function({"nop"}, at), kImageMaxEdgeSlots + 1));
+  std::string why;
+  try {
+    read_image(b, "hostile.bin");
+  } catch (const ImageError& e) {
+    why = e.what();
+  }
+  EXPECT_NE(why.find("hostile.bin: offset 0x60: layout: 1048577 edge slots exceed the limit 1048576"), std::string::npos) << why;
+  b = write_image(image_around(scan_function({"nop"}, at), 0xffffffffu / 2));
+  try {
+    read_image(b, "hostile.bin");
+    why = "";
+  } catch (const ImageError& e) {
+    why = e.what();
+  }
+  EXPECT_NE(why.find("offset 0x60"), std::string::npos) << why;
+}
+
+// ------------------------------------------------------------------ the sandbox
+// Engines that do what hostile code would do, were it to escape the validator:
+// the sandboxed child must stop each one, name what it did, and leave the
+// caller's image and process as they were.
+
+struct Copy : Engine {
+  Layout L = Layout::standard(0);
+  void scan(uint8_t* m) override { m[L.addr(Area::Y, 0)] = m[L.addr(Area::X, 0)]; }
+};
+struct Syscall : Engine {
+  void scan(uint8_t*) override { syscall(SYS_getppid); }
+};
+struct OpenFile : Engine {
+  void scan(uint8_t*) override { open("/tmp/ldc_sandbox_escape", O_CREAT | O_WRONLY, 0600); }
+};
+struct Fault : Engine {
+  volatile uintptr_t where = 0x10;
+  void scan(uint8_t*) override { *reinterpret_cast<volatile int*>(where) = 1; }
+};
+struct Spin : Engine {
+  volatile int sink = 0;
+  void scan(uint8_t*) override {
+    for (;;) sink = 1;
+  }
+};
+
+std::string sandboxed_failure(std::unique_ptr<Engine> e, int timeout_ms = 2000) {
+  Layout L = Layout::standard(0);
+  Memory m(L);
+  auto s = make_sandboxed_engine(std::move(e), L, timeout_ms);
+  std::string why;
+  try {
+    s->scan(m.data());
+  } catch (const SandboxError& x) {
+    why = x.what();
+  }
+  try {  // a dead sandbox stays dead
+    s->scan(m.data());
+    return "the second scan after a failure ran";
+  } catch (const SandboxError& x) {
+    if (why != x.what()) return "the second scan failed differently: " + std::string(x.what());
+  }
+  return why;
+}
+
+TEST(Sandbox, ScansRunInTheChildAndTheImageComesBack) {
+  Layout L = Layout::standard(0);
+  Memory m(L);
+  auto s = make_sandboxed_engine(std::make_unique<Copy>(), L);
+  for (int k = 0; k < 50; k++) {
+    m.set_bit(Area::X, 0, k % 3 == 0);
+    s->scan(m.data());
+    ASSERT_EQ(m.get_bit(Area::Y, 0), k % 3 == 0) << k;
+  }
+}
+
+TEST(Sandbox, NativeCodeWithItsCallTableRunsAsInProcess) {
+  Layout L = Layout::standard(0);
+  std::string f0 = hex(L.addr(Area::F, 0)), f1 = hex(L.addr(Area::F, 1));
+  std::vector<uint32_t> at;
+  std::vector<uint8_t> code = scan_function(
+      {"movss xmm0, dword ptr [rbx+" + f0 + "]", "call qword ptr [rbx-0x40]", "movss dword ptr [rbx+" + f1 + "], xmm0"}, at);
+  ASSERT_EQ(refusal(image_around(code)), "");
+  Memory a(L), b(L);
+  auto plain = make_native_engine(code, 0);
+  auto boxed = make_sandboxed_engine(make_native_engine(code, 0), L);
+  for (float x : {0.5f, 1.0f, -2.25f}) {
+    a.set_real(0, x), b.set_real(0, x);
+    plain->scan(a.data());
+    boxed->scan(b.data());
+    EXPECT_EQ(a.get_real(1), ::sinf(x));
+    EXPECT_TRUE(a.bytes == b.bytes);
+  }
+}
+
+TEST(Sandbox, ASystemCallIsStoppedAndNamed) {
+  EXPECT_EQ(sandboxed_failure(std::make_unique<Syscall>()),
+            "the sandboxed scan made system call " + std::to_string(SYS_getppid) + ", which the sandbox refuses");
+  unlink("/tmp/ldc_sandbox_escape");
+  EXPECT_NE(sandboxed_failure(std::make_unique<OpenFile>()).find("made system call"), std::string::npos);
+  EXPECT_NE(access("/tmp/ldc_sandbox_escape", F_OK), 0) << "the child created a file";
+}
+
+TEST(Sandbox, AFaultIsStoppedAndNamed) {
+  std::string why = sandboxed_failure(std::make_unique<Fault>());
+  EXPECT_NE(why.find("the sandboxed scan was stopped by Segmentation fault at address 0x10"), std::string::npos) << why;
+}
+
+TEST(Sandbox, AScanThatNeverEndsIsStopped) {
+  EXPECT_EQ(sandboxed_failure(std::make_unique<Spin>(), 300), "the sandboxed scan did not end within 300 ms");
+}
+
+}  // namespace
