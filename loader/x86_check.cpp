@@ -126,6 +126,11 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
         (in.ops[0].reg.num == x86::BX || in.ops[0].reg.num == x86::SP))
       return at(di.offset) + text_of(in) + ": writes " + std::string(x86::regName(in.ops[0].reg)) +
              " (the image base and the stack pointer are fixed in the scan body)";
+    // r12-r15 belong to the caller (System V) unless the frame saved them
+    if (writes_first && !slots && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm &&
+        in.ops[0].reg.num >= x86::R12)
+      return at(di.offset) + text_of(in) + ": writes " + std::string(x86::regName(in.ops[0].reg)) +
+             ", which the caller owns: only the -O2 frame saves r12-r15";
     if (in.mnemonic == M::Call && in.numOperands && in.ops[0].kind == x86::OperandKind::Address)
       return at(di.offset) + text_of(in) + ": a direct call (generated code calls only the REAL function table)";
     // branches go forward, inside the body or to the epilogue, so a scan always ends

@@ -45,17 +45,18 @@ std::vector<uint8_t> piece(const std::string& text, size_t at, size_t body) {
 
 // A scan function: the -O0 prologue, the body, the epilogue; `offsets` gets
 // the code offset of every body piece.
-std::vector<uint8_t> scan_function(const std::vector<std::string>& body, std::vector<uint32_t>& offsets) {
+std::vector<uint8_t> scan_function(const std::vector<std::string>& body, std::vector<uint32_t>& offsets,
+                                   bool slots = false) {
   std::vector<uint8_t> code;
   auto put = [&](const std::vector<uint8_t>& b) { code.insert(code.end(), b.begin(), b.end()); };
-  for (const auto& in : x86::scanPrologue(false)) put(x86::encodeAt(in, code.size()));
+  for (const auto& in : x86::scanPrologue(slots)) put(x86::encodeAt(in, code.size()));
   const size_t base = code.size();
   offsets.clear();
   for (const std::string& t : body) {
     offsets.push_back(uint32_t(code.size()));
     put(piece(t, code.size(), base));
   }
-  for (const auto& in : x86::scanEpilogue(false)) put(x86::encodeAt(in, code.size()));
+  for (const auto& in : x86::scanEpilogue(slots)) put(x86::encodeAt(in, code.size()));
   return code;
 }
 
@@ -155,6 +156,9 @@ const std::vector<Case>& cases() {
       {"fixed registers: add esp", {"add esp, 0x8"}, 0, "the image base and the stack pointer are fixed"},
       {"fixed registers: mov spl", {"mov spl, al"}, 0, "the image base and the stack pointer are fixed"},
       {"fixed registers: mov rsp", {"mov rsp, rax"}, 0, "the image base and the stack pointer are fixed"},
+      {"callee-saved: r12 in the -O0 frame", {"mov r12, rax"}, 0, "which the caller owns: only the -O2 frame saves r12-r15"},
+      {"callee-saved: r15b in the -O0 frame", {"setne r15b"}, 0, "which the caller owns"},
+      {"callee-saved: r13d in the -O0 frame", {"xor r13d, r13d"}, 0, "which the caller owns"},
       {"fixed registers: pop rbx", {"pop rbx"}, 0, "the stack is touched only by the prologue and the epilogue"},
       {"fixed registers: push", {"push rax"}, 0, "the stack is touched only by the prologue and the epilogue"},
       {"implicit write: xchg rbx, rax", {"raw: 48 93"}, 0, "undecodable bytes 48 93"},
@@ -230,6 +234,8 @@ TEST(Hostile, HarmlessTwinsAreAccepted) {
     std::vector<uint32_t> at;
     EXPECT_EQ(refusal(image_around(scan_function(body, at))), "") << body[0];
   }
+  std::vector<uint32_t> at;  // the -O2 frame saves r12-r15, so its body may use them
+  EXPECT_EQ(refusal(image_around(scan_function({"mov r12, rax", "setne r15b", "xor r13d, r13d"}, at, true))), "");
 }
 
 TEST(Hostile, EntryPointsMustBeTheFrame) {
