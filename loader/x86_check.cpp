@@ -1,8 +1,10 @@
 // loader/x86_check.cpp -- the x86-64 code check of the loader: every byte
 // decodes with our disassembler, every memory operand is [rbx+disp] inside the
 // memory image, every direct branch lands on an instruction boundary inside the
-// code.  A full NaCl-style validator comes later (issue 9).
+// code and goes forward, and the only division is the guarded one
+// (docs/image-format.md, "The x86-64 code check").
 #include <algorithm>
+#include <array>
 #include <cstdio>
 
 #include "assembler/x86.h"
@@ -61,6 +63,35 @@ std::string check_mem(const x86::Mem& m, uint32_t image_size) {
   return "";
 }
 
+// The one form of division ldc emits (x86gen divmod): the divisor in ecx,
+// tested for 0 and -1 (the two divisions that raise #DE) right before it.
+const std::array<x86::Instruction, 6>& guarded_division() {
+  using M = x86::Mnemonic;
+  using O = x86::Operand;
+  static const std::array<x86::Instruction, 6> seq = {
+      x86::make(M::Test, {O::r(x86::r32(x86::CX)), O::r(x86::r32(x86::CX))}),
+      x86::makeCc(M::Jcc, x86::Cond::E, {O::a(0)}),
+      x86::make(M::Cmp, {O::r(x86::r32(x86::CX)), O::i(-1)}),
+      x86::makeCc(M::Jcc, x86::Cond::E, {O::a(0)}),
+      x86::make(M::Cdq),
+      x86::make(M::Idiv, {O::r(x86::r32(x86::CX))})};
+  return seq;
+}
+
+// Is insts[k] an idiv that ends a whole guarded division (branch targets aside)?
+bool is_guarded_division(const std::vector<x86::Decoded>& insts, size_t k, size_t body_first) {
+  const auto& seq = guarded_division();
+  if (k < body_first + seq.size() - 1) return false;
+  for (size_t j = 0; j < seq.size(); j++) {
+    x86::Instruction a = insts[k + 1 - seq.size() + j].inst;
+    a.longBranch = false;
+    if (a.mnemonic == x86::Mnemonic::Jcc && a.numOperands == 1 && a.ops[0].kind == x86::OperandKind::Address) a.ops[0].imm = 0;
+    if (a.numOperands == 2 && a.ops[1].kind == x86::OperandKind::Imm) a.ops[1].imm = int32_t(a.ops[1].imm);  // decoded 0xffffffff
+    if (!(a == seq[j])) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layout& layout,
@@ -109,6 +140,7 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
   if (first > body_end) return at(entry) + "the prologue is not before the epilogue";
   uint32_t body_lo = body_first < d.insts.size() ? d.insts[body_first].offset : uint32_t(code.size());
   uint32_t exit_at = d.insts[body_end].offset;
+  std::vector<uint32_t> guarded;  // offsets inside guarded divisions: no branch may land there
   for (size_t k = 0; k < d.insts.size(); k++) {
     if (k >= first && k < body_first) continue;  // the prologue
     if (k >= body_end) break;                    // the epilogue
@@ -131,6 +163,12 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
         in.ops[0].reg.num >= x86::R12)
       return at(di.offset) + text_of(in) + ": writes " + std::string(x86::regName(in.ops[0].reg)) +
              ", which the caller owns: only the -O2 frame saves r12-r15";
+    if (in.mnemonic == M::Idiv) {
+      if (!is_guarded_division(d.insts, k, body_first))
+        return at(di.offset) + text_of(in) +
+               ": a division not guarded against 0 and -1 (only 'test ecx, ecx; je; cmp ecx, -1; je; cdq; idiv ecx')";
+      for (size_t j = k + 2 - guarded_division().size(); j <= k; j++) guarded.push_back(d.insts[j].offset);
+    }
     if (in.mnemonic == M::Call && in.numOperands && in.ops[0].kind == x86::OperandKind::Address)
       return at(di.offset) + text_of(in) + ": a direct call (generated code calls only the REAL function table)";
     // branches go forward, inside the body or to the epilogue, so a scan always ends
@@ -172,6 +210,9 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
         if (!std::binary_search(starts.begin(), starts.end(), uint32_t(t)))
           return at(di.offset) + text_of(in) + ": branch target " + hex(uint64_t(t)) +
                  " is inside an instruction, not on an instruction boundary";
+        if (std::binary_search(guarded.begin(), guarded.end(), uint32_t(t)))
+          return at(di.offset) + text_of(in) + ": branch target " + hex(uint64_t(t)) +
+                 " is inside a guarded division (past its test of the divisor)";
       } else if (o.kind == x86::OperandKind::Label) {
         return at(di.offset) + text_of(in) + ": unresolved label operand";
       }

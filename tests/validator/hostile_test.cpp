@@ -172,6 +172,18 @@ const std::vector<Case>& cases() {
       {"string instruction: stosb", {"raw: aa"}, 0, "undecodable bytes aa"},
       {"string instruction: rep movsb", {"raw: f3 a4"}, 0, "undecodable bytes f3 a4"},
       {"string instruction: rep stosq", {"raw: f3 48 ab"}, 0, "undecodable bytes f3 48 ab"},
+      // division: #DE (divisor 0, or INT_MIN / -1) would kill the process, so
+      // idiv stands only at the end of ldc's guard, and nothing jumps past the guard
+      {"division: unguarded idiv", {"mov ecx, 0x0", "cdq", "idiv ecx"}, 2, "a division not guarded against 0 and -1"},
+      {"division: -1 not tested", {"test ecx, ecx", "je 0x7", "cdq", "idiv ecx", "nop"}, 3, "a division not guarded"},
+      {"division: the guard tests another register", {"test eax, eax", "je 0xc", "cmp ecx, -0x1", "je 0xc", "cdq", "idiv ecx", "nop"},
+       5, "a division not guarded"},
+      {"division: a memory divisor", {"test ecx, ecx", "je 0xd", "cmp ecx, -0x1", "je 0xd", "cdq", "idiv dword ptr [rbx+0x50]", "nop"},
+       5, "a division not guarded"},
+      {"division: a branch past the test", {"jmp 0xb", "test ecx, ecx", "je 0xe", "cmp ecx, -0x1", "je 0xe", "cdq", "idiv ecx", "nop"},
+       0, "is inside a guarded division"},
+      {"division: a branch onto the idiv", {"jmp 0xc", "test ecx, ecx", "je 0xe", "cmp ecx, -0x1", "je 0xe", "cdq", "idiv ecx", "nop"},
+       0, "is inside a guarded division"},
       // branches into the middle of an instruction
       {"mid-instruction: jmp", {"jmp 0x4", "mov eax, 0xc3c3c3c3"}, 0, "is inside an instruction, not on an instruction boundary"},
       {"mid-instruction: jcc rel32", {"raw: 0f 85 01 00 00 00", "mov eax, 0x90909090"}, 0,
@@ -229,6 +241,7 @@ TEST(Hostile, HarmlessTwinsAreAccepted) {
       {"movss dword ptr [rbx+" + S4 + "], xmm0", "mov qword ptr [rbx+" + S8 + "], rax"},
       {"jmp 0x2", "nop", "nop", "jne 0x6"},                                  // forward, to boundaries and to the exit
       {"mov eax, ebx", "lea eax, [rbx+0x10]", "cmp ebx, eax", "test ebx, ebx"},  // rbx read, not written
+      {"jmp 0x2", "test ecx, ecx", "je 0xe", "cmp ecx, -0x1", "je 0xe", "cdq", "idiv ecx", "nop"},  // into the guard's test
   };
   for (const auto& body : ok) {
     std::vector<uint32_t> at;
