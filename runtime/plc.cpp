@@ -425,7 +425,14 @@ struct Runtime::Impl {
       std::memcpy(mem + kSysDt, &dtv, 4);
       mem[t.prog->image.layout.addr(Area::S, kBitFirstScan)] = t.first ? 1 : 0;
 
-      p.engine->scan(mem);
+      try {
+        p.engine->scan(mem);
+      } catch (const std::exception& e) {  // the sandbox stopped its child (ldrun --sandbox)
+        t.scan_begin.store(0);
+        fault("ldrun: task '" + t.spec.name + "' scan " + std::to_string(scan_no) + " failed: " + e.what() +
+              "; outputs driven to the safe state (all Y off, WY 0); the runtime is in FAULT");
+        continue;
+      }
       // The watchdog judges the scan before it publishes anything: a scan
       // over its limit neither drives outputs nor counts as done.
       const int64_t ran = now_ns() - begin;

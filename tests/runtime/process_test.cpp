@@ -22,6 +22,7 @@
 #include "driver/c40_driver.h"
 #include "driver/driver.h"
 #include "runtime/plc.h"
+#include "runtime/sandbox.h"
 #include "runtime/runtime.h"
 #include "runtime/shm_layout.h"
 
@@ -587,6 +588,56 @@ TEST(Watchdog, ASlowScanStopsTheRuntimeAndDrivesOutputsSafe) {
   std::printf("%s\n", st.c_str());
   EXPECT_EQ(c.ask("quit"), "ok bye");
   EXPECT_EQ(c.wait(), 0) << c.err();
+}
+
+// A scan that ends in an exception (the sandbox stopped its child) faults the
+// runtime like the watchdog does: outputs safe, the reason named, no crash.
+struct Segfault : Engine {
+  volatile uintptr_t where = 0x10;
+  void scan(uint8_t* m) override {
+    m[Layout::standard(0).addr(Area::Y, 0)] = 1;
+    *reinterpret_cast<volatile int*>(where) = 1;
+  }
+};
+
+TEST(Sandbox, AScanStoppedInTheSandboxFaultsTheRuntime) {
+  TmpDir d;
+  plc::TaskSpec s;
+  s.name = "main", s.program = "on", s.file = d / "on.ld", s.period_us = 1000;
+  s.image = compile_text(d, "on.ld", "|--(Y0)\n|--(MOV 5 WY0)\n");
+  std::vector<plc::TaskSpec> specs;
+  specs.push_back(std::move(s));
+  plc::Options opt;
+  opt.clock = plc::Options::Clock::Virtual, opt.free_run = true, opt.scans = 50;
+  std::vector<std::string> logged;
+  opt.log = [&](const std::string& m) { logged.push_back(m); };
+  int built = 0;
+  auto engines = [&](const Image& img) -> std::unique_ptr<Engine> {
+    // the first build runs the image's own code; the failing one replaces it
+    if (built++ == 0) return make_sandboxed_engine(make_native_engine(img.code, img.entry), img.layout);
+    return make_sandboxed_engine(std::make_unique<Segfault>(), img.layout);
+  };
+  plc::Runtime ok(std::vector<plc::TaskSpec>(specs), opt, engines, plc::make_null_driver());
+  ok.start();
+  ASSERT_TRUE(ok.wait_finished(10000));
+  EXPECT_FALSE(ok.faulted()) << ok.fault_message();
+  EXPECT_EQ(ok.get("Y0"), "1");
+  EXPECT_EQ(ok.get("WY0"), "5");
+  ok.shutdown();
+
+  plc::Runtime bad(std::move(specs), opt, engines, plc::make_null_driver());
+  bad.start();
+  ASSERT_TRUE(bad.wait_finished(10000));
+  ASSERT_TRUE(bad.faulted());
+  std::string m = bad.fault_message();
+  EXPECT_NE(m.find("ldrun: task 'main' scan 1 failed: the sandboxed scan was stopped by Segmentation fault at address 0x10"),
+            std::string::npos) << m;
+  EXPECT_NE(m.find("outputs driven to the safe state"), std::string::npos) << m;
+  EXPECT_EQ(bad.get("Y0"), "0");
+  EXPECT_EQ(bad.get("WY0"), "0");
+  bad.shutdown();
+  ASSERT_FALSE(logged.empty());
+  EXPECT_EQ(logged.back(), m);
 }
 
 }  // namespace
