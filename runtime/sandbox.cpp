@@ -7,6 +7,7 @@
 #include <linux/seccomp.h>
 #include <poll.h>
 #include <signal.h>
+#include <ucontext.h>
 #include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/syscall.h>
@@ -65,15 +66,17 @@ struct Report {
   int32_t signo = 0;   // 0: the scan ended
   int32_t syscall = -1;
   uint64_t addr = 0;
+  uint64_t ip = 0;     // where the signal struck
 };
 
 int g_report_fd = -1;
 
 // Runs in the confined child: report the signal, then leave (both allowed).
-void on_fatal_signal(int sig, siginfo_t* si, void*) {
+void on_fatal_signal(int sig, siginfo_t* si, void* ctx) {
   Report r;
   r.signo = sig;
   r.addr = uint64_t(reinterpret_cast<uintptr_t>(si->si_addr));
+  r.ip = uint64_t(static_cast<ucontext_t*>(ctx)->uc_mcontext.gregs[REG_RIP]);
   if (sig == SIGSYS) r.syscall = si->si_syscall;
   (void)!write(g_report_fd, &r, sizeof r);
   syscall(SYS_exit_group, 128 + sig);
@@ -84,8 +87,8 @@ std::string describe(const Report& r) {
   if (r.signo == SIGSYS)
     std::snprintf(buf, sizeof buf, "the sandboxed scan made system call %d, which the sandbox refuses", r.syscall);
   else
-    std::snprintf(buf, sizeof buf, "the sandboxed scan was stopped by %s at address 0x%llx", strsignal(r.signo),
-                  (unsigned long long)r.addr);
+    std::snprintf(buf, sizeof buf, "the sandboxed scan was stopped by %s at address 0x%llx (instruction at 0x%llx)",
+                  strsignal(r.signo), (unsigned long long)r.addr, (unsigned long long)r.ip);
   return buf;
 }
 
@@ -135,6 +138,7 @@ class SandboxEngine : public Engine {
       got += size_t(k);
     }
     if (r.signo != 0) fail(describe(r));
+    if (!shared_.slack_intact()) fail("the sandboxed scan wrote past the end of the memory image");
     std::memcpy(mem, shared_.data(), shared_.size());
   }
 

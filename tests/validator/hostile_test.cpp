@@ -309,6 +309,9 @@ struct Fault : Engine {
   volatile uintptr_t where = 0x10;
   void scan(uint8_t*) override { *reinterpret_cast<volatile int*>(where) = 1; }
 };
+struct WritePast : Engine {  // into the canary after the image, inside its last page
+  void scan(uint8_t* m) override { m[Layout::standard(0).size + 5] = 1; }
+};
 struct Spin : Engine {
   volatile int sink = 0;
   void scan(uint8_t*) override {
@@ -375,7 +378,11 @@ TEST(Sandbox, ASystemCallIsStoppedAndNamed) {
 
 TEST(Sandbox, AFaultIsStoppedAndNamed) {
   std::string why = sandboxed_failure(std::make_unique<Fault>());
-  EXPECT_NE(why.find("the sandboxed scan was stopped by Segmentation fault at address 0x10"), std::string::npos) << why;
+  EXPECT_NE(why.find("the sandboxed scan was stopped by Segmentation fault at address 0x10 (instruction at 0x"), std::string::npos) << why;
+}
+
+TEST(Sandbox, AWritePastTheImageIsCaught) {
+  EXPECT_EQ(sandboxed_failure(std::make_unique<WritePast>()), "the sandboxed scan wrote past the end of the memory image");
 }
 
 TEST(Sandbox, AScanThatNeverEndsIsStopped) {
