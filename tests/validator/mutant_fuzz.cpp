@@ -28,6 +28,7 @@
 
 #include "assembler/x86_forms.h"
 #include "bench/ldgen.h"
+#include "driver/c40_driver.h"
 #include "driver/driver.h"
 #include "frontend/frontend.h"
 #include "runtime/runtime.h"
@@ -42,7 +43,6 @@ namespace {
 struct Base {
   std::string name;
   Image image;
-  std::vector<uint32_t> branch_targets;  // every instruction boundary
 };
 
 std::vector<Base> bases() {
@@ -62,14 +62,67 @@ std::vector<Base> bases() {
   }
   std::vector<Base> out;
   for (const Program& p : ps)
-    for (int level : {0, 1, 2}) {
-      Image im = make_x86_image(p, build_x86(p, p.source, as::Mode::Blockwise, level, false));
-      im.lines.clear();  // so that only the code check decides
-      std::string name = p.source + " -O" + std::to_string(level);
-      out.push_back({name, read_image(write_image(im), name), {}});
-    }
+    for (int level : {0, 1, 2})
+      for (bool c40 : {false, true}) {
+        Image im = c40 ? make_c40_image(p, build_c40(p, p.source, level))
+                       : make_x86_image(p, build_x86(p, p.source, as::Mode::Blockwise, level, false));
+        im.lines.clear();  // so that only the code check decides
+        std::string name = p.source + (c40 ? " c40" : "") + " -O" + std::to_string(level);
+        out.push_back({name, read_image(write_image(im), name)});
+      }
   return out;
 }
+
+// C40 mutants: words are swapped for real encodings taken from every C40
+// image (the assembler's output), their operand fields (the low 16 bits: a
+// direct address, a displacement or an immediate) set at random or to the
+// edges of the memory image, neighbours swapped, bits flipped, the entry moved.
+class C40Mutator {
+ public:
+  C40Mutator(uint64_t seed, const std::vector<uint32_t>& pool) : rng_(seed), pool_(pool) {}
+  std::string mutate(std::vector<uint8_t>& code, uint32_t& entry) {
+    size_t words = code.size() / 4;
+    if (!words) return "";
+    std::string what;
+    for (int i = 0, n = 1 + int(rng_() % 3); i < n; i++) {
+      size_t w = rng_() % words;
+      uint32_t v = get(code, w);
+      switch (rng_() % 6) {
+        case 0: case 1: v = pool_[rng_() % pool_.size()], what += "word@"; break;
+        case 2: v = (v & 0xffff0000u) | edge16(), what += "field@"; break;
+        case 3: v ^= 1u << (rng_() % 32), what += "flip@"; break;
+        case 4:
+          if (w + 1 < words) {
+            uint32_t next = get(code, w + 1);
+            put(code, w + 1, v), v = next;
+          }
+          what += "swap@";
+          break;
+        default: entry = uint32_t(rng_() % (code.size() + 8)) & ~3u, what += "entry@"; break;
+      }
+      put(code, w, v);
+      what += std::to_string(w) + " ";
+    }
+    return what;
+  }
+
+ private:
+  uint16_t edge16() {
+    switch (rng_() % 4) {
+      case 0: return uint16_t(0xffff - rng_() % 4);
+      case 1: return uint16_t(rng_() % 8);
+      default: return uint16_t(rng_());
+    }
+  }
+  static uint32_t get(const std::vector<uint8_t>& c, size_t w) {
+    return uint32_t(c[4 * w]) | uint32_t(c[4 * w + 1]) << 8 | uint32_t(c[4 * w + 2]) << 16 | uint32_t(c[4 * w + 3]) << 24;
+  }
+  static void put(std::vector<uint8_t>& c, size_t w, uint32_t v) {
+    for (int k = 0; k < 4; k++) c[4 * w + k] = uint8_t(v >> (8 * k));
+  }
+  std::mt19937_64 rng_;
+  const std::vector<uint32_t>& pool_;
+};
 
 class Mutator {
  public:
@@ -315,6 +368,22 @@ class Mutator {
   const std::vector<x86::Decoded>* insts_ = nullptr;
 };
 
+// Three scans of an accepted C40 mutant on the simulator, which bounds-checks
+// every access and stops a scan at its cycle budget: either ends the scan or
+// stops with a message (counted in `stopped`); anything else is a crash.
+void run_simulated(const Image& im, std::mt19937_64& rng, uint64_t& stopped) {
+  Memory m(im.layout);
+  try {
+    auto e = make_c40sim_engine(im.code, im.entry, im.layout);
+    for (int scan = 0; scan < 3; scan++) {
+      for (uint32_t i = 0; i < 32; i++) m.data()[im.layout.addr(Area::X, i)] = rng() & 1;
+      e->scan(m.data());
+    }
+  } catch (const std::exception&) {
+    stopped++;
+  }
+}
+
 // Three scans of an accepted mutant in the sandbox; "" if they ran and ended.
 std::string run_confined(const Image& im, std::mt19937_64& rng) {
   Memory m(im.layout);
@@ -362,20 +431,28 @@ int main(int argc, char** argv) {
   }
   auto t0 = std::chrono::steady_clock::now();
   std::vector<Base> bs = bases();
+  std::vector<uint32_t> pool;  // every word of every C40 image
+  for (const Base& b : bs)
+    if (b.image.target == ImageTarget::C40)
+      for (size_t k = 0; k + 4 <= b.image.code.size(); k += 4)
+        pool.push_back(uint32_t(b.image.code[k]) | uint32_t(b.image.code[k + 1]) << 8 |
+                       uint32_t(b.image.code[k + 2]) << 16 | uint32_t(b.image.code[k + 3]) << 24);
   std::mt19937_64 rng(seed);
-  uint64_t refused = 0, accepted = 0, escapes = 0;
+  uint64_t refused = 0, accepted = 0, escapes = 0, c40_accepted = 0, c40_stopped = 0;
   std::map<std::string, uint64_t> reasons;
   for (uint64_t n = 0; n < count; n++) {
     const Base& b = bs[rng() % bs.size()];
     Image im = b.image;
-    Mutator mu(rng(), im.layout.size);
-    std::string what = mu.mutate(im.code, im.entry);
+    const bool c40 = im.target == ImageTarget::C40;
+    std::string what = c40 ? C40Mutator(rng(), pool).mutate(im.code, im.entry)
+                           : Mutator(rng(), im.layout.size).mutate(im.code, im.entry);
     std::vector<uint8_t> bytes = write_image(im);  // a well-formed file: the CRC fixed
     std::string escape;
     try {
       Image back = read_image(bytes, "mutant.bin");
       accepted++;
-      escape = run_confined(back, rng);
+      if (c40) c40_accepted++, run_simulated(back, rng, c40_stopped);
+      else escape = run_confined(back, rng);
     } catch (const ImageError& e) {
       refused++;
       std::string why = e.what();
@@ -401,8 +478,10 @@ int main(int argc, char** argv) {
     std::sort(top.rbegin(), top.rend());
     for (size_t i = 0; i < top.size() && i < 15; i++) std::printf("  %9llu  %s\n", (unsigned long long)top[i].first, top[i].second.c_str());
   }
-  std::printf("%llu mutants of %zu images (seed %llu): %llu refused, %llu accepted and ran confined, %llu escapes, %.1f s\n",
+  std::printf("%llu mutants of %zu images (seed %llu): %llu refused, %llu accepted and ran (x86-64: %llu in the sandbox;"
+              " C40: %llu on the simulator, %llu of them stopped by it), %llu escapes, %.1f s\n",
               (unsigned long long)count, bs.size(), (unsigned long long)seed, (unsigned long long)refused,
-              (unsigned long long)accepted, (unsigned long long)escapes, secs);
+              (unsigned long long)accepted, (unsigned long long)(accepted - c40_accepted), (unsigned long long)c40_accepted,
+              (unsigned long long)c40_stopped, (unsigned long long)escapes, secs);
   return escapes ? 1 : 0;
 }
