@@ -290,6 +290,42 @@ TEST(Hostile, HugeEdgeCounts) {
   EXPECT_NE(why.find("offset 0x60"), std::string::npos) << why;
 }
 
+// ------------------------------------------------------------------ the guard pages
+// Every memory image (ImageBytes, ir/ir.h) sits on its own pages: a PROT_NONE
+// page, the read-only page whose last 40 bytes are the REAL function table,
+// the image with a canary to the end of its last page, another PROT_NONE page.
+
+uint8_t touch(volatile uint8_t* p, bool write) {
+  if (write) *p = 1;
+  return *p;
+}
+
+TEST(Guard, TheTableSitsReadOnlyRightBelowTheImage) {
+  ImageBytes b(Layout::standard(0).size);
+  for (int f = 0; f < int(RealFn::Count); f++) {
+    uint64_t slot;
+    std::memcpy(&slot, b.data() + kCallTableDisp + 8 * f, 8);
+    EXPECT_EQ(slot, uint64_t(reinterpret_cast<uintptr_t>(real_fn(RealFn(f))))) << f;
+  }
+  EXPECT_TRUE(b.slack_intact());
+  EXPECT_DEATH(touch(b.data() + kCallTableDisp, true), "");  // the table is not writable
+  EXPECT_DEATH(touch(b.data() - 1, true), "");
+}
+
+TEST(Guard, NothingAroundTheImageIsMapped) {
+  const size_t page = size_t(sysconf(_SC_PAGESIZE));
+  for (size_t size : {size_t(Layout::standard(0).size), page, size_t(1)}) {
+    ImageBytes b(size);
+    ImageBytes copy = b;  // copies keep their own guards
+    for (ImageBytes* x : {&b, &copy}) {
+      size_t end = (size + page - 1) / page * page;
+      EXPECT_DEATH(touch(x->data() + end, false), "") << size;             // the guard page after
+      EXPECT_DEATH(touch(x->data() - page - 1, false), "") << size;        // the guard page before the table
+      EXPECT_EQ(touch(x->data() + end - 1, false), size == end ? 0 : ImageBytes::kSlackByte) << size;
+    }
+  }
+}
+
 // ------------------------------------------------------------------ the sandbox
 // Engines that do what hostile code would do, were it to escape the validator:
 // the sandboxed child must stop each one, name what it did, and leave the
