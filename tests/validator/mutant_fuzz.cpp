@@ -16,8 +16,6 @@
 //   mutant_fuzz [--count N] [--seed S] [--save DIR] [--quiet]
 //
 // Exit status 0 when no mutant escaped, 1 otherwise.
-#include <dirent.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -27,12 +25,11 @@
 #include <random>
 
 #include "assembler/x86_forms.h"
-#include "bench/ldgen.h"
 #include "driver/c40_driver.h"
 #include "driver/driver.h"
-#include "frontend/frontend.h"
 #include "runtime/runtime.h"
 #include "runtime/sandbox.h"
+#include "tests/validator/programs.h"
 
 using namespace ldc;
 namespace x86 = ldc::as::x86;
@@ -46,20 +43,7 @@ struct Base {
 };
 
 std::vector<Base> bases() {
-  std::vector<Program> ps;
-  std::string dir = std::string(LDC_SOURCE_DIR) + "/examples";
-  if (DIR* h = opendir(dir.c_str())) {
-    while (dirent* e = readdir(h)) {
-      std::string n = e->d_name;
-      if (n.size() > 3 && n.substr(n.size() - 3) == ".ld") ps.push_back(compile_source(dir + "/" + n).il);
-    }
-    closedir(h);
-  }
-  for (uint64_t seed = 1; seed <= 12; seed++) {
-    GenOptions o;
-    o.rungs = 25;
-    ps.push_back(lower_to_il(parse_ld(generate_ld(seed, o), "gen" + std::to_string(seed) + ".ld")));
-  }
+  std::vector<Program> ps = test::examples_and_random_programs(12, 25);
   std::vector<Base> out;
   for (const Program& p : ps)
     for (int level : {0, 1, 2})

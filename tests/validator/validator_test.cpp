@@ -1,6 +1,5 @@
 #include <gtest/gtest.h>
 
-#include <dirent.h>
 #include <sys/mman.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -8,33 +7,15 @@
 #include <cstring>
 #include <random>
 
-#include "bench/ldgen.h"
-#include "driver/driver.h"
-#include "frontend/frontend.h"
 #include "runtime/runtime.h"
+#include "tests/validator/programs.h"
 
 using namespace ldc;
 namespace x86 = ldc::as::x86;
 
 namespace {
 
-std::vector<Program> programs() {
-  std::vector<Program> out;
-  std::string dir = std::string(LDC_SOURCE_DIR) + "/examples";
-  if (DIR* h = opendir(dir.c_str())) {
-    while (dirent* e = readdir(h)) {
-      std::string n = e->d_name;
-      if (n.size() > 3 && n.substr(n.size() - 3) == ".ld") out.push_back(compile_source(dir + "/" + n).il);
-    }
-    closedir(h);
-  }
-  for (uint64_t seed = 1; seed <= 30; seed++) {
-    GenOptions o;
-    o.rungs = 30;
-    out.push_back(lower_to_il(parse_ld(generate_ld(seed, o), "gen" + std::to_string(seed) + ".ld")));
-  }
-  return out;
-}
+std::vector<Program> programs() { return test::examples_and_random_programs(30, 30); }
 
 std::vector<uint8_t> image_bytes(const Program& p, int level) {
   return write_image(make_x86_image(p, build_x86(p, p.source, as::Mode::Blockwise, level, false)));
