@@ -30,29 +30,6 @@ class NullDriver : public IoDriver {};
 // the global image, private ones into the task's memory), and after the scan
 // the watched devices are printed -- the CSV run_trace prints.
 
-long long cell_int(const std::string& v) {
-  bool neg = !v.empty() && v[0] == '-';
-  size_t at = (neg || (!v.empty() && v[0] == '+')) ? 1 : 0;
-  if (v.size() > at + 2 && v[at] == '0' && (v[at + 1] == 'x' || v[at + 1] == 'X')) {
-    long long x = std::strtoll(v.c_str() + at + 2, nullptr, 16);
-    return neg ? -x : x;
-  }
-  return std::strtoll(v.c_str(), nullptr, 10);
-}
-
-void put_cell(uint8_t* base, const Layout& L, const Probe& p, const std::string& v) {
-  uint8_t* at = base + L.addr(p.area, p.index);
-  if (p.area == Area::F) {
-    float f = std::strtof(v.c_str(), nullptr);
-    std::memcpy(at, &f, 4);
-  } else if (area_is_bit(p.area)) {
-    *at = cell_int(v) != 0;
-  } else {
-    int32_t x = int32_t(cell_int(v));
-    std::memcpy(at, &x, 4);
-  }
-}
-
 class TraceDriver : public IoDriver {
  public:
   TraceDriver(const Trace* trace, std::vector<Probe> watch, std::string* out, FILE* file)
@@ -69,7 +46,7 @@ class TraceDriver : public IoDriver {
     const auto& row = trace_->rows[c.scan - 1];
     for (size_t i = 0; i < row.size(); i++)
       if (!row[i].empty() && int(i) != trace_->dt_column && area_is_shared(trace_->columns[i].area))
-        put_cell(global, layout_, trace_->columns[i], row[i]);
+        put_trace_cell(global, layout_, trace_->columns[i], row[i]);
   }
   void before_scan(const ScanContext& c, uint8_t* mem, std::optional<int32_t>& dt) override {
     if (c.task != 0) return;
@@ -78,8 +55,8 @@ class TraceDriver : public IoDriver {
       const auto& row = trace_->rows[c.scan - 1];
       for (size_t i = 0; i < row.size(); i++) {
         if (row[i].empty()) continue;
-        if (int(i) == trace_->dt_column) dt_ = int32_t(cell_int(row[i]));
-        else if (!area_is_shared(trace_->columns[i].area)) put_cell(mem, layout_, trace_->columns[i], row[i]);
+        if (int(i) == trace_->dt_column) dt_ = int32_t(trace_cell_int(row[i]));
+        else if (!area_is_shared(trace_->columns[i].area)) put_trace_cell(mem, layout_, trace_->columns[i], row[i]);
       }
     }
     if (dt_) dt = dt_;

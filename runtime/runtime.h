@@ -52,6 +52,10 @@ struct Trace {
 };
 // Reads the CSV input trace; errors are "file:line:col: error: ...".
 Trace read_trace(std::string_view text, const std::string& file, const std::vector<Alias>& aliases);
+// A trace cell's integer (decimal, or hex with 0x; `end` as strtoll's), and a
+// non-empty cell written into the memory image at `base`.
+long long trace_cell_int(const std::string& v, char** end = nullptr);
+void put_trace_cell(uint8_t* base, const Layout& L, const Probe& p, const std::string& v);
 
 struct RunOptions {
   int scans = -1;          // -1: as many as the trace has rows (1 without a trace)

@@ -31,7 +31,9 @@ class InterpEngine : public Engine {
 };
 
 // Decimal, or hex with 0x; never octal (a leading 0 is just a 0).
-long long cell_int(const std::string& v, char** end) {
+}  // namespace
+
+long long trace_cell_int(const std::string& v, char** end) {
   bool neg = !v.empty() && v[0] == '-';
   size_t at = (neg || (!v.empty() && v[0] == '+')) ? 1 : 0;
   if (v.size() > at + 2 && v[at] == '0' && (v[at + 1] == 'x' || v[at + 1] == 'X')) {
@@ -41,7 +43,18 @@ long long cell_int(const std::string& v, char** end) {
   return std::strtoll(v.c_str(), end, 10);
 }
 
-}  // namespace
+void put_trace_cell(uint8_t* base, const Layout& L, const Probe& p, const std::string& v) {
+  uint8_t* at = base + L.addr(p.area, p.index);
+  if (p.area == Area::F) {
+    float f = std::strtof(v.c_str(), nullptr);
+    std::memcpy(at, &f, 4);
+  } else if (area_is_bit(p.area)) {
+    *at = trace_cell_int(v) != 0;
+  } else {
+    int32_t x = int32_t(trace_cell_int(v));
+    std::memcpy(at, &x, 4);
+  }
+}
 
 std::unique_ptr<Engine> make_interp_engine(std::vector<uint8_t> il, const Layout& layout) {
   return std::make_unique<InterpEngine>(std::move(il), layout);
@@ -111,7 +124,7 @@ Trace read_trace(std::string_view text, const std::string& file, const std::vect
         if (p.area == Area::F) {
           std::strtof(v.c_str(), &end);
         } else {
-          long long x = cell_int(v, &end);
+          long long x = trace_cell_int(v, &end);
           if (!*end && area_is_bit(p.area) && p.area != Area::Sys && x != 0 && x != 1) fail(cells[i].second, "a bit is 0 or 1, not '" + v + "'");
           if (!*end && (x < INT32_MIN || x > INT32_MAX)) fail(cells[i].second, "value out of the INT32 range: '" + v + "'");
           if (!*end && p.area == Area::Sys && x < 0) fail(cells[i].second, "dt cannot be negative");
@@ -161,10 +174,8 @@ void run_trace(Engine& engine, const Layout& layout, const Trace* trace, const s
         const std::string& v = row[i];
         if (v.empty()) continue;
         const Probe& p = trace->columns[i];
-        if (int(i) == trace->dt_column) dt = int32_t(cell_int(v, nullptr));
-        else if (p.area == Area::F) mem.set_real(p.index, std::strtof(v.c_str(), nullptr));
-        else if (area_is_bit(p.area)) mem.set_bit(p.area, p.index, cell_int(v, nullptr) != 0);
-        else mem.set_int(p.area, p.index, int32_t(cell_int(v, nullptr)));
+        if (int(i) == trace->dt_column) dt = int32_t(trace_cell_int(v));
+        else put_trace_cell(mem.data(), layout, p, v);
       }
     }
     std::memcpy(mem.data() + kSysDt, &dt, 4);
