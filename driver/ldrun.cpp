@@ -17,6 +17,7 @@
 #include "driver/c40_driver.h"
 #include "driver/ldrun_io.h"
 #include "driver/driver.h"
+#include "runtime/modbus.h"
 #include "runtime/plc.h"
 #include "runtime/runtime.h"
 #include "runtime/sandbox.h"
@@ -28,6 +29,7 @@ static const char kUsage[] =
     "       ldrun FILE|--project P.ldp --io=stdio|shm[:/NAME]|trace|none [--period 1ms|500us] [--clock=real|virtual]\n"
     "             [--free-run] [--rt] [--watchdog 200ms] [--retain FILE] [--retain-every 1s] [--cold] [--stop]\n"
     "             [--control=stdin|none] [--reload] [--stats] [--out FILE] [--block 16] [--scans N]\n"
+    "             [--modbus [HOST:]PORT]   a Modbus TCP server (127.0.0.1 unless HOST is given; also with --trace)\n"
     "       FILE: an image (.bin, .hex) or a source ldc reads (.ld, .il, .xml, .rtsp, .sfc), compiled in memory\n"
     "       --sandbox: run the scans in a child process that seccomp confines to its socket (native, interp, c)\n";
 
@@ -37,6 +39,7 @@ namespace {
 struct RtArgs {
   bool on = false;
   std::string project, io, control, clock, period, watchdog, retain, retain_every, out, block;
+  std::string modbus;  // --modbus [HOST:]PORT
   bool free_run = false, rt = false, cold = false, stop = false, stats = false, reload = false;
   bool sandbox = false;  // also in trace mode: it does not select the runtime
 };
@@ -195,6 +198,16 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
     throw UserError("ldrun: error: unknown --io '" + io + "' (stdio, shm[:/NAME], trace or none)");
   }
 
+  if (!a.modbus.empty()) {
+    modbus::ServerOptions mo;
+    try {
+      modbus::parse_address(a.modbus, mo);
+      mo.tasks = specs.size();
+      mo.log = opt.log;
+      driver = modbus::make_modbus_driver(std::move(driver), mo);
+    } catch (std::runtime_error& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
+  }
+
   EngineFactory engines = [engine, sandbox = a.sandbox](const Image& img) -> std::unique_ptr<Engine> {
     std::unique_ptr<Engine> e;
     if (engine == "interp") e = make_interp_engine(img.il, img.layout);
@@ -349,7 +362,8 @@ int main(int argc, char** argv) {
           flag("--stats", rta.stats) || flag("--reload", rta.reload) || opt_value("--project", rta.project) ||
           opt_value("--io", rta.io) || opt_value("--control", rta.control) || opt_value("--clock", rta.clock) ||
           opt_value("--watchdog", rta.watchdog) || opt_value("--retain-every", rta.retain_every) ||
-          opt_value("--retain", rta.retain) || opt_value("--out", rta.out) || opt_value("--block", rta.block)) {
+          opt_value("--retain", rta.retain) || opt_value("--out", rta.out) || opt_value("--block", rta.block) ||
+          opt_value("--modbus", rta.modbus)) {
       } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");
       else if (a == "--cycles") cycles = true;  // C40 engines: cycles and us per scan
       else if (a == "--sandbox") rta.sandbox = true;
