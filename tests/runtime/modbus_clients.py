@@ -264,5 +264,31 @@ with tempfile.TemporaryDirectory() as tmp:
     check("trace mode: M0 column agrees", [r[3] for r in rows] == y0, True)
     check("trace mode: Y2 = X0 of the trace", [r[2] for r in rows], ["0"] * 100 + ["1"] * 200)
 
+# ---------------------------------------------------------------- a project: unit identifiers pick the task
+p, port = start(["--project", os.path.join(SRC, "tests/runtime/modbus/two.ldp"), "--io=stdio", "--modbus", ":0"])
+try:
+    check("project: wait", command(p, "wait 3"), "ok")
+    c = ModbusTcpClient("127.0.0.1", port=port, timeout=5)
+    check("project: pymodbus connect", c.connect(), True)
+    check("project: unit 1 writes fast.D0 = 10", c.write_registers(1024, [0, 10], slave=1).isError(), False)
+    check("project: unit 2 writes slow.D0 = 10", c.write_registers(1024, [0, 10], slave=2).isError(), False)
+    check("project: unit 1 reads fast.D1 = D0 + 1", regs32(c, 1026, slave=1), [11])
+    check("project: unit 0 is task fast too", regs32(c, 1026, slave=0), [11])
+    check("project: unit 2 reads slow.D1 = 2 x D0", regs32(c, 1026, slave=2), [20])
+    check("project: slow.D1 through the line protocol", command(p, "get slow.D1"), "slow.D1 = 20")
+    r = c.read_holding_registers(1024, 2, slave=3)
+    check("project: unit 3: exception 0x0B", getattr(r, "exception_code", None), 0x0B)
+    check("project: coil M0 through unit 2", c.write_coil(8192, True, slave=2).isError(), False)
+    check("wait", command(p, "wait 2"), "ok")
+    check("project: both tasks see M0 (Y0 of fast, Y16 of slow)",
+          [c.read_coils(0, 1, slave=1).bits[0], c.read_coils(16, 1, slave=1).bits[0]], [True, True])
+    c.close()
+    check("project: quit", command(p, "quit"), "ok bye")
+    check("project: exit status", p.wait(timeout=20), 0)
+finally:
+    if p.poll() is None:
+        p.kill()
+        p.wait()
+
 print("%d failures" % len(failures) + (": " + ", ".join(failures) if failures else ""))
 sys.exit(1 if failures else 0)
