@@ -1,15 +1,18 @@
 // runtime/modbus_server.cpp -- the Modbus TCP server of `ldrun --modbus`
 // (runtime/modbus.h): an IoDriver decorator and a network thread.
 //
-// The scan threads and the network thread share one mutex, held only for
-// copies: after each scan the task's thread copies the areas of the map into
-// a snapshot, which the network thread answers reads from (so a read never
-// sees half a scan, and two registers of one word never tear); write
-// requests are queued, applied by the addressed task at its next scan
-// boundary (shared areas on the global image before its inputs are copied
-// in, D and F on its memory), and answered after that scan's snapshot, so a
-// client that writes and then reads sees its write.  The scan never waits on
-// the network.
+// The scan threads never wait on the network thread.  After each published
+// scan the task's thread copies the areas of the map (X Y M K WX WY from the
+// global image, D F from its memory) into the back buffer of the task's
+// triple buffer and publishes it with one atomic exchange; the network
+// thread answers reads from the newest published buffer, so a read never
+// sees half a scan and the two registers of a D word never tear.  Write
+// requests are queued (a mutex the scan side only try_locks: if the network
+// thread holds it, the writes wait for the next scan), applied by the
+// addressed task at its next scan boundary (shared areas on the global image
+// before its inputs are copied in, D and F on its memory), and answered once
+// that scan's buffer is published, so a client that writes and then reads
+// sees its write.
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netdb.h>
@@ -63,10 +66,29 @@ int64_t now_ms() {
 // A write request on its way: queued, taken by its task's scan, done after
 // that scan's snapshot (or cancelled by the network thread on timeout).
 struct Pending {
+  Pending(size_t t, std::vector<Write> w) : task(t), writes(std::move(w)) {}
   size_t task;
   std::vector<Write> writes;
-  enum { Queued, Applied, Done, Cancelled } state = Queued;
-  bool private_applied = false;  // D and F written into the task's memory
+  enum { Queued, Applied, Done, Cancelled };
+  std::atomic<int> state{Queued};  // Done: released by the scan thread, acquired by the network thread
+  bool private_applied = false;    // D and F written into the task's memory (task thread, under its inflight lock)
+};
+
+// A triple buffer: one writer (a task's thread, or safe_outputs, always under
+// the runtime's image lock) and one reader (the network thread) each own one
+// buffer; the third is exchanged.  No lock, no wait, no data race.
+struct Triple {
+  static constexpr uint32_t kFresh = 4;
+  std::vector<uint8_t> buf[3];
+  uint64_t safe_gen[3] = {};        // the safe-state generation when the buffer was filled
+  std::atomic<uint32_t> middle{1};
+  uint32_t back = 0, front = 2;
+  void publish() { back = middle.exchange(back | kFresh, std::memory_order_acq_rel) & 3; }
+  // The newest published buffer (the reader's own from then on).
+  uint32_t latest() {
+    if (middle.load(std::memory_order_acquire) & kFresh) front = middle.exchange(front, std::memory_order_acq_rel) & 3;
+    return front;
+  }
 };
 
 struct Conn {
@@ -101,31 +123,37 @@ class ModbusDriver : public IoDriver {
   void attach(uint8_t* global, const Layout& layout, uint32_t block_size) override {
     inner_->attach(global, layout, block_size);
     layout_ = layout;
-    snap_global_.assign(layout.size, 0);
-    snap_tasks_.assign(o_.tasks, std::vector<uint8_t>(layout.size, 0));
-    inflight_.resize(o_.tasks);
-    copy_global(global);
+    snaps_ = std::vector<Triple>(o_.tasks);
+    for (Triple& t : snaps_)
+      for (auto& b : t.buf) b.assign(layout.size, 0);
+    inflight_ = std::vector<Inflight>(o_.tasks);
+    for (size_t t = 0; t < o_.tasks; t++) fill(snaps_[t], global, nullptr), snaps_[t].publish();
+    view_.layout = &layout_;
+    view_.tasks.assign(o_.tasks, nullptr);
     thread_ = std::thread([this] { serve_loop(); });
   }
+  // Shared areas of the queued writes for this task, before its inputs are copied in.
   void read_inputs(uint8_t* global, const ScanContext& c) override {
     inner_->read_inputs(global, c);
-    std::lock_guard<std::mutex> g(mu_);
     if (c.task >= inflight_.size()) return;
+    std::unique_lock<std::mutex> q(mu_, std::try_to_lock);
+    if (!q.owns_lock() || queue_.empty()) return;  // the network thread holds it: next scan
+    std::lock_guard<std::mutex> g(inflight_[c.task].mu);
     for (auto it = queue_.begin(); it != queue_.end();) {
       Pending& p = **it;
       if (p.task != c.task) { ++it; continue; }
       for (const Write& w : p.writes)
         if (area_is_shared(w.area)) apply(w, global, layout_);
-      p.state = Pending::Applied;
-      inflight_[c.task].push_back(*it);
+      p.state.store(Pending::Applied);
+      inflight_[c.task].list.push_back(*it);
       it = queue_.erase(it);
     }
   }
   void write_outputs(const uint8_t* global, const ScanContext& c) override { inner_->write_outputs(global, c); }
+  // Reads of Y and WY show the safe state until the next published scan.
   void safe_outputs(const uint8_t* global) override {
     inner_->safe_outputs(global);
-    std::lock_guard<std::mutex> g(mu_);
-    copy_global(global);
+    safe_gen_.fetch_add(1);
   }
   void state_changed(State s) override {
     inner_->state_changed(s);
@@ -134,45 +162,44 @@ class ModbusDriver : public IoDriver {
     // non-retentive memory); one whose D/F part it had not reached yet goes
     // back to the queue, for the next scan (or exception 06 on timeout).
     bool any = false;
-    {
-      std::lock_guard<std::mutex> g(mu_);
-      for (auto& list : inflight_) {
-        for (auto it = list.rbegin(); it != list.rend(); ++it) {
-          Pending& p = **it;
-          if (p.private_applied) {
-            p.state = Pending::Done, any = true;
-          } else {
-            p.state = Pending::Queued;
-            queue_.push_front(*it);
-          }
+    std::lock_guard<std::mutex> q(mu_);
+    for (Inflight& f : inflight_) {
+      std::lock_guard<std::mutex> g(f.mu);
+      for (auto it = f.list.rbegin(); it != f.list.rend(); ++it) {
+        Pending& p = **it;
+        if (p.private_applied) {
+          p.state.store(Pending::Done), any = true;
+        } else {
+          p.state.store(Pending::Queued);
+          queue_.push_front(*it);
         }
-        list.clear();
       }
+      f.list.clear();
     }
     if (any) wake();
   }
+  // D and F of the writes taken, on the task's memory, just before the scan.
   void before_scan(const ScanContext& c, uint8_t* mem, std::optional<int32_t>& dt) override {
     inner_->before_scan(c, mem, dt);
-    std::lock_guard<std::mutex> g(mu_);
     if (c.task >= inflight_.size()) return;
-    for (auto& p : inflight_[c.task]) {
+    std::lock_guard<std::mutex> g(inflight_[c.task].mu);  // contended only by state_changed
+    for (auto& p : inflight_[c.task].list) {
       for (const Write& w : p->writes)
         if (!area_is_shared(w.area)) apply(w, mem, layout_);
       p->private_applied = true;
     }
   }
+  // The scan is published: its snapshot, then the writes it took are done.
   void after_scan(const ScanContext& c, const uint8_t* mem, const uint8_t* global) override {
     inner_->after_scan(c, mem, global);
+    if (c.task >= snaps_.size()) return;
+    fill(snaps_[c.task], global, mem);
+    snaps_[c.task].publish();
     bool any = false;
     {
-      std::lock_guard<std::mutex> g(mu_);
-      copy_global(global);
-      if (c.task < snap_tasks_.size()) {
-        uint32_t from = layout_.offset[int(Area::D)], to = layout_.addr(Area::F, layout_.count[int(Area::F)]);
-        std::memcpy(snap_tasks_[c.task].data() + from, mem + from, to - from);
-        for (auto& p : inflight_[c.task]) p->state = Pending::Done, any = true;
-        inflight_[c.task].clear();
-      }
+      std::lock_guard<std::mutex> g(inflight_[c.task].mu);
+      for (auto& p : inflight_[c.task].list) p->state.store(Pending::Done), any = true;
+      inflight_[c.task].list.clear();
     }
     if (any) wake();
   }
@@ -182,14 +209,25 @@ class ModbusDriver : public IoDriver {
   }
 
  private:
-  // ---- scan side
+  struct Inflight {
+    std::mutex mu;
+    std::vector<std::shared_ptr<Pending>> list;  // taken by the task's scan under way
+  };
 
-  // X Y M K and WX WY: two contiguous ranges of the standard layout.
-  void copy_global(const uint8_t* global) {
-    for (auto [a, b] : {std::pair{Area::X, Area::K}, std::pair{Area::WX, Area::WY}}) {
-      uint32_t from = layout_.offset[int(a)], to = layout_.addr(b, layout_.count[int(b)]);
-      std::memcpy(snap_global_.data() + from, global + from, to - from);
-    }
+  // ---- scan side (under the runtime's image lock)
+
+  // The back buffer: X Y M K and WX WY (two contiguous ranges of the standard
+  // layout) from the global image, D and F from the task's memory.
+  void fill(Triple& t, const uint8_t* global, const uint8_t* mem) {
+    uint8_t* b = t.buf[t.back].data();
+    auto copy = [&](const uint8_t* from_mem, Area first, Area last) {
+      uint32_t from = layout_.offset[int(first)], to = layout_.addr(last, layout_.count[int(last)]);
+      if (from_mem) std::memcpy(b + from, from_mem + from, to - from);
+    };
+    copy(global, Area::X, Area::K);
+    copy(global, Area::WX, Area::WY);
+    copy(mem, Area::D, Area::F);
+    t.safe_gen[t.back] = safe_gen_.load();
   }
   void wake() {
     uint64_t one = 1;
@@ -343,20 +381,35 @@ class ModbusDriver : public IoDriver {
     c.out.erase(c.out.begin(), c.out.begin() + n);
   }
 
+  // The view a request sees: every task's newest published buffer, shared
+  // areas from the addressed task's.  If the outputs went to the safe state
+  // after that scan, Y and WY read 0 (as they are).
+  const View& view_for(const std::vector<uint8_t>& in) {
+    for (size_t t = 0; t < snaps_.size(); t++) {
+      Triple& s = snaps_[t];
+      uint32_t f = s.latest();
+      uint8_t* b = s.buf[f].data();
+      if (s.safe_gen[f] != safe_gen_.load()) {
+        for (Area a : {Area::Y, Area::WY}) std::memset(b + layout_.offset[int(a)], 0, layout_.count[int(a)] * layout_.elem_size(a));
+        s.safe_gen[f] = safe_gen_.load();
+      }
+      view_.tasks[t] = b;
+    }
+    size_t unit = in.size() >= kMbapSize ? in[6] : 0;
+    size_t task = unit == 0 || unit == 255 || unit > snaps_.size() ? 0 : unit - 1;
+    view_.global = view_.tasks[task];
+    return view_;
+  }
+
   // Serves the complete requests of c.in, in order; stops at a write until
   // its scan is done.
   void handle_requests(Conn& c) {
     while (!c.pending && !c.closing) {
-      Outcome o;
-      {
+      Outcome o = serve(c.in, view_for(c.in));
+      if (o.kind == Outcome::Reply && !o.writes.empty()) {
+        c.pending = std::make_shared<Pending>(o.task, std::move(o.writes));
         std::lock_guard<std::mutex> g(mu_);
-        View v{&layout_, snap_global_.data(), {}};
-        for (auto& t : snap_tasks_) v.tasks.push_back(t.data());
-        o = serve(c.in, v);
-        if (o.kind == Outcome::Reply && !o.writes.empty()) {
-          c.pending = std::make_shared<Pending>(Pending{o.task, std::move(o.writes)});
-          queue_.push_back(c.pending);
-        }
+        queue_.push_back(c.pending);
       }
       if (o.kind == Outcome::NeedMore) break;
       c.in.erase(c.in.begin(), c.in.begin() + o.consumed);
@@ -379,12 +432,7 @@ class ModbusDriver : public IoDriver {
   void finish_writes() {
     for (Conn& c : conns_) {
       if (!c.pending || c.closing) continue;
-      bool done;
-      {
-        std::lock_guard<std::mutex> g(mu_);
-        done = c.pending->state == Pending::Done;
-      }
-      if (!done) continue;
+      if (c.pending->state.load() != Pending::Done) continue;
       c.pending.reset();
       c.out.insert(c.out.end(), c.pending_reply.begin(), c.pending_reply.end());
       c.last_ms = now_ms();
@@ -410,8 +458,8 @@ class ModbusDriver : public IoDriver {
       bool cancelled = false;
       {
         std::lock_guard<std::mutex> g(mu_);
-        if (c.pending->state == Pending::Queued) {
-          c.pending->state = Pending::Cancelled;
+        if (c.pending->state.load() == Pending::Queued) {
+          c.pending->state.store(Pending::Cancelled);
           std::erase(queue_, c.pending);
           cancelled = true;
         }
@@ -423,7 +471,7 @@ class ModbusDriver : public IoDriver {
       r[4] = 0, r[5] = 3;
       r.push_back(uint8_t(fc | 0x80));
       r.push_back(kServerBusy);
-      c.pending->state = Pending::Done;
+      c.pending->state.store(Pending::Done);
     }
     finish_writes();
   }
@@ -436,13 +484,13 @@ class ModbusDriver : public IoDriver {
   std::list<Conn> conns_;
   uint64_t refused_ = 0;
 
-  // shared by the scan threads and the network thread
-  std::mutex mu_;
   Layout layout_;
-  std::vector<uint8_t> snap_global_;
-  std::vector<std::vector<uint8_t>> snap_tasks_;
+  View view_;                       // the network thread's
+  std::vector<Triple> snaps_;       // per task
+  std::atomic<uint64_t> safe_gen_{0};
+  std::mutex mu_;                   // the queue (the scan side only try_locks it)
   std::deque<std::shared_ptr<Pending>> queue_;
-  std::vector<std::vector<std::shared_ptr<Pending>>> inflight_;
+  std::vector<Inflight> inflight_;  // per task
 };
 
 }  // namespace
