@@ -11,7 +11,7 @@
 // it back with FC 3 (it must be the value just written, both halves of one
 // write: no lost write, no torn word), write a coil of its own (FC 5), read
 // it back (FC 1).  Also checks the program's scan counter D4 never goes
-// back.  Prints ldrun's scan and jitter statistics of both runs; fails (exit
+// back and D5 = D4 x 65537 comes from the same scan (no torn read).  Prints ldrun's scan and jitter statistics of both runs; fails (exit
 // 1) on any wrong value, error reply, timeout or ldrun exit status but 0.
 // Timing is reported, never asserted.
 #include <arpa/inet.h>
@@ -174,11 +174,14 @@ std::string run_client(int port, int i, int requests, uint64_t& done) {
     if (cr.size() != 3) return c.error.empty() ? "bad coil reply" : c.error;
     if ((cr[2] & 1) != on) return "coil M" + std::to_string(100 + i) + " lost a write";
     done += 4;
-    if (k % 50 == 0) {  // the scan counter D4 (1032, 1033) never goes back
-      auto s = c.call({3, 0x04, 0x08, 0, 2});
-      if (s.size() != 6) return c.error;
+    if (k % 50 == 0) {  // the scan counter D4 never goes back; D5 = D4 x 65537 of the same scan
+      auto s = c.call({3, 0x04, 0x08, 0, 4});
+      if (s.size() != 10) return c.error;
       uint32_t n = uint32_t(s[2] << 24 | s[3] << 16 | s[4] << 8 | s[5]);
+      uint32_t d5 = uint32_t(s[6] << 24 | s[7] << 16 | s[8] << 8 | s[9]);
       if (n < last_count) return "the scan counter went back from " + std::to_string(last_count) + " to " + std::to_string(n);
+      if (n < 65536 && d5 != n * 65537u)
+        return "D4 = " + std::to_string(n) + " but D5 = " + std::to_string(d5) + ": not one scan";
       last_count = n;
       done++;
     }
