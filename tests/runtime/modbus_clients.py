@@ -290,5 +290,23 @@ finally:
         p.kill()
         p.wait()
 
+# ---------------------------------------------------------------- refused before the start
+def refused(args):
+    r = subprocess.run([LDRUN, ECHO] + args, capture_output=True, text=True, timeout=30)
+    return r.returncode, r.stderr.strip()
+
+
+check("bad address", refused(["--modbus", "abc"]),
+      (1, "ldrun: error: bad Modbus address 'abc' (PORT, :PORT or HOST:PORT; port 0..65535)"))
+check("--modbus-connections 0", refused(["--modbus", "0", "--modbus-connections", "0"]),
+      (1, "ldrun: error: bad --modbus-connections '0' (1..1000)"))
+busy = socket.socket()
+busy.bind(("127.0.0.1", 0))
+busy.listen()
+taken = busy.getsockname()[1]
+check("port in use", refused(["--modbus", str(taken)]),
+      (1, "ldrun: error: modbus: cannot listen on 127.0.0.1:%d: Address already in use" % taken))
+busy.close()
+
 print("%d failures" % len(failures) + (": " + ", ".join(failures) if failures else ""))
 sys.exit(1 if failures else 0)
