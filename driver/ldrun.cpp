@@ -17,6 +17,7 @@
 #include "driver/c40_driver.h"
 #include "driver/ldrun_io.h"
 #include "driver/driver.h"
+#include "runtime/modbus.h"
 #include "runtime/plc.h"
 #include "runtime/runtime.h"
 #include "runtime/sandbox.h"
@@ -28,6 +29,7 @@ static const char kUsage[] =
     "       ldrun FILE|--project P.ldp --io=stdio|shm[:/NAME]|trace|none [--period 1ms|500us] [--clock=real|virtual]\n"
     "             [--free-run] [--rt] [--watchdog 200ms] [--retain FILE] [--retain-every 1s] [--cold] [--stop]\n"
     "             [--control=stdin|none] [--reload] [--stats] [--out FILE] [--block 16] [--scans N]\n"
+    "             [--modbus [HOST:]PORT] [--modbus-connections 16]   a Modbus TCP server (127.0.0.1 unless HOST is given; also with --trace)\n"
     "       FILE: an image (.bin, .hex) or a source ldc reads (.ld, .il, .xml, .rtsp, .sfc), compiled in memory\n"
     "       --sandbox: run the scans in a child process that seccomp confines to its socket (native, interp, c)\n";
 
@@ -37,6 +39,7 @@ namespace {
 struct RtArgs {
   bool on = false;
   std::string project, io, control, clock, period, watchdog, retain, retain_every, out, block;
+  std::string modbus, modbus_connections;  // --modbus [HOST:]PORT, --modbus-connections N
   bool free_run = false, rt = false, cold = false, stop = false, stats = false, reload = false;
   bool sandbox = false;  // also in trace mode: it does not select the runtime
 };
@@ -195,6 +198,22 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
     throw UserError("ldrun: error: unknown --io '" + io + "' (stdio, shm[:/NAME], trace or none)");
   }
 
+  if (a.modbus.empty() && !a.modbus_connections.empty()) throw UserError("ldrun: error: --modbus-connections needs --modbus");
+  if (!a.modbus.empty()) {
+    modbus::ServerOptions mo;
+    mo.tasks = specs.size();
+    mo.log = opt.log;
+    if (const std::string& n = a.modbus_connections; !n.empty()) {
+      if (n.size() > 4 || n.find_first_not_of("0123456789") != std::string::npos || std::stoul(n) < 1 || std::stoul(n) > 1000)
+        throw UserError("ldrun: error: bad --modbus-connections '" + n + "' (1..1000)");
+      mo.max_connections = std::stoul(n);
+    }
+    try {
+      modbus::parse_address(a.modbus, mo);
+      driver = modbus::make_modbus_driver(std::move(driver), mo);
+    } catch (std::runtime_error& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
+  }
+
   EngineFactory engines = [engine, sandbox = a.sandbox](const Image& img) -> std::unique_ptr<Engine> {
     std::unique_ptr<Engine> e;
     if (engine == "interp") e = make_interp_engine(img.il, img.layout);
@@ -349,7 +368,8 @@ int main(int argc, char** argv) {
           flag("--stats", rta.stats) || flag("--reload", rta.reload) || opt_value("--project", rta.project) ||
           opt_value("--io", rta.io) || opt_value("--control", rta.control) || opt_value("--clock", rta.clock) ||
           opt_value("--watchdog", rta.watchdog) || opt_value("--retain-every", rta.retain_every) ||
-          opt_value("--retain", rta.retain) || opt_value("--out", rta.out) || opt_value("--block", rta.block)) {
+          opt_value("--retain", rta.retain) || opt_value("--out", rta.out) || opt_value("--block", rta.block) ||
+          opt_value("--modbus-connections", rta.modbus_connections) || opt_value("--modbus", rta.modbus)) {
       } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");
       else if (a == "--cycles") cycles = true;  // C40 engines: cycles and us per scan
       else if (a == "--sandbox") rta.sandbox = true;

@@ -1,0 +1,204 @@
+// runtime/modbus.cpp -- the Modbus TCP protocol (runtime/modbus.h): framing,
+// the eight function codes, the address map, exception replies.  A pure
+// function of the request bytes and a read-only view of the memory.
+#include "runtime/modbus.h"
+
+#include <cstring>
+
+namespace ldc::modbus {
+
+namespace {
+
+uint16_t be16(const uint8_t* p) { return uint16_t(p[0] << 8 | p[1]); }
+void put16(std::vector<uint8_t>& v, uint32_t x) {
+  v.push_back(uint8_t(x >> 8));
+  v.push_back(uint8_t(x));
+}
+
+uint32_t word_at(const uint8_t* mem, const Layout& l, Area a, uint32_t i) {
+  uint32_t w;
+  std::memcpy(&w, mem + l.addr(a, i), 4);
+  return w;
+}
+
+// A request being answered: the header to echo, the PDU, the reply.
+struct Req {
+  const uint8_t* mbap;  // transaction (2), protocol (2), length (2), unit (1)
+  const uint8_t* pdu;
+  size_t n;             // PDU bytes
+  const View& v;
+  const uint8_t* task;  // the unit's task memory
+  Outcome out;
+};
+
+// The reply frame for PDU bytes `pdu`.
+void reply(Req& r, const std::vector<uint8_t>& pdu) {
+  auto& o = r.out.reply;
+  o.assign(r.mbap, r.mbap + 4);
+  put16(o, uint32_t(pdu.size() + 1));
+  o.push_back(r.mbap[6]);
+  o.insert(o.end(), pdu.begin(), pdu.end());
+  r.out.kind = Outcome::Reply;
+}
+
+void exception(Req& r, uint8_t code) {
+  r.out.writes.clear();
+  reply(r, {uint8_t(r.pdu[0] | 0x80), code});
+}
+
+// ---- bits
+
+uint8_t coil_at(const Req& r, uint32_t a) {
+  const Layout& l = *r.v.layout;
+  if (a < kCoilM) return r.v.global[l.addr(Area::Y, a - kCoilY)];
+  if (a < kCoilK) return r.v.global[l.addr(Area::M, a - kCoilM)];
+  return r.v.global[l.addr(Area::K, a - kCoilK)];
+}
+
+Write coil_write(uint32_t a, bool on) {
+  if (a < kCoilM) return {Area::Y, a - kCoilY, on, 1};
+  if (a < kCoilK) return {Area::M, a - kCoilM, on, 1};
+  return {Area::K, a - kCoilK, on, 1};
+}
+
+// FC 1 and 2: quantity 1..2000, packed LSB first.
+void read_bits(Req& r) {
+  if (r.n != 5) return exception(r, kIllegalDataValue);
+  uint32_t start = be16(r.pdu + 1), count = be16(r.pdu + 3);
+  bool coils = r.pdu[0] == kReadCoils;
+  if (count < 1 || count > 2000) return exception(r, kIllegalDataValue);
+  if (start + count > (coils ? kCoilEnd : kDiscreteEnd)) return exception(r, kIllegalDataAddress);
+  std::vector<uint8_t> p{r.pdu[0], uint8_t((count + 7) / 8)};
+  p.resize(2 + (count + 7) / 8);
+  for (uint32_t i = 0; i < count; i++) {
+    uint8_t b = coils ? coil_at(r, start + i) : r.v.global[r.v.layout->addr(Area::X, start + i)];
+    if (b) p[2 + i / 8] |= uint8_t(1u << (i % 8));
+  }
+  reply(r, p);
+}
+
+// FC 5: 0xFF00 on, 0x0000 off.
+void write_coil(Req& r) {
+  if (r.n != 5) return exception(r, kIllegalDataValue);
+  uint32_t a = be16(r.pdu + 1), value = be16(r.pdu + 3);
+  if (value != 0xFF00 && value != 0) return exception(r, kIllegalDataValue);
+  if (a >= kCoilEnd) return exception(r, kIllegalDataAddress);
+  r.out.writes.push_back(coil_write(a, value != 0));
+  reply(r, std::vector<uint8_t>(r.pdu, r.pdu + 5));
+}
+
+// FC 15: quantity 1..1968, byte count = ceil(quantity / 8).
+void write_coils(Req& r) {
+  if (r.n < 6) return exception(r, kIllegalDataValue);
+  uint32_t start = be16(r.pdu + 1), count = be16(r.pdu + 3), bytes = r.pdu[5];
+  if (count < 1 || count > 1968 || bytes != (count + 7) / 8 || r.n != 6 + bytes) return exception(r, kIllegalDataValue);
+  if (start + count > kCoilEnd) return exception(r, kIllegalDataAddress);
+  for (uint32_t i = 0; i < count; i++) r.out.writes.push_back(coil_write(start + i, (r.pdu[6 + i / 8] >> (i % 8)) & 1));
+  reply(r, std::vector<uint8_t>(r.pdu, r.pdu + 5));
+}
+
+// ---- registers
+
+// Holding register `a`: WY's low half; D and F high half at even addresses.
+uint16_t holding_at(const Req& r, uint32_t a) {
+  const Layout& l = *r.v.layout;
+  if (a < kHoldD) return uint16_t(word_at(r.v.global, l, Area::WY, a - kHoldWY));
+  Area area = a < kHoldF ? Area::D : Area::F;
+  uint32_t k = a - (a < kHoldF ? kHoldD : kHoldF);
+  uint32_t w = word_at(r.task, l, area, k / 2);
+  return uint16_t(k % 2 ? w : w >> 16);
+}
+
+// A register written: WY sign-extended; a half of D or F.
+Write holding_write(uint32_t a, uint16_t value) {
+  if (a < kHoldD) return {Area::WY, a - kHoldWY, uint32_t(int32_t(int16_t(value))), 0xFFFFFFFFu};
+  Area area = a < kHoldF ? Area::D : Area::F;
+  uint32_t k = a - (a < kHoldF ? kHoldD : kHoldF);
+  if (k % 2) return {area, k / 2, value, 0x0000FFFFu};
+  return {area, k / 2, uint32_t(value) << 16, 0xFFFF0000u};
+}
+
+// FC 3 and 4: quantity 1..125.
+void read_registers(Req& r) {
+  if (r.n != 5) return exception(r, kIllegalDataValue);
+  uint32_t start = be16(r.pdu + 1), count = be16(r.pdu + 3);
+  bool holding = r.pdu[0] == kReadHoldingRegisters;
+  if (count < 1 || count > 125) return exception(r, kIllegalDataValue);
+  if (start + count > (holding ? kHoldEnd : kInputEnd)) return exception(r, kIllegalDataAddress);
+  std::vector<uint8_t> p{r.pdu[0], uint8_t(2 * count)};
+  for (uint32_t i = 0; i < count; i++)
+    put16(p, holding ? holding_at(r, start + i) : uint16_t(word_at(r.v.global, *r.v.layout, Area::WX, start + i)));
+  reply(r, p);
+}
+
+// FC 6.
+void write_register(Req& r) {
+  if (r.n != 5) return exception(r, kIllegalDataValue);
+  uint32_t a = be16(r.pdu + 1);
+  if (a >= kHoldEnd) return exception(r, kIllegalDataAddress);
+  r.out.writes.push_back(holding_write(a, be16(r.pdu + 3)));
+  reply(r, std::vector<uint8_t>(r.pdu, r.pdu + 5));
+}
+
+// FC 16: quantity 1..123, byte count = 2 x quantity.
+void write_registers(Req& r) {
+  if (r.n < 6) return exception(r, kIllegalDataValue);
+  uint32_t start = be16(r.pdu + 1), count = be16(r.pdu + 3), bytes = r.pdu[5];
+  if (count < 1 || count > 123 || bytes != 2 * count || r.n != 6 + bytes) return exception(r, kIllegalDataValue);
+  if (start + count > kHoldEnd) return exception(r, kIllegalDataAddress);
+  for (uint32_t i = 0; i < count; i++) r.out.writes.push_back(holding_write(start + i, be16(r.pdu + 6 + 2 * i)));
+  reply(r, std::vector<uint8_t>(r.pdu, r.pdu + 5));
+}
+
+}  // namespace
+
+Outcome serve(std::span<const uint8_t> buf, const View& v) {
+  Outcome none;
+  if (buf.size() < kMbapSize) return none;
+  const uint8_t* h = buf.data();
+  uint32_t length = be16(h + 4);
+  if (be16(h + 2) != 0 || length < 2 || length > kMaxPdu + 1) {
+    none.kind = Outcome::Close;
+    none.consumed = buf.size();
+    none.error = be16(h + 2) != 0 ? "protocol identifier " + std::to_string(be16(h + 2)) + ", not 0 (Modbus)"
+                                  : "length field " + std::to_string(length) + " outside 2..254";
+    return none;
+  }
+  if (buf.size() < 6 + length) return none;
+  Req r{h, h + kMbapSize, length - 1, v, nullptr, {}};
+  r.out.consumed = 6 + length;
+  uint8_t unit = h[6];
+  size_t task = unit == 0 || unit == 255 ? 0 : size_t(unit) - 1;
+  if (task >= v.tasks.size()) {
+    exception(r, kGatewayTargetFailed);
+    return std::move(r.out);
+  }
+  r.out.task = task;
+  r.task = v.tasks[task];
+  switch (r.pdu[0]) {
+    case kReadCoils:
+    case kReadDiscreteInputs: read_bits(r); break;
+    case kReadHoldingRegisters:
+    case kReadInputRegisters: read_registers(r); break;
+    case kWriteSingleCoil: write_coil(r); break;
+    case kWriteSingleRegister: write_register(r); break;
+    case kWriteMultipleCoils: write_coils(r); break;
+    case kWriteMultipleRegisters: write_registers(r); break;
+    default: exception(r, kIllegalFunction);
+  }
+  return std::move(r.out);
+}
+
+void apply(const Write& w, uint8_t* mem, const Layout& l) {
+  if (area_is_bit(w.area)) {
+    mem[l.addr(w.area, w.index)] = uint8_t(w.value & 1);
+    return;
+  }
+  uint8_t* at = mem + l.addr(w.area, w.index);
+  uint32_t old;
+  std::memcpy(&old, at, 4);
+  uint32_t now = (old & ~w.mask) | (w.value & w.mask);
+  std::memcpy(at, &now, 4);
+}
+
+}  // namespace ldc::modbus

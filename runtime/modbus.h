@@ -1,0 +1,100 @@
+// runtime/modbus.h -- a Modbus TCP server for the soft-PLC runtime
+// (`ldrun --modbus HOST:PORT`, docs/runtime.md "Modbus TCP").
+//
+// Two parts: the protocol -- serve(), a pure function from the bytes a client
+// sent to the reply and the writes a request asks for, over a read-only view
+// of the memory (fuzzed by tests/fuzz/fuzz_modbus.cpp) -- and the server, an
+// IoDriver decorator that applies the writes at scan boundaries and takes the
+// view's snapshot after each scan, with a network thread of its own.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "ir/ir.h"
+#include "runtime/plc.h"
+
+namespace ldc::modbus {
+
+// ---------------------------------------------------------------- the map
+// Coils (FC 1, 5, 15): Y, then M, then K.  Discrete inputs (FC 2): X.
+// Input registers (FC 4): WX, one register per word.  Holding registers
+// (FC 3, 6, 16): WY one register per word, then D and F two registers per
+// word, the high half first.
+constexpr uint32_t kCoilY = 0, kCoilM = 8192, kCoilK = 16384, kCoilEnd = 24576;
+constexpr uint32_t kDiscreteEnd = 8192;
+constexpr uint32_t kInputEnd = 1024;
+constexpr uint32_t kHoldWY = 0, kHoldD = 1024, kHoldF = kHoldD + 2 * 8192, kHoldEnd = kHoldF + 2 * 1024;
+
+// Function codes and exception codes (Modbus Application Protocol V1.1b3).
+enum Function : uint8_t {
+  kReadCoils = 1, kReadDiscreteInputs = 2, kReadHoldingRegisters = 3, kReadInputRegisters = 4,
+  kWriteSingleCoil = 5, kWriteSingleRegister = 6, kWriteMultipleCoils = 15, kWriteMultipleRegisters = 16,
+};
+enum Exception : uint8_t {
+  kIllegalFunction = 1, kIllegalDataAddress = 2, kIllegalDataValue = 3, kServerBusy = 6, kGatewayTargetFailed = 0x0B,
+};
+constexpr size_t kMbapSize = 7;        // transaction, protocol, length, unit
+constexpr size_t kMaxPdu = 253;
+constexpr size_t kMaxAdu = kMbapSize - 1 + 1 + kMaxPdu;  // 260
+
+// What reads see: the shared areas (X Y M K WX WY) in `global`, the private
+// ones (D F) in each task's memory, all at the standard layout's offsets.
+struct View {
+  const Layout* layout = nullptr;
+  const uint8_t* global = nullptr;
+  std::vector<const uint8_t*> tasks;  // at least one
+};
+
+// One element changed by a write request: element = (element & ~mask) |
+// (value & mask).  Bits: value 0/1, mask 1.  Words: INT32 halves or whole.
+struct Write {
+  Area area;
+  uint32_t index;
+  uint32_t value, mask;
+  bool operator==(const Write&) const = default;
+};
+
+struct Outcome {
+  enum Kind { NeedMore, Reply, Close } kind = NeedMore;
+  size_t consumed = 0;           // bytes of the request (Reply, Close: all there is)
+  std::vector<uint8_t> reply;    // the whole reply frame (MBAP header and PDU)
+  size_t task = 0;               // the task whose memory the request addresses (unit identifier)
+  std::vector<Write> writes;     // a write request's changes, applied all at once; empty otherwise
+  std::string error;             // Close: why
+};
+
+// Serves the first request of `buf` (a TCP byte stream): NeedMore if it is
+// incomplete; Close if it is not Modbus (protocol identifier not 0, length
+// field outside 2..254); else the reply -- data, an echo of a write, or an
+// exception.  Unit identifiers 0, 255 and 1 address task 0, 2..n task 1..n-1;
+// others get exception 0x0B.  Never reads outside the view.
+Outcome serve(std::span<const uint8_t> buf, const View& view);
+
+// Applies one write to a memory image of the standard layout.
+void apply(const Write& w, uint8_t* mem, const Layout& layout);
+
+// ---------------------------------------------------------------- the server
+struct ServerOptions {
+  std::string host = "127.0.0.1";
+  uint16_t port = 502;           // 0: any free port (logged)
+  size_t tasks = 1;              // the runtime's task count (unit identifiers)
+  size_t max_connections = 16;   // more are accepted and closed at once
+  int idle_timeout_ms = 60000;   // a connection silent that long is closed
+  int write_timeout_ms = 1000;   // a write no scan took by then: exception 06, not applied
+  std::function<void(const std::string&)> log;
+};
+
+// "HOST:PORT", ":PORT", "PORT", "[V6]:PORT" into host and port (the host
+// defaults to 127.0.0.1); throws std::runtime_error with the reason.
+void parse_address(const std::string& text, ServerOptions& o);
+
+// The decorator: forwards every call to `inner`; binds and listens now
+// (throws std::runtime_error if it cannot), serves from attach() to detach().
+std::unique_ptr<plc::IoDriver> make_modbus_driver(std::unique_ptr<plc::IoDriver> inner, ServerOptions o);
+
+}  // namespace ldc::modbus
