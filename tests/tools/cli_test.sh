@@ -34,6 +34,7 @@ done
 # ldobjdump lists every rung with its IL
 "$bin/ldobjdump" "$tmp/t.bin" > "$tmp/dump" && ok || bad "ldobjdump"
 grep -q '; rung 1, line' "$tmp/dump" && grep -q ';   TON T' "$tmp/dump" && ok || bad "ldobjdump lacks rung/IL lines"
+grep -Eq '^; [0-9]+ bytes, [0-9]+ instructions, [0-9]+ IL; branch sites: [0-9]+ jcc, [0-9]+ jmp, [0-9]+ call$' "$tmp/dump" && ok || bad "ldobjdump lacks the branch-site count"
 
 # bad images are refused before anything runs
 printf 'garbage' > "$tmp/g.bin"
