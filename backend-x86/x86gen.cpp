@@ -1,5 +1,6 @@
 // backend-x86/x86gen.cpp -- IL mnemonics -> x86-64 assembly templates.
 #include <algorithm>
+#include <bitset>
 #include <climits>
 #include <cstring>
 #include <map>
@@ -121,8 +122,8 @@ struct Ungated {
 
 class Gen {
  public:
-  Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate)
-      : L_(l), items_(items), slots_(slots), gate_(gate) {}
+  Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used)
+      : L_(l), items_(items), slots_(slots), gate_(gate), used_(used) {}
 
   void instr(const ldc::Instr& in);
 
@@ -132,6 +133,7 @@ class Gen {
   int next_label_ = 0;
   bool slots_;     // -O2: the stack in kSlots; else the -O0 shift register in ebp
   bool gate_;      // -O2: branch-free power gating (cmov) instead of `je skip`
+  std::bitset<8>* used_;  // the shared routines called (as::x86::Routine)
   int depth_ = 0;  // stack positions in use before the current instruction
 
   Reg slot(int pos) const { return kSlots[((pos % kNumSlots) + kNumSlots) % kNumSlots]; }
@@ -274,6 +276,10 @@ class Gen {
   void advance_eax(uint32_t tw);
   void advance_edx(uint32_t tw);
   void timer_gated(const ldc::Instr& in);
+  void call_routine(as::x86::Routine r) {
+    used_->set(size_t(r));
+    emit(M::Call, {L(std::string(as::x86::routineName(r)))});
+  }
   void counter_gated(const ldc::Instr& in);
   void reset_masked(std::initializer_list<Operand> dwords, std::initializer_list<Operand> bytes);
   void end_skip(const std::string& skip) {
@@ -527,65 +533,17 @@ void Gen::reset_masked(std::initializer_list<Operand> dwords, std::initializer_l
   for (const Operand& o : bytes) emit(M::And, {o, R(cl)});
 }
 
-// -O2 timers: conditional moves over both outcomes, no branch.  P = the input
-// (power, 0/1); r8d is zero throughout; ET' in edx, Q' in r9d.
+// -O2 timers: a call to the shared routine of the kind (as::x86::scanRoutine:
+// branch-free, conditional moves over every outcome) with the timer number in
+// edx, the preset in ecx and the input in esi.
 void Gen::timer_gated(const ldc::Instr& in) {
-  uint32_t n = in.a[0].index;
-  uint32_t tw = L_.addr(Area::TW, n), tq = L_.addr(Area::TQ, n), ti = L_.addr(Area::TI, n);
-  const Reg r9b = r8(R9), r10b = r8(R10);
   Reg p = power();
-  preset_ecx(in.a[1]);
-  advance_edx(tw);  // eax = ET, edx = advance
-  emit(M::Xor, {R(r8d), R(r8d)});
-  emit(M::Xor, {R(r9d), R(r9d)});
-  if (in.op == Op::TON) {  // IN: ET' = TI ? advance : 0; Q' = ET' >= PT.  !IN: 0, 0
-    emit(M::Cmp, {B(ti), I(0)});
-    emit(makeCc(M::Cmovcc, Cond::E, {R(edx), R(r8d)}));
-    emit(M::Test, {R(p), R(p)});
-    emit(makeCc(M::Cmovcc, Cond::E, {R(edx), R(r8d)}));
-    emit(M::Cmp, {R(edx), R(ecx)});
-    emit(makeCc(M::Setcc, Cond::GE, {R(r9b)}));
-    emit(M::And, {R(r9d), R(p)});
-  } else if (in.op == Op::TOF) {
-    // Q: ET' = advance, Q' = ET' < PT; !Q: unchanged (Q stays 0);
-    // then TI (a falling scan): 0, PT > 0; then IN: 0, 1
-    emit(M::Cmp, {R(edx), R(ecx)});
-    emit(makeCc(M::Setcc, Cond::L, {R(r9b)}));
-    emit(M::Cmp, {B(tq), I(0)});
-    emit(makeCc(M::Cmovcc, Cond::E, {R(edx), R(eax)}));
-    emit(makeCc(M::Cmovcc, Cond::E, {R(r9d), R(r8d)}));
-    emit(M::Xor, {R(r10d), R(r10d)});
-    emit(M::Test, {R(ecx), R(ecx)});
-    emit(makeCc(M::Setcc, Cond::G, {R(r10b)}));
-    emit(M::Cmp, {B(ti), I(0)});
-    emit(makeCc(M::Cmovcc, Cond::NE, {R(edx), R(r8d)}));
-    emit(makeCc(M::Cmovcc, Cond::NE, {R(r9d), R(r10d)}));
-    emit(M::Test, {R(p), R(p)});
-    emit(makeCc(M::Cmovcc, Cond::NE, {R(edx), R(r8d)}));
-    emit(makeCc(M::Cmovcc, Cond::NE, {R(r9d), R(p)}));
-  } else {  // TP
-    // !Q: IN && TI: unchanged; IN && !TI (rising): ET' = 0, Q' = PT > 0; !IN: ET' = 0, Q' = 0
-    // Q: ET' = advance, Q' = ET' < PT
-    emit(M::Xor, {R(r10d), R(r10d)});
-    emit(M::Cmp, {B(ti), I(0)});
-    emit(makeCc(M::Setcc, Cond::E, {R(r10b)}));
-    emit(M::And, {R(r10d), R(p)});  // r10d = rising
-    emit(makeCc(M::Cmovcc, Cond::NE, {R(eax), R(r8d)}));
-    emit(M::Test, {R(p), R(p)});
-    emit(makeCc(M::Cmovcc, Cond::E, {R(eax), R(r8d)}));  // eax = ET' without Q
-    emit(M::Test, {R(ecx), R(ecx)});
-    emit(makeCc(M::Setcc, Cond::G, {R(r9b)}));
-    emit(M::And, {R(r9d), R(r10d)});  // r9d = Q' without Q
-    emit(M::Xor, {R(r10d), R(r10d)});
-    emit(M::Cmp, {R(edx), R(ecx)});
-    emit(makeCc(M::Setcc, Cond::L, {R(r10b)}));
-    emit(M::Cmp, {B(tq), I(0)});
-    emit(makeCc(M::Cmovcc, Cond::E, {R(edx), R(eax)}));
-    emit(makeCc(M::Cmovcc, Cond::NE, {R(r9d), R(r10d)}));
-  }
-  emit(M::Mov, {Dw(tw), R(edx)});
-  emit(M::Mov, {B(tq), R(r9b)});
-  emit(M::Mov, {B(ti), R(r8(p.num))});
+  if (p != esi) emit(M::Mov, {R(esi), R(p)});
+  emit(M::Mov, {R(edx), I(in.a[0].index)});
+  const ldc::Operand& pt = in.a[1];
+  if (pt.kind == OpdKind::ConstInt) emit(M::Mov, {R(ecx), I(pt.ival < 0 ? 0 : pt.ival)});
+  else load_int(pt, ecx);
+  call_routine(in.op == Op::TON ? as::x86::Routine::Ton : in.op == Op::TOF ? as::x86::Routine::Tof : as::x86::Routine::Tp);
 }
 
 void Gen::timer(const ldc::Instr& in) {
@@ -678,32 +636,20 @@ void Gen::timer(const ldc::Instr& in) {
   }
 }
 
-// -O2 counters: the count moves by the rising edge (0 or 1); an overflow
-// (the count at its limit) keeps the old count.
+// -O2 counters: the rising edge here (the edge slot is not in the routine's
+// reach), then the shared routine with the counter number in edx, the preset
+// in ecx and the edge in esi.
 void Gen::counter_gated(const ldc::Instr& in) {
-  uint32_t n = in.a[0].index;
-  uint32_t cw = L_.addr(Area::CW, n), cq = L_.addr(Area::CQ, n), e = addr(in.a[2]);
-  bool up = in.op == Op::CTU;
+  uint32_t e = addr(in.a[2]);
   top_to_eax();
-  emit(M::Movzx, {R(ecx), B(e)});
+  emit(M::Movzx, {R(esi), B(e)});
   emit(M::Mov, {B(e), R(al)});
-  emit(M::Not, {R(ecx)});
-  emit(M::And, {R(eax), R(ecx)});  // rising edge of the input
-  emit(M::Mov, {R(edx), Dw(cw)});
-  emit(up ? M::Add : M::Sub, {R(edx), R(eax)});
-  emit(makeCc(M::Cmovcc, Cond::O, {R(edx), Dw(cw)}));
-  emit(M::Mov, {Dw(cw), R(edx)});
-  if (up) {
-    load_int(in.a[1], ecx);
-    emit(M::Xor, {R(eax), R(eax)});
-    emit(M::Cmp, {R(edx), R(ecx)});
-    emit(makeCc(M::Setcc, Cond::GE, {R(al)}));
-  } else {
-    emit(M::Xor, {R(eax), R(eax)});
-    emit(M::Test, {R(edx), R(edx)});
-    emit(makeCc(M::Setcc, Cond::LE, {R(al)}));
-  }
-  emit(M::Mov, {B(cq), R(al)});
+  emit(M::Not, {R(esi)});
+  emit(M::And, {R(esi), R(eax)});  // rising edge of the input
+  emit(M::Mov, {R(edx), I(in.a[0].index)});
+  bool up = in.op == Op::CTU;
+  if (up) load_int(in.a[1], ecx);
+  call_routine(up ? as::x86::Routine::Ctu : as::x86::Routine::Ctd);
 }
 
 void Gen::counter(const ldc::Instr& in) {
@@ -945,6 +891,17 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
 
 std::string x86_label_name(const std::string& il_label) { return "lbl_" + il_label; }
 
+as::x86::RoutineAreas x86_routine_areas(const Layout& l) {
+  as::x86::RoutineAreas a;
+  a.tw = int32_t(l.addr(Area::TW, 0));
+  a.tq = int32_t(l.addr(Area::TQ, 0));
+  a.ti = int32_t(l.addr(Area::TI, 0));
+  a.cw = int32_t(l.addr(Area::CW, 0));
+  a.cq = int32_t(l.addr(Area::CQ, 0));
+  a.dt = int32_t(kSysDt);
+  return a;
+}
+
 X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool notes) {
   const bool o2 = opt_level >= 2;
   X86Code out;
@@ -952,6 +909,8 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
   prog.blocks.reserve(p.rungs.size() + 2);
   out.il_items.reserve(p.rungs.size());
   prog.globals.push_back(kX86ExitLabel);
+  for (int k = 0; k < int(as::x86::Routine::Count); k++)
+    prog.globals.push_back(std::string(as::x86::routineName(as::x86::Routine(k))));
   for (const Rung& r : p.rungs)
     for (const auto& l : r.labels) prog.globals.push_back(x86_label_name(l));
   for (const auto& l : p.end_labels) prog.globals.push_back(x86_label_name(l));
@@ -964,6 +923,7 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
   for (const Instruction& i : scanPrologue(o2)) pro.items.push_back(Item::instr(i));
   prog.blocks.push_back(std::move(pro));
 
+  std::bitset<8> used;
   for (const Rung& r : p.rungs) {
     as::Block<Instruction> b;
     b.sourceLine = r.line;
@@ -972,7 +932,7 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
     if (notes) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
     std::vector<uint32_t> starts;
     bool slots = o2 && stack_fits_slots(r.code, kNumSlots);
-    Gen g(layout, b.items, slots, o2);
+    Gen g(layout, b.items, slots, o2, &used);
     for (const ldc::Instr& in : r.code) {
       starts.push_back(uint32_t(b.items.size()));
       if (notes) b.items.push_back(Item::note(instr_text(in)));
@@ -984,11 +944,26 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
   }
 
   as::Block<Instruction> epi;
-  epi.sourceLine = p.rungs.empty() ? 0 : p.rungs.back().line;
+  const int epi_line = p.rungs.empty() ? 0 : p.rungs.back().line;
+  epi.sourceLine = epi_line;
   for (const auto& l : p.end_labels) epi.items.push_back(Item::labelDef(x86_label_name(l), true));
   epi.items.push_back(Item::labelDef(kX86ExitLabel, true));
   for (const Instruction& i : scanEpilogue(o2)) epi.items.push_back(Item::instr(i));
   prog.blocks.push_back(std::move(epi));
+
+  // the shared timer and counter routines the rungs call, after the epilogue
+  if (used.any()) {
+    as::Block<Instruction> rt;
+    rt.sourceLine = epi_line;
+    as::x86::RoutineAreas areas = x86_routine_areas(layout);
+    for (int k = 0; k < int(as::x86::Routine::Count); k++) {
+      if (!used.test(size_t(k))) continue;
+      std::string name(as::x86::routineName(as::x86::Routine(k)));
+      rt.items.push_back(Item::labelDef(name, true));
+      for (const Instruction& i : as::x86::scanRoutine(as::x86::Routine(k), areas)) rt.items.push_back(Item::instr(i));
+    }
+    prog.blocks.push_back(std::move(rt));
+  }
   return out;
 }
 
