@@ -150,6 +150,25 @@ Disassembly disassemble(std::span<const uint8_t> code);
 std::span<const Instruction> scanPrologue(bool withSlots);
 std::span<const Instruction> scanEpilogue(bool withSlots);
 
+// ------------------------------------------------------ shared routines
+// Timers and counters at -O2 call one routine per kind, placed after the
+// epilogue (docs/x86.md, "Shared routines").  A routine is branch-free and
+// ends with its one `ret`; it takes
+//   edx  the timer or counter number; the routine's first instruction masks it
+//        (`movzx edx, dl`), so whatever the caller passes, every access
+//        [rbx + rdx*k + area] stays inside areas of 256 elements
+//   ecx  the preset (timers clamp a negative one to 0)
+//   esi  the input: the rung's power (timers) or its rising edge (counters), 0 or 1
+// and clobbers eax ecx edx r8-r11 and the flags.  The areas' offsets are the
+// memory layout's; the loader builds the same bodies and accepts a call only
+// to the entry of one of them.
+enum class Routine : uint8_t { Ton, Tof, Tp, Ctu, Ctd, Count };
+struct RoutineAreas {
+  int32_t tw = 0, tq = 0, ti = 0, cw = 0, cq = 0, dt = 0;  // offsets of T0's ET, Q, IN memory; C0's CV, Q; dt
+};
+std::vector<Instruction> scanRoutine(Routine r, const RoutineAreas& areas);
+std::string_view routineName(Routine r);  // the assembly label: rt_ton, rt_tof, rt_tp, rt_ctu, rt_ctd
+
 // ---------------------------------------------------------- whole programs
 
 using X86Program = Program<Instruction>;

@@ -503,4 +503,67 @@ std::span<const Instruction> scanEpilogue(bool withSlots) {
   return withSlots ? o2 : o0;
 }
 
+std::string_view routineName(Routine r) {
+  static const char* const names[] = {"rt_ton", "rt_tof", "rt_tp", "rt_ctu", "rt_ctd"};
+  return names[int(r)];
+}
+
+std::vector<Instruction> scanRoutine(Routine r, const RoutineAreas& a) {
+  std::vector<std::string> t;
+  auto at = [](const char* index, int32_t disp) { return std::string("[rbx+") + index + "+" + std::to_string(disp) + "]"; };
+  const std::string tw = "dword ptr " + at("rdx*4", a.tw), tq = "byte ptr " + at("rdx*1", a.tq),
+                    ti = "byte ptr " + at("rdx*1", a.ti), cw = "dword ptr " + at("rdx*4", a.cw),
+                    cq = "byte ptr " + at("rdx*1", a.cq);
+  t.push_back("movzx edx, dl");  // the mask: 0..255 whatever the caller passed
+  if (r == Routine::Ctu || r == Routine::Ctd) {
+    // CV' = CV +- edge unless that overflows; Q' = CV' >= PV (CTU) or CV' <= 0 (CTD)
+    t.push_back("mov eax, " + cw);
+    t.push_back(std::string(r == Routine::Ctu ? "add" : "sub") + " eax, esi");
+    t.push_back("cmovo eax, " + cw);
+    t.push_back("mov " + cw + ", eax");
+    t.push_back("xor r8d, r8d");
+    if (r == Routine::Ctu) { t.push_back("cmp eax, ecx"); t.push_back("setge r8b"); }
+    else { t.push_back("test eax, eax"); t.push_back("setle r8b"); }
+    t.push_back("mov " + cq + ", r8b");
+  } else {
+    // PT = max(preset, 0); r8d = advance(ET, dt, PT) (see the backend's advance_edx)
+    for (const std::string& x : std::initializer_list<std::string>{"xor eax, eax", "test ecx, ecx", "cmovs ecx, eax", "mov eax, " + tw, "xor r11d, r11d",
+                          "mov r8d, eax", "add r8d, dword ptr [rbx+" + std::to_string(a.dt) + "]", "mov r10d, r8d",
+                          std::string("cmovo r8d, ecx"), std::string("setl r11b"), std::string("cmp r8d, ecx"),
+                          std::string("cmovg r8d, ecx"), std::string("test r11d, r11d"), std::string("cmovne r8d, r10d"),
+                          std::string("cmp eax, ecx"), std::string("cmovge r8d, ecx"), std::string("xor r10d, r10d"),
+                          std::string("xor r9d, r9d")})
+      t.push_back(x);
+    // eax = ET, r8d = advance, r10d = 0; ET' into r8d, Q' into r9d
+    if (r == Routine::Ton) {  // IN: TI ? advance : 0, Q' = ET' >= PT; !IN: 0, 0
+      for (const std::string& x : std::initializer_list<std::string>{"cmp " + ti + ", 0", std::string("cmove r8d, r10d"), std::string("test esi, esi"),
+                            std::string("cmove r8d, r10d"), std::string("cmp r8d, ecx"), std::string("setge r9b"),
+                            std::string("and r9d, esi")})
+        t.push_back(x);
+    } else if (r == Routine::Tof) {  // Q: advance, ET' < PT; !Q: unchanged; TI: 0, PT > 0; IN: 0, 1
+      for (const std::string& x : std::initializer_list<std::string>{std::string("cmp r8d, ecx"), std::string("setl r9b"), "cmp " + tq + ", 0",
+                            std::string("cmove r8d, eax"), std::string("cmove r9d, r10d"), std::string("xor r11d, r11d"),
+                            std::string("test ecx, ecx"), std::string("setg r11b"), "cmp " + ti + ", 0",
+                            std::string("cmovne r8d, r10d"), std::string("cmovne r9d, r11d"), std::string("test esi, esi"),
+                            std::string("cmovne r8d, r10d"), std::string("cmovne r9d, esi")})
+        t.push_back(x);
+    } else {  // TP. !Q: IN && TI unchanged; rising: 0, PT > 0; !IN: 0, 0.  Q: advance, ET' < PT
+      for (const std::string& x : std::initializer_list<std::string>{std::string("xor r11d, r11d"), "cmp " + ti + ", 0", std::string("sete r11b"),
+                            std::string("and r11d, esi"), std::string("cmovne eax, r10d"), std::string("test esi, esi"),
+                            std::string("cmove eax, r10d"), std::string("test ecx, ecx"), std::string("setg r9b"),
+                            std::string("and r9d, r11d"), std::string("xor r11d, r11d"), std::string("cmp r8d, ecx"),
+                            std::string("setl r11b"), "cmp " + tq + ", 0", std::string("cmove r8d, eax"),
+                            std::string("cmovne r9d, r11d")})
+        t.push_back(x);
+    }
+    t.push_back("mov " + tw + ", r8d");
+    t.push_back("mov " + tq + ", r9b");
+    t.push_back("mov " + ti + ", sil");
+  }
+  t.push_back("ret");
+  std::vector<Instruction> v;
+  for (const std::string& x : t) v.push_back(parse(x));
+  return v;
+}
+
 }  // namespace ldc::as::x86

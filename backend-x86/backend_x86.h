@@ -37,4 +37,7 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level = 0, 
 inline constexpr const char* kX86ExitLabel = "scan_exit";
 std::string x86_label_name(const std::string& il_label);  // user label -> assembly label
 
+// Where the shared timer/counter routines (as::x86::scanRoutine) find T0 and C0.
+as::x86::RoutineAreas x86_routine_areas(const Layout& l);
+
 }  // namespace ldc

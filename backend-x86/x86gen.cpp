@@ -1,5 +1,6 @@
 // backend-x86/x86gen.cpp -- IL mnemonics -> x86-64 assembly templates.
 #include <algorithm>
+#include <bitset>
 #include <climits>
 #include <cstring>
 #include <map>
@@ -93,7 +94,8 @@ Mem mem_at(Size size, uint32_t addr) {
 }
 Operand B(uint32_t addr) { return Operand::m(mem_at(Size::Byte, addr)); }
 Operand Dw(uint32_t addr) { return Operand::m(mem_at(Size::Dword, addr)); }
-const Reg eax = r32(AX), ecx = r32(CX), edx = r32(DX), ebp = r32(BP), al = r8(AX), cl = r8(CX);
+const Reg eax = r32(AX), ecx = r32(CX), edx = r32(DX), ebp = r32(BP), esi = r32(SI), edi = r32(DI), al = r8(AX), cl = r8(CX);
+const Reg r8d = r32(R8), r9d = r32(R9), r10d = r32(R10);
 const Reg xmm0 = xmm(0), xmm1 = xmm(1), xmm2 = xmm(2);
 
 uint32_t float_bits(float f) {
@@ -108,9 +110,20 @@ uint32_t float_bits(float f) {
 const Reg kSlots[] = {r8(R12), r8(R13), r8(R14), r8(R15), r8(BP)};
 constexpr int kNumSlots = 5;
 
+// Turns gate_ off for one instruction's code (restored at the end of scope).
+struct Ungated {
+  bool& flag;
+  bool saved;
+  explicit Ungated(bool& f, bool when = true) : flag(f), saved(f) {
+    if (when) f = false;
+  }
+  ~Ungated() { flag = saved; }
+};
+
 class Gen {
  public:
-  Gen(const Layout& l, std::vector<Item>& items, bool slots) : L_(l), items_(items), slots_(slots) {}
+  Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used)
+      : L_(l), items_(items), slots_(slots), gate_(gate), used_(used) {}
 
   void instr(const ldc::Instr& in);
 
@@ -119,13 +132,24 @@ class Gen {
   std::vector<Item>& items_;
   int next_label_ = 0;
   bool slots_;     // -O2: the stack in kSlots; else the -O0 shift register in ebp
+  bool gate_;      // -O2: branch-free power gating (cmov) instead of `je skip`
+  std::bitset<8>* used_;  // the shared routines called (as::x86::Routine)
   int depth_ = 0;  // stack positions in use before the current instruction
 
   Reg slot(int pos) const { return kSlots[((pos % kNumSlots) + kNumSlots) % kNumSlots]; }
   Reg top8() const { return slot(depth_ - 1); }
+  static Reg wide(Reg r8) { return r32(r8.num); }
   void test_top() {
     if (slots_) emit(M::Test, {R(top8()), R(top8())});
     else emit(M::Test, {R(ebp), I(1)});
+  }
+  // A 32-bit register holding the top, 0 or 1: the top slot (its upper bits
+  // are zero, every push writes the full register) or esi from ebp.
+  Reg power() {
+    if (slots_) return wide(top8());
+    emit(M::Mov, {R(esi), R(ebp)});
+    emit(M::And, {R(esi), I(1)});
+    return esi;
   }
   // eax = the top, 0 or 1
   void top_to_eax() {
@@ -186,8 +210,24 @@ class Gen {
     emit(M::Xor, {R(eax), R(eax)});
     label(done);
   }
+  // -O2: d = power ? eax : d, without a branch
+  void gated_store(const ldc::Operand& d) {
+    test_top();
+    emit(makeCc(M::Cmovcc, Cond::E, {R(eax), Dw(addr(d))}));
+    emit(M::Mov, {Dw(addr(d)), R(eax)});
+  }
+  // d = the 32 bits `bits` (an INT32 or a REAL's pattern), with power
+  void store_imm(const ldc::Operand& d, int32_t bits) {
+    if (!gate_) return emit(M::Mov, {Dw(addr(d)), I(bits)});
+    emit(M::Mov, {R(eax), I(bits)});
+    gated_store(d);
+  }
   // store eax (INT32) into d, converting to REAL for F
   void store_int(const ldc::Operand& d) {
+    if (gate_) {
+      if (d.kind == OpdKind::Real) { emit(M::Cvtsi2ss, {R(xmm0), R(eax)}); emit(M::Movd, {R(eax), R(xmm0)}); }
+      return gated_store(d);
+    }
     if (d.kind == OpdKind::Real) {
       emit(M::Cvtsi2ss, {R(xmm0), R(eax)});
       emit(M::Movss, {Dw(addr(d)), R(xmm0)});
@@ -195,6 +235,11 @@ class Gen {
   }
   // store xmm0 (REAL) into d, converting to INT32 for words
   void store_real(const ldc::Operand& d) {
+    if (gate_) {
+      if (d.kind == OpdKind::Real) emit(M::Movd, {R(eax), R(xmm0)});
+      else real_to_int_eax();
+      return gated_store(d);
+    }
     if (d.kind == OpdKind::Real) emit(M::Movss, {Dw(addr(d)), R(xmm0)});
     else { real_to_int_eax(); emit(M::Mov, {Dw(addr(d)), R(eax)}); }
   }
@@ -205,12 +250,14 @@ class Gen {
   }
   void set_error() { emit(M::Mov, {B(L_.addr(Area::S, kBitError)), I(1)}); }
   void push_al() {
-    if (slots_) return emit(M::Mov, {R(slot(depth_)), R(al)});
+    if (slots_) return emit(M::Movzx, {R(wide(slot(depth_))), R(al)});
     emit(M::Movzx, {R(eax), R(al)});
     emit(M::Lea, {R(ebp), Operand::m(Mem{Size::None, r64(AX), r64(BP), 2, 0})});
   }
-  // if the top of the stack is 0, skip to the returned label
+  // if the top of the stack is 0, skip to the returned label; with gate_,
+  // nothing ("" : the stores are gated instead)
   std::string skip_unless_power() {
+    if (gate_) return "";
     std::string skip = fresh();
     test_top();
     jcc(Cond::E, skip);
@@ -227,11 +274,23 @@ class Gen {
   void counter(const ldc::Instr& in);
   void preset_ecx(const ldc::Operand& pt);
   void advance_eax(uint32_t tw);
+  void advance_edx(uint32_t tw);
+  void timer_gated(const ldc::Instr& in);
+  void call_routine(as::x86::Routine r) {
+    used_->set(size_t(r));
+    emit(M::Call, {L(std::string(as::x86::routineName(r)))});
+  }
+  void counter_gated(const ldc::Instr& in);
+  void reset_masked(std::initializer_list<Operand> dwords, std::initializer_list<Operand> bytes);
+  void end_skip(const std::string& skip) {
+    if (!skip.empty()) label(skip);
+  }
 };
 
 void Gen::compare(const ldc::Instr& in) {
   const ldc::Operand &a = in.a[0], &b = in.a[1];
   if (!a.is_real() && !b.is_real()) {
+    if (slots_) emit(M::Xor, {R(wide(slot(depth_))), R(wide(slot(depth_)))});  // no partial-register chain
     load_int(a, eax);
     emit(M::Cmp, {R(eax), int_src(b)});
     Cond c = in.op == Op::LDEQ ? Cond::E : in.op == Op::LDNE ? Cond::NE : in.op == Op::LDLT ? Cond::L
@@ -269,21 +328,21 @@ void Gen::move(const ldc::Instr& in) {
   if (a.is_real()) {
     if (d.kind == OpdKind::Real && a.kind == OpdKind::Real) {
       emit(M::Mov, {R(eax), Dw(addr(a))});
-      emit(M::Mov, {Dw(addr(d)), R(eax)});
+      if (gate_) gated_store(d);
+      else emit(M::Mov, {Dw(addr(d)), R(eax)});
     } else if (d.kind == OpdKind::Real) {
-      emit(M::Mov, {Dw(addr(d)), I(int32_t(float_bits(a.fval)))});
+      store_imm(d, int32_t(float_bits(a.fval)));
     } else {
       load_real(a, xmm0);
       store_real(d);
     }
   } else if (a.kind == OpdKind::ConstInt) {
-    if (d.kind == OpdKind::Real) emit(M::Mov, {Dw(addr(d)), I(int32_t(float_bits(int_to_real(a.ival))))});
-    else emit(M::Mov, {Dw(addr(d)), I(a.ival)});
+    store_imm(d, d.kind == OpdKind::Real ? int32_t(float_bits(int_to_real(a.ival))) : a.ival);
   } else {
     load_int(a, eax);
     store_int(d);
   }
-  label(skip);
+  end_skip(skip);
 }
 
 void Gen::arith(const ldc::Instr& in) {
@@ -305,12 +364,14 @@ void Gen::arith(const ldc::Instr& in) {
     }
     store_int(d);
   }
-  label(skip);
+  end_skip(skip);
 }
 
+// DIV and MOD keep the `je skip` of -O0 at every level: a zero divisor sets S0.
 void Gen::divmod(const ldc::Instr& in) {
   const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
   bool mod = in.op == Op::MOD;
+  Ungated ungated(gate_);
   std::string skip = skip_unless_power();
   if (!mod && (a.is_real() || b.is_real())) {
     std::string divide = fresh(), err = fresh();
@@ -326,7 +387,7 @@ void Gen::divmod(const ldc::Instr& in) {
     jmp(skip);
     label(err);
     set_error();
-    label(skip);
+    end_skip(skip);
     return;
   }
   std::string err = fresh(), minus_one = fresh();
@@ -348,7 +409,7 @@ void Gen::divmod(const ldc::Instr& in) {
   jmp(skip);
   label(err);
   set_error();
-  label(skip);
+  end_skip(skip);
 }
 
 void Gen::logic(const ldc::Instr& in) {
@@ -364,6 +425,12 @@ void Gen::logic(const ldc::Instr& in) {
     if (n.kind == OpdKind::ConstInt) {
       if (n.ival < 0 || n.ival > 31) emit(M::Xor, {R(eax), R(eax)});
       else if (n.ival > 0) emit(m, {R(eax), I(n.ival)});
+    } else if (gate_) {  // counts outside 0..31 (unsigned above 31) give 0
+      load_int(n, ecx);
+      emit(m, {R(eax), R(cl)});
+      emit(M::Xor, {R(edx), R(edx)});
+      emit(M::Cmp, {R(ecx), I(31)});
+      emit(makeCc(M::Cmovcc, Cond::A, {R(eax), R(edx)}));
     } else {
       std::string zero = fresh(), store = fresh();
       load_int(n, ecx);
@@ -381,11 +448,13 @@ void Gen::logic(const ldc::Instr& in) {
     emit(m, {R(eax), int_src(in.a[1])});
     store_int(in.a[2]);
   }
-  label(skip);
+  end_skip(skip);
 }
 
 void Gen::special(const ldc::Instr& in) {
   const ldc::Operand &a = in.a[0], &d = in.a[1];
+  // the calls to the REAL function table keep `je skip`: no call without power
+  Ungated ungated(gate_, in.op != Op::ABS && in.op != Op::SQRT);
   std::string skip = skip_unless_power();
   if (in.op == Op::ABS && !a.is_real()) {
     load_int(a, eax);
@@ -394,7 +463,7 @@ void Gen::special(const ldc::Instr& in) {
     emit(M::Xor, {R(eax), R(ecx)});
     emit(M::Sub, {R(eax), R(ecx)});
     store_int(d);
-    label(skip);
+    end_skip(skip);
     return;
   }
   load_real(a, xmm0);
@@ -411,7 +480,7 @@ void Gen::special(const ldc::Instr& in) {
     emit(M::Call, {Operand::m(m)});
   }
   store_real(d);
-  label(skip);
+  end_skip(skip);
 }
 
 // ecx = timer preset, negative counted as 0
@@ -428,29 +497,66 @@ void Gen::preset_ecx(const ldc::Operand& pt) {
 
 // eax = advance(ET, dt, PT) (docs/il.md); ET at tw, PT in ecx; stores it too
 void Gen::advance_eax(uint32_t tw) {
-  std::string cap = fresh(), store = fresh();
-  emit(M::Mov, {R(eax), Dw(tw)});
-  emit(M::Cmp, {R(eax), R(ecx)});
-  jcc(Cond::GE, cap);
-  emit(M::Add, {R(eax), Dw(kSysDt)});
-  jcc(Cond::O, cap);
-  emit(M::Cmp, {R(eax), R(ecx)});
-  jcc(Cond::LE, store);
-  label(cap);
-  emit(M::Mov, {R(eax), R(ecx)});
-  label(store);
+  advance_edx(tw);
+  emit(M::Mov, {R(eax), R(edx)});
   emit(M::Mov, {Dw(tw), R(eax)});
+}
+
+// edx = advance(ET, dt, PT) without a branch; eax = ET (read from tw), PT in
+// ecx (>= 0).  The IL's rule: ET >= PT ? PT : min(ET + dt, PT) with the sum
+// exact.  After the add, L says the exact sum is negative (below PT: the
+// wrapped sum is exact then unless it overflowed downwards, when the IL keeps
+// the wrapped value); O without L is an upward overflow (above PT).
+void Gen::advance_edx(uint32_t tw) {
+  const Reg r11d = r32(R11), r11b = r8(R11);
+  emit(M::Mov, {R(eax), Dw(tw)});
+  emit(M::Xor, {R(r11d), R(r11d)});
+  emit(M::Mov, {R(edx), R(eax)});
+  emit(M::Add, {R(edx), Dw(kSysDt)});
+  emit(M::Mov, {R(r10d), R(edx)});
+  emit(makeCc(M::Cmovcc, Cond::O, {R(edx), R(ecx)}));
+  emit(makeCc(M::Setcc, Cond::L, {R(r11b)}));
+  emit(M::Cmp, {R(edx), R(ecx)});
+  emit(makeCc(M::Cmovcc, Cond::G, {R(edx), R(ecx)}));
+  emit(M::Test, {R(r11d), R(r11d)});
+  emit(makeCc(M::Cmovcc, Cond::NE, {R(edx), R(r10d)}));
+  emit(M::Cmp, {R(eax), R(ecx)});
+  emit(makeCc(M::Cmovcc, Cond::GE, {R(edx), R(ecx)}));
+}
+
+// RSTT / RSTC with power: each operand &= (top - 1), 0 with power, all ones without
+void Gen::reset_masked(std::initializer_list<Operand> dwords, std::initializer_list<Operand> bytes) {
+  if (slots_) emit(M::Movzx, {R(ecx), R(top8())});
+  else { emit(M::Mov, {R(ecx), R(ebp)}); emit(M::And, {R(ecx), I(1)}); }
+  emit(M::Sub, {R(ecx), I(1)});
+  for (const Operand& o : dwords) emit(M::And, {o, R(ecx)});
+  for (const Operand& o : bytes) emit(M::And, {o, R(cl)});
+}
+
+// -O2 timers: a call to the shared routine of the kind (as::x86::scanRoutine:
+// branch-free, conditional moves over every outcome) with the timer number in
+// edx, the preset in ecx and the input in esi.
+void Gen::timer_gated(const ldc::Instr& in) {
+  Reg p = power();
+  if (p != esi) emit(M::Mov, {R(esi), R(p)});
+  emit(M::Mov, {R(edx), I(in.a[0].index)});
+  const ldc::Operand& pt = in.a[1];
+  if (pt.kind == OpdKind::ConstInt) emit(M::Mov, {R(ecx), I(pt.ival < 0 ? 0 : pt.ival)});
+  else load_int(pt, ecx);
+  call_routine(in.op == Op::TON ? as::x86::Routine::Ton : in.op == Op::TOF ? as::x86::Routine::Tof : as::x86::Routine::Tp);
 }
 
 void Gen::timer(const ldc::Instr& in) {
   uint32_t n = in.a[0].index;
   uint32_t tw = L_.addr(Area::TW, n), tq = L_.addr(Area::TQ, n), ti = L_.addr(Area::TI, n);
+  if (in.op == Op::RSTT && gate_) return reset_masked({Dw(tw)}, {B(tq), B(ti)});
+  if (gate_) return timer_gated(in);
   if (in.op == Op::RSTT) {
     std::string skip = skip_unless_power();
     emit(M::Mov, {Dw(tw), I(0)});
     emit(M::Mov, {B(tq), I(0)});
     emit(M::Mov, {B(ti), I(0)});
-    label(skip);
+    end_skip(skip);
     return;
   }
   preset_ecx(in.a[1]);
@@ -530,14 +636,32 @@ void Gen::timer(const ldc::Instr& in) {
   }
 }
 
+// -O2 counters: the rising edge here (the edge slot is not in the routine's
+// reach), then the shared routine with the counter number in edx, the preset
+// in ecx and the edge in esi.
+void Gen::counter_gated(const ldc::Instr& in) {
+  uint32_t e = addr(in.a[2]);
+  top_to_eax();
+  emit(M::Movzx, {R(esi), B(e)});
+  emit(M::Mov, {B(e), R(al)});
+  emit(M::Not, {R(esi)});
+  emit(M::And, {R(esi), R(eax)});  // rising edge of the input
+  emit(M::Mov, {R(edx), I(in.a[0].index)});
+  bool up = in.op == Op::CTU;
+  if (up) load_int(in.a[1], ecx);
+  call_routine(up ? as::x86::Routine::Ctu : as::x86::Routine::Ctd);
+}
+
 void Gen::counter(const ldc::Instr& in) {
   uint32_t n = in.a[0].index;
   uint32_t cw = L_.addr(Area::CW, n), cq = L_.addr(Area::CQ, n);
+  if (in.op == Op::RSTC && gate_) return reset_masked({Dw(cw)}, {B(cq)});
+  if (gate_) return counter_gated(in);
   if (in.op == Op::RSTC) {
     std::string skip = skip_unless_power();
     emit(M::Mov, {Dw(cw), I(0)});
     emit(M::Mov, {B(cq), I(0)});
-    label(skip);
+    end_skip(skip);
     return;
   }
   bool up = in.op == Op::CTU;
@@ -571,42 +695,50 @@ void Gen::instr(const ldc::Instr& in) {
   depth_ += op_info(in.op).push - op_info(in.op).pop;
 }
 
-// -O2 bit instructions: one or two byte operations on the slot registers.
+// -O2 bit instructions: one or two operations on the slot registers.  A push
+// writes the whole 32-bit register (movzx, mov r32), so a slot never depends
+// on what it held in an earlier rung (no partial-register chain), and its
+// upper bits are zero: 32-bit copies and masks are exact.
 void Gen::bit_slots(const ldc::Instr& in) {
   Reg d = slot(depth_), t = slot(depth_ - 1), u = slot(depth_ - 2);
+  Reg dw = wide(d), tw = wide(t), uw = wide(u);
   Operand b0 = in.nopd() > 0 ? B(addr(in.a[0])) : Operand{}, b1 = in.nopd() > 1 ? B(addr(in.a[1])) : Operand{};
   switch (in.op) {
-    case Op::LOAD: return emit(M::Mov, {R(d), b0});
-    case Op::LOADN: emit(M::Mov, {R(d), b0}); return emit(M::Xor, {R(d), I(1)});
+    case Op::LOAD: return emit(M::Movzx, {R(dw), b0});
+    case Op::LOADN: emit(M::Movzx, {R(dw), b0}); return emit(M::Xor, {R(dw), I(1)});
     case Op::AND: return emit(M::And, {R(t), b0});
     case Op::OR: return emit(M::Or, {R(t), b0});
-    case Op::ANDN: case Op::ORN:
-      emit(M::Mov, {R(al), b0});
-      emit(M::Xor, {R(al), I(1)});
-      return emit(in.op == Op::ANDN ? M::And : M::Or, {R(t), R(al)});
+    case Op::ANDN:  // top & ~b: the upper bits of ~b meet zeros
+      emit(M::Movzx, {R(eax), b0});
+      emit(M::Not, {R(eax)});
+      return emit(M::And, {R(tw), R(eax)});
+    case Op::ORN:
+      emit(M::Movzx, {R(eax), b0});
+      emit(M::Xor, {R(eax), I(1)});
+      return emit(M::Or, {R(tw), R(eax)});
     case Op::LOADP:  // d = b & !e; e = b
-      emit(M::Mov, {R(d), b0});
-      emit(M::Mov, {R(al), b1});
+      emit(M::Movzx, {R(dw), b0});
+      emit(M::Movzx, {R(eax), b1});
       emit(M::Mov, {b1, R(d)});
-      emit(M::Xor, {R(al), I(1)});
-      return emit(M::And, {R(d), R(al)});
+      emit(M::Not, {R(eax)});
+      return emit(M::And, {R(dw), R(eax)});
     case Op::LOADF:  // d = !b & e; e = b
-      emit(M::Mov, {R(al), b0});
-      emit(M::Mov, {R(d), b1});
+      emit(M::Movzx, {R(eax), b0});
+      emit(M::Movzx, {R(dw), b1});
       emit(M::Mov, {b1, R(al)});
-      emit(M::Xor, {R(al), I(1)});
-      return emit(M::And, {R(d), R(al)});
-    case Op::TRUE: return emit(M::Mov, {R(d), I(1)});
-    case Op::ANDBLK: return emit(M::And, {R(u), R(t)});
-    case Op::ORBLK: return emit(M::Or, {R(u), R(t)});
-    case Op::MPS: return emit(M::Mov, {R(d), R(t)});
-    case Op::MRD: return emit(M::Mov, {R(t), R(u)});
+      emit(M::Not, {R(eax)});
+      return emit(M::And, {R(dw), R(eax)});
+    case Op::TRUE: return emit(M::Mov, {R(dw), I(1)});
+    case Op::ANDBLK: return emit(M::And, {R(uw), R(tw)});
+    case Op::ORBLK: return emit(M::Or, {R(uw), R(tw)});
+    case Op::MPS: return emit(M::Mov, {R(dw), R(tw)});
+    case Op::MRD: return emit(M::Mov, {R(tw), R(uw)});
     case Op::MPP: return;
     case Op::OUT: return emit(M::Mov, {b0, R(t)});
     case Op::SET: return emit(M::Or, {b0, R(t)});
     case Op::OUTN: case Op::RST:
-      emit(M::Mov, {R(al), R(t)});
-      emit(M::Xor, {R(al), I(1)});
+      emit(M::Mov, {R(eax), R(tw)});
+      emit(M::Xor, {R(eax), I(1)});
       return emit(in.op == Op::OUTN ? M::Mov : M::And, {b0, R(al)});
     default: break;
   }
@@ -759,6 +891,17 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
 
 std::string x86_label_name(const std::string& il_label) { return "lbl_" + il_label; }
 
+as::x86::RoutineAreas x86_routine_areas(const Layout& l) {
+  as::x86::RoutineAreas a;
+  a.tw = int32_t(l.addr(Area::TW, 0));
+  a.tq = int32_t(l.addr(Area::TQ, 0));
+  a.ti = int32_t(l.addr(Area::TI, 0));
+  a.cw = int32_t(l.addr(Area::CW, 0));
+  a.cq = int32_t(l.addr(Area::CQ, 0));
+  a.dt = int32_t(kSysDt);
+  return a;
+}
+
 X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool notes) {
   const bool o2 = opt_level >= 2;
   X86Code out;
@@ -766,6 +909,8 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
   prog.blocks.reserve(p.rungs.size() + 2);
   out.il_items.reserve(p.rungs.size());
   prog.globals.push_back(kX86ExitLabel);
+  for (int k = 0; k < int(as::x86::Routine::Count); k++)
+    prog.globals.push_back(std::string(as::x86::routineName(as::x86::Routine(k))));
   for (const Rung& r : p.rungs)
     for (const auto& l : r.labels) prog.globals.push_back(x86_label_name(l));
   for (const auto& l : p.end_labels) prog.globals.push_back(x86_label_name(l));
@@ -778,6 +923,7 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
   for (const Instruction& i : scanPrologue(o2)) pro.items.push_back(Item::instr(i));
   prog.blocks.push_back(std::move(pro));
 
+  std::bitset<8> used;
   for (const Rung& r : p.rungs) {
     as::Block<Instruction> b;
     b.sourceLine = r.line;
@@ -786,7 +932,7 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
     if (notes) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
     std::vector<uint32_t> starts;
     bool slots = o2 && stack_fits_slots(r.code, kNumSlots);
-    Gen g(layout, b.items, slots);
+    Gen g(layout, b.items, slots, o2, &used);
     for (const ldc::Instr& in : r.code) {
       starts.push_back(uint32_t(b.items.size()));
       if (notes) b.items.push_back(Item::note(instr_text(in)));
@@ -798,11 +944,26 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
   }
 
   as::Block<Instruction> epi;
-  epi.sourceLine = p.rungs.empty() ? 0 : p.rungs.back().line;
+  const int epi_line = p.rungs.empty() ? 0 : p.rungs.back().line;
+  epi.sourceLine = epi_line;
   for (const auto& l : p.end_labels) epi.items.push_back(Item::labelDef(x86_label_name(l), true));
   epi.items.push_back(Item::labelDef(kX86ExitLabel, true));
   for (const Instruction& i : scanEpilogue(o2)) epi.items.push_back(Item::instr(i));
   prog.blocks.push_back(std::move(epi));
+
+  // the shared timer and counter routines the rungs call, after the epilogue
+  if (used.any()) {
+    as::Block<Instruction> rt;
+    rt.sourceLine = epi_line;
+    as::x86::RoutineAreas areas = x86_routine_areas(layout);
+    for (int k = 0; k < int(as::x86::Routine::Count); k++) {
+      if (!used.test(size_t(k))) continue;
+      std::string name(as::x86::routineName(as::x86::Routine(k)));
+      rt.items.push_back(Item::labelDef(name, true));
+      for (const Instruction& i : as::x86::scanRoutine(as::x86::Routine(k), areas)) rt.items.push_back(Item::instr(i));
+    }
+    prog.blocks.push_back(std::move(rt));
+  }
   return out;
 }
 

@@ -47,6 +47,17 @@ static std::string x86_listing(const Image& img, const std::string& path) {
     out += bytes + "\t" + as::x86::print(di.inst) + "\n";
   }
   if (d.error) out += "  (cannot decode at offset " + std::to_string(d.error->offset) + ": " + d.error->message + ")\n";
+  // Branch sites: each conditional or unconditional jump is a place the branch
+  // predictor may have to remember (docs/x86.md, "Branch sites").
+  size_t jcc = 0, jmp = 0, call = 0;
+  for (const auto& di : d.insts) {
+    jcc += di.inst.mnemonic == as::x86::Mnemonic::Jcc;
+    jmp += di.inst.mnemonic == as::x86::Mnemonic::Jmp;
+    call += di.inst.mnemonic == as::x86::Mnemonic::Call;
+  }
+  out += "\n; " + std::to_string(img.code.size()) + " bytes, " + std::to_string(d.insts.size()) + " instructions, " +
+         std::to_string(img.lines.size()) + " IL; branch sites: " + std::to_string(jcc) + " jcc, " + std::to_string(jmp) +
+         " jmp, " + std::to_string(call) + " call\n";
   return out;
 }
 

@@ -1,6 +1,7 @@
 // ldrun -- run a program scan by scan over an input trace and print watched
 // devices; with --io or --project, the soft-PLC runtime (docs/runtime.md):
 // periodic scan tasks, I/O drivers, online download, retentive memory.
+#include <algorithm>
 #include <poll.h>
 #include <signal.h>
 #include <sys/stat.h>
@@ -25,12 +26,13 @@
 using namespace ldc;
 
 static const char kUsage[] =
-    "usage: ldrun FILE [--engine=native|interp|c|c40sim|c40interp] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms] [--cycles] [--sandbox]\n"
+    "usage: ldrun FILE [--engine=native|interp|fast|c|c40sim|c40interp] [-O0|-O1|-O2] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms] [--cycles] [--sandbox]\n"
     "       ldrun FILE|--project P.ldp --io=stdio|shm[:/NAME]|trace|none [--period 1ms|500us] [--clock=real|virtual]\n"
     "             [--free-run] [--rt] [--watchdog 200ms] [--retain FILE] [--retain-every 1s] [--cold] [--stop]\n"
     "             [--control=stdin|none] [--reload] [--stats] [--out FILE] [--block 16] [--scans N]\n"
     "             [--modbus [HOST:]PORT] [--modbus-connections 16]   a Modbus TCP server (127.0.0.1 unless HOST is given; also with --trace)\n"
     "       FILE: an image (.bin, .hex) or a source ldc reads (.ld, .il, .xml, .rtsp, .sfc), compiled in memory\n"
+    "             (native code at -O0 unless -O1 or -O2 is given; --engine=fast is the fast interpreter)\n"
     "       --sandbox: run the scans in a child process that seccomp confines to its socket (native, interp, c)\n";
 
 namespace {
@@ -339,6 +341,7 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
 int main(int argc, char** argv) {
   std::string input, engine = "native", trace_file, watch, tmpdir, so_path;
   bool cycles = false;
+  int opt_level = -1;  // -O<n> for a source compiled to native code
   struct Cleanup {
     std::string& dir;
     ~Cleanup() { if (!dir.empty()) remove_tree(dir); }
@@ -372,6 +375,7 @@ int main(int argc, char** argv) {
           opt_value("--modbus-connections", rta.modbus_connections) || opt_value("--modbus", rta.modbus)) {
       } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");
       else if (a == "--cycles") cycles = true;  // C40 engines: cycles and us per scan
+      else if (a == "-O0" || a == "-O1" || a == "-O2") opt_level = a[2] - '0';
       else if (a == "--sandbox") rta.sandbox = true;
       else if (a.rfind("--trace", 0) == 0) trace_file = value("--trace");
       else if (a.rfind("--watch", 0) == 0) watch = value("--watch");
@@ -402,8 +406,11 @@ int main(int argc, char** argv) {
     if (engine == "c40sim" || engine == "c40interp" || (engine == "native" && is_c40_image(input)))
       return run_c40(input, engine, trace_file, watch, opt, cycles);  // the TMS320C40 simulator
     if (cycles) throw UserError("ldrun: error: --cycles needs --engine=c40sim or --engine=c40interp");
-    if (engine != "interp" && engine != "native" && engine != "c")
-      throw UserError("ldrun: error: unknown engine '" + engine + "' (native, interp, c, c40sim or c40interp)");
+    if (engine != "interp" && engine != "fast" && engine != "native" && engine != "c")
+      throw UserError("ldrun: error: unknown engine '" + engine + "' (native, interp, fast, c, c40sim or c40interp)");
+    if (opt_level >= 0 && (engine != "native" || is_image_file(input)))
+      throw UserError("ldrun: error: -O" + std::to_string(opt_level) +
+                      " is for a source compiled to native code (--engine=native); an image is already compiled");
     // The program: an image (checked in full before anything runs), or a
     // source file compiled in memory.
     Image img;
@@ -421,11 +428,13 @@ int main(int argc, char** argv) {
       so_path = build_c_shared_object(c, tmpdir);
     } else {
       Compiled c = compile_source(input);
-      img = engine == "native" ? make_x86_image(c.il, build_x86(c.il, input, as::Mode::Blockwise, 0, /*notes=*/false))
+      img = engine == "native" ? make_x86_image(c.il, build_x86(c.il, input, as::Mode::Blockwise, std::max(opt_level, 0),
+                                                                /*notes=*/false))
                                : il_image(c.il);
     }
     const Layout& layout = img.layout;
     std::unique_ptr<Engine> eng = engine == "interp" ? make_interp_engine(img.il, layout)
+                                  : engine == "fast" ? make_fast_interp_engine(img.il, layout)
                                   : engine == "c"    ? make_shared_object_engine(so_path, kCScanSymbol)
                                                      : make_native_engine(img.code, img.entry);
     if (rta.sandbox) eng = make_sandboxed_engine(std::move(eng), layout);

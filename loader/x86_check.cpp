@@ -134,9 +134,41 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     return at(entry) + "the entry is not the scan function's prologue (push rbx; push rbp; ...; mov rbx, rdi)";
   size_t body_first = first + x86::scanPrologue(slots).size();
   size_t epi = x86::scanEpilogue(slots).size();
-  if (d.insts.size() < body_first + epi || !matches(d.insts.size() - epi, x86::scanEpilogue(slots)))
+  // After the epilogue: the shared timer/counter routines, each exactly one of
+  // the bodies as::x86::scanRoutine makes for this layout (branch-free, one
+  // `ret`, the index masked by its first instruction), found from the end.
+  std::vector<uint32_t> routine_entries;
+  size_t code_end = d.insts.size();
+  {
+    x86::RoutineAreas areas;
+    areas.tw = int32_t(layout.addr(Area::TW, 0));
+    areas.tq = int32_t(layout.addr(Area::TQ, 0));
+    areas.ti = int32_t(layout.addr(Area::TI, 0));
+    areas.cw = int32_t(layout.addr(Area::CW, 0));
+    areas.cq = int32_t(layout.addr(Area::CQ, 0));
+    areas.dt = int32_t(kSysDt);
+    // the mask keeps numbers below 256: every area a routine indexes has 256 elements
+    bool full = layout.count[int(Area::TW)] >= 256 && layout.count[int(Area::TQ)] >= 256 &&
+                layout.count[int(Area::TI)] >= 256 && layout.count[int(Area::CW)] >= 256 &&
+                layout.count[int(Area::CQ)] >= 256;
+    std::vector<std::vector<x86::Instruction>> bodies;
+    if (full)
+      for (int r = 0; r < int(x86::Routine::Count); r++) bodies.push_back(x86::scanRoutine(x86::Routine(r), areas));
+    for (bool found = true; found;) {
+      found = false;
+      for (const auto& b : bodies) {
+        if (code_end < b.size() + body_first + epi || !matches(code_end - b.size(), b)) continue;
+        code_end -= b.size();
+        routine_entries.push_back(d.insts[code_end].offset);
+        found = true;
+        break;
+      }
+    }
+    std::sort(routine_entries.begin(), routine_entries.end());
+  }
+  if (code_end < body_first + epi || !matches(code_end - epi, x86::scanEpilogue(slots)))
     return at(d.insts.empty() ? 0 : d.insts.back().offset) + "the code does not end with the scan function's epilogue (pop ...; ret)";
-  size_t body_end = d.insts.size() - epi;
+  size_t body_end = code_end - epi;
   if (first > body_end) return at(entry) + "the prologue is not before the epilogue";
   uint32_t body_lo = body_first < d.insts.size() ? d.insts[body_first].offset : uint32_t(code.size());
   uint32_t exit_at = d.insts[body_end].offset;
@@ -169,8 +201,11 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
                ": a division not guarded against 0 and -1 (only 'test ecx, ecx; je; cmp ecx, -1; je; cdq; idiv ecx')";
       for (size_t j = k + 2 - guarded_division().size(); j <= k; j++) guarded.push_back(d.insts[j].offset);
     }
-    if (in.mnemonic == M::Call && in.numOperands && in.ops[0].kind == x86::OperandKind::Address)
-      return at(di.offset) + text_of(in) + ": a direct call (generated code calls only the REAL function table)";
+    if (in.mnemonic == M::Call && in.numOperands && in.ops[0].kind == x86::OperandKind::Address &&
+        !std::binary_search(routine_entries.begin(), routine_entries.end(), uint32_t(in.ops[0].imm)))
+      return at(di.offset) + text_of(in) +
+             ": a direct call not to the entry of one of the code's routines (generated code calls only those and "
+             "the REAL function table)";
     // branches go forward, inside the body or to the epilogue, so a scan always ends
     if ((in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) && in.numOperands && in.ops[0].kind == x86::OperandKind::Address) {
       int64_t t = in.ops[0].imm;
@@ -180,7 +215,8 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     }
   }
 
-  for (const x86::Decoded& di : d.insts) {
+  for (size_t k = 0; k < code_end; k++) {  // the routines were matched whole
+    const x86::Decoded& di = d.insts[k];
     const x86::Instruction& in = di.inst;
     bool branch = in.mnemonic == x86::Mnemonic::Jmp || in.mnemonic == x86::Mnemonic::Jcc || in.mnemonic == x86::Mnemonic::Call;
     for (unsigned i = 0; i < in.numOperands && i < in.ops.size(); i++) {

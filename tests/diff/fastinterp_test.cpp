@@ -112,12 +112,15 @@ struct Rng {
 // Runs `p` on both interpreters for `scans` scans with random inputs (X0..X63,
 // WX0..WX15, D0..D15, F0..F7; `edgy` draws words from edge values) and
 // compares the whole images after every scan.  "" if they always agree.
-std::string compare_il(const Program& p, uint64_t seed, int scans, bool edgy) {
+// The reference interpreter against `test` (the fast interpreter unless
+// given); edgy: edge values in the inputs, and with wild_dt, in dt too.
+std::string compare_il(const Program& p, uint64_t seed, int scans, bool edgy, const EngineFactory& test = make_fast,
+                       bool wild_dt = false) {
   Layout L = p.layout();
   BinaryIl bin = encode_il(p);
   if (std::string why = validate_il(bin.code, L); !why.empty()) return "invalid IL: " + why;
   auto ref = make_interp_engine(bin.code, L);
-  auto fast = make_fast_interp_engine(bin.code, L);
+  auto fast = test(p);
   Memory a(L), b(L);
   Rng r{seed};
   const int32_t ints[] = {0, 1, -1, 2, 7, -7, 31, 32, 100, -100, INT32_MIN, INT32_MAX, INT32_MIN + 1, 65536};
@@ -140,7 +143,7 @@ std::string compare_il(const Program& p, uint64_t seed, int scans, bool edgy) {
                      : (i < 4 ? 0.1f + r.below(79) / 10.0f : -8.0f + r.below(161) / 10.0f);
       both([&](Memory& m) { m.set_real(i, v); });
     }
-    int32_t dt = r.below(61);
+    int32_t dt = wild_dt && r.below(2) ? ints[r.below(sizeof ints / sizeof ints[0])] : int32_t(r.below(61));
     both([&](Memory& m) {
       std::memcpy(m.data() + kSysDt, &dt, 4);
       m.set_bit(Area::S, kBitFirstScan, k == 1);
@@ -150,7 +153,7 @@ std::string compare_il(const Program& p, uint64_t seed, int scans, bool edgy) {
     for (uint32_t off = 0; off < L.size; off++) {
       if (a.bytes[off] == b.bytes[off]) continue;
       Place pl = describe(L, off);
-      return "scan " + std::to_string(k) + ": " + pl.name + ": reference " + value_at(L, a.bytes, off) + ", fast " +
+      return "scan " + std::to_string(k) + ": " + pl.name + ": reference " + value_at(L, a.bytes, off) + ", tested " +
              value_at(L, b.bytes, off);
     }
     uint32_t n = uint32_t(k);
@@ -336,6 +339,64 @@ TEST(FastInterp, MatchesOnEveryOperandForm) {
   EXPECT_LT(fi.specialized(), fi.il_instructions());  // some go to the generic handler
   for (uint64_t seed = 1; seed <= 20; seed++) {
     EXPECT_EQ(compare_il(p, seed, 80, seed % 2 == 0), "") << "seed " << seed;
+  }
+}
+
+// Timers and counters at their limits: presets from inputs (negative, 0,
+// INT32_MAX), elapsed times and counts written by MOV to any value, dt from
+// the edge values (negative, INT32_MAX: the exact-sum rule of advance).
+const char* kTimerEdgeIl = R"(; timers and counters at their limits
+.edges 4
+.rung line 1
+    LOAD    X0
+    MOV     WX0 T0
+    MOV     WX1 T1
+    MOV     WX2 T2
+    MOV     WX3 C0
+    MOV     WX4 C1
+.rung line 2
+    LOAD    X1
+    TON     T0 WX5
+    TOF     T1 WX6
+    TP      T2 WX7
+    CTU     C0 WX8 E0
+    CTD     C1 WX9 E1
+.rung line 3
+    LOAD    X2
+    AND     X3
+    TON     T3 0
+    TOF     T4 2147483647
+    TP      T5 -5
+    LOAD    X4
+    ORBLK
+    CTU     C2 2147483647 E2
+    CTD     C3 0 E3
+.rung line 4
+    LOAD    X5
+    RSTT    T1
+    RSTC    C0
+    LOADN   X6
+    RSTT    T5
+    RSTC    C3
+.end
+)";
+
+// The native code at every level on the operand forms, the timer limits and
+// the class programs (the -O2 code is branch-free there: cmov, setcc, masks).
+TEST(NativeEdges, EveryLevelMatchesOnOperandFormsAndTimerLimits) {
+  struct Level { const char* name; EngineFactory make; };
+  const Level levels[] = {{"-O0", make_native}, {"-O1", make_native_o1}, {"-O2", make_native_o2}};
+  Program edge = parse_il_text(kEdgeIl, "edge.il"), timers = parse_il_text(kTimerEdgeIl, "timers.il");
+  for (const Level& lv : levels) {
+    for (uint64_t seed = 1; seed <= 12; seed++) {
+      EXPECT_EQ(compare_il(edge, seed, 60, seed % 2 == 0, lv.make, true), "") << lv.name << " seed " << seed;
+      EXPECT_EQ(compare_il(timers, seed, 200, true, lv.make, seed % 3 != 0), "") << lv.name << " seed " << seed;
+    }
+    for (OpClass c : {OpClass::Move, OpClass::Arith, OpClass::Logic, OpClass::Special, OpClass::Timer, OpClass::Counter})
+      for (bool powered : {true, false}) {
+        Program p = parse_il_text(synth::synth_class_il(c, 300, 5, powered), "class.il");
+        EXPECT_EQ(compare_il(p, 10, 30, true, lv.make), "") << lv.name << " " << op_class_name(c);
+      }
   }
 }
 

@@ -25,15 +25,25 @@ grep -q '^|--\[X0\]--(Y0)--(Y1)$' "$tmp/err" && grep -q '^               \^$' "$
 "$bin/ldc" "$src/examples/traffic.ld" -o "$tmp/t.bin" && ok || bad "ldc -o"
 "$bin/ldc" "$src/examples/traffic.ld" --emit=hex -o "$tmp/t.hex" && ok || bad "ldc --emit=hex"
 for f in t.bin t.hex; do
-  for e in native interp; do
+  for e in native interp fast; do
     "$bin/ldrun" "$tmp/$f" --engine=$e --trace "$src/examples/traffic.csv" --watch Y0,Y1,Y2,T0 > "$tmp/$f.$e" || bad "ldrun $f $e"
     cmp -s "$tmp/$f.$e" "$tmp/t.bin.native" && ok || bad "$f on $e differs from t.bin on native"
   done
 done
 
+# a source compiled in memory at each -O level, and on the fast interpreter, runs as the image does
+for o in -O0 -O1 -O2; do
+  "$bin/ldrun" "$src/examples/traffic.ld" $o --trace "$src/examples/traffic.csv" --watch Y0,Y1,Y2,T0 > "$tmp/src$o" || bad "ldrun source $o"
+  cmp -s "$tmp/src$o" "$tmp/t.bin.native" && ok || bad "ldrun source $o differs from the image on native"
+done
+"$bin/ldrun" "$src/examples/traffic.ld" --engine=fast --trace "$src/examples/traffic.csv" --watch Y0,Y1,Y2,T0 > "$tmp/srcfast" || bad "ldrun source fast"
+cmp -s "$tmp/srcfast" "$tmp/t.bin.native" && ok || bad "ldrun source on fast differs from the image on native"
+expect_fail "-O on an image" "is for a source compiled to native code" "$bin/ldrun" "$tmp/t.bin" -O2
+
 # ldobjdump lists every rung with its IL
 "$bin/ldobjdump" "$tmp/t.bin" > "$tmp/dump" && ok || bad "ldobjdump"
 grep -q '; rung 1, line' "$tmp/dump" && grep -q ';   TON T' "$tmp/dump" && ok || bad "ldobjdump lacks rung/IL lines"
+grep -Eq '^; [0-9]+ bytes, [0-9]+ instructions, [0-9]+ IL; branch sites: [0-9]+ jcc, [0-9]+ jmp, [0-9]+ call$' "$tmp/dump" && ok || bad "ldobjdump lacks the branch-site count"
 
 # bad images are refused before anything runs
 printf 'garbage' > "$tmp/g.bin"

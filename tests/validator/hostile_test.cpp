@@ -251,6 +251,76 @@ TEST(Hostile, HarmlessTwinsAreAccepted) {
   EXPECT_EQ(refusal(image_around(scan_function({"mov r12, rax", "setne r15b", "xor r13d, r13d"}, at, true))), "");
 }
 
+// The shared timer/counter routines after the epilogue (docs/x86.md, "Shared
+// routines"): a call may go only to the entry of a routine that is exactly one
+// of the bodies as::x86::scanRoutine makes for the image's layout.
+x86::RoutineAreas layout_areas() {
+  Layout l = Layout::standard(0);
+  x86::RoutineAreas a;
+  a.tw = int32_t(l.addr(Area::TW, 0));
+  a.tq = int32_t(l.addr(Area::TQ, 0));
+  a.ti = int32_t(l.addr(Area::TI, 0));
+  a.cw = int32_t(l.addr(Area::CW, 0));
+  a.cq = int32_t(l.addr(Area::CQ, 0));
+  a.dt = int32_t(kSysDt);
+  return a;
+}
+
+// A scan function whose body calls `call_to` (an offset from the first
+// routine's entry), followed by the routines; `call_at` gets the call's offset.
+std::vector<uint8_t> with_routines(const std::vector<std::vector<x86::Instruction>>& routines, int64_t call_to,
+                                   uint32_t& call_at) {
+  std::vector<uint32_t> at;
+  std::vector<std::string> body = {"mov esi, 0x1", "mov edx, 0x3", "mov ecx, 0x64", "call 0x0", "nop"};
+  std::vector<uint8_t> code = scan_function(body, at);  // the call is rel32: its size does not change
+  const int64_t base = at[0], entry = int64_t(code.size());
+  body[3] = "call " + std::to_string(entry + call_to - base);
+  code = scan_function(body, at);
+  call_at = at[3];
+  for (const auto& r : routines)
+    for (const auto& in : r) {
+      std::vector<uint8_t> b = x86::encodeAt(in, code.size());
+      code.insert(code.end(), b.begin(), b.end());
+    }
+  return code;
+}
+
+TEST(Hostile, CallsOnlyToTheSharedRoutines) {
+  const x86::RoutineAreas areas = layout_areas();
+  const auto ton = x86::scanRoutine(x86::Routine::Ton, areas), ctu = x86::scanRoutine(x86::Routine::Ctu, areas);
+  uint32_t call_at = 0;
+  // the harmless twin: a call to the entry of a canonical routine, with another after it
+  EXPECT_EQ(refusal(image_around(with_routines({ton, ctu}, 0, call_at))), "");
+  int64_t ton_size = 0;
+  for (const auto& in : ton) ton_size += int64_t(x86::encodeAt(in, 0).size());
+  EXPECT_EQ(refusal(image_around(with_routines({ton, ctu}, ton_size, call_at))), "");  // rt_ctu's entry
+  auto refused = [&](const Image& im, const std::string& reason, bool at_call) {
+    std::string why = refusal(im);
+    EXPECT_NE(why.find(reason), std::string::npos) << why;
+    if (at_call) EXPECT_NE(why.find("at code offset " + hex(call_at) + ": "), std::string::npos) << why;
+  };
+  // a call into the middle of a routine (past its mask, on an instruction boundary)
+  int64_t mask = int64_t(x86::encodeAt(ton[0], 0).size());
+  refused(image_around(with_routines({ton}, mask, call_at)), "a direct call not to the entry of one of the code's routines", true);
+  // a call to code that is no routine: the epilogue, and the body itself
+  int64_t epilogue = 0;
+  for (const auto& in : x86::scanEpilogue(false)) epilogue += int64_t(x86::encodeAt(in, 0).size());
+  refused(image_around(with_routines({ton}, -epilogue, call_at)), "a direct call not to the entry", true);
+  refused(image_around(with_routines({}, -epilogue - 1, call_at)), "a direct call not to the entry", true);
+  // an unmasked operand: the routine without its `movzx edx, dl`
+  std::vector<x86::Instruction> unmasked(ton.begin() + 1, ton.end());
+  refused(image_around(with_routines({unmasked}, 0, call_at)), "does not end with the scan function's epilogue", false);
+  // a routine that loops: a jump back to its entry before the ret
+  std::vector<x86::Instruction> loops = ctu;
+  loops.insert(loops.end() - 1, x86::parse("jmp -0x40"));
+  refused(image_around(with_routines({loops}, 0, call_at)), "does not end with the scan function's epilogue", false);
+  // a routine built for other areas: its accesses are not the layout's timers
+  x86::RoutineAreas off = areas;
+  off.tw = int32_t(kSize) - 4;
+  refused(image_around(with_routines({x86::scanRoutine(x86::Routine::Ton, off)}, 0, call_at)),
+          "does not end with the scan function's epilogue", false);
+}
+
 TEST(Hostile, EntryPointsMustBeTheFrame) {
   std::vector<uint32_t> at;
   Image im = image_around(scan_function({"nop"}, at));
