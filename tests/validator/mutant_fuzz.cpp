@@ -270,8 +270,8 @@ class Mutator {
 
   std::string retarget(std::vector<uint8_t>& code, const std::vector<x86::Decoded>& in) {
     const x86::Decoded* b = find(in, [](const x86::Instruction& i) {
-      return (i.mnemonic == x86::Mnemonic::Jmp || i.mnemonic == x86::Mnemonic::Jcc) && i.numOperands &&
-             i.ops[0].kind == x86::OperandKind::Address;
+      return (i.mnemonic == x86::Mnemonic::Jmp || i.mnemonic == x86::Mnemonic::Jcc || i.mnemonic == x86::Mnemonic::Call) &&
+             i.numOperands && i.ops[0].kind == x86::OperandKind::Address;  // calls: to the shared routines
     });
     if (!b) return replace(code, in[pick(in.size())]);
     x86::Instruction i = b->inst;
