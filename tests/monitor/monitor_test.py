@@ -281,6 +281,7 @@ def case_load():
     print(err)
 
 
-{"page_and_stream": case_page_and_stream, "refusals": case_refusals, "write_and_force": case_write_and_force,
- "load": case_load}[CASE]()
-print("ok")
+if __name__ == "__main__":
+    {"page_and_stream": case_page_and_stream, "refusals": case_refusals, "write_and_force": case_write_and_force,
+     "load": case_load}[CASE]()
+    print("ok")
