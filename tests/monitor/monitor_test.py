@@ -22,8 +22,8 @@ def fail(msg):
 
 
 class Ldrun:
-    def __init__(self, args):
-        self.p = subprocess.Popen([os.path.join(LDRUN_DIR, "ldrun")] + args, stdout=subprocess.DEVNULL,
+    def __init__(self, args, stdout=subprocess.DEVNULL):
+        self.p = subprocess.Popen([os.path.join(LDRUN_DIR, "ldrun")] + args, stdout=stdout,
                                   stderr=subprocess.PIPE, text=True, cwd=ROOT)
         line = self.p.stderr.readline()
         if "monitor on http://127.0.0.1:" not in line:
@@ -281,7 +281,76 @@ def case_load():
     print(err)
 
 
+def case_trace_output():
+    # the decorator forwards everything: with a page watching and writes allowed (none
+    # made), the trace driver prints exactly the example's expected CSV
+    exp = os.path.join(ROOT, "examples/traffic.expected")
+    watch = open(exp).readline().strip().split(",", 1)[1]
+    out = open(os.path.join(os.environ.get("TMPDIR", "/tmp"), "ldc_monitor_trace_%d.csv" % os.getpid()), "w+")
+    try:
+        m = Ldrun(["examples/traffic.ld", "--trace", "examples/traffic.csv", "--watch", watch, "--period", "5ms",
+                   "--monitor", "127.0.0.1:0", "--monitor-write"], stdout=out)
+        ev = events(m.port, 1.5)
+        if len(ev) < 10:
+            fail("%d events" % len(ev))
+        m.stop()
+        out.seek(0)
+        got = out.read()
+    finally:
+        out.close()
+        os.unlink(out.name)
+    if got != open(exp).read():
+        fail("the trace output under the monitor differs from examples/traffic.expected:\n" + got[:2000])
+
+
+def case_project():
+    # a project of three tasks on two processors: one section per task, writes by task
+    m = Ldrun(["--project", "tests/runtime/projects/shared.ldp", "--io=none", "--monitor", "127.0.0.1:0",
+               "--monitor-write"])
+    p = m.port
+    prog = get_json(p, "/api/program")
+    tasks = [(t["name"], t["period_us"], len(t["rungs"])) for t in prog["tasks"]]
+    if [t[:2] for t in tasks] != [("fast", 1000), ("belt", 5000), ("slow", 20000)] or min(t[2] for t in tasks) < 1:
+        fail("tasks: %s" % tasks)
+    if any("rows" not in r for t in prog["tasks"] for r in t["rungs"]):
+        fail("a rung of the project is not drawn")
+    ev = events(p, 1.0)
+    if len(ev) < 10 or any(ev[-1]["tasks"][i]["scan"] <= ev[0]["tasks"][i]["scan"] for i in range(3)):
+        fail("not every task advances in the event stream")
+
+    def value(task, name):
+        st = get_json(p, "/api/state")
+        names = [d[0] for d in prog["tasks"][task]["devices"]]
+        return st["tasks"][task]["dev"][names.index(name)]
+
+    # the shared input X0 (fill_btn) starts the mixer's valve Y0 in task fast
+    code, _, text = post(p, "/api/write", "device=fill_btn&value=1")
+    if code != 200:
+        fail("write fill_btn: %d %s" % (code, text))
+    time.sleep(0.2)
+    if value(0, "Y0") != "1":
+        fail("the valve of task fast did not open")
+    # belt_on is an alias of the conveyor program (task belt)
+    code, _, text = post(p, "/api/write", "device=belt_on&value=1&task=belt")
+    if code != 200:
+        fail("write belt_on in task belt: %d %s" % (code, text))
+    code, _, text = post(p, "/api/write", "device=belt_on&value=1")
+    if code != 400:
+        fail("belt_on is not an alias of task fast's program, expected 400: %d %s" % (code, text))
+    time.sleep(0.2)
+    if value(1, "Y20") != "1":
+        fail("the belt of task belt did not start")
+    code, _, text = post(p, "/api/stop", "task=fast")
+    if code != 501:
+        fail("per-task STOP: expected 501, got %d %s" % (code, text))
+    code, _, text = post(p, "/api/stop", "")
+    if code != 200 or get_json(p, "/api/state")["state"] != "STOP":
+        fail("STOP of the project: %d %s" % (code, text))
+    m.stop()
+
+
 if __name__ == "__main__":
     {"page_and_stream": case_page_and_stream, "refusals": case_refusals, "write_and_force": case_write_and_force,
-     "load": case_load}[CASE]()
+     "load": case_load, "project": case_project,
+     "trace_output": case_trace_output}[CASE]()
     print("ok")
