@@ -313,6 +313,8 @@ struct Monitor::Impl {
   Runtime* rt = nullptr;
   std::unique_ptr<http::Server> server;
   std::string program_json;
+  std::vector<TaskStats> stats;  // the server thread's
+  std::chrono::steady_clock::time_point stats_at{};
 
   std::mutex wmu;  // writes and forces
   std::vector<Write> pending;
@@ -368,8 +370,11 @@ struct Monitor::Impl {
   // ---- on the server thread
   std::string state_json() {
     std::string s = "{\"state\":" + jstr(rt ? state_name(rt->state()) : "?");
-    std::vector<TaskStats> st;
-    if (rt) st = rt->stats();
+    // The runtime's statistics sort its sample rings under a lock the task only
+    // try_locks (a sample is lost while it is held): refreshed twice a second.
+    auto now = std::chrono::steady_clock::now();
+    if (rt && now - stats_at > std::chrono::milliseconds(500)) stats = rt->stats(), stats_at = now;
+    const std::vector<TaskStats>& st = stats;
     s += ",\"tasks\":[";
     std::vector<uint8_t> mem, global;
     for (size_t ti = 0; ti < tasks.size(); ti++) {
