@@ -135,9 +135,9 @@ struct TaskView {
   std::vector<RungView> rungs;
   std::vector<Dev> devs;
 
-  // the snapshot, written by the task thread at its scan boundary
+  // the snapshot of its memory, written by the task thread at its scan boundary
   std::mutex snap_mu;
-  std::vector<uint8_t> mem, global;
+  std::vector<uint8_t> mem;
   uint64_t scan = 0;
   std::atomic<bool> want{false};
 };
@@ -314,6 +314,9 @@ struct Monitor::Impl {
   std::unique_ptr<http::Server> server;
   std::string program_json;
   std::vector<TaskStats> stats;  // the server thread's
+  std::mutex global_mu;          // the global image's snapshot
+  std::vector<uint8_t> global_snap;
+  std::atomic<bool> want_global{false};
   std::chrono::steady_clock::time_point stats_at{};
 
   std::mutex wmu;  // writes and forces
@@ -355,16 +358,22 @@ struct Monitor::Impl {
     }
     have_writes.store(!pending.empty() || !forced.empty(), std::memory_order_release);
   }
+  // The global image is copied by whichever task reaches its boundary first
+  // (a held task does not scan, yet its shared devices stay current).
   void snapshot(size_t task, uint64_t scan, const uint8_t* mem, const uint8_t* global) {
     if (task >= tasks.size()) return;
     TaskView& t = *tasks[task];
-    if (!t.want.load(std::memory_order_relaxed)) return;
-    if (!t.snap_mu.try_lock()) return;  // the server is reading: next scan
-    std::memcpy(t.mem.data(), mem, t.mem.size());
-    if (global) std::memcpy(t.global.data(), global, t.global.size());
-    t.scan = scan;
-    t.snap_mu.unlock();
-    t.want.store(false, std::memory_order_relaxed);
+    if (t.want.load(std::memory_order_relaxed) && t.snap_mu.try_lock()) {  // busy: the next scan
+      std::memcpy(t.mem.data(), mem, t.mem.size());
+      t.scan = scan;
+      t.snap_mu.unlock();
+      t.want.store(false, std::memory_order_relaxed);
+    }
+    if (global && want_global.load(std::memory_order_relaxed) && global_mu.try_lock()) {
+      std::memcpy(global_snap.data(), global, global_snap.size());
+      global_mu.unlock();
+      want_global.store(false, std::memory_order_relaxed);
+    }
   }
 
   // ---- on the server thread
@@ -377,16 +386,22 @@ struct Monitor::Impl {
     const std::vector<TaskStats>& st = stats;
     s += ",\"tasks\":[";
     std::vector<uint8_t> mem, global;
+    {
+      std::lock_guard<std::mutex> l(global_mu);
+      global = global_snap;
+    }
+    want_global.store(true, std::memory_order_relaxed);
     for (size_t ti = 0; ti < tasks.size(); ti++) {
       TaskView& t = *tasks[ti];
       uint64_t scan;
       {
         std::lock_guard<std::mutex> l(t.snap_mu);
-        mem = t.mem, global = t.global, scan = t.scan;
+        mem = t.mem, scan = t.scan;
       }
       t.want.store(true, std::memory_order_relaxed);
       View v{t.layout, mem.data(), global.data()};
-      s += std::string(ti ? "," : "") + "{\"name\":" + jstr(t.name) + ",\"scan\":" + std::to_string(scan);
+      s += std::string(ti ? "," : "") + "{\"name\":" + jstr(t.name) + ",\"scan\":" + std::to_string(scan) +
+           ",\"held\":" + (rt && rt->task_held(ti) ? "true" : "false");
       if (ti < st.size()) {
         const TaskStats& x = st[ti];
         s += ",\"scans\":" + std::to_string(x.scans) + ",\"overruns\":" + std::to_string(x.overruns) +
@@ -534,9 +549,10 @@ struct Monitor::Impl {
       if (p == "/api/program") return {200, "application/json", program_json, false};
       if (p == "/api/state") {  // a fresh snapshot: wait up to 250 ms for the next scan boundary
         for (auto& t : tasks) t->want.store(true);
+        want_global.store(true);
         for (int i = 0; i < 50; i++) {
-          bool all = true;
-          for (auto& t : tasks) all = all && !t->want.load();
+          bool all = !want_global.load();
+          for (size_t k = 0; k < tasks.size(); k++) all = all && (!tasks[k]->want.load() || (rt && rt->task_held(k)));
           if (all) break;
           std::this_thread::sleep_for(std::chrono::milliseconds(5));
         }
@@ -559,8 +575,13 @@ struct Monitor::Impl {
       if (p == "/api/write") return write(r);
       if (!rt) return text(409, "no runtime");
       auto task = http::form_value(r.body, "task");
-      if (task && !task->empty() && tasks.size() > 1)
-        return text(501, "RUN/STOP of one task is not available: the runtime starts and stops all tasks together");
+      if (task && !task->empty()) {  // one task: held or released, the others run on
+        size_t ti = rt->find_task(*task);
+        if (ti == SIZE_MAX) return text(400, "unknown task '" + *task + "'");
+        if (p == "/api/run") rt->run_task(ti);
+        else rt->stop_task(ti);
+        return text(200, *task + (rt->task_held(ti) ? " STOP" : " RUN"));
+      }
       if (p == "/api/run") rt->run();
       else rt->stop();
       return text(200, state_name(rt->state()));
@@ -576,7 +597,7 @@ class MonitorDriver : public IoDriver {
   MonitorDriver(std::unique_ptr<IoDriver> inner, std::shared_ptr<Monitor::Impl> m) : inner_(std::move(inner)), m_(std::move(m)) {}
   void attach(uint8_t* global, const Layout& layout, uint32_t block_size) override {
     m_->glayout = layout;
-    for (auto& t : m_->tasks) t->global.assign(layout.size, 0);
+    m_->global_snap.assign(layout.size, 0);
     inner_->attach(global, layout, block_size);
   }
   void read_inputs(uint8_t* global, const ScanContext& c) override {
@@ -634,7 +655,6 @@ Monitor::Monitor(std::vector<MonitorTask> tasks, MonitorOptions opt) : impl_(std
     t->layout = mt.image.layout;
     t->aliases = mt.image.aliases;
     t->mem.assign(t->layout.size, 0);
-    t->global.assign(impl_->glayout.size, 0);
     Program p = program_of(mt.image);
     collect_devices(*t, p);
     for (const Rung& r : p.rungs) {

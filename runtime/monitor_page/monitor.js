@@ -55,7 +55,13 @@ function render() {
   root.textContent = '';
   program.tasks.forEach((t, ti) => {
     const sec = h('div', null, root, 'task');
-    h('h2', 'task ' + t.name + ' \u00b7 period ' + (t.period_us / 1000) + ' ms', sec);
+    const head = h('h2', 'task ' + t.name + ' \u00b7 period ' + (t.period_us / 1000) + ' ms ', sec);
+    t.stateEl = h('span', '', head, 'state');
+    if (program.write && program.tasks.length > 1) {
+      const task = encodeURIComponent(t.name);
+      h('button', 'RUN', head).addEventListener('click', () => post('/api/run', 'task=' + task));
+      h('button', 'STOP', head).addEventListener('click', () => post('/api/stop', 'task=' + task));
+    }
     t.view = t.rungs.map((r, ri) => drawRung(t, ti, r, ri, sec));
   });
   if (program.write) {
@@ -142,6 +148,8 @@ function update(state) {
   state.tasks.forEach((ts, ti) => {
     const t = program.tasks[ti];
     if (!t) return;
+    const ts_state = state.state === 'RUN' && ts.held ? 'STOP' : state.state;
+    if (t.stateEl.textContent !== ts_state) { t.stateEl.textContent = ts_state; t.stateEl.className = 'state ' + ts_state; }
     ts.rungs.forEach((rs, ri) => {
       const v = t.view[ri];
       if (!v || !rs.n) return;

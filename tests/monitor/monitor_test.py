@@ -340,9 +340,33 @@ def case_project():
     time.sleep(0.2)
     if value(1, "Y20") != "1":
         fail("the belt of task belt did not start")
-    code, _, text = post(p, "/api/stop", "task=fast")
-    if code != 501:
-        fail("per-task STOP: expected 501, got %d %s" % (code, text))
+    # STOP of task belt alone: its belt output goes to the safe state, task fast scans on
+    code, _, text = post(p, "/api/stop", "task=belt")
+    if code != 200 or text.strip() != "belt STOP":
+        fail("STOP of task belt: %d %s" % (code, text))
+    time.sleep(0.2)
+    st = get_json(p, "/api/state")
+    if not st["tasks"][1]["held"] or st["tasks"][0]["held"] or st["state"] != "RUN":
+        fail("held flags: %s" % [(t["name"], t["held"]) for t in st["tasks"]])
+    s0, s1 = st["tasks"][0]["scan"], st["tasks"][1]["scan"]
+    time.sleep(0.3)
+    st = get_json(p, "/api/state")
+    if st["tasks"][0]["scan"] <= s0 or st["tasks"][1]["scan"] != s1:
+        fail("task fast must scan on and task belt must not: %s -> %s" % ((s0, s1), (st["tasks"][0]["scan"], st["tasks"][1]["scan"])))
+    if value(0, "Y0") != "1":
+        fail("task fast's valve was touched by stopping task belt")
+    if value(1, "Y20") != "0":
+        fail("task belt's output Y20 is not in the safe state while it is stopped")
+    code, _, text = post(p, "/api/run", "task=belt")
+    if code != 200 or text.strip() != "belt RUN":
+        fail("RUN of task belt: %d %s" % (code, text))
+    time.sleep(0.3)
+    st = get_json(p, "/api/state")
+    if st["tasks"][1]["held"] or value(1, "Y20") != "1":
+        fail("task belt did not run again: %s" % st["tasks"][1]["scan"])
+    code, _, text = post(p, "/api/stop", "task=nope")
+    if code != 400:
+        fail("unknown task: %d %s" % (code, text))
     code, _, text = post(p, "/api/stop", "")
     if code != 200 or get_json(p, "/api/state")["state"] != "STOP":
         fail("STOP of the project: %d %s" % (code, text))
