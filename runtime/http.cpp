@@ -324,6 +324,7 @@ void Server::loop() {
     int n = poll(fds.data(), fds.size(), wait);
     if (n < 0 && errno != EINTR) break;
     int64_t now = now_ms();
+    const size_t polled = fds.size() - 2;  // connections accepted below were not polled yet
     if (n > 0 && (fds[0].revents & POLLIN)) {
       while (true) {
         int fd = accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
@@ -340,10 +341,10 @@ void Server::loop() {
         conns.push_back(std::move(c));
       }
     }
-    for (size_t i = 0; i < conns.size(); i++) {
+    for (size_t i = 0; i < polled; i++) {
       if (n <= 0) break;
       Conn& c = *conns[i];
-      short re = fds[i + 2].fd == c.fd ? fds[i + 2].revents : 0;
+      short re = fds[i + 2].revents;
       if (re & (POLLIN | POLLHUP | POLLERR)) {
         char tmp[16384];
         ssize_t k = recv(c.fd, tmp, sizeof tmp, 0);
