@@ -11,11 +11,12 @@
 #include "driver/c40_driver.h"
 #include "driver/driver.h"
 #include "frontend/frontend.h"
+#include "ir/ladder.h"
 
 using namespace ldc;
 
 static const char kUsage[] =
-    "usage: ldc FILE [-o OUT] [--emit=tree|il|iec-il|asm|listing|hex|c] [--target=x86-64|c40] [-O0|-O1|-O2]\n"
+    "usage: ldc FILE [-o OUT] [--emit=tree|il|iec-il|ld|asm|listing|hex|c] [--target=x86-64|c40] [-O0|-O1|-O2]\n"
     "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .xml (PLCopen TC6), .rtsp (paper 000), .sfc (SFC chart)\n"
     "       -O0 templates (paper 003), -O1 peephole, -O2 bit stack in registers; for both targets\n"
     "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n";
@@ -81,6 +82,14 @@ int main(int argc, char** argv) {
       text = print_tree(c.tree);
     } else if (emit == "il") {
       text = print_il_text(c.il);
+    } else if (emit == "ld") {                               // the ladder grid (docs/format.md)
+      try {
+        text = print_ladder(draw_ladder(raise_to_tree(c.il)), input);
+      } catch (CompileError& e) {
+        std::string msg = format_error(input, read_file(input), e.line, e.col, e.what());
+        if (!msg.empty() && msg.back() == '\n') msg.pop_back();
+        throw UserError(msg);
+      }
     } else if (emit == "iec-il") {                           // IEC 61131-3 IL
       text = print_iec_il(c.il);
     } else if (emit == "c") {                                   // the C route

@@ -19,6 +19,7 @@
 #include "driver/ldrun_io.h"
 #include "driver/driver.h"
 #include "runtime/modbus.h"
+#include "runtime/monitor.h"
 #include "runtime/plc.h"
 #include "runtime/runtime.h"
 #include "runtime/sandbox.h"
@@ -31,6 +32,7 @@ static const char kUsage[] =
     "             [--free-run] [--rt] [--watchdog 200ms] [--retain FILE] [--retain-every 1s] [--cold] [--stop]\n"
     "             [--control=stdin|none] [--reload] [--stats] [--out FILE] [--block 16] [--scans N]\n"
     "             [--modbus [HOST:]PORT] [--modbus-connections 16]   a Modbus TCP server (127.0.0.1 unless HOST is given; also with --trace)\n"
+    "             [--monitor HOST:PORT [--monitor-write] [--monitor-remote]]  (the live ladder view, docs/runtime.md)\n"
     "       FILE: an image (.bin, .hex) or a source ldc reads (.ld, .il, .xml, .rtsp, .sfc), compiled in memory\n"
     "             (native code at -O0 unless -O1 or -O2 is given; --engine=fast is the fast interpreter)\n"
     "       --sandbox: run the scans in a child process that seccomp confines to its socket (native, interp, c)\n";
@@ -44,6 +46,8 @@ struct RtArgs {
   std::string modbus, modbus_connections;  // --modbus [HOST:]PORT, --modbus-connections N
   bool free_run = false, rt = false, cold = false, stop = false, stats = false, reload = false;
   bool sandbox = false;  // also in trace mode: it does not select the runtime
+  std::string monitor;   // --monitor HOST:PORT (runtime/monitor.h)
+  bool monitor_write = false, monitor_remote = false;
 };
 
 // An image for a task: an image file as it is, or a source compiled in memory.
@@ -216,6 +220,24 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
     } catch (std::runtime_error& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
   }
 
+  // The monitor wraps the driver: snapshots after scans, writes before them.
+  std::unique_ptr<Monitor> monitor;
+  std::string monitor_host;
+  if (!a.monitor.empty()) {
+    MonitorOptions mo;
+    try {
+      std::tie(mo.host, mo.port) = parse_monitor_address(a.monitor, a.monitor_remote);
+    } catch (std::exception& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
+    mo.write = a.monitor_write;
+    monitor_host = mo.host;
+    std::vector<MonitorTask> mts;
+    for (const TaskSpec& s : specs) mts.push_back({s.name, s.period_us, s.image});
+    monitor = std::make_unique<Monitor>(std::move(mts), mo);
+    driver = monitor->wrap(std::move(driver));
+  } else if (a.monitor_write || a.monitor_remote) {
+    throw UserError("ldrun: error: --monitor-write and --monitor-remote need --monitor HOST:PORT");
+  }
+
   EngineFactory engines = [engine, sandbox = a.sandbox](const Image& img) -> std::unique_ptr<Engine> {
     std::unique_ptr<Engine> e;
     if (engine == "interp") e = make_interp_engine(img.il, img.layout);
@@ -238,6 +260,15 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
   } catch (UserError&) { throw; } catch (std::exception& e) {
     std::string m = e.what();
     throw UserError(m.find("error:") == std::string::npos ? "ldrun: error: " + m : m);
+  }
+  if (monitor) {
+    monitor->attach(rt.get());
+    try {
+      monitor->start();
+    } catch (std::exception& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
+    std::string host = monitor_host.find(':') != std::string::npos ? "[" + monitor_host + "]" : monitor_host;
+    std::fprintf(stderr, "ldrun: monitor on http://%s:%u/%s\n", host.c_str(), unsigned(monitor->port()),
+                 a.monitor_write ? " (writes allowed)" : "");
   }
   rt->start();
   std::atomic<bool> done{false};
@@ -323,6 +354,9 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
   // With the line protocol a fault leaves the runtime up (status, run, quit);
   // without it, a fault ends the run (exit status 2).
   rt->wait_finished(-1, !control);
+  // The monitor keeps showing the last state until SIGINT/SIGTERM (or quit).
+  while (monitor && !rt->quit_requested()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  if (monitor) monitor->stop();
   bool faulted = rt->faulted();
   done.store(true);
   sig_thread.join();
@@ -372,7 +406,9 @@ int main(int argc, char** argv) {
           opt_value("--io", rta.io) || opt_value("--control", rta.control) || opt_value("--clock", rta.clock) ||
           opt_value("--watchdog", rta.watchdog) || opt_value("--retain-every", rta.retain_every) ||
           opt_value("--retain", rta.retain) || opt_value("--out", rta.out) || opt_value("--block", rta.block) ||
-          opt_value("--modbus-connections", rta.modbus_connections) || opt_value("--modbus", rta.modbus)) {
+          opt_value("--modbus-connections", rta.modbus_connections) || opt_value("--modbus", rta.modbus) ||
+          opt_value("--monitor", rta.monitor) || flag("--monitor-write", rta.monitor_write) ||
+          flag("--monitor-remote", rta.monitor_remote)) {
       } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");
       else if (a == "--cycles") cycles = true;  // C40 engines: cycles and us per scan
       else if (a == "-O0" || a == "-O1" || a == "-O2") opt_level = a[2] - '0';

@@ -132,6 +132,7 @@ class Parser {
   std::map<std::string, DeviceRef> aliases_;  // key: upper-case name
   std::vector<LabelDef> labels_;
   std::vector<Alias> alias_list_;  // in source order
+  std::vector<DeviceRef> retain_;  // `retain Dn` lines, in source order
 
   void read_lines();
   void declarations();
@@ -193,8 +194,14 @@ void Parser::declarations() {
         if (upper(d.name) == upper(w[1].text))
           fail(l.no, w[1].col, "duplicate label '" + w[1].text + "' (first defined on line " + std::to_string(d.line) + ")");
       labels_.push_back({w[1].text, l.no});
+    } else if (kw == "RETAIN") {
+      // retain = "retain" D-word : the word keeps its value across restarts (docs/il.md, .retain)
+      if (w.size() != 2) fail(l.no, col0, "expected: retain Dn");
+      DeviceRef d = device(w[1]);
+      if (d.dev != Dev::D) fail(l.no, w[1].col, "retain needs a D word (D0..D" + std::to_string(device_count(Dev::D) - 1) + ")");
+      if (std::find(retain_.begin(), retain_.end(), d) == retain_.end()) retain_.push_back(d);
     } else if (kw != "RUNG") {
-      fail(l.no, col0, "expected a rung row starting with '|', 'alias', 'label', 'rung \"title\"' or a comment");
+      fail(l.no, col0, "expected a rung row starting with '|', 'alias', 'label', 'retain', 'rung \"title\"' or a comment");
     }
   }
 }
@@ -255,7 +262,7 @@ std::string joined_words(const std::vector<Word>& w) {
   return s;
 }
 
-// contact = ["/"] bit | ("P" | "N") bit | value cmp value
+// contact = ["/"] bit | ("P" | "N") bit | value cmp value | "TRUE"
 // cmp     = "==" | "=" | "!=" | "<>" | "<" | "<=" | ">" | ">="
 TreeNode Parser::input_element(const std::string& inner, int line, int col) {
   TreeNode n;
@@ -297,6 +304,9 @@ TreeNode Parser::input_element(const std::string& inner, int line, int col) {
       n.elem.op = upper(w[0].text) == "P" ? Op::LOADP : Op::LOADF;
       n.elem.a[0] = bit(w[1], 'b');
       n.text = upper(w[0].text) + " " + w[1].text;
+    } else if (w.size() == 1 && upper(w[0].text) == "TRUE" && !aliases_.count("TRUE")) {
+      n.elem.op = Op::TRUE;  // always closed (IL TRUE); an alias named TRUE keeps its meaning
+      n.text = "TRUE";
     } else if (w.size() == 1) {
       n.elem.op = Op::LOAD;
       n.elem.a[0] = bit(w[0], 'b');
@@ -703,6 +713,7 @@ TreeProgram Parser::program() {
   TreeProgram p;
   p.source = file_;
   p.aliases = alias_list_;
+  p.retain = retain_;
   std::vector<std::string> labels;
   std::string title;
   int title_line = 0;

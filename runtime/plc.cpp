@@ -219,6 +219,8 @@ struct Task {
   std::atomic<int64_t> scan_begin{0};  // of the scan under way, 0 if none
   std::atomic<int64_t> last_scan_ns{0}, max_scan_ns{0};
   std::atomic<bool> finished{false};
+  std::atomic<bool> held{false};     // stopped alone (stop_task); changed under glock
+  std::atomic<bool> restart{false};  // run_task: warm restart at the next scan
 
   // the task thread's own
   uint64_t epoch = 0;
@@ -376,11 +378,12 @@ struct Runtime::Impl {
     bool idle = true;
     while (!stopping.load()) {
       State s = state.load();
-      if (s != State::Run || t.finished.load()) {
-        // STOP, FAULT or done: serve requests, wait for RUN.
+      if (s != State::Run || t.finished.load() || t.held.load()) {
+        // STOP, FAULT, held or done: serve requests, wait for RUN.
         std::unique_lock<std::mutex> l(t.req_mu);
         t.req_cv.wait_for(l, std::chrono::milliseconds(50), [&] {
-          return t.has_req.load() || stopping.load() || (state.load() == State::Run && !t.finished.load());
+          return t.has_req.load() || stopping.load() ||
+                 (state.load() == State::Run && !t.finished.load() && !t.held.load());
         });
         l.unlock();
         service(t);
@@ -397,6 +400,7 @@ struct Runtime::Impl {
       if (state.load() != State::Run || stopping.load()) continue;
       const uint64_t ep = epoch.load();
       if (ep != t.epoch) warm_restart(t), t.epoch = ep;
+      if (t.restart.exchange(false)) warm_restart(t);
       Prog& p = *t.prog;
       uint8_t* mem = t.mem.data();
       const int64_t begin = now_ns();
@@ -412,7 +416,7 @@ struct Runtime::Impl {
       bool published = false;
       {
         std::lock_guard<ImageLock> g(glock);
-        if (state.load() == State::Run && epoch.load() == t.epoch) {
+        if (state.load() == State::Run && epoch.load() == t.epoch && !t.held.load()) {
           io->read_inputs(global.data(), ScanContext{ti, scan_no, p.input_runs});
           for (const Run& r : p.in_runs) std::memcpy(mem + r.offset, global.data() + r.offset, r.size);
         }
@@ -448,7 +452,7 @@ struct Runtime::Impl {
       std::memcpy(mem + kSysScan, &n32, 4);
       {
         std::lock_guard<ImageLock> g(glock);
-        if (state.load() == State::Run && epoch.load() == t.epoch) {
+        if (state.load() == State::Run && epoch.load() == t.epoch && !t.held.load()) {
           // Changed bytes only: another task on this processor may write
           // other points of a block this task writes.
           size_t j = 0;
@@ -806,6 +810,37 @@ void Runtime::stop() {
     if (!e.empty()) m.log("ldrun: warning: retentive save failed: " + e);
   }
 }
+
+void Runtime::stop_task(size_t i) {
+  Impl& m = *impl_;
+  Task& t = *m.tasks.at(i);
+  std::lock_guard<std::mutex> c(m.ctl_mu);  // ctl_accesses
+  std::lock_guard<ImageLock> g(m.glock);
+  if (t.held.exchange(true)) return;
+  // the task's own Y and WY points to the safe state, then published
+  std::vector<Run> runs;
+  for (const IoAccess& a : t.ctl_accesses) {
+    if (!a.write || (a.area != Area::Y && a.area != Area::WY)) continue;
+    uint32_t size = a.area == Area::Y ? 1 : 4, off = m.glayout.addr(a.area, a.index);
+    std::memset(m.global.data() + off, 0, size);
+    runs.push_back(Run{off, size});
+  }
+  m.io->write_outputs(m.global.data(), ScanContext{i, t.scans.load(), runs});
+}
+
+void Runtime::run_task(size_t i) {
+  Impl& m = *impl_;
+  Task& t = *m.tasks.at(i);
+  {
+    std::lock_guard<ImageLock> g(m.glock);
+    if (!t.held.load()) return;
+    t.restart.store(true);
+    t.held.store(false);
+  }
+  t.req_cv.notify_all();
+}
+
+bool Runtime::task_held(size_t i) const { return impl_->tasks.at(i)->held.load(); }
 
 void Runtime::shutdown() {
   Impl& m = *impl_;

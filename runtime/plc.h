@@ -138,6 +138,14 @@ class Runtime {
   void run();                   // STOP/FAULT -> RUN: warm restart (retentive memory kept)
   void stop();                  // RUN -> STOP: outputs to the safe state, retentive memory saved
   void shutdown();              // STOP, final save, threads joined, driver detached (idempotent)
+  // One task alone (the monitor's per-task RUN/STOP): stop_task holds task i
+  // -- no more scans, the Y and WY points it writes go to the safe state (0)
+  // and are published -- while the others run on; run_task releases it with
+  // a warm restart of its memory (retentive memory kept) at its next scan.
+  // The runtime's state does not change.  Throws std::out_of_range for a bad index.
+  void stop_task(size_t i);
+  void run_task(size_t i);
+  bool task_held(size_t i) const;
   State state() const;
   bool faulted() const { return state() == State::Fault; }
   std::string fault_message() const;

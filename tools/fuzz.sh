@@ -1,6 +1,6 @@
 #!/bin/sh
 # tools/fuzz.sh NAME SECONDS -- fuzz one reader with libFuzzer (docs/fuzzing.md).
-#   NAME: ld ldmicro plcopen iltext ilbin trace image hex project iecil rtsp sfc modbus
+#   NAME: ld ldmicro plcopen iltext ilbin trace image hex project iecil rtsp sfc modbus http
 # Builds build-fuzz/ with clang (-fsanitize=fuzzer,address,undefined) if needed,
 # seeds fuzz-corpus/NAME/ (git-ignored) from the reader's seed directories,
 # runs for SECONDS and prints the executions.  Crashes land in fuzz-corpus/NAME-crashes/.

@@ -1,0 +1,712 @@
+// runtime/monitor.cpp -- see monitor.h.
+#include "runtime/monitor.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+#include <thread>
+
+#include "ir/ladder.h"
+#include "runtime/http.h"
+#include "runtime/monitor_page.h"  // generated: kMonitorHtml, kMonitorJs, kMonitorCss
+
+namespace ldc::plc {
+namespace {
+
+// ---------------------------------------------------------------- JSON
+
+std::string jstr(std::string_view s) {
+  std::string o = "\"";
+  for (char c : s) {
+    unsigned char u = static_cast<unsigned char>(c);
+    if (c == '"' || c == '\\') o += '\\', o += c;
+    else if (c == '\n') o += "\\n";
+    else if (u < 0x20 || u == 0x7f) {
+      char b[8];
+      std::snprintf(b, sizeof b, "\\u%04x", u);
+      o += b;
+    } else o += c;
+  }
+  return o + "\"";
+}
+std::string jnum(double v) {
+  if (!std::isfinite(v)) return "null";
+  char b[32];
+  std::snprintf(b, sizeof b, "%.6g", v);
+  return b;
+}
+
+// ---------------------------------------------------------------- programs
+
+bool is_shared(Area a) { return a == Area::X || a == Area::Y || a == Area::M || a == Area::K || a == Area::WX || a == Area::WY; }
+
+const char* device_prefix_of(Area a) {
+  switch (a) {
+    case Area::X: return "X";
+    case Area::Y: return "Y";
+    case Area::M: return "M";
+    case Area::K: return "K";
+    case Area::S: return "S";
+    case Area::TQ: case Area::TW: return "T";
+    case Area::CQ: case Area::CW: return "C";
+    case Area::WX: return "WX";
+    case Area::WY: return "WY";
+    case Area::D: return "D";
+    case Area::F: return "F";
+    default: return "?";
+  }
+}
+
+// The program of an image, rung by rung as its line map splits it; jump
+// targets (byte offsets in the binary IL) become labels L<rung>.
+Program program_of(const Image& img) {
+  Program p;
+  p.source = img.source;
+  p.aliases = img.aliases;
+  std::vector<Instr> code;
+  std::vector<uint32_t> at;
+  for (uint32_t off = 0; off < img.il.size();) {
+    Instr in;
+    at.push_back(off);
+    off = decode_instr(img.il, off, in);
+    code.push_back(in);
+  }
+  bool mapped = img.lines.size() == code.size();
+  for (size_t k = 0; k < code.size(); k++) {
+    uint32_t r = mapped ? img.lines[k].rung : 0;
+    while (p.rungs.size() <= r) {
+      Rung nr;
+      nr.line = mapped ? img.lines[k].line : 0;
+      if (p.rungs.size() < img.rung_titles.size()) nr.title = img.rung_titles[p.rungs.size()];
+      p.rungs.push_back(std::move(nr));
+    }
+    if (mapped) code[k].loc = {img.lines[k].line, 1};
+    p.rungs[r].code.push_back(code[k]);
+  }
+  // labels
+  std::map<uint32_t, size_t> rung_at;  // IL offset of a rung's first instruction -> rung
+  size_t k = 0;
+  for (size_t r = 0; r < p.rungs.size(); r++) {
+    if (!p.rungs[r].code.empty()) rung_at.emplace(at[k], r);
+    k += p.rungs[r].code.size();
+  }
+  std::set<size_t> labelled;
+  bool end_label = false;
+  for (Rung& r : p.rungs)
+    for (Instr& in : r.code)
+      for (Operand& o : in.a)
+        if (o.kind == OpdKind::Label) {
+          auto it = rung_at.find(o.index);
+          if (it != rung_at.end()) o.label = "L" + std::to_string(it->second + 1), labelled.insert(it->second);
+          else o.label = "END_OF_SCAN", end_label = true;
+        }
+  for (size_t r : labelled) p.rungs[r].labels.push_back("L" + std::to_string(r + 1));
+  if (end_label) p.end_labels.push_back("END_OF_SCAN");
+  p.edge_slots = img.layout.count[int(Area::E)];
+  return p;
+}
+
+struct Dev {
+  std::string name, alias;
+  Area area;
+  uint32_t index;
+};
+
+struct RungView {
+  bool drawn = false;
+  LadderRung g;
+  std::string why;                 // no ladder form: the reason
+  std::vector<std::string> il;     // ... and its instructions
+  int line = 0;
+  std::string title;
+};
+
+struct TaskView {
+  std::string name;
+  uint32_t period_us = 0;
+  Layout layout;
+  std::vector<Alias> aliases;
+  std::vector<RungView> rungs;
+  std::vector<Dev> devs;
+
+  // the snapshot of its memory, written by the task thread at its scan boundary
+  std::mutex snap_mu;
+  std::vector<uint8_t> mem;
+  uint64_t scan = 0;
+  std::atomic<bool> want{false};
+};
+
+void collect_devices(TaskView& t, const Program& p) {
+  std::set<std::pair<int, uint32_t>> seen;
+  auto add = [&](Area a, uint32_t i) {
+    if (a == Area::Sys || a == Area::E || a == Area::TI || a == Area::Count) return;
+    if (!seen.insert({int(a), i}).second) return;
+    Dev d{std::string(device_prefix_of(a)) + std::to_string(i), "", a, i};
+    if (a == Area::TQ || a == Area::CQ) d.name += ".Q";
+    for (const Alias& al : t.aliases) {
+      Area want_bit = bit_area(al.dev.dev), want_word = word_area(al.dev.dev);
+      if (al.dev.index == i && (want_bit == a || want_word == a)) { d.alias = al.name; break; }
+    }
+    t.devs.push_back(d);
+  };
+  for (const Rung& r : p.rungs)
+    for (const Instr& in : r.code)
+      for (const Operand& o : in.a) {
+        if (o.kind == OpdKind::Bit || o.kind == OpdKind::Int || o.kind == OpdKind::Real) add(o.area, o.index);
+        if (o.kind == OpdKind::Timer) add(Area::TW, o.index), add(Area::TQ, o.index);
+        if (o.kind == OpdKind::Counter) add(Area::CW, o.index), add(Area::CQ, o.index);
+      }
+  for (const Alias& al : t.aliases) {
+    Area b = bit_area(al.dev.dev), w = word_area(al.dev.dev);
+    if (b != Area::Count) add(b, al.dev.index);
+    else if (w != Area::Count) add(w, al.dev.index);
+  }
+  std::sort(t.devs.begin(), t.devs.end(), [](const Dev& a, const Dev& b) {
+    return a.area != b.area ? a.area < b.area : a.index < b.index;
+  });
+}
+
+// ---------------------------------------------------------------- values
+
+struct View {  // a task's snapshot
+  const Layout& L;
+  const uint8_t* mem;
+  const uint8_t* global;
+  const uint8_t* base(Area a) const { return is_shared(a) && global ? global : mem; }
+  bool bit(Area a, uint32_t i) const { return base(a)[L.addr(a, i)] != 0; }
+  int32_t word(Area a, uint32_t i) const {
+    int32_t v;
+    std::memcpy(&v, base(a) + L.addr(a, i), 4);
+    return v;
+  }
+  float real(uint32_t i) const {
+    float v;
+    std::memcpy(&v, base(Area::F) + L.addr(Area::F, i), 4);
+    return v;
+  }
+  double num(const Operand& o) const {
+    switch (o.kind) {
+      case OpdKind::ConstInt: return o.ival;
+      case OpdKind::ConstReal: return o.fval;
+      case OpdKind::Real: return real(o.index);
+      case OpdKind::Int: return word(o.area, o.index);
+      case OpdKind::Timer: return word(Area::TW, o.index);
+      case OpdKind::Counter: return word(Area::CW, o.index);
+      default: return 0;
+    }
+  }
+  std::string text(Area a, uint32_t i) const {
+    if (area_is_bit(a)) return bit(a, i) ? "1" : "0";
+    if (a == Area::F) {
+      char b[32];
+      std::snprintf(b, sizeof b, "%g", double(real(i)));
+      return b;
+    }
+    return std::to_string(word(a, i));
+  }
+  std::string opd_text(const Operand& o) const {
+    switch (o.kind) {
+      case OpdKind::Int: case OpdKind::Real: case OpdKind::Bit: return text(o.area, o.index);
+      case OpdKind::Timer: return std::to_string(word(Area::TW, o.index));
+      case OpdKind::Counter: return std::to_string(word(Area::CW, o.index));
+      default: return "";
+    }
+  }
+};
+
+// Does an input element conduct, judged from the image after the scan?
+// Edge contacts show their bit (the edge itself is gone by then).
+bool closed(const Instr& in, const View& v) {
+  auto b = [&] { return v.bit(in.a[0].area, in.a[0].index); };
+  switch (in.op) {
+    case Op::TRUE: return true;
+    case Op::LOAD: case Op::LOADP: return b();
+    case Op::LOADN: return !b();
+    case Op::LOADF: return !b();
+    default: break;
+  }
+  double x = v.num(in.a[0]), y = v.num(in.a[1]);
+  if (!in.a[0].is_real() && !in.a[1].is_real()) x = double(int32_t(x)), y = double(int32_t(y));
+  switch (in.op) {
+    case Op::LDEQ: return x == y;
+    case Op::LDNE: return x != y;
+    case Op::LDLT: return x < y;
+    case Op::LDLE: return x <= y;
+    case Op::LDGT: return x > y;
+    case Op::LDGE: return x >= y;
+    default: return false;
+  }
+}
+
+// The value shown beside an element: the destination of a word output, a
+// timer's elapsed ms, a counter's value, a compare's operands.
+std::string elem_value(const LadderElem& e, const View& v) {
+  const Instr& in = e.elem;
+  if (!e.output) {
+    if (in.op >= Op::LDEQ && in.op <= Op::LDGE) {
+      std::string a = v.opd_text(in.a[0]), b = v.opd_text(in.a[1]);
+      if (a.empty() && b.empty()) return "";
+      return (a.empty() ? "" : a) + (b.empty() ? "" : (a.empty() ? "" : " : ") + b);
+    }
+    return "";
+  }
+  switch (in.op) {
+    case Op::TON: case Op::TOF: case Op::TP: case Op::RSTT:
+      return std::to_string(v.word(Area::TW, in.a[0].index)) + " ms";
+    case Op::CTU: case Op::CTD: case Op::RSTC: return std::to_string(v.word(Area::CW, in.a[0].index));
+    default: break;
+  }
+  int n = in.nopd();
+  if (n >= 2 && (in.a[n - 1].kind == OpdKind::Int || in.a[n - 1].kind == OpdKind::Real)) return v.opd_text(in.a[n - 1]);
+  return "";
+}
+
+std::string rung_state(const RungView& r, const View& v) {
+  if (!r.drawn) return "{}";
+  const LadderRung& g = r.g;
+  std::vector<char> power(size_t(g.nets), 0);
+  power[0] = 1;
+  std::vector<char> shut(g.elems.size(), 0);
+  for (size_t i = 0; i < g.elems.size(); i++)
+    if (!g.elems[i].output) shut[i] = closed(g.elems[i].elem, v);
+  for (bool changed = true; changed;) {  // the nets form a DAG: this ends
+    changed = false;
+    for (size_t i = 0; i < g.elems.size(); i++) {
+      const LadderElem& e = g.elems[i];
+      if (e.output || !shut[i] || !power[size_t(e.in_net)] || power[size_t(e.out_net)]) continue;
+      power[size_t(e.out_net)] = 1;
+      changed = true;
+    }
+  }
+  std::string n, e, vals;
+  for (char p : power) n += p ? '1' : '0';
+  for (size_t i = 0; i < g.elems.size(); i++) {
+    const LadderElem& el = g.elems[i];
+    e += (el.output ? power[size_t(el.in_net)] : shut[i]) ? '1' : '0';
+    std::string t = elem_value(el, v);
+    if (!t.empty()) vals += (vals.empty() ? "" : ",") + jstr(std::to_string(i)) + ":" + jstr(t);
+  }
+  return "{\"n\":\"" + n + "\",\"e\":\"" + e + "\",\"v\":{" + vals + "}}";
+}
+
+// ---------------------------------------------------------------- writes
+
+struct Write {
+  size_t task;
+  Area area;
+  uint32_t index;
+  uint32_t bits;  // the value's bytes (bit: 0/1; word: INT32 or binary32)
+};
+
+}  // namespace
+
+struct Monitor::Impl {
+  MonitorOptions opt;
+  std::vector<std::unique_ptr<TaskView>> tasks;
+  Layout glayout = Layout::standard(0);
+  Runtime* rt = nullptr;
+  std::unique_ptr<http::Server> server;
+  std::string program_json;
+  std::vector<TaskStats> stats;  // the server thread's
+  std::mutex global_mu;          // the global image's snapshot
+  std::vector<uint8_t> global_snap;
+  std::atomic<bool> want_global{false};
+  std::chrono::steady_clock::time_point stats_at{};
+
+  std::mutex wmu;  // writes and forces
+  std::vector<Write> pending;
+  std::map<std::pair<int, uint32_t>, uint32_t> forced;  // shared inputs held at a value
+  std::atomic<bool> have_writes{false};
+
+  // ---- on the task threads
+  static void store(uint8_t* base, const Layout& L, Area a, uint32_t i, uint32_t bits) {
+    if (area_is_bit(a)) base[L.addr(a, i)] = uint8_t(bits != 0);
+    else std::memcpy(base + L.addr(a, i), &bits, 4);
+  }
+  void apply_shared(uint8_t* global) {
+    if (!have_writes.load(std::memory_order_acquire)) return;
+    std::lock_guard<std::mutex> l(wmu);
+    for (auto& [k, bits] : forced) store(global, glayout, Area(k.first), k.second, bits);
+    for (auto it = pending.begin(); it != pending.end();) {
+      if (is_shared(it->area)) {
+        store(global, glayout, it->area, it->index, it->bits);
+        it = pending.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    have_writes.store(!pending.empty() || !forced.empty(), std::memory_order_release);
+  }
+  void apply_private(size_t task, uint8_t* mem) {
+    if (!have_writes.load(std::memory_order_acquire) || task >= tasks.size()) return;
+    std::lock_guard<std::mutex> l(wmu);
+    const Layout& L = tasks[task]->layout;
+    for (auto& [k, bits] : forced) store(mem, L, Area(k.first), k.second, bits);
+    for (auto it = pending.begin(); it != pending.end();) {
+      if (it->task == task && !is_shared(it->area)) {
+        store(mem, L, it->area, it->index, it->bits);
+        it = pending.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    have_writes.store(!pending.empty() || !forced.empty(), std::memory_order_release);
+  }
+  // The global image is copied by whichever task reaches its boundary first
+  // (a held task does not scan, yet its shared devices stay current).
+  void snapshot(size_t task, uint64_t scan, const uint8_t* mem, const uint8_t* global) {
+    if (task >= tasks.size()) return;
+    TaskView& t = *tasks[task];
+    if (t.want.load(std::memory_order_relaxed) && t.snap_mu.try_lock()) {  // busy: the next scan
+      std::memcpy(t.mem.data(), mem, t.mem.size());
+      t.scan = scan;
+      t.snap_mu.unlock();
+      t.want.store(false, std::memory_order_relaxed);
+    }
+    if (global && want_global.load(std::memory_order_relaxed) && global_mu.try_lock()) {
+      std::memcpy(global_snap.data(), global, global_snap.size());
+      global_mu.unlock();
+      want_global.store(false, std::memory_order_relaxed);
+    }
+  }
+
+  // ---- on the server thread
+  std::string state_json() {
+    std::string s = "{\"state\":" + jstr(rt ? state_name(rt->state()) : "?");
+    // The runtime's statistics sort its sample rings under a lock the task only
+    // try_locks (a sample is lost while it is held): refreshed twice a second.
+    auto now = std::chrono::steady_clock::now();
+    if (rt && now - stats_at > std::chrono::milliseconds(500)) stats = rt->stats(), stats_at = now;
+    const std::vector<TaskStats>& st = stats;
+    s += ",\"tasks\":[";
+    std::vector<uint8_t> mem, global;
+    {
+      std::lock_guard<std::mutex> l(global_mu);
+      global = global_snap;
+    }
+    want_global.store(true, std::memory_order_relaxed);
+    for (size_t ti = 0; ti < tasks.size(); ti++) {
+      TaskView& t = *tasks[ti];
+      uint64_t scan;
+      {
+        std::lock_guard<std::mutex> l(t.snap_mu);
+        mem = t.mem, scan = t.scan;
+      }
+      t.want.store(true, std::memory_order_relaxed);
+      View v{t.layout, mem.data(), global.data()};
+      s += std::string(ti ? "," : "") + "{\"name\":" + jstr(t.name) + ",\"scan\":" + std::to_string(scan) +
+           ",\"held\":" + (rt && rt->task_held(ti) ? "true" : "false");
+      if (ti < st.size()) {
+        const TaskStats& x = st[ti];
+        s += ",\"scans\":" + std::to_string(x.scans) + ",\"overruns\":" + std::to_string(x.overruns) +
+             ",\"scan_us\":{\"median\":" + jnum(x.scan_us.median) + ",\"p99\":" + jnum(x.scan_us.p99) +
+             ",\"max\":" + jnum(x.scan_us.max) + "},\"jitter_us\":{\"median\":" + jnum(x.jitter_us.median) +
+             ",\"p99\":" + jnum(x.jitter_us.p99) + ",\"max\":" + jnum(x.jitter_us.max) + "}";
+      }
+      s += ",\"rungs\":[";
+      for (size_t r = 0; r < t.rungs.size(); r++) s += (r ? "," : "") + rung_state(t.rungs[r], v);
+      s += "],\"dev\":[";
+      for (size_t d = 0; d < t.devs.size(); d++) s += (d ? "," : "") + jstr(v.text(t.devs[d].area, t.devs[d].index));
+      s += "]}";
+    }
+    std::lock_guard<std::mutex> l(wmu);
+    s += "],\"forced\":[";
+    bool first = true;
+    for (auto& [k, bits] : forced) {
+      s += std::string(first ? "" : ",") + jstr(device_prefix_of(Area(k.first)) + std::to_string(k.second));
+      first = false;
+    }
+    return s + "]}";
+  }
+
+  std::string build_program_json() const {
+    std::string s = "{\"write\":" + std::string(opt.write ? "true" : "false") + ",\"tasks\":[";
+    for (size_t ti = 0; ti < tasks.size(); ti++) {
+      const TaskView& t = *tasks[ti];
+      s += std::string(ti ? "," : "") + "{\"name\":" + jstr(t.name) + ",\"period_us\":" + std::to_string(t.period_us) + ",\"rungs\":[";
+      for (size_t r = 0; r < t.rungs.size(); r++) {
+        const RungView& rv = t.rungs[r];
+        s += std::string(r ? "," : "") + "{\"title\":" + jstr(rv.title) + ",\"line\":" + std::to_string(rv.line);
+        if (!rv.drawn) {
+          s += ",\"why\":" + jstr(rv.why) + ",\"il\":[";
+          for (size_t k = 0; k < rv.il.size(); k++) s += (k ? "," : "") + jstr(rv.il[k]);
+          s += "]}";
+          continue;
+        }
+        const LadderRung& g = rv.g;
+        s += ",\"labels\":[";
+        for (size_t k = 0; k < g.labels.size(); k++) s += (k ? "," : "") + jstr(g.labels[k]);
+        s += "],\"rows\":[";
+        for (size_t k = 0; k < g.rows.size(); k++) s += (k ? "," : "") + jstr(g.rows[k]);
+        s += "],\"elems\":[";
+        for (size_t k = 0; k < g.elems.size(); k++) {
+          const LadderElem& e = g.elems[k];
+          s += std::string(k ? "," : "") + "{\"r\":" + std::to_string(e.row) + ",\"c\":" + std::to_string(e.col) +
+               ",\"w\":" + std::to_string(e.width) + ",\"o\":" + (e.output ? "1" : "0") + ",\"t\":" + jstr(e.text) +
+               ",\"i\":" + std::to_string(e.in_net) + ",\"j\":" + std::to_string(e.out_net) + "}";
+        }
+        s += "],\"wires\":[";
+        for (size_t k = 0; k < g.wires.size(); k++)
+          s += std::string(k ? "," : "") + "[" + std::to_string(g.wires[k].row) + "," + std::to_string(g.wires[k].col0) + "," +
+               std::to_string(g.wires[k].col1) + "," + std::to_string(g.wires[k].net) + "]";
+        s += "],\"links\":[";
+        for (size_t k = 0; k < g.links.size(); k++)
+          s += std::string(k ? "," : "") + "[" + std::to_string(g.links[k].col) + "," + std::to_string(g.links[k].row0) + "," +
+               std::to_string(g.links[k].row1) + "," + std::to_string(g.links[k].net) + "]";
+        s += "]}";
+      }
+      s += "],\"devices\":[";
+      for (size_t d = 0; d < t.devs.size(); d++)
+        s += std::string(d ? "," : "") + "[" + jstr(t.devs[d].name) + "," + jstr(t.devs[d].alias) + "]";
+      s += "]}";
+    }
+    return s + "]}";
+  }
+
+  bool host_ok(const http::Request& r) const {
+    if (opt.host != "127.0.0.1" && opt.host != "::1" && opt.host.rfind("127.", 0) != 0) return true;
+    const std::string* h = r.header("host");
+    if (!h) return r.version == "HTTP/1.0";
+    std::string p = ":" + std::to_string(server ? server->port() : opt.port);
+    return *h == "127.0.0.1" + p || *h == "localhost" + p || *h == "[::1]" + p || *h == opt.host + p;
+  }
+
+  static http::Response text(int code, const std::string& body) {
+    return http::Response{code, "text/plain; charset=utf-8", body + "\n", false};
+  }
+
+  http::Response write(const http::Request& r) {
+    auto task_name = http::form_value(r.body, "task");
+    auto device = http::form_value(r.body, "device");
+    auto value = http::form_value(r.body, "value");
+    auto force = http::form_value(r.body, "force");
+    size_t ti = 0;
+    if (task_name && !task_name->empty()) {
+      ti = SIZE_MAX;
+      for (size_t i = 0; i < tasks.size(); i++)
+        if (tasks[i]->name == *task_name) ti = i;
+      if (ti == SIZE_MAX) return text(400, "unknown task '" + *task_name + "'");
+    }
+    if (!device || device->empty()) return text(400, "missing device=");
+    Probe p;
+    try {
+      p = resolve_probe(*device, tasks[ti]->aliases);
+    } catch (std::exception& e) { return text(400, e.what()); }
+    bool writable = p.area == Area::X || p.area == Area::Y || p.area == Area::M || p.area == Area::K || p.area == Area::WX ||
+                    p.area == Area::WY || p.area == Area::D || p.area == Area::F || p.area == Area::TW ||
+                    p.area == Area::CW || (p.area == Area::S && p.index == kBitError);
+    if (!writable) return text(400, *device + " cannot be written from the monitor");
+    bool release = force && *force == "0";
+    bool hold = force && *force == "1";
+    if (force && !release && !hold) return text(400, "force= is 1 (hold) or 0 (release)");
+    if ((hold || release) && p.area != Area::X && p.area != Area::WX)
+      return text(400, "only inputs (X, WX) are forced; write other devices once");
+    uint32_t bits = 0;
+    if (!release) {
+      if (!value) return text(400, "missing value=");
+      const std::string& v = *value;
+      char* end = nullptr;
+      if (area_is_bit(p.area)) {
+        if (v != "0" && v != "1") return text(400, "a bit is 0 or 1, not '" + v + "'");
+        bits = v == "1";
+      } else if (p.area == Area::F) {
+        float f = std::strtof(v.c_str(), &end);
+        if (v.empty() || *end) return text(400, "bad REAL '" + v + "'");
+        std::memcpy(&bits, &f, 4);
+      } else {
+        errno = 0;
+        long long x = std::strtoll(v.c_str(), &end, 0);
+        if (v.empty() || *end || errno || x < INT32_MIN || x > int64_t(UINT32_MAX)) return text(400, "bad INT32 '" + v + "'");
+        bits = uint32_t(int32_t(x));
+      }
+    }
+    {
+      std::lock_guard<std::mutex> l(wmu);
+      auto key = std::make_pair(int(p.area), p.index);
+      if (release) forced.erase(key);
+      else if (hold) forced[key] = bits;
+      else pending.push_back({ti, p.area, p.index, bits});
+      have_writes.store(true, std::memory_order_release);
+    }
+    return text(200, release ? "released" : hold ? "forced" : "queued for the next scan");
+  }
+
+  http::Response handle(const http::Request& r) {
+    if (!host_ok(r)) return text(421, "this monitor answers to its own address only (Host header)");
+    const std::string& p = r.path;
+    bool get = r.method == "GET" || r.method == "HEAD";
+    if (p == "/" || p == "/index.html" || p == "/monitor.js" || p == "/monitor.css" || p == "/api/program" ||
+        p == "/api/state" || p == "/api/events") {
+      if (!get) return text(405, "use GET");
+      if (p == "/monitor.js") return {200, "text/javascript; charset=utf-8", kMonitorJs, false};
+      if (p == "/monitor.css") return {200, "text/css; charset=utf-8", kMonitorCss, false};
+      if (p == "/api/program") return {200, "application/json", program_json, false};
+      if (p == "/api/state") {  // a fresh snapshot: wait up to 250 ms for the next scan boundary
+        for (auto& t : tasks) t->want.store(true);
+        want_global.store(true);
+        for (int i = 0; i < 50; i++) {
+          bool all = !want_global.load();
+          for (size_t k = 0; k < tasks.size(); k++) all = all && (!tasks[k]->want.load() || (rt && rt->task_held(k)));
+          if (all) break;
+          std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+        return {200, "application/json", state_json(), false};
+      }
+      if (p == "/api/events") {
+        for (auto& t : tasks) t->want.store(true);
+        return {200, "text/event-stream", "retry: 1000\n\ndata: " + state_json() + "\n\n", true};
+      }
+      return {200, "text/html; charset=utf-8", kMonitorHtml, false};
+    }
+    if (p == "/api/write" || p == "/api/run" || p == "/api/stop") {
+      if (r.method != "POST") return text(405, "use POST");
+      if (!opt.write) return text(403, "read-only monitor: start ldrun with --monitor-write to allow RUN/STOP and writes");
+      const std::string* h = r.header("x-ldc-monitor");
+      if (!h || *h != "1") return text(403, "missing header X-LDC-Monitor: 1 (sent by the monitor page)");
+      const std::string* ct = r.header("content-type");
+      if (!r.body.empty() && (!ct || ct->rfind("application/x-www-form-urlencoded", 0) != 0))
+        return text(415, "the body is application/x-www-form-urlencoded");
+      if (p == "/api/write") return write(r);
+      if (!rt) return text(409, "no runtime");
+      auto task = http::form_value(r.body, "task");
+      if (task && !task->empty()) {  // one task: held or released, the others run on
+        size_t ti = rt->find_task(*task);
+        if (ti == SIZE_MAX) return text(400, "unknown task '" + *task + "'");
+        if (p == "/api/run") rt->run_task(ti);
+        else rt->stop_task(ti);
+        return text(200, *task + (rt->task_held(ti) ? " STOP" : " RUN"));
+      }
+      if (p == "/api/run") rt->run();
+      else rt->stop();
+      return text(200, state_name(rt->state()));
+    }
+    return text(404, "no such page: " + p);
+  }
+};
+
+namespace {
+
+class MonitorDriver : public IoDriver {
+ public:
+  MonitorDriver(std::unique_ptr<IoDriver> inner, std::shared_ptr<Monitor::Impl> m) : inner_(std::move(inner)), m_(std::move(m)) {}
+  void attach(uint8_t* global, const Layout& layout, uint32_t block_size) override {
+    m_->glayout = layout;
+    m_->global_snap.assign(layout.size, 0);
+    inner_->attach(global, layout, block_size);
+  }
+  void read_inputs(uint8_t* global, const ScanContext& c) override {
+    inner_->read_inputs(global, c);
+    m_->apply_shared(global);
+  }
+  void write_outputs(const uint8_t* global, const ScanContext& c) override { inner_->write_outputs(global, c); }
+  void safe_outputs(const uint8_t* global) override { inner_->safe_outputs(global); }
+  void state_changed(State s) override { inner_->state_changed(s); }
+  void before_scan(const ScanContext& c, uint8_t* mem, std::optional<int32_t>& dt) override {
+    inner_->before_scan(c, mem, dt);
+    m_->apply_private(c.task, mem);
+  }
+  void after_scan(const ScanContext& c, const uint8_t* mem, const uint8_t* global) override {
+    inner_->after_scan(c, mem, global);
+    m_->snapshot(c.task, c.scan, mem, global);
+  }
+  void detach() override { inner_->detach(); }
+
+ private:
+  std::unique_ptr<IoDriver> inner_;
+  std::shared_ptr<Monitor::Impl> m_;
+};
+
+bool loopback(const std::string& h) { return h == "::1" || h.rfind("127.", 0) == 0; }
+
+}  // namespace
+
+std::pair<std::string, uint16_t> parse_monitor_address(const std::string& s, bool remote) {
+  std::string host = "127.0.0.1", port = s;
+  if (!s.empty() && s[0] == '[') {
+    size_t close = s.find(']');
+    if (close == std::string::npos || close + 1 >= s.size() || s[close + 1] != ':')
+      throw std::runtime_error("--monitor: expected [IPv6]:PORT, got '" + s + "'");
+    host = s.substr(1, close - 1), port = s.substr(close + 2);
+  } else if (size_t colon = s.rfind(':'); colon != std::string::npos) {
+    host = s.substr(0, colon), port = s.substr(colon + 1);
+  }
+  if (host == "localhost") host = "127.0.0.1";
+  if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos || std::stoul(port) > 65535)
+    throw std::runtime_error("--monitor: bad port '" + port + "' (0..65535; 0 picks a free one)");
+  if (host.empty()) throw std::runtime_error("--monitor: empty host in '" + s + "'");
+  if (!loopback(host) && !remote)
+    throw std::runtime_error("--monitor: " + host + " is not a loopback address; the monitor serves this machine only unless "
+                             "--monitor-remote is given (docs/runtime.md, \"The monitor\": security)");
+  return {host, uint16_t(std::stoul(port))};
+}
+
+Monitor::Monitor(std::vector<MonitorTask> tasks, MonitorOptions opt) : impl_(std::make_shared<Impl>()) {
+  impl_->opt = std::move(opt);
+  for (MonitorTask& mt : tasks) {
+    auto t = std::make_unique<TaskView>();
+    t->name = mt.name;
+    t->period_us = mt.period_us;
+    t->layout = mt.image.layout;
+    t->aliases = mt.image.aliases;
+    t->mem.assign(t->layout.size, 0);
+    Program p = program_of(mt.image);
+    collect_devices(*t, p);
+    for (const Rung& r : p.rungs) {
+      RungView rv;
+      rv.line = r.line;
+      rv.title = r.title;
+      Program one;
+      one.aliases = p.aliases;
+      one.rungs.push_back(r);
+      try {
+        Ladder l = draw_ladder(raise_to_tree(one));
+        rv.g = std::move(l.rungs.at(0));
+        rv.drawn = true;
+      } catch (std::exception& e) {
+        rv.why = e.what();
+        for (const Instr& in : r.code) rv.il.push_back(instr_text(in));
+      }
+      t->rungs.push_back(std::move(rv));
+    }
+    impl_->tasks.push_back(std::move(t));
+  }
+  impl_->program_json = impl_->build_program_json();
+}
+
+Monitor::~Monitor() { stop(); }
+
+std::unique_ptr<IoDriver> Monitor::wrap(std::unique_ptr<IoDriver> inner) {
+  return std::make_unique<MonitorDriver>(std::move(inner), impl_);
+}
+
+void Monitor::attach(Runtime* rt) { impl_->rt = rt; }
+
+void Monitor::start() {
+  http::Server::Config c;
+  c.host = impl_->opt.host;
+  c.port = impl_->opt.port;
+  c.max_connections = impl_->opt.max_connections;
+  c.tick_ms = impl_->opt.tick_ms;
+  Impl* m = impl_.get();
+  impl_->server = std::make_unique<http::Server>(
+      c, [m](const http::Request& r) { return m->handle(r); },
+      [m]() -> std::string {
+        if (!m->server || m->server->streams() == 0) return "";
+        return "data: " + m->state_json() + "\n\n";
+      });
+  impl_->server->start();
+}
+
+void Monitor::stop() {
+  if (impl_->server) impl_->server->stop();
+}
+
+uint16_t Monitor::port() const { return impl_->server ? impl_->server->port() : 0; }
+
+}  // namespace ldc::plc
