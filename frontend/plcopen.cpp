@@ -247,11 +247,14 @@ class Importer {
   const Node& node(const Conn& c);
   bool is_bool_source(const Conn& c, int depth = 0);
   bool out_is_bool(const Node& b, const std::string& pin, int depth = 0);
+  template <typename E>
+  Cond node_values(std::vector<E*>& left, int nn, int sink, const Element* consumer);
   Cond bool_expr(const std::vector<Conn>& conns, bool order, const Element* consumer);
   Val value_expr(const std::vector<Conn>& conns, bool order, const Element* consumer, int depth = 0);
   Out block_out(const Node& b, const Conn& c, bool order);
   const Pin* out_pin(const Node& b, const Conn& c);
   void statement(const Node& n);
+  void tasks(const Element* root);
   void block(const Node& b);
   void fb_block(const Node& b, Var& inst);
   void fn_block(const Node& b);
@@ -566,25 +569,24 @@ Cond Importer::negate(Cond c, const Element* el) {
 }
 
 // R_TRIG / F_TRIG of a condition, as a statement of its own (Beremiz calls the
-// trigger instance before the statement that reads it).  F_TRIG is IEC's
-// "Q := NOT CLK AND NOT M; M := NOT CLK": it pulses on the first scan if CLK is FALSE.
+// trigger instance before the statement that reads it).
+//   R_TRIG: Q := CLK AND NOT M; M := CLK          (M starts FALSE)
+//   F_TRIG: Q := NOT CLK AND NOT M; M := NOT CLK  (M starts TRUE in MatIEC as
+//           OpenPLC ships it, so there is no pulse on the first scan)
+// R_TRIG is LOADP of CLK; F_TRIG is LOADF of CLK (its edge memory holds CLK,
+// starting FALSE, which is NOT M).  A constant CLK never falls; TRUE rises on
+// the first scan.
 Cond Importer::trigger(Cond c, bool rising, const Element* el, std::optional<Operand> into) {
-  // rising: Q := CLK AND NOT M; M := CLK        falling: Q := NOT CLK AND NOT M; M := NOT CLK
-  // Both are "rising edge of X" with X = CLK or NOT CLK and M starting FALSE.
-  if (!rising) c = negate(std::move(c), el);
-  if (!into) {
-    if (c.k == Cond::False) return Cond::no();
-    if (c.k == Cond::True) return bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), el);  // TRUE rises on the first scan
-  }
   if (c.k != Cond::Expr) {
-    Cond k = c.k == Cond::True ? bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), el) : Cond::no();
+    Cond k = rising && c.k == Cond::True ? bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), el) : Cond::no();
+    if (!into) return k;
     rung(std::move(k), out(Op::OUT, {*into}, el), el);
     return bit_leaf(Op::LOAD, *into, el);
   }
   uint32_t q = into ? into->index : temp_m(el);
   Cond x = is_leaf(c) && c.n.elem.op == Op::LOAD ? std::move(c) : materialize(std::move(c), el);
-  x.n.elem.op = Op::LOADP;
-  x.n.text = "P " + x.n.text;
+  x.n.elem.op = rising ? Op::LOADP : Op::LOADF;
+  x.n.text = (rising ? "P " : "N ") + x.n.text;
   Operand qo = into ? *into : bit_opd(Area::M, q);
   rung(std::move(x), out(Op::OUT, {qo}, el), el);
   return bit_leaf(Op::LOAD, qo, el);
@@ -816,6 +818,10 @@ Cond Importer::bool_expr(const std::vector<Conn>& conns, bool order, const Eleme
       Cond lab;
       if (n.kind == "inVariable" || n.kind == "inOutVariable") {
         Val v = value_of(n.text, n.el);
+        Ty lit_ty;
+        bool untyped_01 = v.o.kind == OpdKind::ConstInt && (v.o.ival == 0 || v.o.ival == 1) &&
+                          upper(n.text).find('#') == std::string::npos && literal(n.text, lit_ty, n.el);
+        if (untyped_01) v.ty = Ty::Bool;  // MatIEC reads the literals 0 and 1 as BOOL where a BOOL is wanted
         if (v.ty != Ty::Bool) fail_at(n.el, "'" + n.text + "' is " + ty_name(v.ty) + " but feeds the power flow of " + where(consumer));
         if (v.o.kind == OpdKind::ConstInt) lab = (v.o.ival != 0) != n.negated ? Cond::yes() : Cond::no();
         else lab = Cond::of(leaf(n.negated ? Op::LOADN : Op::LOAD, {v.o}, n.el, (n.negated ? "/" : "") + n.text));
@@ -891,16 +897,50 @@ Cond Importer::bool_expr(const std::vector<Conn>& conns, bool order, const Eleme
   for (auto& e : edges)
     if (e.alive) left.push_back(&e);
   if (left.size() == 1 && left[0]->from == 0 && left[0]->to == sink) return std::move(left[0]->label);
-  const Element* culprit = nullptr;
-  std::vector<int> outdeg(nn);
-  for (E* e : left) outdeg[e->from]++;
-  for (E* e : left)
-    if (e->el && outdeg[e->from] >= 2 && e->from != 0) { culprit = e->el; break; }
-  for (E* e : left)
-    if (!culprit && e->el) culprit = e->el;
-  if (!culprit) culprit = consumer;
-  fail_at(culprit, "the network feeding " + where(consumer) + " is not series-parallel at " + where(culprit) +
-                       "; ldc needs each output's contacts to reduce to series and parallel blocks");
+  return node_values(left, nn, sink, consumer);
+}
+
+// A power flow that does not reduce to series and parallel blocks (a bridge, a
+// wired OR shared by several forks): each junction's value, in an order where
+// every junction comes after those feeding it, goes into a relay of its own,
+// the OR over its inputs of (value of the junction it comes from AND the
+// contact).  The left rail is TRUE.  The statement then reads the sink's
+// inputs the same way.  The graph is acyclic (loops were refused above).
+template <typename E>
+Cond Importer::node_values(std::vector<E*>& left, int nn, int sink, const Element* consumer) {
+  std::vector<std::vector<E*>> into(nn);
+  for (E* e : left) into[e->to].push_back(e);
+  std::vector<int> order;
+  std::vector<char> seen(nn);
+  std::vector<std::pair<int, size_t>> stack{{sink, 0}};  // iterative depth-first walk towards the rail
+  seen[sink] = 1;
+  while (!stack.empty()) {
+    auto& [v, k] = stack.back();
+    if (k < into[v].size()) {
+      int f = into[v][k++]->from;
+      if (!seen[f]) { seen[f] = 1; stack.push_back({f, 0}); }
+    } else {
+      order.push_back(v);
+      stack.pop_back();
+    }
+  }
+  std::map<int, Operand> relay;
+  auto edge_cond = [&](E* e) {
+    Cond c = std::move(e->label);
+    if (e->from == 0) return c;
+    return c_and(bit_leaf(Op::LOAD, relay.at(e->from), consumer), std::move(c));
+  };
+  for (int v : order) {
+    if (v == 0 || v == sink) continue;
+    Cond c = Cond::no();
+    for (E* e : into[v]) c = c_or(std::move(c), edge_cond(e));
+    Operand m = bit_opd(Area::M, temp_m(consumer));
+    rung(std::move(c), out(Op::OUT, {m}, consumer), consumer);
+    relay[v] = m;
+  }
+  Cond r = Cond::no();
+  for (E* e : into[sink]) r = c_or(std::move(r), edge_cond(e));
+  return r;
 }
 
 Val Importer::value_expr(const std::vector<Conn>& conns, bool order, const Element* consumer, int depth) {
@@ -940,9 +980,11 @@ Out Importer::block_out(const Node& b, const Conn& c, bool order) {
   const Pin* p = out_pin(b, c);
   std::string name = p ? p->name : "ENO";
   auto it = outs_.find({b.id, name});
-  if (it == outs_.end() && !computed_.count(b.id) && fb_kind(upper(b.type)) != FbKind::None && name != "ENO") {
-    // read before its execution order runs it: a function block's outputs are
-    // its devices, as they stand from the previous scan
+  bool in_loop = generating_.count(b.id) > 0;
+  if (it == outs_.end() && (!computed_.count(b.id) || in_loop) && fb_kind(upper(b.type)) != FbKind::None && name != "ENO") {
+    // read before its execution order runs it, or where a loop of blocks closes
+    // (Beremiz reads the instance's output there): a function block's outputs
+    // are its devices, as they stand from the previous scan
     Var* inst = b.instance.empty() ? nullptr : lookup(b.instance);
     if (inst && inst->dev) {
       Val v = value_of(b.instance + "." + name, b.el);
@@ -951,6 +993,8 @@ Out Importer::block_out(const Node& b, const Conn& c, bool order) {
     }
   }
   if (it == outs_.end()) {
+    if (in_loop)
+      fail_at(c.el, "block " + b.type + " localId " + std::to_string(b.id) + " feeds its own input through a loop of functions; only a function block's output can close a loop (" + c.el->path() + ")");
     if (!computed_.count(b.id))
       fail_at(c.el, "block " + b.type + " localId " + std::to_string(b.id) + " is read before its executionOrderId computes it (" + c.el->path() + ")");
     fail_at(c.el, "block " + b.type + " localId " + std::to_string(b.id) + " has no output '" + name + "' (" + c.el->path() + ")");
@@ -1060,21 +1104,22 @@ void Importer::fb_block(const Node& b, Var& inst) {
   if (k == FbKind::Timer) {
     Operand tm{OpdKind::Timer};
     tm.index = i;
-    rung(in("IN"), out(t == "TON" ? Op::TON : t == "TOF" ? Op::TOF : Op::TP, {tm, val("PT").o}, el), el);
+    // MatIEC's timers, as OpenPLC and Beremiz run them (docs/il.md, "MatIEC timers")
+    rung(in("IN"), out(t == "TON" ? Op::MTON : t == "TOF" ? Op::MTOF : Op::MTP, {tm, val("PT").o}, el), el);
     bool_out("Q", bit_opd(Area::TQ, i));
     val_out("ET", Operand{OpdKind::Int, Area::TW, i});
   } else if (t == "CTU" || t == "CTD") {
-    // IEC: IF R THEN CV := 0 ELSIF (edge of CU) AND CV < 32767 THEN CV := CV + 1;
-    // Q := CV >= PV (CTD: IF LD THEN CV := PV ELSIF (edge of CD) AND CV > -32768
-    // THEN CV := CV - 1; Q := CV <= 0).  Our CTU/CTD count on their input's
-    // rising edge; the input here is already a one-scan pulse, so they count
-    // exactly the IEC edges, and compute Q on every scan.
+    // MatIEC as OpenPLC ships it: IF R THEN CV := 0 ELSIF (edge of CU) AND CV < PV
+    // THEN CV := CV + 1; Q := CV >= PV (CTD: IF LD THEN CV := PV ELSIF (edge of CD)
+    // AND CV > 0 THEN CV := CV - 1; Q := CV <= 0).  Our CTU/CTD count on their
+    // input's rising edge; the input here is already a one-scan pulse, so they
+    // count exactly those edges, and compute Q on every scan.
     bool up = t == "CTU";
     Cond r = in(up ? "R" : "LD");
     Val pv = val("PV");
     if (r.k != Cond::False) rung(r, up ? out(Op::RSTC, {cn}, el) : out(Op::MOV, {pv.o, cw}, el), el);
     Cond pulse = trigger(in(up ? "CU" : "CD"), true, el);
-    Cond limit = Cond::of(leaf(up ? Op::LDLT : Op::LDGT, {cw, const_opd(up ? 32767 : -32768)}, el));
+    Cond limit = Cond::of(leaf(up ? Op::LDLT : Op::LDGT, {cw, up ? pv.o : const_opd(0)}, el));
     rung(c_and(c_and(std::move(pulse), negate(r, el)), std::move(limit)), out(up ? Op::CTU : Op::CTD, {cn, pv.o}, el), el);
     bool_out("Q", bit_opd(Area::CQ, i));
     val_out("CV", cw);
@@ -1085,9 +1130,10 @@ void Importer::fb_block(const Node& b, Var& inst) {
     if (r.k != Cond::False) rung(r, out(Op::RSTC, {cn}, el), el);
     Cond idle = c_and(negate(r, el), negate(ld, el));
     if (ld.k != Cond::False) rung(c_and(negate(r, el), ld), out(Op::MOV, {pv.o, cw}, el), el);
-    rung(c_and(c_and(idle, c_and(eu, negate(ed, el))), Cond::of(leaf(Op::LDLT, {cw, const_opd(32767)}, el))),
+    // MatIEC: unless both edges come together, count up while CV < PV, else down while CV > 0
+    rung(c_and(c_and(idle, c_and(eu, negate(ed, el))), Cond::of(leaf(Op::LDLT, {cw, pv.o}, el))),
          out(Op::ADD, {cw, const_opd(1), cw}, el), el);
-    rung(c_and(c_and(idle, c_and(ed, negate(eu, el))), Cond::of(leaf(Op::LDGT, {cw, const_opd(-32768)}, el))),
+    rung(c_and(c_and(idle, c_and(ed, negate(eu, el))), Cond::of(leaf(Op::LDGT, {cw, const_opd(0)}, el))),
          out(Op::SUB, {cw, const_opd(1), cw}, el), el);
     rung(Cond::of(leaf(Op::LDGE, {cw, pv.o}, el)), out(Op::OUT, {bit_opd(Area::M, inst.aux)}, el), el);
     rung(Cond::of(leaf(Op::LDLE, {cw, const_opd(0)}, el)), out(Op::OUT, {bit_opd(Area::M, inst.aux2)}, el), el);
@@ -1118,6 +1164,7 @@ void Importer::fb_block(const Node& b, Var& inst) {
 
 void Importer::fn_block(const Node& b) {
   std::string t = upper(b.type);
+  if (t == "ADD_TIME" || t == "SUB_TIME") t = t.substr(0, 3);  // TIME is INT32 ms: the same arithmetic
   Pins pins{b};
   bool order = b.order > 0;
   const Element* el = b.el;
@@ -1128,7 +1175,7 @@ void Importer::fn_block(const Node& b) {
   if (!cmp.count(t) && !arith.count(t) && !conv && t != "MOVE" && t != "SEL" && t != "LIMIT" && t != "ABS" && t != "AND" &&
       t != "OR" && t != "XOR" && t != "NOT")
     fail_at(el, "block '" + b.type + "' localId " + std::to_string(b.id) + " is not supported: ldc translates TON TOF TP CTU CTD CTUD SR RS R_TRIG F_TRIG, "
-                "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL, AND OR XOR NOT and type conversions (" + el->path() + ")");
+                "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL, ADD_TIME SUB_TIME, AND OR XOR NOT and type conversions (" + el->path() + ")");
   // inputs other than EN, in order
   std::vector<const Pin*> ins;
   for (const Pin& p : b.inputs)
@@ -1167,10 +1214,43 @@ void Importer::fn_block(const Node& b) {
       static const std::map<std::string, Op> ops = {{"GT", Op::LDGT}, {"GE", Op::LDGE}, {"EQ", Op::LDEQ},
                                                     {"NE", Op::LDNE}, {"LE", Op::LDLE}, {"LT", Op::LDLT}};
       if (ins.size() < 2) fail_at(el, t + " needs two inputs (" + el->path() + ")");
-      std::vector<Val> v;
-      for (const Pin* p : ins) v.push_back(val_of(p));
+      // on BOOL when an input is BOOL; the untyped literals 0 and 1 go with either
+      auto literal01 = [&](const Pin* p) {
+        const Node& n = node(p->conns[0]);
+        Ty lt;
+        std::optional<Operand> k;
+        if (n.kind == "inVariable" && upper(n.text).find('#') == std::string::npos) k = literal(n.text, lt, n.el);
+        return k && k->kind == OpdKind::ConstInt && (k->ival == 0 || k->ival == 1);
+      };
+      const Pin *a_bool = nullptr, *a_value = nullptr;
+      for (const Pin* p : ins) {
+        if (literal01(p)) continue;
+        (is_bool_source(p->conns[0]) ? a_bool : a_value) = p;
+      }
+      if (a_bool && a_value)
+        fail_at(el, t + " localId " + std::to_string(b.id) + " compares BOOL input " + a_bool->name + " with the value input " + a_value->name +
+                        "; IEC 61131-3 (and MatIEC) compare inputs of one type (" + el->path() + ")");
+      bool on_bools = a_bool != nullptr;
       c = en;
-      for (size_t k = 0; k + 1 < v.size(); k++) c = c_and(std::move(c), Cond::of(leaf(ops.at(t), {v[k].o, v[k + 1].o}, el)));
+      if (on_bools) {
+        // on BOOL (FALSE < TRUE): EQ is XNOR, NE XOR, GT a AND NOT b, GE a OR NOT b ...
+        std::vector<Cond> x;
+        for (const Pin* p : ins) x.push_back(materialize(cond_of(p), el));
+        for (size_t k = 0; k + 1 < x.size(); k++) {
+          const Cond &a = x[k], &bb = x[k + 1];
+          Cond r = t == "EQ"   ? c_or(c_and(a, bb), c_and(negate(a, el), negate(bb, el)))
+                   : t == "NE" ? c_or(c_and(a, negate(bb, el)), c_and(negate(a, el), bb))
+                   : t == "GT" ? c_and(a, negate(bb, el))
+                   : t == "GE" ? c_or(a, negate(bb, el))
+                   : t == "LT" ? c_and(negate(a, el), bb)
+                               : c_or(negate(a, el), bb);
+          c = c_and(std::move(c), std::move(r));
+        }
+      } else {
+        std::vector<Val> v;
+        for (const Pin* p : ins) v.push_back(val_of(p));
+        for (size_t k = 0; k + 1 < v.size(); k++) c = c_and(std::move(c), Cond::of(leaf(ops.at(t), {v[k].o, v[k + 1].o}, el)));
+      }
     } else if (conv) {  // INT_TO_BOOL & co: the value is not zero
       Val v = val_of(ins.at(0));
       c = c_and(en, Cond::of(leaf(Op::LDNE, {v.o, v.ty == Ty::Real ? [] { Operand z{OpdKind::ConstReal}; z.fval = 0; return z; }() : const_opd(0)}, el)));
@@ -1366,6 +1446,39 @@ void Importer::body(const Element* pou, const Element* ld) {
   if (rungs_.size() == first) pending_title_.clear();
 }
 
+// The configuration's tasks: every program instance must run a POU that ldc
+// compiles (an LD body), and all of them run in one scan, so the tasks must
+// share one interval.  What ldc cannot run is refused by name, never dropped.
+void Importer::tasks(const Element* root) {
+  const Element* inst = root->child("instances");
+  const Element* cfgs = inst ? inst->child("configurations") : nullptr;
+  if (!cfgs) return;
+  std::string first_task, first_interval;
+  for (const Element* cfg : cfgs->children_named("configuration"))
+    for (const Element* res : cfg->children_named("resource")) {
+      auto check = [&](const Element* pi, const std::string& task) {
+        const std::string* type = pi->attr("typeName");
+        std::string name = pi->attr("name") ? *pi->attr("name") : "?";
+        std::string where = "program instance '" + name + "'" + (task.empty() ? "" : " of task '" + task + "'");
+        if (!type) fail_at(pi, where + " has no typeName (" + pi->path() + ")");
+        auto lang = pou_lang_.find(upper(*type));
+        if (lang == pou_lang_.end()) fail_at(pi, where + " runs '" + *type + "', which is not a POU of this project (" + pi->path() + ")");
+        if (lang->second != "LD")
+          fail_at(pi, where + " runs POU '" + *type + "', written in " + lang->second + "; ldc compiles LD bodies only (" + pi->path() + ")");
+      };
+      for (const Element* t : res->children_named("task")) {
+        std::string tn = t->attr("name") ? *t->attr("name") : "?";
+        std::string iv = t->attr("interval") ? *t->attr("interval") : "(no interval)";
+        for (const Element* pi : t->children_named("pouInstance")) check(pi, tn);
+        if (first_task.empty()) first_task = tn, first_interval = iv;
+        else if (upper(iv) != upper(first_interval))
+          fail_at(t, "task '" + tn + "' runs every " + iv + " and task '" + first_task + "' every " + first_interval +
+                         "; ldc runs all programs in one scan, so their tasks must share one interval (" + t->path() + ")");
+      }
+      for (const Element* pi : res->children_named("pouInstance")) check(pi, "");
+    }
+}
+
 TreeProgram Importer::run() {
   if (text_.size() > kMaxSourceBytes) fail_at(nullptr, "source file too large (at most 64 MiB)");
   doc_ = xml::parse(text_);
@@ -1418,6 +1531,7 @@ TreeProgram Importer::run() {
     fail_at(pous ? pous : root, all.empty() ? "the project has no POU" : "no POU of this project has an LD body (" + list +
                                                                                "); ldc imports LD bodies only");
   }
+  tasks(root);
   // declarations of the LD POUs, then devices for all of them
   std::map<const Element*, std::map<std::string, Var*>> scopes;
   for (const Element* p : ld) {
