@@ -1463,8 +1463,8 @@ void Importer::tasks(const Element* root) {
         if (!type) fail_at(pi, where + " has no typeName (" + pi->path() + ")");
         auto lang = pou_lang_.find(upper(*type));
         if (lang == pou_lang_.end()) fail_at(pi, where + " runs '" + *type + "', which is not a POU of this project (" + pi->path() + ")");
-        if (lang->second != "LD")
-          fail_at(pi, where + " runs POU '" + *type + "', written in " + lang->second + "; ldc compiles LD bodies only (" + pi->path() + ")");
+        if (lang->second != "LD" && lang->second != "FBD")
+          fail_at(pi, where + " runs POU '" + *type + "', written in " + lang->second + "; ldc compiles LD and FBD bodies only (" + pi->path() + ")");
       };
       for (const Element* t : res->children_named("task")) {
         std::string tn = t->attr("name") ? *t->attr("name") : "?";
@@ -1523,13 +1523,13 @@ TreeProgram Importer::run() {
       }
       pou_lang_[upper(*p->attr("name"))] = lang;
       all.push_back(p);
-      if (lang == "LD") ld.push_back(p);
+      if (lang == "LD" || lang == "FBD") ld.push_back(p);  // FBD: the same block graph, without rails
     }
   if (ld.empty()) {
     std::string list;
     for (const Element* p : all) list += std::string(list.empty() ? "" : ", ") + "'" + *p->attr("name") + "' is " + pou_lang_[upper(*p->attr("name"))];
-    fail_at(pous ? pous : root, all.empty() ? "the project has no POU" : "no POU of this project has an LD body (" + list +
-                                                                               "); ldc imports LD bodies only");
+    fail_at(pous ? pous : root, all.empty() ? "the project has no POU" : "no POU of this project has an LD or FBD body (" + list +
+                                                                               "); ldc imports LD and FBD bodies only");
   }
   tasks(root);
   // declarations of the LD POUs, then devices for all of them
@@ -1598,9 +1598,9 @@ TreeProgram Importer::run() {
     pou_ = *pe->attr("name");
     scope_ = scopes[pe];
     const Element* b = pe->child("body");
-    body(pe, b->child("LD"));
+    body(pe, b->child("LD") ? b->child("LD") : b->child("FBD"));
   }
-  if (rungs_.empty()) fail_at(ld[0], "the LD bodies of this project have no coils, variables or blocks to run");
+  if (rungs_.empty()) fail_at(ld[0], "the LD and FBD bodies of this project have no coils, variables or blocks to run");
   p.rungs = std::move(rungs_);
   p.end_labels = std::move(pending_labels_);
   aliases(p);
