@@ -195,6 +195,15 @@ class Importer {
   std::map<std::pair<int, std::string>, Out> outs_;
   std::set<std::pair<int, std::string>> consumed_;  // block outputs someone reads
   std::set<int> generating_;
+  // Located BOOL inputs the program writes (MatIEC allows it): the input is
+  // copied into a relay at the start of the scan, and from the first write on
+  // the variable is that relay, X index -> M index.
+  std::map<uint32_t, uint32_t> shadow_;
+  Operand shadowed(Operand o) const {
+    if (o.kind == OpdKind::Bit && o.area == Area::X)
+      if (auto it = shadow_.find(o.index); it != shadow_.end()) return bit_opd(Area::M, it->second);
+    return o;
+  }
   // The native stack: bool_expr recurses once per power-flow element it
   // follows, block_out once per block that feeds a block being generated.  A
   // block's frames are about ten times a flow element's, so it costs
@@ -430,7 +439,7 @@ Val Importer::value_of(const std::string& expr, const Element* el, bool write) {
     if (!d) fail_at(el, why.empty() ? "unsupported address " + e : why);
     if (d->index >= device_count(d->dev)) fail_at(el, "address " + e + " is out of range");
     Area ar = bit_area(d->dev);
-    if (ar != Area::Count) return {bit_opd(ar, d->index), Ty::Bool};
+    if (ar != Area::Count) return {shadowed(bit_opd(ar, d->index)), Ty::Bool};
     Area w = word_area(d->dev);
     return {Operand{w == Area::F ? OpdKind::Real : OpdKind::Int, w, d->index}, w == Area::F ? Ty::Real : Ty::Int};
   }
@@ -463,7 +472,7 @@ Val Importer::value_of(const std::string& expr, const Element* el, bool write) {
   }
   if (v->ty == Ty::None || !v->dev)
     fail_at(el, "variable '" + v->name + "' has type " + v->type + ", which ldc cannot hold (" + where(el) + ")");
-  if (v->ty == Ty::Bool) return {bit_opd(bit_area(v->dev->dev), v->dev->index), Ty::Bool};
+  if (v->ty == Ty::Bool) return {shadowed(bit_opd(bit_area(v->dev->dev), v->dev->index)), Ty::Bool};
   Area w = word_area(v->dev->dev);
   if (write && w == Area::WX) fail_at(el, "'" + e + "' is an input word; it cannot be written (" + where(el) + ")");
   return {Operand{v->ty == Ty::Real ? OpdKind::Real : OpdKind::Int, w, v->dev->index}, v->ty};
@@ -473,8 +482,12 @@ Operand Importer::bit_of(const std::string& expr, const Element* el, bool write)
   Val v = value_of(expr, el, write);
   if (v.ty != Ty::Bool) fail_at(el, "'" + trim(expr) + "' is " + ty_name(v.ty) + "; a BOOL is needed for " + where(el));
   if (v.o.kind == OpdKind::ConstInt) fail_at(el, "a literal cannot be used by " + where(el));
+  if (write && v.o.area == Area::X) {  // from here on the input is its relay
+    uint32_t m = take(Dev::M, el);
+    shadow_[v.o.index] = m;
+    v.o = bit_opd(Area::M, m);
+  }
   if (write) {
-    if (v.o.area == Area::X) fail_at(el, "'" + trim(expr) + "' is an input; it cannot be written (" + where(el) + ")");
     if (v.o.area != Area::Y && v.o.area != Area::M) fail_at(el, "'" + trim(expr) + "' cannot be written (" + where(el) + ")");
   }
   return v.o;
@@ -1601,6 +1614,16 @@ TreeProgram Importer::run() {
     body(pe, b->child("LD") ? b->child("LD") : b->child("FBD"));
   }
   if (rungs_.empty()) fail_at(ld[0], "the LD and FBD bodies of this project have no coils, variables or blocks to run");
+  // inputs the program writes: their relays take the input first in every scan
+  std::vector<TreeRung> copies;
+  for (auto [x, m] : shadow_) {
+    TreeRung r;
+    r.line = rungs_[0].line;
+    if (copies.empty()) r.title = "inputs the program writes";
+    r.root = then_node(bit_leaf(Op::LOAD, bit_opd(Area::X, x), root), out(Op::OUT, {bit_opd(Area::M, m)}, root), {r.line, 1});
+    copies.push_back(std::move(r));
+  }
+  rungs_.insert(rungs_.begin(), std::make_move_iterator(copies.begin()), std::make_move_iterator(copies.end()));
   p.rungs = std::move(rungs_);
   p.end_labels = std::move(pending_labels_);
   aliases(p);
