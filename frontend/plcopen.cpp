@@ -267,6 +267,7 @@ class Importer {
   void block(const Node& b);
   void fb_block(const Node& b, Var& inst);
   void fn_block(const Node& b);
+  void real_to_int(Operand x, Operand res, const Cond& en, const Element* el);
 };
 
 // ------------------------------------------------------------------ declarations
@@ -1175,6 +1176,27 @@ void Importer::fb_block(const Node& b, Var& inst) {
   if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, en, {}};
 }
 
+// res := x rounded to the nearest integer, ties to even (MatIEC's REAL_TO_INT:
+// x +/- 0.5 in LREAL, an exact integer result made even).  The move truncates;
+// the fraction x - trunc(x) is exact in REAL below 2^23 (above, x is already
+// an integer), and decides one step up or down.
+void Importer::real_to_int(Operand x, Operand res, const Cond& en, const Element* el) {
+  auto real_k = [](float f) { Operand k{OpdKind::ConstReal}; k.fval = f; return k; };
+  Operand fr{OpdKind::Real, Area::F, take(Dev::F, el)};
+  Operand odd{OpdKind::Int, Area::D, take(Dev::D, el)};
+  rung(en, out(Op::MOV, {x, res}, el), el);
+  rung(en, out(Op::SUB, {x, res, fr}, el), el);
+  rung(en, out(Op::WAND, {res, const_opd(1), odd}, el), el);
+  Cond small = c_and(Cond::of(leaf(Op::LDLT, {x, real_k(8388608.0f)}, el)), Cond::of(leaf(Op::LDGT, {x, real_k(-8388608.0f)}, el)));
+  Cond is_odd = Cond::of(leaf(Op::LDNE, {odd, const_opd(0)}, el));
+  auto step = [&](Op beyond, float half, Op op) {
+    Cond c = c_or(Cond::of(leaf(beyond, {fr, real_k(half)}, el)), c_and(Cond::of(leaf(Op::LDEQ, {fr, real_k(half)}, el)), is_odd));
+    rung(c_and(c_and(en, small), std::move(c)), out(op, {res, const_opd(1), res}, el), el);
+  };
+  step(Op::LDGT, 0.5f, Op::ADD);
+  step(Op::LDLT, -0.5f, Op::SUB);
+}
+
 void Importer::fn_block(const Node& b) {
   std::string t = upper(b.type);
   if (t == "ADD_TIME" || t == "SUB_TIME") t = t.substr(0, 3);  // TIME is INT32 ms: the same arithmetic
@@ -1310,10 +1332,12 @@ void Importer::fn_block(const Node& b) {
     bool real = false;
     for (const Val& x : v) real |= x.ty == Ty::Real;
     std::string target = conv ? t.substr(to + 4) : "";
+    bool round_real = false;  // REAL_TO_INT & co: IEC rounds to nearest, ties to even
     if (conv) {
       std::string from = t.substr(0, to);
       Ty ft = from == "BOOL" ? Ty::Bool : elementary(from), tt = elementary(target);
-      if (ft == Ty::None || tt == Ty::None || tt == Ty::Bool || (ft == Ty::Real && tt != Ty::Real))
+      round_real = ft == Ty::Real && tt == Ty::Int && target != "TIME";
+      if (ft == Ty::None || tt == Ty::None || tt == Ty::Bool || (ft == Ty::Real && tt != Ty::Real && !round_real))
         fail_at(el, "conversion " + t + " is not supported (" + el->path() + ")");
       real = tt == Ty::Real;
     }
@@ -1327,7 +1351,9 @@ void Importer::fn_block(const Node& b) {
       rung(c_and(en, in), out(Op::MOV, {real ? [] { Operand z{OpdKind::ConstReal}; z.fval = 1; return z; }() : const_opd(1), res}, el), el);
     } else {
       if (en.k != Cond::True) rung(negate(en, el), out(Op::MOV, {zero, res}, el), el);
-      if (conv || t == "MOVE") {
+      if (round_real) {
+        real_to_int(v.at(0).o, res, en, el);
+      } else if (conv || t == "MOVE") {
         rung(en, out(Op::MOV, {v.at(0).o, res}, el), el);
       } else if (t == "ABS") {
         rung(en, out(Op::ABS, {v.at(0).o, res}, el), el);
