@@ -1353,6 +1353,12 @@ void Importer::fn_block(const Node& b) {
       if (en.k != Cond::True) rung(negate(en, el), out(Op::MOV, {zero, res}, el), el);
       if (round_real) {
         real_to_int(v.at(0).o, res, en, el);
+        static const std::set<std::string> unsigned_types = {"USINT", "UINT", "UDINT", "BYTE", "WORD", "DWORD"};
+        if (unsigned_types.count(target)) {  // MatIEC: a negative REAL gives 0 for unsigned and bit-string types
+          Operand z{OpdKind::ConstReal};
+          z.fval = 0;
+          rung(c_and(en, Cond::of(leaf(Op::LDLT, {v.at(0).o, z}, el))), out(Op::MOV, {const_opd(0), res}, el), el);
+        }
       } else if (conv || t == "MOVE") {
         rung(en, out(Op::MOV, {v.at(0).o, res}, el), el);
       } else if (t == "ABS") {
