@@ -268,6 +268,7 @@ class Importer {
   void fb_block(const Node& b, Var& inst);
   void fn_block(const Node& b);
   void real_to_int(Operand x, Operand res, const Cond& en, const Element* el);
+  void bit_shift(const std::string& t, const Pin& in_pin, Operand in, Operand n, Operand res, const Cond& en, const Element* el);
 };
 
 // ------------------------------------------------------------------ declarations
@@ -1197,6 +1198,40 @@ void Importer::real_to_int(Operand x, Operand res, const Cond& en, const Element
   step(Op::LDLT, -0.5f, Op::SUB);
 }
 
+// SHL SHR ROL ROR (MatIEC: IN shifted in its own type, N modulo the width for
+// the rotations; the result keeps the type's width).  The width comes from the
+// declared type of the variable on IN: BYTE 8, WORD 16, else 32 (DWORD, or
+// unknown: no mask).  Rotations need a BYTE, WORD or DWORD variable on IN.
+void Importer::bit_shift(const std::string& t, const Pin& in_pin, Operand in, Operand n, Operand res, const Cond& en,
+                         const Element* el) {
+  int width = 32;
+  bool known = false;
+  if (in_pin.conns.size() == 1) {
+    const Node& src = node(in_pin.conns[0]);
+    if (src.kind == "inVariable" || src.kind == "inOutVariable")
+      if (Var* v = lookup(trim(src.text)); v && !v->derived) {
+        std::string ty = upper(v->type);
+        known = ty == "BYTE" || ty == "WORD" || ty == "DWORD";
+        width = ty == "BYTE" ? 8 : ty == "WORD" ? 16 : 32;
+      }
+  }
+  int32_t mask = width == 32 ? -1 : int32_t((1u << width) - 1);
+  if (t == "SHL" || t == "SHR") {
+    rung(en, out(t == "SHL" ? Op::SHL : Op::SHR, {in, n, res}, el), el);
+  } else {
+    if (!known)
+      fail_at(el, t + " needs a BYTE, WORD or DWORD variable on IN, to know the width it rotates in (" + el->path() + ")");
+    Operand k{OpdKind::Int, Area::D, take(Dev::D, el)}, a{OpdKind::Int, Area::D, take(Dev::D, el)};
+    bool left = t == "ROL";
+    rung(en, out(Op::MOD, {n, const_opd(width), k}, el), el);  // N %= width
+    rung(en, out(left ? Op::SHL : Op::SHR, {in, k, a}, el), el);
+    rung(en, out(Op::SUB, {const_opd(width), k, k}, el), el);
+    rung(en, out(left ? Op::SHR : Op::SHL, {in, k, res}, el), el);
+    rung(en, out(Op::WOR, {a, res, res}, el), el);
+  }
+  if (width < 32) rung(en, out(Op::WAND, {res, const_opd(mask), res}, el), el);
+}
+
 void Importer::fn_block(const Node& b) {
   std::string t = upper(b.type);
   if (t == "ADD_TIME" || t == "SUB_TIME") t = t.substr(0, 3);  // TIME is INT32 ms: the same arithmetic
@@ -1207,10 +1242,12 @@ void Importer::fn_block(const Node& b) {
   static const std::set<std::string> arith = {"ADD", "SUB", "MUL", "DIV", "MOD", "MAX", "MIN"};
   size_t to = t.find("_TO_");
   bool conv = to != std::string::npos;
-  if (!cmp.count(t) && !arith.count(t) && !conv && t != "MOVE" && t != "SEL" && t != "LIMIT" && t != "ABS" && t != "AND" &&
-      t != "OR" && t != "XOR" && t != "NOT")
+  static const std::set<std::string> bits = {"SHL", "SHR", "ROL", "ROR"};
+  if (!cmp.count(t) && !arith.count(t) && !conv && !bits.count(t) && t != "MOVE" && t != "SEL" && t != "MUX" && t != "LIMIT" &&
+      t != "ABS" && t != "AND" && t != "OR" && t != "XOR" && t != "NOT")
     fail_at(el, "block '" + b.type + "' localId " + std::to_string(b.id) + " is not supported: ldc translates TON TOF TP CTU CTD CTUD SR RS R_TRIG F_TRIG, "
-                "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL, ADD_TIME SUB_TIME, AND OR XOR NOT and type conversions (" + el->path() + ")");
+                "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL MUX, ADD_TIME SUB_TIME, AND OR XOR NOT SHL SHR ROL ROR "
+                "and type conversions (" + el->path() + ")");
   // inputs other than EN, in order
   std::vector<const Pin*> ins;
   for (const Pin& p : b.inputs)
@@ -1231,7 +1268,7 @@ void Importer::fn_block(const Node& b) {
   for (const Pin* p : ins)
     if (p->conns.empty()) fail_at(p->el, "input " + p->name + " of " + t + " localId " + std::to_string(b.id) + " is not connected (" + p->el->path() + ")");
   size_t want = t == "SEL" || t == "LIMIT" ? 3 : (conv || t == "NOT" || t == "MOVE" || t == "ABS") ? 1
-                : (t == "SUB" || t == "DIV" || t == "MOD") ? 2 : 0;
+                : (t == "SUB" || t == "DIV" || t == "MOD" || bits.count(t)) ? 2 : 0;
   size_t n_in = ins.size();
   if ((want && n_in != want) || (!want && n_in < 2))
     fail_at(el, t + " localId " + std::to_string(b.id) + " takes " + (want ? std::to_string(want) : std::string("two or more")) +
@@ -1368,6 +1405,18 @@ void Importer::fn_block(const Node& b) {
         Cond gc = materialize(cond_of(g), el);
         rung(c_and(en, negate(gc, el)), out(Op::MOV, {v[0].o, res}, el), el);
         rung(c_and(en, gc), out(Op::MOV, {v[1].o, res}, el), el);
+      } else if (t == "MUX") {  // MatIEC: K selects IN0, IN1 ...; K out of range gives 0 (and ENO FALSE)
+        rung(en, out(Op::MOV, {zero, res}, el), el);
+        Cond in_range = Cond::no();
+        for (size_t k = 1; k < v.size(); k++) {
+          Cond is_k = Cond::of(leaf(Op::LDEQ, {v[0].o, const_opd(int32_t(k - 1))}, el));
+          rung(c_and(en, is_k), out(Op::MOV, {v[k].o, res}, el), el);
+          in_range = c_or(std::move(in_range), std::move(is_k));
+        }
+        eno = c_and(en, std::move(in_range));
+      } else if (bits.count(t)) {
+        if (real) fail_at(el, t + " of REAL values is not defined (" + el->path() + ")");
+        bit_shift(t, *ins[0], v[0].o, v[1].o, res, en, el);
       } else if (t == "LIMIT") {  // IN > MN ? (IN < MX ? IN : MX) : MN
         if (v.size() != 3) fail_at(el, "LIMIT needs MN, IN and MX (" + el->path() + ")");
         rung(c_and(en, Cond::of(leaf(Op::LDLE, {v[1].o, v[0].o}, el))), out(Op::MOV, {v[0].o, res}, el), el);
