@@ -198,11 +198,27 @@ class Importer {
   // Located BOOL inputs the program writes (MatIEC allows it): the input is
   // copied into a relay at the start of the scan, and from the first write on
   // the variable is that relay, X index -> M index.
-  std::map<uint32_t, uint32_t> shadow_;
+  // Input words the same way: WX index -> D index.
+  std::map<uint32_t, uint32_t> shadow_, shadow_w_;
   Operand shadowed(Operand o) const {
     if (o.kind == OpdKind::Bit && o.area == Area::X)
       if (auto it = shadow_.find(o.index); it != shadow_.end()) return bit_opd(Area::M, it->second);
+    if (o.kind == OpdKind::Int && o.area == Area::WX)
+      if (auto it = shadow_w_.find(o.index); it != shadow_w_.end()) return Operand{OpdKind::Int, Area::D, it->second};
     return o;
+  }
+  // A write to an input: from here on it is its relay or word.
+  Val written(Val v, const Element* el) {
+    if (v.o.kind == OpdKind::Bit && v.o.area == Area::X) {
+      uint32_t m = take(Dev::M, el);
+      shadow_[v.o.index] = m;
+      v.o = bit_opd(Area::M, m);
+    } else if (v.o.kind == OpdKind::Int && v.o.area == Area::WX) {
+      uint32_t d = take(Dev::D, el);
+      shadow_w_[v.o.index] = d;
+      v.o = Operand{OpdKind::Int, Area::D, d};
+    }
+    return v;
   }
   // The native stack: bool_expr recurses once per power-flow element it
   // follows, block_out once per block that feeds a block being generated.  A
@@ -234,6 +250,7 @@ class Importer {
   // expressions
   std::optional<Operand> literal(const std::string& s, Ty& ty, const Element* el);
   Val value_of(const std::string& expr, const Element* el, bool write = false);
+  Val read_of(const std::string& expr, const Element* el, bool write);
   Operand bit_of(const std::string& expr, const Element* el, bool write);
   std::string spell(const Operand& o) const;
   std::map<std::pair<int, uint32_t>, std::string> spelled_;
@@ -427,6 +444,12 @@ std::optional<Operand> Importer::literal(const std::string& s0, Ty& ty, const El
 // A variable reference: NAME, INSTANCE.OUTPUT (TON0.Q, CTU0.CV, SR0.Q1) or a
 // direct address; or a literal.
 Val Importer::value_of(const std::string& expr, const Element* el, bool write) {
+  Val v = read_of(expr, el, write);
+  return write ? written(v, el) : v;
+}
+
+// value_of without the inputs' relays for writes (reads see them).
+Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
   std::string e = trim(expr);
   Ty ty;
   if (auto c = literal(e, ty, el)) {
@@ -443,7 +466,7 @@ Val Importer::value_of(const std::string& expr, const Element* el, bool write) {
     Area ar = bit_area(d->dev);
     if (ar != Area::Count) return {shadowed(bit_opd(ar, d->index)), Ty::Bool};
     Area w = word_area(d->dev);
-    return {Operand{w == Area::F ? OpdKind::Real : OpdKind::Int, w, d->index}, w == Area::F ? Ty::Real : Ty::Int};
+    return {shadowed(Operand{w == Area::F ? OpdKind::Real : OpdKind::Int, w, d->index}), w == Area::F ? Ty::Real : Ty::Int};
   }
   size_t dot = e.find('.');
   if (dot != std::string::npos) {
@@ -476,19 +499,13 @@ Val Importer::value_of(const std::string& expr, const Element* el, bool write) {
     fail_at(el, "variable '" + v->name + "' has type " + v->type + ", which ldc cannot hold (" + where(el) + ")");
   if (v->ty == Ty::Bool) return {shadowed(bit_opd(bit_area(v->dev->dev), v->dev->index)), Ty::Bool};
   Area w = word_area(v->dev->dev);
-  if (write && w == Area::WX) fail_at(el, "'" + e + "' is an input word; it cannot be written (" + where(el) + ")");
-  return {Operand{v->ty == Ty::Real ? OpdKind::Real : OpdKind::Int, w, v->dev->index}, v->ty};
+  return {shadowed(Operand{v->ty == Ty::Real ? OpdKind::Real : OpdKind::Int, w, v->dev->index}), v->ty};
 }
 
 Operand Importer::bit_of(const std::string& expr, const Element* el, bool write) {
   Val v = value_of(expr, el, write);
   if (v.ty != Ty::Bool) fail_at(el, "'" + trim(expr) + "' is " + ty_name(v.ty) + "; a BOOL is needed for " + where(el));
   if (v.o.kind == OpdKind::ConstInt) fail_at(el, "a literal cannot be used by " + where(el));
-  if (write && v.o.area == Area::X) {  // from here on the input is its relay
-    uint32_t m = take(Dev::M, el);
-    shadow_[v.o.index] = m;
-    v.o = bit_opd(Area::M, m);
-  }
   if (write) {
     if (v.o.area != Area::Y && v.o.area != Area::M) fail_at(el, "'" + trim(expr) + "' cannot be written (" + where(el) + ")");
   }
@@ -1697,13 +1714,17 @@ TreeProgram Importer::run() {
   if (rungs_.empty()) fail_at(ld[0], "the LD and FBD bodies of this project have no coils, variables or blocks to run");
   // inputs the program writes: their relays take the input first in every scan
   std::vector<TreeRung> copies;
-  for (auto [x, m] : shadow_) {
+  auto copy = [&](TreeNode root_node) {
     TreeRung r;
     r.line = rungs_[0].line;
     if (copies.empty()) r.title = "inputs the program writes";
-    r.root = then_node(bit_leaf(Op::LOAD, bit_opd(Area::X, x), root), out(Op::OUT, {bit_opd(Area::M, m)}, root), {r.line, 1});
+    r.root = std::move(root_node);
     copies.push_back(std::move(r));
-  }
+  };
+  for (auto [x, m] : shadow_)
+    copy(then_node(bit_leaf(Op::LOAD, bit_opd(Area::X, x), root), out(Op::OUT, {bit_opd(Area::M, m)}, root), {rungs_[0].line, 1}));
+  for (auto [x, d] : shadow_w_)
+    copy(out(Op::MOV, {Operand{OpdKind::Int, Area::WX, x}, Operand{OpdKind::Int, Area::D, d}}, root));
   rungs_.insert(rungs_.begin(), std::make_move_iterator(copies.begin()), std::make_move_iterator(copies.end()));
   p.rungs = std::move(rungs_);
   p.end_labels = std::move(pending_labels_);
