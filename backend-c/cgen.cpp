@@ -69,6 +69,25 @@ static inline void tp(u8 *m, uint32_t tw, uint32_t tq, uint32_t ti, int32_t pt, 
   else if (!in) wr_i(m, tw, 0);
   m[ti] = (u8)in;
 }
+static inline void mton(u8 *m, uint32_t tw, uint32_t tq, uint32_t ti, int32_t pt, int in) {
+  pt = pre(pt);
+  if (!in || !m[ti]) { wr_i(m, tw, 0); m[tq] = 0; }
+  else if (!m[tq]) { int32_t et = adv(rd_i(m, tw), rd_i(m, 0), pt); wr_i(m, tw, et); m[tq] = et >= pt; }
+  m[ti] = (u8)in;
+}
+static inline void mtof(u8 *m, uint32_t tw, uint32_t tq, uint32_t ti, int32_t pt, int in) {
+  pt = pre(pt);
+  if (in || m[ti]) { m[tq] = 1; wr_i(m, tw, 0); }
+  else if (m[tq]) { int32_t et = adv(rd_i(m, tw), rd_i(m, 0), pt); wr_i(m, tw, et); m[tq] = et < pt; }
+  m[ti] = (u8)in;
+}
+static inline void mtp(u8 *m, uint32_t tw, uint32_t tq, uint32_t ti, int32_t pt, int in) {
+  pt = pre(pt);
+  if (m[tq]) { int32_t et = adv(rd_i(m, tw), rd_i(m, 0), pt); wr_i(m, tw, et); if (et >= pt) m[tq] = 0; }
+  else if (in && !m[ti]) { m[tq] = 1; wr_i(m, tw, 0); }
+  if (!m[tq] && !in) wr_i(m, tw, 0);
+  m[ti] = (u8)in;
+}
 static inline void ctu(u8 *m, uint32_t cw, uint32_t cq, uint32_t e, int32_t pv, int in) {
   int32_t cv = rd_i(m, cw);
   if (in && !m[e] && cv != INT32_MAX) cv++;
@@ -221,9 +240,10 @@ class CGen {
                   : in.op == Op::EXP ? RealFn::Exp : RealFn::Ln;
         return guarded(store(a[1], "call_fn(m, " + std::to_string(kCallTableDisp + 8 * int32_t(fn)) + ", " + val(a[0], true) + ")", true));
       }
-      case Op::TON: case Op::TOF: case Op::TP: {
+      case Op::TON: case Op::TOF: case Op::TP: case Op::MTON: case Op::MTOF: case Op::MTP: {
         uint32_t n = a[0].index;
-        const char* fn = in.op == Op::TON ? "ton" : in.op == Op::TOF ? "tof" : "tp";
+        const char* fn = in.op == Op::TON ? "ton" : in.op == Op::TOF ? "tof" : in.op == Op::TP ? "tp"
+                       : in.op == Op::MTON ? "mton" : in.op == Op::MTOF ? "mtof" : "mtp";
         return line(std::string(fn) + "(m, " + u(L_.addr(Area::TW, n)) + ", " + u(L_.addr(Area::TQ, n)) + ", " +
                     u(L_.addr(Area::TI, n)) + ", " + val(a[1], false) + ", " + top() + ");");
       }

@@ -422,6 +422,7 @@ class Gen {
   void logic(const ldc::Instr& in);
   void special(const ldc::Instr& in);
   void timer(const ldc::Instr& in);
+  void matiec_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
   void counter(const ldc::Instr& in);
   void preset_r1(const ldc::Operand& pt);
   void advance_r2(uint32_t tw);
@@ -650,6 +651,7 @@ void Gen::timer(const ldc::Instr& in) {
     return;
   }
   preset_r1(in.a[1]);
+  if (in.op == Op::MTON || in.op == Op::MTOF || in.op == Op::MTP) return matiec_timer(in, tw, tq, ti);
   std::string off = fresh(), done = fresh();
   if (in.op == Op::TON) {
     std::string running = fresh(), q = fresh();
@@ -739,6 +741,81 @@ void Gen::timer(const ldc::Instr& in) {
       top_to(r0);
       op(M::Sti, {R(r0), D(ti)});
     }
+  }
+}
+
+// MTON MTOF MTP (docs/il.md, "MatIEC timers"); the preset is in R1.
+void Gen::matiec_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti) {
+  std::string remember = fresh();
+  if (in.op == Op::MTON) {
+    std::string reset = fresh();
+    test_top();
+    branch(Cond::EQ, reset);
+    op(M::Ldi, {D(ti), R(r0)});
+    branch(Cond::EQ, reset);  // rising scan: timing starts
+    op(M::Ldi, {D(tq), R(r0)});
+    branch(Cond::NE, remember);  // done: holds while IN stays on
+    advance_r2(tw);
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Cmpi, {R(r1), R(r2)});
+    opc(M::Ldic, Cond::GE, {I(1), R(r0)});
+    op(M::Sti, {R(r0), D(tq)});
+    jump(remember);
+    label(reset);
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Sti, {R(r0), D(tw)});
+    op(M::Sti, {R(r0), D(tq)});
+  } else if (in.op == Op::MTOF) {
+    std::string on = fresh();
+    test_top();
+    branch(Cond::NE, on);
+    op(M::Ldi, {D(ti), R(r0)});
+    branch(Cond::NE, on);  // falling scan: Q stays on
+    op(M::Ldi, {D(tq), R(r0)});
+    branch(Cond::EQ, remember);
+    advance_r2(tw);
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Cmpi, {R(r1), R(r2)});
+    opc(M::Ldic, Cond::LT, {I(1), R(r0)});
+    op(M::Sti, {R(r0), D(tq)});
+    jump(remember);
+    label(on);
+    op(M::Ldi, {I(1), R(r0)});
+    op(M::Sti, {R(r0), D(tq)});
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Sti, {R(r0), D(tw)});
+  } else {  // MTP
+    std::string idle = fresh(), check = fresh();
+    op(M::Ldi, {D(tq), R(r0)});
+    branch(Cond::EQ, idle);
+    advance_r2(tw);
+    op(M::Cmpi, {R(r1), R(r2)});
+    branch(Cond::LT, remember);
+    op(M::Ldi, {I(0), R(r0)});  // the pulse ends
+    op(M::Sti, {R(r0), D(tq)});
+    jump(check);
+    label(idle);
+    test_top();
+    branch(Cond::EQ, check);
+    op(M::Ldi, {D(ti), R(r0)});
+    branch(Cond::NE, remember);
+    op(M::Ldi, {I(1), R(r0)});  // rising scan: the pulse starts
+    op(M::Sti, {R(r0), D(tq)});
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Sti, {R(r0), D(tw)});
+    jump(remember);
+    label(check);  // Q is off: ET = 0 unless IN is on
+    test_top();
+    branch(Cond::NE, remember);
+    op(M::Ldi, {I(0), R(r0)});
+    op(M::Sti, {R(r0), D(tw)});
+  }
+  label(remember);
+  if (slots_) {
+    op(M::Sti, {R(top()), D(ti)});
+  } else {
+    top_to(r0);
+    op(M::Sti, {R(r0), D(ti)});
   }
 }
 

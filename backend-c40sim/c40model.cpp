@@ -324,7 +324,7 @@ void Run::timer() {
       set_et(e);
       *q = e < pt;
     }
-  } else {
+  } else if (op_ == Op::TP) {
     if (*q) {
       int32_t e = advance(get_et(), dt(), pt);
       set_et(e);
@@ -335,6 +335,34 @@ void Run::timer() {
     } else if (!in) {
       set_et(0);
     }
+  } else if (op_ == Op::MTON) {
+    if (!in || !*ti) {
+      set_et(0);
+      *q = 0;
+    } else if (!*q) {
+      int32_t e = advance(get_et(), dt(), pt);
+      set_et(e);
+      *q = e >= pt;
+    }
+  } else if (op_ == Op::MTOF) {
+    if (in || *ti) {
+      *q = 1;
+      set_et(0);
+    } else if (*q) {
+      int32_t e = advance(get_et(), dt(), pt);
+      set_et(e);
+      *q = e < pt;
+    }
+  } else {  // MTP
+    if (*q) {
+      int32_t e = advance(get_et(), dt(), pt);
+      set_et(e);
+      if (e >= pt) *q = 0;
+    } else if (in && !*ti) {
+      *q = 1;
+      set_et(0);
+    }
+    if (!*q && !in) set_et(0);
   }
   *ti = in;
 }
@@ -433,7 +461,7 @@ void Run::run() {
       case Op::SIN: case Op::COS: case Op::TAN: case Op::SQRT: case Op::EXP: case Op::LN: case Op::ABS:
         special();
         break;
-      case Op::TON: case Op::TOF: case Op::TP: case Op::RSTT: timer(); break;
+      case Op::TON: case Op::TOF: case Op::TP: case Op::RSTT: case Op::MTON: case Op::MTOF: case Op::MTP: timer(); break;
       case Op::CTU: case Op::CTD: case Op::RSTC: counter(); break;
       case Op::JMP: { uint32_t t = operand().index; if (top()) pc_ = t; break; }
       case Op::END: if (top()) end_ = true; break;

@@ -271,6 +271,7 @@ class Gen {
   void logic(const ldc::Instr& in);
   void special(const ldc::Instr& in);
   void timer(const ldc::Instr& in);
+  void matiec_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
   void counter(const ldc::Instr& in);
   void preset_ecx(const ldc::Operand& pt);
   void advance_eax(uint32_t tw);
@@ -550,7 +551,8 @@ void Gen::timer(const ldc::Instr& in) {
   uint32_t n = in.a[0].index;
   uint32_t tw = L_.addr(Area::TW, n), tq = L_.addr(Area::TQ, n), ti = L_.addr(Area::TI, n);
   if (in.op == Op::RSTT && gate_) return reset_masked({Dw(tw)}, {B(tq), B(ti)});
-  if (gate_) return timer_gated(in);
+  // the shared routines have ldc's own rules; MatIEC's timers stay inline
+  if (gate_ && (in.op == Op::TON || in.op == Op::TOF || in.op == Op::TP)) return timer_gated(in);
   if (in.op == Op::RSTT) {
     std::string skip = skip_unless_power();
     emit(M::Mov, {Dw(tw), I(0)});
@@ -560,6 +562,7 @@ void Gen::timer(const ldc::Instr& in) {
     return;
   }
   preset_ecx(in.a[1]);
+  if (in.op == Op::MTON || in.op == Op::MTOF || in.op == Op::MTP) return matiec_timer(in, tw, tq, ti);
   std::string off = fresh(), done = fresh();
   if (in.op == Op::TON) {
     std::string running = fresh(), q = fresh();
@@ -650,6 +653,68 @@ void Gen::counter_gated(const ldc::Instr& in) {
   bool up = in.op == Op::CTU;
   if (up) load_int(in.a[1], ecx);
   call_routine(up ? as::x86::Routine::Ctu : as::x86::Routine::Ctd);
+}
+
+// MTON MTOF MTP (docs/il.md, "MatIEC timers"); the preset is in ECX.
+void Gen::matiec_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti) {
+  std::string remember = fresh();
+  if (in.op == Op::MTON) {
+    std::string reset = fresh();
+    test_top();
+    jcc(Cond::E, reset);
+    emit(M::Cmp, {B(ti), I(0)});
+    jcc(Cond::E, reset);  // rising scan: timing starts
+    emit(M::Cmp, {B(tq), I(0)});
+    jcc(Cond::NE, remember);  // done: holds while IN stays on
+    advance_eax(tw);
+    emit(M::Cmp, {R(eax), R(ecx)});
+    emit(makeCc(M::Setcc, Cond::GE, {R(al)}));
+    emit(M::Mov, {B(tq), R(al)});
+    jmp(remember);
+    label(reset);
+    emit(M::Mov, {Dw(tw), I(0)});
+    emit(M::Mov, {B(tq), I(0)});
+  } else if (in.op == Op::MTOF) {
+    std::string on = fresh();
+    test_top();
+    jcc(Cond::NE, on);
+    emit(M::Cmp, {B(ti), I(0)});
+    jcc(Cond::NE, on);  // falling scan: Q stays on
+    emit(M::Cmp, {B(tq), I(0)});
+    jcc(Cond::E, remember);
+    advance_eax(tw);
+    emit(M::Cmp, {R(eax), R(ecx)});
+    emit(makeCc(M::Setcc, Cond::L, {R(al)}));
+    emit(M::Mov, {B(tq), R(al)});
+    jmp(remember);
+    label(on);
+    emit(M::Mov, {B(tq), I(1)});
+    emit(M::Mov, {Dw(tw), I(0)});
+  } else {  // MTP
+    std::string idle = fresh(), check = fresh();
+    emit(M::Cmp, {B(tq), I(0)});
+    jcc(Cond::E, idle);
+    advance_eax(tw);
+    emit(M::Cmp, {R(eax), R(ecx)});
+    jcc(Cond::L, remember);
+    emit(M::Mov, {B(tq), I(0)});  // the pulse ends
+    jmp(check);
+    label(idle);
+    test_top();
+    jcc(Cond::E, check);
+    emit(M::Cmp, {B(ti), I(0)});
+    jcc(Cond::NE, remember);
+    emit(M::Mov, {B(tq), I(1)});  // rising scan: the pulse starts
+    emit(M::Mov, {Dw(tw), I(0)});
+    jmp(remember);
+    label(check);  // Q is off: ET = 0 unless IN is on
+    test_top();
+    jcc(Cond::NE, remember);
+    emit(M::Mov, {Dw(tw), I(0)});
+  }
+  label(remember);
+  if (slots_) emit(M::Mov, {B(ti), R(top8())});
+  else { top_to_eax(); emit(M::Mov, {B(ti), R(al)}); }
 }
 
 void Gen::counter(const ldc::Instr& in) {

@@ -343,7 +343,7 @@ std::string Gen::output_text() {
     }
     case 2: {
       if (r_.pct(15)) return "(RST " + dev("T", o_.t) + ")";
-      static const char* const kw[] = {"TON", "TOF", "TP"};
+      static const char* const kw[] = {"TON", "TOF", "TP", "MTON", "MTOF", "MTP"};
       return "(" + std::string(r_.of(kw)) + " " + dev("T", o_.t) + " " + timer_preset() + ")";
     }
     case 3: {

@@ -319,7 +319,7 @@ TreeNode Parser::input_element(const std::string& inner, int line, int col) {
 }
 
 // output = bit | "/" bit | ("S"|"R") bit | "RST" (bit|timer|counter)
-//        | ("TON"|"TOF"|"TP") timer preset | ("CTU"|"CTD") counter preset
+//        | ("TON"|"TOF"|"TP"|"MTON"|"MTOF"|"MTP") timer preset | ("CTU"|"CTD") counter preset
 //        | "MOV" value dst | ("ADD"|"SUB"|"MUL"|"DIV"|"MOD"|"AND"|"OR"|"XOR"|"SHL"|"SHR") value value dst
 //        | ("NOT"|"SIN"|"COS"|"TAN"|"SQRT"|"EXP"|"LN"|"ABS") value dst | "JMP" label | "END"
 TreeNode Parser::output_element(const std::string& inner, int line, int col, int rung_line) {
@@ -371,9 +371,9 @@ TreeNode Parser::output_element(const std::string& inner, int line, int col, int
       if (d.dev == Dev::T) { in.op = Op::RSTT; in.a[0] = timer_or_counter(w[1], 't'); }
       else if (d.dev == Dev::C) { in.op = Op::RSTC; in.a[0] = timer_or_counter(w[1], 'c'); }
       else { in.op = Op::RST; in.a[0] = bit(w[1], 'w'); }
-    } else if (kw == "TON" || kw == "TOF" || kw == "TP") {
+    } else if (kw == "TON" || kw == "TOF" || kw == "TP" || kw == "MTON" || kw == "MTOF" || kw == "MTP") {
       want(3, (kw + " Tn preset").c_str());
-      operands(kw == "TON" ? Op::TON : kw == "TOF" ? Op::TOF : Op::TP);
+      operands(*op_from_name(kw));
       if (in.a[1].kind == OpdKind::ConstInt && in.a[1].ival < 0) fail(0, w[2].col, "a timer preset cannot be negative");
     } else if (kw == "CTU" || kw == "CTD") {
       want(3, (kw + " Cn preset").c_str());

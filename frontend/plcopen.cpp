@@ -195,6 +195,31 @@ class Importer {
   std::map<std::pair<int, std::string>, Out> outs_;
   std::set<std::pair<int, std::string>> consumed_;  // block outputs someone reads
   std::set<int> generating_;
+  // Located BOOL inputs the program writes (MatIEC allows it): the input is
+  // copied into a relay at the start of the scan, and from the first write on
+  // the variable is that relay, X index -> M index.
+  // Input words the same way: WX index -> D index.
+  std::map<uint32_t, uint32_t> shadow_, shadow_w_;
+  Operand shadowed(Operand o) const {
+    if (o.kind == OpdKind::Bit && o.area == Area::X)
+      if (auto it = shadow_.find(o.index); it != shadow_.end()) return bit_opd(Area::M, it->second);
+    if (o.kind == OpdKind::Int && o.area == Area::WX)
+      if (auto it = shadow_w_.find(o.index); it != shadow_w_.end()) return Operand{OpdKind::Int, Area::D, it->second};
+    return o;
+  }
+  // A write to an input: from here on it is its relay or word.
+  Val written(Val v, const Element* el) {
+    if (v.o.kind == OpdKind::Bit && v.o.area == Area::X) {
+      uint32_t m = take(Dev::M, el);
+      shadow_[v.o.index] = m;
+      v.o = bit_opd(Area::M, m);
+    } else if (v.o.kind == OpdKind::Int && v.o.area == Area::WX) {
+      uint32_t d = take(Dev::D, el);
+      shadow_w_[v.o.index] = d;
+      v.o = Operand{OpdKind::Int, Area::D, d};
+    }
+    return v;
+  }
   // The native stack: bool_expr recurses once per power-flow element it
   // follows, block_out once per block that feeds a block being generated.  A
   // block's frames are about ten times a flow element's, so it costs
@@ -225,6 +250,7 @@ class Importer {
   // expressions
   std::optional<Operand> literal(const std::string& s, Ty& ty, const Element* el);
   Val value_of(const std::string& expr, const Element* el, bool write = false);
+  Val read_of(const std::string& expr, const Element* el, bool write);
   Operand bit_of(const std::string& expr, const Element* el, bool write);
   std::string spell(const Operand& o) const;
   std::map<std::pair<int, uint32_t>, std::string> spelled_;
@@ -247,14 +273,19 @@ class Importer {
   const Node& node(const Conn& c);
   bool is_bool_source(const Conn& c, int depth = 0);
   bool out_is_bool(const Node& b, const std::string& pin, int depth = 0);
+  template <typename E>
+  Cond node_values(std::vector<E*>& left, int nn, int sink, const Element* consumer);
   Cond bool_expr(const std::vector<Conn>& conns, bool order, const Element* consumer);
   Val value_expr(const std::vector<Conn>& conns, bool order, const Element* consumer, int depth = 0);
   Out block_out(const Node& b, const Conn& c, bool order);
   const Pin* out_pin(const Node& b, const Conn& c);
   void statement(const Node& n);
+  void tasks(const Element* root);
   void block(const Node& b);
   void fb_block(const Node& b, Var& inst);
   void fn_block(const Node& b);
+  void real_to_int(Operand x, Operand res, const Cond& en, const Element* el);
+  void bit_shift(const std::string& t, const Pin& in_pin, Operand in, Operand n, Operand res, const Cond& en, const Element* el);
 };
 
 // ------------------------------------------------------------------ declarations
@@ -413,6 +444,12 @@ std::optional<Operand> Importer::literal(const std::string& s0, Ty& ty, const El
 // A variable reference: NAME, INSTANCE.OUTPUT (TON0.Q, CTU0.CV, SR0.Q1) or a
 // direct address; or a literal.
 Val Importer::value_of(const std::string& expr, const Element* el, bool write) {
+  Val v = read_of(expr, el, write);
+  return write ? written(v, el) : v;
+}
+
+// value_of without the inputs' relays for writes (reads see them).
+Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
   std::string e = trim(expr);
   Ty ty;
   if (auto c = literal(e, ty, el)) {
@@ -427,9 +464,9 @@ Val Importer::value_of(const std::string& expr, const Element* el, bool write) {
     if (!d) fail_at(el, why.empty() ? "unsupported address " + e : why);
     if (d->index >= device_count(d->dev)) fail_at(el, "address " + e + " is out of range");
     Area ar = bit_area(d->dev);
-    if (ar != Area::Count) return {bit_opd(ar, d->index), Ty::Bool};
+    if (ar != Area::Count) return {shadowed(bit_opd(ar, d->index)), Ty::Bool};
     Area w = word_area(d->dev);
-    return {Operand{w == Area::F ? OpdKind::Real : OpdKind::Int, w, d->index}, w == Area::F ? Ty::Real : Ty::Int};
+    return {shadowed(Operand{w == Area::F ? OpdKind::Real : OpdKind::Int, w, d->index}), w == Area::F ? Ty::Real : Ty::Int};
   }
   size_t dot = e.find('.');
   if (dot != std::string::npos) {
@@ -460,10 +497,9 @@ Val Importer::value_of(const std::string& expr, const Element* el, bool write) {
   }
   if (v->ty == Ty::None || !v->dev)
     fail_at(el, "variable '" + v->name + "' has type " + v->type + ", which ldc cannot hold (" + where(el) + ")");
-  if (v->ty == Ty::Bool) return {bit_opd(bit_area(v->dev->dev), v->dev->index), Ty::Bool};
+  if (v->ty == Ty::Bool) return {shadowed(bit_opd(bit_area(v->dev->dev), v->dev->index)), Ty::Bool};
   Area w = word_area(v->dev->dev);
-  if (write && w == Area::WX) fail_at(el, "'" + e + "' is an input word; it cannot be written (" + where(el) + ")");
-  return {Operand{v->ty == Ty::Real ? OpdKind::Real : OpdKind::Int, w, v->dev->index}, v->ty};
+  return {shadowed(Operand{v->ty == Ty::Real ? OpdKind::Real : OpdKind::Int, w, v->dev->index}), v->ty};
 }
 
 Operand Importer::bit_of(const std::string& expr, const Element* el, bool write) {
@@ -471,7 +507,6 @@ Operand Importer::bit_of(const std::string& expr, const Element* el, bool write)
   if (v.ty != Ty::Bool) fail_at(el, "'" + trim(expr) + "' is " + ty_name(v.ty) + "; a BOOL is needed for " + where(el));
   if (v.o.kind == OpdKind::ConstInt) fail_at(el, "a literal cannot be used by " + where(el));
   if (write) {
-    if (v.o.area == Area::X) fail_at(el, "'" + trim(expr) + "' is an input; it cannot be written (" + where(el) + ")");
     if (v.o.area != Area::Y && v.o.area != Area::M) fail_at(el, "'" + trim(expr) + "' cannot be written (" + where(el) + ")");
   }
   return v.o;
@@ -566,25 +601,24 @@ Cond Importer::negate(Cond c, const Element* el) {
 }
 
 // R_TRIG / F_TRIG of a condition, as a statement of its own (Beremiz calls the
-// trigger instance before the statement that reads it).  F_TRIG is IEC's
-// "Q := NOT CLK AND NOT M; M := NOT CLK": it pulses on the first scan if CLK is FALSE.
+// trigger instance before the statement that reads it).
+//   R_TRIG: Q := CLK AND NOT M; M := CLK          (M starts FALSE)
+//   F_TRIG: Q := NOT CLK AND NOT M; M := NOT CLK  (M starts TRUE in MatIEC as
+//           OpenPLC ships it, so there is no pulse on the first scan)
+// R_TRIG is LOADP of CLK; F_TRIG is LOADF of CLK (its edge memory holds CLK,
+// starting FALSE, which is NOT M).  A constant CLK never falls; TRUE rises on
+// the first scan.
 Cond Importer::trigger(Cond c, bool rising, const Element* el, std::optional<Operand> into) {
-  // rising: Q := CLK AND NOT M; M := CLK        falling: Q := NOT CLK AND NOT M; M := NOT CLK
-  // Both are "rising edge of X" with X = CLK or NOT CLK and M starting FALSE.
-  if (!rising) c = negate(std::move(c), el);
-  if (!into) {
-    if (c.k == Cond::False) return Cond::no();
-    if (c.k == Cond::True) return bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), el);  // TRUE rises on the first scan
-  }
   if (c.k != Cond::Expr) {
-    Cond k = c.k == Cond::True ? bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), el) : Cond::no();
+    Cond k = rising && c.k == Cond::True ? bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), el) : Cond::no();
+    if (!into) return k;
     rung(std::move(k), out(Op::OUT, {*into}, el), el);
     return bit_leaf(Op::LOAD, *into, el);
   }
   uint32_t q = into ? into->index : temp_m(el);
   Cond x = is_leaf(c) && c.n.elem.op == Op::LOAD ? std::move(c) : materialize(std::move(c), el);
-  x.n.elem.op = Op::LOADP;
-  x.n.text = "P " + x.n.text;
+  x.n.elem.op = rising ? Op::LOADP : Op::LOADF;
+  x.n.text = (rising ? "P " : "N ") + x.n.text;
   Operand qo = into ? *into : bit_opd(Area::M, q);
   rung(std::move(x), out(Op::OUT, {qo}, el), el);
   return bit_leaf(Op::LOAD, qo, el);
@@ -816,6 +850,10 @@ Cond Importer::bool_expr(const std::vector<Conn>& conns, bool order, const Eleme
       Cond lab;
       if (n.kind == "inVariable" || n.kind == "inOutVariable") {
         Val v = value_of(n.text, n.el);
+        Ty lit_ty;
+        bool untyped_01 = v.o.kind == OpdKind::ConstInt && (v.o.ival == 0 || v.o.ival == 1) &&
+                          upper(n.text).find('#') == std::string::npos && literal(n.text, lit_ty, n.el);
+        if (untyped_01) v.ty = Ty::Bool;  // MatIEC reads the literals 0 and 1 as BOOL where a BOOL is wanted
         if (v.ty != Ty::Bool) fail_at(n.el, "'" + n.text + "' is " + ty_name(v.ty) + " but feeds the power flow of " + where(consumer));
         if (v.o.kind == OpdKind::ConstInt) lab = (v.o.ival != 0) != n.negated ? Cond::yes() : Cond::no();
         else lab = Cond::of(leaf(n.negated ? Op::LOADN : Op::LOAD, {v.o}, n.el, (n.negated ? "/" : "") + n.text));
@@ -891,16 +929,50 @@ Cond Importer::bool_expr(const std::vector<Conn>& conns, bool order, const Eleme
   for (auto& e : edges)
     if (e.alive) left.push_back(&e);
   if (left.size() == 1 && left[0]->from == 0 && left[0]->to == sink) return std::move(left[0]->label);
-  const Element* culprit = nullptr;
-  std::vector<int> outdeg(nn);
-  for (E* e : left) outdeg[e->from]++;
-  for (E* e : left)
-    if (e->el && outdeg[e->from] >= 2 && e->from != 0) { culprit = e->el; break; }
-  for (E* e : left)
-    if (!culprit && e->el) culprit = e->el;
-  if (!culprit) culprit = consumer;
-  fail_at(culprit, "the network feeding " + where(consumer) + " is not series-parallel at " + where(culprit) +
-                       "; ldc needs each output's contacts to reduce to series and parallel blocks");
+  return node_values(left, nn, sink, consumer);
+}
+
+// A power flow that does not reduce to series and parallel blocks (a bridge, a
+// wired OR shared by several forks): each junction's value, in an order where
+// every junction comes after those feeding it, goes into a relay of its own,
+// the OR over its inputs of (value of the junction it comes from AND the
+// contact).  The left rail is TRUE.  The statement then reads the sink's
+// inputs the same way.  The graph is acyclic (loops were refused above).
+template <typename E>
+Cond Importer::node_values(std::vector<E*>& left, int nn, int sink, const Element* consumer) {
+  std::vector<std::vector<E*>> into(nn);
+  for (E* e : left) into[e->to].push_back(e);
+  std::vector<int> order;
+  std::vector<char> seen(nn);
+  std::vector<std::pair<int, size_t>> stack{{sink, 0}};  // iterative depth-first walk towards the rail
+  seen[sink] = 1;
+  while (!stack.empty()) {
+    auto& [v, k] = stack.back();
+    if (k < into[v].size()) {
+      int f = into[v][k++]->from;
+      if (!seen[f]) { seen[f] = 1; stack.push_back({f, 0}); }
+    } else {
+      order.push_back(v);
+      stack.pop_back();
+    }
+  }
+  std::map<int, Operand> relay;
+  auto edge_cond = [&](E* e) {
+    Cond c = std::move(e->label);
+    if (e->from == 0) return c;
+    return c_and(bit_leaf(Op::LOAD, relay.at(e->from), consumer), std::move(c));
+  };
+  for (int v : order) {
+    if (v == 0 || v == sink) continue;
+    Cond c = Cond::no();
+    for (E* e : into[v]) c = c_or(std::move(c), edge_cond(e));
+    Operand m = bit_opd(Area::M, temp_m(consumer));
+    rung(std::move(c), out(Op::OUT, {m}, consumer), consumer);
+    relay[v] = m;
+  }
+  Cond r = Cond::no();
+  for (E* e : into[sink]) r = c_or(std::move(r), edge_cond(e));
+  return r;
 }
 
 Val Importer::value_expr(const std::vector<Conn>& conns, bool order, const Element* consumer, int depth) {
@@ -940,9 +1012,11 @@ Out Importer::block_out(const Node& b, const Conn& c, bool order) {
   const Pin* p = out_pin(b, c);
   std::string name = p ? p->name : "ENO";
   auto it = outs_.find({b.id, name});
-  if (it == outs_.end() && !computed_.count(b.id) && fb_kind(upper(b.type)) != FbKind::None && name != "ENO") {
-    // read before its execution order runs it: a function block's outputs are
-    // its devices, as they stand from the previous scan
+  bool in_loop = generating_.count(b.id) > 0;
+  if (it == outs_.end() && (!computed_.count(b.id) || in_loop) && fb_kind(upper(b.type)) != FbKind::None && name != "ENO") {
+    // read before its execution order runs it, or where a loop of blocks closes
+    // (Beremiz reads the instance's output there): a function block's outputs
+    // are its devices, as they stand from the previous scan
     Var* inst = b.instance.empty() ? nullptr : lookup(b.instance);
     if (inst && inst->dev) {
       Val v = value_of(b.instance + "." + name, b.el);
@@ -951,6 +1025,8 @@ Out Importer::block_out(const Node& b, const Conn& c, bool order) {
     }
   }
   if (it == outs_.end()) {
+    if (in_loop)
+      fail_at(c.el, "block " + b.type + " localId " + std::to_string(b.id) + " feeds its own input through a loop of functions; only a function block's output can close a loop (" + c.el->path() + ")");
     if (!computed_.count(b.id))
       fail_at(c.el, "block " + b.type + " localId " + std::to_string(b.id) + " is read before its executionOrderId computes it (" + c.el->path() + ")");
     fail_at(c.el, "block " + b.type + " localId " + std::to_string(b.id) + " has no output '" + name + "' (" + c.el->path() + ")");
@@ -1060,21 +1136,22 @@ void Importer::fb_block(const Node& b, Var& inst) {
   if (k == FbKind::Timer) {
     Operand tm{OpdKind::Timer};
     tm.index = i;
-    rung(in("IN"), out(t == "TON" ? Op::TON : t == "TOF" ? Op::TOF : Op::TP, {tm, val("PT").o}, el), el);
+    // MatIEC's timers, as OpenPLC and Beremiz run them (docs/il.md, "MatIEC timers")
+    rung(in("IN"), out(t == "TON" ? Op::MTON : t == "TOF" ? Op::MTOF : Op::MTP, {tm, val("PT").o}, el), el);
     bool_out("Q", bit_opd(Area::TQ, i));
     val_out("ET", Operand{OpdKind::Int, Area::TW, i});
   } else if (t == "CTU" || t == "CTD") {
-    // IEC: IF R THEN CV := 0 ELSIF (edge of CU) AND CV < 32767 THEN CV := CV + 1;
-    // Q := CV >= PV (CTD: IF LD THEN CV := PV ELSIF (edge of CD) AND CV > -32768
-    // THEN CV := CV - 1; Q := CV <= 0).  Our CTU/CTD count on their input's
-    // rising edge; the input here is already a one-scan pulse, so they count
-    // exactly the IEC edges, and compute Q on every scan.
+    // MatIEC as OpenPLC ships it: IF R THEN CV := 0 ELSIF (edge of CU) AND CV < PV
+    // THEN CV := CV + 1; Q := CV >= PV (CTD: IF LD THEN CV := PV ELSIF (edge of CD)
+    // AND CV > 0 THEN CV := CV - 1; Q := CV <= 0).  Our CTU/CTD count on their
+    // input's rising edge; the input here is already a one-scan pulse, so they
+    // count exactly those edges, and compute Q on every scan.
     bool up = t == "CTU";
     Cond r = in(up ? "R" : "LD");
     Val pv = val("PV");
     if (r.k != Cond::False) rung(r, up ? out(Op::RSTC, {cn}, el) : out(Op::MOV, {pv.o, cw}, el), el);
     Cond pulse = trigger(in(up ? "CU" : "CD"), true, el);
-    Cond limit = Cond::of(leaf(up ? Op::LDLT : Op::LDGT, {cw, const_opd(up ? 32767 : -32768)}, el));
+    Cond limit = Cond::of(leaf(up ? Op::LDLT : Op::LDGT, {cw, up ? pv.o : const_opd(0)}, el));
     rung(c_and(c_and(std::move(pulse), negate(r, el)), std::move(limit)), out(up ? Op::CTU : Op::CTD, {cn, pv.o}, el), el);
     bool_out("Q", bit_opd(Area::CQ, i));
     val_out("CV", cw);
@@ -1085,9 +1162,10 @@ void Importer::fb_block(const Node& b, Var& inst) {
     if (r.k != Cond::False) rung(r, out(Op::RSTC, {cn}, el), el);
     Cond idle = c_and(negate(r, el), negate(ld, el));
     if (ld.k != Cond::False) rung(c_and(negate(r, el), ld), out(Op::MOV, {pv.o, cw}, el), el);
-    rung(c_and(c_and(idle, c_and(eu, negate(ed, el))), Cond::of(leaf(Op::LDLT, {cw, const_opd(32767)}, el))),
+    // MatIEC: unless both edges come together, count up while CV < PV, else down while CV > 0
+    rung(c_and(c_and(idle, c_and(eu, negate(ed, el))), Cond::of(leaf(Op::LDLT, {cw, pv.o}, el))),
          out(Op::ADD, {cw, const_opd(1), cw}, el), el);
-    rung(c_and(c_and(idle, c_and(ed, negate(eu, el))), Cond::of(leaf(Op::LDGT, {cw, const_opd(-32768)}, el))),
+    rung(c_and(c_and(idle, c_and(ed, negate(eu, el))), Cond::of(leaf(Op::LDGT, {cw, const_opd(0)}, el))),
          out(Op::SUB, {cw, const_opd(1), cw}, el), el);
     rung(Cond::of(leaf(Op::LDGE, {cw, pv.o}, el)), out(Op::OUT, {bit_opd(Area::M, inst.aux)}, el), el);
     rung(Cond::of(leaf(Op::LDLE, {cw, const_opd(0)}, el)), out(Op::OUT, {bit_opd(Area::M, inst.aux2)}, el), el);
@@ -1116,8 +1194,64 @@ void Importer::fb_block(const Node& b, Var& inst) {
   if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, en, {}};
 }
 
+// res := x rounded to the nearest integer, ties to even (MatIEC's REAL_TO_INT:
+// x +/- 0.5 in LREAL, an exact integer result made even).  The move truncates;
+// the fraction x - trunc(x) is exact in REAL below 2^23 (above, x is already
+// an integer), and decides one step up or down.
+void Importer::real_to_int(Operand x, Operand res, const Cond& en, const Element* el) {
+  auto real_k = [](float f) { Operand k{OpdKind::ConstReal}; k.fval = f; return k; };
+  Operand fr{OpdKind::Real, Area::F, take(Dev::F, el)};
+  Operand odd{OpdKind::Int, Area::D, take(Dev::D, el)};
+  rung(en, out(Op::MOV, {x, res}, el), el);
+  rung(en, out(Op::SUB, {x, res, fr}, el), el);
+  rung(en, out(Op::WAND, {res, const_opd(1), odd}, el), el);
+  Cond small = c_and(Cond::of(leaf(Op::LDLT, {x, real_k(8388608.0f)}, el)), Cond::of(leaf(Op::LDGT, {x, real_k(-8388608.0f)}, el)));
+  Cond is_odd = Cond::of(leaf(Op::LDNE, {odd, const_opd(0)}, el));
+  auto step = [&](Op beyond, float half, Op op) {
+    Cond c = c_or(Cond::of(leaf(beyond, {fr, real_k(half)}, el)), c_and(Cond::of(leaf(Op::LDEQ, {fr, real_k(half)}, el)), is_odd));
+    rung(c_and(c_and(en, small), std::move(c)), out(op, {res, const_opd(1), res}, el), el);
+  };
+  step(Op::LDGT, 0.5f, Op::ADD);
+  step(Op::LDLT, -0.5f, Op::SUB);
+}
+
+// SHL SHR ROL ROR (MatIEC: IN shifted in its own type, N modulo the width for
+// the rotations; the result keeps the type's width).  The width comes from the
+// declared type of the variable on IN: BYTE 8, WORD 16, else 32 (DWORD, or
+// unknown: no mask).  Rotations need a BYTE, WORD or DWORD variable on IN.
+void Importer::bit_shift(const std::string& t, const Pin& in_pin, Operand in, Operand n, Operand res, const Cond& en,
+                         const Element* el) {
+  int width = 32;
+  bool known = false;
+  if (in_pin.conns.size() == 1) {
+    const Node& src = node(in_pin.conns[0]);
+    if (src.kind == "inVariable" || src.kind == "inOutVariable")
+      if (Var* v = lookup(trim(src.text)); v && !v->derived) {
+        std::string ty = upper(v->type);
+        known = ty == "BYTE" || ty == "WORD" || ty == "DWORD";
+        width = ty == "BYTE" ? 8 : ty == "WORD" ? 16 : 32;
+      }
+  }
+  int32_t mask = width == 32 ? -1 : int32_t((1u << width) - 1);
+  if (t == "SHL" || t == "SHR") {
+    rung(en, out(t == "SHL" ? Op::SHL : Op::SHR, {in, n, res}, el), el);
+  } else {
+    if (!known)
+      fail_at(el, t + " needs a BYTE, WORD or DWORD variable on IN, to know the width it rotates in (" + el->path() + ")");
+    Operand k{OpdKind::Int, Area::D, take(Dev::D, el)}, a{OpdKind::Int, Area::D, take(Dev::D, el)};
+    bool left = t == "ROL";
+    rung(en, out(Op::MOD, {n, const_opd(width), k}, el), el);  // N %= width
+    rung(en, out(left ? Op::SHL : Op::SHR, {in, k, a}, el), el);
+    rung(en, out(Op::SUB, {const_opd(width), k, k}, el), el);
+    rung(en, out(left ? Op::SHR : Op::SHL, {in, k, res}, el), el);
+    rung(en, out(Op::WOR, {a, res, res}, el), el);
+  }
+  if (width < 32) rung(en, out(Op::WAND, {res, const_opd(mask), res}, el), el);
+}
+
 void Importer::fn_block(const Node& b) {
   std::string t = upper(b.type);
+  if (t == "ADD_TIME" || t == "SUB_TIME") t = t.substr(0, 3);  // TIME is INT32 ms: the same arithmetic
   Pins pins{b};
   bool order = b.order > 0;
   const Element* el = b.el;
@@ -1125,10 +1259,12 @@ void Importer::fn_block(const Node& b) {
   static const std::set<std::string> arith = {"ADD", "SUB", "MUL", "DIV", "MOD", "MAX", "MIN"};
   size_t to = t.find("_TO_");
   bool conv = to != std::string::npos;
-  if (!cmp.count(t) && !arith.count(t) && !conv && t != "MOVE" && t != "SEL" && t != "LIMIT" && t != "ABS" && t != "AND" &&
-      t != "OR" && t != "XOR" && t != "NOT")
+  static const std::set<std::string> bits = {"SHL", "SHR", "ROL", "ROR"};
+  if (!cmp.count(t) && !arith.count(t) && !conv && !bits.count(t) && t != "MOVE" && t != "SEL" && t != "MUX" && t != "LIMIT" &&
+      t != "ABS" && t != "AND" && t != "OR" && t != "XOR" && t != "NOT")
     fail_at(el, "block '" + b.type + "' localId " + std::to_string(b.id) + " is not supported: ldc translates TON TOF TP CTU CTD CTUD SR RS R_TRIG F_TRIG, "
-                "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL, AND OR XOR NOT and type conversions (" + el->path() + ")");
+                "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL MUX, ADD_TIME SUB_TIME, AND OR XOR NOT SHL SHR ROL ROR "
+                "and type conversions (" + el->path() + ")");
   // inputs other than EN, in order
   std::vector<const Pin*> ins;
   for (const Pin& p : b.inputs)
@@ -1149,7 +1285,7 @@ void Importer::fn_block(const Node& b) {
   for (const Pin* p : ins)
     if (p->conns.empty()) fail_at(p->el, "input " + p->name + " of " + t + " localId " + std::to_string(b.id) + " is not connected (" + p->el->path() + ")");
   size_t want = t == "SEL" || t == "LIMIT" ? 3 : (conv || t == "NOT" || t == "MOVE" || t == "ABS") ? 1
-                : (t == "SUB" || t == "DIV" || t == "MOD") ? 2 : 0;
+                : (t == "SUB" || t == "DIV" || t == "MOD" || bits.count(t)) ? 2 : 0;
   size_t n_in = ins.size();
   if ((want && n_in != want) || (!want && n_in < 2))
     fail_at(el, t + " localId " + std::to_string(b.id) + " takes " + (want ? std::to_string(want) : std::string("two or more")) +
@@ -1167,10 +1303,43 @@ void Importer::fn_block(const Node& b) {
       static const std::map<std::string, Op> ops = {{"GT", Op::LDGT}, {"GE", Op::LDGE}, {"EQ", Op::LDEQ},
                                                     {"NE", Op::LDNE}, {"LE", Op::LDLE}, {"LT", Op::LDLT}};
       if (ins.size() < 2) fail_at(el, t + " needs two inputs (" + el->path() + ")");
-      std::vector<Val> v;
-      for (const Pin* p : ins) v.push_back(val_of(p));
+      // on BOOL when an input is BOOL; the untyped literals 0 and 1 go with either
+      auto literal01 = [&](const Pin* p) {
+        const Node& n = node(p->conns[0]);
+        Ty lt;
+        std::optional<Operand> k;
+        if (n.kind == "inVariable" && upper(n.text).find('#') == std::string::npos) k = literal(n.text, lt, n.el);
+        return k && k->kind == OpdKind::ConstInt && (k->ival == 0 || k->ival == 1);
+      };
+      const Pin *a_bool = nullptr, *a_value = nullptr;
+      for (const Pin* p : ins) {
+        if (literal01(p)) continue;
+        (is_bool_source(p->conns[0]) ? a_bool : a_value) = p;
+      }
+      if (a_bool && a_value)
+        fail_at(el, t + " localId " + std::to_string(b.id) + " compares BOOL input " + a_bool->name + " with the value input " + a_value->name +
+                        "; IEC 61131-3 (and MatIEC) compare inputs of one type (" + el->path() + ")");
+      bool on_bools = a_bool != nullptr;
       c = en;
-      for (size_t k = 0; k + 1 < v.size(); k++) c = c_and(std::move(c), Cond::of(leaf(ops.at(t), {v[k].o, v[k + 1].o}, el)));
+      if (on_bools) {
+        // on BOOL (FALSE < TRUE): EQ is XNOR, NE XOR, GT a AND NOT b, GE a OR NOT b ...
+        std::vector<Cond> x;
+        for (const Pin* p : ins) x.push_back(materialize(cond_of(p), el));
+        for (size_t k = 0; k + 1 < x.size(); k++) {
+          const Cond &a = x[k], &bb = x[k + 1];
+          Cond r = t == "EQ"   ? c_or(c_and(a, bb), c_and(negate(a, el), negate(bb, el)))
+                   : t == "NE" ? c_or(c_and(a, negate(bb, el)), c_and(negate(a, el), bb))
+                   : t == "GT" ? c_and(a, negate(bb, el))
+                   : t == "GE" ? c_or(a, negate(bb, el))
+                   : t == "LT" ? c_and(negate(a, el), bb)
+                               : c_or(negate(a, el), bb);
+          c = c_and(std::move(c), std::move(r));
+        }
+      } else {
+        std::vector<Val> v;
+        for (const Pin* p : ins) v.push_back(val_of(p));
+        for (size_t k = 0; k + 1 < v.size(); k++) c = c_and(std::move(c), Cond::of(leaf(ops.at(t), {v[k].o, v[k + 1].o}, el)));
+      }
     } else if (conv) {  // INT_TO_BOOL & co: the value is not zero
       Val v = val_of(ins.at(0));
       c = c_and(en, Cond::of(leaf(Op::LDNE, {v.o, v.ty == Ty::Real ? [] { Operand z{OpdKind::ConstReal}; z.fval = 0; return z; }() : const_opd(0)}, el)));
@@ -1217,10 +1386,12 @@ void Importer::fn_block(const Node& b) {
     bool real = false;
     for (const Val& x : v) real |= x.ty == Ty::Real;
     std::string target = conv ? t.substr(to + 4) : "";
+    bool round_real = false;  // REAL_TO_INT & co: IEC rounds to nearest, ties to even
     if (conv) {
       std::string from = t.substr(0, to);
       Ty ft = from == "BOOL" ? Ty::Bool : elementary(from), tt = elementary(target);
-      if (ft == Ty::None || tt == Ty::None || tt == Ty::Bool || (ft == Ty::Real && tt != Ty::Real))
+      round_real = ft == Ty::Real && tt == Ty::Int && target != "TIME";
+      if (ft == Ty::None || tt == Ty::None || tt == Ty::Bool || (ft == Ty::Real && tt != Ty::Real && !round_real))
         fail_at(el, "conversion " + t + " is not supported (" + el->path() + ")");
       real = tt == Ty::Real;
     }
@@ -1234,7 +1405,15 @@ void Importer::fn_block(const Node& b) {
       rung(c_and(en, in), out(Op::MOV, {real ? [] { Operand z{OpdKind::ConstReal}; z.fval = 1; return z; }() : const_opd(1), res}, el), el);
     } else {
       if (en.k != Cond::True) rung(negate(en, el), out(Op::MOV, {zero, res}, el), el);
-      if (conv || t == "MOVE") {
+      if (round_real) {
+        real_to_int(v.at(0).o, res, en, el);
+        static const std::set<std::string> unsigned_types = {"USINT", "UINT", "UDINT", "BYTE", "WORD", "DWORD"};
+        if (unsigned_types.count(target)) {  // MatIEC: a negative REAL gives 0 for unsigned and bit-string types
+          Operand z{OpdKind::ConstReal};
+          z.fval = 0;
+          rung(c_and(en, Cond::of(leaf(Op::LDLT, {v.at(0).o, z}, el))), out(Op::MOV, {const_opd(0), res}, el), el);
+        }
+      } else if (conv || t == "MOVE") {
         rung(en, out(Op::MOV, {v.at(0).o, res}, el), el);
       } else if (t == "ABS") {
         rung(en, out(Op::ABS, {v.at(0).o, res}, el), el);
@@ -1243,6 +1422,18 @@ void Importer::fn_block(const Node& b) {
         Cond gc = materialize(cond_of(g), el);
         rung(c_and(en, negate(gc, el)), out(Op::MOV, {v[0].o, res}, el), el);
         rung(c_and(en, gc), out(Op::MOV, {v[1].o, res}, el), el);
+      } else if (t == "MUX") {  // MatIEC: K selects IN0, IN1 ...; K out of range gives 0 (and ENO FALSE)
+        rung(en, out(Op::MOV, {zero, res}, el), el);
+        Cond in_range = Cond::no();
+        for (size_t k = 1; k < v.size(); k++) {
+          Cond is_k = Cond::of(leaf(Op::LDEQ, {v[0].o, const_opd(int32_t(k - 1))}, el));
+          rung(c_and(en, is_k), out(Op::MOV, {v[k].o, res}, el), el);
+          in_range = c_or(std::move(in_range), std::move(is_k));
+        }
+        eno = c_and(en, std::move(in_range));
+      } else if (bits.count(t)) {
+        if (real) fail_at(el, t + " of REAL values is not defined (" + el->path() + ")");
+        bit_shift(t, *ins[0], v[0].o, v[1].o, res, en, el);
       } else if (t == "LIMIT") {  // IN > MN ? (IN < MX ? IN : MX) : MN
         if (v.size() != 3) fail_at(el, "LIMIT needs MN, IN and MX (" + el->path() + ")");
         rung(c_and(en, Cond::of(leaf(Op::LDLE, {v[1].o, v[0].o}, el))), out(Op::MOV, {v[0].o, res}, el), el);
@@ -1366,6 +1557,39 @@ void Importer::body(const Element* pou, const Element* ld) {
   if (rungs_.size() == first) pending_title_.clear();
 }
 
+// The configuration's tasks: every program instance must run a POU that ldc
+// compiles (an LD body), and all of them run in one scan, so the tasks must
+// share one interval.  What ldc cannot run is refused by name, never dropped.
+void Importer::tasks(const Element* root) {
+  const Element* inst = root->child("instances");
+  const Element* cfgs = inst ? inst->child("configurations") : nullptr;
+  if (!cfgs) return;
+  std::string first_task, first_interval;
+  for (const Element* cfg : cfgs->children_named("configuration"))
+    for (const Element* res : cfg->children_named("resource")) {
+      auto check = [&](const Element* pi, const std::string& task) {
+        const std::string* type = pi->attr("typeName");
+        std::string name = pi->attr("name") ? *pi->attr("name") : "?";
+        std::string where = "program instance '" + name + "'" + (task.empty() ? "" : " of task '" + task + "'");
+        if (!type) fail_at(pi, where + " has no typeName (" + pi->path() + ")");
+        auto lang = pou_lang_.find(upper(*type));
+        if (lang == pou_lang_.end()) fail_at(pi, where + " runs '" + *type + "', which is not a POU of this project (" + pi->path() + ")");
+        if (lang->second != "LD" && lang->second != "FBD")
+          fail_at(pi, where + " runs POU '" + *type + "', written in " + lang->second + "; ldc compiles LD and FBD bodies only (" + pi->path() + ")");
+      };
+      for (const Element* t : res->children_named("task")) {
+        std::string tn = t->attr("name") ? *t->attr("name") : "?";
+        std::string iv = t->attr("interval") ? *t->attr("interval") : "(no interval)";
+        for (const Element* pi : t->children_named("pouInstance")) check(pi, tn);
+        if (first_task.empty()) first_task = tn, first_interval = iv;
+        else if (upper(iv) != upper(first_interval))
+          fail_at(t, "task '" + tn + "' runs every " + iv + " and task '" + first_task + "' every " + first_interval +
+                         "; ldc runs all programs in one scan, so their tasks must share one interval (" + t->path() + ")");
+      }
+      for (const Element* pi : res->children_named("pouInstance")) check(pi, "");
+    }
+}
+
 TreeProgram Importer::run() {
   if (text_.size() > kMaxSourceBytes) fail_at(nullptr, "source file too large (at most 64 MiB)");
   doc_ = xml::parse(text_);
@@ -1410,14 +1634,15 @@ TreeProgram Importer::run() {
       }
       pou_lang_[upper(*p->attr("name"))] = lang;
       all.push_back(p);
-      if (lang == "LD") ld.push_back(p);
+      if (lang == "LD" || lang == "FBD") ld.push_back(p);  // FBD: the same block graph, without rails
     }
   if (ld.empty()) {
     std::string list;
     for (const Element* p : all) list += std::string(list.empty() ? "" : ", ") + "'" + *p->attr("name") + "' is " + pou_lang_[upper(*p->attr("name"))];
-    fail_at(pous ? pous : root, all.empty() ? "the project has no POU" : "no POU of this project has an LD body (" + list +
-                                                                               "); ldc imports LD bodies only");
+    fail_at(pous ? pous : root, all.empty() ? "the project has no POU" : "no POU of this project has an LD or FBD body (" + list +
+                                                                               "); ldc imports LD and FBD bodies only");
   }
+  tasks(root);
   // declarations of the LD POUs, then devices for all of them
   std::map<const Element*, std::map<std::string, Var*>> scopes;
   for (const Element* p : ld) {
@@ -1484,9 +1709,23 @@ TreeProgram Importer::run() {
     pou_ = *pe->attr("name");
     scope_ = scopes[pe];
     const Element* b = pe->child("body");
-    body(pe, b->child("LD"));
+    body(pe, b->child("LD") ? b->child("LD") : b->child("FBD"));
   }
-  if (rungs_.empty()) fail_at(ld[0], "the LD bodies of this project have no coils, variables or blocks to run");
+  if (rungs_.empty()) fail_at(ld[0], "the LD and FBD bodies of this project have no coils, variables or blocks to run");
+  // inputs the program writes: their relays take the input first in every scan
+  std::vector<TreeRung> copies;
+  auto copy = [&](TreeNode root_node) {
+    TreeRung r;
+    r.line = rungs_[0].line;
+    if (copies.empty()) r.title = "inputs the program writes";
+    r.root = std::move(root_node);
+    copies.push_back(std::move(r));
+  };
+  for (auto [x, m] : shadow_)
+    copy(then_node(bit_leaf(Op::LOAD, bit_opd(Area::X, x), root), out(Op::OUT, {bit_opd(Area::M, m)}, root), {rungs_[0].line, 1}));
+  for (auto [x, d] : shadow_w_)
+    copy(out(Op::MOV, {Operand{OpdKind::Int, Area::WX, x}, Operand{OpdKind::Int, Area::D, d}}, root));
+  rungs_.insert(rungs_.begin(), std::make_move_iterator(copies.begin()), std::make_move_iterator(copies.end()));
   p.rungs = std::move(rungs_);
   p.end_labels = std::move(pending_labels_);
   aliases(p);

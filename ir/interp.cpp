@@ -259,6 +259,50 @@ void exec_TP(Ctx& c) {
   }
   *t.in_mem = in;
 }
+// MatIEC's timers (docs/il.md, "MatIEC timers"): the same state, different rules.
+void exec_MTON(Ctx& c) {
+  Timer t = timer(c, operand(c).index);
+  int32_t pt = preset(operand(c));
+  bool in = top(c);
+  if (!in || !*t.in_mem) {  // off, or the rising scan: timing starts
+    t.set_et(0);
+    *t.q = 0;
+  } else if (!*t.q) {
+    int32_t et = advance(t.get_et(), dt(c), pt);
+    t.set_et(et);
+    *t.q = et >= pt;
+  }
+  *t.in_mem = in;
+}
+void exec_MTOF(Ctx& c) {
+  Timer t = timer(c, operand(c).index);
+  int32_t pt = preset(operand(c));
+  bool in = top(c);
+  if (in || *t.in_mem) {
+    *t.q = 1;
+    t.set_et(0);
+  } else if (*t.q) {
+    int32_t et = advance(t.get_et(), dt(c), pt);
+    t.set_et(et);
+    *t.q = et < pt;
+  }
+  *t.in_mem = in;
+}
+void exec_MTP(Ctx& c) {
+  Timer t = timer(c, operand(c).index);
+  int32_t pt = preset(operand(c));
+  bool in = top(c);
+  if (*t.q) {
+    int32_t et = advance(t.get_et(), dt(c), pt);
+    t.set_et(et);
+    if (et >= pt) *t.q = 0;
+  } else if (in && !*t.in_mem) {
+    *t.q = 1;
+    t.set_et(0);
+  }
+  if (!*t.q && !in) t.set_et(0);
+  *t.in_mem = in;
+}
 void exec_RSTT(Ctx& c) {
   Timer t = timer(c, operand(c).index);
   if (!top(c)) return;

@@ -44,6 +44,7 @@ enum : unsigned { kDstInt = 0, kDstReal = 1 };
   X(ADD_F) X(SUB_F) X(MUL_F) X(DIV_F) X(WNOT_M)                                                         \
   X(SIN_F) X(COS_F) X(TAN_F) X(SQRT_F) X(EXP_F) X(LN_F) X(ABS_F) X(GEN)                                 \
   X(TON_K) X(TON_M) X(TOF_K) X(TOF_M) X(TP_K) X(TP_M) X(RSTT)                                           \
+  X(MTON_K) X(MTON_M) X(MTOF_K) X(MTOF_M) X(MTP_K) X(MTP_M)                                             \
   X(CTU_K) X(CTU_M) X(CTD_K) X(CTD_M) X(RSTC) X(JMP) X(END)
 
 enum FOp : uint16_t {
@@ -325,10 +326,11 @@ FastInterpreter::FastInterpreter(std::span<const uint8_t> il, const Layout& L) {
         }
         break;
       }
-      case Op::TON: case Op::TOF: case Op::TP: {
+      case Op::TON: case Op::TOF: case Op::TP: case Op::MTON: case Op::MTOF: case Op::MTP: {
         unsigned kp;
         uint32_t pt = value(o[1], kp);
-        FOp k = in.op == Op::TON ? F_TON_K : in.op == Op::TOF ? F_TOF_K : F_TP_K;
+        FOp k = in.op == Op::TON ? F_TON_K : in.op == Op::TOF ? F_TOF_K : in.op == Op::TP ? F_TP_K
+              : in.op == Op::MTON ? F_MTON_K : in.op == Op::MTOF ? F_MTOF_K : F_MTP_K;
         if (kp == kIntConst) set(k, uint32_t(int32_t(pt) < 0 ? 0 : int32_t(pt)), 0, 0, uint16_t(o[0].index));
         else set(FOp(k + 1), pt, 0, 0, uint16_t(o[0].index));
         break;
@@ -520,6 +522,52 @@ void FastInterpreter::scan(uint8_t* mem) {
     } else if (!in) {
       st_i(m, et_off, 0);
     }
+    *in_mem = uint8_t(in);
+  })
+  LDC_TIMER(MTON, {
+    const uint32_t n = ip->x, et_off = tw + 4 * n;
+    uint8_t* q = m + tq + n;
+    uint8_t* in_mem = m + ti + n;
+    const uint32_t in = st & 1u;
+    if (!in || !*in_mem) {
+      st_i(m, et_off, 0);
+      *q = 0;
+    } else if (!*q) {
+      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
+      st_i(m, et_off, et);
+      *q = et >= pt;
+    }
+    *in_mem = uint8_t(in);
+  })
+  LDC_TIMER(MTOF, {
+    const uint32_t n = ip->x, et_off = tw + 4 * n;
+    uint8_t* q = m + tq + n;
+    uint8_t* in_mem = m + ti + n;
+    const uint32_t in = st & 1u;
+    if (in || *in_mem) {
+      *q = 1;
+      st_i(m, et_off, 0);
+    } else if (*q) {
+      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
+      st_i(m, et_off, et);
+      *q = et < pt;
+    }
+    *in_mem = uint8_t(in);
+  })
+  LDC_TIMER(MTP, {
+    const uint32_t n = ip->x, et_off = tw + 4 * n;
+    uint8_t* q = m + tq + n;
+    uint8_t* in_mem = m + ti + n;
+    const uint32_t in = st & 1u;
+    if (*q) {
+      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
+      st_i(m, et_off, et);
+      if (et >= pt) *q = 0;
+    } else if (in && !*in_mem) {
+      *q = 1;
+      st_i(m, et_off, 0);
+    }
+    if (!*q && !in) st_i(m, et_off, 0);
     *in_mem = uint8_t(in);
   })
 #undef LDC_TIMER

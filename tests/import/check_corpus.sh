@@ -1,8 +1,9 @@
 #!/bin/sh
 # check_corpus.sh BINDIR SOURCE [EXPECTED_ERROR]
 # Without EXPECTED_ERROR: SOURCE compiles to images that run 300 scans of a
-# pseudo-random input trace on the interpreter, on native code at -O0/-O1/-O2
-# and on the C40 simulator, with the same values for every alias.
+# pseudo-random input trace on the interpreter, on native code at -O0/-O1/-O2,
+# on the C40 simulator and the C40-hosted interpreter, and through the C route,
+# with the same values for every alias.
 # With it: ldc refuses SOURCE with exactly that message (the file named as in
 # its own directory) and leaves no output behind.
 set -eu
@@ -50,8 +51,16 @@ run() {  # run NAME LDC-FLAGS ENGINE
 }
 run interp -O0 interp
 if [ "$(wc -l < "$tmp/interp")" -ne 301 ]; then echo "FAIL: $src: expected 300 scans" >&2; exit 1; fi
-for v in "native-O0 -O0 native" "native-O1 -O1 native" "native-O2 -O2 native" "c40sim --target=c40 c40sim"; do
+for v in "native-O0 -O0 native" "native-O1 -O1 native" "native-O2 -O2 native" "c40sim --target=c40 c40sim" \
+         "c40interp -O0 c40interp"; do
   set -- $v
   run $1 $2 $3
   if ! diff -u "$tmp/interp" "$tmp/$1"; then echo "FAIL: $src: $1 differs from the interpreter" >&2; exit 1; fi
 done
+# the C route (ldc --emit=c and the system cc) from the source
+if [ -n "$watch" ]; then
+  "$bindir/ldrun" "$src" --engine=c --trace "$tmp/trace.csv" --watch "$watch" > "$tmp/c"
+else
+  "$bindir/ldrun" "$src" --engine=c --trace "$tmp/trace.csv" > "$tmp/c"
+fi
+if ! diff -u "$tmp/interp" "$tmp/c"; then echo "FAIL: $src: the C route differs from the interpreter" >&2; exit 1; fi
