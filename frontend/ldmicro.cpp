@@ -234,11 +234,13 @@ class Importer {
   std::set<uint32_t> frozen_;  // relays written once per scan, before they are read
   uint32_t mcr_ = 0;
   std::vector<TreeNode> init_;  // first-scan initialisations
+  std::map<std::string, int> width_;  // VAR LIST: a variable's width in bytes (1..4)
 
   RungBuilder rb_;
 
   // source
   void read_lines();
+  void var_list_entry(const std::string& u);
   size_t header();
   void program(size_t i);
   size_t series(size_t i, std::vector<Elem>& out, const Line& open);
@@ -277,6 +279,9 @@ class Importer {
   void counter(const Elem& e);
   void coil(const Elem& e);
   void uart(const Elem& e);
+  int width_of(const std::string& name) const;
+  std::vector<TreeNode> wrap_nodes(const Operand& d, int bytes, const Elem& e);
+  void wrap(const Elem& e, size_t arg);
 };
 
 void Importer::read_lines() {
@@ -311,7 +316,11 @@ size_t Importer::header() {
       for (; j < lines_.size(); j++) {
         std::string u = trim(lines_[j].text);
         if (u == "END") break;
-        if (u.empty() || !io) continue;
+        if (u.empty()) continue;
+        if (!io) {
+          if (t == "VAR LIST") var_list_entry(u);
+          continue;
+        }
         // "name at pin [...]"
         size_t sp = u.find_first_of(" \t");
         std::string name = u.substr(0, sp);
@@ -327,6 +336,20 @@ size_t Importer::header() {
     // ignores lines it does not know, and so do we.
   }
   fail(int(lines_.size()), 1, "no PROGRAM line: an LDmicro file lists its rungs after a line 'PROGRAM'");
+}
+
+// VAR LIST lines read "N bytes name [comment]".  Widths 1 to 4 are integer
+// variables; longer entries are LDmicro's strings and tables, which keep no width.
+void Importer::var_list_entry(const std::string& u) {
+  size_t a = u.find(' ');
+  if (a == std::string::npos) return;
+  std::string n = u.substr(0, a), rest = trim(u.substr(a));
+  if (rest.rfind("bytes", 0) != 0 || n.empty() || !std::all_of(n.begin(), n.end(), [](char c) { return std::isdigit((unsigned char)c); })) return;
+  std::string name = trim(rest.substr(5));
+  name = name.substr(0, name.find_first_of(" \t"));
+  if (name.empty() || n.size() > 3) return;
+  int w = std::stoi(n);
+  if (w >= 1 && w <= 4) width_[name] = w;
 }
 
 Elem Importer::leaf(const Line& l) {
@@ -872,17 +895,16 @@ void Importer::counter(const Elem& e) {
   if (v01_ && e.args.size() == 2) {
     // LDmicro 0.1: CTU/CTD count rising edges without limit, output count >= max;
     // CTC counts rising edges and wraps past max to 0, passing its input on.
-    if (e.kw == "CTU") {
-      rb_.add(out_node(Op::CTU, {counter_opd(c), max}, e));
-      rb_.restart(bit_leaf(Op::LOAD, Area::CQ, c, e), loc);
-    } else if (e.kw == "CTD") {
-      rb_.add(out_node(Op::CTD, {counter_opd(c), const_opd(0)}, e));
+    // The count is a 16-bit variable: it wraps from 32767 to -32768 (and back).
+    if (e.kw == "CTU" || e.kw == "CTD") {
+      rb_.add(out_node(e.kw == "CTU" ? Op::CTU : Op::CTD, {counter_opd(c), e.kw == "CTU" ? max : const_opd(0)}, e));
+      if (width_of(e.args[0]) < 4) rb_.chain(Cond::yes(), fork_of(wrap_nodes(cw, width_of(e.args[0]), e)), loc);
       rb_.restart(Cond::of(leaf_node(Op::LDGE, {cw, max}, e)), loc);
     } else if (e.kw == "CTC") {
       Cond s = materialize(e);
       TreeNode wrap = then_node(Cond::of(leaf_node(Op::LDGT, {cw, max}, e)), out_node(Op::MOV, {const_opd(0), cw}, e), loc);
-      std::vector<TreeNode> items;
-      items.push_back(out_node(Op::ADD, {cw, const_opd(1), cw}, e));
+      std::vector<TreeNode> items = wrap_nodes(cw, width_of(e.args[0]), e);
+      items.insert(items.begin(), out_node(Op::ADD, {cw, const_opd(1), cw}, e));
       items.push_back(std::move(wrap));
       rb_.add(then_node(bit_leaf(Op::LOADP, Area::M, s.n.elem.a[0].index, e), fork_of(std::move(items)), loc));
     } else {
@@ -908,11 +930,16 @@ void Importer::counter(const Elem& e) {
     return kind == '/' ? bit_leaf(Op::LOADP, Area::M, sm, e) : kind == '\\' ? bit_leaf(Op::LOADF, Area::M, sm, e)
            : kind == '-' ? bit_leaf(Op::LOAD, Area::M, sm, e) : bit_leaf(Op::LOADN, Area::M, sm, e);
   };
+  auto step = [&](Op op) {  // count one, wrapped to the counter's width
+    std::vector<TreeNode> r = wrap_nodes(cw, width_of(e.args[0]), e);
+    r.insert(r.begin(), out_node(op, {cw, const_opd(1), cw}, e));
+    return fork_of(std::move(r));
+  };
   if (e.kw == "CTU") {
-    rb_.chain(c_and(edge(), Cond::of(leaf_node(Op::LDLT, {cw, max}, e))), out_node(Op::ADD, {cw, const_opd(1), cw}, e), loc);
+    rb_.chain(c_and(edge(), Cond::of(leaf_node(Op::LDLT, {cw, max}, e))), step(Op::ADD), loc);
     rb_.restart(Cond::of(leaf_node(Op::LDGE, {cw, max}, e)), loc);
   } else if (e.kw == "CTD") {
-    rb_.chain(c_and(edge(), Cond::of(leaf_node(Op::LDGT, {cw, max}, e))), out_node(Op::SUB, {cw, const_opd(1), cw}, e), loc);
+    rb_.chain(c_and(edge(), Cond::of(leaf_node(Op::LDGT, {cw, max}, e))), step(Op::SUB), loc);
     rb_.restart(Cond::of(leaf_node(Op::LDGT, {cw, max}, e)), loc);
   } else {
     bool up = e.kw == "CTC";
@@ -922,7 +949,7 @@ void Importer::counter(const Elem& e) {
     wrap.push_back(out_node(Op::OUT, {bit_opd(Area::M, w)}, e));
     wrap.push_back(out_node(Op::MOV, {init, cw}, e));
     std::vector<TreeNode> items;
-    items.push_back(out_node(up ? Op::ADD : Op::SUB, {cw, const_opd(1), cw}, e));
+    items.push_back(step(up ? Op::ADD : Op::SUB));
     items.push_back(then_node(Cond::of(leaf_node(up ? Op::LDGT : Op::LDLT, {cw, max}, e)), fork_of(std::move(wrap)), loc));
     rb_.chain(edge(), fork_of(std::move(items)), loc);
     rb_.restart(bit_leaf(Op::LOAD, Area::M, w, e), loc);
@@ -977,6 +1004,8 @@ void Importer::uart(const Elem& e) {
     std::vector<TreeNode> take;
     take.push_back(out_node(Op::WAND, {rx, const_opd(255), var}, e));
     take.push_back(out_node(Op::MOV, {rx, seen}, e));
+    if (!is_number(e.args[0]))
+      for (TreeNode& n : wrap_nodes(var, width_of(e.args[0]), e)) take.push_back(std::move(n));
     rb_.chain(bit_leaf(Op::LOAD, Area::M, got, e), fork_of(std::move(take)), loc);
     rb_.restart(bit_leaf(Op::LOAD, Area::M, got, e), loc);
     return;
@@ -990,6 +1019,37 @@ void Importer::uart(const Elem& e) {
   send.push_back(out_node(Op::SET, {bit_opd(Area::M, kUartBusy)}, e));
   rb_.chain(c_and(std::move(s), bit_leaf(Op::LOADN, Area::M, kUartBusy, e)), fork_of(std::move(send)), loc);
   rb_.restart(bit_leaf(Op::LOAD, Area::M, kUartBusy, e), loc);
+}
+
+// LDmicro variables are 1 to 4 bytes wide (VAR LIST; 2 when not listed, and
+// always 2 in LDmicro 0.1 files) and wrap there as two's complement.  ldc words
+// are INT32, so every write of a variable is followed by an explicit wrap to its
+// width, under the same rung state as the write:
+//   d := ((d + 2^(n-1)) AND (2^n - 1)) - 2^(n-1)      (n = 8 * bytes)
+// which maps any INT32 to the signed n-bit value with the same low n bits.
+int Importer::width_of(const std::string& name) const {
+  if (v01_) return 2;
+  auto it = width_.find(name);
+  return it == width_.end() ? 2 : it->second;
+}
+
+std::vector<TreeNode> Importer::wrap_nodes(const Operand& d, int bytes, const Elem& e) {
+  std::vector<TreeNode> r;
+  if (bytes >= 4) return r;
+  int32_t half = int32_t(1) << (8 * bytes - 1);
+  r.push_back(out_node(Op::ADD, {d, const_opd(half), d}, e));
+  r.push_back(out_node(Op::WAND, {d, const_opd(2 * half - 1), d}, e));
+  r.push_back(out_node(Op::SUB, {d, const_opd(half), d}, e));
+  return r;
+}
+
+// Wrap the variable named by argument `arg` of `e` (the element has just written it).
+void Importer::wrap(const Elem& e, size_t arg) {
+  if (is_number(e.args[arg])) return;
+  auto it = names_.find(e.args[arg]);
+  if (it == names_.end() || (it->second.kind != NK::Var && it->second.kind != NK::Counter)) return;
+  Operand d = value(e, arg, true);
+  for (TreeNode& n : wrap_nodes(d, width_of(e.args[arg]), e)) rb_.add(std::move(n));
 }
 
 void Importer::element(const Elem& e, bool need_out) {
@@ -1064,20 +1124,24 @@ void Importer::element(const Elem& e, bool need_out) {
   }
   if (k == "MOVE") {
     rb_.add(out_node(Op::MOV, {value(e, 1), value(e, 0, true)}, e));
+    wrap(e, 0);
     return;
   }
   static const std::map<std::string, Op> math = {{"ADD", Op::ADD}, {"SUB", Op::SUB}, {"MUL", Op::MUL}, {"DIV", Op::DIV},
                                                  {"MOD", Op::MOD}, {"AND", Op::WAND}, {"OR", Op::WOR}, {"XOR", Op::WXOR}, {"SHL", Op::SHL}};
   if (auto it = math.find(k); it != math.end()) {
     rb_.add(out_node(it->second, {value(e, 1), value(e, 2), value(e, 0, true)}, e));
+    wrap(e, 0);
     return;
   }
   if (k == "NOT") {
     rb_.add(out_node(Op::WNOT, {value(e, 1), value(e, 0, true)}, e));
+    wrap(e, 0);
     return;
   }
   if (k == "NEG") {
     rb_.add(out_node(Op::SUB, {const_opd(0), value(e, 1), value(e, 0, true)}, e));
+    wrap(e, 0);
     return;
   }
   if (k == "SET_BIT" || k == "CLEAR_BIT" || k == "IF_BIT_SET" || k == "IF_BIT_CLEAR") {
@@ -1093,8 +1157,8 @@ void Importer::element(const Elem& e, bool need_out) {
       rb_.add(out_node(Op::SHL, {const_opd(1), value(e, 1), mask}, e));
       if (k == "CLEAR_BIT") rb_.add(out_node(Op::WNOT, {mask, mask}, e));
     }
-    if (k == "SET_BIT") rb_.add(out_node(Op::WOR, {var, mask, var}, e));
-    else if (k == "CLEAR_BIT") rb_.add(out_node(Op::WAND, {var, mask, var}, e));
+    if (k == "SET_BIT") rb_.add(out_node(Op::WOR, {var, mask, var}, e)), wrap(e, 0);
+    else if (k == "CLEAR_BIT") rb_.add(out_node(Op::WAND, {var, mask, var}, e)), wrap(e, 0);
     else {
       Operand t = int_opd(Area::D, temp_d(e));
       rb_.add(out_node(Op::WAND, {var, mask, t}, e));
@@ -1110,7 +1174,10 @@ void Importer::element(const Elem& e, bool need_out) {
     for (int i = stages - 2; i >= 0; i--) {
       const Name& src = names_.at(e.args[0] + std::to_string(i));
       const Name& dst = names_.at(e.args[0] + std::to_string(i + 1));
-      moves.push_back(out_node(Op::MOV, {int_opd(Area::D, src.dev.index), int_opd(Area::D, dst.dev.index)}, e));
+      Operand d = int_opd(Area::D, dst.dev.index);
+      moves.push_back(out_node(Op::MOV, {int_opd(Area::D, src.dev.index), d}, e));
+      if (width_of(e.args[0] + std::to_string(i + 1)) < width_of(e.args[0] + std::to_string(i)))
+        for (TreeNode& n : wrap_nodes(d, width_of(e.args[0] + std::to_string(i + 1)), e)) moves.push_back(std::move(n));
     }
     if (!moves.empty()) rb_.add(then_node(bit_leaf(Op::LOADP, Area::M, s.n.elem.a[0].index, e), fork_of(std::move(moves)), loc));
     return;
@@ -1126,6 +1193,7 @@ void Importer::element(const Elem& e, bool need_out) {
       items.push_back(then_node(Cond::of(leaf_node(Op::LDEQ, {index, const_opd(i)}, e)), out_node(Op::MOV, {v, dest}, e), loc));
     }
     rb_.add(fork_of(std::move(items)));
+    wrap(e, 0);
     return;
   }
   if (k == "PIECEWISE_LINEAR") {
@@ -1151,6 +1219,7 @@ void Importer::element(const Elem& e, bool need_out) {
       items.push_back(then_node(Cond::of(leaf_node(Op::LDLE, {index, const_opd(v[2 * i])}, e)), fork_of(std::move(body)), loc));
     }
     if (!items.empty()) rb_.add(fork_of(std::move(items)));
+    wrap(e, 0);
     return;
   }
   if (k == "READ_ADC") {
