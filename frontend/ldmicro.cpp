@@ -15,6 +15,7 @@
 // it is copied into an internal relay of its own (an M allocated after every
 // named device).  No new IL is needed; docs/ldmicro.md lists each mapping.
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <climits>
 #include <functional>
@@ -24,6 +25,7 @@
 
 #include "frontend/frontend.h"
 #include "frontend/operands.h"
+#include "frontend/ldmicro_segments.h"
 #include "frontend/treebuild.h"
 
 namespace ldc {
@@ -168,11 +170,8 @@ const std::map<std::string, std::string>& unsupported() {
     for (const char* k : {"SLEEP", "DELAY", "CLRWDT", "LOCK"}) r[k] = "microcontroller sleep, delay and watchdog control have no ldc equivalent";
     for (const char* k : {"STEPPER", "PULSER", "NPULSE", "NPULSE_OFF", "QUAD_ENCOD"})
       r[k] = "pulse generators and encoders are microcontroller hardware with no ldc equivalent";
-    for (const char* k : {"7SEGMENTS", "9SEGMENTS", "14SEGMENTS", "16SEGMENTS", "BUS"})
-      r[k] = "display and bus encodings are not translated";
-    for (const char* k : {"BIN2BCD", "BCD2BIN", "OPPOSITE", "SWAP", "ROL", "ROR", "SHR", "SR0"})
-      r[k] = "its result depends on the byte size of the LDmicro variable, which ldc's 32-bit words do not keep";
-    for (const char* k : {"RTL", "THI", "TLO", "TIME2COUNT", "TIME2DELAY", "OSL", "OSC"}) r[k] = "ldc has no translation for it";
+    r["TIME2DELAY"] = "its value is a count of the microcontroller's clock cycles for DELAY, which ldc refuses";
+    for (const char* k : {"RTL", "THI", "TLO", "OSL", "OSC"}) r[k] = "ldc has no translation for it";
     for (const char* k : {"RSFR", "WSFR", "SSFR", "CSFR", "TSFR", "TCSFR"}) r[k] = "microcontroller special function registers do not exist in ldc";
     return r;
   }();
@@ -192,6 +191,10 @@ constexpr uint32_t kUartRx = 1023;    // WX: (sequence << 8) | byte, written by 
 constexpr uint32_t kUartTx = 1023;    // WY: (sequence << 8) | byte, written by UART_SEND
 constexpr uint32_t kUartSeen = 8191;  // D: the last receive word consumed
 constexpr uint32_t kUartBusy = 8191;  // M: a byte was sent in this scan
+
+std::string alias_spelling(const std::string& nm);
+
+bool is_segments(const std::string& k) { return k == "7SEGMENTS" || k == "9SEGMENTS" || k == "14SEGMENTS" || k == "16SEGMENTS"; }
 
 bool is_pure_kw(const std::string& kw) {
   static const std::set<std::string> s = {"CONTACTS", "EQU", "NEQ", "GRT", "GEQ", "LES", "LEQ", "SHORT", "OPEN", "COMMENT"};
@@ -282,6 +285,13 @@ class Importer {
   int width_of(const std::string& name) const;
   std::vector<TreeNode> wrap_nodes(const Operand& d, int bytes, const Elem& e);
   void wrap(const Elem& e, size_t arg);
+  int arg_width(const Elem& e, size_t arg) const;
+  void bit_op(const Elem& e);
+  void bcd(const Elem& e);
+  void segments(const Elem& e);
+  void bus(const Elem& e);
+  void move_to_timer(const Elem& e);
+  Operand narrow_literal(const Elem& e, size_t lit, size_t var);
 };
 
 void Importer::read_lines() {
@@ -468,6 +478,18 @@ void Importer::check_leaf(const Elem& e) {
   else if (k == "UART_SEND" || k == "UART_RECV") arity(1, 3, (k + " variable [bytes wait]").c_str());
   else if (is_uart_flag(k)) arity(0, 0, k.c_str());
   else if (k == "PERSIST") arity(1, 1, "PERSIST variable");
+  else if (k == "ROL" || k == "ROR" || k == "SHR" || k == "SR0") arity(3, 3, (k + " destination operand bits").c_str());
+  else if (k == "BIN2BCD" || k == "BCD2BIN" || k == "SWAP" || k == "OPPOSITE") arity(2, 2, (k + " destination source").c_str());
+  else if (k == "TIME2COUNT") arity(2, 2, "TIME2COUNT variable delay");
+  else if (is_segments(k)) {
+    arity(3, 3, (k + " destination source common").c_str());
+    if (e.args[2] != "C" && e.args[2] != "A") fail(e.line, e.cols[2], "expected C (common cathode) or A (common anode), found '" + e.args[2] + "'");
+  } else if (k == "BUS") {
+    arity(10, 10, "BUS destination source bit0 .. bit7");
+    for (size_t i = 2; i < 10; i++)
+      if (!is_number(e.args[i]) || number(e.args[i], e.line, e.cols[i]) < 0 || number(e.args[i], e.line, e.cols[i]) > 7)
+        fail(e.line, e.cols[i], "BUS bit numbers are 0..7");
+  }
   else fail(e.line, e.col, "unknown LDmicro element '" + k + "'");
 }
 
@@ -602,9 +624,10 @@ void Importer::collect(const Elem& e) {
     int n = number(e.args[1], e.line, e.cols[1]);
     if (n < 1 || n > 256) fail(e.line, e.cols[1], "a shift register has 1 to 256 stages");
     for (int i = 0; i < n; i++) note(e.args[0] + std::to_string(i), NK::Var, e.line, e.cols[0]);
-  } else if (k == "LOOK_UP_TABLE" || k == "PIECEWISE_LINEAR") {
+  } else if (k == "LOOK_UP_TABLE" || k == "PIECEWISE_LINEAR" || is_segments(k) || k == "BUS") {
     var(0);
     var(1);
+
   } else if (k != "COMMENT" && !e.args.empty() && k != "OSR" && k != "OSF") {
     for (size_t i = 0; i < e.args.size(); i++) var(i);
   }
@@ -664,13 +687,29 @@ void Importer::allocate() {
     const Name& n = names_[nm];
     spelled_[{int(n.dev.dev), n.dev.index}] = nm;
     std::string why;
-    std::string u = upper(nm);
-    bool spells_device = parse_device(nm) || parse_iec_address(nm, why);
-    if (!is_identifier(nm) || u == "DT" || seen.count(u)) continue;
-    if (spells_device && !(parse_device(nm) && *parse_device(nm) == n.dev)) continue;
+    std::string al = alias_spelling(nm);
+    std::string u = upper(al);
+    bool spells_device = parse_device(al) || parse_iec_address(al, why);
+    if (!is_identifier(al) || u == "DT" || seen.count(u)) continue;
+    if (spells_device && !(parse_device(al) && *parse_device(al) == n.dev)) continue;
     seen.insert(u);
-    if (!spells_device) aliases_.push_back({nm, n.dev});
+    if (!spells_device) aliases_.push_back({al, n.dev});
   }
+}
+
+// LDmicro names may hold '@' and start with '#' (a port, #PORTB); ldc aliases
+// are letters, digits and '_'.  '@' is spelled "_at_", '#' "_hash_", any other
+// character '_', and a leading digit gets a '_' before it.
+std::string alias_spelling(const std::string& nm) {
+  std::string r;
+  for (char c : nm) {
+    if (std::isalnum((unsigned char)c) || c == '_') r += c;
+    else if (c == '@') r += "_at_";
+    else if (c == '#') r += "_hash_";
+    else r += '_';
+  }
+  if (!r.empty() && std::isdigit((unsigned char)r[0])) r = "_" + r;
+  return r;
 }
 
 Name& Importer::name_of(const Elem& e, size_t arg) {
@@ -812,7 +851,7 @@ std::optional<Cond> Importer::pure(const Elem& e) {
   }
   static const std::map<std::string, Op> cmp = {{"EQU", Op::LDEQ}, {"NEQ", Op::LDNE}, {"GRT", Op::LDGT},
                                                 {"GEQ", Op::LDGE}, {"LES", Op::LDLT}, {"LEQ", Op::LDLE}};
-  return Cond::of(leaf_node(cmp.at(k), {value(e, 0), value(e, 1)}, e));
+  return Cond::of(leaf_node(cmp.at(k), {narrow_literal(e, 0, 1), narrow_literal(e, 1, 0)}, e));
 }
 
 int32_t Importer::cycle_ms(const Elem& e) {
@@ -1052,6 +1091,174 @@ void Importer::wrap(const Elem& e, size_t arg) {
   for (TreeNode& n : wrap_nodes(d, width_of(e.args[arg]), e)) rb_.add(std::move(n));
 }
 
+// The width of argument `arg` (a variable or counter; a number counts as the
+// width of the destination, argument 0).
+int Importer::arg_width(const Elem& e, size_t arg) const {
+  if (!is_number(e.args[arg])) return width_of(e.args[arg]);
+  return is_number(e.args[0]) ? 2 : width_of(e.args[0]);
+}
+
+// ROL, ROR, SR0 (logical) and SHR (arithmetic) shift the n-bit pattern of the
+// source (n = its width), as LDmicro does; the result is wrapped to the
+// destination.  A constant shift must be 0..n, as LDmicro requires.
+void Importer::bit_op(const Elem& e) {
+  const std::string& k = e.kw;
+  int n = 8 * arg_width(e, 1);
+  Operand src = value(e, 1), k_opd = value(e, 2), dest = value(e, 0, true);
+  if (k_opd.kind == OpdKind::ConstInt && (k_opd.ival < 0 || k_opd.ival > n))
+    fail(e.line, e.cols[2], "shift of " + e.args[2] + " bits is out of range for the " + std::to_string(n) + "-bit '" + e.args[1] +
+                                "': 0 to " + std::to_string(n) + " (LDmicro refuses it too)");
+  int32_t mask = n == 32 ? -1 : int32_t((int64_t(1) << n) - 1);
+  Operand u = int_opd(Area::D, temp_d(e)), t = int_opd(Area::D, temp_d(e));
+  std::vector<TreeNode> r;
+  if (k == "SHR") {  // arithmetic: ((x XOR m) >> k) XOR m, m = -1 when x < 0
+    r.push_back(out_node(Op::SHR, {src, const_opd(31), t}, e));
+    r.push_back(out_node(Op::SUB, {const_opd(0), t, t}, e));
+    r.push_back(out_node(Op::WXOR, {src, t, u}, e));
+    r.push_back(out_node(Op::SHR, {u, k_opd, u}, e));
+    r.push_back(out_node(Op::WXOR, {u, t, dest}, e));
+  } else {
+    r.push_back(out_node(Op::WAND, {src, const_opd(mask), u}, e));
+    if (k == "SR0") {
+      r.push_back(out_node(Op::SHR, {u, k_opd, dest}, e));
+    } else {  // rotate: (u << k) | (u >> (n - k)) within n bits, or the mirror for ROR
+      Operand back = k_opd.kind == OpdKind::ConstInt ? const_opd(n - k_opd.ival) : int_opd(Area::D, temp_d(e));
+      if (k_opd.kind != OpdKind::ConstInt) r.push_back(out_node(Op::SUB, {const_opd(n), k_opd, back}, e));
+      bool left = k == "ROL";
+      r.push_back(out_node(left ? Op::SHL : Op::SHR, {u, k_opd, t}, e));
+      r.push_back(out_node(left ? Op::SHR : Op::SHL, {u, back, u}, e));
+      r.push_back(out_node(Op::WOR, {t, u, t}, e));
+      r.push_back(out_node(Op::WAND, {t, const_opd(mask), dest}, e));
+    }
+  }
+  for (TreeNode& x : r) rb_.add(std::move(x));
+  wrap(e, 0);
+}
+
+// BIN2BCD: packed BCD, one digit per 4 bits, as many digits as the destination
+// holds (the source's n-bit pattern, so -1 in one byte is 255).  BCD2BIN: the
+// reverse, one digit per 4 bits of the source.  SWAP: the two halves of one byte
+// (nibbles), or bytes 0 and 1 (2 bytes), 0 and 2 (3 bytes), all four reversed
+// (4 bytes).  OPPOSITE: the source's n bits in reverse order.
+void Importer::bcd(const Elem& e) {
+  const std::string& k = e.kw;
+  int sw = arg_width(e, 1), n = 8 * sw;
+  int32_t mask = n == 32 ? -1 : int32_t((int64_t(1) << n) - 1);
+  Operand src = value(e, 1), dest = value(e, 0, true);
+  Operand v = int_opd(Area::D, temp_d(e)), r = int_opd(Area::D, temp_d(e)), t = int_opd(Area::D, temp_d(e));
+  std::vector<TreeNode> x;
+  x.push_back(out_node(Op::WAND, {src, const_opd(mask), v}, e));
+  x.push_back(out_node(Op::MOV, {const_opd(0), r}, e));
+  if (k == "BIN2BCD") {
+    int digits = 2 * arg_width(e, 0);
+    for (int i = 0; i < digits; i++) {
+      x.push_back(out_node(Op::MOD, {v, const_opd(10), t}, e));
+      x.push_back(out_node(Op::DIV, {v, const_opd(10), v}, e));
+      x.push_back(out_node(Op::SHL, {t, const_opd(4 * i), t}, e));
+      x.push_back(out_node(Op::WOR, {r, t, r}, e));
+    }
+  } else if (k == "BCD2BIN") {
+    int32_t scale = 1;
+    for (int i = 0; i < 2 * sw; i++, scale *= 10) {
+      x.push_back(out_node(Op::SHR, {v, const_opd(4 * i), t}, e));
+      x.push_back(out_node(Op::WAND, {t, const_opd(15), t}, e));
+      x.push_back(out_node(Op::MUL, {t, const_opd(scale), t}, e));
+      x.push_back(out_node(Op::ADD, {r, t, r}, e));
+    }
+  } else {
+    // (from bit, to bit, width) moves
+    std::vector<std::array<int, 3>> moves;
+    if (k == "OPPOSITE")
+      for (int i = 0; i < n; i++) moves.push_back({i, n - 1 - i, 1});
+    else if (sw == 1) moves = {{0, 4, 4}, {4, 0, 4}};
+    else if (sw == 2) moves = {{0, 8, 8}, {8, 0, 8}};
+    else if (sw == 3) moves = {{0, 16, 8}, {8, 8, 8}, {16, 0, 8}};
+    else moves = {{0, 24, 8}, {8, 16, 8}, {16, 8, 8}, {24, 0, 8}};
+    for (auto [from, to, w] : moves) {
+      x.push_back(out_node(Op::SHR, {v, const_opd(from), t}, e));
+      x.push_back(out_node(Op::WAND, {t, const_opd(int32_t((int64_t(1) << w) - 1)), t}, e));
+      x.push_back(out_node(Op::SHL, {t, const_opd(to), t}, e));
+      x.push_back(out_node(Op::WOR, {r, t, r}, e));
+    }
+  }
+  x.push_back(out_node(Op::MOV, {r, dest}, e));
+  for (TreeNode& y : x) rb_.add(std::move(y));
+  wrap(e, 0);
+}
+
+// 7SEGMENTS dest src C|A (and 9, 14, 16): dest := the segment pattern of the
+// character src from LDmicro's table, inverted for a common anode.  A variable
+// source is first clamped as LDmicro does it, in place: the degree sign 0xB0
+// becomes entry 128, anything outside 0..128 a space.
+void Importer::segments(const Elem& e) {
+  const int32_t* table = e.kw[0] == '7' ? ldmicro_segments::k7 : e.kw[0] == '9' ? ldmicro_segments::k9
+                         : e.kw[1] == '4' ? ldmicro_segments::k14 : ldmicro_segments::k16;
+  SrcLoc loc = e.loc();
+  Operand dest = value(e, 0, true);
+  bool anode = e.args[2] == "A";
+  if (is_number(e.args[1])) {
+    int32_t c = number(e.args[1], e.line, e.cols[1]);
+    c = c == 0xB0 ? 128 : (c < 0 || c > 128) ? ' ' : c;
+    rb_.add(out_node(Op::MOV, {const_opd(anode ? ~table[c] : table[c]), dest}, e));
+    wrap(e, 0);
+    return;
+  }
+  Operand src = value(e, 1, true), t = int_opd(Area::D, temp_d(e));
+  std::vector<TreeNode> items;
+  items.push_back(then_node(Cond::of(leaf_node(Op::LDEQ, {src, const_opd(0xB0)}, e)), out_node(Op::MOV, {const_opd(128), src}, e), loc));
+  items.push_back(then_node(Cond::of(leaf_node(Op::LDLT, {src, const_opd(0)}, e)), out_node(Op::MOV, {const_opd(' '), src}, e), loc));
+  items.push_back(then_node(Cond::of(leaf_node(Op::LDGT, {src, const_opd(128)}, e)), out_node(Op::MOV, {const_opd(' '), src}, e), loc));
+  for (int i = 0; i <= 128; i++)
+    items.push_back(then_node(Cond::of(leaf_node(Op::LDEQ, {src, const_opd(i)}, e)), out_node(Op::MOV, {const_opd(table[i]), t}, e), loc));
+  if (anode) items.push_back(out_node(Op::WNOT, {t, t}, e));
+  items.push_back(out_node(Op::MOV, {t, dest}, e));
+  rb_.add(fork_of(std::move(items)));
+  wrap(e, 0);
+}
+
+// BUS dest src b0 .. b7: bit i of dest is bit b_i of src (the low byte).
+void Importer::bus(const Elem& e) {
+  Operand dest = value(e, 0, true), src = value(e, 1);
+  Operand r = int_opd(Area::D, temp_d(e)), t = int_opd(Area::D, temp_d(e));
+  std::vector<TreeNode> x;
+  x.push_back(out_node(Op::MOV, {const_opd(0), r}, e));
+  for (int i = 0; i < 8; i++) {
+    int b = number(e.args[2 + i], e.line, e.cols[2 + i]);
+    x.push_back(out_node(Op::SHR, {src, const_opd(b), t}, e));
+    x.push_back(out_node(Op::WAND, {t, const_opd(1), t}, e));
+    x.push_back(out_node(Op::SHL, {t, const_opd(i), t}, e));
+    x.push_back(out_node(Op::WOR, {r, t, r}, e));
+  }
+  x.push_back(out_node(Op::MOV, {r, dest}, e));
+  for (TreeNode& y : x) rb_.add(std::move(y));
+  wrap(e, 0);
+}
+
+// MOVE T v: LDmicro's timer value is a count of cycles; ldc's is milliseconds,
+// so the timer's word gets v * CYCLE (the reset of a retentive timer is MOVE T 0).
+void Importer::move_to_timer(const Elem& e) {
+  Operand tw = int_opd(Area::TW, name_of(e, 0).dev.index);
+  int32_t cyc = cycle_ms(e);
+  Operand v = value(e, 1);
+  if (v.kind == OpdKind::ConstInt) {
+    int64_t ms = int64_t(v.ival) * cyc;
+    if (ms > INT32_MAX || ms < INT32_MIN) fail(e.line, e.cols[1], "timer value too large in milliseconds");
+    rb_.add(out_node(Op::MOV, {const_opd(int32_t(ms)), tw}, e));
+  } else {
+    rb_.add(out_node(Op::MUL, {v, const_opd(cyc), tw}, e));
+  }
+}
+
+// A literal compared with a narrower variable is read at the variable's width,
+// as LDmicro stores it there: with a 1-byte variable, 0xfd is -3.
+Operand Importer::narrow_literal(const Elem& e, size_t lit, size_t var) {
+  Operand o = value(e, lit);
+  if (o.kind != OpdKind::ConstInt || is_number(e.args[var])) return o;
+  int n = 8 * width_of(e.args[var]);
+  if (n < 32 && o.ival >= (int64_t(1) << (n - 1)) && o.ival < (int64_t(1) << n)) o.ival -= int32_t(int64_t(1) << n);
+  return o;
+}
+
 void Importer::element(const Elem& e, bool need_out) {
   const std::string& k = e.kw;
   SrcLoc loc = e.loc();
@@ -1122,6 +1329,17 @@ void Importer::element(const Elem& e, bool need_out) {
     }
     return;
   }
+  if (k == "ROL" || k == "ROR" || k == "SHR" || k == "SR0") return bit_op(e);
+  if (k == "BIN2BCD" || k == "BCD2BIN" || k == "SWAP" || k == "OPPOSITE") return bcd(e);
+  if (is_segments(k)) return segments(e);
+  if (k == "BUS") return bus(e);
+  if (k == "TIME2COUNT") {  // the delay as LDmicro's timers count it: cycles
+    int32_t cycles = timer_ms(e, name_of(e, 0)) / cycle_ms(e);
+    rb_.add(out_node(Op::MOV, {const_opd(cycles), value(e, 0, true)}, e));
+    wrap(e, 0);
+    return;
+  }
+  if (k == "MOVE" && !is_number(e.args[0]) && name_of(e, 0).kind == NK::Timer) return move_to_timer(e);
   if (k == "MOVE") {
     rb_.add(out_node(Op::MOV, {value(e, 1), value(e, 0, true)}, e));
     wrap(e, 0);
