@@ -161,7 +161,7 @@ const std::map<std::string, std::string>& unsupported() {
       r[k] = "it moves as many bytes as the LDmicro variable is wide, which ldc's 32-bit words do not keep; use UART_SEND or "
              "UART_RECV, one byte at a time";
     r["UART_PRINTF"] = "ldc has no strings and no serial output";
-    for (const char* k : {"FORMATTED_STRING", "STRING", "CPRINTF", "SPRINTF", "FPRINTF", "PRINTF", "I2C_PRINTF", "ISP_PRINTF"})
+    for (const char* k : {"STRING", "CPRINTF", "SPRINTF", "FPRINTF", "PRINTF", "I2C_PRINTF", "ISP_PRINTF"})
       r[k] = "ldc has no strings and no serial output";
     for (const char* k : {"SPI", "SPI_WR", "I2C_RD", "I2C_WR"}) r[k] = "ldc has no SPI or I2C bus";
     for (const char* k : {"RANDOM", "SEED_RANDOM"}) r[k] = "an ldc program is deterministic; there is no random source";
@@ -282,6 +282,8 @@ class Importer {
   void counter(const Elem& e);
   void coil(const Elem& e);
   void uart(const Elem& e);
+  std::vector<TreeNode> uart_send_nodes(const Operand& byte, const Elem& e);
+  void formatted_string(const Elem& e);
   int width_of(const std::string& name) const;
   std::vector<TreeNode> wrap_nodes(const Operand& d, int bytes, const Elem& e);
   void wrap(const Elem& e, size_t arg);
@@ -481,6 +483,9 @@ void Importer::check_leaf(const Elem& e) {
   else if (k == "ROL" || k == "ROR" || k == "SHR" || k == "SR0") arity(3, 3, (k + " destination operand bits").c_str());
   else if (k == "BIN2BCD" || k == "BCD2BIN" || k == "SWAP" || k == "OPPOSITE") arity(2, 2, (k + " destination source").c_str());
   else if (k == "TIME2COUNT") arity(2, 2, "TIME2COUNT variable delay");
+  else if (k == "FORMATTED_STRING") {
+    if (e.args.size() < 2) fail(e.line, e.col, "expected FORMATTED_STRING variable length characters... or FORMATTED_STRING variable text");
+  }
   else if (is_segments(k)) {
     arity(3, 3, (k + " destination source common").c_str());
     if (e.args[2] != "C" && e.args[2] != "A") fail(e.line, e.cols[2], "expected C (common cathode) or A (common anode), found '" + e.args[2] + "'");
@@ -547,12 +552,14 @@ int32_t Importer::number(const std::string& s, int line, int col) const {
   size_t i = (s[0] == '-' || s[0] == '+') ? 1 : 0;
   std::string body = s.substr(i);
   int base = 10;
-  if (!v01_ && body.size() > 1 && body[0] == '0') {
+  // 0x 0b 0o in every file (LDmicro 2.x also saves LDmicro0.1 files, with hex
+  // numbers in them); a bare leading 0 is octal only in newer files.
+  if (body.size() > 1 && body[0] == '0') {
     char p = char(std::tolower((unsigned char)body[1]));
     if (p == 'x') base = 16, body = body.substr(2);
     else if (p == 'b') base = 2, body = body.substr(2);
     else if (p == 'o') base = 8, body = body.substr(2);
-    else base = 8, body = body.substr(1);
+    else if (!v01_) base = 8, body = body.substr(1);
   }
   if (body.empty()) fail(line, col, "malformed number '" + s + "'");
   int64_t v = 0;
@@ -611,6 +618,8 @@ void Importer::collect(const Elem& e) {
     note(e.args[0], NK::Counter, e.line, e.cols[0]);
     var(1);
     var(2);
+  } else if (k == "FORMATTED_STRING") {
+    if (e.args[0] != "(none)") var(0);
   } else if (k == "RES") {
     // resolved after every element is seen
   } else if (k == "READ_ADC") {
@@ -803,7 +812,7 @@ bool Importer::breaks(const Elem& e) const {
   if (k == "CTU" || k == "CTD" || k == "CTR") return true;
   if (k == "CTC") return !(v01_ && e.args.size() == 2);
   if (k == "COIL") return e.args.size() == 5 && e.args[4] != "0";
-  return is_uart(k);
+  return is_uart(k) || k == "FORMATTED_STRING";
 }
 
 Cond Importer::materialize(const Elem& e) {
@@ -1049,15 +1058,144 @@ void Importer::uart(const Elem& e) {
     rb_.restart(bit_leaf(Op::LOAD, Area::M, got, e), loc);
     return;
   }
-  Operand byte = int_opd(Area::D, temp_d(e));
+  rb_.chain(c_and(std::move(s), bit_leaf(Op::LOADN, Area::M, kUartBusy, e)), fork_of(uart_send_nodes(value(e, 0), e)), loc);
+  rb_.restart(bit_leaf(Op::LOAD, Area::M, kUartBusy, e), loc);
+}
+
+// Send the low byte of `v` on the UART: the next sequence number and the byte
+// into uart_tx, and the transmitter is busy for the rest of the scan.
+std::vector<TreeNode> Importer::uart_send_nodes(const Operand& v, const Elem& e) {
+  Operand tx = int_opd(Area::WY, kUartTx), byte = int_opd(Area::D, temp_d(e));
   std::vector<TreeNode> send;
-  send.push_back(out_node(Op::WAND, {value(e, 0), const_opd(255), byte}, e));
+  send.push_back(out_node(Op::WAND, {v, const_opd(255), byte}, e));
   send.push_back(out_node(Op::ADD, {tx, const_opd(256), tx}, e));
   send.push_back(out_node(Op::WAND, {tx, const_opd(0x7FFFFF00), tx}, e));
   send.push_back(out_node(Op::WOR, {tx, byte, tx}, e));
   send.push_back(out_node(Op::SET, {bit_opd(Area::M, kUartBusy)}, e));
-  rb_.chain(c_and(std::move(s), bit_leaf(Op::LOADN, Area::M, kUartBusy, e)), fork_of(std::move(send)), loc);
-  rb_.restart(bit_leaf(Op::LOAD, Area::M, kUartBusy, e), loc);
+  return send;
+}
+
+// FORMATTED_STRING var text: on a rising edge of its state, the element starts
+// sending its text over the UART, one character per scan while the UART is
+// free, as LDmicro does; a variable is interpolated where the text says \N
+// (N digits, leading zeros as spaces) or \-N (a sign first).  Its output is on
+// while the text is being sent.  Everything is per element: a sequence word
+// (the next character), the conversion state, and relays for the edge, the
+// sending and the leading zeros.
+void Importer::formatted_string(const Elem& e) {
+  SrcLoc loc = e.loc();
+  // the text: character codes after the length, or the rest of the line
+  std::string text;
+  if (is_number(e.args[1])) {
+    int64_t len = number(e.args[1], e.line, e.cols[1]);
+    if (len < 0 || int64_t(e.args.size()) != 2 + len)
+      fail(e.line, e.cols[1], "FORMATTED_STRING says " + e.args[1] + " characters but lists " + std::to_string(e.args.size() - 2));
+    for (size_t i = 2; i < e.args.size(); i++) {
+      int32_t c = number(e.args[i], e.line, e.cols[i]);
+      if (c < 1 || c > 255) fail(e.line, e.cols[i], "a character code must be 1..255");
+      text += char(c);
+    }
+  } else {
+    text = trim(e.rest.substr(e.rest.find(e.args[0]) + e.args[0].size()));
+  }
+  enum Kind { Char, Digit, Sign };
+  struct Step { Kind k; int c; };
+  std::vector<Step> steps;
+  int digits = -1;
+  bool minus = false;
+  auto bad = [&](const std::string& why) { fail(e.line, e.col, "FORMATTED_STRING: " + why + " (LDmicro refuses it too)"); };
+  for (size_t i = 0; i < text.size(); i++) {
+    char c = text[i];
+    if (c != '\\') { steps.push_back({Char, (unsigned char)c}); continue; }
+    if (i + 1 < text.size() && (std::isdigit((unsigned char)text[i + 1]) || text[i + 1] == '-') && text[i + 1] != '0') {
+      if (digits >= 0) bad("more than one \\N escape");
+      i++;
+      if (text[i] == '-') minus = true, steps.push_back({Sign, 0}), i++;
+      if (i >= text.size() || !std::isdigit((unsigned char)text[i]) || text[i] == '0' || text[i] > '5') bad("a \\N escape takes 1 to 5 digits");
+      digits = text[i] - '0';
+      for (int d = 0; d < digits; d++) steps.push_back({Digit, d});
+      continue;
+    }
+    while (i + 1 < text.size() && text[i + 1] == '0') i++;  // LDmicro skips a \0 before the escape
+    if (++i >= text.size()) bad("a \\ at the end of the text");
+    static const std::map<char, int> esc = {{'a', 7}, {'b', 8}, {'e', 27}, {'f', 12}, {'n', 10}, {'r', 13}, {'t', 9},
+                                            {'v', 11}, {'\'', 39}, {'"', 34}, {'?', 63}, {'\\', 92}};
+    char x = text[i];
+    if (auto it = esc.find(x); it != esc.end()) { steps.push_back({Char, it->second}); continue; }
+    if (x == 'x' || x == 'X') {
+      auto hex = [](char h) { return std::isxdigit((unsigned char)h) ? (std::isdigit((unsigned char)h) ? h - '0' : std::tolower(h) - 'a' + 10) : -1; };
+      if (i + 2 < text.size() + 0 && hex(text[i + 1]) >= 0 && hex(text[i + 2]) >= 0) {
+        steps.push_back({Char, hex(text[i + 1]) * 16 + hex(text[i + 2])});
+        i += 2;
+        continue;
+      }
+      bad("bad escape: the form is \\xAB");
+    }
+    bad(std::string("bad escape '\\") + x + "'");
+  }
+  bool has_var = e.args[0] != "(none)";
+  if (digits >= 0 && !has_var) bad("the text interpolates a variable but none is named");
+  if (digits < 0 && has_var) bad("a variable is named but the text has no \\N escape for it");
+  Operand var = has_var ? value(e, 0) : const_opd(0);
+  int32_t n = int32_t(steps.size());
+
+  Cond s = materialize(e);
+  uint32_t sm = s.n.elem.a[0].index;
+  uint32_t os = temp_m(e), ds = temp_m(e), lz = temp_m(e), zm = temp_m(e), om = temp_m(e);
+  frozen_.insert(om);
+  Operand seq = int_opd(Area::D, temp_d(e)), sc = int_opd(Area::D, temp_d(e)), cs = int_opd(Area::D, temp_d(e)),
+          ch = int_opd(Area::D, temp_d(e)), t = int_opd(Area::D, temp_d(e));
+  auto M = [&](Op op, uint32_t m) { return bit_leaf(op, Area::M, m, e); };
+  auto cmp = [&](Op op, Operand a, Operand b) { return Cond::of(leaf_node(op, {a, b}, e)); };
+  auto mov = [&](Operand a, Operand d) { return out_node(Op::MOV, {a, d}, e); };
+  {  // a rising edge of the state starts the text
+    std::vector<TreeNode> start;
+    start.push_back(mov(const_opd(0), seq));
+    start.push_back(out_node(Op::SET, {bit_opd(Area::M, ds)}, e));
+    rb_.chain(c_and(M(Op::LOAD, sm), M(Op::LOADN, os)), fork_of(std::move(start)), loc);
+    rb_.chain(M(Op::LOAD, sm), out_node(Op::OUT, {bit_opd(Area::M, os)}, e), loc);
+  }
+  // sc: the character to send in this scan, -1 for none (all sent, or the UART busy)
+  rb_.chain(Cond::yes(), mov(seq, sc), loc);
+  rb_.chain(c_or(cmp(Op::LDGE, seq, const_opd(n)), c_and(M(Op::LOAD, ds), bit_leaf(Op::LOAD, Area::M, kUartBusy, e))),
+            mov(const_opd(-1), sc), loc);
+  int d = 0;
+  for (int i = 0; i < n; i++) {
+    std::vector<TreeNode> a;
+    const Step& st = steps[i];
+    if (st.k == Char) {
+      a.push_back(mov(const_opd(st.c), ch));
+    } else if (st.k == Sign) {  // the sign, and the absolute value to convert
+      a.push_back(mov(const_opd(' '), ch));
+      a.push_back(then_node(cmp(Op::LDLT, var, const_opd(0)), out_node(Op::SUB, {const_opd(0), var, cs}, e), loc));
+      a.push_back(then_node(cmp(Op::LDLT, var, const_opd(0)), mov(const_opd('-'), ch), loc));
+      a.push_back(then_node(cmp(Op::LDGE, var, const_opd(0)), mov(var, cs), loc));
+    } else {  // one digit, the highest first
+      if (d == 0 && !minus) a.push_back(mov(var, cs));
+      if (d == 0) a.push_back(out_node(Op::SET, {bit_opd(Area::M, lz)}, e));
+      int32_t p = 1;
+      for (int j = 0; j < digits - d - 1; j++) p *= 10;
+      a.push_back(out_node(Op::DIV, {cs, const_opd(p), ch}, e));
+      a.push_back(out_node(Op::MUL, {ch, const_opd(p), t}, e));
+      a.push_back(out_node(Op::SUB, {cs, t, cs}, e));
+      a.push_back(out_node(Op::ADD, {ch, const_opd('0'), ch}, e));
+      if (d != digits - 1) {  // leading zeros but the last become spaces
+        a.push_back(then_node(cmp(Op::LDEQ, ch, const_opd('0')), out_node(Op::OUT, {bit_opd(Area::M, zm)}, e), loc));
+        a.push_back(then_node(cmp(Op::LDNE, ch, const_opd('0')), out_node(Op::RST, {bit_opd(Area::M, zm)}, e), loc));
+        a.push_back(then_node(c_and(M(Op::LOAD, zm), M(Op::LOAD, lz)), mov(const_opd(' '), ch), loc));
+        a.push_back(then_node(M(Op::LOADN, zm), out_node(Op::RST, {bit_opd(Area::M, lz)}, e), loc));
+      }
+      d++;
+    }
+    rb_.chain(cmp(Op::LDEQ, sc, const_opd(i)), fork_of(std::move(a)), loc);
+  }
+  std::vector<TreeNode> send = uart_send_nodes(ch, e);
+  send.push_back(out_node(Op::ADD, {seq, const_opd(1), seq}, e));
+  rb_.chain(c_and(cmp(Op::LDGE, sc, const_opd(0)), M(Op::LOAD, ds)), fork_of(std::move(send)), loc);
+  // the output: still sending
+  rb_.chain(c_and(cmp(Op::LDLT, seq, const_opd(n)), M(Op::LOAD, ds)), out_node(Op::OUT, {bit_opd(Area::M, om)}, e), loc);
+  rb_.chain(cmp(Op::LDGE, seq, const_opd(n)), out_node(Op::RST, {bit_opd(Area::M, ds)}, e), loc);
+  rb_.restart(M(Op::LOAD, om), loc);
 }
 
 // LDmicro variables are 1 to 4 bytes wide (VAR LIST; 2 when not listed, and
@@ -1270,6 +1408,7 @@ void Importer::element(const Elem& e, bool need_out) {
   }
   if (k == "COIL") return coil(e);
   if (is_uart(k)) return uart(e);
+  if (k == "FORMATTED_STRING") return formatted_string(e);
   if (k == "PERSIST") {  // the variable is retentive; the state passes on
     auto it = names_.find(e.args[0]);
     if (is_number(e.args[0]) || it == names_.end() || it->second.kind != NK::Var)
@@ -1521,7 +1660,7 @@ TreeProgram Importer::run() {
   };
   std::function<void(const std::vector<Elem>&)> find_uart = [&](const std::vector<Elem>& s) {
     for (const Elem& e : s) {
-      uart_used_ |= is_uart(e.kw);
+      uart_used_ |= is_uart(e.kw) || e.kw == "FORMATTED_STRING";
       find_uart(e.kids);
     }
   };
