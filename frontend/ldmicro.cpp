@@ -163,7 +163,6 @@ const std::map<std::string, std::string>& unsupported() {
     r["UART_PRINTF"] = "ldc has no strings and no serial output";
     for (const char* k : {"STRING", "CPRINTF", "SPRINTF", "FPRINTF", "PRINTF", "I2C_PRINTF", "ISP_PRINTF"})
       r[k] = "ldc has no strings and no serial output";
-    for (const char* k : {"SPI", "SPI_WR", "I2C_RD", "I2C_WR"}) r[k] = "ldc has no SPI or I2C bus";
     for (const char* k : {"RANDOM", "SEED_RANDOM"}) r[k] = "an ldc program is deterministic; there is no random source";
     for (const char* k : {"GOTO", "GOSUB", "RETURN", "LABEL", "SUBPROG", "ENDSUB"})
       r[k] = "jumps and subroutines between LDmicro rungs are not translated";
@@ -191,6 +190,13 @@ constexpr uint32_t kUartRx = 1023;    // WX: (sequence << 8) | byte, written by 
 constexpr uint32_t kUartTx = 1023;    // WY: (sequence << 8) | byte, written by UART_SEND
 constexpr uint32_t kUartSeen = 8191;  // D: the last receive word consumed
 constexpr uint32_t kUartBusy = 8191;  // M: a byte was sent in this scan
+// The SPI and I2C elements (docs/ldmicro.md, "SPI and I2C"): one WY word per
+// byte sent and one WX word per byte received, from 1022 down, in program order;
+// one D counts the transfers of both buses.
+constexpr uint32_t kBusTop = 1022;
+constexpr uint32_t kBusSeq = 8190;
+
+bool is_bus(const std::string& k) { return k == "SPI" || k == "SPI_WR" || k == "I2C_RD" || k == "I2C_WR"; }
 
 std::string alias_spelling(const std::string& nm);
 
@@ -284,6 +290,12 @@ class Importer {
   void uart(const Elem& e);
   std::vector<TreeNode> uart_send_nodes(const Operand& byte, const Elem& e);
   void formatted_string(const Elem& e);
+  struct BusWords { std::vector<uint32_t> tx; int rx = -1; };
+  std::map<std::pair<int, int>, BusWords> bus_words_;  // element (line, col) -> its words
+  std::vector<Alias> bus_aliases_;
+  int spi_bytes_ = 0, i2c_bytes_ = 0;
+  void plan_bus(const Elem& e);
+  void bus_transfer(const Elem& e);
   int width_of(const std::string& name) const;
   std::vector<TreeNode> wrap_nodes(const Operand& d, int bytes, const Elem& e);
   void wrap(const Elem& e, size_t arg);
@@ -483,7 +495,10 @@ void Importer::check_leaf(const Elem& e) {
   else if (k == "ROL" || k == "ROR" || k == "SHR" || k == "SR0") arity(3, 3, (k + " destination operand bits").c_str());
   else if (k == "BIN2BCD" || k == "BCD2BIN" || k == "SWAP" || k == "OPPOSITE") arity(2, 2, (k + " destination source").c_str());
   else if (k == "TIME2COUNT") arity(2, 2, "TIME2COUNT variable delay");
-  else if (k == "FORMATTED_STRING") {
+  else if (is_bus(k)) {
+    arity(8, 8, (k + (k[0] == 'S' ? " name send receive mode modes size first bitrate" : " name send receive mode address register first bitrate")).c_str());
+    if (k[0] == 'S' && e.args[5] != "8") fail(e.line, e.cols[5], "SPI transfers of " + e.args[5] + " bits are not supported: ldc's SPI model moves bytes");
+  } else if (k == "FORMATTED_STRING") {
     if (e.args.size() < 2) fail(e.line, e.col, "expected FORMATTED_STRING variable length characters... or FORMATTED_STRING variable text");
   }
   else if (is_segments(k)) {
@@ -620,6 +635,9 @@ void Importer::collect(const Elem& e) {
     var(2);
   } else if (k == "FORMATTED_STRING") {
     if (e.args[0] != "(none)") var(0);
+  } else if (is_bus(k)) {
+    if (k == "SPI" || k == "I2C_WR") var(1);
+    if (k == "SPI" || k == "I2C_RD") var(2);
   } else if (k == "RES") {
     // resolved after every element is seen
   } else if (k == "READ_ADC") {
@@ -1397,6 +1415,57 @@ Operand Importer::narrow_literal(const Elem& e, size_t lit, size_t var) {
   return o;
 }
 
+// The words of one SPI or I2C element, reserved before any name is allocated:
+// a tx word per byte it sends (SPI_WR sends the characters of its text, or one
+// byte when it names a number), an rx word when it receives.
+void Importer::plan_bus(const Elem& e) {
+  BusWords w;
+  bool spi = e.kw[0] == 'S';
+  size_t bytes = 1;
+  if (e.kw == "SPI_WR" && !is_number(e.args[1])) bytes = e.args[1].size();
+  int& count = spi ? spi_bytes_ : i2c_bytes_;
+  uint32_t next = kBusTop - uint32_t(spi_bytes_ + i2c_bytes_);
+  if (next < bytes + 512) fail(e.line, e.col, "too many SPI and I2C bytes in this program (at most 510)");
+  for (size_t i = 0; i < bytes; i++) {
+    uint32_t ix = next - uint32_t(i);
+    w.tx.push_back(ix);
+    used_.insert({int(Dev::WY), ix});
+    bus_aliases_.push_back({std::string(spi ? "spi_tx" : "i2c_tx") + std::to_string(++count), {Dev::WY, ix}});
+    if (i == 0 && (e.kw == "SPI" || e.kw == "I2C_RD")) {
+      w.rx = int(ix);
+      used_.insert({int(Dev::WX), ix});
+      bus_aliases_.push_back({std::string(spi ? "spi_rx" : "i2c_rx") + std::to_string(count), {Dev::WX, ix}});
+    }
+  }
+  bus_words_[{e.line, e.col}] = w;
+}
+
+// One transfer per byte, in this scan, when the state is on: bus_seq counts it
+// (modulo 2^23) and the byte's tx word gets (bus_seq << 8) | byte; a read takes
+// the low byte of its rx word.  The state passes on (LDmicro's output is its input).
+void Importer::bus_transfer(const Elem& e) {
+  const BusWords& w = bus_words_.at({e.line, e.col});
+  Operand seq = int_opd(Area::D, kBusSeq), t = int_opd(Area::D, temp_d(e));
+  std::vector<Operand> bytes;
+  if (e.kw == "SPI_WR" && !is_number(e.args[1]))
+    for (char c : e.args[1]) bytes.push_back(const_opd((unsigned char)c));
+  else if (e.kw == "I2C_RD") bytes.push_back(const_opd(0));
+  else bytes.push_back(value(e, 1));
+  for (size_t i = 0; i < bytes.size(); i++) {
+    Operand tx = int_opd(Area::WY, w.tx[i]);
+    rb_.add(out_node(Op::ADD, {seq, const_opd(1), seq}, e));
+    rb_.add(out_node(Op::WAND, {seq, const_opd(0x7FFFFF), seq}, e));
+    Operand b = bytes[i].kind == OpdKind::ConstInt ? const_opd(bytes[i].ival & 255) : t;
+    if (b.kind != OpdKind::ConstInt) rb_.add(out_node(Op::WAND, {bytes[i], const_opd(255), t}, e));
+    rb_.add(out_node(Op::SHL, {seq, const_opd(8), tx}, e));
+    rb_.add(out_node(Op::WOR, {tx, b, tx}, e));
+  }
+  if (w.rx >= 0) {
+    rb_.add(out_node(Op::WAND, {int_opd(Area::WX, uint32_t(w.rx)), const_opd(255), value(e, 2, true)}, e));
+    wrap(e, 2);
+  }
+}
+
 void Importer::element(const Elem& e, bool need_out) {
   const std::string& k = e.kw;
   SrcLoc loc = e.loc();
@@ -1409,6 +1478,7 @@ void Importer::element(const Elem& e, bool need_out) {
   if (k == "COIL") return coil(e);
   if (is_uart(k)) return uart(e);
   if (k == "FORMATTED_STRING") return formatted_string(e);
+  if (is_bus(k)) return bus_transfer(e);
   if (k == "PERSIST") {  // the variable is retentive; the state passes on
     auto it = names_.find(e.args[0]);
     if (is_number(e.args[0]) || it == names_.end() || it->second.kind != NK::Var)
@@ -1664,7 +1734,14 @@ TreeProgram Importer::run() {
       find_uart(e.kids);
     }
   };
-  for (const SrcRung& r : rungs_) walk(r.series), find_uart(r.series);
+  std::function<void(const std::vector<Elem>&)> find_bus = [&](const std::vector<Elem>& s) {
+    for (const Elem& e : s) {
+      if (is_bus(e.kw)) plan_bus(e);
+      find_bus(e.kids);
+    }
+  };
+  for (const SrcRung& r : rungs_) walk(r.series), find_uart(r.series), find_bus(r.series);
+  if (!bus_words_.empty()) used_.insert({int(Dev::D), kBusSeq});
   if (uart_used_)
     for (DeviceRef r : {DeviceRef{Dev::WX, kUartRx}, DeviceRef{Dev::WY, kUartTx}, DeviceRef{Dev::D, kUartSeen}, DeviceRef{Dev::M, kUartBusy}})
       used_.insert({int(r.dev), r.index});
@@ -1674,6 +1751,13 @@ TreeProgram Importer::run() {
     for (const Alias& a : aliases_) taken.insert(upper(a.name));
     for (const Alias& a : {Alias{"uart_rx", {Dev::WX, kUartRx}}, Alias{"uart_tx", {Dev::WY, kUartTx}},
                            Alias{"uart_rx_seen", {Dev::D, kUartSeen}}, Alias{"uart_tx_busy", {Dev::M, kUartBusy}}})
+      if (!taken.count(upper(a.name))) aliases_.push_back(a);
+  }
+  if (!bus_words_.empty()) {
+    std::set<std::string> taken;
+    for (const Alias& a : aliases_) taken.insert(upper(a.name));
+    bus_aliases_.push_back({"bus_seq", {Dev::D, kBusSeq}});
+    for (const Alias& a : bus_aliases_)
       if (!taken.count(upper(a.name))) aliases_.push_back(a);
   }
   TreeProgram p;
