@@ -166,11 +166,11 @@ const std::map<std::string, std::string>& unsupported() {
     for (const char* k : {"RANDOM", "SEED_RANDOM"}) r[k] = "an ldc program is deterministic; there is no random source";
     for (const char* k : {"GOTO", "GOSUB", "RETURN", "LABEL", "SUBPROG", "ENDSUB"})
       r[k] = "jumps and subroutines between LDmicro rungs are not translated";
-    for (const char* k : {"SLEEP", "DELAY", "CLRWDT", "LOCK"}) r[k] = "microcontroller sleep, delay and watchdog control have no ldc equivalent";
+    r["SLEEP"] = "it stops the microcontroller until a wake-up event, which an ldc scan cannot do";
     for (const char* k : {"STEPPER", "PULSER", "NPULSE", "NPULSE_OFF", "QUAD_ENCOD"})
       r[k] = "pulse generators and encoders are microcontroller hardware with no ldc equivalent";
     r["TIME2DELAY"] = "its value is a count of the microcontroller's clock cycles for DELAY, which ldc refuses";
-    for (const char* k : {"RTL", "THI", "TLO", "OSL", "OSC"}) r[k] = "ldc has no translation for it";
+    for (const char* k : {"RTL", "THI", "TLO", "ODR"}) r[k] = "ldc has no translation for it";
     for (const char* k : {"RSFR", "WSFR", "SSFR", "CSFR", "TSFR", "TCSFR"}) r[k] = "microcontroller special function registers do not exist in ldc";
     return r;
   }();
@@ -479,7 +479,9 @@ void Importer::check_leaf(const Elem& e) {
     arity(3, 3, (k + " destination operand1 operand2").c_str());
   else if (k == "NOT" || k == "NEG") arity(2, 2, (k + " destination operand").c_str());
   else if (k == "EQU" || k == "NEQ" || k == "GRT" || k == "GEQ" || k == "LES" || k == "LEQ") arity(2, 2, (k + " operand1 operand2").c_str());
-  else if (k == "OSR" || k == "OSF" || k == "SHORT" || k == "OPEN" || k == "MASTER_RELAY") arity(0, 0, k.c_str());
+  else if (k == "OSR" || k == "OSF" || k == "OSL" || k == "OSC" || k == "SHORT" || k == "OPEN" || k == "MASTER_RELAY" || k == "CLRWDT" || k == "LOCK")
+    arity(0, 0, k.c_str());
+  else if (k == "DELAY") arity(1, 1, "DELAY microseconds");
   else if (k == "PLACEHOLDER") fail(e.line, e.col, "empty row (PLACEHOLDER); delete it or add instructions, as LDmicro itself requires");
   else if (k == "SHIFT_REGISTER") arity(2, 2, "SHIFT_REGISTER name stages");
   else if (k == "LOOK_UP_TABLE") {
@@ -655,6 +657,8 @@ void Importer::collect(const Elem& e) {
     var(0);
     var(1);
 
+  } else if (k == "DELAY") {
+    var(0);
   } else if (k != "COMMENT" && !e.args.empty() && k != "OSR" && k != "OSF") {
     for (size_t i = 0; i < e.args.size(); i++) var(i);
   }
@@ -826,7 +830,7 @@ bool Importer::breaks(const Elem& e) const {
       if (breaks(x)) return true;
     return false;
   }
-  if (k == "TOF" || k == "RTO" || k == "TCY" || k == "OSF" || k == "MASTER_RELAY") return true;
+  if (k == "TOF" || k == "RTO" || k == "TCY" || k == "OSF" || k == "OSL" || k == "OSC" || k == "MASTER_RELAY") return true;
   if (k == "CTU" || k == "CTD" || k == "CTR") return true;
   if (k == "CTC") return !(v01_ && e.args.size() == 2);
   if (k == "COIL") return e.args.size() == 5 && e.args[4] != "0";
@@ -1500,6 +1504,29 @@ void Importer::element(const Elem& e, bool need_out) {
     rb_.restart(bit_leaf(Op::LOADF, Area::M, s.n.elem.a[0].index, e), loc);
     return;
   }
+  if (k == "OSC") {  // while on, on and off in turn, on first: out = state AND NOT last out
+    Cond s = materialize(e);
+    uint32_t sm = s.n.elem.a[0].index, st = temp_m(e), om = temp_m(e);
+    frozen_.insert(om);
+    rb_.chain(c_and(bit_leaf(Op::LOAD, Area::M, sm, e), bit_leaf(Op::LOADN, Area::M, st, e)), out_node(Op::OUT, {bit_opd(Area::M, om)}, e), loc);
+    rb_.chain(bit_leaf(Op::LOAD, Area::M, om, e), out_node(Op::OUT, {bit_opd(Area::M, st)}, e), loc);
+    rb_.restart(bit_leaf(Op::LOAD, Area::M, om, e), loc);
+    return;
+  }
+  if (k == "OSL") {  // on while the state is on; off for one scan after it falls (once it has been on)
+    Cond s = materialize(e);
+    uint32_t sm = s.n.elem.a[0].index, lo = temp_m(e), hi = temp_m(e), om = temp_m(e);
+    frozen_.insert(om);
+    rb_.chain(c_or(bit_leaf(Op::LOAD, Area::M, sm, e), bit_leaf(Op::LOAD, Area::M, lo, e)), out_node(Op::OUT, {bit_opd(Area::M, om)}, e), loc);
+    std::vector<TreeNode> on;
+    on.push_back(out_node(Op::RST, {bit_opd(Area::M, lo)}, e));
+    on.push_back(out_node(Op::SET, {bit_opd(Area::M, hi)}, e));
+    rb_.chain(bit_leaf(Op::LOAD, Area::M, sm, e), fork_of(std::move(on)), loc);
+    rb_.chain(c_and(bit_leaf(Op::LOADN, Area::M, sm, e), bit_leaf(Op::LOAD, Area::M, hi, e)), out_node(Op::SET, {bit_opd(Area::M, lo)}, e), loc);
+    rb_.restart(bit_leaf(Op::LOAD, Area::M, om, e), loc);
+    return;
+  }
+  if (k == "CLRWDT" || k == "LOCK" || k == "DELAY") return;  // no effect on any value: the state passes on
   if (k == "MASTER_RELAY") {
     // LDmicro: if the master relay is off, turn it on; else it takes the rung state.
     Cond s = materialize(e);
