@@ -169,7 +169,6 @@ const std::map<std::string, std::string>& unsupported() {
     r["SLEEP"] = "it stops the microcontroller until a wake-up event, which an ldc scan cannot do";
     for (const char* k : {"STEPPER", "PULSER", "NPULSE", "NPULSE_OFF", "QUAD_ENCOD"})
       r[k] = "pulse generators and encoders are microcontroller hardware with no ldc equivalent";
-    r["TIME2DELAY"] = "its value is a count of the microcontroller's clock cycles for DELAY, which ldc refuses";
     for (const char* k : {"RTL", "THI", "TLO", "ODR"}) r[k] = "ldc has no translation for it";
     for (const char* k : {"RSFR", "WSFR", "SSFR", "CSFR", "TSFR", "TCSFR"}) r[k] = "microcontroller special function registers do not exist in ldc";
     return r;
@@ -225,6 +224,8 @@ class Importer {
   bool v01_ = false;          // "LDmicro0.1": the classic semantics (docs/ldmicro.md)
   int64_t cycle_us_ = 10000;  // LDmicro's default
   int cycle_line_ = 0;
+  int64_t crystal_hz_ = -1;  // CRYSTAL=, for TIME2DELAY
+  std::string micro_;        // MICRO=
   std::vector<std::pair<std::string, int>> io_list_;  // names in IO LIST order, with their line
   std::vector<SrcRung> rungs_;
   std::vector<std::string> titles_;  // per rung: the COMMENT rung above it, if any
@@ -332,6 +333,16 @@ size_t Importer::header() {
       cycle_us_ = std::stoll(t.substr(6, e - 6));
       if (cycle_us_ > 2000000000) fail(l.no, 7, "cycle time too long (at most 2000000000 us)");
       cycle_line_ = l.no;
+      continue;
+    }
+    if (t.rfind("CRYSTAL=", 0) == 0) {
+      size_t e = 8;
+      while (e < t.size() && std::isdigit((unsigned char)t[e])) e++;
+      if (e > 8 && e - 8 <= 12) crystal_hz_ = std::stoll(t.substr(8, e - 8));
+      continue;
+    }
+    if (t.rfind("MICRO=", 0) == 0) {
+      micro_ = t.substr(6);
       continue;
     }
     if (t == "IO LIST" || t == "VAR LIST" || t == "PULL-UP LIST") {
@@ -496,7 +507,7 @@ void Importer::check_leaf(const Elem& e) {
   else if (k == "PERSIST") arity(1, 1, "PERSIST variable");
   else if (k == "ROL" || k == "ROR" || k == "SHR" || k == "SR0") arity(3, 3, (k + " destination operand bits").c_str());
   else if (k == "BIN2BCD" || k == "BCD2BIN" || k == "SWAP" || k == "OPPOSITE") arity(2, 2, (k + " destination source").c_str());
-  else if (k == "TIME2COUNT") arity(2, 2, "TIME2COUNT variable delay");
+  else if (k == "TIME2COUNT" || k == "TIME2DELAY") arity(2, 2, (k + " variable delay").c_str());
   else if (is_bus(k)) {
     arity(8, 8, (k + (k[0] == 'S' ? " name send receive mode modes size first bitrate" : " name send receive mode address register first bitrate")).c_str());
     if (k[0] == 'S' && e.args[5] != "8") fail(e.line, e.cols[5], "SPI transfers of " + e.args[5] + " bits are not supported: ldc's SPI model moves bytes");
@@ -1572,6 +1583,21 @@ void Importer::element(const Elem& e, bool need_out) {
   if (k == "TIME2COUNT") {  // the delay as LDmicro's timers count it: cycles
     int32_t cycles = timer_ms(e, name_of(e, 0)) / cycle_ms(e);
     rb_.add(out_node(Op::MOV, {const_opd(cycles), value(e, 0, true)}, e));
+    wrap(e, 0);
+    return;
+  }
+  if (k == "TIME2DELAY") {  // the delay in the loop counts of LDmicro's DELAY for the MICRO= at CRYSTAL=
+    if (!is_number(e.args[1])) fail(e.line, e.cols[1], "TIME2DELAY needs a number of microseconds");
+    if (crystal_hz_ <= 0) fail(e.line, e.col, "TIME2DELAY needs the file's CRYSTAL= clock frequency");
+    bool avr = micro_.rfind("Atmel AVR", 0) == 0, pic = micro_.rfind("Microchip PIC1", 0) == 0;
+    if (!micro_.empty() && !avr && !pic)
+      fail(e.line, e.col, "TIME2DELAY is defined for AVR and PIC microcontrollers only, not '" + micro_ + "' (LDmicro refuses it too)");
+    __int128 c = __int128(number(e.args[1], e.line, e.cols[1])) * crystal_hz_ / 1000000;
+    if (pic) c /= 4;
+    if (avr) c = std::min<__int128>((c - 1) / 4, 0x10000);
+    if (pic) c = std::min<__int128>((c - 10) / 6, 0xffff);
+    if (c > INT32_MAX) fail(e.line, e.cols[1], "TIME2DELAY result too large");
+    rb_.add(out_node(Op::MOV, {const_opd(c <= 0 ? 1 : int32_t(c)), value(e, 0, true)}, e));
     wrap(e, 0);
     return;
   }
