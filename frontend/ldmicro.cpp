@@ -158,12 +158,10 @@ const std::map<std::string, std::string>& unsupported() {
   static const std::map<std::string, std::string> m = [] {
     std::map<std::string, std::string> r;
     for (const char* k : {"UART_SENDn", "UART_RECVn"})
-      r[k] = "it moves as many bytes as the LDmicro variable is wide, which ldc's 32-bit words do not keep; use UART_SEND or "
-             "UART_RECV, one byte at a time";
+      r[k] = "LDmicro's own compiler no longer translates it (its code is disabled); use UART_SEND or UART_RECV, one byte at a time";
     r["UART_PRINTF"] = "ldc has no strings and no serial output";
     for (const char* k : {"STRING", "CPRINTF", "SPRINTF", "FPRINTF", "PRINTF", "I2C_PRINTF", "ISP_PRINTF"})
-      r[k] = "ldc has no strings and no serial output";
-    for (const char* k : {"RANDOM", "SEED_RANDOM"}) r[k] = "an ldc program is deterministic; there is no random source";
+      r[k] = "ldc has no string (character array) variables";
     for (const char* k : {"GOTO", "GOSUB", "RETURN", "LABEL", "SUBPROG", "ENDSUB"})
       r[k] = "jumps and subroutines between LDmicro rungs are not translated";
     r["SLEEP"] = "it stops the microcontroller until a wake-up event, which an ldc scan cannot do";
@@ -295,6 +293,7 @@ class Importer {
   std::map<std::pair<int, int>, BusWords> bus_words_;  // element (line, col) -> its words
   std::vector<Alias> bus_aliases_;
   int spi_bytes_ = 0, i2c_bytes_ = 0;
+  std::map<std::string, uint32_t> seeds_;  // RANDOM: each variable's seed word
   void plan_bus(const Elem& e);
   void bus_transfer(const Elem& e);
   int width_of(const std::string& name) const;
@@ -493,6 +492,8 @@ void Importer::check_leaf(const Elem& e) {
   else if (k == "OSR" || k == "OSF" || k == "OSL" || k == "OSC" || k == "SHORT" || k == "OPEN" || k == "MASTER_RELAY" || k == "CLRWDT" || k == "LOCK")
     arity(0, 0, k.c_str());
   else if (k == "DELAY") arity(1, 1, "DELAY microseconds");
+  else if (k == "RANDOM") arity(1, 1, "RANDOM variable");
+  else if (k == "SEED_RANDOM") arity(2, 2, "SEED_RANDOM variable seed");
   else if (k == "PLACEHOLDER") fail(e.line, e.col, "empty row (PLACEHOLDER); delete it or add instructions, as LDmicro itself requires");
   else if (k == "SHIFT_REGISTER") arity(2, 2, "SHIFT_REGISTER name stages");
   else if (k == "LOOK_UP_TABLE") {
@@ -1537,7 +1538,24 @@ void Importer::element(const Elem& e, bool need_out) {
     rb_.restart(bit_leaf(Op::LOAD, Area::M, om, e), loc);
     return;
   }
-  if (k == "CLRWDT" || k == "LOCK" || k == "DELAY") return;  // no effect on any value: the state passes on
+  if (k == "CLRWDT" || k == "LOCK" || k == "DELAY") return;
+  if (k == "RANDOM" || k == "SEED_RANDOM") {
+    // LDmicro's generator: per variable a 32-bit seed, seed := seed * 69069 + 1,
+    // and the variable gets the seed's top n bits (n = its width), signed.
+    Operand v = value(e, 0, true);
+    auto [it, fresh] = seeds_.try_emplace(e.args[0], 0);
+    if (fresh) {
+      it->second = temp_d(e);
+      init_.push_back(out_node(Op::MOV, {const_opd(1), int_opd(Area::D, it->second)}, e));
+    }
+    Operand seed = int_opd(Area::D, it->second);
+    if (k == "SEED_RANDOM") return rb_.add(out_node(Op::MOV, {value(e, 1), seed}, e));
+    rb_.add(out_node(Op::MUL, {seed, const_opd(69069), seed}, e));
+    rb_.add(out_node(Op::ADD, {seed, const_opd(1), seed}, e));
+    rb_.add(out_node(Op::SHR, {seed, const_opd(32 - 8 * width_of(e.args[0])), v}, e));
+    wrap(e, 0);
+    return;
+  }  // no effect on any value: the state passes on
   if (k == "MASTER_RELAY") {
     // LDmicro: if the master relay is off, turn it on; else it takes the rung state.
     Cond s = materialize(e);
@@ -1848,7 +1866,7 @@ TreeProgram Importer::run() {
   if (!init_.empty()) {
     TreeRung tr;
     tr.line = rungs_[0].line;
-    tr.title = "counter initial values";
+    tr.title = "initial values";
     tr.root = then_node(bit_leaf(Op::LOAD, Area::S, kBitFirstScan, top), fork_of(std::move(init_)), top.loc());
     p.rungs.insert(p.rungs.begin() + long(init_at), std::move(tr));
   }
