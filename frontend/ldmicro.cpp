@@ -167,7 +167,7 @@ const std::map<std::string, std::string>& unsupported() {
     r["SLEEP"] = "it stops the microcontroller until a wake-up event, which an ldc scan cannot do";
     for (const char* k : {"STEPPER", "PULSER", "NPULSE", "NPULSE_OFF", "QUAD_ENCOD"})
       r[k] = "pulse generators and encoders are microcontroller hardware with no ldc equivalent";
-    for (const char* k : {"RTL", "THI", "TLO", "ODR"}) r[k] = "ldc has no translation for it";
+    r["ODR"] = "ldc has no translation for it";
     for (const char* k : {"RSFR", "WSFR", "SSFR", "CSFR", "TSFR", "TCSFR"}) r[k] = "microcontroller special function registers do not exist in ldc";
     return r;
   }();
@@ -196,6 +196,10 @@ constexpr uint32_t kBusSeq = 8190;
 bool is_bus(const std::string& k) { return k == "SPI" || k == "SPI_WR" || k == "I2C_RD" || k == "I2C_WR"; }
 
 std::string alias_spelling(const std::string& nm);
+
+bool is_timer_kw(const std::string& k) {
+  return k == "TON" || k == "TOF" || k == "RTO" || k == "TCY" || k == "RTL" || k == "THI" || k == "TLO";
+}
 
 bool is_segments(const std::string& k) { return k == "7SEGMENTS" || k == "9SEGMENTS" || k == "14SEGMENTS" || k == "16SEGMENTS"; }
 
@@ -481,7 +485,7 @@ void Importer::check_leaf(const Elem& e) {
   if (k == "COMMENT") return;
   if (k == "CONTACTS") arity(2, 3, "CONTACTS name negated [set1]");
   else if (k == "COIL") arity(4, 5, "COIL name negated setOnly resetOnly [toggle]");
-  else if (k == "TON" || k == "TOF" || k == "RTO" || k == "TCY") arity(2, 3, (k + " name delay [adjust]").c_str());
+  else if (is_timer_kw(k)) arity(2, 3, (k + " name delay [adjust]").c_str());
   else if (k == "CTU" || k == "CTD" || k == "CTC" || k == "CTR") arity(2, 4, (k + " name max [init [inputKind]]").c_str());
   else if (k == "RES") arity(1, 1, "RES name");
   else if (k == "MOVE") arity(2, 2, "MOVE destination source");
@@ -641,7 +645,7 @@ void Importer::collect(const Elem& e) {
     for (const Elem& x : e.kids) collect(x);
   } else if (k == "CONTACTS" || k == "COIL") {
     note(e.args[0], NK::Bit, e.line, e.cols[0]);
-  } else if (k == "TON" || k == "TOF" || k == "RTO" || k == "TCY") {
+  } else if (is_timer_kw(k)) {
     note(e.args[0], NK::Timer, e.line, e.cols[0], k);
   } else if (k == "CTU" || k == "CTD" || k == "CTC" || k == "CTR") {
     note(e.args[0], NK::Counter, e.line, e.cols[0]);
@@ -842,7 +846,7 @@ bool Importer::breaks(const Elem& e) const {
       if (breaks(x)) return true;
     return false;
   }
-  if (k == "TOF" || k == "RTO" || k == "TCY" || k == "OSF" || k == "OSL" || k == "OSC" || k == "MASTER_RELAY") return true;
+  if (k == "TOF" || k == "RTO" || k == "TCY" || k == "RTL" || k == "THI" || k == "TLO" || k == "OSF" || k == "OSL" || k == "OSC" || k == "MASTER_RELAY") return true;
   if (k == "CTU" || k == "CTD" || k == "CTR") return true;
   if (k == "CTC") return !(v01_ && e.args.size() == 2);
   if (k == "COIL") return e.args.size() == 5 && e.args[4] != "0";
@@ -937,7 +941,34 @@ void Importer::timer(const Elem& e) {
   } else if (e.kw == "TOF") {  // the output outlives the input: a new chain
     rb_.add(out_node(Op::TOF, {timer_opd(t), const_opd(pt)}, e));
     rb_.restart(bit_leaf(Op::LOAD, Area::TQ, t, e), loc);
-  } else if (e.kw == "RTO") {
+  } else if (e.kw == "THI" || e.kw == "TLO") {
+    // THI: a rising state starts a pulse of P cycles (on while counting); TLO:
+    // a falling state (once it has been on) starts a gap of P cycles in an
+    // output that is otherwise on.  The count lives in T's word, in ms; the
+    // next pulse needs the state back at rest (off for THI, on for TLO).
+    bool hi_kind = e.kw == "THI";
+    int32_t cyc = cycle_ms(e);
+    Cond s = materialize(e);
+    uint32_t sm = s.n.elem.a[0].index, st = temp_m(e), lt = temp_m(e), hi = hi_kind ? 0 : temp_m(e), om = temp_m(e);
+    frozen_.insert(om);
+    Operand tw = int_opd(Area::TW, t);
+    auto M = [&](Op op, uint32_t m) { return bit_leaf(op, Area::M, m, e); };
+    if (hi_kind) {
+      rb_.chain(M(Op::LOAD, sm), out_node(Op::SET, {bit_opd(Area::M, st)}, e), loc);
+    } else {
+      rb_.chain(c_and(M(Op::LOADN, sm), M(Op::LOAD, hi)), out_node(Op::SET, {bit_opd(Area::M, st)}, e), loc);
+      rb_.chain(M(Op::LOAD, sm), out_node(Op::SET, {bit_opd(Area::M, hi)}, e), loc);
+    }
+    rb_.chain(c_and(M(Op::LOAD, st), Cond::of(leaf_node(Op::LDLT, {tw, const_opd(pt)}, e))), out_node(Op::OUT, {bit_opd(Area::M, lt)}, e), loc);
+    rb_.chain(M(Op::LOAD, lt), out_node(Op::ADD, {tw, const_opd(cyc), tw}, e), loc);
+    std::vector<TreeNode> rest;
+    rest.push_back(out_node(Op::MOV, {const_opd(0), tw}, e));
+    rest.push_back(out_node(Op::RST, {bit_opd(Area::M, st)}, e));
+    rb_.chain(c_and(c_and(M(Op::LOAD, st), M(Op::LOADN, lt)), M(hi_kind ? Op::LOADN : Op::LOAD, sm)), fork_of(std::move(rest)), loc);
+    if (hi_kind) rb_.chain(M(Op::LOAD, lt), out_node(Op::OUT, {bit_opd(Area::M, om)}, e), loc);
+    else rb_.chain(c_and(M(Op::LOAD, hi), M(Op::LOADN, lt)), out_node(Op::OUT, {bit_opd(Area::M, om)}, e), loc);
+    rb_.restart(M(Op::LOAD, om), loc);
+  } else if (e.kw == "RTO" || e.kw == "RTL") {
     // Retentive: count cycles while the input is on, keep the count while it
     // is off; the output is (count before this cycle) >= P, whatever the input.
     // The count lives in the timer's word, in ms (one cycle = CYCLE ms).
@@ -947,6 +978,7 @@ void Importer::timer(const Elem& e) {
     frozen_.insert(o);
     Operand tw = int_opd(Area::TW, t);
     rb_.chain(Cond::of(leaf_node(Op::LDGE, {tw, const_opd(pt)}, e)), out_node(Op::OUT, {bit_opd(Area::M, o)}, e), loc);
+    if (e.kw == "RTL") s = bit_leaf(Op::LOADN, Area::M, s.n.elem.a[0].index, e);  // counts while the state is off
     rb_.chain(c_and(std::move(s), Cond::of(leaf_node(Op::LDLT, {tw, const_opd(pt)}, e))),
               out_node(Op::ADD, {tw, const_opd(cyc), tw}, e), loc);
     rb_.restart(bit_leaf(Op::LOAD, Area::M, o, e), loc);
@@ -1504,7 +1536,7 @@ void Importer::element(const Elem& e, bool need_out) {
     if (std::find(persist_.begin(), persist_.end(), d) == persist_.end()) persist_.push_back(d);
     return;
   }
-  if (k == "TON" || k == "TOF" || k == "RTO" || k == "TCY") return timer(e);
+  if (is_timer_kw(k)) return timer(e);
   if (k == "CTU" || k == "CTD" || k == "CTC" || k == "CTR") return counter(e);
   if (k == "OSR") {
     Cond s = materialize(e);
@@ -1570,7 +1602,7 @@ void Importer::element(const Elem& e, bool need_out) {
     const Name& n = it->second;
     if (n.kind == NK::Timer) {
       if (n.timer_kind == "TON") rb_.add(out_node(Op::RSTT, {timer_opd(n.dev.index)}, e));
-      else if (n.timer_kind == "RTO" || n.timer_kind == "TCY") rb_.add(out_node(Op::MOV, {const_opd(0), int_opd(Area::TW, n.dev.index)}, e));
+      else if (n.timer_kind != "TOF") rb_.add(out_node(Op::MOV, {const_opd(0), int_opd(Area::TW, n.dev.index)}, e));
       else fail(e.line, e.cols[0], "RES of the TOF timer '" + e.args[0] + "' is not supported: LDmicro restarts its off-delay, which ldc's TOF cannot be made to do");
     } else if (n.kind == NK::Counter) {
       if (v01_) rb_.add(out_node(Op::RSTC, {counter_opd(n.dev.index)}, e));
