@@ -55,6 +55,7 @@ struct Elem {
 
 struct SrcRung {
   int line = 0;
+  int ldm_index = 0;  // LDmicro's rung number - 1, comment rungs counted
   std::vector<Elem> series;
 };
 
@@ -162,8 +163,7 @@ const std::map<std::string, std::string>& unsupported() {
     r["UART_PRINTF"] = "ldc has no strings and no serial output";
     for (const char* k : {"STRING", "CPRINTF", "SPRINTF", "FPRINTF", "PRINTF", "I2C_PRINTF", "ISP_PRINTF"})
       r[k] = "ldc has no string (character array) variables";
-    for (const char* k : {"GOTO", "GOSUB", "RETURN", "LABEL", "SUBPROG", "ENDSUB"})
-      r[k] = "jumps and subroutines between LDmicro rungs are not translated";
+    for (const char* k : {"GOSUB", "RETURN", "SUBPROG", "ENDSUB"}) r[k] = "LDmicro subroutines are not translated";
     r["SLEEP"] = "it stops the microcontroller until a wake-up event, which an ldc scan cannot do";
     for (const char* k : {"STEPPER", "PULSER", "NPULSE", "NPULSE_OFF", "QUAD_ENCOD"})
       r[k] = "pulse generators and encoders are microcontroller hardware with no ldc equivalent";
@@ -276,6 +276,10 @@ class Importer {
 
   // translation
   void translate(const SrcRung& r, size_t index);
+  size_t rung_now_ = 0;
+  std::map<std::string, size_t> labels_;  // LABEL name -> index in rungs_
+  std::set<size_t> targets_;              // rungs_ indices some GOTO jumps to
+  size_t goto_target(const Elem& e);
   void series_code(const std::vector<Elem>& s, bool need_out);
   void element(const Elem& e, bool need_out);
   void parallel_code(const Elem& e, bool need_out);
@@ -497,6 +501,7 @@ void Importer::check_leaf(const Elem& e) {
     arity(0, 0, k.c_str());
   else if (k == "DELAY") arity(1, 1, "DELAY microseconds");
   else if (k == "RANDOM") arity(1, 1, "RANDOM variable");
+  else if (k == "GOTO" || k == "LABEL") arity(1, 1, (k + " label").c_str());
   else if (k == "SEED_RANDOM") arity(2, 2, "SEED_RANDOM variable seed");
   else if (k == "PLACEHOLDER") fail(e.line, e.col, "empty row (PLACEHOLDER); delete it or add instructions, as LDmicro itself requires");
   else if (k == "SHIFT_REGISTER") arity(2, 2, "SHIFT_REGISTER name stages");
@@ -534,6 +539,7 @@ void Importer::check_leaf(const Elem& e) {
 // program = { "RUNG" [n] series "END" }
 void Importer::program(size_t i) {
   std::string title;
+  int count = 0;
   for (i++; i < lines_.size(); i++) {
     const Line& l = lines_[i];
     std::string t = trim(l.text);
@@ -543,6 +549,7 @@ void Importer::program(size_t i) {
       fail(l.no, col, "expected RUNG, found '" + t + "'");
     SrcRung r;
     r.line = l.no;
+    r.ldm_index = count++;
     i = series(i + 1, r.series, l);
     if (r.series.size() == 1 && r.series[0].kw == "COMMENT") {
       // a comment rung: its first line titles the next rung
@@ -675,6 +682,8 @@ void Importer::collect(const Elem& e) {
 
   } else if (k == "DELAY") {
     var(0);
+  } else if (k == "GOTO" || k == "LABEL") {
+    // labels, not variables
   } else if (k != "COMMENT" && !e.args.empty() && k != "OSR" && k != "OSF") {
     for (size_t i = 0; i < e.args.size(); i++) var(i);
   }
@@ -1570,7 +1579,15 @@ void Importer::element(const Elem& e, bool need_out) {
     rb_.restart(bit_leaf(Op::LOAD, Area::M, om, e), loc);
     return;
   }
-  if (k == "CLRWDT" || k == "LOCK" || k == "DELAY") return;
+  if (k == "CLRWDT" || k == "LOCK" || k == "DELAY" || k == "LABEL") return;
+  if (k == "GOTO") {
+    size_t t = goto_target(e);
+    targets_.insert(t);
+    Operand l{OpdKind::Label};
+    l.label = "rung" + std::to_string(t + 1);
+    rb_.add(out_node(Op::JMP, {l}, e));
+    return;
+  }
   if (k == "RANDOM" || k == "SEED_RANDOM") {
     // LDmicro's generator: per variable a 32-bit seed, seed := seed * 69069 + 1,
     // and the variable gets the seed's top n bits (n = its width), signed.
@@ -1803,7 +1820,29 @@ void Importer::parallel_code(const Elem& e, bool need_out) {
   }
 }
 
-void Importer::translate(const SrcRung& r, size_t) {
+// GOTO label: the rung holding LABEL label, or LDmicro's rung number; ldc's
+// JMP goes forward only, so a GOTO to this rung or an earlier one (a loop
+// inside the cycle) is refused.  A target past the last rung ends the scan's rungs.
+size_t Importer::goto_target(const Elem& e) {
+  const std::string& l = e.args[0];
+  size_t t;
+  if (is_number(l)) {
+    int64_t n = number(l, e.line, e.cols[0]);
+    t = rungs_.size();
+    for (size_t i = 0; i < rungs_.size(); i++)
+      if (rungs_[i].ldm_index >= n - 1) { t = i; break; }
+  } else {
+    auto it = labels_.find(l);
+    if (it == labels_.end()) fail(e.line, e.cols[0], "GOTO: LABEL '" + l + "' not found (LDmicro refuses it too)");
+    t = it->second;
+  }
+  if (t <= rung_now_)
+    fail(e.line, e.col, "GOTO to this rung or an earlier one (a loop inside the cycle) is not supported: ldc jumps forward only");
+  return t;
+}
+
+void Importer::translate(const SrcRung& r, size_t index) {
+  rung_now_ = index;
   Elem at;
   at.line = r.line;
   at.col = 1;
@@ -1886,10 +1925,22 @@ TreeProgram Importer::run() {
     p.rungs.push_back(std::move(tr));
   }
   size_t init_at = p.rungs.size();
+  std::function<void(const std::vector<Elem>&, size_t)> find_labels = [&](const std::vector<Elem>& s, size_t i) {
+    for (const Elem& e : s) {
+      if (e.kw == "LABEL" && !labels_.emplace(e.args[0], i).second)
+        fail(e.line, e.cols[0], "LABEL '" + e.args[0] + "' is placed twice");
+      find_labels(e.kids, i);
+    }
+  };
+  for (size_t i = 0; i < rungs_.size(); i++) find_labels(rungs_[i].series, i);
+  std::vector<std::string> pending;  // labels waiting for the next rung that makes code
   for (size_t i = 0; i < rungs_.size(); i++) {
     translate(rungs_[i], i);
+    if (targets_.count(i)) pending.push_back("rung" + std::to_string(i + 1));
     if (rb_.top.empty()) continue;  // only conditions: nothing to do
     TreeRung tr;
+    tr.labels = std::move(pending);
+    pending.clear();
     tr.line = rungs_[i].line;
     tr.title = titles_[i];
     tr.root = fork_of(std::move(rb_.top));
@@ -1903,6 +1954,9 @@ TreeProgram Importer::run() {
     p.rungs.insert(p.rungs.begin() + long(init_at), std::move(tr));
   }
   if (p.rungs.empty()) fail(int(lines_.size()), 1, "this program has no outputs");
+  p.end_labels = pending;
+  for (size_t t : targets_)
+    if (t >= rungs_.size()) p.end_labels.push_back("rung" + std::to_string(t + 1));
   p.retain = persist_;
   return p;
 }
