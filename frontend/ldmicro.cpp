@@ -15,6 +15,7 @@
 // it is copied into an internal relay of its own (an M allocated after every
 // named device).  No new IL is needed; docs/ldmicro.md lists each mapping.
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <climits>
 #include <functional>
@@ -24,6 +25,7 @@
 
 #include "frontend/frontend.h"
 #include "frontend/operands.h"
+#include "frontend/ldmicro_segments.h"
 #include "frontend/treebuild.h"
 
 namespace ldc {
@@ -53,6 +55,7 @@ struct Elem {
 
 struct SrcRung {
   int line = 0;
+  int ldm_index = 0;  // LDmicro's rung number - 1, comment rungs counted
   std::vector<Elem> series;
 };
 
@@ -156,23 +159,15 @@ const std::map<std::string, std::string>& unsupported() {
   static const std::map<std::string, std::string> m = [] {
     std::map<std::string, std::string> r;
     for (const char* k : {"UART_SENDn", "UART_RECVn"})
-      r[k] = "it moves as many bytes as the LDmicro variable is wide, which ldc's 32-bit words do not keep; use UART_SEND or "
-             "UART_RECV, one byte at a time";
+      r[k] = "LDmicro's own compiler no longer translates it (its code is disabled); use UART_SEND or UART_RECV, one byte at a time";
     r["UART_PRINTF"] = "ldc has no strings and no serial output";
-    for (const char* k : {"FORMATTED_STRING", "STRING", "CPRINTF", "SPRINTF", "FPRINTF", "PRINTF", "I2C_PRINTF", "ISP_PRINTF"})
-      r[k] = "ldc has no strings and no serial output";
-    for (const char* k : {"SPI", "SPI_WR", "I2C_RD", "I2C_WR"}) r[k] = "ldc has no SPI or I2C bus";
-    for (const char* k : {"RANDOM", "SEED_RANDOM"}) r[k] = "an ldc program is deterministic; there is no random source";
-    for (const char* k : {"GOTO", "GOSUB", "RETURN", "LABEL", "SUBPROG", "ENDSUB"})
-      r[k] = "jumps and subroutines between LDmicro rungs are not translated";
-    for (const char* k : {"SLEEP", "DELAY", "CLRWDT", "LOCK"}) r[k] = "microcontroller sleep, delay and watchdog control have no ldc equivalent";
+    for (const char* k : {"STRING", "CPRINTF", "SPRINTF", "FPRINTF", "PRINTF", "I2C_PRINTF", "ISP_PRINTF"})
+      r[k] = "ldc has no string (character array) variables";
+    for (const char* k : {"GOSUB", "RETURN", "SUBPROG", "ENDSUB"}) r[k] = "LDmicro subroutines are not translated";
+    r["SLEEP"] = "it stops the microcontroller until a wake-up event, which an ldc scan cannot do";
     for (const char* k : {"STEPPER", "PULSER", "NPULSE", "NPULSE_OFF", "QUAD_ENCOD"})
       r[k] = "pulse generators and encoders are microcontroller hardware with no ldc equivalent";
-    for (const char* k : {"7SEGMENTS", "9SEGMENTS", "14SEGMENTS", "16SEGMENTS", "BUS"})
-      r[k] = "display and bus encodings are not translated";
-    for (const char* k : {"BIN2BCD", "BCD2BIN", "OPPOSITE", "SWAP", "ROL", "ROR", "SHR", "SR0"})
-      r[k] = "its result depends on the byte size of the LDmicro variable, which ldc's 32-bit words do not keep";
-    for (const char* k : {"RTL", "THI", "TLO", "TIME2COUNT", "TIME2DELAY", "OSL", "OSC"}) r[k] = "ldc has no translation for it";
+    r["ODR"] = "ldc has no translation for it";
     for (const char* k : {"RSFR", "WSFR", "SSFR", "CSFR", "TSFR", "TCSFR"}) r[k] = "microcontroller special function registers do not exist in ldc";
     return r;
   }();
@@ -192,6 +187,21 @@ constexpr uint32_t kUartRx = 1023;    // WX: (sequence << 8) | byte, written by 
 constexpr uint32_t kUartTx = 1023;    // WY: (sequence << 8) | byte, written by UART_SEND
 constexpr uint32_t kUartSeen = 8191;  // D: the last receive word consumed
 constexpr uint32_t kUartBusy = 8191;  // M: a byte was sent in this scan
+// The SPI and I2C elements (docs/ldmicro.md, "SPI and I2C"): one WY word per
+// byte sent and one WX word per byte received, from 1022 down, in program order;
+// one D counts the transfers of both buses.
+constexpr uint32_t kBusTop = 1022;
+constexpr uint32_t kBusSeq = 8190;
+
+bool is_bus(const std::string& k) { return k == "SPI" || k == "SPI_WR" || k == "I2C_RD" || k == "I2C_WR"; }
+
+std::string alias_spelling(const std::string& nm);
+
+bool is_timer_kw(const std::string& k) {
+  return k == "TON" || k == "TOF" || k == "RTO" || k == "TCY" || k == "RTL" || k == "THI" || k == "TLO";
+}
+
+bool is_segments(const std::string& k) { return k == "7SEGMENTS" || k == "9SEGMENTS" || k == "14SEGMENTS" || k == "16SEGMENTS"; }
 
 bool is_pure_kw(const std::string& kw) {
   static const std::set<std::string> s = {"CONTACTS", "EQU", "NEQ", "GRT", "GEQ", "LES", "LEQ", "SHORT", "OPEN", "COMMENT"};
@@ -216,6 +226,8 @@ class Importer {
   bool v01_ = false;          // "LDmicro0.1": the classic semantics (docs/ldmicro.md)
   int64_t cycle_us_ = 10000;  // LDmicro's default
   int cycle_line_ = 0;
+  int64_t crystal_hz_ = -1;  // CRYSTAL=, for TIME2DELAY
+  std::string micro_;        // MICRO=
   std::vector<std::pair<std::string, int>> io_list_;  // names in IO LIST order, with their line
   std::vector<SrcRung> rungs_;
   std::vector<std::string> titles_;  // per rung: the COMMENT rung above it, if any
@@ -234,11 +246,13 @@ class Importer {
   std::set<uint32_t> frozen_;  // relays written once per scan, before they are read
   uint32_t mcr_ = 0;
   std::vector<TreeNode> init_;  // first-scan initialisations
+  std::map<std::string, int> width_;  // VAR LIST: a variable's width in bytes (1..4)
 
   RungBuilder rb_;
 
   // source
   void read_lines();
+  void var_list_entry(const std::string& u);
   size_t header();
   void program(size_t i);
   size_t series(size_t i, std::vector<Elem>& out, const Line& open);
@@ -262,6 +276,10 @@ class Importer {
 
   // translation
   void translate(const SrcRung& r, size_t index);
+  size_t rung_now_ = 0;
+  std::map<std::string, size_t> labels_;  // LABEL name -> index in rungs_
+  std::set<size_t> targets_;              // rungs_ indices some GOTO jumps to
+  size_t goto_target(const Elem& e);
   void series_code(const std::vector<Elem>& s, bool need_out);
   void element(const Elem& e, bool need_out);
   void parallel_code(const Elem& e, bool need_out);
@@ -277,6 +295,25 @@ class Importer {
   void counter(const Elem& e);
   void coil(const Elem& e);
   void uart(const Elem& e);
+  std::vector<TreeNode> uart_send_nodes(const Operand& byte, const Elem& e);
+  void formatted_string(const Elem& e);
+  struct BusWords { std::vector<uint32_t> tx; int rx = -1; };
+  std::map<std::pair<int, int>, BusWords> bus_words_;  // element (line, col) -> its words
+  std::vector<Alias> bus_aliases_;
+  int spi_bytes_ = 0, i2c_bytes_ = 0;
+  std::map<std::string, uint32_t> seeds_;  // RANDOM: each variable's seed word
+  void plan_bus(const Elem& e);
+  void bus_transfer(const Elem& e);
+  int width_of(const std::string& name) const;
+  std::vector<TreeNode> wrap_nodes(const Operand& d, int bytes, const Elem& e);
+  void wrap(const Elem& e, size_t arg);
+  int arg_width(const Elem& e, size_t arg) const;
+  void bit_op(const Elem& e);
+  void bcd(const Elem& e);
+  void segments(const Elem& e);
+  void bus(const Elem& e);
+  void move_to_timer(const Elem& e);
+  Operand narrow_literal(const Elem& e, size_t lit, size_t var);
 };
 
 void Importer::read_lines() {
@@ -305,13 +342,27 @@ size_t Importer::header() {
       cycle_line_ = l.no;
       continue;
     }
+    if (t.rfind("CRYSTAL=", 0) == 0) {
+      size_t e = 8;
+      while (e < t.size() && std::isdigit((unsigned char)t[e])) e++;
+      if (e > 8 && e - 8 <= 12) crystal_hz_ = std::stoll(t.substr(8, e - 8));
+      continue;
+    }
+    if (t.rfind("MICRO=", 0) == 0) {
+      micro_ = t.substr(6);
+      continue;
+    }
     if (t == "IO LIST" || t == "VAR LIST" || t == "PULL-UP LIST") {
       bool io = t == "IO LIST";
       size_t j = i + 1;
       for (; j < lines_.size(); j++) {
         std::string u = trim(lines_[j].text);
         if (u == "END") break;
-        if (u.empty() || !io) continue;
+        if (u.empty()) continue;
+        if (!io) {
+          if (t == "VAR LIST") var_list_entry(u);
+          continue;
+        }
         // "name at pin [...]"
         size_t sp = u.find_first_of(" \t");
         std::string name = u.substr(0, sp);
@@ -327,6 +378,20 @@ size_t Importer::header() {
     // ignores lines it does not know, and so do we.
   }
   fail(int(lines_.size()), 1, "no PROGRAM line: an LDmicro file lists its rungs after a line 'PROGRAM'");
+}
+
+// VAR LIST lines read "N bytes name [comment]".  Widths 1 to 4 are integer
+// variables; longer entries are LDmicro's strings and tables, which keep no width.
+void Importer::var_list_entry(const std::string& u) {
+  size_t a = u.find(' ');
+  if (a == std::string::npos) return;
+  std::string n = u.substr(0, a), rest = trim(u.substr(a));
+  if (rest.rfind("bytes", 0) != 0 || n.empty() || !std::all_of(n.begin(), n.end(), [](char c) { return std::isdigit((unsigned char)c); })) return;
+  std::string name = trim(rest.substr(5));
+  name = name.substr(0, name.find_first_of(" \t"));
+  if (name.empty() || n.size() > 3) return;
+  int w = std::stoi(n);
+  if (w >= 1 && w <= 4) width_[name] = w;
 }
 
 Elem Importer::leaf(const Line& l) {
@@ -424,7 +489,7 @@ void Importer::check_leaf(const Elem& e) {
   if (k == "COMMENT") return;
   if (k == "CONTACTS") arity(2, 3, "CONTACTS name negated [set1]");
   else if (k == "COIL") arity(4, 5, "COIL name negated setOnly resetOnly [toggle]");
-  else if (k == "TON" || k == "TOF" || k == "RTO" || k == "TCY") arity(2, 3, (k + " name delay [adjust]").c_str());
+  else if (is_timer_kw(k)) arity(2, 3, (k + " name delay [adjust]").c_str());
   else if (k == "CTU" || k == "CTD" || k == "CTC" || k == "CTR") arity(2, 4, (k + " name max [init [inputKind]]").c_str());
   else if (k == "RES") arity(1, 1, "RES name");
   else if (k == "MOVE") arity(2, 2, "MOVE destination source");
@@ -432,7 +497,12 @@ void Importer::check_leaf(const Elem& e) {
     arity(3, 3, (k + " destination operand1 operand2").c_str());
   else if (k == "NOT" || k == "NEG") arity(2, 2, (k + " destination operand").c_str());
   else if (k == "EQU" || k == "NEQ" || k == "GRT" || k == "GEQ" || k == "LES" || k == "LEQ") arity(2, 2, (k + " operand1 operand2").c_str());
-  else if (k == "OSR" || k == "OSF" || k == "SHORT" || k == "OPEN" || k == "MASTER_RELAY") arity(0, 0, k.c_str());
+  else if (k == "OSR" || k == "OSF" || k == "OSL" || k == "OSC" || k == "SHORT" || k == "OPEN" || k == "MASTER_RELAY" || k == "CLRWDT" || k == "LOCK")
+    arity(0, 0, k.c_str());
+  else if (k == "DELAY") arity(1, 1, "DELAY microseconds");
+  else if (k == "RANDOM") arity(1, 1, "RANDOM variable");
+  else if (k == "GOTO" || k == "LABEL") arity(1, 1, (k + " label").c_str());
+  else if (k == "SEED_RANDOM") arity(2, 2, "SEED_RANDOM variable seed");
   else if (k == "PLACEHOLDER") fail(e.line, e.col, "empty row (PLACEHOLDER); delete it or add instructions, as LDmicro itself requires");
   else if (k == "SHIFT_REGISTER") arity(2, 2, "SHIFT_REGISTER name stages");
   else if (k == "LOOK_UP_TABLE") {
@@ -445,12 +515,31 @@ void Importer::check_leaf(const Elem& e) {
   else if (k == "UART_SEND" || k == "UART_RECV") arity(1, 3, (k + " variable [bytes wait]").c_str());
   else if (is_uart_flag(k)) arity(0, 0, k.c_str());
   else if (k == "PERSIST") arity(1, 1, "PERSIST variable");
+  else if (k == "ROL" || k == "ROR" || k == "SHR" || k == "SR0") arity(3, 3, (k + " destination operand bits").c_str());
+  else if (k == "BIN2BCD" || k == "BCD2BIN" || k == "SWAP" || k == "OPPOSITE") arity(2, 2, (k + " destination source").c_str());
+  else if (k == "TIME2COUNT" || k == "TIME2DELAY") arity(2, 2, (k + " variable delay").c_str());
+  else if (is_bus(k)) {
+    arity(8, 8, (k + (k[0] == 'S' ? " name send receive mode modes size first bitrate" : " name send receive mode address register first bitrate")).c_str());
+    if (k[0] == 'S' && e.args[5] != "8") fail(e.line, e.cols[5], "SPI transfers of " + e.args[5] + " bits are not supported: ldc's SPI model moves bytes");
+  } else if (k == "FORMATTED_STRING") {
+    if (e.args.size() < 2) fail(e.line, e.col, "expected FORMATTED_STRING variable length characters... or FORMATTED_STRING variable text");
+  }
+  else if (is_segments(k)) {
+    arity(3, 3, (k + " destination source common").c_str());
+    if (e.args[2] != "C" && e.args[2] != "A") fail(e.line, e.cols[2], "expected C (common cathode) or A (common anode), found '" + e.args[2] + "'");
+  } else if (k == "BUS") {
+    arity(10, 10, "BUS destination source bit0 .. bit7");
+    for (size_t i = 2; i < 10; i++)
+      if (!is_number(e.args[i]) || number(e.args[i], e.line, e.cols[i]) < 0 || number(e.args[i], e.line, e.cols[i]) > 7)
+        fail(e.line, e.cols[i], "BUS bit numbers are 0..7");
+  }
   else fail(e.line, e.col, "unknown LDmicro element '" + k + "'");
 }
 
 // program = { "RUNG" [n] series "END" }
 void Importer::program(size_t i) {
   std::string title;
+  int count = 0;
   for (i++; i < lines_.size(); i++) {
     const Line& l = lines_[i];
     std::string t = trim(l.text);
@@ -460,6 +549,7 @@ void Importer::program(size_t i) {
       fail(l.no, col, "expected RUNG, found '" + t + "'");
     SrcRung r;
     r.line = l.no;
+    r.ldm_index = count++;
     i = series(i + 1, r.series, l);
     if (r.series.size() == 1 && r.series[0].kw == "COMMENT") {
       // a comment rung: its first line titles the next rung
@@ -502,12 +592,14 @@ int32_t Importer::number(const std::string& s, int line, int col) const {
   size_t i = (s[0] == '-' || s[0] == '+') ? 1 : 0;
   std::string body = s.substr(i);
   int base = 10;
-  if (!v01_ && body.size() > 1 && body[0] == '0') {
+  // 0x 0b 0o in every file (LDmicro 2.x also saves LDmicro0.1 files, with hex
+  // numbers in them); a bare leading 0 is octal only in newer files.
+  if (body.size() > 1 && body[0] == '0') {
     char p = char(std::tolower((unsigned char)body[1]));
     if (p == 'x') base = 16, body = body.substr(2);
     else if (p == 'b') base = 2, body = body.substr(2);
     else if (p == 'o') base = 8, body = body.substr(2);
-    else base = 8, body = body.substr(1);
+    else if (!v01_) base = 8, body = body.substr(1);
   }
   if (body.empty()) fail(line, col, "malformed number '" + s + "'");
   int64_t v = 0;
@@ -560,12 +652,17 @@ void Importer::collect(const Elem& e) {
     for (const Elem& x : e.kids) collect(x);
   } else if (k == "CONTACTS" || k == "COIL") {
     note(e.args[0], NK::Bit, e.line, e.cols[0]);
-  } else if (k == "TON" || k == "TOF" || k == "RTO" || k == "TCY") {
+  } else if (is_timer_kw(k)) {
     note(e.args[0], NK::Timer, e.line, e.cols[0], k);
   } else if (k == "CTU" || k == "CTD" || k == "CTC" || k == "CTR") {
     note(e.args[0], NK::Counter, e.line, e.cols[0]);
     var(1);
     var(2);
+  } else if (k == "FORMATTED_STRING") {
+    if (e.args[0] != "(none)") var(0);
+  } else if (is_bus(k)) {
+    if (k == "SPI" || k == "I2C_WR") var(1);
+    if (k == "SPI" || k == "I2C_RD") var(2);
   } else if (k == "RES") {
     // resolved after every element is seen
   } else if (k == "READ_ADC") {
@@ -579,9 +676,14 @@ void Importer::collect(const Elem& e) {
     int n = number(e.args[1], e.line, e.cols[1]);
     if (n < 1 || n > 256) fail(e.line, e.cols[1], "a shift register has 1 to 256 stages");
     for (int i = 0; i < n; i++) note(e.args[0] + std::to_string(i), NK::Var, e.line, e.cols[0]);
-  } else if (k == "LOOK_UP_TABLE" || k == "PIECEWISE_LINEAR") {
+  } else if (k == "LOOK_UP_TABLE" || k == "PIECEWISE_LINEAR" || is_segments(k) || k == "BUS") {
     var(0);
     var(1);
+
+  } else if (k == "DELAY") {
+    var(0);
+  } else if (k == "GOTO" || k == "LABEL") {
+    // labels, not variables
   } else if (k != "COMMENT" && !e.args.empty() && k != "OSR" && k != "OSF") {
     for (size_t i = 0; i < e.args.size(); i++) var(i);
   }
@@ -641,13 +743,29 @@ void Importer::allocate() {
     const Name& n = names_[nm];
     spelled_[{int(n.dev.dev), n.dev.index}] = nm;
     std::string why;
-    std::string u = upper(nm);
-    bool spells_device = parse_device(nm) || parse_iec_address(nm, why);
-    if (!is_identifier(nm) || u == "DT" || seen.count(u)) continue;
-    if (spells_device && !(parse_device(nm) && *parse_device(nm) == n.dev)) continue;
+    std::string al = alias_spelling(nm);
+    std::string u = upper(al);
+    bool spells_device = parse_device(al) || parse_iec_address(al, why);
+    if (!is_identifier(al) || u == "DT" || seen.count(u)) continue;
+    if (spells_device && !(parse_device(al) && *parse_device(al) == n.dev)) continue;
     seen.insert(u);
-    if (!spells_device) aliases_.push_back({nm, n.dev});
+    if (!spells_device) aliases_.push_back({al, n.dev});
   }
+}
+
+// LDmicro names may hold '@' and start with '#' (a port, #PORTB); ldc aliases
+// are letters, digits and '_'.  '@' is spelled "_at_", '#' "_hash_", any other
+// character '_', and a leading digit gets a '_' before it.
+std::string alias_spelling(const std::string& nm) {
+  std::string r;
+  for (char c : nm) {
+    if (std::isalnum((unsigned char)c) || c == '_') r += c;
+    else if (c == '@') r += "_at_";
+    else if (c == '#') r += "_hash_";
+    else r += '_';
+  }
+  if (!r.empty() && std::isdigit((unsigned char)r[0])) r = "_" + r;
+  return r;
 }
 
 Name& Importer::name_of(const Elem& e, size_t arg) {
@@ -737,11 +855,11 @@ bool Importer::breaks(const Elem& e) const {
       if (breaks(x)) return true;
     return false;
   }
-  if (k == "TOF" || k == "RTO" || k == "TCY" || k == "OSF" || k == "MASTER_RELAY") return true;
+  if (k == "TOF" || k == "RTO" || k == "TCY" || k == "RTL" || k == "THI" || k == "TLO" || k == "OSF" || k == "OSL" || k == "OSC" || k == "MASTER_RELAY") return true;
   if (k == "CTU" || k == "CTD" || k == "CTR") return true;
   if (k == "CTC") return !(v01_ && e.args.size() == 2);
   if (k == "COIL") return e.args.size() == 5 && e.args[4] != "0";
-  return is_uart(k);
+  return is_uart(k) || k == "FORMATTED_STRING";
 }
 
 Cond Importer::materialize(const Elem& e) {
@@ -789,7 +907,7 @@ std::optional<Cond> Importer::pure(const Elem& e) {
   }
   static const std::map<std::string, Op> cmp = {{"EQU", Op::LDEQ}, {"NEQ", Op::LDNE}, {"GRT", Op::LDGT},
                                                 {"GEQ", Op::LDGE}, {"LES", Op::LDLT}, {"LEQ", Op::LDLE}};
-  return Cond::of(leaf_node(cmp.at(k), {value(e, 0), value(e, 1)}, e));
+  return Cond::of(leaf_node(cmp.at(k), {narrow_literal(e, 0, 1), narrow_literal(e, 1, 0)}, e));
 }
 
 int32_t Importer::cycle_ms(const Elem& e) {
@@ -832,7 +950,34 @@ void Importer::timer(const Elem& e) {
   } else if (e.kw == "TOF") {  // the output outlives the input: a new chain
     rb_.add(out_node(Op::TOF, {timer_opd(t), const_opd(pt)}, e));
     rb_.restart(bit_leaf(Op::LOAD, Area::TQ, t, e), loc);
-  } else if (e.kw == "RTO") {
+  } else if (e.kw == "THI" || e.kw == "TLO") {
+    // THI: a rising state starts a pulse of P cycles (on while counting); TLO:
+    // a falling state (once it has been on) starts a gap of P cycles in an
+    // output that is otherwise on.  The count lives in T's word, in ms; the
+    // next pulse needs the state back at rest (off for THI, on for TLO).
+    bool hi_kind = e.kw == "THI";
+    int32_t cyc = cycle_ms(e);
+    Cond s = materialize(e);
+    uint32_t sm = s.n.elem.a[0].index, st = temp_m(e), lt = temp_m(e), hi = hi_kind ? 0 : temp_m(e), om = temp_m(e);
+    frozen_.insert(om);
+    Operand tw = int_opd(Area::TW, t);
+    auto M = [&](Op op, uint32_t m) { return bit_leaf(op, Area::M, m, e); };
+    if (hi_kind) {
+      rb_.chain(M(Op::LOAD, sm), out_node(Op::SET, {bit_opd(Area::M, st)}, e), loc);
+    } else {
+      rb_.chain(c_and(M(Op::LOADN, sm), M(Op::LOAD, hi)), out_node(Op::SET, {bit_opd(Area::M, st)}, e), loc);
+      rb_.chain(M(Op::LOAD, sm), out_node(Op::SET, {bit_opd(Area::M, hi)}, e), loc);
+    }
+    rb_.chain(c_and(M(Op::LOAD, st), Cond::of(leaf_node(Op::LDLT, {tw, const_opd(pt)}, e))), out_node(Op::OUT, {bit_opd(Area::M, lt)}, e), loc);
+    rb_.chain(M(Op::LOAD, lt), out_node(Op::ADD, {tw, const_opd(cyc), tw}, e), loc);
+    std::vector<TreeNode> rest;
+    rest.push_back(out_node(Op::MOV, {const_opd(0), tw}, e));
+    rest.push_back(out_node(Op::RST, {bit_opd(Area::M, st)}, e));
+    rb_.chain(c_and(c_and(M(Op::LOAD, st), M(Op::LOADN, lt)), M(hi_kind ? Op::LOADN : Op::LOAD, sm)), fork_of(std::move(rest)), loc);
+    if (hi_kind) rb_.chain(M(Op::LOAD, lt), out_node(Op::OUT, {bit_opd(Area::M, om)}, e), loc);
+    else rb_.chain(c_and(M(Op::LOAD, hi), M(Op::LOADN, lt)), out_node(Op::OUT, {bit_opd(Area::M, om)}, e), loc);
+    rb_.restart(M(Op::LOAD, om), loc);
+  } else if (e.kw == "RTO" || e.kw == "RTL") {
     // Retentive: count cycles while the input is on, keep the count while it
     // is off; the output is (count before this cycle) >= P, whatever the input.
     // The count lives in the timer's word, in ms (one cycle = CYCLE ms).
@@ -842,6 +987,7 @@ void Importer::timer(const Elem& e) {
     frozen_.insert(o);
     Operand tw = int_opd(Area::TW, t);
     rb_.chain(Cond::of(leaf_node(Op::LDGE, {tw, const_opd(pt)}, e)), out_node(Op::OUT, {bit_opd(Area::M, o)}, e), loc);
+    if (e.kw == "RTL") s = bit_leaf(Op::LOADN, Area::M, s.n.elem.a[0].index, e);  // counts while the state is off
     rb_.chain(c_and(std::move(s), Cond::of(leaf_node(Op::LDLT, {tw, const_opd(pt)}, e))),
               out_node(Op::ADD, {tw, const_opd(cyc), tw}, e), loc);
     rb_.restart(bit_leaf(Op::LOAD, Area::M, o, e), loc);
@@ -872,17 +1018,16 @@ void Importer::counter(const Elem& e) {
   if (v01_ && e.args.size() == 2) {
     // LDmicro 0.1: CTU/CTD count rising edges without limit, output count >= max;
     // CTC counts rising edges and wraps past max to 0, passing its input on.
-    if (e.kw == "CTU") {
-      rb_.add(out_node(Op::CTU, {counter_opd(c), max}, e));
-      rb_.restart(bit_leaf(Op::LOAD, Area::CQ, c, e), loc);
-    } else if (e.kw == "CTD") {
-      rb_.add(out_node(Op::CTD, {counter_opd(c), const_opd(0)}, e));
+    // The count is a 16-bit variable: it wraps from 32767 to -32768 (and back).
+    if (e.kw == "CTU" || e.kw == "CTD") {
+      rb_.add(out_node(e.kw == "CTU" ? Op::CTU : Op::CTD, {counter_opd(c), e.kw == "CTU" ? max : const_opd(0)}, e));
+      if (width_of(e.args[0]) < 4) rb_.chain(Cond::yes(), fork_of(wrap_nodes(cw, width_of(e.args[0]), e)), loc);
       rb_.restart(Cond::of(leaf_node(Op::LDGE, {cw, max}, e)), loc);
     } else if (e.kw == "CTC") {
       Cond s = materialize(e);
       TreeNode wrap = then_node(Cond::of(leaf_node(Op::LDGT, {cw, max}, e)), out_node(Op::MOV, {const_opd(0), cw}, e), loc);
-      std::vector<TreeNode> items;
-      items.push_back(out_node(Op::ADD, {cw, const_opd(1), cw}, e));
+      std::vector<TreeNode> items = wrap_nodes(cw, width_of(e.args[0]), e);
+      items.insert(items.begin(), out_node(Op::ADD, {cw, const_opd(1), cw}, e));
       items.push_back(std::move(wrap));
       rb_.add(then_node(bit_leaf(Op::LOADP, Area::M, s.n.elem.a[0].index, e), fork_of(std::move(items)), loc));
     } else {
@@ -908,11 +1053,16 @@ void Importer::counter(const Elem& e) {
     return kind == '/' ? bit_leaf(Op::LOADP, Area::M, sm, e) : kind == '\\' ? bit_leaf(Op::LOADF, Area::M, sm, e)
            : kind == '-' ? bit_leaf(Op::LOAD, Area::M, sm, e) : bit_leaf(Op::LOADN, Area::M, sm, e);
   };
+  auto step = [&](Op op) {  // count one, wrapped to the counter's width
+    std::vector<TreeNode> r = wrap_nodes(cw, width_of(e.args[0]), e);
+    r.insert(r.begin(), out_node(op, {cw, const_opd(1), cw}, e));
+    return fork_of(std::move(r));
+  };
   if (e.kw == "CTU") {
-    rb_.chain(c_and(edge(), Cond::of(leaf_node(Op::LDLT, {cw, max}, e))), out_node(Op::ADD, {cw, const_opd(1), cw}, e), loc);
+    rb_.chain(c_and(edge(), Cond::of(leaf_node(Op::LDLT, {cw, max}, e))), step(Op::ADD), loc);
     rb_.restart(Cond::of(leaf_node(Op::LDGE, {cw, max}, e)), loc);
   } else if (e.kw == "CTD") {
-    rb_.chain(c_and(edge(), Cond::of(leaf_node(Op::LDGT, {cw, max}, e))), out_node(Op::SUB, {cw, const_opd(1), cw}, e), loc);
+    rb_.chain(c_and(edge(), Cond::of(leaf_node(Op::LDGT, {cw, max}, e))), step(Op::SUB), loc);
     rb_.restart(Cond::of(leaf_node(Op::LDGT, {cw, max}, e)), loc);
   } else {
     bool up = e.kw == "CTC";
@@ -922,7 +1072,7 @@ void Importer::counter(const Elem& e) {
     wrap.push_back(out_node(Op::OUT, {bit_opd(Area::M, w)}, e));
     wrap.push_back(out_node(Op::MOV, {init, cw}, e));
     std::vector<TreeNode> items;
-    items.push_back(out_node(up ? Op::ADD : Op::SUB, {cw, const_opd(1), cw}, e));
+    items.push_back(step(up ? Op::ADD : Op::SUB));
     items.push_back(then_node(Cond::of(leaf_node(up ? Op::LDGT : Op::LDLT, {cw, max}, e)), fork_of(std::move(wrap)), loc));
     rb_.chain(edge(), fork_of(std::move(items)), loc);
     rb_.restart(bit_leaf(Op::LOAD, Area::M, w, e), loc);
@@ -977,19 +1127,400 @@ void Importer::uart(const Elem& e) {
     std::vector<TreeNode> take;
     take.push_back(out_node(Op::WAND, {rx, const_opd(255), var}, e));
     take.push_back(out_node(Op::MOV, {rx, seen}, e));
+    if (!is_number(e.args[0]))
+      for (TreeNode& n : wrap_nodes(var, width_of(e.args[0]), e)) take.push_back(std::move(n));
     rb_.chain(bit_leaf(Op::LOAD, Area::M, got, e), fork_of(std::move(take)), loc);
     rb_.restart(bit_leaf(Op::LOAD, Area::M, got, e), loc);
     return;
   }
-  Operand byte = int_opd(Area::D, temp_d(e));
+  rb_.chain(c_and(std::move(s), bit_leaf(Op::LOADN, Area::M, kUartBusy, e)), fork_of(uart_send_nodes(value(e, 0), e)), loc);
+  rb_.restart(bit_leaf(Op::LOAD, Area::M, kUartBusy, e), loc);
+}
+
+// Send the low byte of `v` on the UART: the next sequence number and the byte
+// into uart_tx, and the transmitter is busy for the rest of the scan.
+std::vector<TreeNode> Importer::uart_send_nodes(const Operand& v, const Elem& e) {
+  Operand tx = int_opd(Area::WY, kUartTx), byte = int_opd(Area::D, temp_d(e));
   std::vector<TreeNode> send;
-  send.push_back(out_node(Op::WAND, {value(e, 0), const_opd(255), byte}, e));
+  send.push_back(out_node(Op::WAND, {v, const_opd(255), byte}, e));
   send.push_back(out_node(Op::ADD, {tx, const_opd(256), tx}, e));
   send.push_back(out_node(Op::WAND, {tx, const_opd(0x7FFFFF00), tx}, e));
   send.push_back(out_node(Op::WOR, {tx, byte, tx}, e));
   send.push_back(out_node(Op::SET, {bit_opd(Area::M, kUartBusy)}, e));
-  rb_.chain(c_and(std::move(s), bit_leaf(Op::LOADN, Area::M, kUartBusy, e)), fork_of(std::move(send)), loc);
-  rb_.restart(bit_leaf(Op::LOAD, Area::M, kUartBusy, e), loc);
+  return send;
+}
+
+// FORMATTED_STRING var text: on a rising edge of its state, the element starts
+// sending its text over the UART, one character per scan while the UART is
+// free, as LDmicro does; a variable is interpolated where the text says \N
+// (N digits, leading zeros as spaces) or \-N (a sign first).  Its output is on
+// while the text is being sent.  Everything is per element: a sequence word
+// (the next character), the conversion state, and relays for the edge, the
+// sending and the leading zeros.
+void Importer::formatted_string(const Elem& e) {
+  SrcLoc loc = e.loc();
+  // the text: character codes after the length, or the rest of the line
+  std::string text;
+  if (is_number(e.args[1])) {
+    int64_t len = number(e.args[1], e.line, e.cols[1]);
+    if (len < 0 || int64_t(e.args.size()) != 2 + len)
+      fail(e.line, e.cols[1], "FORMATTED_STRING says " + e.args[1] + " characters but lists " + std::to_string(e.args.size() - 2));
+    for (size_t i = 2; i < e.args.size(); i++) {
+      int32_t c = number(e.args[i], e.line, e.cols[i]);
+      if (c < 1 || c > 255) fail(e.line, e.cols[i], "a character code must be 1..255");
+      text += char(c);
+    }
+  } else {
+    text = trim(e.rest.substr(e.rest.find(e.args[0]) + e.args[0].size()));
+  }
+  enum Kind { Char, Digit, Sign };
+  struct Step { Kind k; int c; };
+  std::vector<Step> steps;
+  int digits = -1;
+  bool minus = false;
+  auto bad = [&](const std::string& why) { fail(e.line, e.col, "FORMATTED_STRING: " + why + " (LDmicro refuses it too)"); };
+  for (size_t i = 0; i < text.size(); i++) {
+    char c = text[i];
+    if (c != '\\') { steps.push_back({Char, (unsigned char)c}); continue; }
+    if (i + 1 < text.size() && (std::isdigit((unsigned char)text[i + 1]) || text[i + 1] == '-') && text[i + 1] != '0') {
+      if (digits >= 0) bad("more than one \\N escape");
+      i++;
+      if (text[i] == '-') minus = true, steps.push_back({Sign, 0}), i++;
+      if (i >= text.size() || !std::isdigit((unsigned char)text[i]) || text[i] == '0' || text[i] > '5') bad("a \\N escape takes 1 to 5 digits");
+      digits = text[i] - '0';
+      for (int d = 0; d < digits; d++) steps.push_back({Digit, d});
+      continue;
+    }
+    while (i + 1 < text.size() && text[i + 1] == '0') i++;  // LDmicro skips a \0 before the escape
+    if (++i >= text.size()) bad("a \\ at the end of the text");
+    static const std::map<char, int> esc = {{'a', 7}, {'b', 8}, {'e', 27}, {'f', 12}, {'n', 10}, {'r', 13}, {'t', 9},
+                                            {'v', 11}, {'\'', 39}, {'"', 34}, {'?', 63}, {'\\', 92}};
+    char x = text[i];
+    if (auto it = esc.find(x); it != esc.end()) { steps.push_back({Char, it->second}); continue; }
+    if (x == 'x' || x == 'X') {
+      auto hex = [](char h) { return std::isxdigit((unsigned char)h) ? (std::isdigit((unsigned char)h) ? h - '0' : std::tolower(h) - 'a' + 10) : -1; };
+      if (i + 2 < text.size() + 0 && hex(text[i + 1]) >= 0 && hex(text[i + 2]) >= 0) {
+        steps.push_back({Char, hex(text[i + 1]) * 16 + hex(text[i + 2])});
+        i += 2;
+        continue;
+      }
+      bad("bad escape: the form is \\xAB");
+    }
+    bad(std::string("bad escape '\\") + x + "'");
+  }
+  bool has_var = e.args[0] != "(none)";
+  if (digits >= 0 && !has_var) bad("the text interpolates a variable but none is named");
+  if (digits < 0 && has_var) bad("a variable is named but the text has no \\N escape for it");
+  Operand var = has_var ? value(e, 0) : const_opd(0);
+  int32_t n = int32_t(steps.size());
+
+  Cond s = materialize(e);
+  uint32_t sm = s.n.elem.a[0].index;
+  uint32_t os = temp_m(e), ds = temp_m(e), lz = temp_m(e), zm = temp_m(e), om = temp_m(e);
+  frozen_.insert(om);
+  Operand seq = int_opd(Area::D, temp_d(e)), sc = int_opd(Area::D, temp_d(e)), cs = int_opd(Area::D, temp_d(e)),
+          ch = int_opd(Area::D, temp_d(e)), t = int_opd(Area::D, temp_d(e));
+  auto M = [&](Op op, uint32_t m) { return bit_leaf(op, Area::M, m, e); };
+  auto cmp = [&](Op op, Operand a, Operand b) { return Cond::of(leaf_node(op, {a, b}, e)); };
+  auto mov = [&](Operand a, Operand d) { return out_node(Op::MOV, {a, d}, e); };
+  {  // a rising edge of the state starts the text
+    std::vector<TreeNode> start;
+    start.push_back(mov(const_opd(0), seq));
+    start.push_back(out_node(Op::SET, {bit_opd(Area::M, ds)}, e));
+    rb_.chain(c_and(M(Op::LOAD, sm), M(Op::LOADN, os)), fork_of(std::move(start)), loc);
+    rb_.chain(M(Op::LOAD, sm), out_node(Op::OUT, {bit_opd(Area::M, os)}, e), loc);
+  }
+  // sc: the character to send in this scan, -1 for none (all sent, or the UART busy)
+  rb_.chain(Cond::yes(), mov(seq, sc), loc);
+  rb_.chain(c_or(cmp(Op::LDGE, seq, const_opd(n)), c_and(M(Op::LOAD, ds), bit_leaf(Op::LOAD, Area::M, kUartBusy, e))),
+            mov(const_opd(-1), sc), loc);
+  int d = 0;
+  for (int i = 0; i < n; i++) {
+    std::vector<TreeNode> a;
+    const Step& st = steps[i];
+    if (st.k == Char) {
+      a.push_back(mov(const_opd(st.c), ch));
+    } else if (st.k == Sign) {  // the sign, and the absolute value to convert
+      a.push_back(mov(const_opd(' '), ch));
+      a.push_back(then_node(cmp(Op::LDLT, var, const_opd(0)), out_node(Op::SUB, {const_opd(0), var, cs}, e), loc));
+      a.push_back(then_node(cmp(Op::LDLT, var, const_opd(0)), mov(const_opd('-'), ch), loc));
+      a.push_back(then_node(cmp(Op::LDGE, var, const_opd(0)), mov(var, cs), loc));
+    } else {  // one digit, the highest first
+      if (d == 0 && !minus) a.push_back(mov(var, cs));
+      if (d == 0) a.push_back(out_node(Op::SET, {bit_opd(Area::M, lz)}, e));
+      int32_t p = 1;
+      for (int j = 0; j < digits - d - 1; j++) p *= 10;
+      a.push_back(out_node(Op::DIV, {cs, const_opd(p), ch}, e));
+      a.push_back(out_node(Op::MUL, {ch, const_opd(p), t}, e));
+      a.push_back(out_node(Op::SUB, {cs, t, cs}, e));
+      a.push_back(out_node(Op::ADD, {ch, const_opd('0'), ch}, e));
+      if (d != digits - 1) {  // leading zeros but the last become spaces
+        a.push_back(then_node(cmp(Op::LDEQ, ch, const_opd('0')), out_node(Op::OUT, {bit_opd(Area::M, zm)}, e), loc));
+        a.push_back(then_node(cmp(Op::LDNE, ch, const_opd('0')), out_node(Op::RST, {bit_opd(Area::M, zm)}, e), loc));
+        a.push_back(then_node(c_and(M(Op::LOAD, zm), M(Op::LOAD, lz)), mov(const_opd(' '), ch), loc));
+        a.push_back(then_node(M(Op::LOADN, zm), out_node(Op::RST, {bit_opd(Area::M, lz)}, e), loc));
+      }
+      d++;
+    }
+    rb_.chain(cmp(Op::LDEQ, sc, const_opd(i)), fork_of(std::move(a)), loc);
+  }
+  std::vector<TreeNode> send = uart_send_nodes(ch, e);
+  send.push_back(out_node(Op::ADD, {seq, const_opd(1), seq}, e));
+  rb_.chain(c_and(cmp(Op::LDGE, sc, const_opd(0)), M(Op::LOAD, ds)), fork_of(std::move(send)), loc);
+  // the output: still sending
+  rb_.chain(c_and(cmp(Op::LDLT, seq, const_opd(n)), M(Op::LOAD, ds)), out_node(Op::OUT, {bit_opd(Area::M, om)}, e), loc);
+  rb_.chain(cmp(Op::LDGE, seq, const_opd(n)), out_node(Op::RST, {bit_opd(Area::M, ds)}, e), loc);
+  rb_.restart(M(Op::LOAD, om), loc);
+}
+
+// LDmicro variables are 1 to 4 bytes wide (VAR LIST; 2 when not listed, and
+// always 2 in LDmicro 0.1 files) and wrap there as two's complement.  ldc words
+// are INT32, so every write of a variable is followed by an explicit wrap to its
+// width, under the same rung state as the write:
+//   d := ((d + 2^(n-1)) AND (2^n - 1)) - 2^(n-1)      (n = 8 * bytes)
+// which maps any INT32 to the signed n-bit value with the same low n bits.
+int Importer::width_of(const std::string& name) const {
+  if (v01_) return 2;
+  auto it = width_.find(name);
+  return it == width_.end() ? 2 : it->second;
+}
+
+std::vector<TreeNode> Importer::wrap_nodes(const Operand& d, int bytes, const Elem& e) {
+  std::vector<TreeNode> r;
+  if (bytes >= 4) return r;
+  int32_t half = int32_t(1) << (8 * bytes - 1);
+  r.push_back(out_node(Op::ADD, {d, const_opd(half), d}, e));
+  r.push_back(out_node(Op::WAND, {d, const_opd(2 * half - 1), d}, e));
+  r.push_back(out_node(Op::SUB, {d, const_opd(half), d}, e));
+  return r;
+}
+
+// Wrap the variable named by argument `arg` of `e` (the element has just written it).
+void Importer::wrap(const Elem& e, size_t arg) {
+  if (is_number(e.args[arg])) return;
+  auto it = names_.find(e.args[arg]);
+  if (it == names_.end() || (it->second.kind != NK::Var && it->second.kind != NK::Counter)) return;
+  Operand d = value(e, arg, true);
+  for (TreeNode& n : wrap_nodes(d, width_of(e.args[arg]), e)) rb_.add(std::move(n));
+}
+
+// The width of argument `arg` (a variable or counter; a number counts as the
+// width of the destination, argument 0).
+int Importer::arg_width(const Elem& e, size_t arg) const {
+  if (!is_number(e.args[arg])) return width_of(e.args[arg]);
+  return is_number(e.args[0]) ? 2 : width_of(e.args[0]);
+}
+
+// ROL, ROR, SR0 (logical) and SHR (arithmetic) shift the n-bit pattern of the
+// source (n = its width), as LDmicro does; the result is wrapped to the
+// destination.  A constant shift must be 0..n, as LDmicro requires.
+void Importer::bit_op(const Elem& e) {
+  const std::string& k = e.kw;
+  int n = 8 * arg_width(e, 1);
+  Operand src = value(e, 1), k_opd = value(e, 2), dest = value(e, 0, true);
+  if (k_opd.kind == OpdKind::ConstInt && (k_opd.ival < 0 || k_opd.ival > n))
+    fail(e.line, e.cols[2], "shift of " + e.args[2] + " bits is out of range for the " + std::to_string(n) + "-bit '" + e.args[1] +
+                                "': 0 to " + std::to_string(n) + " (LDmicro refuses it too)");
+  int32_t mask = n == 32 ? -1 : int32_t((int64_t(1) << n) - 1);
+  Operand u = int_opd(Area::D, temp_d(e)), t = int_opd(Area::D, temp_d(e));
+  std::vector<TreeNode> r;
+  if (k == "SHR") {  // arithmetic: ((x XOR m) >> k) XOR m, m = -1 when x < 0
+    r.push_back(out_node(Op::SHR, {src, const_opd(31), t}, e));
+    r.push_back(out_node(Op::SUB, {const_opd(0), t, t}, e));
+    r.push_back(out_node(Op::WXOR, {src, t, u}, e));
+    r.push_back(out_node(Op::SHR, {u, k_opd, u}, e));
+    r.push_back(out_node(Op::WXOR, {u, t, dest}, e));
+  } else {
+    r.push_back(out_node(Op::WAND, {src, const_opd(mask), u}, e));
+    if (k == "SR0") {
+      r.push_back(out_node(Op::SHR, {u, k_opd, dest}, e));
+    } else {  // rotate: (u << k) | (u >> (n - k)) within n bits, or the mirror for ROR
+      Operand back = k_opd.kind == OpdKind::ConstInt ? const_opd(n - k_opd.ival) : int_opd(Area::D, temp_d(e));
+      if (k_opd.kind != OpdKind::ConstInt) r.push_back(out_node(Op::SUB, {const_opd(n), k_opd, back}, e));
+      bool left = k == "ROL";
+      r.push_back(out_node(left ? Op::SHL : Op::SHR, {u, k_opd, t}, e));
+      r.push_back(out_node(left ? Op::SHR : Op::SHL, {u, back, u}, e));
+      r.push_back(out_node(Op::WOR, {t, u, t}, e));
+      r.push_back(out_node(Op::WAND, {t, const_opd(mask), dest}, e));
+    }
+  }
+  for (TreeNode& x : r) rb_.add(std::move(x));
+  wrap(e, 0);
+}
+
+// BIN2BCD: packed BCD, one digit per 4 bits, as many digits as the destination
+// holds (the source's n-bit pattern, so -1 in one byte is 255).  BCD2BIN: the
+// reverse, one digit per 4 bits of the source.  SWAP: the two halves of one byte
+// (nibbles), or bytes 0 and 1 (2 bytes), 0 and 2 (3 bytes), all four reversed
+// (4 bytes).  OPPOSITE: the source's n bits in reverse order.
+void Importer::bcd(const Elem& e) {
+  const std::string& k = e.kw;
+  int sw = arg_width(e, 1), n = 8 * sw;
+  int32_t mask = n == 32 ? -1 : int32_t((int64_t(1) << n) - 1);
+  Operand src = value(e, 1), dest = value(e, 0, true);
+  Operand v = int_opd(Area::D, temp_d(e)), r = int_opd(Area::D, temp_d(e)), t = int_opd(Area::D, temp_d(e));
+  std::vector<TreeNode> x;
+  x.push_back(out_node(Op::WAND, {src, const_opd(mask), v}, e));
+  x.push_back(out_node(Op::MOV, {const_opd(0), r}, e));
+  if (k == "BIN2BCD") {
+    int digits = 2 * arg_width(e, 0);
+    for (int i = 0; i < digits; i++) {
+      x.push_back(out_node(Op::MOD, {v, const_opd(10), t}, e));
+      x.push_back(out_node(Op::DIV, {v, const_opd(10), v}, e));
+      x.push_back(out_node(Op::SHL, {t, const_opd(4 * i), t}, e));
+      x.push_back(out_node(Op::WOR, {r, t, r}, e));
+    }
+  } else if (k == "BCD2BIN") {
+    int32_t scale = 1;
+    for (int i = 0; i < 2 * sw; i++, scale *= 10) {
+      x.push_back(out_node(Op::SHR, {v, const_opd(4 * i), t}, e));
+      x.push_back(out_node(Op::WAND, {t, const_opd(15), t}, e));
+      x.push_back(out_node(Op::MUL, {t, const_opd(scale), t}, e));
+      x.push_back(out_node(Op::ADD, {r, t, r}, e));
+    }
+  } else {
+    // (from bit, to bit, width) moves
+    std::vector<std::array<int, 3>> moves;
+    if (k == "OPPOSITE")
+      for (int i = 0; i < n; i++) moves.push_back({i, n - 1 - i, 1});
+    else if (sw == 1) moves = {{0, 4, 4}, {4, 0, 4}};
+    else if (sw == 2) moves = {{0, 8, 8}, {8, 0, 8}};
+    else if (sw == 3) moves = {{0, 16, 8}, {8, 8, 8}, {16, 0, 8}};
+    else moves = {{0, 24, 8}, {8, 16, 8}, {16, 8, 8}, {24, 0, 8}};
+    for (auto [from, to, w] : moves) {
+      x.push_back(out_node(Op::SHR, {v, const_opd(from), t}, e));
+      x.push_back(out_node(Op::WAND, {t, const_opd(int32_t((int64_t(1) << w) - 1)), t}, e));
+      x.push_back(out_node(Op::SHL, {t, const_opd(to), t}, e));
+      x.push_back(out_node(Op::WOR, {r, t, r}, e));
+    }
+  }
+  x.push_back(out_node(Op::MOV, {r, dest}, e));
+  for (TreeNode& y : x) rb_.add(std::move(y));
+  wrap(e, 0);
+}
+
+// 7SEGMENTS dest src C|A (and 9, 14, 16): dest := the segment pattern of the
+// character src from LDmicro's table, inverted for a common anode.  A variable
+// source is first clamped as LDmicro does it, in place: the degree sign 0xB0
+// becomes entry 128, anything outside 0..128 a space.
+void Importer::segments(const Elem& e) {
+  const int32_t* table = e.kw[0] == '7' ? ldmicro_segments::k7 : e.kw[0] == '9' ? ldmicro_segments::k9
+                         : e.kw[1] == '4' ? ldmicro_segments::k14 : ldmicro_segments::k16;
+  SrcLoc loc = e.loc();
+  Operand dest = value(e, 0, true);
+  bool anode = e.args[2] == "A";
+  if (is_number(e.args[1])) {
+    int32_t c = number(e.args[1], e.line, e.cols[1]);
+    c = c == 0xB0 ? 128 : (c < 0 || c > 128) ? ' ' : c;
+    rb_.add(out_node(Op::MOV, {const_opd(anode ? ~table[c] : table[c]), dest}, e));
+    wrap(e, 0);
+    return;
+  }
+  Operand src = value(e, 1, true), t = int_opd(Area::D, temp_d(e));
+  std::vector<TreeNode> items;
+  items.push_back(then_node(Cond::of(leaf_node(Op::LDEQ, {src, const_opd(0xB0)}, e)), out_node(Op::MOV, {const_opd(128), src}, e), loc));
+  items.push_back(then_node(Cond::of(leaf_node(Op::LDLT, {src, const_opd(0)}, e)), out_node(Op::MOV, {const_opd(' '), src}, e), loc));
+  items.push_back(then_node(Cond::of(leaf_node(Op::LDGT, {src, const_opd(128)}, e)), out_node(Op::MOV, {const_opd(' '), src}, e), loc));
+  for (int i = 0; i <= 128; i++)
+    items.push_back(then_node(Cond::of(leaf_node(Op::LDEQ, {src, const_opd(i)}, e)), out_node(Op::MOV, {const_opd(table[i]), t}, e), loc));
+  if (anode) items.push_back(out_node(Op::WNOT, {t, t}, e));
+  items.push_back(out_node(Op::MOV, {t, dest}, e));
+  rb_.add(fork_of(std::move(items)));
+  wrap(e, 0);
+}
+
+// BUS dest src b0 .. b7: bit i of dest is bit b_i of src (the low byte).
+void Importer::bus(const Elem& e) {
+  Operand dest = value(e, 0, true), src = value(e, 1);
+  Operand r = int_opd(Area::D, temp_d(e)), t = int_opd(Area::D, temp_d(e));
+  std::vector<TreeNode> x;
+  x.push_back(out_node(Op::MOV, {const_opd(0), r}, e));
+  for (int i = 0; i < 8; i++) {
+    int b = number(e.args[2 + i], e.line, e.cols[2 + i]);
+    x.push_back(out_node(Op::SHR, {src, const_opd(b), t}, e));
+    x.push_back(out_node(Op::WAND, {t, const_opd(1), t}, e));
+    x.push_back(out_node(Op::SHL, {t, const_opd(i), t}, e));
+    x.push_back(out_node(Op::WOR, {r, t, r}, e));
+  }
+  x.push_back(out_node(Op::MOV, {r, dest}, e));
+  for (TreeNode& y : x) rb_.add(std::move(y));
+  wrap(e, 0);
+}
+
+// MOVE T v: LDmicro's timer value is a count of cycles; ldc's is milliseconds,
+// so the timer's word gets v * CYCLE (the reset of a retentive timer is MOVE T 0).
+void Importer::move_to_timer(const Elem& e) {
+  Operand tw = int_opd(Area::TW, name_of(e, 0).dev.index);
+  int32_t cyc = cycle_ms(e);
+  Operand v = value(e, 1);
+  if (v.kind == OpdKind::ConstInt) {
+    int64_t ms = int64_t(v.ival) * cyc;
+    if (ms > INT32_MAX || ms < INT32_MIN) fail(e.line, e.cols[1], "timer value too large in milliseconds");
+    rb_.add(out_node(Op::MOV, {const_opd(int32_t(ms)), tw}, e));
+  } else {
+    rb_.add(out_node(Op::MUL, {v, const_opd(cyc), tw}, e));
+  }
+}
+
+// A literal compared with a narrower variable is read at the variable's width,
+// as LDmicro stores it there: with a 1-byte variable, 0xfd is -3.
+Operand Importer::narrow_literal(const Elem& e, size_t lit, size_t var) {
+  Operand o = value(e, lit);
+  if (o.kind != OpdKind::ConstInt || is_number(e.args[var])) return o;
+  int n = 8 * width_of(e.args[var]);
+  if (n < 32 && o.ival >= (int64_t(1) << (n - 1)) && o.ival < (int64_t(1) << n)) o.ival -= int32_t(int64_t(1) << n);
+  return o;
+}
+
+// The words of one SPI or I2C element, reserved before any name is allocated:
+// a tx word per byte it sends (SPI_WR sends the characters of its text, or one
+// byte when it names a number), an rx word when it receives.
+void Importer::plan_bus(const Elem& e) {
+  BusWords w;
+  bool spi = e.kw[0] == 'S';
+  size_t bytes = 1;
+  if (e.kw == "SPI_WR" && !is_number(e.args[1])) bytes = e.args[1].size();
+  int& count = spi ? spi_bytes_ : i2c_bytes_;
+  uint32_t next = kBusTop - uint32_t(spi_bytes_ + i2c_bytes_);
+  if (next < bytes + 512) fail(e.line, e.col, "too many SPI and I2C bytes in this program (at most 510)");
+  for (size_t i = 0; i < bytes; i++) {
+    uint32_t ix = next - uint32_t(i);
+    w.tx.push_back(ix);
+    used_.insert({int(Dev::WY), ix});
+    bus_aliases_.push_back({std::string(spi ? "spi_tx" : "i2c_tx") + std::to_string(++count), {Dev::WY, ix}});
+    if (i == 0 && (e.kw == "SPI" || e.kw == "I2C_RD")) {
+      w.rx = int(ix);
+      used_.insert({int(Dev::WX), ix});
+      bus_aliases_.push_back({std::string(spi ? "spi_rx" : "i2c_rx") + std::to_string(count), {Dev::WX, ix}});
+    }
+  }
+  bus_words_[{e.line, e.col}] = w;
+}
+
+// One transfer per byte, in this scan, when the state is on: bus_seq counts it
+// (modulo 2^23) and the byte's tx word gets (bus_seq << 8) | byte; a read takes
+// the low byte of its rx word.  The state passes on (LDmicro's output is its input).
+void Importer::bus_transfer(const Elem& e) {
+  const BusWords& w = bus_words_.at({e.line, e.col});
+  Operand seq = int_opd(Area::D, kBusSeq), t = int_opd(Area::D, temp_d(e));
+  std::vector<Operand> bytes;
+  if (e.kw == "SPI_WR" && !is_number(e.args[1]))
+    for (char c : e.args[1]) bytes.push_back(const_opd((unsigned char)c));
+  else if (e.kw == "I2C_RD") bytes.push_back(const_opd(0));
+  else bytes.push_back(value(e, 1));
+  for (size_t i = 0; i < bytes.size(); i++) {
+    Operand tx = int_opd(Area::WY, w.tx[i]);
+    rb_.add(out_node(Op::ADD, {seq, const_opd(1), seq}, e));
+    rb_.add(out_node(Op::WAND, {seq, const_opd(0x7FFFFF), seq}, e));
+    Operand b = bytes[i].kind == OpdKind::ConstInt ? const_opd(bytes[i].ival & 255) : t;
+    if (b.kind != OpdKind::ConstInt) rb_.add(out_node(Op::WAND, {bytes[i], const_opd(255), t}, e));
+    rb_.add(out_node(Op::SHL, {seq, const_opd(8), tx}, e));
+    rb_.add(out_node(Op::WOR, {tx, b, tx}, e));
+  }
+  if (w.rx >= 0) {
+    rb_.add(out_node(Op::WAND, {int_opd(Area::WX, uint32_t(w.rx)), const_opd(255), value(e, 2, true)}, e));
+    wrap(e, 2);
+  }
 }
 
 void Importer::element(const Elem& e, bool need_out) {
@@ -1003,6 +1534,8 @@ void Importer::element(const Elem& e, bool need_out) {
   }
   if (k == "COIL") return coil(e);
   if (is_uart(k)) return uart(e);
+  if (k == "FORMATTED_STRING") return formatted_string(e);
+  if (is_bus(k)) return bus_transfer(e);
   if (k == "PERSIST") {  // the variable is retentive; the state passes on
     auto it = names_.find(e.args[0]);
     if (is_number(e.args[0]) || it == names_.end() || it->second.kind != NK::Var)
@@ -1012,7 +1545,7 @@ void Importer::element(const Elem& e, bool need_out) {
     if (std::find(persist_.begin(), persist_.end(), d) == persist_.end()) persist_.push_back(d);
     return;
   }
-  if (k == "TON" || k == "TOF" || k == "RTO" || k == "TCY") return timer(e);
+  if (is_timer_kw(k)) return timer(e);
   if (k == "CTU" || k == "CTD" || k == "CTC" || k == "CTR") return counter(e);
   if (k == "OSR") {
     Cond s = materialize(e);
@@ -1024,6 +1557,54 @@ void Importer::element(const Elem& e, bool need_out) {
     rb_.restart(bit_leaf(Op::LOADF, Area::M, s.n.elem.a[0].index, e), loc);
     return;
   }
+  if (k == "OSC") {  // while on, on and off in turn, on first: out = state AND NOT last out
+    Cond s = materialize(e);
+    uint32_t sm = s.n.elem.a[0].index, st = temp_m(e), om = temp_m(e);
+    frozen_.insert(om);
+    rb_.chain(c_and(bit_leaf(Op::LOAD, Area::M, sm, e), bit_leaf(Op::LOADN, Area::M, st, e)), out_node(Op::OUT, {bit_opd(Area::M, om)}, e), loc);
+    rb_.chain(bit_leaf(Op::LOAD, Area::M, om, e), out_node(Op::OUT, {bit_opd(Area::M, st)}, e), loc);
+    rb_.restart(bit_leaf(Op::LOAD, Area::M, om, e), loc);
+    return;
+  }
+  if (k == "OSL") {  // on while the state is on; off for one scan after it falls (once it has been on)
+    Cond s = materialize(e);
+    uint32_t sm = s.n.elem.a[0].index, lo = temp_m(e), hi = temp_m(e), om = temp_m(e);
+    frozen_.insert(om);
+    rb_.chain(c_or(bit_leaf(Op::LOAD, Area::M, sm, e), bit_leaf(Op::LOAD, Area::M, lo, e)), out_node(Op::OUT, {bit_opd(Area::M, om)}, e), loc);
+    std::vector<TreeNode> on;
+    on.push_back(out_node(Op::RST, {bit_opd(Area::M, lo)}, e));
+    on.push_back(out_node(Op::SET, {bit_opd(Area::M, hi)}, e));
+    rb_.chain(bit_leaf(Op::LOAD, Area::M, sm, e), fork_of(std::move(on)), loc);
+    rb_.chain(c_and(bit_leaf(Op::LOADN, Area::M, sm, e), bit_leaf(Op::LOAD, Area::M, hi, e)), out_node(Op::SET, {bit_opd(Area::M, lo)}, e), loc);
+    rb_.restart(bit_leaf(Op::LOAD, Area::M, om, e), loc);
+    return;
+  }
+  if (k == "CLRWDT" || k == "LOCK" || k == "DELAY" || k == "LABEL") return;
+  if (k == "GOTO") {
+    size_t t = goto_target(e);
+    targets_.insert(t);
+    Operand l{OpdKind::Label};
+    l.label = "rung" + std::to_string(t + 1);
+    rb_.add(out_node(Op::JMP, {l}, e));
+    return;
+  }
+  if (k == "RANDOM" || k == "SEED_RANDOM") {
+    // LDmicro's generator: per variable a 32-bit seed, seed := seed * 69069 + 1,
+    // and the variable gets the seed's top n bits (n = its width), signed.
+    Operand v = value(e, 0, true);
+    auto [it, fresh] = seeds_.try_emplace(e.args[0], 0);
+    if (fresh) {
+      it->second = temp_d(e);
+      init_.push_back(out_node(Op::MOV, {const_opd(1), int_opd(Area::D, it->second)}, e));
+    }
+    Operand seed = int_opd(Area::D, it->second);
+    if (k == "SEED_RANDOM") return rb_.add(out_node(Op::MOV, {value(e, 1), seed}, e));
+    rb_.add(out_node(Op::MUL, {seed, const_opd(69069), seed}, e));
+    rb_.add(out_node(Op::ADD, {seed, const_opd(1), seed}, e));
+    rb_.add(out_node(Op::SHR, {seed, const_opd(32 - 8 * width_of(e.args[0])), v}, e));
+    wrap(e, 0);
+    return;
+  }  // no effect on any value: the state passes on
   if (k == "MASTER_RELAY") {
     // LDmicro: if the master relay is off, turn it on; else it takes the rung state.
     Cond s = materialize(e);
@@ -1038,7 +1619,7 @@ void Importer::element(const Elem& e, bool need_out) {
     const Name& n = it->second;
     if (n.kind == NK::Timer) {
       if (n.timer_kind == "TON") rb_.add(out_node(Op::RSTT, {timer_opd(n.dev.index)}, e));
-      else if (n.timer_kind == "RTO" || n.timer_kind == "TCY") rb_.add(out_node(Op::MOV, {const_opd(0), int_opd(Area::TW, n.dev.index)}, e));
+      else if (n.timer_kind != "TOF") rb_.add(out_node(Op::MOV, {const_opd(0), int_opd(Area::TW, n.dev.index)}, e));
       else fail(e.line, e.cols[0], "RES of the TOF timer '" + e.args[0] + "' is not supported: LDmicro restarts its off-delay, which ldc's TOF cannot be made to do");
     } else if (n.kind == NK::Counter) {
       if (v01_) rb_.add(out_node(Op::RSTC, {counter_opd(n.dev.index)}, e));
@@ -1062,22 +1643,52 @@ void Importer::element(const Elem& e, bool need_out) {
     }
     return;
   }
+  if (k == "ROL" || k == "ROR" || k == "SHR" || k == "SR0") return bit_op(e);
+  if (k == "BIN2BCD" || k == "BCD2BIN" || k == "SWAP" || k == "OPPOSITE") return bcd(e);
+  if (is_segments(k)) return segments(e);
+  if (k == "BUS") return bus(e);
+  if (k == "TIME2COUNT") {  // the delay as LDmicro's timers count it: cycles
+    int32_t cycles = timer_ms(e, name_of(e, 0)) / cycle_ms(e);
+    rb_.add(out_node(Op::MOV, {const_opd(cycles), value(e, 0, true)}, e));
+    wrap(e, 0);
+    return;
+  }
+  if (k == "TIME2DELAY") {  // the delay in the loop counts of LDmicro's DELAY for the MICRO= at CRYSTAL=
+    if (!is_number(e.args[1])) fail(e.line, e.cols[1], "TIME2DELAY needs a number of microseconds");
+    if (crystal_hz_ <= 0) fail(e.line, e.col, "TIME2DELAY needs the file's CRYSTAL= clock frequency");
+    bool avr = micro_.rfind("Atmel AVR", 0) == 0, pic = micro_.rfind("Microchip PIC1", 0) == 0;
+    if (!micro_.empty() && !avr && !pic)
+      fail(e.line, e.col, "TIME2DELAY is defined for AVR and PIC microcontrollers only, not '" + micro_ + "' (LDmicro refuses it too)");
+    __int128 c = __int128(number(e.args[1], e.line, e.cols[1])) * crystal_hz_ / 1000000;
+    if (pic) c /= 4;
+    if (avr) c = std::min<__int128>((c - 1) / 4, 0x10000);
+    if (pic) c = std::min<__int128>((c - 10) / 6, 0xffff);
+    if (c > INT32_MAX) fail(e.line, e.cols[1], "TIME2DELAY result too large");
+    rb_.add(out_node(Op::MOV, {const_opd(c <= 0 ? 1 : int32_t(c)), value(e, 0, true)}, e));
+    wrap(e, 0);
+    return;
+  }
+  if (k == "MOVE" && !is_number(e.args[0]) && name_of(e, 0).kind == NK::Timer) return move_to_timer(e);
   if (k == "MOVE") {
     rb_.add(out_node(Op::MOV, {value(e, 1), value(e, 0, true)}, e));
+    wrap(e, 0);
     return;
   }
   static const std::map<std::string, Op> math = {{"ADD", Op::ADD}, {"SUB", Op::SUB}, {"MUL", Op::MUL}, {"DIV", Op::DIV},
                                                  {"MOD", Op::MOD}, {"AND", Op::WAND}, {"OR", Op::WOR}, {"XOR", Op::WXOR}, {"SHL", Op::SHL}};
   if (auto it = math.find(k); it != math.end()) {
     rb_.add(out_node(it->second, {value(e, 1), value(e, 2), value(e, 0, true)}, e));
+    wrap(e, 0);
     return;
   }
   if (k == "NOT") {
     rb_.add(out_node(Op::WNOT, {value(e, 1), value(e, 0, true)}, e));
+    wrap(e, 0);
     return;
   }
   if (k == "NEG") {
     rb_.add(out_node(Op::SUB, {const_opd(0), value(e, 1), value(e, 0, true)}, e));
+    wrap(e, 0);
     return;
   }
   if (k == "SET_BIT" || k == "CLEAR_BIT" || k == "IF_BIT_SET" || k == "IF_BIT_CLEAR") {
@@ -1093,8 +1704,8 @@ void Importer::element(const Elem& e, bool need_out) {
       rb_.add(out_node(Op::SHL, {const_opd(1), value(e, 1), mask}, e));
       if (k == "CLEAR_BIT") rb_.add(out_node(Op::WNOT, {mask, mask}, e));
     }
-    if (k == "SET_BIT") rb_.add(out_node(Op::WOR, {var, mask, var}, e));
-    else if (k == "CLEAR_BIT") rb_.add(out_node(Op::WAND, {var, mask, var}, e));
+    if (k == "SET_BIT") rb_.add(out_node(Op::WOR, {var, mask, var}, e)), wrap(e, 0);
+    else if (k == "CLEAR_BIT") rb_.add(out_node(Op::WAND, {var, mask, var}, e)), wrap(e, 0);
     else {
       Operand t = int_opd(Area::D, temp_d(e));
       rb_.add(out_node(Op::WAND, {var, mask, t}, e));
@@ -1110,7 +1721,10 @@ void Importer::element(const Elem& e, bool need_out) {
     for (int i = stages - 2; i >= 0; i--) {
       const Name& src = names_.at(e.args[0] + std::to_string(i));
       const Name& dst = names_.at(e.args[0] + std::to_string(i + 1));
-      moves.push_back(out_node(Op::MOV, {int_opd(Area::D, src.dev.index), int_opd(Area::D, dst.dev.index)}, e));
+      Operand d = int_opd(Area::D, dst.dev.index);
+      moves.push_back(out_node(Op::MOV, {int_opd(Area::D, src.dev.index), d}, e));
+      if (width_of(e.args[0] + std::to_string(i + 1)) < width_of(e.args[0] + std::to_string(i)))
+        for (TreeNode& n : wrap_nodes(d, width_of(e.args[0] + std::to_string(i + 1)), e)) moves.push_back(std::move(n));
     }
     if (!moves.empty()) rb_.add(then_node(bit_leaf(Op::LOADP, Area::M, s.n.elem.a[0].index, e), fork_of(std::move(moves)), loc));
     return;
@@ -1126,6 +1740,7 @@ void Importer::element(const Elem& e, bool need_out) {
       items.push_back(then_node(Cond::of(leaf_node(Op::LDEQ, {index, const_opd(i)}, e)), out_node(Op::MOV, {v, dest}, e), loc));
     }
     rb_.add(fork_of(std::move(items)));
+    wrap(e, 0);
     return;
   }
   if (k == "PIECEWISE_LINEAR") {
@@ -1151,6 +1766,7 @@ void Importer::element(const Elem& e, bool need_out) {
       items.push_back(then_node(Cond::of(leaf_node(Op::LDLE, {index, const_opd(v[2 * i])}, e)), fork_of(std::move(body)), loc));
     }
     if (!items.empty()) rb_.add(fork_of(std::move(items)));
+    wrap(e, 0);
     return;
   }
   if (k == "READ_ADC") {
@@ -1204,7 +1820,29 @@ void Importer::parallel_code(const Elem& e, bool need_out) {
   }
 }
 
-void Importer::translate(const SrcRung& r, size_t) {
+// GOTO label: the rung holding LABEL label, or LDmicro's rung number; ldc's
+// JMP goes forward only, so a GOTO to this rung or an earlier one (a loop
+// inside the cycle) is refused.  A target past the last rung ends the scan's rungs.
+size_t Importer::goto_target(const Elem& e) {
+  const std::string& l = e.args[0];
+  size_t t;
+  if (is_number(l)) {
+    int64_t n = number(l, e.line, e.cols[0]);
+    t = rungs_.size();
+    for (size_t i = 0; i < rungs_.size(); i++)
+      if (rungs_[i].ldm_index >= n - 1) { t = i; break; }
+  } else {
+    auto it = labels_.find(l);
+    if (it == labels_.end()) fail(e.line, e.cols[0], "GOTO: LABEL '" + l + "' not found (LDmicro refuses it too)");
+    t = it->second;
+  }
+  if (t <= rung_now_)
+    fail(e.line, e.col, "GOTO to this rung or an earlier one (a loop inside the cycle) is not supported: ldc jumps forward only");
+  return t;
+}
+
+void Importer::translate(const SrcRung& r, size_t index) {
+  rung_now_ = index;
   Elem at;
   at.line = r.line;
   at.col = 1;
@@ -1234,11 +1872,18 @@ TreeProgram Importer::run() {
   };
   std::function<void(const std::vector<Elem>&)> find_uart = [&](const std::vector<Elem>& s) {
     for (const Elem& e : s) {
-      uart_used_ |= is_uart(e.kw);
+      uart_used_ |= is_uart(e.kw) || e.kw == "FORMATTED_STRING";
       find_uart(e.kids);
     }
   };
-  for (const SrcRung& r : rungs_) walk(r.series), find_uart(r.series);
+  std::function<void(const std::vector<Elem>&)> find_bus = [&](const std::vector<Elem>& s) {
+    for (const Elem& e : s) {
+      if (is_bus(e.kw)) plan_bus(e);
+      find_bus(e.kids);
+    }
+  };
+  for (const SrcRung& r : rungs_) walk(r.series), find_uart(r.series), find_bus(r.series);
+  if (!bus_words_.empty()) used_.insert({int(Dev::D), kBusSeq});
   if (uart_used_)
     for (DeviceRef r : {DeviceRef{Dev::WX, kUartRx}, DeviceRef{Dev::WY, kUartTx}, DeviceRef{Dev::D, kUartSeen}, DeviceRef{Dev::M, kUartBusy}})
       used_.insert({int(r.dev), r.index});
@@ -1248,6 +1893,13 @@ TreeProgram Importer::run() {
     for (const Alias& a : aliases_) taken.insert(upper(a.name));
     for (const Alias& a : {Alias{"uart_rx", {Dev::WX, kUartRx}}, Alias{"uart_tx", {Dev::WY, kUartTx}},
                            Alias{"uart_rx_seen", {Dev::D, kUartSeen}}, Alias{"uart_tx_busy", {Dev::M, kUartBusy}}})
+      if (!taken.count(upper(a.name))) aliases_.push_back(a);
+  }
+  if (!bus_words_.empty()) {
+    std::set<std::string> taken;
+    for (const Alias& a : aliases_) taken.insert(upper(a.name));
+    bus_aliases_.push_back({"bus_seq", {Dev::D, kBusSeq}});
+    for (const Alias& a : bus_aliases_)
       if (!taken.count(upper(a.name))) aliases_.push_back(a);
   }
   TreeProgram p;
@@ -1273,10 +1925,22 @@ TreeProgram Importer::run() {
     p.rungs.push_back(std::move(tr));
   }
   size_t init_at = p.rungs.size();
+  std::function<void(const std::vector<Elem>&, size_t)> find_labels = [&](const std::vector<Elem>& s, size_t i) {
+    for (const Elem& e : s) {
+      if (e.kw == "LABEL" && !labels_.emplace(e.args[0], i).second)
+        fail(e.line, e.cols[0], "LABEL '" + e.args[0] + "' is placed twice");
+      find_labels(e.kids, i);
+    }
+  };
+  for (size_t i = 0; i < rungs_.size(); i++) find_labels(rungs_[i].series, i);
+  std::vector<std::string> pending;  // labels waiting for the next rung that makes code
   for (size_t i = 0; i < rungs_.size(); i++) {
     translate(rungs_[i], i);
+    if (targets_.count(i)) pending.push_back("rung" + std::to_string(i + 1));
     if (rb_.top.empty()) continue;  // only conditions: nothing to do
     TreeRung tr;
+    tr.labels = std::move(pending);
+    pending.clear();
     tr.line = rungs_[i].line;
     tr.title = titles_[i];
     tr.root = fork_of(std::move(rb_.top));
@@ -1285,11 +1949,14 @@ TreeProgram Importer::run() {
   if (!init_.empty()) {
     TreeRung tr;
     tr.line = rungs_[0].line;
-    tr.title = "counter initial values";
+    tr.title = "initial values";
     tr.root = then_node(bit_leaf(Op::LOAD, Area::S, kBitFirstScan, top), fork_of(std::move(init_)), top.loc());
     p.rungs.insert(p.rungs.begin() + long(init_at), std::move(tr));
   }
   if (p.rungs.empty()) fail(int(lines_.size()), 1, "this program has no outputs");
+  p.end_labels = pending;
+  for (size_t t : targets_)
+    if (t >= rungs_.size()) p.end_labels.push_back("rung" + std::to_string(t + 1));
   p.retain = persist_;
   return p;
 }
