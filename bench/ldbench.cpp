@@ -56,6 +56,7 @@
 #include "loader/loader.h"
 #include "runtime/fastinterp.h"
 #include "runtime/runtime.h"
+#include "driver/version.h"
 
 #ifndef LDC_SOURCE_DIR
 #define LDC_SOURCE_DIR "."
@@ -1814,21 +1815,25 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
   }
 }
 
+const char kUsage[] =
+    "usage: ldbench [--out DIR] [--smoke] [--samples N] [--batch-us US] [--no-c] [--c-max-il N]\n"
+    "               [--only examples,classes,fig10,scaling,large,compile,memory] [--c40|--no-c40] [--source DIR]\n"
+    "               [--doc FILE.md]   (also put the tables between FILE.md's generated-region markers)\n"
+    "       ldbench --synth N_EXE P_BASIC [SEED]   (a synthetic program's IL text, to stdout)\n"
+    "       ldbench --plant RUNGS                  (the synthetic plant's .ld text, to stdout)\n"
+    "       ldbench [options] FILE...              (every engine on these programs only; FILE.csv beside\n"
+    "                                               a program is its trace, else random inputs)\n";
+
 int usage() {
-  std::fprintf(stderr,
-               "usage: ldbench [--out DIR] [--smoke] [--samples N] [--batch-us US] [--no-c] [--c-max-il N]\n"
-               "               [--only examples,classes,fig10,scaling,large,compile,memory] [--no-c40] [--source DIR]\n"
-               "               [--doc FILE.md]   (also put the tables between FILE.md's generated-region markers)\n"
-               "       ldbench --synth N_EXE P_BASIC [SEED]   (a synthetic program's IL text, to stdout)\n"
-               "       ldbench --plant RUNGS                  (the synthetic plant's .ld text, to stdout)\n"
-               "       ldbench [options] FILE...              (every engine on these programs only; FILE.csv beside\n"
-               "                                               a program is its trace, else random inputs)\n");
+  std::fputs(kUsage, stderr);
   return 2;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc == 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) return std::fputs(kUsage, stdout), 0;
+  if (argc == 2 && std::string(argv[1]) == "--version") return print_version("ldbench");
   // The benchmark programs themselves, for a look with ldc --emit=listing.
   if ((argc == 4 || argc == 5) && std::string(argv[1]) == "--synth") {
     synth::SynthOptions so;

@@ -25,6 +25,7 @@
 #include <map>
 
 #include "ir/ir.h"
+#include "driver/version.h"
 
 namespace ldc {
 namespace {
@@ -771,6 +772,7 @@ int main(int argc, char** argv) {
     long long n = 0;
     std::string err;
     if (name == "-h" || name == "--help") { std::fputs(kUsage, stdout); return 0; }
+    if (name == "--version") return print_version("ldgen");
     if (name != "--seed" && name != "--rungs" && name != "--depth" && name != "--classes" && name != "--without" &&
         name != "--range" && name != "-o" && name != "--trace" && name != "--scans")
       return fail("unknown option '" + a + "'");

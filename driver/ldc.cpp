@@ -12,6 +12,7 @@
 #include "driver/driver.h"
 #include "frontend/frontend.h"
 #include "ir/ladder.h"
+#include "driver/version.h"
 
 using namespace ldc;
 
@@ -64,6 +65,7 @@ int main(int argc, char** argv) {
     else if (a.rfind("--project=", 0) == 0) project = a.substr(10);
     else if (a == "-O0" || a == "-O1" || a == "-O2") opt = a[2] - '0';
     else if (a == "-h" || a == "--help") { std::fputs(kUsage, stdout); return 0; }
+    else if (a == "--version") return print_version("ldc");
     else if (!a.empty() && a[0] == '-') { std::fprintf(stderr, "ldc: error: unknown option '%s'\n%s", a.c_str(), kUsage); return 1; }
     else if (input.empty()) input = a;
     else { std::fprintf(stderr, "ldc: error: more than one input file\n%s", kUsage); return 1; }

@@ -6,6 +6,7 @@
 
 #include "driver/c40_driver.h"
 #include "driver/driver.h"
+#include "driver/version.h"
 
 using namespace ldc;
 
@@ -62,6 +63,7 @@ static std::string x86_listing(const Image& img, const std::string& path) {
 }
 
 int main(int argc, char** argv) {
+  if (argc == 2 && std::string(argv[1]) == "--version") return print_version("ldobjdump");
   if (argc != 2 || argv[1][0] == '-') {
     std::fputs(kUsage, argc == 2 && std::string(argv[1]) == "--help" ? stdout : stderr);
     return argc == 2 && std::string(argv[1]) == "--help" ? 0 : 1;

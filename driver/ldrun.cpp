@@ -23,6 +23,7 @@
 #include "runtime/plc.h"
 #include "runtime/runtime.h"
 #include "runtime/sandbox.h"
+#include "driver/version.h"
 
 using namespace ldc;
 
@@ -423,6 +424,7 @@ int main(int argc, char** argv) {
       } else if (a.rfind("--period", 0) == 0) {
         period_text = value("--period");
       } else if (a == "-h" || a == "--help") { std::fputs(kUsage, stdout); return 0; }
+      else if (a == "--version") return print_version("ldrun");
       else if (!a.empty() && a[0] == '-') throw UserError("ldrun: error: unknown option '" + a + "'\n" + kUsage);
       else if (input.empty()) input = a;
       else throw UserError("ldrun: error: more than one program");
