@@ -281,6 +281,4 @@ Result assemble(const Target<Inst>& target, const Program<Inst>& program,
 
 }  // namespace ldc::as
 
-#include "assembler/x86.h"
-
 #endif  // LDC_ASSEMBLER_ASSEMBLER_H

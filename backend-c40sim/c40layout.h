@@ -16,51 +16,30 @@
 #include <vector>
 
 #include "ir/ir.h"
+#include "loader/c40_map.h"
 
 namespace ldc::c40gen {
 
-// ---------------------------------------------------------------- memory map
-// Word addresses of the simulated board (all regions zero-wait but the data).
-constexpr uint32_t kCodeBase = 0x000000;   // native scan code, or the C40-hosted interpreter
-constexpr uint32_t kCodeMaxWords = 0x100000;
-constexpr uint32_t kIlBase = 0x100000;     // the word IL the interpreter runs (zero-wait, as in the paper)
-constexpr uint32_t kIlMaxWords = 0x100000;
-constexpr uint32_t kStackBase = 0x200000;  // SP starts here; the C4x stack grows upward
-constexpr uint32_t kStackWords = 0x400;
-constexpr uint32_t kRomBase = 0x300000;    // the math ROM (mathrom.h): one routine every kRomStride words
-constexpr uint32_t kRomStride = 0x100;
-constexpr uint32_t kRomWords = 0x1000;
-constexpr uint32_t kDataBase = 0x800000;   // the memory image, page 0x80 (LDPK 0x80)
-constexpr uint32_t kDataPage = kDataBase >> 16;
-constexpr unsigned kDataWaitStates = 1;    // 50 ns SRAM at 40 MHz
-constexpr double kNsPerCycle = 50.0;       // TMS320C40-40
-
-// Fixed words of the Sys area (16 words).
-constexpr uint32_t kSysWords = 16;
-constexpr uint32_t kSysDtWord = 0;       // INT32 dt (ms) of this scan
-constexpr uint32_t kSysScanWord = 1;     // scans completed
-constexpr uint32_t kSysScratchWord = 2;  // generated code builds REAL constants here
-
-// Word offsets of the areas, in Layout::standard order, one word per element.
-struct C40Layout {
-  uint32_t count[kAreaCount] = {};
-  uint32_t offset[kAreaCount] = {};  // words from kDataBase
-  uint32_t words = 0;                // total
-
-  static C40Layout of(const Layout& bytes) {  // inline: the loader uses it without the backend
-    C40Layout w;
-    uint32_t off = 0;
-    for (int i = 0; i < kAreaCount; i++) {
-      w.count[i] = Area(i) == Area::Sys ? kSysWords : bytes.count[i];
-      w.offset[i] = off;
-      off += w.count[i];
-    }
-    w.words = off;
-    return w;
-  }
-  uint32_t addr(Area a, uint32_t index) const { return kDataBase + offset[int(a)] + index; }
-  bool operator==(const C40Layout&) const = default;
-};
+// The memory map, the Sys words and C40Layout are the image format's
+// (loader/c40_map.h).
+using c40map::kCodeBase;
+using c40map::kCodeMaxWords;
+using c40map::kIlBase;
+using c40map::kIlMaxWords;
+using c40map::kStackBase;
+using c40map::kStackWords;
+using c40map::kRomBase;
+using c40map::kRomStride;
+using c40map::kRomWords;
+using c40map::kDataBase;
+using c40map::kDataPage;
+using c40map::kDataWaitStates;
+using c40map::kNsPerCycle;
+using c40map::kSysWords;
+using c40map::kSysDtWord;
+using c40map::kSysScanWord;
+using c40map::kSysScratchWord;
+using c40map::C40Layout;
 
 // The byte image of docs/il.md <-> the C40 word image (words.size() ==
 // layout.words).  Sys: dt and the scan counter only (the x86 call table is

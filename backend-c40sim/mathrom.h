@@ -22,9 +22,9 @@
 
 namespace ldc::c40gen {
 
-enum class RomFn : uint8_t { Sin, Cos, Tan, Sqrt, Exp, Ln, Count };
-constexpr int kRomFnCount = int(RomFn::Count);
-constexpr uint32_t rom_entry(RomFn f) { return kRomBase + uint32_t(f) * kRomStride; }
+using c40map::RomFn;  // the entry points are the image format's (loader/c40_map.h)
+using c40map::kRomFnCount;
+using c40map::rom_entry;
 const char* rom_name(RomFn f);      // "sin", ...
 float rom_host(RomFn f, float x);   // sinf cosf tanf sqrtf expf logf
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "assembler/assembler.h"
+#include "assembler/x86.h"
 #include "ir/ir.h"
 
 namespace ldc {

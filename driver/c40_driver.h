@@ -11,6 +11,22 @@
 
 namespace ldc {
 
+// Engines on the cycle-counting C40 simulator (backend-c40sim, docs/c40.md):
+// the C40 native code of an image (ImageTarget::C40), or the C40-hosted
+// interpreter (backend-c40sim/interp.c40s) running the image's IL in its word
+// form.  Both keep the cost of the last scan (50 ns per cycle).
+struct C40ScanCost {
+  uint64_t cycles = 0;
+  uint64_t instructions = 0;
+  double us() const { return double(cycles) * 0.05; }
+};
+class C40Engine : public Engine {
+ public:
+  virtual C40ScanCost last_scan() const = 0;
+};
+std::unique_ptr<C40Engine> make_c40sim_engine(std::span<const uint8_t> code, uint32_t entry, const Layout& layout);
+std::unique_ptr<C40Engine> make_c40interp_engine(std::span<const uint8_t> il, const Layout& layout);
+
 struct C40Build {
   c40gen::C40Code gen;
   as::Result asm_result;

@@ -6,8 +6,7 @@
 #include <vector>
 
 #include "assembler/c40.h"
-#include "backend-c40sim/c40layout.h"
-#include "backend-c40sim/mathrom.h"
+#include "loader/c40_map.h"
 
 namespace ldc {
 namespace {
@@ -34,7 +33,7 @@ bool writes_dp(const Instruction& in) {
 }  // namespace
 
 std::string check_c40_code(std::span<const uint8_t> code, uint32_t entry, const Layout& layout) {
-  using c40gen::C40Layout;
+  using c40map::C40Layout;
   const uint32_t n = uint32_t(code.size() / 4);
   const C40Layout w = C40Layout::of(layout);
   auto at = [](uint32_t i) { return "at word " + hex(i) + ": "; };
@@ -58,9 +57,9 @@ std::string check_c40_code(std::span<const uint8_t> code, uint32_t entry, const 
       if (o.kind == OperandKind::Address) {
         int64_t t = o.imm;
         bool rom = false;
-        for (int f = 0; f < c40gen::kRomFnCount; f++)
+        for (int f = 0; f < c40map::kRomFnCount; f++)
           rom |= (in->mnemonic == Mnemonic::Call || in->mnemonic == Mnemonic::Callc) &&
-                 t == int64_t(c40gen::rom_entry(c40gen::RomFn(f)));
+                 t == int64_t(c40map::rom_entry(c40map::RomFn(f)));
         if (!rom && (t < 0 || t >= int64_t(n)))
           return at(i) + "'" + print(*in) + "': target " + hex(uint64_t(t)) + " outside the code (" +
                  std::to_string(n) + " words)";
@@ -110,9 +109,9 @@ std::string check_c40_code(std::span<const uint8_t> code, uint32_t entry, const 
       if (dp[i] < 0)
         return at(i) + "'" + print(in) + "': direct operand with the data page not set by LDPK on every path";
       uint64_t a = uint64_t(uint32_t(dp[i]) & 0xFFFF) << 16 | uint64_t(in.ops[k].imm);
-      if (a < c40gen::kDataBase || a >= uint64_t(c40gen::kDataBase) + w.words)
-        return at(i) + "'" + print(in) + "': word " + hex(a) + " is outside the memory image (" + hex(c40gen::kDataBase) +
-               ".." + hex(c40gen::kDataBase + w.words - 1) + ")";
+      if (a < c40map::kDataBase || a >= uint64_t(c40map::kDataBase) + w.words)
+        return at(i) + "'" + print(in) + "': word " + hex(a) + " is outside the memory image (" + hex(c40map::kDataBase) +
+               ".." + hex(c40map::kDataBase + w.words - 1) + ")";
     }
     bool falls = true;
     switch (in.mnemonic) {

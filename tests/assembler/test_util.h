@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "assembler/assembler.h"
+#include "assembler/x86.h"
 
 namespace ldc::as::test {
 

@@ -6,6 +6,7 @@
 
 #include "backend-c40sim/c40model.h"
 #include "ir/ir.h"
+#include "driver/c40_driver.h"
 #include "runtime/runtime.h"
 #include "tests/diff/harness.h"
 

@@ -1,8 +1,10 @@
-// runtime/c40_engine.cpp -- the C40 engines: the simulated board of
-// backend-c40sim running native C40 code or the C40-hosted interpreter.
+// driver/c40_engine.cpp -- the C40 engines (c40_driver.h): the simulated
+// board of backend-c40sim running native C40 code or the C40-hosted
+// interpreter, behind the runtime's Engine interface.  The driver wires the
+// two together, so that runtime/ includes no backend.
 #include "backend-c40sim/c40interp.h"
 #include "backend-c40sim/c40machine.h"
-#include "runtime/runtime.h"
+#include "driver/c40_driver.h"
 
 namespace ldc {
 namespace {

@@ -1,0 +1,42 @@
+#!/bin/sh
+# layers_test.sh SRCDIR -- the pipeline's folders include one way
+# (docs/architecture.md): data flows frontend -> ir -> backends -> assembler ->
+# loader -> runtime, and the driver wires targets together.
+#   ir        includes only ir
+#   frontend  includes only ir
+#   assembler includes nothing of ours but assembler, and assembler.h nothing of ours at all
+#   loader    includes ir, assembler and loader: no backend, no runtime
+#   runtime   includes ir, loader and runtime: no backend
+#   backends  include ir, assembler and loader's image-format facts, never runtime or driver
+set -u
+src=$1
+fails=0 checks=0
+# allowed FOLDER PATTERN: every #include "..." of FOLDER's files matches PATTERN
+allowed() {
+  dir=$1 pat=$2
+  for f in "$src/$dir"/*.h "$src/$dir"/*.cpp; do
+    [ -e "$f" ] || continue
+    grep -o '^#include "[^"]*"' "$f" | sed 's/^#include "\(.*\)"$/\1/' | while read -r inc; do
+      echo "$inc" | grep -Eq "^($pat)$" || echo "FAIL: $dir/$(basename "$f") includes \"$inc\""
+    done
+  done
+}
+out=$( {
+  allowed ir 'ir/[a-z_]+\.h|(ir/)?ops\.def'
+  allowed frontend 'ir/[a-z_]+\.h|frontend/[a-z_0-9]+\.h'
+  allowed assembler 'assembler/[a-z_0-9]+\.h'
+  allowed loader 'ir/[a-z_]+\.h|assembler/[a-z_0-9]+\.h|loader/[a-z_0-9]+\.h'
+  allowed runtime 'ir/[a-z_]+\.h|loader/[a-z_0-9]+\.h|runtime/[a-z_0-9]+\.h|monitor_page\.h'
+  allowed backend-x86 'ir/[a-z_]+\.h|assembler/[a-z_0-9]+\.h|backend-x86/[a-z_0-9]+\.h'
+  allowed backend-c40sim 'ir/[a-z_]+\.h|assembler/[a-z_0-9]+\.h|loader/c40_map\.h|backend-c40sim/[a-z_0-9]+\.h'
+  allowed backend-c 'ir/[a-z_]+\.h|backend-c/[a-z_0-9]+\.h'
+} )
+if grep -q '^#include "' "$src/assembler/assembler.h"; then out="$out
+FAIL: assembler/assembler.h includes a header of ours (the x86/C40 headers include it, not the other way)"; fi
+if [ -n "$out" ]; then
+  echo "$out" >&2
+  n=$(echo "$out" | grep -c FAIL)
+  echo "0 passed, $n failed"
+  exit 1
+fi
+echo "8 passed, 0 failed"
