@@ -220,14 +220,9 @@ static std::string build_c_text(const std::string& text, const std::string& dir)
 }
 
 std::optional<int32_t> parse_period(const std::string& s) {
-  char* end = nullptr;
-  errno = 0;
-  long long v = std::strtoll(s.c_str(), &end, 10);
-  if (end == s.c_str() || errno || v < 0) return std::nullopt;
-  std::string unit = end;
-  long long ms = unit.empty() || unit == "ms" ? v : unit == "s" ? v * 1000 : -1;
-  if (ms < 0 || ms > INT32_MAX) return std::nullopt;
-  return int32_t(ms);
+  std::optional<int64_t> us = parse_duration_us(s);
+  if (!us || *us % 1000) return std::nullopt;  // whole milliseconds
+  return int32_t(*us / 1000);
 }
 
 }  // namespace ldc

@@ -65,7 +65,8 @@ std::string build_c_shared_object(const Compiled& c, const std::string& dir);
 std::string make_temp_dir();
 void remove_tree(const std::string& dir);
 
-// "10ms", "10", "2s" -> ms; nullopt if malformed.
+// "10ms", "10", "2s" -> ms; nullopt if malformed or not whole ms
+// (parse_duration_us, below, reads it).
 std::optional<int32_t> parse_period(const std::string& s);
 
 

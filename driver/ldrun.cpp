@@ -418,9 +418,9 @@ int main(int argc, char** argv) {
       else if (a.rfind("--watch", 0) == 0) watch = value("--watch");
       else if (a.rfind("--scans", 0) == 0) {
         std::string v = value("--scans");
-        auto n = parse_period(v);
-        if (!n || v.find_first_not_of("0123456789") != std::string::npos) throw UserError("ldrun: error: bad --scans '" + v + "'");
-        opt.scans = *n;
+        if (v.empty() || v.size() > 9 || v.find_first_not_of("0123456789") != std::string::npos)
+          throw UserError("ldrun: error: bad --scans '" + v + "'");
+        opt.scans = std::stoi(v);
       } else if (a.rfind("--period", 0) == 0) {
         period_text = value("--period");
       } else if (a == "-h" || a == "--help") { std::fputs(kUsage, stdout); return 0; }
