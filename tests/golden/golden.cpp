@@ -2,12 +2,14 @@
 // foo.il (what ldc --emit=tree / --emit=il print) or foo.err (the exact error);
 // an IEC IL source foo.il has its ldc IL in foo.out.il and no tree.
 // a chart foo.sfc beside foo.il and foo.c (ldc --emit=c, docs/sfc.md).
-// `golden --update FILE...` rewrites the expected files, to be reviewed as a diff.
+// With LDC_UPDATE=1 in the environment it rewrites the expected files instead,
+// to be reviewed as a diff (the one update switch of every golden test, docs/testing.md).
 // `golden --roundtrip FILE...` only compiles and checks the round trip.
 // Every IL is also printed, read back and compared (the IL text round trip).
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include "driver/driver.h"
@@ -33,11 +35,11 @@ static int check(const std::string& name, const std::string& want_file, const st
 }
 
 int main(int argc, char** argv) {
-  bool update = false, roundtrip_only = false;
+  const char* env = std::getenv("LDC_UPDATE");
+  bool update = env && std::string(env) == "1", roundtrip_only = false;
   int failures = 0, cases = 0;
   for (int i = 1; i < argc; i++) {
     std::string path = argv[i];
-    if (path == "--update") { update = true; continue; }
     if (path == "--roundtrip") { roundtrip_only = true; continue; }  // no expected files
     size_t slash = path.rfind('/');
     std::string dir = slash == std::string::npos ? "." : path.substr(0, slash);

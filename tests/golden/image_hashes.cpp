@@ -3,15 +3,16 @@
 // against tests/golden/image_hashes.txt.  A change of code generation shows
 // here as the list of images it changed; a refactor must change none.
 //
-//   image_hashes SRCDIR [--update]
+//   image_hashes SRCDIR          (LDC_UPDATE=1: rewrite the expected file)
 // Paths are relative to SRCDIR (images hold the source file's name), the
-// corpus at SRCDIR/../shared/corpus.  --update rewrites the expected file, to
-// be reviewed as a diff.
+// corpus at SRCDIR/../shared/corpus.  With LDC_UPDATE=1 in the environment
+// it rewrites the expected file, to be reviewed as a diff.
 #include <dirent.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -67,8 +68,8 @@ std::string hashes() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2 || argc > 3 || (argc == 3 && std::string(argv[2]) != "--update")) {
-    std::fprintf(stderr, "usage: image_hashes SRCDIR [--update]\n");
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: image_hashes SRCDIR   (LDC_UPDATE=1 rewrites the expected file)\n");
     return 2;
   }
   if (chdir(argv[1]) != 0) {
@@ -77,7 +78,7 @@ int main(int argc, char** argv) {
   }
   const std::string expected_file = "tests/golden/image_hashes.txt";
   std::string got = hashes();
-  if (argc == 3) {
+  if (const char* u = std::getenv("LDC_UPDATE"); u && std::string(u) == "1") {
     write_file_atomic(expected_file, got);
     return 0;
   }
@@ -90,7 +91,7 @@ int main(int argc, char** argv) {
     std::printf("%zu images as recorded\n", size_t(std::count(got.begin(), got.end(), '\n')));
     return 0;
   }
-  std::fprintf(stderr, "images differ from %s (rerun with --update and review the diff):\n", expected_file.c_str());
+  std::fprintf(stderr, "images differ from %s (rerun with LDC_UPDATE=1 and review the diff):\n", expected_file.c_str());
   size_t a = 0, b = 0;
   while (a < got.size() || b < want.size()) {
     std::string g = a < got.size() ? got.substr(a, got.find('\n', a) - a) : "";

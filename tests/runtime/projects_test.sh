@@ -3,7 +3,7 @@
 # NAME.out is the expected stdout of an accepted project (its configuration
 # table), NAME.err the exact stderr of a refused one (exit status 1).
 # Run from PROJECTS so the messages name the files as the project does.
-# Set UPDATE=1 to rewrite the expected files after a deliberate change.
+# Set LDC_UPDATE=1 to rewrite the expected files after a deliberate change.
 set -u
 bin=$1 dir=$2
 tmp=$(mktemp -d)
@@ -14,7 +14,7 @@ for p in *.ldp; do
   n=${p%.ldp}
   "$bin/ldc" --project "$p" > "$tmp/out" 2> "$tmp/err"; rc=$?
   checks=$((checks + 1))
-  if [ "${UPDATE:-}" = 1 ]; then
+  if [ "${LDC_UPDATE:-}" = 1 ]; then
     if [ $rc -eq 0 ]; then cp "$tmp/out" "$n.out"; rm -f "$n.err"; else cp "$tmp/err" "$n.err"; rm -f "$n.out"; fi
     continue
   fi

@@ -2,7 +2,7 @@
 # protocol_test.sh BINDIR PROJECTS -- the line protocol through pipes: a
 # project built by ldc --project runs with --io=stdio, the commands of
 # protocol.cmds go in on stdin, and the replies (timings masked) must be
-# protocol.expected.  UPDATE=1 rewrites the expected file.
+# protocol.expected.  LDC_UPDATE=1 rewrites the expected file.
 set -u
 bin=$1 dir=$2
 here=$(cd "$(dirname "$0")" && pwd)
@@ -14,7 +14,7 @@ cd "$dir" || exit 1
 rc=$?
 sed -e 's/switched at scan [0-9]*: latency [0-9.]* [mu]s (switch [0-9.]* [mu]s)/switched at scan N: latency T (switch T)/' \
     "$tmp/out" > "$tmp/replies"
-if [ "${UPDATE:-}" = 1 ]; then cp "$tmp/replies" "$here/protocol.expected"; fi
+if [ "${LDC_UPDATE:-}" = 1 ]; then cp "$tmp/replies" "$here/protocol.expected"; fi
 fails=0
 [ $rc -eq 0 ] || { echo "FAIL: ldrun exit $rc" >&2; cat "$tmp/err" >&2; fails=$((fails + 1)); }
 diff -u "$here/protocol.expected" "$tmp/replies" || { echo "FAIL: replies differ" >&2; fails=$((fails + 1)); }
