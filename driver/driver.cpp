@@ -219,6 +219,17 @@ static std::string build_c_text(const std::string& text, const std::string& dir)
   return so;
 }
 
+int run_tool(const char* tool, const std::function<int()>& work) {
+  try {
+    return work();
+  } catch (const UserError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: error: %s\n", tool, e.what());
+  }
+  return 1;
+}
+
 std::optional<int32_t> parse_period(const std::string& s) {
   std::optional<int64_t> us = parse_duration_us(s);
   if (!us || *us % 1000) return std::nullopt;  // whole milliseconds

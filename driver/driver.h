@@ -3,6 +3,7 @@
 // without leaving a half-written file behind.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -17,6 +18,10 @@ namespace ldc {
 struct UserError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+
+// A tool's main: runs `work`; a UserError prints as it is, any other
+// exception as "TOOL: error: ...", and either gives exit status 1.
+int run_tool(const char* tool, const std::function<int()>& work);
 
 std::string read_file(const std::string& path);  // throws UserError
 // Writes to path.tmp.PID, then renames, so no half-written output is left.

@@ -62,22 +62,22 @@ static std::string x86_listing(const Image& img, const std::string& path) {
   return out;
 }
 
-int main(int argc, char** argv) {
+namespace {
+
+int ldobjdump_main(int argc, char** argv) {
   if (argc == 2 && std::string(argv[1]) == "--version") return print_version("ldobjdump");
   if (argc != 2 || argv[1][0] == '-') {
     std::fputs(kUsage, argc == 2 && std::string(argv[1]) == "--help" ? stdout : stderr);
     return argc == 2 && std::string(argv[1]) == "--help" ? 0 : 1;
   }
-  try {
-    Image img = load_image_file(argv[1]);
-    std::string out = img.target == ImageTarget::C40 ? c40_objdump(img, argv[1]) : x86_listing(img, argv[1]);
-    std::fwrite(out.data(), 1, out.size(), stdout);
-  } catch (UserError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 1;
-  } catch (std::exception& e) {
-    std::fprintf(stderr, "ldobjdump: error: %s\n", e.what());
-    return 1;
-  }
+  Image img = load_image_file(argv[1]);
+  std::string out = img.target == ImageTarget::C40 ? c40_objdump(img, argv[1]) : x86_listing(img, argv[1]);
+  std::fwrite(out.data(), 1, out.size(), stdout);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return run_tool("ldobjdump", [&] { return ldobjdump_main(argc, argv); });
 }

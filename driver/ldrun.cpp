@@ -373,7 +373,9 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+
+int ldrun_main(int argc, char** argv) {
   std::string input, engine = "native", trace_file, watch, tmpdir, so_path;
   bool cycles = false;
   int opt_level = -1;  // -O<n> for a source compiled to native code
@@ -384,110 +386,108 @@ int main(int argc, char** argv) {
   RunOptions opt;
   RtArgs rta;
   std::string period_text;
-  try {
-    for (int i = 1; i < argc; i++) {
-      std::string a = argv[i];
-      auto value = [&](const std::string& name) -> std::string {
-        if (a.rfind(name + "=", 0) == 0) return a.substr(name.size() + 1);
-        if (a == name && i + 1 < argc) return argv[++i];
-        throw UserError("ldrun: error: " + name + " needs a value");
-      };
-      auto flag = [&](const char* name, bool& f) {
-        if (a != name) return false;
-        f = true, rta.on = true;
-        return true;
-      };
-      auto opt_value = [&](const char* name, std::string& v) {
-        if (a != name && a.rfind(std::string(name) + "=", 0) != 0) return false;
-        v = value(name), rta.on = true;
-        return true;
-      };
-      if (flag("--free-run", rta.free_run) || flag("--rt", rta.rt) || flag("--cold", rta.cold) || flag("--stop", rta.stop) ||
-          flag("--stats", rta.stats) || flag("--reload", rta.reload) || opt_value("--project", rta.project) ||
-          opt_value("--io", rta.io) || opt_value("--control", rta.control) || opt_value("--clock", rta.clock) ||
-          opt_value("--watchdog", rta.watchdog) || opt_value("--retain-every", rta.retain_every) ||
-          opt_value("--retain", rta.retain) || opt_value("--out", rta.out) || opt_value("--block", rta.block) ||
-          opt_value("--modbus-connections", rta.modbus_connections) || opt_value("--modbus", rta.modbus) ||
-          opt_value("--monitor", rta.monitor) || flag("--monitor-write", rta.monitor_write) ||
-          flag("--monitor-remote", rta.monitor_remote)) {
-      } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");
-      else if (a == "--cycles") cycles = true;  // C40 engines: cycles and us per scan
-      else if (a == "-O0" || a == "-O1" || a == "-O2") opt_level = a[2] - '0';
-      else if (a == "--sandbox") rta.sandbox = true;
-      else if (a.rfind("--trace", 0) == 0) trace_file = value("--trace");
-      else if (a.rfind("--watch", 0) == 0) watch = value("--watch");
-      else if (a.rfind("--scans", 0) == 0) {
-        std::string v = value("--scans");
-        if (v.empty() || v.size() > 9 || v.find_first_not_of("0123456789") != std::string::npos)
-          throw UserError("ldrun: error: bad --scans '" + v + "'");
-        opt.scans = std::stoi(v);
-      } else if (a.rfind("--period", 0) == 0) {
-        period_text = value("--period");
-      } else if (a == "-h" || a == "--help") { std::fputs(kUsage, stdout); return 0; }
-      else if (a == "--version") return print_version("ldrun");
-      else if (!a.empty() && a[0] == '-') throw UserError("ldrun: error: unknown option '" + a + "'\n" + kUsage);
-      else if (input.empty()) input = a;
-      else throw UserError("ldrun: error: more than one program");
-    }
-    if (rta.on) {
-      rta.period = period_text;
-      return run_runtime(input, engine, trace_file, watch, opt.scans, rta);
-    }
-    if (!period_text.empty()) {
-      auto p = parse_period(period_text);
-      if (!p) throw UserError("ldrun: error: bad --period '" + period_text + "' (e.g. 10ms, 1s)");
-      opt.period_ms = *p;
-    }
-    if (input.empty()) throw UserError(std::string("ldrun: error: no program\n") + kUsage);
-    if (rta.sandbox && (engine == "c40sim" || engine == "c40interp" || is_c40_image(input)))
-      throw UserError("ldrun: error: --sandbox is for the engines that run on this machine (native, interp, c); the C40 engines are simulated");
-    if (engine == "c40sim" || engine == "c40interp" || (engine == "native" && is_c40_image(input)))
-      return run_c40(input, engine, trace_file, watch, opt, cycles);  // the TMS320C40 simulator
-    if (cycles) throw UserError("ldrun: error: --cycles needs --engine=c40sim or --engine=c40interp");
-    if (engine != "interp" && engine != "fast" && engine != "native" && engine != "c")
-      throw UserError("ldrun: error: unknown engine '" + engine + "' (native, interp, fast, c, c40sim or c40interp)");
-    if (opt_level >= 0 && (engine != "native" || is_image_file(input)))
-      throw UserError("ldrun: error: -O" + std::to_string(opt_level) +
-                      " is for a source compiled to native code (--engine=native); an image is already compiled");
-    // The program: an image (checked in full before anything runs), or a
-    // source file compiled in memory.
-    Image img;
-    if (is_image_file(input)) {
-      img = load_image_file(input);
-      if (engine == "c") throw UserError("ldrun: error: --engine=c needs the program's source (.ld or .il), not an image");
-      if (img.target != ImageTarget::X86_64 && engine == "native")
-        throw UserError("ldrun: error: " + input + " is not an x86-64 image; use --engine=interp");
-    } else if (engine == "c") {
-      Compiled c = compile_source(input);
-      img.layout = c.il.layout();
-      img.aliases = c.il.aliases;
-      img.retentive = retentive_ranges(c.il);
-      tmpdir = make_temp_dir();
-      so_path = build_c_shared_object(c, tmpdir);
-    } else {
-      Compiled c = compile_source(input);
-      img = engine == "native" ? make_x86_image(c.il, build_x86(c.il, input, as::Mode::Blockwise, std::max(opt_level, 0),
-                                                                /*notes=*/false))
-                               : il_image(c.il);
-    }
-    const Layout& layout = img.layout;
-    std::unique_ptr<Engine> eng = engine == "interp" ? make_interp_engine(img.il, layout)
-                                  : engine == "fast" ? make_fast_interp_engine(img.il, layout)
-                                  : engine == "c"    ? make_shared_object_engine(so_path, kCScanSymbol)
-                                                     : make_native_engine(img.code, img.entry);
-    if (rta.sandbox) eng = make_sandboxed_engine(std::move(eng), layout);
-    for (Probe& p : parse_watch(watch, img.aliases)) opt.watch.push_back(p);
-    Trace trace;
-    if (!trace_file.empty()) trace = load_trace(trace_file, img.aliases);
-    std::string out;
-    run_trace(*eng, layout, trace_file.empty() ? nullptr : &trace, trace_file, opt, out);
-    std::fwrite(out.data(), 1, out.size(), stdout);
-  } catch (UserError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 1;
-  } catch (std::exception& e) {
-    std::fprintf(stderr, "ldrun: error: %s\n", e.what());
-    return 1;
+  for (int i = 1; i < argc; i++) {
+    std::string a = argv[i];
+    auto value = [&](const std::string& name) -> std::string {
+      if (a.rfind(name + "=", 0) == 0) return a.substr(name.size() + 1);
+      if (a == name && i + 1 < argc) return argv[++i];
+      throw UserError("ldrun: error: " + name + " needs a value");
+    };
+    auto flag = [&](const char* name, bool& f) {
+      if (a != name) return false;
+      f = true, rta.on = true;
+      return true;
+    };
+    auto opt_value = [&](const char* name, std::string& v) {
+      if (a != name && a.rfind(std::string(name) + "=", 0) != 0) return false;
+      v = value(name), rta.on = true;
+      return true;
+    };
+    if (flag("--free-run", rta.free_run) || flag("--rt", rta.rt) || flag("--cold", rta.cold) || flag("--stop", rta.stop) ||
+        flag("--stats", rta.stats) || flag("--reload", rta.reload) || opt_value("--project", rta.project) ||
+        opt_value("--io", rta.io) || opt_value("--control", rta.control) || opt_value("--clock", rta.clock) ||
+        opt_value("--watchdog", rta.watchdog) || opt_value("--retain-every", rta.retain_every) ||
+        opt_value("--retain", rta.retain) || opt_value("--out", rta.out) || opt_value("--block", rta.block) ||
+        opt_value("--modbus-connections", rta.modbus_connections) || opt_value("--modbus", rta.modbus) ||
+        opt_value("--monitor", rta.monitor) || flag("--monitor-write", rta.monitor_write) ||
+        flag("--monitor-remote", rta.monitor_remote)) {
+    } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");
+    else if (a == "--cycles") cycles = true;  // C40 engines: cycles and us per scan
+    else if (a == "-O0" || a == "-O1" || a == "-O2") opt_level = a[2] - '0';
+    else if (a == "--sandbox") rta.sandbox = true;
+    else if (a.rfind("--trace", 0) == 0) trace_file = value("--trace");
+    else if (a.rfind("--watch", 0) == 0) watch = value("--watch");
+    else if (a.rfind("--scans", 0) == 0) {
+      std::string v = value("--scans");
+      if (v.empty() || v.size() > 9 || v.find_first_not_of("0123456789") != std::string::npos)
+        throw UserError("ldrun: error: bad --scans '" + v + "'");
+      opt.scans = std::stoi(v);
+    } else if (a.rfind("--period", 0) == 0) {
+      period_text = value("--period");
+    } else if (a == "-h" || a == "--help") { std::fputs(kUsage, stdout); return 0; }
+    else if (a == "--version") return print_version("ldrun");
+    else if (!a.empty() && a[0] == '-') throw UserError("ldrun: error: unknown option '" + a + "'\n" + kUsage);
+    else if (input.empty()) input = a;
+    else throw UserError("ldrun: error: more than one program");
   }
+  if (rta.on) {
+    rta.period = period_text;
+    return run_runtime(input, engine, trace_file, watch, opt.scans, rta);
+  }
+  if (!period_text.empty()) {
+    auto p = parse_period(period_text);
+    if (!p) throw UserError("ldrun: error: bad --period '" + period_text + "' (e.g. 10ms, 1s)");
+    opt.period_ms = *p;
+  }
+  if (input.empty()) throw UserError(std::string("ldrun: error: no program\n") + kUsage);
+  if (rta.sandbox && (engine == "c40sim" || engine == "c40interp" || is_c40_image(input)))
+    throw UserError("ldrun: error: --sandbox is for the engines that run on this machine (native, interp, c); the C40 engines are simulated");
+  if (engine == "c40sim" || engine == "c40interp" || (engine == "native" && is_c40_image(input)))
+    return run_c40(input, engine, trace_file, watch, opt, cycles);  // the TMS320C40 simulator
+  if (cycles) throw UserError("ldrun: error: --cycles needs --engine=c40sim or --engine=c40interp");
+  if (engine != "interp" && engine != "fast" && engine != "native" && engine != "c")
+    throw UserError("ldrun: error: unknown engine '" + engine + "' (native, interp, fast, c, c40sim or c40interp)");
+  if (opt_level >= 0 && (engine != "native" || is_image_file(input)))
+    throw UserError("ldrun: error: -O" + std::to_string(opt_level) +
+                    " is for a source compiled to native code (--engine=native); an image is already compiled");
+  // The program: an image (checked in full before anything runs), or a
+  // source file compiled in memory.
+  Image img;
+  if (is_image_file(input)) {
+    img = load_image_file(input);
+    if (engine == "c") throw UserError("ldrun: error: --engine=c needs the program's source (.ld or .il), not an image");
+    if (img.target != ImageTarget::X86_64 && engine == "native")
+      throw UserError("ldrun: error: " + input + " is not an x86-64 image; use --engine=interp");
+  } else if (engine == "c") {
+    Compiled c = compile_source(input);
+    img.layout = c.il.layout();
+    img.aliases = c.il.aliases;
+    img.retentive = retentive_ranges(c.il);
+    tmpdir = make_temp_dir();
+    so_path = build_c_shared_object(c, tmpdir);
+  } else {
+    Compiled c = compile_source(input);
+    img = engine == "native" ? make_x86_image(c.il, build_x86(c.il, input, as::Mode::Blockwise, std::max(opt_level, 0),
+                                                              /*notes=*/false))
+                             : il_image(c.il);
+  }
+  const Layout& layout = img.layout;
+  std::unique_ptr<Engine> eng = engine == "interp" ? make_interp_engine(img.il, layout)
+                                : engine == "fast" ? make_fast_interp_engine(img.il, layout)
+                                : engine == "c"    ? make_shared_object_engine(so_path, kCScanSymbol)
+                                                   : make_native_engine(img.code, img.entry);
+  if (rta.sandbox) eng = make_sandboxed_engine(std::move(eng), layout);
+  for (Probe& p : parse_watch(watch, img.aliases)) opt.watch.push_back(p);
+  Trace trace;
+  if (!trace_file.empty()) trace = load_trace(trace_file, img.aliases);
+  std::string out;
+  run_trace(*eng, layout, trace_file.empty() ? nullptr : &trace, trace_file, opt, out);
+  std::fwrite(out.data(), 1, out.size(), stdout);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return run_tool("ldrun", [&] { return ldrun_main(argc, argv); });
 }
