@@ -21,27 +21,7 @@ C40Build build_c40(const Program& p, const std::string& source_name, int opt_lev
 }
 
 Image make_c40_image(const Program& p, const C40Build& b) {
-  Image img;
-  img.target = ImageTarget::C40;
-  img.source = p.source;
-  img.layout = p.layout();
-  img.code = b.asm_result.code;
-  img.entry = 0;
-  BinaryIl bin = encode_il(p);
-  img.il = bin.code;
-  img.aliases = p.aliases;
-  img.retentive = retentive_ranges(p);
-  size_t k = 0;
-  for (size_t r = 0; r < p.rungs.size(); r++) {
-    img.rung_titles.push_back(p.rungs[r].title);
-    const auto& items = b.asm_result.items[r + 1];  // block 0 is the prologue
-    for (size_t i = 0; i < p.rungs[r].code.size(); i++, k++) {
-      const Instr& in = p.rungs[r].code[i];
-      img.lines.push_back({items[b.gen.il_items[r][i]].offset, bin.instr_offset[k],
-                           in.loc.line ? in.loc.line : p.rungs[r].line, uint32_t(r)});
-    }
-  }
-  return img;
+  return make_image(ImageTarget::C40, p, b.asm_result, b.gen.il_items);
 }
 
 std::string c40_output(const Program& p, const std::string& input, const std::string& emit, bool to_file,

@@ -96,43 +96,8 @@ NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode
   return b;
 }
 
-std::vector<RetentiveRange> retentive_ranges(const Program& p) {
-  std::vector<RetentiveRange> r = {{Area::K, 0, device_count(Dev::K)}};
-  std::vector<uint32_t> words;
-  for (const DeviceRef& d : p.retain) words.push_back(d.index);
-  std::sort(words.begin(), words.end());
-  words.erase(std::unique(words.begin(), words.end()), words.end());
-  for (size_t i = 0; i < words.size(); i++) {
-    if (i && words[i] == words[i - 1] + 1) r.back().count++;
-    else r.push_back({Area::D, words[i], 1});
-  }
-  return r;
-}
-
 Image make_x86_image(const Program& p, const NativeBuild& nb) {
-  Image img;
-  img.target = ImageTarget::X86_64;
-  img.source = p.source;
-  img.layout = p.layout();
-  img.code = nb.asm_result.code;
-  img.entry = 0;
-  BinaryIl bin = encode_il(p);
-  img.il = bin.code;
-  img.aliases = p.aliases;
-  img.retentive = retentive_ranges(p);
-  size_t k = 0;
-  for (size_t r = 0; r < p.rungs.size(); r++) {
-    img.rung_titles.push_back(p.rungs[r].title);
-    const auto& items = nb.asm_result.items[r + 1];  // block 0 is the prologue
-    uint32_t block_end = nb.asm_result.blockOffsets[r + 2];
-    for (size_t i = 0; i < p.rungs[r].code.size(); i++, k++) {
-      const Instr& in = p.rungs[r].code[i];
-      uint32_t at = nb.gen.il_items[r][i];
-      img.lines.push_back({at < items.size() ? items[at].offset : block_end, bin.instr_offset[k],
-                           in.loc.line ? in.loc.line : p.rungs[r].line, uint32_t(r)});
-    }
-  }
-  return img;
+  return make_image(ImageTarget::X86_64, p, nb.asm_result, nb.gen.il_items);
 }
 
 bool is_image_file(const std::string& path) {

@@ -50,7 +50,6 @@ NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode
 Image make_x86_image(const Program& p, const NativeBuild& nb);
 // An image's retentive ranges for p: the K area, then p's .retain words
 // (docs/image-format.md, section 6), adjacent words joined into one range.
-std::vector<RetentiveRange> retentive_ranges(const Program& p);
 
 // Reads an image file (binary, or Intel HEX by its first character) and checks
 // it fully; errors are UserError naming the file and the place.

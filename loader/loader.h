@@ -11,6 +11,7 @@
 #include <string_view>
 #include <vector>
 
+#include "assembler/assembler.h"
 #include "ir/ir.h"
 #include "loader/config.h"
 
@@ -60,6 +61,14 @@ struct ImageError : std::runtime_error {
 
 // Serializes an image.  Writes the fields as they are (read_image does the
 // checking); throws ImageError only if the image is too large for the format.
+// The image of a program and its assembled code, for either target: the
+// backends assemble rung r as block r + 1 (block 0: the prologue), and
+// il_items[r][i] is the assembler item where IL instruction i of rung r
+// starts (the line map).  The K area and the IL's .retain words are retentive.
+Image make_image(ImageTarget target, const Program& p, const as::Result& code,
+                 const std::vector<std::vector<uint32_t>>& il_items);
+std::vector<RetentiveRange> retentive_ranges(const Program& p);
+
 std::vector<uint8_t> write_image(const Image& image);
 
 // Parses and checks an image; `name` is the file name used in messages.
