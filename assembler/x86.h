@@ -150,6 +150,18 @@ Disassembly disassemble(std::span<const uint8_t> code);
 std::span<const Instruction> scanPrologue(bool withSlots);
 std::span<const Instruction> scanEpilogue(bool withSlots);
 
+// The -O2 frame's base registers (docs/x86.md, "Compact addressing"): right
+// after the -O2 prologue, `lea rdi, [rbx+K0]; lea r15, [rbx+K1]` point them
+// into the memory image at offsets the compiler picks per program, so that
+// devices near K take [rdi+disp8] / [r15+disp8] instead of [rbx+disp32].  The
+// body never writes them, except that each call through the REAL function
+// table (which may clobber rdi) is followed at once by `lea rdi, [rbx+K0]`.
+// r15 is callee-saved; the shared routines use neither.  The loader's
+// validator reads K0 and K1 from the prologue and checks every [reg+disp]
+// against the memory image as K+disp.
+constexpr RegNum kBaseRegs[2] = {DI, R15};
+Instruction baseLea(RegNum reg, int32_t k);  // lea reg, [rbx+k]
+
 // ------------------------------------------------------ shared routines
 // Timers and counters at -O2 call one routine per kind, placed after the
 // epilogue (docs/x86.md, "Shared routines").  A routine is branch-free and
