@@ -159,7 +159,8 @@ std::span<const Instruction> scanEpilogue(bool withSlots);
 // r15 is callee-saved; the shared routines use neither.  The loader's
 // validator reads K0 and K1 from the prologue and checks every [reg+disp]
 // against the memory image as K+disp.
-constexpr RegNum kBaseRegs[2] = {DI, R15};
+constexpr int kNumBases = 3;
+constexpr RegNum kBaseRegs[kNumBases] = {DI, R15, R14};
 Instruction baseLea(RegNum reg, int32_t k);  // lea reg, [rbx+k]
 
 // ------------------------------------------------------ shared routines

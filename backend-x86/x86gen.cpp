@@ -108,8 +108,8 @@ uint32_t float_bits(float f) {
 // stack position p lives in kSlots[p % kNumSlots] (0 or 1 in the low byte).
 // They survive the calls to the REAL functions.  r15 is the second base
 // register (as::x86::kBaseRegs), so four slots.
-const Reg kSlots[] = {r8(R12), r8(R13), r8(R14), r8(BP)};
-constexpr int kNumSlots = 4;
+const Reg kSlots[] = {r8(R12), r8(R13), r8(BP)};
+constexpr int kNumSlots = 3;
 
 // Turns gate_ off for one instruction's code (restored at the end of scope).
 struct Ungated {
@@ -544,7 +544,7 @@ void Gen::reset_masked(std::initializer_list<Operand> dwords, std::initializer_l
 void Gen::timer_gated(const ldc::Instr& in) {
   Reg p = power();
   if (p != esi) emit(M::Mov, {R(esi), R(p)});
-  emit(M::Mov, {R(edx), I(in.a[0].index)});
+  emit(M::Mov, {R(r8(DX)), I(int32_t(in.a[0].index & 0xff))});  // the routine takes dl only (movzx edx, dl)
   const ldc::Operand& pt = in.a[1];
   if (pt.kind == OpdKind::ConstInt) emit(M::Mov, {R(ecx), I(pt.ival < 0 ? 0 : pt.ival)});
   else load_int(pt, ecx);
@@ -653,7 +653,7 @@ void Gen::counter_gated(const ldc::Instr& in) {
   emit(M::Mov, {B(e), R(al)});
   emit(M::Not, {R(esi)});
   emit(M::And, {R(esi), R(eax)});  // rising edge of the input
-  emit(M::Mov, {R(edx), I(in.a[0].index)});
+  emit(M::Mov, {R(r8(DX)), I(int32_t(in.a[0].index & 0xff))});  // the routine takes dl only (movzx edx, dl)
   bool up = in.op == Op::CTU;
   if (up) load_int(in.a[1], ecx);
   call_routine(up ? as::x86::Routine::Ctu : as::x86::Routine::Ctd);
@@ -994,8 +994,8 @@ void set_bases(std::vector<as::Block<Instruction>>& blocks, uint32_t image_size)
         if (rewritable(it.inst, it.inst.ops[k]))
           ops.push_back({it.inst.ops[k].mem.disp, int64_t(it.inst.ops[k].mem.disp) + mem_width(it.inst.ops[k].mem) - 1});
     }
-  int64_t ks[2];
-  for (int r = 0; r < 2; r++) {
+  int64_t ks[kNumBases];
+  for (int r = 0; r < kNumBases; r++) {
     // window [lo, lo+255]: the operands with first >= lo and last <= lo+255,
     // counted per width from sorted first bytes
     std::map<int64_t, std::vector<int64_t>> by_width;
@@ -1024,14 +1024,15 @@ void set_bases(std::vector<as::Block<Instruction>>& blocks, uint32_t image_size)
       if (it.kind != as::ItemKind::Instruction) continue;
       Instruction& in = it.inst;
       if (in.mnemonic == M::Lea && in.ops[0].kind == OperandKind::Reg && in.ops[0].reg.cls == RegClass::Gp64 &&
-          (in.ops[0].reg.num == DI || in.ops[0].reg.num == R15) && in.ops[1].mem.base == r64(BX)) {
-        in.ops[1].mem.disp = int32_t(ks[in.ops[0].reg.num == DI ? 0 : 1]);
+          in.ops[1].mem.base == r64(BX)) {
+        for (int r = 0; r < kNumBases; r++)
+          if (in.ops[0].reg.num == kBaseRegs[r]) in.ops[1].mem.disp = int32_t(ks[r]);
         continue;
       }
       for (unsigned k = 0; k < in.numOperands; k++) {
         if (!rewritable(in, in.ops[k])) continue;
         Mem& m = in.ops[k].mem;
-        for (int r = 0; r < 2; r++) {
+        for (int r = 0; r < kNumBases; r++) {
           int64_t d = int64_t(m.disp) - ks[r];
           if (d >= -128 && d + mem_width(m) - 1 <= 127) {
             m.base = r64(as::x86::kBaseRegs[r]);

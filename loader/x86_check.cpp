@@ -47,11 +47,11 @@ uint32_t width(x86::Size s) {
 // prologue points them to; absent under the -O0 frame.
 struct Bases {
   bool set = false;
-  int64_t k[2] = {0, 0};
+  int64_t k[x86::kNumBases] = {};
   // which base register r is (0, 1), or -1
   static int which(const x86::Reg& r) {
     if (r.cls != x86::RegClass::Gp64) return -1;
-    for (int i = 0; i < 2; i++)
+    for (int i = 0; i < x86::kNumBases; i++)
       if (r.num == x86::kBaseRegs[i]) return i;
     return -1;
   }
@@ -168,17 +168,18 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
   size_t body_first = first + x86::scanPrologue(slots).size();
   Bases bases;
   // The -O2 frame may then set its base registers (lea rdi, [rbx+K0]; lea
-  // r15, [rbx+K1]); without both, it is the frame before compact addressing,
+  // r15, [rbx+K1]; ...); without all, it is the frame before compact addressing,
   // whose body may not address memory through them.
-  if (slots && body_first + 2 <= d.insts.size()) {
-    const x86::Instruction &l0 = d.insts[body_first].inst, &l1 = d.insts[body_first + 1].inst;
-    if (l0.numOperands == 2 && l1.numOperands == 2 && l0.ops[1].kind == x86::OperandKind::Mem &&
-        l1.ops[1].kind == x86::OperandKind::Mem && is_base_lea(l0, 0, l0.ops[1].mem.disp) &&
-        is_base_lea(l1, 1, l1.ops[1].mem.disp)) {
+  if (slots && body_first + x86::kNumBases <= d.insts.size()) {
+    bool all = true;
+    for (int i = 0; i < x86::kNumBases && all; i++) {
+      const x86::Instruction& l = d.insts[body_first + size_t(i)].inst;
+      all = l.numOperands == 2 && l.ops[1].kind == x86::OperandKind::Mem && is_base_lea(l, i, l.ops[1].mem.disp);
+      if (all) bases.k[i] = l.ops[1].mem.disp;
+    }
+    if (all) {
       bases.set = true;
-      bases.k[0] = l0.ops[1].mem.disp;
-      bases.k[1] = l1.ops[1].mem.disp;
-      body_first += 2;
+      body_first += x86::kNumBases;
     }
   }
   size_t epi = x86::scanEpilogue(slots).size();
@@ -241,7 +242,7 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     // the base registers are fixed in the -O2 body: only rdi's reload after a
     // call through the REAL function table (below) may set it, to its K
     if (bases.set && writes_first && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm) {
-      for (int b = 0; b < 2; b++)
+      for (int b = 0; b < x86::kNumBases; b++)
         if (in.ops[0].reg.num == x86::kBaseRegs[b] && !(b == 0 && is_base_lea(in, 0, bases.k[0])))
           return at(di.offset) + text_of(in) + ": writes " + std::string(x86::regName(in.ops[0].reg)) +
                  ", a base register of the -O2 frame (only rdi's reload 'lea rdi, [rbx+" + std::to_string(bases.k[0]) +
