@@ -151,13 +151,15 @@ std::span<const Instruction> scanPrologue(bool withSlots);
 std::span<const Instruction> scanEpilogue(bool withSlots);
 
 // The -O2 frame's base registers (docs/x86.md, "Compact addressing"): right
-// after the -O2 prologue, `lea rdi, [rbx+K0]; lea r15, [rbx+K1]` point them
+// after the -O2 prologue, `lea rdi, [rbx+K0]; lea r15, [rbx+K1]; lea r14,
+// [rbx+K2]` point them
 // into the memory image at offsets the compiler picks per program, so that
-// devices near K take [rdi+disp8] / [r15+disp8] instead of [rbx+disp32].  The
+// devices near K take [rdi+disp8] / [r15+disp8] / [r14+disp8] instead of
+// [rbx+disp32].  The
 // body never writes them, except that each call through the REAL function
 // table (which may clobber rdi) is followed at once by `lea rdi, [rbx+K0]`.
-// r15 is callee-saved; the shared routines use neither.  The loader's
-// validator reads K0 and K1 from the prologue and checks every [reg+disp]
+// r15 and r14 are callee-saved (they were bit-stack slots before); the shared
+// routines use none of the three.  The loader's validator reads the K from the prologue and checks every [reg+disp]
 // against the memory image as K+disp.
 constexpr int kNumBases = 3;
 constexpr RegNum kBaseRegs[kNumBases] = {DI, R15, R14};

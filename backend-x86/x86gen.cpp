@@ -106,8 +106,8 @@ uint32_t float_bits(float f) {
 
 // -O2 keeps the bit stack in callee-saved byte registers: the entry at
 // stack position p lives in kSlots[p % kNumSlots] (0 or 1 in the low byte).
-// They survive the calls to the REAL functions.  r15 is the second base
-// register (as::x86::kBaseRegs), so four slots.
+// They survive the calls to the REAL functions.  r15 and r14 are base
+// registers (as::x86::kBaseRegs, compact addressing), so three slots.
 const Reg kSlots[] = {r8(R12), r8(R13), r8(BP)};
 constexpr int kNumSlots = 3;
 
@@ -973,10 +973,10 @@ as::x86::RoutineAreas x86_routine_areas(const Layout& l) {
   return a;
 }
 
-// -O2 compact addressing (docs/x86.md): pick K0 and K1 for the base registers
-// rdi and r15 so that their disp8 windows [K-128, K+127] cover as many of
+// -O2 compact addressing (docs/x86.md): pick K for each base register
+// (as::x86::kBaseRegs) so that their disp8 windows [K-128, K+127] cover as many of
 // the program's [rbx+disp32] operands as possible (greedily: the fullest
-// window first), rewrite those operands to [rdi+d8] / [r15+d8], and fill K
+// window first), rewrite those operands to [reg+d8], and fill K
 // into the prologue's leas and the reloads after REAL calls.
 bool rewritable(const Instruction& in, const as::x86::Operand& o) {
   return o.kind == OperandKind::Mem && in.mnemonic != M::Call && in.mnemonic != M::Lea && o.mem.base == r64(BX) &&
@@ -1060,7 +1060,7 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
   // prologue: keep rbx/rbp for the caller, 16-byte stack alignment for calls
   as::Block<Instruction> pro;
   pro.sourceLine = p.rungs.empty() ? 0 : p.rungs[0].line;
-  pro.items.push_back(Item::note(o2 ? "scan(image): rbx = image, bit stack in r12b r13b r14b bpl, bases rdi r15 (-O2)"
+  pro.items.push_back(Item::note(o2 ? "scan(image): rbx = image, bit stack in r12b r13b bpl, bases rdi r15 r14 (-O2)"
                                     : "scan(image): rbx = image, ebp = bit stack"));
   for (const Instruction& i : scanPrologue(o2)) pro.items.push_back(Item::instr(i));
   if (o2)

@@ -65,7 +65,7 @@ bool is_base_lea(const x86::Instruction& in, int i, int64_t k) {
 }
 
 // "" if the memory operand is [rbx+disp] (or, under the -O2 frame, [rdi+disp]
-// or [r15+disp], i.e. the image at K+disp) with [disp, disp+width) inside the image.
+// [r15+disp] or [r14+disp], i.e. the image at K+disp) with [disp, disp+width) inside the image.
 std::string check_mem(const x86::Mem& m, uint32_t image_size, const Bases& bases) {
   const x86::Reg& base = m.base;
   if (int b = Bases::which(base); b >= 0 && bases.set) {
@@ -168,7 +168,7 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
   size_t body_first = first + x86::scanPrologue(slots).size();
   Bases bases;
   // The -O2 frame may then set its base registers (lea rdi, [rbx+K0]; lea
-  // r15, [rbx+K1]; ...); without all, it is the frame before compact addressing,
+  // r15, [rbx+K1]; lea r14, [rbx+K2]); without all, it is the frame before compact addressing,
   // whose body may not address memory through them.
   if (slots && body_first + x86::kNumBases <= d.insts.size()) {
     bool all = true;
