@@ -150,6 +150,21 @@ Disassembly disassemble(std::span<const uint8_t> code);
 std::span<const Instruction> scanPrologue(bool withSlots);
 std::span<const Instruction> scanEpilogue(bool withSlots);
 
+// The -O2 frame's base registers (docs/x86.md, "Compact addressing"): right
+// after the -O2 prologue, `lea rdi, [rbx+K0]; lea r15, [rbx+K1]; lea r14,
+// [rbx+K2]` point them
+// into the memory image at offsets the compiler picks per program, so that
+// devices near K take [rdi+disp8] / [r15+disp8] / [r14+disp8] instead of
+// [rbx+disp32].  The
+// body never writes them, except that each call through the REAL function
+// table (which may clobber rdi) is followed at once by `lea rdi, [rbx+K0]`.
+// r15 and r14 are callee-saved (they were bit-stack slots before); the shared
+// routines use none of the three.  The loader's validator reads the K from the prologue and checks every [reg+disp]
+// against the memory image as K+disp.
+constexpr int kNumBases = 3;
+constexpr RegNum kBaseRegs[kNumBases] = {DI, R15, R14};
+Instruction baseLea(RegNum reg, int32_t k);  // lea reg, [rbx+k]
+
 // ------------------------------------------------------ shared routines
 // Timers and counters at -O2 call one routine per kind, placed after the
 // epilogue (docs/x86.md, "Shared routines").  A routine is branch-free and

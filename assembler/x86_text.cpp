@@ -503,6 +503,14 @@ std::span<const Instruction> scanEpilogue(bool withSlots) {
   return withSlots ? o2 : o0;
 }
 
+Instruction baseLea(RegNum reg, int32_t k) {
+  Mem m;
+  m.base = r64(BX);
+  m.disp = k;
+  m.size = Size::None;
+  return make(Mnemonic::Lea, {Operand::r(r64(reg)), Operand::m(m)});
+}
+
 std::string_view routineName(Routine r) {
   static const char* const names[] = {"rt_ton", "rt_tof", "rt_tp", "rt_ctu", "rt_ctd"};
   return names[int(r)];

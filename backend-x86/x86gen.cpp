@@ -106,9 +106,10 @@ uint32_t float_bits(float f) {
 
 // -O2 keeps the bit stack in callee-saved byte registers: the entry at
 // stack position p lives in kSlots[p % kNumSlots] (0 or 1 in the low byte).
-// They survive the calls to the REAL functions.
-const Reg kSlots[] = {r8(R12), r8(R13), r8(R14), r8(R15), r8(BP)};
-constexpr int kNumSlots = 5;
+// They survive the calls to the REAL functions.  r15 and r14 are base
+// registers (as::x86::kBaseRegs, compact addressing), so three slots.
+const Reg kSlots[] = {r8(R12), r8(R13), r8(BP)};
+constexpr int kNumSlots = 3;
 
 // Turns gate_ off for one instruction's code (restored at the end of scope).
 struct Ungated {
@@ -123,7 +124,7 @@ struct Ungated {
 class Gen {
  public:
   Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used)
-      : L_(l), items_(items), slots_(slots), gate_(gate), used_(used) {}
+      : L_(l), items_(items), slots_(slots), gate_(gate), bases_(gate), used_(used) {}
 
   void instr(const ldc::Instr& in);
 
@@ -133,6 +134,7 @@ class Gen {
   int next_label_ = 0;
   bool slots_;     // -O2: the stack in kSlots; else the -O0 shift register in ebp
   bool gate_;      // -O2: branch-free power gating (cmov) instead of `je skip`
+  bool bases_;     // -O2: the frame sets the base registers (rdi is reloaded after a REAL call)
   std::bitset<8>* used_;  // the shared routines called (as::x86::Routine)
   int depth_ = 0;  // stack positions in use before the current instruction
 
@@ -479,6 +481,8 @@ void Gen::special(const ldc::Instr& in) {
               : in.op == Op::EXP ? RealFn::Exp : RealFn::Ln;
     Mem m = mem_at(Size::Qword, uint32_t(kCallTableDisp + 8 * int32_t(fn)));
     emit(M::Call, {Operand::m(m)});
+    // the call may clobber rdi: point it back (its K is filled in by set_bases)
+    if (bases_) emit(as::x86::baseLea(DI, 0));
   }
   store_real(d);
   end_skip(skip);
@@ -540,7 +544,7 @@ void Gen::reset_masked(std::initializer_list<Operand> dwords, std::initializer_l
 void Gen::timer_gated(const ldc::Instr& in) {
   Reg p = power();
   if (p != esi) emit(M::Mov, {R(esi), R(p)});
-  emit(M::Mov, {R(edx), I(in.a[0].index)});
+  emit(M::Mov, {R(r8(DX)), I(int32_t(in.a[0].index & 0xff))});  // the routine takes dl only (movzx edx, dl)
   const ldc::Operand& pt = in.a[1];
   if (pt.kind == OpdKind::ConstInt) emit(M::Mov, {R(ecx), I(pt.ival < 0 ? 0 : pt.ival)});
   else load_int(pt, ecx);
@@ -649,7 +653,7 @@ void Gen::counter_gated(const ldc::Instr& in) {
   emit(M::Mov, {B(e), R(al)});
   emit(M::Not, {R(esi)});
   emit(M::And, {R(esi), R(eax)});  // rising edge of the input
-  emit(M::Mov, {R(edx), I(in.a[0].index)});
+  emit(M::Mov, {R(r8(DX)), I(int32_t(in.a[0].index & 0xff))});  // the routine takes dl only (movzx edx, dl)
   bool up = in.op == Op::CTU;
   if (up) load_int(in.a[1], ecx);
   call_routine(up ? as::x86::Routine::Ctu : as::x86::Routine::Ctd);
@@ -861,7 +865,9 @@ bool mem_uses(const Operand& o, uint8_t num) {
                                         (o.mem.index.valid() && o.mem.index.num == num));
 }
 bool writes_reg(const Instruction& i, uint8_t num) {
-  if (i.mnemonic == M::Call || (i.mnemonic == M::Idiv && (num == AX || num == DX)) || (i.mnemonic == M::Cdq && num == DX)) return true;
+  // a call keeps the callee-saved registers (the shared routines and libm alike): ebp's stack survives it
+  if (i.mnemonic == M::Call) return !(num == BX || num == BP || num >= R12);
+  if ((i.mnemonic == M::Idiv && (num == AX || num == DX)) || (i.mnemonic == M::Cdq && num == DX)) return true;
   if (i.mnemonic == M::Cmp || i.mnemonic == M::Test || i.mnemonic == M::Push || i.numOperands == 0) return false;
   if (i.mnemonic == M::Jmp || i.mnemonic == M::Jcc || i.mnemonic == M::Ucomiss) return false;
   return is_reg(i.ops[0], num);
@@ -967,6 +973,77 @@ as::x86::RoutineAreas x86_routine_areas(const Layout& l) {
   return a;
 }
 
+// -O2 compact addressing (docs/x86.md): pick K for each base register
+// (as::x86::kBaseRegs) so that their disp8 windows [K-128, K+127] cover as many of
+// the program's [rbx+disp32] operands as possible (greedily: the fullest
+// window first), rewrite those operands to [reg+d8], and fill K
+// into the prologue's leas and the reloads after REAL calls.
+bool rewritable(const Instruction& in, const as::x86::Operand& o) {
+  return o.kind == OperandKind::Mem && in.mnemonic != M::Call && in.mnemonic != M::Lea && o.mem.base == r64(BX) &&
+         !o.mem.index.valid() && (o.mem.disp < -128 || o.mem.disp > 127);
+}
+uint32_t mem_width(const Mem& m) { return m.size == Size::Dword ? 4 : m.size == Size::Qword ? 8 : 1; }
+
+void set_bases(std::vector<as::Block<Instruction>>& blocks, uint32_t image_size) {
+  std::vector<int64_t> addrs;  // the first byte of each operand whose last byte is addr+w-1
+  std::vector<std::pair<int64_t, int64_t>> ops;  // (first, last) byte
+  for (const auto& b : blocks)
+    for (const Item& it : b.items) {
+      if (it.kind != as::ItemKind::Instruction) continue;
+      for (unsigned k = 0; k < it.inst.numOperands; k++)
+        if (rewritable(it.inst, it.inst.ops[k]))
+          ops.push_back({it.inst.ops[k].mem.disp, int64_t(it.inst.ops[k].mem.disp) + mem_width(it.inst.ops[k].mem) - 1});
+    }
+  int64_t ks[kNumBases];
+  for (int r = 0; r < kNumBases; r++) {
+    // window [lo, lo+255]: the operands with first >= lo and last <= lo+255,
+    // counted per width from sorted first bytes
+    std::map<int64_t, std::vector<int64_t>> by_width;
+    for (const auto& o : ops) by_width[o.second - o.first].push_back(o.first);
+    for (auto& [w, v] : by_width) std::sort(v.begin(), v.end());
+    size_t best = 0;
+    int64_t best_lo = 0;
+    for (const auto& [w0, cand] : by_width)
+      for (size_t i = 0; i < cand.size(); i++) {
+        if (i > 0 && cand[i] == cand[i - 1]) continue;
+        int64_t lo = cand[i];
+        size_t n = 0;
+        for (const auto& [w, v] : by_width)
+          n += size_t(std::upper_bound(v.begin(), v.end(), lo + 255 - w) - std::lower_bound(v.begin(), v.end(), lo));
+        if (n > best) best = n, best_lo = lo;
+      }
+    ks[r] = best ? best_lo + 128 : 128;
+    if (ks[r] >= int64_t(image_size)) ks[r] = int64_t(image_size) - 1;
+    std::vector<std::pair<int64_t, int64_t>> rest;
+    for (const auto& o : ops)
+      if (!(o.first >= ks[r] - 128 && o.second <= ks[r] + 127)) rest.push_back(o);
+    ops.swap(rest);
+  }
+  for (auto& b : blocks)
+    for (Item& it : b.items) {
+      if (it.kind != as::ItemKind::Instruction) continue;
+      Instruction& in = it.inst;
+      if (in.mnemonic == M::Lea && in.ops[0].kind == OperandKind::Reg && in.ops[0].reg.cls == RegClass::Gp64 &&
+          in.ops[1].mem.base == r64(BX)) {
+        for (int r = 0; r < kNumBases; r++)
+          if (in.ops[0].reg.num == kBaseRegs[r]) in.ops[1].mem.disp = int32_t(ks[r]);
+        continue;
+      }
+      for (unsigned k = 0; k < in.numOperands; k++) {
+        if (!rewritable(in, in.ops[k])) continue;
+        Mem& m = in.ops[k].mem;
+        for (int r = 0; r < kNumBases; r++) {
+          int64_t d = int64_t(m.disp) - ks[r];
+          if (d >= -128 && d + mem_width(m) - 1 <= 127) {
+            m.base = r64(as::x86::kBaseRegs[r]);
+            m.disp = int32_t(d);
+            break;
+          }
+        }
+      }
+    }
+}
+
 X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool notes) {
   const bool o2 = opt_level >= 2;
   X86Code out;
@@ -983,9 +1060,11 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
   // prologue: keep rbx/rbp for the caller, 16-byte stack alignment for calls
   as::Block<Instruction> pro;
   pro.sourceLine = p.rungs.empty() ? 0 : p.rungs[0].line;
-  pro.items.push_back(Item::note(o2 ? "scan(image): rbx = image, bit stack in r12b r13b r14b r15b bpl (-O2)"
+  pro.items.push_back(Item::note(o2 ? "scan(image): rbx = image, bit stack in r12b r13b bpl, bases rdi r15 r14 (-O2)"
                                     : "scan(image): rbx = image, ebp = bit stack"));
   for (const Instruction& i : scanPrologue(o2)) pro.items.push_back(Item::instr(i));
+  if (o2)
+    for (RegNum r : as::x86::kBaseRegs) pro.items.push_back(Item::instr(as::x86::baseLea(r, 0)));  // K: set_bases
   prog.blocks.push_back(std::move(pro));
 
   std::bitset<8> used;
@@ -1029,6 +1108,7 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool
     }
     prog.blocks.push_back(std::move(rt));
   }
+  if (o2) set_bases(prog.blocks, layout.size);
   return out;
 }
 

@@ -43,9 +43,42 @@ uint32_t width(x86::Size s) {
   return 1;
 }
 
-// "" if the memory operand is [rbx+disp] with [disp, disp+width) inside the image.
-std::string check_mem(const x86::Mem& m, uint32_t image_size) {
+// The -O2 frame's base registers (as::x86::kBaseRegs) and the offsets K its
+// prologue points them to; absent under the -O0 frame.
+struct Bases {
+  bool set = false;
+  int64_t k[x86::kNumBases] = {};
+  // which base register r is (0, 1), or -1
+  static int which(const x86::Reg& r) {
+    if (r.cls != x86::RegClass::Gp64) return -1;
+    for (int i = 0; i < x86::kNumBases; i++)
+      if (r.num == x86::kBaseRegs[i]) return i;
+    return -1;
+  }
+};
+
+// Is `in` exactly `lea reg, [rbx+k]`, the one instruction that sets base register i?
+bool is_base_lea(const x86::Instruction& in, int i, int64_t k) {
+  return in.mnemonic == x86::Mnemonic::Lea && in.numOperands == 2 && in.ops[0].kind == x86::OperandKind::Reg &&
+         in.ops[0].reg == x86::r64(x86::kBaseRegs[i]) && in.ops[1].kind == x86::OperandKind::Mem &&
+         in.ops[1].mem.base == x86::r64(x86::BX) && !in.ops[1].mem.index.valid() && in.ops[1].mem.disp == k;
+}
+
+// "" if the memory operand is [rbx+disp] (or, under the -O2 frame, [rdi+disp]
+// [r15+disp] or [r14+disp], i.e. the image at K+disp) with [disp, disp+width) inside the image.
+std::string check_mem(const x86::Mem& m, uint32_t image_size, const Bases& bases) {
   const x86::Reg& base = m.base;
+  if (int b = Bases::which(base); b >= 0 && bases.set) {
+    if (m.index.valid())
+      return "indexed memory operand (index " + std::string(x86::regName(m.index)) + "): its address cannot be checked";
+    int64_t lo = bases.k[b] + m.disp, hi = lo + width(m.size);
+    if (lo < 0 || hi > int64_t(image_size))
+      return "memory operand [" + std::string(x86::regName(base)) + (m.disp < 0 ? "-" : "+") +
+             hex(m.disp < 0 ? -int64_t(m.disp) : m.disp) + "] (image offset " + std::to_string(lo) + ", " +
+             std::to_string(width(m.size)) + " bytes; the frame sets " + std::string(x86::regName(base)) + " = rbx+" +
+             std::to_string(bases.k[b]) + ") outside the memory image [0, " + hex(image_size) + ")";
+    return "";
+  }
   if (base.cls == x86::RegClass::Rip) return "rip-relative memory operand (only [rbx+disp] may address memory)";
   if (!base.valid()) return "absolute memory operand (only [rbx+disp] may address memory)";
   if (base.cls == x86::RegClass::Gp64 && (base.num == x86::SP || base.num == x86::BP))
@@ -133,6 +166,22 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
   if (!slots && !(first < d.insts.size() && d.insts[first].offset == entry && matches(first, x86::scanPrologue(false))))
     return at(entry) + "the entry is not the scan function's prologue (push rbx; push rbp; ...; mov rbx, rdi)";
   size_t body_first = first + x86::scanPrologue(slots).size();
+  Bases bases;
+  // The -O2 frame may then set its base registers (lea rdi, [rbx+K0]; lea
+  // r15, [rbx+K1]; lea r14, [rbx+K2]); without all, it is the frame before compact addressing,
+  // whose body may not address memory through them.
+  if (slots && body_first + x86::kNumBases <= d.insts.size()) {
+    bool all = true;
+    for (int i = 0; i < x86::kNumBases && all; i++) {
+      const x86::Instruction& l = d.insts[body_first + size_t(i)].inst;
+      all = l.numOperands == 2 && l.ops[1].kind == x86::OperandKind::Mem && is_base_lea(l, i, l.ops[1].mem.disp);
+      if (all) bases.k[i] = l.ops[1].mem.disp;
+    }
+    if (all) {
+      bases.set = true;
+      body_first += x86::kNumBases;
+    }
+  }
   size_t epi = x86::scanEpilogue(slots).size();
   // After the epilogue: the shared timer/counter routines, each exactly one of
   // the bodies as::x86::scanRoutine makes for this layout (branch-free, one
@@ -190,6 +239,19 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
         (in.ops[0].reg.num == x86::BX || in.ops[0].reg.num == x86::SP))
       return at(di.offset) + text_of(in) + ": writes " + std::string(x86::regName(in.ops[0].reg)) +
              " (the image base and the stack pointer are fixed in the scan body)";
+    // the base registers are fixed in the -O2 body: only rdi's reload after a
+    // call through the REAL function table (below) may set it, to its K
+    if (bases.set && writes_first && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm) {
+      for (int b = 0; b < x86::kNumBases; b++)
+        if (in.ops[0].reg.num == x86::kBaseRegs[b] && !(b == 0 && is_base_lea(in, 0, bases.k[0])))
+          return at(di.offset) + text_of(in) + ": writes " + std::string(x86::regName(in.ops[0].reg)) +
+                 ", a base register of the -O2 frame (only rdi's reload 'lea rdi, [rbx+" + std::to_string(bases.k[0]) +
+                 "]' may set one)";
+    }
+    if (bases.set && in.mnemonic == M::Call && in.numOperands && in.ops[0].kind == x86::OperandKind::Mem &&
+        (k + 1 >= body_end || !is_base_lea(d.insts[k + 1].inst, 0, bases.k[0])))
+      return at(di.offset) + text_of(in) + ": a call through the REAL function table not followed at once by 'lea rdi, [rbx+" +
+             std::to_string(bases.k[0]) + "]' (the call may change rdi, a base register of the -O2 frame)";
     // r12-r15 belong to the caller (System V) unless the frame saved them
     if (writes_first && !slots && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm &&
         in.ops[0].reg.num >= x86::R12)
@@ -235,7 +297,7 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
           continue;
         }
         if (branch) return at(di.offset) + text_of(in) + ": indirect branch through memory";
-        if (std::string why = check_mem(o.mem, layout.size); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
+        if (std::string why = check_mem(o.mem, layout.size, bases); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
       } else if (o.kind == x86::OperandKind::Reg && branch) {
         return at(di.offset) + text_of(in) + ": indirect branch through a register";
       } else if (o.kind == x86::OperandKind::Address) {

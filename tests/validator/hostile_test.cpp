@@ -43,13 +43,22 @@ std::vector<uint8_t> piece(const std::string& text, size_t at, size_t body) {
   return x86::encodeAt(in, at);
 }
 
-// A scan function: the -O0 prologue, the body, the epilogue; `offsets` gets
-// the code offset of every body piece.
+const uint32_t kSize = Layout::standard(0).size;
+// The base registers' offsets of the -O2 frames built here: rdi's window
+// starts 0x40 - 0x80 below the image, r15's ends at its last byte, r14's
+// is in the middle.
+const int32_t kK0 = 0x40, kK1 = int32_t(kSize) - 0x80, kK2 = 0x1000;
+
+// A scan function: the -O0 prologue (the -O2 one with `slots`, followed by
+// its base registers' leas, `leas` of them, with K0 and K1), the body, the
+// epilogue; `offsets` gets the code offset of every body piece.
 std::vector<uint8_t> scan_function(const std::vector<std::string>& body, std::vector<uint32_t>& offsets,
-                                   bool slots = false) {
+                                   bool slots = false, int leas = x86::kNumBases, int32_t k0 = kK0, int32_t k1 = kK1) {
   std::vector<uint8_t> code;
   auto put = [&](const std::vector<uint8_t>& b) { code.insert(code.end(), b.begin(), b.end()); };
   for (const auto& in : x86::scanPrologue(slots)) put(x86::encodeAt(in, code.size()));
+  for (int i = 0; slots && i < leas; i++)
+    put(x86::encodeAt(x86::baseLea(x86::kBaseRegs[i], i == 0 ? k0 : i == 1 ? k1 : kK2), code.size()));
   const size_t base = code.size();
   offsets.clear();
   for (const std::string& t : body) {
@@ -95,7 +104,6 @@ struct Case {
   const char* reason;  // in the message after the offset
 };
 
-const uint32_t kSize = Layout::standard(0).size;
 const std::string S = hex(kSize);             // one past the image
 const std::string S1 = hex(kSize - 1);        // its last byte
 const std::string S3 = hex(kSize - 3), S4 = hex(kSize - 4), S7 = hex(kSize - 7), S8 = hex(kSize - 8);
@@ -248,7 +256,89 @@ TEST(Hostile, HarmlessTwinsAreAccepted) {
     EXPECT_EQ(refusal(image_around(scan_function(body, at))), "") << body[0];
   }
   std::vector<uint32_t> at;  // the -O2 frame saves r12-r15, so its body may use them
-  EXPECT_EQ(refusal(image_around(scan_function({"mov r12, rax", "setne r15b", "xor r13d, r13d"}, at, true))), "");
+  EXPECT_EQ(refusal(image_around(scan_function({"mov r12, rax", "setne r13b", "xor r13d, r13d"}, at, true))), "");
+}
+
+// The -O2 frame's base registers (docs/x86.md, "Compact addressing"): the
+// prologue sets rdi = rbx+K0, r15 = rbx+K1 and r14 = rbx+K2; the body may
+// address [rdi+d] / [r15+d] / [r14+d] inside the image as K+d, never write
+// them, and reloads rdi right after each call through the REAL function table.
+TEST(Hostile, BaseRegisters) {
+  const std::string lo = "[rdi-0x40]", hi = "[r15+0x7f]";  // image bytes 0 and kSize-1
+  std::vector<uint32_t> at;
+  // harmless twins: the first and last bytes of the image, lea arithmetic, the reload
+  const std::vector<std::vector<std::string>> ok = {
+      {"movzx eax, byte ptr " + lo, "mov byte ptr " + hi + ", al", "mov dword ptr [r15+0x7c], eax"},
+      {"call qword ptr [rbx-0x40]", "lea rdi, [rbx+" + hex(kK0) + "]", "mov eax, dword ptr [rdi+0x10]"},
+      {"lea rax, [rdi+0x7f]", "lea eax, [r15-0x80]", "cmp rdi, rax", "test r15, r15", "mov rax, rdi"},
+      {"mov eax, dword ptr [r14-0x80]", "add dword ptr [r14+0x7c], eax", "cmp r14d, 0x1"},
+      {"lea rdi, [rbx+" + hex(kK0) + "]", "je 0xd", "call qword ptr [rbx-0x20]", "lea rdi, [rbx+" + hex(kK0) + "]", "nop"},
+  };
+  for (const auto& body : ok) EXPECT_EQ(refusal(image_around(scan_function(body, at, true))), "") << body[0];
+  // a K outside the image is fine as long as every K+d is inside
+  EXPECT_EQ(refusal(image_around(scan_function({"mov byte ptr [r15-0x20], al"}, at, true, x86::kNumBases, kK0, int32_t(kSize) + 0x10))), "");
+
+  auto refused = [&](const std::vector<std::string>& body, size_t hostile, const std::string& reason, bool slots = true,
+                     int leas = x86::kNumBases, int32_t k0 = kK0, int32_t k1 = kK1) {
+    std::string why = refusal(image_around(scan_function(body, at, slots, leas, k0, k1)));
+    EXPECT_NE(why.find("at code offset " + hex(at[hostile]) + ": "), std::string::npos) << body[hostile] << ": " << why;
+    EXPECT_NE(why.find(reason), std::string::npos) << body[hostile] << ": " << why;
+  };
+  const std::string base = "a base register of the -O2 frame";
+  // writing a base register, every width and form
+  refused({"nop", "mov edi, eax"}, 1, base);
+  refused({"mov rdi, rbx"}, 0, base);  // even to the image base
+  refused({"setne dil"}, 0, base);
+  refused({"add r15, 0x10"}, 0, base);
+  refused({"xor r15d, r15d"}, 0, base);
+  refused({"mov r15b, 0x1"}, 0, base);
+  refused({"lea rdi, [rbx+" + hex(kK0 + 1) + "]"}, 0, base);  // a lea to another K
+  refused({"lea r15, [rbx+" + hex(kK1) + "]"}, 0, base);      // r15 is never reloaded
+  refused({"lea rdi, [rdi+0x0]"}, 0, base);
+  refused({"imul edi, eax, 0x3"}, 0, base);
+  refused({"setne r14b"}, 0, base);  // r14 was a bit-stack slot before compact addressing
+  refused({"mov r14, rdi"}, 0, base);
+  refused({"lea r14, [rbx+" + hex(kK2) + "]"}, 0, base);
+  // the REAL call without its reload (or with a wrong one, or at the end)
+  refused({"call qword ptr [rbx-0x40]", "nop"}, 0, "not followed at once by 'lea rdi, [rbx+");
+  refused({"call qword ptr [rbx-0x40]", "lea rdi, [rbx+" + hex(kK0 + 4) + "]"}, 0, "not followed at once");
+  refused({"nop", "call qword ptr [rbx-0x38]"}, 1, "not followed at once");
+  // one byte outside, below and above, for bytes and dwords, on both registers
+  refused({"mov byte ptr [rdi-0x41], al"}, 0, "outside the memory image");
+  refused({"mov byte ptr [r15+0x80], al"}, 0, "outside the memory image", true, x86::kNumBases, kK0, kK1 + 1);
+  refused({"mov dword ptr [r15+0x7d], eax"}, 0, "outside the memory image");
+  refused({"mov byte ptr [r14+0x10], al"}, 0, "memory operand based on r14, not rbx", false);
+  refused({"movzx eax, byte ptr [rdi-0x80]"}, 0, "outside the memory image");
+  refused({"mov eax, dword ptr [r15+0x7f]"}, 0, "outside the memory image");
+  refused({"movss xmm0, dword ptr [r15-0x20]"}, 0, "outside the memory image", true, x86::kNumBases, kK0, int32_t(kSize) + 0x1d);
+  refused({"mov byte ptr [r14-0x1001], al"}, 0, "outside the memory image");  // K2 - 0x1001 = -1
+  EXPECT_EQ(refusal(image_around(scan_function({"mov byte ptr [r14-0x1000], al"}, at, true))), "");  // byte 0
+  // indexed through a base register
+  refused({"mov al, byte ptr [rdi+rax*1]"}, 0, "indexed memory operand");
+  // the wrong frame: the -O0 frame sets no base register
+  refused({"mov byte ptr [rdi+0x10], al"}, 0, "memory operand based on rdi, not rbx", false);
+  refused({"movzx eax, byte ptr [r15+0x10]"}, 0, "memory operand based on r15, not rbx", false);
+  // a -O2 prologue without both leas, or with them swapped, is the frame
+  // before compact addressing: it sets no base register
+  for (int leas = 0; leas < x86::kNumBases; leas++) {
+    refused({"mov byte ptr [rdi+0x10], al"}, 0, "memory operand based on rdi, not rbx", true, leas);
+    refused({"mov byte ptr [r15+0x10], al"}, 0, "memory operand based on r15, not rbx", true, leas);
+  }
+  EXPECT_EQ(refusal(image_around(scan_function({"setne r15b"}, at, true, 0))), "");  // that frame's slot
+  std::vector<uint8_t> swapped;
+  auto put = [&](const x86::Instruction& in) {
+    auto b = x86::encodeAt(in, swapped.size());
+    swapped.insert(swapped.end(), b.begin(), b.end());
+  };
+  for (const auto& in : x86::scanPrologue(true)) put(in);
+  for (int i : {1, 0}) put(x86::baseLea(x86::kBaseRegs[i], i ? kK1 : kK0));
+  size_t hostile_at = swapped.size();
+  put(x86::parse("mov byte ptr [r15+0x10], al"));
+  for (const auto& in : x86::scanEpilogue(true)) put(in);
+  std::string why = refusal(image_around(swapped));
+  EXPECT_NE(why.find("at code offset " + hex(hostile_at) + ": 'mov byte ptr [r15+0x10], al': memory operand based on r15, not rbx"),
+            std::string::npos)
+      << why;
 }
 
 // The shared timer/counter routines after the epilogue (docs/x86.md, "Shared

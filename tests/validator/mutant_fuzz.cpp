@@ -131,6 +131,15 @@ class Mutator {
     x86::Disassembly d = x86::disassemble(code);
     if (d.insts.empty()) return flip(code);
     insts_ = &d.insts;
+    // the -O2 frame's base registers: their K from the prologue's leas
+    for (int64_t& k : k_) k = 0;
+    for (size_t i = 0; i < d.insts.size() && i < 16; i++) {
+      const x86::Instruction& in = d.insts[i].inst;
+      if (in.mnemonic == x86::Mnemonic::Lea && in.ops[0].kind == x86::OperandKind::Reg && in.ops[1].kind == x86::OperandKind::Mem &&
+          in.ops[1].mem.base == x86::r64(x86::BX))
+        for (int b = 0; b < x86::kNumBases; b++)
+          if (in.ops[0].reg == x86::r64(x86::kBaseRegs[b])) k_[b] = in.ops[1].mem.disp;
+    }
     const x86::Decoded& v = d.insts[pick(d.insts.size())];
     unsigned r = unsigned(pick(100));
     if (r < 40) return replace(code, v);
@@ -163,9 +172,20 @@ class Mutator {
     }
   }
 
+  // A displacement for a memory operand based on `base`: one of disp()'s
+  // image offsets seen through the base register's K (the -O2 frame's rdi, r15).
+  int32_t disp_for(const x86::Reg& base, uint32_t width) {
+    int64_t d = disp(width);
+    for (int b = 0; b < x86::kNumBases; b++)
+      if (base == x86::r64(x86::kBaseRegs[b])) d -= k_[b];
+    if (chance(30)) d = int8_t(rng_());  // the disp8 the compiler uses with them
+    return int32_t(d);
+  }
+
   x86::Reg reg(x86::RegClass c) {
     uint8_t n = uint8_t(pick(16));
     if (chance(25)) n = chance(50) ? x86::BX : x86::SP;  // the fixed registers, often
+    else if (chance(20)) n = x86::kBaseRegs[pick(x86::kNumBases)];    // and the base registers
     return {c, n};
   }
 
@@ -173,7 +193,8 @@ class Mutator {
     x86::Mem m;
     m.size = size;
     m.base = x86::r64(x86::BX);
-    if (chance(12)) {
+    if (chance(25)) m.base = x86::r64(x86::kBaseRegs[pick(x86::kNumBases)]);  // the -O2 frame's base registers
+    else if (chance(12)) {
       switch (pick(4)) {
         case 0: m.base = x86::rip(); break;
         case 1: m.base = {}; break;
@@ -185,7 +206,7 @@ class Mutator {
       if (m.index.num == x86::SP) m.index = {};
       m.scale = uint8_t(1u << pick(4));
     }
-    m.disp = disp(size == x86::Size::Byte ? 1 : size == x86::Size::Qword ? 8 : 4);
+    m.disp = disp_for(m.base, size == x86::Size::Byte ? 1 : size == x86::Size::Qword ? 8 : 4);
     return m;
   }
 
@@ -297,7 +318,7 @@ class Mutator {
     for (unsigned k = 0; k < i.numOperands; k++)
       if (i.ops[k].kind == x86::OperandKind::Mem) {
         x86::Size s = i.ops[k].mem.size;
-        i.ops[k].mem.disp = disp(s == x86::Size::Byte ? 1 : s == x86::Size::Qword ? 8 : 4);
+        i.ops[k].mem.disp = disp_for(i.ops[k].mem.base, s == x86::Size::Byte ? 1 : s == x86::Size::Qword ? 8 : 4);
         if (chance(10)) i.ops[k].mem = mem(s);
       }
     try {
@@ -349,6 +370,7 @@ class Mutator {
 
   std::mt19937_64 rng_;
   uint32_t size_;
+  int64_t k_[x86::kNumBases] = {};
   const std::vector<x86::Decoded>* insts_ = nullptr;
 };
 
