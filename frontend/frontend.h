@@ -34,6 +34,24 @@ TreeProgram parse_ldmicro(std::string_view text, const std::string& filename);
 // Imports the LD bodies of a PLCopen TC6 XML project (docs/plcopen.md).
 // Throws CompileError (line, col, message naming the XML element path).
 TreeProgram parse_plcopen(std::string_view text, const std::string& filename);
+// A configuration of several tasks (docs/plcopen.md, "Configurations of
+// several tasks"): one program per task, over one allocation of devices, so a
+// BOOL global is the same relay in every program.
+struct PlcopenTask {
+  std::string name, resource, program;  // task, its resource, the program's name
+  uint32_t resource_index = 0;          // the resource's place in the file: its processor
+  uint32_t period_us = 0, priority = 0;
+  int line = 0, col = 0;                // the task element
+  TreeProgram tree;
+};
+struct PlcopenImport {
+  std::string configuration;            // the configuration's name
+  std::vector<PlcopenTask> tasks;       // empty: one program, `single`
+  TreeProgram single;
+};
+// At most one task: `single` is parse_plcopen's program.  Several tasks: one
+// program per task.  Throws CompileError.
+PlcopenImport import_plcopen(std::string_view text, const std::string& filename);
 
 // IEC 61131-3 Instruction List (docs/iec-il.md).  A `.il` file is ldc's own IL
 // text when its first character other than blanks and `;` comment lines is

@@ -281,6 +281,31 @@ class Importer {
   const Pin* out_pin(const Node& b, const Conn& c);
   void statement(const Node& n);
   void tasks(const Element* root);
+  struct CfgTask {
+    const Element* el = nullptr;
+    std::string name, resource, interval, priority_text;
+    uint32_t resource_index = 0;
+    bool no_task = false;  // a resource's pouInstance outside any task
+    std::vector<std::string> pous, instances;  // upper POU names, instance names
+    std::vector<const Element*> instance_els;
+  };
+  std::vector<CfgTask> cfg_tasks_;
+  std::string config_name_;
+  int task_ = -1;  // the task being translated (several tasks), else -1
+  std::map<Var*, std::set<int>> global_users_;  // global -> tasks whose programs use it
+  std::vector<const Element*> ld_pous_;
+  std::map<const Element*, std::map<std::string, Var*>> scopes_;
+  void prepare();
+  void emit_init(const std::function<bool(const Var&)>& which, const Element* root);
+  void emit_bodies(const std::vector<const Element*>& pous);
+  TreeProgram run_prepared(const Element* root);
+  void finish(TreeProgram& p, const Element* root);
+  PlcopenTask task_program(size_t i, const Element* root);
+
+ public:
+  PlcopenImport import();
+
+ private:
   void block(const Node& b);
   void fb_block(const Node& b, Var& inst);
   void fn_block(const Node& b);
@@ -381,9 +406,11 @@ void Importer::allocate() {
 
 Var* Importer::lookup(const std::string& name) {
   std::string k = upper(name);
-  if (auto it = scope_.find(k); it != scope_.end()) return it->second;
-  if (auto it = globals_.find(k); it != globals_.end()) return it->second;
-  return nullptr;
+  Var* v = nullptr;
+  if (auto it = scope_.find(k); it != scope_.end()) v = it->second;
+  else if (auto it = globals_.find(k); it != globals_.end()) v = it->second;
+  if (v && v->pou.empty() && task_ >= 0) global_users_[v].insert(task_);
+  return v;
 }
 
 // Aliases: each variable's name, or POU_name when the name is declared in more
@@ -1557,16 +1584,48 @@ void Importer::body(const Element* pou, const Element* ld) {
   if (rungs_.size() == first) pending_title_.clear();
 }
 
+// A task's interval, T#20ms, T#0.1ms, TIME#1s500ms, in microseconds; nullopt
+// if malformed or not a whole number of microseconds.
+std::optional<uint64_t> interval_us(const std::string& s0) {
+  std::string s = upper(trim(s0));
+  size_t hash = s.find('#');
+  if (hash == std::string::npos || (s.substr(0, hash) != "T" && s.substr(0, hash) != "TIME")) return std::nullopt;
+  std::string b = s.substr(hash + 1);
+  double us = 0;
+  size_t i = 0;
+  if (b.empty()) return std::nullopt;
+  while (i < b.size()) {
+    if (b[i] == '_') { i++; continue; }
+    size_t j = i;
+    while (j < b.size() && (std::isdigit((unsigned char)b[j]) || b[j] == '.')) j++;
+    if (j == i || j - i > 12) return std::nullopt;
+    double v = std::strtod(b.substr(i, j - i).c_str(), nullptr);
+    size_t k = j;
+    while (k < b.size() && std::isalpha((unsigned char)b[k])) k++;
+    std::string u = b.substr(j, k - j);
+    double mul = u == "D" ? 86400e6 : u == "H" ? 3600e6 : u == "M" ? 60e6 : u == "S" ? 1e6 : u == "MS" ? 1e3 : u == "US" ? 1 : u == "NS" ? 1e-3 : -1;
+    if (mul < 0) return std::nullopt;
+    us += v * mul;
+    i = k;
+  }
+  double r = std::round(us);
+  if (std::fabs(us - r) > 1e-6 || r > 4e9) return std::nullopt;
+  return uint64_t(r);
+}
+
 // The configuration's tasks: every program instance must run a POU that ldc
-// compiles (an LD body), and all of them run in one scan, so the tasks must
-// share one interval.  What ldc cannot run is refused by name, never dropped.
+// compiles (an LD or FBD body); what ldc cannot run is refused by name, never
+// dropped.  Each task is kept, with its programs, for a configuration of
+// several tasks (one ldc task each).
 void Importer::tasks(const Element* root) {
   const Element* inst = root->child("instances");
   const Element* cfgs = inst ? inst->child("configurations") : nullptr;
   if (!cfgs) return;
-  std::string first_task, first_interval;
-  for (const Element* cfg : cfgs->children_named("configuration"))
+  uint32_t res_index = 0;
+  for (const Element* cfg : cfgs->children_named("configuration")) {
+    if (config_name_.empty() && cfg->attr("name")) config_name_ = *cfg->attr("name");
     for (const Element* res : cfg->children_named("resource")) {
+      std::string rn = res->attr("name") ? *res->attr("name") : "resource" + std::to_string(res_index);
       auto check = [&](const Element* pi, const std::string& task) {
         const std::string* type = pi->attr("typeName");
         std::string name = pi->attr("name") ? *pi->attr("name") : "?";
@@ -1576,21 +1635,42 @@ void Importer::tasks(const Element* root) {
         if (lang == pou_lang_.end()) fail_at(pi, where + " runs '" + *type + "', which is not a POU of this project (" + pi->path() + ")");
         if (lang->second != "LD" && lang->second != "FBD")
           fail_at(pi, where + " runs POU '" + *type + "', written in " + lang->second + "; ldc compiles LD and FBD bodies only (" + pi->path() + ")");
+        return upper(*type);
       };
       for (const Element* t : res->children_named("task")) {
-        std::string tn = t->attr("name") ? *t->attr("name") : "?";
-        std::string iv = t->attr("interval") ? *t->attr("interval") : "(no interval)";
-        for (const Element* pi : t->children_named("pouInstance")) check(pi, tn);
-        if (first_task.empty()) first_task = tn, first_interval = iv;
-        else if (upper(iv) != upper(first_interval))
-          fail_at(t, "task '" + tn + "' runs every " + iv + " and task '" + first_task + "' every " + first_interval +
-                         "; ldc runs all programs in one scan, so their tasks must share one interval (" + t->path() + ")");
+        CfgTask ct;
+        ct.el = t;
+        ct.name = t->attr("name") ? *t->attr("name") : "?";
+        ct.resource = rn;
+        ct.resource_index = res_index;
+        for (const Element* pi : t->children_named("pouInstance")) {
+          ct.pous.push_back(check(pi, ct.name));
+          ct.instances.push_back(pi->attr("name") ? *pi->attr("name") : ct.name);
+          ct.instance_els.push_back(pi);
+        }
+        const std::string* iv = t->attr("interval");
+        if (iv) ct.interval = *iv;
+        if (auto p = t->attr("priority")) ct.priority_text = *p;
+        cfg_tasks_.push_back(std::move(ct));
       }
-      for (const Element* pi : res->children_named("pouInstance")) check(pi, "");
+      for (const Element* pi : res->children_named("pouInstance")) {
+        CfgTask ct;  // a program of the resource without a task: runs every cycle of the resource
+        ct.el = pi;
+        ct.name = pi->attr("name") ? *pi->attr("name") : "?";
+        ct.resource = rn;
+        ct.resource_index = res_index;
+        ct.pous.push_back(check(pi, ""));
+        ct.instances.push_back(ct.name);
+        ct.instance_els.push_back(pi);
+        ct.no_task = true;
+        cfg_tasks_.push_back(std::move(ct));
+      }
+      res_index++;
     }
+  }
 }
 
-TreeProgram Importer::run() {
+void Importer::prepare() {
   if (text_.size() > kMaxSourceBytes) fail_at(nullptr, "source file too large (at most 64 MiB)");
   doc_ = xml::parse(text_);
   const Element* root = doc_.root.get();
@@ -1607,7 +1687,8 @@ TreeProgram Importer::run() {
   // POUs and their languages
   const Element* types = root->child("types");
   const Element* pous = types ? types->child("pous") : nullptr;
-  std::vector<const Element*> all, ld;
+  std::vector<const Element*> all;
+  std::vector<const Element*>& ld = ld_pous_;
   if (pous)
     for (const Element* p : pous->children_named("pou")) {
       if (!p->attr("name")) fail_at(p, "POU without a name (" + p->path() + ")");
@@ -1644,8 +1725,7 @@ TreeProgram Importer::run() {
   }
   tasks(root);
   // declarations of the LD POUs, then devices for all of them
-  std::map<const Element*, std::map<std::string, Var*>> scopes;
-  for (const Element* p : ld) {
+    for (const Element* p : ld_pous_) {
     scope_.clear();
     std::string name = *p->attr("name");
     if (const Element* itf = p->child("interface")) {
@@ -1678,14 +1758,18 @@ TreeProgram Importer::run() {
         }
       }
     }
-    scopes[p] = scope_;
+    scopes_[p] = scope_;
   }
   allocate();
   for (auto& v : vars_)
     if (v->dev) spelled_[{int(v->dev->dev), v->dev->index}] = v->name;
-  // initial values: set on the first scan, before anything else runs
+}
+
+// The first-scan rung setting the initial values of the variables `which` selects.
+void Importer::emit_init(const std::function<bool(const Var&)>& which, const Element* root) {
+  init_.clear();
   for (auto& v : vars_) {
-    if (!v->dev || v->init.empty() || v->derived || v->constant) continue;
+    if (!v->dev || v->init.empty() || v->derived || v->constant || !which(*v)) continue;
     if (v->dev->dev == Dev::X || v->dev->dev == Dev::WX) continue;  // inputs belong to the I/O
     Ty t;
     auto c = literal(v->init, t, v->el);
@@ -1696,23 +1780,27 @@ TreeProgram Importer::run() {
       init_.push_back(out(Op::MOV, {*c, Operand{v->ty == Ty::Real ? OpdKind::Real : OpdKind::Int, word_area(v->dev->dev), v->dev->index}}, v->el));
     }
   }
-  TreeProgram p;
-  p.source = file_;
-  if (!init_.empty()) {
-    TreeRung r;
-    r.line = init_[0].elem.loc.line;
-    r.title = "initial values";
-    r.root = then_node(bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), root), fork_of(std::move(init_)), {r.line, 1});
-    rungs_.push_back(std::move(r));
-  }
-  for (const Element* pe : ld) {
+  if (init_.empty()) return;
+  TreeRung r;
+  r.line = init_[0].elem.loc.line;
+  r.title = "initial values";
+  r.root = then_node(bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), root), fork_of(std::move(init_)), {r.line, 1});
+  init_.clear();
+  rungs_.push_back(std::move(r));
+}
+
+// The rungs of the POUs `pous`, in that order, after the initial values.
+void Importer::emit_bodies(const std::vector<const Element*>& pous) {
+  for (const Element* pe : pous) {
     pou_ = *pe->attr("name");
-    scope_ = scopes[pe];
+    scope_ = scopes_[pe];
     const Element* b = pe->child("body");
     body(pe, b->child("LD") ? b->child("LD") : b->child("FBD"));
   }
-  if (rungs_.empty()) fail_at(ld[0], "the LD and FBD bodies of this project have no coils, variables or blocks to run");
-  // inputs the program writes: their relays take the input first in every scan
+}
+
+// The copies of the inputs the program writes first, then labels and aliases.
+void Importer::finish(TreeProgram& p, const Element* root) {
   std::vector<TreeRung> copies;
   auto copy = [&](TreeNode root_node) {
     TreeRung r;
@@ -1726,14 +1814,122 @@ TreeProgram Importer::run() {
   for (auto [x, d] : shadow_w_)
     copy(out(Op::MOV, {Operand{OpdKind::Int, Area::WX, x}, Operand{OpdKind::Int, Area::D, d}}, root));
   rungs_.insert(rungs_.begin(), std::make_move_iterator(copies.begin()), std::make_move_iterator(copies.end()));
+  p.source = file_;
   p.rungs = std::move(rungs_);
+  rungs_.clear();
   p.end_labels = std::move(pending_labels_);
+  pending_labels_.clear();
+  shadow_.clear();
+  shadow_w_.clear();
   aliases(p);
+}
+
+TreeProgram Importer::run() {
+  prepare();
+  const Element* root = doc_.root.get();
+  if (cfg_tasks_.size() > 1)
+    fail_at(cfg_tasks_[1].el, "the configuration has " + std::to_string(cfg_tasks_.size()) +
+                                  " tasks: ldc compiles it as a project, one image per task (ldc FILE -o DIR)");
+  return run_prepared(root);
+}
+
+TreeProgram Importer::run_prepared(const Element* root) {
+  emit_init([](const Var&) { return true; }, root);
+  emit_bodies(ld_pous_);
+  if (rungs_.empty()) fail_at(ld_pous_[0], "the LD and FBD bodies of this project have no coils, variables or blocks to run");
+  TreeProgram p;
+  finish(p, root);
   return p;
 }
 
+// One task of several: the programs of its instances, in order, over the
+// devices every task shares.
+PlcopenTask Importer::task_program(size_t i, const Element* root) {
+  const CfgTask& ct = cfg_tasks_[i];
+  PlcopenTask t;
+  t.name = ct.name, t.resource = ct.resource, t.resource_index = ct.resource_index;
+  t.line = ct.el->line, t.col = ct.el->col;
+  std::string where = "task '" + ct.name + "' (" + ct.el->path() + ")";
+  if (ct.no_task)
+    fail_at(ct.el, "program instance '" + ct.name + "' of resource '" + ct.resource +
+                       "' belongs to no task; in a configuration of several tasks ldc needs each program's task and interval (" +
+                       ct.el->path() + ")");
+  auto us = interval_us(ct.interval);
+  if (ct.interval.empty()) fail_at(ct.el, where + " has no interval; ldc runs periodic tasks only (an event task, 'single', is not supported)");
+  if (!us || *us < 50 || *us > 10000000)
+    fail_at(ct.el, where + ": interval '" + ct.interval + "' is not a period ldc can run (a whole number of microseconds, 50us..10s)");
+  t.period_us = uint32_t(*us);
+  if (!ct.priority_text.empty()) {
+    const std::string& pr = ct.priority_text;
+    if (pr.find_first_not_of("0123456789") != std::string::npos || pr.size() > 2)
+      fail_at(ct.el, where + ": priority '" + pr + "' is not one ldc has (0, the highest, .. 99)");
+    t.priority = uint32_t(std::stoul(pr));
+  }
+  if (ct.instances.empty()) fail_at(ct.el, where + " runs no program");
+  t.program = ct.instances.size() == 1 ? ct.instances[0] : ct.name + "_programs";
+  std::vector<const Element*> pous;
+  for (size_t k = 0; k < ct.pous.size(); k++)
+    for (const Element* pe : ld_pous_)
+      if (upper(*pe->attr("name")) == ct.pous[k]) pous.push_back(pe);
+  task_ = int(i);
+  std::set<const Element*> mine(pous.begin(), pous.end());
+  emit_bodies(pous);
+  if (rungs_.empty()) fail_at(ct.el, where + ": its programs have no coils, variables or blocks to run");
+  // the initial values of its POUs' variables and of the globals it uses
+  std::vector<TreeRung> bodies = std::move(rungs_);
+  rungs_.clear();
+  std::set<std::string> my_pous;
+  for (const Element* pe : pous) my_pous.insert(*pe->attr("name"));
+  emit_init([&](const Var& v) {
+    if (v.pou.empty()) return global_users_.count(const_cast<Var*>(&v)) && global_users_[const_cast<Var*>(&v)].count(int(i));
+    return my_pous.count(v.pou) > 0;
+  }, root);
+  for (auto& r : bodies) rungs_.push_back(std::move(r));
+  finish(t.tree, root);
+  task_ = -1;
+  return t;
+}
+
+// A configuration of several tasks: a program per task.  A POU runs in one
+// program instance only, and a global held in a program's private memory
+// (an integer or REAL in D or F, a timer or counter) in one task only.
+PlcopenImport Importer::import() {
+  PlcopenImport r;
+  prepare();
+  const Element* root = doc_.root.get();
+  if (cfg_tasks_.size() <= 1) {
+    r.single = run_prepared(root);
+    return r;
+  }
+  std::map<std::string, std::string> owner;  // upper POU -> instance
+  for (const CfgTask& ct : cfg_tasks_)
+    for (size_t k = 0; k < ct.pous.size(); k++) {
+      auto [it, fresh] = owner.emplace(ct.pous[k], ct.instances[k]);
+      if (!fresh)
+        fail_at(ct.instance_els[k], "program instance '" + ct.instances[k] + "' runs POU '" + *ct.instance_els[k]->attr("typeName") +
+                                        "', as instance '" + it->second + "' does; ldc translates each POU once, so one instance per POU (" +
+                                        ct.instance_els[k]->path() + ")");
+    }
+  r.configuration = config_name_;
+  for (size_t i = 0; i < cfg_tasks_.size(); i++) r.tasks.push_back(task_program(i, root));
+  for (auto& [v, users] : global_users_) {
+    if (users.size() < 2 || !v->dev) continue;
+    Dev d = v->dev->dev;
+    if (d != Dev::D && d != Dev::F && d != Dev::T && d != Dev::C) continue;
+    auto it = users.begin();
+    const std::string& a = cfg_tasks_[*it].name;
+    const std::string& b = cfg_tasks_[*++it].name;
+    fail_at(v->el, "global variable '" + v->name + "' (" + v->type + ") is used by the programs of tasks '" + a + "' and '" + b +
+                       "'; ldc keeps it in a program's private memory (" + dev_name(d) +
+                       "), so tasks share only BOOL globals (relays, M) and variables located at inputs and outputs (%I, %Q)");
+  }
+  r.configuration = config_name_;
+  return r;
+}
 }  // namespace
 
 TreeProgram parse_plcopen(std::string_view text, const std::string& filename) { return Importer(text, filename).run(); }
+
+PlcopenImport import_plcopen(std::string_view text, const std::string& filename) { return Importer(text, filename).import(); }
 
 }  // namespace ldc
