@@ -1279,6 +1279,9 @@ void Importer::bit_shift(const std::string& t, const Pin& in_pin, Operand in, Op
 void Importer::fn_block(const Node& b) {
   std::string t = upper(b.type);
   if (t == "ADD_TIME" || t == "SUB_TIME") t = t.substr(0, 3);  // TIME is INT32 ms: the same arithmetic
+  // TIME times or by an integer: MUL, DIV on ms (DIV truncates to the ms); a REAL factor is refused below
+  std::string time_op = t == "MUL_TIME" || t == "DIV_TIME" ? t : "";
+  if (!time_op.empty()) t = t.substr(0, 3);
   Pins pins{b};
   bool order = b.order > 0;
   const Element* el = b.el;
@@ -1290,7 +1293,7 @@ void Importer::fn_block(const Node& b) {
   if (!cmp.count(t) && !arith.count(t) && !conv && !bits.count(t) && t != "MOVE" && t != "SEL" && t != "MUX" && t != "LIMIT" &&
       t != "ABS" && t != "AND" && t != "OR" && t != "XOR" && t != "NOT")
     fail_at(el, "block '" + b.type + "' localId " + std::to_string(b.id) + " is not supported: ldc translates TON TOF TP CTU CTD CTUD SR RS R_TRIG F_TRIG, "
-                "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL MUX, ADD_TIME SUB_TIME, AND OR XOR NOT SHL SHR ROL ROR "
+                "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL MUX, ADD_TIME SUB_TIME MUL_TIME DIV_TIME, AND OR XOR NOT SHL SHR ROL ROR "
                 "and type conversions (" + el->path() + ")");
   // inputs other than EN, in order
   std::vector<const Pin*> ins;
@@ -1312,10 +1315,10 @@ void Importer::fn_block(const Node& b) {
   for (const Pin* p : ins)
     if (p->conns.empty()) fail_at(p->el, "input " + p->name + " of " + t + " localId " + std::to_string(b.id) + " is not connected (" + p->el->path() + ")");
   size_t want = t == "SEL" || t == "LIMIT" ? 3 : (conv || t == "NOT" || t == "MOVE" || t == "ABS") ? 1
-                : (t == "SUB" || t == "DIV" || t == "MOD" || bits.count(t)) ? 2 : 0;
+                : (t == "SUB" || t == "DIV" || t == "MOD" || bits.count(t) || !time_op.empty()) ? 2 : 0;
   size_t n_in = ins.size();
   if ((want && n_in != want) || (!want && n_in < 2))
-    fail_at(el, t + " localId " + std::to_string(b.id) + " takes " + (want ? std::to_string(want) : std::string("two or more")) +
+    fail_at(el, (time_op.empty() ? t : time_op) + " localId " + std::to_string(b.id) + " takes " + (want ? std::to_string(want) : std::string("two or more")) +
                     " input" + (want == 1 ? "" : "s") + ", not " + std::to_string(n_in) + " (" + el->path() + ")");
   bool boolean = out_is_bool(b, "OUT");
   std::string outname = "OUT";
@@ -1412,6 +1415,9 @@ void Importer::fn_block(const Node& b) {
     }
     bool real = false;
     for (const Val& x : v) real |= x.ty == Ty::Real;
+    if (!time_op.empty() && real)
+      fail_at(el, time_op + " localId " + std::to_string(b.id) + " by a REAL is not supported: TIME is held in whole milliseconds (" +
+                      el->path() + ")");
     std::string target = conv ? t.substr(to + 4) : "";
     bool round_real = false;  // REAL_TO_INT & co: IEC rounds to nearest, ties to even
     if (conv) {
