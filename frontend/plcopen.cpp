@@ -273,6 +273,7 @@ class Importer {
   const Node& node(const Conn& c);
   bool is_bool_source(const Conn& c, int depth = 0);
   bool out_is_bool(const Node& b, const std::string& pin, int depth = 0);
+  void refuse_user_pou(const Node& b);
   template <typename E>
   Cond node_values(std::vector<E*>& left, int nn, int sink, const Element* consumer);
   Cond bool_expr(const std::vector<Conn>& conns, bool order, const Element* consumer);
@@ -802,8 +803,19 @@ bool Importer::is_bool_source(const Conn& c, int depth) {
   fail_at(c.el, n.kind + " localId " + std::to_string(n.id) + " has no output to connect (" + c.el->path() + ")");
 }
 
+// A block calling one of the project's own POUs is refused by name, wherever
+// it is first met (generating it, or asking the type of its output).
+void Importer::refuse_user_pou(const Node& b) {
+  auto lang = pou_lang_.find(upper(b.type));
+  if (lang != pou_lang_.end())
+    fail_at(b.el, "block '" + b.type + "' localId " + std::to_string(b.id) + (b.instance.empty() ? "" : " (instance " + b.instance + ")") +
+                      " calls POU '" + b.type + "', written in " + lang->second +
+                      "; ldc translates the standard blocks only, not calls of the project's own POUs (" + b.el->path() + ")");
+}
+
 bool Importer::out_is_bool(const Node& b, const std::string& pin, int depth) {
   std::string t = upper(b.type);
+  if (fb_kind(t) == FbKind::None) refuse_user_pou(b);
   if (pin == "ENO") return true;
   if (fb_kind(t) != FbKind::None) return !(pin == "ET" || pin == "CV");
   static const std::set<std::string> cmp = {"GT", "GE", "EQ", "NE", "LE", "LT"};
@@ -1080,11 +1092,7 @@ void Importer::block(const Node& b) {
       fail_at(b.el, "instance '" + b.instance + "' is declared as " + inst->type + ", but block localId " + std::to_string(b.id) + " is a " + t);
     fb_block(b, *inst);
   } else {
-    auto lang = pou_lang_.find(t);
-    if (lang != pou_lang_.end())
-      fail_at(b.el, "block '" + b.type + "' localId " + std::to_string(b.id) + (b.instance.empty() ? "" : " (instance " + b.instance + ")") +
-                        " calls POU '" + b.type + "', written in " + lang->second +
-                        "; ldc translates the standard blocks only, not calls of the project's own POUs (" + b.el->path() + ")");
+    refuse_user_pou(b);
     fn_block(b);
   }
   generating_.erase(b.id);
