@@ -64,6 +64,31 @@ std::string lower(std::string s) {
 }
 
 
+// A PLCopen program: its rungs, then its chart (docs/plcopen.md, section 1b).
+void append_il(Program& p, Program q) {
+  if (!q.rungs.empty()) {
+    auto& l = q.rungs[0].labels;
+    l.insert(l.begin(), p.end_labels.begin(), p.end_labels.end());
+    p.end_labels.clear();
+  }
+  for (Rung& r : q.rungs) p.rungs.push_back(std::move(r));
+  p.end_labels.insert(p.end_labels.end(), q.end_labels.begin(), q.end_labels.end());
+  for (const Alias& a : q.aliases) {
+    bool dup = false;
+    for (const Alias& b : p.aliases) dup |= lower(a.name) == lower(b.name);
+    if (!dup) p.aliases.push_back(a);
+  }
+}
+
+Program plcopen_il(const TreeProgram& tree, const std::optional<PlcopenChart>& chart) {
+  Program p = lower_to_il(tree);
+  if (!chart) return p;
+  if (chart->chart.edge_slots) throw std::logic_error("a PLCopen chart with edge slots");
+  append_il(p, lower_chart(chart->chart));
+  if (!chart->after.rungs.empty()) append_il(p, lower_to_il(chart->after));
+  return p;
+}
+
 // A PLCopen configuration of several tasks as a project: each task's program
 // compiled already, on the processor of its resource.
 std::shared_ptr<Project> plcopen_project(PlcopenImport& im, const std::string& path, const std::string& text) {
@@ -89,7 +114,7 @@ std::shared_ptr<Project> plcopen_project(PlcopenImport& im, const std::string& p
     pt.period_us = t.period_us, pt.priority = t.priority;
     pt.program = t.program, pt.path = path, pt.file = base;
     pt.line = t.line, pt.col = t.col;
-    pt.il = std::make_shared<const Program>(lower_to_il(t.tree));
+    pt.il = std::make_shared<const Program>(plcopen_il(t.tree, t.chart));
     p->tasks.push_back(std::move(pt));
   }
   return p;
@@ -133,7 +158,7 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
         throw UserError(path + ": error: no task '" + task + "' in the configuration (" + names + ")");
       } else if (im.tasks.empty()) {
         c.tree = std::move(im.single);
-        c.il = lower_to_il(c.tree);
+        c.il = plcopen_il(c.tree, im.single_chart);
       } else if (allow_project) {
         c.project = plcopen_project(im, path, text);
       } else {

@@ -282,6 +282,27 @@ class Importer {
   const Pin* out_pin(const Node& b, const Conn& c);
   void statement(const Node& n);
   void tasks(const Element* root);
+  // SFC (section 1b): the chart of the POU being translated, at most one per program
+  bool sfc_mode_ = false;
+  std::optional<Chart> chart_;
+  std::vector<TreeRung> after_;  // the chart's actions, after its steps
+  std::string chart_pou_;
+  void take_chart(std::optional<PlcopenChart>& into) {
+    if (!chart_) return;
+    into.emplace();
+    into->chart = std::move(*chart_);
+    into->after.source = file_;
+    into->after.rungs = std::move(after_);
+    chart_.reset();
+    after_.clear();
+  }
+  static const std::set<std::string>& sfc_kinds() {
+    static const std::set<std::string> k = {"step", "transition", "selectionDivergence", "selectionConvergence",
+                                            "simultaneousDivergence", "simultaneousConvergence", "jumpStep", "macroStep", "actionBlock"};
+    return k;
+  }
+  void sfc_body(const Element* pou, const Element* sfc);
+  uint32_t take_run(Dev d, uint32_t n, const Element* el);
   struct CfgTask {
     const Element* el = nullptr;
     std::string name, resource, interval, priority_text;
@@ -684,6 +705,7 @@ void Importer::read_conns(const Element* cpi, std::vector<Conn>& outv) {
 
 void Importer::read_node(const Element* e) {
   std::string k(e->local_name());
+  if (sfc_mode_ && sfc_kinds().count(k)) return;  // the chart's own elements (sfc_body)
   static const std::set<std::string> known = {"leftPowerRail", "rightPowerRail", "contact", "coil", "block", "inVariable",
                                               "outVariable", "inOutVariable", "connector", "continuation", "comment"};
   if (!known.count(k)) {
@@ -1598,6 +1620,223 @@ void Importer::body(const Element* pou, const Element* ld) {
   if (rungs_.size() == first) pending_title_.clear();
 }
 
+// ------------------------------------------------------------------ SFC bodies
+
+// n devices of kind d in a row (a chart's step flags), avoiding every device in use.
+uint32_t Importer::take_run(Dev d, uint32_t n, const Element* el) {
+  for (uint32_t b = 0; b + n <= device_count(d); b++) {
+    uint32_t k = 0;
+    while (k < n && !used_.count({int(d), b + k})) k++;
+    if (k == n) {
+      for (k = 0; k < n; k++) used_.insert({int(d), b + k});
+      return b;
+    }
+    b += k;
+  }
+  fail_at(el, std::string("out of ") + dev_name(d) + " devices for this chart's steps");
+}
+
+// A PLCopen SFC body becomes the chart of ldc's SFC compiler (ir/sfc.cpp): steps
+// in one sequence, with selection divergences and convergences and jumps;
+// transition conditions drawn in the body's LD/FBD graph (computed into a relay
+// each, before the chart); actions that are BOOL variables with the qualifiers
+// N, S and R.  Everything else is refused by name.
+void Importer::sfc_body(const Element* pou, const Element* sfc) {
+  std::string pname = *pou->attr("name");
+  if (chart_) fail_at(pou, "POU '" + pname + "' is a second SFC program in one task (after '" + chart_pou_ + "'); ldc runs one chart per program");
+  // the LD/FBD elements: blocks and variables feeding the conditions
+  sfc_mode_ = true;
+  body(pou, sfc);
+  sfc_mode_ = false;
+  std::map<int, const Element*> el_of;
+  for (const auto& c : sfc->children) {
+    std::string k(c->local_name());
+    if (!sfc_kinds().count(k)) continue;
+    if (k == "simultaneousDivergence" || k == "simultaneousConvergence" || k == "macroStep")
+      fail_at(c.get(), "SFC element '" + k + "' is not supported: ldc translates single sequences with selections and jumps (" + c->path() + ")");
+    const std::string* id = c->attr("localId");
+    if (!id) fail_at(c.get(), k + " without a localId (" + c->path() + ")");
+    int n = std::atoi(id->c_str());
+    if (el_of.count(n) || nodes_.count(n)) fail_at(c.get(), "localId " + *id + " is used twice (" + c->path() + ")");
+    el_of[n] = c.get();
+  }
+  auto refs = [&](const Element* e) {
+    std::vector<int> r;
+    for (const Element* cpi : e->children_named("connectionPointIn"))
+      for (const Element* cn : cpi->children_named("connection"))
+        if (auto ref = cn->attr("refLocalId")) r.push_back(std::atoi(ref->c_str()));
+    return r;
+  };
+  auto kind = [&](int id) { auto it = el_of.find(id); return it == el_of.end() ? std::string() : std::string(it->second->local_name()); };
+  Chart c;
+  c.source = file_;
+  std::map<int, uint32_t> step_of;        // localId -> step
+  std::map<std::string, uint32_t> named;  // upper step name -> step
+  bool have_initial = false;
+  for (auto& [id, e] : el_of) (void)id, (void)e;
+  for (const auto& ch : sfc->children) {
+    if (ch->local_name() != "step") continue;
+    const Element* e = ch.get();
+    SfcStep st;
+    if (!e->attr("name")) fail_at(e, "step without a name (" + e->path() + ")");
+    st.name = *e->attr("name");
+    st.line = e->line;
+    if (named.count(upper(st.name))) fail_at(e, "a second step named '" + st.name + "' (" + e->path() + ")");
+    uint32_t i = uint32_t(c.steps.size());
+    if (auto ini = e->attr("initialStep"); ini && (*ini == "true" || *ini == "1")) {
+      if (have_initial) fail_at(e, "step '" + st.name + "' is a second initial step; ldc translates charts with one initial step (" + e->path() + ")");
+      c.initial = i, have_initial = true;
+    }
+    step_of[std::atoi(e->attr("localId")->c_str())] = i;
+    named[upper(st.name)] = i;
+    c.steps.push_back(std::move(st));
+  }
+  if (c.steps.empty()) fail_at(sfc, "the SFC body of POU '" + pname + "' has no step");
+  if (!have_initial) fail_at(sfc, "the SFC body of POU '" + pname + "' has no initial step");
+  // a transition's source step, back through a selection divergence
+  auto source_step = [&](const Element* t) -> uint32_t {
+    std::vector<int> r = refs(t);
+    for (int depth = 0; depth < 64; depth++) {
+      if (r.size() != 1) fail_at(t, "transition localId " + *t->attr("localId") + " follows " + std::to_string(r.size()) + " elements; ldc needs one step (" + t->path() + ")");
+      std::string k = kind(r[0]);
+      if (k == "step") return step_of[r[0]];
+      if (k != "selectionDivergence") fail_at(t, "transition localId " + *t->attr("localId") + " follows " + (k.empty() ? "localId " + std::to_string(r[0]) : k) + "; ldc needs a step or a selection divergence (" + t->path() + ")");
+      r = refs(el_of[r[0]]);
+    }
+    fail_at(t, "transition localId " + *t->attr("localId") + ": a loop of divergences (" + t->path() + ")");
+  };
+  // the step a transition leads to, forward through a selection convergence or a jump
+  auto target_step = [&](const Element* t, int tid) -> uint32_t {
+    int from = tid;
+    for (int depth = 0; depth < 64; depth++) {
+      std::vector<const Element*> next;
+      for (auto& [id, e] : el_of)
+        for (int r : refs(e))
+          if (r == from && e->local_name() != "actionBlock") next.push_back(e);
+      if (next.size() != 1) fail_at(t, "transition localId " + *t->attr("localId") + " leads to " + std::to_string(next.size()) + " elements; ldc needs one step (" + t->path() + ")");
+      const Element* n = next[0];
+      std::string k(n->local_name());
+      if (k == "step") return step_of[std::atoi(n->attr("localId")->c_str())];
+      if (k == "jumpStep") {
+        auto target = n->attr("targetName");
+        if (!target || !named.count(upper(*target))) fail_at(n, "jump to an unknown step (" + n->path() + ")");
+        return named[upper(*target)];
+      }
+      if (k != "selectionConvergence") fail_at(n, "transition localId " + *t->attr("localId") + " leads to " + k + "; ldc needs a step, a jump or a selection convergence (" + n->path() + ")");
+      from = std::atoi(n->attr("localId")->c_str());
+    }
+    fail_at(t, "transition localId " + *t->attr("localId") + ": a loop of convergences (" + t->path() + ")");
+  };
+  // transitions: conditions into relays, by priority (left first) per step
+  struct Tr { uint32_t from; double x; size_t doc; SfcTransition t; };
+  std::vector<Tr> trs;
+  for (const auto& ch : sfc->children) {
+    if (ch->local_name() != "transition") continue;
+    const Element* t = ch.get();
+    int tid = std::atoi(t->attr("localId")->c_str());
+    std::string what = "transition localId " + std::to_string(tid);
+    const Element* cond = t->child("condition");
+    if (!cond) fail_at(t, what + " has no condition (" + t->path() + ")");
+    const Element* ci = cond->child("connectionPointIn");
+    if (!ci) {
+      std::string how = cond->child("inline") ? "an inline " + (cond->child("inline")->child("body") && !cond->child("inline")->child("body")->children.empty()
+                                                                   ? std::string(cond->child("inline")->child("body")->children[0]->local_name()) : std::string("?")) + " condition"
+                        : cond->child("reference") ? "a condition named '" + (cond->child("reference")->attr("name") ? *cond->child("reference")->attr("name") : "?") + "' (a transition of the POU's <transitions>)"
+                                                   : "this form of condition";
+      fail_at(cond, what + " has " + how + "; ldc translates conditions drawn in the chart's LD/FBD graph (" + cond->path() + ")");
+    }
+    std::vector<Conn> conns;
+    read_conns(ci, conns);
+    Cond cc = bool_expr(conns, false, cond);
+    uint32_t m = take(Dev::M, t);
+    if (rungs_.empty() || pending_title_.empty()) {}
+    rung(std::move(cc), out(Op::OUT, {bit_opd(Area::M, m)}, t), t);
+    Tr tr;
+    tr.from = source_step(t);
+    tr.x = 0;
+    if (const Element* pos = t->child("position"))
+      if (auto x = pos->attr("x")) tr.x = std::atof(x->c_str());
+    tr.doc = trs.size();
+    tr.t.line = t->line;
+    tr.t.text = "localId " + std::to_string(tid);
+    Instr ld;
+    ld.op = Op::LOAD;
+    ld.a[0] = bit_opd(Area::M, m);
+    ld.loc = {t->line, t->col};
+    tr.t.cond = {ld};
+    tr.t.target = target_step(t, tid);
+    trs.push_back(std::move(tr));
+  }
+  std::stable_sort(trs.begin(), trs.end(), [](const Tr& a, const Tr& b) { return a.from != b.from ? a.from < b.from : a.x < b.x; });
+  for (Tr& tr : trs) c.steps[tr.from].out.push_back(std::move(tr.t));
+  // actions: as MatIEC runs them, after the steps have moved: a variable action
+  // is TRUE while a step naming it N is active, or from an S step's activation
+  // to an R step's (its stored state, a relay)
+  const Element* actions = pou->child("actions");
+  struct Act { Operand bit; std::vector<uint32_t> n, set, reset; const Element* el; };
+  std::vector<Act> acts;
+  for (const auto& ch : sfc->children) {
+    if (ch->local_name() != "actionBlock") continue;
+    const Element* ab = ch.get();
+    std::vector<int> r = refs(ab);
+    if (r.size() != 1 || kind(r[0]) != "step") fail_at(ab, "action block localId " + *ab->attr("localId") + " is not attached to one step (" + ab->path() + ")");
+    uint32_t s = step_of[r[0]];
+    for (const Element* a : ab->children_named("action")) {
+      std::string q = a->attr("qualifier") ? upper(*a->attr("qualifier")) : "N";
+      const Element* ref = a->child("reference");
+      if (!ref || !ref->attr("name"))
+        fail_at(a, "an inline action in step '" + c.steps[s].name + "'; ldc translates actions that are BOOL variables (" + a->path() + ")");
+      std::string name = *ref->attr("name");
+      if (actions)
+        for (const Element* an : actions->children_named("action"))
+          if (an->attr("name") && upper(*an->attr("name")) == upper(name))
+            fail_at(a, "action '" + name + "' of step '" + c.steps[s].name + "' is an action body of the POU; ldc translates actions that are BOOL variables (" + a->path() + ")");
+      if (q != "N" && q != "S" && q != "R")
+        fail_at(a, "qualifier " + q + " of action '" + name + "' in step '" + c.steps[s].name + "' is not supported: ldc translates N, S and R (" + a->path() + ")");
+      Var* v = lookup(name);
+      if (!v) fail_at(a, "action '" + name + "' of step '" + c.steps[s].name + "' is neither a variable nor an action of POU '" + pname + "' (" + a->path() + ")");
+      if (v->ty != Ty::Bool) fail_at(a, "action '" + name + "' of step '" + c.steps[s].name + "' is a " + v->type + " variable; an action variable is BOOL (" + a->path() + ")");
+      Operand o = bit_of(name, a, true);
+      Act* act = nullptr;
+      for (Act& x : acts)
+        if (x.bit.area == o.area && x.bit.index == o.index) act = &x;
+      if (!act) acts.push_back(Act{o, {}, {}, {}, a}), act = &acts.back();
+      (q == "N" ? act->n : q == "S" ? act->set : act->reset).push_back(s);
+    }
+  }
+  SfcScope sc;
+  for (uint32_t i = 0; i < c.steps.size(); i++) sc.steps.push_back(i), c.steps[i].scope = 0;
+  c.scopes.push_back(sc);
+  c.flag_base = take_run(Dev::M, uint32_t(3 * c.steps.size()), sfc);
+  std::vector<TreeRung> saved = std::move(rungs_);
+  rungs_.clear();
+  std::string saved_title = std::move(pending_title_);
+  pending_title_ = "actions of " + pname;
+  for (const Act& x : acts) {
+    auto flag = [&](uint32_t st) { return bit_leaf(Op::LOAD, bit_opd(Area::M, c.flag(st)), x.el); };
+    Cond q = Cond::no();
+    if (!x.set.empty() || !x.reset.empty()) {
+      Operand stored = bit_opd(Area::M, take(Dev::M, x.el));
+      for (uint32_t st : x.set) rung(flag(st), out(Op::SET, {stored}, x.el), x.el);
+      for (uint32_t st : x.reset) rung(flag(st), out(Op::RST, {stored}, x.el), x.el);
+      q = bit_leaf(Op::LOAD, stored, x.el);
+    }
+    for (uint32_t st : x.n) q = c_or(std::move(q), flag(st));
+    rung(std::move(q), out(Op::OUT, {x.bit}, x.el), x.el);
+  }
+  after_ = std::move(rungs_);
+  rungs_ = std::move(saved);
+  pending_title_ = std::move(saved_title);
+  for (uint32_t i = 0; i < c.steps.size(); i++) {
+    std::string why;
+    const std::string& n = c.steps[i].name;
+    if (!lookup(n) && is_identifier(n) && !parse_device(n) && !parse_iec_address(n, why))
+      c.aliases.push_back({n, DeviceRef{Dev::M, c.flag(i)}});
+  }
+  chart_ = std::move(c);
+  chart_pou_ = pname;
+}
+
 // A task's interval, T#20ms, T#0.1ms, TIME#1s500ms, in microseconds; nullopt
 // if malformed or not a whole number of microseconds.
 std::optional<uint64_t> interval_us(const std::string& s0) {
@@ -1647,8 +1886,8 @@ void Importer::tasks(const Element* root) {
         if (!type) fail_at(pi, where + " has no typeName (" + pi->path() + ")");
         auto lang = pou_lang_.find(upper(*type));
         if (lang == pou_lang_.end()) fail_at(pi, where + " runs '" + *type + "', which is not a POU of this project (" + pi->path() + ")");
-        if (lang->second != "LD" && lang->second != "FBD")
-          fail_at(pi, where + " runs POU '" + *type + "', written in " + lang->second + "; ldc compiles LD and FBD bodies only (" + pi->path() + ")");
+        if (lang->second != "LD" && lang->second != "FBD" && lang->second != "SFC")
+          fail_at(pi, where + " runs POU '" + *type + "', written in " + lang->second + "; ldc compiles LD, FBD and SFC bodies only (" + pi->path() + ")");
         return upper(*type);
       };
       for (const Element* t : res->children_named("task")) {
@@ -1731,13 +1970,21 @@ void Importer::prepare() {
       all.push_back(p);
       if (lang == "LD" || lang == "FBD") ld.push_back(p);  // FBD: the same block graph, without rails
     }
+  tasks(root);
+  // SFC programs that a task runs: their charts (section 1b)
+  for (const Element* p : all)
+    if (pou_lang_[upper(*p->attr("name"))] == "SFC") {
+      bool run = false;
+      for (const CfgTask& ct : cfg_tasks_)
+        for (const std::string& u : ct.pous) run |= u == upper(*p->attr("name"));
+      if (run) ld.push_back(p);
+    }
   if (ld.empty()) {
     std::string list;
     for (const Element* p : all) list += std::string(list.empty() ? "" : ", ") + "'" + *p->attr("name") + "' is " + pou_lang_[upper(*p->attr("name"))];
     fail_at(pous ? pous : root, all.empty() ? "the project has no POU" : "no POU of this project has an LD or FBD body (" + list +
                                                                                "); ldc imports LD and FBD bodies only");
   }
-  tasks(root);
   // declarations of the LD POUs, then devices for all of them
     for (const Element* p : ld_pous_) {
     scope_.clear();
@@ -1809,7 +2056,8 @@ void Importer::emit_bodies(const std::vector<const Element*>& pous) {
     pou_ = *pe->attr("name");
     scope_ = scopes_[pe];
     const Element* b = pe->child("body");
-    body(pe, b->child("LD") ? b->child("LD") : b->child("FBD"));
+    if (const Element* sfc = b->child("SFC")) sfc_body(pe, sfc);
+    else body(pe, b->child("LD") ? b->child("LD") : b->child("FBD"));
   }
 }
 
@@ -1844,7 +2092,9 @@ TreeProgram Importer::run() {
   if (cfg_tasks_.size() > 1)
     fail_at(cfg_tasks_[1].el, "the configuration has " + std::to_string(cfg_tasks_.size()) +
                                   " tasks: ldc compiles it as a project, one image per task (ldc FILE -o DIR)");
-  return run_prepared(root);
+  TreeProgram p = run_prepared(root);
+  if (chart_) fail_at(root, "POU '" + chart_pou_ + "' is an SFC program: its chart is compiled through import_plcopen");
+  return p;
 }
 
 TreeProgram Importer::run_prepared(const Element* root) {
@@ -1900,6 +2150,7 @@ PlcopenTask Importer::task_program(size_t i, const Element* root) {
   }, root);
   for (auto& r : bodies) rungs_.push_back(std::move(r));
   finish(t.tree, root);
+  take_chart(t.chart);
   task_ = -1;
   return t;
 }
@@ -1913,6 +2164,7 @@ PlcopenImport Importer::import() {
   const Element* root = doc_.root.get();
   if (cfg_tasks_.size() <= 1) {
     r.single = run_prepared(root);
+    take_chart(r.single_chart);
     return r;
   }
   std::map<std::string, std::string> owner;  // upper POU -> instance

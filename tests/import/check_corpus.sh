@@ -23,6 +23,15 @@ if [ $# -ge 3 ]; then
 fi
 # A pseudo-random input trace (a fixed LCG): every input alias (X, WX) set in
 # 300 scans, bits toggling, words over a small range; dt 10 ms.
+# A PLCopen configuration of several tasks: it builds as a project, and each
+# task's program is checked as below (TASK=NAME).
+if [ -z "$task" ] && ! "$bindir/ldc" "$src" --emit=il > "$tmp/il" 2> "$tmp/ilerr"; then
+  tasks=$(sed -n 's/.*the configuration has [0-9]* tasks (\([^)]*\)).*/\1/p' "$tmp/ilerr" | head -n 1 | tr -d ',')
+  if [ -z "$tasks" ]; then cat "$tmp/ilerr" >&2; exit 1; fi
+  "$bindir/ldc" "$src" -o "$tmp/project"
+  for t in $tasks; do TASK=$t sh "$0" "$bindir" "$src"; done
+  exit 0
+fi
 "$bindir/ldc" "$src" $task --emit=il > "$tmp/il"
 watch=$(sed -n 's/^\.alias \([^ ]*\) .*/\1/p' "$tmp/il" | paste -sd, -)
 inputs=$(sed -n 's/^\.alias \([^ ]*\) \(W\{0,1\}X[0-9]*\)$/\1 \2/p' "$tmp/il")
