@@ -1739,8 +1739,13 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
     if (!cond) fail_at(t, what + " has no condition (" + t->path() + ")");
     const Element* ci = cond->child("connectionPointIn");
     if (!ci) {
-      std::string how = cond->child("inline") ? "an inline " + (cond->child("inline")->child("body") && !cond->child("inline")->child("body")->children.empty()
-                                                                   ? std::string(cond->child("inline")->child("body")->children[0]->local_name()) : std::string("?")) + " condition"
+      auto inline_lang = [](const Element* in) {  // <inline><ST> (TC6 2.01), or <inline><body><ST>
+        const Element* b = in->child("body") ? in->child("body") : in;
+        for (const auto& ch : b->children)
+          if (ch->local_name() != "documentation" && ch->local_name() != "addData") return std::string(ch->local_name());
+        return std::string("empty");
+      };
+      std::string how = cond->child("inline") ? "an inline " + inline_lang(cond->child("inline")) + " condition"
                         : cond->child("reference") ? "a condition named '" + (cond->child("reference")->attr("name") ? *cond->child("reference")->attr("name") : "?") + "' (a transition of the POU's <transitions>)"
                                                    : "this form of condition";
       fail_at(cond, what + " has " + how + "; ldc translates conditions drawn in the chart's LD/FBD graph (" + cond->path() + ")");
