@@ -454,8 +454,11 @@ int main(int argc, char** argv) {
     if (input.empty()) throw UserError(std::string("ldrun: error: no program\n") + kUsage);
     if (rta.sandbox && (engine == "c40sim" || engine == "c40interp" || is_c40_image(input)))
       throw UserError("ldrun: error: --sandbox is for the engines that run on this machine (native, interp, c); the C40 engines are simulated");
-    if (engine == "c40sim" || engine == "c40interp" || (engine == "native" && is_c40_image(input)))
+    if (engine == "c40sim" || engine == "c40interp" || (engine == "native" && is_c40_image(input))) {
+      if (!g_task.empty())
+        throw UserError("ldrun: error: --task is not taken by the C40 engines: compile the task's image first (ldc FILE --task NAME --target=c40 -o F.bin)");
       return run_c40(input, engine, trace_file, watch, opt, cycles);  // the TMS320C40 simulator
+    }
     if (cycles) throw UserError("ldrun: error: --cycles needs --engine=c40sim or --engine=c40interp");
     if (engine != "interp" && engine != "fast" && engine != "native" && engine != "c")
       throw UserError("ldrun: error: unknown engine '" + engine + "' (native, interp, fast, c, c40sim or c40interp)");
