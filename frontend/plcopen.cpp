@@ -1640,7 +1640,7 @@ uint32_t Importer::take_run(Dev d, uint32_t n, const Element* el) {
 // in one sequence, with selection divergences and convergences and jumps;
 // transition conditions drawn in the body's LD/FBD graph (computed into a relay
 // each, before the chart); actions that are BOOL variables with the qualifiers
-// N, S and R.  Everything else is refused by name.
+// N, S, R and P.  Everything else is refused by name.
 void Importer::sfc_body(const Element* pou, const Element* sfc) {
   std::string pname = *pou->attr("name");
   if (chart_) fail_at(pou, "POU '" + pname + "' is a second SFC program in one task (after '" + chart_pou_ + "'); ldc runs one chart per program");
@@ -1778,7 +1778,7 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
   // is TRUE while a step naming it N is active, or from an S step's activation
   // to an R step's (its stored state, a relay)
   const Element* actions = pou->child("actions");
-  struct Act { Operand bit; std::vector<uint32_t> n, set, reset; const Element* el; };
+  struct Act { Operand bit; std::vector<uint32_t> n, set, reset, pulse; const Element* el; };
   std::vector<Act> acts;
   for (const auto& ch : sfc->children) {
     if (ch->local_name() != "actionBlock") continue;
@@ -1796,8 +1796,8 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
         for (const Element* an : actions->children_named("action"))
           if (an->attr("name") && upper(*an->attr("name")) == upper(name))
             fail_at(a, "action '" + name + "' of step '" + c.steps[s].name + "' is an action body of the POU; ldc translates actions that are BOOL variables (" + a->path() + ")");
-      if (q != "N" && q != "S" && q != "R")
-        fail_at(a, "qualifier " + q + " of action '" + name + "' in step '" + c.steps[s].name + "' is not supported: ldc translates N, S and R (" + a->path() + ")");
+      if (q != "N" && q != "S" && q != "R" && q != "P")
+        fail_at(a, "qualifier " + q + " of action '" + name + "' in step '" + c.steps[s].name + "' is not supported: ldc translates N, S, R and P (" + a->path() + ")");
       Var* v = lookup(name);
       if (!v) fail_at(a, "action '" + name + "' of step '" + c.steps[s].name + "' is neither a variable nor an action of POU '" + pname + "' (" + a->path() + ")");
       if (v->ty != Ty::Bool) fail_at(a, "action '" + name + "' of step '" + c.steps[s].name + "' is a " + v->type + " variable; an action variable is BOOL (" + a->path() + ")");
@@ -1805,8 +1805,8 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
       Act* act = nullptr;
       for (Act& x : acts)
         if (x.bit.area == o.area && x.bit.index == o.index) act = &x;
-      if (!act) acts.push_back(Act{o, {}, {}, {}, a}), act = &acts.back();
-      (q == "N" ? act->n : q == "S" ? act->set : act->reset).push_back(s);
+      if (!act) acts.push_back(Act{o, {}, {}, {}, {}, a}), act = &acts.back();
+      (q == "N" ? act->n : q == "S" ? act->set : q == "R" ? act->reset : act->pulse).push_back(s);
     }
   }
   SfcScope sc;
@@ -1827,6 +1827,12 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
       q = bit_leaf(Op::LOAD, stored, x.el);
     }
     for (uint32_t st : x.n) q = c_or(std::move(q), flag(st));
+    // P: the scan the step is activated in, when its entry bit is still set (the
+    // initial step: the first scan, its entry bit already cleared by its first run)
+    for (uint32_t st : x.pulse) {
+      q = c_or(std::move(q), bit_leaf(Op::LOAD, bit_opd(Area::M, c.entry(st)), x.el));
+      if (st == c.initial) q = c_or(std::move(q), bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), x.el));
+    }
     rung(std::move(q), out(Op::OUT, {x.bit}, x.el), x.el);
   }
   after_ = std::move(rungs_);
