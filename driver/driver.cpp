@@ -49,7 +49,81 @@ static bool ends_with(const std::string& s, const std::string& suf) {
   return s.size() >= suf.size() && s.compare(s.size() - suf.size(), suf.size(), suf) == 0;
 }
 
-Compiled compile_source(const std::string& path) {
+namespace {
+
+bool is_name(const std::string& s) {
+  if (s.empty() || std::isdigit(static_cast<unsigned char>(s[0]))) return false;
+  for (char c : s)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') return false;
+  return true;
+}
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+
+// A PLCopen program: its rungs, then its chart (docs/plcopen.md, section 1b).
+void append_il(Program& p, Program q) {
+  if (!q.rungs.empty()) {
+    auto& l = q.rungs[0].labels;
+    l.insert(l.begin(), p.end_labels.begin(), p.end_labels.end());
+    p.end_labels.clear();
+  }
+  for (Rung& r : q.rungs) p.rungs.push_back(std::move(r));
+  p.end_labels.insert(p.end_labels.end(), q.end_labels.begin(), q.end_labels.end());
+  for (const Alias& a : q.aliases) {
+    bool dup = false;
+    for (const Alias& b : p.aliases) dup |= lower(a.name) == lower(b.name);
+    if (!dup) p.aliases.push_back(a);
+  }
+}
+
+Program plcopen_il(const TreeProgram& tree, const std::optional<PlcopenChart>& chart) {
+  Program p = lower_to_il(tree);
+  if (!chart) return p;
+  if (chart->chart.edge_slots) throw std::logic_error("a PLCopen chart with edge slots");
+  append_il(p, lower_chart(chart->chart));
+  if (!chart->after.rungs.empty()) append_il(p, lower_to_il(chart->after));
+  return p;
+}
+
+// A PLCopen configuration of several tasks as a project: each task's program
+// compiled already, on the processor of its resource.
+std::shared_ptr<Project> plcopen_project(PlcopenImport& im, const std::string& path, const std::string& text) {
+  auto p = std::make_shared<Project>();
+  p->path = path;
+  p->text = text;
+  size_t slash = path.rfind('/');
+  p->dir = slash == std::string::npos ? "" : path.substr(0, slash);
+  std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
+  p->name = is_name(im.configuration) ? im.configuration : "configuration";
+  for (PlcopenTask& t : im.tasks) {
+    auto fail = [&](const std::string& m) { return CompileError(t.line, t.col, m); };
+    if (!is_name(t.name)) throw fail("task name '" + t.name + "' is not a name ldc's projects take (letters, digits and _)");
+    if (!is_name(t.program)) throw fail("program name '" + t.program + "' is not a name ldc's projects take (letters, digits and _)");
+    if (!is_name(t.resource)) throw fail("resource name '" + t.resource + "' is not a name ldc's projects take (letters, digits and _)");
+    if (t.resource_index > 255) throw fail("more than 256 resources (ldc has processors 0..255)");
+    for (const ProjectTask& o : p->tasks) {
+      if (lower(o.name) == lower(t.name)) throw fail("a second task named '" + t.name + "' (ldc's task names are unique in a project)");
+      if (lower(o.program) == lower(t.program)) throw fail("a second program named '" + t.program + "' (in task '" + o.name + "')");
+    }
+    ProjectTask pt;
+    pt.name = t.name, pt.resource = t.resource, pt.processor = t.resource_index;
+    pt.period_us = t.period_us, pt.priority = t.priority;
+    pt.program = t.program, pt.path = path, pt.file = base;
+    pt.line = t.line, pt.col = t.col;
+    pt.il = std::make_shared<const Program>(plcopen_il(t.tree, t.chart));
+    p->tasks.push_back(std::move(pt));
+  }
+  return p;
+}
+
+}  // namespace
+
+Compiled compile_source(const std::string& path, bool allow_project, const std::string& task) {
+  if (!task.empty() && !ends_with(path, ".xml")) throw UserError(path + ": error: --task is for a PLCopen configuration of several tasks");
   std::string text = read_file(path);
   Compiled c;
   try {
@@ -68,8 +142,33 @@ Compiled compile_source(const std::string& path) {
       c.il = lower_to_il(c.tree);
     } else if (ends_with(path, ".xml")) {
       c.from_ld = true;
-      c.tree = parse_plcopen(text, path);
-      c.il = lower_to_il(c.tree);
+      PlcopenImport im = import_plcopen(text, path);
+      if (!task.empty()) {
+        if (im.tasks.empty()) throw UserError(path + ": error: --task " + task + ": the file has one program, not a configuration of several tasks");
+        auto p = plcopen_project(im, path, text);
+        std::string names;
+        for (size_t i = 0; i < p->tasks.size(); i++) {
+          names += (i ? ", " : "") + p->tasks[i].name;
+          if (lower(p->tasks[i].name) == lower(task)) {
+            c.tree = std::move(im.tasks[i].tree);
+            c.il = *p->tasks[i].il;
+            return c;
+          }
+        }
+        throw UserError(path + ": error: no task '" + task + "' in the configuration (" + names + ")");
+      } else if (im.tasks.empty()) {
+        c.tree = std::move(im.single);
+        c.il = plcopen_il(c.tree, im.single_chart);
+      } else if (allow_project) {
+        c.project = plcopen_project(im, path, text);
+      } else {
+        std::string names;
+        for (const PlcopenTask& t : im.tasks) names += (names.empty() ? "" : ", ") + t.name;
+        throw CompileError(im.tasks[0].line, im.tasks[0].col,
+                           "the configuration has " + std::to_string(im.tasks.size()) + " tasks (" + names +
+                               "), one program each: `ldc FILE -o DIR` writes their images and project, `ldrun FILE --io=...` runs them, "
+                               "`ldc FILE --task NAME` compiles one");
+      }
     } else {
       c.from_ld = true;
       c.tree = parse_ld(text, path);
@@ -236,18 +335,6 @@ std::vector<Token> split_words(std::string_view line) {
     t.push_back(Token{std::string(line.substr(s, i - s)), int(s) + 1});
   }
   return t;
-}
-
-bool is_name(const std::string& s) {
-  if (s.empty() || std::isdigit(static_cast<unsigned char>(s[0]))) return false;
-  for (char c : s)
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') return false;
-  return true;
-}
-
-std::string lower(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
 }
 
 std::string us_text(int64_t us) {
@@ -451,7 +538,14 @@ std::vector<BuiltTask> build_project(const Project& p) {
     BuiltTask b{t, {}};
     ProgramSource ps;
     ps.file = t.path;
-    if (is_image_file(t.path)) {
+    if (t.il) {  // a PLCopen task, compiled with its configuration
+      b.image = make_x86_image(*t.il, build_x86(*t.il, t.path));
+      ps.text = p.text;
+      BinaryIl bin = encode_il(*t.il);
+      ps.instr_offset = bin.instr_offset;
+      for (const Rung& r : t.il->rungs)
+        for (const Instr& in : r.code) ps.instr_loc.push_back(in.loc.line ? in.loc : SrcLoc{r.line, 1});
+    } else if (is_image_file(t.path)) {
       b.image = load_image_file(t.path);
       if (b.image.target != ImageTarget::X86_64) throw UserError(t.path + ": error: not an x86-64 image");
       b.image.config.reset();  // recomputed for this project

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,15 +28,20 @@ std::string read_file(const std::string& path);  // throws UserError
 // Writes to path.tmp.PID, then renames, so no half-written output is left.
 void write_file_atomic(const std::string& path, const std::string& data);  // throws UserError
 
+struct Project;
 struct Compiled {
   TreeProgram tree;  // empty for IL input
   Program il;
   bool from_ld = false;
   std::optional<Chart> chart;  // a .sfc source (docs/sfc.md)
+  std::shared_ptr<Project> project;  // a PLCopen configuration of several tasks
 };
 // .ld (grid) or .il (IL text): parse and lower.  Errors are formatted
 // "file:line:col: error: ..." with the source line and a caret.
-Compiled compile_source(const std::string& path);
+// A PLCopen configuration of several tasks is a project (one program per
+// task, `project`) when allow_project is set, and an error otherwise.
+// `task` picks one task's program of such a configuration (`--task NAME`).
+Compiled compile_source(const std::string& path, bool allow_project = false, const std::string& task = "");
 
 // The x86-64 route: macro compiler then the blockwise assembler.  Assembly
 // errors become UserError with the rung's source line.
@@ -94,6 +100,7 @@ struct ProjectTask {
   std::string file;                // program file as written in the project
   std::string path;                // ... resolved against the project's directory
   int line = 0, col = 0;           // where the program is bound (for messages)
+  std::shared_ptr<const Program> il;  // compiled already (a PLCopen task), else compile `path`
 };
 struct Project {
   std::string path, dir, name;     // project file, its directory ("" = cwd), configuration name

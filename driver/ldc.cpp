@@ -20,14 +20,15 @@ static const char kUsage[] =
     "usage: ldc FILE [-o OUT] [--emit=tree|il|iec-il|ld|asm|listing|hex|c] [--target=x86-64|c40] [-O0|-O1|-O2]\n"
     "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .xml (PLCopen TC6), .rtsp (paper 000), .sfc (SFC chart)\n"
     "       -O0 templates (paper 003), -O1 peephole, -O2 bit stack in registers; for both targets\n"
-    "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n";
+    "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n"
+    "       ldc FILE.xml [-o DIR]   (a PLCopen configuration of several tasks is a project, the same way)\n"
+    "       ldc FILE.xml --task NAME ...   (one task's program of such a configuration)\n";
 
 // ldc --project: compile every program of the project, run the configuration
 // system of paper 002 (refusing write conflicts) and, with -o DIR, write one
 // image per task with its 'config' section and the project file that runs them.
-static int build_project_main(const std::string& project, const std::string& outdir) {
+static int write_project(const Project& p, const std::string& outdir) {
   try {
-    Project p = parse_project(project);
     std::vector<BuiltTask> built = build_project(p);
     if (outdir.empty()) {
       std::string t = print_configuration(p, built);
@@ -53,8 +54,21 @@ static int build_project_main(const std::string& project, const std::string& out
   return 0;
 }
 
+static int build_project_main(const std::string& project, const std::string& outdir) {
+  try {
+    return write_project(parse_project(project), outdir);
+  } catch (UserError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+  } catch (std::exception& e) {
+    std::fprintf(stderr, "ldc: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
-  std::string input, output, emit, target = "x86-64", project;
+  std::string input, output, emit, target = "x86-64", project, task;
   int opt = 0;
   for (int i = 1; i < argc; i++) {
     std::string a = argv[i];
@@ -63,6 +77,8 @@ int main(int argc, char** argv) {
     else if (a.rfind("--target=", 0) == 0) target = a.substr(9);
     else if (a == "--project" && i + 1 < argc) project = argv[++i];
     else if (a.rfind("--project=", 0) == 0) project = a.substr(10);
+    else if (a == "--task" && i + 1 < argc) task = argv[++i];
+    else if (a.rfind("--task=", 0) == 0) task = a.substr(7);
     else if (a == "-O0" || a == "-O1" || a == "-O2") opt = a[2] - '0';
     else if (a == "-h" || a == "--help") { std::fputs(kUsage, stdout); return 0; }
     else if (a == "--version") return print_version("ldc");
@@ -71,13 +87,14 @@ int main(int argc, char** argv) {
     else { std::fprintf(stderr, "ldc: error: more than one input file\n%s", kUsage); return 1; }
   }
   if (!project.empty()) {
-    if (!input.empty() || !emit.empty()) { std::fprintf(stderr, "ldc: error: --project takes no input file or --emit\n%s", kUsage); return 1; }
+    if (!input.empty() || !emit.empty() || !task.empty()) { std::fprintf(stderr, "ldc: error: --project takes no input file, --emit or --task\n%s", kUsage); return 1; }
     return build_project_main(project, output);
   }
   if (input.empty()) { std::fprintf(stderr, "ldc: error: no input file\n%s", kUsage); return 1; }
   try {
     if (target != "x86-64" && target != "c40") throw UserError("ldc: error: unknown target '" + target + "' (x86-64 or c40)");
-    Compiled c = compile_source(input);                      // parse + lower
+    Compiled c = compile_source(input, emit.empty() && target == "x86-64", task);  // parse + lower
+    if (c.project) return write_project(*c.project, output);  // a PLCopen configuration of several tasks
     std::string text;
     if (emit == "tree") {
       if (!c.from_ld) throw UserError("ldc: error: --emit=tree needs a .ld source");

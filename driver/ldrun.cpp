@@ -36,6 +36,7 @@ static const char kUsage[] =
     "             [--monitor HOST:PORT [--monitor-write] [--monitor-remote]]  (the live ladder view, docs/runtime.md)\n"
     "       FILE: an image (.bin, .hex) or a source ldc reads (.ld, .il, .xml, .rtsp, .sfc), compiled in memory\n"
     "             (native code at -O0 unless -O1 or -O2 is given; --engine=fast is the fast interpreter)\n"
+    "       FILE.xml: a PLCopen configuration of several tasks runs as a project (--io); --task NAME picks one task's program\n"
     "       --sandbox: run the scans in a child process that seccomp confines to its socket (native, interp, c)\n";
 
 namespace {
@@ -51,10 +52,13 @@ struct RtArgs {
   bool monitor_write = false, monitor_remote = false;
 };
 
+// --task NAME: one task's program of a PLCopen configuration of several tasks.
+std::string g_task;
+
 // An image for a task: an image file as it is, or a source compiled in memory.
 Image load_program(const std::string& file) {
   if (is_image_file(file)) return load_image_file(file);
-  Compiled c = compile_source(file);
+  Compiled c = compile_source(file, false, g_task);
   return make_x86_image(c.il, build_x86(c.il, file));
 }
 
@@ -130,8 +134,18 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
 
   // The tasks: a project's, or one task "main" running the program.
   std::vector<TaskSpec> specs;
+  // a PLCopen configuration of several tasks is a project too
+  std::shared_ptr<Project> proj;
+  std::optional<Image> single;
   if (!a.project.empty()) {
-    Project p = parse_project(a.project);
+    proj = std::make_shared<Project>(parse_project(a.project));
+  } else if (!input.empty() && !is_image_file(input)) {
+    Compiled c = compile_source(input, g_task.empty(), g_task);
+    if (c.project) proj = c.project;
+    else single = make_x86_image(c.il, build_x86(c.il, input));
+  }
+  if (proj) {
+    const Project& p = *proj;
     opt.block_size = p.block_size;
     opt.retain_file = p.retain_file;
     opt.retain_every_us = p.retain_every_us;
@@ -151,7 +165,7 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
     s.resource = "cpu0";
     s.period_us = uint32_t(period_us);
     s.file = input;
-    s.image = load_program(input);
+    s.image = single ? std::move(*single) : load_program(input);
     if (s.image.config) {
       s.processor = s.image.config->processor;
       opt.block_size = s.image.config->block_size;
@@ -412,6 +426,7 @@ int ldrun_main(int argc, char** argv) {
         opt_value("--monitor", rta.monitor) || flag("--monitor-write", rta.monitor_write) ||
         flag("--monitor-remote", rta.monitor_remote)) {
     } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");
+    else if (a.rfind("--task", 0) == 0) g_task = value("--task");
     else if (a == "--cycles") cycles = true;  // C40 engines: cycles and us per scan
     else if (a == "-O0" || a == "-O1" || a == "-O2") opt_level = a[2] - '0';
     else if (a == "--sandbox") rta.sandbox = true;
@@ -442,8 +457,11 @@ int ldrun_main(int argc, char** argv) {
   if (input.empty()) throw UserError(std::string("ldrun: error: no program\n") + kUsage);
   if (rta.sandbox && (engine == "c40sim" || engine == "c40interp" || is_c40_image(input)))
     throw UserError("ldrun: error: --sandbox is for the engines that run on this machine (native, interp, c); the C40 engines are simulated");
-  if (engine == "c40sim" || engine == "c40interp" || (engine == "native" && is_c40_image(input)))
+  if (engine == "c40sim" || engine == "c40interp" || (engine == "native" && is_c40_image(input))) {
+    if (!g_task.empty())
+      throw UserError("ldrun: error: --task is not taken by the C40 engines: compile the task's image first (ldc FILE --task NAME --target=c40 -o F.bin)");
     return run_c40(input, engine, trace_file, watch, opt, cycles);  // the TMS320C40 simulator
+  }
   if (cycles) throw UserError("ldrun: error: --cycles needs --engine=c40sim or --engine=c40interp");
   if (engine != "interp" && engine != "fast" && engine != "native" && engine != "c")
     throw UserError("ldrun: error: unknown engine '" + engine + "' (native, interp, fast, c, c40sim or c40interp)");
@@ -459,14 +477,14 @@ int ldrun_main(int argc, char** argv) {
     if (img.target != ImageTarget::X86_64 && engine == "native")
       throw UserError("ldrun: error: " + input + " is not an x86-64 image; use --engine=interp");
   } else if (engine == "c") {
-    Compiled c = compile_source(input);
+    Compiled c = compile_source(input, false, g_task);
     img.layout = c.il.layout();
     img.aliases = c.il.aliases;
     img.retentive = retentive_ranges(c.il);
     tmpdir = make_temp_dir();
     so_path = build_c_shared_object(c, tmpdir);
   } else {
-    Compiled c = compile_source(input);
+    Compiled c = compile_source(input, false, g_task);
     img = engine == "native" ? make_x86_image(c.il, build_x86(c.il, input, as::Mode::Blockwise, std::max(opt_level, 0),
                                                               /*notes=*/false))
                              : il_image(c.il);

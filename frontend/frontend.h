@@ -1,6 +1,7 @@
 // frontend/frontend.h -- the .ld ladder grid reader (docs/format.md).
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -34,6 +35,31 @@ TreeProgram parse_ldmicro(std::string_view text, const std::string& filename);
 // Imports the LD bodies of a PLCopen TC6 XML project (docs/plcopen.md).
 // Throws CompileError (line, col, message naming the XML element path).
 TreeProgram parse_plcopen(std::string_view text, const std::string& filename);
+// A configuration of several tasks (docs/plcopen.md, "Configurations of
+// several tasks"): one program per task, over one allocation of devices, so a
+// BOOL global is the same relay in every program.
+struct PlcopenChart {
+  Chart chart;          // steps and transitions (ir/sfc.cpp)
+  TreeProgram after;    // its actions, run after the steps have moved
+};
+struct PlcopenTask {
+  std::string name, resource, program;  // task, its resource, the program's name
+  uint32_t resource_index = 0;          // the resource's place in the file: its processor
+  uint32_t period_us = 0, priority = 0;
+  int line = 0, col = 0;                // the task element
+  TreeProgram tree;
+  std::optional<PlcopenChart> chart;    // an SFC program's chart, run after the tree's rungs
+};
+struct PlcopenImport {
+  std::string configuration;            // the configuration's name
+  std::vector<PlcopenTask> tasks;       // empty: one program, `single`
+  TreeProgram single;
+  std::optional<PlcopenChart> single_chart;
+};
+// A program's IL is lower_to_il(tree), then lower_chart(chart) appended
+// (then the actions' rungs).  At most one task: `single` is parse_plcopen's program.  Several tasks: one
+// program per task.  Throws CompileError.
+PlcopenImport import_plcopen(std::string_view text, const std::string& filename);
 
 // IEC 61131-3 Instruction List (docs/iec-il.md).  A `.il` file is ldc's own IL
 // text when its first character other than blanks and `;` comment lines is

@@ -273,6 +273,7 @@ class Importer {
   const Node& node(const Conn& c);
   bool is_bool_source(const Conn& c, int depth = 0);
   bool out_is_bool(const Node& b, const std::string& pin, int depth = 0);
+  void refuse_user_pou(const Node& b);
   template <typename E>
   Cond node_values(std::vector<E*>& left, int nn, int sink, const Element* consumer);
   Cond bool_expr(const std::vector<Conn>& conns, bool order, const Element* consumer);
@@ -281,6 +282,52 @@ class Importer {
   const Pin* out_pin(const Node& b, const Conn& c);
   void statement(const Node& n);
   void tasks(const Element* root);
+  // SFC (section 1b): the chart of the POU being translated, at most one per program
+  bool sfc_mode_ = false;
+  std::optional<Chart> chart_;
+  std::vector<TreeRung> after_;  // the chart's actions, after its steps
+  std::string chart_pou_;
+  void take_chart(std::optional<PlcopenChart>& into) {
+    if (!chart_) return;
+    into.emplace();
+    into->chart = std::move(*chart_);
+    into->after.source = file_;
+    into->after.rungs = std::move(after_);
+    chart_.reset();
+    after_.clear();
+  }
+  static const std::set<std::string>& sfc_kinds() {
+    static const std::set<std::string> k = {"step", "transition", "selectionDivergence", "selectionConvergence",
+                                            "simultaneousDivergence", "simultaneousConvergence", "jumpStep", "macroStep", "actionBlock"};
+    return k;
+  }
+  void sfc_body(const Element* pou, const Element* sfc);
+  uint32_t take_run(Dev d, uint32_t n, const Element* el);
+  struct CfgTask {
+    const Element* el = nullptr;
+    std::string name, resource, interval, priority_text;
+    uint32_t resource_index = 0;
+    bool no_task = false;  // a resource's pouInstance outside any task
+    std::vector<std::string> pous, instances;  // upper POU names, instance names
+    std::vector<const Element*> instance_els;
+  };
+  std::vector<CfgTask> cfg_tasks_;
+  std::string config_name_;
+  int task_ = -1;  // the task being translated (several tasks), else -1
+  std::map<Var*, std::set<int>> global_users_;  // global -> tasks whose programs use it
+  std::vector<const Element*> ld_pous_;
+  std::map<const Element*, std::map<std::string, Var*>> scopes_;
+  void prepare();
+  void emit_init(const std::function<bool(const Var&)>& which, const Element* root);
+  void emit_bodies(const std::vector<const Element*>& pous);
+  TreeProgram run_prepared(const Element* root);
+  void finish(TreeProgram& p, const Element* root);
+  PlcopenTask task_program(size_t i, const Element* root);
+
+ public:
+  PlcopenImport import();
+
+ private:
   void block(const Node& b);
   void fb_block(const Node& b, Var& inst);
   void fn_block(const Node& b);
@@ -381,9 +428,11 @@ void Importer::allocate() {
 
 Var* Importer::lookup(const std::string& name) {
   std::string k = upper(name);
-  if (auto it = scope_.find(k); it != scope_.end()) return it->second;
-  if (auto it = globals_.find(k); it != globals_.end()) return it->second;
-  return nullptr;
+  Var* v = nullptr;
+  if (auto it = scope_.find(k); it != scope_.end()) v = it->second;
+  else if (auto it = globals_.find(k); it != globals_.end()) v = it->second;
+  if (v && v->pou.empty() && task_ >= 0) global_users_[v].insert(task_);
+  return v;
 }
 
 // Aliases: each variable's name, or POU_name when the name is declared in more
@@ -656,6 +705,7 @@ void Importer::read_conns(const Element* cpi, std::vector<Conn>& outv) {
 
 void Importer::read_node(const Element* e) {
   std::string k(e->local_name());
+  if (sfc_mode_ && sfc_kinds().count(k)) return;  // the chart's own elements (sfc_body)
   static const std::set<std::string> known = {"leftPowerRail", "rightPowerRail", "contact", "coil", "block", "inVariable",
                                               "outVariable", "inOutVariable", "connector", "continuation", "comment"};
   if (!known.count(k)) {
@@ -775,8 +825,19 @@ bool Importer::is_bool_source(const Conn& c, int depth) {
   fail_at(c.el, n.kind + " localId " + std::to_string(n.id) + " has no output to connect (" + c.el->path() + ")");
 }
 
+// A block calling one of the project's own POUs is refused by name, wherever
+// it is first met (generating it, or asking the type of its output).
+void Importer::refuse_user_pou(const Node& b) {
+  auto lang = pou_lang_.find(upper(b.type));
+  if (lang != pou_lang_.end())
+    fail_at(b.el, "block '" + b.type + "' localId " + std::to_string(b.id) + (b.instance.empty() ? "" : " (instance " + b.instance + ")") +
+                      " calls POU '" + b.type + "', written in " + lang->second +
+                      "; ldc translates the standard blocks only, not calls of the project's own POUs (" + b.el->path() + ")");
+}
+
 bool Importer::out_is_bool(const Node& b, const std::string& pin, int depth) {
   std::string t = upper(b.type);
+  if (fb_kind(t) == FbKind::None) refuse_user_pou(b);
   if (pin == "ENO") return true;
   if (fb_kind(t) != FbKind::None) return !(pin == "ET" || pin == "CV");
   static const std::set<std::string> cmp = {"GT", "GE", "EQ", "NE", "LE", "LT"};
@@ -1053,11 +1114,7 @@ void Importer::block(const Node& b) {
       fail_at(b.el, "instance '" + b.instance + "' is declared as " + inst->type + ", but block localId " + std::to_string(b.id) + " is a " + t);
     fb_block(b, *inst);
   } else {
-    auto lang = pou_lang_.find(t);
-    if (lang != pou_lang_.end())
-      fail_at(b.el, "block '" + b.type + "' localId " + std::to_string(b.id) + (b.instance.empty() ? "" : " (instance " + b.instance + ")") +
-                        " calls POU '" + b.type + "', written in " + lang->second +
-                        "; ldc translates the standard blocks only, not calls of the project's own POUs (" + b.el->path() + ")");
+    refuse_user_pou(b);
     fn_block(b);
   }
   generating_.erase(b.id);
@@ -1252,6 +1309,9 @@ void Importer::bit_shift(const std::string& t, const Pin& in_pin, Operand in, Op
 void Importer::fn_block(const Node& b) {
   std::string t = upper(b.type);
   if (t == "ADD_TIME" || t == "SUB_TIME") t = t.substr(0, 3);  // TIME is INT32 ms: the same arithmetic
+  // TIME times or by an integer: MUL, DIV on ms (DIV truncates to the ms); a REAL factor is refused below
+  std::string time_op = t == "MUL_TIME" || t == "DIV_TIME" ? t : "";
+  if (!time_op.empty()) t = t.substr(0, 3);
   Pins pins{b};
   bool order = b.order > 0;
   const Element* el = b.el;
@@ -1263,7 +1323,7 @@ void Importer::fn_block(const Node& b) {
   if (!cmp.count(t) && !arith.count(t) && !conv && !bits.count(t) && t != "MOVE" && t != "SEL" && t != "MUX" && t != "LIMIT" &&
       t != "ABS" && t != "AND" && t != "OR" && t != "XOR" && t != "NOT")
     fail_at(el, "block '" + b.type + "' localId " + std::to_string(b.id) + " is not supported: ldc translates TON TOF TP CTU CTD CTUD SR RS R_TRIG F_TRIG, "
-                "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL MUX, ADD_TIME SUB_TIME, AND OR XOR NOT SHL SHR ROL ROR "
+                "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL MUX, ADD_TIME SUB_TIME MUL_TIME DIV_TIME, AND OR XOR NOT SHL SHR ROL ROR "
                 "and type conversions (" + el->path() + ")");
   // inputs other than EN, in order
   std::vector<const Pin*> ins;
@@ -1285,10 +1345,10 @@ void Importer::fn_block(const Node& b) {
   for (const Pin* p : ins)
     if (p->conns.empty()) fail_at(p->el, "input " + p->name + " of " + t + " localId " + std::to_string(b.id) + " is not connected (" + p->el->path() + ")");
   size_t want = t == "SEL" || t == "LIMIT" ? 3 : (conv || t == "NOT" || t == "MOVE" || t == "ABS") ? 1
-                : (t == "SUB" || t == "DIV" || t == "MOD" || bits.count(t)) ? 2 : 0;
+                : (t == "SUB" || t == "DIV" || t == "MOD" || bits.count(t) || !time_op.empty()) ? 2 : 0;
   size_t n_in = ins.size();
   if ((want && n_in != want) || (!want && n_in < 2))
-    fail_at(el, t + " localId " + std::to_string(b.id) + " takes " + (want ? std::to_string(want) : std::string("two or more")) +
+    fail_at(el, (time_op.empty() ? t : time_op) + " localId " + std::to_string(b.id) + " takes " + (want ? std::to_string(want) : std::string("two or more")) +
                     " input" + (want == 1 ? "" : "s") + ", not " + std::to_string(n_in) + " (" + el->path() + ")");
   bool boolean = out_is_bool(b, "OUT");
   std::string outname = "OUT";
@@ -1385,6 +1445,9 @@ void Importer::fn_block(const Node& b) {
     }
     bool real = false;
     for (const Val& x : v) real |= x.ty == Ty::Real;
+    if (!time_op.empty() && real)
+      fail_at(el, time_op + " localId " + std::to_string(b.id) + " by a REAL is not supported: TIME is held in whole milliseconds (" +
+                      el->path() + ")");
     std::string target = conv ? t.substr(to + 4) : "";
     bool round_real = false;  // REAL_TO_INT & co: IEC rounds to nearest, ties to even
     if (conv) {
@@ -1557,16 +1620,276 @@ void Importer::body(const Element* pou, const Element* ld) {
   if (rungs_.size() == first) pending_title_.clear();
 }
 
+// ------------------------------------------------------------------ SFC bodies
+
+// n devices of kind d in a row (a chart's step flags), avoiding every device in use.
+uint32_t Importer::take_run(Dev d, uint32_t n, const Element* el) {
+  for (uint32_t b = 0; b + n <= device_count(d); b++) {
+    uint32_t k = 0;
+    while (k < n && !used_.count({int(d), b + k})) k++;
+    if (k == n) {
+      for (k = 0; k < n; k++) used_.insert({int(d), b + k});
+      return b;
+    }
+    b += k;
+  }
+  fail_at(el, std::string("out of ") + dev_name(d) + " devices for this chart's steps");
+}
+
+// A PLCopen SFC body becomes the chart of ldc's SFC compiler (ir/sfc.cpp): steps
+// in one sequence, with selection divergences and convergences and jumps;
+// transition conditions drawn in the body's LD/FBD graph (computed into a relay
+// each, before the chart); actions that are BOOL variables with the qualifiers
+// N, S, R and P.  Everything else is refused by name.
+void Importer::sfc_body(const Element* pou, const Element* sfc) {
+  std::string pname = *pou->attr("name");
+  if (chart_) fail_at(pou, "POU '" + pname + "' is a second SFC program in one task (after '" + chart_pou_ + "'); ldc runs one chart per program");
+  // the LD/FBD elements: blocks and variables feeding the conditions
+  sfc_mode_ = true;
+  body(pou, sfc);
+  sfc_mode_ = false;
+  std::map<int, const Element*> el_of;
+  for (const auto& c : sfc->children) {
+    std::string k(c->local_name());
+    if (!sfc_kinds().count(k)) continue;
+    if (k == "simultaneousDivergence" || k == "simultaneousConvergence" || k == "macroStep")
+      fail_at(c.get(), "SFC element '" + k + "' is not supported: ldc translates single sequences with selections and jumps (" + c->path() + ")");
+    const std::string* id = c->attr("localId");
+    if (!id) fail_at(c.get(), k + " without a localId (" + c->path() + ")");
+    int n = std::atoi(id->c_str());
+    if (el_of.count(n) || nodes_.count(n)) fail_at(c.get(), "localId " + *id + " is used twice (" + c->path() + ")");
+    el_of[n] = c.get();
+  }
+  auto refs = [&](const Element* e) {
+    std::vector<int> r;
+    for (const Element* cpi : e->children_named("connectionPointIn"))
+      for (const Element* cn : cpi->children_named("connection"))
+        if (auto ref = cn->attr("refLocalId")) r.push_back(std::atoi(ref->c_str()));
+    return r;
+  };
+  auto kind = [&](int id) { auto it = el_of.find(id); return it == el_of.end() ? std::string() : std::string(it->second->local_name()); };
+  Chart c;
+  c.source = file_;
+  std::map<int, uint32_t> step_of;        // localId -> step
+  std::map<std::string, uint32_t> named;  // upper step name -> step
+  bool have_initial = false;
+  for (auto& [id, e] : el_of) (void)id, (void)e;
+  for (const auto& ch : sfc->children) {
+    if (ch->local_name() != "step") continue;
+    const Element* e = ch.get();
+    SfcStep st;
+    if (!e->attr("name")) fail_at(e, "step without a name (" + e->path() + ")");
+    st.name = *e->attr("name");
+    st.line = e->line;
+    if (named.count(upper(st.name))) fail_at(e, "a second step named '" + st.name + "' (" + e->path() + ")");
+    uint32_t i = uint32_t(c.steps.size());
+    if (auto ini = e->attr("initialStep"); ini && (*ini == "true" || *ini == "1")) {
+      if (have_initial) fail_at(e, "step '" + st.name + "' is a second initial step; ldc translates charts with one initial step (" + e->path() + ")");
+      c.initial = i, have_initial = true;
+    }
+    step_of[std::atoi(e->attr("localId")->c_str())] = i;
+    named[upper(st.name)] = i;
+    c.steps.push_back(std::move(st));
+  }
+  if (c.steps.empty()) fail_at(sfc, "the SFC body of POU '" + pname + "' has no step");
+  if (!have_initial) fail_at(sfc, "the SFC body of POU '" + pname + "' has no initial step");
+  // a transition's source step, back through a selection divergence
+  auto source_step = [&](const Element* t) -> uint32_t {
+    std::vector<int> r = refs(t);
+    for (int depth = 0; depth < 64; depth++) {
+      if (r.size() != 1) fail_at(t, "transition localId " + *t->attr("localId") + " follows " + std::to_string(r.size()) + " elements; ldc needs one step (" + t->path() + ")");
+      std::string k = kind(r[0]);
+      if (k == "step") return step_of[r[0]];
+      if (k != "selectionDivergence") fail_at(t, "transition localId " + *t->attr("localId") + " follows " + (k.empty() ? "localId " + std::to_string(r[0]) : k) + "; ldc needs a step or a selection divergence (" + t->path() + ")");
+      r = refs(el_of[r[0]]);
+    }
+    fail_at(t, "transition localId " + *t->attr("localId") + ": a loop of divergences (" + t->path() + ")");
+  };
+  // the step a transition leads to, forward through a selection convergence or a jump
+  auto target_step = [&](const Element* t, int tid) -> uint32_t {
+    int from = tid;
+    for (int depth = 0; depth < 64; depth++) {
+      std::vector<const Element*> next;
+      for (auto& [id, e] : el_of)
+        for (int r : refs(e))
+          if (r == from && e->local_name() != "actionBlock") next.push_back(e);
+      if (next.size() != 1) fail_at(t, "transition localId " + *t->attr("localId") + " leads to " + std::to_string(next.size()) + " elements; ldc needs one step (" + t->path() + ")");
+      const Element* n = next[0];
+      std::string k(n->local_name());
+      if (k == "step") return step_of[std::atoi(n->attr("localId")->c_str())];
+      if (k == "jumpStep") {
+        auto target = n->attr("targetName");
+        if (!target || !named.count(upper(*target))) fail_at(n, "jump to an unknown step (" + n->path() + ")");
+        return named[upper(*target)];
+      }
+      if (k != "selectionConvergence") fail_at(n, "transition localId " + *t->attr("localId") + " leads to " + k + "; ldc needs a step, a jump or a selection convergence (" + n->path() + ")");
+      from = std::atoi(n->attr("localId")->c_str());
+    }
+    fail_at(t, "transition localId " + *t->attr("localId") + ": a loop of convergences (" + t->path() + ")");
+  };
+  // transitions: conditions into relays, by priority (left first) per step
+  struct Tr { uint32_t from; double x; size_t doc; SfcTransition t; };
+  std::vector<Tr> trs;
+  for (const auto& ch : sfc->children) {
+    if (ch->local_name() != "transition") continue;
+    const Element* t = ch.get();
+    int tid = std::atoi(t->attr("localId")->c_str());
+    std::string what = "transition localId " + std::to_string(tid);
+    const Element* cond = t->child("condition");
+    if (!cond) fail_at(t, what + " has no condition (" + t->path() + ")");
+    const Element* ci = cond->child("connectionPointIn");
+    if (!ci) {
+      auto inline_lang = [](const Element* in) {  // <inline><ST> (TC6 2.01), or <inline><body><ST>
+        const Element* b = in->child("body") ? in->child("body") : in;
+        for (const auto& ch : b->children)
+          if (ch->local_name() != "documentation" && ch->local_name() != "addData") return std::string(ch->local_name());
+        return std::string("empty");
+      };
+      std::string how = cond->child("inline") ? "an inline " + inline_lang(cond->child("inline")) + " condition"
+                        : cond->child("reference") ? "a condition named '" + (cond->child("reference")->attr("name") ? *cond->child("reference")->attr("name") : "?") + "' (a transition of the POU's <transitions>)"
+                                                   : "this form of condition";
+      fail_at(cond, what + " has " + how + "; ldc translates conditions drawn in the chart's LD/FBD graph (" + cond->path() + ")");
+    }
+    std::vector<Conn> conns;
+    read_conns(ci, conns);
+    Cond cc = bool_expr(conns, false, cond);
+    uint32_t m = take(Dev::M, t);
+    if (rungs_.empty() || pending_title_.empty()) {}
+    rung(std::move(cc), out(Op::OUT, {bit_opd(Area::M, m)}, t), t);
+    Tr tr;
+    tr.from = source_step(t);
+    tr.x = 0;
+    if (const Element* pos = t->child("position"))
+      if (auto x = pos->attr("x")) tr.x = std::atof(x->c_str());
+    tr.doc = trs.size();
+    tr.t.line = t->line;
+    tr.t.text = "localId " + std::to_string(tid);
+    Instr ld;
+    ld.op = Op::LOAD;
+    ld.a[0] = bit_opd(Area::M, m);
+    ld.loc = {t->line, t->col};
+    tr.t.cond = {ld};
+    tr.t.target = target_step(t, tid);
+    trs.push_back(std::move(tr));
+  }
+  std::stable_sort(trs.begin(), trs.end(), [](const Tr& a, const Tr& b) { return a.from != b.from ? a.from < b.from : a.x < b.x; });
+  for (Tr& tr : trs) c.steps[tr.from].out.push_back(std::move(tr.t));
+  // actions: as MatIEC runs them, after the steps have moved: a variable action
+  // is TRUE while a step naming it N is active, or from an S step's activation
+  // to an R step's (its stored state, a relay)
+  const Element* actions = pou->child("actions");
+  struct Act { Operand bit; std::vector<uint32_t> n, set, reset, pulse; const Element* el; };
+  std::vector<Act> acts;
+  for (const auto& ch : sfc->children) {
+    if (ch->local_name() != "actionBlock") continue;
+    const Element* ab = ch.get();
+    std::vector<int> r = refs(ab);
+    if (r.size() != 1 || kind(r[0]) != "step") fail_at(ab, "action block localId " + *ab->attr("localId") + " is not attached to one step (" + ab->path() + ")");
+    uint32_t s = step_of[r[0]];
+    for (const Element* a : ab->children_named("action")) {
+      std::string q = a->attr("qualifier") ? upper(*a->attr("qualifier")) : "N";
+      const Element* ref = a->child("reference");
+      if (!ref || !ref->attr("name"))
+        fail_at(a, "an inline action in step '" + c.steps[s].name + "'; ldc translates actions that are BOOL variables (" + a->path() + ")");
+      std::string name = *ref->attr("name");
+      if (actions)
+        for (const Element* an : actions->children_named("action"))
+          if (an->attr("name") && upper(*an->attr("name")) == upper(name))
+            fail_at(a, "action '" + name + "' of step '" + c.steps[s].name + "' is an action body of the POU; ldc translates actions that are BOOL variables (" + a->path() + ")");
+      if (q != "N" && q != "S" && q != "R" && q != "P")
+        fail_at(a, "qualifier " + q + " of action '" + name + "' in step '" + c.steps[s].name + "' is not supported: ldc translates N, S, R and P (" + a->path() + ")");
+      Var* v = lookup(name);
+      if (!v) fail_at(a, "action '" + name + "' of step '" + c.steps[s].name + "' is neither a variable nor an action of POU '" + pname + "' (" + a->path() + ")");
+      if (v->ty != Ty::Bool) fail_at(a, "action '" + name + "' of step '" + c.steps[s].name + "' is a " + v->type + " variable; an action variable is BOOL (" + a->path() + ")");
+      Operand o = bit_of(name, a, true);
+      Act* act = nullptr;
+      for (Act& x : acts)
+        if (x.bit.area == o.area && x.bit.index == o.index) act = &x;
+      if (!act) acts.push_back(Act{o, {}, {}, {}, {}, a}), act = &acts.back();
+      (q == "N" ? act->n : q == "S" ? act->set : q == "R" ? act->reset : act->pulse).push_back(s);
+    }
+  }
+  SfcScope sc;
+  for (uint32_t i = 0; i < c.steps.size(); i++) sc.steps.push_back(i), c.steps[i].scope = 0;
+  c.scopes.push_back(sc);
+  c.flag_base = take_run(Dev::M, uint32_t(3 * c.steps.size()), sfc);
+  std::vector<TreeRung> saved = std::move(rungs_);
+  rungs_.clear();
+  std::string saved_title = std::move(pending_title_);
+  pending_title_ = "actions of " + pname;
+  for (const Act& x : acts) {
+    auto flag = [&](uint32_t st) { return bit_leaf(Op::LOAD, bit_opd(Area::M, c.flag(st)), x.el); };
+    Cond q = Cond::no();
+    if (!x.set.empty() || !x.reset.empty()) {
+      Operand stored = bit_opd(Area::M, take(Dev::M, x.el));
+      for (uint32_t st : x.set) rung(flag(st), out(Op::SET, {stored}, x.el), x.el);
+      for (uint32_t st : x.reset) rung(flag(st), out(Op::RST, {stored}, x.el), x.el);
+      q = bit_leaf(Op::LOAD, stored, x.el);
+    }
+    for (uint32_t st : x.n) q = c_or(std::move(q), flag(st));
+    // P: the scan the step is activated in, when its entry bit is still set (the
+    // initial step: the first scan, its entry bit already cleared by its first run)
+    for (uint32_t st : x.pulse) {
+      q = c_or(std::move(q), bit_leaf(Op::LOAD, bit_opd(Area::M, c.entry(st)), x.el));
+      if (st == c.initial) q = c_or(std::move(q), bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), x.el));
+    }
+    rung(std::move(q), out(Op::OUT, {x.bit}, x.el), x.el);
+  }
+  after_ = std::move(rungs_);
+  rungs_ = std::move(saved);
+  pending_title_ = std::move(saved_title);
+  for (uint32_t i = 0; i < c.steps.size(); i++) {
+    std::string why;
+    const std::string& n = c.steps[i].name;
+    if (!lookup(n) && is_identifier(n) && !parse_device(n) && !parse_iec_address(n, why))
+      c.aliases.push_back({n, DeviceRef{Dev::M, c.flag(i)}});
+  }
+  chart_ = std::move(c);
+  chart_pou_ = pname;
+}
+
+// A task's interval, T#20ms, T#0.1ms, TIME#1s500ms, in microseconds; nullopt
+// if malformed or not a whole number of microseconds.
+std::optional<uint64_t> interval_us(const std::string& s0) {
+  std::string s = upper(trim(s0));
+  size_t hash = s.find('#');
+  if (hash == std::string::npos || (s.substr(0, hash) != "T" && s.substr(0, hash) != "TIME")) return std::nullopt;
+  std::string b = s.substr(hash + 1);
+  double us = 0;
+  size_t i = 0;
+  if (b.empty()) return std::nullopt;
+  while (i < b.size()) {
+    if (b[i] == '_') { i++; continue; }
+    size_t j = i;
+    while (j < b.size() && (std::isdigit((unsigned char)b[j]) || b[j] == '.')) j++;
+    if (j == i || j - i > 12) return std::nullopt;
+    double v = std::strtod(b.substr(i, j - i).c_str(), nullptr);
+    size_t k = j;
+    while (k < b.size() && std::isalpha((unsigned char)b[k])) k++;
+    std::string u = b.substr(j, k - j);
+    double mul = u == "D" ? 86400e6 : u == "H" ? 3600e6 : u == "M" ? 60e6 : u == "S" ? 1e6 : u == "MS" ? 1e3 : u == "US" ? 1 : u == "NS" ? 1e-3 : -1;
+    if (mul < 0) return std::nullopt;
+    us += v * mul;
+    i = k;
+  }
+  double r = std::round(us);
+  if (std::fabs(us - r) > 1e-6 || r > 4e9) return std::nullopt;
+  return uint64_t(r);
+}
+
 // The configuration's tasks: every program instance must run a POU that ldc
-// compiles (an LD body), and all of them run in one scan, so the tasks must
-// share one interval.  What ldc cannot run is refused by name, never dropped.
+// compiles (an LD or FBD body); what ldc cannot run is refused by name, never
+// dropped.  Each task is kept, with its programs, for a configuration of
+// several tasks (one ldc task each).
 void Importer::tasks(const Element* root) {
   const Element* inst = root->child("instances");
   const Element* cfgs = inst ? inst->child("configurations") : nullptr;
   if (!cfgs) return;
-  std::string first_task, first_interval;
-  for (const Element* cfg : cfgs->children_named("configuration"))
+  uint32_t res_index = 0;
+  for (const Element* cfg : cfgs->children_named("configuration")) {
+    if (config_name_.empty() && cfg->attr("name")) config_name_ = *cfg->attr("name");
     for (const Element* res : cfg->children_named("resource")) {
+      std::string rn = res->attr("name") ? *res->attr("name") : "resource" + std::to_string(res_index);
       auto check = [&](const Element* pi, const std::string& task) {
         const std::string* type = pi->attr("typeName");
         std::string name = pi->attr("name") ? *pi->attr("name") : "?";
@@ -1574,23 +1897,44 @@ void Importer::tasks(const Element* root) {
         if (!type) fail_at(pi, where + " has no typeName (" + pi->path() + ")");
         auto lang = pou_lang_.find(upper(*type));
         if (lang == pou_lang_.end()) fail_at(pi, where + " runs '" + *type + "', which is not a POU of this project (" + pi->path() + ")");
-        if (lang->second != "LD" && lang->second != "FBD")
-          fail_at(pi, where + " runs POU '" + *type + "', written in " + lang->second + "; ldc compiles LD and FBD bodies only (" + pi->path() + ")");
+        if (lang->second != "LD" && lang->second != "FBD" && lang->second != "SFC")
+          fail_at(pi, where + " runs POU '" + *type + "', written in " + lang->second + "; ldc compiles LD, FBD and SFC bodies only (" + pi->path() + ")");
+        return upper(*type);
       };
       for (const Element* t : res->children_named("task")) {
-        std::string tn = t->attr("name") ? *t->attr("name") : "?";
-        std::string iv = t->attr("interval") ? *t->attr("interval") : "(no interval)";
-        for (const Element* pi : t->children_named("pouInstance")) check(pi, tn);
-        if (first_task.empty()) first_task = tn, first_interval = iv;
-        else if (upper(iv) != upper(first_interval))
-          fail_at(t, "task '" + tn + "' runs every " + iv + " and task '" + first_task + "' every " + first_interval +
-                         "; ldc runs all programs in one scan, so their tasks must share one interval (" + t->path() + ")");
+        CfgTask ct;
+        ct.el = t;
+        ct.name = t->attr("name") ? *t->attr("name") : "?";
+        ct.resource = rn;
+        ct.resource_index = res_index;
+        for (const Element* pi : t->children_named("pouInstance")) {
+          ct.pous.push_back(check(pi, ct.name));
+          ct.instances.push_back(pi->attr("name") ? *pi->attr("name") : ct.name);
+          ct.instance_els.push_back(pi);
+        }
+        const std::string* iv = t->attr("interval");
+        if (iv) ct.interval = *iv;
+        if (auto p = t->attr("priority")) ct.priority_text = *p;
+        cfg_tasks_.push_back(std::move(ct));
       }
-      for (const Element* pi : res->children_named("pouInstance")) check(pi, "");
+      for (const Element* pi : res->children_named("pouInstance")) {
+        CfgTask ct;  // a program of the resource without a task: runs every cycle of the resource
+        ct.el = pi;
+        ct.name = pi->attr("name") ? *pi->attr("name") : "?";
+        ct.resource = rn;
+        ct.resource_index = res_index;
+        ct.pous.push_back(check(pi, ""));
+        ct.instances.push_back(ct.name);
+        ct.instance_els.push_back(pi);
+        ct.no_task = true;
+        cfg_tasks_.push_back(std::move(ct));
+      }
+      res_index++;
     }
+  }
 }
 
-TreeProgram Importer::run() {
+void Importer::prepare() {
   if (text_.size() > kMaxSourceBytes) fail_at(nullptr, "source file too large (at most 64 MiB)");
   doc_ = xml::parse(text_);
   const Element* root = doc_.root.get();
@@ -1607,7 +1951,8 @@ TreeProgram Importer::run() {
   // POUs and their languages
   const Element* types = root->child("types");
   const Element* pous = types ? types->child("pous") : nullptr;
-  std::vector<const Element*> all, ld;
+  std::vector<const Element*> all;
+  std::vector<const Element*>& ld = ld_pous_;
   if (pous)
     for (const Element* p : pous->children_named("pou")) {
       if (!p->attr("name")) fail_at(p, "POU without a name (" + p->path() + ")");
@@ -1636,16 +1981,23 @@ TreeProgram Importer::run() {
       all.push_back(p);
       if (lang == "LD" || lang == "FBD") ld.push_back(p);  // FBD: the same block graph, without rails
     }
+  tasks(root);
+  // SFC programs that a task runs: their charts (section 1b)
+  for (const Element* p : all)
+    if (pou_lang_[upper(*p->attr("name"))] == "SFC") {
+      bool run = false;
+      for (const CfgTask& ct : cfg_tasks_)
+        for (const std::string& u : ct.pous) run |= u == upper(*p->attr("name"));
+      if (run) ld.push_back(p);
+    }
   if (ld.empty()) {
     std::string list;
     for (const Element* p : all) list += std::string(list.empty() ? "" : ", ") + "'" + *p->attr("name") + "' is " + pou_lang_[upper(*p->attr("name"))];
     fail_at(pous ? pous : root, all.empty() ? "the project has no POU" : "no POU of this project has an LD or FBD body (" + list +
                                                                                "); ldc imports LD and FBD bodies only");
   }
-  tasks(root);
   // declarations of the LD POUs, then devices for all of them
-  std::map<const Element*, std::map<std::string, Var*>> scopes;
-  for (const Element* p : ld) {
+    for (const Element* p : ld_pous_) {
     scope_.clear();
     std::string name = *p->attr("name");
     if (const Element* itf = p->child("interface")) {
@@ -1678,14 +2030,18 @@ TreeProgram Importer::run() {
         }
       }
     }
-    scopes[p] = scope_;
+    scopes_[p] = scope_;
   }
   allocate();
   for (auto& v : vars_)
     if (v->dev) spelled_[{int(v->dev->dev), v->dev->index}] = v->name;
-  // initial values: set on the first scan, before anything else runs
+}
+
+// The first-scan rung setting the initial values of the variables `which` selects.
+void Importer::emit_init(const std::function<bool(const Var&)>& which, const Element* root) {
+  init_.clear();
   for (auto& v : vars_) {
-    if (!v->dev || v->init.empty() || v->derived || v->constant) continue;
+    if (!v->dev || v->init.empty() || v->derived || v->constant || !which(*v)) continue;
     if (v->dev->dev == Dev::X || v->dev->dev == Dev::WX) continue;  // inputs belong to the I/O
     Ty t;
     auto c = literal(v->init, t, v->el);
@@ -1696,23 +2052,28 @@ TreeProgram Importer::run() {
       init_.push_back(out(Op::MOV, {*c, Operand{v->ty == Ty::Real ? OpdKind::Real : OpdKind::Int, word_area(v->dev->dev), v->dev->index}}, v->el));
     }
   }
-  TreeProgram p;
-  p.source = file_;
-  if (!init_.empty()) {
-    TreeRung r;
-    r.line = init_[0].elem.loc.line;
-    r.title = "initial values";
-    r.root = then_node(bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), root), fork_of(std::move(init_)), {r.line, 1});
-    rungs_.push_back(std::move(r));
-  }
-  for (const Element* pe : ld) {
+  if (init_.empty()) return;
+  TreeRung r;
+  r.line = init_[0].elem.loc.line;
+  r.title = "initial values";
+  r.root = then_node(bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), root), fork_of(std::move(init_)), {r.line, 1});
+  init_.clear();
+  rungs_.push_back(std::move(r));
+}
+
+// The rungs of the POUs `pous`, in that order, after the initial values.
+void Importer::emit_bodies(const std::vector<const Element*>& pous) {
+  for (const Element* pe : pous) {
     pou_ = *pe->attr("name");
-    scope_ = scopes[pe];
+    scope_ = scopes_[pe];
     const Element* b = pe->child("body");
-    body(pe, b->child("LD") ? b->child("LD") : b->child("FBD"));
+    if (const Element* sfc = b->child("SFC")) sfc_body(pe, sfc);
+    else body(pe, b->child("LD") ? b->child("LD") : b->child("FBD"));
   }
-  if (rungs_.empty()) fail_at(ld[0], "the LD and FBD bodies of this project have no coils, variables or blocks to run");
-  // inputs the program writes: their relays take the input first in every scan
+}
+
+// The copies of the inputs the program writes first, then labels and aliases.
+void Importer::finish(TreeProgram& p, const Element* root) {
   std::vector<TreeRung> copies;
   auto copy = [&](TreeNode root_node) {
     TreeRung r;
@@ -1726,14 +2087,126 @@ TreeProgram Importer::run() {
   for (auto [x, d] : shadow_w_)
     copy(out(Op::MOV, {Operand{OpdKind::Int, Area::WX, x}, Operand{OpdKind::Int, Area::D, d}}, root));
   rungs_.insert(rungs_.begin(), std::make_move_iterator(copies.begin()), std::make_move_iterator(copies.end()));
+  p.source = file_;
   p.rungs = std::move(rungs_);
+  rungs_.clear();
   p.end_labels = std::move(pending_labels_);
+  pending_labels_.clear();
+  shadow_.clear();
+  shadow_w_.clear();
   aliases(p);
+}
+
+TreeProgram Importer::run() {
+  prepare();
+  const Element* root = doc_.root.get();
+  if (cfg_tasks_.size() > 1)
+    fail_at(cfg_tasks_[1].el, "the configuration has " + std::to_string(cfg_tasks_.size()) +
+                                  " tasks: ldc compiles it as a project, one image per task (ldc FILE -o DIR)");
+  TreeProgram p = run_prepared(root);
+  if (chart_) fail_at(root, "POU '" + chart_pou_ + "' is an SFC program: its chart is compiled through import_plcopen");
   return p;
 }
 
+TreeProgram Importer::run_prepared(const Element* root) {
+  emit_init([](const Var&) { return true; }, root);
+  emit_bodies(ld_pous_);
+  if (rungs_.empty()) fail_at(ld_pous_[0], "the LD and FBD bodies of this project have no coils, variables or blocks to run");
+  TreeProgram p;
+  finish(p, root);
+  return p;
+}
+
+// One task of several: the programs of its instances, in order, over the
+// devices every task shares.
+PlcopenTask Importer::task_program(size_t i, const Element* root) {
+  const CfgTask& ct = cfg_tasks_[i];
+  PlcopenTask t;
+  t.name = ct.name, t.resource = ct.resource, t.resource_index = ct.resource_index;
+  t.line = ct.el->line, t.col = ct.el->col;
+  std::string where = "task '" + ct.name + "' (" + ct.el->path() + ")";
+  if (ct.no_task)
+    fail_at(ct.el, "program instance '" + ct.name + "' of resource '" + ct.resource +
+                       "' belongs to no task; in a configuration of several tasks ldc needs each program's task and interval (" +
+                       ct.el->path() + ")");
+  auto us = interval_us(ct.interval);
+  if (ct.interval.empty()) fail_at(ct.el, where + " has no interval; ldc runs periodic tasks only (an event task, 'single', is not supported)");
+  if (!us || *us < 50 || *us > 10000000)
+    fail_at(ct.el, where + ": interval '" + ct.interval + "' is not a period ldc can run (a whole number of microseconds, 50us..10s)");
+  t.period_us = uint32_t(*us);
+  if (!ct.priority_text.empty()) {
+    const std::string& pr = ct.priority_text;
+    if (pr.find_first_not_of("0123456789") != std::string::npos || pr.size() > 2)
+      fail_at(ct.el, where + ": priority '" + pr + "' is not one ldc has (0, the highest, .. 99)");
+    t.priority = uint32_t(std::stoul(pr));
+  }
+  if (ct.instances.empty()) fail_at(ct.el, where + " runs no program");
+  t.program = ct.instances.size() == 1 ? ct.instances[0] : ct.name + "_programs";
+  std::vector<const Element*> pous;
+  for (size_t k = 0; k < ct.pous.size(); k++)
+    for (const Element* pe : ld_pous_)
+      if (upper(*pe->attr("name")) == ct.pous[k]) pous.push_back(pe);
+  task_ = int(i);
+  std::set<const Element*> mine(pous.begin(), pous.end());
+  emit_bodies(pous);
+  if (rungs_.empty()) fail_at(ct.el, where + ": its programs have no coils, variables or blocks to run");
+  // the initial values of its POUs' variables and of the globals it uses
+  std::vector<TreeRung> bodies = std::move(rungs_);
+  rungs_.clear();
+  std::set<std::string> my_pous;
+  for (const Element* pe : pous) my_pous.insert(*pe->attr("name"));
+  emit_init([&](const Var& v) {
+    if (v.pou.empty()) return global_users_.count(const_cast<Var*>(&v)) && global_users_[const_cast<Var*>(&v)].count(int(i));
+    return my_pous.count(v.pou) > 0;
+  }, root);
+  for (auto& r : bodies) rungs_.push_back(std::move(r));
+  finish(t.tree, root);
+  take_chart(t.chart);
+  task_ = -1;
+  return t;
+}
+
+// A configuration of several tasks: a program per task.  A POU runs in one
+// program instance only, and a global held in a program's private memory
+// (an integer or REAL in D or F, a timer or counter) in one task only.
+PlcopenImport Importer::import() {
+  PlcopenImport r;
+  prepare();
+  const Element* root = doc_.root.get();
+  if (cfg_tasks_.size() <= 1) {
+    r.single = run_prepared(root);
+    take_chart(r.single_chart);
+    return r;
+  }
+  std::map<std::string, std::string> owner;  // upper POU -> instance
+  for (const CfgTask& ct : cfg_tasks_)
+    for (size_t k = 0; k < ct.pous.size(); k++) {
+      auto [it, fresh] = owner.emplace(ct.pous[k], ct.instances[k]);
+      if (!fresh)
+        fail_at(ct.instance_els[k], "program instance '" + ct.instances[k] + "' runs POU '" + *ct.instance_els[k]->attr("typeName") +
+                                        "', as instance '" + it->second + "' does; ldc translates each POU once, so one instance per POU (" +
+                                        ct.instance_els[k]->path() + ")");
+    }
+  r.configuration = config_name_;
+  for (size_t i = 0; i < cfg_tasks_.size(); i++) r.tasks.push_back(task_program(i, root));
+  for (auto& [v, users] : global_users_) {
+    if (users.size() < 2 || !v->dev) continue;
+    Dev d = v->dev->dev;
+    if (d != Dev::D && d != Dev::F && d != Dev::T && d != Dev::C) continue;
+    auto it = users.begin();
+    const std::string& a = cfg_tasks_[*it].name;
+    const std::string& b = cfg_tasks_[*++it].name;
+    fail_at(v->el, "global variable '" + v->name + "' (" + v->type + ") is used by the programs of tasks '" + a + "' and '" + b +
+                       "'; ldc keeps it in a program's private memory (" + dev_name(d) +
+                       "), so tasks share only BOOL globals (relays, M) and variables located at inputs and outputs (%I, %Q)");
+  }
+  r.configuration = config_name_;
+  return r;
+}
 }  // namespace
 
 TreeProgram parse_plcopen(std::string_view text, const std::string& filename) { return Importer(text, filename).run(); }
+
+PlcopenImport import_plcopen(std::string_view text, const std::string& filename) { return Importer(text, filename).import(); }
 
 }  // namespace ldc

@@ -8,6 +8,8 @@
 # its own directory) and leaves no output behind.
 set -eu
 bindir=$1 src=$2
+# TASK=NAME: one task's program of a PLCopen configuration of several tasks
+task=${TASK:+--task $TASK}
 dir=$(dirname "$src") file=$(basename "$src")
 tmp=$(mktemp -d)
 [ -n "${KEEP:-}" ] || trap 'rm -rf "$tmp"' EXIT
@@ -21,7 +23,16 @@ if [ $# -ge 3 ]; then
 fi
 # A pseudo-random input trace (a fixed LCG): every input alias (X, WX) set in
 # 300 scans, bits toggling, words over a small range; dt 10 ms.
-"$bindir/ldc" "$src" --emit=il > "$tmp/il"
+# A PLCopen configuration of several tasks: it builds as a project, and each
+# task's program is checked as below (TASK=NAME).
+if [ -z "$task" ] && ! "$bindir/ldc" "$src" --emit=il > "$tmp/il" 2> "$tmp/ilerr"; then
+  tasks=$(sed -n 's/.*the configuration has [0-9]* tasks (\([^)]*\)).*/\1/p' "$tmp/ilerr" | head -n 1 | tr -d ',')
+  if [ -z "$tasks" ]; then cat "$tmp/ilerr" >&2; exit 1; fi
+  "$bindir/ldc" "$src" -o "$tmp/project"
+  for t in $tasks; do TASK=$t sh "$0" "$bindir" "$src"; done
+  exit 0
+fi
+"$bindir/ldc" "$src" $task --emit=il > "$tmp/il"
 watch=$(sed -n 's/^\.alias \([^ ]*\) .*/\1/p' "$tmp/il" | paste -sd, -)
 inputs=$(sed -n 's/^\.alias \([^ ]*\) \(W\{0,1\}X[0-9]*\)$/\1 \2/p' "$tmp/il")
 echo "$inputs" | awk 'BEGIN { s = 12345; n = 0 }
@@ -42,7 +53,7 @@ echo "$inputs" | awk 'BEGIN { s = 12345; n = 0 }
 # The interpreter defines the meaning; native code at every level and the C40
 # simulator must give the same values scan by scan.
 run() {  # run NAME LDC-FLAGS ENGINE
-  "$bindir/ldc" "$src" $2 -o "$tmp/$1.bin"
+  "$bindir/ldc" "$src" $task $2 -o "$tmp/$1.bin"
   if [ -n "$watch" ]; then
     "$bindir/ldrun" "$tmp/$1.bin" --engine=$3 --trace "$tmp/trace.csv" --watch "$watch" > "$tmp/$1"
   else
@@ -59,8 +70,8 @@ for v in "native-O0 -O0 native" "native-O1 -O1 native" "native-O2 -O2 native" "c
 done
 # the C route (ldc --emit=c and the system cc) from the source
 if [ -n "$watch" ]; then
-  "$bindir/ldrun" "$src" --engine=c --trace "$tmp/trace.csv" --watch "$watch" > "$tmp/c"
+  "$bindir/ldrun" "$src" $task --engine=c --trace "$tmp/trace.csv" --watch "$watch" > "$tmp/c"
 else
-  "$bindir/ldrun" "$src" --engine=c --trace "$tmp/trace.csv" > "$tmp/c"
+  "$bindir/ldrun" "$src" $task --engine=c --trace "$tmp/trace.csv" > "$tmp/c"
 fi
 if ! diff -u "$tmp/interp" "$tmp/c"; then echo "FAIL: $src: the C route differs from the interpreter" >&2; exit 1; fi
