@@ -28,46 +28,29 @@ static const char kUsage[] =
 // system of paper 002 (refusing write conflicts) and, with -o DIR, write one
 // image per task with its 'config' section and the project file that runs them.
 static int write_project(const Project& p, const std::string& outdir) {
-  try {
-    std::vector<BuiltTask> built = build_project(p);
-    if (outdir.empty()) {
-      std::string t = print_configuration(p, built);
-      std::fwrite(t.data(), 1, t.size(), stdout);
-      return 0;
-    }
-    if (mkdir(outdir.c_str(), 0777) != 0 && errno != EEXIST)
-      throw UserError("ldc: error: cannot create " + outdir + ": " + std::strerror(errno));
-    std::vector<std::string> files;
-    for (const BuiltTask& b : built) {
-      std::vector<uint8_t> bin = write_image(b.image);
-      files.push_back(b.spec.name + ".bin");
-      write_file_atomic(outdir + "/" + files.back(), std::string(bin.begin(), bin.end()));
-    }
-    write_file_atomic(outdir + "/" + p.name + ".ldp", print_project(p, files));
-  } catch (UserError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 1;
-  } catch (std::exception& e) {
-    std::fprintf(stderr, "ldc: error: %s\n", e.what());
-    return 1;
+  std::vector<BuiltTask> built = build_project(p);
+  if (outdir.empty()) {
+    std::string t = print_configuration(p, built);
+    std::fwrite(t.data(), 1, t.size(), stdout);
+    return 0;
   }
+  if (mkdir(outdir.c_str(), 0777) != 0 && errno != EEXIST)
+    throw UserError("ldc: error: cannot create " + outdir + ": " + std::strerror(errno));
+  std::vector<std::string> files;
+  for (const BuiltTask& b : built) {
+    std::vector<uint8_t> bin = write_image(b.image);
+    files.push_back(b.spec.name + ".bin");
+    write_file_atomic(outdir + "/" + files.back(), std::string(bin.begin(), bin.end()));
+  }
+  write_file_atomic(outdir + "/" + p.name + ".ldp", print_project(p, files));
   return 0;
 }
 
 static int build_project_main(const std::string& project, const std::string& outdir) {
-  try {
-    return write_project(parse_project(project), outdir);
-  } catch (UserError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 1;
-  } catch (std::exception& e) {
-    std::fprintf(stderr, "ldc: error: %s\n", e.what());
-    return 1;
-  }
-  return 0;
+  return write_project(parse_project(project), outdir);
 }
 
-int main(int argc, char** argv) {
+static int ldc_main(int argc, char** argv) {
   std::string input, output, emit, target = "x86-64", project, task;
   int opt = 0;
   for (int i = 1; i < argc; i++) {
@@ -91,56 +74,52 @@ int main(int argc, char** argv) {
     return build_project_main(project, output);
   }
   if (input.empty()) { std::fprintf(stderr, "ldc: error: no input file\n%s", kUsage); return 1; }
-  try {
-    if (target != "x86-64" && target != "c40") throw UserError("ldc: error: unknown target '" + target + "' (x86-64 or c40)");
-    Compiled c = compile_source(input, emit.empty() && target == "x86-64", task);  // parse + lower
-    if (c.project) return write_project(*c.project, output);  // a PLCopen configuration of several tasks
-    std::string text;
-    if (emit == "tree") {
-      if (!c.from_ld) throw UserError("ldc: error: --emit=tree needs a .ld source");
-      text = print_tree(c.tree);
-    } else if (emit == "il") {
-      text = print_il_text(c.il);
-    } else if (emit == "ld") {                               // the ladder grid (docs/format.md)
-      try {
-        text = print_ladder(draw_ladder(raise_to_tree(c.il)), input);
-      } catch (CompileError& e) {
-        std::string msg = format_error(input, read_file(input), e.line, e.col, e.what());
-        if (!msg.empty() && msg.back() == '\n') msg.pop_back();
-        throw UserError(msg);
-      }
-    } else if (emit == "iec-il") {                           // IEC 61131-3 IL
-      text = print_iec_il(c.il);
-    } else if (emit == "c") {                                   // the C route
-      text = c_source(c);
-    } else if (emit == "asm" && target == "x86-64") {        // macro compiler
-      text = "# ldc " + input + ": x86-64, GNU as syntax (.intel_syntax noprefix)\n" +
-             as::x86::toGnuAs(generate_x86(c.il, c.il.layout(), opt).program);
-    } else if (emit == "listing" && target == "x86-64") {    // + blockwise assembler
-      NativeBuild nb = build_x86(c.il, input, as::Mode::Blockwise, opt);
-      text = as::x86::listing(nb.gen.program, nb.asm_result);
-    } else if ((emit.empty() || emit == "hex") && target == "x86-64") {  // + loader
-      NativeBuild nb = build_x86(c.il, input, as::Mode::Blockwise, opt, /*notes=*/false);
-      std::vector<uint8_t> bin = write_image(make_x86_image(c.il, nb));
-      if (emit == "hex") text = write_intel_hex(bin);
-      else {
-        if (output.empty()) throw UserError("ldc: error: an image needs -o FILE (or --emit=hex for text on stdout)");
-        text.assign(bin.begin(), bin.end());
-      }
-    } else if (target == "c40" && (emit.empty() || emit == "asm" || emit == "listing" || emit == "hex")) {  // the C40
-      text = c40_output(c.il, input, emit, !output.empty(), opt);
-    } else {
-      throw UserError("ldc: error: " + (emit.empty() ? std::string("image output (-o FILE.bin)") : "--emit=" + emit) +
-                      " is not available in this build (for this target)");
+  if (target != "x86-64" && target != "c40") throw UserError("ldc: error: unknown target '" + target + "' (x86-64 or c40)");
+  Compiled c = compile_source(input, emit.empty() && target == "x86-64", task);  // parse + lower
+  if (c.project) return write_project(*c.project, output);  // a PLCopen configuration of several tasks
+  std::string text;
+  if (emit == "tree") {
+    if (!c.from_ld) throw UserError("ldc: error: --emit=tree needs a .ld source");
+    text = print_tree(c.tree);
+  } else if (emit == "il") {
+    text = print_il_text(c.il);
+  } else if (emit == "ld") {                               // the ladder grid (docs/format.md)
+    try {
+      text = print_ladder(draw_ladder(raise_to_tree(c.il)), input);
+    } catch (CompileError& e) {
+      std::string msg = format_error(input, read_file(input), e.line, e.col, e.what());
+      if (!msg.empty() && msg.back() == '\n') msg.pop_back();
+      throw UserError(msg);
     }
-    if (output.empty()) std::fwrite(text.data(), 1, text.size(), stdout);
-    else write_file_atomic(output, text);
-  } catch (UserError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 1;
-  } catch (std::exception& e) {
-    std::fprintf(stderr, "ldc: error: %s\n", e.what());
-    return 1;
+  } else if (emit == "iec-il") {                           // IEC 61131-3 IL
+    text = print_iec_il(c.il);
+  } else if (emit == "c") {                                   // the C route
+    text = c_source(c);
+  } else if (emit == "asm" && target == "x86-64") {        // macro compiler
+    text = "# ldc " + input + ": x86-64, GNU as syntax (.intel_syntax noprefix)\n" +
+           as::x86::toGnuAs(generate_x86(c.il, c.il.layout(), opt).program);
+  } else if (emit == "listing" && target == "x86-64") {    // + blockwise assembler
+    NativeBuild nb = build_x86(c.il, input, as::Mode::Blockwise, opt);
+    text = as::x86::listing(nb.gen.program, nb.asm_result);
+  } else if ((emit.empty() || emit == "hex") && target == "x86-64") {  // + loader
+    NativeBuild nb = build_x86(c.il, input, as::Mode::Blockwise, opt, /*notes=*/false);
+    std::vector<uint8_t> bin = write_image(make_x86_image(c.il, nb));
+    if (emit == "hex") text = write_intel_hex(bin);
+    else {
+      if (output.empty()) throw UserError("ldc: error: an image needs -o FILE (or --emit=hex for text on stdout)");
+      text.assign(bin.begin(), bin.end());
+    }
+  } else if (target == "c40" && (emit.empty() || emit == "asm" || emit == "listing" || emit == "hex")) {  // the C40
+    text = c40_output(c.il, input, emit, !output.empty(), opt);
+  } else {
+    throw UserError("ldc: error: " + (emit.empty() ? std::string("image output (-o FILE.bin)") : "--emit=" + emit) +
+                    " is not available in this build (for this target)");
   }
+  if (output.empty()) std::fwrite(text.data(), 1, text.size(), stdout);
+  else write_file_atomic(output, text);
   return 0;
+}
+
+int main(int argc, char** argv) {
+  return run_tool("ldc", [&] { return ldc_main(argc, argv); });
 }
