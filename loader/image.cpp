@@ -221,146 +221,190 @@ std::vector<uint8_t> write_image(const Image& im) {
 
 // ---------------------------------------------------------------- read_image
 
-Image read_image(std::span<const uint8_t> b, const std::string& name) {
-  auto fail = [&](uint64_t off, const std::string& msg) -> ImageError {
-    return ImageError(name + ": offset " + hex(off) + ": " + msg);
-  };
+namespace {
 
-  // ---- fixed header
-  if (b.size() < kFixedHeaderSize)
-    throw ImageError(name + ": truncated header: " + std::to_string(b.size()) + " bytes, an image header has " +
-                     std::to_string(kFixedHeaderSize));
-  if (!std::equal(std::begin(kMagic), std::end(kMagic), b.begin()))
-    throw fail(kOffMagic, "not an ldc image (bad magic; expected \"LDCIMG\\0\\1\")");
-  if (uint16_t v = get16(b, kOffVersion); v != kVersion)
-    throw fail(kOffVersion, "unsupported format version " + std::to_string(v) + " (this loader reads version " +
-                                std::to_string(kVersion) + ")");
-  uint8_t target = b[kOffTarget];
-  if (target != uint8_t(ImageTarget::X86_64) && target != uint8_t(ImageTarget::C40))
-    throw fail(kOffTarget, "unknown target " + std::to_string(target) + " (1 = x86-64, 2 = C40)");
-  if (b[kOffFlags] != 0) throw fail(kOffFlags, "unknown flags " + hex(b[kOffFlags]) + " (version " + std::to_string(kVersion) + " defines none)");
-  uint32_t total = get32(b, kOffTotalSize);
-  if (total > kImageMaxSize) throw fail(kOffTotalSize, "total size " + hex(total) + " exceeds the limit " + hex(kImageMaxSize));
-  if (b.size() < total)
-    throw ImageError(name + ": truncated file: the header says " + std::to_string(total) + " bytes, the file has " +
-                     std::to_string(b.size()));
-  if (b.size() > total)
-    throw fail(total, std::to_string(b.size() - total) + " trailing bytes after the image (header says " +
-                          std::to_string(total) + " bytes)");
-  uint32_t nsec = get32(b, kOffSectionCount);
-  if (nsec > kMaxSections) throw fail(kOffSectionCount, "section count " + std::to_string(nsec) + " exceeds the limit " + std::to_string(kMaxSections));
-  uint32_t header_size = get32(b, kOffHeaderSize);
-  uint32_t want_header = kOffSections + nsec * kSectionEntrySize;
-  if (header_size != want_header)
-    throw fail(kOffHeaderSize, "header size " + hex(header_size) + " does not match " + std::to_string(nsec) +
-                                   " sections (expected " + hex(want_header) + ")");
-  if (header_size > total)
-    throw ImageError(name + ": truncated file: the header and section table need " + std::to_string(header_size) +
-                     " bytes, the image has " + std::to_string(total));
-  if (uint32_t sum = get32(b, kOffChecksum), want = image_checksum(b); sum != want)
-    throw fail(kOffChecksum, "bad checksum " + hex(sum) + " (the file's CRC-32 is " + hex(want) + ")");
-  if (uint32_t r = get32(b, kOffReserved); r != 0) throw fail(kOffReserved, "reserved field is " + hex(r) + ", not 0");
+// read_image in named steps: the fixed header, the layout, the section table,
+// each section's contents, and last their meaning (IL, code, line map).
+class ImageReader {
+ public:
+  ImageReader(std::span<const uint8_t> b, const std::string& name) : b_(b), name_(name) {}
 
-  Image im;
-  im.target = ImageTarget(target);
-  im.retentive.clear();
-
-  // ---- layout
-  if (uint32_t n = get32(b, kOffLayout); n != uint32_t(kAreaCount))
-    throw fail(kOffLayout, "layout has " + std::to_string(n) + " areas, version " + std::to_string(kVersion) + " has " + std::to_string(kAreaCount));
-  const uint32_t off_count = kOffLayout + 4, off_offset = off_count + 4 * kAreaCount, off_size = off_offset + 4 * kAreaCount;
-  for (int i = 0; i < kAreaCount; i++) im.layout.count[i] = get32(b, off_count + 4 * i);
-  for (int i = 0; i < kAreaCount; i++) im.layout.offset[i] = get32(b, off_offset + 4 * i);
-  im.layout.size = get32(b, off_size);
-  const int e = int(Area::E);
-  if (im.layout.count[e] > kImageMaxEdgeSlots)
-    throw fail(off_count + 4 * e, "layout: " + std::to_string(im.layout.count[e]) + " edge slots exceed the limit " +
-                                      std::to_string(kImageMaxEdgeSlots));
-  Layout want = Layout::standard(im.layout.count[e]);
-  for (int i = 0; i < kAreaCount; i++)
-    if (im.layout.count[i] != want.count[i])
-      throw fail(off_count + 4 * i, std::string("layout mismatch: area ") + area_name(Area(i)) + " has " +
-                                        std::to_string(im.layout.count[i]) + " elements, the standard layout has " +
-                                        std::to_string(want.count[i]));
-  for (int i = 0; i < kAreaCount; i++)
-    if (im.layout.offset[i] != want.offset[i])
-      throw fail(off_offset + 4 * i, std::string("layout mismatch: area ") + area_name(Area(i)) + " at " +
-                                         hex(im.layout.offset[i]) + ", the standard layout puts it at " + hex(want.offset[i]));
-  if (im.layout.size != want.size)
-    throw fail(off_size, "layout mismatch: memory image size " + hex(im.layout.size) + ", the standard layout has " +
-                             hex(want.size));
-
-  // ---- section table
-  const SectionEntry* by_id[kSectionIdEnd] = {};
-  std::vector<SectionEntry> table(nsec);
-  for (uint32_t i = 0; i < nsec; i++) {
-    uint32_t at = kOffSections + i * kSectionEntrySize;
-    SectionEntry s{get32(b, at), get32(b, at + 4), get32(b, at + 8), i};
-    std::string where = "section table entry " + std::to_string(i);
-    if (s.id == 0 || s.id >= kSectionIdEnd)
-      throw fail(at, where + ": unknown section id " + std::to_string(s.id) + " (version " + std::to_string(kVersion) + " has ids 1.." +
-                         std::to_string(kSectionIdEnd - 1) + ")");
-    where += " ('" + std::string(kSectionNames[s.id]) + "')";
-    if (s.offset % 4) throw fail(at + 4, where + ": section offset " + hex(s.offset) + " is not 4-byte aligned");
-    if (s.offset < header_size)
-      throw fail(at + 4, where + ": section offset " + hex(s.offset) + " lies inside the header (which ends at " +
-                             hex(header_size) + ")");
-    if (uint64_t(s.offset) + s.size > total)
-      throw fail(at + 8, where + ": section [" + hex(s.offset) + ", " + hex(uint64_t(s.offset) + s.size) +
-                             ") runs past the end of the file (" + hex(total) + ")");
-    table[i] = s;
+  Image read() {
+    header();
+    layout();
+    section_table();
+    section_overlaps();
+    contents();
+    check_il_and_config();
+    check_code();
+    check_lines();
+    return std::move(im_);
   }
-  for (const SectionEntry& s : table) {
-    if (by_id[s.id])
-      throw fail(kOffSections + s.table_index * kSectionEntrySize,
-                 "section table entry " + std::to_string(s.table_index) + ": second '" + kSectionNames[s.id] +
-                     "' section (the first is entry " + std::to_string(by_id[s.id]->table_index) + ")");
-    by_id[s.id] = &s;
-  }
-  // Overlap: sort by offset and compare each non-empty section with the
-  // furthest-reaching one before it (empty sections overlap nothing).
-  std::vector<const SectionEntry*> sorted;
-  for (const SectionEntry& s : table) sorted.push_back(&s);
-  std::stable_sort(sorted.begin(), sorted.end(), [](auto* x, auto* y) { return x->offset < y->offset; });
-  const SectionEntry* reach = nullptr;
-  for (const SectionEntry* s : sorted) {
-    if (s->size == 0) continue;
-    auto end = [](const SectionEntry& x) { return uint64_t(x.offset) + x.size; };
-    if (reach && s->offset < end(*reach))
-      throw fail(s->offset, std::string("section '") + kSectionNames[s->id] + "' [" + hex(s->offset) + ", " + hex(end(*s)) +
-                                ") overlaps section '" + kSectionNames[reach->id] + "' [" + hex(reach->offset) + ", " +
-                                hex(end(*reach)) + ")");
-    if (!reach || end(*s) > end(*reach)) reach = s;
-  }
-  for (uint32_t id : {uint32_t(kCode), uint32_t(kIl)})
-    if (!by_id[id])
-      throw fail(kOffSections, std::string("the section table has no '") + kSectionNames[id] + "' section (required)");
 
-  auto bytes_of = [&](const SectionEntry& s) { return b.subspan(s.offset, s.size); };
-  auto sfail = [&](const SectionEntry& s, const std::string& msg) -> ImageError {
-    return ImageError(name + ": section '" + kSectionNames[s.id] + "' at offset " + hex(s.offset) + ": " + msg);
-  };
-  auto finish = [&](SectionReader& r, const SectionEntry& s) {
+ private:
+  std::span<const uint8_t> b_;
+  const std::string& name_;
+  Image im_;
+  uint32_t total_ = 0, nsec_ = 0, header_size_ = 0;
+  std::vector<SectionEntry> table_;
+  const SectionEntry* by_id_[kSectionIdEnd] = {};
+  std::vector<uint32_t> code_starts_;  // x86-64 instruction starts, for the line map
+
+  ImageError fail(uint64_t off, const std::string& msg) const {
+    return ImageError(name_ + ": offset " + hex(off) + ": " + msg);
+  }
+  ImageError sfail(const SectionEntry& s, const std::string& msg) const {
+    return ImageError(name_ + ": section '" + kSectionNames[s.id] + "' at offset " + hex(s.offset) + ": " + msg);
+  }
+  std::span<const uint8_t> bytes_of(const SectionEntry& s) const { return b_.subspan(s.offset, s.size); }
+  SectionReader reader(const SectionEntry& s) const { return SectionReader{bytes_of(s), s.offset}; }
+  void finish(SectionReader& r, const SectionEntry& s) const {
     r.finish();
     if (!r.error.empty()) throw sfail(s, r.error);
-  };
+  }
 
-  // ---- contents
-  const SectionEntry& code_sec = *by_id[kCode];
-  const SectionEntry& il_sec = *by_id[kIl];
-  {
-    auto c = bytes_of(code_sec);
-    im.code.assign(c.begin(), c.end());
-    auto i = bytes_of(il_sec);
-    im.il.assign(i.begin(), i.end());
+  void header() {
+    if (b_.size() < kFixedHeaderSize)
+      throw ImageError(name_ + ": truncated header: " + std::to_string(b_.size()) + " bytes, an image header has " +
+                       std::to_string(kFixedHeaderSize));
+    if (!std::equal(std::begin(kMagic), std::end(kMagic), b_.begin()))
+      throw fail(kOffMagic, "not an ldc image (bad magic; expected \"LDCIMG\\0\\1\")");
+    if (uint16_t v = get16(b_, kOffVersion); v != kVersion)
+      throw fail(kOffVersion, "unsupported format version " + std::to_string(v) + " (this loader reads version " +
+                                  std::to_string(kVersion) + ")");
+    uint8_t target = b_[kOffTarget];
+    if (target != uint8_t(ImageTarget::X86_64) && target != uint8_t(ImageTarget::C40))
+      throw fail(kOffTarget, "unknown target " + std::to_string(target) + " (1 = x86-64, 2 = C40)");
+    if (b_[kOffFlags] != 0)
+      throw fail(kOffFlags, "unknown flags " + hex(b_[kOffFlags]) + " (version " + std::to_string(kVersion) + " defines none)");
+    sizes();
+    if (uint32_t sum = get32(b_, kOffChecksum), want = image_checksum(b_); sum != want)
+      throw fail(kOffChecksum, "bad checksum " + hex(sum) + " (the file's CRC-32 is " + hex(want) + ")");
+    if (uint32_t r = get32(b_, kOffReserved); r != 0) throw fail(kOffReserved, "reserved field is " + hex(r) + ", not 0");
+    im_.target = ImageTarget(target);
+    im_.retentive.clear();
   }
-  if (const SectionEntry* s = by_id[kEntry]) {
-    SectionReader r{bytes_of(*s), s->offset};
-    im.entry = r.u32("entry point");
-    finish(r, *s);
+
+  // The total size, the section count and the header size, each against the file.
+  void sizes() {
+    total_ = get32(b_, kOffTotalSize);
+    if (total_ > kImageMaxSize) throw fail(kOffTotalSize, "total size " + hex(total_) + " exceeds the limit " + hex(kImageMaxSize));
+    if (b_.size() < total_)
+      throw ImageError(name_ + ": truncated file: the header says " + std::to_string(total_) + " bytes, the file has " +
+                       std::to_string(b_.size()));
+    if (b_.size() > total_)
+      throw fail(total_, std::to_string(b_.size() - total_) + " trailing bytes after the image (header says " +
+                             std::to_string(total_) + " bytes)");
+    nsec_ = get32(b_, kOffSectionCount);
+    if (nsec_ > kMaxSections)
+      throw fail(kOffSectionCount, "section count " + std::to_string(nsec_) + " exceeds the limit " + std::to_string(kMaxSections));
+    header_size_ = get32(b_, kOffHeaderSize);
+    uint32_t want_header = kOffSections + nsec_ * kSectionEntrySize;
+    if (header_size_ != want_header)
+      throw fail(kOffHeaderSize, "header size " + hex(header_size_) + " does not match " + std::to_string(nsec_) +
+                                     " sections (expected " + hex(want_header) + ")");
+    if (header_size_ > total_)
+      throw ImageError(name_ + ": truncated file: the header and section table need " + std::to_string(header_size_) +
+                       " bytes, the image has " + std::to_string(total_));
   }
-  if (const SectionEntry* s = by_id[kConfig]) {
-    SectionReader r{bytes_of(*s), s->offset};
+
+  void layout() {
+    Layout& l = im_.layout;
+    if (uint32_t n = get32(b_, kOffLayout); n != uint32_t(kAreaCount))
+      throw fail(kOffLayout, "layout has " + std::to_string(n) + " areas, version " + std::to_string(kVersion) + " has " +
+                                 std::to_string(kAreaCount));
+    const uint32_t off_count = kOffLayout + 4, off_offset = off_count + 4 * kAreaCount, off_size = off_offset + 4 * kAreaCount;
+    for (int i = 0; i < kAreaCount; i++) l.count[i] = get32(b_, off_count + 4 * i);
+    for (int i = 0; i < kAreaCount; i++) l.offset[i] = get32(b_, off_offset + 4 * i);
+    l.size = get32(b_, off_size);
+    const int e = int(Area::E);
+    if (l.count[e] > kImageMaxEdgeSlots)
+      throw fail(off_count + 4 * e, "layout: " + std::to_string(l.count[e]) + " edge slots exceed the limit " +
+                                        std::to_string(kImageMaxEdgeSlots));
+    Layout want = Layout::standard(l.count[e]);
+    for (int i = 0; i < kAreaCount; i++)
+      if (l.count[i] != want.count[i])
+        throw fail(off_count + 4 * i, std::string("layout mismatch: area ") + area_name(Area(i)) + " has " +
+                                          std::to_string(l.count[i]) + " elements, the standard layout has " +
+                                          std::to_string(want.count[i]));
+    for (int i = 0; i < kAreaCount; i++)
+      if (l.offset[i] != want.offset[i])
+        throw fail(off_offset + 4 * i, std::string("layout mismatch: area ") + area_name(Area(i)) + " at " + hex(l.offset[i]) +
+                                           ", the standard layout puts it at " + hex(want.offset[i]));
+    if (l.size != want.size)
+      throw fail(off_size, "layout mismatch: memory image size " + hex(l.size) + ", the standard layout has " + hex(want.size));
+  }
+
+  void section_table() {
+    table_.resize(nsec_);
+    for (uint32_t i = 0; i < nsec_; i++) {
+      uint32_t at = kOffSections + i * kSectionEntrySize;
+      SectionEntry s{get32(b_, at), get32(b_, at + 4), get32(b_, at + 8), i};
+      std::string where = "section table entry " + std::to_string(i);
+      if (s.id == 0 || s.id >= kSectionIdEnd)
+        throw fail(at, where + ": unknown section id " + std::to_string(s.id) + " (version " + std::to_string(kVersion) +
+                           " has ids 1.." + std::to_string(kSectionIdEnd - 1) + ")");
+      where += " ('" + std::string(kSectionNames[s.id]) + "')";
+      if (s.offset % 4) throw fail(at + 4, where + ": section offset " + hex(s.offset) + " is not 4-byte aligned");
+      if (s.offset < header_size_)
+        throw fail(at + 4, where + ": section offset " + hex(s.offset) + " lies inside the header (which ends at " +
+                               hex(header_size_) + ")");
+      if (uint64_t(s.offset) + s.size > total_)
+        throw fail(at + 8, where + ": section [" + hex(s.offset) + ", " + hex(uint64_t(s.offset) + s.size) +
+                               ") runs past the end of the file (" + hex(total_) + ")");
+      table_[i] = s;
+    }
+    for (const SectionEntry& s : table_) {
+      if (by_id_[s.id])
+        throw fail(kOffSections + s.table_index * kSectionEntrySize,
+                   "section table entry " + std::to_string(s.table_index) + ": second '" + kSectionNames[s.id] +
+                       "' section (the first is entry " + std::to_string(by_id_[s.id]->table_index) + ")");
+      by_id_[s.id] = &s;
+    }
+  }
+
+  // Sorts by offset and compares each non-empty section with the
+  // furthest-reaching one before it (empty sections overlap nothing).
+  void section_overlaps() {
+    std::vector<const SectionEntry*> sorted;
+    for (const SectionEntry& s : table_) sorted.push_back(&s);
+    std::stable_sort(sorted.begin(), sorted.end(), [](auto* x, auto* y) { return x->offset < y->offset; });
+    auto end = [](const SectionEntry& x) { return uint64_t(x.offset) + x.size; };
+    const SectionEntry* reach = nullptr;
+    for (const SectionEntry* s : sorted) {
+      if (s->size == 0) continue;
+      if (reach && s->offset < end(*reach))
+        throw fail(s->offset, std::string("section '") + kSectionNames[s->id] + "' [" + hex(s->offset) + ", " + hex(end(*s)) +
+                                  ") overlaps section '" + kSectionNames[reach->id] + "' [" + hex(reach->offset) + ", " +
+                                  hex(end(*reach)) + ")");
+      if (!reach || end(*s) > end(*reach)) reach = s;
+    }
+    for (uint32_t id : {uint32_t(kCode), uint32_t(kIl)})
+      if (!by_id_[id])
+        throw fail(kOffSections, std::string("the section table has no '") + kSectionNames[id] + "' section (required)");
+  }
+
+  void contents() {
+    auto c = bytes_of(*by_id_[kCode]);
+    im_.code.assign(c.begin(), c.end());
+    auto i = bytes_of(*by_id_[kIl]);
+    im_.il.assign(i.begin(), i.end());
+    if (const SectionEntry* s = by_id_[kEntry]) entry(*s);
+    if (const SectionEntry* s = by_id_[kConfig]) config(*s);
+    if (const SectionEntry* s = by_id_[kLines]) lines(*s);
+    if (const SectionEntry* s = by_id_[kStrings]) strings(*s);
+    if (const SectionEntry* s = by_id_[kAliases]) aliases(*s);
+    if (const SectionEntry* s = by_id_[kRetentive]) retentive(*s);
+  }
+
+  void entry(const SectionEntry& s) {
+    SectionReader r = reader(s);
+    im_.entry = r.u32("entry point");
+    finish(r, s);
+  }
+
+  void config(const SectionEntry& s) {
+    SectionReader r = reader(s);
     IoConfig c;
     c.block_size = r.u32("block size");
     c.processor = r.u32("processor");
@@ -381,39 +425,42 @@ Image read_image(std::span<const uint8_t> b, const std::string& name) {
       row.writer = r.u32("row");
       row.period_us = r.u32("row");
       if (r.error.empty() && reserved != 0)
-        r.error = "row " + std::to_string(i) + " at file offset " + hex(uint64_t(s->offset) + r.pos - kConfigRowSize) +
+        r.error = "row " + std::to_string(i) + " at file offset " + hex(uint64_t(s.offset) + r.pos - kConfigRowSize) +
                   ": reserved field is " + hex(reserved) + ", not 0";
       c.rows.push_back(row);
     }
-    finish(r, *s);
-    im.config = std::move(c);
+    finish(r, s);
+    im_.config = std::move(c);
   }
-  if (const SectionEntry* s = by_id[kLines]) {
-    if (s->size % kLineEntrySize)
-      throw sfail(*s, "size " + std::to_string(s->size) + " is not a multiple of the " + std::to_string(kLineEntrySize) +
-                          "-byte line map entry");
-    SectionReader r{bytes_of(*s), s->offset};
-    im.lines.resize(s->size / kLineEntrySize);
-    for (LineEntry& l : im.lines) {
+
+  void lines(const SectionEntry& s) {
+    if (s.size % kLineEntrySize)
+      throw sfail(s, "size " + std::to_string(s.size) + " is not a multiple of the " + std::to_string(kLineEntrySize) +
+                         "-byte line map entry");
+    SectionReader r = reader(s);
+    im_.lines.resize(s.size / kLineEntrySize);
+    for (LineEntry& l : im_.lines) {
       l.code_offset = r.u32("line entry");
       l.il_offset = r.u32("line entry");
       l.line = int32_t(r.u32("line entry"));
       l.rung = r.u32("line entry");
     }
-    finish(r, *s);
+    finish(r, s);
   }
-  if (const SectionEntry* s = by_id[kStrings]) {
-    SectionReader r{bytes_of(*s), s->offset};
-    im.source = r.str("source name");
+
+  void strings(const SectionEntry& s) {
+    SectionReader r = reader(s);
+    im_.source = r.str("source name");
     uint32_t n = r.u32("rung title count");
     // Each title takes at least its 4-byte length: n can never exceed what is left.
     if (r.error.empty() && n > (r.data.size() - r.pos) / 4)
       r.error = "rung title count " + std::to_string(n) + " does not fit in the section";
-    for (uint32_t i = 0; i < n && r.error.empty(); i++) im.rung_titles.push_back(r.str("rung title"));
-    finish(r, *s);
+    for (uint32_t i = 0; i < n && r.error.empty(); i++) im_.rung_titles.push_back(r.str("rung title"));
+    finish(r, s);
   }
-  if (const SectionEntry* s = by_id[kAliases]) {
-    SectionReader r{bytes_of(*s), s->offset};
+
+  void aliases(const SectionEntry& s) {
+    SectionReader r = reader(s);
     uint32_t n = r.u32("alias count");
     if (r.error.empty() && n > (r.data.size() - r.pos) / 9)
       r.error = "alias count " + std::to_string(n) + " does not fit in the section";
@@ -423,86 +470,97 @@ Image read_image(std::span<const uint8_t> b, const std::string& name) {
       uint32_t index = r.u32("alias");
       std::string nm = r.str("alias name");
       if (!r.error.empty()) break;
-      std::string where = "alias " + std::to_string(i) + " at file offset " + hex(uint64_t(s->offset) + at) + ": ";
-      if (dev > uint8_t(Dev::F)) throw sfail(*s, where + "unknown device kind " + std::to_string(dev));
+      std::string where = "alias " + std::to_string(i) + " at file offset " + hex(uint64_t(s.offset) + at) + ": ";
+      if (dev > uint8_t(Dev::F)) throw sfail(s, where + "unknown device kind " + std::to_string(dev));
       if (index >= device_count(Dev(dev)))
-        throw sfail(*s, where + "'" + nm + "' names " + dev_name(Dev(dev)) + std::to_string(index) + ", outside " +
-                            dev_name(Dev(dev)) + "0.." + dev_name(Dev(dev)) + std::to_string(device_count(Dev(dev)) - 1));
-      if (nm.empty()) throw sfail(*s, where + "empty alias name");
-      im.aliases.push_back(Alias{nm, DeviceRef{Dev(dev), index}});
+        throw sfail(s, where + "'" + nm + "' names " + dev_name(Dev(dev)) + std::to_string(index) + ", outside " +
+                           dev_name(Dev(dev)) + "0.." + dev_name(Dev(dev)) + std::to_string(device_count(Dev(dev)) - 1));
+      if (nm.empty()) throw sfail(s, where + "empty alias name");
+      im_.aliases.push_back(Alias{nm, DeviceRef{Dev(dev), index}});
     }
-    finish(r, *s);
+    finish(r, s);
   }
-  if (const SectionEntry* s = by_id[kRetentive]) {
-    if (s->size % kRetentiveEntrySize)
-      throw sfail(*s, "size " + std::to_string(s->size) + " is not a multiple of the " +
-                          std::to_string(kRetentiveEntrySize) + "-byte range entry");
-    SectionReader r{bytes_of(*s), s->offset};
-    for (uint32_t i = 0; i < s->size / kRetentiveEntrySize; i++) {
+
+  void retentive(const SectionEntry& s) {
+    if (s.size % kRetentiveEntrySize)
+      throw sfail(s, "size " + std::to_string(s.size) + " is not a multiple of the " + std::to_string(kRetentiveEntrySize) +
+                         "-byte range entry");
+    SectionReader r = reader(s);
+    for (uint32_t i = 0; i < s.size / kRetentiveEntrySize; i++) {
       uint32_t area = r.u32("range"), first = r.u32("range"), count = r.u32("range");
-      std::string where = "range " + std::to_string(i) + " at file offset " + hex(uint64_t(s->offset) + i * kRetentiveEntrySize) + ": ";
+      std::string where = "range " + std::to_string(i) + " at file offset " + hex(uint64_t(s.offset) + i * kRetentiveEntrySize) + ": ";
       if (area == 0 || area >= uint32_t(kAreaCount))
-        throw sfail(*s, where + (area == 0 ? std::string("the Sys area cannot be retentive") : "unknown area " + std::to_string(area)));
-      if (count == 0) throw sfail(*s, where + "empty range");
-      uint32_t n = im.layout.count[area];
+        throw sfail(s, where + (area == 0 ? std::string("the Sys area cannot be retentive") : "unknown area " + std::to_string(area)));
+      if (count == 0) throw sfail(s, where + "empty range");
+      uint32_t n = im_.layout.count[area];
       if (uint64_t(first) + count > n)
-        throw sfail(*s, where + area_name(Area(area)) + "[" + std::to_string(first) + ".." + std::to_string(uint64_t(first) + count - 1) +
-                            "] outside the area (" + std::to_string(n) + " elements)");
-      im.retentive.push_back(RetentiveRange{Area(area), first, count});
+        throw sfail(s, where + area_name(Area(area)) + "[" + std::to_string(first) + ".." + std::to_string(uint64_t(first) + count - 1) +
+                           "] outside the area (" + std::to_string(n) + " elements)");
+      im_.retentive.push_back(RetentiveRange{Area(area), first, count});
     }
-    finish(r, *s);
+    finish(r, s);
   }
 
-  // ---- meaning
-  if (std::string why = validate_il(im.il, im.layout); !why.empty()) throw sfail(il_sec, "invalid IL: " + why);
-  if (im.config)
-    if (std::string why = check_io_config(*im.config, im.il); !why.empty()) throw sfail(*by_id[kConfig], why);
-  std::vector<uint32_t> il_starts;
-  for (uint32_t off = 0; off < im.il.size();) {
-    il_starts.push_back(off);
-    Instr in;
-    off = decode_instr(im.il, off, in);
+  void check_il_and_config() {
+    if (std::string why = validate_il(im_.il, im_.layout); !why.empty()) throw sfail(*by_id_[kIl], "invalid IL: " + why);
+    if (im_.config)
+      if (std::string why = check_io_config(*im_.config, im_.il); !why.empty()) throw sfail(*by_id_[kConfig], why);
   }
 
-  if (im.entry >= im.code.size()) {
-    std::string msg = "entry point " + hex(im.entry) + " is outside the code (" + std::to_string(im.code.size()) + " bytes)";
-    if (const SectionEntry* s = by_id[kEntry]) throw sfail(*s, msg);
-    throw sfail(code_sec, msg + "; the image has no 'entry' section, so the entry is 0");
-  }
-  std::vector<uint32_t> code_starts;
-  if (im.target == ImageTarget::X86_64) {
-    if (std::string why = detail::check_x86(im.code, im.entry, im.layout, &code_starts); !why.empty())
-      throw sfail(code_sec, why);
-  } else {
-    if (im.code.size() % 4)
-      throw sfail(code_sec, "C40 code is 32-bit words, but the section has " + std::to_string(im.code.size()) + " bytes");
-    if (im.entry % 4) throw sfail(by_id[kEntry] ? *by_id[kEntry] : code_sec, "C40 entry point " + hex(im.entry) + " is not word-aligned");
-    if (std::string why = check_c40_code(im.code, im.entry, im.layout); !why.empty()) throw sfail(code_sec, why);
+  // The entry point, then the target's code check (docs/image-format.md, "Threat model").
+  void check_code() {
+    const SectionEntry& code = *by_id_[kCode];
+    const SectionEntry* entry = by_id_[kEntry];
+    if (im_.entry >= im_.code.size()) {
+      std::string msg = "entry point " + hex(im_.entry) + " is outside the code (" + std::to_string(im_.code.size()) + " bytes)";
+      if (entry) throw sfail(*entry, msg);
+      throw sfail(code, msg + "; the image has no 'entry' section, so the entry is 0");
+    }
+    if (im_.target == ImageTarget::X86_64) {
+      if (std::string why = detail::check_x86(im_.code, im_.entry, im_.layout, &code_starts_); !why.empty())
+        throw sfail(code, why);
+      return;
+    }
+    if (im_.code.size() % 4)
+      throw sfail(code, "C40 code is 32-bit words, but the section has " + std::to_string(im_.code.size()) + " bytes");
+    if (im_.entry % 4) throw sfail(entry ? *entry : code, "C40 entry point " + hex(im_.entry) + " is not word-aligned");
+    if (std::string why = check_c40_code(im_.code, im_.entry, im_.layout); !why.empty()) throw sfail(code, why);
   }
 
-  if (const SectionEntry* s = by_id[kLines]) {
-    for (size_t i = 0; i < im.lines.size(); i++) {
-      const LineEntry& l = im.lines[i];
+  bool code_boundary(uint32_t off) const {
+    return im_.target == ImageTarget::X86_64 ? std::binary_search(code_starts_.begin(), code_starts_.end(), off) : off % 4 == 0;
+  }
+
+  void check_lines() {
+    const SectionEntry* s = by_id_[kLines];
+    if (!s) return;
+    std::vector<uint32_t> il_starts;
+    for (uint32_t off = 0; off < im_.il.size();) {
+      il_starts.push_back(off);
+      Instr in;
+      off = decode_instr(im_.il, off, in);
+    }
+    for (size_t i = 0; i < im_.lines.size(); i++) {
+      const LineEntry& l = im_.lines[i];
       std::string where = "entry " + std::to_string(i) + " at file offset " + hex(uint64_t(s->offset) + i * kLineEntrySize) + ": ";
-      if (l.code_offset > im.code.size())
-        throw sfail(*s, where + "code offset " + hex(l.code_offset) + " outside the code (" + std::to_string(im.code.size()) + " bytes)");
-      if (l.code_offset < im.code.size()) {
-        bool boundary = im.target == ImageTarget::X86_64
-                            ? std::binary_search(code_starts.begin(), code_starts.end(), l.code_offset)
-                            : l.code_offset % 4 == 0;
-        if (!boundary) throw sfail(*s, where + "code offset " + hex(l.code_offset) + " is not an instruction boundary");
-      }
+      if (l.code_offset > im_.code.size())
+        throw sfail(*s, where + "code offset " + hex(l.code_offset) + " outside the code (" + std::to_string(im_.code.size()) + " bytes)");
+      if (l.code_offset < im_.code.size() && !code_boundary(l.code_offset))
+        throw sfail(*s, where + "code offset " + hex(l.code_offset) + " is not an instruction boundary");
       if (!std::binary_search(il_starts.begin(), il_starts.end(), l.il_offset))
         throw sfail(*s, where + "IL offset " + std::to_string(l.il_offset) +
-                            (l.il_offset >= im.il.size() ? " outside the IL (" + std::to_string(im.il.size()) + " bytes)"
-                                                         : " is not an IL instruction boundary"));
+                            (l.il_offset >= im_.il.size() ? " outside the IL (" + std::to_string(im_.il.size()) + " bytes)"
+                                                          : " is not an IL instruction boundary"));
       if (l.line < 0) throw sfail(*s, where + "negative source line " + std::to_string(l.line));
-      if (l.rung >= im.rung_titles.size())
+      if (l.rung >= im_.rung_titles.size())
         throw sfail(*s, where + "rung " + std::to_string(l.rung) + " but the image has " +
-                            std::to_string(im.rung_titles.size()) + " rungs (titles)");
+                            std::to_string(im_.rung_titles.size()) + " rungs (titles)");
     }
   }
-  return im;
-}
+};
+
+}  // namespace
+
+Image read_image(std::span<const uint8_t> b, const std::string& name) { return ImageReader(b, name).read(); }
 
 }  // namespace ldc
