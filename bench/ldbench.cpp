@@ -1096,19 +1096,48 @@ double class_ns(Run& R, const std::string& klass, bool powered, int e) {
   return NAN;
 }
 
-void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<MemRow>& memrows,
-            const std::map<std::string, std::string>& machine) {
+// The report in named steps: each writes its CSV files and plots and appends
+// its section to the tables (R.tables); run() puts them in order.
+struct Report {
+  Run& R;
+  const std::vector<CompileRow>& compile;
+  const std::vector<MemRow>& memrows;
+  const std::map<std::string, std::string>& machine;
   const Options& o = R.o;
   std::string& md = R.tables;
-  auto info = [&](const char* k) { auto it = machine.find(k); return it == machine.end() ? std::string("?") : it->second; };
   std::string note = info("cpu") + ", " + info("date");
 
-  // --- timings.csv
-  R.write("timings.csv", R.timings.text());
+  std::string info(const char* k) const {
+    auto it = machine.find(k);
+    return it == machine.end() ? std::string("?") : it->second;
+  }
+  static std::string cell(const Timing& t) { return t.ok ? mp(t.median, t.p99) : std::string("–"); }
+  std::vector<Subject*> headline_subjects() const {
+    std::vector<Subject*> head;
+    for (const char* e : {"scaling", "inputs", "repeat", "large"})
+      for (Subject* s : R.of(e)) head.push_back(s);
+    return head;
+  }
 
-  // --- headline: the typical mix
-  // --- the targets of issues 5 and 8, where this run stands
-  {
+  void run() {
+    R.write("timings.csv", R.timings.text());
+    targets();
+    headline();
+    levels();
+    scaling();
+    classes();
+    fig10();
+    code_size();
+    examples();
+    compile_speed();
+    memory();
+    machine_csv();
+    this_run();
+    put_in_doc();
+  }
+
+  // the targets of the issues, where this run stands
+  void targets() {
     Subject* mix = nullptr;  // the headline program: the typical mix of 3,000 instructions
     Subject* plant = nullptr;
     for (Subject* s : R.of("scaling"))
@@ -1200,36 +1229,33 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
           "typical-mix programs.  Compile speed: CPU time of every phase, the table below.\n\n";
   }
 
-  md += "## Headline: the typical mix (P_basic = 0.689)\n\n";
-  md += md_head({"program", "N_exe", "P_basic", "classic", "fast", "native", "C -O2", "classic/native", "fast/native",
-                 "C/native", "native ns/IL", "C40 interp", "C40 native", "C40 interp/native"});
-  auto cell = [](const Timing& t) { return t.ok ? mp(t.median, t.p99) : std::string("–"); };
-  std::vector<Subject*> head;
-  for (Subject* s : R.of("scaling")) head.push_back(s);
-  for (Subject* s : R.of("inputs")) head.push_back(s);
-  for (Subject* s : R.of("repeat")) head.push_back(s);
-  for (Subject* s : R.of("large")) head.push_back(s);
-  for (Subject* s : head) {
-    md += md_row({s->name, std::to_string(s->n), fixed(s->counts.p_basic(), 3), cell(s->t[kClassic]),
-                  cell(s->t[kFast]), cell(s->t[kNative]), cell(s->t[kC]),
-                  ratio(s->t[kClassic].median, s->t[kNative].median), ratio(s->t[kFast].median, s->t[kNative].median),
-                  ratio(s->t[kC].median, s->t[kNative].median), fixed(s->t[kNative].median / s->n, 3),
-                  cycles_text(s->c40_interp_cycles), cycles_text(s->c40_cycles), ratio(s->c40_interp_cycles, s->c40_cycles)});
+  // headline: the typical mix
+  void headline() {
+    md += "## Headline: the typical mix (P_basic = 0.689)\n\n";
+    md += md_head({"program", "N_exe", "P_basic", "classic", "fast", "native", "C -O2", "classic/native", "fast/native",
+                   "C/native", "native ns/IL", "C40 interp", "C40 native", "C40 interp/native"});
+    for (Subject* s : headline_subjects()) {
+      md += md_row({s->name, std::to_string(s->n), fixed(s->counts.p_basic(), 3), cell(s->t[kClassic]),
+                    cell(s->t[kFast]), cell(s->t[kNative]), cell(s->t[kC]),
+                    ratio(s->t[kClassic].median, s->t[kNative].median), ratio(s->t[kFast].median, s->t[kNative].median),
+                    ratio(s->t[kC].median, s->t[kNative].median), fixed(s->t[kNative].median / s->n, 3),
+                    cycles_text(s->c40_interp_cycles), cycles_text(s->c40_cycles), ratio(s->c40_interp_cycles, s->c40_cycles)});
+    }
+    md += "\nMedian / p99 time per scan on this machine (the input-writing overhead subtracted; a sample is one batch "
+          "of scans, so p99 is over batch means, and on a shared machine it mostly shows the scheduler); C40: the "
+          "simulated TMS320C40-40 (50 ns per cycle), median cycles per scan of its native code and of the C40-hosted "
+          "interpreter.\n\n";
   }
-  md += "\nMedian / p99 time per scan on this machine (the input-writing overhead subtracted; a sample is one batch "
-        "of scans, so p99 is over batch means, and on a shared machine it mostly shows the scheduler); C40: the "
-        "simulated TMS320C40-40 (50 ns per cycle), median cycles per scan of its native code and of the C40-hosted "
-        "interpreter.\n\n";
 
-  // --- optimization levels (issue 8)
-  {
+  // optimization levels (issue 8)
+  void levels() {
     Csv c({"program", "n_exe", "p_basic", "o0_ns", "o1_ns", "o2_ns", "c_ns", "o0_p99_ns", "o1_p99_ns", "o2_p99_ns",
            "c_p99_ns", "o0_bytes", "o1_bytes", "o2_bytes", "o0_build_s", "o1_build_s", "o2_build_s", "c_build_s",
            "c40_o0_cycles", "c40_o1_cycles", "c40_o2_cycles", "c40_o0_bytes", "c40_o1_bytes", "c40_o2_bytes"});
     md += "## Optimization levels: -O0, -O1, -O2 against the C route\n\n";
     md += md_head({"program", "N_exe", "-O0", "-O1", "-O2", "C -O2", "C/-O2", "-O0/-O2", "-O2 ns/IL",
                    "bytes/IL -O0 · -O1 · -O2", "build ms -O0 · -O1 · -O2", "cc -O2 build"});
-    std::vector<Subject*> lv = head;
+    std::vector<Subject*> lv = headline_subjects();
     for (Subject* s : R.of("classes"))
       if (s->powered) lv.push_back(s);
     for (Subject* s : lv) {
@@ -1285,8 +1311,8 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     R.write("levels.csv", c.text());
   }
 
-  // --- scaling.csv and plot
-  {
+  // scaling.csv and plot
+  void scaling() {
     Csv c({"n_exe", "p_basic", "classic_ns", "fast_ns", "native_ns", "c_ns", "classic_p99_ns", "fast_p99_ns",
            "native_p99_ns", "c_p99_ns", "c40_cycles", "c40_interp_cycles", "classic_over_native", "fast_over_native",
            "c_over_native", "c40_interp_over_native"});
@@ -1349,8 +1375,8 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     R.write("speedup.svg", plot::render(sp));
   }
 
-  // --- classes (Fig. 8)
-  {
+  // classes (Fig. 8)
+  void classes() {
     Csv c({"class", "powered", "n", "classic_ns_per_instr", "fast_ns_per_instr", "native_ns_per_instr", "c_ns_per_instr",
            "c40_cycles_per_instr", "c40_interp_cycles_per_instr", "classic_over_native", "fast_over_native",
            "c_over_native", "c40_interp_over_native", "native_code_bytes_per_instr", "c40_code_bytes_per_instr",
@@ -1419,8 +1445,8 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     R.write("classes_c40.svg", plot::render(cp));
   }
 
-  // --- Fig. 10 and eq. (2)
-  {
+  // Fig. 10 and eq. (2)
+  void fig10() {
     // eq. (2): T = N [P T_basic + (1-P) sum_c w_c T_c], T_c the mean of the
     // powered and unpowered one-class programs (a mix rung has power about half the time).
     synth::AppMix mix = synth::typical_app_mix();
@@ -1557,123 +1583,125 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     md += ".\n\n";
   }
 
-  // --- code size (eq. 3, 4)
-  if (!R.of("fig10").empty() || !R.of("scaling").empty()) {
-    std::vector<double> x, native, image, il, fast, cx, cb, kx, kb;
-    std::vector<Subject*> typical;
-    for (Subject* s : R.of("fig10"))
-      if (std::fabs(s->p_target - synth::kTypicalPBasic) <= 1e-9) typical.push_back(s);
-    for (Subject* s : R.of("scaling")) typical.push_back(s);
-    for (Subject* s : typical) {
-      x.push_back(s->n);
-      native.push_back(double(s->native_bytes));
-      image.push_back(double(s->image_bytes));
-      il.push_back(double(s->il_bytes));
-      fast.push_back(double(s->fast_bytes));
-      if (s->c_bytes) { cx.push_back(s->n); cb.push_back(double(s->c_bytes)); }
-      if (s->c40_bytes) { kx.push_back(s->n); kb.push_back(double(s->c40_bytes)); }
-    }
-    Csv c({"quantity", "slope_bytes_per_il", "intercept_bytes", "r2", "slope_through_origin", "points"});
-    md += "## Memory: bytes vs N_exe (paper 003, eq. 3 and 4)\n\n";
-    md += "Least squares over the typical-mix programs (P_basic = 0.689: the Fig. 10 row and the scaling programs, "
-          "N_exe 300 to 100,000); per P_basic below.  Bytes, except where words are said.\n\n";
-    md += md_head({"quantity", "fit (bytes)", "R²", "through 0", "paper"});
-    auto line = [&](const std::string& q, const std::vector<double>& xs, const std::vector<double>& ys,
-                    const std::string& paper) {
-      Fit f = fit(xs, ys);
-      c.row({q, fmt(f.slope, 6), fmt(f.intercept, 6), fmt(f.r2, 6), fmt(f.slope0, 6), std::to_string(f.n)});
-      md += md_row({q, fixed(f.slope, 3) + " N_exe " + (f.intercept < 0 ? "− " : "+ ") + fixed(std::fabs(f.intercept), 0),
-                    fixed(f.r2, 4), fixed(f.slope0, 3) + " N_exe", paper});
-      return f;
-    };
-    Fit fn = line("native x86-64 code", x, native, "M = 9.790 N_exe (C40)");
-    if (!kx.empty()) line("native C40 code (4 bytes a word)", kx, kb, "M = 9.790 N_exe");
-    Fit fi = line("image file", x, image, "");
-    line("binary IL (classic interpreter's program)", x, il, "M' = 2.114 N_exe + 18.973 N_PLC + 183");
-    line("fast interpreter's decoded program", x, fast, "");
-    if (!cx.empty()) line("C route: ldc_scan function (cc -O2)", cx, cb, "");
-    // the interpreters' own code, from this executable's symbol table
-    size_t classic_code = elf_symbol_size("/proc/self/exe", "_GLOBAL__N_1*", "3Ctx") +
-                          elf_symbol_size("/proc/self/exe", "_ZNK3ldc11Interpreter4scanEPh");
-    size_t fast_code = elf_symbol_size("/proc/self/exe", "_ZN3ldc15FastInterpreter4scanEPh") +
-                       elf_symbol_size("/proc/self/exe", "_GLOBAL__N_1*", "7genericEPhRKNS_15FastInterpreter3InsEj") +
-                       elf_symbol_size("/proc/self/exe", "_GLOBAL__N_1*", "12compare_real");
-    c.row({"classic interpreter code (N_PLC term)", "", fmt(double(classic_code), 6), "", "", "0"});
-    c.row({"fast interpreter code", "", fmt(double(fast_code), 6), "", "", "0"});
-    md += "\nThe interpreters' own machine code (this executable's symbol table; the N_PLC term of eq. 3, " +
-          std::to_string(kOpCount) + " mnemonics): classic " + std::to_string(classic_code) + " bytes, fast " +
-          std::to_string(fast_code) + " bytes.\n\n";
-    R.write("codesize_fits.csv", c.text());
-    plot::LinePlot lp;
-    lp.title = "Memory vs N_exe (typical mix, P_basic = 0.689)";
-    lp.xlabel = "N_exe (IL instructions)";
-    lp.ylabel = "bytes";
-    lp.logx = lp.logy = true;
-    lp.note = note;
-    auto pts = [&](const std::string& n, const std::vector<double>& xs, const std::vector<double>& ys, int color) {
-      plot::Series s;
-      s.name = n;
-      s.x = xs;
-      s.y = ys;
-      s.line = false;
-      s.color = plot::palette()[color];
-      lp.series.push_back(s);
-    };
-    auto fitline = [&](const std::string& n, const Fit& f, int color, bool dashed) {
-      plot::Series s;
-      s.name = n;
-      s.markers = false;
-      s.dashed = dashed;
-      s.color = plot::palette()[color];
-      double lo = *std::min_element(x.begin(), x.end()), hi = *std::max_element(x.begin(), x.end());
-      for (double v = lo; v <= hi * 1.0001; v *= 1.25) {
-        s.x.push_back(v);
-        s.y.push_back(f.slope * v + f.intercept);
+  // code size (eq. 3, 4)
+  void code_size() {
+    if (!R.of("fig10").empty() || !R.of("scaling").empty()) {
+      std::vector<double> x, native, image, il, fast, cx, cb, kx, kb;
+      std::vector<Subject*> typical;
+      for (Subject* s : R.of("fig10"))
+        if (std::fabs(s->p_target - synth::kTypicalPBasic) <= 1e-9) typical.push_back(s);
+      for (Subject* s : R.of("scaling")) typical.push_back(s);
+      for (Subject* s : typical) {
+        x.push_back(s->n);
+        native.push_back(double(s->native_bytes));
+        image.push_back(double(s->image_bytes));
+        il.push_back(double(s->il_bytes));
+        fast.push_back(double(s->fast_bytes));
+        if (s->c_bytes) { cx.push_back(s->n); cb.push_back(double(s->c_bytes)); }
+        if (s->c40_bytes) { kx.push_back(s->n); kb.push_back(double(s->c40_bytes)); }
       }
-      lp.series.push_back(s);
-    };
-    pts("native x86-64 code", x, native, 2);
-    if (!kx.empty()) pts("native C40 code", kx, kb, 5);
-    fitline("native fit", fn, 2, false);
-    pts("image file", x, image, 4);
-    fitline("image fit", fi, 4, false);
-    pts("binary IL", x, il, 0);
-    pts("fast decoded", x, fast, 1);
-    if (!cx.empty()) pts("C ldc_scan", cx, cb, 3);
-    Fit paper;
-    paper.slope = 9.790;
-    paper.intercept = 0;
-    fitline("paper eq. 4 (bytes)", paper, 7, true);
-    paper.slope = 4 * 9.790;
-    fitline("paper eq. 4 (C40 words)", paper, 8, true);
-    R.write("codesize.svg", plot::render(lp));
-    // per-subject sizes
-    Csv all({"experiment", "program", "n_exe", "p_basic", "il_bytes", "fast_decoded_bytes", "native_code_bytes",
-             "image_bytes", "c_scan_bytes", "c40_code_bytes", "native_bytes_per_il", "native_build_s", "c_build_s"});
-    for (auto& s : R.subjects)
-      all.row({s->experiment, s->name, std::to_string(s->n), fmt(s->counts.p_basic(), 4), std::to_string(s->il_bytes),
-               std::to_string(s->fast_bytes), std::to_string(s->native_bytes), std::to_string(s->image_bytes),
-               s->c_bytes ? std::to_string(s->c_bytes) : "", s->c40_bytes ? std::to_string(s->c40_bytes) : "",
-               fmt(double(s->native_bytes) / s->n, 5),
-               fmt(s->native_build_s, 4), fmt(s->c_build_s, 4)});
-    R.write("codesize.csv", all.text());
-    // bytes per instruction by P_basic
-    md += md_head({"P_basic", "x86-64 bytes/IL (fit over N)", "R²", "C40 bytes/IL (fit over N)", "R²"});
-    std::map<double, std::array<std::vector<double>, 3>> byp;
-    for (Subject* s : R.of("fig10")) {
-      byp[s->p_target][0].push_back(s->n);
-      byp[s->p_target][1].push_back(double(s->native_bytes));
-      byp[s->p_target][2].push_back(double(s->c40_bytes));
+      Csv c({"quantity", "slope_bytes_per_il", "intercept_bytes", "r2", "slope_through_origin", "points"});
+      md += "## Memory: bytes vs N_exe (paper 003, eq. 3 and 4)\n\n";
+      md += "Least squares over the typical-mix programs (P_basic = 0.689: the Fig. 10 row and the scaling programs, "
+            "N_exe 300 to 100,000); per P_basic below.  Bytes, except where words are said.\n\n";
+      md += md_head({"quantity", "fit (bytes)", "R²", "through 0", "paper"});
+      auto line = [&](const std::string& q, const std::vector<double>& xs, const std::vector<double>& ys,
+                      const std::string& paper) {
+        Fit f = fit(xs, ys);
+        c.row({q, fmt(f.slope, 6), fmt(f.intercept, 6), fmt(f.r2, 6), fmt(f.slope0, 6), std::to_string(f.n)});
+        md += md_row({q, fixed(f.slope, 3) + " N_exe " + (f.intercept < 0 ? "− " : "+ ") + fixed(std::fabs(f.intercept), 0),
+                      fixed(f.r2, 4), fixed(f.slope0, 3) + " N_exe", paper});
+        return f;
+      };
+      Fit fn = line("native x86-64 code", x, native, "M = 9.790 N_exe (C40)");
+      if (!kx.empty()) line("native C40 code (4 bytes a word)", kx, kb, "M = 9.790 N_exe");
+      Fit fi = line("image file", x, image, "");
+      line("binary IL (classic interpreter's program)", x, il, "M' = 2.114 N_exe + 18.973 N_PLC + 183");
+      line("fast interpreter's decoded program", x, fast, "");
+      if (!cx.empty()) line("C route: ldc_scan function (cc -O2)", cx, cb, "");
+      // the interpreters' own code, from this executable's symbol table
+      size_t classic_code = elf_symbol_size("/proc/self/exe", "_GLOBAL__N_1*", "3Ctx") +
+                            elf_symbol_size("/proc/self/exe", "_ZNK3ldc11Interpreter4scanEPh");
+      size_t fast_code = elf_symbol_size("/proc/self/exe", "_ZN3ldc15FastInterpreter4scanEPh") +
+                         elf_symbol_size("/proc/self/exe", "_GLOBAL__N_1*", "7genericEPhRKNS_15FastInterpreter3InsEj") +
+                         elf_symbol_size("/proc/self/exe", "_GLOBAL__N_1*", "12compare_real");
+      c.row({"classic interpreter code (N_PLC term)", "", fmt(double(classic_code), 6), "", "", "0"});
+      c.row({"fast interpreter code", "", fmt(double(fast_code), 6), "", "", "0"});
+      md += "\nThe interpreters' own machine code (this executable's symbol table; the N_PLC term of eq. 3, " +
+            std::to_string(kOpCount) + " mnemonics): classic " + std::to_string(classic_code) + " bytes, fast " +
+            std::to_string(fast_code) + " bytes.\n\n";
+      R.write("codesize_fits.csv", c.text());
+      plot::LinePlot lp;
+      lp.title = "Memory vs N_exe (typical mix, P_basic = 0.689)";
+      lp.xlabel = "N_exe (IL instructions)";
+      lp.ylabel = "bytes";
+      lp.logx = lp.logy = true;
+      lp.note = note;
+      auto pts = [&](const std::string& n, const std::vector<double>& xs, const std::vector<double>& ys, int color) {
+        plot::Series s;
+        s.name = n;
+        s.x = xs;
+        s.y = ys;
+        s.line = false;
+        s.color = plot::palette()[color];
+        lp.series.push_back(s);
+      };
+      auto fitline = [&](const std::string& n, const Fit& f, int color, bool dashed) {
+        plot::Series s;
+        s.name = n;
+        s.markers = false;
+        s.dashed = dashed;
+        s.color = plot::palette()[color];
+        double lo = *std::min_element(x.begin(), x.end()), hi = *std::max_element(x.begin(), x.end());
+        for (double v = lo; v <= hi * 1.0001; v *= 1.25) {
+          s.x.push_back(v);
+          s.y.push_back(f.slope * v + f.intercept);
+        }
+        lp.series.push_back(s);
+      };
+      pts("native x86-64 code", x, native, 2);
+      if (!kx.empty()) pts("native C40 code", kx, kb, 5);
+      fitline("native fit", fn, 2, false);
+      pts("image file", x, image, 4);
+      fitline("image fit", fi, 4, false);
+      pts("binary IL", x, il, 0);
+      pts("fast decoded", x, fast, 1);
+      if (!cx.empty()) pts("C ldc_scan", cx, cb, 3);
+      Fit paper;
+      paper.slope = 9.790;
+      paper.intercept = 0;
+      fitline("paper eq. 4 (bytes)", paper, 7, true);
+      paper.slope = 4 * 9.790;
+      fitline("paper eq. 4 (C40 words)", paper, 8, true);
+      R.write("codesize.svg", plot::render(lp));
+      // per-subject sizes
+      Csv all({"experiment", "program", "n_exe", "p_basic", "il_bytes", "fast_decoded_bytes", "native_code_bytes",
+               "image_bytes", "c_scan_bytes", "c40_code_bytes", "native_bytes_per_il", "native_build_s", "c_build_s"});
+      for (auto& s : R.subjects)
+        all.row({s->experiment, s->name, std::to_string(s->n), fmt(s->counts.p_basic(), 4), std::to_string(s->il_bytes),
+                 std::to_string(s->fast_bytes), std::to_string(s->native_bytes), std::to_string(s->image_bytes),
+                 s->c_bytes ? std::to_string(s->c_bytes) : "", s->c40_bytes ? std::to_string(s->c40_bytes) : "",
+                 fmt(double(s->native_bytes) / s->n, 5),
+                 fmt(s->native_build_s, 4), fmt(s->c_build_s, 4)});
+      R.write("codesize.csv", all.text());
+      // bytes per instruction by P_basic
+      md += md_head({"P_basic", "x86-64 bytes/IL (fit over N)", "R²", "C40 bytes/IL (fit over N)", "R²"});
+      std::map<double, std::array<std::vector<double>, 3>> byp;
+      for (Subject* s : R.of("fig10")) {
+        byp[s->p_target][0].push_back(s->n);
+        byp[s->p_target][1].push_back(double(s->native_bytes));
+        byp[s->p_target][2].push_back(double(s->c40_bytes));
+      }
+      for (auto& [p, v] : byp) {
+        Fit f = fit(v[0], v[1]), g = fit(v[0], v[2]);
+        md += md_row({fixed(p, 3), fixed(f.slope, 2), fixed(f.r2, 4), fixed(g.slope, 2), fixed(g.r2, 4)});
+      }
+      md += "\n";
     }
-    for (auto& [p, v] : byp) {
-      Fit f = fit(v[0], v[1]), g = fit(v[0], v[2]);
-      md += md_row({fixed(p, 3), fixed(f.slope, 2), fixed(f.r2, 4), fixed(g.slope, 2), fixed(g.r2, 4)});
-    }
-    md += "\n";
   }
 
-  // --- examples
-  {
+  // examples
+  void examples() {
     Csv c({"example", "n_exe", "p_basic", "classic_ns", "fast_ns", "native_ns", "c_ns", "classic_p99_ns", "fast_p99_ns",
            "native_p99_ns", "c_p99_ns", "c40_cycles", "c40_interp_cycles", "native_code_bytes"});
     md += "## Shipped examples (their own input traces, cycled)\n\n";
@@ -1696,84 +1724,88 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     R.write("examples.csv", c.text());
   }
 
-  // --- compile speed
-  if (!compile.empty()) {
-    Csv c({"source", "opt", "rungs", "il", "parse_s", "lower_s", "generate_s", "assemble_s", "image_s", "total_s",
-           "il_per_s", "wall_s", "code_bytes", "image_bytes", "repeats"});
-    md += "## Compile speed (ldc's own pipeline, CPU time, median of " + std::to_string(compile[0].repeats) + ")\n\n";
-    md += md_head({"source", "level", "IL", "parse", "lower", "generate", "assemble", "image", "total", "IL/s", "wall",
-                   "code bytes/IL"});
-    plot::LinePlot lp;
-    lp.title = "Compile time vs program size (plant .ld, all phases)";
-    lp.xlabel = "IL instructions";
-    lp.ylabel = "CPU seconds";
-    lp.logx = lp.logy = true;
-    lp.note = note;
-    std::vector<plot::Series> ser(6);
-    const char* names[] = {"parse (.ld grid)", "lower to IL", "generate x86", "assemble", "image", "total"};
-    for (int k = 0; k < 6; k++) ser[k].name = names[k];
-    std::vector<double> fx, fy;
-    for (const CompileRow& r : compile) {
-      const Phases& p = r.ph;
-      c.row({r.source, std::to_string(r.opt), std::to_string(p.rungs), std::to_string(p.il), fmt(p.parse, 5), fmt(p.lower, 5),
-             fmt(p.generate, 5), fmt(p.assemble, 5), fmt(p.image, 5), fmt(p.total(), 5), fmt(p.il / p.total(), 5),
-             fmt(p.wall, 5), std::to_string(p.code), std::to_string(p.image_bytes), std::to_string(r.repeats)});
-      md += md_row({r.source, "-O" + std::to_string(r.opt), std::to_string(p.il), fixed(p.parse * 1e3, 1) + " ms",
-                    fixed(p.lower * 1e3, 1) + " ms", fixed(p.generate * 1e3, 1) + " ms",
-                    fixed(p.assemble * 1e3, 1) + " ms", fixed(p.image * 1e3, 1) + " ms",
-                    fixed(p.total() * 1e3, 1) + " ms", fixed(p.il / p.total() / 1e6, 2) + " M",
-                    fixed(p.wall * 1e3, 1) + " ms", fixed(double(p.code) / double(p.il), 2)});
-      if (r.source.rfind("plant .ld", 0) == 0 && !r.levels) {
-        double v[6] = {p.parse, p.lower, p.generate, p.assemble, p.image, p.total()};
-        for (int k = 0; k < 6; k++) {
-          ser[k].x.push_back(double(p.il));
-          ser[k].y.push_back(v[k]);
+  // compile speed
+  void compile_speed() {
+    if (!compile.empty()) {
+      Csv c({"source", "opt", "rungs", "il", "parse_s", "lower_s", "generate_s", "assemble_s", "image_s", "total_s",
+             "il_per_s", "wall_s", "code_bytes", "image_bytes", "repeats"});
+      md += "## Compile speed (ldc's own pipeline, CPU time, median of " + std::to_string(compile[0].repeats) + ")\n\n";
+      md += md_head({"source", "level", "IL", "parse", "lower", "generate", "assemble", "image", "total", "IL/s", "wall",
+                     "code bytes/IL"});
+      plot::LinePlot lp;
+      lp.title = "Compile time vs program size (plant .ld, all phases)";
+      lp.xlabel = "IL instructions";
+      lp.ylabel = "CPU seconds";
+      lp.logx = lp.logy = true;
+      lp.note = note;
+      std::vector<plot::Series> ser(6);
+      const char* names[] = {"parse (.ld grid)", "lower to IL", "generate x86", "assemble", "image", "total"};
+      for (int k = 0; k < 6; k++) ser[k].name = names[k];
+      std::vector<double> fx, fy;
+      for (const CompileRow& r : compile) {
+        const Phases& p = r.ph;
+        c.row({r.source, std::to_string(r.opt), std::to_string(p.rungs), std::to_string(p.il), fmt(p.parse, 5), fmt(p.lower, 5),
+               fmt(p.generate, 5), fmt(p.assemble, 5), fmt(p.image, 5), fmt(p.total(), 5), fmt(p.il / p.total(), 5),
+               fmt(p.wall, 5), std::to_string(p.code), std::to_string(p.image_bytes), std::to_string(r.repeats)});
+        md += md_row({r.source, "-O" + std::to_string(r.opt), std::to_string(p.il), fixed(p.parse * 1e3, 1) + " ms",
+                      fixed(p.lower * 1e3, 1) + " ms", fixed(p.generate * 1e3, 1) + " ms",
+                      fixed(p.assemble * 1e3, 1) + " ms", fixed(p.image * 1e3, 1) + " ms",
+                      fixed(p.total() * 1e3, 1) + " ms", fixed(p.il / p.total() / 1e6, 2) + " M",
+                      fixed(p.wall * 1e3, 1) + " ms", fixed(double(p.code) / double(p.il), 2)});
+        if (r.source.rfind("plant .ld", 0) == 0 && !r.levels) {
+          double v[6] = {p.parse, p.lower, p.generate, p.assemble, p.image, p.total()};
+          for (int k = 0; k < 6; k++) {
+            ser[k].x.push_back(double(p.il));
+            ser[k].y.push_back(v[k]);
+          }
+          fx.push_back(double(p.il));
+          fy.push_back(p.total());
         }
-        fx.push_back(double(p.il));
-        fy.push_back(p.total());
       }
+      ser[5].color = "#000000";
+      lp.series = ser;
+      Fit f = fit(fx, fy);
+      md += "\nPlant programs: total = " + fmt(f.slope * 1e9, 4) + " ns × IL " + (f.intercept < 0 ? "− " : "+ ") +
+            fmt(std::fabs(f.intercept) * 1e3, 3) + " ms (R² " + fixed(f.r2, 4) + "); per IL instruction " +
+            fixed(compile.front().ph.total() / compile.front().ph.il * 1e9, 0) + " ns at the smallest, " +
+            fixed(fy.empty() ? NAN : fy.back() / fx.back() * 1e9, 0) + " ns at the largest plant.\n\n";
+      R.write("compile.csv", c.text());
+      R.write("compile.svg", plot::render(lp));
     }
-    ser[5].color = "#000000";
-    lp.series = ser;
-    Fit f = fit(fx, fy);
-    md += "\nPlant programs: total = " + fmt(f.slope * 1e9, 4) + " ns × IL " + (f.intercept < 0 ? "− " : "+ ") +
-          fmt(std::fabs(f.intercept) * 1e3, 3) + " ms (R² " + fixed(f.r2, 4) + "); per IL instruction " +
-          fixed(compile.front().ph.total() / compile.front().ph.il * 1e9, 0) + " ns at the smallest, " +
-          fixed(fy.empty() ? NAN : fy.back() / fx.back() * 1e9, 0) + " ns at the largest plant.\n\n";
-    R.write("compile.csv", c.text());
-    R.write("compile.svg", plot::render(lp));
   }
 
-  // --- memory
-  if (!memrows.empty()) {
-    Csv c({"rungs", "source", "source_bytes", "il", "code_bytes", "image_bytes", "rss_before_kb", "hwm_after_parse_kb",
-           "hwm_after_lower_kb", "hwm_after_generate_kb", "hwm_after_assemble_kb", "hwm_after_image_kb", "seconds",
-           "error"});
-    md += "## Peak memory of compiling (child process, VmHWM)\n\n";
-    md += "Peak resident memory (VmHWM) after each phase; the source text is already in memory.  The .ld reader "
-          "refuses more than 65,536 rungs (frontend kMaxRungs), so the 100,000-rung plant is compiled from its IL text "
-          "(no grid to read, no lowering).\n\n";
-    md += md_head({"plant rungs", "IL", "source file", "image", "RSS before", "after parse", "after lower",
-                   "after generate", "after assemble", "after image (peak)", "peak bytes per IL", "time"});
-    auto mib = [](long kb) { return fixed(kb / 1024.0, 1) + " MiB"; };
-    for (const MemRow& m : memrows) {
-      c.row({std::to_string(m.rungs), m.source, std::to_string(m.source_bytes), std::to_string(m.il), std::to_string(m.code),
-             std::to_string(m.image), std::to_string(m.before_kb), std::to_string(m.hwm_kb[0]), std::to_string(m.hwm_kb[1]),
-             std::to_string(m.hwm_kb[2]), std::to_string(m.hwm_kb[3]), std::to_string(m.hwm_kb[4]), fmt(m.seconds, 4),
-             m.error});
-      md += md_row({std::to_string(m.rungs), std::to_string(m.il),
-                    m.source + " " + fixed(m.source_bytes / 1048576.0, 1) + " MiB",
-                    fixed(m.image / 1048576.0, 1) + " MiB", mib(m.before_kb), mib(m.hwm_kb[0]), mib(m.hwm_kb[1]),
-                    mib(m.hwm_kb[2]), mib(m.hwm_kb[3]), mib(m.hwm_kb[4]),
-                    m.il ? fixed((m.peak_kb() - m.before_kb) * 1024.0 / double(m.il), 0) : "–",
-                    fixed(m.seconds, 2) + " s" + (m.error.empty() ? "" : " (" + m.error + ")")});
+  // memory
+  void memory() {
+    if (!memrows.empty()) {
+      Csv c({"rungs", "source", "source_bytes", "il", "code_bytes", "image_bytes", "rss_before_kb", "hwm_after_parse_kb",
+             "hwm_after_lower_kb", "hwm_after_generate_kb", "hwm_after_assemble_kb", "hwm_after_image_kb", "seconds",
+             "error"});
+      md += "## Peak memory of compiling (child process, VmHWM)\n\n";
+      md += "Peak resident memory (VmHWM) after each phase; the source text is already in memory.  The .ld reader "
+            "refuses more than 65,536 rungs (frontend kMaxRungs), so the 100,000-rung plant is compiled from its IL text "
+            "(no grid to read, no lowering).\n\n";
+      md += md_head({"plant rungs", "IL", "source file", "image", "RSS before", "after parse", "after lower",
+                     "after generate", "after assemble", "after image (peak)", "peak bytes per IL", "time"});
+      auto mib = [](long kb) { return fixed(kb / 1024.0, 1) + " MiB"; };
+      for (const MemRow& m : memrows) {
+        c.row({std::to_string(m.rungs), m.source, std::to_string(m.source_bytes), std::to_string(m.il), std::to_string(m.code),
+               std::to_string(m.image), std::to_string(m.before_kb), std::to_string(m.hwm_kb[0]), std::to_string(m.hwm_kb[1]),
+               std::to_string(m.hwm_kb[2]), std::to_string(m.hwm_kb[3]), std::to_string(m.hwm_kb[4]), fmt(m.seconds, 4),
+               m.error});
+        md += md_row({std::to_string(m.rungs), std::to_string(m.il),
+                      m.source + " " + fixed(m.source_bytes / 1048576.0, 1) + " MiB",
+                      fixed(m.image / 1048576.0, 1) + " MiB", mib(m.before_kb), mib(m.hwm_kb[0]), mib(m.hwm_kb[1]),
+                      mib(m.hwm_kb[2]), mib(m.hwm_kb[3]), mib(m.hwm_kb[4]),
+                      m.il ? fixed((m.peak_kb() - m.before_kb) * 1024.0 / double(m.il), 0) : "–",
+                      fixed(m.seconds, 2) + " s" + (m.error.empty() ? "" : " (" + m.error + ")")});
+      }
+      md += "\n";
+      R.write("memory.csv", c.text());
     }
-    md += "\n";
-    R.write("memory.csv", c.text());
   }
 
-  // --- machine
-  {
+  // machine.csv
+  void machine_csv() {
     Csv c({"key", "value"});
     for (auto& [k, v] : machine) c.row({k, v});
     std::ifstream la("/proc/loadavg");
@@ -1786,21 +1818,27 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
     c.row({"c40", o.c40 ? "simulated TMS320C40-40 (backend-c40sim, docs/c40.md), 50 ns per cycle" : "off (--no-c40)"});
     R.write("machine.csv", c.text());
   }
-  std::string run = "## This run\n\n" + md_head({"what", "value"});
-  std::ifstream la("/proc/loadavg");
-  std::string load_end;
-  std::getline(la, load_end);
-  for (const char* k : {"date", "cpu", "logical_cpus", "kernel", "compiler", "cc", "build_type"})
-    run += md_row({k, info(k)});
-  run += md_row({"load average (1, 5, 15 min) at start · end", info("loadavg_start").substr(0, 14) + " · " + load_end.substr(0, 14)});
-  run += md_row({"duration", fixed(secs_since(R.start), 0) + " s"});
-  run += md_row({"command", "`" + o.command + "`"});
-  run += "\n";
-  md = run + md;
-  R.write("tables.md", "<!-- generated by ldbench; " + o.command + " -->\n\n" + md);
-  if (!o.doc.empty()) {
-    // Between the markers: this run's tables, headings one level down, the
-    // rest of the document untouched.
+
+  // "This run" heads the tables; tables.md
+  void this_run() {
+    std::string run = "## This run\n\n" + md_head({"what", "value"});
+    std::ifstream la("/proc/loadavg");
+    std::string load_end;
+    std::getline(la, load_end);
+    for (const char* k : {"date", "cpu", "logical_cpus", "kernel", "compiler", "cc", "build_type"})
+      run += md_row({k, info(k)});
+    run += md_row({"load average (1, 5, 15 min) at start · end", info("loadavg_start").substr(0, 14) + " · " + load_end.substr(0, 14)});
+    run += md_row({"duration", fixed(secs_since(R.start), 0) + " s"});
+    run += md_row({"command", "`" + o.command + "`"});
+    run += "\n";
+    md = run + md;
+    R.write("tables.md", "<!-- generated by ldbench; " + o.command + " -->\n\n" + md);
+  }
+
+  // --doc FILE: between FILE's markers, this run's tables with headings one
+  // level down; the rest of the document untouched.
+  void put_in_doc() {
+    if (o.doc.empty()) return;
     const std::string begin = "<!-- ldbench tables: begin -->", end = "<!-- ldbench tables: end -->";
     std::string text = read_file(o.doc);
     size_t b = text.find(begin), e = text.find(end);
@@ -1813,6 +1851,11 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
            text.substr(e);
     write_file_atomic(o.doc, text);
   }
+};
+
+void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<MemRow>& memrows,
+            const std::map<std::string, std::string>& machine) {
+  Report{R, compile, memrows, machine}.run();
 }
 
 const char kUsage[] =
