@@ -237,7 +237,7 @@ class Importer {
   uint32_t next_[11] = {};          // next free index per Dev
   std::set<std::pair<int, uint32_t>> used_;
   std::vector<Alias> aliases_;
-  std::map<std::pair<int, uint32_t>, std::string> spelled_;  // device -> LDmicro name (for --emit=tree)
+  Spellings spelled_;  // device -> LDmicro name (for --emit=tree)
   int depth_ = 0;
   static constexpr int kMaxNesting = 100;
   bool mcr_used_ = false;
@@ -799,25 +799,7 @@ Operand Importer::value(const Elem& e, size_t arg, bool dest) {
   fail(e.line, col, "'" + s + "' is a PWM output; only SET_PWM writes it");
 }
 
-std::string Importer::spell(const Operand& o) const {
-  int dev = -1;
-  switch (o.kind) {
-    case OpdKind::Bit:
-      dev = o.area == Area::X ? int(Dev::X) : o.area == Area::Y ? int(Dev::Y) : o.area == Area::M ? int(Dev::M)
-            : o.area == Area::TQ ? int(Dev::T) : o.area == Area::CQ ? int(Dev::C) : -1;
-      break;
-    case OpdKind::Int:
-      dev = o.area == Area::D ? int(Dev::D) : o.area == Area::TW ? int(Dev::T) : o.area == Area::CW ? int(Dev::C)
-            : o.area == Area::WX ? int(Dev::WX) : o.area == Area::WY ? int(Dev::WY) : -1;
-      break;
-    case OpdKind::Timer: dev = int(Dev::T); break;
-    case OpdKind::Counter: dev = int(Dev::C); break;
-    default: break;
-  }
-  if (dev >= 0)
-    if (auto it = spelled_.find({dev, o.index}); it != spelled_.end()) return it->second;
-  return operand_text(o);
-}
+std::string Importer::spell(const Operand& o) const { return spell_operand(o, spelled_); }
 
 TreeNode Importer::leaf_node(Op op, std::vector<Operand> a, const Elem& e) {
   TreeNode n;

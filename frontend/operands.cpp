@@ -158,4 +158,27 @@ std::optional<Operand> parse_constant(std::string_view text, std::string& why) {
   return std::nullopt;
 }
 
+// The device kind an operand's area belongs to (a timer's or counter's bit,
+// word or instance is its T or C), -1 for none.
+static int operand_dev(const Operand& o) {
+  switch (o.kind) {
+    case OpdKind::Timer: return int(Dev::T);
+    case OpdKind::Counter: return int(Dev::C);
+    case OpdKind::Bit:
+      return o.area == Area::X ? int(Dev::X) : o.area == Area::Y ? int(Dev::Y) : o.area == Area::M ? int(Dev::M)
+             : o.area == Area::TQ ? int(Dev::T) : o.area == Area::CQ ? int(Dev::C) : -1;
+    case OpdKind::Int:
+    case OpdKind::Real:
+      return o.area == Area::D ? int(Dev::D) : o.area == Area::TW ? int(Dev::T) : o.area == Area::CW ? int(Dev::C)
+             : o.area == Area::WX ? int(Dev::WX) : o.area == Area::WY ? int(Dev::WY) : o.area == Area::F ? int(Dev::F) : -1;
+    default: return -1;
+  }
+}
+
+std::string spell_operand(const Operand& o, const Spellings& spelled) {
+  if (int dev = operand_dev(o); dev >= 0)
+    if (auto it = spelled.find({dev, o.index}); it != spelled.end()) return it->second;
+  return operand_text(o);
+}
+
 }  // namespace ldc

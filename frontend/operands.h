@@ -23,4 +23,9 @@ bool is_identifier(std::string_view s);
 // 42, -7, 16#FF, 0xFF, 2#1010, 1.5, -2.0e3, 500ms, 2s, T#1m30s (durations in ms).
 std::optional<Operand> parse_constant(std::string_view s, std::string& why);
 
+// Names as the source spelled them, by (Dev, index): the importers' --emit=tree text.
+using Spellings = std::map<std::pair<int, uint32_t>, std::string>;
+// An operand as its source spelled its device (`spelled`), else operand_text.
+std::string spell_operand(const Operand& o, const Spellings& spelled);
+
 }  // namespace ldc

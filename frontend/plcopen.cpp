@@ -253,7 +253,7 @@ class Importer {
   Val read_of(const std::string& expr, const Element* el, bool write);
   Operand bit_of(const std::string& expr, const Element* el, bool write);
   std::string spell(const Operand& o) const;
-  std::map<std::pair<int, uint32_t>, std::string> spelled_;
+  Spellings spelled_;
 
   // tree pieces
   TreeNode leaf(Op op, std::vector<Operand> a, const Element* el, std::string text = "");
@@ -561,26 +561,7 @@ Operand Importer::bit_of(const std::string& expr, const Element* el, bool write)
   return v.o;
 }
 
-std::string Importer::spell(const Operand& o) const {
-  int dev = -1;
-  switch (o.kind) {
-    case OpdKind::Bit:
-      dev = o.area == Area::X ? int(Dev::X) : o.area == Area::Y ? int(Dev::Y) : o.area == Area::M ? int(Dev::M)
-            : o.area == Area::TQ ? int(Dev::T) : o.area == Area::CQ ? int(Dev::C) : -1;
-      break;
-    case OpdKind::Int:
-    case OpdKind::Real:
-      dev = o.area == Area::D ? int(Dev::D) : o.area == Area::TW ? int(Dev::T) : o.area == Area::CW ? int(Dev::C)
-            : o.area == Area::WX ? int(Dev::WX) : o.area == Area::WY ? int(Dev::WY) : o.area == Area::F ? int(Dev::F) : -1;
-      break;
-    case OpdKind::Timer: dev = int(Dev::T); break;
-    case OpdKind::Counter: dev = int(Dev::C); break;
-    default: break;
-  }
-  if (dev >= 0)
-    if (auto it = spelled_.find({dev, o.index}); it != spelled_.end()) return it->second;
-  return operand_text(o);
-}
+std::string Importer::spell(const Operand& o) const { return spell_operand(o, spelled_); }
 
 // ------------------------------------------------------------------ tree pieces
 
