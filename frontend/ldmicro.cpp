@@ -25,6 +25,7 @@
 
 #include "frontend/frontend.h"
 #include "frontend/operands.h"
+#include "frontend/ldmicro_format.h"
 #include "frontend/ldmicro_segments.h"
 #include "frontend/treebuild.h"
 
@@ -48,6 +49,7 @@ struct Elem {
   std::vector<std::string> args;  // words after the keyword
   std::vector<int> cols;          // their columns
   std::string rest;               // the text after the keyword (COMMENT)
+  std::string text;               // the whole line (STRING's format)
   int line = 0, col = 0;
   std::vector<Elem> kids;  // SERIES / PARALLEL
   SrcLoc loc() const { return {line, col}; }
@@ -132,7 +134,7 @@ class RungBuilder {
 
 // ------------------------------------------------------------------ names
 
-enum class NK { Bit, Timer, Counter, Var, Adc, Pwm };
+enum class NK { Bit, Timer, Counter, Var, Adc, Pwm, Str };
 
 struct Name {
   NK kind = NK::Var;
@@ -150,6 +152,7 @@ const char* kind_word(NK k) {
     case NK::Var: return "an integer variable";
     case NK::Adc: return "an A/D input";
     case NK::Pwm: return "a PWM output";
+    case NK::Str: return "a string variable";
   }
   return "";
 }
@@ -160,9 +163,10 @@ const std::map<std::string, std::string>& unsupported() {
     std::map<std::string, std::string> r;
     for (const char* k : {"UART_SENDn", "UART_RECVn"})
       r[k] = "LDmicro's own compiler no longer translates it (its code is disabled); use UART_SEND or UART_RECV, one byte at a time";
-    r["UART_PRINTF"] = "ldc has no strings and no serial output";
-    for (const char* k : {"STRING", "CPRINTF", "SPRINTF", "FPRINTF", "PRINTF", "I2C_PRINTF", "ISP_PRINTF"})
-      r[k] = "ldc has no string (character array) variables";
+    r["UART_WR"] = "LDmicro's own reader and compiler no longer translate it (their code is disabled); use UART_SEND of a string variable";
+    for (const char* k : {"CPRINTF", "SPRINTF", "FPRINTF", "PRINTF", "I2C_PRINTF", "ISP_PRINTF", "UART_PRINTF"})
+      r[k] = "LDmicro itself neither reads nor compiles it (its file reader has no entry for it, its compiler no translation); "
+             "use STRING and UART_SEND of a string variable";
     for (const char* k : {"GOSUB", "RETURN", "SUBPROG", "ENDSUB"}) r[k] = "LDmicro subroutines are not translated";
     r["SLEEP"] = "it stops the microcontroller until a wake-up event, which an ldc scan cannot do";
     for (const char* k : {"STEPPER", "PULSER", "NPULSE", "NPULSE_OFF", "QUAD_ENCOD"})
@@ -208,6 +212,35 @@ bool is_pure_kw(const std::string& kw) {
   return s.count(kw) > 0;
 }
 
+// The sizes of a STRING conversion's field (docs/ldmicro.md, "Strings"): the
+// digits an INT32 can have in its base, the longest sign or prefix, the fewest
+// and most digits printed (precision and zero padding included), and the
+// fewest and most characters of sign, prefix and digits together.
+struct FieldSizes {
+  int maxd = 1, plmax = 0, nzmin = 1, nzmax = 1, cmin = 1, cmax = 1;
+};
+
+FieldSizes field_sizes(const ldmicro_format::Spec& s) {
+  FieldSizes z;
+  if (s.conv == 'c') return z;
+  bool hex = s.conv == 'x' || s.conv == 'X', oct = s.conv == 'o';
+  bool zero_pad = s.zero && !s.minus && s.prec < 0;
+  z.maxd = hex ? 8 : oct ? 11 : 10;
+  z.plmax = s.conv == 'd' ? 1 : hex && s.alt ? 2 : 0;
+  z.nzmin = s.prec == 0 ? (oct && s.alt ? 1 : 0) : std::max(1, s.prec);
+  z.nzmax = std::max({z.maxd + (oct && s.alt ? 1 : 0), s.prec, zero_pad ? s.width : 0});
+  z.cmin = z.nzmin + (s.conv == 'd' && (s.plus || s.space) ? 1 : 0);
+  if (zero_pad) z.cmin = std::max(z.cmin, s.width);
+  z.cmax = z.nzmax + z.plmax;
+  return z;
+}
+
+// The longest text a STRING with this format makes.
+int format_max(const ldmicro_format::Format& f) {
+  if (!f.has_spec) return int(f.before.size());
+  return int(f.before.size() + f.after.size()) + std::max(f.spec.width, field_sizes(f.spec).cmax);
+}
+
 // ------------------------------------------------------------------ importer
 
 class Importer {
@@ -247,6 +280,16 @@ class Importer {
   uint32_t mcr_ = 0;
   std::vector<TreeNode> init_;  // first-scan initialisations
   std::map<std::string, int> width_;  // VAR LIST: a variable's width in bytes (1..4)
+  std::map<std::string, int64_t> var_bytes_;  // VAR LIST: every entry's size in bytes (strings too)
+  // STRING destinations (docs/ldmicro.md, "Strings"): the name's D word holds
+  // the length, `cells` one character per word; `need` is the longest text
+  // any STRING writing it can make.
+  struct StrVar {
+    int need = 0;
+    std::vector<uint32_t> cells;
+  };
+  std::map<std::string, StrVar> strs_;
+  std::map<std::pair<int, int>, ldmicro_format::Format> formats_;  // STRING element (line, col) -> its text
 
   RungBuilder rb_;
 
@@ -297,6 +340,13 @@ class Importer {
   void uart(const Elem& e);
   std::vector<TreeNode> uart_send_nodes(const Operand& byte, const Elem& e);
   void formatted_string(const Elem& e);
+  void plan_string(const Elem& e);
+  void string_elem(const Elem& e);
+  std::vector<TreeNode> string_digits(const ldmicro_format::Spec& s, const Operand& v, const std::vector<Operand>& r, const Operand& c,
+                                      const Elem& e);
+  std::vector<TreeNode> string_layout(const ldmicro_format::Format& f, int cv, const std::vector<Operand>& r, const StrVar& sv,
+                                      const Operand& len, const Elem& e);
+  void uart_send_string(const Elem& e);
   struct BusWords { std::vector<uint32_t> tx; int rx = -1; };
   std::map<std::pair<int, int>, BusWords> bus_words_;  // element (line, col) -> its words
   std::vector<Alias> bus_aliases_;
@@ -389,14 +439,16 @@ void Importer::var_list_entry(const std::string& u) {
   if (rest.rfind("bytes", 0) != 0 || n.empty() || !std::all_of(n.begin(), n.end(), [](char c) { return std::isdigit((unsigned char)c); })) return;
   std::string name = trim(rest.substr(5));
   name = name.substr(0, name.find_first_of(" \t"));
-  if (name.empty() || n.size() > 3) return;
+  if (name.empty() || n.size() > 6) return;
   int w = std::stoi(n);
+  var_bytes_[name] = w;
   if (w >= 1 && w <= 4) width_[name] = w;
 }
 
 Elem Importer::leaf(const Line& l) {
   Elem e;
   e.line = l.no;
+  e.text = l.text;
   size_t st = l.text.find_first_not_of(" \t");
   e.col = int(st) + 1;
   size_t i = st;
@@ -521,6 +573,8 @@ void Importer::check_leaf(const Elem& e) {
   else if (is_bus(k)) {
     arity(8, 8, (k + (k[0] == 'S' ? " name send receive mode modes size first bitrate" : " name send receive mode address register first bitrate")).c_str());
     if (k[0] == 'S' && e.args[5] != "8") fail(e.line, e.cols[5], "SPI transfers of " + e.args[5] + " bits are not supported: ldc's SPI model moves bytes");
+  } else if (k == "STRING") {
+    if (e.args.size() < 3) fail(e.line, e.col, "expected STRING destination variable format");
   } else if (k == "FORMATTED_STRING") {
     if (e.args.size() < 2) fail(e.line, e.col, "expected FORMATTED_STRING variable length characters... or FORMATTED_STRING variable text");
   }
@@ -660,6 +714,12 @@ void Importer::collect(const Elem& e) {
     var(2);
   } else if (k == "FORMATTED_STRING") {
     if (e.args[0] != "(none)") var(0);
+  } else if (k == "STRING") {
+    if (e.args[1] != "(none)") var(1);  // the destination was noted first (run)
+  } else if ((k == "UART_SEND" || k == "UART_RECV") && strs_.count(e.args[0])) {
+    if (k == "UART_RECV")
+      fail(e.line, e.cols[0], "UART_RECV takes one byte into an integer variable; '" + e.args[0] +
+                                  "' is a string variable, and LDmicro has no element that receives into a string");
   } else if (is_bus(k)) {
     if (k == "SPI" || k == "I2C_WR") var(1);
     if (k == "SPI" || k == "I2C_RD") var(2);
@@ -707,7 +767,8 @@ void Importer::allocate() {
       case NK::Counter: return Dev::C;
       case NK::Adc: return Dev::WX;
       case NK::Pwm: return Dev::WY;
-      case NK::Var: return Dev::D;
+      case NK::Var:
+      case NK::Str: return Dev::D;
     }
     return Dev::D;
   };
@@ -738,6 +799,15 @@ void Importer::allocate() {
     Name& n = names_[nm];
     if (n.kind == NK::Adc) n.held = DeviceRef{Dev::D, take(Dev::D, n.line, n.col)};
   }
+  for (const std::string& nm : order_) {  // a string's characters, after every named word
+    if (!strs_.count(nm)) continue;
+    StrVar& sv = strs_[nm];
+    const Name& n = names_.at(nm);
+    for (int i = 0; i < sv.need; i++) {
+      sv.cells.push_back(take(Dev::D, n.line, n.col));
+      spelled_[{int(Dev::D), sv.cells.back()}] = nm + "_" + std::to_string(i);
+    }
+  }
   std::set<std::string> seen;
   for (const std::string& nm : order_) {
     const Name& n = names_[nm];
@@ -750,6 +820,16 @@ void Importer::allocate() {
     if (spells_device && !(parse_device(al) && *parse_device(al) == n.dev)) continue;
     seen.insert(u);
     if (!spells_device) aliases_.push_back({al, n.dev});
+  }
+  for (const std::string& nm : order_) {  // a string's characters: NAME_0, NAME_1, ...
+    auto it = strs_.find(nm);
+    if (it == strs_.end()) continue;
+    for (size_t i = 0; i < it->second.cells.size(); i++) {
+      std::string why, al = alias_spelling(nm) + "_" + std::to_string(i);
+      if (!is_identifier(al) || seen.count(upper(al)) || parse_device(al) || parse_iec_address(al, why)) continue;
+      seen.insert(upper(al));
+      aliases_.push_back({al, {Dev::D, it->second.cells[i]}});
+    }
   }
 }
 
@@ -794,6 +874,7 @@ Operand Importer::value(const Elem& e, size_t arg, bool dest) {
       fail(e.line, col, "timer '" + s + "' used as a number: LDmicro counts a timer in cycles, ldc in milliseconds, so its "
                                        "value has no exact translation");
     case NK::Bit: fail(e.line, col, "'" + s + "' is a bit; an integer is needed here");
+    case NK::Str: fail(e.line, col, "'" + s + "' is a string variable; an integer is needed here");
     case NK::Pwm: break;
   }
   fail(e.line, col, "'" + s + "' is a PWM output; only SET_PWM writes it");
@@ -1096,6 +1177,7 @@ void Importer::uart(const Elem& e) {
   auto fresh = [&] { return Cond::of(leaf_node(Op::LDNE, {rx, seen}, e)); };
   if (k == "UART_RECV_AVAIL") return rb_.restart(fresh(), loc);
   if (is_uart_flag(k)) return rb_.restart(bit_leaf(Op::LOADN, Area::M, kUartBusy, e), loc);
+  if (k == "UART_SEND" && strs_.count(e.args[0])) return uart_send_string(e);
   if (e.args.size() >= 2 && number(e.args[1], e.line, e.cols[1]) != 1)
     fail(e.line, e.cols[1], k + " of " + e.args[1] + " bytes is not supported: ldc's UART moves one byte at a time");
   if (e.args.size() >= 3 && number(e.args[2], e.line, e.cols[2]) != 0)
@@ -1252,6 +1334,211 @@ void Importer::formatted_string(const Elem& e) {
   // the output: still sending
   rb_.chain(c_and(cmp(Op::LDLT, seq, const_opd(n)), M(Op::LOAD, ds)), out_node(Op::OUT, {bit_opd(Area::M, om)}, e), loc);
   rb_.chain(cmp(Op::LDGE, seq, const_opd(n)), out_node(Op::RST, {bit_opd(Area::M, ds)}, e), loc);
+  rb_.restart(M(Op::LOAD, om), loc);
+}
+
+// STRING dest var text: when its state is on, dest := sprintf(text, var), as
+// LDmicro's C output does it (docs/ldmicro.md, "Strings").  Here, before any
+// name is allocated: the text as LDmicro's reader makes it, split around its
+// one conversion, and the longest result, which sizes the destination.
+void Importer::plan_string(const Elem& e) {
+  const std::string& dest = e.args[0];
+  if (dest == "(none)") fail(e.line, e.cols[0], "STRING needs a destination string variable");
+  note(dest, NK::Str, e.line, e.cols[0]);
+  std::string text;
+  bool codes = v01_ && is_number(e.args[2]) && std::all_of(e.args.begin() + 2, e.args.end(), [&](const std::string& a) { return is_number(a); });
+  if (codes && int64_t(e.args.size()) == 3 + int64_t(number(e.args[2], e.line, e.cols[2]))) {
+    // an LDmicro0.1 file: the length and the character codes, read as LDmicro 4 reads them
+    for (size_t i = 3; i < e.args.size(); i++) {
+      int32_t c = number(e.args[i], e.line, e.cols[i]);
+      text += (c < 32 || c > 127) ? 'X' : char(c);
+    }
+  } else {
+    std::string raw = e.text.substr(size_t(e.cols[2] - 1));
+    raw = raw.substr(0, raw.find_last_not_of(" \t\r") + 1);
+    text = ldmicro_format::load_text(raw);
+  }
+  ldmicro_format::Format f;
+  if (e.args[1] == "(none)") f.before = text;  // no variable: the text is copied, '%' and all
+  else if (std::string why = ldmicro_format::parse(text, f); !why.empty())
+    fail(e.line, e.cols[2], "STRING format: " + why);
+  StrVar& sv = strs_[dest];
+  int need = format_max(f);
+  if (auto it = var_bytes_.find(dest); it != var_bytes_.end() && it->second >= 1) need = int(std::min<int64_t>(need, it->second - 1));
+  sv.need = std::max(sv.need, need);
+  formats_[{e.line, e.col}] = std::move(f);
+}
+
+void Importer::string_elem(const Elem& e) {
+  const ldmicro_format::Format& f = formats_.at({e.line, e.col});
+  const StrVar& sv = strs_.at(e.args[0]);
+  Operand len = int_opd(Area::D, name_of(e, 0).dev.index);
+  SrcLoc loc = e.loc();
+  int cap = int(sv.cells.size()), n1 = int(f.before.size());
+  std::vector<TreeNode> x;
+  for (int j = 0; j < n1 && j < cap; j++)
+    x.push_back(out_node(Op::MOV, {const_opd((unsigned char)f.before[j]), int_opd(Area::D, sv.cells[j])}, e));
+  if (!f.has_spec) {
+    x.push_back(out_node(Op::MOV, {const_opd(std::min(cap, n1)), len}, e));
+    return rb_.add(fork_of(std::move(x)));
+  }
+  const ldmicro_format::Spec& s = f.spec;
+  FieldSizes z = field_sizes(s);
+  std::vector<Operand> r;
+  for (int q = 0; q < z.cmax; q++) r.push_back(int_opd(Area::D, temp_d(e)));
+  Operand c = int_opd(Area::D, temp_d(e));
+  for (TreeNode& n : string_digits(s, value(e, 1), r, c, e)) x.push_back(std::move(n));
+  if (s.conv == 'c') {
+    for (TreeNode& n : string_layout(f, 1, r, sv, len, e)) x.push_back(std::move(n));
+    // a NUL character ends the C string where it stands
+    int at = n1 + (s.minus ? 0 : std::max(s.width, 1) - 1);
+    x.push_back(then_node(Cond::of(leaf_node(Op::LDEQ, {r[0], const_opd(0)}, e)), out_node(Op::MOV, {const_opd(std::min(cap, at)), len}, e), loc));
+  } else {
+    for (int cv = z.cmin; cv <= z.cmax; cv++)
+      x.push_back(then_node(Cond::of(leaf_node(Op::LDEQ, {c, const_opd(cv)}, e)), fork_of(string_layout(f, cv, r, sv, len, e)), loc));
+  }
+  rb_.add(fork_of(std::move(x)));
+}
+
+// The conversion's characters from the right, into r[0], r[1], ... (the last
+// digit first, then zeros, then the sign or 0x), and their count into c.
+std::vector<TreeNode> Importer::string_digits(const ldmicro_format::Spec& s, const Operand& v, const std::vector<Operand>& r,
+                                              const Operand& c, const Elem& e) {
+  std::vector<TreeNode> x;
+  SrcLoc loc = e.loc();
+  auto op = [&](Op o, std::vector<Operand> a) { x.push_back(out_node(o, std::move(a), e)); };
+  auto when = [&](Cond cond, TreeNode n) { x.push_back(then_node(std::move(cond), std::move(n), loc)); };
+  auto cmp = [&](Op o, Operand a, Operand b) { return Cond::of(leaf_node(o, {a, b}, e)); };
+  auto K = [](int32_t k) { return const_opd(k); };
+  if (s.conv == 'c') {  // the value as an unsigned char
+    op(Op::WAND, {v, K(255), r[0]});
+    op(Op::MOV, {K(1), c});
+    return x;
+  }
+  FieldSizes z = field_sizes(s);
+  bool hex = s.conv == 'x' || s.conv == 'X', oct = s.conv == 'o', sgn = s.conv == 'd';
+  Operand w = int_opd(Area::D, temp_d(e)), u = int_opd(Area::D, temp_d(e)), t = int_opd(Area::D, temp_d(e)),
+          nd = int_opd(Area::D, temp_d(e)), nz = int_opd(Area::D, temp_d(e)), pl = int_opd(Area::D, temp_d(e)),
+          sg = int_opd(Area::D, temp_d(e));
+  op(Op::MOV, {v, w});
+  if (s.bits < 32 && sgn)  // h, hh: the value as a short or a char
+    for (TreeNode& n : wrap_nodes(w, s.bits / 8, e)) x.push_back(std::move(n));
+  if (s.bits < 32 && !sgn) op(Op::WAND, {w, K((1 << s.bits) - 1), w});
+  op(Op::MOV, {w, u});  // u: the magnitude, as an unsigned 32-bit pattern
+  if (sgn) when(cmp(Op::LDLT, w, K(0)), out_node(Op::SUB, {K(0), w, u}, e));
+  op(Op::MOV, {K(1), nd});
+  if (!hex && !oct) {  // the first digit of an unsigned value: (u >> 1) / 5 is u / 10
+    Operand qq = t;
+    Operand q = int_opd(Area::D, temp_d(e));
+    op(Op::SHR, {u, K(1), q});
+    op(Op::DIV, {q, K(5), q});
+    op(Op::MUL, {q, K(10), qq});
+    op(Op::SUB, {u, qq, r[0]});
+    for (int i = 1; i < z.maxd; i++) {
+      when(cmp(Op::LDNE, q, K(0)), out_node(Op::MOV, {K(i + 1), nd}, e));
+      op(Op::MOD, {q, K(10), r[i]});
+      op(Op::DIV, {q, K(10), q});
+    }
+  } else {
+    int sh = hex ? 4 : 3;
+    op(Op::WAND, {u, K((1 << sh) - 1), r[0]});
+    for (int i = 1; i < z.maxd; i++) {
+      op(Op::SHR, {u, K(sh * i), t});
+      when(cmp(Op::LDNE, t, K(0)), out_node(Op::MOV, {K(i + 1), nd}, e));
+      op(Op::WAND, {t, K((1 << sh) - 1), r[i]});
+    }
+  }
+  for (int i = 0; i < z.maxd; i++) {
+    op(Op::ADD, {r[i], K('0'), r[i]});
+    if (hex) when(cmp(Op::LDGT, r[i], K('9')), out_node(Op::ADD, {r[i], K((s.conv == 'x' ? 'a' : 'A') - '9' - 1), r[i]}, e));
+  }
+  for (int i = z.maxd; i < z.cmax; i++) op(Op::MOV, {K('0'), r[i]});
+  if (s.prec == 0) when(cmp(Op::LDEQ, u, K(0)), out_node(Op::MOV, {K(0), nd}, e));
+  op(Op::MOV, {nd, nz});
+  if (s.prec > 0) when(cmp(Op::LDLT, nz, K(s.prec)), out_node(Op::MOV, {K(s.prec), nz}, e));
+  if (oct && s.alt) {  // '#': the first digit printed is a 0
+    when(c_and(cmp(Op::LDNE, u, K(0)), cmp(Op::LDEQ, nz, nd)), out_node(Op::ADD, {nz, K(1), nz}, e));
+    when(cmp(Op::LDEQ, nz, K(0)), out_node(Op::MOV, {K(1), nz}, e));
+  }
+  op(Op::MOV, {K(0), pl});
+  if (sgn) {
+    if (s.plus || s.space) {
+      op(Op::MOV, {K(s.plus ? '+' : ' '), sg});
+      op(Op::MOV, {K(1), pl});
+    }
+    std::vector<TreeNode> minus;
+    minus.push_back(out_node(Op::MOV, {K('-'), sg}, e));
+    minus.push_back(out_node(Op::MOV, {K(1), pl}, e));
+    when(cmp(Op::LDLT, w, K(0)), fork_of(std::move(minus)));
+  }
+  if (hex && s.alt) when(cmp(Op::LDNE, u, K(0)), out_node(Op::MOV, {K(2), pl}, e));
+  if (s.zero && !s.minus && s.prec < 0 && s.width > 0) {  // '0': zeros up to the width
+    op(Op::SUB, {K(s.width), pl, t});
+    when(cmp(Op::LDLT, nz, t), out_node(Op::MOV, {t, nz}, e));
+  }
+  if (z.plmax > 0)  // the sign or 0x left of the digits
+    for (int n = z.nzmin; n <= z.nzmax; n++) {
+      std::vector<TreeNode> put;
+      if (sgn) put.push_back(out_node(Op::MOV, {sg, r[n]}, e));
+      else {
+        put.push_back(out_node(Op::MOV, {K(s.conv), r[n]}, e));
+        put.push_back(out_node(Op::MOV, {K('0'), r[n + 1]}, e));
+      }
+      when(cmp(Op::LDEQ, nz, K(n)), fork_of(std::move(put)));
+    }
+  op(Op::ADD, {nz, pl, c});
+  return x;
+}
+
+// The destination when the conversion has cv characters: the text before it
+// (already there), the field of max(width, cv) characters, justified right
+// (spaces first) or left ('-'), and the text after it; cut at the capacity.
+std::vector<TreeNode> Importer::string_layout(const ldmicro_format::Format& f, int cv, const std::vector<Operand>& r, const StrVar& sv,
+                                              const Operand& len, const Elem& e) {
+  std::vector<TreeNode> x;
+  int cap = int(sv.cells.size()), n1 = int(f.before.size()), n2 = int(f.after.size());
+  int L = std::max(f.spec.width, cv);
+  for (int j = 0; j < L + n2 && n1 + j < cap; j++) {
+    Operand src;
+    if (j >= L) src = const_opd((unsigned char)f.after[j - L]);
+    else if (!f.spec.minus) src = j < L - cv ? const_opd(' ') : r[L - 1 - j];
+    else src = j < cv ? r[cv - 1 - j] : const_opd(' ');
+    x.push_back(out_node(Op::MOV, {src, int_opd(Area::D, sv.cells[n1 + j])}, e));
+  }
+  x.push_back(out_node(Op::MOV, {const_opd(std::min(cap, n1 + L + n2)), len}, e));
+  return x;
+}
+
+// UART_SEND of a string variable (LDmicro 5, without wait): while
+// the state is on and no text is going out, the element starts sending; then
+// each scan with the UART free sends the next character (the string as it
+// stands in that scan), until the length is reached.  Output: sending, or
+// the UART busy.
+void Importer::uart_send_string(const Elem& e) {
+  if (e.args.size() >= 3 && number(e.args[2], e.line, e.cols[2]) != 0)
+    fail(e.line, e.cols[2], "UART_SEND with wait " + e.args[2] + " is not supported: a scan never waits for the UART");
+  SrcLoc loc = e.loc();
+  const StrVar& sv = strs_.at(e.args[0]);
+  Operand len = int_opd(Area::D, name_of(e, 0).dev.index);
+  Cond s = materialize(e);
+  uint32_t sm = s.n.elem.a[0].index, act = temp_m(e), om = temp_m(e);
+  frozen_.insert(om);
+  Operand idx = int_opd(Area::D, temp_d(e)), ch = int_opd(Area::D, temp_d(e));
+  auto M = [&](Op op, uint32_t m) { return bit_leaf(op, Area::M, m, e); };
+  auto cmp = [&](Op op, Operand a, Operand b) { return Cond::of(leaf_node(op, {a, b}, e)); };
+  auto ready = [&] { return c_and(M(Op::LOAD, act), M(Op::LOADN, kUartBusy)); };
+  std::vector<TreeNode> start;
+  start.push_back(out_node(Op::SET, {bit_opd(Area::M, act)}, e));
+  start.push_back(out_node(Op::MOV, {const_opd(0), idx}, e));
+  rb_.chain(c_and(M(Op::LOAD, sm), M(Op::LOADN, act)), fork_of(std::move(start)), loc);
+  rb_.chain(c_and(ready(), cmp(Op::LDGE, idx, len)), out_node(Op::RST, {bit_opd(Area::M, act)}, e), loc);
+  std::vector<TreeNode> send;
+  for (size_t i = 0; i < sv.cells.size(); i++)
+    send.push_back(then_node(cmp(Op::LDEQ, idx, const_opd(int32_t(i))), out_node(Op::MOV, {int_opd(Area::D, sv.cells[i]), ch}, e), loc));
+  for (TreeNode& n : uart_send_nodes(ch, e)) send.push_back(std::move(n));
+  send.push_back(out_node(Op::ADD, {idx, const_opd(1), idx}, e));
+  rb_.chain(c_and(ready(), cmp(Op::LDLT, idx, len)), fork_of(std::move(send)), loc);
+  rb_.chain(c_or(M(Op::LOAD, act), M(Op::LOAD, kUartBusy)), out_node(Op::OUT, {bit_opd(Area::M, om)}, e), loc);
   rb_.restart(M(Op::LOAD, om), loc);
 }
 
@@ -1517,6 +1804,7 @@ void Importer::element(const Elem& e, bool need_out) {
   if (k == "COIL") return coil(e);
   if (is_uart(k)) return uart(e);
   if (k == "FORMATTED_STRING") return formatted_string(e);
+  if (k == "STRING") return string_elem(e);
   if (is_bus(k)) return bus_transfer(e);
   if (k == "PERSIST") {  // the variable is retentive; the state passes on
     auto it = names_.find(e.args[0]);
@@ -1864,6 +2152,13 @@ TreeProgram Importer::run() {
       find_bus(e.kids);
     }
   };
+  std::function<void(const std::vector<Elem>&)> find_strings = [&](const std::vector<Elem>& s) {
+    for (const Elem& e : s) {
+      if (e.kw == "STRING") plan_string(e);
+      find_strings(e.kids);
+    }
+  };
+  for (const SrcRung& r : rungs_) find_strings(r.series);
   for (const SrcRung& r : rungs_) walk(r.series), find_uart(r.series), find_bus(r.series);
   if (!bus_words_.empty()) used_.insert({int(Dev::D), kBusSeq});
   if (uart_used_)
