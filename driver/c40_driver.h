@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "backend-c40sim/c40gen.h"
+#include "backend-c40sim/gen/c40gen.h"
 #include "driver/driver.h"
 #include "runtime/runtime.h"
 
@@ -13,7 +13,7 @@ namespace ldc {
 
 // Engines on the cycle-counting C40 simulator (backend-c40sim, docs/c40.md):
 // the C40 native code of an image (ImageTarget::C40), or the C40-hosted
-// interpreter (backend-c40sim/interp.c40s) running the image's IL in its word
+// interpreter (backend-c40sim/machine/interp.c40s) running the image's IL in its word
 // form.  Both keep the cost of the last scan (50 ns per cycle).
 struct C40ScanCost {
   uint64_t cycles = 0;

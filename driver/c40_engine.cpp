@@ -2,8 +2,8 @@
 // board of backend-c40sim running native C40 code or the C40-hosted
 // interpreter, behind the runtime's Engine interface.  The driver wires the
 // two together, so that runtime/ includes no backend.
-#include "backend-c40sim/c40interp.h"
-#include "backend-c40sim/c40machine.h"
+#include "backend-c40sim/machine/c40interp.h"
+#include "backend-c40sim/machine/c40machine.h"
 #include "driver/c40_driver.h"
 
 namespace ldc {

@@ -10,10 +10,10 @@
 #include <random>
 #include <sstream>
 
-#include "backend-c40sim/c40gen.h"
-#include "backend-c40sim/c40interp.h"
-#include "backend-c40sim/c40machine.h"
-#include "backend-c40sim/c40model.h"
+#include "backend-c40sim/gen/c40gen.h"
+#include "backend-c40sim/machine/c40interp.h"
+#include "backend-c40sim/machine/c40machine.h"
+#include "tests/c40gen/c40model.h"
 #include "frontend/frontend.h"
 #include "tests/c40/c40_test_util.h"
 #include "tests/c40gen/c40gen_util.h"

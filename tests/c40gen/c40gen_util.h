@@ -4,7 +4,7 @@
 #include <memory>
 #include <string>
 
-#include "backend-c40sim/c40model.h"
+#include "tests/c40gen/c40model.h"
 #include "ir/ir.h"
 #include "driver/c40_driver.h"
 #include "runtime/runtime.h"

@@ -13,7 +13,7 @@
 #include "loader/c40_check.h"
 #include "loader/loader.h"
 #include "runtime/runtime.h"
-#include "backend-c40sim/c40machine.h"
+#include "backend-c40sim/machine/c40machine.h"
 
 namespace {
 
