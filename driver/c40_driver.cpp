@@ -21,7 +21,9 @@ C40Build build_c40(const Program& p, const std::string& source_name, int opt_lev
 }
 
 Image make_c40_image(const Program& p, const C40Build& b) {
-  return make_image(ImageTarget::C40, p, b.asm_result, b.gen.il_items);
+  std::vector<uint32_t> blocks;
+  for (size_t r = 0; r < b.gen.il_items.size(); r++) blocks.push_back(c40gen::C40Code::rung_block(r));
+  return make_image(ImageTarget::C40, p, b.asm_result, b.gen.il_items, blocks);
 }
 
 std::string c40_output(const Program& p, const std::string& input, const std::string& emit, bool to_file,

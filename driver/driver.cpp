@@ -196,7 +196,9 @@ NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode
 }
 
 Image make_x86_image(const Program& p, const NativeBuild& nb) {
-  return make_image(ImageTarget::X86_64, p, nb.asm_result, nb.gen.il_items);
+  std::vector<uint32_t> blocks;
+  for (size_t r = 0; r < nb.gen.il_items.size(); r++) blocks.push_back(X86Code::rung_block(r));
+  return make_image(ImageTarget::X86_64, p, nb.asm_result, nb.gen.il_items, blocks);
 }
 
 bool is_image_file(const std::string& path) {

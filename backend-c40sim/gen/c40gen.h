@@ -32,9 +32,11 @@ using namespace c40map;
 struct C40Code {
   // block 0 prologue, one block per rung, then the epilogue and the routines
   as::c40::C40Program program;
-  // For rung r and its IL instruction i, the item index in block r + 1 where
-  // the instruction's code starts (a comment item holding the IL text).
+  // For rung r and its IL instruction i, the item index in block rung_block(r)
+  // where the instruction's code starts (a comment item holding the IL text).
   std::vector<std::vector<uint32_t>> il_items;
+  // The block of rung r's code (so that no caller counts the blocks).
+  static uint32_t rung_block(size_t r) { return uint32_t(r) + 1; }
 };
 
 // opt_level 0: paper 003's templates; 1: the templates with the peephole
