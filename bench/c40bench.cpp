@@ -25,7 +25,7 @@
 #include "backend-c40sim/machine/c40interp.h"
 #include "backend-c40sim/machine/c40machine.h"
 #include "bench/synth.h"
-#include "driver/c40_driver.h"
+#include "driver/c40_target.h"
 
 namespace {
 

@@ -71,6 +71,11 @@ std::vector<RetentiveRange> retentive_ranges(const Program& p);
 // checking); throws ImageError only if the image is too large for the format.
 std::vector<uint8_t> write_image(const Image& image);
 
+// The target byte of an image's header, from the file's first bytes and
+// nothing else checked (read_image checks it all); nullopt if `head` does not
+// start with "LDCIMG" or is too short to hold the byte.
+std::optional<uint8_t> peek_image_target(std::span<const uint8_t> head);
+
 // Parses and checks an image; `name` is the file name used in messages.
 // Never reads outside `bytes`; throws ImageError for anything not exactly right.
 Image read_image(std::span<const uint8_t> bytes, const std::string& name);

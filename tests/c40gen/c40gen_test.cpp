@@ -348,11 +348,11 @@ TEST(C40Opt, EveryLevelPaysOnEveryExample) {
       words[opt] = res.code.size() / 4;
       class Counting : public Engine {
        public:
-        explicit Counting(std::unique_ptr<C40Engine> e) : e_(std::move(e)) {}
-        void scan(uint8_t* mem) override { e_->scan(mem); cycles += e_->last_scan().cycles; }
+        explicit Counting(std::unique_ptr<Engine> e) : e_(std::move(e)) {}
+        void scan(uint8_t* mem) override { e_->scan(mem); cycles += e_->last_cost()->cycles; }
         uint64_t cycles = 0;
        private:
-        std::unique_ptr<C40Engine> e_;
+        std::unique_ptr<Engine> e_;
       } eng(make_c40sim_engine(res.code, 0, p.layout()));
       std::string out;
       run_trace(eng, p.layout(), &t, n + ".csv", RunOptions{}, out);
