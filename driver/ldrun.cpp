@@ -453,6 +453,13 @@ std::string with_cycles(const std::string& out, const std::vector<ScanCost>& cos
   return with;
 }
 
+// "a, b, c"
+std::string comma_list(const std::vector<std::string>& names) {
+  std::string s;
+  for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
 // The engines of target t that run its code (code) or its images' IL.
 std::vector<std::string> engines_of(const Target& t, bool code) {
   std::vector<std::string> n;
@@ -470,9 +477,7 @@ void check_trace_args(const TraceArgs& a, const FoundEngine& fe, const Target* i
   if (a.sandbox && simulated) {
     std::vector<std::string> here = engine_names(true);
     here.insert(here.end(), {"interp", "c"});
-    std::string list;
-    for (const std::string& e : here) list += (list.empty() ? "" : ", ") + e;
-    throw UserError("ldrun: error: --sandbox is for the engines that run on this machine (" + list + "); the " +
+    throw UserError("ldrun: error: --sandbox is for the engines that run on this machine (" + comma_list(here) + "); the " +
                     std::string(simulated->title) + " engines are simulated");
   }
   if (!g_task.empty() && simulated && !il_engine)
@@ -500,10 +505,8 @@ std::string wrong_image(const TraceArgs& a, const FoundEngine& fe, const Target&
   if (fe.target->host) {  // the default engine on a simulated target's image
     std::vector<std::string> other = engines_of(image, false);
     other.push_back("interp");
-    std::string list;
-    for (const std::string& e : other) list += (list.empty() ? "" : ", ") + e;
     return "ldrun: error: " + a.input + " is " + std::string(image.an_image) + "; use --engine=" +
-           or_list(engines_of(image, true)) + " (or " + list + ")";
+           or_list(engines_of(image, true)) + " (or " + comma_list(other) + ")";
   }
   std::vector<std::string> il = engines_of(*fe.target, false);
   return "ldrun: error: " + a.input + " is not " + std::string(fe.target->an_image) + "; compile it with ldc --target=" +
