@@ -20,10 +20,12 @@ namespace ldc {
 
 struct X86Code {
   as::x86::X86Program program;  // block 0 prologue, one block per rung, last block epilogue
-  // For rung r and its IL instruction i, the item index in block r + 1 where
-  // the instruction's code starts (with notes, the comment item holding the IL
-  // text; an index equal to the block's item count means the block's end).
+  // For rung r and its IL instruction i, the item index in block rung_block(r)
+  // where the instruction's code starts (with notes, the comment item holding
+  // the IL text; an index equal to the block's item count means the block's end).
   std::vector<std::vector<uint32_t>> il_items;
+  // The block of rung r's code (so that no caller counts the blocks).
+  static uint32_t rung_block(size_t r) { return uint32_t(r) + 1; }
 };
 
 // opt_level 0: paper 003's pure macro expansion (the bit stack shifted in ebp).

@@ -22,10 +22,10 @@
 #include <string>
 #include <vector>
 
-#include "backend-c40sim/c40interp.h"
-#include "backend-c40sim/c40machine.h"
+#include "backend-c40sim/machine/c40interp.h"
+#include "backend-c40sim/machine/c40machine.h"
 #include "bench/synth.h"
-#include "driver/c40_driver.h"
+#include "driver/c40_target.h"
 
 namespace {
 

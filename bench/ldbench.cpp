@@ -50,8 +50,9 @@
 #include "bench/rng.h"
 #include "bench/svgplot.h"
 #include "bench/synth.h"
-#include "driver/c40_driver.h"
 #include "driver/driver.h"
+#include "driver/targets.h"
+#include "driver/x86_target.h"
 #include "frontend/frontend.h"
 #include "loader/loader.h"
 #include "runtime/fastinterp.h"
@@ -396,13 +397,15 @@ void prepare(Subject& s, const Options& o) {
     s.eng[kFast] = std::move(fast);
   }
   auto t0 = Clock::now();
+  const Target& x86 = *find_target("x86-64");
   for (int lvl = 0; lvl < kLevels; lvl++) {
     t0 = Clock::now();
-    NativeBuild nb = build_x86(s.prog, s.name, as::Mode::Blockwise, lvl, false);
+    TargetCode tc = x86.generate(s.prog, s.name, lvl, /*notes=*/false);
     s.native_build_at[lvl] = secs_since(t0);
-    s.native_bytes_at[lvl] = nb.asm_result.code.size();
-    if (lvl == 0) s.image_bytes = write_image(make_x86_image(s.prog, nb)).size();
-    s.eng[kNativeAt[lvl]] = make_native_engine(nb.asm_result.code, 0);
+    s.native_bytes_at[lvl] = tc.assembled.code.size();
+    Image img = make_image(x86.image_kind, s.prog, tc.assembled, tc.il_items, tc.rung_blocks);
+    if (lvl == 0) s.image_bytes = write_image(img).size();
+    s.eng[kNativeAt[lvl]] = find_engine("native").engine->make(img);
   }
   s.native_build_s = s.native_build_at[0];
   s.native_bytes = s.native_bytes_at[0];
@@ -427,7 +430,7 @@ void prepare(Subject& s, const Options& o) {
 
 // ------------------------------------------------------------------ the TMS320C40
 //
-// Simulated cycles per scan of the C40 native code (build_c40) and of the
+// Simulated cycles per scan of the C40 native code (the table's "c40" target) and of the
 // C40-hosted interpreter running the same IL, on the board of docs/c40.md
 // (backend-c40sim: code in zero-wait SRAM, the memory image in SRAM with one
 // wait state, 50 ns per cycle on a TMS320C40-40, cache off as in paper 003).
@@ -442,29 +445,28 @@ void measure_c40(Subject& s, const Options& o) {
   }
   Layout L = s.prog.layout();
   int scans = o.smoke ? 3 : s.n > 30000 ? 5 : 17;
-  auto run = [&](C40Engine& e) {
+  auto run = [&](Engine& e) {
     Memory m(L);
     std::vector<double> cyc;
     for (int k = 0; k < scans; k++) {
       s.trace.apply(m.data(), size_t(k) % s.trace.size());
       m.set_bit(Area::S, kBitFirstScan, k == 0);
       e.scan(m.data());
-      if (k > 0) cyc.push_back(double(e.last_scan().cycles));
+      if (k > 0) cyc.push_back(double(e.last_cost()->cycles));
     }
     return median(cyc);
   };
   try {
+    const Target& c40 = *find_target("c40");
+    Image img;
     for (int lvl = 0; lvl < kLevels; lvl++) {
-      C40Build b = build_c40(s.prog, s.name, lvl);
-      s.c40_bytes_at[lvl] = b.asm_result.code.size();
-      auto native = make_c40sim_engine(b.asm_result.code, 0, L);
-      s.c40_cycles_at[lvl] = run(*native);
+      img = target_image(c40, s.prog, s.name, lvl);
+      s.c40_bytes_at[lvl] = img.code.size();
+      s.c40_cycles_at[lvl] = run(*find_engine("c40sim").engine->make(img));
     }
     s.c40_bytes = s.c40_bytes_at[0];
     s.c40_cycles = s.c40_cycles_at[0];
-    BinaryIl bin = encode_il(s.prog);
-    auto interp = make_c40interp_engine(bin.code, L);
-    s.c40_interp_cycles = run(*interp);
+    s.c40_interp_cycles = run(*find_engine("c40interp").engine->make(img));  // the image's IL
   } catch (std::exception& e) {
     s.c40_status = std::string("failed: ") + e.what();
   }

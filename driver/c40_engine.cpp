@@ -1,38 +1,38 @@
-// driver/c40_engine.cpp -- the C40 engines (c40_driver.h): the simulated
-// board of backend-c40sim running native C40 code or the C40-hosted
+// driver/c40_engine.cpp -- the C40 engines (c40_target.h): the simulated
+// board of backend-c40sim/machine running native C40 code or the C40-hosted
 // interpreter, behind the runtime's Engine interface.  The driver wires the
 // two together, so that runtime/ includes no backend.
-#include "backend-c40sim/c40interp.h"
-#include "backend-c40sim/c40machine.h"
-#include "driver/c40_driver.h"
+#include "backend-c40sim/machine/c40interp.h"
+#include "backend-c40sim/machine/c40machine.h"
+#include "driver/c40_target.h"
 
 namespace ldc {
 namespace {
 
-class C40MachineEngine : public C40Engine {
+class C40MachineEngine : public Engine {
  public:
   C40MachineEngine(const Layout& layout, std::span<const uint32_t> code, uint32_t entry, std::span<const uint32_t> il)
       : m_(layout, code, entry, il) {}
   void scan(uint8_t* mem) override {
     c40gen::ScanCost c = m_.scan(mem);
-    last_ = {c.cycles, c.instructions};
+    last_ = ScanCost{c.cycles, c.instructions, c40gen::kNsPerCycle};
   }
-  C40ScanCost last_scan() const override { return last_; }
+  std::optional<ScanCost> last_cost() const override { return last_; }
 
  private:
   c40gen::C40Machine m_;
-  C40ScanCost last_;
+  ScanCost last_{0, 0, c40gen::kNsPerCycle};
 };
 
 }  // namespace
 
-std::unique_ptr<C40Engine> make_c40sim_engine(std::span<const uint8_t> code, uint32_t entry, const Layout& layout) {
+std::unique_ptr<Engine> make_c40sim_engine(std::span<const uint8_t> code, uint32_t entry, const Layout& layout) {
   if (code.size() % 4 || entry % 4) throw std::runtime_error("C40 code is not whole 32-bit words");
   std::vector<uint32_t> words = as::c40::wordsOf(code);
   return std::make_unique<C40MachineEngine>(layout, words, entry / 4, std::span<const uint32_t>{});
 }
 
-std::unique_ptr<C40Engine> make_c40interp_engine(std::span<const uint8_t> il, const Layout& layout) {
+std::unique_ptr<Engine> make_c40interp_engine(std::span<const uint8_t> il, const Layout& layout) {
   const c40gen::InterpProgram& ip = c40gen::interp_program();
   std::vector<uint32_t> wil = c40gen::word_il(il, layout);
   return std::make_unique<C40MachineEngine>(layout, ip.words, ip.entry, wil);

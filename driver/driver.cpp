@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "backend-c/backend_c.h"
+#include "driver/targets.h"
 #include "frontend/frontend.h"
 
 namespace ldc {
@@ -180,23 +181,6 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
     throw UserError(msg);
   }
   return c;
-}
-
-NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode, int opt_level, bool notes) {
-  NativeBuild b;
-  b.gen = generate_x86(p, p.layout(), opt_level, notes);
-  b.asm_result = as::assemble(as::x86::target(), b.gen.program, mode);
-  if (!b.asm_result.ok()) {
-    std::string msg;
-    for (const auto& e : b.asm_result.errors)
-      msg += (msg.empty() ? "" : "\n") + source_name + ":" + std::to_string(e.line) + ":1: error: " + e.message;
-    throw UserError(msg);
-  }
-  return b;
-}
-
-Image make_x86_image(const Program& p, const NativeBuild& nb) {
-  return make_image(ImageTarget::X86_64, p, nb.asm_result, nb.gen.il_items);
 }
 
 bool is_image_file(const std::string& path) {
@@ -531,6 +515,7 @@ struct ProgramSource {
 }  // namespace
 
 std::vector<BuiltTask> build_project(const Project& p) {
+  const Target& host = host_target();  // the soft PLC runs the tasks on this machine
   std::vector<BuiltTask> built;
   std::vector<ProgramSource> srcs;
   std::vector<ConfigTask> cts;
@@ -539,7 +524,7 @@ std::vector<BuiltTask> build_project(const Project& p) {
     ProgramSource ps;
     ps.file = t.path;
     if (t.il) {  // a PLCopen task, compiled with its configuration
-      b.image = make_x86_image(*t.il, build_x86(*t.il, t.path));
+      b.image = target_image(host, *t.il, t.path, 0);
       ps.text = p.text;
       BinaryIl bin = encode_il(*t.il);
       ps.instr_offset = bin.instr_offset;
@@ -547,13 +532,13 @@ std::vector<BuiltTask> build_project(const Project& p) {
         for (const Instr& in : r.code) ps.instr_loc.push_back(in.loc.line ? in.loc : SrcLoc{r.line, 1});
     } else if (is_image_file(t.path)) {
       b.image = load_image_file(t.path);
-      if (b.image.target != ImageTarget::X86_64) throw UserError(t.path + ": error: not an x86-64 image");
+      if (b.image.target != host.image_kind) throw UserError(t.path + ": error: not " + std::string(host.an_image));
       b.image.config.reset();  // recomputed for this project
       ps.image = true;
       ps.lines = b.image.lines;
     } else {
       Compiled c = compile_source(t.path);
-      b.image = make_x86_image(c.il, build_x86(c.il, t.path));
+      b.image = target_image(host, c.il, t.path, 0);
       ps.text = read_file(t.path);
       BinaryIl bin = encode_il(c.il);
       ps.instr_offset = bin.instr_offset;

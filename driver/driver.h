@@ -9,7 +9,6 @@
 #include <string>
 #include <vector>
 
-#include "backend-x86/backend_x86.h"
 #include "ir/ir.h"
 #include "loader/loader.h"
 
@@ -42,20 +41,6 @@ struct Compiled {
 // task, `project`) when allow_project is set, and an error otherwise.
 // `task` picks one task's program of such a configuration (`--task NAME`).
 Compiled compile_source(const std::string& path, bool allow_project = false, const std::string& task = "");
-
-// The x86-64 route: macro compiler then the blockwise assembler.  Assembly
-// errors become UserError with the rung's source line.
-struct NativeBuild {
-  X86Code gen;
-  as::Result asm_result;
-};
-NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode = as::Mode::Blockwise,
-                      int opt_level = 0, bool notes = true);
-
-// The image ldc writes for the x86-64 target: code, binary IL, line map, names.
-Image make_x86_image(const Program& p, const NativeBuild& nb);
-// An image's retentive ranges for p: the K area, then p's .retain words
-// (docs/image-format.md, section 6), adjacent words joined into one range.
 
 // Reads an image file (binary, or Intel HEX by its first character) and checks
 // it fully; errors are UserError naming the file and the place.
@@ -118,7 +103,7 @@ std::string print_project(const Project& p, const std::vector<std::string>& file
 
 struct BuiltTask {
   ProjectTask spec;
-  Image image;  // x86-64 image with its 'config' section
+  Image image;  // an image of the host target (x86-64) with its 'config' section
 };
 // Compiles (sources) or loads (images) every program, runs the configuration
 // system of paper 002 and attaches each image's 'config' section.  A write

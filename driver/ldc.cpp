@@ -8,21 +8,24 @@
 #include <string>
 
 #include "backend-c/backend_c.h"
-#include "driver/c40_driver.h"
 #include "driver/driver.h"
+#include "driver/targets.h"
 #include "frontend/frontend.h"
 #include "ir/ladder.h"
 #include "driver/version.h"
 
 using namespace ldc;
 
-static const char kUsage[] =
-    "usage: ldc FILE [-o OUT] [--emit=tree|il|iec-il|ld|asm|listing|hex|c] [--target=x86-64|c40] [-O0|-O1|-O2]\n"
-    "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .xml (PLCopen TC6), .rtsp (paper 000), .sfc (SFC chart)\n"
-    "       -O0 templates (paper 003), -O1 peephole, -O2 bit stack in registers; for both targets\n"
-    "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n"
-    "       ldc FILE.xml [-o DIR]   (a PLCopen configuration of several tasks is a project, the same way)\n"
-    "       ldc FILE.xml --task NAME ...   (one task's program of such a configuration)\n";
+static std::string usage() {
+  std::string targets;
+  for (const Target& t : ldc::targets()) targets += (targets.empty() ? "" : "|") + std::string(t.name);
+  return "usage: ldc FILE [-o OUT] [--emit=tree|il|iec-il|ld|asm|listing|hex|c] [--target=" + targets + "] [-O0|-O1|-O2]\n"
+         "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .xml (PLCopen TC6), .rtsp (paper 000), .sfc (SFC chart)\n"
+         "       -O0 templates (paper 003), -O1 peephole, -O2 bit stack in registers; for every target\n"
+         "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n"
+         "       ldc FILE.xml [-o DIR]   (a PLCopen configuration of several tasks is a project, the same way)\n"
+         "       ldc FILE.xml --task NAME ...   (one task's program of such a configuration)\n";
+}
 
 // ldc --project: compile every program of the project, run the configuration
 // system of paper 002 (refusing write conflicts) and, with -o DIR, write one
@@ -51,7 +54,7 @@ static int build_project_main(const std::string& project, const std::string& out
 }
 
 static int ldc_main(int argc, char** argv) {
-  std::string input, output, emit, target = "x86-64", project, task;
+  std::string input, output, emit, target(targets().front().name), project, task;
   int opt = 0;
   for (int i = 1; i < argc; i++) {
     std::string a = argv[i];
@@ -63,19 +66,20 @@ static int ldc_main(int argc, char** argv) {
     else if (a == "--task" && i + 1 < argc) task = argv[++i];
     else if (a.rfind("--task=", 0) == 0) task = a.substr(7);
     else if (a == "-O0" || a == "-O1" || a == "-O2") opt = a[2] - '0';
-    else if (a == "-h" || a == "--help") { std::fputs(kUsage, stdout); return 0; }
+    else if (a == "-h" || a == "--help") { std::fputs(usage().c_str(), stdout); return 0; }
     else if (a == "--version") return print_version("ldc");
-    else if (!a.empty() && a[0] == '-') { std::fprintf(stderr, "ldc: error: unknown option '%s'\n%s", a.c_str(), kUsage); return 1; }
+    else if (!a.empty() && a[0] == '-') { std::fprintf(stderr, "ldc: error: unknown option '%s'\n%s", a.c_str(), usage().c_str()); return 1; }
     else if (input.empty()) input = a;
-    else { std::fprintf(stderr, "ldc: error: more than one input file\n%s", kUsage); return 1; }
+    else { std::fprintf(stderr, "ldc: error: more than one input file\n%s", usage().c_str()); return 1; }
   }
   if (!project.empty()) {
-    if (!input.empty() || !emit.empty() || !task.empty()) { std::fprintf(stderr, "ldc: error: --project takes no input file, --emit or --task\n%s", kUsage); return 1; }
+    if (!input.empty() || !emit.empty() || !task.empty()) { std::fprintf(stderr, "ldc: error: --project takes no input file, --emit or --task\n%s", usage().c_str()); return 1; }
     return build_project_main(project, output);
   }
-  if (input.empty()) { std::fprintf(stderr, "ldc: error: no input file\n%s", kUsage); return 1; }
-  if (target != "x86-64" && target != "c40") throw UserError("ldc: error: unknown target '" + target + "' (x86-64 or c40)");
-  Compiled c = compile_source(input, emit.empty() && target == "x86-64", task);  // parse + lower
+  if (input.empty()) { std::fprintf(stderr, "ldc: error: no input file\n%s", usage().c_str()); return 1; }
+  const Target* t = find_target(target);
+  if (!t) throw UserError("ldc: error: unknown target '" + target + "' (" + target_names() + ")");
+  Compiled c = compile_source(input, emit.empty() && t->host, task);  // parse + lower
   if (c.project) return write_project(*c.project, output);  // a PLCopen configuration of several tasks
   std::string text;
   if (emit == "tree") {
@@ -95,22 +99,17 @@ static int ldc_main(int argc, char** argv) {
     text = print_iec_il(c.il);
   } else if (emit == "c") {                                   // the C route
     text = c_source(c);
-  } else if (emit == "asm" && target == "x86-64") {        // macro compiler
-    text = "# ldc " + input + ": x86-64, GNU as syntax (.intel_syntax noprefix)\n" +
-           as::x86::toGnuAs(generate_x86(c.il, c.il.layout(), opt).program);
-  } else if (emit == "listing" && target == "x86-64") {    // + blockwise assembler
-    NativeBuild nb = build_x86(c.il, input, as::Mode::Blockwise, opt);
-    text = as::x86::listing(nb.gen.program, nb.asm_result);
-  } else if ((emit.empty() || emit == "hex") && target == "x86-64") {  // + loader
-    NativeBuild nb = build_x86(c.il, input, as::Mode::Blockwise, opt, /*notes=*/false);
-    std::vector<uint8_t> bin = write_image(make_x86_image(c.il, nb));
+  } else if (emit == "asm") {                              // macro compiler
+    text = t->gnu_as(c.il, input, opt);
+  } else if (emit == "listing") {                          // + blockwise assembler
+    text = t->listing(c.il, input, opt);
+  } else if (emit.empty() || emit == "hex") {              // + loader
+    std::vector<uint8_t> bin = write_image(target_image(*t, c.il, input, opt));
     if (emit == "hex") text = write_intel_hex(bin);
     else {
       if (output.empty()) throw UserError("ldc: error: an image needs -o FILE (or --emit=hex for text on stdout)");
       text.assign(bin.begin(), bin.end());
     }
-  } else if (target == "c40" && (emit.empty() || emit == "asm" || emit == "listing" || emit == "hex")) {  // the C40
-    text = c40_output(c.il, input, emit, !output.empty(), opt);
   } else {
     throw UserError("ldc: error: " + (emit.empty() ? std::string("image output (-o FILE.bin)") : "--emit=" + emit) +
                     " is not available in this build (for this target)");

@@ -15,9 +15,9 @@
 #include <thread>
 
 #include "backend-c/backend_c.h"
-#include "driver/c40_driver.h"
-#include "driver/ldrun_io.h"
 #include "driver/driver.h"
+#include "driver/ldrun_io.h"
+#include "driver/targets.h"
 #include "runtime/modbus.h"
 #include "runtime/monitor.h"
 #include "runtime/plc.h"
@@ -27,8 +27,25 @@
 
 using namespace ldc;
 
-static const char kUsage[] =
-    "usage: ldrun FILE [--engine=native|interp|fast|c|c40sim|c40interp] [-O0|-O1|-O2] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms] [--cycles] [--sandbox]\n"
+namespace {
+
+// The engines that run a program's IL, on any image or source.
+const char* const kIlEngines[] = {"interp", "fast", "c"};
+
+// Every engine: those of the targets that run here, the IL engines, then
+// those of the simulated targets.
+std::vector<std::string> all_engines() {
+  std::vector<std::string> n = engine_names(true);
+  n.insert(n.end(), std::begin(kIlEngines), std::end(kIlEngines));
+  for (const std::string& e : engine_names(false)) n.push_back(e);
+  return n;
+}
+
+std::string usage() {
+  std::string engines;
+  for (const std::string& e : all_engines()) engines += (engines.empty() ? "" : "|") + e;
+  return
+    "usage: ldrun FILE [--engine=" + engines + "] [-O0|-O1|-O2] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms] [--cycles] [--sandbox]\n"
     "       ldrun FILE|--project P.ldp --io=stdio|shm[:/NAME]|trace|none [--period 1ms|500us] [--clock=real|virtual]\n"
     "             [--free-run] [--rt] [--watchdog 200ms] [--retain FILE] [--retain-every 1s] [--cold] [--stop]\n"
     "             [--control=stdin|none] [--reload] [--stats] [--out FILE] [--block 16] [--scans N]\n"
@@ -38,8 +55,7 @@ static const char kUsage[] =
     "             (native code at -O0 unless -O1 or -O2 is given; --engine=fast is the fast interpreter)\n"
     "       FILE.xml: a PLCopen configuration of several tasks runs as a project (--io); --task NAME picks one task's program\n"
     "       --sandbox: run the scans in a child process that seccomp confines to its socket (native, interp, c)\n";
-
-namespace {
+}
 
 // Options of the soft-PLC runtime mode.
 struct RtArgs {
@@ -59,7 +75,7 @@ std::string g_task;
 Image load_program(const std::string& file) {
   if (is_image_file(file)) return load_image_file(file);
   Compiled c = compile_source(file, false, g_task);
-  return make_x86_image(c.il, build_x86(c.il, file));
+  return target_image(host_target(), c.il, file, 0);
 }
 
 std::string stem(const std::string& path) {
@@ -110,10 +126,16 @@ class LineReader {
 int run_runtime(const std::string& input, const std::string& engine, const std::string& trace_file,
                 const std::string& watch, int scans, const RtArgs& a) {
   using namespace ldc::plc;
-  if (engine != "native" && engine != "interp")
-    throw UserError("ldrun: error: the runtime runs --engine=native or --engine=interp, not '" + engine + "'");
+  // interp, or the engine of the code of a target that runs here (native)
+  const FoundEngine code = find_engine(engine);
+  if (engine != "interp" && !(code.engine && code.engine->runs_code && code.target->host)) {
+    std::vector<std::string> ok;
+    for (const std::string& e : engine_names(true)) ok.push_back("--engine=" + e);
+    ok.push_back("--engine=interp");
+    throw UserError("ldrun: error: the runtime runs " + or_list(ok) + ", not '" + engine + "'");
+  }
   if (!a.project.empty() && !input.empty()) throw UserError("ldrun: error: give a program or --project, not both");
-  if (a.project.empty() && input.empty()) throw UserError(std::string("ldrun: error: no program\n") + kUsage);
+  if (a.project.empty() && input.empty()) throw UserError("ldrun: error: no program\n" + usage());
   Options opt;
   opt.log = [](const std::string& m) { std::fprintf(stderr, "%s\n", m.c_str()); };
   auto duration = [](const std::string& v, const char* what, int64_t min) {
@@ -142,7 +164,7 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
   } else if (!input.empty() && !is_image_file(input)) {
     Compiled c = compile_source(input, g_task.empty(), g_task);
     if (c.project) proj = c.project;
-    else single = make_x86_image(c.il, build_x86(c.il, input));
+    else single = target_image(host_target(), c.il, input, 0);
   }
   if (proj) {
     const Project& p = *proj;
@@ -182,8 +204,8 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
   if (!a.retain.empty()) opt.retain_file = a.retain;
   if (!a.retain_every.empty()) opt.retain_every_us = duration(a.retain_every, "--retain-every", 1000);
   for (const TaskSpec& s : specs)
-    if (engine == "native" && s.image.target != ImageTarget::X86_64)
-      throw UserError("ldrun: error: " + s.file + " is not an x86-64 image; use --engine=interp");
+    if (code.engine && s.image.target != code.target->image_kind)
+      throw UserError("ldrun: error: " + s.file + " is not " + std::string(code.target->an_image) + "; use --engine=interp");
 
   // The I/O driver.
   std::string io = a.io.empty() ? (trace_file.empty() ? "none" : "trace") : a.io;
@@ -253,11 +275,11 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
     throw UserError("ldrun: error: --monitor-write and --monitor-remote need --monitor HOST:PORT");
   }
 
-  EngineFactory engines = [engine, sandbox = a.sandbox](const Image& img) -> std::unique_ptr<Engine> {
+  EngineFactory engines = [code, sandbox = a.sandbox](const Image& img) -> std::unique_ptr<Engine> {
     std::unique_ptr<Engine> e;
-    if (engine == "interp") e = make_interp_engine(img.il, img.layout);
-    else if (img.target != ImageTarget::X86_64) throw std::runtime_error("not an x86-64 image");
-    else e = make_native_engine(img.code, img.entry);
+    if (!code.engine) e = make_interp_engine(img.il, img.layout);
+    else if (img.target != code.target->image_kind) throw std::runtime_error("not " + std::string(code.target->an_image));
+    else e = code.engine->make(img);
     return sandbox ? make_sandboxed_engine(std::move(e), img.layout) : std::move(e);
   };
 
@@ -389,14 +411,162 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
 
 namespace {
 
-int ldrun_main(int argc, char** argv) {
-  std::string input, engine = "native", trace_file, watch, tmpdir, so_path;
-  bool cycles = false;
-  int opt_level = -1;  // -O<n> for a source compiled to native code
+// ---------------------------------------------------------------- trace mode
+
+struct TraceArgs {
+  std::string input, engine, trace_file, watch;
+  int opt_level;  // -1: none given
+  bool cycles, sandbox;
+};
+
+// Keeps the cost of every scan of the engine it wraps (--cycles).
+class Recorder : public Engine {
+ public:
+  explicit Recorder(Engine& e) : e_(e) {}
+  void scan(uint8_t* mem) override {
+    e_.scan(mem);
+    costs.push_back(e_.last_cost().value_or(ScanCost{}));
+  }
+  std::vector<ScanCost> costs;
+
+ private:
+  Engine& e_;
+};
+
+// --cycles: two more columns, the scan's cycles and microseconds.
+std::string with_cycles(const std::string& out, const std::vector<ScanCost>& costs) {
+  std::string with;
+  size_t pos = 0, row = 0;
+  while (pos < out.size()) {
+    size_t nl = out.find('\n', pos);
+    std::string line = out.substr(pos, nl - pos);
+    pos = nl + 1;
+    if (row == 0) line += ",cycles,us";
+    else if (row - 1 < costs.size()) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, ",%llu,%.2f", (unsigned long long)costs[row - 1].cycles, costs[row - 1].us());
+      line += buf;
+    }
+    with += line + "\n";
+    row++;
+  }
+  return with;
+}
+
+// "a, b, c"
+std::string comma_list(const std::vector<std::string>& names) {
+  std::string s;
+  for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
+// The engines of target t that run its code (code) or its images' IL.
+std::vector<std::string> engines_of(const Target& t, bool code) {
+  std::vector<std::string> n;
+  for (const TargetEngine& e : t.engines)
+    if (e.runs_code == code) n.emplace_back(e.name);
+  return n;
+}
+
+// Refusals before anything is read or compiled: the engine's name, the
+// options it takes, and the target of an image input (`image`, or nullptr).
+void check_trace_args(const TraceArgs& a, const FoundEngine& fe, const Target* image) {
+  bool il_engine = std::find(std::begin(kIlEngines), std::end(kIlEngines), a.engine) != std::end(kIlEngines);
+  const Target* simulated = fe.target && !fe.target->host ? fe.target
+                            : image && !image->host && (!fe.engine || fe.engine->runs_code) ? image : nullptr;
+  if (a.sandbox && simulated) {
+    std::vector<std::string> here = engine_names(true);
+    here.insert(here.end(), {"interp", "c"});
+    throw UserError("ldrun: error: --sandbox is for the engines that run on this machine (" + comma_list(here) + "); the " +
+                    std::string(simulated->title) + " engines are simulated");
+  }
+  if (!g_task.empty() && simulated && !il_engine)
+    throw UserError("ldrun: error: --task is not taken by the " + std::string(simulated->title) +
+                    " engines: compile the task's image first (ldc FILE --task NAME --target=" + std::string(simulated->name) +
+                    " -o F.bin)");
+  if (a.cycles && !(fe.target && !fe.target->host)) {
+    std::vector<std::string> sim;
+    for (const std::string& e : engine_names(false)) sim.push_back("--engine=" + e);
+    throw UserError("ldrun: error: --cycles needs " + or_list(sim));
+  }
+  if (!fe.engine && !il_engine)
+    throw UserError("ldrun: error: unknown engine '" + a.engine + "' (" + or_list(all_engines()) + ")");
+  if (a.opt_level >= 0 && (!fe.engine || !fe.engine->runs_code || is_image_file(a.input))) {
+    std::vector<std::string> code;
+    for (const Target& t : targets())
+      for (const std::string& e : engines_of(t, true)) code.push_back(e);
+    throw UserError("ldrun: error: -O" + std::to_string(a.opt_level) + " is for a source compiled to native code (--engine=" +
+                    or_list(code) + "); an image is already compiled");
+  }
+}
+
+// An image for an engine on another target's code: where to go instead.
+std::string wrong_image(const TraceArgs& a, const FoundEngine& fe, const Target& image) {
+  if (fe.target->host) {  // the default engine on a simulated target's image
+    std::vector<std::string> other = engines_of(image, false);
+    other.push_back("interp");
+    return "ldrun: error: " + a.input + " is " + std::string(image.an_image) + "; use --engine=" +
+           or_list(engines_of(image, true)) + " (or " + comma_list(other) + ")";
+  }
+  std::vector<std::string> il = engines_of(*fe.target, false);
+  return "ldrun: error: " + a.input + " is not " + std::string(fe.target->an_image) + "; compile it with ldc --target=" +
+         std::string(fe.target->name) + ", or use --engine=" + or_list(il.empty() ? std::vector<std::string>{"interp"} : il);
+}
+
+// ldrun FILE --engine=E [--trace ...]: the program over the trace, scan by scan.
+int run_trace_mode(const TraceArgs& a, RunOptions opt) {
+  const FoundEngine fe = find_engine(a.engine);
+  const Target* image_target = image_file_target(a.input);
+  check_trace_args(a, fe, image_target);
+  // The program: an image (checked in full before anything runs), or a
+  // source file compiled in memory.
+  Image img;
+  std::string tmpdir, so_path;
   struct Cleanup {
     std::string& dir;
     ~Cleanup() { if (!dir.empty()) remove_tree(dir); }
   } cleanup{tmpdir};
+  bool code = fe.engine && fe.engine->runs_code;
+  if (is_image_file(a.input)) {
+    img = load_image_file(a.input);
+    if (a.engine == "c") throw UserError("ldrun: error: --engine=c needs the program's source (.ld or .il), not an image");
+    if (code && img.target != fe.target->image_kind) throw UserError(wrong_image(a, fe, target_of(img.target)));
+  } else if (a.engine == "c") {
+    Compiled c = compile_source(a.input, false, g_task);
+    img.layout = c.il.layout();
+    img.aliases = c.il.aliases;
+    img.retentive = retentive_ranges(c.il);
+    tmpdir = make_temp_dir();
+    so_path = build_c_shared_object(c, tmpdir);
+  } else {
+    Compiled c = compile_source(a.input, false, g_task);
+    img = code ? target_image(*fe.target, c.il, a.input, std::max(a.opt_level, 0)) : il_image(c.il);
+  }
+  const Layout& layout = img.layout;
+  std::unique_ptr<Engine> eng = fe.engine           ? fe.engine->make(img)
+                                : a.engine == "interp" ? make_interp_engine(img.il, layout)
+                                : a.engine == "fast"   ? make_fast_interp_engine(img.il, layout)
+                                                       : make_shared_object_engine(so_path, kCScanSymbol);
+  if (a.sandbox) eng = make_sandboxed_engine(std::move(eng), layout);
+  for (Probe& p : parse_watch(a.watch, img.aliases)) opt.watch.push_back(p);
+  Trace trace;
+  if (!a.trace_file.empty()) trace = load_trace(a.trace_file, img.aliases);
+  std::string out;
+  if (a.cycles) {
+    Recorder rec(*eng);
+    run_trace(rec, layout, a.trace_file.empty() ? nullptr : &trace, a.trace_file, opt, out);
+    out = with_cycles(out, rec.costs);
+  } else {
+    run_trace(*eng, layout, a.trace_file.empty() ? nullptr : &trace, a.trace_file, opt, out);
+  }
+  std::fwrite(out.data(), 1, out.size(), stdout);
+  return 0;
+}
+
+int ldrun_main(int argc, char** argv) {
+  std::string input, engine(host_target().engines.front().name), trace_file, watch;
+  bool cycles = false;
+  int opt_level = -1;  // -O<n> for a source compiled to native code
   RunOptions opt;
   RtArgs rta;
   std::string period_text;
@@ -427,7 +597,7 @@ int ldrun_main(int argc, char** argv) {
         flag("--monitor-remote", rta.monitor_remote)) {
     } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");
     else if (a.rfind("--task", 0) == 0) g_task = value("--task");
-    else if (a == "--cycles") cycles = true;  // C40 engines: cycles and us per scan
+    else if (a == "--cycles") cycles = true;  // simulated engines: cycles and us per scan
     else if (a == "-O0" || a == "-O1" || a == "-O2") opt_level = a[2] - '0';
     else if (a == "--sandbox") rta.sandbox = true;
     else if (a.rfind("--trace", 0) == 0) trace_file = value("--trace");
@@ -439,9 +609,9 @@ int ldrun_main(int argc, char** argv) {
       opt.scans = std::stoi(v);
     } else if (a.rfind("--period", 0) == 0) {
       period_text = value("--period");
-    } else if (a == "-h" || a == "--help") { std::fputs(kUsage, stdout); return 0; }
+    } else if (a == "-h" || a == "--help") { std::fputs(usage().c_str(), stdout); return 0; }
     else if (a == "--version") return print_version("ldrun");
-    else if (!a.empty() && a[0] == '-') throw UserError("ldrun: error: unknown option '" + a + "'\n" + kUsage);
+    else if (!a.empty() && a[0] == '-') throw UserError("ldrun: error: unknown option '" + a + "'\n" + usage());
     else if (input.empty()) input = a;
     else throw UserError("ldrun: error: more than one program");
   }
@@ -454,54 +624,8 @@ int ldrun_main(int argc, char** argv) {
     if (!p) throw UserError("ldrun: error: bad --period '" + period_text + "' (e.g. 10ms, 1s)");
     opt.period_ms = *p;
   }
-  if (input.empty()) throw UserError(std::string("ldrun: error: no program\n") + kUsage);
-  if (rta.sandbox && (engine == "c40sim" || engine == "c40interp" || is_c40_image(input)))
-    throw UserError("ldrun: error: --sandbox is for the engines that run on this machine (native, interp, c); the C40 engines are simulated");
-  if (engine == "c40sim" || engine == "c40interp" || (engine == "native" && is_c40_image(input))) {
-    if (!g_task.empty())
-      throw UserError("ldrun: error: --task is not taken by the C40 engines: compile the task's image first (ldc FILE --task NAME --target=c40 -o F.bin)");
-    return run_c40(input, engine, trace_file, watch, opt, cycles);  // the TMS320C40 simulator
-  }
-  if (cycles) throw UserError("ldrun: error: --cycles needs --engine=c40sim or --engine=c40interp");
-  if (engine != "interp" && engine != "fast" && engine != "native" && engine != "c")
-    throw UserError("ldrun: error: unknown engine '" + engine + "' (native, interp, fast, c, c40sim or c40interp)");
-  if (opt_level >= 0 && (engine != "native" || is_image_file(input)))
-    throw UserError("ldrun: error: -O" + std::to_string(opt_level) +
-                    " is for a source compiled to native code (--engine=native); an image is already compiled");
-  // The program: an image (checked in full before anything runs), or a
-  // source file compiled in memory.
-  Image img;
-  if (is_image_file(input)) {
-    img = load_image_file(input);
-    if (engine == "c") throw UserError("ldrun: error: --engine=c needs the program's source (.ld or .il), not an image");
-    if (img.target != ImageTarget::X86_64 && engine == "native")
-      throw UserError("ldrun: error: " + input + " is not an x86-64 image; use --engine=interp");
-  } else if (engine == "c") {
-    Compiled c = compile_source(input, false, g_task);
-    img.layout = c.il.layout();
-    img.aliases = c.il.aliases;
-    img.retentive = retentive_ranges(c.il);
-    tmpdir = make_temp_dir();
-    so_path = build_c_shared_object(c, tmpdir);
-  } else {
-    Compiled c = compile_source(input, false, g_task);
-    img = engine == "native" ? make_x86_image(c.il, build_x86(c.il, input, as::Mode::Blockwise, std::max(opt_level, 0),
-                                                              /*notes=*/false))
-                             : il_image(c.il);
-  }
-  const Layout& layout = img.layout;
-  std::unique_ptr<Engine> eng = engine == "interp" ? make_interp_engine(img.il, layout)
-                                : engine == "fast" ? make_fast_interp_engine(img.il, layout)
-                                : engine == "c"    ? make_shared_object_engine(so_path, kCScanSymbol)
-                                                   : make_native_engine(img.code, img.entry);
-  if (rta.sandbox) eng = make_sandboxed_engine(std::move(eng), layout);
-  for (Probe& p : parse_watch(watch, img.aliases)) opt.watch.push_back(p);
-  Trace trace;
-  if (!trace_file.empty()) trace = load_trace(trace_file, img.aliases);
-  std::string out;
-  run_trace(*eng, layout, trace_file.empty() ? nullptr : &trace, trace_file, opt, out);
-  std::fwrite(out.data(), 1, out.size(), stdout);
-  return 0;
+  if (input.empty()) throw UserError("ldrun: error: no program\n" + usage());
+  return run_trace_mode({input, engine, trace_file, watch, opt_level, cycles, rta.sandbox}, opt);
 }
 
 }  // namespace

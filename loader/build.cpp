@@ -20,7 +20,7 @@ std::vector<RetentiveRange> retentive_ranges(const Program& p) {
 }
 
 Image make_image(ImageTarget target, const Program& p, const as::Result& code,
-                 const std::vector<std::vector<uint32_t>>& il_items) {
+                 const std::vector<std::vector<uint32_t>>& il_items, std::span<const uint32_t> rung_blocks) {
   Image img;
   img.target = target;
   img.source = p.source;
@@ -34,8 +34,9 @@ Image make_image(ImageTarget target, const Program& p, const as::Result& code,
   size_t k = 0;
   for (size_t r = 0; r < p.rungs.size(); r++) {
     img.rung_titles.push_back(p.rungs[r].title);
-    const auto& items = code.items[r + 1];  // block r + 1 is rung r (block 0: the prologue)
-    uint32_t block_end = code.blockOffsets[r + 2];
+    uint32_t b = rung_blocks[r];
+    const auto& items = code.items[b];
+    uint32_t block_end = b + 1 < code.blockOffsets.size() ? code.blockOffsets[b + 1] : uint32_t(code.code.size());
     for (size_t i = 0; i < p.rungs[r].code.size(); i++, k++) {
       const Instr& in = p.rungs[r].code[i];
       uint32_t at = il_items[r][i];  // an instruction that emitted nothing at the rung's end: the block's end

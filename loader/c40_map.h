@@ -54,7 +54,7 @@ struct C40Layout {
   bool operator==(const C40Layout&) const = default;
 };
 
-// The math ROM's routines (backend-c40sim/mathrom.h), one every kRomStride words.
+// The math ROM's routines (backend-c40sim/machine/mathrom.h), one every kRomStride words.
 enum class RomFn : uint8_t { Sin, Cos, Tan, Sqrt, Exp, Ln, Count };
 constexpr int kRomFnCount = int(RomFn::Count);
 constexpr uint32_t rom_entry(RomFn f) { return kRomBase + uint32_t(f) * kRomStride; }

@@ -221,6 +221,11 @@ std::vector<uint8_t> write_image(const Image& im) {
 
 // ---------------------------------------------------------------- read_image
 
+std::optional<uint8_t> peek_image_target(std::span<const uint8_t> head) {
+  if (head.size() <= kOffTarget || !std::equal(kMagic, kMagic + 6, head.begin())) return std::nullopt;
+  return head[kOffTarget];
+}
+
 namespace {
 
 // read_image in named steps: the fixed header, the layout, the section table,

@@ -59,17 +59,22 @@ struct ImageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Serializes an image.  Writes the fields as they are (read_image does the
-// checking); throws ImageError only if the image is too large for the format.
-// The image of a program and its assembled code, for either target: the
-// backends assemble rung r as block r + 1 (block 0: the prologue), and
-// il_items[r][i] is the assembler item where IL instruction i of rung r
-// starts (the line map).  The K area and the IL's .retain words are retentive.
+// The image of a program and its assembled code, for any target: rung r's
+// code is block rung_blocks[r] (the backend says which), and il_items[r][i]
+// is the item of that block where IL instruction i of rung r starts (the line
+// map).  The K area and the IL's .retain words are retentive.
 Image make_image(ImageTarget target, const Program& p, const as::Result& code,
-                 const std::vector<std::vector<uint32_t>>& il_items);
+                 const std::vector<std::vector<uint32_t>>& il_items, std::span<const uint32_t> rung_blocks);
 std::vector<RetentiveRange> retentive_ranges(const Program& p);
 
+// Serializes an image.  Writes the fields as they are (read_image does the
+// checking); throws ImageError only if the image is too large for the format.
 std::vector<uint8_t> write_image(const Image& image);
+
+// The target byte of an image's header, from the file's first bytes and
+// nothing else checked (read_image checks it all); nullopt if `head` does not
+// start with "LDCIMG" or is too short to hold the byte.
+std::optional<uint8_t> peek_image_target(std::span<const uint8_t> head);
 
 // Parses and checks an image; `name` is the file name used in messages.
 // Never reads outside `bytes`; throws ImageError for anything not exactly right.

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -13,11 +14,23 @@
 
 namespace ldc {
 
+// What one scan cost on a simulated processor (the C40 engines, docs/c40.md):
+// counted cycles and instructions, and the processor's cycle time.
+struct ScanCost {
+  uint64_t cycles = 0;
+  uint64_t instructions = 0;
+  double ns_per_cycle = 0;
+  double us() const { return double(cycles) * ns_per_cycle / 1000.0; }
+};
+
 // Something that runs one scan over the memory image.
 class Engine {
  public:
   virtual ~Engine() = default;
   virtual void scan(uint8_t* mem) = 0;
+  // The cost of the last scan on a simulated processor; nullopt for an engine
+  // that runs on this machine (its time is measured, not counted).
+  virtual std::optional<ScanCost> last_cost() const { return std::nullopt; }
 };
 
 // The reference interpreter over an image's binary IL.

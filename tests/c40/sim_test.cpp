@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-#include "backend-c40sim/sim.h"
+#include "backend-c40sim/machine/sim.h"
 #include "c40_test_util.h"
 
 using namespace ldc::as;

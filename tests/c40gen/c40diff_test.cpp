@@ -16,7 +16,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "backend-c40sim/c40gen.h"
+#include "backend-c40sim/gen/c40gen.h"
 #include "frontend/frontend.h"
 #include "tests/c40gen/c40gen_util.h"
 

@@ -10,10 +10,10 @@
 #include <random>
 #include <sstream>
 
-#include "backend-c40sim/c40gen.h"
-#include "backend-c40sim/c40interp.h"
-#include "backend-c40sim/c40machine.h"
-#include "backend-c40sim/c40model.h"
+#include "backend-c40sim/gen/c40gen.h"
+#include "backend-c40sim/machine/c40interp.h"
+#include "backend-c40sim/machine/c40machine.h"
+#include "tests/c40gen/c40model.h"
 #include "frontend/frontend.h"
 #include "tests/c40/c40_test_util.h"
 #include "tests/c40gen/c40gen_util.h"
@@ -348,11 +348,11 @@ TEST(C40Opt, EveryLevelPaysOnEveryExample) {
       words[opt] = res.code.size() / 4;
       class Counting : public Engine {
        public:
-        explicit Counting(std::unique_ptr<C40Engine> e) : e_(std::move(e)) {}
-        void scan(uint8_t* mem) override { e_->scan(mem); cycles += e_->last_scan().cycles; }
+        explicit Counting(std::unique_ptr<Engine> e) : e_(std::move(e)) {}
+        void scan(uint8_t* mem) override { e_->scan(mem); cycles += e_->last_cost()->cycles; }
         uint64_t cycles = 0;
        private:
-        std::unique_ptr<C40Engine> e_;
+        std::unique_ptr<Engine> e_;
       } eng(make_c40sim_engine(res.code, 0, p.layout()));
       std::string out;
       run_trace(eng, p.layout(), &t, n + ".csv", RunOptions{}, out);

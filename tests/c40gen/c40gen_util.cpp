@@ -3,7 +3,7 @@
 
 #include <stdexcept>
 
-#include "backend-c40sim/c40gen.h"
+#include "backend-c40sim/gen/c40gen.h"
 
 namespace ldc::c40gen::test {
 namespace {

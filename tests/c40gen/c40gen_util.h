@@ -4,9 +4,9 @@
 #include <memory>
 #include <string>
 
-#include "backend-c40sim/c40model.h"
+#include "tests/c40gen/c40model.h"
 #include "ir/ir.h"
-#include "driver/c40_driver.h"
+#include "driver/c40_target.h"
 #include "runtime/runtime.h"
 #include "tests/diff/harness.h"
 

@@ -8,12 +8,12 @@
 #include <sstream>
 
 #include "bench/ldgen.h"
-#include "driver/c40_driver.h"
+#include "driver/c40_target.h"
 #include "frontend/frontend.h"
 #include "loader/c40_check.h"
 #include "loader/loader.h"
 #include "runtime/runtime.h"
-#include "backend-c40sim/c40machine.h"
+#include "backend-c40sim/machine/c40machine.h"
 
 namespace {
 
@@ -211,7 +211,7 @@ TEST(C40Image, ExamplesStayFarBelowTheCycleBudget) {
         for (uint32_t d = 0; d < 8; d++) m.set_int(Area::D, d, k * 977 - int32_t(d) * 3001);
         std::memcpy(m.data() + kSysDt, &k, 4);
         eng->scan(m.data());
-        worst = std::max(worst, eng->last_scan().cycles);
+        worst = std::max(worst, eng->last_cost()->cycles);
       }
       EXPECT_LT(worst * 10, budget) << n << " -O" << opt << ": " << worst << " cycles, budget " << budget;
     }

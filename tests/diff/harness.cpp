@@ -16,6 +16,7 @@
 #include <set>
 
 #include "driver/driver.h"
+#include "driver/x86_target.h"
 #include "frontend/frontend.h"
 
 namespace ldc::diff {

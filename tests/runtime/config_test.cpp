@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "driver/driver.h"
+#include "driver/x86_target.h"
 #include "loader/config.h"
 #include "loader/loader.h"
 

@@ -19,8 +19,9 @@
 #include <sstream>
 #include <thread>
 
-#include "driver/c40_driver.h"
+#include "driver/c40_target.h"
 #include "driver/driver.h"
+#include "driver/x86_target.h"
 #include "runtime/plc.h"
 #include "runtime/sandbox.h"
 #include "runtime/runtime.h"

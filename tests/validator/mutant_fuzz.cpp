@@ -25,8 +25,9 @@
 #include <random>
 
 #include "assembler/x86_forms.h"
-#include "driver/c40_driver.h"
+#include "driver/c40_target.h"
 #include "driver/driver.h"
+#include "driver/x86_target.h"
 #include "runtime/runtime.h"
 #include "runtime/sandbox.h"
 #include "tests/validator/programs.h"

@@ -10,6 +10,7 @@
 
 #include "bench/ldgen.h"
 #include "driver/driver.h"
+#include "driver/x86_target.h"
 #include "frontend/frontend.h"
 
 namespace ldc::test {

@@ -7,6 +7,7 @@
 #include "../assembler/test_util.h"
 #include "bench/ldgen.h"
 #include "driver/driver.h"
+#include "driver/x86_target.h"
 #include "frontend/frontend.h"
 
 using namespace ldc;

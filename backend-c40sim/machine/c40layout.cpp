@@ -1,5 +1,5 @@
-// backend-c40sim/c40layout.cpp -- the C40 word image (c40layout.h).
-#include "backend-c40sim/c40layout.h"
+// backend-c40sim/machine/c40layout.cpp -- the C40 word image (c40layout.h).
+#include "backend-c40sim/machine/c40layout.h"
 
 #include <cstring>
 

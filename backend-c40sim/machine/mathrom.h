@@ -1,4 +1,4 @@
-// backend-c40sim/mathrom.h -- the math ROM of the simulated C40 board.
+// backend-c40sim/machine/mathrom.h -- the math ROM of the simulated C40 board.
 //
 // SIN COS TAN SQRT EXP LN have no C40 instruction (SQRT would need RSQRF,
 // outside our assembler's subset).  Generated code and the C40-hosted
@@ -17,14 +17,12 @@
 #include <string>
 #include <vector>
 
-#include "backend-c40sim/c40layout.h"
-#include "backend-c40sim/sim.h"
+#include "backend-c40sim/machine/c40layout.h"
+#include "backend-c40sim/machine/sim.h"
 
 namespace ldc::c40gen {
 
-using c40map::RomFn;  // the entry points are the image format's (loader/c40_map.h)
-using c40map::kRomFnCount;
-using c40map::rom_entry;
+// RomFn and rom_entry are the image format's (loader/c40_map.h, via c40layout.h).
 const char* rom_name(RomFn f);      // "sin", ...
 float rom_host(RomFn f, float x);   // sinf cosf tanf sqrtf expf logf
 

@@ -1,12 +1,12 @@
-// backend-c40sim/mathrom.cpp -- the math ROM: assembly and the host service (mathrom.h).
-#include "backend-c40sim/mathrom.h"
+// backend-c40sim/machine/mathrom.cpp -- the math ROM: assembly and the host service (mathrom.h).
+#include "backend-c40sim/machine/mathrom.h"
 
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
 
-#include "backend-c40sim/c40text.h"
-#include "backend-c40sim/mathrom_c40s.h"  // kMathRomSource, generated from mathrom.c40s
+#include "backend-c40sim/machine/c40text.h"
+#include "backend-c40sim/machine/mathrom_c40s.h"  // kMathRomSource, generated from mathrom.c40s
 
 namespace ldc::c40gen {
 

@@ -1,15 +1,15 @@
-// backend-c40sim/c40model.cpp -- the C40 semantic model and its precision check
+// tests/c40gen/c40model.cpp -- the C40 semantic model and its precision check
 // (c40model.h).  Operand decoding and the INT32, bit, timer and counter rules
 // follow ir/interp.cpp (docs/il.md); REAL goes through c40gen.h's functions.
-#include "backend-c40sim/c40model.h"
+#include "tests/c40gen/c40model.h"
 
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
 
-#include "backend-c40sim/c40gen.h"
-#include "backend-c40sim/mathrom.h"
+#include "backend-c40sim/gen/c40gen.h"
+#include "backend-c40sim/machine/mathrom.h"
 
 namespace ldc::c40gen {
 

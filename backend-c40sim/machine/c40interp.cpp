@@ -1,12 +1,12 @@
-// backend-c40sim/c40interp.cpp -- the C40-hosted interpreter and its word IL.
-#include "backend-c40sim/c40interp.h"
+// backend-c40sim/machine/c40interp.cpp -- the C40-hosted interpreter and its word IL.
+#include "backend-c40sim/machine/c40interp.h"
 
 #include <map>
 #include <stdexcept>
 
-#include "backend-c40sim/c40layout.h"
-#include "backend-c40sim/interp_c40s.h"  // kInterpSource, generated from interp.c40s
-#include "backend-c40sim/mathrom.h"
+#include "backend-c40sim/machine/c40layout.h"
+#include "backend-c40sim/machine/interp_c40s.h"  // kInterpSource, generated from interp.c40s
+#include "backend-c40sim/machine/mathrom.h"
 
 namespace ldc::c40gen {
 

@@ -1,10 +1,10 @@
-// backend-c40sim/c40text.cpp -- C40 source text -> words (c40text.h).
-#include "backend-c40sim/c40text.h"
+// backend-c40sim/machine/c40text.cpp -- C40 source text -> words (c40text.h).
+#include "backend-c40sim/machine/c40text.h"
 
 #include <cstdlib>
 #include <stdexcept>
 
-#include "backend-c40sim/sim.h"
+#include "backend-c40sim/machine/sim.h"
 
 namespace ldc::c40gen {
 namespace {

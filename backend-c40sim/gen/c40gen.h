@@ -1,4 +1,4 @@
-// backend-c40sim/c40gen.h -- the macro compiler for the TMS320C40 (paper 003,
+// backend-c40sim/gen/c40gen.h -- the macro compiler for the TMS320C40 (paper 003,
 // step 2, Fig. 6): every IL mnemonic becomes a fixed C40 assembly template.
 //
 // The generated code is one function, entered at word 0 with CALL and left with
@@ -20,18 +20,23 @@
 #include <vector>
 
 #include "assembler/c40.h"
-#include "backend-c40sim/c40layout.h"
-#include "backend-c40sim/sim.h"
+#include "backend-c40sim/machine/c40float.h"
 #include "ir/ir.h"
+#include "loader/c40_map.h"
 
 namespace ldc::c40gen {
+
+// The image format's memory map, word layout and math ROM entries (loader/c40_map.h).
+using namespace c40map;
 
 struct C40Code {
   // block 0 prologue, one block per rung, then the epilogue and the routines
   as::c40::C40Program program;
-  // For rung r and its IL instruction i, the item index in block r + 1 where
-  // the instruction's code starts (a comment item holding the IL text).
+  // For rung r and its IL instruction i, the item index in block rung_block(r)
+  // where the instruction's code starts (a comment item holding the IL text).
   std::vector<std::vector<uint32_t>> il_items;
+  // The block of rung r's code (so that no caller counts the blocks).
+  static uint32_t rung_block(size_t r) { return uint32_t(r) + 1; }
 };
 
 // opt_level 0: paper 003's templates; 1: the templates with the peephole

@@ -1,4 +1,4 @@
-// backend-c40sim/c40machine.h -- the simulated C40 board that runs scans:
+// backend-c40sim/machine/c40machine.h -- the simulated C40 board that runs scans:
 // code (native scan code, or the C40-hosted interpreter and its IL) in
 // zero-wait SRAM, the math ROM, a stack, and the memory image in SRAM with one
 // wait state (c40layout.h).  Each scan copies the byte image of docs/il.md in
@@ -11,9 +11,9 @@
 #include <span>
 #include <vector>
 
-#include "backend-c40sim/c40layout.h"
-#include "backend-c40sim/mathrom.h"
-#include "backend-c40sim/sim.h"
+#include "backend-c40sim/machine/c40layout.h"
+#include "backend-c40sim/machine/mathrom.h"
+#include "backend-c40sim/machine/sim.h"
 
 namespace ldc::c40gen {
 

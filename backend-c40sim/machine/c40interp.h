@@ -1,4 +1,4 @@
-// backend-c40sim/c40interp.h -- the C40-hosted interpreter (interp.c40s): the
+// backend-c40sim/machine/c40interp.h -- the C40-hosted interpreter (interp.c40s): the
 // classic interpreter of paper 003 written in C40 assembly, and the word form
 // of the IL it runs (docs/c40.md, "The interpreter baseline").
 #pragma once
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "backend-c40sim/c40text.h"
+#include "backend-c40sim/machine/c40text.h"
 #include "ir/ir.h"
 
 namespace ldc::c40gen {

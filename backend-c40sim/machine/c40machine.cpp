@@ -1,5 +1,5 @@
-// backend-c40sim/c40machine.cpp -- the board that runs scans (c40machine.h).
-#include "backend-c40sim/c40machine.h"
+// backend-c40sim/machine/c40machine.cpp -- the board that runs scans (c40machine.h).
+#include "backend-c40sim/machine/c40machine.h"
 
 #include <stdexcept>
 

@@ -1,4 +1,4 @@
-// backend-c40sim/c40model.h -- what C40 code computes, as a C++ IL interpreter.
+// tests/c40gen/c40model.h -- what C40 code computes, as a C++ IL interpreter.
 //
 // The C40 has no IEEE arithmetic: REAL operands are converted to its own float
 // format (FRIEEE, FLOAT), computed in 40-bit registers that truncate, and

@@ -1,12 +1,10 @@
-// backend-c40sim/c40gen.cpp -- IL mnemonics -> TMS320C40 assembly templates.
-#include "backend-c40sim/c40gen.h"
+// backend-c40sim/gen/c40gen.cpp -- IL mnemonics -> TMS320C40 assembly templates.
+#include "backend-c40sim/gen/c40gen.h"
 
 #include <algorithm>
 #include <cstring>
 #include <map>
 #include <stdexcept>
-
-#include "backend-c40sim/mathrom.h"
 
 namespace ldc::c40gen {
 

@@ -1,8 +1,8 @@
-// ldc_c40sim: a cycle-counting instruction-set simulator for the TMS320C40
+// backend-c40sim/machine/sim.h -- ldc_c40sim: a cycle-counting instruction-set simulator for the TMS320C40
 // subset of assembler/c40.h. See docs/c40.md for the semantics, the float
 // format and the cycle model (and what it does not model).
-#ifndef LDC_BACKEND_C40SIM_SIM_H
-#define LDC_BACKEND_C40SIM_SIM_H
+#ifndef LDC_BACKEND_C40SIM_MACHINE_SIM_H
+#define LDC_BACKEND_C40SIM_MACHINE_SIM_H
 
 #include <cstdint>
 #include <functional>
@@ -12,50 +12,11 @@
 #include <vector>
 
 #include "assembler/c40.h"
+#include "backend-c40sim/machine/c40float.h"
 
 namespace ldc::c40sim {
 
 using as::c40::Reg;
-
-// ------------------------------------------------------------- floats
-
-// A 40-bit extended-precision register: an 8-bit two's complement exponent
-// (bits 39-32) and a 32-bit part (bits 31-0) that holds either an integer or
-// the sign bit and the 31-bit fraction of a float. Exponent -128 is zero.
-struct Ext {
-  uint8_t exp = 0x80;
-  uint32_t man = 0;
-  friend bool operator==(const Ext&, const Ext&) = default;
-};
-
-namespace fp {
-// Results carry the exponent overflow (V) and underflow (UF) conditions.
-struct Res {
-  Ext v;
-  bool overflow = false;
-  bool underflow = false;
-};
-constexpr Ext kZero{0x80, 0};
-bool isZero(Ext x);
-bool isNegative(Ext x);
-double toDouble(Ext x);         // exact
-Res fromDouble(double v);       // rounds toward -infinity (the C40's truncation)
-Ext fromSingle(uint32_t word);  // 32-bit memory float -> register (LDF)
-uint32_t toSingle(Ext x);       // register -> 32-bit memory float (STF, truncates)
-Ext fromShort(uint16_t bits);   // 16-bit short float immediate
-Res fromInt(int32_t i);         // FLOAT (exact)
-int32_t fix(Ext x, bool* overflow);  // FIX: floor, saturating
-Res add(Ext a, Ext b);
-Res sub(Ext a, Ext b);  // a - b
-Res mul(Ext a, Ext b);  // inputs truncated to single precision first
-Res neg(Ext a);
-Res abs(Ext a);
-Res rcp(Ext a);  // RCPF model: 1/a truncated to 8 fraction bits
-int compare(Ext a, Ext b);  // sign of a - b, exact
-// TOIEEE / FRIEEE (TMS320C3x/C4x conversion tables; see docs/c40.md).
-uint32_t toIeee(Ext x);
-Res fromIeee(uint32_t ieee);
-}  // namespace fp
 
 // ------------------------------------------------------------ simulator
 
@@ -163,4 +124,4 @@ std::string_view stopName(Stop s);
 
 }  // namespace ldc::c40sim
 
-#endif  // LDC_BACKEND_C40SIM_SIM_H
+#endif  // LDC_BACKEND_C40SIM_MACHINE_SIM_H

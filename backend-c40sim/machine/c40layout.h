@@ -1,4 +1,4 @@
-// backend-c40sim/c40layout.h -- the word-addressed memory image of the C40
+// backend-c40sim/machine/c40layout.h -- the word-addressed memory image of the C40
 // target and the simulated board's memory map (docs/c40.md, "Code generation").
 //
 // The TMS320C40 addresses 32-bit words.  On the C40 every device element is
@@ -20,26 +20,9 @@
 
 namespace ldc::c40gen {
 
-// The memory map, the Sys words and C40Layout are the image format's
-// (loader/c40_map.h).
-using c40map::kCodeBase;
-using c40map::kCodeMaxWords;
-using c40map::kIlBase;
-using c40map::kIlMaxWords;
-using c40map::kStackBase;
-using c40map::kStackWords;
-using c40map::kRomBase;
-using c40map::kRomStride;
-using c40map::kRomWords;
-using c40map::kDataBase;
-using c40map::kDataPage;
-using c40map::kDataWaitStates;
-using c40map::kNsPerCycle;
-using c40map::kSysWords;
-using c40map::kSysDtWord;
-using c40map::kSysScanWord;
-using c40map::kSysScratchWord;
-using c40map::C40Layout;
+// The memory map, the Sys words, C40Layout and the math ROM's entries are the
+// image format's (loader/c40_map.h).
+using namespace c40map;
 
 // The byte image of docs/il.md <-> the C40 word image (words.size() ==
 // layout.words).  Sys: dt and the scan counter only (the x86 call table is

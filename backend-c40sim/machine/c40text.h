@@ -1,4 +1,4 @@
-// backend-c40sim/c40text.h -- assembling C40 source text (.c40s) with our
+// backend-c40sim/machine/c40text.h -- assembling C40 source text (.c40s) with our
 // assembler: the math ROM and the C40-hosted interpreter are written this way.
 #pragma once
 

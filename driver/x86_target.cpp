@@ -1,0 +1,104 @@
+// driver/x86_target.cpp -- the x86-64 row of the table of targets
+// (targets.h): backend-x86's macro compiler, the assembler's x86-64 target,
+// the x86-64 code check and the native engine.
+#include "driver/x86_target.h"
+
+#include <cstdio>
+
+#include "driver/targets.h"
+
+namespace ldc {
+
+NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode, int opt_level, bool notes) {
+  NativeBuild b;
+  b.gen = generate_x86(p, p.layout(), opt_level, notes);
+  b.asm_result = assemble_or_throw(as::x86::target(), b.gen.program, source_name, mode);
+  return b;
+}
+
+Image make_x86_image(const Program& p, const NativeBuild& nb) {
+  return make_image(ImageTarget::X86_64, p, nb.asm_result, nb.gen.il_items, rung_blocks(nb.gen));
+}
+
+namespace {
+
+TargetCode generate(const Program& p, const std::string& source_name, int opt_level, bool notes) {
+  NativeBuild b = build_x86(p, source_name, as::Mode::Blockwise, opt_level, notes);
+  return target_code(std::move(b.gen), std::move(b.asm_result));
+}
+
+std::string gnu_as(const Program& p, const std::string& source_name, int opt_level) {
+  return "# ldc " + source_name + ": x86-64, GNU as syntax (.intel_syntax noprefix)\n" +
+         as::x86::toGnuAs(generate_x86(p, p.layout(), opt_level).program);
+}
+
+std::string listing(const Program& p, const std::string& source_name, int opt_level) {
+  NativeBuild nb = build_x86(p, source_name, as::Mode::Blockwise, opt_level);
+  return as::x86::listing(nb.gen.program, nb.asm_result);
+}
+
+// Branch sites: each conditional or unconditional jump is a place the branch
+// predictor may have to remember (docs/x86.md, "Branch sites").
+std::string branch_sites(const Image& img, const as::x86::Disassembly& d) {
+  size_t jcc = 0, jmp = 0, call = 0;
+  for (const auto& di : d.insts) {
+    jcc += di.inst.mnemonic == as::x86::Mnemonic::Jcc;
+    jmp += di.inst.mnemonic == as::x86::Mnemonic::Jmp;
+    call += di.inst.mnemonic == as::x86::Mnemonic::Call;
+  }
+  return "\n; " + std::to_string(img.code.size()) + " bytes, " + std::to_string(d.insts.size()) + " instructions, " +
+         std::to_string(img.lines.size()) + " IL; branch sites: " + std::to_string(jcc) + " jcc, " + std::to_string(jmp) +
+         " jmp, " + std::to_string(call) + " call\n";
+}
+
+std::string disassemble(const Image& img) {
+  std::string out = "Disassembly of section .code:\n\n";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%016x <scan>:\n", img.entry);
+  out += buf;
+  std::multimap<uint32_t, std::string> notes = line_notes(img, 1);
+  as::x86::Disassembly d = as::x86::disassemble(img.code);
+  for (const auto& di : d.insts) {
+    auto [lo, hi] = notes.equal_range(di.offset);
+    for (auto it = lo; it != hi; ++it) out += it->second + "\n";
+    std::snprintf(buf, sizeof buf, "%8x:\t", di.offset);
+    out += buf;
+    std::string bytes;
+    for (uint32_t i = 0; i < di.length; i++) {
+      std::snprintf(buf, sizeof buf, "%02x ", img.code[di.offset + i]);
+      bytes += buf;
+    }
+    if (bytes.size() < 21) bytes.resize(21, ' ');
+    out += bytes + "\t" + as::x86::print(di.inst) + "\n";
+  }
+  if (d.error) out += "  (cannot decode at offset " + std::to_string(d.error->offset) + ": " + d.error->message + ")\n";
+  return out + branch_sites(img, d);
+}
+
+const as::TargetInfo& assembler() { return as::x86::target(); }
+
+std::unique_ptr<Engine> native_engine(const Image& img) { return make_native_engine(img.code, img.entry); }
+
+const TargetEngine kEngines[] = {{"native", true, native_engine}};
+
+}  // namespace
+
+const Target& x86_64_target() {
+  static const Target t{
+      .name = "x86-64",
+      .title = "x86-64",
+      .an_image = "an x86-64 image",
+      .image_kind = ImageTarget::X86_64,
+      .host = true,
+      .assembler = assembler,
+      .generate = generate,
+      .gnu_as = gnu_as,
+      .listing = listing,
+      .disassemble = disassemble,
+      .check = check_x86_code,
+      .engines = kEngines,
+  };
+  return t;
+}
+
+}  // namespace ldc

@@ -1,0 +1,25 @@
+// driver/x86_target.h -- the x86-64 target's route for the tests and the
+// benchmarks that look inside it (the tools go through driver/targets.h):
+// the macro compiler then the blockwise assembler, and the image.
+#pragma once
+
+#include <string>
+
+#include "backend-x86/backend_x86.h"
+#include "ir/ir.h"
+#include "loader/loader.h"
+
+namespace ldc {
+
+// Assembly errors become UserError with the rung's source line.
+struct NativeBuild {
+  X86Code gen;
+  as::Result asm_result;
+};
+NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode = as::Mode::Blockwise,
+                      int opt_level = 0, bool notes = true);
+
+// The image ldc writes for the x86-64 target: code, binary IL, line map, names.
+Image make_x86_image(const Program& p, const NativeBuild& nb);
+
+}  // namespace ldc
