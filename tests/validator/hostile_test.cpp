@@ -387,7 +387,9 @@ TEST(Hostile, CallsOnlyToTheSharedRoutines) {
   auto refused = [&](const Image& im, const std::string& reason, bool at_call) {
     std::string why = refusal(im);
     EXPECT_NE(why.find(reason), std::string::npos) << why;
-    if (at_call) EXPECT_NE(why.find("at code offset " + hex(call_at) + ": "), std::string::npos) << why;
+    if (at_call) {
+      EXPECT_NE(why.find("at code offset " + hex(call_at) + ": "), std::string::npos) << why;
+    }
   };
   // a call into the middle of a routine (past its mask, on an instruction boundary)
   int64_t mask = int64_t(x86::encodeAt(ton[0], 0).size());
