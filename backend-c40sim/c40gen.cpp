@@ -431,21 +431,16 @@ class Gen {
   void gen(const ldc::Instr& in);
 };
 
-Cond cond_of(Op op) {
-  switch (op) {
-    case Op::LDEQ: return Cond::EQ;
-    case Op::LDNE: return Cond::NE;
-    case Op::LDLT: return Cond::LT;
-    case Op::LDLE: return Cond::LE;
-    case Op::LDGT: return Cond::GT;
-    default: return Cond::GE;
-  }
-}
+// The C40 condition of each relation after CMPI / CMPF a - b, in the order of
+// ops.def's REL table (CMPF's flags on C40 floats have no NaN).
+constexpr Cond kRelConds[] = {Cond::EQ, Cond::NE, Cond::LT, Cond::LE, Cond::GT, Cond::GE};
+static_assert(sizeof kRelConds / sizeof kRelConds[0] == size_t(Rel::None));
+Cond cond_of(Rel r) { return kRelConds[int(r)]; }
 
 // push (a op b): the push is prepared in R2 (R10 << 1 | 1) and taken with LDIcond.
 void Gen::compare(const ldc::Instr& in) {
   const ldc::Operand &a = in.a[0], &b = in.a[1];
-  Cond c = cond_of(in.op);
+  Cond c = cond_of(op_info(in.op).rel);
   Reg d = slot(depth_);
   auto prepare = [&] {
     if (slots_) return op(M::Ldi, {I(0), R(d)});  // -O2: 0, or 1 if the condition holds
@@ -608,10 +603,8 @@ void Gen::special(const ldc::Instr& in) {
       store_real(d);
     }
   } else {
-    RomFn fn = in.op == Op::SIN ? RomFn::Sin : in.op == Op::COS ? RomFn::Cos : in.op == Op::TAN ? RomFn::Tan
-             : in.op == Op::SQRT ? RomFn::Sqrt : in.op == Op::EXP ? RomFn::Exp : RomFn::Ln;
     load_real(a, r0);
-    op(M::Call, {A(rom_entry(fn))});
+    op(M::Call, {A(rom_entry(rom_of(op_info(in.op).fn)))});
     store_real(d);
   }
   label(skip);

@@ -19,6 +19,7 @@
 
 #include "backend-c40sim/c40layout.h"
 #include "backend-c40sim/sim.h"
+#include "ir/ir.h"
 
 namespace ldc::c40gen {
 
@@ -27,6 +28,13 @@ using c40map::kRomFnCount;
 using c40map::rom_entry;
 const char* rom_name(RomFn f);      // "sin", ...
 float rom_host(RomFn f, float x);   // sinf cosf tanf sqrtf expf logf
+
+// The ROM routine of each REAL function, keyed by ir's RealFn (the order of
+// ops.def's FN table, then None); RomFn::Count: the C40 computes it inline (ABS).
+inline constexpr RomFn kRomOfFn[] = {RomFn::Sin, RomFn::Cos, RomFn::Tan,  RomFn::Exp,
+                                     RomFn::Ln,  RomFn::Sqrt, RomFn::Count, RomFn::Count};
+static_assert(sizeof kRomOfFn / sizeof kRomOfFn[0] == size_t(RealFn::None) + 1);
+constexpr RomFn rom_of(RealFn f) { return kRomOfFn[int(f)]; }
 
 struct MathRom {
   std::vector<uint32_t> words;            // kRomWords words from kRomBase

@@ -290,37 +290,57 @@ class Gen {
   }
 };
 
+// The x86 forms of each relation, in the order of ops.def's REL table.
+// After `cmp` a signed condition; after `ucomiss` an unsigned one, where an
+// unordered (NaN) result sets ZF, PF and CF: only A and AE are false then, so
+// Lt and Le test their swap_operands relation (Gt, Ge) on the operands
+// exchanged, and Eq / Ne fold in the parity flag (false / true on NaN).
+struct X86Rel {
+  Rel rel;
+  Cond int_cc;     // setcc after `cmp a, b`
+  Cond real_cc;    // setcc after `ucomiss a, b`, or `ucomiss b, a` if swap
+  bool swap;
+  bool parity;     // then: setcc parity_cc into cl, parity_op al, cl
+  Cond parity_cc;
+  M parity_op;
+};
+constexpr X86Rel kX86Rels[] = {
+    {Rel::Eq, Cond::E,  Cond::E,  false, true,  Cond::NP, M::And},
+    {Rel::Ne, Cond::NE, Cond::NE, false, true,  Cond::P,  M::Or},
+    {Rel::Lt, Cond::L,  Cond::A,  true,  false, {},       {}},
+    {Rel::Le, Cond::LE, Cond::AE, true,  false, {},       {}},
+    {Rel::Gt, Cond::G,  Cond::A,  false, false, {},       {}},
+    {Rel::Ge, Cond::GE, Cond::AE, false, false, {},       {}},
+};
+static_assert([] {
+  for (int r = 0; r < int(Rel::None); r++) {
+    const X86Rel& x = kX86Rels[r];
+    if (x.rel != Rel(r)) return false;
+    if (x.swap && kX86Rels[int(swap_operands(x.rel))].real_cc != x.real_cc) return false;
+  }
+  return true;
+}(), "kX86Rels follows ops.def's REL table");
+constexpr const X86Rel& x86_rel(Rel r) { return kX86Rels[int(r)]; }
+
 void Gen::compare(const ldc::Instr& in) {
   const ldc::Operand &a = in.a[0], &b = in.a[1];
+  const X86Rel& x = x86_rel(op_info(in.op).rel);
   if (!a.is_real() && !b.is_real()) {
     if (slots_) emit(M::Xor, {R(wide(slot(depth_))), R(wide(slot(depth_)))});  // no partial-register chain
     load_int(a, eax);
     emit(M::Cmp, {R(eax), int_src(b)});
-    Cond c = in.op == Op::LDEQ ? Cond::E : in.op == Op::LDNE ? Cond::NE : in.op == Op::LDLT ? Cond::L
-           : in.op == Op::LDLE ? Cond::LE : in.op == Op::LDGT ? Cond::G : Cond::GE;
-    if (slots_) return emit(makeCc(M::Setcc, c, {R(slot(depth_))}));
-    emit(makeCc(M::Setcc, c, {R(al)}));
+    if (slots_) return emit(makeCc(M::Setcc, x.int_cc, {R(slot(depth_))}));
+    emit(makeCc(M::Setcc, x.int_cc, {R(al)}));
     return push_al();
   }
   load_real(a, xmm0);
   load_real(b, xmm1);
-  switch (in.op) {  // unordered (NaN) sets ZF, PF and CF
-    case Op::LDGT: emit(M::Ucomiss, {R(xmm0), R(xmm1)}); emit(makeCc(M::Setcc, Cond::A, {R(al)})); break;
-    case Op::LDGE: emit(M::Ucomiss, {R(xmm0), R(xmm1)}); emit(makeCc(M::Setcc, Cond::AE, {R(al)})); break;
-    case Op::LDLT: emit(M::Ucomiss, {R(xmm1), R(xmm0)}); emit(makeCc(M::Setcc, Cond::A, {R(al)})); break;
-    case Op::LDLE: emit(M::Ucomiss, {R(xmm1), R(xmm0)}); emit(makeCc(M::Setcc, Cond::AE, {R(al)})); break;
-    case Op::LDEQ:
-      emit(M::Ucomiss, {R(xmm0), R(xmm1)});
-      emit(makeCc(M::Setcc, Cond::E, {R(al)}));
-      emit(makeCc(M::Setcc, Cond::NP, {R(cl)}));
-      emit(M::And, {R(al), R(cl)});
-      break;
-    default:
-      emit(M::Ucomiss, {R(xmm0), R(xmm1)});
-      emit(makeCc(M::Setcc, Cond::NE, {R(al)}));
-      emit(makeCc(M::Setcc, Cond::P, {R(cl)}));
-      emit(M::Or, {R(al), R(cl)});
-      break;
+  if (x.swap) emit(M::Ucomiss, {R(xmm1), R(xmm0)});
+  else emit(M::Ucomiss, {R(xmm0), R(xmm1)});
+  emit(makeCc(M::Setcc, x.real_cc, {R(al)}));
+  if (x.parity) {
+    emit(makeCc(M::Setcc, x.parity_cc, {R(cl)}));
+    emit(x.parity_op, {R(al), R(cl)});
   }
   push_al();
 }
@@ -456,10 +476,11 @@ void Gen::logic(const ldc::Instr& in) {
 
 void Gen::special(const ldc::Instr& in) {
   const ldc::Operand &a = in.a[0], &d = in.a[1];
+  const RealFn fn = op_info(in.op).fn;
   // the calls to the REAL function table keep `je skip`: no call without power
-  Ungated ungated(gate_, in.op != Op::ABS && in.op != Op::SQRT);
+  Ungated ungated(gate_, real_fn_info(fn).called);
   std::string skip = skip_unless_power();
-  if (in.op == Op::ABS && !a.is_real()) {
+  if (real_fn_info(fn).ints && !a.is_real()) {  // ABS of an INT32
     load_int(a, eax);
     emit(M::Mov, {R(ecx), R(eax)});
     emit(M::Sar, {R(ecx), I(31)});
@@ -470,19 +491,16 @@ void Gen::special(const ldc::Instr& in) {
     return;
   }
   load_real(a, xmm0);
-  if (in.op == Op::ABS) {
+  if (real_fn_info(fn).called) {
+    emit(M::Call, {Operand::m(mem_at(Size::Qword, uint32_t(call_slot_disp(fn))))});
+    // the call may clobber rdi: point it back (its K is filled in by set_bases)
+    if (bases_) emit(as::x86::baseLea(DI, 0));
+  } else if (fn == RealFn::Sqrt) {
+    emit(M::Sqrtss, {R(xmm0), R(xmm0)});
+  } else {  // Abs: the sign bit cleared
     emit(M::Movd, {R(eax), R(xmm0)});
     emit(M::And, {R(eax), I(0x7fffffff)});
     emit(M::Movd, {R(xmm0), R(eax)});
-  } else if (in.op == Op::SQRT) {
-    emit(M::Sqrtss, {R(xmm0), R(xmm0)});
-  } else {
-    RealFn fn = in.op == Op::SIN ? RealFn::Sin : in.op == Op::COS ? RealFn::Cos : in.op == Op::TAN ? RealFn::Tan
-              : in.op == Op::EXP ? RealFn::Exp : RealFn::Ln;
-    Mem m = mem_at(Size::Qword, uint32_t(kCallTableDisp + 8 * int32_t(fn)));
-    emit(M::Call, {Operand::m(m)});
-    // the call may clobber rdi: point it back (its K is filled in by set_bases)
-    if (bases_) emit(as::x86::baseLea(DI, 0));
   }
   store_real(d);
   end_skip(skip);
