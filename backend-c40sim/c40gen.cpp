@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "backend-c40sim/mathrom.h"
+#include "ir/codegen.h"
 
 namespace ldc::c40gen {
 
@@ -105,11 +106,7 @@ uint32_t float_bits(float f) {
 // the data page) of the IL instruction's operand 0 and 1 (a bit device or an
 // edge slot; one word each, 0 or 1).  R10 is the bit stack, top in bit 0;
 // R11 holds the mask ~1.
-struct Template {
-  Op op;
-  const char* text;
-};
-const Template kBitTemplates[] = {
+const OpTemplate kBitTemplates[] = {
     {Op::LOAD,   "LSH 1, R10; OR %0, R10"},
     {Op::LOADN,  "LSH 1, R10; OR 1, R10; XOR %0, R10"},
     {Op::AND,    "LDI %0, R0; OR R11, R0; AND R0, R10"},
@@ -130,21 +127,10 @@ const Template kBitTemplates[] = {
     {Op::RST,    "LDI %0, R0; ANDN R10, R0; STI R0, %0"},
 };
 
+// The templates, parsed once; %k becomes the placeholder @k (a direct operand).
 const std::vector<Instruction>* bit_template(Op op) {
-  static const auto table = [] {
-    std::map<Op, std::vector<Instruction>> t;
-    for (const Template& row : kBitTemplates) {
-      std::string s = row.text;
-      for (size_t p; (p = s.find('%')) != std::string::npos;) s.replace(p, 1, "@");  // %k -> @k: a marker
-      size_t start = 0;
-      while (start < s.size()) {
-        size_t semi = s.find(';', start);
-        t[row.op].push_back(parse(s.substr(start, semi == std::string::npos ? std::string::npos : semi - start)));
-        start = semi == std::string::npos ? s.size() : semi + 1;
-      }
-    }
-    return t;
-  }();
+  static const auto table = parse_templates<Instruction>(
+      kBitTemplates, [](const std::string& s) { return parse(s); }, [](int k) { return "@" + std::to_string(k); });
   auto it = table.find(op);
   return it == table.end() ? nullptr : &it->second;
 }
@@ -428,7 +414,10 @@ class Gen {
   void advance_r2(uint32_t tw);
   void bit_slots(const ldc::Instr& in);
   bool bit_fused(const ldc::Instr& in, Fuse f);
-  void gen(const ldc::Instr& in);
+  void basic(const ldc::Instr& in);
+  void flow(const ldc::Instr& in);
+  template <class G>
+  friend void ldc::gen_by_class(G& g, const ldc::Instr& in);
 };
 
 // The C40 condition of each relation after CMPI / CMPF a - b, in the order of
@@ -847,7 +836,7 @@ void Gen::counter(const ldc::Instr& in) {
 void Gen::instr(const ldc::Instr& in) {
   Fuse f = at_ < fuse_.size() ? fuse_[at_] : Fuse::None;
   if (slots_ && bit_template(in.op)) bit_slots(in);
-  else if (f == Fuse::None || !bit_fused(in, f)) gen(in);
+  else if (f == Fuse::None || !bit_fused(in, f)) gen_by_class(*this, in);
   depth_ += op_info(in.op).push - op_info(in.op).pop;
   at_++;
 }
@@ -956,40 +945,26 @@ void Gen::bit_slots(const ldc::Instr& in) {
   throw std::logic_error(std::string("c40 backend: no -O2 form for ") + op_info(in.op).name);
 }
 
-void Gen::gen(const ldc::Instr& in) {
-  if (const auto* t = bit_template(in.op)) {
-    for (Instruction i : *t) {
-      if (r0_top_ && i == make(M::And3, {I(1), R(r10), R(r0)})) continue;  // -O1: R0 holds the top
-      for (unsigned k = 0; k < i.numOperands; k++)
-        if (i.ops[k].kind == OperandKind::Direct) i.ops[k] = Dv(in.a[i.ops[k].imm]);
-      emit(std::move(i));
-    }
-    return;
+// The bit instructions: their template with the placeholders replaced by the
+// operands' direct addresses.
+void Gen::basic(const ldc::Instr& in) {
+  const std::vector<Instruction>* t = bit_template(in.op);
+  if (!t) throw std::logic_error(std::string("c40 backend: no template for ") + op_info(in.op).name);
+  for (Instruction i : *t) {
+    if (r0_top_ && i == make(M::And3, {I(1), R(r10), R(r0)})) continue;  // -O1: R0 holds the top
+    for (unsigned k = 0; k < i.numOperands; k++)
+      if (i.ops[k].kind == OperandKind::Direct) i.ops[k] = Dv(in.a[i.ops[k].imm]);
+    emit(std::move(i));
   }
+}
 
-  switch (op_info(in.op).klass) {
-    case OpClass::Compare: return compare(in);
-    case OpClass::Move: return move(in);
-    case OpClass::Arith:
-      if (in.op == Op::DIV || in.op == Op::MOD) return divmod(in);
-      return arith(in);
-    case OpClass::Logic: return logic(in);
-    case OpClass::Special: return special(in);
-    case OpClass::Timer: return timer(in);
-    case OpClass::Counter: return counter(in);
-    case OpClass::Flow:
-      test_top();
-      if (in.op == Op::END) return opc(M::Retsc, Cond::NE, {});
-      {
-        std::string skip = fresh();
-        branch(Cond::EQ, skip);
-        jump(label_name(in.a[0].label));  // BR: 24-bit reach across the program
-        label(skip);
-      }
-      return;
-    case OpClass::Basic: break;
-  }
-  throw std::logic_error(std::string("c40 backend: no template for ") + op_info(in.op).name);
+void Gen::flow(const ldc::Instr& in) {
+  test_top();
+  if (in.op == Op::END) return opc(M::Retsc, Cond::NE, {});
+  std::string skip = fresh();
+  branch(Cond::EQ, skip);
+  jump(label_name(in.a[0].label));  // BR: 24-bit reach across the program
+  label(skip);
 }
 
 // The shift-subtract division (docs/c40.md): R0 = a, R1 = b (b != 0, -1);

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "backend-x86/backend_x86.h"
+#include "ir/codegen.h"
 
 namespace ldc {
 namespace {
@@ -25,11 +26,7 @@ using Item = as::Item<Instruction>;
 // `[rbx + address]` of the IL instruction's operand 0 and 1: a bit device or
 // an edge slot, one byte each.  The bit stack is ebp, top in bit 0:
 // a push is `lea ebp, [rax+rbp*2]` with the new bit in eax.
-struct Template {
-  Op op;
-  const char* text;
-};
-const Template kBitTemplates[] = {
+const OpTemplate kBitTemplates[] = {
     {Op::LOAD,   "movzx eax, byte ptr %0; lea ebp, [rax+rbp*2]"},
     {Op::LOADN,  "movzx eax, byte ptr %0; xor eax, 1; lea ebp, [rax+rbp*2]"},
     {Op::AND,    "movzx eax, byte ptr %0; or eax, -2; and ebp, eax"},
@@ -52,32 +49,13 @@ const Template kBitTemplates[] = {
 
 constexpr int32_t kMark[2] = {0x10000000, 0x20000000};
 
-// The templates, parsed once.
-const std::vector<Instruction>& bit_template(Op op) {
-  static const auto table = [] {
-    std::map<Op, std::vector<Instruction>> t;
-    for (const Template& row : kBitTemplates) {
-      std::string s = row.text;
-      for (int k = 0; k < 2; k++) {
-        std::string key = "%" + std::to_string(k), val = "[rbx+" + std::to_string(kMark[k]) + "]";
-        for (size_t p; (p = s.find(key)) != std::string::npos;) s.replace(p, key.size(), val);
-      }
-      size_t start = 0;
-      while (start < s.size()) {
-        size_t semi = s.find(';', start);
-        t[row.op].push_back(parse(s.substr(start, semi == std::string::npos ? std::string::npos : semi - start)));
-        start = semi == std::string::npos ? s.size() : semi + 1;
-      }
-    }
-    return t;
-  }();
-  return table.at(op);
-}
-
-bool has_template(Op op) {
-  for (const Template& row : kBitTemplates)
-    if (row.op == op) return true;
-  return false;
+// The templates, parsed once; %k becomes the placeholder [rbx+kMark[k]].
+const std::vector<Instruction>* bit_template(Op op) {
+  static const auto table = parse_templates<Instruction>(
+      kBitTemplates, [](const std::string& s) { return parse(s); },
+      [](int k) { return "[rbx+" + std::to_string(kMark[k]) + "]"; });
+  auto it = table.find(op);
+  return it == table.end() ? nullptr : &it->second;
 }
 
 // ------------------------------------------------------------ application code
@@ -159,7 +137,8 @@ class Gen {
     else { emit(M::Mov, {R(eax), R(ebp)}); emit(M::And, {R(eax), I(1)}); }
   }
   void bit_slots(const ldc::Instr& in);
-  void gen(const ldc::Instr& in);
+  template <class G>
+  friend void ldc::gen_by_class(G& g, const ldc::Instr& in);
 
   void emit(Instruction i) { items_.push_back(Item::instr(std::move(i))); }
   void emit(M m, std::initializer_list<Operand> ops) { emit(make(m, ops)); }
@@ -266,6 +245,7 @@ class Gen {
     return skip;
   }
 
+  void basic(const ldc::Instr& in);
   void compare(const ldc::Instr& in);
   void move(const ldc::Instr& in);
   void arith(const ldc::Instr& in);
@@ -284,6 +264,7 @@ class Gen {
     emit(M::Call, {L(std::string(as::x86::routineName(r)))});
   }
   void counter_gated(const ldc::Instr& in);
+  void flow(const ldc::Instr& in);
   void reset_masked(std::initializer_list<Operand> dwords, std::initializer_list<Operand> bytes);
   void end_skip(const std::string& skip) {
     if (!skip.empty()) label(skip);
@@ -778,7 +759,7 @@ void Gen::counter(const ldc::Instr& in) {
 }
 
 void Gen::instr(const ldc::Instr& in) {
-  gen(in);
+  gen_by_class(*this, in);
   depth_ += op_info(in.op).push - op_info(in.op).pop;
 }
 
@@ -832,39 +813,28 @@ void Gen::bit_slots(const ldc::Instr& in) {
   throw std::logic_error(std::string("x86 backend: no -O2 form for ") + op_info(in.op).name);
 }
 
-void Gen::gen(const ldc::Instr& in) {
-  if (slots_ && has_template(in.op)) return bit_slots(in);
-  if (has_template(in.op)) {
-    for (Instruction i : bit_template(in.op)) {
-      for (int k = 0; k < i.numOperands; k++) {
-        Mem& m = i.ops[k].mem;
-        if (i.ops[k].kind != OperandKind::Mem) continue;
-        if (m.disp == kMark[0]) m.disp = int32_t(addr(in.a[0]));
-        else if (m.disp == kMark[1]) m.disp = int32_t(addr(in.a[1]));
-      }
-      emit(std::move(i));
+// The bit instructions: -O2 on the slot registers, else their template with
+// the placeholders replaced by the operands' addresses.
+void Gen::basic(const ldc::Instr& in) {
+  if (slots_) return bit_slots(in);
+  const std::vector<Instruction>* t = bit_template(in.op);
+  if (!t) throw std::logic_error(std::string("x86 backend: no template for ") + op_info(in.op).name);
+  for (Instruction i : *t) {
+    for (int k = 0; k < i.numOperands; k++) {
+      Mem& m = i.ops[k].mem;
+      if (i.ops[k].kind != OperandKind::Mem) continue;
+      if (m.disp == kMark[0]) m.disp = int32_t(addr(in.a[0]));
+      else if (m.disp == kMark[1]) m.disp = int32_t(addr(in.a[1]));
     }
-    return;
+    emit(std::move(i));
   }
-  switch (op_info(in.op).klass) {
-    case OpClass::Compare: return compare(in);
-    case OpClass::Move: return move(in);
-    case OpClass::Arith:
-      if (in.op == Op::DIV || in.op == Op::MOD) return divmod(in);
-      return arith(in);
-    case OpClass::Logic: return logic(in);
-    case OpClass::Special: return special(in);
-    case OpClass::Timer: return timer(in);
-    case OpClass::Counter: return counter(in);
-    case OpClass::Flow: {
-      test_top();
-      Instruction j = makeCc(M::Jcc, Cond::NE, {L(in.op == Op::JMP ? x86_label_name(in.a[0].label) : kX86ExitLabel)});
-      j.longBranch = true;
-      return emit(std::move(j));
-    }
-    case OpClass::Basic: break;
-  }
-  throw std::logic_error(std::string("x86 backend: no template for ") + op_info(in.op).name);
+}
+
+void Gen::flow(const ldc::Instr& in) {
+  test_top();
+  Instruction j = makeCc(M::Jcc, Cond::NE, {L(in.op == Op::JMP ? x86_label_name(in.a[0].label) : kX86ExitLabel)});
+  j.longBranch = true;
+  emit(std::move(j));
 }
 
 // ------------------------------------------------------------ -O1 peephole
