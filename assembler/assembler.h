@@ -284,6 +284,9 @@ Result assemble(const Target<Inst>& target, const Program<Inst>& program,
 // The two text forms every target prints the same way; `mark` starts a
 // comment in the target's syntax ("#", ";").
 
+// v in a printf format of one unsigned number ("%08x"), for listing columns.
+std::string listingField(const char* fmt, uint32_t v);
+
 // The GNU-as source of a program: `head`, then per block a comment line
 // (`<mark> block B, line L`) and its items, one a line: a label (a block's
 // local labels renamed .L<B>_name: blocks may reuse names), an instruction

@@ -537,20 +537,15 @@ std::string toGnuAs(const C40Program& p) {
 }
 
 std::string listing(const C40Program& p, const Result& r) {
-  auto hex = [](const char* fmt, uint32_t v) {
-    char buf[16];
-    std::snprintf(buf, sizeof buf, fmt, v);
-    return std::string(buf);
-  };
   auto itemHead = [&](const ItemLayout& lay) {
     std::string word = "          ";
     if (lay.size == 4 && lay.offset + 4 <= r.code.size())
-      word = hex("%08x  ", uint32_t(r.code[lay.offset]) | uint32_t(r.code[lay.offset + 1]) << 8 |
-                               uint32_t(r.code[lay.offset + 2]) << 16 | uint32_t(r.code[lay.offset + 3]) << 24);
-    return hex("%06x  ", lay.offset / 4) + word;
+      word = listingField("%08x  ", uint32_t(r.code[lay.offset]) | uint32_t(r.code[lay.offset + 1]) << 8 |
+                                        uint32_t(r.code[lay.offset + 2]) << 16 | uint32_t(r.code[lay.offset + 3]) << 24);
+    return listingField("%06x  ", lay.offset / 4) + word;
   };
   return listingText(
-      p, r, ";", [&](uint32_t off) { return hex("%06x", off / 4) + "            "; }, itemHead,
+      p, r, ";", [&](uint32_t off) { return listingField("%06x", off / 4) + "            "; }, itemHead,
       [](const Instruction& in, const ItemLayout&) { return print(in); });
 }
 

@@ -416,19 +416,14 @@ std::string toGnuAs(const X86Program& p) {
 }
 
 std::string listing(const X86Program& p, const Result& r) {
-  auto hex = [](const char* fmt, uint32_t v) {
-    char buf[16];
-    std::snprintf(buf, sizeof buf, fmt, v);
-    return std::string(buf);
-  };
   auto itemHead = [&](const ItemLayout& lay) {
     std::string bytes;
-    for (uint32_t k = 0; k < lay.size && lay.offset + k < r.code.size(); ++k) bytes += hex("%02x", r.code[lay.offset + k]);
+    for (uint32_t k = 0; k < lay.size && lay.offset + k < r.code.size(); ++k) bytes += listingField("%02x", r.code[lay.offset + k]);
     bytes.resize(std::max<size_t>(bytes.size(), 20), ' ');
-    return hex("%08x  ", lay.offset) + bytes + "  ";
+    return listingField("%08x  ", lay.offset) + bytes + "  ";
   };
   return listingText(
-      p, r, "#", [&](uint32_t off) { return hex("%08x", off) + "  "; }, itemHead,
+      p, r, "#", [&](uint32_t off) { return listingField("%08x", off) + "  "; }, itemHead,
       [](const Instruction& in, const ItemLayout& lay) { return print(in, lay.longForm); });
 }
 
