@@ -14,6 +14,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <set>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -277,6 +278,76 @@ Result assemble(const Target<Inst>& target, const Program<Inst>& program,
   };
   View view(target, program);
   return detail::assemble(target, view, mode);
+}
+
+// ------------------------------------------------------------------ text
+// The two text forms every target prints the same way; `mark` starts a
+// comment in the target's syntax ("#", ";").
+
+// v in a printf format of one unsigned number ("%08x"), for listing columns.
+std::string listingField(const char* fmt, uint32_t v);
+
+// The GNU-as source of a program: `head`, then per block a comment line
+// (`<mark> block B, line L`) and its items, one a line: a label (a block's
+// local labels renamed .L<B>_name: blocks may reuse names), an instruction
+// after a tab as print(inst, outside) prints it, its label operands renamed
+// (outside: one of them is not a local label of its block), and an item's
+// comment after a tab and `<mark> `.  A comment item without text is no line.
+template <class Inst, class Print>
+std::string gnuAsText(const Program<Inst>& p, std::string head, std::string_view mark, Print print) {
+  std::string out = std::move(head);
+  for (size_t b = 0; b < p.blocks.size(); ++b) {
+    const auto& blk = p.blocks[b];
+    std::set<std::string_view> locals;
+    for (const auto& it : blk.items)
+      if (it.kind == ItemKind::Label && !it.global) locals.insert(it.label);
+    auto mangle = [&](const std::string& n) { return locals.count(n) ? ".L" + std::to_string(b) + "_" + n : n; };
+    out += std::string(mark) + " block " + std::to_string(b) + ", line " + std::to_string(blk.sourceLine) + "\n";
+    for (const auto& it : blk.items) {
+      if (it.kind == ItemKind::Label) {
+        out += mangle(it.label) + ":";
+      } else if (it.kind == ItemKind::Instruction) {
+        Inst in = it.inst;
+        bool outside = false;
+        for (unsigned i = 0; i < unsigned(in.numOperands) && i < 3; ++i) {
+          auto& o = in.ops[i];
+          if (o.kind != decltype(o.kind)::Label) continue;
+          outside = outside || !locals.count(o.label);
+          o.label = mangle(o.label);
+        }
+        out += "\t" + print(in, outside);
+      }
+      if (!it.comment.empty()) out += "\t" + std::string(mark) + " " + it.comment;
+      if (it.kind != ItemKind::Comment || !it.comment.empty()) out += "\n";
+    }
+  }
+  return out;
+}
+
+// The listing of an assembled program: per block a line
+// `blockHead(offset) <mark> block B, line L`, then per item
+// `itemHead(layout)` followed by its label, or a tab and print(inst, layout),
+// and its comment after a tab and `<mark> `.
+template <class Inst, class BlockHead, class ItemHead, class Print>
+std::string listingText(const Program<Inst>& p, const Result& r, std::string_view mark, BlockHead blockHead,
+                        ItemHead itemHead, Print print) {
+  std::string out;
+  for (size_t b = 0; b < p.blocks.size(); ++b) {
+    const auto& blk = p.blocks[b];
+    out += blockHead(b < r.blockOffsets.size() ? r.blockOffsets[b] : 0u) + std::string(mark) + " block " +
+           std::to_string(b) + ", line " + std::to_string(blk.sourceLine) + "\n";
+    for (size_t i = 0; i < blk.items.size(); ++i) {
+      const auto& it = blk.items[i];
+      ItemLayout lay;
+      if (b < r.items.size() && i < r.items[b].size()) lay = r.items[b][i];
+      std::string line = itemHead(lay);
+      if (it.kind == ItemKind::Label) line += it.label + ":";
+      else if (it.kind == ItemKind::Instruction) line += "\t" + print(it.inst, lay);
+      if (!it.comment.empty()) line += "\t" + std::string(mark) + " " + it.comment;
+      out += line + "\n";
+    }
+  }
+  return out;
 }
 
 }  // namespace ldc::as

@@ -532,62 +532,21 @@ Line parseLine(std::string_view text) {
 }
 
 std::string toGnuAs(const C40Program& p) {
-  std::string out = "\t.text\n.Lcode:\n";
-  for (size_t b = 0; b < p.blocks.size(); ++b) {
-    const auto& blk = p.blocks[b];
-    std::set<std::string_view> locals;
-    for (const auto& it : blk.items)
-      if (it.kind == ItemKind::Label && !it.global) locals.insert(it.label);
-    auto mangle = [&](const std::string& n) {
-      return locals.count(n) ? ".L" + std::to_string(b) + "_" + n : n;
-    };
-    out += "; block " + std::to_string(b) + ", line " + std::to_string(blk.sourceLine) + "\n";
-    for (const auto& it : blk.items) {
-      if (it.kind == ItemKind::Label) {
-        out += mangle(it.label) + ":";
-      } else if (it.kind == ItemKind::Instruction) {
-        Instruction in = it.inst;
-        for (unsigned i = 0; i < in.numOperands && i < 3; ++i)
-          if (in.ops[i].kind == OperandKind::Label) in.ops[i].label = mangle(in.ops[i].label);
-        out += "\t" + printGnuAs(in, ".Lcode");
-      }
-      if (!it.comment.empty()) out += "\t; " + it.comment;
-      if (it.kind != ItemKind::Comment || !it.comment.empty()) out += "\n";
-    }
-  }
-  return out;
+  return gnuAsText(p, "\t.text\n.Lcode:\n", ";",
+                   [](const Instruction& in, bool) { return printGnuAs(in, ".Lcode"); });
 }
 
 std::string listing(const C40Program& p, const Result& r) {
-  std::string out;
-  char buf[48];
-  for (size_t b = 0; b < p.blocks.size(); ++b) {
-    const auto& blk = p.blocks[b];
-    uint32_t off = b < r.blockOffsets.size() ? r.blockOffsets[b] : 0u;
-    std::snprintf(buf, sizeof buf, "%06x", off / 4);
-    out += std::string(buf) + "            ; block " + std::to_string(b) + ", line " +
-           std::to_string(blk.sourceLine) + "\n";
-    for (size_t i = 0; i < blk.items.size(); ++i) {
-      const auto& it = blk.items[i];
-      ItemLayout lay;
-      if (b < r.items.size() && i < r.items[b].size()) lay = r.items[b][i];
-      std::snprintf(buf, sizeof buf, "%06x  ", lay.offset / 4);
-      std::string line = buf;
-      if (lay.size == 4 && lay.offset + 4 <= r.code.size()) {
-        uint32_t w = uint32_t(r.code[lay.offset]) | uint32_t(r.code[lay.offset + 1]) << 8 |
-                     uint32_t(r.code[lay.offset + 2]) << 16 | uint32_t(r.code[lay.offset + 3]) << 24;
-        std::snprintf(buf, sizeof buf, "%08x  ", w);
-        line += buf;
-      } else {
-        line += "          ";
-      }
-      if (it.kind == ItemKind::Label) line += it.label + ":";
-      else if (it.kind == ItemKind::Instruction) line += "\t" + print(it.inst);
-      if (!it.comment.empty()) line += "\t; " + it.comment;
-      out += line + "\n";
-    }
-  }
-  return out;
+  auto itemHead = [&](const ItemLayout& lay) {
+    std::string word = "          ";
+    if (lay.size == 4 && lay.offset + 4 <= r.code.size())
+      word = listingField("%08x  ", uint32_t(r.code[lay.offset]) | uint32_t(r.code[lay.offset + 1]) << 8 |
+                                        uint32_t(r.code[lay.offset + 2]) << 16 | uint32_t(r.code[lay.offset + 3]) << 24);
+    return listingField("%06x  ", lay.offset / 4) + word;
+  };
+  return listingText(
+      p, r, ";", [&](uint32_t off) { return listingField("%06x", off / 4) + "            "; }, itemHead,
+      [](const Instruction& in, const ItemLayout&) { return print(in); });
 }
 
 }  // namespace ldc::as::c40

@@ -3,9 +3,16 @@
 #include "assembler/assembler.h"
 
 #include <chrono>
+#include <cstdio>
 #include <unordered_map>
 
 namespace ldc::as {
+
+std::string listingField(const char* fmt, uint32_t v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, fmt, v);
+  return buf;
+}
 
 AsmError::AsmError(Error e) : std::runtime_error(e.message), error_(std::move(e)) {}
 

@@ -408,68 +408,23 @@ std::string print(const Instruction& in, bool forceLong, std::string_view addres
 }
 
 std::string toGnuAs(const X86Program& p) {
-  std::set<std::string_view> globals(p.globals.begin(), p.globals.end());
-  std::string out = ".intel_syntax noprefix\n.text\n.Lcode:\n";
-  for (size_t b = 0; b < p.blocks.size(); ++b) {
-    const auto& blk = p.blocks[b];
-    std::set<std::string_view> locals;
-    for (const auto& it : blk.items)
-      if (it.kind == ItemKind::Label && !it.global) locals.insert(it.label);
-    auto mangle = [&](const std::string& n) {
-      return locals.count(n) ? ".L" + std::to_string(b) + "_" + n : n;
-    };
-    out += "# block " + std::to_string(b) + ", line " + std::to_string(blk.sourceLine) + "\n";
-    for (const auto& it : blk.items) {
-      if (it.kind == ItemKind::Label) {
-        out += mangle(it.label) + ":";
-      } else if (it.kind == ItemKind::Instruction) {
-        Instruction in = it.inst;
-        bool far = false;
-        for (unsigned i = 0; i < in.numOperands && i < 3; ++i) {
-          Operand& o = in.ops[i];
-          if (o.kind == OperandKind::Label) {
-            far = !locals.count(o.label);
-            o.label = mangle(o.label);
-          } else if (o.kind == OperandKind::Address) {
-            far = true;
-          }
-        }
-        out += "\t" + print(in, far, ".Lcode");
-      }
-      if (!it.comment.empty()) out += "\t# " + it.comment;
-      if (it.kind != ItemKind::Comment || !it.comment.empty()) out += "\n";
-    }
-  }
-  return out;
+  return gnuAsText(p, ".intel_syntax noprefix\n.text\n.Lcode:\n", "#", [](const Instruction& in, bool outside) {
+    bool address = false;  // an absolute code address: reached with the long form too
+    for (unsigned i = 0; i < in.numOperands && i < 3; ++i) address = address || in.ops[i].kind == OperandKind::Address;
+    return print(in, outside || address, ".Lcode");
+  });
 }
 
 std::string listing(const X86Program& p, const Result& r) {
-  std::string out;
-  char buf[32];
-  for (size_t b = 0; b < p.blocks.size(); ++b) {
-    const auto& blk = p.blocks[b];
-    std::snprintf(buf, sizeof buf, "%08x", b < r.blockOffsets.size() ? r.blockOffsets[b] : 0u);
-    out += std::string(buf) + "  # block " + std::to_string(b) + ", line " +
-           std::to_string(blk.sourceLine) + "\n";
-    for (size_t i = 0; i < blk.items.size(); ++i) {
-      const auto& it = blk.items[i];
-      ItemLayout lay;
-      if (b < r.items.size() && i < r.items[b].size()) lay = r.items[b][i];
-      std::snprintf(buf, sizeof buf, "%08x  ", lay.offset);
-      std::string line = buf, bytes;
-      for (uint32_t k = 0; k < lay.size && lay.offset + k < r.code.size(); ++k) {
-        std::snprintf(buf, sizeof buf, "%02x", r.code[lay.offset + k]);
-        bytes += buf;
-      }
-      bytes.resize(std::max<size_t>(bytes.size(), 20), ' ');
-      line += bytes + "  ";
-      if (it.kind == ItemKind::Label) line += it.label + ":";
-      else if (it.kind == ItemKind::Instruction) line += "\t" + print(it.inst, lay.longForm);
-      if (!it.comment.empty()) line += "\t# " + it.comment;
-      out += line + "\n";
-    }
-  }
-  return out;
+  auto itemHead = [&](const ItemLayout& lay) {
+    std::string bytes;
+    for (uint32_t k = 0; k < lay.size && lay.offset + k < r.code.size(); ++k) bytes += listingField("%02x", r.code[lay.offset + k]);
+    bytes.resize(std::max<size_t>(bytes.size(), 20), ' ');
+    return listingField("%08x  ", lay.offset) + bytes + "  ";
+  };
+  return listingText(
+      p, r, "#", [&](uint32_t off) { return listingField("%08x", off) + "  "; }, itemHead,
+      [](const Instruction& in, const ItemLayout& lay) { return print(in, lay.longForm); });
 }
 
 std::span<const Instruction> scanPrologue(bool withSlots) {

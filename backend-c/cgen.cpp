@@ -198,11 +198,8 @@ class CGen {
       case Op::OUTN: return line(bit(a[0]) + " = (u8)!" + top() + ";");
       case Op::SET: return line("if (" + top() + ") " + bit(a[0]) + " = 1;");
       case Op::RST: return line("if (" + top() + ") " + bit(a[0]) + " = 0;");
-      case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE: {
-        const char* op = in.op == Op::LDEQ ? "==" : in.op == Op::LDNE ? "!=" : in.op == Op::LDLT ? "<"
-                       : in.op == Op::LDLE ? "<=" : in.op == Op::LDGT ? ">" : ">=";
-        return push("(" + val(a[0], real) + " " + op + " " + val(a[1], real) + ")");
-      }
+      case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE:
+        return push("(" + val(a[0], real) + " " + rel_info(op_info(in.op).rel).c + " " + val(a[1], real) + ")");
       case Op::MOV: return guarded(store(a[1], val(a[0], a[0].is_real()), a[0].is_real()));
       case Op::ADD: case Op::SUB: case Op::MUL: {
         if (real) {
@@ -231,14 +228,13 @@ class CGen {
       case Op::SHL: case Op::SHR:
         return guarded(store(a[2], std::string(in.op == Op::SHL ? "i_shl(" : "i_shr(") + val(a[0], false) + ", " +
                                        val(a[1], false) + ")", false));
-      case Op::ABS:
-        if (!a[0].is_real()) return guarded(store(a[1], "i_abs(" + val(a[0], false) + ")", false));
-        return guarded(store(a[1], "fabsf(" + val(a[0], true) + ")", true));
-      case Op::SQRT: return guarded(store(a[1], "sqrtf(" + val(a[0], true) + ")", true));
-      case Op::SIN: case Op::COS: case Op::TAN: case Op::EXP: case Op::LN: {
-        RealFn fn = in.op == Op::SIN ? RealFn::Sin : in.op == Op::COS ? RealFn::Cos : in.op == Op::TAN ? RealFn::Tan
-                  : in.op == Op::EXP ? RealFn::Exp : RealFn::Ln;
-        return guarded(store(a[1], "call_fn(m, " + std::to_string(kCallTableDisp + 8 * int32_t(fn)) + ", " + val(a[0], true) + ")", true));
+      case Op::SIN: case Op::COS: case Op::TAN: case Op::SQRT: case Op::EXP: case Op::LN: case Op::ABS: {
+        const RealFn fn = op_info(in.op).fn;
+        if (real_fn_info(fn).ints && !a[0].is_real()) return guarded(store(a[1], "i_abs(" + val(a[0], false) + ")", false));
+        // the called ones through the image's table, as native code: the same libm as the interpreter
+        if (real_fn_info(fn).called)
+          return guarded(store(a[1], "call_fn(m, " + std::to_string(call_slot_disp(fn)) + ", " + val(a[0], true) + ")", true));
+        return guarded(store(a[1], std::string(real_fn_info(fn).libm) + "(" + val(a[0], true) + ")", true));
       }
       case Op::TON: case Op::TOF: case Op::TP: case Op::MTON: case Op::MTOF: case Op::MTP: {
         uint32_t n = a[0].index;

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "backend-x86/backend_x86.h"
+#include "ir/codegen.h"
 
 namespace ldc {
 namespace {
@@ -25,11 +26,7 @@ using Item = as::Item<Instruction>;
 // `[rbx + address]` of the IL instruction's operand 0 and 1: a bit device or
 // an edge slot, one byte each.  The bit stack is ebp, top in bit 0:
 // a push is `lea ebp, [rax+rbp*2]` with the new bit in eax.
-struct Template {
-  Op op;
-  const char* text;
-};
-const Template kBitTemplates[] = {
+const OpTemplate kBitTemplates[] = {
     {Op::LOAD,   "movzx eax, byte ptr %0; lea ebp, [rax+rbp*2]"},
     {Op::LOADN,  "movzx eax, byte ptr %0; xor eax, 1; lea ebp, [rax+rbp*2]"},
     {Op::AND,    "movzx eax, byte ptr %0; or eax, -2; and ebp, eax"},
@@ -52,32 +49,13 @@ const Template kBitTemplates[] = {
 
 constexpr int32_t kMark[2] = {0x10000000, 0x20000000};
 
-// The templates, parsed once.
-const std::vector<Instruction>& bit_template(Op op) {
-  static const auto table = [] {
-    std::map<Op, std::vector<Instruction>> t;
-    for (const Template& row : kBitTemplates) {
-      std::string s = row.text;
-      for (int k = 0; k < 2; k++) {
-        std::string key = "%" + std::to_string(k), val = "[rbx+" + std::to_string(kMark[k]) + "]";
-        for (size_t p; (p = s.find(key)) != std::string::npos;) s.replace(p, key.size(), val);
-      }
-      size_t start = 0;
-      while (start < s.size()) {
-        size_t semi = s.find(';', start);
-        t[row.op].push_back(parse(s.substr(start, semi == std::string::npos ? std::string::npos : semi - start)));
-        start = semi == std::string::npos ? s.size() : semi + 1;
-      }
-    }
-    return t;
-  }();
-  return table.at(op);
-}
-
-bool has_template(Op op) {
-  for (const Template& row : kBitTemplates)
-    if (row.op == op) return true;
-  return false;
+// The templates, parsed once; %k becomes the placeholder [rbx+kMark[k]].
+const std::vector<Instruction>* bit_template(Op op) {
+  static const auto table = parse_templates<Instruction>(
+      kBitTemplates, [](const std::string& s) { return parse(s); },
+      [](int k) { return "[rbx+" + std::to_string(kMark[k]) + "]"; });
+  auto it = table.find(op);
+  return it == table.end() ? nullptr : &it->second;
 }
 
 // ------------------------------------------------------------ application code
@@ -159,7 +137,8 @@ class Gen {
     else { emit(M::Mov, {R(eax), R(ebp)}); emit(M::And, {R(eax), I(1)}); }
   }
   void bit_slots(const ldc::Instr& in);
-  void gen(const ldc::Instr& in);
+  template <class G>
+  friend void ldc::gen_by_class(G& g, const ldc::Instr& in);
 
   void emit(Instruction i) { items_.push_back(Item::instr(std::move(i))); }
   void emit(M m, std::initializer_list<Operand> ops) { emit(make(m, ops)); }
@@ -266,6 +245,7 @@ class Gen {
     return skip;
   }
 
+  void basic(const ldc::Instr& in);
   void compare(const ldc::Instr& in);
   void move(const ldc::Instr& in);
   void arith(const ldc::Instr& in);
@@ -284,43 +264,64 @@ class Gen {
     emit(M::Call, {L(std::string(as::x86::routineName(r)))});
   }
   void counter_gated(const ldc::Instr& in);
+  void flow(const ldc::Instr& in);
   void reset_masked(std::initializer_list<Operand> dwords, std::initializer_list<Operand> bytes);
   void end_skip(const std::string& skip) {
     if (!skip.empty()) label(skip);
   }
 };
 
+// The x86 forms of each relation, in the order of ops.def's REL table.
+// After `cmp` a signed condition; after `ucomiss` an unsigned one, where an
+// unordered (NaN) result sets ZF, PF and CF: only A and AE are false then, so
+// Lt and Le test their swap_operands relation (Gt, Ge) on the operands
+// exchanged, and Eq / Ne fold in the parity flag (false / true on NaN).
+struct X86Rel {
+  Rel rel;
+  Cond int_cc;     // setcc after `cmp a, b`
+  Cond real_cc;    // setcc after `ucomiss a, b`, or `ucomiss b, a` if swap
+  bool swap;
+  bool parity;     // then: setcc parity_cc into cl, parity_op al, cl
+  Cond parity_cc;
+  M parity_op;
+};
+constexpr X86Rel kX86Rels[] = {
+    {Rel::Eq, Cond::E,  Cond::E,  false, true,  Cond::NP, M::And},
+    {Rel::Ne, Cond::NE, Cond::NE, false, true,  Cond::P,  M::Or},
+    {Rel::Lt, Cond::L,  Cond::A,  true,  false, {},       {}},
+    {Rel::Le, Cond::LE, Cond::AE, true,  false, {},       {}},
+    {Rel::Gt, Cond::G,  Cond::A,  false, false, {},       {}},
+    {Rel::Ge, Cond::GE, Cond::AE, false, false, {},       {}},
+};
+static_assert([] {
+  for (int r = 0; r < int(Rel::None); r++) {
+    const X86Rel& x = kX86Rels[r];
+    if (x.rel != Rel(r)) return false;
+    if (x.swap && kX86Rels[int(swap_operands(x.rel))].real_cc != x.real_cc) return false;
+  }
+  return true;
+}(), "kX86Rels follows ops.def's REL table");
+constexpr const X86Rel& x86_rel(Rel r) { return kX86Rels[int(r)]; }
+
 void Gen::compare(const ldc::Instr& in) {
   const ldc::Operand &a = in.a[0], &b = in.a[1];
+  const X86Rel& x = x86_rel(op_info(in.op).rel);
   if (!a.is_real() && !b.is_real()) {
     if (slots_) emit(M::Xor, {R(wide(slot(depth_))), R(wide(slot(depth_)))});  // no partial-register chain
     load_int(a, eax);
     emit(M::Cmp, {R(eax), int_src(b)});
-    Cond c = in.op == Op::LDEQ ? Cond::E : in.op == Op::LDNE ? Cond::NE : in.op == Op::LDLT ? Cond::L
-           : in.op == Op::LDLE ? Cond::LE : in.op == Op::LDGT ? Cond::G : Cond::GE;
-    if (slots_) return emit(makeCc(M::Setcc, c, {R(slot(depth_))}));
-    emit(makeCc(M::Setcc, c, {R(al)}));
+    if (slots_) return emit(makeCc(M::Setcc, x.int_cc, {R(slot(depth_))}));
+    emit(makeCc(M::Setcc, x.int_cc, {R(al)}));
     return push_al();
   }
   load_real(a, xmm0);
   load_real(b, xmm1);
-  switch (in.op) {  // unordered (NaN) sets ZF, PF and CF
-    case Op::LDGT: emit(M::Ucomiss, {R(xmm0), R(xmm1)}); emit(makeCc(M::Setcc, Cond::A, {R(al)})); break;
-    case Op::LDGE: emit(M::Ucomiss, {R(xmm0), R(xmm1)}); emit(makeCc(M::Setcc, Cond::AE, {R(al)})); break;
-    case Op::LDLT: emit(M::Ucomiss, {R(xmm1), R(xmm0)}); emit(makeCc(M::Setcc, Cond::A, {R(al)})); break;
-    case Op::LDLE: emit(M::Ucomiss, {R(xmm1), R(xmm0)}); emit(makeCc(M::Setcc, Cond::AE, {R(al)})); break;
-    case Op::LDEQ:
-      emit(M::Ucomiss, {R(xmm0), R(xmm1)});
-      emit(makeCc(M::Setcc, Cond::E, {R(al)}));
-      emit(makeCc(M::Setcc, Cond::NP, {R(cl)}));
-      emit(M::And, {R(al), R(cl)});
-      break;
-    default:
-      emit(M::Ucomiss, {R(xmm0), R(xmm1)});
-      emit(makeCc(M::Setcc, Cond::NE, {R(al)}));
-      emit(makeCc(M::Setcc, Cond::P, {R(cl)}));
-      emit(M::Or, {R(al), R(cl)});
-      break;
+  if (x.swap) emit(M::Ucomiss, {R(xmm1), R(xmm0)});
+  else emit(M::Ucomiss, {R(xmm0), R(xmm1)});
+  emit(makeCc(M::Setcc, x.real_cc, {R(al)}));
+  if (x.parity) {
+    emit(makeCc(M::Setcc, x.parity_cc, {R(cl)}));
+    emit(x.parity_op, {R(al), R(cl)});
   }
   push_al();
 }
@@ -456,10 +457,11 @@ void Gen::logic(const ldc::Instr& in) {
 
 void Gen::special(const ldc::Instr& in) {
   const ldc::Operand &a = in.a[0], &d = in.a[1];
+  const RealFn fn = op_info(in.op).fn;
   // the calls to the REAL function table keep `je skip`: no call without power
-  Ungated ungated(gate_, in.op != Op::ABS && in.op != Op::SQRT);
+  Ungated ungated(gate_, real_fn_info(fn).called);
   std::string skip = skip_unless_power();
-  if (in.op == Op::ABS && !a.is_real()) {
+  if (real_fn_info(fn).ints && !a.is_real()) {  // ABS of an INT32
     load_int(a, eax);
     emit(M::Mov, {R(ecx), R(eax)});
     emit(M::Sar, {R(ecx), I(31)});
@@ -470,19 +472,16 @@ void Gen::special(const ldc::Instr& in) {
     return;
   }
   load_real(a, xmm0);
-  if (in.op == Op::ABS) {
+  if (real_fn_info(fn).called) {
+    emit(M::Call, {Operand::m(mem_at(Size::Qword, uint32_t(call_slot_disp(fn))))});
+    // the call may clobber rdi: point it back (its K is filled in by set_bases)
+    if (bases_) emit(as::x86::baseLea(DI, 0));
+  } else if (fn == RealFn::Sqrt) {
+    emit(M::Sqrtss, {R(xmm0), R(xmm0)});
+  } else {  // Abs: the sign bit cleared
     emit(M::Movd, {R(eax), R(xmm0)});
     emit(M::And, {R(eax), I(0x7fffffff)});
     emit(M::Movd, {R(xmm0), R(eax)});
-  } else if (in.op == Op::SQRT) {
-    emit(M::Sqrtss, {R(xmm0), R(xmm0)});
-  } else {
-    RealFn fn = in.op == Op::SIN ? RealFn::Sin : in.op == Op::COS ? RealFn::Cos : in.op == Op::TAN ? RealFn::Tan
-              : in.op == Op::EXP ? RealFn::Exp : RealFn::Ln;
-    Mem m = mem_at(Size::Qword, uint32_t(kCallTableDisp + 8 * int32_t(fn)));
-    emit(M::Call, {Operand::m(m)});
-    // the call may clobber rdi: point it back (its K is filled in by set_bases)
-    if (bases_) emit(as::x86::baseLea(DI, 0));
   }
   store_real(d);
   end_skip(skip);
@@ -760,7 +759,7 @@ void Gen::counter(const ldc::Instr& in) {
 }
 
 void Gen::instr(const ldc::Instr& in) {
-  gen(in);
+  gen_by_class(*this, in);
   depth_ += op_info(in.op).push - op_info(in.op).pop;
 }
 
@@ -814,39 +813,28 @@ void Gen::bit_slots(const ldc::Instr& in) {
   throw std::logic_error(std::string("x86 backend: no -O2 form for ") + op_info(in.op).name);
 }
 
-void Gen::gen(const ldc::Instr& in) {
-  if (slots_ && has_template(in.op)) return bit_slots(in);
-  if (has_template(in.op)) {
-    for (Instruction i : bit_template(in.op)) {
-      for (int k = 0; k < i.numOperands; k++) {
-        Mem& m = i.ops[k].mem;
-        if (i.ops[k].kind != OperandKind::Mem) continue;
-        if (m.disp == kMark[0]) m.disp = int32_t(addr(in.a[0]));
-        else if (m.disp == kMark[1]) m.disp = int32_t(addr(in.a[1]));
-      }
-      emit(std::move(i));
+// The bit instructions: -O2 on the slot registers, else their template with
+// the placeholders replaced by the operands' addresses.
+void Gen::basic(const ldc::Instr& in) {
+  if (slots_) return bit_slots(in);
+  const std::vector<Instruction>* t = bit_template(in.op);
+  if (!t) throw std::logic_error(std::string("x86 backend: no template for ") + op_info(in.op).name);
+  for (Instruction i : *t) {
+    for (int k = 0; k < i.numOperands; k++) {
+      Mem& m = i.ops[k].mem;
+      if (i.ops[k].kind != OperandKind::Mem) continue;
+      if (m.disp == kMark[0]) m.disp = int32_t(addr(in.a[0]));
+      else if (m.disp == kMark[1]) m.disp = int32_t(addr(in.a[1]));
     }
-    return;
+    emit(std::move(i));
   }
-  switch (op_info(in.op).klass) {
-    case OpClass::Compare: return compare(in);
-    case OpClass::Move: return move(in);
-    case OpClass::Arith:
-      if (in.op == Op::DIV || in.op == Op::MOD) return divmod(in);
-      return arith(in);
-    case OpClass::Logic: return logic(in);
-    case OpClass::Special: return special(in);
-    case OpClass::Timer: return timer(in);
-    case OpClass::Counter: return counter(in);
-    case OpClass::Flow: {
-      test_top();
-      Instruction j = makeCc(M::Jcc, Cond::NE, {L(in.op == Op::JMP ? x86_label_name(in.a[0].label) : kX86ExitLabel)});
-      j.longBranch = true;
-      return emit(std::move(j));
-    }
-    case OpClass::Basic: break;
-  }
-  throw std::logic_error(std::string("x86 backend: no template for ") + op_info(in.op).name);
+}
+
+void Gen::flow(const ldc::Instr& in) {
+  test_top();
+  Instruction j = makeCc(M::Jcc, Cond::NE, {L(in.op == Op::JMP ? x86_label_name(in.a[0].label) : kX86ExitLabel)});
+  j.longBranch = true;
+  emit(std::move(j));
 }
 
 // ------------------------------------------------------------ -O1 peephole

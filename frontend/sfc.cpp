@@ -562,8 +562,7 @@ Cond SfcParser::factor(const std::vector<Tok>& t, size_t& i, bool neg, int line,
       if (neg) {
         if (n.elem.a[0].is_real() || n.elem.a[1].is_real())
           fail(line, w.col, "NOT of a REAL compare (false with NaN both ways): write the opposite compare");
-        op = op == Op::LDEQ ? Op::LDNE : op == Op::LDNE ? Op::LDEQ : op == Op::LDLT ? Op::LDGE
-           : op == Op::LDLE ? Op::LDGT : op == Op::LDGT ? Op::LDLE : Op::LDLT;
+        op = compare_op(negate(op_info(op).rel));
       }
       n.elem.op = op;
       n.text += std::string(" ") + cmp->first + " " + t[i + 2].text;

@@ -12,11 +12,9 @@
 namespace ldc {
 namespace {
 
-float fn_sin(float x) { return ::sinf(x); }
-float fn_cos(float x) { return ::cosf(x); }
-float fn_tan(float x) { return ::tanf(x); }
-float fn_exp(float x) { return ::expf(x); }
-float fn_ln(float x) { return ::logf(x); }
+// One function of our own per FN row (the table holds their addresses).
+#define FN(name, libm, called, ints) float fn_##name(float x) { return ::libm(x); }
+#include "ir/ops.def"
 
 size_t page_size() {
   static const size_t page = size_t(sysconf(_SC_PAGESIZE));
@@ -26,12 +24,15 @@ size_t page_size() {
 }  // namespace
 
 RealFnPtr real_fn(RealFn f) {
-  static const RealFnPtr table[] = {fn_sin, fn_cos, fn_tan, fn_exp, fn_ln};
-  static_assert(sizeof table / sizeof table[0] == size_t(RealFn::Count));
+  static const RealFnPtr table[] = {
+#define FN(name, libm, called, ints) fn_##name,
+#include "ir/ops.def"
+  };
+  static_assert(sizeof table / sizeof table[0] == size_t(RealFn::None));
   return table[size_t(f)];
 }
 
-static_assert(kCallTableDisp + 8 * int32_t(RealFn::Count) <= 0, "the call table lies below the image");
+static_assert(kCallTableDisp + 8 * kCallSlots <= 0, "the call table lies below the image");
 
 void ImageBytes::map(size_t size, Sharing sharing) {
   const size_t page = page_size();
@@ -51,7 +52,7 @@ void ImageBytes::map(size_t size, Sharing sharing) {
     unmap();
     throw std::bad_alloc();
   }
-  for (int k = 0; k < int(RealFn::Count); k++) {
+  for (int k = 0; k < kCallSlots; k++) {
     RealFnPtr f = real_fn(RealFn(k));
     std::memcpy(image_ + kCallTableDisp + 8 * k, &f, sizeof f);
   }

@@ -110,19 +110,13 @@ void exec_OUTN(Ctx& c) { *operand(c).addr = !top(c); }
 void exec_SET(Ctx& c) { Val w = operand(c); if (top(c)) *w.addr = 1; }
 void exec_RST(Ctx& c) { Val w = operand(c); if (top(c)) *w.addr = 0; }
 
-// ---- compares
-template <typename Cmp>
-void compare(Ctx& c, Cmp cmp) {
+// ---- compares: the relation of ops.def's rel column
+template <Rel r>
+void exec_compare(Ctx& c) {
   Val a = operand(c), b = operand(c);
-  if (a.real || b.real) push(c, cmp(as_real(a), as_real(b)));
-  else push(c, cmp(a.i, b.i));
+  if (a.real || b.real) push(c, rel_holds(r, as_real(a), as_real(b)));
+  else push(c, rel_holds(r, a.i, b.i));
 }
-void exec_LDEQ(Ctx& c) { compare(c, [](auto x, auto y) { return x == y; }); }
-void exec_LDNE(Ctx& c) { compare(c, [](auto x, auto y) { return x != y; }); }
-void exec_LDLT(Ctx& c) { compare(c, [](auto x, auto y) { return x < y; }); }
-void exec_LDLE(Ctx& c) { compare(c, [](auto x, auto y) { return x <= y; }); }
-void exec_LDGT(Ctx& c) { compare(c, [](auto x, auto y) { return x > y; }); }
-void exec_LDGE(Ctx& c) { compare(c, [](auto x, auto y) { return x >= y; }); }
 
 // ---- application instructions (only when top is 1)
 void exec_MOV(Ctx& c) {
@@ -175,23 +169,13 @@ void exec_WNOT(Ctx& c) {
   Val a = operand(c), d = operand(c);
   store_int(d, ~a.i);
 }
-template <typename Fn>
-void special(Ctx& c, Fn fn) {
+// SIN ... ABS: the REAL function of ops.def's fn column
+template <RealFn f>
+void exec_special(Ctx& c) {
   if (!top(c)) return skip_operands(c, 2);
   Val a = operand(c), d = operand(c);
-  store_real(d, fn(as_real(a)));
-}
-void exec_SIN(Ctx& c) { special(c, [](float x) { return ::sinf(x); }); }
-void exec_COS(Ctx& c) { special(c, [](float x) { return ::cosf(x); }); }
-void exec_TAN(Ctx& c) { special(c, [](float x) { return ::tanf(x); }); }
-void exec_SQRT(Ctx& c) { special(c, [](float x) { return ::sqrtf(x); }); }
-void exec_EXP(Ctx& c) { special(c, [](float x) { return ::expf(x); }); }
-void exec_LN(Ctx& c) { special(c, [](float x) { return ::logf(x); }); }
-void exec_ABS(Ctx& c) {
-  if (!top(c)) return skip_operands(c, 2);
-  Val a = operand(c), d = operand(c);
-  if (a.real) store_real(d, ::fabsf(a.f));
-  else store_int(d, a.i == kMin ? kMin : (a.i < 0 ? -a.i : a.i));
+  if (real_fn_info(f).ints && !a.real) store_int(d, a.i == kMin ? kMin : (a.i < 0 ? -a.i : a.i));
+  else store_real(d, apply_real_fn(f, as_real(a)));
 }
 
 // ---- timers: state of timer n = ET (TW), Q (TQ), IN memory (TI)
@@ -345,10 +329,21 @@ void exec_JMP(Ctx& c) {
 }
 void exec_END(Ctx& c) { if (top(c)) c.end = true; }
 
-// The dispatch table, in ops.def order.
+// The dispatch table, in ops.def order: a compare's routine is its relation's,
+// a REAL function's its function's, every other mnemonic has its own.
 using Routine = void (*)(Ctx&);
+#define ROUTINE_Compare(name, rel, fn) exec_compare<Rel::rel>
+#define ROUTINE_Special(name, rel, fn) exec_special<RealFn::fn>
+#define ROUTINE_OWN(name, rel, fn) exec_##name
+#define ROUTINE_Basic ROUTINE_OWN
+#define ROUTINE_Move ROUTINE_OWN
+#define ROUTINE_Arith ROUTINE_OWN
+#define ROUTINE_Logic ROUTINE_OWN
+#define ROUTINE_Timer ROUTINE_OWN
+#define ROUTINE_Counter ROUTINE_OWN
+#define ROUTINE_Flow ROUTINE_OWN
 const Routine kRoutines[kOpCount] = {
-#define OP(name, opds, push, pop, klass) exec_##name,
+#define OP(name, opds, push, pop, klass, rel, fn) ROUTINE_##klass(name, rel, fn),
 #include "ir/ops.def"
 };
 

@@ -50,12 +50,11 @@ Layout Layout::standard(uint32_t edge_slots) {
 
 // ---------------------------------------------------------------- ops
 
-static const OpInfo kOps[kOpCount] = {
-#define OP(name, opds, push, pop, klass) {#name, opds, push, pop, OpClass::klass},
-#include "ops.def"
-};
-
-const OpInfo& op_info(Op op) { return kOps[int(op)]; }
+Op compare_op(Rel r) {
+  for (int i = 0; i < kOpCount; i++)
+    if (kOps[i].rel == r && r != Rel::None) return Op(i);
+  throw std::logic_error("compare_op: no compare for this relation");
+}
 
 static bool iequals(std::string_view a, std::string_view b) {
   if (a.size() != b.size()) return false;

@@ -3,6 +3,7 @@
 // interpreter that defines what every program means (docs/il.md).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -81,10 +82,48 @@ constexpr uint32_t kSysSize = 64;   // bytes 8..63 are reserved (0)
 // image + kCallTableDisp + 8k, `call qword ptr [rbx-0x40]` for sin.  Generated
 // code can write only inside the image, so it can never redirect these calls
 // (docs/image-format.md, "Threat model").
-enum class RealFn : uint8_t { Sin, Cos, Tan, Exp, Ln, Count };
+// The REAL functions of the Special instructions (ops.def's fn column and FN table).
+enum class RealFn : uint8_t {
+#define FN(name, libm, called, ints) name,
+#include "ops.def"
+  None
+};
+struct RealFnInfo {
+  const char* name;  // "Sin"
+  const char* libm;  // "sinf": the C library function that defines it
+  bool called;       // native code calls it through the table; its slot is int(RealFn)
+  bool ints;         // an INT32 operand gives an INT32 result (ABS)
+};
+inline constexpr RealFnInfo kRealFns[] = {
+#define FN(name, libm, called, ints) {#name, #libm, called != 0, ints != 0},
+#include "ops.def"
+};
+constexpr const RealFnInfo& real_fn_info(RealFn f) { return kRealFns[int(f)]; }
+// Slots of the call table: the called functions, which come first in the FN table.
+constexpr int kCallSlots = [] {
+  int n = 0;
+  while (n < int(RealFn::None) && kRealFns[n].called) n++;
+  return n;
+}();
+static_assert([] {
+  for (int k = kCallSlots; k < int(RealFn::None); k++)
+    if (kRealFns[k].called) return false;
+  return true;
+}(), "ops.def: the called REAL functions come first in the FN table");
 constexpr int32_t kCallTableDisp = -64;
+// The displacement from the image of f's slot in the call table (f must be called).
+constexpr int32_t call_slot_disp(RealFn f) { return kCallTableDisp + 8 * int32_t(f); }
+// f(x), as the C library computes it (inline, for interpreters).
+inline float apply_real_fn(RealFn f, float x) {
+  switch (f) {
+#define FN(name, libm, called, ints) case RealFn::name: return ::libm(x);
+#include "ops.def"
+    case RealFn::None: break;
+  }
+  return x;
+}
 using RealFnPtr = float (*)(float);
-RealFnPtr real_fn(RealFn f);  // sinf cosf tanf expf logf
+RealFnPtr real_fn(RealFn f);  // the libm function: sinf cosf tanf expf logf sqrtf fabsf
 
 // System bits.
 constexpr uint32_t kBitError = 0;      // S0
@@ -94,7 +133,7 @@ constexpr uint32_t kSysBits = 16;
 // ---------------------------------------------------------------- the IL
 
 enum class Op : uint8_t {
-#define OP(name, opds, push, pop, klass) name,
+#define OP(name, opds, push, pop, klass, rel, fn) name,
 #include "ops.def"
   Count
 };
@@ -102,13 +141,56 @@ constexpr int kOpCount = static_cast<int>(Op::Count);
 
 enum class OpClass : uint8_t { Basic, Compare, Move, Arith, Logic, Special, Timer, Counter, Flow };
 
+// The relation of a compare (ops.def's rel column and REL table).
+enum class Rel : uint8_t {
+#define REL(name, c, ld, negation, swapped) name,
+#include "ops.def"
+  None
+};
+struct RelInfo {
+  const char* name;  // "Eq"
+  const char* c;     // "==": the C operator
+  const char* ld;    // "==", "<>": the ladder grid's spelling
+  Rel negation;      // holds exactly when this one does not (INT32 operands)
+  Rel swapped;       // the same with the operands exchanged
+};
+inline constexpr RelInfo kRels[] = {
+#define REL(name, c, ld, negation, swapped) {#name, c, ld, Rel::negation, Rel::swapped},
+#include "ops.def"
+};
+constexpr const RelInfo& rel_info(Rel r) { return kRels[int(r)]; }
+constexpr Rel negate(Rel r) { return rel_info(r).negation; }
+constexpr Rel swap_operands(Rel r) { return rel_info(r).swapped; }
+// Does `x r y` hold?  (IEEE for floats: with a NaN only Ne holds.)
+template <class T>
+constexpr bool rel_holds(Rel r, T x, T y) {
+  switch (r) {
+    case Rel::Eq: return x == y;
+    case Rel::Ne: return x != y;
+    case Rel::Lt: return x < y;
+    case Rel::Le: return x <= y;
+    case Rel::Gt: return x > y;
+    case Rel::Ge: return x >= y;
+    case Rel::None: break;
+  }
+  return false;
+}
+
 struct OpInfo {
   const char* name;
   const char* operands;  // signature letters, see ops.def
   int push, pop;
   OpClass klass;
+  Rel rel;               // Compare: its relation; else None
+  RealFn fn;             // Special: its REAL function; else None
 };
-const OpInfo& op_info(Op op);
+inline constexpr OpInfo kOps[kOpCount] = {
+#define OP(name, opds, push, pop, klass, rel, fn) {#name, opds, push, pop, OpClass::klass, Rel::rel, RealFn::fn},
+#include "ops.def"
+};
+constexpr const OpInfo& op_info(Op op) { return kOps[int(op)]; }
+// The compare instruction of a relation (LDEQ for Eq).
+Op compare_op(Rel r);
 std::optional<Op> op_from_name(std::string_view name);  // case-insensitive
 const char* op_class_name(OpClass c);
 // May a device of area `a`, index `idx`, stand for signature letter `sig`?

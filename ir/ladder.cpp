@@ -16,9 +16,8 @@ using K = TreeNode::Kind;
 
 bool is_push(Op op) {
   switch (op) {
-    case Op::TRUE: case Op::LOAD: case Op::LOADN: case Op::LOADP: case Op::LOADF:
-    case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE: return true;
-    default: return false;
+    case Op::TRUE: case Op::LOAD: case Op::LOADN: case Op::LOADP: case Op::LOADF: return true;
+    default: return op_info(op).klass == OpClass::Compare;
   }
 }
 bool is_modify(Op op) { return op == Op::AND || op == Op::ANDN || op == Op::OR || op == Op::ORN; }
@@ -293,9 +292,7 @@ struct Speller {
       case Op::LOADF: return "[N " + a + "]";
       default: break;
     }
-    static const std::map<Op, const char*> cmp = {{Op::LDEQ, "=="}, {Op::LDNE, "<>"}, {Op::LDLT, "<"},
-                                                  {Op::LDLE, "<="}, {Op::LDGT, ">"},  {Op::LDGE, ">="}};
-    return "[" + a + " " + cmp.at(in.op) + " " + opd(in.a[1], in.loc) + "]";
+    return "[" + a + " " + rel_info(op_info(in.op).rel).ld + " " + opd(in.a[1], in.loc) + "]";
   }
   std::string output(const Instr& in) const {
     std::string head;

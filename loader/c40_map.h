@@ -59,4 +59,11 @@ enum class RomFn : uint8_t { Sin, Cos, Tan, Sqrt, Exp, Ln, Count };
 constexpr int kRomFnCount = int(RomFn::Count);
 constexpr uint32_t rom_entry(RomFn f) { return kRomBase + uint32_t(f) * kRomStride; }
 
+// The ROM routine of each REAL function, keyed by ir's RealFn (the order of
+// ops.def's FN table, then None); RomFn::Count: the C40 computes it inline (ABS).
+inline constexpr RomFn kRomOfFn[] = {RomFn::Sin, RomFn::Cos, RomFn::Tan,  RomFn::Exp,
+                                     RomFn::Ln,  RomFn::Sqrt, RomFn::Count, RomFn::Count};
+static_assert(sizeof kRomOfFn / sizeof kRomOfFn[0] == size_t(RealFn::None) + 1);
+constexpr RomFn rom_of(RealFn f) { return kRomOfFn[int(f)]; }
+
 }  // namespace ldc::c40map

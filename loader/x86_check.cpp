@@ -291,7 +291,7 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
           // functions below the image (ir.h, kCallTableDisp)
           const x86::Mem& m = o.mem;
           bool table = m.base == x86::r64(x86::BX) && !m.index.valid() && m.size == x86::Size::Qword &&
-                       m.disp >= kCallTableDisp && m.disp < kCallTableDisp + 8 * int32_t(RealFn::Count) &&
+                       m.disp >= kCallTableDisp && m.disp < kCallTableDisp + 8 * kCallSlots &&
                        (m.disp - kCallTableDisp) % 8 == 0;
           if (!table) return at(di.offset) + text_of(in) + ": indirect call not through the REAL function table";
           continue;

@@ -42,7 +42,7 @@ enum : unsigned { kDstInt = 0, kDstReal = 1 };
   LDC_INT3(X, ADD) LDC_INT3(X, SUB) LDC_INT3(X, MUL) LDC_INT3(X, DIV) LDC_INT3(X, MOD)                  \
   LDC_INT3(X, WAND) LDC_INT3(X, WOR) LDC_INT3(X, WXOR) LDC_INT3(X, SHL) LDC_INT3(X, SHR)                \
   X(ADD_F) X(SUB_F) X(MUL_F) X(DIV_F) X(WNOT_M)                                                         \
-  X(SIN_F) X(COS_F) X(TAN_F) X(SQRT_F) X(EXP_F) X(LN_F) X(ABS_F) X(GEN)                                 \
+  X(SIN_F) X(COS_F) X(TAN_F) X(EXP_F) X(LN_F) X(SQRT_F) X(ABS_F) X(GEN)                                 \
   X(TON_K) X(TON_M) X(TOF_K) X(TOF_M) X(TP_K) X(TP_M) X(RSTT)                                           \
   X(MTON_K) X(MTON_M) X(MTOF_K) X(MTOF_M) X(MTP_K) X(MTP_M)                                             \
   X(CTU_K) X(CTU_M) X(CTD_K) X(CTD_M) X(RSTC) X(JMP) X(END)
@@ -53,6 +53,22 @@ enum FOp : uint16_t {
 #undef LDC_ENUM
   F_Count
 };
+
+// The compare handlers of each operand form run in the order of ops.def's REL
+// table (F_EQ_MM + Rel), the REAL function handlers in that of its FN table
+// (F_SIN_F + RealFn).
+constexpr bool follows_rel_order(FOp eq, FOp ne, FOp lt, FOp le, FOp gt, FOp ge) {
+  return ne == eq + int(Rel::Ne) && lt == eq + int(Rel::Lt) && le == eq + int(Rel::Le) && gt == eq + int(Rel::Gt) &&
+         ge == eq + int(Rel::Ge) && eq + int(Rel::Eq) == eq;
+}
+static_assert(follows_rel_order(F_EQ_MM, F_NE_MM, F_LT_MM, F_LE_MM, F_GT_MM, F_GE_MM));
+static_assert(follows_rel_order(F_EQ_MK, F_NE_MK, F_LT_MK, F_LE_MK, F_GT_MK, F_GE_MK));
+static_assert(follows_rel_order(F_EQ_FF, F_NE_FF, F_LT_FF, F_LE_FF, F_GT_FF, F_GE_FF));
+static_assert(follows_rel_order(F_EQ_FK, F_NE_FK, F_LT_FK, F_LE_FK, F_GT_FK, F_GE_FK));
+static_assert(F_COS_F == F_SIN_F + int(RealFn::Cos) && F_TAN_F == F_SIN_F + int(RealFn::Tan) &&
+              F_EXP_F == F_SIN_F + int(RealFn::Exp) && F_LN_F == F_SIN_F + int(RealFn::Ln) &&
+              F_SQRT_F == F_SIN_F + int(RealFn::Sqrt) && F_ABS_F == F_SIN_F + int(RealFn::Abs) &&
+              F_SIN_F + int(RealFn::Sin) == F_SIN_F);
 
 inline int32_t ld_i(const uint8_t* m, uint32_t off) { int32_t v; std::memcpy(&v, m + off, 4); return v; }
 inline float ld_f(const uint8_t* m, uint32_t off) { float v; std::memcpy(&v, m + off, 4); return v; }
@@ -145,42 +161,20 @@ __attribute__((noinline)) void generic(uint8_t* m, const FastInterpreter::Ins& i
       return;
     }
     case Op::WNOT: store_int(m, kd, in.c, ~get_i(m, ka, in.a)); return;
-    case Op::ABS:
-      if (ka & 1) store_real(m, kd, in.c, ::fabsf(get_f(m, ka, in.a)));
-      else store_int(m, kd, in.c, i_abs(get_i(m, ka, in.a)));
+    case Op::SIN: case Op::COS: case Op::TAN: case Op::SQRT: case Op::EXP: case Op::LN: case Op::ABS: {
+      const RealFn fn = op_info(op).fn;
+      if (real_fn_info(fn).ints && !(ka & 1)) store_int(m, kd, in.c, i_abs(get_i(m, ka, in.a)));
+      else store_real(m, kd, in.c, apply_real_fn(fn, get_f(m, ka, in.a)));
       return;
-    case Op::SIN: store_real(m, kd, in.c, ::sinf(get_f(m, ka, in.a))); return;
-    case Op::COS: store_real(m, kd, in.c, ::cosf(get_f(m, ka, in.a))); return;
-    case Op::TAN: store_real(m, kd, in.c, ::tanf(get_f(m, ka, in.a))); return;
-    case Op::SQRT: store_real(m, kd, in.c, ::sqrtf(get_f(m, ka, in.a))); return;
-    case Op::EXP: store_real(m, kd, in.c, ::expf(get_f(m, ka, in.a))); return;
-    case Op::LN: store_real(m, kd, in.c, ::logf(get_f(m, ka, in.a))); return;
+    }
     default: break;
   }
 }
 
-// A REAL compare: x = ka | kb << 2 | (compare opcode - LDEQ) << 4.
+// A REAL compare: x = ka | kb << 2 | Rel << 4.
 __attribute__((noinline)) bool compare_real(const uint8_t* m, const FastInterpreter::Ins& in) {
   float x = get_f(m, in.x & 3, in.a), y = get_f(m, (in.x >> 2) & 3, in.b);
-  switch (in.x >> 4) {
-    case 0: return x == y;
-    case 1: return x != y;
-    case 2: return x < y;
-    case 3: return x <= y;
-    case 4: return x > y;
-    default: return x >= y;
-  }
-}
-
-bool fold_compare(Op op, int32_t x, int32_t y) {
-  switch (op) {
-    case Op::LDEQ: return x == y;
-    case Op::LDNE: return x != y;
-    case Op::LDLT: return x < y;
-    case Op::LDLE: return x <= y;
-    case Op::LDGT: return x > y;
-    default: return x >= y;
-  }
+  return rel_holds(Rel(in.x >> 4), x, y);
 }
 
 }  // namespace
@@ -259,25 +253,26 @@ FastInterpreter::FastInterpreter(std::span<const uint8_t> il, const Layout& L) {
       case Op::SET: set(F_SET, where(o[0])); break;
       case Op::RST: set(F_RST, where(o[0])); break;
       case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE: {
-        unsigned ka, kb, rel = unsigned(in.op) - unsigned(Op::LDEQ);
+        const Rel r = op_info(in.op).rel;
+        const unsigned rel = unsigned(r), mirror = unsigned(swap_operands(r));  // a r b is b mirror a
+        unsigned ka, kb;
         uint32_t a = value(o[0], ka), b = value(o[1], kb);
-        static const unsigned mirror[6] = {0, 1, 4, 5, 2, 3};  // EQ NE LT LE GT GE -> EQ NE GT GE LT LE
         if (ka == kRealMem && kb == kRealMem) {
           set(FOp(F_EQ_FF + rel), a, b);
         } else if (ka == kRealMem && kb == kRealConst) {
           set(FOp(F_EQ_FK + rel), a, b);
         } else if (ka == kRealConst && kb == kRealMem) {
-          set(FOp(F_EQ_FK + mirror[rel]), b, a);
+          set(FOp(F_EQ_FK + mirror), b, a);
         } else if ((ka | kb) & 1) {
           set(F_CMP_F, a, b, 0, uint16_t(ka | kb << 2 | rel << 4));
         } else if (ka == kIntConst && kb == kIntConst) {
-          set(fold_compare(in.op, int32_t(a), int32_t(b)) ? F_TRUE : F_PUSH0);
+          set(rel_holds(r, int32_t(a), int32_t(b)) ? F_TRUE : F_PUSH0);
         } else if (ka == kIntMem && kb == kIntMem) {
           set(FOp(F_EQ_MM + rel), a, b);
         } else if (ka == kIntMem) {
           set(FOp(F_EQ_MK + rel), a, b);
         } else {  // constant op word: the mirrored compare, word op constant
-          set(FOp(F_EQ_MK + mirror[rel]), b, a);
+          set(FOp(F_EQ_MK + mirror), b, a);
         }
         break;
       }
@@ -318,9 +313,7 @@ FastInterpreter::FastInterpreter(std::span<const uint8_t> il, const Layout& L) {
         unsigned ka, kd;
         uint32_t a = value(o[0], ka), dst = dest(o[1], kd);
         if (ka == kRealMem && kd == kDstReal) {
-          FOp f = in.op == Op::SIN ? F_SIN_F : in.op == Op::COS ? F_COS_F : in.op == Op::TAN ? F_TAN_F
-                : in.op == Op::SQRT ? F_SQRT_F : in.op == Op::EXP ? F_EXP_F : in.op == Op::LN ? F_LN_F : F_ABS_F;
-          set(f, a, dst);
+          set(FOp(F_SIN_F + unsigned(op_info(in.op).fn)), a, dst);
         } else {
           gen(ka, a, 0, 0, kd, dst);
         }
@@ -407,16 +400,13 @@ void FastInterpreter::scan(uint8_t* mem) {
   HANDLER(RST) { m[ip->a] &= uint8_t((st & 1u) ^ 1u); NEXT(); }
 
   // ---- compares
-#define LDC_CMP(N, OPR)                                                                              \
-  HANDLER(N##_MM) { st = (st << 1) | uint32_t(ld_i(m, ip->a) OPR ld_i(m, ip->b)); NEXT(); }          \
-  HANDLER(N##_MK) { st = (st << 1) | uint32_t(ld_i(m, ip->a) OPR int32_t(ip->b)); NEXT(); }
-  LDC_CMP(EQ, ==) LDC_CMP(NE, !=) LDC_CMP(LT, <) LDC_CMP(LE, <=) LDC_CMP(GT, >) LDC_CMP(GE, >=)
+#define LDC_CMP(N, REL)                                                                                      \
+  HANDLER(N##_MM) { st = (st << 1) | uint32_t(rel_holds(Rel::REL, ld_i(m, ip->a), ld_i(m, ip->b))); NEXT(); } \
+  HANDLER(N##_MK) { st = (st << 1) | uint32_t(rel_holds(Rel::REL, ld_i(m, ip->a), int32_t(ip->b))); NEXT(); } \
+  HANDLER(N##_FF) { st = (st << 1) | uint32_t(rel_holds(Rel::REL, ld_f(m, ip->a), ld_f(m, ip->b))); NEXT(); } \
+  HANDLER(N##_FK) { st = (st << 1) | uint32_t(rel_holds(Rel::REL, ld_f(m, ip->a), bits_f(ip->b))); NEXT(); }
+  LDC_CMP(EQ, Eq) LDC_CMP(NE, Ne) LDC_CMP(LT, Lt) LDC_CMP(LE, Le) LDC_CMP(GT, Gt) LDC_CMP(GE, Ge)
 #undef LDC_CMP
-#define LDC_FCMP(N, OPR)                                                                             \
-  HANDLER(N##_FF) { st = (st << 1) | uint32_t(ld_f(m, ip->a) OPR ld_f(m, ip->b)); NEXT(); }          \
-  HANDLER(N##_FK) { st = (st << 1) | uint32_t(ld_f(m, ip->a) OPR bits_f(ip->b)); NEXT(); }
-  LDC_FCMP(EQ, ==) LDC_FCMP(NE, !=) LDC_FCMP(LT, <) LDC_FCMP(LE, <=) LDC_FCMP(GT, >) LDC_FCMP(GE, >=)
-#undef LDC_FCMP
   HANDLER(CMP_F) { st = (st << 1) | uint32_t(compare_real(m, *ip)); NEXT(); }
 
   // ---- application instructions: only with power
@@ -461,13 +451,11 @@ void FastInterpreter::scan(uint8_t* mem) {
     NEXT();
   }
   HANDLER(WNOT_M) { if (st & 1u) st_i(m, ip->b, ~ld_i(m, ip->a)); NEXT(); }
-  HANDLER(SIN_F) { if (st & 1u) st_f(m, ip->b, ::sinf(ld_f(m, ip->a))); NEXT(); }
-  HANDLER(COS_F) { if (st & 1u) st_f(m, ip->b, ::cosf(ld_f(m, ip->a))); NEXT(); }
-  HANDLER(TAN_F) { if (st & 1u) st_f(m, ip->b, ::tanf(ld_f(m, ip->a))); NEXT(); }
-  HANDLER(SQRT_F) { if (st & 1u) st_f(m, ip->b, ::sqrtf(ld_f(m, ip->a))); NEXT(); }
-  HANDLER(EXP_F) { if (st & 1u) st_f(m, ip->b, ::expf(ld_f(m, ip->a))); NEXT(); }
-  HANDLER(LN_F) { if (st & 1u) st_f(m, ip->b, ::logf(ld_f(m, ip->a))); NEXT(); }
-  HANDLER(ABS_F) { if (st & 1u) st_f(m, ip->b, ::fabsf(ld_f(m, ip->a))); NEXT(); }
+#define LDC_REALFN(N, F) \
+  HANDLER(N##_F) { if (st & 1u) st_f(m, ip->b, apply_real_fn(RealFn::F, ld_f(m, ip->a))); NEXT(); }
+  LDC_REALFN(SIN, Sin) LDC_REALFN(COS, Cos) LDC_REALFN(TAN, Tan) LDC_REALFN(EXP, Exp) LDC_REALFN(LN, Ln)
+  LDC_REALFN(SQRT, Sqrt) LDC_REALFN(ABS, Abs)
+#undef LDC_REALFN
   HANDLER(GEN) { if (st & 1u) generic(m, *ip, s0); NEXT(); }
 
   // ---- timers: x = timer number; a = preset (K: a constant, already >= 0; M: its word)

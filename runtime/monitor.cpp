@@ -233,15 +233,7 @@ bool closed(const Instr& in, const View& v) {
   }
   double x = v.num(in.a[0]), y = v.num(in.a[1]);
   if (!in.a[0].is_real() && !in.a[1].is_real()) x = double(int32_t(x)), y = double(int32_t(y));
-  switch (in.op) {
-    case Op::LDEQ: return x == y;
-    case Op::LDNE: return x != y;
-    case Op::LDLT: return x < y;
-    case Op::LDLE: return x <= y;
-    case Op::LDGT: return x > y;
-    case Op::LDGE: return x >= y;
-    default: return false;
-  }
+  return rel_holds(op_info(in.op).rel, x, y);
 }
 
 // The value shown beside an element: the destination of a word output, a
@@ -249,7 +241,7 @@ bool closed(const Instr& in, const View& v) {
 std::string elem_value(const LadderElem& e, const View& v) {
   const Instr& in = e.elem;
   if (!e.output) {
-    if (in.op >= Op::LDEQ && in.op <= Op::LDGE) {
+    if (op_info(in.op).klass == OpClass::Compare) {
       std::string a = v.opd_text(in.a[0]), b = v.opd_text(in.a[1]);
       if (a.empty() && b.empty()) return "";
       return (a.empty() ? "" : a) + (b.empty() ? "" : (a.empty() ? "" : " : ") + b);

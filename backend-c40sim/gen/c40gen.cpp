@@ -6,6 +6,8 @@
 #include <map>
 #include <stdexcept>
 
+#include "ir/codegen.h"
+
 namespace ldc::c40gen {
 
 // ---------------------------------------------------------------- REAL semantics
@@ -103,11 +105,7 @@ uint32_t float_bits(float f) {
 // the data page) of the IL instruction's operand 0 and 1 (a bit device or an
 // edge slot; one word each, 0 or 1).  R10 is the bit stack, top in bit 0;
 // R11 holds the mask ~1.
-struct Template {
-  Op op;
-  const char* text;
-};
-const Template kBitTemplates[] = {
+const OpTemplate kBitTemplates[] = {
     {Op::LOAD,   "LSH 1, R10; OR %0, R10"},
     {Op::LOADN,  "LSH 1, R10; OR 1, R10; XOR %0, R10"},
     {Op::AND,    "LDI %0, R0; OR R11, R0; AND R0, R10"},
@@ -128,21 +126,10 @@ const Template kBitTemplates[] = {
     {Op::RST,    "LDI %0, R0; ANDN R10, R0; STI R0, %0"},
 };
 
+// The templates, parsed once; %k becomes the placeholder @k (a direct operand).
 const std::vector<Instruction>* bit_template(Op op) {
-  static const auto table = [] {
-    std::map<Op, std::vector<Instruction>> t;
-    for (const Template& row : kBitTemplates) {
-      std::string s = row.text;
-      for (size_t p; (p = s.find('%')) != std::string::npos;) s.replace(p, 1, "@");  // %k -> @k: a marker
-      size_t start = 0;
-      while (start < s.size()) {
-        size_t semi = s.find(';', start);
-        t[row.op].push_back(parse(s.substr(start, semi == std::string::npos ? std::string::npos : semi - start)));
-        start = semi == std::string::npos ? s.size() : semi + 1;
-      }
-    }
-    return t;
-  }();
+  static const auto table = parse_templates<Instruction>(
+      kBitTemplates, [](const std::string& s) { return parse(s); }, [](int k) { return "@" + std::to_string(k); });
   auto it = table.find(op);
   return it == table.end() ? nullptr : &it->second;
 }
@@ -426,24 +413,22 @@ class Gen {
   void advance_r2(uint32_t tw);
   void bit_slots(const ldc::Instr& in);
   bool bit_fused(const ldc::Instr& in, Fuse f);
-  void gen(const ldc::Instr& in);
+  void basic(const ldc::Instr& in);
+  void flow(const ldc::Instr& in);
+  template <class G>
+  friend void ldc::gen_by_class(G& g, const ldc::Instr& in);
 };
 
-Cond cond_of(Op op) {
-  switch (op) {
-    case Op::LDEQ: return Cond::EQ;
-    case Op::LDNE: return Cond::NE;
-    case Op::LDLT: return Cond::LT;
-    case Op::LDLE: return Cond::LE;
-    case Op::LDGT: return Cond::GT;
-    default: return Cond::GE;
-  }
-}
+// The C40 condition of each relation after CMPI / CMPF a - b, in the order of
+// ops.def's REL table (CMPF's flags on C40 floats have no NaN).
+constexpr Cond kRelConds[] = {Cond::EQ, Cond::NE, Cond::LT, Cond::LE, Cond::GT, Cond::GE};
+static_assert(sizeof kRelConds / sizeof kRelConds[0] == size_t(Rel::None));
+Cond cond_of(Rel r) { return kRelConds[int(r)]; }
 
 // push (a op b): the push is prepared in R2 (R10 << 1 | 1) and taken with LDIcond.
 void Gen::compare(const ldc::Instr& in) {
   const ldc::Operand &a = in.a[0], &b = in.a[1];
-  Cond c = cond_of(in.op);
+  Cond c = cond_of(op_info(in.op).rel);
   Reg d = slot(depth_);
   auto prepare = [&] {
     if (slots_) return op(M::Ldi, {I(0), R(d)});  // -O2: 0, or 1 if the condition holds
@@ -606,10 +591,8 @@ void Gen::special(const ldc::Instr& in) {
       store_real(d);
     }
   } else {
-    RomFn fn = in.op == Op::SIN ? RomFn::Sin : in.op == Op::COS ? RomFn::Cos : in.op == Op::TAN ? RomFn::Tan
-             : in.op == Op::SQRT ? RomFn::Sqrt : in.op == Op::EXP ? RomFn::Exp : RomFn::Ln;
     load_real(a, r0);
-    op(M::Call, {A(rom_entry(fn))});
+    op(M::Call, {A(rom_entry(rom_of(op_info(in.op).fn)))});
     store_real(d);
   }
   label(skip);
@@ -852,7 +835,7 @@ void Gen::counter(const ldc::Instr& in) {
 void Gen::instr(const ldc::Instr& in) {
   Fuse f = at_ < fuse_.size() ? fuse_[at_] : Fuse::None;
   if (slots_ && bit_template(in.op)) bit_slots(in);
-  else if (f == Fuse::None || !bit_fused(in, f)) gen(in);
+  else if (f == Fuse::None || !bit_fused(in, f)) gen_by_class(*this, in);
   depth_ += op_info(in.op).push - op_info(in.op).pop;
   at_++;
 }
@@ -961,40 +944,26 @@ void Gen::bit_slots(const ldc::Instr& in) {
   throw std::logic_error(std::string("c40 backend: no -O2 form for ") + op_info(in.op).name);
 }
 
-void Gen::gen(const ldc::Instr& in) {
-  if (const auto* t = bit_template(in.op)) {
-    for (Instruction i : *t) {
-      if (r0_top_ && i == make(M::And3, {I(1), R(r10), R(r0)})) continue;  // -O1: R0 holds the top
-      for (unsigned k = 0; k < i.numOperands; k++)
-        if (i.ops[k].kind == OperandKind::Direct) i.ops[k] = Dv(in.a[i.ops[k].imm]);
-      emit(std::move(i));
-    }
-    return;
+// The bit instructions: their template with the placeholders replaced by the
+// operands' direct addresses.
+void Gen::basic(const ldc::Instr& in) {
+  const std::vector<Instruction>* t = bit_template(in.op);
+  if (!t) throw std::logic_error(std::string("c40 backend: no template for ") + op_info(in.op).name);
+  for (Instruction i : *t) {
+    if (r0_top_ && i == make(M::And3, {I(1), R(r10), R(r0)})) continue;  // -O1: R0 holds the top
+    for (unsigned k = 0; k < i.numOperands; k++)
+      if (i.ops[k].kind == OperandKind::Direct) i.ops[k] = Dv(in.a[i.ops[k].imm]);
+    emit(std::move(i));
   }
+}
 
-  switch (op_info(in.op).klass) {
-    case OpClass::Compare: return compare(in);
-    case OpClass::Move: return move(in);
-    case OpClass::Arith:
-      if (in.op == Op::DIV || in.op == Op::MOD) return divmod(in);
-      return arith(in);
-    case OpClass::Logic: return logic(in);
-    case OpClass::Special: return special(in);
-    case OpClass::Timer: return timer(in);
-    case OpClass::Counter: return counter(in);
-    case OpClass::Flow:
-      test_top();
-      if (in.op == Op::END) return opc(M::Retsc, Cond::NE, {});
-      {
-        std::string skip = fresh();
-        branch(Cond::EQ, skip);
-        jump(label_name(in.a[0].label));  // BR: 24-bit reach across the program
-        label(skip);
-      }
-      return;
-    case OpClass::Basic: break;
-  }
-  throw std::logic_error(std::string("c40 backend: no template for ") + op_info(in.op).name);
+void Gen::flow(const ldc::Instr& in) {
+  test_top();
+  if (in.op == Op::END) return opc(M::Retsc, Cond::NE, {});
+  std::string skip = fresh();
+  branch(Cond::EQ, skip);
+  jump(label_name(in.a[0].label));  // BR: 24-bit reach across the program
+  label(skip);
 }
 
 // The shift-subtract division (docs/c40.md): R0 = a, R1 = b (b != 0, -1);

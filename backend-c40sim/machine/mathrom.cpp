@@ -16,14 +16,9 @@ const char* rom_name(RomFn f) {
 }
 
 float rom_host(RomFn f, float x) {
-  switch (f) {
-    case RomFn::Sin: return ::sinf(x);
-    case RomFn::Cos: return ::cosf(x);
-    case RomFn::Tan: return ::tanf(x);
-    case RomFn::Sqrt: return ::sqrtf(x);
-    case RomFn::Exp: return ::expf(x);
-    default: return ::logf(x);
-  }
+  int k = 0;
+  while (k < int(RealFn::None) && rom_of(RealFn(k)) != f) k++;
+  return apply_real_fn(RealFn(k), x);
 }
 
 c40sim::Ext rom_result(RomFn f, c40sim::Ext x) {

@@ -22,7 +22,7 @@
 
 namespace ldc::c40gen {
 
-// RomFn and rom_entry are the image format's (loader/c40_map.h, via c40layout.h).
+// RomFn, rom_entry and rom_of are the image format's (loader/c40_map.h, via c40layout.h).
 const char* rom_name(RomFn f);      // "sin", ...
 float rom_host(RomFn f, float x);   // sinf cosf tanf sqrtf expf logf
 

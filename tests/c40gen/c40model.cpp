@@ -14,10 +14,7 @@
 namespace ldc::c40gen {
 
 uint32_t CheckReport::ulps_for(Op op) {
-  switch (op) {
-    case Op::SIN: case Op::COS: case Op::TAN: case Op::SQRT: case Op::EXP: case Op::LN: return kUlpsRom;
-    default: return kUlpsArith;
-  }
+  return op_info(op).klass == OpClass::Special && rom_of(op_info(op).fn) != RomFn::Count ? kUlpsRom : kUlpsArith;
 }
 
 uint64_t CheckReport::total_checked() const {
@@ -203,13 +200,12 @@ class Run {
     store_real(d, int_to_real(x), real_from_int(x), Fmt::In);
   }
 
-  template <typename Cmp>
-  void compare(Cmp cmp) {
+  void compare(Rel rel) {
     Val a = operand(), b = operand();
-    if (!a.real && !b.real) return push(cmp(a.i, b.i));
-    bool c = cmp(real_compare(a.c40(), b.c40()), 0);
+    if (!a.real && !b.real) return push(rel_holds(rel, a.i, b.i));
+    bool c = rel_holds(rel, real_compare(a.c40(), b.c40()), 0);
     if (!check_) return push(c);
-    bool r = cmp(a.ieee(), b.ieee());
+    bool r = rel_holds(rel, a.ieee(), b.ieee());
     if (count(inputs({&a, &b})) && r != c) violation(std::string("compare: REAL ") + (r ? "true" : "false"));
     push(r);
   }
@@ -280,8 +276,7 @@ void Run::special() {
     if (d.real) return put_bits(d, a.bits & 0x7FFFFFFFu);  // fabsf, exact on both
     return store_real(d, std::fabs(a.f()), fp::abs(a.c40()).v, inputs({&a}));
   }
-  RomFn fn = op_ == Op::SIN ? RomFn::Sin : op_ == Op::COS ? RomFn::Cos : op_ == Op::TAN ? RomFn::Tan
-           : op_ == Op::SQRT ? RomFn::Sqrt : op_ == Op::EXP ? RomFn::Exp : RomFn::Ln;
+  RomFn fn = rom_of(op_info(op_).fn);
   store_real(d, rom_host(fn, a.ieee()), rom_result(fn, a.c40()), inputs({&a}));
 }
 
@@ -419,12 +414,9 @@ void Run::run() {
       case Op::OUTN: *operand().addr = !top(); break;
       case Op::SET: { Val w = operand(); if (top()) *w.addr = 1; break; }
       case Op::RST: { Val w = operand(); if (top()) *w.addr = 0; break; }
-      case Op::LDEQ: compare([](auto x, auto y) { return x == y; }); break;
-      case Op::LDNE: compare([](auto x, auto y) { return x != y; }); break;
-      case Op::LDLT: compare([](auto x, auto y) { return x < y; }); break;
-      case Op::LDLE: compare([](auto x, auto y) { return x <= y; }); break;
-      case Op::LDGT: compare([](auto x, auto y) { return x > y; }); break;
-      case Op::LDGE: compare([](auto x, auto y) { return x >= y; }); break;
+      case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE:
+        compare(op_info(op_).rel);
+        break;
       case Op::MOV: {
         if (!top()) { skip(2); break; }
         Val a = operand(), d = operand();

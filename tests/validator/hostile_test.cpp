@@ -464,7 +464,7 @@ uint8_t touch(volatile uint8_t* p, bool write) {
 
 TEST(Guard, TheTableSitsReadOnlyRightBelowTheImage) {
   ImageBytes b(Layout::standard(0).size);
-  for (int f = 0; f < int(RealFn::Count); f++) {
+  for (int f = 0; f < kCallSlots; f++) {
     uint64_t slot;
     std::memcpy(&slot, b.data() + kCallTableDisp + 8 * f, 8);
     EXPECT_EQ(slot, uint64_t(reinterpret_cast<uintptr_t>(real_fn(RealFn(f))))) << f;
