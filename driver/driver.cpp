@@ -184,8 +184,16 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
 
 NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode, int opt_level, bool notes) {
   NativeBuild b;
-  b.gen = generate_x86(p, p.layout(), opt_level, notes);
-  b.asm_result = as::assemble(as::x86::target(), b.gen.program, mode);
+  if (mode == as::Mode::Blockwise && !notes) {  // an image: each block assembled as it is made, then dropped
+    b.gen.program.globals = x86_globals(p);
+    as::Assembler<as::x86::Instruction> a(as::x86::target(), b.gen.program.globals);
+    b.gen.il_items = generate_x86_blocks(p, p.layout(), opt_level, false,
+                                         [&](as::Block<as::x86::Instruction>& blk) { a.add(blk); });
+    b.asm_result = a.finish();
+  } else {
+    b.gen = generate_x86(p, p.layout(), opt_level, notes);
+    b.asm_result = as::assemble(as::x86::target(), b.gen.program, mode);
+  }
   if (!b.asm_result.ok()) {
     std::string msg;
     for (const auto& e : b.asm_result.errors)

@@ -44,7 +44,10 @@ struct Compiled {
 Compiled compile_source(const std::string& path, bool allow_project = false, const std::string& task = "");
 
 // The x86-64 route: macro compiler then the blockwise assembler.  Assembly
-// errors become UserError with the rung's source line.
+// errors become UserError with the rung's source line.  Without notes (an
+// image) in Mode::Blockwise the blocks are streamed: each is assembled as soon
+// as it is generated and dropped (as::Assembler), so gen.program holds only the
+// global names; with notes (listings, --emit=asm) it holds every block.
 struct NativeBuild {
   X86Code gen;
   as::Result asm_result;
