@@ -77,6 +77,7 @@ static int ldc_main(int argc, char** argv) {
   if (target != "x86-64" && target != "c40") throw UserError("ldc: error: unknown target '" + target + "' (x86-64 or c40)");
   Compiled c = compile_source(input, emit.empty() && target == "x86-64", task);  // parse + lower
   if (c.project) return write_project(*c.project, output);  // a PLCopen configuration of several tasks
+  if (emit.empty() || emit == "hex") c.tree = {};  // an image needs only the IL: free the tree before code generation
   std::string text;
   if (emit == "tree") {
     if (!c.from_ld) throw UserError("ldc: error: --emit=tree needs a .ld source");
