@@ -971,8 +971,8 @@ std::pair<long, long> rss_hwm_kb() {
 }
 
 // `ldbench --compile-child FILE`: compiles FILE (.ld or .il) through every phase, as
-// the ldc driver does (the tree, the IL, the code and the image all alive at
-// the end), and prints "rss_before_kb hwm_parse hwm_lower hwm_generate
+// the ldc driver does for an image (the tree freed after lowering; the IL, the
+// code and the image alive at the end), and prints "rss_before_kb hwm_parse hwm_lower hwm_generate
 // hwm_assemble hwm_image il code_bytes image_bytes seconds".
 int compile_child(const std::string& file) {
   std::string text = read_file(file);
@@ -990,6 +990,7 @@ int compile_child(const std::string& file) {
     hwm[0] = rss_hwm_kb().second;
     p = lower_to_il(tp);
     hwm[1] = rss_hwm_kb().second;
+    tp = {};  // as ldc does for an image: the tree is not needed past lowering
   }
   // as ldc does (no listing notes): generation and assembly interleave, block by
   // block, so they share one high-water mark
