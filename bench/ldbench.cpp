@@ -1796,7 +1796,8 @@ struct Report {
              "hwm_after_lower_kb", "hwm_after_generate_kb", "hwm_after_assemble_kb", "hwm_after_image_kb", "seconds",
              "error"});
       md += "## Peak memory of compiling (child process, VmHWM)\n\n";
-      md += "Peak resident memory (VmHWM) after each phase; the source text is already in memory.  The .ld reader "
+      md += "Peak resident memory (VmHWM) after each phase; the source text is already in memory; generation and assembly "
+            "interleave block by block, as in ldc, so they share one figure, and the tree is freed after lowering.  The .ld reader "
             "refuses more than 65,536 rungs (frontend kMaxRungs), so the 100,000-rung plant is compiled from its IL text "
             "(no grid to read, no lowering).\n\n";
       md += md_head({"plant rungs", "IL", "source file", "image", "RSS before", "after parse", "after lower",
