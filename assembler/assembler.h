@@ -14,6 +14,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <set>
 #include <span>
 #include <stdexcept>
@@ -245,6 +246,16 @@ class ProgramView {
                       Encoding& out) const = 0;
 };
 Result assemble(const TargetInfo& target, const ProgramView& program, Mode mode);
+
+// The streaming assembler (Assembler<Inst>): the core between blocks.
+struct Stream;
+struct StreamDeleter {
+  void operator()(Stream* s) const;
+};
+std::unique_ptr<Stream, StreamDeleter> streamBegin(const TargetInfo& target, std::vector<std::string> globals);
+// `block` answers for one block only, numbered by how many came before it.
+void streamBlock(Stream& s, const ProgramView& block);
+Result streamFinish(Stream& s);
 }  // namespace detail
 
 // Assembles a program. Never throws for errors in the input: they are
@@ -349,6 +360,50 @@ std::string listingText(const Program<Inst>& p, const Result& r, std::string_vie
   }
   return out;
 }
+
+// The blockwise assembler fed one block at a time (paper 003, Fig. 7): each
+// block is laid out, relaxed and emitted when it is added, and may be freed
+// right after; only the global table, the code and the fixups to global labels
+// stay until finish().  The bytes are those of assemble(target, program) on the
+// same blocks (Mode::Blockwise); the errors are the same, though a block's
+// global-definition errors come with that block, not before every other one.
+template <class Inst>
+class Assembler {
+ public:
+  Assembler(const Target<Inst>& target, std::vector<std::string> globals)
+      : t_(target), s_(detail::streamBegin(target, std::move(globals))) {}
+  void add(const Block<Inst>& b) {
+    View v(t_, b, n_++);
+    detail::streamBlock(*s_, v);
+  }
+  size_t blocks() const { return n_; }
+  // The result, as assemble() gives it; the assembler is spent afterwards.
+  Result finish() { return detail::streamFinish(*s_); }
+
+ private:
+  class View final : public detail::ProgramView {
+   public:
+    View(const Target<Inst>& t, const Block<Inst>& b, size_t index) : t_(t), b_(b), index_(index) {}
+    std::span<const std::string> globals() const override { return {}; }
+    size_t numBlocks() const override { return index_ + 1; }
+    int sourceLine(size_t) const override { return b_.sourceLine; }
+    size_t numItems(size_t) const override { return b_.items.size(); }
+    ItemKind kind(size_t, size_t i) const override { return b_.items[i].kind; }
+    std::string_view label(size_t, size_t i) const override { return b_.items[i].label; }
+    bool isGlobal(size_t, size_t i) const override { return b_.items[i].global; }
+    void encode(size_t, size_t i, bool longForm, Encoding& out) const override {
+      t_.encode(b_.items[i].inst, longForm, out);
+    }
+
+   private:
+    const Target<Inst>& t_;
+    const Block<Inst>& b_;
+    size_t index_;
+  };
+  const Target<Inst>& t_;
+  std::unique_ptr<detail::Stream, detail::StreamDeleter> s_;
+  size_t n_ = 0;
+};
 
 }  // namespace ldc::as
 

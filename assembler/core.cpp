@@ -65,7 +65,7 @@ void applyFixup(const FixupKind& k, std::span<uint8_t> code, size_t offset, int6
 }
 
 namespace detail {
-namespace {
+namespace core_impl {
 
 enum class RefType : uint8_t { Dead, Local, Global, Absolute };
 
@@ -106,26 +106,56 @@ struct Pending {
 
 class Core {
  public:
-  Core(const TargetInfo& t, const ProgramView& p, Mode mode) : t_(t), p_(p), mode_(mode) {}
+  // The declared global names must outlive the core (the table keeps views).
+  Core(const TargetInfo& t, std::span<const std::string> globals, Mode mode) : t_(t), mode_(mode) {
+    r_.globalAddresses.assign(globals.size(), -1);
+    globalDefBlock_.assign(globals.size(), -1);
+    globalNames_ = globals;
+    for (uint32_t i = 0; i < globals.size(); ++i) {
+      if (!globals_.emplace(std::string_view(globals[i]), i).second)
+        error(-1, "duplicate global label '" + globals[i] + "'");
+    }
+  }
 
-  Result run() {
-    size_t nb = p_.numBlocks();
+  // The whole program at once (assemble()).
+  Result run(const ProgramView& p) {
+    p_ = &p;
+    size_t nb = p.numBlocks();
+    lines_.reserve(nb);
+    for (size_t b = 0; b < nb; ++b) lines_.push_back(p.sourceLine(b));
     r_.blockOffsets.assign(nb, 0);
     r_.items.resize(nb);
-    for (size_t b = 0; b < nb; ++b) r_.items[b].resize(p_.numItems(b));
-    collectGlobals();
+    for (size_t b = 0; b < nb; ++b) r_.items[b].resize(p.numItems(b));
+    for (uint32_t b = 0; b < nb; ++b) defineGlobals(b);
+    notePeak();
     if (mode_ == Mode::Blockwise) {
       for (uint32_t b = 0; b < nb; ++b) assembleUnit(b, b + 1);
     } else {
       assembleUnit(0, uint32_t(nb));
     }
+    return finish();
+  }
+
+  // One block more (Assembler::add): `p` answers for block `b` only, which is
+  // the next one; its items are not looked at again after this call.
+  void block(const ProgramView& p, uint32_t b) {
+    p_ = &p;
+    lines_.push_back(p.sourceLine(b));
+    r_.blockOffsets.push_back(0);
+    r_.items.emplace_back(p.numItems(b));
+    defineGlobals(b);
+    assembleUnit(b, b + 1);
+    p_ = nullptr;
+  }
+
+  Result finish() {
     resolvePending();
     return std::move(r_);
   }
 
  private:
   void error(int block, std::string msg) {
-    int line = block >= 0 ? p_.sourceLine(size_t(block)) : 0;
+    int line = block >= 0 ? lines_[size_t(block)] : 0;
     r_.errors.push_back(Error{block, line, std::move(msg)});
   }
 
@@ -134,37 +164,28 @@ class Core {
     if (n > r_.stats.peakLabelEntries) r_.stats.peakLabelEntries = n;
   }
 
-  // Pass 1: the global table, from the declarations and the definitions.
-  void collectGlobals() {
-    auto decl = p_.globals();
-    r_.globalAddresses.assign(decl.size(), -1);
-    globalDefBlock_.assign(decl.size(), -1);
-    for (uint32_t i = 0; i < decl.size(); ++i) {
-      if (!globals_.emplace(std::string_view(decl[i]), i).second)
-        error(-1, "duplicate global label '" + decl[i] + "'");
-    }
-    for (uint32_t b = 0; b < p_.numBlocks(); ++b) {
-      for (size_t i = 0; i < p_.numItems(b); ++i) {
-        if (p_.kind(b, i) != ItemKind::Label || !p_.isGlobal(b, i)) continue;
-        std::string_view name = p_.label(b, i);
-        auto it = globals_.find(name);
-        if (it == globals_.end()) {
-          error(int(b), "global label '" + std::string(name) + "' is not declared");
-        } else if (globalDefBlock_[it->second] >= 0) {
-          error(int(b), "duplicate global label '" + std::string(name) + "'");
-        } else {
-          globalDefBlock_[it->second] = int(b);
-        }
+  // Pass 1: each global label definition of block b must be declared and
+  // defined once.
+  void defineGlobals(uint32_t b) {
+    for (size_t i = 0; i < p_->numItems(b); ++i) {
+      if (p_->kind(b, i) != ItemKind::Label || !p_->isGlobal(b, i)) continue;
+      std::string_view name = p_->label(b, i);
+      auto it = globals_.find(name);
+      if (it == globals_.end()) {
+        error(int(b), "global label '" + std::string(name) + "' is not declared");
+      } else if (globalDefBlock_[it->second] >= 0) {
+        error(int(b), "duplicate global label '" + std::string(name) + "'");
+      } else {
+        globalDefBlock_[it->second] = int(b);
       }
     }
-    notePeak();
   }
 
   void encodeState(InstState& s) {
     ++r_.stats.encodeCalls;
     s.enc = Encoding{};
     try {
-      p_.encode(s.block, s.item, s.longForm, s.enc);
+      p_->encode(s.block, s.item, s.longForm, s.enc);
       for (unsigned f = 0; f < s.enc.numFixups; ++f) {
         const Fixup& fx = s.enc.fixups[f];
         if (fx.kind >= t_.fixupKinds.size() ||
@@ -203,9 +224,9 @@ class Core {
     localAddr_.clear();
     // Local label table.
     for (uint32_t b = first; b < last; ++b) {
-      for (size_t i = 0; i < p_.numItems(b); ++i) {
-        if (p_.kind(b, i) != ItemKind::Label || p_.isGlobal(b, i)) continue;
-        std::string_view name = p_.label(b, i);
+      for (size_t i = 0; i < p_->numItems(b); ++i) {
+        if (p_->kind(b, i) != ItemKind::Label || p_->isGlobal(b, i)) continue;
+        std::string_view name = p_->label(b, i);
         if (globals_.count(name)) {
           error(int(b), "local label '" + std::string(name) + "' clashes with a global label");
           continue;
@@ -222,8 +243,8 @@ class Core {
     // First encoding: short forms, long ones for non-local targets.
     std::vector<InstState> insts;
     for (uint32_t b = first; b < last; ++b) {
-      for (uint32_t i = 0; i < p_.numItems(b); ++i) {
-        if (p_.kind(b, i) != ItemKind::Instruction) continue;
+      for (uint32_t i = 0; i < p_->numItems(b); ++i) {
+        if (p_->kind(b, i) != ItemKind::Instruction) continue;
         InstState s;
         s.block = b;
         s.item = i;
@@ -278,11 +299,11 @@ class Core {
     size_t n = 0;
     for (uint32_t b = first; b < last; ++b) {
       blockStart[b - first] = cur;
-      for (size_t i = 0; i < p_.numItems(b); ++i) {
-        switch (p_.kind(b, i)) {
+      for (size_t i = 0; i < p_->numItems(b); ++i) {
+        switch (p_->kind(b, i)) {
           case ItemKind::Label:
-            if (!p_.isGlobal(b, i)) {
-              auto it = locals_.find(LocalKey{b, p_.label(b, i)});
+            if (!p_->isGlobal(b, i)) {
+              auto it = locals_.find(LocalKey{b, p_->label(b, i)});
               if (it != locals_.end()) localAddr_[it->second] = cur;
             }
             break;
@@ -305,12 +326,12 @@ class Core {
     for (uint32_t b = first; b < last; ++b) {
       r_.blockOffsets[b] = base + blockStart[b - first];
       uint32_t cur = r_.blockOffsets[b];
-      for (size_t i = 0; i < p_.numItems(b); ++i) {
+      for (size_t i = 0; i < p_->numItems(b); ++i) {
         ItemLayout& lay = r_.items[b][i];
         lay.offset = cur;
-        ItemKind kind = p_.kind(b, i);
-        if (kind == ItemKind::Label && p_.isGlobal(b, i)) {
-          auto g = globals_.find(p_.label(b, i));
+        ItemKind kind = p_->kind(b, i);
+        if (kind == ItemKind::Label && p_->isGlobal(b, i)) {
+          auto g = globals_.find(p_->label(b, i));
           if (g != globals_.end() && globalDefBlock_[g->second] == int(b))
             r_.globalAddresses[g->second] = cur;
         }
@@ -321,7 +342,10 @@ class Core {
         r_.code.insert(r_.code.end(), s.enc.bytes.begin(), s.enc.bytes.begin() + s.enc.size);
         for (unsigned f = 0; f < s.enc.numFixups; ++f) {
           const Fixup& fx = s.enc.fixups[f];
-          Pending pd{cur, s.enc.size, cur + fx.offset, fx.kind, s.refs[f], fx.addend, b, fx.label};
+          // a pending fixup outlives the block: name its label from the global table
+          std::string_view label =
+              s.refs[f].type == RefType::Global ? std::string_view(globalNames_[s.refs[f].index]) : fx.label;
+          Pending pd{cur, s.enc.size, cur + fx.offset, fx.kind, s.refs[f], fx.addend, b, label};
           if (s.refs[f].type == RefType::Local) {
             const FixupKind& k = t_.fixupKinds[fx.kind];
             patch(pd, base + localAddr_[s.refs[f].index]);
@@ -369,9 +393,11 @@ class Core {
   }
 
   const TargetInfo& t_;
-  const ProgramView& p_;
+  const ProgramView* p_ = nullptr;
   Mode mode_;
   Result r_;
+  std::vector<int> lines_;  // each block's source line, for errors
+  std::span<const std::string> globalNames_;
   std::unordered_map<std::string_view, uint32_t> globals_;
   std::vector<int> globalDefBlock_;
   std::unordered_map<LocalKey, uint32_t, LocalKeyHash> locals_;
@@ -379,14 +405,47 @@ class Core {
   std::vector<Pending> pending_;
 };
 
-}  // namespace
+}  // namespace core_impl
+using core_impl::Core;
 
 Result assemble(const TargetInfo& target, const ProgramView& program, Mode mode) {
   auto t0 = std::chrono::steady_clock::now();
-  Result r = Core(target, program, mode).run();
+  Result r = Core(target, program.globals(), mode).run(program);
   r.stats.elapsedNs = std::chrono::duration_cast<std::chrono::nanoseconds>(
                           std::chrono::steady_clock::now() - t0)
                           .count();
+  return r;
+}
+
+struct Stream {
+  std::vector<std::string> globals;
+  Core core;
+  uint32_t blocks = 0;
+  int64_t ns = 0;
+  Stream(const TargetInfo& t, std::vector<std::string> g)
+      : globals(std::move(g)), core(t, globals, Mode::Blockwise) {}
+};
+
+void StreamDeleter::operator()(Stream* s) const { delete s; }
+
+std::unique_ptr<Stream, StreamDeleter> streamBegin(const TargetInfo& target, std::vector<std::string> globals) {
+  auto t0 = std::chrono::steady_clock::now();
+  std::unique_ptr<Stream, StreamDeleter> s(new Stream(target, std::move(globals)));
+  s->ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
+  return s;
+}
+
+void streamBlock(Stream& s, const ProgramView& block) {
+  auto t0 = std::chrono::steady_clock::now();
+  s.core.block(block, s.blocks++);
+  s.ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
+}
+
+Result streamFinish(Stream& s) {
+  auto t0 = std::chrono::steady_clock::now();
+  Result r = s.core.finish();
+  s.ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
+  r.stats.elapsedNs = s.ns;
   return r;
 }
 

@@ -10,6 +10,8 @@
 // address is baked in.
 #pragma once
 
+#include <functional>
+#include <string>
 #include <vector>
 
 #include "assembler/assembler.h"
@@ -35,6 +37,17 @@ struct X86Code {
 // notes: comment items with each rung's line and each IL instruction's text,
 // for --emit=asm and listings; an image does not need them.
 X86Code generate_x86(const Program& p, const Layout& layout, int opt_level = 0, bool notes = true);
+
+// The same blocks one at a time, for the streaming assembler (as::Assembler):
+// each block is handed to `sink`, which may take its items (the generator
+// reuses the block afterwards).  The global names (X86Code::program.globals)
+// are x86_globals(p); the result is X86Code::il_items.  At -O2 the base
+// registers' K need every block's operands first: the rungs are generated
+// twice, a first time only to count them (docs/x86.md, "Compact addressing").
+using X86BlockSink = std::function<void(as::Block<as::x86::Instruction>&)>;
+std::vector<std::vector<uint32_t>> generate_x86_blocks(const Program& p, const Layout& layout, int opt_level, bool notes,
+                                                       const X86BlockSink& sink);
+std::vector<std::string> x86_globals(const Program& p);
 
 // Names of the global labels the backend defines.
 inline constexpr const char* kX86ExitLabel = "scan_exit";

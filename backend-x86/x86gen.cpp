@@ -1,5 +1,7 @@
 // backend-x86/x86gen.cpp -- IL mnemonics -> x86-64 assembly templates.
 #include <algorithm>
+#include <array>
+#include <optional>
 #include <bitset>
 #include <climits>
 #include <cstring>
@@ -972,17 +974,22 @@ bool rewritable(const Instruction& in, const as::x86::Operand& o) {
 }
 uint32_t mem_width(const Mem& m) { return m.size == Size::Dword ? 4 : m.size == Size::Qword ? 8 : 1; }
 
-void set_bases(std::vector<as::Block<Instruction>>& blocks, uint32_t image_size) {
-  std::vector<int64_t> addrs;  // the first byte of each operand whose last byte is addr+w-1
-  std::vector<std::pair<int64_t, int64_t>> ops;  // (first, last) byte
-  for (const auto& b : blocks)
-    for (const Item& it : b.items) {
-      if (it.kind != as::ItemKind::Instruction) continue;
-      for (unsigned k = 0; k < it.inst.numOperands; k++)
-        if (rewritable(it.inst, it.inst.ops[k]))
-          ops.push_back({it.inst.ops[k].mem.disp, int64_t(it.inst.ops[k].mem.disp) + mem_width(it.inst.ops[k].mem) - 1});
-    }
-  int64_t ks[kNumBases];
+namespace {
+
+using Ops = std::vector<std::pair<int64_t, int64_t>>;  // (first, last) byte of each rewritable operand
+using Bases = std::array<int64_t, kNumBases>;
+
+void collect_ops(const as::Block<Instruction>& b, Ops& ops) {
+  for (const Item& it : b.items) {
+    if (it.kind != as::ItemKind::Instruction) continue;
+    for (unsigned k = 0; k < it.inst.numOperands; k++)
+      if (rewritable(it.inst, it.inst.ops[k]))
+        ops.push_back({it.inst.ops[k].mem.disp, int64_t(it.inst.ops[k].mem.disp) + mem_width(it.inst.ops[k].mem) - 1});
+  }
+}
+
+Bases choose_bases(Ops ops, uint32_t image_size) {
+  Bases ks{};
   for (int r = 0; r < kNumBases; r++) {
     // window [lo, lo+255]: the operands with first >= lo and last <= lo+255,
     // counted per width from sorted first bytes
@@ -1002,101 +1009,173 @@ void set_bases(std::vector<as::Block<Instruction>>& blocks, uint32_t image_size)
       }
     ks[r] = best ? best_lo + 128 : 128;
     if (ks[r] >= int64_t(image_size)) ks[r] = int64_t(image_size) - 1;
-    std::vector<std::pair<int64_t, int64_t>> rest;
+    Ops rest;
     for (const auto& o : ops)
       if (!(o.first >= ks[r] - 128 && o.second <= ks[r] + 127)) rest.push_back(o);
     ops.swap(rest);
   }
-  for (auto& b : blocks)
-    for (Item& it : b.items) {
-      if (it.kind != as::ItemKind::Instruction) continue;
-      Instruction& in = it.inst;
-      if (in.mnemonic == M::Lea && in.ops[0].kind == OperandKind::Reg && in.ops[0].reg.cls == RegClass::Gp64 &&
-          in.ops[1].mem.base == r64(BX)) {
-        for (int r = 0; r < kNumBases; r++)
-          if (in.ops[0].reg.num == kBaseRegs[r]) in.ops[1].mem.disp = int32_t(ks[r]);
-        continue;
-      }
-      for (unsigned k = 0; k < in.numOperands; k++) {
-        if (!rewritable(in, in.ops[k])) continue;
-        Mem& m = in.ops[k].mem;
-        for (int r = 0; r < kNumBases; r++) {
-          int64_t d = int64_t(m.disp) - ks[r];
-          if (d >= -128 && d + mem_width(m) - 1 <= 127) {
-            m.base = r64(as::x86::kBaseRegs[r]);
-            m.disp = int32_t(d);
-            break;
-          }
+  return ks;
+}
+
+void apply_bases(as::Block<Instruction>& b, const Bases& ks) {
+  for (Item& it : b.items) {
+    if (it.kind != as::ItemKind::Instruction) continue;
+    Instruction& in = it.inst;
+    if (in.mnemonic == M::Lea && in.ops[0].kind == OperandKind::Reg && in.ops[0].reg.cls == RegClass::Gp64 &&
+        in.ops[1].mem.base == r64(BX)) {
+      for (int r = 0; r < kNumBases; r++)
+        if (in.ops[0].reg.num == kBaseRegs[r]) in.ops[1].mem.disp = int32_t(ks[r]);
+      continue;
+    }
+    for (unsigned k = 0; k < in.numOperands; k++) {
+      if (!rewritable(in, in.ops[k])) continue;
+      Mem& m = in.ops[k].mem;
+      for (int r = 0; r < kNumBases; r++) {
+        int64_t d = int64_t(m.disp) - ks[r];
+        if (d >= -128 && d + mem_width(m) - 1 <= 127) {
+          m.base = r64(as::x86::kBaseRegs[r]);
+          m.disp = int32_t(d);
+          break;
         }
       }
     }
+  }
 }
 
-X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool notes) {
-  const bool o2 = opt_level >= 2;
-  X86Code out;
-  auto& prog = out.program;
-  prog.blocks.reserve(p.rungs.size() + 2);
-  out.il_items.reserve(p.rungs.size());
-  prog.globals.push_back(kX86ExitLabel);
-  for (int k = 0; k < int(as::x86::Routine::Count); k++)
-    prog.globals.push_back(std::string(as::x86::routineName(as::x86::Routine(k))));
-  for (const Rung& r : p.rungs)
-    for (const auto& l : r.labels) prog.globals.push_back(x86_label_name(l));
-  for (const auto& l : p.end_labels) prog.globals.push_back(x86_label_name(l));
+// The blocks of a program in order (block 0 the prologue, one per rung, the
+// epilogue, the shared routines if any are called), each handed to `sink`.
+class Blocks {
+ public:
+  Blocks(const Program& p, const Layout& layout, int opt_level, bool notes)
+      : p_(p), layout_(layout), opt_(opt_level), o2_(opt_level >= 2), notes_(notes) {}
 
-  // prologue: keep rbx/rbp for the caller, 16-byte stack alignment for calls
-  as::Block<Instruction> pro;
-  pro.sourceLine = p.rungs.empty() ? 0 : p.rungs[0].line;
-  pro.items.push_back(Item::note(o2 ? "scan(image): rbx = image, bit stack in r12b r13b bpl, bases rdi r15 r14 (-O2)"
-                                    : "scan(image): rbx = image, ebp = bit stack"));
-  for (const Instruction& i : scanPrologue(o2)) pro.items.push_back(Item::instr(i));
-  if (o2)
-    for (RegNum r : as::x86::kBaseRegs) pro.items.push_back(Item::instr(as::x86::baseLea(r, 0)));  // K: set_bases
-  prog.blocks.push_back(std::move(pro));
-
-  std::bitset<8> used;
-  for (const Rung& r : p.rungs) {
-    as::Block<Instruction> b;
-    b.sourceLine = r.line;
-    b.items.reserve(r.code.size() * (notes ? 12 : 10) + 4);  // items are large: grow once
-    for (const auto& l : r.labels) b.items.push_back(Item::labelDef(x86_label_name(l), true));
-    if (notes) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
-    std::vector<uint32_t> starts;
-    bool slots = o2 && stack_fits_slots(r.code, kNumSlots);
-    Gen g(layout, b.items, slots, o2, &used);
-    for (const ldc::Instr& in : r.code) {
-      starts.push_back(uint32_t(b.items.size()));
-      if (notes) b.items.push_back(Item::note(instr_text(in)));
-      g.instr(in);
-    }
-    if (opt_level >= 1 && !slots) peephole(b.items, starts);
-    out.il_items.push_back(std::move(starts));
-    prog.blocks.push_back(std::move(b));
+  as::Block<Instruction> prologue() const {
+    // keep rbx/rbp for the caller, 16-byte stack alignment for calls
+    as::Block<Instruction> pro;
+    pro.sourceLine = p_.rungs.empty() ? 0 : p_.rungs[0].line;
+    pro.items.push_back(Item::note(o2_ ? "scan(image): rbx = image, bit stack in r12b r13b bpl, bases rdi r15 r14 (-O2)"
+                                         : "scan(image): rbx = image, ebp = bit stack"));
+    for (const Instruction& i : scanPrologue(o2_)) pro.items.push_back(Item::instr(i));
+    if (o2_)
+      for (RegNum r : as::x86::kBaseRegs) pro.items.push_back(Item::instr(as::x86::baseLea(r, 0)));  // K: set_bases
+    return pro;
   }
 
-  as::Block<Instruction> epi;
-  const int epi_line = p.rungs.empty() ? 0 : p.rungs.back().line;
-  epi.sourceLine = epi_line;
-  for (const auto& l : p.end_labels) epi.items.push_back(Item::labelDef(x86_label_name(l), true));
-  epi.items.push_back(Item::labelDef(kX86ExitLabel, true));
-  for (const Instruction& i : scanEpilogue(o2)) epi.items.push_back(Item::instr(i));
-  prog.blocks.push_back(std::move(epi));
+  // Rung r's block into b (its items replaced); starts: where each IL instruction's code starts.
+  void rung(size_t ri, as::Block<Instruction>& b, std::vector<uint32_t>& starts) {
+    const Rung& r = p_.rungs[ri];
+    b.sourceLine = r.line;
+    b.items.clear();
+    starts.clear();
+    starts.reserve(r.code.size());
+    for (const auto& l : r.labels) b.items.push_back(Item::labelDef(x86_label_name(l), true));
+    if (notes_) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
+    bool slots = o2_ && stack_fits_slots(r.code, kNumSlots);
+    Gen g(layout_, b.items, slots, o2_, &used_);
+    for (const ldc::Instr& in : r.code) {
+      starts.push_back(uint32_t(b.items.size()));
+      if (notes_) b.items.push_back(Item::note(instr_text(in)));
+      g.instr(in);
+    }
+    if (opt_ >= 1 && !slots) peephole(b.items, starts);
+  }
 
-  // the shared timer and counter routines the rungs call, after the epilogue
-  if (used.any()) {
+  as::Block<Instruction> epilogue() const {
+    as::Block<Instruction> epi;
+    epi.sourceLine = p_.rungs.empty() ? 0 : p_.rungs.back().line;
+    for (const auto& l : p_.end_labels) epi.items.push_back(Item::labelDef(x86_label_name(l), true));
+    epi.items.push_back(Item::labelDef(kX86ExitLabel, true));
+    for (const Instruction& i : scanEpilogue(o2_)) epi.items.push_back(Item::instr(i));
+    return epi;
+  }
+
+  // the shared timer and counter routines the rungs call, after the epilogue (empty if none)
+  std::optional<as::Block<Instruction>> routines() const {
+    if (!used_.any()) return std::nullopt;
     as::Block<Instruction> rt;
-    rt.sourceLine = epi_line;
-    as::x86::RoutineAreas areas = x86_routine_areas(layout);
+    rt.sourceLine = p_.rungs.empty() ? 0 : p_.rungs.back().line;
+    as::x86::RoutineAreas areas = x86_routine_areas(layout_);
     for (int k = 0; k < int(as::x86::Routine::Count); k++) {
-      if (!used.test(size_t(k))) continue;
+      if (!used_.test(size_t(k))) continue;
       std::string name(as::x86::routineName(as::x86::Routine(k)));
       rt.items.push_back(Item::labelDef(name, true));
       for (const Instruction& i : as::x86::scanRoutine(as::x86::Routine(k), areas)) rt.items.push_back(Item::instr(i));
     }
-    prog.blocks.push_back(std::move(rt));
+    return rt;
   }
-  if (o2) set_bases(prog.blocks, layout.size);
+
+  // -O2: the base registers' K over every block, from a first sweep that keeps
+  // only the operands (the blocks are made again by the second).
+  Bases bases() {
+    Ops ops;
+    collect_ops(prologue(), ops);
+    as::Block<Instruction> b;
+    std::vector<uint32_t> starts;
+    for (size_t r = 0; r < p_.rungs.size(); r++) {
+      rung(r, b, starts);
+      collect_ops(b, ops);
+    }
+    collect_ops(epilogue(), ops);
+    if (auto rt = routines()) collect_ops(*rt, ops);
+    used_.reset();
+    return choose_bases(std::move(ops), layout_.size);
+  }
+
+  void run(std::vector<std::vector<uint32_t>>& il_items, const X86BlockSink& sink) {
+    Bases ks{};
+    if (o2_) ks = bases();
+    auto give = [&](as::Block<Instruction>& b) {
+      if (o2_) apply_bases(b, ks);
+      sink(b);
+    };
+    as::Block<Instruction> b = prologue();
+    give(b);
+    il_items.reserve(p_.rungs.size());
+    std::vector<uint32_t> starts;
+    for (size_t r = 0; r < p_.rungs.size(); r++) {
+      rung(r, b, starts);
+      il_items.push_back(starts);
+      give(b);
+    }
+    b = epilogue();
+    give(b);
+    if (auto rt = routines()) give(*rt);
+  }
+
+ private:
+  const Program& p_;
+  const Layout& layout_;
+  int opt_;
+  bool o2_, notes_;
+  std::bitset<8> used_;
+};
+
+}  // namespace
+
+std::vector<std::string> x86_globals(const Program& p) {
+  std::vector<std::string> g;
+  g.push_back(kX86ExitLabel);
+  for (int k = 0; k < int(as::x86::Routine::Count); k++)
+    g.push_back(std::string(as::x86::routineName(as::x86::Routine(k))));
+  for (const Rung& r : p.rungs)
+    for (const auto& l : r.labels) g.push_back(x86_label_name(l));
+  for (const auto& l : p.end_labels) g.push_back(x86_label_name(l));
+  return g;
+}
+
+std::vector<std::vector<uint32_t>> generate_x86_blocks(const Program& p, const Layout& layout, int opt_level, bool notes,
+                                                       const X86BlockSink& sink) {
+  std::vector<std::vector<uint32_t>> il_items;
+  Blocks(p, layout, opt_level, notes).run(il_items, sink);
+  return il_items;
+}
+
+X86Code generate_x86(const Program& p, const Layout& layout, int opt_level, bool notes) {
+  X86Code out;
+  out.program.globals = x86_globals(p);
+  out.program.blocks.reserve(p.rungs.size() + 3);
+  out.il_items = generate_x86_blocks(p, layout, opt_level, notes,
+                                     [&](as::Block<Instruction>& b) { out.program.blocks.push_back(std::move(b)); });
   return out;
 }
 

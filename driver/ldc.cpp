@@ -81,6 +81,7 @@ static int ldc_main(int argc, char** argv) {
   if (!t) throw UserError("ldc: error: unknown target '" + target + "' (" + target_names() + ")");
   Compiled c = compile_source(input, emit.empty() && t->host, task);  // parse + lower
   if (c.project) return write_project(*c.project, output);  // a PLCopen configuration of several tasks
+  if (emit.empty() || emit == "hex") c.tree = {};  // an image needs only the IL: free the tree before code generation
   std::string text;
   if (emit == "tree") {
     if (!c.from_ld) throw UserError("ldc: error: --emit=tree needs a .ld source");

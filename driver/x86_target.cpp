@@ -11,6 +11,15 @@ namespace ldc {
 
 NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode, int opt_level, bool notes) {
   NativeBuild b;
+  if (mode == as::Mode::Blockwise && !notes) {  // an image: each block assembled as it is made, then dropped
+    b.gen.program.globals = x86_globals(p);
+    as::Assembler<as::x86::Instruction> a(as::x86::target(), b.gen.program.globals);
+    b.gen.il_items = generate_x86_blocks(p, p.layout(), opt_level, false,
+                                         [&](as::Block<as::x86::Instruction>& blk) { a.add(blk); });
+    b.asm_result = a.finish();
+    throw_assembly_errors(b.asm_result, source_name);
+    return b;
+  }
   b.gen = generate_x86(p, p.layout(), opt_level, notes);
   b.asm_result = assemble_or_throw(as::x86::target(), b.gen.program, source_name, mode);
   return b;

@@ -11,7 +11,10 @@
 
 namespace ldc {
 
-// Assembly errors become UserError with the rung's source line.
+// Assembly errors become UserError with the rung's source line.  Without notes
+// (an image) in Mode::Blockwise the blocks are streamed: each is assembled as
+// soon as it is generated and dropped (as::Assembler), so gen.program holds
+// only the global names; with notes (listings, --emit=asm) it holds every block.
 struct NativeBuild {
   X86Code gen;
   as::Result asm_result;
