@@ -8,9 +8,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "loader/checks.h"
 #include "loader/loader.h"
-#include "loader/c40_check.h"
 
 namespace ldc {
 
@@ -219,6 +217,13 @@ std::vector<uint8_t> write_image(const Image& im) {
   return std::move(w.out);
 }
 
+// "1 = x86-64, 2 = C40": the known target bytes, for the header's message.
+static std::string known_kinds() {
+  std::string s;
+  for (const ImageKind& k : image_kinds()) s += (s.empty() ? "" : ", ") + std::to_string(int(k.id)) + " = " + k.name;
+  return s;
+}
+
 // ---------------------------------------------------------------- read_image
 
 std::optional<uint8_t> peek_image_target(std::span<const uint8_t> head) {
@@ -253,7 +258,8 @@ class ImageReader {
   uint32_t total_ = 0, nsec_ = 0, header_size_ = 0;
   std::vector<SectionEntry> table_;
   const SectionEntry* by_id_[kSectionIdEnd] = {};
-  std::vector<uint32_t> code_starts_;  // x86-64 instruction starts, for the line map
+  const ImageKind* kind_ = nullptr;
+  std::vector<uint32_t> code_starts_;  // instruction starts, for the line map
 
   ImageError fail(uint64_t off, const std::string& msg) const {
     return ImageError(name_ + ": offset " + hex(off) + ": " + msg);
@@ -278,8 +284,8 @@ class ImageReader {
       throw fail(kOffVersion, "unsupported format version " + std::to_string(v) + " (this loader reads version " +
                                   std::to_string(kVersion) + ")");
     uint8_t target = b_[kOffTarget];
-    if (target != uint8_t(ImageTarget::X86_64) && target != uint8_t(ImageTarget::C40))
-      throw fail(kOffTarget, "unknown target " + std::to_string(target) + " (1 = x86-64, 2 = C40)");
+    kind_ = find_image_kind(target);
+    if (!kind_) throw fail(kOffTarget, "unknown target " + std::to_string(target) + " (" + known_kinds() + ")");
     if (b_[kOffFlags] != 0)
       throw fail(kOffFlags, "unknown flags " + hex(b_[kOffFlags]) + " (version " + std::to_string(kVersion) + " defines none)");
     sizes();
@@ -521,20 +527,17 @@ class ImageReader {
       if (entry) throw sfail(*entry, msg);
       throw sfail(code, msg + "; the image has no 'entry' section, so the entry is 0");
     }
-    if (im_.target == ImageTarget::X86_64) {
-      if (std::string why = detail::check_x86(im_.code, im_.entry, im_.layout, &code_starts_); !why.empty())
-        throw sfail(code, why);
-      return;
+    if (const uint32_t unit = kind_->unit; unit > 1) {
+      std::string words = std::string(kind_->name) + " code is " + std::to_string(8 * unit) + "-bit words";
+      if (im_.code.size() % unit)
+        throw sfail(code, words + ", but the section has " + std::to_string(im_.code.size()) + " bytes");
+      if (im_.entry % unit)
+        throw sfail(entry ? *entry : code, std::string(kind_->name) + " entry point " + hex(im_.entry) + " is not word-aligned");
     }
-    if (im_.code.size() % 4)
-      throw sfail(code, "C40 code is 32-bit words, but the section has " + std::to_string(im_.code.size()) + " bytes");
-    if (im_.entry % 4) throw sfail(entry ? *entry : code, "C40 entry point " + hex(im_.entry) + " is not word-aligned");
-    if (std::string why = check_c40_code(im_.code, im_.entry, im_.layout); !why.empty()) throw sfail(code, why);
+    if (std::string why = kind_->check(im_.code, im_.entry, im_.layout, &code_starts_); !why.empty()) throw sfail(code, why);
   }
 
-  bool code_boundary(uint32_t off) const {
-    return im_.target == ImageTarget::X86_64 ? std::binary_search(code_starts_.begin(), code_starts_.end(), off) : off % 4 == 0;
-  }
+  bool code_boundary(uint32_t off) const { return std::binary_search(code_starts_.begin(), code_starts_.end(), off); }
 
   void check_lines() {
     const SectionEntry* s = by_id_[kLines];

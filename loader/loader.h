@@ -17,7 +17,22 @@
 
 namespace ldc {
 
+// The kind of machine code an image holds: the header's target byte.
 enum class ImageTarget : uint8_t { X86_64 = 1, C40 = 2 };
+
+// One row per ImageTarget (loader/image_kinds.cpp): what read_image needs to
+// know of a kind of code.  A new target adds its value above and one row.
+struct ImageKind {
+  ImageTarget id;
+  const char* name;  // in messages: "x86-64", "C40"
+  uint32_t unit;     // the code is a sequence of `unit`-byte words (1: bytes)
+  // "" if the code passes its check, else "at ...: why"; fills `starts` with
+  // the offset of every instruction, ascending (line map entries must hit one).
+  std::string (*check)(std::span<const uint8_t> code, uint32_t entry, const Layout& layout,
+                       std::vector<uint32_t>* starts);
+};
+std::span<const ImageKind> image_kinds();
+const ImageKind* find_image_kind(uint8_t id);  // nullptr for an unknown byte
 
 // One per IL instruction: where its machine code starts, where it starts in the
 // IL section, the source line of its element and the index of its rung.

@@ -34,6 +34,19 @@ TEST(Targets, NamesKindsAndEnginesAreUnique) {
   EXPECT_EQ(&targets().front(), &host_target());  // the default target runs here
 }
 
+// The loader knows every target's kind of code, and nothing else: one row of
+// image_kinds() per row of targets(), found by its header byte.
+TEST(Targets, EveryTargetHasItsImageKindAndNoMore) {
+  for (const Target& t : targets()) {
+    const ImageKind* k = find_image_kind(uint8_t(t.image_kind));
+    ASSERT_NE(k, nullptr) << t.name;
+    EXPECT_EQ(k->id, t.image_kind);
+  }
+  EXPECT_EQ(image_kinds().size(), targets().size());
+  EXPECT_EQ(find_image_kind(0), nullptr);
+  EXPECT_EQ(find_image_kind(0xFF), nullptr);
+}
+
 // Every row's hooks agree: the image passes the row's code check and its
 // disassembly, runs on the row's engines like the reference interpreter, and
 // each rung's line entries point into the rung's block.
