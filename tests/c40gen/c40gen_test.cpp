@@ -15,7 +15,7 @@
 #include "backend-c40sim/machine/c40machine.h"
 #include "tests/c40gen/c40model.h"
 #include "frontend/frontend.h"
-#include "tests/c40/c40_test_util.h"
+#include "tests/assembler/c40_test_util.h"
 #include "tests/c40gen/c40gen_util.h"
 #include "tests/diff/harness.h"
 

@@ -1,7 +1,7 @@
 // Independent checks with GNU binutils for tic4x (-mcpu=40): GNU as gives
 // the words of every golden row, of our printer's text and of the core's
 // programs; objdump disassembles the rows' words to the same instructions
-// as our disassembler. The tools come from tests/c40/build_tic4x_tools.sh;
+// as our disassembler. The tools come from tests/assembler/build_tic4x_tools.sh;
 // without them these tests FAIL.
 #include <gtest/gtest.h>
 

@@ -9,7 +9,7 @@
 
 namespace ldc::as::c40::test {
 
-// One row of tests/c40/c40_encode.rows: `<hex word>  <instruction>  ; source`.
+// One row of tests/assembler/c40_encode.rows: `<hex word>  <instruction>  ; source`.
 struct Row {
   int line = 0;     // in the file
   std::string hex;  // "-" if not filled in yet
@@ -29,7 +29,7 @@ struct BlockText {
 };
 C40Program buildProgram(std::vector<std::string> globals, const std::vector<BlockText>& blocks);
 
-// The tic4x GNU tools (tests/c40/build_tic4x_tools.sh builds them from
+// The tic4x GNU tools (tests/assembler/build_tic4x_tools.sh builds them from
 // Debian's binutils-source). Empty string and ADD_FAILURE if missing.
 std::string tic4xTool(const std::string& name);
 

@@ -118,7 +118,7 @@ std::string tic4xTool(const std::string& name) {
   std::string path = dir + "/bin/tic4x-" + name;
   if (access(path.c_str(), X_OK) != 0) {
     ADD_FAILURE() << "the tic4x GNU " << name << " is missing (" << path
-                  << "). Build it with tests/c40/build_tic4x_tools.sh, which needs Debian's "
+                  << "). Build it with tests/assembler/build_tic4x_tools.sh, which needs Debian's "
                      "binutils-source package (apt-get install -y binutils-source); ctest runs "
                      "it as the c40_tools fixture.";
     return "";

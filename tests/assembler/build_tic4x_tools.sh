@@ -4,7 +4,7 @@
 # (/usr/src/binutils/binutils-<version>.tar.xz). Debian's binutils-multiarch
 # does not include the tic4x target, so the C40 cross-checks need these.
 #
-#   tests/c40/build_tic4x_tools.sh [DIR]
+#   tests/assembler/build_tic4x_tools.sh [DIR]
 #
 # Installs DIR/bin/tic4x-as, tic4x-objdump and tic4x-objcopy (DIR defaults to
 # $LDC_TIC4X_DIR, else $HOME/.cache/ldc-tic4x). Does nothing if they exist.
