@@ -1,5 +1,5 @@
-// tests/c40gen/c40gen_util.cpp -- engines and checks shared by the C40 tests.
-#include "tests/c40gen/c40gen_util.h"
+// tests/backend-c40sim/gen/c40gen_util.cpp -- engines and checks shared by the C40 tests.
+#include "tests/backend-c40sim/gen/c40gen_util.h"
 
 #include <stdexcept>
 

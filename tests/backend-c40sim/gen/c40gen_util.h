@@ -1,10 +1,10 @@
-// tests/c40gen/c40gen_util.h -- engines and checks shared by the C40 tests.
+// tests/backend-c40sim/gen/c40gen_util.h -- engines and checks shared by the C40 tests.
 #pragma once
 
 #include <memory>
 #include <string>
 
-#include "tests/c40gen/c40model.h"
+#include "tests/backend-c40sim/gen/c40model.h"
 #include "ir/ir.h"
 #include "driver/c40_target.h"
 #include "runtime/runtime.h"

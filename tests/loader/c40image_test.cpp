@@ -1,4 +1,4 @@
-// tests/c40gen/c40image_test.cpp -- ImageTarget::C40 images: what ldc writes
+// tests/loader/c40image_test.cpp -- ImageTarget::C40 images: what ldc writes
 // reads back, and the loader's C40 code check refuses what it must
 // (docs/image-format.md, "The C40 code check").
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// tests/c40gen/mathrom_test.cpp -- the math ROM (backend-c40sim/machine/mathrom.h):
+// tests/backend-c40sim/machine/mathrom_test.cpp -- the math ROM (backend-c40sim/machine/mathrom.h):
 // our C40 routines are real implementations whose cycles the simulator
 // counts, so they must be accurate in their primary ranges on their own (the
 // host service switched off); with the service on, a call returns the host's

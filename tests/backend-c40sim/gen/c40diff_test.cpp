@@ -1,4 +1,4 @@
-// tests/c40gen/c40diff_test.cpp -- ldgen random programs on the C40 engines,
+// tests/backend-c40sim/gen/c40diff_test.cpp -- ldgen random programs on the C40 engines,
 // scan by scan (docs/c40.md, "How the C40 engines are tested"):
 //   c40sim native code   == the C40 model, byte for byte
 //   the C40-hosted interpreter == the C40 model, byte for byte
@@ -18,7 +18,7 @@
 
 #include "backend-c40sim/gen/c40gen.h"
 #include "frontend/frontend.h"
-#include "tests/c40gen/c40gen_util.h"
+#include "tests/backend-c40sim/gen/c40gen_util.h"
 
 namespace {
 

@@ -1,7 +1,7 @@
-// tests/c40gen/c40model.cpp -- the C40 semantic model and its precision check
+// tests/backend-c40sim/gen/c40model.cpp -- the C40 semantic model and its precision check
 // (c40model.h).  Operand decoding and the INT32, bit, timer and counter rules
 // follow ir/interp.cpp (docs/il.md); REAL goes through c40gen.h's functions.
-#include "tests/c40gen/c40model.h"
+#include "tests/backend-c40sim/gen/c40model.h"
 
 #include <cmath>
 #include <cstdio>

@@ -1,4 +1,4 @@
-// tests/c40gen/c40gen_test.cpp -- the C40 code generator, the C40-hosted
+// tests/backend-c40sim/gen/c40gen_test.cpp -- the C40 code generator, the C40-hosted
 // interpreter and the C40 semantic model on the shipped examples; the REAL
 // helpers; the word IL; GNU as for tic4x against our words (docs/c40.md).
 #include <gtest/gtest.h>
@@ -13,10 +13,10 @@
 #include "backend-c40sim/gen/c40gen.h"
 #include "backend-c40sim/machine/c40interp.h"
 #include "backend-c40sim/machine/c40machine.h"
-#include "tests/c40gen/c40model.h"
+#include "tests/backend-c40sim/gen/c40model.h"
 #include "frontend/frontend.h"
 #include "tests/assembler/c40_test_util.h"
-#include "tests/c40gen/c40gen_util.h"
+#include "tests/backend-c40sim/gen/c40gen_util.h"
 #include "tests/diff/harness.h"
 
 namespace {

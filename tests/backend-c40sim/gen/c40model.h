@@ -1,11 +1,11 @@
-// tests/c40gen/c40model.h -- what C40 code computes, as a C++ IL interpreter.
+// tests/backend-c40sim/gen/c40model.h -- what C40 code computes, as a C++ IL interpreter.
 //
 // The C40 has no IEEE arithmetic: REAL operands are converted to its own float
 // format (FRIEEE, FLOAT), computed in 40-bit registers that truncate, and
 // stored back with TOIEEE.  This model runs the IL over the byte image of
 // docs/il.md with exactly that arithmetic (c40gen.h's real_* functions, the
 // math ROM's host results), so the simulated native code and the C40-hosted
-// interpreter must match it bit for bit after every scan (tests/c40gen).
+// interpreter must match it bit for bit after every scan (tests/backend-c40sim/gen).
 //
 // In Mode::Check it instead keeps the state of the reference interpreter
 // (IEEE binary32, docs/il.md) and, for every REAL operation it executes,
@@ -32,7 +32,7 @@ struct CheckReport {
   // the bound, in binary32 units in the last place, per mnemonic kind
   // The C40 truncates (toward -infinity) where IEEE rounds to nearest: one
   // unit at most for ADD SUB MUL DIV ABS and the INT32 -> REAL conversions
-  // (__divf: 1 ulp over 20 million random normal quotients, tests/c40gen).
+  // (__divf: 1 ulp over 20 million random normal quotients, tests/backend-c40sim/gen).
   static constexpr uint32_t kUlpsArith = 1;
   static constexpr uint32_t kUlpsRom = 0;      // the math ROM returns the host's binary32 result
   static uint32_t ulps_for(Op op);
