@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "../assembler/test_util.h"
+#include "tests/assembler/test_util.h"
 #include "bench/ldgen.h"
 #include "driver/driver.h"
 #include "driver/x86_target.h"
