@@ -1,4 +1,4 @@
-// tests/validator/programs.h -- the programs whose images the validator tests
+// tests/loader/programs.h -- the programs whose images the validator tests
 // and the mutant fuzzer start from: every example, then `random` ldgen
 // programs of `rungs` rungs (seeds 1, 2, ...).
 #pragma once

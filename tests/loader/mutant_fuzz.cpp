@@ -30,7 +30,7 @@
 #include "driver/x86_target.h"
 #include "runtime/runtime.h"
 #include "runtime/sandbox.h"
-#include "tests/validator/programs.h"
+#include "tests/loader/programs.h"
 
 using namespace ldc;
 namespace x86 = ldc::as::x86;

@@ -8,7 +8,7 @@
 #include <random>
 
 #include "runtime/runtime.h"
-#include "tests/validator/programs.h"
+#include "tests/loader/programs.h"
 
 using namespace ldc;
 namespace x86 = ldc::as::x86;
