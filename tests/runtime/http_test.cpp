@@ -1,4 +1,4 @@
-// tests/monitor/http_test.cpp -- the monitor's HTTP request parser (a pure
+// tests/runtime/http_test.cpp -- the monitor's HTTP request parser (a pure
 // function of the bytes received), form decoding, addresses, and the server
 // on a loopback socket: replies, limits, timeouts, the connection bound.
 #include <arpa/inet.h>
