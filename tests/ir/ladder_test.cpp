@@ -1,4 +1,4 @@
-// tests/ladder/ladder_test.cpp -- raising IL to rung trees and drawing them
+// tests/ir/ladder_test.cpp -- raising IL to rung trees and drawing them
 // (ir/ladder.h): exact round trips through the grid reader, refusals, and the
 // geometry the monitor draws from.
 #include <gtest/gtest.h>
