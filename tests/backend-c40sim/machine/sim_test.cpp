@@ -7,7 +7,7 @@
 #include <random>
 
 #include "backend-c40sim/machine/sim.h"
-#include "c40_test_util.h"
+#include "tests/assembler/c40_test_util.h"
 
 using namespace ldc::as;
 using namespace ldc::as::c40;
