@@ -437,7 +437,7 @@ void prepare(Subject& s, const Options& o) {
 // The simulator is deterministic: the median over a few scans of the trace
 // (the first, with S1 set, left out).  REAL arithmetic on the C40 uses its own
 // float format, so C40 images are not compared with the classic interpreter's
-// here; tests/c40gen holds them to the C40 semantic model.
+// here; tests/backend-c40sim/gen holds them to the C40 semantic model.
 void measure_c40(Subject& s, const Options& o) {
   if (!o.c40) {
     s.c40_status = "off (--no-c40)";
