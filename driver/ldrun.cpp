@@ -16,6 +16,7 @@
 
 #include "backend-c/backend_c.h"
 #include "driver/driver.h"
+#include "driver/project.h"
 #include "driver/ldrun_io.h"
 #include "driver/targets.h"
 #include "runtime/modbus.h"
