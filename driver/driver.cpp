@@ -2,22 +2,20 @@
 #include "driver/driver.h"
 
 #include <dirent.h>
-#include <spawn.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cstdlib>
-#include <fcntl.h>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <sstream>
 
 #include "backend-c/backend_c.h"
+#include "backend-c/c_shared.h"
 #include "driver/project.h"
 #include "driver/targets.h"
 #include "frontend/frontend.h"
@@ -214,45 +212,16 @@ void remove_tree(const std::string& dir) {
   rmdir(dir.c_str());
 }
 
-extern "C" char** environ;
-
 std::string c_source(const Compiled& c) {
   return c.chart ? generate_sfc_c(*c.chart, c.il.layout()) : generate_c(c.il, c.il.layout());
 }
 
-static std::string build_c_text(const std::string& text, const std::string& dir);
-
-std::string build_c_shared_object(const Program& p, const std::string& dir) {
-  return build_c_text(generate_c(p, p.layout()), dir);
-}
-
-std::string build_c_shared_object(const Compiled& c, const std::string& dir) { return build_c_text(c_source(c), dir); }
-
-static std::string build_c_text(const std::string& text, const std::string& dir) {
-  std::string c = dir + "/prog.c", so = dir + "/prog.so", log = dir + "/cc.log";
-  write_file_atomic(c, text);
-  const char* cc_env = std::getenv("CC");
-  std::string cc = cc_env && *cc_env ? cc_env : "cc";
-  std::vector<std::string> args = {cc, "-O2", "-shared", "-fPIC", "-ffp-contract=off", "-o", so, c, "-lm"};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  pid_t pid;
-  int rc = posix_spawnp(&pid, cc.c_str(), &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) throw UserError("error: cannot run the C compiler '" + cc + "': " + std::strerror(rc));
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    std::string out;
-    try { out = read_file(log); } catch (...) {}
-    throw UserError("error: the C compiler failed on the generated C (" + c + "):\n" + out);
+std::string build_c_shared_object(const Compiled& c, const std::string& dir) {
+  try {
+    return build_c_text(c_source(c), dir);
+  } catch (const CBuildError& e) {
+    throw UserError(e.what());
   }
-  return so;
 }
 
 int run_tool(const char* tool, const std::function<int()>& work) {

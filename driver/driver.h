@@ -48,12 +48,10 @@ Image load_image_file(const std::string& path);
 // True for files ldrun treats as an image: *.bin, *.hex, or the image magic.
 bool is_image_file(const std::string& path);
 
-// The C route: writes `ldc --emit=c` to DIR/prog.c and compiles it with the
-// system C compiler (${CC:-cc} -O2 -shared -fPIC) into DIR/prog.so; returns its path.
-std::string build_c_shared_object(const Program& p, const std::string& dir);
 // `ldc --emit=c` of a source: the SFC switch form for a chart, else the C route.
 std::string c_source(const Compiled& c);
-// ... of a compiled source (a chart as its switch form).
+// The C route's shared object of a compiled source (backend-c/c_shared.h:
+// DIR/prog.c compiled into DIR/prog.so; returns its path), errors as UserError.
 std::string build_c_shared_object(const Compiled& c, const std::string& dir);
 
 // A fresh private directory under $TMPDIR (or /tmp), removed with remove_tree.
