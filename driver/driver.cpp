@@ -169,28 +169,11 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
   return c;
 }
 
-bool is_image_file(const std::string& path) {
-  if (ends_with(path, ".bin") || ends_with(path, ".hex")) return true;
-  std::ifstream f(path, std::ios::binary);
-  char magic[6] = {};
-  f.read(magic, 6);
-  return f.gcount() == 6 && std::string(magic, 6) == "LDCIMG";
-}
-
 Image load_image_file(const std::string& path) {
-  std::string data = read_file(path);
-  std::span<const uint8_t> bytes(reinterpret_cast<const uint8_t*>(data.data()), data.size());
   try {
-    if (looks_like_intel_hex(bytes)) {
-      std::vector<uint8_t> raw = read_intel_hex(data, path);
-      return read_image(raw, path);
-    }
-    return read_image(bytes, path);
-  } catch (ImageError& e) {
-    std::string m = e.what();  // "prog.bin: section ...": make it "prog.bin: error: section ..."
-    if (m.find(" error: ") == std::string::npos && m.rfind(path + ": ", 0) == 0)
-      m = path + ": error: " + m.substr(path.size() + 2);
-    throw UserError(m);
+    return read_image_file(path);
+  } catch (const ImageError& e) {
+    throw UserError(e.what());
   }
 }
 

@@ -42,11 +42,8 @@ struct Compiled {
 // `task` picks one task's program of such a configuration (`--task NAME`).
 Compiled compile_source(const std::string& path, bool allow_project = false, const std::string& task = "");
 
-// Reads an image file (binary, or Intel HEX by its first character) and checks
-// it fully; errors are UserError naming the file and the place.
+// read_image_file (loader.h) with its errors as UserError.
 Image load_image_file(const std::string& path);
-// True for files ldrun treats as an image: *.bin, *.hex, or the image magic.
-bool is_image_file(const std::string& path);
 
 // `ldc --emit=c` of a source: the SFC switch form for a chart, else the C route.
 std::string c_source(const Compiled& c);
