@@ -45,6 +45,7 @@
 #include <vector>
 
 #include "backend-c/backend_c.h"
+#include "backend-c/c_shared.h"
 #include "backend-x86/backend_x86.h"
 #include "bench/ldgen.h"
 #include "bench/rng.h"

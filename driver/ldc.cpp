@@ -9,6 +9,7 @@
 
 #include "backend-c/backend_c.h"
 #include "driver/driver.h"
+#include "driver/project.h"
 #include "driver/targets.h"
 #include "frontend/frontend.h"
 #include "ir/ladder.h"

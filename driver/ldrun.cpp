@@ -16,6 +16,7 @@
 
 #include "backend-c/backend_c.h"
 #include "driver/driver.h"
+#include "driver/project.h"
 #include "driver/ldrun_io.h"
 #include "driver/targets.h"
 #include "runtime/modbus.h"
@@ -123,10 +124,19 @@ class LineReader {
   bool eof_ = false;
 };
 
-int run_runtime(const std::string& input, const std::string& engine, const std::string& trace_file,
-                const std::string& watch, int scans, const RtArgs& a) {
-  using namespace ldc::plc;
-  // interp, or the engine of the code of a target that runs here (native)
+namespace soft_plc {
+
+using namespace ldc::plc;
+
+// "--period 10ms" and the like: microseconds, at least `min`.
+int64_t duration_arg(const std::string& v, const char* what, int64_t min) {
+  auto d = parse_duration_us(v);
+  if (!d || *d < min) throw UserError(std::string("ldrun: error: bad ") + what + " '" + v + "' (e.g. 500us, 10ms, 1s)");
+  return *d;
+}
+
+// interp, or the engine of the code of a target that runs here (native)
+FoundEngine runtime_engine(const std::string& engine) {
   const FoundEngine code = find_engine(engine);
   if (engine != "interp" && !(code.engine && code.engine->runs_code && code.target->host)) {
     std::vector<std::string> ok;
@@ -134,277 +144,341 @@ int run_runtime(const std::string& input, const std::string& engine, const std::
     ok.push_back("--engine=interp");
     throw UserError("ldrun: error: the runtime runs " + or_list(ok) + ", not '" + engine + "'");
   }
-  if (!a.project.empty() && !input.empty()) throw UserError("ldrun: error: give a program or --project, not both");
-  if (a.project.empty() && input.empty()) throw UserError("ldrun: error: no program\n" + usage());
-  Options opt;
-  opt.log = [](const std::string& m) { std::fprintf(stderr, "%s\n", m.c_str()); };
-  auto duration = [](const std::string& v, const char* what, int64_t min) {
-    auto d = parse_duration_us(v);
-    if (!d || *d < min) throw UserError(std::string("ldrun: error: bad ") + what + " '" + v + "' (e.g. 500us, 10ms, 1s)");
-    return *d;
-  };
-  int64_t period_us = a.period.empty() ? 10000 : duration(a.period, "--period", 50);
-  if (!a.watchdog.empty()) opt.watchdog_us = uint32_t(std::min<int64_t>(duration(a.watchdog, "--watchdog", 0), UINT32_MAX));
-  if (a.clock == "virtual") opt.clock = Options::Clock::Virtual;
-  else if (!a.clock.empty() && a.clock != "real") throw UserError("ldrun: error: --clock is real or virtual, not '" + a.clock + "'");
-  opt.free_run = a.free_run;
-  opt.rt = a.rt;
-  if (a.rt && a.free_run) throw UserError("ldrun: error: --rt with --free-run would keep a CPU busy forever; choose one");
-  opt.start_stopped = a.stop;
-  opt.cold = a.cold;
-  opt.scans = scans;
+  return code;
+}
 
-  // The tasks: a project's, or one task "main" running the program.
-  std::vector<TaskSpec> specs;
-  // a PLCopen configuration of several tasks is a project too
-  std::shared_ptr<Project> proj;
-  std::optional<Image> single;
-  if (!a.project.empty()) {
-    proj = std::make_shared<Project>(parse_project(a.project));
-  } else if (!input.empty() && !is_image_file(input)) {
-    Compiled c = compile_source(input, g_task.empty(), g_task);
-    if (c.project) proj = c.project;
-    else single = target_image(host_target(), c.il, input, 0);
+TaskSpec task_of(BuiltTask& b) {
+  TaskSpec s;
+  s.name = b.spec.name, s.program = b.spec.program, s.resource = b.spec.resource;
+  s.processor = b.spec.processor, s.period_us = b.spec.period_us, s.priority = b.spec.priority;
+  s.watchdog_us = b.spec.watchdog_us, s.exclusive = b.spec.exclusive, s.file = b.spec.path;
+  s.image = std::move(b.image);
+  return s;
+}
+
+// One run of the soft PLC (ldrun --io or --project), step by step: the
+// options, the tasks, the I/O driver (with Modbus and the monitor around it),
+// the runtime and the threads that serve signals, the line protocol and --reload.
+class SoftPlcRun {
+ public:
+  SoftPlcRun(const std::string& input, const std::string& trace_file, const std::string& watch, const RtArgs& a)
+      : input_(input), trace_file_(trace_file), watch_(watch), a_(a) {}
+  ~SoftPlcRun() {
+    rt_.reset();
+    monitor_.reset();
+    if (out_ && out_ != stdout) std::fclose(out_);
   }
-  if (proj) {
-    const Project& p = *proj;
-    opt.block_size = p.block_size;
-    opt.retain_file = p.retain_file;
-    opt.retain_every_us = p.retain_every_us;
-    for (BuiltTask& b : build_project(p)) {
-      TaskSpec s;
-      s.name = b.spec.name, s.program = b.spec.program, s.resource = b.spec.resource;
-      s.processor = b.spec.processor, s.period_us = b.spec.period_us, s.priority = b.spec.priority;
-      s.watchdog_us = b.spec.watchdog_us, s.exclusive = b.spec.exclusive, s.file = b.spec.path;
-      s.image = std::move(b.image);
-      specs.push_back(std::move(s));
+
+  int run(const std::string& engine, int scans) {
+    code_ = runtime_engine(engine);
+    if (!a_.project.empty() && !input_.empty()) throw UserError("ldrun: error: give a program or --project, not both");
+    if (a_.project.empty() && input_.empty()) throw UserError("ldrun: error: no program\n" + usage());
+    read_options(scans);
+    read_tasks();
+    apply_task_options();
+    open_io();
+    add_modbus();
+    add_monitor();
+    start();
+    return finish();
+  }
+
+ private:
+  const std::string& input_;
+  const std::string& trace_file_;
+  const std::string& watch_;
+  const RtArgs& a_;
+  FoundEngine code_;
+  Options opt_;
+  int64_t period_us_ = 10000;
+  std::vector<TaskSpec> specs_;
+  bool control_ = false;
+  Trace trace_;
+  FILE* out_ = nullptr;
+  std::unique_ptr<IoDriver> driver_;
+  std::unique_ptr<Monitor> monitor_;
+  std::string monitor_host_;
+  sigset_t sigs_;
+  std::unique_ptr<Runtime> rt_;
+  std::atomic<bool> done_{false};
+  std::thread sig_thread_, ctl_thread_, reload_thread_;
+
+  void read_options(int scans) {
+    opt_.log = [](const std::string& m) { std::fprintf(stderr, "%s\n", m.c_str()); };
+    if (!a_.period.empty()) period_us_ = duration_arg(a_.period, "--period", 50);
+    if (!a_.watchdog.empty())
+      opt_.watchdog_us = uint32_t(std::min<int64_t>(duration_arg(a_.watchdog, "--watchdog", 0), UINT32_MAX));
+    if (a_.clock == "virtual") opt_.clock = Options::Clock::Virtual;
+    else if (!a_.clock.empty() && a_.clock != "real") throw UserError("ldrun: error: --clock is real or virtual, not '" + a_.clock + "'");
+    opt_.free_run = a_.free_run;
+    opt_.rt = a_.rt;
+    if (a_.rt && a_.free_run) throw UserError("ldrun: error: --rt with --free-run would keep a CPU busy forever; choose one");
+    opt_.start_stopped = a_.stop;
+    opt_.cold = a_.cold;
+    opt_.scans = scans;
+  }
+
+  // The tasks: a project's (a PLCopen configuration of several tasks is a
+  // project too), or one task "main" running the program.
+  void read_tasks() {
+    std::shared_ptr<Project> proj;
+    std::optional<Image> single;
+    if (!a_.project.empty()) {
+      proj = std::make_shared<Project>(parse_project(a_.project));
+    } else if (!input_.empty() && !is_image_file(input_)) {
+      Compiled c = compile_source(input_, g_task.empty(), g_task);
+      if (c.project) proj = c.project;
+      else single = target_image(host_target(), c.il, input_, 0);
     }
-    if (!a.period.empty()) throw UserError("ldrun: error: --period is for one program; a project gives each task its period");
-  } else {
+    if (proj) {
+      opt_.block_size = proj->block_size;
+      opt_.retain_file = proj->retain_file;
+      opt_.retain_every_us = proj->retain_every_us;
+      for (BuiltTask& b : build_project(*proj)) specs_.push_back(task_of(b));
+      if (!a_.period.empty()) throw UserError("ldrun: error: --period is for one program; a project gives each task its period");
+      return;
+    }
     TaskSpec s;
     s.name = "main";
-    s.program = stem(input);
+    s.program = stem(input_);
     s.resource = "cpu0";
-    s.period_us = uint32_t(period_us);
-    s.file = input;
-    s.image = single ? std::move(*single) : load_program(input);
+    s.period_us = uint32_t(period_us_);
+    s.file = input_;
+    s.image = single ? std::move(*single) : load_program(input_);
     if (s.image.config) {
       s.processor = s.image.config->processor;
-      opt.block_size = s.image.config->block_size;
+      opt_.block_size = s.image.config->block_size;
     }
-    specs.push_back(std::move(s));
-  }
-  if (!a.block.empty()) {
-    const std::string& b = a.block;
-    if (b.find_first_not_of("0123456789") != std::string::npos || b.size() > 5 || std::stoul(b) < 16 ||
-        std::stoul(b) % 16 || std::stoul(b) > kMaxBlockSize)
-      throw UserError("ldrun: error: bad --block '" + b + "' (a multiple of 16 in 16..8192)");
-    opt.block_size = uint32_t(std::stoul(b));
-  }
-  if (!a.retain.empty()) opt.retain_file = a.retain;
-  if (!a.retain_every.empty()) opt.retain_every_us = duration(a.retain_every, "--retain-every", 1000);
-  for (const TaskSpec& s : specs)
-    if (code.engine && s.image.target != code.target->image_kind)
-      throw UserError("ldrun: error: " + s.file + " is not " + std::string(code.target->an_image) + "; use --engine=interp");
-
-  // The I/O driver.
-  std::string io = a.io.empty() ? (trace_file.empty() ? "none" : "trace") : a.io;
-  bool control = a.control.empty() ? io == "stdio" : a.control == "stdin";
-  if (!a.control.empty() && a.control != "stdin" && a.control != "none")
-    throw UserError("ldrun: error: --control is stdin or none, not '" + a.control + "'");
-  std::unique_ptr<IoDriver> driver;
-  Trace trace;
-  FILE* out = nullptr;
-  struct CloseOut {
-    FILE*& f;
-    ~CloseOut() { if (f && f != stdout) std::fclose(f); }
-  } close_out{out};
-  if (io == "trace") {
-    if (specs.size() != 1) throw UserError("ldrun: error: the trace driver drives one task; the project has " + std::to_string(specs.size()));
-    std::vector<Probe> probes = parse_watch(watch, specs[0].image.aliases);
-    if (!trace_file.empty()) {
-      trace = load_trace(trace_file, specs[0].image.aliases);
-      if (opt.scans < 0) opt.scans = int64_t(trace.rows.size());
-    }
-    if (a.out.empty()) {
-      if (control) throw UserError("ldrun: error: the trace CSV and the line protocol both want stdout: give --out FILE");
-      out = stdout;
-    } else if (!(out = std::fopen(a.out.c_str(), "w"))) {
-      throw UserError("ldrun: error: cannot create " + a.out + ": " + std::strerror(errno));
-    }
-    driver = make_trace_driver(trace_file.empty() ? nullptr : &trace, probes, nullptr, out);
-  } else if (io == "shm" || io.rfind("shm:", 0) == 0) {
-    driver = make_shm_driver(io.size() > 4 ? io.substr(4) : "/ldc");
-  } else if (io == "stdio" || io == "none") {
-    driver = make_null_driver();
-  } else {
-    throw UserError("ldrun: error: unknown --io '" + io + "' (stdio, shm[:/NAME], trace or none)");
+    specs_.push_back(std::move(s));
   }
 
-  if (a.modbus.empty() && !a.modbus_connections.empty()) throw UserError("ldrun: error: --modbus-connections needs --modbus");
-  if (!a.modbus.empty()) {
+  // --block, --retain, --retain-every over the tasks' own; the engine's image kind.
+  void apply_task_options() {
+    if (!a_.block.empty()) {
+      const std::string& b = a_.block;
+      if (b.find_first_not_of("0123456789") != std::string::npos || b.size() > 5 || std::stoul(b) < 16 ||
+          std::stoul(b) % 16 || std::stoul(b) > kMaxBlockSize)
+        throw UserError("ldrun: error: bad --block '" + b + "' (a multiple of 16 in 16..8192)");
+      opt_.block_size = uint32_t(std::stoul(b));
+    }
+    if (!a_.retain.empty()) opt_.retain_file = a_.retain;
+    if (!a_.retain_every.empty()) opt_.retain_every_us = duration_arg(a_.retain_every, "--retain-every", 1000);
+    for (const TaskSpec& s : specs_)
+      if (code_.engine && s.image.target != code_.target->image_kind)
+        throw UserError("ldrun: error: " + s.file + " is not " + std::string(code_.target->an_image) + "; use --engine=interp");
+  }
+
+  // The I/O driver (--io), and whether the line protocol reads stdin (--control).
+  void open_io() {
+    std::string io = a_.io.empty() ? (trace_file_.empty() ? "none" : "trace") : a_.io;
+    control_ = a_.control.empty() ? io == "stdio" : a_.control == "stdin";
+    if (!a_.control.empty() && a_.control != "stdin" && a_.control != "none")
+      throw UserError("ldrun: error: --control is stdin or none, not '" + a_.control + "'");
+    if (io == "trace") open_trace();
+    else if (io == "shm" || io.rfind("shm:", 0) == 0) driver_ = make_shm_driver(io.size() > 4 ? io.substr(4) : "/ldc");
+    else if (io == "stdio" || io == "none") driver_ = make_null_driver();
+    else throw UserError("ldrun: error: unknown --io '" + io + "' (stdio, shm[:/NAME], trace or none)");
+  }
+
+  void open_trace() {
+    if (specs_.size() != 1) throw UserError("ldrun: error: the trace driver drives one task; the project has " + std::to_string(specs_.size()));
+    std::vector<Probe> probes = parse_watch(watch_, specs_[0].image.aliases);
+    if (!trace_file_.empty()) {
+      trace_ = load_trace(trace_file_, specs_[0].image.aliases);
+      if (opt_.scans < 0) opt_.scans = int64_t(trace_.rows.size());
+    }
+    if (a_.out.empty()) {
+      if (control_) throw UserError("ldrun: error: the trace CSV and the line protocol both want stdout: give --out FILE");
+      out_ = stdout;
+    } else if (!(out_ = std::fopen(a_.out.c_str(), "w"))) {
+      throw UserError("ldrun: error: cannot create " + a_.out + ": " + std::strerror(errno));
+    }
+    driver_ = make_trace_driver(trace_file_.empty() ? nullptr : &trace_, probes, nullptr, out_);
+  }
+
+  void add_modbus() {
+    if (a_.modbus.empty() && !a_.modbus_connections.empty()) throw UserError("ldrun: error: --modbus-connections needs --modbus");
+    if (a_.modbus.empty()) return;
     modbus::ServerOptions mo;
-    mo.tasks = specs.size();
-    mo.log = opt.log;
-    if (const std::string& n = a.modbus_connections; !n.empty()) {
+    mo.tasks = specs_.size();
+    mo.log = opt_.log;
+    if (const std::string& n = a_.modbus_connections; !n.empty()) {
       if (n.size() > 4 || n.find_first_not_of("0123456789") != std::string::npos || std::stoul(n) < 1 || std::stoul(n) > 1000)
         throw UserError("ldrun: error: bad --modbus-connections '" + n + "' (1..1000)");
       mo.max_connections = std::stoul(n);
     }
     try {
-      modbus::parse_address(a.modbus, mo);
-      driver = modbus::make_modbus_driver(std::move(driver), mo);
+      modbus::parse_address(a_.modbus, mo);
+      driver_ = modbus::make_modbus_driver(std::move(driver_), mo);
     } catch (std::runtime_error& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
   }
 
   // The monitor wraps the driver: snapshots after scans, writes before them.
-  std::unique_ptr<Monitor> monitor;
-  std::string monitor_host;
-  if (!a.monitor.empty()) {
+  void add_monitor() {
+    if (a_.monitor.empty()) {
+      if (a_.monitor_write || a_.monitor_remote)
+        throw UserError("ldrun: error: --monitor-write and --monitor-remote need --monitor HOST:PORT");
+      return;
+    }
     MonitorOptions mo;
     try {
-      std::tie(mo.host, mo.port) = parse_monitor_address(a.monitor, a.monitor_remote);
+      std::tie(mo.host, mo.port) = parse_monitor_address(a_.monitor, a_.monitor_remote);
     } catch (std::exception& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
-    mo.write = a.monitor_write;
-    monitor_host = mo.host;
+    mo.write = a_.monitor_write;
+    monitor_host_ = mo.host;
     std::vector<MonitorTask> mts;
-    for (const TaskSpec& s : specs) mts.push_back({s.name, s.period_us, s.image});
-    monitor = std::make_unique<Monitor>(std::move(mts), mo);
-    driver = monitor->wrap(std::move(driver));
-  } else if (a.monitor_write || a.monitor_remote) {
-    throw UserError("ldrun: error: --monitor-write and --monitor-remote need --monitor HOST:PORT");
+    for (const TaskSpec& s : specs_) mts.push_back({s.name, s.period_us, s.image});
+    monitor_ = std::make_unique<Monitor>(std::move(mts), mo);
+    driver_ = monitor_->wrap(std::move(driver_));
   }
 
-  EngineFactory engines = [code, sandbox = a.sandbox](const Image& img) -> std::unique_ptr<Engine> {
-    std::unique_ptr<Engine> e;
-    if (!code.engine) e = make_interp_engine(img.il, img.layout);
-    else if (img.target != code.target->image_kind) throw std::runtime_error("not " + std::string(code.target->an_image));
-    else e = code.engine->make(img);
-    return sandbox ? make_sandboxed_engine(std::move(e), img.layout) : std::move(e);
-  };
+  EngineFactory engines() const {
+    return [code = code_, sandbox = a_.sandbox](const Image& img) -> std::unique_ptr<Engine> {
+      std::unique_ptr<Engine> e;
+      if (!code.engine) e = make_interp_engine(img.il, img.layout);
+      else if (img.target != code.target->image_kind) throw std::runtime_error("not " + std::string(code.target->an_image));
+      else e = code.engine->make(img);
+      return sandbox ? make_sandboxed_engine(std::move(e), img.layout) : std::move(e);
+    };
+  }
 
   // SIGINT and SIGTERM end the run in order (outputs safe, retentive memory
   // saved): blocked here, so every thread inherits the mask, and taken by sigtimedwait.
-  sigset_t sigs;
-  sigemptyset(&sigs);
-  sigaddset(&sigs, SIGINT);
-  sigaddset(&sigs, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &sigs, nullptr);
-
-  std::unique_ptr<Runtime> rt;
-  try {
-    rt = std::make_unique<Runtime>(std::move(specs), opt, engines, std::move(driver));
-  } catch (UserError&) { throw; } catch (std::exception& e) {
-    std::string m = e.what();
-    throw UserError(m.find("error:") == std::string::npos ? "ldrun: error: " + m : m);
-  }
-  if (monitor) {
-    monitor->attach(rt.get());
+  void start() {
+    sigemptyset(&sigs_);
+    sigaddset(&sigs_, SIGINT);
+    sigaddset(&sigs_, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &sigs_, nullptr);
     try {
-      monitor->start();
-    } catch (std::exception& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
-    std::string host = monitor_host.find(':') != std::string::npos ? "[" + monitor_host + "]" : monitor_host;
-    std::fprintf(stderr, "ldrun: monitor on http://%s:%u/%s\n", host.c_str(), unsigned(monitor->port()),
-                 a.monitor_write ? " (writes allowed)" : "");
+      rt_ = std::make_unique<Runtime>(std::move(specs_), opt_, engines(), std::move(driver_));
+    } catch (UserError&) { throw; } catch (std::exception& e) {
+      std::string m = e.what();
+      throw UserError(m.find("error:") == std::string::npos ? "ldrun: error: " + m : m);
+    }
+    if (monitor_) start_monitor();
+    rt_->start();
+    sig_thread_ = std::thread([this] { serve_signals(); });
+    if (control_) ctl_thread_ = std::thread([this] { serve_control(); });
+    if (a_.reload) reload_thread_ = std::thread([this] { serve_reload(); });
   }
-  rt->start();
-  std::atomic<bool> done{false};
-  std::thread sig_thread([&] {
+
+  void start_monitor() {
+    monitor_->attach(rt_.get());
+    try {
+      monitor_->start();
+    } catch (std::exception& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
+    std::string host = monitor_host_.find(':') != std::string::npos ? "[" + monitor_host_ + "]" : monitor_host_;
+    std::fprintf(stderr, "ldrun: monitor on http://%s:%u/%s\n", host.c_str(), unsigned(monitor_->port()),
+                 a_.monitor_write ? " (writes allowed)" : "");
+  }
+
+  void serve_signals() {
     timespec ts{0, 100000000};
-    while (!done.load()) {
-      int s = sigtimedwait(&sigs, nullptr, &ts);
+    while (!done_.load()) {
+      int s = sigtimedwait(&sigs_, nullptr, &ts);
       if (s == SIGINT || s == SIGTERM) {
         std::fprintf(stderr, "ldrun: %s: stopping\n", s == SIGINT ? "SIGINT" : "SIGTERM");
-        rt->request_quit();
+        rt_->request_quit();
       }
     }
-  });
-  std::thread ctl_thread;
-  if (control) {
-    ctl_thread = std::thread([&] {
-      Control c{*rt, [](const std::string& f) { return load_program(f); }};
-      LineReader in;
-      std::string line;
-      while (!done.load()) {
-        int r = in.next(line, 100);
-        if (r == 0) continue;
-        if (r < 0) {
-          rt->request_quit();
-          break;
-        }
-        bool quit = false;
-        std::string reply;
+  }
+
+  // The line protocol on stdin (docs/runtime.md), replies on stdout.
+  void serve_control() {
+    Control c{*rt_, [](const std::string& f) { return load_program(f); }};
+    LineReader in;
+    std::string line;
+    while (!done_.load()) {
+      int r = in.next(line, 100);
+      if (r == 0) continue;
+      if (r < 0) {
+        rt_->request_quit();
+        break;
+      }
+      bool quit = false;
+      std::string reply;
+      try {
+        reply = c.execute(line, quit);
+      } catch (std::exception& e) { reply = std::string("error: ") + e.what(); }
+      if (!reply.empty()) {
+        std::fprintf(stdout, "%s\n", reply.c_str());
+        std::fflush(stdout);
+      }
+      if (quit) {
+        rt_->request_quit();
+        break;
+      }
+    }
+  }
+
+  // The files --reload watches: each task's image (or source).
+  std::vector<std::string> watched_files() const {
+    std::vector<std::string> files;
+    for (size_t i = 0; i < rt_->task_count(); i++) files.push_back(!a_.project.empty() ? "" : input_);
+    if (!a_.project.empty()) {
+      Project p = parse_project(a_.project);
+      for (size_t i = 0; i < p.tasks.size(); i++) files[i] = p.tasks[i].path;
+    }
+    return files;
+  }
+
+  // A watched file that changes is loaded and switched in, like `load`.
+  void serve_reload() {
+    struct Seen { std::string file; int64_t mtime_ns = 0, size = -1; };
+    auto stat_of = [](const std::string& f, int64_t& mt, int64_t& sz) {
+      struct stat st;
+      if (::stat(f.c_str(), &st) != 0) return false;
+      mt = int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec, sz = st.st_size;
+      return true;
+    };
+    std::vector<Seen> seen;
+    for (auto& f : watched_files()) {
+      Seen s{f};
+      stat_of(f, s.mtime_ns, s.size);
+      seen.push_back(s);
+    }
+    while (!done_.load()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(250));
+      for (size_t i = 0; i < seen.size(); i++) {
+        int64_t mt, sz;
+        if (!stat_of(seen[i].file, mt, sz) || (mt == seen[i].mtime_ns && sz == seen[i].size)) continue;
+        seen[i].mtime_ns = mt, seen[i].size = sz;
         try {
-          reply = c.execute(line, quit);
-        } catch (std::exception& e) { reply = std::string("error: ") + e.what(); }
-        if (!reply.empty()) {
-          std::fprintf(stdout, "%s\n", reply.c_str());
-          std::fflush(stdout);
-        }
-        if (quit) {
-          rt->request_quit();
-          break;
+          SwapReport r = rt_->replace(rt_->task_name(i), load_program(seen[i].file), seen[i].file);
+          std::fprintf(stderr, "ldrun: reloaded %s: %s\n", seen[i].file.c_str(), r.text().c_str());
+        } catch (std::exception& e) {
+          std::fprintf(stderr, "ldrun: reload of %s refused: %s\n", seen[i].file.c_str(), e.what());
         }
       }
-    });
+    }
   }
-  std::thread reload_thread;
-  if (a.reload) {
-    reload_thread = std::thread([&] {
-      // A watched file: a task's image (or source) that changes is loaded
-      // and switched in, like `load`.
-      struct Seen { std::string file; int64_t mtime_ns = 0, size = -1; bool pending = false; };
-      std::vector<Seen> seen;
-      auto stat_of = [](const std::string& f, int64_t& mt, int64_t& sz) {
-        struct stat st;
-        if (::stat(f.c_str(), &st) != 0) return false;
-        mt = int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec, sz = st.st_size;
-        return true;
-      };
-      std::vector<std::string> files;
-      for (size_t i = 0; i < rt->task_count(); i++) files.push_back(!a.project.empty() ? "" : input);
-      if (!a.project.empty()) {
-        Project p = parse_project(a.project);
-        for (size_t i = 0; i < p.tasks.size(); i++) files[i] = p.tasks[i].path;
-      }
-      for (auto& f : files) {
-        Seen s{f};
-        stat_of(f, s.mtime_ns, s.size);
-        seen.push_back(s);
-      }
-      while (!done.load()) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(250));
-        for (size_t i = 0; i < seen.size(); i++) {
-          int64_t mt, sz;
-          if (!stat_of(seen[i].file, mt, sz) || (mt == seen[i].mtime_ns && sz == seen[i].size)) continue;
-          seen[i].mtime_ns = mt, seen[i].size = sz;
-          try {
-            SwapReport r = rt->replace(rt->task_name(i), load_program(seen[i].file), seen[i].file);
-            std::fprintf(stderr, "ldrun: reloaded %s: %s\n", seen[i].file.c_str(), r.text().c_str());
-          } catch (std::exception& e) {
-            std::fprintf(stderr, "ldrun: reload of %s refused: %s\n", seen[i].file.c_str(), e.what());
-          }
-        }
-      }
-    });
-  }
+
   // With the line protocol a fault leaves the runtime up (status, run, quit);
   // without it, a fault ends the run (exit status 2).
-  rt->wait_finished(-1, !control);
-  // The monitor keeps showing the last state until SIGINT/SIGTERM (or quit).
-  while (monitor && !rt->quit_requested()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  if (monitor) monitor->stop();
-  bool faulted = rt->faulted();
-  done.store(true);
-  sig_thread.join();
-  if (ctl_thread.joinable()) ctl_thread.join();
-  if (reload_thread.joinable()) reload_thread.join();
-  rt->shutdown();
-  if (a.stats) {
-    std::string s = Runtime::format_stats(rt->stats());
-    std::fputs(s.c_str(), stderr);
+  int finish() {
+    rt_->wait_finished(-1, !control_);
+    // The monitor keeps showing the last state until SIGINT/SIGTERM (or quit).
+    while (monitor_ && !rt_->quit_requested()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (monitor_) monitor_->stop();
+    bool faulted = rt_->faulted();
+    done_.store(true);
+    sig_thread_.join();
+    if (ctl_thread_.joinable()) ctl_thread_.join();
+    if (reload_thread_.joinable()) reload_thread_.join();
+    rt_->shutdown();
+    if (a_.stats) {
+      std::string s = Runtime::format_stats(rt_->stats());
+      std::fputs(s.c_str(), stderr);
+    }
+    return faulted && !control_ ? 2 : 0;
   }
-  return faulted && !control ? 2 : 0;
+};
+
+}  // namespace soft_plc
+
+int run_runtime(const std::string& input, const std::string& engine, const std::string& trace_file,
+                const std::string& watch, int scans, const RtArgs& a) {
+  return soft_plc::SoftPlcRun(input, trace_file, watch, a).run(engine, scans);
 }
 
 }  // namespace

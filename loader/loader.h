@@ -114,6 +114,13 @@ std::vector<uint8_t> read_intel_hex(std::string_view text, const std::string& na
 // True if the first non-blank character is ':'.
 bool looks_like_intel_hex(std::span<const uint8_t> bytes);
 
+// Reads an image file (binary, or Intel HEX by its first character) and checks
+// it fully; every ImageError, a file that cannot be read included, reads
+// "FILE: error: ..." naming the file and the place.
+Image read_image_file(const std::string& path);
+// True for files ldrun treats as an image: *.bin, *.hex, or the image magic.
+bool is_image_file(const std::string& path);
+
 // Limits of format version 1.
 constexpr uint32_t kImageMaxSize = 256u << 20;    // whole file, bytes
 constexpr uint32_t kImageMaxEdgeSlots = 1u << 20;  // count of the E area

@@ -181,6 +181,171 @@ __attribute__((noinline)) bool compare_real(const uint8_t* m, const FastInterpre
 
 // ------------------------------------------------------------------ decoding
 
+namespace {
+
+using Ins = FastInterpreter::Ins;
+
+Ins ins(FOp op, uint32_t a = 0, uint32_t b = 0, uint32_t c = 0, uint16_t x = 0) { return Ins{uint16_t(op), x, a, b, c}; }
+
+// Decodes IL instructions into handler calls: one member function per
+// instruction group; `special` says whether the last one got a specialized
+// handler (not the generic one).
+struct Decoder {
+  const Layout& L;
+  const std::vector<uint32_t>& starts;  // instruction starts, so jump targets (byte offsets) become indices
+  bool special = true;
+
+  uint32_t index_of(uint32_t target) const {  // target == il.size(): the HALT
+    auto it = std::lower_bound(starts.begin(), starts.end(), target);
+    if (it != starts.end() && *it != target) throw std::invalid_argument("fast interpreter: jump inside an instruction");
+    return uint32_t(it - starts.begin());
+  }
+  uint32_t where(const Operand& o) const {  // byte offset of a device or edge slot
+    if (o.kind == OpdKind::Edge) return L.addr(Area::E, o.index);
+    return L.addr(o.area, o.index);
+  }
+  // A value operand: its kind and its 32-bit field.
+  uint32_t value(const Operand& o, unsigned& kind) const {
+    switch (o.kind) {
+      case OpdKind::ConstInt: kind = kIntConst; return uint32_t(o.ival);
+      case OpdKind::ConstReal: kind = kRealConst; return f_bits(o.fval);
+      case OpdKind::Real: kind = kRealMem; return where(o);
+      default: kind = kIntMem; return where(o);
+    }
+  }
+  uint32_t dest(const Operand& o, unsigned& kind) const {
+    kind = o.kind == OpdKind::Real ? kDstReal : kDstInt;
+    return where(o);
+  }
+  Ins gen(Op op, unsigned ka, uint32_t a, unsigned kb, uint32_t b, unsigned kd, uint32_t c) {
+    special = false;
+    return ins(F_GEN, a, b, c, uint16_t(unsigned(op) | ka << 8 | kb << 10 | kd << 12));
+  }
+
+  Ins decode(const Instr& in);
+  Ins bit(const Instr& in);
+  Ins compare(const Instr& in);
+  Ins mov(const Instr& in);
+  Ins arith(const Instr& in);
+  Ins unary(const Instr& in);
+  Ins timer(const Instr& in);
+  Ins counter(const Instr& in);
+};
+
+// The bit instructions, and the rest that take no value operand.
+Ins Decoder::bit(const Instr& in) {
+  const Operand* o = in.a;
+  switch (in.op) {
+    case Op::LOAD: return ins(F_LD, where(o[0]));
+    case Op::LOADN: return ins(F_LDN, where(o[0]));
+    case Op::AND: return ins(F_AND, where(o[0]));
+    case Op::ANDN: return ins(F_ANDN, where(o[0]));
+    case Op::OR: return ins(F_OR, where(o[0]));
+    case Op::ORN: return ins(F_ORN, where(o[0]));
+    case Op::LOADP: return ins(F_LDP, where(o[0]), where(o[1]));
+    case Op::LOADF: return ins(F_LDF, where(o[0]), where(o[1]));
+    case Op::TRUE: return ins(F_TRUE);
+    case Op::ANDBLK: return ins(F_ANDB);
+    case Op::ORBLK: return ins(F_ORB);
+    case Op::MPS: return ins(F_MPS);
+    case Op::MRD: return ins(F_MRD);
+    case Op::MPP: return ins(F_MPP);
+    case Op::OUT: return ins(F_OUT, where(o[0]));
+    case Op::OUTN: return ins(F_OUTN, where(o[0]));
+    case Op::SET: return ins(F_SET, where(o[0]));
+    case Op::RST: return ins(F_RST, where(o[0]));
+    case Op::RSTT: return ins(F_RSTT, 0, 0, 0, uint16_t(o[0].index));
+    case Op::RSTC: return ins(F_RSTC, 0, 0, 0, uint16_t(o[0].index));
+    case Op::JMP: return ins(F_JMP, index_of(o[0].index));
+    case Op::END: return ins(F_END);
+    default: throw std::invalid_argument("fast interpreter: bad opcode");
+  }
+}
+
+// LDEQ..LDGE: by the operands' kinds; a constant first is the mirrored compare.
+Ins Decoder::compare(const Instr& in) {
+  const Rel r = op_info(in.op).rel;
+  const unsigned rel = unsigned(r), mirror = unsigned(swap_operands(r));  // a r b is b mirror a
+  unsigned ka, kb;
+  uint32_t a = value(in.a[0], ka), b = value(in.a[1], kb);
+  if (ka == kRealMem && kb == kRealMem) return ins(FOp(F_EQ_FF + rel), a, b);
+  if (ka == kRealMem && kb == kRealConst) return ins(FOp(F_EQ_FK + rel), a, b);
+  if (ka == kRealConst && kb == kRealMem) return ins(FOp(F_EQ_FK + mirror), b, a);
+  if ((ka | kb) & 1) return ins(F_CMP_F, a, b, 0, uint16_t(ka | kb << 2 | rel << 4));
+  if (ka == kIntConst && kb == kIntConst) return ins(rel_holds(r, int32_t(a), int32_t(b)) ? F_TRUE : F_PUSH0);
+  if (ka == kIntMem && kb == kIntMem) return ins(FOp(F_EQ_MM + rel), a, b);
+  if (ka == kIntMem) return ins(FOp(F_EQ_MK + rel), a, b);
+  return ins(FOp(F_EQ_MK + mirror), b, a);  // constant op word: the mirrored compare, word op constant
+}
+
+Ins Decoder::mov(const Instr& in) {
+  unsigned ka, kd;
+  uint32_t a = value(in.a[0], ka), dst = dest(in.a[1], kd);
+  if (ka == kIntConst) return ins(F_MOVK, dst, kd == kDstReal ? f_bits(int_to_real(int32_t(a))) : a);
+  if (ka == kRealConst) return ins(F_MOVK, dst, kd == kDstReal ? a : uint32_t(real_to_int(bits_f(a))));
+  if ((ka == kRealMem) == (kd == kDstReal)) return ins(F_MOV32, a, dst);
+  if (ka == kIntMem) return ins(F_MOVI2F, a, dst);
+  return ins(F_MOVF2I, a, dst);
+}
+
+// ADD..SHR: word handlers by the operands' kinds, REAL ones for + - * /.
+Ins Decoder::arith(const Instr& in) {
+  unsigned ka, kb, kd;
+  uint32_t a = value(in.a[0], ka), b = value(in.a[1], kb), c = dest(in.a[2], kd);
+  FOp base = in.op == Op::ADD ? F_ADD_MM : in.op == Op::SUB ? F_SUB_MM : in.op == Op::MUL ? F_MUL_MM
+           : in.op == Op::DIV ? F_DIV_MM : in.op == Op::MOD ? F_MOD_MM : in.op == Op::WAND ? F_WAND_MM
+           : in.op == Op::WOR ? F_WOR_MM : in.op == Op::WXOR ? F_WXOR_MM : in.op == Op::SHL ? F_SHL_MM : F_SHR_MM;
+  bool ints = !((ka | kb) & 1) && kd == kDstInt;
+  if (ints && ka == kIntMem && kb == kIntMem) return ins(base, a, b, c);
+  if (ints && ka == kIntMem && kb == kIntConst) return ins(FOp(base + 1), a, b, c);
+  if (ints && ka == kIntConst && kb == kIntMem) return ins(FOp(base + 2), a, b, c);
+  if (ka == kRealMem && kb == kRealMem && kd == kDstReal && unsigned(in.op) <= unsigned(Op::DIV))
+    return ins(FOp(F_ADD_F + (unsigned(in.op) - unsigned(Op::ADD))), a, b, c);
+  return gen(in.op, ka, a, kb, b, kd, c);
+}
+
+// WNOT and the REAL functions.
+Ins Decoder::unary(const Instr& in) {
+  unsigned ka, kd;
+  uint32_t a = value(in.a[0], ka), dst = dest(in.a[1], kd);
+  if (in.op == Op::WNOT && ka == kIntMem && kd == kDstInt) return ins(F_WNOT_M, a, dst);
+  if (in.op != Op::WNOT && ka == kRealMem && kd == kDstReal) return ins(FOp(F_SIN_F + unsigned(op_info(in.op).fn)), a, dst);
+  return gen(in.op, ka, a, 0, 0, kd, dst);
+}
+
+Ins Decoder::timer(const Instr& in) {
+  unsigned kp;
+  uint32_t pt = value(in.a[1], kp);
+  FOp k = in.op == Op::TON ? F_TON_K : in.op == Op::TOF ? F_TOF_K : in.op == Op::TP ? F_TP_K
+        : in.op == Op::MTON ? F_MTON_K : in.op == Op::MTOF ? F_MTOF_K : F_MTP_K;
+  if (kp == kIntConst) return ins(k, uint32_t(int32_t(pt) < 0 ? 0 : int32_t(pt)), 0, 0, uint16_t(in.a[0].index));
+  return ins(FOp(k + 1), pt, 0, 0, uint16_t(in.a[0].index));
+}
+
+Ins Decoder::counter(const Instr& in) {
+  unsigned kp;
+  uint32_t pv = value(in.a[1], kp);
+  FOp k = in.op == Op::CTU ? F_CTU_K : F_CTD_K;
+  return ins(kp == kIntConst ? k : FOp(k + 1), pv, where(in.a[2]), 0, uint16_t(in.a[0].index));
+}
+
+Ins Decoder::decode(const Instr& in) {
+  special = true;
+  switch (in.op) {
+    case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE: return compare(in);
+    case Op::MOV: return mov(in);
+    case Op::ADD: case Op::SUB: case Op::MUL: case Op::DIV: case Op::MOD:
+    case Op::WAND: case Op::WOR: case Op::WXOR: case Op::SHL: case Op::SHR: return arith(in);
+    case Op::WNOT: case Op::SIN: case Op::COS: case Op::TAN: case Op::SQRT: case Op::EXP: case Op::LN: case Op::ABS:
+      return unary(in);
+    case Op::TON: case Op::TOF: case Op::TP: case Op::MTON: case Op::MTOF: case Op::MTP: return timer(in);
+    case Op::CTU: case Op::CTD: return counter(in);
+    default: return bit(in);
+  }
+}
+
+}  // namespace
+
 FastInterpreter::FastInterpreter(std::span<const uint8_t> il, const Layout& L) {
   s0_ = L.addr(Area::S, kBitError);
   tw_ = L.offset[int(Area::TW)];
@@ -188,8 +353,6 @@ FastInterpreter::FastInterpreter(std::span<const uint8_t> il, const Layout& L) {
   ti_ = L.offset[int(Area::TI)];
   cw_ = L.offset[int(Area::CW)];
   cq_ = L.offset[int(Area::CQ)];
-
-  // Instruction starts, so jump targets (byte offsets) become indices.
   std::vector<uint32_t> starts;
   std::vector<Instr> instrs;
   for (uint32_t off = 0; off < il.size();) {
@@ -198,156 +361,89 @@ FastInterpreter::FastInterpreter(std::span<const uint8_t> il, const Layout& L) {
     off = decode_instr(il, off, instrs.back());
   }
   il_count_ = instrs.size();
-  auto index_of = [&](uint32_t target) -> uint32_t {  // target == il.size(): the HALT
-    auto it = std::lower_bound(starts.begin(), starts.end(), target);
-    if (it != starts.end() && *it != target) throw std::invalid_argument("fast interpreter: jump inside an instruction");
-    return uint32_t(it - starts.begin());
-  };
-  auto where = [&](const Operand& o) -> uint32_t {  // byte offset of a device or edge slot
-    if (o.kind == OpdKind::Edge) return L.addr(Area::E, o.index);
-    return L.addr(o.area, o.index);
-  };
-  // A value operand: its kind and its 32-bit field.
-  auto value = [&](const Operand& o, unsigned& kind) -> uint32_t {
-    switch (o.kind) {
-      case OpdKind::ConstInt: kind = kIntConst; return uint32_t(o.ival);
-      case OpdKind::ConstReal: kind = kRealConst; return f_bits(o.fval);
-      case OpdKind::Real: kind = kRealMem; return where(o);
-      default: kind = kIntMem; return where(o);
-    }
-  };
-  auto dest = [&](const Operand& o, unsigned& kind) -> uint32_t {
-    kind = o.kind == OpdKind::Real ? kDstReal : kDstInt;
-    return where(o);
-  };
-
+  Decoder dec{L, starts};
   code_.reserve(instrs.size() + 1);
   for (const Instr& in : instrs) {
-    Ins d{};
-    bool special = true;
-    auto set = [&](FOp op, uint32_t a = 0, uint32_t b = 0, uint32_t c = 0, uint16_t x = 0) {
-      d.op = op; d.a = a; d.b = b; d.c = c; d.x = x;
-    };
-    auto gen = [&](unsigned ka, uint32_t a, unsigned kb, uint32_t b, unsigned kd, uint32_t c) {
-      set(F_GEN, a, b, c, uint16_t(unsigned(in.op) | ka << 8 | kb << 10 | kd << 12));
-      special = false;
-    };
-    const Operand* o = in.a;
-    switch (in.op) {
-      case Op::LOAD: set(F_LD, where(o[0])); break;
-      case Op::LOADN: set(F_LDN, where(o[0])); break;
-      case Op::AND: set(F_AND, where(o[0])); break;
-      case Op::ANDN: set(F_ANDN, where(o[0])); break;
-      case Op::OR: set(F_OR, where(o[0])); break;
-      case Op::ORN: set(F_ORN, where(o[0])); break;
-      case Op::LOADP: set(F_LDP, where(o[0]), where(o[1])); break;
-      case Op::LOADF: set(F_LDF, where(o[0]), where(o[1])); break;
-      case Op::TRUE: set(F_TRUE); break;
-      case Op::ANDBLK: set(F_ANDB); break;
-      case Op::ORBLK: set(F_ORB); break;
-      case Op::MPS: set(F_MPS); break;
-      case Op::MRD: set(F_MRD); break;
-      case Op::MPP: set(F_MPP); break;
-      case Op::OUT: set(F_OUT, where(o[0])); break;
-      case Op::OUTN: set(F_OUTN, where(o[0])); break;
-      case Op::SET: set(F_SET, where(o[0])); break;
-      case Op::RST: set(F_RST, where(o[0])); break;
-      case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE: {
-        const Rel r = op_info(in.op).rel;
-        const unsigned rel = unsigned(r), mirror = unsigned(swap_operands(r));  // a r b is b mirror a
-        unsigned ka, kb;
-        uint32_t a = value(o[0], ka), b = value(o[1], kb);
-        if (ka == kRealMem && kb == kRealMem) {
-          set(FOp(F_EQ_FF + rel), a, b);
-        } else if (ka == kRealMem && kb == kRealConst) {
-          set(FOp(F_EQ_FK + rel), a, b);
-        } else if (ka == kRealConst && kb == kRealMem) {
-          set(FOp(F_EQ_FK + mirror), b, a);
-        } else if ((ka | kb) & 1) {
-          set(F_CMP_F, a, b, 0, uint16_t(ka | kb << 2 | rel << 4));
-        } else if (ka == kIntConst && kb == kIntConst) {
-          set(rel_holds(r, int32_t(a), int32_t(b)) ? F_TRUE : F_PUSH0);
-        } else if (ka == kIntMem && kb == kIntMem) {
-          set(FOp(F_EQ_MM + rel), a, b);
-        } else if (ka == kIntMem) {
-          set(FOp(F_EQ_MK + rel), a, b);
-        } else {  // constant op word: the mirrored compare, word op constant
-          set(FOp(F_EQ_MK + mirror), b, a);
-        }
-        break;
-      }
-      case Op::MOV: {
-        unsigned ka, kd;
-        uint32_t a = value(o[0], ka), dst = dest(o[1], kd);
-        if (ka == kIntConst) set(F_MOVK, dst, kd == kDstReal ? f_bits(int_to_real(int32_t(a))) : a);
-        else if (ka == kRealConst) set(F_MOVK, dst, kd == kDstReal ? a : uint32_t(real_to_int(bits_f(a))));
-        else if ((ka == kRealMem) == (kd == kDstReal)) set(F_MOV32, a, dst);
-        else if (ka == kIntMem) set(F_MOVI2F, a, dst);
-        else set(F_MOVF2I, a, dst);
-        break;
-      }
-      case Op::ADD: case Op::SUB: case Op::MUL: case Op::DIV: case Op::MOD:
-      case Op::WAND: case Op::WOR: case Op::WXOR: case Op::SHL: case Op::SHR: {
-        unsigned ka, kb, kd;
-        uint32_t a = value(o[0], ka), b = value(o[1], kb), c = dest(o[2], kd);
-        FOp base = in.op == Op::ADD ? F_ADD_MM : in.op == Op::SUB ? F_SUB_MM : in.op == Op::MUL ? F_MUL_MM
-                 : in.op == Op::DIV ? F_DIV_MM : in.op == Op::MOD ? F_MOD_MM : in.op == Op::WAND ? F_WAND_MM
-                 : in.op == Op::WOR ? F_WOR_MM : in.op == Op::WXOR ? F_WXOR_MM : in.op == Op::SHL ? F_SHL_MM : F_SHR_MM;
-        bool ints = !((ka | kb) & 1) && kd == kDstInt;
-        if (ints && ka == kIntMem && kb == kIntMem) set(base, a, b, c);
-        else if (ints && ka == kIntMem && kb == kIntConst) set(FOp(base + 1), a, b, c);
-        else if (ints && ka == kIntConst && kb == kIntMem) set(FOp(base + 2), a, b, c);
-        else if (ka == kRealMem && kb == kRealMem && kd == kDstReal && unsigned(in.op) <= unsigned(Op::DIV))
-          set(FOp(F_ADD_F + (unsigned(in.op) - unsigned(Op::ADD))), a, b, c);
-        else gen(ka, a, kb, b, kd, c);
-        break;
-      }
-      case Op::WNOT: {
-        unsigned ka, kd;
-        uint32_t a = value(o[0], ka), dst = dest(o[1], kd);
-        if (ka == kIntMem && kd == kDstInt) set(F_WNOT_M, a, dst);
-        else gen(ka, a, 0, 0, kd, dst);
-        break;
-      }
-      case Op::SIN: case Op::COS: case Op::TAN: case Op::SQRT: case Op::EXP: case Op::LN: case Op::ABS: {
-        unsigned ka, kd;
-        uint32_t a = value(o[0], ka), dst = dest(o[1], kd);
-        if (ka == kRealMem && kd == kDstReal) {
-          set(FOp(F_SIN_F + unsigned(op_info(in.op).fn)), a, dst);
-        } else {
-          gen(ka, a, 0, 0, kd, dst);
-        }
-        break;
-      }
-      case Op::TON: case Op::TOF: case Op::TP: case Op::MTON: case Op::MTOF: case Op::MTP: {
-        unsigned kp;
-        uint32_t pt = value(o[1], kp);
-        FOp k = in.op == Op::TON ? F_TON_K : in.op == Op::TOF ? F_TOF_K : in.op == Op::TP ? F_TP_K
-              : in.op == Op::MTON ? F_MTON_K : in.op == Op::MTOF ? F_MTOF_K : F_MTP_K;
-        if (kp == kIntConst) set(k, uint32_t(int32_t(pt) < 0 ? 0 : int32_t(pt)), 0, 0, uint16_t(o[0].index));
-        else set(FOp(k + 1), pt, 0, 0, uint16_t(o[0].index));
-        break;
-      }
-      case Op::RSTT: set(F_RSTT, 0, 0, 0, uint16_t(o[0].index)); break;
-      case Op::CTU: case Op::CTD: {
-        unsigned kp;
-        uint32_t pv = value(o[1], kp);
-        FOp k = in.op == Op::CTU ? F_CTU_K : F_CTD_K;
-        set(kp == kIntConst ? k : FOp(k + 1), pv, where(o[2]), 0, uint16_t(o[0].index));
-        break;
-      }
-      case Op::RSTC: set(F_RSTC, 0, 0, 0, uint16_t(o[0].index)); break;
-      case Op::JMP: set(F_JMP, index_of(o[0].index)); break;
-      case Op::END: set(F_END); break;
-      case Op::Count: throw std::invalid_argument("fast interpreter: bad opcode");
-    }
-    specialized_ += special;
-    code_.push_back(d);
+    code_.push_back(dec.decode(in));
+    specialized_ += dec.special;
   }
   code_.push_back(Ins{F_HALT, 0, 0, 0, 0});
 }
 
 // ------------------------------------------------------------------ running
+
+// The timers' scan step (docs/il.md): timer n of kind K (F_TON_K .. F_MTP_K),
+// preset pt (already >= 0), input `in`; inlined into its handlers.
+template <FOp K>
+__attribute__((always_inline)) inline void timer_step(uint8_t* m, uint32_t tw, uint32_t tq, uint32_t ti, uint32_t n,
+                                                      int32_t pt, uint32_t in) {
+  const uint32_t et_off = tw + 4 * n;
+  uint8_t* q = m + tq + n;
+  uint8_t* in_mem = m + ti + n;
+  if constexpr (K == F_TON_K) {
+    if (in) {
+      int32_t et = *in_mem ? advance(ld_i(m, et_off), dt_of(m), pt) : 0;
+      st_i(m, et_off, et);
+      *q = et >= pt;
+    } else {
+      st_i(m, et_off, 0);
+      *q = 0;
+    }
+  } else if constexpr (K == F_TOF_K) {
+    if (in) {
+      *q = 1;
+      st_i(m, et_off, 0);
+    } else if (*in_mem) {
+      st_i(m, et_off, 0);
+      *q = pt > 0;
+    } else if (*q) {
+      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
+      st_i(m, et_off, et);
+      *q = et < pt;
+    }
+  } else if constexpr (K == F_TP_K) {
+    if (*q) {
+      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
+      st_i(m, et_off, et);
+      if (et >= pt) *q = 0;
+    } else if (in && !*in_mem) {
+      *q = pt > 0;
+      st_i(m, et_off, 0);
+    } else if (!in) {
+      st_i(m, et_off, 0);
+    }
+  } else if constexpr (K == F_MTON_K) {
+    if (!in || !*in_mem) {
+      st_i(m, et_off, 0);
+      *q = 0;
+    } else if (!*q) {
+      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
+      st_i(m, et_off, et);
+      *q = et >= pt;
+    }
+  } else if constexpr (K == F_MTOF_K) {
+    if (in || *in_mem) {
+      *q = 1;
+      st_i(m, et_off, 0);
+    } else if (*q) {
+      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
+      st_i(m, et_off, et);
+      *q = et < pt;
+    }
+  } else if constexpr (K == F_MTP_K) {
+    if (*q) {
+      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
+      st_i(m, et_off, et);
+      if (et >= pt) *q = 0;
+    } else if (in && !*in_mem) {
+      *q = 1;
+      st_i(m, et_off, 0);
+    }
+    if (!*q && !in) st_i(m, et_off, 0);
+  }
+  *in_mem = uint8_t(in);
+}
+
 
 #if LDC_FAST_GOTO
 #define HANDLER(name) LH_##name:
@@ -459,105 +555,14 @@ void FastInterpreter::scan(uint8_t* mem) {
   HANDLER(GEN) { if (st & 1u) generic(m, *ip, s0); NEXT(); }
 
   // ---- timers: x = timer number; a = preset (K: a constant, already >= 0; M: its word)
-#define LDC_TIMER(N, ...)                                                                           \
-  HANDLER(N##_K) { int32_t pt = int32_t(ip->a); __VA_ARGS__ NEXT(); }                               \
-  HANDLER(N##_M) { int32_t pt = ld_i(m, ip->a); if (pt < 0) pt = 0; __VA_ARGS__ NEXT(); }
-  LDC_TIMER(TON, {
-    const uint32_t n = ip->x, et_off = tw + 4 * n;
-    uint8_t* q = m + tq + n;
-    uint8_t* in_mem = m + ti + n;
-    const uint32_t in = st & 1u;
-    if (in) {
-      int32_t et = *in_mem ? advance(ld_i(m, et_off), dt_of(m), pt) : 0;
-      st_i(m, et_off, et);
-      *q = et >= pt;
-    } else {
-      st_i(m, et_off, 0);
-      *q = 0;
-    }
-    *in_mem = uint8_t(in);
-  })
-  LDC_TIMER(TOF, {
-    const uint32_t n = ip->x, et_off = tw + 4 * n;
-    uint8_t* q = m + tq + n;
-    uint8_t* in_mem = m + ti + n;
-    const uint32_t in = st & 1u;
-    if (in) {
-      *q = 1;
-      st_i(m, et_off, 0);
-    } else if (*in_mem) {
-      st_i(m, et_off, 0);
-      *q = pt > 0;
-    } else if (*q) {
-      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
-      st_i(m, et_off, et);
-      *q = et < pt;
-    }
-    *in_mem = uint8_t(in);
-  })
-  LDC_TIMER(TP, {
-    const uint32_t n = ip->x, et_off = tw + 4 * n;
-    uint8_t* q = m + tq + n;
-    uint8_t* in_mem = m + ti + n;
-    const uint32_t in = st & 1u;
-    if (*q) {
-      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
-      st_i(m, et_off, et);
-      if (et >= pt) *q = 0;
-    } else if (in && !*in_mem) {
-      *q = pt > 0;
-      st_i(m, et_off, 0);
-    } else if (!in) {
-      st_i(m, et_off, 0);
-    }
-    *in_mem = uint8_t(in);
-  })
-  LDC_TIMER(MTON, {
-    const uint32_t n = ip->x, et_off = tw + 4 * n;
-    uint8_t* q = m + tq + n;
-    uint8_t* in_mem = m + ti + n;
-    const uint32_t in = st & 1u;
-    if (!in || !*in_mem) {
-      st_i(m, et_off, 0);
-      *q = 0;
-    } else if (!*q) {
-      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
-      st_i(m, et_off, et);
-      *q = et >= pt;
-    }
-    *in_mem = uint8_t(in);
-  })
-  LDC_TIMER(MTOF, {
-    const uint32_t n = ip->x, et_off = tw + 4 * n;
-    uint8_t* q = m + tq + n;
-    uint8_t* in_mem = m + ti + n;
-    const uint32_t in = st & 1u;
-    if (in || *in_mem) {
-      *q = 1;
-      st_i(m, et_off, 0);
-    } else if (*q) {
-      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
-      st_i(m, et_off, et);
-      *q = et < pt;
-    }
-    *in_mem = uint8_t(in);
-  })
-  LDC_TIMER(MTP, {
-    const uint32_t n = ip->x, et_off = tw + 4 * n;
-    uint8_t* q = m + tq + n;
-    uint8_t* in_mem = m + ti + n;
-    const uint32_t in = st & 1u;
-    if (*q) {
-      int32_t et = advance(ld_i(m, et_off), dt_of(m), pt);
-      st_i(m, et_off, et);
-      if (et >= pt) *q = 0;
-    } else if (in && !*in_mem) {
-      *q = 1;
-      st_i(m, et_off, 0);
-    }
-    if (!*q && !in) st_i(m, et_off, 0);
-    *in_mem = uint8_t(in);
-  })
+#define LDC_TIMER(N)                                                                                           \
+  HANDLER(N##_K) { timer_step<F_##N##_K>(m, tw, tq, ti, ip->x, int32_t(ip->a), st & 1u); NEXT(); }              \
+  HANDLER(N##_M) {                                                                                             \
+    int32_t pt = ld_i(m, ip->a);                                                                               \
+    timer_step<F_##N##_K>(m, tw, tq, ti, ip->x, pt < 0 ? 0 : pt, st & 1u);                                      \
+    NEXT();                                                                                                    \
+  }
+  LDC_TIMER(TON) LDC_TIMER(TOF) LDC_TIMER(TP) LDC_TIMER(MTON) LDC_TIMER(MTOF) LDC_TIMER(MTP)
 #undef LDC_TIMER
   HANDLER(RSTT) {
     if (st & 1u) {

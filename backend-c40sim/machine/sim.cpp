@@ -292,6 +292,305 @@ uint32_t shiftL(uint32_t v, int32_t count, bool arith, bool* carry) {
   return v;
 }
 
+// One instruction's execution (C40Sim::execute): its operands, the register
+// groups it uses and writes, the flag-setting operations, and one member
+// function per instruction group; a group's function returns false for an
+// instruction not of its group.  A control transfer is left in taken/target.
+class Step {
+ public:
+  using M = Mnemonic;
+  Step(Exec& x, uint32_t* r32, const Instruction& in, uint32_t pc, bool& taken, uint32_t& target)
+      : x(x), r32_(r32), in(in), pc(pc), a(in.ops[0]), b(in.ops[1]), c(in.ops[2]), taken_(taken), target_(target) {
+    for (unsigned i = 0; i < in.numOperands; ++i) {
+      if (in.ops[i].kind == OperandKind::Ind) uses |= 1u << kGroupAux;
+      if (in.ops[i].kind == OperandKind::Direct) uses |= 1u << kGroupDp;
+    }
+  }
+
+  unsigned uses = 0, writes = 0;
+
+  bool integer();
+  bool integer3();
+  bool floating();
+  bool float3();
+  bool conversion();
+  bool loadStore();
+  bool stack();
+  bool control();
+
+ private:
+  Exec& x;
+  uint32_t* r32_;
+  const Instruction& in;
+  uint32_t pc;
+  const Operand &a, &b, &c;
+  bool& taken_;
+  uint32_t& target_;
+
+  void wrote(Reg r) {
+    Group g = groupOf(r);
+    if (g != kNoGroup) writes |= 1u << g;
+  }
+  void setI(Reg r, uint32_t v) {
+    x.setIreg(r, v);
+    wrote(r);
+  }
+  void setF(Reg r, Ext v) {
+    x.setFreg(r, v);
+    wrote(r);
+  }
+  void branch(uint32_t t) {
+    taken_ = true;
+    target_ = t;
+  }
+  uint32_t targetOf(const Operand& o) { return o.kind == OperandKind::Reg ? x.ireg(o.reg) : uint32_t(o.imm); }
+  void push(uint32_t v) {
+    uint32_t& sp = r32_[unsigned(Reg::SP)];
+    sp += 1;
+    x.wr(sp, v);
+  }
+  uint32_t pop() {
+    uint32_t& sp = r32_[unsigned(Reg::SP)];
+    uint32_t v = x.rd(sp);
+    sp -= 1;
+    return v;
+  }
+  // Integer arithmetic on int64 for the flags (N from the exact result).
+  void arith(const Reg* dst, int64_t exact, uint32_t out, bool carry, bool setC) {
+    bool v = exact < INT32_MIN || exact > INT32_MAX;
+    x.intFlags(dst, out, exact < 0, v, carry, setC);
+  }
+  uint32_t addOp(const Reg* dst, uint32_t p, uint32_t q) {
+    uint32_t out = p + q;
+    arith(dst, int64_t(int32_t(p)) + int32_t(q), out, (uint64_t(p) + q) >> 32, true);
+    return out;
+  }
+  uint32_t subOp(const Reg* dst, uint32_t p, uint32_t q) {  // p - q
+    uint32_t out = p - q;
+    arith(dst, int64_t(int32_t(p)) - int32_t(q), out, p < q, true);
+    return out;
+  }
+  uint32_t mpyOp(const Reg* dst, uint32_t p, uint32_t q) {  // 24 x 24 bits
+    int64_t prod = int64_t(sext(p, 24)) * sext(q, 24);
+    uint32_t out = uint32_t(uint64_t(prod));
+    arith(dst, prod, out, false, false);
+    return out;
+  }
+  uint32_t shiftOp(const Reg* dst, uint32_t v, uint32_t count, bool ar) {
+    bool carry = false;
+    uint32_t out = shiftL(v, sext(count & 0x7F, 7), ar, &carry);
+    x.intFlags(dst, out, out >> 31, false, carry, true);
+    return out;
+  }
+  uint32_t logic(const Reg* dst, uint32_t out) {
+    x.logicFlags(dst, out);
+    return out;
+  }
+  Ext fres(const Reg* dst, const fp::Res& r) {
+    x.floatFlags(dst, r);
+    return r.v;
+  }
+  void fcmp(Ext p, Ext q) {  // flags of p - q
+    fp::Res r = fp::sub(p, q);
+    int s = fp::compare(p, q);
+    uint32_t f = (s < 0 ? kN : 0) | (s == 0 ? kZ : 0) | (r.overflow ? kV : 0) | (r.underflow ? kUF : 0);
+    x.flags(nullptr, f, kN | kZ | kV | kUF);
+  }
+  // LDIc/LDFc whose condition is false: only the address update happens.
+  bool skippedLoad(M conditional) {
+    if (in.mnemonic != conditional || condTrue(in.cond, x.st())) return false;
+    if (a.kind == OperandKind::Ind) x.ea(a.ind);
+    return true;
+  }
+  void loadI(Reg r, uint32_t v) {
+    setI(r, v);
+    x.intFlags(&r, v, v >> 31, false, false, false);
+  }
+};
+
+// LDI, ABSI, NEGI and the two-operand integer and logic instructions.
+bool Step::integer() {
+  switch (in.mnemonic) {
+    case M::Ldi: case M::Ldic:
+      if (!skippedLoad(M::Ldic)) loadI(b.reg, x.ival(a));
+      return true;
+    case M::Absi: {
+      int32_t s = int32_t(x.ival(a));
+      uint32_t out = s < 0 ? uint32_t(0) - uint32_t(s) : uint32_t(s);
+      setI(b.reg, out);
+      arith(&b.reg, s < 0 ? -int64_t(s) : s, out, false, false);
+      return true;
+    }
+    case M::Negi: { uint32_t s = x.ival(a); setI(b.reg, subOp(&b.reg, 0, s)); return true; }
+    case M::Addi: { uint32_t s = x.ival(a); setI(b.reg, addOp(&b.reg, x.ireg(b.reg), s)); return true; }
+    case M::Subi: { uint32_t s = x.ival(a); setI(b.reg, subOp(&b.reg, x.ireg(b.reg), s)); return true; }
+    case M::Cmpi: { uint32_t s = x.ival(a); subOp(nullptr, x.ireg(b.reg), s); return true; }
+    case M::Mpyi: { uint32_t s = x.ival(a); setI(b.reg, mpyOp(&b.reg, x.ireg(b.reg), s)); return true; }
+    case M::And: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) & s)); return true; }
+    case M::Andn: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) & ~s)); return true; }
+    case M::Or: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) | s)); return true; }
+    case M::Xor: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) ^ s)); return true; }
+    case M::Not: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, ~s)); return true; }
+    case M::Tstb: { uint32_t s = x.ival(a); logic(nullptr, x.ireg(b.reg) & s); return true; }
+    case M::Lsh: { uint32_t s = x.ival(a); setI(b.reg, shiftOp(&b.reg, x.ireg(b.reg), s, false)); return true; }
+    case M::Ash: { uint32_t s = x.ival(a); setI(b.reg, shiftOp(&b.reg, x.ireg(b.reg), s, true)); return true; }
+    default: return false;
+  }
+}
+
+// The three-operand integer instructions: c = b OP a (CMPI3, TSTB3: flags only).
+bool Step::integer3() {
+  switch (in.mnemonic) {
+    case M::Addi3: case M::Subi3: case M::Mpyi3: case M::And3: case M::Andn3: case M::Or3:
+    case M::Xor3: case M::Lsh3: case M::Ash3: case M::Cmpi3: case M::Tstb3: break;
+    default: return false;
+  }
+  uint32_t s2 = x.ival(a), s1 = x.ival(b);
+  const Reg* d = (in.mnemonic == M::Cmpi3 || in.mnemonic == M::Tstb3) ? nullptr : &c.reg;
+  uint32_t out = 0;
+  switch (in.mnemonic) {
+    case M::Addi3: out = addOp(d, s1, s2); break;
+    case M::Subi3: case M::Cmpi3: out = subOp(d, s1, s2); break;
+    case M::Mpyi3: out = mpyOp(d, s1, s2); break;
+    case M::And3: case M::Tstb3: out = logic(d, s1 & s2); break;
+    case M::Andn3: out = logic(d, s1 & ~s2); break;
+    case M::Or3: out = logic(d, s1 | s2); break;
+    case M::Xor3: out = logic(d, s1 ^ s2); break;
+    case M::Lsh3: out = shiftOp(d, s1, s2, false); break;
+    default: out = shiftOp(d, s1, s2, true); break;
+  }
+  if (d) setI(*d, out);
+  return true;
+}
+
+// LDF and the two-operand floating-point instructions.
+bool Step::floating() {
+  switch (in.mnemonic) {
+    case M::Ldf: case M::Ldfc:
+      if (!skippedLoad(M::Ldfc)) setF(b.reg, fres(&b.reg, fp::Res{x.fval(a), false, false}));
+      return true;
+    case M::Absf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::abs(s))); return true; }
+    case M::Negf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::neg(s))); return true; }
+    case M::Addf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::add(x.freg(b.reg), s))); return true; }
+    case M::Subf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::sub(x.freg(b.reg), s))); return true; }
+    case M::Mpyf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::mul(x.freg(b.reg), s))); return true; }
+    case M::Cmpf: { Ext s = x.fval(a); fcmp(x.freg(b.reg), s); return true; }
+    case M::Rcpf: {
+      Ext s = a.kind == OperandKind::Reg ? x.freg(a.reg) : x.fval(a);
+      setF(b.reg, fres(&b.reg, fp::rcp(s)));
+      return true;
+    }
+    default: return false;
+  }
+}
+
+// The three-operand floating-point instructions: c = b OP a (CMPF3: flags only).
+bool Step::float3() {
+  if (in.mnemonic != M::Addf3 && in.mnemonic != M::Subf3 && in.mnemonic != M::Mpyf3 && in.mnemonic != M::Cmpf3)
+    return false;
+  Ext s2 = x.fval(a), s1 = x.fval(b);
+  if (in.mnemonic == M::Cmpf3) {
+    fcmp(s1, s2);
+    return true;
+  }
+  fp::Res r = in.mnemonic == M::Addf3 ? fp::add(s1, s2) : in.mnemonic == M::Subf3 ? fp::sub(s1, s2) : fp::mul(s1, s2);
+  setF(c.reg, fres(&c.reg, r));
+  return true;
+}
+
+// FIX, FLOAT and the IEEE conversions.
+bool Step::conversion() {
+  switch (in.mnemonic) {
+    case M::Fix: {
+      Ext s = x.fval(a);
+      bool ov = false;
+      uint32_t out = uint32_t(fp::fix(s, &ov));
+      setI(b.reg, out);
+      x.intFlags(&b.reg, out, out >> 31, ov, false, false);
+      return true;
+    }
+    case M::Float: { uint32_t s = x.ival(a); setF(b.reg, fres(&b.reg, fp::fromInt(int32_t(s)))); return true; }
+    case M::Toieee: {
+      uint32_t w = fp::toIeee(x.fval(a));
+      setF(b.reg, fp::fromSingle(w));
+      x.flags(&b.reg, (w >> 31 ? kN : 0) | ((w & 0x7FFFFFFF) == 0 ? kZ : 0), kN | kZ | kV | kUF);
+      return true;
+    }
+    case M::Frieee: { fp::Res r = fp::fromIeee(x.rd(x.addrOf(a))); setF(b.reg, fres(&b.reg, r)); return true; }
+    default: return false;
+  }
+}
+
+// Stores, LDA, LDHI, LDPK and NOP (whose operand may update an AR).
+bool Step::loadStore() {
+  switch (in.mnemonic) {
+    case M::Sti: x.wr(x.addrOf(b), x.ireg(a.reg)); return true;
+    case M::Stf: x.wr(x.addrOf(b), fp::toSingle(x.freg(a.reg))); return true;
+    case M::Lda: setI(b.reg, x.ival(a)); return true;
+    case M::Ldhi: loadI(b.reg, uint32_t(a.imm) << 16); return true;
+    case M::Ldpk: {
+      uint32_t& dp = r32_[unsigned(Reg::DP)];
+      dp = (dp & 0xFFFF0000u) | uint32_t(a.imm);
+      writes |= 1u << kGroupDp;
+      return true;
+    }
+    case M::Nop:
+      if (in.numOperands == 1) x.ea(a.ind);
+      return true;
+    default: return false;
+  }
+}
+
+// PUSH, PUSHF, POP, POPF.
+bool Step::stack() {
+  switch (in.mnemonic) {
+    case M::Push: uses |= 1u << kGroupSp; push(x.ireg(a.reg)); return true;
+    case M::Pushf: uses |= 1u << kGroupSp; push(fp::toSingle(x.freg(a.reg))); return true;
+    case M::Pop: uses |= 1u << kGroupSp; loadI(a.reg, pop()); return true;
+    case M::Popf: {
+      uses |= 1u << kGroupSp;
+      fp::Res r{fp::fromSingle(pop()), false, false};
+      setF(a.reg, fres(&a.reg, r));
+      return true;
+    }
+    default: return false;
+  }
+}
+
+// Branches, calls, returns and DBc.
+bool Step::control() {
+  switch (in.mnemonic) {
+    case M::Br: case M::Brd: branch(uint32_t(a.imm)); return true;
+    case M::Bc: case M::Bcd:
+      if (condTrue(in.cond, x.st())) branch(targetOf(a));
+      return true;
+    case M::Call:
+      uses |= 1u << kGroupSp;
+      push(pc + 1);
+      branch(uint32_t(a.imm));
+      return true;
+    case M::Callc:
+      uses |= 1u << kGroupSp;
+      if (condTrue(in.cond, x.st())) {
+        push(pc + 1);
+        branch(targetOf(a));
+      }
+      return true;
+    case M::Retsc:
+      uses |= 1u << kGroupSp;
+      if (condTrue(in.cond, x.st())) branch(pop());
+      return true;
+    case M::Dbc: case M::Dbcd: {
+      uses |= 1u << kGroupAux;
+      uint32_t& r = r32_[unsigned(a.reg)];
+      r -= 1;
+      if (condTrue(in.cond, x.st()) && int32_t(r) >= 0) branch(uint32_t(b.imm));
+      return true;
+    }
+    default: return false;
+  }
+}
+
 }  // namespace
 
 // Executes one instruction (not its control transfer: that is left in
@@ -300,265 +599,11 @@ uint32_t shiftL(uint32_t v, int32_t count, bool arith, bool* carry) {
 unsigned C40Sim::execute(const Instruction& in, uint32_t pc) {
   Exec x(r32_, ext_, [this](uint32_t a) { return memRead(a); },
          [this](uint32_t a, uint32_t v) { memWrite(a, v); });
-  const Operand& a = in.ops[0];
-  const Operand& b = in.ops[1];
-  const Operand& c = in.ops[2];
-  unsigned uses = 0, writes = 0;
-  for (unsigned i = 0; i < in.numOperands; ++i) {
-    if (in.ops[i].kind == OperandKind::Ind) uses |= 1u << kGroupAux;
-    if (in.ops[i].kind == OperandKind::Direct) uses |= 1u << kGroupDp;
-  }
-  auto wrote = [&](Reg r) {
-    Group g = groupOf(r);
-    if (g != kNoGroup) writes |= 1u << g;
-  };
-  auto setI = [&](Reg r, uint32_t v) {
-    x.setIreg(r, v);
-    wrote(r);
-  };
-  auto setF = [&](Reg r, Ext v) {
-    x.setFreg(r, v);
-    wrote(r);
-  };
-  auto branch = [&](uint32_t t) {
-    taken_ = true;
-    target_ = t;
-  };
-  auto targetOf = [&](const Operand& o) -> uint32_t {
-    return o.kind == OperandKind::Reg ? x.ireg(o.reg) : uint32_t(o.imm);
-  };
-  auto push = [&](uint32_t v) {
-    uint32_t& sp = r32_[unsigned(Reg::SP)];
-    sp += 1;
-    x.wr(sp, v);
-  };
-  auto pop = [&]() {
-    uint32_t& sp = r32_[unsigned(Reg::SP)];
-    uint32_t v = x.rd(sp);
-    sp -= 1;
-    return v;
-  };
-  // Integer arithmetic on int64 for the flags (N from the exact result).
-  auto arith = [&](const Reg* dst, int64_t exact, uint32_t out, bool carry, bool setC) {
-    bool v = exact < INT32_MIN || exact > INT32_MAX;
-    x.intFlags(dst, out, exact < 0, v, carry, setC);
-  };
-  auto addOp = [&](const Reg* dst, uint32_t p, uint32_t q) {
-    uint32_t out = p + q;
-    arith(dst, int64_t(int32_t(p)) + int32_t(q), out, (uint64_t(p) + q) >> 32, true);
-    return out;
-  };
-  auto subOp = [&](const Reg* dst, uint32_t p, uint32_t q) {  // p - q
-    uint32_t out = p - q;
-    arith(dst, int64_t(int32_t(p)) - int32_t(q), out, p < q, true);
-    return out;
-  };
-  auto mpyOp = [&](const Reg* dst, uint32_t p, uint32_t q) {  // 24 x 24 bits
-    int64_t prod = int64_t(sext(p, 24)) * sext(q, 24);
-    uint32_t out = uint32_t(uint64_t(prod));
-    arith(dst, prod, out, false, false);
-    return out;
-  };
-  auto shiftOp = [&](const Reg* dst, uint32_t v, uint32_t count, bool ar) {
-    bool carry = false;
-    uint32_t out = shiftL(v, sext(count & 0x7F, 7), ar, &carry);
-    x.intFlags(dst, out, out >> 31, false, carry, true);
-    return out;
-  };
-  auto logic = [&](const Reg* dst, uint32_t out) {
-    x.logicFlags(dst, out);
-    return out;
-  };
-  auto fres = [&](const Reg* dst, const fp::Res& r) {
-    x.floatFlags(dst, r);
-    return r.v;
-  };
-  auto fcmp = [&](Ext p, Ext q) {  // flags of p - q
-    fp::Res r = fp::sub(p, q);
-    int s = fp::compare(p, q);
-    uint32_t f = (s < 0 ? kN : 0) | (s == 0 ? kZ : 0) | (r.overflow ? kV : 0) | (r.underflow ? kUF : 0);
-    x.flags(nullptr, f, kN | kZ | kV | kUF);
-  };
-
-  using M = Mnemonic;
-  switch (in.mnemonic) {
-    case M::Ldi: case M::Ldic: {
-      if (in.mnemonic == M::Ldic && !condTrue(in.cond, x.st())) {
-        if (a.kind == OperandKind::Ind) x.ea(a.ind);  // the address update still happens
-        break;
-      }
-      uint32_t v = x.ival(a);
-      setI(b.reg, v);
-      x.intFlags(&b.reg, v, v >> 31, false, false, false);
-      break;
-    }
-    case M::Absi: {
-      int32_t s = int32_t(x.ival(a));
-      uint32_t out = s < 0 ? uint32_t(0) - uint32_t(s) : uint32_t(s);
-      setI(b.reg, out);
-      arith(&b.reg, s < 0 ? -int64_t(s) : s, out, false, false);
-      break;
-    }
-    case M::Negi: {
-      uint32_t s = x.ival(a);
-      setI(b.reg, subOp(&b.reg, 0, s));
-      break;
-    }
-    case M::Addi: { uint32_t s = x.ival(a); setI(b.reg, addOp(&b.reg, x.ireg(b.reg), s)); break; }
-    case M::Subi: { uint32_t s = x.ival(a); setI(b.reg, subOp(&b.reg, x.ireg(b.reg), s)); break; }
-    case M::Cmpi: { uint32_t s = x.ival(a); subOp(nullptr, x.ireg(b.reg), s); break; }
-    case M::Mpyi: { uint32_t s = x.ival(a); setI(b.reg, mpyOp(&b.reg, x.ireg(b.reg), s)); break; }
-    case M::And: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) & s)); break; }
-    case M::Andn: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) & ~s)); break; }
-    case M::Or: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) | s)); break; }
-    case M::Xor: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) ^ s)); break; }
-    case M::Not: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, ~s)); break; }
-    case M::Tstb: { uint32_t s = x.ival(a); logic(nullptr, x.ireg(b.reg) & s); break; }
-    case M::Lsh: { uint32_t s = x.ival(a); setI(b.reg, shiftOp(&b.reg, x.ireg(b.reg), s, false)); break; }
-    case M::Ash: { uint32_t s = x.ival(a); setI(b.reg, shiftOp(&b.reg, x.ireg(b.reg), s, true)); break; }
-
-    case M::Addi3: case M::Subi3: case M::Mpyi3: case M::And3: case M::Andn3: case M::Or3:
-    case M::Xor3: case M::Lsh3: case M::Ash3: case M::Cmpi3: case M::Tstb3: {
-      uint32_t s2 = x.ival(a), s1 = x.ival(b);
-      const Reg* d = (in.mnemonic == M::Cmpi3 || in.mnemonic == M::Tstb3) ? nullptr : &c.reg;
-      uint32_t out = 0;
-      switch (in.mnemonic) {
-        case M::Addi3: out = addOp(d, s1, s2); break;
-        case M::Subi3: case M::Cmpi3: out = subOp(d, s1, s2); break;
-        case M::Mpyi3: out = mpyOp(d, s1, s2); break;
-        case M::And3: case M::Tstb3: out = logic(d, s1 & s2); break;
-        case M::Andn3: out = logic(d, s1 & ~s2); break;
-        case M::Or3: out = logic(d, s1 | s2); break;
-        case M::Xor3: out = logic(d, s1 ^ s2); break;
-        case M::Lsh3: out = shiftOp(d, s1, s2, false); break;
-        default: out = shiftOp(d, s1, s2, true); break;
-      }
-      if (d) setI(*d, out);
-      break;
-    }
-
-    case M::Ldf: case M::Ldfc: {
-      if (in.mnemonic == M::Ldfc && !condTrue(in.cond, x.st())) {
-        if (a.kind == OperandKind::Ind) x.ea(a.ind);
-        break;
-      }
-      fp::Res r{x.fval(a), false, false};
-      setF(b.reg, fres(&b.reg, r));
-      break;
-    }
-    case M::Absf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::abs(s))); break; }
-    case M::Negf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::neg(s))); break; }
-    case M::Addf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::add(x.freg(b.reg), s))); break; }
-    case M::Subf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::sub(x.freg(b.reg), s))); break; }
-    case M::Mpyf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::mul(x.freg(b.reg), s))); break; }
-    case M::Cmpf: { Ext s = x.fval(a); fcmp(x.freg(b.reg), s); break; }
-    case M::Rcpf: {
-      Ext s = a.kind == OperandKind::Reg ? x.freg(a.reg) : x.fval(a);
-      setF(b.reg, fres(&b.reg, fp::rcp(s)));
-      break;
-    }
-    case M::Addf3: case M::Subf3: case M::Mpyf3: case M::Cmpf3: {
-      Ext s2 = x.fval(a), s1 = x.fval(b);
-      if (in.mnemonic == M::Cmpf3) {
-        fcmp(s1, s2);
-        break;
-      }
-      fp::Res r = in.mnemonic == M::Addf3 ? fp::add(s1, s2)
-                  : in.mnemonic == M::Subf3 ? fp::sub(s1, s2) : fp::mul(s1, s2);
-      setF(c.reg, fres(&c.reg, r));
-      break;
-    }
-    case M::Fix: {
-      Ext s = x.fval(a);
-      bool ov = false;
-      uint32_t out = uint32_t(fp::fix(s, &ov));
-      setI(b.reg, out);
-      x.intFlags(&b.reg, out, out >> 31, ov, false, false);
-      break;
-    }
-    case M::Float: {
-      uint32_t s = x.ival(a);
-      setF(b.reg, fres(&b.reg, fp::fromInt(int32_t(s))));
-      break;
-    }
-    case M::Toieee: {
-      uint32_t w = fp::toIeee(x.fval(a));
-      setF(b.reg, fp::fromSingle(w));
-      x.flags(&b.reg, (w >> 31 ? kN : 0) | ((w & 0x7FFFFFFF) == 0 ? kZ : 0), kN | kZ | kV | kUF);
-      break;
-    }
-    case M::Frieee: {
-      fp::Res r = fp::fromIeee(x.rd(x.addrOf(a)));
-      setF(b.reg, fres(&b.reg, r));
-      break;
-    }
-
-    case M::Sti: x.wr(x.addrOf(b), x.ireg(a.reg)); break;
-    case M::Stf: x.wr(x.addrOf(b), fp::toSingle(x.freg(a.reg))); break;
-    case M::Lda: setI(b.reg, x.ival(a)); break;
-    case M::Ldhi: {
-      uint32_t v = uint32_t(a.imm) << 16;
-      setI(b.reg, v);
-      x.intFlags(&b.reg, v, v >> 31, false, false, false);
-      break;
-    }
-    case M::Ldpk: {
-      uint32_t& dp = r32_[unsigned(Reg::DP)];
-      dp = (dp & 0xFFFF0000u) | uint32_t(a.imm);
-      writes |= 1u << kGroupDp;
-      break;
-    }
-
-    case M::Push: uses |= 1u << kGroupSp; push(x.ireg(a.reg)); break;
-    case M::Pushf: uses |= 1u << kGroupSp; push(fp::toSingle(x.freg(a.reg))); break;
-    case M::Pop: {
-      uses |= 1u << kGroupSp;
-      uint32_t v = pop();
-      setI(a.reg, v);
-      x.intFlags(&a.reg, v, v >> 31, false, false, false);
-      break;
-    }
-    case M::Popf: {
-      uses |= 1u << kGroupSp;
-      fp::Res r{fp::fromSingle(pop()), false, false};
-      setF(a.reg, fres(&a.reg, r));
-      break;
-    }
-    case M::Nop:
-      if (in.numOperands == 1) x.ea(a.ind);
-      break;
-
-    case M::Br: case M::Brd: branch(uint32_t(a.imm)); break;
-    case M::Bc: case M::Bcd:
-      if (condTrue(in.cond, x.st())) branch(targetOf(a));
-      break;
-    case M::Call:
-      uses |= 1u << kGroupSp;
-      push(pc + 1);
-      branch(uint32_t(a.imm));
-      break;
-    case M::Callc:
-      uses |= 1u << kGroupSp;
-      if (condTrue(in.cond, x.st())) {
-        push(pc + 1);
-        branch(targetOf(a));
-      }
-      break;
-    case M::Retsc:
-      uses |= 1u << kGroupSp;
-      if (condTrue(in.cond, x.st())) branch(pop());
-      break;
-    case M::Dbc: case M::Dbcd: {
-      uses |= 1u << kGroupAux;
-      uint32_t& r = r32_[unsigned(a.reg)];
-      r -= 1;
-      if (condTrue(in.cond, x.st()) && int32_t(r) >= 0) branch(uint32_t(b.imm));
-      break;
-    }
-    case M::Word: case M::Count_:
-      throw SimError{Stop::IllegalInstruction, "not an instruction"};
-  }
-  return uses << 8 | writes;
+  Step s(x, r32_, in, pc, taken_, target_);
+  if (!(s.integer() || s.integer3() || s.floating() || s.float3() || s.conversion() || s.loadStore() || s.stack() ||
+        s.control()))
+    throw SimError{Stop::IllegalInstruction, "not an instruction"};  // .word and the like
+  return s.uses << 8 | s.writes;
 }
 
 RunResult C40Sim::call(uint32_t entry, uint64_t maxCycles) {

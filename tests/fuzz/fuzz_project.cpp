@@ -1,4 +1,4 @@
-// Fuzz the project file reader (driver.h parse_project).  It reads a path, so
+// Fuzz the project file reader (driver/project.h parse_project).  It reads a path, so
 // the input goes to a per-process temporary file first.
 #include <unistd.h>
 
@@ -6,6 +6,7 @@
 #include <string>
 
 #include "driver/driver.h"
+#include "driver/project.h"
 #include "tests/fuzz/fuzz_common.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -1,0 +1,413 @@
+// driver/project.cpp -- the project file language (driver/project.h).
+#include "driver/project.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+
+#include "driver/driver.h"
+#include "driver/targets.h"
+#include "frontend/frontend.h"
+#include "loader/config.h"
+
+namespace ldc {
+
+std::optional<int64_t> parse_duration_us(const std::string& s) {
+  char* end = nullptr;
+  errno = 0;
+  long long v = std::strtoll(s.c_str(), &end, 10);
+  if (end == s.c_str() || errno || v < 0 || !std::isdigit(static_cast<unsigned char>(s[0]))) return std::nullopt;
+  std::string unit = end;
+  long long mul = unit.empty() || unit == "ms" ? 1000 : unit == "us" ? 1 : unit == "s" ? 1000000 : -1;
+  if (mul < 0 || v > (int64_t(1) << 31) / mul) return std::nullopt;
+  return int64_t(v) * mul;
+}
+
+bool is_project_name(const std::string& s) {
+  if (s.empty() || std::isdigit(static_cast<unsigned char>(s[0]))) return false;
+  for (char c : s)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') return false;
+  return true;
+}
+
+namespace {
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+}  // namespace
+
+bool same_name(const std::string& a, const std::string& b) { return lower(a) == lower(b); }
+
+// ---------------------------------------------------------------- reading
+
+namespace {
+
+struct Token {
+  std::string text;
+  int col;
+};
+
+std::vector<Token> split_words(std::string_view line) {
+  std::vector<Token> t;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) i++;
+    if (i >= line.size() || line[i] == '#') break;
+    size_t s = i;
+    while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') i++;
+    t.push_back(Token{std::string(line.substr(s, i - s)), int(s) + 1});
+  }
+  return t;
+}
+
+std::string us_text(int64_t us) {
+  if (us % 1000000 == 0 && us) return std::to_string(us / 1000000) + "s";
+  if (us % 1000 == 0) return std::to_string(us / 1000) + "ms";
+  return std::to_string(us) + "us";
+}
+
+// Reads a project file line by line: one member function per keyword, each
+// reading the words `w` of the current line into the project `p`.
+struct ProjectReader {
+  Project& p;
+  int line = 0;
+  std::vector<Token> w;                // the current line's words
+  std::string resource;                // the current resource
+  uint32_t processor = 0;              // ... its processor
+  std::vector<std::pair<uint32_t, std::string>> processors;
+  bool in_task = false, task_has_program = false;
+  int task_line = 0, task_col = 0;
+
+  std::string resolve(const std::string& f) const {
+    return f.empty() || f[0] == '/' || p.dir.empty() ? f : p.dir + "/" + f;
+  }
+  UserError fail(int col, const std::string& msg) const {
+    std::string m = format_error(p.path, p.text, line, col, msg);
+    if (!m.empty() && m.back() == '\n') m.pop_back();
+    return UserError(m);
+  }
+  void need(size_t n, const char* form) const {
+    if (w.size() < n) throw fail(w.back().col + int(w.back().text.size()), std::string("expected '") + form + "'");
+  }
+  void nothing_after(size_t n) const {
+    if (w.size() > n) throw fail(w[n].col, "unexpected '" + w[n].text + "'");
+  }
+  std::string name_at(size_t i, const char* what) const {
+    if (!is_project_name(w[i].text)) throw fail(w[i].col, std::string("bad ") + what + " name '" + w[i].text + "' (letters, digits and _)");
+    return w[i].text;
+  }
+  uint32_t number_at(size_t i, const char* what, uint32_t max) const {
+    const std::string& s = w[i].text;
+    if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || s.size() > 9 || std::stoul(s) > max)
+      throw fail(w[i].col, std::string("bad ") + what + " '" + s + "' (0.." + std::to_string(max) + ")");
+    return uint32_t(std::stoul(s));
+  }
+  int64_t duration_at(size_t i, const char* what, int64_t min) const {
+    auto d = parse_duration_us(w[i].text);
+    if (!d || *d < min) throw fail(w[i].col, std::string("bad ") + what + " '" + w[i].text + "' (e.g. 500us, 10ms, 1s)");
+    return *d;
+  }
+  void end_task() {
+    if (in_task && !task_has_program) {
+      line = task_line;
+      throw fail(task_col, "task '" + p.tasks.back().name + "' has no program (a task runs one program)");
+    }
+  }
+
+  void read_configuration() {
+    need(2, "configuration NAME");
+    if (!p.tasks.empty() || !resource.empty()) throw fail(w[0].col, "'configuration' comes before the first resource");
+    p.name = name_at(1, "configuration");
+    nothing_after(2);
+  }
+  void read_block() {
+    need(2, "block N");
+    if (!resource.empty()) throw fail(w[0].col, "'block' comes before the first resource");
+    uint32_t b = number_at(1, "block size", kMaxBlockSize);
+    if (b < 16 || b % 16) throw fail(w[1].col, "the block size is a multiple of 16 (16.." + std::to_string(kMaxBlockSize) + ")");
+    p.block_size = b;
+    nothing_after(2);
+  }
+  void read_retain() {
+    need(2, "retain FILE [every DURATION]");
+    p.retain_file_as_written = w[1].text;
+    p.retain_file = resolve(w[1].text);
+    if (w.size() > 2) {
+      if (lower(w[2].text) != "every") throw fail(w[2].col, "expected 'every DURATION' after the file");
+      need(4, "every DURATION");
+      p.retain_every_us = duration_at(3, "save interval", 1000);
+      nothing_after(4);
+    }
+  }
+  void read_resource() {
+    end_task();
+    in_task = false;
+    need(4, "resource NAME processor N");
+    resource = name_at(1, "resource");
+    if (lower(w[2].text) != "processor") throw fail(w[2].col, "expected 'processor N'");
+    processor = number_at(3, "processor number", 255);
+    for (auto& [n, r] : processors) {
+      if (r == resource) throw fail(w[1].col, "second resource named '" + resource + "'");
+      if (n == processor) throw fail(w[3].col, "processor " + std::to_string(n) + " already belongs to resource '" + r + "'");
+    }
+    processors.emplace_back(processor, resource);
+    nothing_after(4);
+  }
+  // period, priority, watchdog and exclusive after "task NAME"
+  void task_attributes(ProjectTask& t) {
+    bool have_period = false;
+    for (size_t i = 2; i < w.size(); i++) {
+      std::string k = lower(w[i].text);
+      if (k == "exclusive") { t.exclusive = true; continue; }
+      if (k != "period" && k != "priority" && k != "watchdog")
+        throw fail(w[i].col, "unknown task attribute '" + w[i].text + "' (period, priority, watchdog, exclusive)");
+      if (i + 1 >= w.size()) throw fail(w[i].col + int(w[i].text.size()), "'" + k + "' needs a value");
+      if (k == "period") t.period_us = uint32_t(duration_at(i + 1, "period", 50)), have_period = true;
+      else if (k == "priority") t.priority = number_at(i + 1, "priority", 99);
+      else t.watchdog_us = uint32_t(duration_at(i + 1, "watchdog", 1));
+      i++;
+    }
+    if (!have_period) throw fail(w[0].col, "task '" + t.name + "' needs 'period DURATION' (e.g. period 10ms)");
+    if (t.period_us > 10000000) throw fail(w[0].col, "task period above 10 s");
+  }
+  void read_task() {
+    end_task();
+    if (resource.empty()) throw fail(w[0].col, "a task belongs to a resource: 'resource NAME processor N' first");
+    need(4, "task NAME period DURATION");
+    ProjectTask t;
+    t.name = name_at(1, "task");
+    for (const ProjectTask& o : p.tasks)
+      if (same_name(o.name, t.name)) throw fail(w[1].col, "second task named '" + t.name + "'");
+    t.resource = resource;
+    t.processor = processor;
+    task_attributes(t);
+    p.tasks.push_back(t);
+    in_task = true, task_has_program = false, task_line = line, task_col = w[1].col;
+  }
+  void read_program() {
+    if (!in_task) throw fail(w[0].col, "a program is bound to a task: 'task NAME period DURATION' first");
+    need(3, "program NAME FILE");
+    if (task_has_program)
+      throw fail(w[0].col, "task '" + p.tasks.back().name + "' already runs program '" + p.tasks.back().program +
+                               "' (one program, one image per task)");
+    ProjectTask& t = p.tasks.back();
+    t.program = name_at(1, "program");
+    for (const ProjectTask& o : p.tasks)
+      if (&o != &t && same_name(o.program, t.program)) throw fail(w[1].col, "second program named '" + t.program + "'");
+    t.file = w[2].text;
+    t.path = resolve(w[2].text);
+    t.line = line, t.col = w[1].col;
+    task_has_program = true;
+    nothing_after(3);
+  }
+
+  void read_line(std::string_view l) {
+    line++;
+    w = split_words(l);
+    if (w.empty()) return;
+    std::string kw = lower(w[0].text);
+    if (kw == "configuration") read_configuration();
+    else if (kw == "block") read_block();
+    else if (kw == "retain") read_retain();
+    else if (kw == "resource") read_resource();
+    else if (kw == "task") read_task();
+    else if (kw == "program") read_program();
+    else throw fail(w[0].col, "unknown keyword '" + w[0].text + "' (configuration, block, retain, resource, task, program)");
+  }
+  void read_all() {
+    std::string_view text = p.text;
+    size_t pos = 0;
+    while (pos < text.size()) {
+      size_t nl = text.find('\n', pos);
+      read_line(text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos));
+      pos = nl == std::string_view::npos ? text.size() : nl + 1;
+    }
+    end_task();
+    if (p.tasks.empty()) {
+      line = std::max(line, 1);
+      throw fail(1, "the project has no task");
+    }
+  }
+};
+
+}  // namespace
+
+Project parse_project(const std::string& path) {
+  Project p;
+  p.path = path;
+  p.text = read_file(path);
+  size_t slash = path.rfind('/');
+  p.dir = slash == std::string::npos ? "" : path.substr(0, slash);
+  std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
+  p.name = base.substr(0, base.rfind('.'));
+  ProjectReader{p}.read_all();
+  return p;
+}
+
+std::string print_project(const Project& p, const std::vector<std::string>& files) {
+  std::string s = "# " + p.name + ": written by ldc --project from " + p.path + "\nconfiguration " + p.name + "\nblock " +
+                  std::to_string(p.block_size) + "\n";
+  if (!p.retain_file_as_written.empty())
+    s += "retain " + p.retain_file_as_written + " every " + us_text(p.retain_every_us) + "\n";
+  std::string res;
+  for (size_t i = 0; i < p.tasks.size(); i++) {
+    const ProjectTask& t = p.tasks[i];
+    if (t.resource != res) s += "resource " + t.resource + " processor " + std::to_string(t.processor) + "\n", res = t.resource;
+    s += "  task " + t.name + " period " + us_text(t.period_us) + " priority " + std::to_string(t.priority);
+    if (t.watchdog_us) s += " watchdog " + us_text(t.watchdog_us);
+    if (t.exclusive) s += " exclusive";
+    s += "\n    program " + t.program + " " + files[i] + "\n";
+  }
+  return s;
+}
+
+namespace {
+
+// Where each program's IL instructions come from, for messages.
+struct ProgramSource {
+  std::string file, text;           // source file and its text ("" for an image)
+  std::vector<uint32_t> instr_offset;
+  std::vector<SrcLoc> instr_loc;
+  std::vector<LineEntry> lines;      // images: the line map
+  bool image = false;
+  std::string located(uint32_t il_offset, const std::string& msg) const {
+    if (image) {
+      int line = 0;
+      for (const LineEntry& e : lines)
+        if (e.il_offset == il_offset) line = e.line;
+      return file + ": error: " + msg + " (IL offset " + std::to_string(il_offset) +
+             (line ? ", source line " + std::to_string(line) : std::string()) + ")\n";
+    }
+    auto it = std::lower_bound(instr_offset.begin(), instr_offset.end(), il_offset);
+    SrcLoc loc = it != instr_offset.end() && *it == il_offset ? instr_loc[it - instr_offset.begin()] : SrcLoc{};
+    return format_error(file, text, loc.line, loc.col ? loc.col : 1, msg);
+  }
+};
+
+// A task's image (compiled, loaded or PLCopen's) and where its IL comes from.
+BuiltTask build_task(const Project& p, const ProjectTask& t, ProgramSource& ps) {
+  const Target& host = host_target();  // the soft PLC runs the tasks on this machine
+  BuiltTask b{t, {}};
+  ps.file = t.path;
+  auto source_of = [&](const Program& il, std::string text) {
+    ps.text = std::move(text);
+    BinaryIl bin = encode_il(il);
+    ps.instr_offset = bin.instr_offset;
+    for (const Rung& r : il.rungs)
+      for (const Instr& in : r.code) ps.instr_loc.push_back(in.loc.line ? in.loc : SrcLoc{r.line, 1});
+  };
+  if (t.il) {  // a PLCopen task, compiled with its configuration
+    b.image = target_image(host, *t.il, t.path, 0);
+    source_of(*t.il, p.text);
+  } else if (is_image_file(t.path)) {
+    b.image = load_image_file(t.path);
+    if (b.image.target != host.image_kind) throw UserError(t.path + ": error: not " + std::string(host.an_image));
+    b.image.config.reset();  // recomputed for this project
+    ps.image = true;
+    ps.lines = b.image.lines;
+  } else {
+    Compiled c = compile_source(t.path);
+    b.image = target_image(host, c.il, t.path, 0);
+    source_of(c.il, read_file(t.path));
+  }
+  return b;
+}
+
+ConfigTask config_task(const ProjectTask& t, const Image& image) {
+  ConfigTask ct;
+  ct.program = t.program, ct.task = t.name, ct.resource = t.resource;
+  ct.processor = t.processor, ct.period_us = t.period_us, ct.priority = t.priority, ct.exclusive = t.exclusive;
+  ct.accesses = io_accesses(image.il);
+  return ct;
+}
+
+// One write conflict: the project line, then the writes of both programs.
+std::string conflict_text(const Project& p, const WriteConflict& c, const std::vector<ProgramSource>& srcs) {
+  constexpr size_t kMaxListed = 8;
+  const ProjectTask &a = p.tasks[c.first], &b = p.tasks[c.second];
+  std::string block = block_name(c.area, c.block, p.block_size);
+  auto who = [](const ProjectTask& t) {
+    return "program '" + t.program + "' (task " + t.name + ", processor " + std::to_string(t.processor) + ")";
+  };
+  std::string why = a.processor != b.processor ? "a block is written by one processor only"
+                    : a.exclusive ? "task '" + a.name + "' is exclusive: no other task may write its blocks"
+                                  : "task '" + b.name + "' is exclusive: no other task may write its blocks";
+  std::string msg = format_error(p.path, p.text, b.line, b.col,
+                                 "I/O block " + block + " is written by " + who(a) + " and by " + who(b) + "; " + why);
+  for (int side = 0; side < 2; side++) {
+    const ProjectTask& t = side ? b : a;
+    const ProjectTask& other = side ? a : b;
+    const auto& ws = side ? c.second_writes : c.first_writes;
+    for (size_t i = 0; i < ws.size() && i < kMaxListed; i++)
+      msg += srcs[side ? c.second : c.first].located(
+          ws[i].il_offset, "'" + t.program + "' writes " + point_name(ws[i].area, ws[i].index) + " (block " + block +
+                               ", also written by '" + other.program + "')");
+    if (ws.size() > kMaxListed)
+      msg += srcs[side ? c.second : c.first].file + ": note: and " + std::to_string(ws.size() - kMaxListed) +
+             " more writes of '" + t.program + "' in block " + block + "\n";
+  }
+  return msg;
+}
+
+}  // namespace
+
+std::vector<BuiltTask> build_project(const Project& p) {
+  std::vector<BuiltTask> built;
+  std::vector<ProgramSource> srcs;
+  std::vector<ConfigTask> cts;
+  for (const ProjectTask& t : p.tasks) {
+    ProgramSource ps;
+    built.push_back(build_task(p, t, ps));
+    cts.push_back(config_task(t, built.back().image));
+    srcs.push_back(std::move(ps));
+  }
+  SystemConfig sc = configure(cts, p.block_size);
+  if (!sc.conflicts.empty()) {
+    std::string msg;
+    for (const WriteConflict& c : sc.conflicts) msg += conflict_text(p, c, srcs);
+    msg += p.path + ": error: " + std::to_string(sc.conflicts.size()) + " I/O write conflict" +
+           (sc.conflicts.size() == 1 ? "" : "s") + "; the project is refused";
+    throw UserError(msg);
+  }
+  for (size_t i = 0; i < built.size(); i++) built[i].image.config = sc.per_task[i];
+  return built;
+}
+
+std::string print_configuration(const Project& p, const std::vector<BuiltTask>& built) {
+  std::string s = "configuration " + p.name + ": " + std::to_string(built.size()) + " task" +
+                  (built.size() == 1 ? "" : "s") + ", I/O blocks of " + std::to_string(p.block_size) + " points\n";
+  auto flags_text = [](uint8_t f) {
+    std::string t;
+    if (f & kBlockRead) t += " read";
+    if (f & kBlockWrite) t += " write";
+    return t;
+  };
+  for (const BuiltTask& b : built) {
+    const IoConfig& c = *b.image.config;
+    s += "task " + c.task + " (resource " + c.resource + ", processor " + std::to_string(c.processor) + ", period " +
+         us_text(c.period_us) + ", priority " + std::to_string(c.priority) + "): program " + c.program + "\n";
+    for (const ConfigRow& r : c.rows)
+      if (r.flags & (kBlockRead | kBlockWrite)) s += "  " + block_name(r.area, r.block, c.block_size) + flags_text(r.flags) + "\n";
+  }
+  s += "system table (block, writing processor, refresh period, users):\n";
+  const IoConfig& c0 = *built.front().image.config;
+  for (size_t i = 0; i < c0.rows.size(); i++) {
+    const ConfigRow& r = c0.rows[i];
+    std::string users;
+    for (const BuiltTask& b : built)
+      if (b.image.config->rows[i].flags & (kBlockRead | kBlockWrite))
+        users += " " + b.spec.name + (b.image.config->rows[i].flags & kBlockWrite ? "(w)" : "");
+    char line[160];
+    std::snprintf(line, sizeof line, "  %-16s %-6s %-8s", block_name(r.area, r.block, c0.block_size).c_str(),
+                  r.writer == kNoProcessor ? "-" : std::to_string(r.writer).c_str(), us_text(r.period_us).c_str());
+    s += line + users + "\n";
+  }
+  return s;
+}
+
+}  // namespace ldc

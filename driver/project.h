@@ -1,0 +1,67 @@
+// driver/project.h -- the project file (docs/runtime.md): an IEC 61131-3
+// configuration of resources (processors), tasks (period, priority) and
+// programs bound to them; reading and printing it, building its images with
+// the configuration system of paper 002, and the system-level table.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ir/ir.h"
+#include "loader/loader.h"
+
+namespace ldc {
+
+// "500us", "10ms", "10" (ms), "2s" -> microseconds; nullopt if malformed
+// or above 2^31 us.
+std::optional<int64_t> parse_duration_us(const std::string& s);
+
+// Names of configurations, resources, tasks and programs: letters, digits and
+// _, not starting with a digit; compared without case (same_name).
+bool is_project_name(const std::string& s);
+bool same_name(const std::string& a, const std::string& b);
+
+struct ProjectTask {
+  std::string name;                // task name
+  std::string resource;            // resource name
+  uint32_t processor = 0;          // the resource's processor number
+  uint32_t period_us = 0;
+  uint32_t priority = 0;           // 0 highest
+  uint32_t watchdog_us = 0;        // 0: the runtime's default
+  bool exclusive = false;          // no other task may write its I/O blocks
+  std::string program;             // program name
+  std::string file;                // program file as written in the project
+  std::string path;                // ... resolved against the project's directory
+  int line = 0, col = 0;           // where the program is bound (for messages)
+  std::shared_ptr<const Program> il;  // compiled already (a PLCopen task), else compile `path`
+};
+struct Project {
+  std::string path, dir, name;     // project file, its directory ("" = cwd), configuration name
+  std::string text;                // the project file, for messages
+  uint32_t block_size = 16;        // points per I/O block
+  std::string retain_file;         // resolved against dir; "" if none
+  std::string retain_file_as_written;
+  int64_t retain_every_us = 1000000;
+  std::vector<ProjectTask> tasks;
+};
+// Reads a project file; errors are UserError "file:line:col: error: ..." with a caret.
+Project parse_project(const std::string& path);
+// The project file text for a project (canonical form; programs as given in `files`, one per task).
+std::string print_project(const Project& p, const std::vector<std::string>& files);
+
+struct BuiltTask {
+  ProjectTask spec;
+  Image image;  // an image of the host target (x86-64) with its 'config' section
+};
+// Compiles (sources) or loads (images) every program, runs the configuration
+// system of paper 002 and attaches each image's 'config' section.  A write
+// conflict is a UserError listing every conflict: the project line, then every
+// writing element as "file:line:col: error: ..." with its source line and a caret.
+std::vector<BuiltTask> build_project(const Project& p);
+// The system-level table as text (ldc --project without -o).
+std::string print_configuration(const Project& p, const std::vector<BuiltTask>& built);
+
+}  // namespace ldc
