@@ -101,7 +101,7 @@ struct Ungated {
   ~Ungated() { flag = saved; }
 };
 
-class Gen {
+class Gen : public ClassGen<Gen> {
  public:
   Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used)
       : L_(l), items_(items), slots_(slots), gate_(gate), bases_(gate), used_(used) {}
@@ -145,7 +145,7 @@ class Gen {
   void emit(Instruction i) { items_.push_back(Item::instr(std::move(i))); }
   void emit(M m, std::initializer_list<Operand> ops) { emit(make(m, ops)); }
   void jcc(Cond c, const std::string& label) { emit(makeCc(M::Jcc, c, {L(label)})); }
-  void jmp(const std::string& label) { emit(M::Jmp, {L(label)}); }
+  void jump(const std::string& label) { emit(M::Jmp, {L(label)}); }
   void label(const std::string& l) { items_.push_back(Item::labelDef(l)); }
   std::string fresh() { return "L" + std::to_string(next_label_++); }
 
@@ -188,7 +188,7 @@ class Gen {
     emit(M::Ucomiss, {R(xmm0), R(xmm2)});
     jcc(Cond::BE, done);  // negative: INT32_MIN is right
     emit(M::Mov, {R(eax), I(INT32_MAX)});
-    jmp(done);
+    jump(done);
     label(nan);
     emit(M::Xor, {R(eax), R(eax)});
     label(done);
@@ -248,17 +248,52 @@ class Gen {
   }
 
   void basic(const ldc::Instr& in);
-  void compare(const ldc::Instr& in);
-  void move(const ldc::Instr& in);
-  void arith(const ldc::Instr& in);
-  void divmod(const ldc::Instr& in);
-  void logic(const ldc::Instr& in);
-  void special(const ldc::Instr& in);
-  void timer(const ldc::Instr& in);
-  void matiec_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
-  void counter(const ldc::Instr& in);
-  void preset_ecx(const ldc::Operand& pt);
-  void advance_eax(uint32_t tw);
+  void flow(const ldc::Instr& in);
+
+  // ClassGen's primitives
+  friend class ClassGen<Gen>;
+  void load_int(const ldc::Operand& a) { load_int(a, eax); }
+  void load_ints(const ldc::Operand& a, const ldc::Operand& b) { load_int(a, eax); load_int(b, ecx); }
+  void load_reals(const ldc::Operand& a, const ldc::Operand& b) { load_real(a, xmm0); load_real(b, xmm1); }
+  void compare_ints(const ldc::Operand& a, const ldc::Operand& b, Rel rel);
+  void compare_reals(const ldc::Operand& a, const ldc::Operand& b, Rel rel);
+  void copy_word(const ldc::Operand& a, const ldc::Operand& d);
+  void move_const(const ldc::Operand& a, const ldc::Operand& d);
+  void move_real_to_int(const ldc::Operand& a, const ldc::Operand& d);
+  void int_arith(Op op, const ldc::Operand& a, const ldc::Operand& b);
+  void real_arith(Op op);
+  Ungated ungated(const ldc::Instr& in);
+  DivLabels div_labels(bool real);
+  void branch_zero_real(const DivLabels& l);
+  void divide_real() { emit(M::Divss, {R(xmm0), R(xmm1)}); }
+  void divisor_branch(int32_t v, const std::string& l);
+  void divide_int(bool mod);
+  void minus_one_result(bool mod);
+  void word_not(const ldc::Operand& a);
+  void shift(Op op, const ldc::Operand& a, const ldc::Operand& n);
+  void bitwise(Op op, const ldc::Operand& a, const ldc::Operand& b);
+  void abs_int(const ldc::Operand& a, const ldc::Operand& d);
+  void real_fn(Op op, const ldc::Operand& a, const ldc::Operand& d);
+  uint32_t area_addr(Area a, uint32_t n) const { return L_.addr(a, n); }
+  bool gated_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
+  bool gated_counter(const ldc::Instr& in, uint32_t cw, uint32_t cq);
+  void put_word(uint32_t a, int32_t v) { emit(M::Mov, {Dw(a), I(v)}); }
+  void put_flag(uint32_t a, int32_t v) { emit(M::Mov, {B(a), I(v)}); }
+  void unless_power(const std::string& l) { test_top(); jcc(Cond::E, l); }
+  void if_power(const std::string& l) { test_top(); jcc(Cond::NE, l); }
+  void if_flag(uint32_t a, bool set, const std::string& l) {
+    emit(M::Cmp, {B(a), I(0)});
+    jcc(set ? Cond::NE : Cond::E, l);
+  }
+  void restart_et(uint32_t tw) { emit(M::Mov, {Dw(tw), I(0)}); emit(M::Xor, {R(eax), R(eax)}); }
+  void et_below(const std::string& l) { emit(M::Cmp, {R(eax), R(ecx)}); jcc(Cond::L, l); }
+  void q_et(uint32_t tq, Rel rel);
+  void q_preset(uint32_t tq);
+  void tof_on(uint32_t tw, uint32_t tq, uint32_t ti) { put_flag(tq, 1); put_word(tw, 0); put_flag(ti, 1); }
+  void remember_input(uint32_t ti);
+  void count(const ldc::Instr& in, uint32_t cw, uint32_t cq);
+  void preset(const ldc::Operand& pt);
+  void advance(uint32_t tw);
   void advance_edx(uint32_t tw);
   void timer_gated(const ldc::Instr& in);
   void call_routine(as::x86::Routine r) {
@@ -266,7 +301,6 @@ class Gen {
     emit(M::Call, {L(std::string(as::x86::routineName(r)))});
   }
   void counter_gated(const ldc::Instr& in);
-  void flow(const ldc::Instr& in);
   void reset_masked(std::initializer_list<Operand> dwords, std::initializer_list<Operand> bytes);
   void end_skip(const std::string& skip) {
     if (!skip.empty()) label(skip);
@@ -305,19 +339,21 @@ static_assert([] {
 }(), "kX86Rels follows ops.def's REL table");
 constexpr const X86Rel& x86_rel(Rel r) { return kX86Rels[int(r)]; }
 
-void Gen::compare(const ldc::Instr& in) {
-  const ldc::Operand &a = in.a[0], &b = in.a[1];
-  const X86Rel& x = x86_rel(op_info(in.op).rel);
-  if (!a.is_real() && !b.is_real()) {
-    if (slots_) emit(M::Xor, {R(wide(slot(depth_))), R(wide(slot(depth_)))});  // no partial-register chain
-    load_int(a, eax);
-    emit(M::Cmp, {R(eax), int_src(b)});
-    if (slots_) return emit(makeCc(M::Setcc, x.int_cc, {R(slot(depth_))}));
-    emit(makeCc(M::Setcc, x.int_cc, {R(al)}));
-    return push_al();
-  }
-  load_real(a, xmm0);
-  load_real(b, xmm1);
+// push (a REL b), INT32
+void Gen::compare_ints(const ldc::Operand& a, const ldc::Operand& b, Rel rel) {
+  const X86Rel& x = x86_rel(rel);
+  if (slots_) emit(M::Xor, {R(wide(slot(depth_))), R(wide(slot(depth_)))});  // no partial-register chain
+  load_int(a, eax);
+  emit(M::Cmp, {R(eax), int_src(b)});
+  if (slots_) return emit(makeCc(M::Setcc, x.int_cc, {R(slot(depth_))}));
+  emit(makeCc(M::Setcc, x.int_cc, {R(al)}));
+  push_al();
+}
+
+// push (a REL b), REAL
+void Gen::compare_reals(const ldc::Operand& a, const ldc::Operand& b, Rel rel) {
+  const X86Rel& x = x86_rel(rel);
+  load_reals(a, b);
   if (x.swap) emit(M::Ucomiss, {R(xmm1), R(xmm0)});
   else emit(M::Ucomiss, {R(xmm0), R(xmm1)});
   emit(makeCc(M::Setcc, x.real_cc, {R(al)}));
@@ -328,151 +364,133 @@ void Gen::compare(const ldc::Instr& in) {
   push_al();
 }
 
-void Gen::move(const ldc::Instr& in) {
-  const ldc::Operand &a = in.a[0], &d = in.a[1];
-  std::string skip = skip_unless_power();
-  if (a.is_real()) {
-    if (d.kind == OpdKind::Real && a.kind == OpdKind::Real) {
-      emit(M::Mov, {R(eax), Dw(addr(a))});
-      if (gate_) gated_store(d);
-      else emit(M::Mov, {Dw(addr(d)), R(eax)});
-    } else if (d.kind == OpdKind::Real) {
-      store_imm(d, int32_t(float_bits(a.fval)));
-    } else {
-      load_real(a, xmm0);
-      store_real(d);
-    }
-  } else if (a.kind == OpdKind::ConstInt) {
-    store_imm(d, d.kind == OpdKind::Real ? int32_t(float_bits(int_to_real(a.ival))) : a.ival);
-  } else {
-    load_int(a, eax);
-    store_int(d);
-  }
-  end_skip(skip);
+// d = a, both REAL words
+void Gen::copy_word(const ldc::Operand& a, const ldc::Operand& d) {
+  emit(M::Mov, {R(eax), Dw(addr(a))});
+  if (gate_) gated_store(d);
+  else emit(M::Mov, {Dw(addr(d)), R(eax)});
 }
 
-void Gen::arith(const ldc::Instr& in) {
-  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
-  std::string skip = skip_unless_power();
-  if (a.is_real() || b.is_real()) {
-    load_real(a, xmm0);
-    load_real(b, xmm1);
-    M m = in.op == Op::ADD ? M::Addss : in.op == Op::SUB ? M::Subss : M::Mulss;
-    emit(m, {R(xmm0), R(xmm1)});
-    store_real(d);
-  } else {
-    load_int(a, eax);
-    if (in.op == Op::MUL) {
-      if (b.kind == OpdKind::ConstInt) emit(M::Imul, {R(eax), R(eax), I(b.ival)});
-      else emit(M::Imul, {R(eax), Dw(addr(b))});
-    } else {
-      emit(in.op == Op::ADD ? M::Add : M::Sub, {R(eax), int_src(b)});
-    }
-    store_int(d);
-  }
-  end_skip(skip);
+// d = a constant: its 32 bits, but a REAL one into a word is converted at run time
+void Gen::move_const(const ldc::Operand& a, const ldc::Operand& d) {
+  if (a.kind == OpdKind::ConstReal && d.kind != OpdKind::Real) return move_real_to_int(a, d);
+  if (a.kind == OpdKind::ConstReal) return store_imm(d, int32_t(float_bits(a.fval)));
+  store_imm(d, d.kind == OpdKind::Real ? int32_t(float_bits(int_to_real(a.ival))) : a.ival);
 }
 
-// DIV and MOD keep the `je skip` of -O0 at every level: a zero divisor sets S0.
-void Gen::divmod(const ldc::Instr& in) {
-  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
-  bool mod = in.op == Op::MOD;
-  Ungated ungated(gate_);
-  std::string skip = skip_unless_power();
-  if (!mod && (a.is_real() || b.is_real())) {
-    std::string divide = fresh(), err = fresh();
-    load_real(a, xmm0);
-    load_real(b, xmm1);
-    emit(M::Xorps, {R(xmm2), R(xmm2)});
-    emit(M::Ucomiss, {R(xmm1), R(xmm2)});
-    jcc(Cond::P, divide);  // NaN divisor: not zero
-    jcc(Cond::E, err);
-    label(divide);
-    emit(M::Divss, {R(xmm0), R(xmm1)});
-    store_real(d);
-    jmp(skip);
-    label(err);
-    set_error();
-    end_skip(skip);
-    return;
-  }
-  std::string err = fresh(), minus_one = fresh();
+void Gen::move_real_to_int(const ldc::Operand& a, const ldc::Operand& d) {
+  load_real(a, xmm0);
+  store_real(d);
+}
+
+// eax = a op b (ADD SUB MUL)
+void Gen::int_arith(Op op, const ldc::Operand& a, const ldc::Operand& b) {
   load_int(a, eax);
-  load_int(b, ecx);
-  emit(M::Test, {R(ecx), R(ecx)});
-  jcc(Cond::E, err);
-  emit(M::Cmp, {R(ecx), I(-1)});
-  jcc(Cond::E, minus_one);
+  if (op == Op::MUL) {
+    if (b.kind == OpdKind::ConstInt) emit(M::Imul, {R(eax), R(eax), I(b.ival)});
+    else emit(M::Imul, {R(eax), Dw(addr(b))});
+  } else {
+    emit(op == Op::ADD ? M::Add : M::Sub, {R(eax), int_src(b)});
+  }
+}
+
+void Gen::real_arith(Op op) {
+  emit(op == Op::ADD ? M::Addss : op == Op::SUB ? M::Subss : M::Mulss, {R(xmm0), R(xmm1)});
+}
+
+// DIV and MOD keep the `je skip` of -O0 at every level: a zero divisor sets
+// S0; so do the calls to the REAL function table: no call without power.
+Ungated Gen::ungated(const ldc::Instr& in) {
+  const OpInfo& i = op_info(in.op);
+  return Ungated(gate_, i.klass == OpClass::Arith || (i.klass == OpClass::Special && real_fn_info(i.fn).called));
+}
+
+DivLabels Gen::div_labels(bool real) {
+  DivLabels l;
+  if (real) {
+    l.divide = fresh();
+    l.err = fresh();
+  } else {
+    l.err = fresh();
+    l.minus_one = fresh();
+  }
+  return l;
+}
+
+void Gen::branch_zero_real(const DivLabels& l) {
+  emit(M::Xorps, {R(xmm2), R(xmm2)});
+  emit(M::Ucomiss, {R(xmm1), R(xmm2)});
+  jcc(Cond::P, l.divide);  // NaN divisor: not zero
+  jcc(Cond::E, l.err);
+  label(l.divide);
+}
+
+void Gen::divisor_branch(int32_t v, const std::string& l) {
+  if (v == 0) emit(M::Test, {R(ecx), R(ecx)});
+  else emit(M::Cmp, {R(ecx), I(v)});
+  jcc(Cond::E, l);
+}
+
+void Gen::divide_int(bool mod) {
   emit(M::Cdq, {});
   emit(M::Idiv, {R(ecx)});
   if (mod) emit(M::Mov, {R(eax), R(edx)});
-  store_int(d);
-  jmp(skip);
-  label(minus_one);  // x / -1 = -x (wrapping), x MOD -1 = 0; every branch goes forward
+}
+
+// every branch of DIV / MOD goes forward
+void Gen::minus_one_result(bool mod) {
   if (mod) emit(M::Xor, {R(eax), R(eax)});
   else emit(M::Neg, {R(eax)});
-  store_int(d);
-  jmp(skip);
-  label(err);
-  set_error();
-  end_skip(skip);
 }
 
-void Gen::logic(const ldc::Instr& in) {
-  const ldc::Operand& a = in.a[0];
-  std::string skip = skip_unless_power();
+void Gen::word_not(const ldc::Operand& a) {
   load_int(a, eax);
-  if (in.op == Op::WNOT) {
-    emit(M::Not, {R(eax)});
-    store_int(in.a[1]);
-  } else if (in.op == Op::SHL || in.op == Op::SHR) {
-    const ldc::Operand& n = in.a[1];
-    M m = in.op == Op::SHL ? M::Shl : M::Shr;
-    if (n.kind == OpdKind::ConstInt) {
-      if (n.ival < 0 || n.ival > 31) emit(M::Xor, {R(eax), R(eax)});
-      else if (n.ival > 0) emit(m, {R(eax), I(n.ival)});
-    } else if (gate_) {  // counts outside 0..31 (unsigned above 31) give 0
-      load_int(n, ecx);
-      emit(m, {R(eax), R(cl)});
-      emit(M::Xor, {R(edx), R(edx)});
-      emit(M::Cmp, {R(ecx), I(31)});
-      emit(makeCc(M::Cmovcc, Cond::A, {R(eax), R(edx)}));
-    } else {
-      std::string zero = fresh(), store = fresh();
-      load_int(n, ecx);
-      emit(M::Cmp, {R(ecx), I(31)});
-      jcc(Cond::A, zero);  // unsigned: negative counts too
-      emit(m, {R(eax), R(cl)});
-      jmp(store);
-      label(zero);
-      emit(M::Xor, {R(eax), R(eax)});
-      label(store);
-    }
-    store_int(in.a[2]);
-  } else {
-    M m = in.op == Op::WAND ? M::And : in.op == Op::WOR ? M::Or : M::Xor;
-    emit(m, {R(eax), int_src(in.a[1])});
-    store_int(in.a[2]);
-  }
-  end_skip(skip);
+  emit(M::Not, {R(eax)});
 }
 
-void Gen::special(const ldc::Instr& in) {
-  const ldc::Operand &a = in.a[0], &d = in.a[1];
-  const RealFn fn = op_info(in.op).fn;
-  // the calls to the REAL function table keep `je skip`: no call without power
-  Ungated ungated(gate_, real_fn_info(fn).called);
-  std::string skip = skip_unless_power();
-  if (real_fn_info(fn).ints && !a.is_real()) {  // ABS of an INT32
-    load_int(a, eax);
-    emit(M::Mov, {R(ecx), R(eax)});
-    emit(M::Sar, {R(ecx), I(31)});
-    emit(M::Xor, {R(eax), R(ecx)});
-    emit(M::Sub, {R(eax), R(ecx)});
-    store_int(d);
-    end_skip(skip);
-    return;
+// eax = a << n or a >> n (logical); counts outside 0..31 give 0
+void Gen::shift(Op op, const ldc::Operand& a, const ldc::Operand& n) {
+  load_int(a, eax);
+  M m = op == Op::SHL ? M::Shl : M::Shr;
+  if (n.kind == OpdKind::ConstInt) {
+    if (n.ival < 0 || n.ival > 31) emit(M::Xor, {R(eax), R(eax)});
+    else if (n.ival > 0) emit(m, {R(eax), I(n.ival)});
+  } else if (gate_) {  // unsigned above 31: negative counts too
+    load_int(n, ecx);
+    emit(m, {R(eax), R(cl)});
+    emit(M::Xor, {R(edx), R(edx)});
+    emit(M::Cmp, {R(ecx), I(31)});
+    emit(makeCc(M::Cmovcc, Cond::A, {R(eax), R(edx)}));
+  } else {
+    std::string zero = fresh(), store = fresh();
+    load_int(n, ecx);
+    emit(M::Cmp, {R(ecx), I(31)});
+    jcc(Cond::A, zero);  // unsigned: negative counts too
+    emit(m, {R(eax), R(cl)});
+    jump(store);
+    label(zero);
+    emit(M::Xor, {R(eax), R(eax)});
+    label(store);
   }
+}
+
+void Gen::bitwise(Op op, const ldc::Operand& a, const ldc::Operand& b) {
+  load_int(a, eax);
+  emit(op == Op::WAND ? M::And : op == Op::WOR ? M::Or : M::Xor, {R(eax), int_src(b)});
+}
+
+// ABS of an INT32
+void Gen::abs_int(const ldc::Operand& a, const ldc::Operand& d) {
+  load_int(a, eax);
+  emit(M::Mov, {R(ecx), R(eax)});
+  emit(M::Sar, {R(ecx), I(31)});
+  emit(M::Xor, {R(eax), R(ecx)});
+  emit(M::Sub, {R(eax), R(ecx)});
+  store_int(d);
+}
+
+void Gen::real_fn(Op op, const ldc::Operand& a, const ldc::Operand& d) {
+  const RealFn fn = op_info(op).fn;
   load_real(a, xmm0);
   if (real_fn_info(fn).called) {
     emit(M::Call, {Operand::m(mem_at(Size::Qword, uint32_t(call_slot_disp(fn))))});
@@ -486,11 +504,10 @@ void Gen::special(const ldc::Instr& in) {
     emit(M::Movd, {R(xmm0), R(eax)});
   }
   store_real(d);
-  end_skip(skip);
 }
 
 // ecx = timer preset, negative counted as 0
-void Gen::preset_ecx(const ldc::Operand& pt) {
+void Gen::preset(const ldc::Operand& pt) {
   if (pt.kind == OpdKind::ConstInt) {
     emit(M::Mov, {R(ecx), I(pt.ival < 0 ? 0 : pt.ival)});
     return;
@@ -502,7 +519,7 @@ void Gen::preset_ecx(const ldc::Operand& pt) {
 }
 
 // eax = advance(ET, dt, PT) (docs/il.md); ET at tw, PT in ecx; stores it too
-void Gen::advance_eax(uint32_t tw) {
+void Gen::advance(uint32_t tw) {
   advance_edx(tw);
   emit(M::Mov, {R(eax), R(edx)});
   emit(M::Mov, {Dw(tw), R(eax)});
@@ -552,97 +569,36 @@ void Gen::timer_gated(const ldc::Instr& in) {
   call_routine(in.op == Op::TON ? as::x86::Routine::Ton : in.op == Op::TOF ? as::x86::Routine::Tof : as::x86::Routine::Tp);
 }
 
-void Gen::timer(const ldc::Instr& in) {
-  uint32_t n = in.a[0].index;
-  uint32_t tw = L_.addr(Area::TW, n), tq = L_.addr(Area::TQ, n), ti = L_.addr(Area::TI, n);
-  if (in.op == Op::RSTT && gate_) return reset_masked({Dw(tw)}, {B(tq), B(ti)});
-  // the shared routines have ldc's own rules; MatIEC's timers stay inline
-  if (gate_ && (in.op == Op::TON || in.op == Op::TOF || in.op == Op::TP)) return timer_gated(in);
-  if (in.op == Op::RSTT) {
-    std::string skip = skip_unless_power();
-    emit(M::Mov, {Dw(tw), I(0)});
-    emit(M::Mov, {B(tq), I(0)});
-    emit(M::Mov, {B(ti), I(0)});
-    end_skip(skip);
-    return;
-  }
-  preset_ecx(in.a[1]);
-  if (in.op == Op::MTON || in.op == Op::MTOF || in.op == Op::MTP) return matiec_timer(in, tw, tq, ti);
-  std::string off = fresh(), done = fresh();
-  if (in.op == Op::TON) {
-    std::string running = fresh(), q = fresh();
-    test_top();
-    jcc(Cond::E, off);
-    emit(M::Cmp, {B(ti), I(0)});
-    jcc(Cond::NE, running);
-    emit(M::Mov, {Dw(tw), I(0)});  // rising scan: timing starts
-    emit(M::Xor, {R(eax), R(eax)});
-    jmp(q);
-    label(running);
-    advance_eax(tw);
-    label(q);
-    emit(M::Cmp, {R(eax), R(ecx)});
-    emit(makeCc(M::Setcc, Cond::GE, {R(al)}));
-    emit(M::Mov, {B(tq), R(al)});
-    emit(M::Mov, {B(ti), I(1)});
-    jmp(done);
-    label(off);
-    emit(M::Mov, {Dw(tw), I(0)});
-    emit(M::Mov, {B(tq), I(0)});
-    emit(M::Mov, {B(ti), I(0)});
-    label(done);
-  } else if (in.op == Op::TOF) {
-    std::string not_falling = fresh(), ti0 = fresh();
-    test_top();
-    jcc(Cond::E, off);
-    emit(M::Mov, {B(tq), I(1)});
-    emit(M::Mov, {Dw(tw), I(0)});
-    emit(M::Mov, {B(ti), I(1)});
-    jmp(done);
-    label(off);
-    emit(M::Cmp, {B(ti), I(0)});
-    jcc(Cond::E, not_falling);
-    emit(M::Mov, {Dw(tw), I(0)});  // falling scan: timing starts
-    emit(M::Test, {R(ecx), R(ecx)});
-    emit(makeCc(M::Setcc, Cond::G, {R(al)}));
-    emit(M::Mov, {B(tq), R(al)});
-    jmp(ti0);
-    label(not_falling);
-    emit(M::Cmp, {B(tq), I(0)});
-    jcc(Cond::E, ti0);
-    advance_eax(tw);
-    emit(M::Cmp, {R(eax), R(ecx)});
-    emit(makeCc(M::Setcc, Cond::L, {R(al)}));
-    emit(M::Mov, {B(tq), R(al)});
-    label(ti0);
-    emit(M::Mov, {B(ti), I(0)});
-    label(done);
-  } else {  // TP
-    std::string idle = fresh(), remember = fresh();
-    emit(M::Cmp, {B(tq), I(0)});
-    jcc(Cond::E, idle);
-    advance_eax(tw);
-    emit(M::Cmp, {R(eax), R(ecx)});
-    jcc(Cond::L, remember);
-    emit(M::Mov, {B(tq), I(0)});
-    jmp(remember);
-    label(idle);
-    test_top();
-    jcc(Cond::E, off);
-    emit(M::Cmp, {B(ti), I(0)});
-    jcc(Cond::NE, remember);
-    emit(M::Test, {R(ecx), R(ecx)});  // rising scan: the pulse starts
-    emit(makeCc(M::Setcc, Cond::G, {R(al)}));
-    emit(M::Mov, {B(tq), R(al)});
-    emit(M::Mov, {Dw(tw), I(0)});
-    jmp(remember);
-    label(off);
-    emit(M::Mov, {Dw(tw), I(0)});
-    label(remember);
-    if (slots_) emit(M::Mov, {B(ti), R(top8())});
-    else { top_to_eax(); emit(M::Mov, {B(ti), R(al)}); }
-  }
+// -O2: RSTT gated by a mask, TON TOF TP by the shared routines (they have
+// ldc's own rules; MatIEC's timers stay inline)
+bool Gen::gated_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti) {
+  if (!gate_) return false;
+  if (in.op == Op::RSTT) reset_masked({Dw(tw)}, {B(tq), B(ti)});
+  else if (in.op == Op::TON || in.op == Op::TOF || in.op == Op::TP) timer_gated(in);
+  else return false;
+  return true;
 }
+
+// tq = (eax rel ecx): Q from ET and PT
+void Gen::q_et(uint32_t tq, Rel rel) {
+  emit(M::Cmp, {R(eax), R(ecx)});
+  emit(makeCc(M::Setcc, x86_rel(rel).int_cc, {R(al)}));
+  emit(M::Mov, {B(tq), R(al)});
+}
+
+// tq = (ecx > 0): Q when a timing starts
+void Gen::q_preset(uint32_t tq) {
+  emit(M::Test, {R(ecx), R(ecx)});
+  emit(makeCc(M::Setcc, Cond::G, {R(al)}));
+  emit(M::Mov, {B(tq), R(al)});
+}
+
+// ti = the top (IN, for the next scan's edge)
+void Gen::remember_input(uint32_t ti) {
+  if (slots_) emit(M::Mov, {B(ti), R(top8())});
+  else { top_to_eax(); emit(M::Mov, {B(ti), R(al)}); }
+}
+
 
 // -O2 counters: the rising edge here (the edge slot is not in the routine's
 // reach), then the shared routine with the counter number in edx, the preset
@@ -660,80 +616,17 @@ void Gen::counter_gated(const ldc::Instr& in) {
   call_routine(up ? as::x86::Routine::Ctu : as::x86::Routine::Ctd);
 }
 
-// MTON MTOF MTP (docs/il.md, "MatIEC timers"); the preset is in ECX.
-void Gen::matiec_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti) {
-  std::string remember = fresh();
-  if (in.op == Op::MTON) {
-    std::string reset = fresh();
-    test_top();
-    jcc(Cond::E, reset);
-    emit(M::Cmp, {B(ti), I(0)});
-    jcc(Cond::E, reset);  // rising scan: timing starts
-    emit(M::Cmp, {B(tq), I(0)});
-    jcc(Cond::NE, remember);  // done: holds while IN stays on
-    advance_eax(tw);
-    emit(M::Cmp, {R(eax), R(ecx)});
-    emit(makeCc(M::Setcc, Cond::GE, {R(al)}));
-    emit(M::Mov, {B(tq), R(al)});
-    jmp(remember);
-    label(reset);
-    emit(M::Mov, {Dw(tw), I(0)});
-    emit(M::Mov, {B(tq), I(0)});
-  } else if (in.op == Op::MTOF) {
-    std::string on = fresh();
-    test_top();
-    jcc(Cond::NE, on);
-    emit(M::Cmp, {B(ti), I(0)});
-    jcc(Cond::NE, on);  // falling scan: Q stays on
-    emit(M::Cmp, {B(tq), I(0)});
-    jcc(Cond::E, remember);
-    advance_eax(tw);
-    emit(M::Cmp, {R(eax), R(ecx)});
-    emit(makeCc(M::Setcc, Cond::L, {R(al)}));
-    emit(M::Mov, {B(tq), R(al)});
-    jmp(remember);
-    label(on);
-    emit(M::Mov, {B(tq), I(1)});
-    emit(M::Mov, {Dw(tw), I(0)});
-  } else {  // MTP
-    std::string idle = fresh(), check = fresh();
-    emit(M::Cmp, {B(tq), I(0)});
-    jcc(Cond::E, idle);
-    advance_eax(tw);
-    emit(M::Cmp, {R(eax), R(ecx)});
-    jcc(Cond::L, remember);
-    emit(M::Mov, {B(tq), I(0)});  // the pulse ends
-    jmp(check);
-    label(idle);
-    test_top();
-    jcc(Cond::E, check);
-    emit(M::Cmp, {B(ti), I(0)});
-    jcc(Cond::NE, remember);
-    emit(M::Mov, {B(tq), I(1)});  // rising scan: the pulse starts
-    emit(M::Mov, {Dw(tw), I(0)});
-    jmp(remember);
-    label(check);  // Q is off: ET = 0 unless IN is on
-    test_top();
-    jcc(Cond::NE, remember);
-    emit(M::Mov, {Dw(tw), I(0)});
-  }
-  label(remember);
-  if (slots_) emit(M::Mov, {B(ti), R(top8())});
-  else { top_to_eax(); emit(M::Mov, {B(ti), R(al)}); }
+// -O2: RSTC gated by a mask, CTU CTD by the shared routines
+bool Gen::gated_counter(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
+  if (!gate_) return false;
+  if (in.op == Op::RSTC) reset_masked({Dw(cw)}, {B(cq)});
+  else counter_gated(in);
+  return true;
 }
 
-void Gen::counter(const ldc::Instr& in) {
-  uint32_t n = in.a[0].index;
-  uint32_t cw = L_.addr(Area::CW, n), cq = L_.addr(Area::CQ, n);
-  if (in.op == Op::RSTC && gate_) return reset_masked({Dw(cw)}, {B(cq)});
-  if (gate_) return counter_gated(in);
-  if (in.op == Op::RSTC) {
-    std::string skip = skip_unless_power();
-    emit(M::Mov, {Dw(cw), I(0)});
-    emit(M::Mov, {B(cq), I(0)});
-    end_skip(skip);
-    return;
-  }
+
+// CTU / CTD without -O2: the rising edge of the input, then CV and Q
+void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
   bool up = in.op == Op::CTU;
   uint32_t e = addr(in.a[2]);
   std::string q = fresh();

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstring>
 #include <map>
+#include <optional>
 #include <stdexcept>
 
 #include "ir/codegen.h"
@@ -165,7 +166,7 @@ constexpr int kNumSlots = 8;
 // ending it are computed in R0 instead of the shift register R10.
 enum class Fuse : uint8_t { None, Start, Contact, Push, Combine };
 
-class Gen {
+class Gen : public ClassGen<Gen> {
  public:
   // opt: the -O level; slots: this rung keeps its stack in kSlots (-O2)
   Gen(const C40Layout& w, std::vector<Item>& items, int& next_label, int opt, bool slots)
@@ -191,6 +192,7 @@ class Gen {
   int depth_ = 0;              // stack positions in use before the current instruction (-O2)
   int z_of_ = -1;              // register whose value the Z flag reflects (-1: none)
   bool r0_top_ = false;        // R0 holds the top of the stack, 0 or 1 (-O1)
+  std::optional<int32_t> r0_value_;  // R0's constant, as r0_value loaded it (within one IL instruction)
   bool group_open_ = false;    // a power test's branch to group_ is pending (-O1)
   std::string group_;
   std::vector<Fuse> fuse_;     // per IL instruction of the rung (-O1)
@@ -214,6 +216,7 @@ class Gen {
     bool direct = false;
     for (unsigned k = 0; k < i.numOperands; k++) direct |= i.ops[k].kind == OperandKind::Direct;
     if (writes_reg(i, r0) || writes_reg(i, Reg::R10)) r0_top_ = false;
+    if (writes_reg(i, r0)) r0_value_.reset();
     if (i.mnemonic != M::Sti && i.mnemonic != M::Stf) z_of_ = -1;  // stores leave the flags alone
     if (direct && page_ != kDataPage) {
       items_.push_back(Item::instr(make(M::Ldpk, {I(page_)})));
@@ -237,6 +240,7 @@ class Gen {
     items_.push_back(Item::labelDef(l));
     z_of_ = -1;
     r0_top_ = false;
+    r0_value_.reset();
   }
   std::string fresh() { return "L" + std::to_string(next_label_++); }
   void branch(Cond c, const std::string& l) { opc(M::Bc, c, {L(l)}); }
@@ -400,17 +404,54 @@ class Gen {
     op(M::Addi, {R(r2), R(r0)});
   }
 
-  void compare(const ldc::Instr& in);
-  void move(const ldc::Instr& in);
-  void arith(const ldc::Instr& in);
-  void divmod(const ldc::Instr& in);
-  void logic(const ldc::Instr& in);
-  void special(const ldc::Instr& in);
-  void timer(const ldc::Instr& in);
-  void matiec_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
-  void counter(const ldc::Instr& in);
-  void preset_r1(const ldc::Operand& pt);
-  void advance_r2(uint32_t tw);
+  // ClassGen's primitives
+  friend class ClassGen<Gen>;
+  void end_skip(const std::string& skip) { label(skip); }
+  int ungated(const ldc::Instr&) { return 0; }  // no gated stores to turn off
+  void load_int(const ldc::Operand& a) { load_int(a, r0); }
+  void load_ints(const ldc::Operand& a, const ldc::Operand& b) { load_int(a, r0); load_int(b, r1); }
+  void load_reals(const ldc::Operand& a, const ldc::Operand& b) { load_real(a, r0); load_real(b, r1); }
+  void prepare_push();
+  void push_cond(Rel rel);
+  void compare_ints(const ldc::Operand& a, const ldc::Operand& b, Rel rel);
+  void compare_reals(const ldc::Operand& a, const ldc::Operand& b, Rel rel);
+  void copy_word(const ldc::Operand& a, const ldc::Operand& d);
+  void move_const(const ldc::Operand& a, const ldc::Operand& d);
+  void move_real_to_int(const ldc::Operand& a, const ldc::Operand& d);
+  void int_arith(Op o, const ldc::Operand& a, const ldc::Operand& b);
+  void real_arith(Op o);
+  DivLabels div_labels(bool real);
+  void branch_zero_real(const DivLabels& l);
+  void divide_real() { op(M::Call, {L(kDivfLabel)}); }  // R0 = a / b
+  void divisor_branch(int32_t v, const std::string& l);
+  void divide_int(bool mod);
+  void minus_one_result(bool mod);
+  void word_not(const ldc::Operand& a) { op(M::Not, {int_src(a, true, r0), R(r0)}); }
+  void shift(Op o, const ldc::Operand& a, const ldc::Operand& n);
+  void bitwise(Op o, const ldc::Operand& a, const ldc::Operand& b);
+  void abs_int(const ldc::Operand& a, const ldc::Operand& d);
+  void real_fn(Op o, const ldc::Operand& a, const ldc::Operand& d);
+  uint32_t area_addr(Area a, uint32_t n) const { return W_.addr(a, n); }
+  bool gated_timer(const ldc::Instr&, uint32_t, uint32_t, uint32_t) { return false; }
+  bool gated_counter(const ldc::Instr&, uint32_t, uint32_t) { return false; }
+  void r0_value(int32_t v);
+  void put_word(uint32_t a, int32_t v) { r0_value(v); op(M::Sti, {R(r0), D(a)}); }
+  void put_flag(uint32_t a, int32_t v) { put_word(a, v); }
+  void unless_power(const std::string& l) { test_top(); branch(Cond::EQ, l); }
+  void if_power(const std::string& l) { test_top(); branch(Cond::NE, l); }
+  void if_flag(uint32_t a, bool set, const std::string& l) {
+    op(M::Ldi, {D(a), R(r0)});
+    branch(set ? Cond::NE : Cond::EQ, l);
+  }
+  void restart_et(uint32_t tw) { op(M::Ldi, {I(0), R(r2)}); op(M::Sti, {R(r2), D(tw)}); }
+  void et_below(const std::string& l) { op(M::Cmpi, {R(r1), R(r2)}); branch(Cond::LT, l); }
+  void q_et(uint32_t tq, Rel rel);
+  void q_preset(uint32_t tq);
+  void tof_on(uint32_t tw, uint32_t tq, uint32_t ti) { put_flag(tq, 1); put_flag(ti, 1); put_word(tw, 0); }
+  void remember_input(uint32_t ti);
+  void count(const ldc::Instr& in, uint32_t cw, uint32_t cq);
+  void preset(const ldc::Operand& pt);
+  void advance(uint32_t tw);
   void bit_slots(const ldc::Instr& in);
   bool bit_fused(const ldc::Instr& in, Fuse f);
   void basic(const ldc::Instr& in);
@@ -426,154 +467,131 @@ static_assert(sizeof kRelConds / sizeof kRelConds[0] == size_t(Rel::None));
 Cond cond_of(Rel r) { return kRelConds[int(r)]; }
 
 // push (a op b): the push is prepared in R2 (R10 << 1 | 1) and taken with LDIcond.
-void Gen::compare(const ldc::Instr& in) {
-  const ldc::Operand &a = in.a[0], &b = in.a[1];
-  Cond c = cond_of(op_info(in.op).rel);
-  Reg d = slot(depth_);
-  auto prepare = [&] {
-    if (slots_) return op(M::Ldi, {I(0), R(d)});  // -O2: 0, or 1 if the condition holds
-    op(M::Lsh, {I(1), R(r10)});
-    op(M::Or3, {I(1), R(r10), R(r2)});
-  };
-  if (!a.is_real() && !b.is_real()) {
-    load_int(a, r0);
-    prepare();
-    op(M::Cmpi, {int_src(b, false, r1), R(r0)});
-  } else {
-    load_real(a, r0);
-    load_real(b, r1);
-    prepare();
-    op(M::Cmpf, {R(r1), R(r0)});
-  }
-  if (slots_) opc(M::Ldic, c, {I(1), R(d)});
-  else opc(M::Ldic, c, {R(r2), R(r10)});
+void Gen::prepare_push() {
+  if (slots_) return op(M::Ldi, {I(0), R(slot(depth_))});  // -O2: 0, or 1 if the condition holds
+  op(M::Lsh, {I(1), R(r10)});
+  op(M::Or3, {I(1), R(r10), R(r2)});
 }
 
-void Gen::move(const ldc::Instr& in) {
-  const ldc::Operand &a = in.a[0], &d = in.a[1];
-  std::string skip = skip_unless_power();
+void Gen::push_cond(Rel rel) {
+  if (slots_) opc(M::Ldic, cond_of(rel), {I(1), R(slot(depth_))});
+  else opc(M::Ldic, cond_of(rel), {R(r2), R(r10)});
+}
+
+void Gen::compare_ints(const ldc::Operand& a, const ldc::Operand& b, Rel rel) {
+  load_int(a, r0);
+  prepare_push();
+  op(M::Cmpi, {int_src(b, false, r1), R(r0)});
+  push_cond(rel);
+}
+
+void Gen::compare_reals(const ldc::Operand& a, const ldc::Operand& b, Rel rel) {
+  load_reals(a, b);
+  prepare_push();
+  op(M::Cmpf, {R(r1), R(r0)});
+  push_cond(rel);
+}
+
+// d = a, both REAL words: the IEEE word, exactly
+void Gen::copy_word(const ldc::Operand& a, const ldc::Operand& d) {
+  op(M::Ldi, {Dv(a), R(r0)});
+  op(M::Sti, {R(r0), Dv(d)});
+}
+
+// d = a constant, converted at compile time (an INT32 into F: FLOAT then TOIEEE, folded)
+void Gen::move_const(const ldc::Operand& a, const ldc::Operand& d) {
   bool dreal = d.kind == OpdKind::Real;
-  if (a.kind == OpdKind::Real && dreal) {  // REAL -> REAL: the IEEE word, exactly
-    op(M::Ldi, {Dv(a), R(r0)});
-    op(M::Sti, {R(r0), Dv(d)});
-  } else if (a.kind == OpdKind::ConstReal && dreal) {
-    store_word(float_bits(a.fval), d);
-  } else if (a.kind == OpdKind::ConstInt && dreal) {  // FLOAT then TOIEEE, folded
-    store_word(real_to_ieee(real_from_int(a.ival)), d);
-  } else if (is_const(a)) {
-    store_word(uint32_t(const_int(a)), d);
-  } else if (a.kind == OpdKind::Real) {
-    load_int(a, r1);  // FRIEEE and the truncation
-    op(M::Sti, {R(r1), Dv(d)});
-  } else {
-    load_int(a, r0);
-    store_int(d);
-  }
-  label(skip);
+  if (a.kind == OpdKind::ConstReal && dreal) store_word(float_bits(a.fval), d);
+  else if (a.kind == OpdKind::ConstInt && dreal) store_word(real_to_ieee(real_from_int(a.ival)), d);
+  else store_word(uint32_t(const_int(a)), d);
 }
 
-void Gen::arith(const ldc::Instr& in) {
-  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
-  std::string skip = skip_unless_power();
-  if (a.is_real() || b.is_real()) {
-    load_real(a, r0);
-    load_real(b, r1);
-    op(in.op == Op::ADD ? M::Addf : in.op == Op::SUB ? M::Subf : M::Mpyf, {R(r1), R(r0)});
-    store_real(d);
-  } else if (in.op == Op::MUL) {
-    load_int(a, r0);
-    load_int(b, r1);
-    mul32();
-    store_int(d);
-  } else {
-    load_int(a, r0);
-    op(in.op == Op::ADD ? M::Addi : M::Subi, {int_src(b, false, r1), R(r0)});
-    store_int(d);
-  }
-  label(skip);
+void Gen::move_real_to_int(const ldc::Operand& a, const ldc::Operand& d) {
+  load_int(a, r1);  // FRIEEE and the truncation
+  op(M::Sti, {R(r1), Dv(d)});
 }
 
-void Gen::divmod(const ldc::Instr& in) {
-  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
-  bool mod = in.op == Op::MOD;
-  std::string skip = skip_unless_power(), err = fresh();
-  if (!mod && (a.is_real() || b.is_real())) {
-    load_real(a, r0);
-    load_real(b, r1);
-    op(M::Cmpf, {F(0.0), R(r1)});
-    branch(Cond::EQ, err);
-    op(M::Call, {L(kDivfLabel)});  // R0 = a / b
-    store_real(d);
-    jump(skip);
+// R0 = a op b (ADD SUB MUL)
+void Gen::int_arith(Op o, const ldc::Operand& a, const ldc::Operand& b) {
+  if (o == Op::MUL) {
+    load_ints(a, b);
+    return mul32();
+  }
+  load_int(a, r0);
+  op(o == Op::ADD ? M::Addi : M::Subi, {int_src(b, false, r1), R(r0)});
+}
+
+void Gen::real_arith(Op o) { op(o == Op::ADD ? M::Addf : o == Op::SUB ? M::Subf : M::Mpyf, {R(r1), R(r0)}); }
+
+DivLabels Gen::div_labels(bool real) {
+  DivLabels l;
+  l.err = fresh();
+  if (!real) {
+    l.minus_one = fresh();
+    l.store = fresh();
+  }
+  return l;
+}
+
+void Gen::branch_zero_real(const DivLabels& l) {
+  op(M::Cmpf, {F(0.0), R(r1)});
+  branch(Cond::EQ, l.err);
+}
+
+void Gen::divisor_branch(int32_t v, const std::string& l) {
+  op(M::Cmpi, {I(v), R(r1)});
+  branch(Cond::EQ, l);
+}
+
+void Gen::divide_int(bool mod) {
+  op(M::Call, {L(kDivLabel)});  // R0 = quotient, R1 = remainder
+  if (mod) op(M::Ldi, {R(r1), R(r0)});
+}
+
+void Gen::minus_one_result(bool mod) {
+  if (mod) op(M::Ldi, {I(0), R(r0)});
+  else op(M::Negi, {R(r0), R(r0)});
+}
+
+void Gen::shift(Op o, const ldc::Operand& a, const ldc::Operand& n) {
+  load_int(a, r0);
+  if (is_const(n)) {
+    int32_t c = const_int(n);
+    if (c < 0 || c > 31) op(M::Ldi, {I(0), R(r0)});
+    else if (c > 0) op(M::Lsh, {I(o == Op::SHL ? c : -c), R(r0)});
+    return;
+  }
+  load_int(n, r1);
+  if (o == Op::SHR) {
+    op(M::Negi, {R(r1), R(r2)});
+    op(M::Lsh3, {R(r2), R(r0), R(r0)});
   } else {
-    std::string minus_one = fresh(), store = fresh();
-    load_int(a, r0);
-    load_int(b, r1);
-    op(M::Cmpi, {I(0), R(r1)});
-    branch(Cond::EQ, err);
-    op(M::Cmpi, {I(-1), R(r1)});
-    branch(Cond::EQ, minus_one);
-    op(M::Call, {L(kDivLabel)});  // R0 = quotient, R1 = remainder
-    if (mod) op(M::Ldi, {R(r1), R(r0)});
-    label(store);
+    op(M::Lsh3, {R(r1), R(r0), R(r0)});
+  }
+  op(M::Cmpi, {I(31), R(r1)});
+  opc(M::Ldic, Cond::HI, {I(0), R(r0)});  // unsigned: negative counts too
+}
+
+void Gen::bitwise(Op o, const ldc::Operand& a, const ldc::Operand& b) {
+  load_int(a, r0);
+  M m = o == Op::WAND ? M::And : o == Op::WOR ? M::Or : M::Xor;
+  op(m, {int_src(b, true, r1), R(r0)});
+}
+
+// ABS of an INT32 (INT32_MIN stays)
+void Gen::abs_int(const ldc::Operand& a, const ldc::Operand& d) {
+  if (a.kind == OpdKind::ConstInt) {
+    int32_t v = a.ival == INT32_MIN ? INT32_MIN : (a.ival < 0 ? -a.ival : a.ival);
+    if (d.kind == OpdKind::Real) store_word(real_to_ieee(real_from_int(v)), d);
+    else store_word(uint32_t(v), d);
+  } else {
+    op(M::Absi, {Dv(a), R(r0)});
     store_int(d);
-    jump(skip);
-    label(minus_one);  // x / -1 = -x (wrapping), x MOD -1 = 0
-    if (mod) op(M::Ldi, {I(0), R(r0)});
-    else op(M::Negi, {R(r0), R(r0)});
-    jump(store);
   }
-  label(err);
-  set_error();
-  label(skip);
 }
 
-void Gen::logic(const ldc::Instr& in) {
-  std::string skip = skip_unless_power();
-  if (in.op == Op::WNOT) {
-    op(M::Not, {int_src(in.a[0], true, r0), R(r0)});
-    store_int(in.a[1]);
-  } else if (in.op == Op::SHL || in.op == Op::SHR) {
-    const ldc::Operand& n = in.a[1];
-    load_int(in.a[0], r0);
-    if (is_const(n)) {
-      int32_t c = const_int(n);
-      if (c < 0 || c > 31) op(M::Ldi, {I(0), R(r0)});
-      else if (c > 0) op(M::Lsh, {I(in.op == Op::SHL ? c : -c), R(r0)});
-    } else {
-      load_int(n, r1);
-      if (in.op == Op::SHR) {
-        op(M::Negi, {R(r1), R(r2)});
-        op(M::Lsh3, {R(r2), R(r0), R(r0)});
-      } else {
-        op(M::Lsh3, {R(r1), R(r0), R(r0)});
-      }
-      op(M::Cmpi, {I(31), R(r1)});
-      opc(M::Ldic, Cond::HI, {I(0), R(r0)});  // unsigned: negative counts too
-    }
-    store_int(in.a[2]);
-  } else {
-    load_int(in.a[0], r0);
-    M m = in.op == Op::WAND ? M::And : in.op == Op::WOR ? M::Or : M::Xor;
-    op(m, {int_src(in.a[1], true, r1), R(r0)});
-    store_int(in.a[2]);
-  }
-  label(skip);
-}
-
-void Gen::special(const ldc::Instr& in) {
-  const ldc::Operand &a = in.a[0], &d = in.a[1];
-  std::string skip = skip_unless_power();
-  if (in.op == Op::ABS && !a.is_real()) {
-    if (a.kind == OpdKind::ConstInt) {
-      int32_t v = a.ival == INT32_MIN ? INT32_MIN : (a.ival < 0 ? -a.ival : a.ival);
-      if (d.kind == OpdKind::Real) store_word(real_to_ieee(real_from_int(v)), d);
-      else store_word(uint32_t(v), d);
-    } else {
-      op(M::Absi, {Dv(a), R(r0)});
-      store_int(d);
-    }
-  } else if (in.op == Op::ABS && d.kind == OpdKind::Real) {  // fabsf: the IEEE sign bit cleared
+void Gen::real_fn(Op o, const ldc::Operand& a, const ldc::Operand& d) {
+  if (o == Op::ABS && d.kind == OpdKind::Real) {  // fabsf: the IEEE sign bit cleared
     if (a.kind == OpdKind::ConstReal) {
       store_word(float_bits(a.fval) & 0x7FFFFFFFu, d);
     } else {
@@ -582,7 +600,7 @@ void Gen::special(const ldc::Instr& in) {
       op(M::Lsh, {I(-1), R(r0)});
       op(M::Sti, {R(r0), Dv(d)});
     }
-  } else if (in.op == Op::ABS) {  // REAL -> INT32
+  } else if (o == Op::ABS) {  // REAL -> INT32
     if (a.kind == OpdKind::ConstReal) {
       store_word(uint32_t(real_to_int32(fp::abs(real_from_ieee(float_bits(a.fval))).v)), d);
     } else {
@@ -592,14 +610,13 @@ void Gen::special(const ldc::Instr& in) {
     }
   } else {
     load_real(a, r0);
-    op(M::Call, {A(rom_entry(rom_of(op_info(in.op).fn)))});
+    op(M::Call, {A(rom_entry(rom_of(op_info(o).fn)))});
     store_real(d);
   }
-  label(skip);
 }
 
 // R1 = timer preset, a negative one counted as 0
-void Gen::preset_r1(const ldc::Operand& pt) {
+void Gen::preset(const ldc::Operand& pt) {
   if (is_const(pt)) return load_imm32(std::max(const_int(pt), 0), r1);
   load_int(pt, r1);
   opc(M::Ldic, Cond::LT, {I(0), R(r1)});
@@ -607,7 +624,7 @@ void Gen::preset_r1(const ldc::Operand& pt) {
 
 // R2 = advance(ET, dt, PT) (docs/il.md) with ET at tw, PT in R1; stored too.
 // Uses R0.  ADDI sets V when ET + dt overflows (dt is never negative).
-void Gen::advance_r2(uint32_t tw) {
+void Gen::advance(uint32_t tw) {
   op(M::Ldi, {D(tw), R(r0)});
   op(M::Ldi, {R(r0), R(r2)});
   op(M::Addi, {D(W_.addr(Area::Sys, kSysDtWord)), R(r2)});
@@ -619,179 +636,32 @@ void Gen::advance_r2(uint32_t tw) {
   op(M::Sti, {R(r2), D(tw)});
 }
 
-void Gen::timer(const ldc::Instr& in) {
-  uint32_t n = in.a[0].index;
-  uint32_t tw = W_.addr(Area::TW, n), tq = W_.addr(Area::TQ, n), ti = W_.addr(Area::TI, n);
-  if (in.op == Op::RSTT) {
-    std::string skip = skip_unless_power();
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Sti, {R(r0), D(tw)});
-    op(M::Sti, {R(r0), D(tq)});
-    op(M::Sti, {R(r0), D(ti)});
-    label(skip);
-    return;
-  }
-  preset_r1(in.a[1]);
-  if (in.op == Op::MTON || in.op == Op::MTOF || in.op == Op::MTP) return matiec_timer(in, tw, tq, ti);
-  std::string off = fresh(), done = fresh();
-  if (in.op == Op::TON) {
-    std::string running = fresh(), q = fresh();
-    test_top();
-    branch(Cond::EQ, off);
-    op(M::Ldi, {D(ti), R(r0)});
-    branch(Cond::NE, running);
-    op(M::Ldi, {I(0), R(r2)});  // rising scan: timing starts
-    op(M::Sti, {R(r2), D(tw)});
-    jump(q);
-    label(running);
-    advance_r2(tw);
-    label(q);
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Cmpi, {R(r1), R(r2)});
-    opc(M::Ldic, Cond::GE, {I(1), R(r0)});
-    op(M::Sti, {R(r0), D(tq)});
-    op(M::Ldi, {I(1), R(r0)});
-    op(M::Sti, {R(r0), D(ti)});
-    jump(done);
-    label(off);
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Sti, {R(r0), D(tw)});
-    op(M::Sti, {R(r0), D(tq)});
-    op(M::Sti, {R(r0), D(ti)});
-    label(done);
-  } else if (in.op == Op::TOF) {
-    std::string not_falling = fresh(), ti0 = fresh();
-    test_top();
-    branch(Cond::EQ, off);
-    op(M::Ldi, {I(1), R(r0)});
-    op(M::Sti, {R(r0), D(tq)});
-    op(M::Sti, {R(r0), D(ti)});
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Sti, {R(r0), D(tw)});
-    jump(done);
-    label(off);
-    op(M::Ldi, {D(ti), R(r0)});
-    branch(Cond::EQ, not_falling);
-    op(M::Ldi, {I(0), R(r0)});  // falling scan: timing starts
-    op(M::Sti, {R(r0), D(tw)});
-    op(M::Cmpi, {I(0), R(r1)});
-    opc(M::Ldic, Cond::GT, {I(1), R(r0)});
-    op(M::Sti, {R(r0), D(tq)});
-    jump(ti0);
-    label(not_falling);
-    op(M::Ldi, {D(tq), R(r0)});
-    branch(Cond::EQ, ti0);
-    advance_r2(tw);
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Cmpi, {R(r1), R(r2)});
-    opc(M::Ldic, Cond::LT, {I(1), R(r0)});
-    op(M::Sti, {R(r0), D(tq)});
-    label(ti0);
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Sti, {R(r0), D(ti)});
-    label(done);
-  } else {  // TP
-    std::string idle = fresh(), remember = fresh();
-    op(M::Ldi, {D(tq), R(r0)});
-    branch(Cond::EQ, idle);
-    advance_r2(tw);
-    op(M::Cmpi, {R(r1), R(r2)});
-    branch(Cond::LT, remember);
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Sti, {R(r0), D(tq)});
-    jump(remember);
-    label(idle);
-    test_top();
-    branch(Cond::EQ, off);
-    op(M::Ldi, {D(ti), R(r0)});
-    branch(Cond::NE, remember);
-    op(M::Ldi, {I(0), R(r0)});  // rising scan: the pulse starts
-    op(M::Cmpi, {I(0), R(r1)});
-    opc(M::Ldic, Cond::GT, {I(1), R(r0)});
-    op(M::Sti, {R(r0), D(tq)});
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Sti, {R(r0), D(tw)});
-    jump(remember);
-    label(off);
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Sti, {R(r0), D(tw)});
-    label(remember);
-    if (slots_) {
-      op(M::Sti, {R(top()), D(ti)});
-    } else {
-      top_to(r0);
-      op(M::Sti, {R(r0), D(ti)});
-    }
-  }
+// R0 = v, unless it holds v already (put_word, put_flag and the Q settings of
+// one timer or counter share it)
+void Gen::r0_value(int32_t v) {
+  if (r0_value_ == v) return;
+  op(M::Ldi, {I(v), R(r0)});
+  r0_value_ = v;
 }
 
-// MTON MTOF MTP (docs/il.md, "MatIEC timers"); the preset is in R1.
-void Gen::matiec_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti) {
-  std::string remember = fresh();
-  if (in.op == Op::MTON) {
-    std::string reset = fresh();
-    test_top();
-    branch(Cond::EQ, reset);
-    op(M::Ldi, {D(ti), R(r0)});
-    branch(Cond::EQ, reset);  // rising scan: timing starts
-    op(M::Ldi, {D(tq), R(r0)});
-    branch(Cond::NE, remember);  // done: holds while IN stays on
-    advance_r2(tw);
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Cmpi, {R(r1), R(r2)});
-    opc(M::Ldic, Cond::GE, {I(1), R(r0)});
-    op(M::Sti, {R(r0), D(tq)});
-    jump(remember);
-    label(reset);
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Sti, {R(r0), D(tw)});
-    op(M::Sti, {R(r0), D(tq)});
-  } else if (in.op == Op::MTOF) {
-    std::string on = fresh();
-    test_top();
-    branch(Cond::NE, on);
-    op(M::Ldi, {D(ti), R(r0)});
-    branch(Cond::NE, on);  // falling scan: Q stays on
-    op(M::Ldi, {D(tq), R(r0)});
-    branch(Cond::EQ, remember);
-    advance_r2(tw);
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Cmpi, {R(r1), R(r2)});
-    opc(M::Ldic, Cond::LT, {I(1), R(r0)});
-    op(M::Sti, {R(r0), D(tq)});
-    jump(remember);
-    label(on);
-    op(M::Ldi, {I(1), R(r0)});
-    op(M::Sti, {R(r0), D(tq)});
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Sti, {R(r0), D(tw)});
-  } else {  // MTP
-    std::string idle = fresh(), check = fresh();
-    op(M::Ldi, {D(tq), R(r0)});
-    branch(Cond::EQ, idle);
-    advance_r2(tw);
-    op(M::Cmpi, {R(r1), R(r2)});
-    branch(Cond::LT, remember);
-    op(M::Ldi, {I(0), R(r0)});  // the pulse ends
-    op(M::Sti, {R(r0), D(tq)});
-    jump(check);
-    label(idle);
-    test_top();
-    branch(Cond::EQ, check);
-    op(M::Ldi, {D(ti), R(r0)});
-    branch(Cond::NE, remember);
-    op(M::Ldi, {I(1), R(r0)});  // rising scan: the pulse starts
-    op(M::Sti, {R(r0), D(tq)});
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Sti, {R(r0), D(tw)});
-    jump(remember);
-    label(check);  // Q is off: ET = 0 unless IN is on
-    test_top();
-    branch(Cond::NE, remember);
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Sti, {R(r0), D(tw)});
-  }
-  label(remember);
+// tq = (R2 rel R1): Q from ET and PT
+void Gen::q_et(uint32_t tq, Rel rel) {
+  r0_value(0);
+  op(M::Cmpi, {R(r1), R(r2)});
+  opc(M::Ldic, cond_of(rel), {I(1), R(r0)});
+  op(M::Sti, {R(r0), D(tq)});
+}
+
+// tq = (R1 > 0): Q when a timing starts
+void Gen::q_preset(uint32_t tq) {
+  r0_value(0);
+  op(M::Cmpi, {I(0), R(r1)});
+  opc(M::Ldic, Cond::GT, {I(1), R(r0)});
+  op(M::Sti, {R(r0), D(tq)});
+}
+
+// ti = the top (IN, for the next scan's edge)
+void Gen::remember_input(uint32_t ti) {
   if (slots_) {
     op(M::Sti, {R(top()), D(ti)});
   } else {
@@ -800,17 +670,9 @@ void Gen::matiec_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t 
   }
 }
 
-void Gen::counter(const ldc::Instr& in) {
-  uint32_t n = in.a[0].index;
-  uint32_t cw = W_.addr(Area::CW, n), cq = W_.addr(Area::CQ, n);
-  if (in.op == Op::RSTC) {
-    std::string skip = skip_unless_power();
-    op(M::Ldi, {I(0), R(r0)});
-    op(M::Sti, {R(r0), D(cw)});
-    op(M::Sti, {R(r0), D(cq)});
-    label(skip);
-    return;
-  }
+
+// CTU / CTD: the rising edge of the input, then CV (saturated) and Q
+void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
   bool up = in.op == Op::CTU;
   uint32_t e = addr(in.a[2]);
   top_to(r0);  // IN
@@ -833,6 +695,7 @@ void Gen::counter(const ldc::Instr& in) {
 }
 
 void Gen::instr(const ldc::Instr& in) {
+  r0_value_.reset();
   Fuse f = at_ < fuse_.size() ? fuse_[at_] : Fuse::None;
   if (slots_ && bit_template(in.op)) bit_slots(in);
   else if (f == Fuse::None || !bit_fused(in, f)) gen_by_class(*this, in);
