@@ -8,8 +8,7 @@
 //
 // The x86-64 target (instruction model, encoder, parser, printer and
 // disassembler) is declared in assembler/x86.h, included at the end.
-#ifndef LDC_ASSEMBLER_ASSEMBLER_H
-#define LDC_ASSEMBLER_ASSEMBLER_H
+#pragma once
 
 #include <array>
 #include <cstddef>
@@ -52,23 +51,23 @@ class AsmError : public std::runtime_error {
 enum class PcBase : uint8_t { InstructionStart, InstructionEnd };
 
 // One kind of field an encoder may leave for the core to fill in.
-// The field lives in a little-endian container of `containerBytes` bytes at
-// the fixup's offset; it is `bitWidth` bits wide starting at bit `bitShift`.
-// value = (target + addend - pc) / scale        if pcRelative
+// The field lives in a little-endian container of `container_bytes` bytes at
+// the fixup's offset; it is `bit_width` bits wide starting at bit `bit_shift`.
+// value = (target + addend - pc) / scale        if pc_relative
 //       = (target + addend) / scale             otherwise
-// where pc = (start or end of the instruction) + pcBias * scale.
+// where pc = (start or end of the instruction) + pc_bias * scale.
 // Addresses are byte offsets from the start of the code.
 struct FixupKind {
   std::string_view name;
-  uint8_t containerBytes;  // 1, 2, 4 or 8
-  uint8_t bitShift;
-  uint8_t bitWidth;
-  bool pcRelative;
-  bool isSigned;
-  PcBase pcBase;
-  int32_t pcBias;    // in units of `scale` bytes
+  uint8_t container_bytes;  // 1, 2, 4 or 8
+  uint8_t bit_shift;
+  uint8_t bit_width;
+  bool pc_relative;
+  bool is_signed;
+  PcBase pc_base;
+  int32_t pc_bias;    // in units of `scale` bytes
   uint8_t scale;     // bytes per unit of the field (x86: 1, C40: 4)
-  int16_t relaxTo;   // index of the longer kind to grow to, -1 if none
+  int16_t relax_to;   // index of the longer kind to grow to, -1 if none
 };
 
 // A field to fill: `label` empty means an absolute code address `addend`.
@@ -84,22 +83,22 @@ struct Encoding {
   std::array<uint8_t, 16> bytes{};
   uint8_t size = 0;
   std::array<Fixup, 2> fixups{};
-  uint8_t numFixups = 0;
+  uint8_t num_fixups = 0;
 
   void put(uint8_t b);
   void put32(uint32_t v);
-  void addFixup(Fixup f);
+  void add_fixup(Fixup f);
   std::span<const uint8_t> view() const { return {bytes.data(), size}; }
 };
 
 // Computes the value to store for a fixup (before range checking).
 // Returns false if the distance is not a multiple of the kind's scale.
-bool fixupValue(const FixupKind& k, int64_t target, int64_t addend,
-                int64_t instStart, int64_t instSize, int64_t& value);
+bool fixup_value(const FixupKind& k, int64_t target, int64_t addend,
+                int64_t inst_start, int64_t inst_size, int64_t& value);
 // True if value fits the kind's field.
-bool fixupFits(const FixupKind& k, int64_t value);
+bool fixup_fits(const FixupKind& k, int64_t value);
 // Stores value into the field at code[offset]; the caller checked the range.
-void applyFixup(const FixupKind& k, std::span<uint8_t> code, size_t offset,
+void apply_fixup(const FixupKind& k, std::span<uint8_t> code, size_t offset,
                 int64_t value);
 
 // ----------------------------------------------------------------- target
@@ -107,15 +106,15 @@ void applyFixup(const FixupKind& k, std::span<uint8_t> code, size_t offset,
 // The data and hooks that describe a target.
 struct TargetInfo {
   std::string_view name;
-  std::span<const FixupKind> fixupKinds;
+  std::span<const FixupKind> fixup_kinds;
 };
 
 template <class Inst>
 struct Target : TargetInfo {
-  // Encodes one instruction. longForm asks for the long variant of a
+  // Encodes one instruction. long_form asks for the long variant of a
   // relaxable instruction (and is set from the start for references to
   // global labels and absolute addresses). Throws AsmError.
-  void (*encode)(const Inst& inst, bool longForm, Encoding& out) = nullptr;
+  void (*encode)(const Inst& inst, bool long_form, Encoding& out) = nullptr;
 };
 
 // ---------------------------------------------------------------- program
@@ -130,11 +129,11 @@ struct Item {
   Inst inst{};          // for Instruction
   std::string comment;  // optional, for listings
 
-  static Item labelDef(std::string name, bool isGlobal = false) {
+  static Item label_def(std::string name, bool is_global = false) {
     Item it;
     it.kind = ItemKind::Label;
     it.label = std::move(name);
-    it.global = isGlobal;
+    it.global = is_global;
     return it;
   }
   static Item instr(Inst i, std::string comment = {}) {
@@ -154,7 +153,7 @@ struct Item {
 // For peephole passes: is the first item after `i` that is neither a
 // comment nor dropped the definition of `label`?
 template <class Inst>
-bool labelFollows(const std::vector<Item<Inst>>& items, size_t i, const std::string& label,
+bool label_follows(const std::vector<Item<Inst>>& items, size_t i, const std::string& label,
                   const std::vector<char>& drop) {
   for (size_t j = i + 1; j < items.size(); j++) {
     if (items[j].kind == ItemKind::Comment || drop[j]) continue;
@@ -166,22 +165,22 @@ bool labelFollows(const std::vector<Item<Inst>>& items, size_t i, const std::str
 // Removes the items marked in `drop` (one flag per item); `index` holds item
 // indices (e.g. where each IL instruction's code starts) and is moved along.
 template <class Inst>
-void removeItems(std::vector<Item<Inst>>& items, const std::vector<char>& drop, std::vector<uint32_t>& index) {
-  std::vector<uint32_t> newIndex(items.size() + 1);
+void remove_items(std::vector<Item<Inst>>& items, const std::vector<char>& drop, std::vector<uint32_t>& index) {
+  std::vector<uint32_t> new_index(items.size() + 1);
   std::vector<Item<Inst>> kept;
   kept.reserve(items.size());
   for (size_t i = 0; i < items.size(); i++) {
-    newIndex[i] = uint32_t(kept.size());
+    new_index[i] = uint32_t(kept.size());
     if (!drop[i]) kept.push_back(std::move(items[i]));
   }
-  newIndex[items.size()] = uint32_t(kept.size());
-  for (auto& s : index) s = newIndex[s];
+  new_index[items.size()] = uint32_t(kept.size());
+  for (auto& s : index) s = new_index[s];
   items = std::move(kept);
 }
 
 template <class Inst>
 struct Block {
-  int sourceLine = 0;
+  int source_line = 0;
   std::vector<Item<Inst>> items;
 };
 
@@ -199,18 +198,18 @@ enum class Mode : uint8_t {
 };
 
 struct Stats {
-  size_t peakLabelEntries = 0;  // max entries alive in the label tables
-  size_t relaxPasses = 0;       // layout passes summed over all units
+  size_t peak_label_entries = 0;  // max entries alive in the label tables
+  size_t relax_passes = 0;       // layout passes summed over all units
   size_t units = 0;             // blocks (blockwise) or 1 (whole program)
-  size_t encodeCalls = 0;
-  size_t globalFixups = 0;      // fixups resolved after layout
-  int64_t elapsedNs = 0;        // wall time of assemble()
+  size_t encode_calls = 0;
+  size_t global_fixups = 0;      // fixups resolved after layout
+  int64_t elapsed_ns = 0;        // wall time of assemble()
 };
 
 struct ItemLayout {
   uint32_t offset = 0;  // from the start of the code
   uint32_t size = 0;
-  bool longForm = false;
+  bool long_form = false;
 };
 
 // An absolute fixup; the loader adds the load address.
@@ -221,9 +220,9 @@ struct Relocation {
 
 struct Result {
   std::vector<uint8_t> code;
-  std::vector<uint32_t> blockOffsets;
+  std::vector<uint32_t> block_offsets;
   std::vector<std::vector<ItemLayout>> items;  // [block][item]
-  std::vector<int64_t> globalAddresses;  // per declared global, -1 if undefined
+  std::vector<int64_t> global_addresses;  // per declared global, -1 if undefined
   std::vector<Relocation> relocations;
   std::vector<Error> errors;
   Stats stats;
@@ -236,13 +235,13 @@ class ProgramView {
  public:
   virtual ~ProgramView() = default;
   virtual std::span<const std::string> globals() const = 0;
-  virtual size_t numBlocks() const = 0;
-  virtual int sourceLine(size_t block) const = 0;
-  virtual size_t numItems(size_t block) const = 0;
+  virtual size_t num_blocks() const = 0;
+  virtual int source_line(size_t block) const = 0;
+  virtual size_t num_items(size_t block) const = 0;
   virtual ItemKind kind(size_t block, size_t item) const = 0;
   virtual std::string_view label(size_t block, size_t item) const = 0;
-  virtual bool isGlobal(size_t block, size_t item) const = 0;
-  virtual void encode(size_t block, size_t item, bool longForm,
+  virtual bool is_global(size_t block, size_t item) const = 0;
+  virtual void encode(size_t block, size_t item, bool long_form,
                       Encoding& out) const = 0;
 };
 Result assemble(const TargetInfo& target, const ProgramView& program, Mode mode);
@@ -252,10 +251,10 @@ struct Stream;
 struct StreamDeleter {
   void operator()(Stream* s) const;
 };
-std::unique_ptr<Stream, StreamDeleter> streamBegin(const TargetInfo& target, std::vector<std::string> globals);
+std::unique_ptr<Stream, StreamDeleter> stream_begin(const TargetInfo& target, std::vector<std::string> globals);
 // `block` answers for one block only, numbered by how many came before it.
-void streamBlock(Stream& s, const ProgramView& block);
-Result streamFinish(Stream& s);
+void stream_block(Stream& s, const ProgramView& block);
+Result stream_finish(Stream& s);
 }  // namespace detail
 
 // Assembles a program. Never throws for errors in the input: they are
@@ -267,20 +266,20 @@ Result assemble(const Target<Inst>& target, const Program<Inst>& program,
    public:
     View(const Target<Inst>& t, const Program<Inst>& p) : t_(t), p_(p) {}
     std::span<const std::string> globals() const override { return p_.globals; }
-    size_t numBlocks() const override { return p_.blocks.size(); }
-    int sourceLine(size_t b) const override { return p_.blocks[b].sourceLine; }
-    size_t numItems(size_t b) const override { return p_.blocks[b].items.size(); }
+    size_t num_blocks() const override { return p_.blocks.size(); }
+    int source_line(size_t b) const override { return p_.blocks[b].source_line; }
+    size_t num_items(size_t b) const override { return p_.blocks[b].items.size(); }
     ItemKind kind(size_t b, size_t i) const override {
       return p_.blocks[b].items[i].kind;
     }
     std::string_view label(size_t b, size_t i) const override {
       return p_.blocks[b].items[i].label;
     }
-    bool isGlobal(size_t b, size_t i) const override {
+    bool is_global(size_t b, size_t i) const override {
       return p_.blocks[b].items[i].global;
     }
-    void encode(size_t b, size_t i, bool longForm, Encoding& out) const override {
-      t_.encode(p_.blocks[b].items[i].inst, longForm, out);
+    void encode(size_t b, size_t i, bool long_form, Encoding& out) const override {
+      t_.encode(p_.blocks[b].items[i].inst, long_form, out);
     }
 
    private:
@@ -296,7 +295,7 @@ Result assemble(const Target<Inst>& target, const Program<Inst>& program,
 // comment in the target's syntax ("#", ";").
 
 // v in a printf format of one unsigned number ("%08x"), for listing columns.
-std::string listingField(const char* fmt, uint32_t v);
+std::string listing_field(const char* fmt, uint32_t v);
 
 // The GNU-as source of a program: `head`, then per block a comment line
 // (`<mark> block B, line L`) and its items, one a line: a label (a block's
@@ -305,7 +304,7 @@ std::string listingField(const char* fmt, uint32_t v);
 // (outside: one of them is not a local label of its block), and an item's
 // comment after a tab and `<mark> `.  A comment item without text is no line.
 template <class Inst, class Print>
-std::string gnuAsText(const Program<Inst>& p, std::string head, std::string_view mark, Print print) {
+std::string gnu_as_text(const Program<Inst>& p, std::string head, std::string_view mark, Print print) {
   std::string out = std::move(head);
   for (size_t b = 0; b < p.blocks.size(); ++b) {
     const auto& blk = p.blocks[b];
@@ -313,14 +312,14 @@ std::string gnuAsText(const Program<Inst>& p, std::string head, std::string_view
     for (const auto& it : blk.items)
       if (it.kind == ItemKind::Label && !it.global) locals.insert(it.label);
     auto mangle = [&](const std::string& n) { return locals.count(n) ? ".L" + std::to_string(b) + "_" + n : n; };
-    out += std::string(mark) + " block " + std::to_string(b) + ", line " + std::to_string(blk.sourceLine) + "\n";
+    out += std::string(mark) + " block " + std::to_string(b) + ", line " + std::to_string(blk.source_line) + "\n";
     for (const auto& it : blk.items) {
       if (it.kind == ItemKind::Label) {
         out += mangle(it.label) + ":";
       } else if (it.kind == ItemKind::Instruction) {
         Inst in = it.inst;
         bool outside = false;
-        for (unsigned i = 0; i < unsigned(in.numOperands) && i < 3; ++i) {
+        for (unsigned i = 0; i < unsigned(in.num_operands) && i < 3; ++i) {
           auto& o = in.ops[i];
           if (o.kind != decltype(o.kind)::Label) continue;
           outside = outside || !locals.count(o.label);
@@ -336,22 +335,22 @@ std::string gnuAsText(const Program<Inst>& p, std::string head, std::string_view
 }
 
 // The listing of an assembled program: per block a line
-// `blockHead(offset) <mark> block B, line L`, then per item
-// `itemHead(layout)` followed by its label, or a tab and print(inst, layout),
+// `block_head(offset) <mark> block B, line L`, then per item
+// `item_head(layout)` followed by its label, or a tab and print(inst, layout),
 // and its comment after a tab and `<mark> `.
 template <class Inst, class BlockHead, class ItemHead, class Print>
-std::string listingText(const Program<Inst>& p, const Result& r, std::string_view mark, BlockHead blockHead,
-                        ItemHead itemHead, Print print) {
+std::string listing_text(const Program<Inst>& p, const Result& r, std::string_view mark, BlockHead block_head,
+                        ItemHead item_head, Print print) {
   std::string out;
   for (size_t b = 0; b < p.blocks.size(); ++b) {
     const auto& blk = p.blocks[b];
-    out += blockHead(b < r.blockOffsets.size() ? r.blockOffsets[b] : 0u) + std::string(mark) + " block " +
-           std::to_string(b) + ", line " + std::to_string(blk.sourceLine) + "\n";
+    out += block_head(b < r.block_offsets.size() ? r.block_offsets[b] : 0u) + std::string(mark) + " block " +
+           std::to_string(b) + ", line " + std::to_string(blk.source_line) + "\n";
     for (size_t i = 0; i < blk.items.size(); ++i) {
       const auto& it = blk.items[i];
       ItemLayout lay;
       if (b < r.items.size() && i < r.items[b].size()) lay = r.items[b][i];
-      std::string line = itemHead(lay);
+      std::string line = item_head(lay);
       if (it.kind == ItemKind::Label) line += it.label + ":";
       else if (it.kind == ItemKind::Instruction) line += "\t" + print(it.inst, lay);
       if (!it.comment.empty()) line += "\t" + std::string(mark) + " " + it.comment;
@@ -371,28 +370,28 @@ template <class Inst>
 class Assembler {
  public:
   Assembler(const Target<Inst>& target, std::vector<std::string> globals)
-      : t_(target), s_(detail::streamBegin(target, std::move(globals))) {}
+      : t_(target), s_(detail::stream_begin(target, std::move(globals))) {}
   void add(const Block<Inst>& b) {
     View v(t_, b, n_++);
-    detail::streamBlock(*s_, v);
+    detail::stream_block(*s_, v);
   }
   size_t blocks() const { return n_; }
   // The result, as assemble() gives it; the assembler is spent afterwards.
-  Result finish() { return detail::streamFinish(*s_); }
+  Result finish() { return detail::stream_finish(*s_); }
 
  private:
   class View final : public detail::ProgramView {
    public:
     View(const Target<Inst>& t, const Block<Inst>& b, size_t index) : t_(t), b_(b), index_(index) {}
     std::span<const std::string> globals() const override { return {}; }
-    size_t numBlocks() const override { return index_ + 1; }
-    int sourceLine(size_t) const override { return b_.sourceLine; }
-    size_t numItems(size_t) const override { return b_.items.size(); }
+    size_t num_blocks() const override { return index_ + 1; }
+    int source_line(size_t) const override { return b_.source_line; }
+    size_t num_items(size_t) const override { return b_.items.size(); }
     ItemKind kind(size_t, size_t i) const override { return b_.items[i].kind; }
     std::string_view label(size_t, size_t i) const override { return b_.items[i].label; }
-    bool isGlobal(size_t, size_t i) const override { return b_.items[i].global; }
-    void encode(size_t, size_t i, bool longForm, Encoding& out) const override {
-      t_.encode(b_.items[i].inst, longForm, out);
+    bool is_global(size_t, size_t i) const override { return b_.items[i].global; }
+    void encode(size_t, size_t i, bool long_form, Encoding& out) const override {
+      t_.encode(b_.items[i].inst, long_form, out);
     }
 
    private:
@@ -407,4 +406,3 @@ class Assembler {
 
 }  // namespace ldc::as
 
-#endif  // LDC_ASSEMBLER_ASSEMBLER_H

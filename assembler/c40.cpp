@@ -51,7 +51,7 @@ static_assert(std::size(kSpecs) == size_t(Mnemonic::Count_));
 
 const Spec& spec(Mnemonic m) { return kSpecs[size_t(m)]; }
 
-ImmKind immKind(Cls c) {
+ImmKind imm_kind(Cls c) {
   switch (c) {
     case Cls::A: case Cls::BI: case Cls::AB: case Cls::AY: return ImmKind::S16;
     case Cls::AU: case Cls::Ldhi: case Cls::Ldpk: return ImmKind::U16;
@@ -60,7 +60,7 @@ ImmKind immKind(Cls c) {
   }
 }
 
-bool isFloatSrc(Cls c) {
+bool is_float_src(Cls c) {
   return c == Cls::AF || c == Cls::B || c == Cls::BA || c == Cls::BB || c == Cls::S ||
          c == Cls::S2;
 }
@@ -69,25 +69,25 @@ bool isFloatSrc(Cls c) {
 
 using namespace detail;
 
-bool validCond(unsigned c) { return c <= 20 && c != 11; }
+bool valid_cond(unsigned c) { return c <= 20 && c != 11; }
 
 Instruction make(Mnemonic m, std::initializer_list<Operand> ops) {
   Instruction in;
   in.mnemonic = m;
   for (const Operand& o : ops) {
-    if (in.numOperands >= 3) throw AsmError("too many operands");
-    in.ops[in.numOperands++] = o;
+    if (in.num_operands >= 3) throw AsmError("too many operands");
+    in.ops[in.num_operands++] = o;
   }
   return in;
 }
 
-Instruction makeCc(Mnemonic m, Cond c, std::initializer_list<Operand> ops) {
+Instruction make_cc(Mnemonic m, Cond c, std::initializer_list<Operand> ops) {
   Instruction in = make(m, ops);
   in.cond = c;
   return in;
 }
 
-bool hasCond(Mnemonic m) {
+bool has_cond(Mnemonic m) {
   switch (m) {
     case Mnemonic::Ldic: case Mnemonic::Ldfc: case Mnemonic::Bc: case Mnemonic::Bcd:
     case Mnemonic::Callc: case Mnemonic::Retsc: case Mnemonic::Dbc: case Mnemonic::Dbcd:
@@ -97,7 +97,7 @@ bool hasCond(Mnemonic m) {
   }
 }
 
-bool isControl(Mnemonic m) {
+bool is_control(Mnemonic m) {
   switch (m) {
     case Mnemonic::Br: case Mnemonic::Brd: case Mnemonic::Call: case Mnemonic::Bc:
     case Mnemonic::Bcd: case Mnemonic::Callc: case Mnemonic::Retsc: case Mnemonic::Dbc:
@@ -108,7 +108,7 @@ bool isControl(Mnemonic m) {
   }
 }
 
-bool isDelayed(Mnemonic m) {
+bool is_delayed(Mnemonic m) {
   return m == Mnemonic::Brd || m == Mnemonic::Bcd || m == Mnemonic::Dbcd;
 }
 
@@ -127,7 +127,7 @@ constexpr FixupKind kKinds[] = {
   try {
     text = print(in);
   } catch (...) {
-    text = mnemonicName(in.mnemonic, in.cond);
+    text = mnemonic_name(in.mnemonic, in.cond);
   }
   throw AsmError("invalid operands for '" + text + "'" + (why.empty() ? "" : ": " + why));
 }
@@ -139,36 +139,36 @@ struct FixReq {
   const Operand* op = nullptr;  // Label or Address
 };
 
-bool regAny(const Operand& o) { return o.kind == OperandKind::Reg && unsigned(o.reg) < kNumRegs; }
-bool regExt(const Operand& o) { return o.kind == OperandKind::Reg && isExtended(o.reg); }
+bool reg_any(const Operand& o) { return o.kind == OperandKind::Reg && unsigned(o.reg) < kNumRegs; }
+bool reg_ext(const Operand& o) { return o.kind == OperandKind::Reg && is_extended(o.reg); }
 
-bool indValid(const Ind& i) {
+bool ind_valid(const Ind& i) {
   if (i.ar > 7 || i.mod > kBitRev) return false;
   if (i.mod < kIr0) return i.disp >= 1;
   return i.disp == 0;
 }
 
 // 16-bit indirect field of the general forms: mod 15-11, ARn 10-8, disp 7-0.
-uint32_t longInd(const Ind& i) { return uint32_t(i.mod) << 11 | uint32_t(i.ar) << 8 | i.disp; }
+uint32_t long_ind(const Ind& i) { return uint32_t(i.mod) << 11 | uint32_t(i.ar) << 8 | i.disp; }
 // 8-bit C3x-style 3-operand field: mod 7-3, ARn 2-0 (displacement 1 implied).
-bool shortIndOk(const Ind& i) {
-  return indValid(i) && (i.mod >= kIr0 || i.disp == 1);
+bool short_ind_ok(const Ind& i) {
+  return ind_valid(i) && (i.mod >= kIr0 || i.disp == 1);
 }
-uint32_t shortInd(const Ind& i) { return uint32_t(i.mod) << 3 | i.ar; }
+uint32_t short_ind(const Ind& i) { return uint32_t(i.mod) << 3 | i.ar; }
 // 8-bit C4x 3-operand field: *+ARn(disp), disp 7-3 (0-31), ARn 2-0.
-bool c4xIndOk(const Ind& i) {
-  return indValid(i) && (i.mod == kPlain || (i.mod == kPreAdd && i.disp <= 31));
+bool c4x_ind_ok(const Ind& i) {
+  return ind_valid(i) && (i.mod == kPlain || (i.mod == kPreAdd && i.disp <= 31));
 }
-uint32_t c4xInd(const Ind& i) { return uint32_t(i.mod == kPlain ? 0 : i.disp) << 3 | i.ar; }
+uint32_t c4x_ind(const Ind& i) { return uint32_t(i.mod == kPlain ? 0 : i.disp) << 3 | i.ar; }
 
 // The general source: mode bits 22-21 and field 15-0.
-bool encodeSrc(const Operand& o, Cls cls, uint32_t& word) {
-  ImmKind ik = immKind(cls);
-  bool extOnly = cls == Cls::AF || cls == Cls::B || cls == Cls::BB;
+bool encode_src(const Operand& o, Cls cls, uint32_t& word) {
+  ImmKind ik = imm_kind(cls);
+  bool ext_only = cls == Cls::AF || cls == Cls::B || cls == Cls::BB;
   switch (o.kind) {
     case OperandKind::Reg:
       if (cls == Cls::B6) return false;
-      if (extOnly ? !regExt(o) : !regAny(o)) return false;
+      if (ext_only ? !reg_ext(o) : !reg_any(o)) return false;
       word |= 0u << 21 | uint32_t(o.reg);
       return true;
     case OperandKind::Direct:
@@ -176,8 +176,8 @@ bool encodeSrc(const Operand& o, Cls cls, uint32_t& word) {
       word |= 1u << 21 | uint32_t(o.imm);
       return true;
     case OperandKind::Ind:
-      if (!indValid(o.ind)) return false;
-      word |= 2u << 21 | longInd(o.ind);
+      if (!ind_valid(o.ind)) return false;
+      word |= 2u << 21 | long_ind(o.ind);
       return true;
     case OperandKind::Imm:
       if (ik == ImmKind::S16 && o.imm >= -32768 && o.imm <= 32767) {
@@ -199,64 +199,64 @@ bool encodeSrc(const Operand& o, Cls cls, uint32_t& word) {
   }
 }
 
-bool isTarget(const Operand& o) {
+bool is_target(const Operand& o) {
   return o.kind == OperandKind::Label || o.kind == OperandKind::Address;
 }
 
 uint32_t encode3(const Instruction& in, const Spec& s, uint8_t nops) {
   bool flt = s.cls == Cls::S || s.cls == Cls::S2;
-  bool hasDst = s.cls == Cls::T || s.cls == Cls::S;
-  if (in.numOperands != nops) bad(in);
+  bool has_dst = s.cls == Cls::T || s.cls == Cls::S;
+  if (in.num_operands != nops) bad(in);
   const Operand& src2 = in.ops[0];
   const Operand& src1 = in.ops[1];
   uint32_t dst = 0;
-  if (hasDst) {
+  if (has_dst) {
     const Operand& d = in.ops[2];
-    if (flt ? !regExt(d) : !regAny(d)) bad(in);
+    if (flt ? !reg_ext(d) : !reg_any(d)) bad(in);
     dst = uint32_t(d.reg);
   }
-  auto regOk = [&](const Operand& o) { return flt ? regExt(o) : regAny(o); };
+  auto reg_ok = [&](const Operand& o) { return flt ? reg_ext(o) : reg_any(o); };
   uint32_t opc = s.base | dst << 16;
   // Type 1 (bit 28 = 0): registers and C3x-style indirect operands.
   {
-    bool ok2 = regOk(src2) || (src2.kind == OperandKind::Ind && shortIndOk(src2.ind));
-    bool ok1 = regOk(src1) || (src1.kind == OperandKind::Ind && shortIndOk(src1.ind));
+    bool ok2 = reg_ok(src2) || (src2.kind == OperandKind::Ind && short_ind_ok(src2.ind));
+    bool ok1 = reg_ok(src1) || (src1.kind == OperandKind::Ind && short_ind_ok(src1.ind));
     if (ok2 && ok1) {
       uint32_t t = (src1.kind == OperandKind::Ind ? 1u : 0u) | (src2.kind == OperandKind::Ind ? 2u : 0u);
-      uint32_t f2 = src2.kind == OperandKind::Ind ? shortInd(src2.ind) : uint32_t(src2.reg);
-      uint32_t f1 = src1.kind == OperandKind::Ind ? shortInd(src1.ind) : uint32_t(src1.reg);
+      uint32_t f2 = src2.kind == OperandKind::Ind ? short_ind(src2.ind) : uint32_t(src2.reg);
+      uint32_t f1 = src1.kind == OperandKind::Ind ? short_ind(src1.ind) : uint32_t(src1.reg);
       return 0x20000000u | opc | t << 21 | f1 << 8 | f2;
     }
   }
   // Type 2 (C4x, bit 28 = 1): 8-bit immediate or *+ARn(0-31).
   {
     bool imm2 = !flt && src2.kind == OperandKind::Imm && src2.imm >= -128 && src2.imm <= 127;
-    bool ind2 = src2.kind == OperandKind::Ind && c4xIndOk(src2.ind);
-    bool reg1 = regOk(src1);
-    bool ind1 = src1.kind == OperandKind::Ind && c4xIndOk(src1.ind);
+    bool ind2 = src2.kind == OperandKind::Ind && c4x_ind_ok(src2.ind);
+    bool reg1 = reg_ok(src1);
+    bool ind1 = src1.kind == OperandKind::Ind && c4x_ind_ok(src1.ind);
     if ((imm2 || ind2) && (reg1 || ind1)) {
       uint32_t t = (ind2 ? 1u : 0u) | (ind1 ? 2u : 0u);
       if (flt && !ind2) bad(in);
-      uint32_t f2 = ind2 ? c4xInd(src2.ind) : (uint32_t(src2.imm) & 0xFF);
-      uint32_t f1 = ind1 ? c4xInd(src1.ind) : uint32_t(src1.reg);
+      uint32_t f2 = ind2 ? c4x_ind(src2.ind) : (uint32_t(src2.imm) & 0xFF);
+      uint32_t f1 = ind1 ? c4x_ind(src1.ind) : uint32_t(src1.reg);
       return 0x30000000u | opc | t << 21 | f1 << 8 | f2;
     }
   }
   bad(in);
 }
 
-uint32_t encodeWord(const Instruction& in, FixReq& fix) {
+uint32_t encode_word(const Instruction& in, FixReq& fix) {
   if (size_t(in.mnemonic) >= size_t(Mnemonic::Count_)) throw AsmError("invalid mnemonic");
   const Spec& s = spec(in.mnemonic);
-  if (hasCond(in.mnemonic) && !validCond(unsigned(in.cond))) bad(in, "invalid condition");
+  if (has_cond(in.mnemonic) && !valid_cond(unsigned(in.cond))) bad(in, "invalid condition");
   const Operand& a = in.ops[0];
   const Operand& b = in.ops[1];
   uint32_t cond = uint32_t(in.cond);
   auto need = [&](uint8_t n) {
-    if (in.numOperands != n) bad(in);
+    if (in.num_operands != n) bad(in);
   };
   auto target = [&](uint16_t kind, const Operand& o) {
-    if (!isTarget(o)) bad(in);
+    if (!is_target(o)) bad(in);
     fix.present = true;
     fix.kind = kind;
     fix.op = &o;
@@ -267,27 +267,27 @@ uint32_t encodeWord(const Instruction& in, FixReq& fix) {
       need(2);
       uint32_t w = s.base;
       if (s.cls == Cls::AB || s.cls == Cls::BB) w |= cond << 23;
-      if (!encodeSrc(a, s.cls, w)) bad(in);
-      bool dstExt = s.cls == Cls::BI || s.cls == Cls::B || s.cls == Cls::BA ||
+      if (!encode_src(a, s.cls, w)) bad(in);
+      bool dst_ext = s.cls == Cls::BI || s.cls == Cls::B || s.cls == Cls::BA ||
                     s.cls == Cls::B6 || s.cls == Cls::BB;
       if (s.cls == Cls::AY) {
         if (b.kind != OperandKind::Reg || unsigned(b.reg) < 8 || unsigned(b.reg) > 20) bad(in);
-      } else if (dstExt ? !regExt(b) : !regAny(b)) {
+      } else if (dst_ext ? !reg_ext(b) : !reg_any(b)) {
         bad(in);
       }
       return w | uint32_t(b.reg) << 16;
     }
     case Cls::A7: case Cls::B7: {
       need(2);
-      if (s.cls == Cls::B7 ? !regExt(a) : !regAny(a)) bad(in);
+      if (s.cls == Cls::B7 ? !reg_ext(a) : !reg_any(a)) bad(in);
       uint32_t w = s.base | uint32_t(a.reg) << 16;
       if (b.kind == OperandKind::Direct && b.imm >= 0 && b.imm <= 0xFFFF) return w | 1u << 21 | uint32_t(b.imm);
-      if (b.kind == OperandKind::Ind && indValid(b.ind)) return w | 2u << 21 | longInd(b.ind);
+      if (b.kind == OperandKind::Ind && ind_valid(b.ind)) return w | 2u << 21 | long_ind(b.ind);
       bad(in);
     }
     case Cls::Ldhi:
       need(2);
-      if (a.kind != OperandKind::Imm || a.imm < 0 || a.imm > 0xFFFF || !regAny(b)) bad(in);
+      if (a.kind != OperandKind::Imm || a.imm < 0 || a.imm > 0xFFFF || !reg_any(b)) bad(in);
       return s.base | uint32_t(b.reg) << 16 | uint32_t(a.imm);
     case Cls::Ldpk:
       need(1);
@@ -303,7 +303,7 @@ uint32_t encodeWord(const Instruction& in, FixReq& fix) {
     case Cls::J: case Cls::JS: {
       need(1);
       uint32_t w = s.base | cond << 16;
-      if (regAny(a)) return w | uint32_t(a.reg);
+      if (reg_any(a)) return w | uint32_t(a.reg);
       target(in.mnemonic == Mnemonic::Bcd ? Disp16D : Disp16, a);
       return w | 0x02000000u;
     }
@@ -312,18 +312,18 @@ uint32_t encodeWord(const Instruction& in, FixReq& fix) {
       return s.base | cond << 16;
     case Cls::D:
       need(2);
-      if (a.kind != OperandKind::Reg || !isAux(a.reg)) bad(in);
+      if (a.kind != OperandKind::Reg || !is_aux(a.reg)) bad(in);
       target(in.mnemonic == Mnemonic::Dbcd ? Disp16D : Disp16, b);
       return s.base | 0x02000000u | (uint32_t(a.reg) - 8) << 22 | cond << 16;
     case Cls::R: case Cls::RF:
       need(1);
-      if (s.cls == Cls::RF ? !regExt(a) : !regAny(a)) bad(in);
+      if (s.cls == Cls::RF ? !reg_ext(a) : !reg_any(a)) bad(in);
       return s.base | uint32_t(a.reg) << 16;
     case Cls::Nop:
-      if (in.numOperands == 0) return s.base;
+      if (in.num_operands == 0) return s.base;
       need(1);
-      if (a.kind != OperandKind::Ind || !indValid(a.ind)) bad(in);
-      return s.base | 2u << 21 | longInd(a.ind);
+      if (a.kind != OperandKind::Ind || !ind_valid(a.ind)) bad(in);
+      return s.base | 2u << 21 | long_ind(a.ind);
     case Cls::Word:
       need(1);
       if (a.kind == OperandKind::Imm && a.imm >= -(int64_t(1) << 31) && a.imm <= 0xFFFFFFFFll)
@@ -334,7 +334,7 @@ uint32_t encodeWord(const Instruction& in, FixReq& fix) {
   bad(in);
 }
 
-void encodeHook(const Instruction& in, bool longForm, Encoding& out) { out = encode(in, longForm); }
+void encode_hook(const Instruction& in, bool long_form, Encoding& out) { out = encode(in, long_form); }
 
 }  // namespace
 
@@ -342,8 +342,8 @@ const Target<Instruction>& target() {
   static const Target<Instruction> t = [] {
     Target<Instruction> x;
     x.name = "c40";
-    x.fixupKinds = kKinds;
-    x.encode = &encodeHook;
+    x.fixup_kinds = kKinds;
+    x.encode = &encode_hook;
     return x;
   }();
   return t;
@@ -351,7 +351,7 @@ const Target<Instruction>& target() {
 
 Encoding encode(const Instruction& in, bool) {
   FixReq fix;
-  uint32_t w = encodeWord(in, fix);
+  uint32_t w = encode_word(in, fix);
   Encoding e;
   e.put32(w);
   if (fix.present) {
@@ -363,23 +363,23 @@ Encoding encode(const Instruction& in, bool) {
     } else {
       f.addend = fix.op->imm * 4;  // word address -> byte offset
     }
-    e.addFixup(f);
+    e.add_fixup(f);
   }
   return e;
 }
 
-uint32_t encodeAt(const Instruction& in, int64_t address) {
+uint32_t encode_at(const Instruction& in, int64_t address) {
   FixReq fix;
-  uint32_t w = encodeWord(in, fix);
+  uint32_t w = encode_word(in, fix);
   if (!fix.present) return w;
   if (fix.op->kind == OperandKind::Label)
     throw AsmError("label '" + fix.op->label + "' needs the assembler core");
   const FixupKind& k = kKinds[fix.kind];
   int64_t v = 0;
-  fixupValue(k, fix.op->imm * 4, 0, address * 4, 4, v);
-  if (!fixupFits(k, v)) throw AsmError("target " + std::to_string(fix.op->imm) + " out of range for " + std::string(k.name));
+  fixup_value(k, fix.op->imm * 4, 0, address * 4, 4, v);
+  if (!fixup_fits(k, v)) throw AsmError("target " + std::to_string(fix.op->imm) + " out of range for " + std::string(k.name));
   uint8_t bytes[4] = {uint8_t(w), uint8_t(w >> 8), uint8_t(w >> 16), uint8_t(w >> 24)};
-  applyFixup(k, bytes, 0, v);
+  apply_fixup(k, bytes, 0, v);
   return uint32_t(bytes[0]) | uint32_t(bytes[1]) << 8 | uint32_t(bytes[2]) << 16 |
          uint32_t(bytes[3]) << 24;
 }
@@ -399,29 +399,29 @@ int64_t sext(uint32_t v, unsigned bits) {
   return int64_t(int32_t((v & ((m << 1) - 1)) ^ m)) - int64_t(int32_t(m));
 }
 
-Ind indFromLong(uint32_t f) { return Ind{uint8_t(f >> 11 & 0x1F), uint8_t(f >> 8 & 7), uint8_t(f & 0xFF)}; }
-Ind indFromShort(uint32_t f) {
+Ind ind_from_long(uint32_t f) { return Ind{uint8_t(f >> 11 & 0x1F), uint8_t(f >> 8 & 7), uint8_t(f & 0xFF)}; }
+Ind ind_from_short(uint32_t f) {
   uint8_t mod = uint8_t(f >> 3 & 0x1F);
   return Ind{mod, uint8_t(f & 7), uint8_t(mod < kIr0 ? 1 : 0)};
 }
-Ind indFromC4x(uint32_t f) {
+Ind ind_from_c4x(uint32_t f) {
   uint8_t d = uint8_t(f >> 3 & 0x1F);
   return d == 0 ? Ind{kPlain, uint8_t(f & 7), 0} : Ind{kPreAdd, uint8_t(f & 7), d};
 }
 
-Operand regOp(uint32_t n) {
+Operand reg_op(uint32_t n) {
   if (n >= kNumRegs) throw AsmError("register number " + std::to_string(n));
   return Operand::r(Reg(n));
 }
 
-Operand srcOp(uint32_t w, Cls cls) {
+Operand src_op(uint32_t w, Cls cls) {
   uint32_t f = w & 0xFFFF;
   switch (w >> 21 & 3) {
-    case 0: return regOp(f);
+    case 0: return reg_op(f);
     case 1: return Operand::d(uint16_t(f));
-    case 2: return Operand::m(indFromLong(f));
+    case 2: return Operand::m(ind_from_long(f));
     default:
-      switch (immKind(cls)) {
+      switch (imm_kind(cls)) {
         case ImmKind::S16: return Operand::i(sext(f, 16));
         case ImmKind::U16: return Operand::i(f);
         case ImmKind::F16: return Operand::f(uint16_t(f));
@@ -437,24 +437,24 @@ Instruction candidate(Mnemonic m, uint32_t w, int64_t address) {
   Instruction in;
   in.mnemonic = m;
   auto set = [&](std::initializer_list<Operand> ops) {
-    in.numOperands = 0;
-    for (const Operand& o : ops) in.ops[in.numOperands++] = o;
+    in.num_operands = 0;
+    for (const Operand& o : ops) in.ops[in.num_operands++] = o;
   };
   uint32_t cond = w >> 16 & 0x1F;
   switch (s.cls) {
     case Cls::A: case Cls::AU: case Cls::AF: case Cls::BI: case Cls::B: case Cls::BA:
     case Cls::B6: case Cls::AY:
-      set({srcOp(w, s.cls), regOp(w >> 16 & 0x1F)});
+      set({src_op(w, s.cls), reg_op(w >> 16 & 0x1F)});
       break;
     case Cls::AB: case Cls::BB:
       in.cond = Cond(w >> 23 & 0x1F);
-      set({srcOp(w, s.cls), regOp(w >> 16 & 0x1F)});
+      set({src_op(w, s.cls), reg_op(w >> 16 & 0x1F)});
       break;
     case Cls::A7: case Cls::B7:
-      if ((w >> 21 & 3) == 1) set({regOp(w >> 16 & 0x1F), Operand::d(uint16_t(w))});
-      else set({regOp(w >> 16 & 0x1F), Operand::m(indFromLong(w & 0xFFFF))});
+      if ((w >> 21 & 3) == 1) set({reg_op(w >> 16 & 0x1F), Operand::d(uint16_t(w))});
+      else set({reg_op(w >> 16 & 0x1F), Operand::m(ind_from_long(w & 0xFFFF))});
       break;
-    case Cls::Ldhi: set({Operand::i(w & 0xFFFF), regOp(w >> 16 & 0x1F)}); break;
+    case Cls::Ldhi: set({Operand::i(w & 0xFFFF), reg_op(w >> 16 & 0x1F)}); break;
     case Cls::Ldpk: set({Operand::i(w & 0xFFFF)}); break;
     case Cls::T: case Cls::T2: case Cls::S: case Cls::S2: {
       bool type2 = (w >> 28 & 1) != 0;
@@ -462,13 +462,13 @@ Instruction candidate(Mnemonic m, uint32_t w, int64_t address) {
       uint32_t f2 = w & 0xFF, f1 = w >> 8 & 0xFF;
       Operand o2, o1;
       if (!type2) {
-        o2 = (t & 2) ? Operand::m(indFromShort(f2)) : regOp(f2);
-        o1 = (t & 1) ? Operand::m(indFromShort(f1)) : regOp(f1);
+        o2 = (t & 2) ? Operand::m(ind_from_short(f2)) : reg_op(f2);
+        o1 = (t & 1) ? Operand::m(ind_from_short(f1)) : reg_op(f1);
       } else {
-        o2 = (t & 1) ? Operand::m(indFromC4x(f2)) : Operand::i(sext(f2, 8));
-        o1 = (t & 2) ? Operand::m(indFromC4x(f1)) : regOp(f1);
+        o2 = (t & 1) ? Operand::m(ind_from_c4x(f2)) : Operand::i(sext(f2, 8));
+        o1 = (t & 2) ? Operand::m(ind_from_c4x(f1)) : reg_op(f1);
       }
-      if (s.cls == Cls::T || s.cls == Cls::S) set({o2, o1, regOp(w >> 16 & 0x1F)});
+      if (s.cls == Cls::T || s.cls == Cls::S) set({o2, o1, reg_op(w >> 16 & 0x1F)});
       else set({o2, o1});
       break;
     }
@@ -483,7 +483,7 @@ Instruction candidate(Mnemonic m, uint32_t w, int64_t address) {
         int64_t bias = m == Mnemonic::Bcd ? 3 : 1;
         set({Operand::a(address + bias + sext(w & 0xFFFF, 16))});
       } else {
-        set({regOp(w & 0xFFFF)});
+        set({reg_op(w & 0xFFFF)});
       }
       break;
     case Cls::Rets: in.cond = Cond(cond); set({}); break;
@@ -494,9 +494,9 @@ Instruction candidate(Mnemonic m, uint32_t w, int64_t address) {
       set({Operand::r(ar(w >> 22 & 7)), Operand::a(address + bias + sext(w & 0xFFFF, 16))});
       break;
     }
-    case Cls::R: case Cls::RF: set({regOp(w >> 16 & 0x1F)}); break;
+    case Cls::R: case Cls::RF: set({reg_op(w >> 16 & 0x1F)}); break;
     case Cls::Nop:
-      if ((w >> 21 & 3) == 2) set({Operand::m(indFromLong(w & 0xFFFF))});
+      if ((w >> 21 & 3) == 2) set({Operand::m(ind_from_long(w & 0xFFFF))});
       else set({});
       break;
     case Cls::Word: throw AsmError("data");
@@ -563,7 +563,7 @@ std::optional<Mnemonic> classify(uint32_t w) {
 
 }  // namespace
 
-std::optional<Instruction> decodeWord(uint32_t w, int64_t address, DecodeError* error) {
+std::optional<Instruction> decode_word(uint32_t w, int64_t address, DecodeError* error) {
   auto fail = [&](const std::string& why) -> std::optional<Instruction> {
     if (error) *error = DecodeError{address, hex32(w) + ": " + why};
     return std::nullopt;
@@ -579,7 +579,7 @@ std::optional<Instruction> decodeWord(uint32_t w, int64_t address, DecodeError* 
   // Accept only what the encoder produces.
   uint32_t again = 0;
   try {
-    again = encodeAt(in, address);
+    again = encode_at(in, address);
   } catch (const AsmError& e) {
     return fail("not in the subset (" + std::string(e.what()) + ")");
   }
@@ -592,13 +592,13 @@ Disassembly disassemble(std::span<const uint32_t> words, int64_t base) {
   for (size_t i = 0; i < words.size(); ++i) {
     DecodeError e;
     int64_t addr = base + int64_t(i);
-    if (auto in = decodeWord(words[i], addr, &e)) d.insts.push_back({*in, addr, words[i]});
+    if (auto in = decode_word(words[i], addr, &e)) d.insts.push_back({*in, addr, words[i]});
     else d.errors.push_back(e);
   }
   return d;
 }
 
-std::vector<uint32_t> wordsOf(std::span<const uint8_t> code) {
+std::vector<uint32_t> words_of(std::span<const uint8_t> code) {
   std::vector<uint32_t> w(code.size() / 4);
   for (size_t i = 0; i < w.size(); ++i)
     w[i] = uint32_t(code[4 * i]) | uint32_t(code[4 * i + 1]) << 8 |
@@ -606,8 +606,8 @@ std::vector<uint32_t> wordsOf(std::span<const uint8_t> code) {
   return w;
 }
 
-Disassembly disassembleBytes(std::span<const uint8_t> code, int64_t base) {
-  Disassembly d = disassemble(wordsOf(code), base);
+Disassembly disassemble_bytes(std::span<const uint8_t> code, int64_t base) {
+  Disassembly d = disassemble(words_of(code), base);
   if (code.size() % 4)
     d.errors.push_back({base + int64_t(code.size() / 4),
                         "truncated word (" + std::to_string(code.size() % 4) + " bytes)"});

@@ -6,8 +6,7 @@
 // with -mcpu=40. Every instruction is one 32-bit word; memory is word
 // addressed. The core counts bytes: a word is 4 bytes of code (little-endian)
 // and every fixup kind has scale 4. See docs/c40.md.
-#ifndef LDC_ASSEMBLER_C40_H
-#define LDC_ASSEMBLER_C40_H
+#pragma once
 
 #include <optional>
 
@@ -24,8 +23,8 @@ enum class Reg : uint8_t {
 };
 constexpr unsigned kNumRegs = 32;
 // R0-R11: the 40-bit extended-precision registers.
-constexpr bool isExtended(Reg r) { return unsigned(r) <= 7 || (unsigned(r) >= 28 && unsigned(r) <= 31); }
-constexpr bool isAux(Reg r) { return unsigned(r) >= 8 && unsigned(r) <= 15; }
+constexpr bool is_extended(Reg r) { return unsigned(r) <= 7 || (unsigned(r) >= 28 && unsigned(r) <= 31); }
+constexpr bool is_aux(Reg r) { return unsigned(r) >= 8 && unsigned(r) <= 15; }
 constexpr Reg ar(unsigned n) { return Reg(8 + n); }
 // R0..R11 by index (R8..R11 are numbers 28..31).
 constexpr Reg rx(unsigned n) { return n < 8 ? Reg(n) : Reg(28 + n - 8); }
@@ -35,7 +34,7 @@ enum class Cond : uint8_t {
   U = 0, LO = 1, LS = 2, HI = 3, HS = 4, EQ = 5, NE = 6, LT = 7, LE = 8, GT = 9, GE = 10,
   NV = 12, V = 13, NUF = 14, UF = 15, NLV = 16, LV = 17, NLUF = 18, LUF = 19, ZUF = 20,
 };
-bool validCond(unsigned c);
+bool valid_cond(unsigned c);
 
 // Indirect addressing: the 5-bit modification field `mod` (0x00-0x19) and
 // the auxiliary register. Modes 0-7 use the displacement `disp`; 8-15 use
@@ -112,20 +111,20 @@ enum class Mnemonic : uint8_t {
 struct Instruction {
   Mnemonic mnemonic = Mnemonic::Nop;
   Cond cond = Cond::U;  // for the conditional forms
-  uint8_t numOperands = 0;
+  uint8_t num_operands = 0;
   std::array<Operand, 3> ops{};
   friend bool operator==(const Instruction&, const Instruction&) = default;
 };
 
 Instruction make(Mnemonic m, std::initializer_list<Operand> ops = {});
-Instruction makeCc(Mnemonic m, Cond c, std::initializer_list<Operand> ops = {});
-bool hasCond(Mnemonic m);
+Instruction make_cc(Mnemonic m, Cond c, std::initializer_list<Operand> ops = {});
+bool has_cond(Mnemonic m);
 // True for instructions that change the flow of control (branches, calls,
 // returns, DBcond).
-bool isControl(Mnemonic m);
-bool isDelayed(Mnemonic m);  // BRD, BcondD, DBcondD
+bool is_control(Mnemonic m);
+bool is_delayed(Mnemonic m);  // BRD, BcondD, DBcondD
 
-// Fixup kinds of the C40 target (indices into target().fixupKinds).
+// Fixup kinds of the C40 target (indices into target().fixup_kinds).
 enum FixupKindId : uint16_t {
   Disp16 = 0,   // Bcond, CALLcond, DBcond: bits 0-15, target = addr + 1 + disp
   Disp16D = 1,  // BcondD, DBcondD: target = addr + 3 + disp
@@ -137,14 +136,14 @@ enum FixupKindId : uint16_t {
 const Target<Instruction>& target();
 
 // Encodes one instruction: 4 bytes (little-endian word) plus at most one
-// fixup for a Label or Address operand. longForm is ignored (the C40 is
+// fixup for a Label or Address operand. long_form is ignored (the C40 is
 // fixed width). Throws AsmError for anything outside the subset.
-Encoding encode(const Instruction& inst, bool longForm = false);
+Encoding encode(const Instruction& inst, bool long_form = false);
 
 // The final word of an instruction placed at word address `address`,
 // resolving Address operands. Throws AsmError for Label operands, for
 // unencodable instructions and for displacements out of range.
-uint32_t encodeAt(const Instruction& inst, int64_t address = 0);
+uint32_t encode_at(const Instruction& inst, int64_t address = 0);
 
 // Parses one instruction (TI syntax; `;` starts a comment). Mnemonics and
 // registers are case-insensitive, labels are not. Throws AsmError.
@@ -157,25 +156,25 @@ struct Line {
   std::optional<Instruction> inst;
   std::string comment;
 };
-Line parseLine(std::string_view line);
+Line parse_line(std::string_view line);
 
-// Text that parse() and GNU as (tic4x, -mcpu=40) accept. addressBase, if
-// given, prints Address operands as `addressBase+N`.
-std::string print(const Instruction& inst, std::string_view addressBase = {});
-// The same for GNU as input (toGnuAs): GNU as 2.40 reads some exact
+// Text that parse() and GNU as (tic4x, -mcpu=40) accept. address_base, if
+// given, prints Address operands as `address_base+N`.
+std::string print(const Instruction& inst, std::string_view address_base = {});
+// The same for GNU as input (to_gnu_as): GNU as 2.40 reads some exact
 // short-float decimals one unit in the last place low, so float immediates
 // with a nonzero fraction are written a quarter unit larger in magnitude.
 // parse() refuses that text (it is not exact); GNU as gives the same word.
-std::string printGnuAs(const Instruction& inst, std::string_view addressBase = {});
-std::string mnemonicName(Mnemonic m, Cond c = Cond::U);
-std::string_view regName(Reg r);
-std::string_view condName(Cond c);
-std::string indText(const Ind& ind);
+std::string print_gnu_as(const Instruction& inst, std::string_view address_base = {});
+std::string mnemonic_name(Mnemonic m, Cond c = Cond::U);
+std::string_view reg_name(Reg r);
+std::string_view cond_name(Cond c);
+std::string ind_text(const Ind& ind);
 
 // 16-bit short floating-point immediates (4-bit exponent, sign, 11-bit
 // fraction; exponent -8 is zero). Returns nullopt if v is not exact.
-std::optional<uint16_t> shortFloatFromDouble(double v);
-double shortFloatToDouble(uint16_t bits);
+std::optional<uint16_t> short_float_from_double(double v);
+double short_float_to_double(uint16_t bits);
 
 // ------------------------------------------------------------ disassembly
 
@@ -188,7 +187,7 @@ struct DecodeError {
 // Address operands (absolute word addresses). Accepts exactly the words
 // encode() produces (e.g. `*+AR0(0)` and alternate 3-operand forms are
 // refused); anything else is a DecodeError.
-std::optional<Instruction> decodeWord(uint32_t word, int64_t address = 0,
+std::optional<Instruction> decode_word(uint32_t word, int64_t address = 0,
                                       DecodeError* error = nullptr);
 
 struct Decoded {
@@ -204,8 +203,8 @@ struct Disassembly {
 Disassembly disassemble(std::span<const uint32_t> words, int64_t base = 0);
 // Little-endian bytes (as in Result::code); a trailing partial word is an
 // error.
-Disassembly disassembleBytes(std::span<const uint8_t> code, int64_t base = 0);
-std::vector<uint32_t> wordsOf(std::span<const uint8_t> code);
+Disassembly disassemble_bytes(std::span<const uint8_t> code, int64_t base = 0);
+std::vector<uint32_t> words_of(std::span<const uint8_t> code);
 
 // ---------------------------------------------------------- whole programs
 
@@ -213,11 +212,10 @@ using C40Program = Program<Instruction>;
 
 // GNU as source (tic4x, -mcpu=40) for a program: local labels are renamed
 // `L<block>_<name>`, Address operands are printed relative to `Lcode`.
-std::string toGnuAs(const C40Program& program);
+std::string to_gnu_as(const C40Program& program);
 
 // A listing: word address, word, text and comment of every item.
 std::string listing(const C40Program& program, const Result& result);
 
 }  // namespace ldc::as::c40
 
-#endif  // LDC_ASSEMBLER_C40_H

@@ -1,6 +1,5 @@
 // C40 target internals shared by the encoder and the text code.
-#ifndef LDC_ASSEMBLER_C40_FORMS_H
-#define LDC_ASSEMBLER_C40_FORMS_H
+#pragma once
 
 #include "assembler/c40.h"
 
@@ -49,9 +48,8 @@ struct Spec {
 };
 
 const Spec& spec(Mnemonic m);
-ImmKind immKind(Cls c);
-bool isFloatSrc(Cls c);
+ImmKind imm_kind(Cls c);
+bool is_float_src(Cls c);
 
 }  // namespace ldc::as::c40::detail
 
-#endif

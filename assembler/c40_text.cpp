@@ -45,13 +45,13 @@ std::string trim(std::string_view s) {
   return std::string(s.substr(a, b - a));
 }
 
-std::optional<Cond> condByName(std::string_view s) {
+std::optional<Cond> cond_by_name(std::string_view s) {
   for (const CondName& c : kConds)
     if (c.name == s) return c.cond;
   return std::nullopt;
 }
 
-std::optional<Reg> regByName(std::string_view s) {
+std::optional<Reg> reg_by_name(std::string_view s) {
   std::string u = upper(s);
   for (unsigned i = 0; i < kNumRegs; ++i)
     if (kRegNames[i] == u) return Reg(i);
@@ -64,23 +64,23 @@ std::optional<Reg> regByName(std::string_view s) {
   return std::nullopt;
 }
 
-bool isIdentStart(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_' || c == '.'; }
-bool isIdentChar(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.'; }
+bool is_ident_start(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_' || c == '.'; }
+bool is_ident_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.'; }
 
-bool isLabelName(std::string_view s) {
-  if (s.empty() || !isIdentStart(s[0])) return false;
+bool is_label_name(std::string_view s) {
+  if (s.empty() || !is_ident_start(s[0])) return false;
   for (char c : s)
-    if (!isIdentChar(c)) return false;
-  return !regByName(s);
+    if (!is_ident_char(c)) return false;
+  return !reg_by_name(s);
 }
 
 struct Number {
-  bool isFloat = false;
+  bool is_float = false;
   int64_t i = 0;
   double f = 0;
 };
 
-bool allHex(std::string_view s) {
+bool all_hex(std::string_view s) {
   if (s.empty()) return false;
   for (char c : s)
     if (!std::isxdigit(static_cast<unsigned char>(c))) return false;
@@ -88,7 +88,7 @@ bool allHex(std::string_view s) {
 }
 
 // Decimal, 0x hex, TI hex (`0FFFh`), or a decimal float.
-std::optional<Number> parseNumber(std::string_view text) {
+std::optional<Number> parse_number(std::string_view text) {
   std::string s = trim(text);
   bool neg = false;
   size_t p = 0;
@@ -97,26 +97,26 @@ std::optional<Number> parseNumber(std::string_view text) {
   if (body.empty() || !(std::isdigit(static_cast<unsigned char>(body[0])) || body[0] == '.'))
     return std::nullopt;
   Number n;
-  auto finishInt = [&](uint64_t v) -> std::optional<Number> {
+  auto finish_int = [&](uint64_t v) -> std::optional<Number> {
     if (v > (uint64_t(1) << 40)) return std::nullopt;
     n.i = neg ? -int64_t(v) : int64_t(v);
     n.f = double(n.i);
     return n;
   };
   if (body.size() > 2 && body[0] == '0' && (body[1] == 'x' || body[1] == 'X')) {
-    if (!allHex(body.substr(2)) || body.size() > 12) return std::nullopt;
-    return finishInt(std::stoull(body.substr(2), nullptr, 16));
+    if (!all_hex(body.substr(2)) || body.size() > 12) return std::nullopt;
+    return finish_int(std::stoull(body.substr(2), nullptr, 16));
   }
   if (body.size() > 1 && (body.back() == 'h' || body.back() == 'H')) {
     std::string h = body.substr(0, body.size() - 1);
-    if (!allHex(h) || h.size() > 10) return std::nullopt;
-    return finishInt(std::stoull(h, nullptr, 16));
+    if (!all_hex(h) || h.size() > 10) return std::nullopt;
+    return finish_int(std::stoull(h, nullptr, 16));
   }
   bool digits = true;
   for (char c : body) digits = digits && std::isdigit(static_cast<unsigned char>(c));
   if (digits) {
     if (body.size() > 13) return std::nullopt;
-    return finishInt(std::stoull(body));
+    return finish_int(std::stoull(body));
   }
   for (char c : body)
     if (!(std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == 'e' || c == 'E' ||
@@ -125,7 +125,7 @@ std::optional<Number> parseNumber(std::string_view text) {
   char* end = nullptr;
   double v = std::strtod(body.c_str(), &end);
   if (end != body.c_str() + body.size() || !std::isfinite(v)) return std::nullopt;
-  n.isFloat = true;
+  n.is_float = true;
   n.f = neg ? -v : v;
   return n;
 }
@@ -142,7 +142,7 @@ struct RawOp {
 
 [[noreturn]] void fail(const std::string& msg) { throw AsmError(msg); }
 
-Ind parseInd(const std::string& t) {
+Ind parse_ind(const std::string& t) {
   // t starts with '*' and has no spaces.
   std::string u = upper(t);
   size_t p = 1;
@@ -161,7 +161,7 @@ Ind parseInd(const std::string& t) {
     if (u.compare(p, 2, "++") == 0) { post = 1; p += 2; }
     else if (u.compare(p, 2, "--") == 0) { post = 2; p += 2; }
   }
-  bool hasIdx = false;
+  bool has_idx = false;
   int idx = 0;  // 0 displacement, 1 IR0, 2 IR1
   int64_t disp = 1;
   if (p < u.size() && u[p] == '(') {
@@ -171,12 +171,12 @@ Ind parseInd(const std::string& t) {
     if (in == "IR0") idx = 1;
     else if (in == "IR1") idx = 2;
     else {
-      auto n = parseNumber(in);
-      if (!n || n->isFloat || n->i < 0 || n->i > 255)
+      auto n = parse_number(in);
+      if (!n || n->is_float || n->i < 0 || n->i > 255)
         fail("bad displacement in '" + t + "' (0-255, IR0 or IR1)");
       disp = n->i;
     }
-    hasIdx = true;
+    has_idx = true;
     p = close + 1;
   }
   bool circ = false, bitrev = false;
@@ -184,7 +184,7 @@ Ind parseInd(const std::string& t) {
   else if (p < u.size() && u[p] == 'B') { bitrev = true; ++p; }
   if (p != u.size()) fail("bad indirect operand '" + t + "'");
   if (!pre && !post) {
-    if (hasIdx || circ || bitrev) fail("bad indirect operand '" + t + "'");
+    if (has_idx || circ || bitrev) fail("bad indirect operand '" + t + "'");
     ind.mod = kPlain;
     return ind;
   }
@@ -209,7 +209,7 @@ Ind parseInd(const std::string& t) {
   return ind;
 }
 
-RawOp parseRaw(std::string_view text) {
+RawOp parse_raw(std::string_view text) {
   std::string t;
   for (char c : text)
     if (!std::isspace(static_cast<unsigned char>(c))) t += c;
@@ -217,8 +217,8 @@ RawOp parseRaw(std::string_view text) {
   r.text = t;
   if (t.empty()) fail("empty operand");
   if (t[0] == '@') {
-    auto n = parseNumber(t.substr(1));
-    if (!n || n->isFloat || n->i < 0 || n->i > 0xFFFF)
+    auto n = parse_number(t.substr(1));
+    if (!n || n->is_float || n->i < 0 || n->i > 0xFFFF)
       fail("bad direct address '" + t + "' (@0-0xFFFF, the offset from DP)");
     r.kind = RawOp::Direct;
     r.num = *n;
@@ -226,30 +226,30 @@ RawOp parseRaw(std::string_view text) {
   }
   if (t[0] == '*') {
     r.kind = RawOp::Ind;
-    r.ind = parseInd(t);
+    r.ind = parse_ind(t);
     return r;
   }
-  if (auto reg = regByName(t)) {
+  if (auto reg = reg_by_name(t)) {
     r.kind = RawOp::Reg;
     r.reg = *reg;
     return r;
   }
-  if (auto n = parseNumber(t)) {
+  if (auto n = parse_number(t)) {
     r.kind = RawOp::Num;
     r.num = *n;
     return r;
   }
-  if (!isLabelName(t)) fail("bad operand '" + t + "'");
+  if (!is_label_name(t)) fail("bad operand '" + t + "'");
   r.kind = RawOp::Name;
   r.name = t;
   return r;
 }
 
-std::optional<std::pair<Mnemonic, Cond>> mnemonicByName(std::string_view name) {
+std::optional<std::pair<Mnemonic, Cond>> mnemonic_by_name(std::string_view name) {
   std::string u = upper(name);
   for (size_t i = 0; i < size_t(Mnemonic::Count_); ++i) {
     Mnemonic m = Mnemonic(i);
-    if (hasCond(m)) continue;
+    if (has_cond(m)) continue;
     if (upper(spec(m).name) == u) return std::pair{m, Cond::U};
   }
   struct Pre {
@@ -269,11 +269,11 @@ std::optional<std::pair<Mnemonic, Cond>> mnemonicByName(std::string_view name) {
       if (p.m == Mnemonic::Ldic || p.m == Mnemonic::Ldfc) continue;
       return std::pair{p.m, Cond::U};
     }
-    if (auto c = condByName(rest)) return std::pair{p.m, *c};
+    if (auto c = cond_by_name(rest)) return std::pair{p.m, *c};
     if (p.delayed != p.m && rest.back() == 'D') {
       std::string c2 = rest.substr(0, rest.size() - 1);
       if (c2.empty()) return std::pair{p.delayed, Cond::U};
-      if (auto c = condByName(c2)) return std::pair{p.delayed, *c};
+      if (auto c = cond_by_name(c2)) return std::pair{p.delayed, *c};
     }
   }
   return std::nullopt;
@@ -292,30 +292,30 @@ Operand finish(const RawOp& r, Mnemonic m, unsigned pos) {
   const Number& n = r.num;
   bool branch = s.cls == Cls::I || s.cls == Cls::J || s.cls == Cls::JS || (s.cls == Cls::D && pos == 1);
   if (branch) {
-    if (n.isFloat) fail("bad branch target '" + r.text + "'");
+    if (n.is_float) fail("bad branch target '" + r.text + "'");
     return Operand::a(n.i);
   }
   if (s.cls == Cls::Word) {
-    if (n.isFloat || n.i < -(int64_t(1) << 31) || n.i > 0xFFFFFFFFll)
+    if (n.is_float || n.i < -(int64_t(1) << 31) || n.i > 0xFFFFFFFFll)
       fail("bad .word value '" + r.text + "'");
     return Operand::i(n.i);
   }
   bool three = s.cls == Cls::T || s.cls == Cls::T2 || s.cls == Cls::S || s.cls == Cls::S2;
   if (three) {
-    if (n.isFloat || n.i < -128 || n.i > 127) fail("bad immediate '" + r.text + "' (-128..127)");
+    if (n.is_float || n.i < -128 || n.i > 127) fail("bad immediate '" + r.text + "' (-128..127)");
     return Operand::i(n.i);
   }
-  switch (immKind(s.cls)) {
+  switch (imm_kind(s.cls)) {
     case ImmKind::F16: {
-      auto bits = shortFloatFromDouble(n.f);
+      auto bits = short_float_from_double(n.f);
       if (!bits) fail("'" + r.text + "' is not a 16-bit short float (4-bit exponent, 12-bit mantissa)");
       return Operand::f(*bits);
     }
     case ImmKind::S16:
-      if (n.isFloat || n.i < -32768 || n.i > 0xFFFF) fail("bad immediate '" + r.text + "' (16 bits)");
+      if (n.is_float || n.i < -32768 || n.i > 0xFFFF) fail("bad immediate '" + r.text + "' (16 bits)");
       return Operand::i(n.i > 32767 ? n.i - 65536 : n.i);
     case ImmKind::U16:
-      if (n.isFloat || n.i < 0 || n.i > 0xFFFF) fail("bad immediate '" + r.text + "' (0..0xFFFF)");
+      if (n.is_float || n.i < 0 || n.i > 0xFFFF) fail("bad immediate '" + r.text + "' (0..0xFFFF)");
       return Operand::i(n.i);
     case ImmKind::None: break;
   }
@@ -328,8 +328,8 @@ std::string hex(uint64_t v) {
   return buf;
 }
 
-std::string floatText(uint16_t bits) {
-  double v = shortFloatToDouble(bits);
+std::string float_text(uint16_t bits) {
+  double v = short_float_to_double(bits);
   char buf[64];
   for (int prec = 1; prec <= 17; ++prec) {
     std::snprintf(buf, sizeof buf, "%.*g", prec, v);
@@ -343,11 +343,11 @@ std::string floatText(uint16_t bits) {
 // GNU as 2.40 converts some exact short-float decimals one unit in the last
 // place toward zero; a quarter unit more magnitude makes it land on the
 // intended bits. Powers of two (fraction 0) convert exactly as they are.
-std::string gasFloatText(uint16_t bits) {
-  if ((bits & 0x7FF) == 0 || (bits >> 12) == 8) return floatText(bits);
+std::string gas_float_text(uint16_t bits) {
+  if ((bits & 0x7FF) == 0 || (bits >> 12) == 8) return float_text(bits);
   int e = int(bits >> 12 & 0xF);
   if (e >= 8) e -= 16;
-  double v = shortFloatToDouble(bits);
+  double v = short_float_to_double(bits);
   double nudged = v + std::copysign(std::ldexp(1.0, e - 13), v);
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.17g", nudged);
@@ -356,18 +356,18 @@ std::string gasFloatText(uint16_t bits) {
   return s;
 }
 
-std::string operandText(const Operand& o, const Instruction& in, std::string_view base,
-                        bool forGas = false) {
+std::string operand_text(const Operand& o, const Instruction& in, std::string_view base,
+                        bool for_gas = false) {
   const Spec& s = spec(in.mnemonic);
   switch (o.kind) {
     case OperandKind::None: return "";
-    case OperandKind::Reg: return std::string(regName(o.reg));
+    case OperandKind::Reg: return std::string(reg_name(o.reg));
     case OperandKind::Imm:
-      if (immKind(s.cls) == ImmKind::U16) return hex(uint64_t(o.imm));
+      if (imm_kind(s.cls) == ImmKind::U16) return hex(uint64_t(o.imm));
       return std::to_string(o.imm);
-    case OperandKind::Float: return forGas ? gasFloatText(uint16_t(o.imm)) : floatText(uint16_t(o.imm));
+    case OperandKind::Float: return for_gas ? gas_float_text(uint16_t(o.imm)) : float_text(uint16_t(o.imm));
     case OperandKind::Direct: return "@" + hex(uint64_t(o.imm));
-    case OperandKind::Ind: return indText(o.ind);
+    case OperandKind::Ind: return ind_text(o.ind);
     case OperandKind::Label: return o.label;
     case OperandKind::Address:
       if (!base.empty())
@@ -377,7 +377,7 @@ std::string operandText(const Operand& o, const Instruction& in, std::string_vie
   return "";
 }
 
-std::vector<std::string> splitOperands(std::string_view s) {
+std::vector<std::string> split_operands(std::string_view s) {
   std::vector<std::string> out;
   std::string cur;
   int depth = 0;
@@ -395,29 +395,29 @@ std::vector<std::string> splitOperands(std::string_view s) {
   return out;
 }
 
-Instruction parseInstruction(std::string_view text) {
+Instruction parse_instruction(std::string_view text) {
   std::string t = trim(text);
   if (t.empty()) fail("empty instruction");
   if (t.find("||") != std::string::npos) fail("parallel instructions are not in the subset");
   size_t sp = 0;
   while (sp < t.size() && !std::isspace(static_cast<unsigned char>(t[sp]))) ++sp;
   std::string name = t.substr(0, sp);
-  auto mc = mnemonicByName(name);
+  auto mc = mnemonic_by_name(name);
   if (!mc) fail("unknown mnemonic '" + name + "'");
   Instruction in;
   in.mnemonic = mc->first;
   in.cond = mc->second;
-  std::vector<std::string> ops = splitOperands(std::string_view(t).substr(sp));
+  std::vector<std::string> ops = split_operands(std::string_view(t).substr(sp));
   if (ops.size() > 3) fail("too many operands");
   for (size_t i = 0; i < ops.size(); ++i) {
     if (ops[i].empty()) fail("empty operand");
-    in.ops[i] = finish(parseRaw(ops[i]), in.mnemonic, unsigned(i));
+    in.ops[i] = finish(parse_raw(ops[i]), in.mnemonic, unsigned(i));
   }
-  in.numOperands = uint8_t(ops.size());
+  in.num_operands = uint8_t(ops.size());
   return in;
 }
 
-std::pair<std::string, std::string> splitComment(std::string_view line) {
+std::pair<std::string, std::string> split_comment(std::string_view line) {
   size_t c = line.find(';');
   if (c == std::string_view::npos) return {std::string(line), ""};
   return {std::string(line.substr(0, c)), trim(line.substr(c + 1))};
@@ -425,24 +425,24 @@ std::pair<std::string, std::string> splitComment(std::string_view line) {
 
 }  // namespace
 
-std::string_view regName(Reg r) { return unsigned(r) < kNumRegs ? kRegNames[unsigned(r)] : "?"; }
+std::string_view reg_name(Reg r) { return unsigned(r) < kNumRegs ? kRegNames[unsigned(r)] : "?"; }
 
-std::string_view condName(Cond c) {
+std::string_view cond_name(Cond c) {
   for (const CondName& n : kConds)
     if (n.cond == c) return n.name;
   return "?";
 }
 
-std::string mnemonicName(Mnemonic m, Cond c) {
+std::string mnemonic_name(Mnemonic m, Cond c) {
   if (size_t(m) >= size_t(Mnemonic::Count_)) return "?";
   std::string n(spec(m).name);
-  if (!hasCond(m)) return n;
-  n += condName(c);
+  if (!has_cond(m)) return n;
+  n += cond_name(c);
   if (m == Mnemonic::Bcd || m == Mnemonic::Dbcd) n += "D";
   return n;
 }
 
-std::string indText(const Ind& i) {
+std::string ind_text(const Ind& i) {
   std::string a = "AR" + std::to_string(i.ar);
   if (i.mod == kPlain) return "*" + a;
   if (i.mod == kBitRev) return "*" + a + "++(IR0)B";
@@ -460,7 +460,7 @@ std::string indText(const Ind& i) {
   }
 }
 
-std::optional<uint16_t> shortFloatFromDouble(double v) {
+std::optional<uint16_t> short_float_from_double(double v) {
   if (v == 0) return uint16_t(0x8000);
   if (!std::isfinite(v)) return std::nullopt;
   int x = 0;
@@ -483,7 +483,7 @@ std::optional<uint16_t> shortFloatFromDouble(double v) {
   return uint16_t((unsigned(e) & 0xF) << 12 | unsigned(s) << 11 | unsigned(f));
 }
 
-double shortFloatToDouble(uint16_t bits) {
+double short_float_to_double(uint16_t bits) {
   int e = int(bits >> 12 & 0xF);
   if (e >= 8) e -= 16;
   if (e == -8) return 0;
@@ -492,60 +492,60 @@ double shortFloatToDouble(uint16_t bits) {
   return std::ldexp(mant, e);
 }
 
-std::string print(const Instruction& in, std::string_view addressBase) {
-  std::string out = mnemonicName(in.mnemonic, in.cond);
-  for (unsigned i = 0; i < in.numOperands && i < 3; ++i)
-    out += (i ? ", " : " ") + operandText(in.ops[i], in, addressBase);
+std::string print(const Instruction& in, std::string_view address_base) {
+  std::string out = mnemonic_name(in.mnemonic, in.cond);
+  for (unsigned i = 0; i < in.num_operands && i < 3; ++i)
+    out += (i ? ", " : " ") + operand_text(in.ops[i], in, address_base);
   return out;
 }
 
-std::string printGnuAs(const Instruction& in, std::string_view addressBase) {
-  std::string out = mnemonicName(in.mnemonic, in.cond);
-  for (unsigned i = 0; i < in.numOperands && i < 3; ++i)
-    out += (i ? ", " : " ") + operandText(in.ops[i], in, addressBase, true);
+std::string print_gnu_as(const Instruction& in, std::string_view address_base) {
+  std::string out = mnemonic_name(in.mnemonic, in.cond);
+  for (unsigned i = 0; i < in.num_operands && i < 3; ++i)
+    out += (i ? ", " : " ") + operand_text(in.ops[i], in, address_base, true);
   return out;
 }
 
 Instruction parse(std::string_view line) {
-  auto [code, comment] = splitComment(line);
+  auto [code, comment] = split_comment(line);
   std::string t = trim(code);
   size_t colon = t.find(':');
-  if (colon != std::string::npos && colon > 0 && isLabelName(trim(t.substr(0, colon))))
-    fail("labels are not instructions (use parseLine)");
-  return parseInstruction(t);
+  if (colon != std::string::npos && colon > 0 && is_label_name(trim(t.substr(0, colon))))
+    fail("labels are not instructions (use parse_line)");
+  return parse_instruction(t);
 }
 
-Line parseLine(std::string_view text) {
+Line parse_line(std::string_view text) {
   Line l;
-  auto [code, comment] = splitComment(text);
+  auto [code, comment] = split_comment(text);
   l.comment = comment;
   std::string t = trim(code);
   size_t colon = t.find(':');
   if (colon != std::string::npos) {
     std::string name = trim(t.substr(0, colon));
-    if (!isLabelName(name)) fail("bad label '" + name + "'");
+    if (!is_label_name(name)) fail("bad label '" + name + "'");
     l.label = name;
     t = trim(t.substr(colon + 1));
   }
-  if (!t.empty()) l.inst = parseInstruction(t);
+  if (!t.empty()) l.inst = parse_instruction(t);
   return l;
 }
 
-std::string toGnuAs(const C40Program& p) {
-  return gnuAsText(p, "\t.text\n.Lcode:\n", ";",
-                   [](const Instruction& in, bool) { return printGnuAs(in, ".Lcode"); });
+std::string to_gnu_as(const C40Program& p) {
+  return gnu_as_text(p, "\t.text\n.Lcode:\n", ";",
+                   [](const Instruction& in, bool) { return print_gnu_as(in, ".Lcode"); });
 }
 
 std::string listing(const C40Program& p, const Result& r) {
-  auto itemHead = [&](const ItemLayout& lay) {
+  auto item_head = [&](const ItemLayout& lay) {
     std::string word = "          ";
     if (lay.size == 4 && lay.offset + 4 <= r.code.size())
-      word = listingField("%08x  ", uint32_t(r.code[lay.offset]) | uint32_t(r.code[lay.offset + 1]) << 8 |
+      word = listing_field("%08x  ", uint32_t(r.code[lay.offset]) | uint32_t(r.code[lay.offset + 1]) << 8 |
                                         uint32_t(r.code[lay.offset + 2]) << 16 | uint32_t(r.code[lay.offset + 3]) << 24);
-    return listingField("%06x  ", lay.offset / 4) + word;
+    return listing_field("%06x  ", lay.offset / 4) + word;
   };
-  return listingText(
-      p, r, ";", [&](uint32_t off) { return listingField("%06x", off / 4) + "            "; }, itemHead,
+  return listing_text(
+      p, r, ";", [&](uint32_t off) { return listing_field("%06x", off / 4) + "            "; }, item_head,
       [](const Instruction& in, const ItemLayout&) { return print(in); });
 }
 

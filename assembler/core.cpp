@@ -8,7 +8,7 @@
 
 namespace ldc::as {
 
-std::string listingField(const char* fmt, uint32_t v) {
+std::string listing_field(const char* fmt, uint32_t v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, fmt, v);
   return buf;
@@ -25,17 +25,17 @@ void Encoding::put32(uint32_t v) {
   for (int i = 0; i < 4; ++i) put(uint8_t(v >> (8 * i)));
 }
 
-void Encoding::addFixup(Fixup f) {
-  if (numFixups >= fixups.size()) throw AsmError("too many fixups in one instruction");
-  fixups[numFixups++] = f;
+void Encoding::add_fixup(Fixup f) {
+  if (num_fixups >= fixups.size()) throw AsmError("too many fixups in one instruction");
+  fixups[num_fixups++] = f;
 }
 
-bool fixupValue(const FixupKind& k, int64_t target, int64_t addend,
-                int64_t instStart, int64_t instSize, int64_t& value) {
+bool fixup_value(const FixupKind& k, int64_t target, int64_t addend,
+                int64_t inst_start, int64_t inst_size, int64_t& value) {
   int64_t v = target + addend;
-  if (k.pcRelative) {
-    int64_t pc = (k.pcBase == PcBase::InstructionEnd ? instStart + instSize : instStart) +
-                 int64_t(k.pcBias) * k.scale;
+  if (k.pc_relative) {
+    int64_t pc = (k.pc_base == PcBase::InstructionEnd ? inst_start + inst_size : inst_start) +
+                 int64_t(k.pc_bias) * k.scale;
     v -= pc;
   }
   if (k.scale > 1) {
@@ -46,22 +46,22 @@ bool fixupValue(const FixupKind& k, int64_t target, int64_t addend,
   return true;
 }
 
-bool fixupFits(const FixupKind& k, int64_t value) {
-  if (k.bitWidth >= 64) return true;
-  if (k.isSigned) {
-    int64_t lim = int64_t(1) << (k.bitWidth - 1);
+bool fixup_fits(const FixupKind& k, int64_t value) {
+  if (k.bit_width >= 64) return true;
+  if (k.is_signed) {
+    int64_t lim = int64_t(1) << (k.bit_width - 1);
     return value >= -lim && value < lim;
   }
-  return value >= 0 && uint64_t(value) < (uint64_t(1) << k.bitWidth);
+  return value >= 0 && uint64_t(value) < (uint64_t(1) << k.bit_width);
 }
 
-void applyFixup(const FixupKind& k, std::span<uint8_t> code, size_t offset, int64_t value) {
+void apply_fixup(const FixupKind& k, std::span<uint8_t> code, size_t offset, int64_t value) {
   uint64_t c = 0;
-  for (unsigned i = 0; i < k.containerBytes; ++i) c |= uint64_t(code[offset + i]) << (8 * i);
-  uint64_t mask = k.bitWidth >= 64 ? ~uint64_t(0) : (uint64_t(1) << k.bitWidth) - 1;
-  c &= ~(mask << k.bitShift);
-  c |= (uint64_t(value) & mask) << k.bitShift;
-  for (unsigned i = 0; i < k.containerBytes; ++i) code[offset + i] = uint8_t(c >> (8 * i));
+  for (unsigned i = 0; i < k.container_bytes; ++i) c |= uint64_t(code[offset + i]) << (8 * i);
+  uint64_t mask = k.bit_width >= 64 ? ~uint64_t(0) : (uint64_t(1) << k.bit_width) - 1;
+  c &= ~(mask << k.bit_shift);
+  c |= (uint64_t(value) & mask) << k.bit_shift;
+  for (unsigned i = 0; i < k.container_bytes; ++i) code[offset + i] = uint8_t(c >> (8 * i));
 }
 
 namespace detail {
@@ -77,9 +77,9 @@ struct Ref {
 struct InstState {
   uint32_t block = 0, item = 0;
   Encoding enc;
-  bool longForm = false;
+  bool long_form = false;
   bool bad = false;  // failed to encode
-  bool hasLocal = false;
+  bool has_local = false;
   uint32_t offset = 0;  // unit-relative
   std::array<Ref, 2> refs{};
 };
@@ -96,7 +96,7 @@ struct LocalKeyHash {
 };
 
 struct Pending {
-  uint32_t instStart, instSize, fieldOffset;
+  uint32_t inst_start, inst_size, field_offset;
   uint16_t kind;
   Ref ref;
   int64_t addend;
@@ -108,7 +108,7 @@ class Core {
  public:
   // The declared global names must outlive the core (the table keeps views).
   Core(const TargetInfo& t, std::span<const std::string> globals, Mode mode) : t_(t), mode_(mode) {
-    r_.globalAddresses.assign(globals.size(), -1);
+    r_.global_addresses.assign(globals.size(), -1);
     globalDefBlock_.assign(globals.size(), -1);
     globalNames_ = globals;
     for (uint32_t i = 0; i < globals.size(); ++i) {
@@ -120,18 +120,18 @@ class Core {
   // The whole program at once (assemble()).
   Result run(const ProgramView& p) {
     p_ = &p;
-    size_t nb = p.numBlocks();
+    size_t nb = p.num_blocks();
     lines_.reserve(nb);
-    for (size_t b = 0; b < nb; ++b) lines_.push_back(p.sourceLine(b));
-    r_.blockOffsets.assign(nb, 0);
+    for (size_t b = 0; b < nb; ++b) lines_.push_back(p.source_line(b));
+    r_.block_offsets.assign(nb, 0);
     r_.items.resize(nb);
-    for (size_t b = 0; b < nb; ++b) r_.items[b].resize(p.numItems(b));
-    for (uint32_t b = 0; b < nb; ++b) defineGlobals(b);
-    notePeak();
+    for (size_t b = 0; b < nb; ++b) r_.items[b].resize(p.num_items(b));
+    for (uint32_t b = 0; b < nb; ++b) define_globals(b);
+    note_peak();
     if (mode_ == Mode::Blockwise) {
-      for (uint32_t b = 0; b < nb; ++b) assembleUnit(b, b + 1);
+      for (uint32_t b = 0; b < nb; ++b) assemble_unit(b, b + 1);
     } else {
-      assembleUnit(0, uint32_t(nb));
+      assemble_unit(0, uint32_t(nb));
     }
     return finish();
   }
@@ -140,16 +140,16 @@ class Core {
   // the next one; its items are not looked at again after this call.
   void block(const ProgramView& p, uint32_t b) {
     p_ = &p;
-    lines_.push_back(p.sourceLine(b));
-    r_.blockOffsets.push_back(0);
-    r_.items.emplace_back(p.numItems(b));
-    defineGlobals(b);
-    assembleUnit(b, b + 1);
+    lines_.push_back(p.source_line(b));
+    r_.block_offsets.push_back(0);
+    r_.items.emplace_back(p.num_items(b));
+    define_globals(b);
+    assemble_unit(b, b + 1);
     p_ = nullptr;
   }
 
   Result finish() {
-    resolvePending();
+    resolve_pending();
     return std::move(r_);
   }
 
@@ -159,16 +159,16 @@ class Core {
     r_.errors.push_back(Error{block, line, std::move(msg)});
   }
 
-  void notePeak() {
+  void note_peak() {
     size_t n = globals_.size() + locals_.size();
-    if (n > r_.stats.peakLabelEntries) r_.stats.peakLabelEntries = n;
+    if (n > r_.stats.peak_label_entries) r_.stats.peak_label_entries = n;
   }
 
   // Pass 1: each global label definition of block b must be declared and
   // defined once.
-  void defineGlobals(uint32_t b) {
-    for (size_t i = 0; i < p_->numItems(b); ++i) {
-      if (p_->kind(b, i) != ItemKind::Label || !p_->isGlobal(b, i)) continue;
+  void define_globals(uint32_t b) {
+    for (size_t i = 0; i < p_->num_items(b); ++i) {
+      if (p_->kind(b, i) != ItemKind::Label || !p_->is_global(b, i)) continue;
       std::string_view name = p_->label(b, i);
       auto it = globals_.find(name);
       if (it == globals_.end()) {
@@ -181,15 +181,15 @@ class Core {
     }
   }
 
-  void encodeState(InstState& s) {
-    ++r_.stats.encodeCalls;
+  void encode_state(InstState& s) {
+    ++r_.stats.encode_calls;
     s.enc = Encoding{};
     try {
-      p_->encode(s.block, s.item, s.longForm, s.enc);
-      for (unsigned f = 0; f < s.enc.numFixups; ++f) {
+      p_->encode(s.block, s.item, s.long_form, s.enc);
+      for (unsigned f = 0; f < s.enc.num_fixups; ++f) {
         const Fixup& fx = s.enc.fixups[f];
-        if (fx.kind >= t_.fixupKinds.size() ||
-            fx.offset + t_.fixupKinds[fx.kind].containerBytes > s.enc.size)
+        if (fx.kind >= t_.fixup_kinds.size() ||
+            fx.offset + t_.fixup_kinds[fx.kind].container_bytes > s.enc.size)
           throw AsmError("encoder produced an invalid fixup");
       }
     } catch (const AsmError& e) {
@@ -209,23 +209,23 @@ class Core {
     return {RefType::Dead, 0};
   }
 
-  void resolveRefs(InstState& s, bool report = false) {
-    s.hasLocal = false;
-    for (unsigned f = 0; f < s.enc.numFixups; ++f) {
+  void resolve_refs(InstState& s, bool report = false) {
+    s.has_local = false;
+    for (unsigned f = 0; f < s.enc.num_fixups; ++f) {
       s.refs[f] = resolve(s.block, s.enc.fixups[f].label, report);
-      if (s.refs[f].type == RefType::Local) s.hasLocal = true;
+      if (s.refs[f].type == RefType::Local) s.has_local = true;
     }
   }
 
   // Lays out and relaxes blocks [first, last) as one unit, then emits it.
-  void assembleUnit(uint32_t first, uint32_t last) {
+  void assemble_unit(uint32_t first, uint32_t last) {
     ++r_.stats.units;
     locals_.clear();
     localAddr_.clear();
     // Local label table.
     for (uint32_t b = first; b < last; ++b) {
-      for (size_t i = 0; i < p_->numItems(b); ++i) {
-        if (p_->kind(b, i) != ItemKind::Label || p_->isGlobal(b, i)) continue;
+      for (size_t i = 0; i < p_->num_items(b); ++i) {
+        if (p_->kind(b, i) != ItemKind::Label || p_->is_global(b, i)) continue;
         std::string_view name = p_->label(b, i);
         if (globals_.count(name)) {
           error(int(b), "local label '" + std::string(name) + "' clashes with a global label");
@@ -238,50 +238,50 @@ class Core {
         localAddr_.push_back(0);
       }
     }
-    notePeak();
+    note_peak();
 
     // First encoding: short forms, long ones for non-local targets.
     std::vector<InstState> insts;
     for (uint32_t b = first; b < last; ++b) {
-      for (uint32_t i = 0; i < p_->numItems(b); ++i) {
+      for (uint32_t i = 0; i < p_->num_items(b); ++i) {
         if (p_->kind(b, i) != ItemKind::Instruction) continue;
         InstState s;
         s.block = b;
         s.item = i;
-        encodeState(s);
-        resolveRefs(s, true);
+        encode_state(s);
+        resolve_refs(s, true);
         bool far = false;
-        for (unsigned f = 0; f < s.enc.numFixups; ++f)
+        for (unsigned f = 0; f < s.enc.num_fixups; ++f)
           far |= s.refs[f].type == RefType::Global || s.refs[f].type == RefType::Absolute;
         if (far && !s.bad) {
-          s.longForm = true;
-          encodeState(s);
-          resolveRefs(s);
+          s.long_form = true;
+          encode_state(s);
+          resolve_refs(s);
         }
         insts.push_back(std::move(s));
       }
     }
 
     // Relaxation: grow the forms that do not reach, until nothing changes.
-    std::vector<uint32_t> blockStart(last - first);
+    std::vector<uint32_t> block_start(last - first);
     for (;;) {
-      ++r_.stats.relaxPasses;
-      layout(first, last, insts, blockStart);
+      ++r_.stats.relax_passes;
+      layout(first, last, insts, block_start);
       bool changed = false;
       for (auto& s : insts) {
-        if (!s.hasLocal || s.longForm || s.bad) continue;
-        for (unsigned f = 0; f < s.enc.numFixups; ++f) {
+        if (!s.has_local || s.long_form || s.bad) continue;
+        for (unsigned f = 0; f < s.enc.num_fixups; ++f) {
           if (s.refs[f].type != RefType::Local) continue;
           const Fixup& fx = s.enc.fixups[f];
-          const FixupKind& k = t_.fixupKinds[fx.kind];
-          if (k.relaxTo < 0) continue;
+          const FixupKind& k = t_.fixup_kinds[fx.kind];
+          if (k.relax_to < 0) continue;
           int64_t v;
-          bool ok = fixupValue(k, localAddr_[s.refs[f].index], fx.addend, s.offset,
+          bool ok = fixup_value(k, localAddr_[s.refs[f].index], fx.addend, s.offset,
                                s.enc.size, v);
-          if (!ok || !fixupFits(k, v)) {
-            s.longForm = true;
-            encodeState(s);
-            resolveRefs(s);
+          if (!ok || !fixup_fits(k, v)) {
+            s.long_form = true;
+            encode_state(s);
+            resolve_refs(s);
             changed = true;
             break;
           }
@@ -290,19 +290,19 @@ class Core {
       if (!changed) break;
     }
 
-    emit(first, last, insts, blockStart);
+    emit(first, last, insts, block_start);
   }
 
   void layout(uint32_t first, uint32_t last, std::vector<InstState>& insts,
-              std::vector<uint32_t>& blockStart) {
+              std::vector<uint32_t>& block_start) {
     uint32_t cur = 0;
     size_t n = 0;
     for (uint32_t b = first; b < last; ++b) {
-      blockStart[b - first] = cur;
-      for (size_t i = 0; i < p_->numItems(b); ++i) {
+      block_start[b - first] = cur;
+      for (size_t i = 0; i < p_->num_items(b); ++i) {
         switch (p_->kind(b, i)) {
           case ItemKind::Label:
-            if (!p_->isGlobal(b, i)) {
+            if (!p_->is_global(b, i)) {
               auto it = locals_.find(LocalKey{b, p_->label(b, i)});
               if (it != locals_.end()) localAddr_[it->second] = cur;
             }
@@ -320,36 +320,36 @@ class Core {
   }
 
   void emit(uint32_t first, uint32_t last, std::vector<InstState>& insts,
-            const std::vector<uint32_t>& blockStart) {
+            const std::vector<uint32_t>& block_start) {
     const uint32_t base = uint32_t(r_.code.size());
     size_t n = 0;
     for (uint32_t b = first; b < last; ++b) {
-      r_.blockOffsets[b] = base + blockStart[b - first];
-      uint32_t cur = r_.blockOffsets[b];
-      for (size_t i = 0; i < p_->numItems(b); ++i) {
+      r_.block_offsets[b] = base + block_start[b - first];
+      uint32_t cur = r_.block_offsets[b];
+      for (size_t i = 0; i < p_->num_items(b); ++i) {
         ItemLayout& lay = r_.items[b][i];
         lay.offset = cur;
         ItemKind kind = p_->kind(b, i);
-        if (kind == ItemKind::Label && p_->isGlobal(b, i)) {
+        if (kind == ItemKind::Label && p_->is_global(b, i)) {
           auto g = globals_.find(p_->label(b, i));
           if (g != globals_.end() && globalDefBlock_[g->second] == int(b))
-            r_.globalAddresses[g->second] = cur;
+            r_.global_addresses[g->second] = cur;
         }
         if (kind != ItemKind::Instruction) continue;
         InstState& s = insts[n++];
         lay.size = s.enc.size;
-        lay.longForm = s.longForm;
+        lay.long_form = s.long_form;
         r_.code.insert(r_.code.end(), s.enc.bytes.begin(), s.enc.bytes.begin() + s.enc.size);
-        for (unsigned f = 0; f < s.enc.numFixups; ++f) {
+        for (unsigned f = 0; f < s.enc.num_fixups; ++f) {
           const Fixup& fx = s.enc.fixups[f];
           // a pending fixup outlives the block: name its label from the global table
           std::string_view label =
               s.refs[f].type == RefType::Global ? std::string_view(globalNames_[s.refs[f].index]) : fx.label;
           Pending pd{cur, s.enc.size, cur + fx.offset, fx.kind, s.refs[f], fx.addend, b, label};
           if (s.refs[f].type == RefType::Local) {
-            const FixupKind& k = t_.fixupKinds[fx.kind];
+            const FixupKind& k = t_.fixup_kinds[fx.kind];
             patch(pd, base + localAddr_[s.refs[f].index]);
-            if (!k.pcRelative) r_.relocations.push_back({pd.fieldOffset, pd.kind});
+            if (!k.pc_relative) r_.relocations.push_back({pd.field_offset, pd.kind});
           } else if (s.refs[f].type != RefType::Dead) {
             pending_.push_back(pd);
           }
@@ -360,35 +360,35 @@ class Core {
   }
 
   void patch(const Pending& pd, int64_t target) {
-    const FixupKind& k = t_.fixupKinds[pd.kind];
+    const FixupKind& k = t_.fixup_kinds[pd.kind];
     int64_t v;
     std::string what = pd.label.empty() ? "address " + std::to_string(pd.addend)
                                         : "label '" + std::string(pd.label) + "'";
-    if (!fixupValue(k, target, pd.addend, pd.instStart, pd.instSize, v)) {
+    if (!fixup_value(k, target, pd.addend, pd.inst_start, pd.inst_size, v)) {
       error(int(pd.block), what + " is not aligned for fixup " + std::string(k.name));
       return;
     }
-    if (!fixupFits(k, v)) {
+    if (!fixup_fits(k, v)) {
       error(int(pd.block), what + " out of range for fixup " + std::string(k.name));
       return;
     }
-    applyFixup(k, r_.code, pd.fieldOffset, v);
+    apply_fixup(k, r_.code, pd.field_offset, v);
   }
 
   // After all blocks are laid out: references to globals and addresses.
-  void resolvePending() {
+  void resolve_pending() {
     for (const Pending& pd : pending_) {
-      ++r_.stats.globalFixups;
+      ++r_.stats.global_fixups;
       int64_t target = 0;
       if (pd.ref.type == RefType::Global) {
-        target = r_.globalAddresses[pd.ref.index];
+        target = r_.global_addresses[pd.ref.index];
         if (target < 0) {
           error(int(pd.block), "undefined label '" + std::string(pd.label) + "'");
           continue;
         }
       }
       patch(pd, target);
-      if (!t_.fixupKinds[pd.kind].pcRelative) r_.relocations.push_back({pd.fieldOffset, pd.kind});
+      if (!t_.fixup_kinds[pd.kind].pc_relative) r_.relocations.push_back({pd.field_offset, pd.kind});
     }
   }
 
@@ -411,7 +411,7 @@ using core_impl::Core;
 Result assemble(const TargetInfo& target, const ProgramView& program, Mode mode) {
   auto t0 = std::chrono::steady_clock::now();
   Result r = Core(target, program.globals(), mode).run(program);
-  r.stats.elapsedNs = std::chrono::duration_cast<std::chrono::nanoseconds>(
+  r.stats.elapsed_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
                           std::chrono::steady_clock::now() - t0)
                           .count();
   return r;
@@ -428,24 +428,24 @@ struct Stream {
 
 void StreamDeleter::operator()(Stream* s) const { delete s; }
 
-std::unique_ptr<Stream, StreamDeleter> streamBegin(const TargetInfo& target, std::vector<std::string> globals) {
+std::unique_ptr<Stream, StreamDeleter> stream_begin(const TargetInfo& target, std::vector<std::string> globals) {
   auto t0 = std::chrono::steady_clock::now();
   std::unique_ptr<Stream, StreamDeleter> s(new Stream(target, std::move(globals)));
   s->ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
   return s;
 }
 
-void streamBlock(Stream& s, const ProgramView& block) {
+void stream_block(Stream& s, const ProgramView& block) {
   auto t0 = std::chrono::steady_clock::now();
   s.core.block(block, s.blocks++);
   s.ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
 }
 
-Result streamFinish(Stream& s) {
+Result stream_finish(Stream& s) {
   auto t0 = std::chrono::steady_clock::now();
   Result r = s.core.finish();
   s.ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
-  r.stats.elapsedNs = s.ns;
+  r.stats.elapsed_ns = s.ns;
   return r;
 }
 

@@ -122,7 +122,7 @@ constexpr Form kForms[] = {
 
 std::span<const Form> forms() { return kForms; }
 
-unsigned numOps(const Form& f) {
+unsigned num_ops(const Form& f) {
   unsigned n = 0;
   while (n < 3 && f.ops[n] != OT::None) ++n;
   return n;
@@ -130,15 +130,15 @@ unsigned numOps(const Form& f) {
 
 namespace {
 
-bool isImmType(OT t) { return t == OT::I8 || t == OT::IB || t == OT::I32; }
-bool isRelType(OT t) { return t == OT::Rel8 || t == OT::Rel32; }
-bool isMemOnly(OT t) { return t == OT::M8 || t == OT::M32 || t == OT::M64 || t == OT::MA; }
-bool isRegOnly(OT t) {
+bool is_imm_type(OT t) { return t == OT::I8 || t == OT::IB || t == OT::I32; }
+bool is_rel_type(OT t) { return t == OT::Rel8 || t == OT::Rel32; }
+bool is_mem_only(OT t) { return t == OT::M8 || t == OT::M32 || t == OT::M64 || t == OT::MA; }
+bool is_reg_only(OT t) {
   return t == OT::R8 || t == OT::R32 || t == OT::R64 || t == OT::X;
 }
 
 // The register class of a register-or-memory type's register half.
-RegClass regClassOf(OT t) {
+RegClass reg_class_of(OT t) {
   switch (t) {
     case OT::R8: case OT::RM8: case OT::Al: case OT::Cl: return RegClass::Gp8;
     case OT::R32: case OT::RM32: case OT::Eax: return RegClass::Gp32;
@@ -148,7 +148,7 @@ RegClass regClassOf(OT t) {
   }
 }
 
-Size memSizeOf(OT t) {
+Size mem_size_of(OT t) {
   switch (t) {
     case OT::M8: case OT::RM8: return Size::Byte;
     case OT::M32: case OT::RM32: case OT::XM32: return Size::Dword;
@@ -157,24 +157,24 @@ Size memSizeOf(OT t) {
   }
 }
 
-bool acceptsMem(OT t) { return isMemOnly(t) || t == OT::RM8 || t == OT::RM32 || t == OT::RM64 || t == OT::XM32; }
-bool acceptsReg(OT t) { return isRegOnly(t) || t == OT::RM8 || t == OT::RM32 || t == OT::RM64 || t == OT::XM32; }
+bool accepts_mem(OT t) { return is_mem_only(t) || t == OT::RM8 || t == OT::RM32 || t == OT::RM64 || t == OT::XM32; }
+bool accepts_reg(OT t) { return is_reg_only(t) || t == OT::RM8 || t == OT::RM32 || t == OT::RM64 || t == OT::XM32; }
 
-bool hasRegOperand(const Instruction& in) {
-  for (unsigned i = 0; i < in.numOperands; ++i)
+bool has_reg_operand(const Instruction& in) {
+  for (unsigned i = 0; i < in.num_operands; ++i)
     if (in.ops[i].kind == OperandKind::Reg && in.ops[i].reg != r8(CX)) return true;
   return false;
 }
 
 // Immediate in range for an operand of the form's size.
-bool immFits(OT t, int64_t v, bool w) {
+bool imm_fits(OT t, int64_t v, bool w) {
   switch (t) {
     case OT::IB: return v >= -128 && v <= 255;
     case OT::One: return v == 1;
     case OT::I32:
       return w ? (v >= INT32_MIN && v <= INT32_MAX) : (v >= INT32_MIN && v <= int64_t(UINT32_MAX));
     case OT::I8: {
-      if (!immFits(OT::I32, v, w)) return false;
+      if (!imm_fits(OT::I32, v, w)) return false;
       int64_t s = w ? v : int64_t(int32_t(uint32_t(v)));
       return s >= -128 && s <= 127;
     }
@@ -182,7 +182,7 @@ bool immFits(OT t, int64_t v, bool w) {
   }
 }
 
-bool matches(OT t, const Operand& o, const Form& f, const Instruction& in, bool longForm) {
+bool matches(OT t, const Operand& o, const Form& f, const Instruction& in, bool long_form) {
   switch (o.kind) {
     case OperandKind::Reg:
       switch (t) {
@@ -190,19 +190,19 @@ bool matches(OT t, const Operand& o, const Form& f, const Instruction& in, bool 
         case OT::Eax: return o.reg == r32(AX);
         case OT::Rax: return o.reg == r64(AX);
         case OT::Cl: return o.reg == r8(CX);
-        default: return acceptsReg(t) && o.reg.cls == regClassOf(t);
+        default: return accepts_reg(t) && o.reg.cls == reg_class_of(t);
       }
     case OperandKind::Mem:
-      if (!acceptsMem(t)) return false;
+      if (!accepts_mem(t)) return false;
       if (t == OT::MA) return true;
       if (o.mem.size == Size::None)
-        return hasRegOperand(in) || in.mnemonic == Mnemonic::Jmp || in.mnemonic == Mnemonic::Call;
-      return o.mem.size == memSizeOf(t);
+        return has_reg_operand(in) || in.mnemonic == Mnemonic::Jmp || in.mnemonic == Mnemonic::Call;
+      return o.mem.size == mem_size_of(t);
     case OperandKind::Imm:
-      return (isImmType(t) || t == OT::One) && immFits(t, o.imm, f.w);
+      return (is_imm_type(t) || t == OT::One) && imm_fits(t, o.imm, f.w);
     case OperandKind::Label:
     case OperandKind::Address:
-      if (t == OT::Rel8) return !longForm && !in.longBranch;
+      if (t == OT::Rel8) return !long_form && !in.long_branch;
       return t == OT::Rel32;
     case OperandKind::None:
       return false;
@@ -210,12 +210,12 @@ bool matches(OT t, const Operand& o, const Form& f, const Instruction& in, bool 
   return false;
 }
 
-const Form* findForm(const Instruction& in, bool longForm) {
+const Form* find_form(const Instruction& in, bool long_form) {
   for (const Form& f : kForms) {
-    if (f.mn != in.mnemonic || numOps(f) != in.numOperands) continue;
+    if (f.mn != in.mnemonic || num_ops(f) != in.num_operands) continue;
     bool ok = true;
-    for (unsigned i = 0; i < in.numOperands && ok; ++i)
-      ok = matches(f.ops[i], in.ops[i], f, in, longForm);
+    for (unsigned i = 0; i < in.num_operands && ok; ++i)
+      ok = matches(f.ops[i], in.ops[i], f, in, long_form);
     if (ok) return &f;
   }
   return nullptr;
@@ -223,9 +223,9 @@ const Form* findForm(const Instruction& in, bool longForm) {
 
 uint8_t hi(Reg r) { return (r.num >> 3) & 1; }
 uint8_t lo(Reg r) { return r.num & 7; }
-bool needsRex(Reg r) { return r.cls == RegClass::Gp8 && r.num >= 4 && r.num <= 7; }
+bool needs_rex(Reg r) { return r.cls == RegClass::Gp8 && r.num >= 4 && r.num <= 7; }
 
-void checkMem(const Mem& m) {
+void check_mem(const Mem& m) {
   if (m.base.valid() && m.base.cls != RegClass::Gp64 && m.base.cls != RegClass::Rip)
     throw AsmError("memory base must be a 64-bit register or rip");
   if (m.index.valid()) {
@@ -238,7 +238,7 @@ void checkMem(const Mem& m) {
   if (!m.index.valid() && m.scale != 1) throw AsmError("scale without an index register");
 }
 
-void putModRM(Encoding& out, uint8_t reg, const Operand& rm) {
+void put_mod_rm(Encoding& out, uint8_t reg, const Operand& rm) {
   if (rm.kind == OperandKind::Reg) {
     out.put(uint8_t(0xC0 | (reg & 7) << 3 | lo(rm.reg)));
     return;
@@ -273,50 +273,50 @@ void putModRM(Encoding& out, uint8_t reg, const Operand& rm) {
   if (mod == 2) out.put32(uint32_t(m.disp));
 }
 
-void encodeForm(const Form& f, const Instruction& in, Encoding& out) {
-  const Operand* regOp = nullptr;  // goes in ModRM.reg
-  const Operand* rmOp = nullptr;   // goes in ModRM.rm
-  uint8_t regField = 0;
+void encode_form(const Form& f, const Instruction& in, Encoding& out) {
+  const Operand* reg_op = nullptr;  // goes in ModRM.reg
+  const Operand* rm_op = nullptr;   // goes in ModRM.rm
+  uint8_t reg_field = 0;
   switch (f.enc) {
-    case Enc::MR: rmOp = &in.ops[0]; regOp = &in.ops[1]; break;
-    case Enc::RM: regOp = &in.ops[0]; rmOp = &in.ops[1]; break;
-    case Enc::M: rmOp = &in.ops[0]; regField = uint8_t(f.digit); break;
-    case Enc::O: regOp = &in.ops[0]; break;
+    case Enc::MR: rm_op = &in.ops[0]; reg_op = &in.ops[1]; break;
+    case Enc::RM: reg_op = &in.ops[0]; rm_op = &in.ops[1]; break;
+    case Enc::M: rm_op = &in.ops[0]; reg_field = uint8_t(f.digit); break;
+    case Enc::O: reg_op = &in.ops[0]; break;
     default: break;
   }
-  if (regOp) regField = regOp->reg.num;
+  if (reg_op) reg_field = reg_op->reg.num;
   uint8_t rex = f.w ? 0x08 : 0;
-  bool forceRex = false;
+  bool force_rex = false;
   if (f.enc == Enc::O) {
-    rex |= hi(regOp->reg);
-  } else if (regOp) {
-    rex |= uint8_t(hi(regOp->reg) << 2);
+    rex |= hi(reg_op->reg);
+  } else if (reg_op) {
+    rex |= uint8_t(hi(reg_op->reg) << 2);
   }
-  if (rmOp && rmOp->kind == OperandKind::Reg) rex |= hi(rmOp->reg);
-  if (rmOp && rmOp->kind == OperandKind::Mem) {
-    checkMem(rmOp->mem);
-    if (rmOp->mem.index.valid()) rex |= uint8_t(hi(rmOp->mem.index) << 1);
-    if (rmOp->mem.base.cls == RegClass::Gp64) rex |= hi(rmOp->mem.base);
+  if (rm_op && rm_op->kind == OperandKind::Reg) rex |= hi(rm_op->reg);
+  if (rm_op && rm_op->kind == OperandKind::Mem) {
+    check_mem(rm_op->mem);
+    if (rm_op->mem.index.valid()) rex |= uint8_t(hi(rm_op->mem.index) << 1);
+    if (rm_op->mem.base.cls == RegClass::Gp64) rex |= hi(rm_op->mem.base);
   }
-  for (unsigned i = 0; i < in.numOperands; ++i)
-    if (in.ops[i].kind == OperandKind::Reg && needsRex(in.ops[i].reg)) forceRex = true;
+  for (unsigned i = 0; i < in.num_operands; ++i)
+    if (in.ops[i].kind == OperandKind::Reg && needs_rex(in.ops[i].reg)) force_rex = true;
 
   if (f.prefix) out.put(f.prefix);
-  if (rex || forceRex) out.put(uint8_t(0x40 | rex));
+  if (rex || force_rex) out.put(uint8_t(0x40 | rex));
   for (unsigned i = 0; i + 1 < f.len; ++i) out.put(f.op[i]);
   uint8_t last = f.op[f.len - 1];
   if (f.cc) last = uint8_t(last + uint8_t(in.cond));
-  if (f.enc == Enc::O) last = uint8_t(last + lo(regOp->reg));
+  if (f.enc == Enc::O) last = uint8_t(last + lo(reg_op->reg));
   out.put(last);
-  if (rmOp) putModRM(out, regField, *rmOp);
-  for (unsigned i = 0; i < in.numOperands; ++i) {
+  if (rm_op) put_mod_rm(out, reg_field, *rm_op);
+  for (unsigned i = 0; i < in.num_operands; ++i) {
     OT t = f.ops[i];
     const Operand& o = in.ops[i];
     if (t == OT::I8 || t == OT::IB) {
       out.put(uint8_t(o.imm));
     } else if (t == OT::I32) {
       out.put32(uint32_t(o.imm));
-    } else if (isRelType(t)) {
+    } else if (is_rel_type(t)) {
       Fixup fx;
       fx.offset = out.size;
       fx.kind = t == OT::Rel8 ? Rel8 : Rel32;
@@ -324,20 +324,20 @@ void encodeForm(const Form& f, const Instruction& in, Encoding& out) {
       else fx.addend = o.imm;
       if (t == OT::Rel8) out.put(0);
       else out.put32(0);
-      out.addFixup(fx);
+      out.add_fixup(fx);
     }
   }
 }
 
-void encodeHook(const Instruction& in, bool longForm, Encoding& out) {
-  if (in.numOperands > 3) throw AsmError("too many operands");
-  const Form* f = findForm(in, longForm);
+void encode_hook(const Instruction& in, bool long_form, Encoding& out) {
+  if (in.num_operands > 3) throw AsmError("too many operands");
+  const Form* f = find_form(in, long_form);
   if (!f) throw AsmError("invalid operands for '" + print(in) + "'");
-  encodeForm(*f, in, out);
+  encode_form(*f, in, out);
 }
 
 constexpr FixupKind kFixupKinds[] = {
-    // name   bytes shift width pcrel  signed  pc base                  bias scale relaxTo
+    // name   bytes shift width pcrel  signed  pc base                  bias scale relax_to
     {"rel8", 1, 0, 8, true, true, PcBase::InstructionEnd, 0, 1, Rel32},
     {"rel32", 4, 0, 32, true, true, PcBase::InstructionEnd, 0, 1, -1},
 };
@@ -345,8 +345,8 @@ constexpr FixupKind kFixupKinds[] = {
 const Target<Instruction> kTarget = [] {
   Target<Instruction> t;
   t.name = "x86-64";
-  t.fixupKinds = kFixupKinds;
-  t.encode = encodeHook;
+  t.fixup_kinds = kFixupKinds;
+  t.encode = encode_hook;
   return t;
 }();
 
@@ -356,45 +356,45 @@ const Target<Instruction> kTarget = [] {
 using namespace detail;
 
 Instruction make(Mnemonic m, std::initializer_list<Operand> ops) {
-  return makeCc(m, Cond::O, ops);
+  return make_cc(m, Cond::O, ops);
 }
 
-Instruction makeCc(Mnemonic m, Cond c, std::initializer_list<Operand> ops) {
+Instruction make_cc(Mnemonic m, Cond c, std::initializer_list<Operand> ops) {
   Instruction in;
   in.mnemonic = m;
   in.cond = c;
   if (ops.size() > 3) throw AsmError("too many operands");
-  for (const Operand& o : ops) in.ops[in.numOperands++] = o;
+  for (const Operand& o : ops) in.ops[in.num_operands++] = o;
   return in;
 }
 
 const Target<Instruction>& target() { return kTarget; }
 
-Encoding encode(const Instruction& inst, bool longForm) {
+Encoding encode(const Instruction& inst, bool long_form) {
   Encoding e;
-  encodeHook(inst, longForm, e);
+  encode_hook(inst, long_form, e);
   return e;
 }
 
-std::vector<uint8_t> encodeAt(const Instruction& inst, uint64_t address) {
-  for (bool longForm : {false, true}) {
-    Encoding e = encode(inst, longForm);
+std::vector<uint8_t> encode_at(const Instruction& inst, uint64_t address) {
+  for (bool long_form : {false, true}) {
+    Encoding e = encode(inst, long_form);
     std::vector<uint8_t> bytes(e.bytes.begin(), e.bytes.begin() + e.size);
     bool relax = false;
-    for (unsigned i = 0; i < e.numFixups; ++i) {
+    for (unsigned i = 0; i < e.num_fixups; ++i) {
       const Fixup& fx = e.fixups[i];
       if (!fx.label.empty())
         throw AsmError("label '" + std::string(fx.label) + "' needs the assembler core");
       const FixupKind& k = kFixupKinds[fx.kind];
       int64_t v;
-      if (!fixupValue(k, 0, fx.addend, int64_t(address), e.size, v) || !fixupFits(k, v)) {
-        if (k.relaxTo >= 0 && !longForm) {
+      if (!fixup_value(k, 0, fx.addend, int64_t(address), e.size, v) || !fixup_fits(k, v)) {
+        if (k.relax_to >= 0 && !long_form) {
           relax = true;
           break;
         }
         throw AsmError("branch target out of range");
       }
-      applyFixup(k, bytes, fx.offset, v);
+      apply_fixup(k, bytes, fx.offset, v);
     }
     if (!relax) return bytes;
   }
@@ -423,7 +423,7 @@ struct Reader {
   }
 };
 
-bool opcodeMatches(const Form& f, const uint8_t* op, unsigned len) {
+bool opcode_matches(const Form& f, const uint8_t* op, unsigned len) {
   if (f.len != len) return false;
   for (unsigned i = 0; i + 1 < len; ++i)
     if (op[i] != f.op[i]) return false;
@@ -434,33 +434,33 @@ bool opcodeMatches(const Form& f, const uint8_t* op, unsigned len) {
 }
 
 // Decodes with one form; returns false if the bytes do not fit it.
-bool decodeWith(const Form& f, Reader rd, size_t start, uint8_t rex, const uint8_t* op,
+bool decode_with(const Form& f, Reader rd, size_t start, uint8_t rex, const uint8_t* op,
                 Instruction& in, size_t& end, bool& truncated) {
-  bool hasModRM = f.enc == Enc::MR || f.enc == Enc::RM || f.enc == Enc::M;
+  bool has_mod_rm = f.enc == Enc::MR || f.enc == Enc::RM || f.enc == Enc::M;
   in = Instruction{};
   in.mnemonic = f.mn;
   in.cond = f.cc ? Cond(op[f.len - 1] & 0x0F) : Cond::O;
-  in.numOperands = uint8_t(numOps(f));
-  unsigned rmIdx = 9, regIdx = 9;
-  if (f.enc == Enc::MR) rmIdx = 0, regIdx = 1;
-  if (f.enc == Enc::RM) rmIdx = 1, regIdx = 0;
-  if (f.enc == Enc::M) rmIdx = 0;
-  Operand rmOp;
-  uint8_t regNum = 0;
-  if (hasModRM) {
+  in.num_operands = uint8_t(num_ops(f));
+  unsigned rm_idx = 9, reg_idx = 9;
+  if (f.enc == Enc::MR) rm_idx = 0, reg_idx = 1;
+  if (f.enc == Enc::RM) rm_idx = 1, reg_idx = 0;
+  if (f.enc == Enc::M) rm_idx = 0;
+  Operand rm_op;
+  uint8_t reg_num = 0;
+  if (has_mod_rm) {
     uint8_t modrm = rd.u8();
     if (!rd.ok) return truncated = true, false;
     uint8_t mod = modrm >> 6, reg = (modrm >> 3) & 7, rm = modrm & 7;
     if (f.enc == Enc::M && reg != uint8_t(f.digit)) return false;
-    regNum = uint8_t(reg | ((rex >> 2) & 1) << 3);
-    OT rmType = f.ops[rmIdx];
+    reg_num = uint8_t(reg | ((rex >> 2) & 1) << 3);
+    OT rm_type = f.ops[rm_idx];
     if (mod == 3) {
-      if (!acceptsReg(rmType)) return false;
-      rmOp = Operand::r(Reg{regClassOf(rmType), uint8_t(rm | (rex & 1) << 3)});
+      if (!accepts_reg(rm_type)) return false;
+      rm_op = Operand::r(Reg{reg_class_of(rm_type), uint8_t(rm | (rex & 1) << 3)});
     } else {
-      if (!acceptsMem(rmType)) return false;
+      if (!accepts_mem(rm_type)) return false;
       Mem m;
-      m.size = memSizeOf(rmType);
+      m.size = mem_size_of(rm_type);
       if (rm == 4) {
         uint8_t sib = rd.u8();
         uint8_t idx = uint8_t(((sib >> 3) & 7) | ((rex >> 1) & 1) << 3);
@@ -479,20 +479,20 @@ bool decodeWith(const Form& f, Reader rd, size_t start, uint8_t rex, const uint8
       }
       if (mod == 1) m.disp = int8_t(rd.u8());
       if (mod == 2) m.disp = int32_t(rd.u32());
-      rmOp = Operand::m(m);
+      rm_op = Operand::m(m);
     }
   }
-  for (unsigned i = 0; i < in.numOperands; ++i) {
+  for (unsigned i = 0; i < in.num_operands; ++i) {
     OT t = f.ops[i];
     Operand& o = in.ops[i];
-    if (i == rmIdx) {
-      o = rmOp;
-    } else if (i == regIdx) {
-      o = Operand::r(Reg{regClassOf(t), regNum});
+    if (i == rm_idx) {
+      o = rm_op;
+    } else if (i == reg_idx) {
+      o = Operand::r(Reg{reg_class_of(t), reg_num});
     } else if (f.enc == Enc::O && i == 0) {
-      o = Operand::r(Reg{regClassOf(t), uint8_t((op[f.len - 1] & 7) | (rex & 1) << 3)});
+      o = Operand::r(Reg{reg_class_of(t), uint8_t((op[f.len - 1] & 7) | (rex & 1) << 3)});
     } else if (t == OT::Al || t == OT::Eax || t == OT::Rax) {
-      o = Operand::r(Reg{regClassOf(t), AX});
+      o = Operand::r(Reg{reg_class_of(t), AX});
     } else if (t == OT::Cl) {
       o = Operand::r(r8(CX));
     } else if (t == OT::One) {
@@ -513,9 +513,9 @@ bool decodeWith(const Form& f, Reader rd, size_t start, uint8_t rex, const uint8
       int64_t target = int64_t(rd.pos) + d;
       o = Operand::a(target);
       // Record a long form the short one could have expressed.
-      bool hasShort = in.mnemonic == Mnemonic::Jmp || in.mnemonic == Mnemonic::Jcc;
-      int64_t shortDisp = target - (int64_t(start) + 2);
-      in.longBranch = hasShort && shortDisp >= -128 && shortDisp <= 127;
+      bool has_short = in.mnemonic == Mnemonic::Jmp || in.mnemonic == Mnemonic::Jcc;
+      int64_t short_disp = target - (int64_t(start) + 2);
+      in.long_branch = has_short && short_disp >= -128 && short_disp <= 127;
     }
   }
   if (!rd.ok) return truncated = true, false;
@@ -540,17 +540,17 @@ std::optional<Decoded> decode(std::span<const uint8_t> code, size_t offset, Deco
   unsigned len = 1;
   if (b == 0x0F) op[1] = rd.u8(), len = 2;
   if (!rd.ok) return fail("truncated instruction");
-  bool sawOpcode = false, truncated = false;
+  bool saw_opcode = false, truncated = false;
   for (const Form& f : kForms) {
-    if (f.prefix != prefix || !opcodeMatches(f, op, len)) continue;
+    if (f.prefix != prefix || !opcode_matches(f, op, len)) continue;
     if (bool((rex >> 3) & 1) != f.w) continue;
-    sawOpcode = true;
+    saw_opcode = true;
     Instruction in;
     size_t end = 0;
-    if (!decodeWith(f, rd, offset, rex, op, in, end, truncated)) continue;
+    if (!decode_with(f, rd, offset, rex, op, in, end, truncated)) continue;
     // Accept exactly what the encoder produces for this instruction.
     try {
-      std::vector<uint8_t> again = encodeAt(in, offset);
+      std::vector<uint8_t> again = encode_at(in, offset);
       if (again.size() != end - offset ||
           !std::equal(again.begin(), again.end(), code.begin() + long(offset)))
         continue;
@@ -560,7 +560,7 @@ std::optional<Decoded> decode(std::span<const uint8_t> code, size_t offset, Deco
     return Decoded{std::move(in), uint32_t(offset), uint32_t(end - offset)};
   }
   if (truncated) return fail("truncated instruction");
-  return fail(sawOpcode ? "invalid or non-canonical encoding"
+  return fail(saw_opcode ? "invalid or non-canonical encoding"
                         : "unknown opcode (not in the ldc x86-64 subset)");
 }
 

@@ -3,8 +3,7 @@
 // Instruction model, encoder, one-line parser, printer and disassembler for
 // the subset of x86-64 the ldc code generator uses. Text is Intel syntax as
 // GNU as accepts it under `.intel_syntax noprefix`. See docs/assembler.md.
-#ifndef LDC_ASSEMBLER_X86_H
-#define LDC_ASSEMBLER_X86_H
+#pragma once
 
 #include "assembler/assembler.h"
 
@@ -78,17 +77,17 @@ enum class Cond : uint8_t { O, NO, B, AE, E, NE, BE, A, S, NS, P, NP, L, GE, LE,
 struct Instruction {
   Mnemonic mnemonic = Mnemonic::Nop;
   Cond cond = Cond::O;  // for Setcc, Cmovcc, Jcc
-  uint8_t numOperands = 0;
+  uint8_t num_operands = 0;
   std::array<Operand, 3> ops{};
   // Always use the rel32 form of jmp/jcc (printed as `{disp32}`).
-  bool longBranch = false;
+  bool long_branch = false;
   friend bool operator==(const Instruction&, const Instruction&) = default;
 };
 
 Instruction make(Mnemonic m, std::initializer_list<Operand> ops = {});
-Instruction makeCc(Mnemonic m, Cond c, std::initializer_list<Operand> ops = {});
+Instruction make_cc(Mnemonic m, Cond c, std::initializer_list<Operand> ops = {});
 
-// Fixup kinds of the x86-64 target (indices into target().fixupKinds).
+// Fixup kinds of the x86-64 target (indices into target().fixup_kinds).
 enum FixupKindId : uint16_t { Rel8 = 0, Rel32 = 1 };
 
 // The target description for the core.
@@ -96,25 +95,25 @@ const Target<Instruction>& target();
 
 // Encodes one instruction: bytes plus fixups for label/address operands.
 // Throws AsmError if the instruction is not in the subset.
-Encoding encode(const Instruction& inst, bool longForm = false);
+Encoding encode(const Instruction& inst, bool long_form = false);
 
 // Encodes one instruction placed at `address`, resolving Address operands
 // (short form if it reaches, as GNU as does). Throws AsmError for Label
 // operands or unencodable instructions.
-std::vector<uint8_t> encodeAt(const Instruction& inst, uint64_t address = 0);
+std::vector<uint8_t> encode_at(const Instruction& inst, uint64_t address = 0);
 
 // Parses one instruction line (Intel syntax; `#` or `;` starts a comment).
 // Also reads objdump's spelling (`DWORD PTR`, `ds:0x10`, `+0x0`).
 // Throws AsmError with a message naming the problem.
 Instruction parse(std::string_view line);
 
-// Prints in the syntax parse() and GNU as accept. forceLong prints jmp/jcc
-// with the `{disp32}` pseudo-prefix, as inst.longBranch does.
-// addressBase, if given, prints Address operands as `addressBase+0x12`.
-std::string print(const Instruction& inst, bool forceLong = false,
-                  std::string_view addressBase = {});
-std::string_view mnemonicName(Mnemonic m, Cond c = Cond::O);
-std::string_view regName(Reg r);
+// Prints in the syntax parse() and GNU as accept. force_long prints jmp/jcc
+// with the `{disp32}` pseudo-prefix, as inst.long_branch does.
+// address_base, if given, prints Address operands as `address_base+0x12`.
+std::string print(const Instruction& inst, bool force_long = false,
+                  std::string_view address_base = {});
+std::string_view mnemonic_name(Mnemonic m, Cond c = Cond::O);
+std::string_view reg_name(Reg r);
 
 // ------------------------------------------------------------ disassembly
 
@@ -144,11 +143,11 @@ Disassembly disassemble(std::span<const uint8_t> code);
 // ------------------------------------------------------- the scan frame
 // The frame of ldc's scan function `void scan(uint8_t* image)`: the prologue
 // at its entry and the epilogue at scan_exit, the only pushes, pops and ret
-// that generated code contains (docs/x86.md).  withSlots is the -O2 frame,
+// that generated code contains (docs/x86.md).  with_slots is the -O2 frame,
 // which also saves r12-r15 for the bit-stack slots.  The backend emits these;
 // the loader's validator accepts nothing else.
-std::span<const Instruction> scanPrologue(bool withSlots);
-std::span<const Instruction> scanEpilogue(bool withSlots);
+std::span<const Instruction> scan_prologue(bool with_slots);
+std::span<const Instruction> scan_epilogue(bool with_slots);
 
 // The -O2 frame's base registers (docs/x86.md, "Compact addressing"): right
 // after the -O2 prologue, `lea rdi, [rbx+K0]; lea r15, [rbx+K1]; lea r14,
@@ -163,7 +162,7 @@ std::span<const Instruction> scanEpilogue(bool withSlots);
 // against the memory image as K+disp.
 constexpr int kNumBases = 3;
 constexpr RegNum kBaseRegs[kNumBases] = {DI, R15, R14};
-Instruction baseLea(RegNum reg, int32_t k);  // lea reg, [rbx+k]
+Instruction base_lea(RegNum reg, int32_t k);  // lea reg, [rbx+k]
 
 // ------------------------------------------------------ shared routines
 // Timers and counters at -O2 call one routine per kind, placed after the
@@ -181,8 +180,8 @@ enum class Routine : uint8_t { Ton, Tof, Tp, Ctu, Ctd, Count };
 struct RoutineAreas {
   int32_t tw = 0, tq = 0, ti = 0, cw = 0, cq = 0, dt = 0;  // offsets of T0's ET, Q, IN memory; C0's CV, Q; dt
 };
-std::vector<Instruction> scanRoutine(Routine r, const RoutineAreas& areas);
-std::string_view routineName(Routine r);  // the assembly label: rt_ton, rt_tof, rt_tp, rt_ctu, rt_ctd
+std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& areas);
+std::string_view routine_name(Routine r);  // the assembly label: rt_ton, rt_tof, rt_tp, rt_ctu, rt_ctd
 
 // ---------------------------------------------------------- whole programs
 
@@ -191,11 +190,10 @@ using X86Program = Program<Instruction>;
 // GNU as source for a program (`.intel_syntax noprefix`): local labels are
 // renamed `.L<block>_<name>`, jumps to global labels and addresses get
 // `{disp32}` so as picks the same rel32 forms as the core.
-std::string toGnuAs(const X86Program& program);
+std::string to_gnu_as(const X86Program& program);
 
 // A listing: offset, bytes, text and comment of every item.
 std::string listing(const X86Program& program, const Result& result);
 
 }  // namespace ldc::as::x86
 
-#endif  // LDC_ASSEMBLER_X86_H

@@ -1,7 +1,6 @@
 // Internal: the x86-64 form table shared by the encoder, the decoder and
 // the documentation. Not a public header.
-#ifndef LDC_ASSEMBLER_X86_FORMS_H
-#define LDC_ASSEMBLER_X86_FORMS_H
+#pragma once
 
 #include "assembler/x86.h"
 
@@ -44,8 +43,7 @@ struct Form {
 };
 
 std::span<const Form> forms();
-unsigned numOps(const Form& f);
+unsigned num_ops(const Form& f);
 
 }  // namespace ldc::as::x86::detail
 
-#endif

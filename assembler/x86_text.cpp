@@ -37,8 +37,8 @@ constexpr Alias kCondAliases[] = {
     {"nz", Cond::NE}, {"na", Cond::BE}, {"nbe", Cond::A}, {"pe", Cond::P},  {"po", Cond::NP},
     {"nge", Cond::L}, {"nl", Cond::GE}, {"ng", Cond::LE}, {"nle", Cond::G}};
 
-bool isCc(Mnemonic m) { return m == Mnemonic::Setcc || m == Mnemonic::Cmovcc || m == Mnemonic::Jcc; }
-bool isBranch(Mnemonic m) { return m == Mnemonic::Jcc || m == Mnemonic::Jmp || m == Mnemonic::Call; }
+bool is_cc(Mnemonic m) { return m == Mnemonic::Setcc || m == Mnemonic::Cmovcc || m == Mnemonic::Jcc; }
+bool is_branch(Mnemonic m) { return m == Mnemonic::Jcc || m == Mnemonic::Jmp || m == Mnemonic::Call; }
 
 std::string lower(std::string_view s) {
   std::string r(s);
@@ -46,7 +46,7 @@ std::string lower(std::string_view s) {
   return r;
 }
 
-std::optional<Cond> condByName(std::string_view s) {
+std::optional<Cond> cond_by_name(std::string_view s) {
   for (unsigned i = 0; i < 16; ++i)
     if (kConds[i] == s) return Cond(i);
   for (const Alias& a : kCondAliases)
@@ -54,20 +54,20 @@ std::optional<Cond> condByName(std::string_view s) {
   return std::nullopt;
 }
 
-std::optional<std::pair<Mnemonic, Cond>> mnemonicByName(std::string_view s) {
+std::optional<std::pair<Mnemonic, Cond>> mnemonic_by_name(std::string_view s) {
   for (unsigned i = 0; i < std::size(kMnemonics); ++i) {
     Mnemonic m = Mnemonic(i);
-    if (!isCc(m) && kMnemonics[i] == s) return std::pair{m, Cond::O};
+    if (!is_cc(m) && kMnemonics[i] == s) return std::pair{m, Cond::O};
   }
   for (Mnemonic m : {Mnemonic::Setcc, Mnemonic::Cmovcc, Mnemonic::Jcc}) {
     std::string_view pre = kMnemonics[size_t(m)];
     if (s.size() > pre.size() && s.substr(0, pre.size()) == pre)
-      if (auto c = condByName(s.substr(pre.size()))) return std::pair{m, *c};
+      if (auto c = cond_by_name(s.substr(pre.size()))) return std::pair{m, *c};
   }
   return std::nullopt;
 }
 
-std::optional<Reg> regByName(std::string_view s) {
+std::optional<Reg> reg_by_name(std::string_view s) {
   for (unsigned i = 0; i < 16; ++i) {
     if (kGp64[i] == s) return r64(i);
     if (kGp32[i] == s) return r32(i);
@@ -78,15 +78,15 @@ std::optional<Reg> regByName(std::string_view s) {
   return std::nullopt;
 }
 
-std::optional<Size> sizeByName(std::string_view s) {
+std::optional<Size> size_by_name(std::string_view s) {
   if (s == "byte") return Size::Byte;
   if (s == "dword") return Size::Dword;
   if (s == "qword") return Size::Qword;
   return std::nullopt;
 }
 
-bool isReserved(std::string_view lowered) {
-  return regByName(lowered) || sizeByName(lowered) || lowered == "ptr" || lowered == "word" ||
+bool is_reserved(std::string_view lowered) {
+  return reg_by_name(lowered) || size_by_name(lowered) || lowered == "ptr" || lowered == "word" ||
          lowered == "xmmword" || lowered == "offset" || lowered == "short" || lowered == "near" ||
          lowered == "ah" || lowered == "bh" || lowered == "ch" || lowered == "dh";
 }
@@ -97,7 +97,7 @@ std::string hex(uint64_t v) {
   return buf;
 }
 
-std::string signedHex(int64_t v) {
+std::string signed_hex(int64_t v) {
   return v < 0 ? "-" + hex(0 - uint64_t(v)) : hex(uint64_t(v));
 }
 
@@ -111,28 +111,28 @@ class Parser {
     if (eat('{')) {
       if (lower(ident()) != "disp32") fail("only the {disp32} pseudo-prefix is supported");
       expect('}');
-      in.longBranch = true;
+      in.long_branch = true;
       ws();
     }
     std::string name = lower(ident());
     if (name.empty()) fail("expected a mnemonic");
-    auto mn = mnemonicByName(name);
+    auto mn = mnemonic_by_name(name);
     if (!mn) fail("unknown mnemonic '" + name + "'");
     in.mnemonic = mn->first;
     in.cond = mn->second;
-    if (in.longBranch && in.mnemonic != Mnemonic::Jmp && in.mnemonic != Mnemonic::Jcc)
+    if (in.long_branch && in.mnemonic != Mnemonic::Jmp && in.mnemonic != Mnemonic::Jcc)
       fail("{disp32} is only supported on jmp and jcc");
     ws();
-    if (!atEnd()) {
+    if (!at_end()) {
       for (;;) {
-        if (in.numOperands == 3) fail("too many operands");
-        in.ops[in.numOperands++] = operand(isBranch(in.mnemonic));
+        if (in.num_operands == 3) fail("too many operands");
+        in.ops[in.num_operands++] = operand(is_branch(in.mnemonic));
         ws();
         if (!eat(',')) break;
       }
     }
     ws();
-    if (!atEnd()) fail("unexpected '" + std::string(s_.substr(i_)) + "'");
+    if (!at_end()) fail("unexpected '" + std::string(s_.substr(i_)) + "'");
     return in;
   }
 
@@ -143,7 +143,7 @@ class Parser {
   void ws() {
     while (i_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[i_]))) ++i_;
   }
-  bool atEnd() const { return i_ >= s_.size(); }
+  bool at_end() const { return i_ >= s_.size(); }
   bool eat(char c) {
     ws();
     if (i_ < s_.size() && s_[i_] == c) {
@@ -155,25 +155,25 @@ class Parser {
   void expect(char c) {
     if (!eat(c)) fail(std::string("expected '") + c + "'");
   }
-  static bool identStart(char c) {
+  static bool ident_start(char c) {
     return std::isalpha(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '$' || c == '@';
   }
-  static bool identChar(char c) {
-    return identStart(c) || std::isdigit(static_cast<unsigned char>(c));
+  static bool ident_char(char c) {
+    return ident_start(c) || std::isdigit(static_cast<unsigned char>(c));
   }
-  bool peekIdent() {
+  bool peek_ident() {
     ws();
-    return i_ < s_.size() && identStart(s_[i_]);
+    return i_ < s_.size() && ident_start(s_[i_]);
   }
-  bool peekNumber() {
+  bool peek_number() {
     ws();
     return i_ < s_.size() && std::isdigit(static_cast<unsigned char>(s_[i_]));
   }
   std::string_view ident() {
     ws();
     size_t b = i_;
-    if (i_ < s_.size() && identStart(s_[i_]))
-      while (i_ < s_.size() && identChar(s_[i_])) ++i_;
+    if (i_ < s_.size() && ident_start(s_[i_]))
+      while (i_ < s_.size() && ident_char(s_[i_])) ++i_;
     return s_.substr(b, i_ - b);
   }
   uint64_t number() {
@@ -195,10 +195,10 @@ class Parser {
       v = v * base + d;
     }
     if (i_ == b) fail("expected a number");
-    if (i_ < s_.size() && identChar(s_[i_])) fail("malformed number");
+    if (i_ < s_.size() && ident_char(s_[i_])) fail("malformed number");
     return v;
   }
-  int64_t signedNumber() {
+  int64_t signed_number() {
     bool neg = eat('-');
     if (!neg) eat('+');
     uint64_t v = number();
@@ -211,10 +211,10 @@ class Parser {
 
   Operand operand(bool branch) {
     size_t save = i_;
-    if (peekIdent()) {
+    if (peek_ident()) {
       std::string_view word = ident();
       std::string w = lower(word);
-      if (auto sz = sizeByName(w)) {
+      if (auto sz = size_by_name(w)) {
         if (lower(ident()) != "ptr") fail("expected 'ptr' after '" + w + "'");
         Mem m = memory();
         m.size = *sz;
@@ -226,19 +226,19 @@ class Parser {
       }
       if (w == "ah" || w == "bh" || w == "ch" || w == "dh")
         fail("register '" + w + "' is not supported");
-      if (auto r = regByName(w)) {
+      if (auto r = reg_by_name(w)) {
         if (r->cls == RegClass::Rip) fail("rip is only allowed as a memory base");
         return Operand::r(*r);
       }
       if (w == "word" || w == "xmmword") fail("operand size '" + w + "' is not supported");
       if (!branch) fail("unexpected '" + std::string(word) + "'");
-      if (isReserved(w)) fail("'" + std::string(word) + "' cannot be a label");
+      if (is_reserved(w)) fail("'" + std::string(word) + "' cannot be a label");
       return Operand::l(std::string(word));
     }
     ws();
     if (i_ < s_.size() && s_[i_] == '[') return Operand::m(memory());
-    if (i_ < s_.size() && (s_[i_] == '-' || s_[i_] == '+' || peekNumber())) {
-      int64_t v = signedNumber();
+    if (i_ < s_.size() && (s_[i_] == '-' || s_[i_] == '+' || peek_number())) {
+      int64_t v = signed_number();
       return branch ? Operand::a(v) : Operand::i(v);
     }
     fail("expected an operand");
@@ -249,9 +249,9 @@ class Parser {
     Mem m;
     int64_t disp = 0;
     size_t save = i_;
-    if (peekIdent() && lower(ident()) == "ds") {
+    if (peek_ident() && lower(ident()) == "ds") {
       expect(':');
-      disp = signedNumber();
+      disp = signed_number();
       if (disp < INT32_MIN || disp > INT32_MAX) fail("displacement out of range");
       m.disp = int32_t(disp);
       return m;
@@ -264,11 +264,11 @@ class Parser {
       if (eat('-')) sign = -1;
       else if (!eat('+') && !first) fail("expected '+', '-' or ']'");
       first = false;
-      if (peekNumber()) {
+      if (peek_number()) {
         uint64_t n = number();
         if (eat('*')) {
           if (sign < 0) fail("negative scale");
-          setIndex(m, reg(), n);
+          set_index(m, reg(), n);
         } else {
           if (n > (uint64_t(1) << 40)) fail("displacement out of range");
           disp += sign * int64_t(n);
@@ -279,11 +279,11 @@ class Parser {
         if (sign < 0) fail("cannot subtract a register");
         Reg r = reg();
         if (eat('*')) {
-          setIndex(m, r, number());
+          set_index(m, r, number());
         } else if (!m.base.valid() && !m.index.valid()) {
           m.base = r;
         } else if (!m.index.valid()) {
-          setIndex(m, r, 1);
+          set_index(m, r, 1);
         } else {
           fail("too many registers in address");
         }
@@ -297,14 +297,14 @@ class Parser {
 
   Reg reg() {
     std::string w = lower(ident());
-    auto r = regByName(w);
+    auto r = reg_by_name(w);
     if (!r) fail(w.empty() ? "expected a register or number" : "'" + w + "' is not a register");
     if (r->cls != RegClass::Gp64 && r->cls != RegClass::Rip)
       fail("address registers must be 64-bit");
     return *r;
   }
 
-  void setIndex(Mem& m, Reg r, uint64_t scale) {
+  void set_index(Mem& m, Reg r, uint64_t scale) {
     if (m.index.valid()) fail("two index registers");
     if (r.cls == RegClass::Rip) fail("rip cannot be an index");
     if (r.num == SP) fail("rsp cannot be an index register");
@@ -317,7 +317,7 @@ class Parser {
   size_t i_ = 0;
 };
 
-std::string memText(const Mem& m) {
+std::string mem_text(const Mem& m) {
   std::string s;
   switch (m.size) {
     case Size::Byte: s = "byte ptr "; break;
@@ -326,22 +326,22 @@ std::string memText(const Mem& m) {
     case Size::None: break;
   }
   s += '[';
-  if (m.base.valid()) s += regName(m.base);
+  if (m.base.valid()) s += reg_name(m.base);
   if (m.index.valid()) {
     if (m.base.valid()) s += '+';
-    s += regName(m.index);
+    s += reg_name(m.index);
     if (m.scale != 1 || !m.base.valid()) s += "*" + std::to_string(m.scale);
   }
-  if (!m.base.valid() && !m.index.valid()) s += signedHex(m.disp);
+  if (!m.base.valid() && !m.index.valid()) s += signed_hex(m.disp);
   else if (m.disp > 0) s += "+" + hex(uint64_t(m.disp));
-  else if (m.disp < 0) s += signedHex(m.disp);
+  else if (m.disp < 0) s += signed_hex(m.disp);
   s += ']';
   return s;
 }
 
 }  // namespace
 
-std::string_view regName(Reg r) {
+std::string_view reg_name(Reg r) {
   unsigned n = r.num & 15;
   switch (r.cls) {
     case RegClass::Gp8: return kGp8[n];
@@ -354,8 +354,8 @@ std::string_view regName(Reg r) {
   return "?";
 }
 
-std::string_view mnemonicName(Mnemonic m, Cond c) {
-  static const std::array<std::array<std::string, 16>, 3> ccNames = [] {
+std::string_view mnemonic_name(Mnemonic m, Cond c) {
+  static const std::array<std::array<std::string, 16>, 3> cc_names = [] {
     std::array<std::array<std::string, 16>, 3> t;
     for (unsigned i = 0; i < 16; ++i) {
       t[0][i] = "set" + std::string(kConds[i]);
@@ -365,9 +365,9 @@ std::string_view mnemonicName(Mnemonic m, Cond c) {
     return t;
   }();
   unsigned ci = unsigned(c) & 15;
-  if (m == Mnemonic::Setcc) return ccNames[0][ci];
-  if (m == Mnemonic::Cmovcc) return ccNames[1][ci];
-  if (m == Mnemonic::Jcc) return ccNames[2][ci];
+  if (m == Mnemonic::Setcc) return cc_names[0][ci];
+  if (m == Mnemonic::Cmovcc) return cc_names[1][ci];
+  if (m == Mnemonic::Jcc) return cc_names[2][ci];
   if (size_t(m) < std::size(kMnemonics)) return kMnemonics[size_t(m)];
   return "?";
 }
@@ -378,28 +378,28 @@ Instruction parse(std::string_view line) {
   return Parser(line).instruction();
 }
 
-std::string print(const Instruction& in, bool forceLong, std::string_view addressBase) {
+std::string print(const Instruction& in, bool force_long, std::string_view address_base) {
   std::string s;
-  bool target = in.numOperands > 0 && (in.ops[0].kind == OperandKind::Label ||
+  bool target = in.num_operands > 0 && (in.ops[0].kind == OperandKind::Label ||
                                        in.ops[0].kind == OperandKind::Address);
-  if ((in.longBranch || forceLong) && target &&
+  if ((in.long_branch || force_long) && target &&
       (in.mnemonic == Mnemonic::Jmp || in.mnemonic == Mnemonic::Jcc))
     s = "{disp32} ";
-  s += mnemonicName(in.mnemonic, in.cond);
-  for (unsigned i = 0; i < in.numOperands && i < 3; ++i) {
+  s += mnemonic_name(in.mnemonic, in.cond);
+  for (unsigned i = 0; i < in.num_operands && i < 3; ++i) {
     s += i ? ", " : " ";
     const Operand& o = in.ops[i];
     switch (o.kind) {
-      case OperandKind::Reg: s += regName(o.reg); break;
-      case OperandKind::Mem: s += memText(o.mem); break;
-      case OperandKind::Imm: s += signedHex(o.imm); break;
+      case OperandKind::Reg: s += reg_name(o.reg); break;
+      case OperandKind::Mem: s += mem_text(o.mem); break;
+      case OperandKind::Imm: s += signed_hex(o.imm); break;
       case OperandKind::Label: s += o.label; break;
       case OperandKind::Address:
-        if (!addressBase.empty()) {
-          s += addressBase;
+        if (!address_base.empty()) {
+          s += address_base;
           s += o.imm < 0 ? "" : "+";
         }
-        s += signedHex(o.imm);
+        s += signed_hex(o.imm);
         break;
       case OperandKind::None: s += "?"; break;
     }
@@ -407,27 +407,27 @@ std::string print(const Instruction& in, bool forceLong, std::string_view addres
   return s;
 }
 
-std::string toGnuAs(const X86Program& p) {
-  return gnuAsText(p, ".intel_syntax noprefix\n.text\n.Lcode:\n", "#", [](const Instruction& in, bool outside) {
+std::string to_gnu_as(const X86Program& p) {
+  return gnu_as_text(p, ".intel_syntax noprefix\n.text\n.Lcode:\n", "#", [](const Instruction& in, bool outside) {
     bool address = false;  // an absolute code address: reached with the long form too
-    for (unsigned i = 0; i < in.numOperands && i < 3; ++i) address = address || in.ops[i].kind == OperandKind::Address;
+    for (unsigned i = 0; i < in.num_operands && i < 3; ++i) address = address || in.ops[i].kind == OperandKind::Address;
     return print(in, outside || address, ".Lcode");
   });
 }
 
 std::string listing(const X86Program& p, const Result& r) {
-  auto itemHead = [&](const ItemLayout& lay) {
+  auto item_head = [&](const ItemLayout& lay) {
     std::string bytes;
-    for (uint32_t k = 0; k < lay.size && lay.offset + k < r.code.size(); ++k) bytes += listingField("%02x", r.code[lay.offset + k]);
+    for (uint32_t k = 0; k < lay.size && lay.offset + k < r.code.size(); ++k) bytes += listing_field("%02x", r.code[lay.offset + k]);
     bytes.resize(std::max<size_t>(bytes.size(), 20), ' ');
-    return listingField("%08x  ", lay.offset) + bytes + "  ";
+    return listing_field("%08x  ", lay.offset) + bytes + "  ";
   };
-  return listingText(
-      p, r, "#", [&](uint32_t off) { return listingField("%08x", off) + "  "; }, itemHead,
-      [](const Instruction& in, const ItemLayout& lay) { return print(in, lay.longForm); });
+  return listing_text(
+      p, r, "#", [&](uint32_t off) { return listing_field("%08x", off) + "  "; }, item_head,
+      [](const Instruction& in, const ItemLayout& lay) { return print(in, lay.long_form); });
 }
 
-std::span<const Instruction> scanPrologue(bool withSlots) {
+std::span<const Instruction> scan_prologue(bool with_slots) {
   static const std::vector<Instruction> o0 = [] {
     std::vector<Instruction> v;
     for (const char* t : {"push rbx", "push rbp", "push rax", "mov rbx, rdi", "xor ebp, ebp"}) v.push_back(parse(t));
@@ -440,10 +440,10 @@ std::span<const Instruction> scanPrologue(bool withSlots) {
       v.push_back(parse(t));
     return v;
   }();
-  return withSlots ? o2 : o0;
+  return with_slots ? o2 : o0;
 }
 
-std::span<const Instruction> scanEpilogue(bool withSlots) {
+std::span<const Instruction> scan_epilogue(bool with_slots) {
   static const std::vector<Instruction> o0 = [] {
     std::vector<Instruction> v;
     for (const char* t : {"pop rax", "pop rbp", "pop rbx", "ret"}) v.push_back(parse(t));
@@ -455,10 +455,10 @@ std::span<const Instruction> scanEpilogue(bool withSlots) {
       v.push_back(parse(t));
     return v;
   }();
-  return withSlots ? o2 : o0;
+  return with_slots ? o2 : o0;
 }
 
-Instruction baseLea(RegNum reg, int32_t k) {
+Instruction base_lea(RegNum reg, int32_t k) {
   Mem m;
   m.base = r64(BX);
   m.disp = k;
@@ -466,12 +466,12 @@ Instruction baseLea(RegNum reg, int32_t k) {
   return make(Mnemonic::Lea, {Operand::r(r64(reg)), Operand::m(m)});
 }
 
-std::string_view routineName(Routine r) {
+std::string_view routine_name(Routine r) {
   static const char* const names[] = {"rt_ton", "rt_tof", "rt_tp", "rt_ctu", "rt_ctd"};
   return names[int(r)];
 }
 
-std::vector<Instruction> scanRoutine(Routine r, const RoutineAreas& a) {
+std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& a) {
   std::vector<std::string> t;
   auto at = [](const char* index, int32_t disp) { return std::string("[rbx+") + index + "+" + std::to_string(disp) + "]"; };
   const std::string tw = "dword ptr " + at("rdx*4", a.tw), tq = "byte ptr " + at("rdx*1", a.tq),

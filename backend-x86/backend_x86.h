@@ -53,7 +53,7 @@ std::vector<std::string> x86_globals(const Program& p);
 inline constexpr const char* kX86ExitLabel = "scan_exit";
 std::string x86_label_name(const std::string& il_label);  // user label -> assembly label
 
-// Where the shared timer/counter routines (as::x86::scanRoutine) find T0 and C0.
+// Where the shared timer/counter routines (as::x86::scan_routine) find T0 and C0.
 as::x86::RoutineAreas x86_routine_areas(const Layout& l);
 
 }  // namespace ldc

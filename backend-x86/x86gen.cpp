@@ -144,9 +144,9 @@ class Gen : public ClassGen<Gen> {
 
   void emit(Instruction i) { items_.push_back(Item::instr(std::move(i))); }
   void emit(M m, std::initializer_list<Operand> ops) { emit(make(m, ops)); }
-  void jcc(Cond c, const std::string& label) { emit(makeCc(M::Jcc, c, {L(label)})); }
+  void jcc(Cond c, const std::string& label) { emit(make_cc(M::Jcc, c, {L(label)})); }
   void jump(const std::string& label) { emit(M::Jmp, {L(label)}); }
-  void label(const std::string& l) { items_.push_back(Item::labelDef(l)); }
+  void label(const std::string& l) { items_.push_back(Item::label_def(l)); }
   std::string fresh() { return "L" + std::to_string(next_label_++); }
 
   uint32_t addr(const ldc::Operand& o) const {
@@ -196,7 +196,7 @@ class Gen : public ClassGen<Gen> {
   // -O2: d = power ? eax : d, without a branch
   void gated_store(const ldc::Operand& d) {
     test_top();
-    emit(makeCc(M::Cmovcc, Cond::E, {R(eax), Dw(addr(d))}));
+    emit(make_cc(M::Cmovcc, Cond::E, {R(eax), Dw(addr(d))}));
     emit(M::Mov, {Dw(addr(d)), R(eax)});
   }
   // d = the 32 bits `bits` (an INT32 or a REAL's pattern), with power
@@ -298,7 +298,7 @@ class Gen : public ClassGen<Gen> {
   void timer_gated(const ldc::Instr& in);
   void call_routine(as::x86::Routine r) {
     used_->set(size_t(r));
-    emit(M::Call, {L(std::string(as::x86::routineName(r)))});
+    emit(M::Call, {L(std::string(as::x86::routine_name(r)))});
   }
   void counter_gated(const ldc::Instr& in);
   void reset_masked(std::initializer_list<Operand> dwords, std::initializer_list<Operand> bytes);
@@ -345,8 +345,8 @@ void Gen::compare_ints(const ldc::Operand& a, const ldc::Operand& b, Rel rel) {
   if (slots_) emit(M::Xor, {R(wide(slot(depth_))), R(wide(slot(depth_)))});  // no partial-register chain
   load_int(a, eax);
   emit(M::Cmp, {R(eax), int_src(b)});
-  if (slots_) return emit(makeCc(M::Setcc, x.int_cc, {R(slot(depth_))}));
-  emit(makeCc(M::Setcc, x.int_cc, {R(al)}));
+  if (slots_) return emit(make_cc(M::Setcc, x.int_cc, {R(slot(depth_))}));
+  emit(make_cc(M::Setcc, x.int_cc, {R(al)}));
   push_al();
 }
 
@@ -356,9 +356,9 @@ void Gen::compare_reals(const ldc::Operand& a, const ldc::Operand& b, Rel rel) {
   load_reals(a, b);
   if (x.swap) emit(M::Ucomiss, {R(xmm1), R(xmm0)});
   else emit(M::Ucomiss, {R(xmm0), R(xmm1)});
-  emit(makeCc(M::Setcc, x.real_cc, {R(al)}));
+  emit(make_cc(M::Setcc, x.real_cc, {R(al)}));
   if (x.parity) {
-    emit(makeCc(M::Setcc, x.parity_cc, {R(cl)}));
+    emit(make_cc(M::Setcc, x.parity_cc, {R(cl)}));
     emit(x.parity_op, {R(al), R(cl)});
   }
   push_al();
@@ -460,7 +460,7 @@ void Gen::shift(Op op, const ldc::Operand& a, const ldc::Operand& n) {
     emit(m, {R(eax), R(cl)});
     emit(M::Xor, {R(edx), R(edx)});
     emit(M::Cmp, {R(ecx), I(31)});
-    emit(makeCc(M::Cmovcc, Cond::A, {R(eax), R(edx)}));
+    emit(make_cc(M::Cmovcc, Cond::A, {R(eax), R(edx)}));
   } else {
     std::string zero = fresh(), store = fresh();
     load_int(n, ecx);
@@ -495,7 +495,7 @@ void Gen::real_fn(Op op, const ldc::Operand& a, const ldc::Operand& d) {
   if (real_fn_info(fn).called) {
     emit(M::Call, {Operand::m(mem_at(Size::Qword, uint32_t(call_slot_disp(fn))))});
     // the call may clobber rdi: point it back (its K is filled in by set_bases)
-    if (bases_) emit(as::x86::baseLea(DI, 0));
+    if (bases_) emit(as::x86::base_lea(DI, 0));
   } else if (fn == RealFn::Sqrt) {
     emit(M::Sqrtss, {R(xmm0), R(xmm0)});
   } else {  // Abs: the sign bit cleared
@@ -515,7 +515,7 @@ void Gen::preset(const ldc::Operand& pt) {
   load_int(pt, ecx);
   emit(M::Xor, {R(edx), R(edx)});
   emit(M::Test, {R(ecx), R(ecx)});
-  emit(makeCc(M::Cmovcc, Cond::S, {R(ecx), R(edx)}));
+  emit(make_cc(M::Cmovcc, Cond::S, {R(ecx), R(edx)}));
 }
 
 // eax = advance(ET, dt, PT) (docs/il.md); ET at tw, PT in ecx; stores it too
@@ -537,14 +537,14 @@ void Gen::advance_edx(uint32_t tw) {
   emit(M::Mov, {R(edx), R(eax)});
   emit(M::Add, {R(edx), Dw(kSysDt)});
   emit(M::Mov, {R(r10d), R(edx)});
-  emit(makeCc(M::Cmovcc, Cond::O, {R(edx), R(ecx)}));
-  emit(makeCc(M::Setcc, Cond::L, {R(r11b)}));
+  emit(make_cc(M::Cmovcc, Cond::O, {R(edx), R(ecx)}));
+  emit(make_cc(M::Setcc, Cond::L, {R(r11b)}));
   emit(M::Cmp, {R(edx), R(ecx)});
-  emit(makeCc(M::Cmovcc, Cond::G, {R(edx), R(ecx)}));
+  emit(make_cc(M::Cmovcc, Cond::G, {R(edx), R(ecx)}));
   emit(M::Test, {R(r11d), R(r11d)});
-  emit(makeCc(M::Cmovcc, Cond::NE, {R(edx), R(r10d)}));
+  emit(make_cc(M::Cmovcc, Cond::NE, {R(edx), R(r10d)}));
   emit(M::Cmp, {R(eax), R(ecx)});
-  emit(makeCc(M::Cmovcc, Cond::GE, {R(edx), R(ecx)}));
+  emit(make_cc(M::Cmovcc, Cond::GE, {R(edx), R(ecx)}));
 }
 
 // RSTT / RSTC with power: each operand &= (top - 1), 0 with power, all ones without
@@ -556,7 +556,7 @@ void Gen::reset_masked(std::initializer_list<Operand> dwords, std::initializer_l
   for (const Operand& o : bytes) emit(M::And, {o, R(cl)});
 }
 
-// -O2 timers: a call to the shared routine of the kind (as::x86::scanRoutine:
+// -O2 timers: a call to the shared routine of the kind (as::x86::scan_routine:
 // branch-free, conditional moves over every outcome) with the timer number in
 // edx, the preset in ecx and the input in esi.
 void Gen::timer_gated(const ldc::Instr& in) {
@@ -582,14 +582,14 @@ bool Gen::gated_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t t
 // tq = (eax rel ecx): Q from ET and PT
 void Gen::q_et(uint32_t tq, Rel rel) {
   emit(M::Cmp, {R(eax), R(ecx)});
-  emit(makeCc(M::Setcc, x86_rel(rel).int_cc, {R(al)}));
+  emit(make_cc(M::Setcc, x86_rel(rel).int_cc, {R(al)}));
   emit(M::Mov, {B(tq), R(al)});
 }
 
 // tq = (ecx > 0): Q when a timing starts
 void Gen::q_preset(uint32_t tq) {
   emit(M::Test, {R(ecx), R(ecx)});
-  emit(makeCc(M::Setcc, Cond::G, {R(al)}));
+  emit(make_cc(M::Setcc, Cond::G, {R(al)}));
   emit(M::Mov, {B(tq), R(al)});
 }
 
@@ -645,10 +645,10 @@ void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
   if (up) {
     load_int(in.a[1], eax);
     emit(M::Cmp, {R(edx), R(eax)});
-    emit(makeCc(M::Setcc, Cond::GE, {R(al)}));
+    emit(make_cc(M::Setcc, Cond::GE, {R(al)}));
   } else {
     emit(M::Test, {R(edx), R(edx)});
-    emit(makeCc(M::Setcc, Cond::LE, {R(al)}));
+    emit(make_cc(M::Setcc, Cond::LE, {R(al)}));
   }
   emit(M::Mov, {B(cq), R(al)});
 }
@@ -715,7 +715,7 @@ void Gen::basic(const ldc::Instr& in) {
   const std::vector<Instruction>* t = bit_template(in.op);
   if (!t) throw std::logic_error(std::string("x86 backend: no template for ") + op_info(in.op).name);
   for (Instruction i : *t) {
-    for (int k = 0; k < i.numOperands; k++) {
+    for (int k = 0; k < i.num_operands; k++) {
       Mem& m = i.ops[k].mem;
       if (i.ops[k].kind != OperandKind::Mem) continue;
       if (m.disp == kMark[0]) m.disp = int32_t(addr(in.a[0]));
@@ -727,8 +727,8 @@ void Gen::basic(const ldc::Instr& in) {
 
 void Gen::flow(const ldc::Instr& in) {
   test_top();
-  Instruction j = makeCc(M::Jcc, Cond::NE, {L(in.op == Op::JMP ? x86_label_name(in.a[0].label) : kX86ExitLabel)});
-  j.longBranch = true;
+  Instruction j = make_cc(M::Jcc, Cond::NE, {L(in.op == Op::JMP ? x86_label_name(in.a[0].label) : kX86ExitLabel)});
+  j.long_branch = true;
   emit(std::move(j));
 }
 
@@ -751,12 +751,12 @@ bool writes_reg(const Instruction& i, uint8_t num) {
   // a call keeps the callee-saved registers (the shared routines and libm alike): ebp's stack survives it
   if (i.mnemonic == M::Call) return !(num == BX || num == BP || num >= R12);
   if ((i.mnemonic == M::Idiv && (num == AX || num == DX)) || (i.mnemonic == M::Cdq && num == DX)) return true;
-  if (i.mnemonic == M::Cmp || i.mnemonic == M::Test || i.mnemonic == M::Push || i.numOperands == 0) return false;
+  if (i.mnemonic == M::Cmp || i.mnemonic == M::Test || i.mnemonic == M::Push || i.num_operands == 0) return false;
   if (i.mnemonic == M::Jmp || i.mnemonic == M::Jcc || i.mnemonic == M::Ucomiss) return false;
   return is_reg(i.ops[0], num);
 }
 bool reads_reg(const Instruction& i, uint8_t num) {
-  for (unsigned k = 0; k < i.numOperands; k++) {
+  for (unsigned k = 0; k < i.num_operands; k++) {
     if (mem_uses(i.ops[k], num)) return true;
     if (is_reg(i.ops[k], num)) {
       bool pure_write = k == 0 && (i.mnemonic == M::Mov || i.mnemonic == M::Movzx || i.mnemonic == M::Lea ||
@@ -807,7 +807,7 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
     if (in.mnemonic == M::Lea && is_reg(in.ops[0], BP) && mem_uses(in.ops[1], AX)) { eax_top = true; continue; }  // a push of eax
     if (writes_reg(in, AX)) { eax_top = false; eax_byte = -1; }
     if (writes_reg(in, BP)) eax_top = false;
-    if (in.numOperands && in.ops[0].kind == OperandKind::Mem) eax_byte = -1;  // a store may change that byte
+    if (in.num_operands && in.ops[0].kind == OperandKind::Mem) eax_byte = -1;  // a store may change that byte
     if (in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) { eax_top = false; eax_byte = -1; }
   }
   // backward: is the stack (ebp) read again?
@@ -836,9 +836,9 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
   for (size_t i = 0; i < items.size(); i++) {
     const Item& it = items[i];
     if (drop[i] || it.kind != as::ItemKind::Instruction || (it.inst.mnemonic != M::Jmp && it.inst.mnemonic != M::Jcc)) continue;
-    if (it.inst.ops[0].kind == OperandKind::Label && as::labelFollows(items, i, it.inst.ops[0].label, drop)) drop[i] = 1;
+    if (it.inst.ops[0].kind == OperandKind::Label && as::label_follows(items, i, it.inst.ops[0].label, drop)) drop[i] = 1;
   }
-  as::removeItems(items, drop, starts);
+  as::remove_items(items, drop, starts);
 }
 
 }  // namespace
@@ -875,7 +875,7 @@ using Bases = std::array<int64_t, kNumBases>;
 void collect_ops(const as::Block<Instruction>& b, Ops& ops) {
   for (const Item& it : b.items) {
     if (it.kind != as::ItemKind::Instruction) continue;
-    for (unsigned k = 0; k < it.inst.numOperands; k++)
+    for (unsigned k = 0; k < it.inst.num_operands; k++)
       if (rewritable(it.inst, it.inst.ops[k]))
         ops.push_back({it.inst.ops[k].mem.disp, int64_t(it.inst.ops[k].mem.disp) + mem_width(it.inst.ops[k].mem) - 1});
   }
@@ -920,7 +920,7 @@ void apply_bases(as::Block<Instruction>& b, const Bases& ks) {
         if (in.ops[0].reg.num == kBaseRegs[r]) in.ops[1].mem.disp = int32_t(ks[r]);
       continue;
     }
-    for (unsigned k = 0; k < in.numOperands; k++) {
+    for (unsigned k = 0; k < in.num_operands; k++) {
       if (!rewritable(in, in.ops[k])) continue;
       Mem& m = in.ops[k].mem;
       for (int r = 0; r < kNumBases; r++) {
@@ -945,23 +945,23 @@ class Blocks {
   as::Block<Instruction> prologue() const {
     // keep rbx/rbp for the caller, 16-byte stack alignment for calls
     as::Block<Instruction> pro;
-    pro.sourceLine = p_.rungs.empty() ? 0 : p_.rungs[0].line;
+    pro.source_line = p_.rungs.empty() ? 0 : p_.rungs[0].line;
     pro.items.push_back(Item::note(o2_ ? "scan(image): rbx = image, bit stack in r12b r13b bpl, bases rdi r15 r14 (-O2)"
                                          : "scan(image): rbx = image, ebp = bit stack"));
-    for (const Instruction& i : scanPrologue(o2_)) pro.items.push_back(Item::instr(i));
+    for (const Instruction& i : scan_prologue(o2_)) pro.items.push_back(Item::instr(i));
     if (o2_)
-      for (RegNum r : as::x86::kBaseRegs) pro.items.push_back(Item::instr(as::x86::baseLea(r, 0)));  // K: set_bases
+      for (RegNum r : as::x86::kBaseRegs) pro.items.push_back(Item::instr(as::x86::base_lea(r, 0)));  // K: set_bases
     return pro;
   }
 
   // Rung r's block into b (its items replaced); starts: where each IL instruction's code starts.
   void rung(size_t ri, as::Block<Instruction>& b, std::vector<uint32_t>& starts) {
     const Rung& r = p_.rungs[ri];
-    b.sourceLine = r.line;
+    b.source_line = r.line;
     b.items.clear();
     starts.clear();
     starts.reserve(r.code.size());
-    for (const auto& l : r.labels) b.items.push_back(Item::labelDef(x86_label_name(l), true));
+    for (const auto& l : r.labels) b.items.push_back(Item::label_def(x86_label_name(l), true));
     if (notes_) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
     bool slots = o2_ && stack_fits_slots(r.code, kNumSlots);
     Gen g(layout_, b.items, slots, o2_, &used_);
@@ -975,10 +975,10 @@ class Blocks {
 
   as::Block<Instruction> epilogue() const {
     as::Block<Instruction> epi;
-    epi.sourceLine = p_.rungs.empty() ? 0 : p_.rungs.back().line;
-    for (const auto& l : p_.end_labels) epi.items.push_back(Item::labelDef(x86_label_name(l), true));
-    epi.items.push_back(Item::labelDef(kX86ExitLabel, true));
-    for (const Instruction& i : scanEpilogue(o2_)) epi.items.push_back(Item::instr(i));
+    epi.source_line = p_.rungs.empty() ? 0 : p_.rungs.back().line;
+    for (const auto& l : p_.end_labels) epi.items.push_back(Item::label_def(x86_label_name(l), true));
+    epi.items.push_back(Item::label_def(kX86ExitLabel, true));
+    for (const Instruction& i : scan_epilogue(o2_)) epi.items.push_back(Item::instr(i));
     return epi;
   }
 
@@ -986,13 +986,13 @@ class Blocks {
   std::optional<as::Block<Instruction>> routines() const {
     if (!used_.any()) return std::nullopt;
     as::Block<Instruction> rt;
-    rt.sourceLine = p_.rungs.empty() ? 0 : p_.rungs.back().line;
+    rt.source_line = p_.rungs.empty() ? 0 : p_.rungs.back().line;
     as::x86::RoutineAreas areas = x86_routine_areas(layout_);
     for (int k = 0; k < int(as::x86::Routine::Count); k++) {
       if (!used_.test(size_t(k))) continue;
-      std::string name(as::x86::routineName(as::x86::Routine(k)));
-      rt.items.push_back(Item::labelDef(name, true));
-      for (const Instruction& i : as::x86::scanRoutine(as::x86::Routine(k), areas)) rt.items.push_back(Item::instr(i));
+      std::string name(as::x86::routine_name(as::x86::Routine(k)));
+      rt.items.push_back(Item::label_def(name, true));
+      for (const Instruction& i : as::x86::scan_routine(as::x86::Routine(k), areas)) rt.items.push_back(Item::instr(i));
     }
     return rt;
   }
@@ -1049,7 +1049,7 @@ std::vector<std::string> x86_globals(const Program& p) {
   std::vector<std::string> g;
   g.push_back(kX86ExitLabel);
   for (int k = 0; k < int(as::x86::Routine::Count); k++)
-    g.push_back(std::string(as::x86::routineName(as::x86::Routine(k))));
+    g.push_back(std::string(as::x86::routine_name(as::x86::Routine(k))));
   for (const Rung& r : p.rungs)
     for (const auto& l : r.labels) g.push_back(x86_label_name(l));
   for (const auto& l : p.end_labels) g.push_back(x86_label_name(l));

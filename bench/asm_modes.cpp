@@ -51,8 +51,8 @@ int main(int argc, char** argv) {
       if (first.empty()) first = r.code;
       else if (first != r.code) { std::fprintf(stderr, "the two modes gave different code\n"); return 1; }
       std::printf("\"%s\",%zu,%zu,%zu,%s,%zu,%zu,%zu,%.1f\n", file.c_str(), p.rungs.size(), il, items,
-                  mode == as::Mode::Blockwise ? "blockwise" : "whole-program", r.code.size(), r.stats.peakLabelEntries,
-                  r.stats.relaxPasses, ms);
+                  mode == as::Mode::Blockwise ? "blockwise" : "whole-program", r.code.size(), r.stats.peak_label_entries,
+                  r.stats.relax_passes, ms);
     }
   } catch (std::exception& e) {
     std::fprintf(stderr, "asm_modes: %s\n", e.what());

@@ -63,10 +63,10 @@ Cost measure(const Program& p, int scans, uint64_t seed) {
   // native: the owner of every code word
   C40Build b = build_c40(p, "bench");
   Image img = make_c40_image(p, b);
-  std::vector<uint32_t> code = as::c40::wordsOf(img.code);
+  std::vector<uint32_t> code = as::c40::words_of(img.code);
   const int32_t kOverhead = -1, kRoutine = -2;
   std::vector<int32_t> owner(code.size(), kRoutine);
-  uint32_t epilogue = b.asm_result.blockOffsets.back() / 4;  // scan_exit: RETSU, then __divi, __divf
+  uint32_t epilogue = b.asm_result.block_offsets.back() / 4;  // scan_exit: RETSU, then __divi, __divf
   for (uint32_t a = 0; a < code.size(); a++) owner[a] = a < epilogue ? kOverhead : kRoutine;
   for (size_t k = 0; k < img.lines.size(); k++) {
     uint32_t from = img.lines[k].code_offset / 4, to = k + 1 < img.lines.size() ? img.lines[k + 1].code_offset / 4 : epilogue;

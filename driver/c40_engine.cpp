@@ -28,7 +28,7 @@ class C40MachineEngine : public Engine {
 
 std::unique_ptr<Engine> make_c40sim_engine(std::span<const uint8_t> code, uint32_t entry, const Layout& layout) {
   if (code.size() % 4 || entry % 4) throw std::runtime_error("C40 code is not whole 32-bit words");
-  std::vector<uint32_t> words = as::c40::wordsOf(code);
+  std::vector<uint32_t> words = as::c40::words_of(code);
   return std::make_unique<C40MachineEngine>(layout, words, entry / 4, std::span<const uint32_t>{});
 }
 

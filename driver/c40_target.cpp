@@ -30,7 +30,7 @@ TargetCode generate(const Program& p, const std::string& source_name, int opt_le
 
 std::string gnu_as(const Program& p, const std::string& source_name, int opt_level) {
   return "; ldc " + source_name + ": TMS320C40, GNU as syntax (tic4x, as -mcpu=40), -O" + std::to_string(opt_level) +
-         "\n" + as::c40::toGnuAs(c40gen::generate_c40(p, p.layout(), opt_level).program);
+         "\n" + as::c40::to_gnu_as(c40gen::generate_c40(p, p.layout(), opt_level).program);
 }
 
 std::string listing(const Program& p, const std::string& source_name, int opt_level) {
@@ -45,7 +45,7 @@ std::string disassemble(const Image& img) {
   std::snprintf(buf, sizeof buf, "%08x <scan>:\n", img.entry / 4);
   out += buf;
   std::multimap<uint32_t, std::string> notes = line_notes(img, 4);
-  as::c40::Disassembly d = as::c40::disassembleBytes(img.code);
+  as::c40::Disassembly d = as::c40::disassemble_bytes(img.code);
   for (const auto& di : d.insts) {
     auto [lo, hi] = notes.equal_range(uint32_t(di.address));
     for (auto it = lo; it != hi; ++it) out += it->second + "\n";

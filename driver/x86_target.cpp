@@ -38,7 +38,7 @@ TargetCode generate(const Program& p, const std::string& source_name, int opt_le
 
 std::string gnu_as(const Program& p, const std::string& source_name, int opt_level) {
   return "# ldc " + source_name + ": x86-64, GNU as syntax (.intel_syntax noprefix)\n" +
-         as::x86::toGnuAs(generate_x86(p, p.layout(), opt_level).program);
+         as::x86::to_gnu_as(generate_x86(p, p.layout(), opt_level).program);
 }
 
 std::string listing(const Program& p, const std::string& source_name, int opt_level) {

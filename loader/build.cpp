@@ -36,7 +36,7 @@ Image make_image(ImageTarget target, const Program& p, const as::Result& code,
     img.rung_titles.push_back(p.rungs[r].title);
     uint32_t b = rung_blocks[r];
     const auto& items = code.items[b];
-    uint32_t block_end = b + 1 < code.blockOffsets.size() ? code.blockOffsets[b + 1] : uint32_t(code.code.size());
+    uint32_t block_end = b + 1 < code.block_offsets.size() ? code.block_offsets[b + 1] : uint32_t(code.code.size());
     for (size_t i = 0; i < p.rungs[r].code.size(); i++, k++) {
       const Instr& in = p.rungs[r].code[i];
       uint32_t at = il_items[r][i];  // an instruction that emitted nothing at the rung's end: the block's end

@@ -25,7 +25,7 @@ constexpr int32_t kUnknown = -1;  // DP not set by LDPK on some path
 
 bool writes_dp(const Instruction& in) {
   if (in.mnemonic == Mnemonic::Ldpk) return false;
-  for (unsigned k = 0; k < in.numOperands; k++)
+  for (unsigned k = 0; k < in.num_operands; k++)
     if (in.ops[k].kind == OperandKind::Reg && in.ops[k].reg == Reg::DP) return true;
   return false;
 }
@@ -43,15 +43,15 @@ std::string check_c40_code(std::span<const uint8_t> code, uint32_t entry, const 
     uint32_t word = uint32_t(code[4 * i]) | uint32_t(code[4 * i + 1]) << 8 | uint32_t(code[4 * i + 2]) << 16 |
                     uint32_t(code[4 * i + 3]) << 24;
     DecodeError e;
-    auto in = decodeWord(word, i, &e);
+    auto in = decode_word(word, i, &e);
     if (!in) return at(i) + "word " + hex(word) + " does not decode: " + e.message;
     insts[i] = *in;
-    for (unsigned k = 0; k < in->numOperands; k++) {
+    for (unsigned k = 0; k < in->num_operands; k++) {
       const as::c40::Operand& o = in->ops[k];
       if (o.kind == OperandKind::Ind && in->mnemonic != Mnemonic::Nop)
         return at(i) + "'" + print(*in) + "': indirect memory operand (its address cannot be checked)";
       if (o.kind == OperandKind::Ind) return at(i) + "'" + print(*in) + "': NOP with an address update";
-      if (isControl(in->mnemonic) && o.kind == OperandKind::Reg && in->mnemonic != Mnemonic::Dbc &&
+      if (is_control(in->mnemonic) && o.kind == OperandKind::Reg && in->mnemonic != Mnemonic::Dbc &&
           in->mnemonic != Mnemonic::Dbcd)
         return at(i) + "'" + print(*in) + "': branch or call through a register";
       if (o.kind == OperandKind::Address) {
@@ -65,14 +65,14 @@ std::string check_c40_code(std::span<const uint8_t> code, uint32_t entry, const 
                  std::to_string(n) + " words)";
       }
     }
-    if (isDelayed(in->mnemonic)) {
+    if (is_delayed(in->mnemonic)) {
       if (i + 3 >= n) return at(i) + "'" + print(*in) + "': its delay slots run past the end of the code";
     }
   }
   for (uint32_t i = 0; i < n; i++)
-    if (isDelayed(insts[i].mnemonic))
+    if (is_delayed(insts[i].mnemonic))
       for (uint32_t s = 1; s <= 3; s++)
-        if (isControl(insts[i + s].mnemonic))
+        if (is_control(insts[i + s].mnemonic))
           return at(i + s) + "'" + print(insts[i + s]) + "' in the delay slot of a delayed branch";
   // 2. the data page, by a flow analysis from the entry
   std::vector<int32_t> dp(n, kUnseen);  // DP before each instruction
@@ -90,7 +90,7 @@ std::string check_c40_code(std::span<const uint8_t> code, uint32_t entry, const 
   std::vector<int64_t> delayed_target(n, -1);
   std::vector<bool> delayed_cond(n, false);
   for (uint32_t i = 0; i < n; i++)
-    if (isDelayed(insts[i].mnemonic)) {
+    if (is_delayed(insts[i].mnemonic)) {
       const as::c40::Operand& t = insts[i].ops[insts[i].mnemonic == Mnemonic::Brd || insts[i].mnemonic == Mnemonic::Bcd ? 0 : 1];
       delayed_target[i + 3] = t.imm;
       delayed_cond[i + 3] = !(insts[i].mnemonic == Mnemonic::Brd ||
@@ -104,7 +104,7 @@ std::string check_c40_code(std::span<const uint8_t> code, uint32_t entry, const 
     int32_t out = dp[i];
     if (in.mnemonic == Mnemonic::Ldpk) out = int32_t(in.ops[0].imm);
     else if (writes_dp(in)) out = kUnknown;
-    for (unsigned k = 0; k < in.numOperands; k++) {
+    for (unsigned k = 0; k < in.num_operands; k++) {
       if (in.ops[k].kind != OperandKind::Direct) continue;
       if (dp[i] < 0)
         return at(i) + "'" + print(in) + "': direct operand with the data page not set by LDPK on every path";

@@ -29,7 +29,7 @@ std::string text_of(const x86::Instruction& in) {
   try {
     return "'" + x86::print(in) + "'";
   } catch (const std::exception&) {
-    return "'" + std::string(x86::mnemonicName(in.mnemonic, in.cond)) + " ...'";
+    return "'" + std::string(x86::mnemonic_name(in.mnemonic, in.cond)) + " ...'";
   }
 }
 
@@ -59,7 +59,7 @@ struct Bases {
 
 // Is `in` exactly `lea reg, [rbx+k]`, the one instruction that sets base register i?
 bool is_base_lea(const x86::Instruction& in, int i, int64_t k) {
-  return in.mnemonic == x86::Mnemonic::Lea && in.numOperands == 2 && in.ops[0].kind == x86::OperandKind::Reg &&
+  return in.mnemonic == x86::Mnemonic::Lea && in.num_operands == 2 && in.ops[0].kind == x86::OperandKind::Reg &&
          in.ops[0].reg == x86::r64(x86::kBaseRegs[i]) && in.ops[1].kind == x86::OperandKind::Mem &&
          in.ops[1].mem.base == x86::r64(x86::BX) && !in.ops[1].mem.index.valid() && in.ops[1].mem.disp == k;
 }
@@ -70,24 +70,24 @@ std::string check_mem(const x86::Mem& m, uint32_t image_size, const Bases& bases
   const x86::Reg& base = m.base;
   if (int b = Bases::which(base); b >= 0 && bases.set) {
     if (m.index.valid())
-      return "indexed memory operand (index " + std::string(x86::regName(m.index)) + "): its address cannot be checked";
+      return "indexed memory operand (index " + std::string(x86::reg_name(m.index)) + "): its address cannot be checked";
     int64_t lo = bases.k[b] + m.disp, hi = lo + width(m.size);
     if (lo < 0 || hi > int64_t(image_size))
-      return "memory operand [" + std::string(x86::regName(base)) + (m.disp < 0 ? "-" : "+") +
+      return "memory operand [" + std::string(x86::reg_name(base)) + (m.disp < 0 ? "-" : "+") +
              hex(m.disp < 0 ? -int64_t(m.disp) : m.disp) + "] (image offset " + std::to_string(lo) + ", " +
-             std::to_string(width(m.size)) + " bytes; the frame sets " + std::string(x86::regName(base)) + " = rbx+" +
+             std::to_string(width(m.size)) + " bytes; the frame sets " + std::string(x86::reg_name(base)) + " = rbx+" +
              std::to_string(bases.k[b]) + ") outside the memory image [0, " + hex(image_size) + ")";
     return "";
   }
   if (base.cls == x86::RegClass::Rip) return "rip-relative memory operand (only [rbx+disp] may address memory)";
   if (!base.valid()) return "absolute memory operand (only [rbx+disp] may address memory)";
   if (base.cls == x86::RegClass::Gp64 && (base.num == x86::SP || base.num == x86::BP))
-    return "stack-relative memory operand based on " + std::string(x86::regName(base)) +
+    return "stack-relative memory operand based on " + std::string(x86::reg_name(base)) +
            " (only [rbx+disp] may address memory)";
   if (base != x86::r64(x86::BX))
-    return "memory operand based on " + std::string(x86::regName(base)) + ", not rbx";
+    return "memory operand based on " + std::string(x86::reg_name(base)) + ", not rbx";
   if (m.index.valid())
-    return "indexed memory operand (index " + std::string(x86::regName(m.index)) +
+    return "indexed memory operand (index " + std::string(x86::reg_name(m.index)) +
            "): its address cannot be checked";
   int64_t lo = m.disp, hi = int64_t(m.disp) + width(m.size);
   if (lo < 0 || hi > int64_t(image_size))
@@ -103,9 +103,9 @@ const std::array<x86::Instruction, 6>& guarded_division() {
   using O = x86::Operand;
   static const std::array<x86::Instruction, 6> seq = {
       x86::make(M::Test, {O::r(x86::r32(x86::CX)), O::r(x86::r32(x86::CX))}),
-      x86::makeCc(M::Jcc, x86::Cond::E, {O::a(0)}),
+      x86::make_cc(M::Jcc, x86::Cond::E, {O::a(0)}),
       x86::make(M::Cmp, {O::r(x86::r32(x86::CX)), O::i(-1)}),
-      x86::makeCc(M::Jcc, x86::Cond::E, {O::a(0)}),
+      x86::make_cc(M::Jcc, x86::Cond::E, {O::a(0)}),
       x86::make(M::Cdq),
       x86::make(M::Idiv, {O::r(x86::r32(x86::CX))})};
   return seq;
@@ -117,9 +117,9 @@ bool is_guarded_division(const std::vector<x86::Decoded>& insts, size_t k, size_
   if (k < body_first + seq.size() - 1) return false;
   for (size_t j = 0; j < seq.size(); j++) {
     x86::Instruction a = insts[k + 1 - seq.size() + j].inst;
-    a.longBranch = false;
-    if (a.mnemonic == x86::Mnemonic::Jcc && a.numOperands == 1 && a.ops[0].kind == x86::OperandKind::Address) a.ops[0].imm = 0;
-    if (a.numOperands == 2 && a.ops[1].kind == x86::OperandKind::Imm) a.ops[1].imm = int32_t(a.ops[1].imm);  // decoded 0xffffffff
+    a.long_branch = false;
+    if (a.mnemonic == x86::Mnemonic::Jcc && a.num_operands == 1 && a.ops[0].kind == x86::OperandKind::Address) a.ops[0].imm = 0;
+    if (a.num_operands == 2 && a.ops[1].kind == x86::OperandKind::Imm) a.ops[1].imm = int32_t(a.ops[1].imm);  // decoded 0xffffffff
     if (!(a == seq[j])) return false;
   }
   return true;
@@ -157,15 +157,15 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     if (at + seq.size() > d.insts.size()) return false;
     for (size_t k = 0; k < seq.size(); k++) {
       x86::Instruction a = d.insts[at + k].inst;
-      a.longBranch = false;
+      a.long_branch = false;
       if (!(a == seq[k])) return false;
     }
     return true;
   };
-  bool slots = first < d.insts.size() && d.insts[first].offset == entry && matches(first, x86::scanPrologue(true));
-  if (!slots && !(first < d.insts.size() && d.insts[first].offset == entry && matches(first, x86::scanPrologue(false))))
+  bool slots = first < d.insts.size() && d.insts[first].offset == entry && matches(first, x86::scan_prologue(true));
+  if (!slots && !(first < d.insts.size() && d.insts[first].offset == entry && matches(first, x86::scan_prologue(false))))
     return at(entry) + "the entry is not the scan function's prologue (push rbx; push rbp; ...; mov rbx, rdi)";
-  size_t body_first = first + x86::scanPrologue(slots).size();
+  size_t body_first = first + x86::scan_prologue(slots).size();
   Bases bases;
   // The -O2 frame may then set its base registers (lea rdi, [rbx+K0]; lea
   // r15, [rbx+K1]; lea r14, [rbx+K2]); without all, it is the frame before compact addressing,
@@ -174,7 +174,7 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     bool all = true;
     for (int i = 0; i < x86::kNumBases && all; i++) {
       const x86::Instruction& l = d.insts[body_first + size_t(i)].inst;
-      all = l.numOperands == 2 && l.ops[1].kind == x86::OperandKind::Mem && is_base_lea(l, i, l.ops[1].mem.disp);
+      all = l.num_operands == 2 && l.ops[1].kind == x86::OperandKind::Mem && is_base_lea(l, i, l.ops[1].mem.disp);
       if (all) bases.k[i] = l.ops[1].mem.disp;
     }
     if (all) {
@@ -182,9 +182,9 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
       body_first += x86::kNumBases;
     }
   }
-  size_t epi = x86::scanEpilogue(slots).size();
+  size_t epi = x86::scan_epilogue(slots).size();
   // After the epilogue: the shared timer/counter routines, each exactly one of
-  // the bodies as::x86::scanRoutine makes for this layout (branch-free, one
+  // the bodies as::x86::scan_routine makes for this layout (branch-free, one
   // `ret`, the index masked by its first instruction), found from the end.
   std::vector<uint32_t> routine_entries;
   size_t code_end = d.insts.size();
@@ -202,7 +202,7 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
                 layout.count[int(Area::CQ)] >= 256;
     std::vector<std::vector<x86::Instruction>> bodies;
     if (full)
-      for (int r = 0; r < int(x86::Routine::Count); r++) bodies.push_back(x86::scanRoutine(x86::Routine(r), areas));
+      for (int r = 0; r < int(x86::Routine::Count); r++) bodies.push_back(x86::scan_routine(x86::Routine(r), areas));
     for (bool found = true; found;) {
       found = false;
       for (const auto& b : bodies) {
@@ -215,7 +215,7 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     }
     std::sort(routine_entries.begin(), routine_entries.end());
   }
-  if (code_end < body_first + epi || !matches(code_end - epi, x86::scanEpilogue(slots)))
+  if (code_end < body_first + epi || !matches(code_end - epi, x86::scan_epilogue(slots)))
     return at(d.insts.empty() ? 0 : d.insts.back().offset) + "the code does not end with the scan function's epilogue (pop ...; ret)";
   size_t body_end = code_end - epi;
   if (first > body_end) return at(entry) + "the prologue is not before the epilogue";
@@ -232,30 +232,30 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     if (in.mnemonic == M::Push || in.mnemonic == M::Pop || in.mnemonic == M::Ret)
       return at(di.offset) + text_of(in) + ": the stack is touched only by the prologue and the epilogue";
     // rbx holds the image base and rsp the frame: no instruction of the body may change them
-    bool writes_first = in.numOperands > 0 && in.mnemonic != M::Cmp && in.mnemonic != M::Test &&
+    bool writes_first = in.num_operands > 0 && in.mnemonic != M::Cmp && in.mnemonic != M::Test &&
                         in.mnemonic != M::Ucomiss && in.mnemonic != M::Jmp && in.mnemonic != M::Jcc &&
                         in.mnemonic != M::Call;
     if (writes_first && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm &&
         (in.ops[0].reg.num == x86::BX || in.ops[0].reg.num == x86::SP))
-      return at(di.offset) + text_of(in) + ": writes " + std::string(x86::regName(in.ops[0].reg)) +
+      return at(di.offset) + text_of(in) + ": writes " + std::string(x86::reg_name(in.ops[0].reg)) +
              " (the image base and the stack pointer are fixed in the scan body)";
     // the base registers are fixed in the -O2 body: only rdi's reload after a
     // call through the REAL function table (below) may set it, to its K
     if (bases.set && writes_first && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm) {
       for (int b = 0; b < x86::kNumBases; b++)
         if (in.ops[0].reg.num == x86::kBaseRegs[b] && !(b == 0 && is_base_lea(in, 0, bases.k[0])))
-          return at(di.offset) + text_of(in) + ": writes " + std::string(x86::regName(in.ops[0].reg)) +
+          return at(di.offset) + text_of(in) + ": writes " + std::string(x86::reg_name(in.ops[0].reg)) +
                  ", a base register of the -O2 frame (only rdi's reload 'lea rdi, [rbx+" + std::to_string(bases.k[0]) +
                  "]' may set one)";
     }
-    if (bases.set && in.mnemonic == M::Call && in.numOperands && in.ops[0].kind == x86::OperandKind::Mem &&
+    if (bases.set && in.mnemonic == M::Call && in.num_operands && in.ops[0].kind == x86::OperandKind::Mem &&
         (k + 1 >= body_end || !is_base_lea(d.insts[k + 1].inst, 0, bases.k[0])))
       return at(di.offset) + text_of(in) + ": a call through the REAL function table not followed at once by 'lea rdi, [rbx+" +
              std::to_string(bases.k[0]) + "]' (the call may change rdi, a base register of the -O2 frame)";
     // r12-r15 belong to the caller (System V) unless the frame saved them
     if (writes_first && !slots && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm &&
         in.ops[0].reg.num >= x86::R12)
-      return at(di.offset) + text_of(in) + ": writes " + std::string(x86::regName(in.ops[0].reg)) +
+      return at(di.offset) + text_of(in) + ": writes " + std::string(x86::reg_name(in.ops[0].reg)) +
              ", which the caller owns: only the -O2 frame saves r12-r15";
     if (in.mnemonic == M::Idiv) {
       if (!is_guarded_division(d.insts, k, body_first))
@@ -263,13 +263,13 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
                ": a division not guarded against 0 and -1 (only 'test ecx, ecx; je; cmp ecx, -1; je; cdq; idiv ecx')";
       for (size_t j = k + 2 - guarded_division().size(); j <= k; j++) guarded.push_back(d.insts[j].offset);
     }
-    if (in.mnemonic == M::Call && in.numOperands && in.ops[0].kind == x86::OperandKind::Address &&
+    if (in.mnemonic == M::Call && in.num_operands && in.ops[0].kind == x86::OperandKind::Address &&
         !std::binary_search(routine_entries.begin(), routine_entries.end(), uint32_t(in.ops[0].imm)))
       return at(di.offset) + text_of(in) +
              ": a direct call not to the entry of one of the code's routines (generated code calls only those and "
              "the REAL function table)";
     // branches go forward, inside the body or to the epilogue, so a scan always ends
-    if ((in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) && in.numOperands && in.ops[0].kind == x86::OperandKind::Address) {
+    if ((in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) && in.num_operands && in.ops[0].kind == x86::OperandKind::Address) {
       int64_t t = in.ops[0].imm;
       if (t <= int64_t(di.offset)) return at(di.offset) + text_of(in) + ": backward branch (a scan runs straight through)";
       if (t < int64_t(body_lo) || t > int64_t(exit_at))
@@ -281,7 +281,7 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     const x86::Decoded& di = d.insts[k];
     const x86::Instruction& in = di.inst;
     bool branch = in.mnemonic == x86::Mnemonic::Jmp || in.mnemonic == x86::Mnemonic::Jcc || in.mnemonic == x86::Mnemonic::Call;
-    for (unsigned i = 0; i < in.numOperands && i < in.ops.size(); i++) {
+    for (unsigned i = 0; i < in.num_operands && i < in.ops.size(); i++) {
       const x86::Operand& o = in.ops[i];
       if (o.kind == x86::OperandKind::Mem && in.mnemonic == x86::Mnemonic::Lea) {
         continue;  // lea is arithmetic: it computes an address but touches no memory

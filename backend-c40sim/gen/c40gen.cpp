@@ -15,9 +15,9 @@ namespace ldc::c40gen {
 
 namespace fp = c40sim::fp;
 
-Ext real_from_ieee(uint32_t bits) { return fp::fromIeee(bits).v; }
-Ext real_from_int(int32_t i) { return fp::fromInt(i).v; }
-uint32_t real_to_ieee(Ext x) { return fp::toIeee(x); }
+Ext real_from_ieee(uint32_t bits) { return fp::from_ieee(bits).v; }
+Ext real_from_int(int32_t i) { return fp::from_int(i).v; }
+uint32_t real_to_ieee(Ext x) { return fp::to_ieee(x); }
 Ext real_add(Ext a, Ext b) { return fp::add(a, b).v; }
 Ext real_sub(Ext a, Ext b) { return fp::sub(a, b).v; }
 Ext real_mul(Ext a, Ext b) { return fp::mul(a, b).v; }
@@ -26,7 +26,7 @@ int real_compare(Ext a, Ext b) { return fp::compare(a, b); }
 int32_t real_to_int32(Ext x) {
   bool ov = false;
   int32_t fl = fp::fix(x, &ov);                         // FIX   R0, R1
-  Ext f = fp::fromInt(fl).v;                            // FLOAT R1, R2
+  Ext f = fp::from_int(fl).v;                            // FLOAT R1, R2
   int32_t plus = int32_t(uint32_t(fl) + 1u);            // ADDI3 1, R1, R3
   if (fp::compare(x, fp::kZero) >= 0) plus = fl;        // CMPF 0.0, R0; LDIGE R1, R3
   if (fp::compare(x, f) > 0) fl = plus;                 // CMPF R2, R0;  LDIGT R3, R1
@@ -34,15 +34,15 @@ int32_t real_to_int32(Ext x) {
 }
 
 namespace {
-Ext kOne() { return fp::fromShort(*as::c40::shortFloatFromDouble(1.0)); }
-Ext kTwo() { return fp::fromShort(*as::c40::shortFloatFromDouble(2.0)); }
+Ext kOne() { return fp::from_short(*as::c40::short_float_from_double(1.0)); }
+Ext kTwo() { return fp::from_short(*as::c40::short_float_from_double(2.0)); }
 }  // namespace
 
 // x = m 2^e with the exponent field cleared (PUSHF, POP, ASH3 -24, LSH 8, LSH -8, PUSH, POPF)
 static Ext split_exponent(Ext x, int32_t& e) {
-  uint32_t w = fp::toSingle(x);
+  uint32_t w = fp::to_single(x);
   e = int32_t(w) >> 24;
-  return fp::fromSingle((w << 8) >> 8);
+  return fp::from_single((w << 8) >> 8);
 }
 
 Ext real_div(Ext a, Ext b) {
@@ -65,8 +65,8 @@ Ext real_div(Ext a, Ext b) {
   r = fp::mul(r, x).v;                                  // MPYF  R2, R5
   q = fp::add(q, r).v;                                  // ADDF  R5, R3: m_a / m_b in (1/2, 2)
   int32_t k1 = k >> 1, k2 = k - k1;                     // ASH3 -1, R4, R5; SUBI3 R5, R4, R4
-  q = fp::mul(q, fp::fromSingle(uint32_t(k1) << 24)).v; // 2^k1 via LSH 24, PUSH, POPF; MPYF
-  q = fp::mul(q, fp::fromSingle(uint32_t(k2) << 24)).v; // 2^k2
+  q = fp::mul(q, fp::from_single(uint32_t(k1) << 24)).v; // 2^k1 via LSH 24, PUSH, POPF; MPYF
+  q = fp::mul(q, fp::from_single(uint32_t(k2) << 24)).v; // 2^k2
   if (fp::compare(a0, fp::kZero) == 0) q = fp::kZero;   // CMPF 0.0, R6; LDFEQ 0.0, R0
   return q;
 }
@@ -86,7 +86,7 @@ Operand I(int64_t v) { return Operand::i(v); }
 Operand L(std::string s) { return Operand::l(std::move(s)); }
 Operand A(uint32_t addr) { return Operand::a(addr); }
 Operand F(double v) {
-  auto b = shortFloatFromDouble(v);
+  auto b = short_float_from_double(v);
   if (!b) throw std::logic_error("c40 backend: not a short float");
   return Operand::f(*b);
 }
@@ -149,7 +149,7 @@ bool writes_reg(const Instruction& i, Reg r) {
     case M::Pop: case M::Popf: return i.ops[0].kind == OperandKind::Reg && i.ops[0].reg == r;
     default: break;
   }
-  const Operand& d = i.ops[i.numOperands ? i.numOperands - 1 : 0];
+  const Operand& d = i.ops[i.num_operands ? i.num_operands - 1 : 0];
   return d.kind == OperandKind::Reg && d.reg == r;
 }
 
@@ -214,7 +214,7 @@ class Gen : public ClassGen<Gen> {
   // own LDPK before and LDPK back after it.
   void emit(Instruction i) {
     bool direct = false;
-    for (unsigned k = 0; k < i.numOperands; k++) direct |= i.ops[k].kind == OperandKind::Direct;
+    for (unsigned k = 0; k < i.num_operands; k++) direct |= i.ops[k].kind == OperandKind::Direct;
     if (writes_reg(i, r0) || writes_reg(i, Reg::R10)) r0_top_ = false;
     if (writes_reg(i, r0)) r0_value_.reset();
     if (i.mnemonic != M::Sti && i.mnemonic != M::Stf) z_of_ = -1;  // stores leave the flags alone
@@ -230,14 +230,14 @@ class Gen : public ClassGen<Gen> {
   // emit, then remember that Z reflects the destination (an integer operation
   // on R0-R11 sets Z from its result)
   void emit_z(Instruction i) {
-    Reg d = i.ops[i.numOperands - 1].reg;
+    Reg d = i.ops[i.num_operands - 1].reg;
     emit(std::move(i));
-    if (isExtended(d)) z_of_ = int(d);
+    if (is_extended(d)) z_of_ = int(d);
   }
   void op(M m, std::initializer_list<Operand> ops) { emit(make(m, ops)); }
-  void opc(M m, Cond c, std::initializer_list<Operand> ops) { emit(makeCc(m, c, ops)); }
+  void opc(M m, Cond c, std::initializer_list<Operand> ops) { emit(make_cc(m, c, ops)); }
   void label(const std::string& l) {
-    items_.push_back(Item::labelDef(l));
+    items_.push_back(Item::label_def(l));
     z_of_ = -1;
     r0_top_ = false;
     r0_value_.reset();
@@ -307,9 +307,9 @@ class Gen : public ClassGen<Gen> {
         return op(M::Float, {R(r), R(r)});
       case OpdKind::ConstReal: {
         Ext e = real_from_ieee(float_bits(o.fval));
-        double v = fp::toDouble(e);
-        if (auto sb = shortFloatFromDouble(v); sb && fp::fromShort(*sb) == e) return op(M::Ldf, {Operand::f(*sb), R(r)});
-        uint32_t w = fp::toSingle(e);  // exact: FRIEEE leaves the 8 low bits 0
+        double v = fp::to_double(e);
+        if (auto sb = short_float_from_double(v); sb && fp::from_short(*sb) == e) return op(M::Ldf, {Operand::f(*sb), R(r)});
+        uint32_t w = fp::to_single(e);  // exact: FRIEEE leaves the 8 low bits 0
         load_imm32(int32_t(w), r);
         op(M::Sti, {R(r), D(kDataBase + W_.offset[int(Area::Sys)] + kSysScratchWord)});
         return op(M::Ldf, {D(kDataBase + W_.offset[int(Area::Sys)] + kSysScratchWord), R(r)});
@@ -814,7 +814,7 @@ void Gen::basic(const ldc::Instr& in) {
   if (!t) throw std::logic_error(std::string("c40 backend: no template for ") + op_info(in.op).name);
   for (Instruction i : *t) {
     if (r0_top_ && i == make(M::And3, {I(1), R(r10), R(r0)})) continue;  // -O1: R0 holds the top
-    for (unsigned k = 0; k < i.numOperands; k++)
+    for (unsigned k = 0; k < i.num_operands; k++)
       if (i.ops[k].kind == OperandKind::Direct) i.ops[k] = Dv(in.a[i.ops[k].imm]);
     emit(std::move(i));
   }
@@ -942,9 +942,9 @@ void drop_jumps_to_next(std::vector<Item>& items, std::vector<uint32_t>& starts)
   for (size_t i = 0; i < items.size(); i++) {
     const Item& it = items[i];
     if (it.kind != as::ItemKind::Instruction || (it.inst.mnemonic != M::Br && it.inst.mnemonic != M::Bc)) continue;
-    if (it.inst.ops[0].kind == OperandKind::Label && as::labelFollows(items, i, it.inst.ops[0].label, drop)) drop[i] = 1;
+    if (it.inst.ops[0].kind == OperandKind::Label && as::label_follows(items, i, it.inst.ops[0].label, drop)) drop[i] = 1;
   }
-  as::removeItems(items, drop, starts);
+  as::remove_items(items, drop, starts);
 }
 
 // ------------------------------------------------------------ delay slots (-O1)
@@ -974,13 +974,13 @@ struct Effect {
 };
 Effect effect_of(const Instruction& i) {
   Effect e;
-  for (unsigned k = 0; k < i.numOperands; k++) {
+  for (unsigned k = 0; k < i.num_operands; k++) {
     const Operand& o = i.ops[k];
     if (o.kind == OperandKind::Direct) e.mem = true, e.use |= bit(Reg::DP);
     if (o.kind == OperandKind::Ind) e.fixed = true;
   }
   auto reg_use = [&](unsigned k) {
-    if (k < i.numOperands && i.ops[k].kind == OperandKind::Reg) e.use |= bit(i.ops[k].reg);
+    if (k < i.num_operands && i.ops[k].kind == OperandKind::Reg) e.use |= bit(i.ops[k].reg);
   };
   switch (i.mnemonic) {
     case M::Br: case M::Brd: case M::Bc: case M::Bcd: case M::Call: case M::Callc: case M::Retsc: case M::Dbc:
@@ -994,11 +994,11 @@ Effect effect_of(const Instruction& i) {
       return e;
     default: break;
   }
-  unsigned n = i.numOperands;
+  unsigned n = i.num_operands;
   for (unsigned k = 0; k + 1 < n; k++) reg_use(k);
   Reg d = i.ops[n - 1].reg;
   e.def |= bit(d);
-  if (isExtended(d)) e.def |= kFlags;
+  if (is_extended(d)) e.def |= kFlags;
   switch (i.mnemonic) {  // these write their destination without reading it
     case M::Ldi: case M::Ldf: case M::Ldhi: case M::Float: case M::Fix: case M::Frieee: case M::Toieee: case M::Absi:
     case M::Negi: case M::Not: case M::Absf: case M::Negf: case M::Rcpf: case M::Addi3: case M::And3: case M::Andn3:
@@ -1060,7 +1060,7 @@ bool in_slot(const std::vector<Item>& items, size_t k) {
   int seen = 0;
   for (size_t j = k; j-- > 0 && seen < 3;) {
     if (items[j].kind != as::ItemKind::Instruction) continue;
-    if (isDelayed(items[j].inst.mnemonic)) return true;
+    if (is_delayed(items[j].inst.mnemonic)) return true;
     seen++;
   }
   return false;
@@ -1149,7 +1149,7 @@ void fill_delay_slots_slow(std::vector<Item>& items, std::vector<uint32_t>& star
   for (size_t i = 0; i < items.size(); i++)
     if (items[i].kind == as::ItemKind::Instruction && is_branch(items[i].inst) && delay_branch(items, i, starts)) {
       // the branch moved up by the instructions taken from before it; go on after its slots
-      while (items[i].kind != as::ItemKind::Instruction || !isDelayed(items[i].inst.mnemonic)) i--;
+      while (items[i].kind != as::ItemKind::Instruction || !is_delayed(items[i].inst.mnemonic)) i--;
       i += 3;
     }
 }
@@ -1169,7 +1169,7 @@ void fill_delay_slots(std::vector<Item>& items, std::vector<uint32_t>& starts) {
   for (size_t i = 0; i < items.size(); i++)
     if (items[i].kind == as::ItemKind::Instruction) {
       const Instruction& in = items[i].inst;
-      for (unsigned k = 0; k < in.numOperands; k++)
+      for (unsigned k = 0; k < in.num_operands; k++)
         if (in.ops[k].kind == OperandKind::Label) {
           auto t = label_at.find(in.ops[k].label);
           if (t != label_at.end() && t->second <= i) forward = false;
@@ -1263,7 +1263,7 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
   for (const auto& l : p.end_labels) prog.globals.push_back(label_name(l));
 
   as::Block<Instruction> pro;
-  pro.sourceLine = p.rungs.empty() ? 0 : p.rungs[0].line;
+  pro.source_line = p.rungs.empty() ? 0 : p.rungs[0].line;
   // -O2 keeps a rung's stack in the slot registers where it fits, but only
   // when no rung reads stack entries that the rungs before it pushed (IL text
   // can say that; .ld rungs never do): then nothing reads R10 across rungs.
@@ -1280,8 +1280,8 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
   int next_label = 0;
   for (const Rung& r : p.rungs) {
     as::Block<Instruction> b;
-    b.sourceLine = r.line;
-    for (const auto& l : r.labels) b.items.push_back(Item::labelDef(label_name(l), true));
+    b.source_line = r.line;
+    for (const auto& l : r.labels) b.items.push_back(Item::label_def(label_name(l), true));
     bool slots = slots_ok && stack_fits_slots(r.code, kNumSlots);
     b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title) +
                                  (slots ? " (stack in registers)" : "")));
@@ -1306,19 +1306,19 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
   }
 
   as::Block<Instruction> epi;
-  epi.sourceLine = p.rungs.empty() ? 0 : p.rungs.back().line;
-  for (const auto& l : p.end_labels) epi.items.push_back(Item::labelDef(label_name(l), true));
-  epi.items.push_back(Item::labelDef(kExitLabel, true));
+  epi.source_line = p.rungs.empty() ? 0 : p.rungs.back().line;
+  for (const auto& l : p.end_labels) epi.items.push_back(Item::label_def(label_name(l), true));
+  epi.items.push_back(Item::label_def(kExitLabel, true));
   epi.items.push_back(Item::instr(parse("RETSU")));
   epi.items.push_back(Item::note("__divi: R0 = R0 / R1, R1 = R0 % R1 (INT32, shift-subtract)"));
-  epi.items.push_back(Item::labelDef(kDivLabel, true));
+  epi.items.push_back(Item::label_def(kDivLabel, true));
   for (const char* t : kDivRoutine) {
-    Line l = parseLine(t);
-    if (!l.label.empty()) epi.items.push_back(Item::labelDef(l.label));
+    Line l = parse_line(t);
+    if (!l.label.empty()) epi.items.push_back(Item::label_def(l.label));
     epi.items.push_back(Item::instr(*l.inst));
   }
   epi.items.push_back(Item::note("__divf: R0 = R0 / R1 (C40 floats)"));
-  epi.items.push_back(Item::labelDef(kDivfLabel, true));
+  epi.items.push_back(Item::label_def(kDivfLabel, true));
   for (const char* t : kDivfRoutine) epi.items.push_back(Item::instr(parse(t)));
   prog.blocks.push_back(std::move(epi));
   return out;

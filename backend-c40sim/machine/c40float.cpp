@@ -33,7 +33,7 @@ i128 shr(i128 v, int s) {  // arithmetic (floor) shift, any s >= 0
   return v >> s;
 }
 
-int expOf(Ext x) { return int(int8_t(x.exp)); }
+int exp_of(Ext x) { return int(int8_t(x.exp)); }
 
 // The 33-bit signed mantissa: value = sm * 2^(exp - 31).
 int64_t sm(Ext x) {
@@ -42,8 +42,8 @@ int64_t sm(Ext x) {
 }
 
 Val val(Ext x) {
-  if (isZero(x)) return {};
-  return {sm(x), expOf(x) - 31};
+  if (is_zero(x)) return {};
+  return {sm(x), exp_of(x) - 31};
 }
 
 // Normalizes with truncation toward -infinity (dropping low bits of the
@@ -81,15 +81,15 @@ Res normalize(Val v) {
 
 }  // namespace
 
-bool isZero(Ext x) { return x.exp == 0x80; }
-bool isNegative(Ext x) { return !isZero(x) && (x.man >> 31); }
+bool is_zero(Ext x) { return x.exp == 0x80; }
+bool is_negative(Ext x) { return !is_zero(x) && (x.man >> 31); }
 
-double toDouble(Ext x) {
-  if (isZero(x)) return 0.0;
-  return std::ldexp(double(sm(x)), expOf(x) - 31);
+double to_double(Ext x) {
+  if (is_zero(x)) return 0.0;
+  return std::ldexp(double(sm(x)), exp_of(x) - 31);
 }
 
-Res fromDouble(double v) {
+Res from_double(double v) {
   if (v == 0 || std::isnan(v)) return {};
   if (std::isinf(v)) return normalize(Val{v > 0 ? 1 : -1, 1000});
   int e = 0;
@@ -98,10 +98,10 @@ Res fromDouble(double v) {
   return normalize(Val{m, e - 53});
 }
 
-Ext fromSingle(uint32_t w) { return Ext{uint8_t(w >> 24), (w & 0xFFFFFF) << 8}; }
-uint32_t toSingle(Ext x) { return uint32_t(x.exp) << 24 | x.man >> 8; }
+Ext from_single(uint32_t w) { return Ext{uint8_t(w >> 24), (w & 0xFFFFFF) << 8}; }
+uint32_t to_single(Ext x) { return uint32_t(x.exp) << 24 | x.man >> 8; }
 
-Ext fromShort(uint16_t bits) {
+Ext from_short(uint16_t bits) {
   int e = int(bits >> 12 & 0xF);
   if (e >= 8) e -= 16;
   if (e == -8) return kZero;
@@ -110,15 +110,15 @@ Ext fromShort(uint16_t bits) {
   return Ext{uint8_t(int8_t(e)), uint32_t(m << 20) ^ 0x80000000u};
 }
 
-Res fromInt(int32_t i) { return normalize(Val{i, 0}); }
+Res from_int(int32_t i) { return normalize(Val{i, 0}); }
 
 int32_t fix(Ext x, bool* overflow) {
   *overflow = false;
-  if (isZero(x)) return 0;
-  int e = expOf(x);
+  if (is_zero(x)) return 0;
+  int e = exp_of(x);
   if (e > 30) {
     *overflow = true;
-    return isNegative(x) ? std::numeric_limits<int32_t>::min() : std::numeric_limits<int32_t>::max();
+    return is_negative(x) ? std::numeric_limits<int32_t>::min() : std::numeric_limits<int32_t>::max();
   }
   return int32_t(shr(sm(x), 31 - e));
 }
@@ -155,17 +155,17 @@ Res sub(Ext a, Ext b) {
   return normalize(Val{big + small, x.e - G});
 }
 
-Res abs(Ext a) { return isNegative(a) ? neg(a) : normalize(val(a)); }
+Res abs(Ext a) { return is_negative(a) ? neg(a) : normalize(val(a)); }
 
 Res mul(Ext a, Ext b) {
-  if (isZero(a) || isZero(b)) return {};
+  if (is_zero(a) || is_zero(b)) return {};
   // Operands truncated to single precision: 25-bit mantissas.
   int64_t ma = sm(a) >> 8, mb = sm(b) >> 8;
-  return normalize(Val{i128(ma) * mb, (expOf(a) - 23) + (expOf(b) - 23)});
+  return normalize(Val{i128(ma) * mb, (exp_of(a) - 23) + (exp_of(b) - 23)});
 }
 
 Res rcp(Ext a) {
-  if (isZero(a)) {
+  if (is_zero(a)) {
     Res r;
     r.overflow = true;
     r.v = Ext{0x7F, 0x7FFFFFFF};
@@ -176,8 +176,8 @@ Res rcp(Ext a) {
   i128 d = sm(a);
   i128 q = num / d;
   if ((num % d != 0) && ((num < 0) != (d < 0))) --q;
-  Res r = normalize(Val{q, 31 - expOf(a) - 95});
-  if (!r.overflow && !r.underflow && !isZero(r.v)) {
+  Res r = normalize(Val{q, 31 - exp_of(a) - 95});
+  if (!r.overflow && !r.underflow && !is_zero(r.v)) {
     int64_t s = sm(r.v);
     s = (s >> 23) << 23;  // keep 8 fraction bits
     r.v.man = uint32_t(uint64_t(s)) ^ 0x80000000u;
@@ -186,12 +186,12 @@ Res rcp(Ext a) {
 }
 
 int compare(Ext a, Ext b) {
-  double x = toDouble(a), y = toDouble(b);
+  double x = to_double(a), y = to_double(b);
   return x < y ? -1 : x > y ? 1 : 0;
 }
 
-uint32_t toIeee(Ext x) {
-  uint32_t w = toSingle(x);
+uint32_t to_ieee(Ext x) {
+  uint32_t w = to_single(x);
   int e = int(int8_t(w >> 24));
   uint32_t s = w >> 23 & 1, f = w & 0x7FFFFF;
   if (e <= -127) return 0;  // zero and the values too small for IEEE normals
@@ -201,7 +201,7 @@ uint32_t toIeee(Ext x) {
   return 0x80000000u | uint32_t(e + 128) << 23;
 }
 
-Res fromIeee(uint32_t w) {
+Res from_ieee(uint32_t w) {
   Res r;
   uint32_t e8 = w >> 23 & 0xFF, s = w >> 31, f = w & 0x7FFFFF;
   if (e8 == 255) {  // NaN and infinity: saturate, signal overflow

@@ -25,14 +25,14 @@ struct Res {
   bool underflow = false;
 };
 constexpr Ext kZero{0x80, 0};
-bool isZero(Ext x);
-bool isNegative(Ext x);
-double toDouble(Ext x);         // exact
-Res fromDouble(double v);       // rounds toward -infinity (the C40's truncation)
-Ext fromSingle(uint32_t word);  // 32-bit memory float -> register (LDF)
-uint32_t toSingle(Ext x);       // register -> 32-bit memory float (STF, truncates)
-Ext fromShort(uint16_t bits);   // 16-bit short float immediate
-Res fromInt(int32_t i);         // FLOAT (exact)
+bool is_zero(Ext x);
+bool is_negative(Ext x);
+double to_double(Ext x);         // exact
+Res from_double(double v);       // rounds toward -infinity (the C40's truncation)
+Ext from_single(uint32_t word);  // 32-bit memory float -> register (LDF)
+uint32_t to_single(Ext x);       // register -> 32-bit memory float (STF, truncates)
+Ext from_short(uint16_t bits);   // 16-bit short float immediate
+Res from_int(int32_t i);         // FLOAT (exact)
 int32_t fix(Ext x, bool* overflow);  // FIX: floor, saturating
 Res add(Ext a, Ext b);
 Res sub(Ext a, Ext b);  // a - b
@@ -42,8 +42,8 @@ Res abs(Ext a);
 Res rcp(Ext a);  // RCPF model: 1/a truncated to 8 fraction bits
 int compare(Ext a, Ext b);  // sign of a - b, exact
 // TOIEEE / FRIEEE (TMS320C3x/C4x conversion tables; see docs/c40.md).
-uint32_t toIeee(Ext x);
-Res fromIeee(uint32_t ieee);
+uint32_t to_ieee(Ext x);
+Res from_ieee(uint32_t ieee);
 }  // namespace fp
 
 }  // namespace ldc::c40sim

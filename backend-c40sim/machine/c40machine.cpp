@@ -14,8 +14,8 @@ c40sim::Config board_config(const C40Layout& w, uint32_t code_words, uint32_t il
       {"rom", kRomBase, kRomWords, 0},
       {"stack", kStackBase, kStackWords, 0},
   };
-  cfg.nsPerCycle = kNsPerCycle;
-  cfg.maxInstructions = UINT64_MAX;
+  cfg.ns_per_cycle = kNsPerCycle;
+  cfg.max_instructions = UINT64_MAX;
   return cfg;
 }
 
@@ -30,7 +30,7 @@ C40Machine::C40Machine(const Layout& layout, std::span<const uint32_t> code, uin
   if (!il.empty()) sim_->load(il, kIlBase);
   rom_.install(*sim_);
   c40sim::C40Sim* s = sim_.get();
-  sim_->setTrace([this, s](const c40sim::TraceEntry& t) {
+  sim_->set_trace([this, s](const c40sim::TraceEntry& t) {
     rom_.on_instruction(*s, t.pc);
     if (observer) observer(t);
   });
@@ -42,10 +42,10 @@ ScanCost C40Machine::scan(uint8_t* mem) {
   bytes_to_words(layout_, w_, mem, in_.data());
   for (uint32_t i = 0; i < w_.words; i++)  // buf_ holds what the simulator's memory holds
     if (in_[i] != buf_[i]) sim_->write(kDataBase + i, buf_[i] = in_[i]);
-  sim_->setReg(as::c40::Reg::SP, kStackBase);
+  sim_->set_reg(as::c40::Reg::SP, kStackBase);
   c40sim::RunResult r = sim_->call(entry_, max_cycles);
   if (!r.ok())
-    throw std::runtime_error("C40 simulator: " + std::string(c40sim::stopName(r.stop)) + ": " + r.error);
+    throw std::runtime_error("C40 simulator: " + std::string(c40sim::stop_name(r.stop)) + ": " + r.error);
   for (uint32_t i = 0; i < w_.words; i++) buf_[i] = sim_->read(kDataBase + i);
   words_to_bytes(layout_, w_, buf_.data(), mem);
   return {r.cycles, r.instructions};

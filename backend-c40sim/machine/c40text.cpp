@@ -69,31 +69,31 @@ AsmText assemble_once(std::string_view text, uint32_t base, const std::string& n
       if (code.rfind(".float", 0) == 0) {
         if (!label.empty()) {
           label_items.emplace_back(blk.items.size(), label);
-          blk.items.push_back(as::Item<Instruction>::labelDef(label));
+          blk.items.push_back(as::Item<Instruction>::label_def(label));
         }
         std::string v = trim(code.substr(6));
         char* end = nullptr;
         double d = std::strtod(v.c_str(), &end);
         if (v.empty() || *end) throw as::AsmError("bad .float '" + v + "'");
-        uint32_t w = c40sim::fp::toSingle(c40sim::fp::fromDouble(d).v);
+        uint32_t w = c40sim::fp::to_single(c40sim::fp::from_double(d).v);
         blk.items.push_back(as::Item<Instruction>::instr(make(Mnemonic::Word, {Operand::i(w)}), comment));
         continue;
       }
-      Line l = parseLine(line);
+      Line l = parse_line(line);
       if (!l.label.empty()) {
         label_items.emplace_back(blk.items.size(), l.label);
-        blk.items.push_back(as::Item<Instruction>::labelDef(l.label));
+        blk.items.push_back(as::Item<Instruction>::label_def(l.label));
       }
       if (l.inst) blk.items.push_back(as::Item<Instruction>::instr(*l.inst, l.comment));
     } catch (const as::AsmError& e) {
       throw std::runtime_error(name + ":" + std::to_string(lineno) + ": " + e.what());
     }
   }
-  blk.sourceLine = 1;
+  blk.source_line = 1;
   out.program.blocks.push_back(std::move(blk));
   out.result = as::assemble(target(), out.program, as::Mode::WholeProgram);
   if (!out.result.ok()) throw std::runtime_error(name + ": " + out.result.errors[0].message);
-  out.words = wordsOf(out.result.code);
+  out.words = words_of(out.result.code);
   for (const auto& [item, l] : label_items) out.labels[l] = base + out.result.items[0][item].offset / 4;
   return out;
 }

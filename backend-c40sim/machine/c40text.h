@@ -20,7 +20,7 @@ struct AsmText {
 };
 
 // Assembles `text` (TI syntax as assembler/c40.h parses it, one statement per
-// line) as one block placed at word address `base`.  Besides parseLine():
+// line) as one block placed at word address `base`.  Besides parse_line():
 //   .float V       a C40 single-precision word for the decimal V
 //   %NAME_HI%      the high 16 bits of label NAME's absolute address
 //   %NAME_LO%      its low 16 bits (for LDHI / OR into an address register)

@@ -22,12 +22,12 @@ float rom_host(RomFn f, float x) {
 }
 
 c40sim::Ext rom_result(RomFn f, c40sim::Ext x) {
-  uint32_t in = c40sim::fp::toIeee(x), out;
+  uint32_t in = c40sim::fp::to_ieee(x), out;
   float a, y;
   std::memcpy(&a, &in, 4);
   y = rom_host(f, a);
   std::memcpy(&out, &y, 4);
-  return c40sim::fp::fromIeee(out).v;
+  return c40sim::fp::from_ieee(out).v;
 }
 
 const MathRom& math_rom() {
@@ -92,7 +92,7 @@ void RomService::on_instruction(c40sim::C40Sim& sim, uint32_t pc) {
     arg_[k] = sim.ext(as::c40::Reg::R0);
     calls_[k]++;
   } else if (pc == math_rom().exit[k] && host_) {
-    sim.setExt(as::c40::Reg::R0, rom_result(RomFn(k), arg_[k]));
+    sim.set_ext(as::c40::Reg::R0, rom_result(RomFn(k), arg_[k]));
   }
 }
 

@@ -19,7 +19,7 @@ namespace {
 
 constexpr uint32_t kC = 0x01, kV = 0x02, kZ = 0x04, kN = 0x08, kUF = 0x10, kLV = 0x20, kLUF = 0x40;
 
-int extIndex(Reg r) {
+int ext_index(Reg r) {
   unsigned n = unsigned(r);
   if (n <= 7) return int(n);
   if (n >= 28 && n <= 31) return int(n - 20);
@@ -34,7 +34,7 @@ std::string hex(uint64_t v) {
 
 // Register groups of the pipeline's address-register conflicts.
 enum Group { kGroupAux = 0, kGroupDp = 1, kGroupSp = 2, kNoGroup = 3 };
-Group groupOf(Reg r) {
+Group group_of(Reg r) {
   unsigned n = unsigned(r);
   if ((n >= 8 && n <= 15) || r == Reg::IR0 || r == Reg::IR1 || r == Reg::BK) return kGroupAux;
   if (r == Reg::DP) return kGroupDp;
@@ -47,7 +47,7 @@ struct SimError {
   std::string message;
 };
 
-bool condTrue(Cond c, uint32_t st) {
+bool cond_true(Cond c, uint32_t st) {
   bool C = st & kC, V = st & kV, Z = st & kZ, N = st & kN, UF = st & kUF, LV = st & kLV,
        LUF = st & kLUF;
   switch (c) {
@@ -82,7 +82,7 @@ int32_t sext(uint32_t v, unsigned bits) {
 
 }  // namespace
 
-std::string_view stopName(Stop s) {
+std::string_view stop_name(Stop s) {
   switch (s) {
     case Stop::Returned: return "returned";
     case Stop::CycleLimit: return "cycle limit";
@@ -126,50 +126,50 @@ uint32_t C40Sim::read(uint32_t a) const {
   return mem_[size_t(r - cfg_.regions.data())][a - r->base];
 }
 
-void C40Sim::setReg(Reg r, uint32_t v) {
-  int x = extIndex(r);
+void C40Sim::set_reg(Reg r, uint32_t v) {
+  int x = ext_index(r);
   if (x >= 0) ext_[x].man = v;
   else r32_[unsigned(r)] = v;
 }
 uint32_t C40Sim::reg(Reg r) const {
-  int x = extIndex(r);
+  int x = ext_index(r);
   return x >= 0 ? ext_[x].man : r32_[unsigned(r)];
 }
-void C40Sim::setExt(Reg r, Ext v) {
-  int x = extIndex(r);
+void C40Sim::set_ext(Reg r, Ext v) {
+  int x = ext_index(r);
   if (x < 0) throw std::invalid_argument("not an extended-precision register");
   ext_[x] = v;
 }
 Ext C40Sim::ext(Reg r) const {
-  int x = extIndex(r);
+  int x = ext_index(r);
   if (x < 0) throw std::invalid_argument("not an extended-precision register");
   return ext_[x];
 }
 
-uint32_t C40Sim::memRead(uint32_t a) {
+uint32_t C40Sim::mem_read(uint32_t a) {
   Region* r = region(a);
   if (!r) throw SimError{Stop::MemoryFault, "read of " + hex(a) + " outside memory"};
-  waits_ += r->waitStates;
+  waits_ += r->wait_states;
   return mem_[size_t(r - cfg_.regions.data())][a - r->base];
 }
 
-void C40Sim::memWrite(uint32_t a, uint32_t v) {
+void C40Sim::mem_write(uint32_t a, uint32_t v) {
   Region* r = region(a);
   if (!r) throw SimError{Stop::MemoryFault, "write of " + hex(a) + " outside memory"};
-  waits_ += r->waitStates;
+  waits_ += r->wait_states;
   mem_[size_t(r - cfg_.regions.data())][a - r->base] = v;
 }
 
 const C40Sim::Cached& C40Sim::fetch(uint32_t pc) {
   Region* r = region(pc);
   if (!r) throw SimError{Stop::MemoryFault, "fetch of " + hex(pc) + " outside memory"};
-  waits_ += r->waitStates;
+  waits_ += r->wait_states;
   uint32_t w = mem_[size_t(r - cfg_.regions.data())][pc - r->base];
   Cached& c = cache_[pc];
   if (c.word != w || (!c.ok && c.error.empty())) {
     c.word = w;
     DecodeError e;
-    auto in = decodeWord(w, pc, &e);
+    auto in = decode_word(w, pc, &e);
     c.ok = bool(in);
     if (in) c.inst = *in;
     c.error = in ? "" : e.message;
@@ -189,22 +189,22 @@ class Exec {
   uint32_t& st() { return r32_[unsigned(Reg::ST)]; }
 
   uint32_t ireg(Reg r) const {
-    int x = extIndex(r);
+    int x = ext_index(r);
     return x >= 0 ? ext_[x].man : r32_[unsigned(r)];
   }
-  void setIreg(Reg r, uint32_t v) {
-    int x = extIndex(r);
+  void set_ireg(Reg r, uint32_t v) {
+    int x = ext_index(r);
     if (x >= 0) ext_[x].man = v;
     else r32_[unsigned(r)] = v;
   }
   Ext freg(Reg r) const {
-    int x = extIndex(r);
-    return x >= 0 ? ext_[x] : fp::fromSingle(r32_[unsigned(r)]);
+    int x = ext_index(r);
+    return x >= 0 ? ext_[x] : fp::from_single(r32_[unsigned(r)]);
   }
-  void setFreg(Reg r, Ext v) {
-    int x = extIndex(r);
+  void set_freg(Reg r, Ext v) {
+    int x = ext_index(r);
     if (x >= 0) ext_[x] = v;
-    else r32_[unsigned(r)] = fp::toSingle(v);
+    else r32_[unsigned(r)] = fp::to_single(v);
   }
 
   // Effective address of an indirect operand; applies the AR update.
@@ -224,21 +224,21 @@ class Exec {
     }
   }
   uint32_t direct(int64_t off) { return (r32_[unsigned(Reg::DP)] & 0xFFFF) << 16 | uint32_t(off); }
-  uint32_t addrOf(const Operand& o) { return o.kind == OperandKind::Direct ? direct(o.imm) : ea(o.ind); }
+  uint32_t addr_of(const Operand& o) { return o.kind == OperandKind::Direct ? direct(o.imm) : ea(o.ind); }
 
   uint32_t ival(const Operand& o) {
     switch (o.kind) {
       case OperandKind::Reg: return ireg(o.reg);
       case OperandKind::Imm: return uint32_t(int32_t(o.imm));
-      case OperandKind::Direct: case OperandKind::Ind: return rd_(addrOf(o));
+      case OperandKind::Direct: case OperandKind::Ind: return rd_(addr_of(o));
       default: throw SimError{Stop::Unsupported, "operand"};
     }
   }
   Ext fval(const Operand& o) {
     switch (o.kind) {
       case OperandKind::Reg: return freg(o.reg);
-      case OperandKind::Float: return fp::fromShort(uint16_t(o.imm));
-      case OperandKind::Direct: case OperandKind::Ind: return fp::fromSingle(rd_(addrOf(o)));
+      case OperandKind::Float: return fp::from_short(uint16_t(o.imm));
+      case OperandKind::Direct: case OperandKind::Ind: return fp::from_single(rd_(addr_of(o)));
       default: throw SimError{Stop::Unsupported, "operand"};
     }
   }
@@ -246,19 +246,19 @@ class Exec {
   // Flags are set when the destination is R0-R11 (SET COND = 0) or always
   // for compares (dst == nullptr).
   void flags(const Reg* dst, uint32_t set, uint32_t mask) {
-    if (dst && extIndex(*dst) < 0) return;
+    if (dst && ext_index(*dst) < 0) return;
     uint32_t& s = st();
     s = (s & ~mask) | (set & mask);
     if (set & kV) s |= kLV;
     if (set & kUF) s |= kLUF;
   }
-  void intFlags(const Reg* dst, uint32_t res, bool n, bool v, bool c, bool setC) {
+  void int_flags(const Reg* dst, uint32_t res, bool n, bool v, bool c, bool set_c) {
     uint32_t f = (n ? kN : 0) | (res == 0 ? kZ : 0) | (v ? kV : 0) | (c ? kC : 0);
-    flags(dst, f, kN | kZ | kV | kUF | (setC ? kC : 0));
+    flags(dst, f, kN | kZ | kV | kUF | (set_c ? kC : 0));
   }
-  void logicFlags(const Reg* dst, uint32_t res) { intFlags(dst, res, res >> 31, false, false, false); }
-  void floatFlags(const Reg* dst, const fp::Res& r) {
-    uint32_t f = (fp::isNegative(r.v) ? kN : 0) | (fp::isZero(r.v) ? kZ : 0) |
+  void logic_flags(const Reg* dst, uint32_t res) { int_flags(dst, res, res >> 31, false, false, false); }
+  void float_flags(const Reg* dst, const fp::Res& r) {
+    uint32_t f = (fp::is_negative(r.v) ? kN : 0) | (fp::is_zero(r.v) ? kZ : 0) |
                  (r.overflow ? kV : 0) | (r.underflow ? kUF : 0);
     flags(dst, f, kN | kZ | kV | kUF);
   }
@@ -273,7 +273,7 @@ class Exec {
   std::function<void(uint32_t, uint32_t)> wr_;
 };
 
-uint32_t shiftL(uint32_t v, int32_t count, bool arith, bool* carry) {
+uint32_t shift_l(uint32_t v, int32_t count, bool arith, bool* carry) {
   *carry = false;
   if (count > 0) {
     if (count <= 32) *carry = (uint64_t(v) << count) >> 32 & 1;
@@ -301,7 +301,7 @@ class Step {
   using M = Mnemonic;
   Step(Exec& x, uint32_t* r32, const Instruction& in, uint32_t pc, bool& taken, uint32_t& target)
       : x(x), r32_(r32), in(in), pc(pc), a(in.ops[0]), b(in.ops[1]), c(in.ops[2]), taken_(taken), target_(target) {
-    for (unsigned i = 0; i < in.numOperands; ++i) {
+    for (unsigned i = 0; i < in.num_operands; ++i) {
       if (in.ops[i].kind == OperandKind::Ind) uses |= 1u << kGroupAux;
       if (in.ops[i].kind == OperandKind::Direct) uses |= 1u << kGroupDp;
     }
@@ -314,7 +314,7 @@ class Step {
   bool floating();
   bool float3();
   bool conversion();
-  bool loadStore();
+  bool load_store();
   bool stack();
   bool control();
 
@@ -328,22 +328,22 @@ class Step {
   uint32_t& target_;
 
   void wrote(Reg r) {
-    Group g = groupOf(r);
+    Group g = group_of(r);
     if (g != kNoGroup) writes |= 1u << g;
   }
-  void setI(Reg r, uint32_t v) {
-    x.setIreg(r, v);
+  void set_i(Reg r, uint32_t v) {
+    x.set_ireg(r, v);
     wrote(r);
   }
-  void setF(Reg r, Ext v) {
-    x.setFreg(r, v);
+  void set_f(Reg r, Ext v) {
+    x.set_freg(r, v);
     wrote(r);
   }
   void branch(uint32_t t) {
     taken_ = true;
     target_ = t;
   }
-  uint32_t targetOf(const Operand& o) { return o.kind == OperandKind::Reg ? x.ireg(o.reg) : uint32_t(o.imm); }
+  uint32_t target_of(const Operand& o) { return o.kind == OperandKind::Reg ? x.ireg(o.reg) : uint32_t(o.imm); }
   void push(uint32_t v) {
     uint32_t& sp = r32_[unsigned(Reg::SP)];
     sp += 1;
@@ -356,38 +356,38 @@ class Step {
     return v;
   }
   // Integer arithmetic on int64 for the flags (N from the exact result).
-  void arith(const Reg* dst, int64_t exact, uint32_t out, bool carry, bool setC) {
+  void arith(const Reg* dst, int64_t exact, uint32_t out, bool carry, bool set_c) {
     bool v = exact < INT32_MIN || exact > INT32_MAX;
-    x.intFlags(dst, out, exact < 0, v, carry, setC);
+    x.int_flags(dst, out, exact < 0, v, carry, set_c);
   }
-  uint32_t addOp(const Reg* dst, uint32_t p, uint32_t q) {
+  uint32_t add_op(const Reg* dst, uint32_t p, uint32_t q) {
     uint32_t out = p + q;
     arith(dst, int64_t(int32_t(p)) + int32_t(q), out, (uint64_t(p) + q) >> 32, true);
     return out;
   }
-  uint32_t subOp(const Reg* dst, uint32_t p, uint32_t q) {  // p - q
+  uint32_t sub_op(const Reg* dst, uint32_t p, uint32_t q) {  // p - q
     uint32_t out = p - q;
     arith(dst, int64_t(int32_t(p)) - int32_t(q), out, p < q, true);
     return out;
   }
-  uint32_t mpyOp(const Reg* dst, uint32_t p, uint32_t q) {  // 24 x 24 bits
+  uint32_t mpy_op(const Reg* dst, uint32_t p, uint32_t q) {  // 24 x 24 bits
     int64_t prod = int64_t(sext(p, 24)) * sext(q, 24);
     uint32_t out = uint32_t(uint64_t(prod));
     arith(dst, prod, out, false, false);
     return out;
   }
-  uint32_t shiftOp(const Reg* dst, uint32_t v, uint32_t count, bool ar) {
+  uint32_t shift_op(const Reg* dst, uint32_t v, uint32_t count, bool ar) {
     bool carry = false;
-    uint32_t out = shiftL(v, sext(count & 0x7F, 7), ar, &carry);
-    x.intFlags(dst, out, out >> 31, false, carry, true);
+    uint32_t out = shift_l(v, sext(count & 0x7F, 7), ar, &carry);
+    x.int_flags(dst, out, out >> 31, false, carry, true);
     return out;
   }
   uint32_t logic(const Reg* dst, uint32_t out) {
-    x.logicFlags(dst, out);
+    x.logic_flags(dst, out);
     return out;
   }
   Ext fres(const Reg* dst, const fp::Res& r) {
-    x.floatFlags(dst, r);
+    x.float_flags(dst, r);
     return r.v;
   }
   void fcmp(Ext p, Ext q) {  // flags of p - q
@@ -397,14 +397,14 @@ class Step {
     x.flags(nullptr, f, kN | kZ | kV | kUF);
   }
   // LDIc/LDFc whose condition is false: only the address update happens.
-  bool skippedLoad(M conditional) {
-    if (in.mnemonic != conditional || condTrue(in.cond, x.st())) return false;
+  bool skipped_load(M conditional) {
+    if (in.mnemonic != conditional || cond_true(in.cond, x.st())) return false;
     if (a.kind == OperandKind::Ind) x.ea(a.ind);
     return true;
   }
-  void loadI(Reg r, uint32_t v) {
-    setI(r, v);
-    x.intFlags(&r, v, v >> 31, false, false, false);
+  void load_i(Reg r, uint32_t v) {
+    set_i(r, v);
+    x.int_flags(&r, v, v >> 31, false, false, false);
   }
 };
 
@@ -412,28 +412,28 @@ class Step {
 bool Step::integer() {
   switch (in.mnemonic) {
     case M::Ldi: case M::Ldic:
-      if (!skippedLoad(M::Ldic)) loadI(b.reg, x.ival(a));
+      if (!skipped_load(M::Ldic)) load_i(b.reg, x.ival(a));
       return true;
     case M::Absi: {
       int32_t s = int32_t(x.ival(a));
       uint32_t out = s < 0 ? uint32_t(0) - uint32_t(s) : uint32_t(s);
-      setI(b.reg, out);
+      set_i(b.reg, out);
       arith(&b.reg, s < 0 ? -int64_t(s) : s, out, false, false);
       return true;
     }
-    case M::Negi: { uint32_t s = x.ival(a); setI(b.reg, subOp(&b.reg, 0, s)); return true; }
-    case M::Addi: { uint32_t s = x.ival(a); setI(b.reg, addOp(&b.reg, x.ireg(b.reg), s)); return true; }
-    case M::Subi: { uint32_t s = x.ival(a); setI(b.reg, subOp(&b.reg, x.ireg(b.reg), s)); return true; }
-    case M::Cmpi: { uint32_t s = x.ival(a); subOp(nullptr, x.ireg(b.reg), s); return true; }
-    case M::Mpyi: { uint32_t s = x.ival(a); setI(b.reg, mpyOp(&b.reg, x.ireg(b.reg), s)); return true; }
-    case M::And: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) & s)); return true; }
-    case M::Andn: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) & ~s)); return true; }
-    case M::Or: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) | s)); return true; }
-    case M::Xor: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, x.ireg(b.reg) ^ s)); return true; }
-    case M::Not: { uint32_t s = x.ival(a); setI(b.reg, logic(&b.reg, ~s)); return true; }
+    case M::Negi: { uint32_t s = x.ival(a); set_i(b.reg, sub_op(&b.reg, 0, s)); return true; }
+    case M::Addi: { uint32_t s = x.ival(a); set_i(b.reg, add_op(&b.reg, x.ireg(b.reg), s)); return true; }
+    case M::Subi: { uint32_t s = x.ival(a); set_i(b.reg, sub_op(&b.reg, x.ireg(b.reg), s)); return true; }
+    case M::Cmpi: { uint32_t s = x.ival(a); sub_op(nullptr, x.ireg(b.reg), s); return true; }
+    case M::Mpyi: { uint32_t s = x.ival(a); set_i(b.reg, mpy_op(&b.reg, x.ireg(b.reg), s)); return true; }
+    case M::And: { uint32_t s = x.ival(a); set_i(b.reg, logic(&b.reg, x.ireg(b.reg) & s)); return true; }
+    case M::Andn: { uint32_t s = x.ival(a); set_i(b.reg, logic(&b.reg, x.ireg(b.reg) & ~s)); return true; }
+    case M::Or: { uint32_t s = x.ival(a); set_i(b.reg, logic(&b.reg, x.ireg(b.reg) | s)); return true; }
+    case M::Xor: { uint32_t s = x.ival(a); set_i(b.reg, logic(&b.reg, x.ireg(b.reg) ^ s)); return true; }
+    case M::Not: { uint32_t s = x.ival(a); set_i(b.reg, logic(&b.reg, ~s)); return true; }
     case M::Tstb: { uint32_t s = x.ival(a); logic(nullptr, x.ireg(b.reg) & s); return true; }
-    case M::Lsh: { uint32_t s = x.ival(a); setI(b.reg, shiftOp(&b.reg, x.ireg(b.reg), s, false)); return true; }
-    case M::Ash: { uint32_t s = x.ival(a); setI(b.reg, shiftOp(&b.reg, x.ireg(b.reg), s, true)); return true; }
+    case M::Lsh: { uint32_t s = x.ival(a); set_i(b.reg, shift_op(&b.reg, x.ireg(b.reg), s, false)); return true; }
+    case M::Ash: { uint32_t s = x.ival(a); set_i(b.reg, shift_op(&b.reg, x.ireg(b.reg), s, true)); return true; }
     default: return false;
   }
 }
@@ -449,17 +449,17 @@ bool Step::integer3() {
   const Reg* d = (in.mnemonic == M::Cmpi3 || in.mnemonic == M::Tstb3) ? nullptr : &c.reg;
   uint32_t out = 0;
   switch (in.mnemonic) {
-    case M::Addi3: out = addOp(d, s1, s2); break;
-    case M::Subi3: case M::Cmpi3: out = subOp(d, s1, s2); break;
-    case M::Mpyi3: out = mpyOp(d, s1, s2); break;
+    case M::Addi3: out = add_op(d, s1, s2); break;
+    case M::Subi3: case M::Cmpi3: out = sub_op(d, s1, s2); break;
+    case M::Mpyi3: out = mpy_op(d, s1, s2); break;
     case M::And3: case M::Tstb3: out = logic(d, s1 & s2); break;
     case M::Andn3: out = logic(d, s1 & ~s2); break;
     case M::Or3: out = logic(d, s1 | s2); break;
     case M::Xor3: out = logic(d, s1 ^ s2); break;
-    case M::Lsh3: out = shiftOp(d, s1, s2, false); break;
-    default: out = shiftOp(d, s1, s2, true); break;
+    case M::Lsh3: out = shift_op(d, s1, s2, false); break;
+    default: out = shift_op(d, s1, s2, true); break;
   }
-  if (d) setI(*d, out);
+  if (d) set_i(*d, out);
   return true;
 }
 
@@ -467,17 +467,17 @@ bool Step::integer3() {
 bool Step::floating() {
   switch (in.mnemonic) {
     case M::Ldf: case M::Ldfc:
-      if (!skippedLoad(M::Ldfc)) setF(b.reg, fres(&b.reg, fp::Res{x.fval(a), false, false}));
+      if (!skipped_load(M::Ldfc)) set_f(b.reg, fres(&b.reg, fp::Res{x.fval(a), false, false}));
       return true;
-    case M::Absf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::abs(s))); return true; }
-    case M::Negf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::neg(s))); return true; }
-    case M::Addf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::add(x.freg(b.reg), s))); return true; }
-    case M::Subf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::sub(x.freg(b.reg), s))); return true; }
-    case M::Mpyf: { Ext s = x.fval(a); setF(b.reg, fres(&b.reg, fp::mul(x.freg(b.reg), s))); return true; }
+    case M::Absf: { Ext s = x.fval(a); set_f(b.reg, fres(&b.reg, fp::abs(s))); return true; }
+    case M::Negf: { Ext s = x.fval(a); set_f(b.reg, fres(&b.reg, fp::neg(s))); return true; }
+    case M::Addf: { Ext s = x.fval(a); set_f(b.reg, fres(&b.reg, fp::add(x.freg(b.reg), s))); return true; }
+    case M::Subf: { Ext s = x.fval(a); set_f(b.reg, fres(&b.reg, fp::sub(x.freg(b.reg), s))); return true; }
+    case M::Mpyf: { Ext s = x.fval(a); set_f(b.reg, fres(&b.reg, fp::mul(x.freg(b.reg), s))); return true; }
     case M::Cmpf: { Ext s = x.fval(a); fcmp(x.freg(b.reg), s); return true; }
     case M::Rcpf: {
       Ext s = a.kind == OperandKind::Reg ? x.freg(a.reg) : x.fval(a);
-      setF(b.reg, fres(&b.reg, fp::rcp(s)));
+      set_f(b.reg, fres(&b.reg, fp::rcp(s)));
       return true;
     }
     default: return false;
@@ -494,7 +494,7 @@ bool Step::float3() {
     return true;
   }
   fp::Res r = in.mnemonic == M::Addf3 ? fp::add(s1, s2) : in.mnemonic == M::Subf3 ? fp::sub(s1, s2) : fp::mul(s1, s2);
-  setF(c.reg, fres(&c.reg, r));
+  set_f(c.reg, fres(&c.reg, r));
   return true;
 }
 
@@ -505,29 +505,29 @@ bool Step::conversion() {
       Ext s = x.fval(a);
       bool ov = false;
       uint32_t out = uint32_t(fp::fix(s, &ov));
-      setI(b.reg, out);
-      x.intFlags(&b.reg, out, out >> 31, ov, false, false);
+      set_i(b.reg, out);
+      x.int_flags(&b.reg, out, out >> 31, ov, false, false);
       return true;
     }
-    case M::Float: { uint32_t s = x.ival(a); setF(b.reg, fres(&b.reg, fp::fromInt(int32_t(s)))); return true; }
+    case M::Float: { uint32_t s = x.ival(a); set_f(b.reg, fres(&b.reg, fp::from_int(int32_t(s)))); return true; }
     case M::Toieee: {
-      uint32_t w = fp::toIeee(x.fval(a));
-      setF(b.reg, fp::fromSingle(w));
+      uint32_t w = fp::to_ieee(x.fval(a));
+      set_f(b.reg, fp::from_single(w));
       x.flags(&b.reg, (w >> 31 ? kN : 0) | ((w & 0x7FFFFFFF) == 0 ? kZ : 0), kN | kZ | kV | kUF);
       return true;
     }
-    case M::Frieee: { fp::Res r = fp::fromIeee(x.rd(x.addrOf(a))); setF(b.reg, fres(&b.reg, r)); return true; }
+    case M::Frieee: { fp::Res r = fp::from_ieee(x.rd(x.addr_of(a))); set_f(b.reg, fres(&b.reg, r)); return true; }
     default: return false;
   }
 }
 
 // Stores, LDA, LDHI, LDPK and NOP (whose operand may update an AR).
-bool Step::loadStore() {
+bool Step::load_store() {
   switch (in.mnemonic) {
-    case M::Sti: x.wr(x.addrOf(b), x.ireg(a.reg)); return true;
-    case M::Stf: x.wr(x.addrOf(b), fp::toSingle(x.freg(a.reg))); return true;
-    case M::Lda: setI(b.reg, x.ival(a)); return true;
-    case M::Ldhi: loadI(b.reg, uint32_t(a.imm) << 16); return true;
+    case M::Sti: x.wr(x.addr_of(b), x.ireg(a.reg)); return true;
+    case M::Stf: x.wr(x.addr_of(b), fp::to_single(x.freg(a.reg))); return true;
+    case M::Lda: set_i(b.reg, x.ival(a)); return true;
+    case M::Ldhi: load_i(b.reg, uint32_t(a.imm) << 16); return true;
     case M::Ldpk: {
       uint32_t& dp = r32_[unsigned(Reg::DP)];
       dp = (dp & 0xFFFF0000u) | uint32_t(a.imm);
@@ -535,7 +535,7 @@ bool Step::loadStore() {
       return true;
     }
     case M::Nop:
-      if (in.numOperands == 1) x.ea(a.ind);
+      if (in.num_operands == 1) x.ea(a.ind);
       return true;
     default: return false;
   }
@@ -545,12 +545,12 @@ bool Step::loadStore() {
 bool Step::stack() {
   switch (in.mnemonic) {
     case M::Push: uses |= 1u << kGroupSp; push(x.ireg(a.reg)); return true;
-    case M::Pushf: uses |= 1u << kGroupSp; push(fp::toSingle(x.freg(a.reg))); return true;
-    case M::Pop: uses |= 1u << kGroupSp; loadI(a.reg, pop()); return true;
+    case M::Pushf: uses |= 1u << kGroupSp; push(fp::to_single(x.freg(a.reg))); return true;
+    case M::Pop: uses |= 1u << kGroupSp; load_i(a.reg, pop()); return true;
     case M::Popf: {
       uses |= 1u << kGroupSp;
-      fp::Res r{fp::fromSingle(pop()), false, false};
-      setF(a.reg, fres(&a.reg, r));
+      fp::Res r{fp::from_single(pop()), false, false};
+      set_f(a.reg, fres(&a.reg, r));
       return true;
     }
     default: return false;
@@ -562,7 +562,7 @@ bool Step::control() {
   switch (in.mnemonic) {
     case M::Br: case M::Brd: branch(uint32_t(a.imm)); return true;
     case M::Bc: case M::Bcd:
-      if (condTrue(in.cond, x.st())) branch(targetOf(a));
+      if (cond_true(in.cond, x.st())) branch(target_of(a));
       return true;
     case M::Call:
       uses |= 1u << kGroupSp;
@@ -571,20 +571,20 @@ bool Step::control() {
       return true;
     case M::Callc:
       uses |= 1u << kGroupSp;
-      if (condTrue(in.cond, x.st())) {
+      if (cond_true(in.cond, x.st())) {
         push(pc + 1);
-        branch(targetOf(a));
+        branch(target_of(a));
       }
       return true;
     case M::Retsc:
       uses |= 1u << kGroupSp;
-      if (condTrue(in.cond, x.st())) branch(pop());
+      if (cond_true(in.cond, x.st())) branch(pop());
       return true;
     case M::Dbc: case M::Dbcd: {
       uses |= 1u << kGroupAux;
       uint32_t& r = r32_[unsigned(a.reg)];
       r -= 1;
-      if (condTrue(in.cond, x.st()) && int32_t(r) >= 0) branch(uint32_t(b.imm));
+      if (cond_true(in.cond, x.st()) && int32_t(r) >= 0) branch(uint32_t(b.imm));
       return true;
     }
     default: return false;
@@ -597,46 +597,46 @@ bool Step::control() {
 // taken_/target_). Returns the decode-phase register groups it used as a
 // bit set in the high bits and the groups it writes in the low bits.
 unsigned C40Sim::execute(const Instruction& in, uint32_t pc) {
-  Exec x(r32_, ext_, [this](uint32_t a) { return memRead(a); },
-         [this](uint32_t a, uint32_t v) { memWrite(a, v); });
+  Exec x(r32_, ext_, [this](uint32_t a) { return mem_read(a); },
+         [this](uint32_t a, uint32_t v) { mem_write(a, v); });
   Step s(x, r32_, in, pc, taken_, target_);
-  if (!(s.integer() || s.integer3() || s.floating() || s.float3() || s.conversion() || s.loadStore() || s.stack() ||
+  if (!(s.integer() || s.integer3() || s.floating() || s.float3() || s.conversion() || s.load_store() || s.stack() ||
         s.control()))
     throw SimError{Stop::IllegalInstruction, "not an instruction"};  // .word and the like
   return s.uses << 8 | s.writes;
 }
 
-RunResult C40Sim::call(uint32_t entry, uint64_t maxCycles) {
+RunResult C40Sim::call(uint32_t entry, uint64_t max_cycles) {
   RunResult res;
   uint64_t cycles = 0, count = 0;
   // The cycle (end of execute) of the last write to each register group.
-  int64_t lastWrite[3] = {INT64_MIN / 2, INT64_MIN / 2, INT64_MIN / 2};
+  int64_t last_write[3] = {INT64_MIN / 2, INT64_MIN / 2, INT64_MIN / 2};
   uint32_t pc = entry;
   int delay = 0;  // instructions left in the delay slots of a taken delayed branch
-  uint32_t delayedTarget = 0;
+  uint32_t delayed_target = 0;
   auto finish = [&](Stop s, std::string err) {
     res.stop = s;
     res.cycles = cycles;
     res.instructions = count;
     res.pc = pc;
     res.error = std::move(err);
-    res.ns = double(cycles) * cfg_.nsPerCycle;
+    res.ns = double(cycles) * cfg_.ns_per_cycle;
     return res;
   };
   try {
     uint32_t& sp = r32_[unsigned(Reg::SP)];
     sp += 1;
-    memWrite(sp, cfg_.returnAddress);
+    mem_write(sp, cfg_.return_address);
   } catch (const SimError& e) {
     return finish(e.stop, "call: " + e.message + " (SP " + hex(r32_[unsigned(Reg::SP)]) + ")");
   }
   for (;;) {
-    if (pc == cfg_.returnAddress && delay == 0) return finish(Stop::Returned, "");
-    if (cycles >= maxCycles)
-      return finish(Stop::CycleLimit, "cycle limit " + std::to_string(maxCycles) + " reached at PC " + hex(pc));
-    if (count >= cfg_.maxInstructions)
+    if (pc == cfg_.return_address && delay == 0) return finish(Stop::Returned, "");
+    if (cycles >= max_cycles)
+      return finish(Stop::CycleLimit, "cycle limit " + std::to_string(max_cycles) + " reached at PC " + hex(pc));
+    if (count >= cfg_.max_instructions)
       return finish(Stop::InstructionLimit,
-                    "instruction limit " + std::to_string(cfg_.maxInstructions) + " reached at PC " + hex(pc));
+                    "instruction limit " + std::to_string(cfg_.max_instructions) + " reached at PC " + hex(pc));
     waits_ = 0;
     taken_ = false;
     unsigned cost = 1;
@@ -645,7 +645,7 @@ RunResult C40Sim::call(uint32_t entry, uint64_t maxCycles) {
       const Cached& c = fetch(pc);
       if (!c.ok) return finish(Stop::IllegalInstruction, "illegal instruction at " + hex(pc) + ": " + c.error);
       inst = &c.inst;
-      if (delay > 0 && isControl(inst->mnemonic))
+      if (delay > 0 && is_control(inst->mnemonic))
         return finish(Stop::Unsupported, "branch in a delay slot at " + hex(pc));
       unsigned ug = execute(*inst, pc);
       unsigned uses = ug >> 8, writes = ug & 0xFF;
@@ -654,12 +654,12 @@ RunResult C40Sim::call(uint32_t entry, uint64_t maxCycles) {
       // cycles later.
       int64_t stall = 0;
       for (int g = 0; g < 3; ++g)
-        if (uses >> g & 1) stall = std::max<int64_t>(stall, lastWrite[g] + 2 - int64_t(cycles));
+        if (uses >> g & 1) stall = std::max<int64_t>(stall, last_write[g] + 2 - int64_t(cycles));
       cost += unsigned(stall) + waits_;
-      if (isControl(inst->mnemonic) && !isDelayed(inst->mnemonic)) cost += 3;  // pipeline flush
+      if (is_control(inst->mnemonic) && !is_delayed(inst->mnemonic)) cost += 3;  // pipeline flush
       cycles += cost;
       for (int g = 0; g < 3; ++g)
-        if (writes >> g & 1) lastWrite[g] = int64_t(cycles);
+        if (writes >> g & 1) last_write[g] = int64_t(cycles);
     } catch (const SimError& e) {
       return finish(e.stop, e.message + " at PC " + hex(pc));
     }
@@ -667,14 +667,14 @@ RunResult C40Sim::call(uint32_t entry, uint64_t maxCycles) {
     if (trace_) trace_(TraceEntry{pc, inst, cycles - cost, cost});
     uint32_t next = pc + 1;
     if (taken_) {
-      if (isDelayed(inst->mnemonic)) {
+      if (is_delayed(inst->mnemonic)) {
         delay = 3;
-        delayedTarget = target_;
+        delayed_target = target_;
       } else {
         next = target_;
       }
     } else if (delay > 0 && --delay == 0) {
-      next = delayedTarget;
+      next = delayed_target;
     }
     pc = next;
   }

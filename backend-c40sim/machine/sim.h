@@ -1,8 +1,7 @@
 // backend-c40sim/machine/sim.h -- ldc_c40sim: a cycle-counting instruction-set simulator for the TMS320C40
 // subset of assembler/c40.h. See docs/c40.md for the semantics, the float
 // format and the cycle model (and what it does not model).
-#ifndef LDC_BACKEND_C40SIM_MACHINE_SIM_H
-#define LDC_BACKEND_C40SIM_MACHINE_SIM_H
+#pragma once
 
 #include <cstdint>
 #include <functional>
@@ -24,18 +23,18 @@ struct Region {
   std::string name;
   uint32_t base = 0;
   uint32_t size = 0;        // words
-  unsigned waitStates = 0;  // extra cycles per access (fetch, read or write)
+  unsigned wait_states = 0;  // extra cycles per access (fetch, read or write)
 };
 
 struct Config {
   std::vector<Region> regions;
-  double nsPerCycle = 50.0;              // TMS320C40-40
-  uint32_t returnAddress = 0xFFFFFFFFu;  // call() returns here; must not be code
-  uint64_t maxInstructions = 100000000;  // runaway guard besides max_cycles
+  double ns_per_cycle = 50.0;              // TMS320C40-40
+  uint32_t return_address = 0xFFFFFFFFu;  // call() returns here; must not be code
+  uint64_t max_instructions = 100000000;  // runaway guard besides max_cycles
 };
 
 enum class Stop : uint8_t {
-  Returned,          // RETS came back to Config::returnAddress
+  Returned,          // RETS came back to Config::return_address
   CycleLimit,
   InstructionLimit,
   MemoryFault,       // access outside every region
@@ -49,14 +48,14 @@ struct RunResult {
   uint64_t instructions = 0;
   uint32_t pc = 0;
   std::string error;  // empty when stop == Returned
-  double ns = 0;      // cycles * nsPerCycle
+  double ns = 0;      // cycles * ns_per_cycle
   bool ok() const { return stop == Stop::Returned; }
 };
 
 struct TraceEntry {
   uint32_t pc;
   const as::c40::Instruction* inst;
-  uint64_t cyclesBefore;
+  uint64_t cycles_before;
   unsigned cycles;  // this instruction, stalls and wait states included
 };
 
@@ -72,21 +71,21 @@ class C40Sim {
 
   // Integer view of a register (bits 31-0); setting an extended register
   // keeps its exponent.
-  void setReg(Reg r, uint32_t value);
+  void set_reg(Reg r, uint32_t value);
   uint32_t reg(Reg r) const;
   // Extended registers R0-R11 as 40-bit values (others: std::invalid_argument).
-  void setExt(Reg r, Ext value);
+  void set_ext(Reg r, Ext value);
   Ext ext(Reg r) const;
-  void setFloat(Reg r, double v) { setExt(r, fp::fromDouble(v).v); }
-  double getFloat(Reg r) const { return fp::toDouble(ext(r)); }
+  void set_float(Reg r, double v) { set_ext(r, fp::from_double(v).v); }
+  double get_float(Reg r) const { return fp::to_double(ext(r)); }
   uint32_t st() const { return reg(Reg::ST); }
 
-  // Pushes Config::returnAddress (SP is incremented first, as CALL does),
+  // Pushes Config::return_address (SP is incremented first, as CALL does),
   // jumps to entry and runs until RETS returns there, or a limit or an error
   // stops it. Cycles count the executed instructions only.
-  RunResult call(uint32_t entry, uint64_t maxCycles);
+  RunResult call(uint32_t entry, uint64_t max_cycles);
 
-  void setTrace(std::function<void(const TraceEntry&)> t) { trace_ = std::move(t); }
+  void set_trace(std::function<void(const TraceEntry&)> t) { trace_ = std::move(t); }
   const Config& config() const { return cfg_; }
 
  private:
@@ -102,8 +101,8 @@ class C40Sim {
   };
   Region* region(uint32_t address);
   const Region* region(uint32_t address) const;
-  uint32_t memRead(uint32_t address);
-  void memWrite(uint32_t address, uint32_t value);
+  uint32_t mem_read(uint32_t address);
+  void mem_write(uint32_t address, uint32_t value);
   const Cached& fetch(uint32_t pc);
   unsigned execute(const as::c40::Instruction& in, uint32_t pc);
 
@@ -120,8 +119,7 @@ class C40Sim {
   std::function<void(const TraceEntry&)> trace_;
 };
 
-std::string_view stopName(Stop s);
+std::string_view stop_name(Stop s);
 
 }  // namespace ldc::c40sim
 
-#endif  // LDC_BACKEND_C40SIM_MACHINE_SIM_H

@@ -20,60 +20,60 @@ using namespace ldc::as::c40::test;
 
 namespace {
 
-std::vector<uint32_t> readWords(const std::string& path) {
+std::vector<uint32_t> read_words(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::vector<uint8_t> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return wordsOf(b);
+  return words_of(b);
 }
 
 // Assembles GNU as source; returns the .text words (empty + failure on error).
-std::vector<uint32_t> gnuAssemble(const std::string& source) {
-  std::string as = tic4xTool("as"), objcopy = tic4xTool("objcopy");
+std::vector<uint32_t> gnu_assemble(const std::string& source) {
+  std::string as = tic4x_tool("as"), objcopy = tic4x_tool("objcopy");
   if (as.empty() || objcopy.empty()) return {};
-  std::string dir = tempDir();
+  std::string dir = temp_dir();
   std::ofstream(dir + "/a.s") << source;
   std::string out;
-  if (runCommand(as + " -mcpu=40 -o " + dir + "/a.o " + dir + "/a.s", &out) != 0) {
+  if (run_command(as + " -mcpu=40 -o " + dir + "/a.o " + dir + "/a.s", &out) != 0) {
     ADD_FAILURE() << "GNU as failed:\n" << out;
     return {};
   }
-  if (runCommand(objcopy + " -O binary -j .text " + dir + "/a.o " + dir + "/a.bin", &out) != 0) {
+  if (run_command(objcopy + " -O binary -j .text " + dir + "/a.o " + dir + "/a.bin", &out) != 0) {
     ADD_FAILURE() << "objcopy failed:\n" << out;
     return {};
   }
-  auto w = readWords(dir + "/a.bin");
-  runCommand("rm -rf " + dir, nullptr);
+  auto w = read_words(dir + "/a.bin");
+  run_command("rm -rf " + dir, nullptr);
   return w;
 }
 
 // The instruction as GNU as should see it at word `addr` of a file that
 // starts with `.Lcode:`: Address operands relative to .Lcode.
-std::string gasLine(const Instruction& in) { return "\t" + printGnuAs(in, ".Lcode") + "\n"; }
+std::string gas_line(const Instruction& in) { return "\t" + print_gnu_as(in, ".Lcode") + "\n"; }
 
 // An instruction moved from address 0 to `addr` with the same displacement.
 Instruction shifted(Instruction in, int64_t addr) {
-  for (unsigned i = 0; i < in.numOperands; ++i)
+  for (unsigned i = 0; i < in.num_operands; ++i)
     if (in.ops[i].kind == OperandKind::Address) in.ops[i].imm += addr;
   return in;
 }
 
 TEST(C40GnuAs, RowsAssembleToTheGoldenWords) {
-  auto rows = loadRows();
-  std::string byText = "\t.text\n.Lcode:\n", byPrinter = byText;
+  auto rows = load_rows();
+  std::string by_text = "\t.text\n.Lcode:\n", by_printer = by_text;
   for (size_t i = 0; i < rows.size(); ++i) {
     Instruction in = shifted(parse(rows[i].text), int64_t(i));
-    bool hasAddress = false;
-    for (unsigned k = 0; k < in.numOperands; ++k) hasAddress |= in.ops[k].kind == OperandKind::Address;
+    bool has_address = false;
+    for (unsigned k = 0; k < in.num_operands; ++k) has_address |= in.ops[k].kind == OperandKind::Address;
     // The row text itself when it has no numeric branch target (GNU as
     // reads those as absolute addresses), else our text.
-    byText += hasAddress ? gasLine(in) : "\t" + rows[i].text + "\n";
-    byPrinter += gasLine(in);
+    by_text += has_address ? gas_line(in) : "\t" + rows[i].text + "\n";
+    by_printer += gas_line(in);
   }
-  for (const std::string* src : {&byText, &byPrinter}) {
-    auto words = gnuAssemble(*src);
+  for (const std::string* src : {&by_text, &by_printer}) {
+    auto words = gnu_assemble(*src);
     ASSERT_EQ(words.size(), rows.size());
     for (size_t i = 0; i < rows.size(); ++i)
-      EXPECT_EQ(hexWord(words[i]), rows[i].hex) << "c40_encode.rows:" << rows[i].line << ": " << rows[i].text;
+      EXPECT_EQ(hex_word(words[i]), rows[i].hex) << "c40_encode.rows:" << rows[i].line << ": " << rows[i].text;
   }
 }
 
@@ -86,19 +86,19 @@ TEST(C40GnuAs, RandomDecodedInstructionsAssembleToTheSameWords) {
     uint32_t w = rng();
     if (want.size() % 3 == 0) w &= 0x3fffffff;
     int64_t addr = int64_t(want.size());
-    auto in = decodeWord(w, addr);
+    auto in = decode_word(w, addr);
     if (!in) continue;
     want.push_back(w);
-    src += gasLine(*in);
+    src += gas_line(*in);
   }
-  auto got = gnuAssemble(src);
+  auto got = gnu_assemble(src);
   ASSERT_EQ(got.size(), want.size());
   size_t bad = 0;
   for (size_t i = 0; i < want.size() && bad < 20; ++i)
     if (got[i] != want[i]) {
       ++bad;
-      ADD_FAILURE() << print(*decodeWord(want[i], int64_t(i))) << ": ours " << hexWord(want[i])
-                    << ", GNU as " << hexWord(got[i]);
+      ADD_FAILURE() << print(*decode_word(want[i], int64_t(i))) << ": ours " << hex_word(want[i])
+                    << ", GNU as " << hex_word(got[i]);
     }
 }
 
@@ -109,7 +109,7 @@ std::string lower(std::string s) {
   return s;
 }
 
-std::string normOperand(std::string o) {
+std::string norm_operand(std::string o) {
   o = lower(o);
   std::string t;
   for (char c : o)
@@ -158,15 +158,15 @@ std::string normalize(const std::string& text, bool ours) {
   if (!rest.empty()) ops.push_back(cur);
   if (!ours && mn == "nop" && ops.size() == 1 && ops[0] == "r0") ops.clear();
   std::string out = mn;
-  for (size_t i = 0; i < ops.size(); ++i) out += (i ? "," : " ") + normOperand(ops[i]);
+  for (size_t i = 0; i < ops.size(); ++i) out += (i ? "," : " ") + norm_operand(ops[i]);
   return out;
 }
 
 TEST(C40Objdump, DisassemblyOfTheRowsAgreesWithOurs) {
-  std::string objdump = tic4xTool("objdump");
+  std::string objdump = tic4x_tool("objdump");
   ASSERT_FALSE(objdump.empty());
-  auto rows = loadRows();
-  std::string dir = tempDir();
+  auto rows = load_rows();
+  std::string dir = temp_dir();
   std::vector<uint32_t> words;
   {
     std::ofstream f(dir + "/rows.bin", std::ios::binary);
@@ -177,8 +177,8 @@ TEST(C40Objdump, DisassemblyOfTheRowsAgreesWithOurs) {
     }
   }
   std::string out;
-  ASSERT_EQ(runCommand(objdump + " -D -b binary -m tic4x -EL " + dir + "/rows.bin", &out), 0) << out;
-  runCommand("rm -rf " + dir, nullptr);
+  ASSERT_EQ(run_command(objdump + " -D -b binary -m tic4x -EL " + dir + "/rows.bin", &out), 0) << out;
+  run_command("rm -rf " + dir, nullptr);
   std::map<uint64_t, std::string> theirs;
   std::istringstream ss(out);
   std::string line;
@@ -197,7 +197,7 @@ TEST(C40Objdump, DisassemblyOfTheRowsAgreesWithOurs) {
   ASSERT_EQ(theirs.size(), rows.size()) << out.substr(0, 2000);
   for (size_t i = 0; i < rows.size(); ++i) {
     DecodeError e;
-    auto in = decodeWord(words[i], int64_t(i), &e);
+    auto in = decode_word(words[i], int64_t(i), &e);
     ASSERT_TRUE(in) << e.message;
     EXPECT_EQ(normalize(print(*in), true), normalize(theirs[i], false))
         << "c40_encode.rows:" << rows[i].line << ": " << rows[i].text << " (objdump: " << theirs[i] << ")";
@@ -207,7 +207,7 @@ TEST(C40Objdump, DisassemblyOfTheRowsAgreesWithOurs) {
 // ------------------------------------------------------ core programs
 
 TEST(C40GnuAs, CoreProgramsMatchGnuAs) {
-  C40Program p = buildProgram({"main", "rung1", "done"},
+  C40Program p = build_program({"main", "rung1", "done"},
                               {{10, R"(main::
 LDPK 0x8000
 LDI @0x1, R0
@@ -255,12 +255,12 @@ BR done
     t += "Z0:\nend:\nRETSU\n";
     blocks.push_back({b + 100, t});
   }
-  C40Program big = buildProgram(globals, blocks);
+  C40Program big = build_program(globals, blocks);
   for (const C40Program* prog : {&p, &big}) {
     Result r = assemble(target(), *prog);
     ASSERT_TRUE(r.ok()) << r.errors[0].message;
-    auto words = gnuAssemble(toGnuAs(*prog));
-    EXPECT_EQ(words, wordsOf(r.code)) << toGnuAs(*prog);
+    auto words = gnu_assemble(to_gnu_as(*prog));
+    EXPECT_EQ(words, words_of(r.code)) << to_gnu_as(*prog);
   }
 }
 

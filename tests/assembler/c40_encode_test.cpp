@@ -15,13 +15,13 @@ using namespace ldc::as::c40::test;
 namespace {
 
 TEST(C40Encode, RowsFileIsReadable) {
-  auto rows = loadRows();
+  auto rows = load_rows();
   ASSERT_GT(rows.size(), 300u) << "cannot read " << LDC_C40_ROWS;
   for (const Row& r : rows) EXPECT_FALSE(r.source.empty()) << "row " << r.line << " cites no source";
 }
 
 TEST(C40Encode, Rows) {
-  auto rows = loadRows();
+  auto rows = load_rows();
   const char* upd = std::getenv("LDC_UPDATE");
   bool update = upd && std::string(upd) == "1";
   std::vector<std::string> hexes;
@@ -31,27 +31,27 @@ TEST(C40Encode, Rows) {
     uint32_t w = 0;
     try {
       in = parse(r.text);
-      w = encodeAt(in, 0);
+      w = encode_at(in, 0);
     } catch (const AsmError& e) {
       ADD_FAILURE() << e.what();
       hexes.push_back(r.hex);
       continue;
     }
-    hexes.push_back(hexWord(w));
+    hexes.push_back(hex_word(w));
     if (!update) {
-      EXPECT_EQ(hexWord(w), r.hex);
+      EXPECT_EQ(hex_word(w), r.hex);
     }
     uint32_t golden = update ? w : uint32_t(std::stoul(r.hex, nullptr, 16));
-    // The one-word Encoding agrees with encodeAt for rows without targets.
+    // The one-word Encoding agrees with encode_at for rows without targets.
     Encoding e = encode(in);
     ASSERT_EQ(e.size, 4);
-    if (e.numFixups == 0) {
+    if (e.num_fixups == 0) {
       uint32_t ew = uint32_t(e.bytes[0]) | uint32_t(e.bytes[1]) << 8 | uint32_t(e.bytes[2]) << 16 |
                     uint32_t(e.bytes[3]) << 24;
-      EXPECT_EQ(hexWord(ew), hexWord(w));
+      EXPECT_EQ(hex_word(ew), hex_word(w));
     }
     DecodeError err;
-    auto d = decodeWord(golden, 0, &err);
+    auto d = decode_word(golden, 0, &err);
     if (!d) {
       ADD_FAILURE() << "decode: " << err.message;
       continue;
@@ -62,7 +62,7 @@ TEST(C40Encode, Rows) {
     EXPECT_TRUE(again == in) << "reparsed as " << print(again);
   }
   if (update) {
-    rewriteRows(hexes);
+    rewrite_rows(hexes);
     std::printf("rewrote %zu rows in %s\n", hexes.size(), LDC_C40_ROWS);
   }
 }
@@ -71,19 +71,19 @@ TEST(C40Encode, Rows) {
 TEST(C40Encode, RowsCoverEveryMnemonic) {
   std::set<std::string> seen;
   std::set<std::pair<int, int>> conds;
-  for (const Row& r : loadRows()) {
+  for (const Row& r : load_rows()) {
     auto in = parse(r.text);
-    seen.insert(mnemonicName(in.mnemonic, Cond::U));
+    seen.insert(mnemonic_name(in.mnemonic, Cond::U));
     conds.insert({int(in.mnemonic), int(in.cond)});
   }
   for (unsigned m = 0; m < unsigned(Mnemonic::Count_); ++m) {
     if (Mnemonic(m) == Mnemonic::Word) continue;
-    EXPECT_TRUE(seen.count(mnemonicName(Mnemonic(m), Cond::U)))
-        << mnemonicName(Mnemonic(m)) << " has no golden row";
+    EXPECT_TRUE(seen.count(mnemonic_name(Mnemonic(m), Cond::U)))
+        << mnemonic_name(Mnemonic(m)) << " has no golden row";
   }
   for (unsigned c = 0; c <= 20; ++c)
-    if (validCond(c)) {
-      EXPECT_TRUE(conds.count({int(Mnemonic::Bc), int(c)})) << "B" << condName(Cond(c));
+    if (valid_cond(c)) {
+      EXPECT_TRUE(conds.count({int(Mnemonic::Bc), int(c)})) << "B" << cond_name(Cond(c));
     }
 }
 
@@ -106,38 +106,38 @@ TEST(C40Encode, FixupsForLabels) {
     ASSERT_EQ(e.size, 4);
     uint32_t w = uint32_t(e.bytes[0]) | uint32_t(e.bytes[1]) << 8 | uint32_t(e.bytes[2]) << 16 |
                  uint32_t(e.bytes[3]) << 24;
-    EXPECT_EQ(hexWord(w), hexWord(c.word));
-    ASSERT_EQ(e.numFixups, 1);
+    EXPECT_EQ(hex_word(w), hex_word(c.word));
+    ASSERT_EQ(e.num_fixups, 1);
     EXPECT_EQ(e.fixups[0].offset, 0u);
     EXPECT_EQ(e.fixups[0].kind, c.kind);
-    EXPECT_EQ(e.fixups[0].label, in.ops[in.numOperands - 1].label);
+    EXPECT_EQ(e.fixups[0].label, in.ops[in.num_operands - 1].label);
   }
-  const auto& k = target().fixupKinds;
+  const auto& k = target().fixup_kinds;
   ASSERT_EQ(k.size(), 5u);
-  EXPECT_EQ(k[Disp16].pcBias, 1);
-  EXPECT_EQ(k[Disp16D].pcBias, 3);
-  EXPECT_EQ(k[Disp24].bitWidth, 24);
-  EXPECT_EQ(k[Disp24D].pcBias, 3);
-  EXPECT_FALSE(k[Abs32].pcRelative);
+  EXPECT_EQ(k[Disp16].pc_bias, 1);
+  EXPECT_EQ(k[Disp16D].pc_bias, 3);
+  EXPECT_EQ(k[Disp24].bit_width, 24);
+  EXPECT_EQ(k[Disp24D].pc_bias, 3);
+  EXPECT_FALSE(k[Abs32].pc_relative);
   for (const FixupKind& f : k) {
     EXPECT_EQ(f.scale, 4);
-    EXPECT_EQ(f.containerBytes, 4);
-    EXPECT_EQ(f.relaxTo, -1);
+    EXPECT_EQ(f.container_bytes, 4);
+    EXPECT_EQ(f.relax_to, -1);
   }
 }
 
 TEST(C40Encode, EncodeAtResolvesAddressesAndChecksRange) {
-  EXPECT_EQ(hexWord(encodeAt(parse("BU 0x10"), 0x20)), "6a00ffef");  // 0x10 - 0x21
-  EXPECT_EQ(hexWord(encodeAt(parse("BUD 0x10"), 0x20)), "6a20ffed");  // 0x10 - 0x23
-  EXPECT_EQ(hexWord(encodeAt(parse("BU 0x8000"), 0)), "6a007fff");
-  EXPECT_THROW(encodeAt(parse("BU 0x8001"), 0), AsmError);
-  EXPECT_EQ(hexWord(encodeAt(parse("BU -0x7fff"), 0)), "6a008000");
-  EXPECT_THROW(encodeAt(parse("BU -0x8000"), 0), AsmError);
-  EXPECT_EQ(hexWord(encodeAt(parse("BR 0x800000"), 0)), "607fffff");
-  EXPECT_THROW(encodeAt(parse("BR 0x800001"), 0), AsmError);
-  EXPECT_THROW(encodeAt(parse("BR somewhere")), AsmError);
-  EXPECT_EQ(hexWord(encodeAt(parse(".word 0x12345678"))), "12345678");
-  EXPECT_EQ(hexWord(encodeAt(parse(".word -1"))), "ffffffff");
+  EXPECT_EQ(hex_word(encode_at(parse("BU 0x10"), 0x20)), "6a00ffef");  // 0x10 - 0x21
+  EXPECT_EQ(hex_word(encode_at(parse("BUD 0x10"), 0x20)), "6a20ffed");  // 0x10 - 0x23
+  EXPECT_EQ(hex_word(encode_at(parse("BU 0x8000"), 0)), "6a007fff");
+  EXPECT_THROW(encode_at(parse("BU 0x8001"), 0), AsmError);
+  EXPECT_EQ(hex_word(encode_at(parse("BU -0x7fff"), 0)), "6a008000");
+  EXPECT_THROW(encode_at(parse("BU -0x8000"), 0), AsmError);
+  EXPECT_EQ(hex_word(encode_at(parse("BR 0x800000"), 0)), "607fffff");
+  EXPECT_THROW(encode_at(parse("BR 0x800001"), 0), AsmError);
+  EXPECT_THROW(encode_at(parse("BR somewhere")), AsmError);
+  EXPECT_EQ(hex_word(encode_at(parse(".word 0x12345678"))), "12345678");
+  EXPECT_EQ(hex_word(encode_at(parse(".word -1"))), "ffffffff");
 }
 
 TEST(C40Encode, RejectsOperandsOutsideTheSubset) {

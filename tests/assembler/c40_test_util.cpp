@@ -20,7 +20,7 @@ std::string trim(const std::string& s) {
 }
 }  // namespace
 
-std::vector<Row> loadRows(const std::string& path) {
+std::vector<Row> load_rows(const std::string& path) {
   std::vector<Row> rows;
   std::ifstream in(path);
   std::string line;
@@ -42,7 +42,7 @@ std::vector<Row> loadRows(const std::string& path) {
   return rows;
 }
 
-void rewriteRows(const std::vector<std::string>& hexes, const std::string& path) {
+void rewrite_rows(const std::vector<std::string>& hexes, const std::string& path) {
   std::ifstream in(path);
   std::string line, out;
   size_t k = 0;
@@ -57,18 +57,18 @@ void rewriteRows(const std::vector<std::string>& hexes, const std::string& path)
   std::ofstream(path) << out;
 }
 
-std::string hexWord(uint32_t w) {
+std::string hex_word(uint32_t w) {
   char buf[16];
   std::snprintf(buf, sizeof buf, "%08x", w);
   return buf;
 }
 
-C40Program buildProgram(std::vector<std::string> globals, const std::vector<BlockText>& blocks) {
+C40Program build_program(std::vector<std::string> globals, const std::vector<BlockText>& blocks) {
   C40Program p;
   p.globals = std::move(globals);
   for (const BlockText& bt : blocks) {
     Block<Instruction> b;
-    b.sourceLine = bt.line;
+    b.source_line = bt.line;
     std::istringstream ss(bt.text);
     std::string line;
     while (std::getline(ss, line)) {
@@ -79,11 +79,11 @@ C40Program buildProgram(std::vector<std::string> globals, const std::vector<Bloc
         continue;
       }
       if (t.size() > 2 && t.compare(t.size() - 2, 2, "::") == 0) {
-        b.items.push_back(Item<Instruction>::labelDef(t.substr(0, t.size() - 2), true));
+        b.items.push_back(Item<Instruction>::label_def(t.substr(0, t.size() - 2), true));
         continue;
       }
-      Line l = parseLine(t);
-      if (!l.label.empty()) b.items.push_back(Item<Instruction>::labelDef(l.label));
+      Line l = parse_line(t);
+      if (!l.label.empty()) b.items.push_back(Item<Instruction>::label_def(l.label));
       if (l.inst) b.items.push_back(Item<Instruction>::instr(*l.inst, l.comment));
     }
     p.blocks.push_back(std::move(b));
@@ -91,7 +91,7 @@ C40Program buildProgram(std::vector<std::string> globals, const std::vector<Bloc
   return p;
 }
 
-int runCommand(const std::string& cmd, std::string* out) {
+int run_command(const std::string& cmd, std::string* out) {
   std::string full = cmd + " 2>&1";
   FILE* f = popen(full.c_str(), "r");
   if (!f) return -1;
@@ -104,13 +104,13 @@ int runCommand(const std::string& cmd, std::string* out) {
   return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
-std::string tempDir() {
+std::string temp_dir() {
   char tmpl[] = "/tmp/ldc_c40_XXXXXX";
   char* d = mkdtemp(tmpl);
   return d ? d : "/tmp";
 }
 
-std::string tic4xTool(const std::string& name) {
+std::string tic4x_tool(const std::string& name) {
   std::string dir;
   if (const char* e = std::getenv("LDC_TIC4X_DIR")) dir = e;
   else if (const char* h = std::getenv("HOME")) dir = std::string(h) + "/.cache/ldc-tic4x";

@@ -63,33 +63,33 @@ TEST(C40Text, ParserErrors) {
 }
 
 TEST(C40Text, Lines) {
-  Line l = parseLine("LD001:  BR LD002 ; to the next");
+  Line l = parse_line("LD001:  BR LD002 ; to the next");
   EXPECT_EQ(l.label, "LD001");
   ASSERT_TRUE(l.inst);
   EXPECT_EQ(print(*l.inst), "BR LD002");
   EXPECT_EQ(l.comment, "to the next");
-  l = parseLine("only:");
+  l = parse_line("only:");
   EXPECT_EQ(l.label, "only");
   EXPECT_FALSE(l.inst);
-  l = parseLine("; just a comment");
+  l = parse_line("; just a comment");
   EXPECT_FALSE(l.inst);
   EXPECT_EQ(l.comment, "just a comment");
-  EXPECT_THROW(parseLine("AR0: NOP"), AsmError);  // a register is no label
-  EXPECT_THROW(parseLine("1x: NOP"), AsmError);
+  EXPECT_THROW(parse_line("AR0: NOP"), AsmError);  // a register is no label
+  EXPECT_THROW(parse_line("1x: NOP"), AsmError);
 }
 
 TEST(C40Text, ShortFloats) {
-  EXPECT_EQ(*shortFloatFromDouble(0.0), 0x8000);
-  EXPECT_EQ(*shortFloatFromDouble(1.0), 0x0000);
-  EXPECT_EQ(*shortFloatFromDouble(1.5), 0x0400);
-  EXPECT_EQ(*shortFloatFromDouble(-2.0), 0x0800);  // GNU as: ldf -2.0, r1 = 07610800
-  EXPECT_EQ(*shortFloatFromDouble(-1.0), 0xf800);  // -2 * 2^-1
-  EXPECT_EQ(*shortFloatFromDouble(0.5), 0xf000);
-  EXPECT_FALSE(shortFloatFromDouble(0.1));
-  EXPECT_FALSE(shortFloatFromDouble(256.0));
+  EXPECT_EQ(*short_float_from_double(0.0), 0x8000);
+  EXPECT_EQ(*short_float_from_double(1.0), 0x0000);
+  EXPECT_EQ(*short_float_from_double(1.5), 0x0400);
+  EXPECT_EQ(*short_float_from_double(-2.0), 0x0800);  // GNU as: ldf -2.0, r1 = 07610800
+  EXPECT_EQ(*short_float_from_double(-1.0), 0xf800);  // -2 * 2^-1
+  EXPECT_EQ(*short_float_from_double(0.5), 0xf000);
+  EXPECT_FALSE(short_float_from_double(0.1));
+  EXPECT_FALSE(short_float_from_double(256.0));
   for (unsigned b = 0; b < 0x10000; ++b) {
-    double v = shortFloatToDouble(uint16_t(b));
-    auto back = shortFloatFromDouble(v);
+    double v = short_float_to_double(uint16_t(b));
+    auto back = short_float_from_double(v);
     ASSERT_TRUE(back) << b;
     if ((b >> 12) == 8) EXPECT_EQ(*back, 0x8000);  // every exponent -8 value is zero
     else EXPECT_EQ(*back, b) << v;
@@ -112,12 +112,12 @@ TEST(C40Decode, ReportsWordsOutsideTheSubsetWithTheirAddress) {
   for (const Case& c : cases) {
     SCOPED_TRACE(c.why);
     DecodeError e;
-    EXPECT_FALSE(decodeWord(c.w, 0x1234, &e)) << print(*decodeWord(c.w, 0x1234));
+    EXPECT_FALSE(decode_word(c.w, 0x1234, &e)) << print(*decode_word(c.w, 0x1234));
     EXPECT_EQ(e.address, 0x1234);
     EXPECT_FALSE(e.message.empty());
   }
   std::vector<uint8_t> bytes = {0x00, 0x00, 0x01, 0x08, 0xff, 0xff, 0xff, 0xff, 0x00, 0x00};
-  Disassembly d = disassembleBytes(bytes, 0x100);
+  Disassembly d = disassemble_bytes(bytes, 0x100);
   ASSERT_EQ(d.insts.size(), 1u);
   EXPECT_EQ(print(d.insts[0].inst), "LDI R0, R1");
   ASSERT_EQ(d.errors.size(), 2u);
@@ -131,11 +131,11 @@ TEST(C40Decode, RandomWordsNeverCrashAndRoundTrip) {
   for (int i = 0; i < 200000; ++i) {
     uint32_t w = rng();
     if (i % 4 == 0) w &= 0x3fffffff;  // more of the opcode space we cover
-    auto in = decodeWord(w, 0x1000);
+    auto in = decode_word(w, 0x1000);
     if (!in) continue;
     ++decoded;
-    ASSERT_EQ(encodeAt(*in, 0x1000), w) << print(*in);
-    ASSERT_TRUE(parse(print(*in)) == *in) << print(*in) << " " << hexWord(w);
+    ASSERT_EQ(encode_at(*in, 0x1000), w) << print(*in);
+    ASSERT_TRUE(parse(print(*in)) == *in) << print(*in) << " " << hex_word(w);
   }
   EXPECT_GT(decoded, 10000u);
 }

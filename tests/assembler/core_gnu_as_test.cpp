@@ -1,5 +1,5 @@
 // The core's layout and relaxation checked against GNU as: the program is
-// printed as GNU as source (toGnuAs) and must assemble to the same bytes.
+// printed as GNU as source (to_gnu_as) and must assemble to the same bytes.
 #include <gtest/gtest.h>
 
 #include "test_util.h"
@@ -15,13 +15,13 @@ std::string nops(int n) {
   return s;
 }
 
-void expectSameAsGnu(const x86::X86Program& p) {
+void expect_same_as_gnu(const x86::X86Program& p) {
   std::string why;
-  ASSERT_TRUE(binutilsAvailable(&why)) << why;
+  ASSERT_TRUE(binutils_available(&why)) << why;
   Result r = assemble(x86::target(), p);
   ASSERT_TRUE(r.ok()) << r.errors[0].message;
-  std::string src = x86::toGnuAs(p), err;
-  std::vector<uint8_t> theirs = gnuAssemble(src, &err);
+  std::string src = x86::to_gnu_as(p), err;
+  std::vector<uint8_t> theirs = gnu_assemble(src, &err);
   ASSERT_TRUE(err.empty()) << err;
   if (r.code != theirs) {
     size_t i = 0;
@@ -41,7 +41,7 @@ TEST(GnuAsCore, RelaxationBoundariesMatchGnuAs) {
       blocks.push_back({line++, "L:\n" + nops(n) + j + " L\nret"});
     }
   }
-  expectSameAsGnu(buildProgram({}, blocks));
+  expect_same_as_gnu(build_program({}, blocks));
 }
 
 TEST(GnuAsCore, CascadingGrowthMatchesGnuAs) {
@@ -50,15 +50,15 @@ TEST(GnuAsCore, CascadingGrowthMatchesGnuAs) {
   for (int i = 0; i < 8; ++i) t += "jne L" + std::to_string(i) + "\n" + nops(60);
   for (int i = 0; i < 8; ++i) t += "L" + std::to_string(i) + ":\n" + nops(8);
   t += "B:\n" + nops(120) + "jmp B\njmp A\n" + nops(125) + "A:\nret\n";
-  expectSameAsGnu(buildProgram({}, {{1, t}}));
+  expect_same_as_gnu(build_program({}, {{1, t}}));
 }
 
 TEST(GnuAsCore, GlobalJumpsMatchGnuAsWithDisp32) {
-  auto p = buildProgram({"r0", "r1", "r2"},
+  auto p = build_program({"r0", "r1", "r2"},
                         {{1, "r0::\ncmp eax, 0x1\nje r1\njmp r2\nskip:\njne skip\nret"},
                          {2, "r1::\nje r0\ncall r2\njmp r1\nskip:\njmp skip"},
                          {3, "r2::\njl r0\nret"}});
-  expectSameAsGnu(p);
+  expect_same_as_gnu(p);
 }
 
 TEST(GnuAsCore, LargeProgramMatchesGnuAs) {
@@ -85,7 +85,7 @@ TEST(GnuAsCore, LargeProgramMatchesGnuAs) {
     }
     blocks.push_back({b + 1, t});
   }
-  expectSameAsGnu(buildProgram(globals, blocks));
+  expect_same_as_gnu(build_program(globals, blocks));
 }
 
 }  // namespace

@@ -19,9 +19,9 @@ std::string nops(int n) {
 }
 
 // Size of the item at (block, item).
-uint32_t sizeAt(const Result& r, size_t b, size_t i) { return r.items[b][i].size; }
+uint32_t size_at(const Result& r, size_t b, size_t i) { return r.items[b][i].size; }
 
-std::string errorsOf(const Result& r) {
+std::string errors_of(const Result& r) {
   std::string s;
   for (const Error& e : r.errors)
     s += "block " + std::to_string(e.block) + " line " + std::to_string(e.line) + ": " + e.message + "\n";
@@ -32,11 +32,11 @@ TEST(Core, ForwardJumpShortUpTo127) {
   for (int n : {0, 1, 126, 127, 128, 129, 300}) {
     SCOPED_TRACE(n);
     for (const char* j : {"jmp", "je"}) {
-      auto p = buildProgram({}, {{10, std::string(j) + " L\n" + nops(n) + "L:\nret"}});
+      auto p = build_program({}, {{10, std::string(j) + " L\n" + nops(n) + "L:\nret"}});
       Result r = assemble(x86::target(), p);
-      ASSERT_TRUE(r.ok()) << errorsOf(r);
-      uint32_t longSize = std::string(j) == "jmp" ? 5 : 6;
-      EXPECT_EQ(sizeAt(r, 0, 0), n <= 127 ? 2u : longSize);
+      ASSERT_TRUE(r.ok()) << errors_of(r);
+      uint32_t long_size = std::string(j) == "jmp" ? 5 : 6;
+      EXPECT_EQ(size_at(r, 0, 0), n <= 127 ? 2u : long_size);
       // The displacement reaches the label.
       auto d = x86::disassemble(r.code);
       ASSERT_FALSE(d.error);
@@ -48,11 +48,11 @@ TEST(Core, ForwardJumpShortUpTo127) {
 TEST(Core, BackwardJumpShortDownToMinus128) {
   for (int n : {0, 125, 126, 127, 128}) {
     SCOPED_TRACE(n);
-    auto p = buildProgram({}, {{1, "L:\n" + nops(n) + "jne L"}});
+    auto p = build_program({}, {{1, "L:\n" + nops(n) + "jne L"}});
     Result r = assemble(x86::target(), p);
-    ASSERT_TRUE(r.ok()) << errorsOf(r);
+    ASSERT_TRUE(r.ok()) << errors_of(r);
     // disp = -(n + 2) for the short form.
-    EXPECT_EQ(sizeAt(r, 0, size_t(n) + 1), n <= 126 ? 2u : 6u);
+    EXPECT_EQ(size_at(r, 0, size_t(n) + 1), n <= 126 ? 2u : 6u);
     auto d = x86::disassemble(r.code);
     ASSERT_FALSE(d.error);
     EXPECT_EQ(d.insts.back().inst.ops[0].imm, 0);
@@ -62,19 +62,19 @@ TEST(Core, BackwardJumpShortDownToMinus128) {
 TEST(Core, GrowingOneJumpCanPushAnotherOutOfRange) {
   // j1 reaches A only while j2 is short; j2 must grow (B is 128 bytes past
   // it), which then pushes A out of j1's reach: two rounds of growth.
-  auto p = buildProgram({}, {{1, "jmp A\n" + nops(124) + "jmp B\nA:\n" + nops(128) + "B:\nret"}});
+  auto p = build_program({}, {{1, "jmp A\n" + nops(124) + "jmp B\nA:\n" + nops(128) + "B:\nret"}});
   Result r = assemble(x86::target(), p);
-  ASSERT_TRUE(r.ok()) << errorsOf(r);
-  EXPECT_EQ(sizeAt(r, 0, 0), 5u);
-  EXPECT_EQ(sizeAt(r, 0, 125), 5u);
-  EXPECT_GE(r.stats.relaxPasses, 3u);
+  ASSERT_TRUE(r.ok()) << errors_of(r);
+  EXPECT_EQ(size_at(r, 0, 0), 5u);
+  EXPECT_EQ(size_at(r, 0, 125), 5u);
+  EXPECT_GE(r.stats.relax_passes, 3u);
   auto d = x86::disassemble(r.code);
   ASSERT_FALSE(d.error) << d.error->message;
   EXPECT_EQ(d.insts[0].inst.ops[0].imm, int64_t(r.items[0][126].offset));
 }
 
 X86Program rungs() {
-  return buildProgram({"rung0", "rung1", "rung2", "done"},
+  return build_program({"rung0", "rung1", "rung2", "done"},
                       {{100, "rung0::\n"
                              "cmp eax, 0x1\n"
                              "je skip\n"
@@ -97,21 +97,21 @@ X86Program rungs() {
 TEST(Core, GlobalJumpsAreRel32AndResolvedAcrossBlocks) {
   X86Program p = rungs();
   Result r = assemble(x86::target(), p);
-  ASSERT_TRUE(r.ok()) << errorsOf(r);
-  ASSERT_EQ(r.globalAddresses.size(), 4u);
-  EXPECT_EQ(r.globalAddresses[0], 0);
-  EXPECT_EQ(r.globalAddresses[1], r.blockOffsets[1]);
-  EXPECT_EQ(r.globalAddresses[2], r.blockOffsets[2]);
+  ASSERT_TRUE(r.ok()) << errors_of(r);
+  ASSERT_EQ(r.global_addresses.size(), 4u);
+  EXPECT_EQ(r.global_addresses[0], 0);
+  EXPECT_EQ(r.global_addresses[1], r.block_offsets[1]);
+  EXPECT_EQ(r.global_addresses[2], r.block_offsets[2]);
   auto d = x86::disassemble(r.code);
   ASSERT_FALSE(d.error) << d.error->message;
   // Every branch to a global label is a rel32 form to the right address.
   std::vector<std::pair<std::string, int64_t>> want = {
-      {"je", -1}, {"jmp", r.globalAddresses[2]}, {"jne", r.globalAddresses[1]},
-      {"jne", -1}, {"call", r.globalAddresses[0]}, {"jmp", r.globalAddresses[3]},
-      {"jmp", r.globalAddresses[1]}};
+      {"je", -1}, {"jmp", r.global_addresses[2]}, {"jne", r.global_addresses[1]},
+      {"jne", -1}, {"call", r.global_addresses[0]}, {"jmp", r.global_addresses[3]},
+      {"jmp", r.global_addresses[1]}};
   size_t k = 0;
   for (const auto& di : d.insts) {
-    std::string mn(x86::mnemonicName(di.inst.mnemonic, di.inst.cond));
+    std::string mn(x86::mnemonic_name(di.inst.mnemonic, di.inst.cond));
     if (di.inst.ops[0].kind != x86::OperandKind::Address) continue;
     ASSERT_LT(k, want.size());
     EXPECT_EQ(mn, want[k].first);
@@ -124,20 +124,20 @@ TEST(Core, GlobalJumpsAreRel32AndResolvedAcrossBlocks) {
     ++k;
   }
   EXPECT_EQ(k, want.size());
-  EXPECT_EQ(r.stats.globalFixups, 5u);
+  EXPECT_EQ(r.stats.global_fixups, 5u);
 }
 
 TEST(Core, LocalLabelsWithTheSameNameInDifferentBlocks) {
   X86Program p = rungs();  // both rung0 and rung1 define "skip"
   for (Mode mode : {Mode::Blockwise, Mode::WholeProgram}) {
     Result r = assemble(x86::target(), p, mode);
-    ASSERT_TRUE(r.ok()) << errorsOf(r);
+    ASSERT_TRUE(r.ok()) << errors_of(r);
     auto d = x86::disassemble(r.code);
     ASSERT_FALSE(d.error);
     // je skip (block 0) -> block 0's skip; jne skip (block 1) -> block 1's.
     EXPECT_EQ(d.insts[1].inst.ops[0].imm, int64_t(r.items[0][4].offset));
     size_t b1 = 0;
-    while (d.insts[b1].offset < r.blockOffsets[1]) ++b1;
+    while (d.insts[b1].offset < r.block_offsets[1]) ++b1;
     EXPECT_EQ(d.insts[b1 + 1].inst.ops[0].imm, int64_t(r.items[1][4].offset));
   }
 }
@@ -146,17 +146,17 @@ TEST(Core, BlockAndItemOffsets) {
   X86Program p = rungs();
   Result r = assemble(x86::target(), p);
   ASSERT_TRUE(r.ok());
-  ASSERT_EQ(r.blockOffsets.size(), 3u);
-  EXPECT_EQ(r.blockOffsets[0], 0u);
+  ASSERT_EQ(r.block_offsets.size(), 3u);
+  EXPECT_EQ(r.block_offsets[0], 0u);
   // rung0: cmp(3) je(2) jmp(5) jne(6) = 16 bytes.
-  EXPECT_EQ(r.blockOffsets[1], 16u);
+  EXPECT_EQ(r.block_offsets[1], 16u);
   EXPECT_EQ(r.items[0][1].offset, 0u);
   EXPECT_EQ(r.items[0][2].offset, 3u);
   EXPECT_EQ(r.items[0][3].offset, 5u);
   EXPECT_EQ(r.items[0][4].offset, 10u);  // the label skip
   EXPECT_EQ(r.items[0][5].offset, 10u);
-  EXPECT_TRUE(r.items[0][3].longForm);
-  EXPECT_FALSE(r.items[0][2].longForm);
+  EXPECT_TRUE(r.items[0][3].long_form);
+  EXPECT_FALSE(r.items[0][2].long_form);
   std::string lst = x86::listing(p, r);
   EXPECT_NE(lst.find("{disp32} jmp rung2"), std::string::npos) << lst;
   EXPECT_NE(lst.find("# fall through"), std::string::npos) << lst;
@@ -187,10 +187,10 @@ TEST(Core, ErrorsCarryBlockLineAndLabel) {
   };
   for (const ErrCase& c : cases) {
     SCOPED_TRACE(c.what);
-    X86Program p = buildProgram(c.globals, c.blocks);
+    X86Program p = build_program(c.globals, c.blocks);
     for (Mode mode : {Mode::Blockwise, Mode::WholeProgram}) {
       Result r = assemble(x86::target(), p, mode);
-      ASSERT_EQ(r.errors.size(), 1u) << errorsOf(r);
+      ASSERT_EQ(r.errors.size(), 1u) << errors_of(r);
       EXPECT_EQ(r.errors[0].block, c.block);
       EXPECT_EQ(r.errors[0].line, c.line);
       EXPECT_NE(r.errors[0].message.find(c.message), std::string::npos) << r.errors[0].message;
@@ -199,17 +199,17 @@ TEST(Core, ErrorsCarryBlockLineAndLabel) {
 }
 
 TEST(Core, ErrorsDoNotStopTheOtherBlocks) {
-  X86Program p = buildProgram({"g"}, {{1, "jmp x\n"}, {2, "g::\nret"}, {3, "jmp y\njmp g"}});
+  X86Program p = build_program({"g"}, {{1, "jmp x\n"}, {2, "g::\nret"}, {3, "jmp y\njmp g"}});
   Result r = assemble(x86::target(), p);
   EXPECT_EQ(r.errors.size(), 2u);
-  EXPECT_EQ(r.globalAddresses[0], int64_t(r.blockOffsets[1]));
+  EXPECT_EQ(r.global_addresses[0], int64_t(r.block_offsets[1]));
   auto d = x86::disassemble(r.code);
   ASSERT_FALSE(d.error);
-  EXPECT_EQ(d.insts.back().inst.ops[0].imm, r.globalAddresses[0]);
+  EXPECT_EQ(d.insts.back().inst.ops[0].imm, r.global_addresses[0]);
 }
 
 // A pseudo-random program: many rungs with local and global jumps.
-X86Program bigProgram(int blocks, uint32_t seed) {
+X86Program big_program(int blocks, uint32_t seed) {
   auto rnd = [&] {
     seed = seed * 1103515245u + 12345u;
     return (seed >> 16) & 0x7fff;
@@ -235,30 +235,30 @@ X86Program bigProgram(int blocks, uint32_t seed) {
     bt.push_back({1000 + b * 10, t});
   }
   bt.push_back({99999, "end::\nret"});
-  return buildProgram(globals, bt);
+  return build_program(globals, bt);
 }
 
 TEST(Core, BlockwiseAndWholeProgramGiveIdenticalBytes) {
-  X86Program p = bigProgram(60, 7);
+  X86Program p = big_program(60, 7);
   Result bw = assemble(x86::target(), p, Mode::Blockwise);
   Result wp = assemble(x86::target(), p, Mode::WholeProgram);
-  ASSERT_TRUE(bw.ok()) << errorsOf(bw);
-  ASSERT_TRUE(wp.ok()) << errorsOf(wp);
+  ASSERT_TRUE(bw.ok()) << errors_of(bw);
+  ASSERT_TRUE(wp.ok()) << errors_of(wp);
   EXPECT_EQ(bw.code, wp.code);
-  EXPECT_EQ(bw.blockOffsets, wp.blockOffsets);
-  EXPECT_EQ(bw.globalAddresses, wp.globalAddresses);
+  EXPECT_EQ(bw.block_offsets, wp.block_offsets);
+  EXPECT_EQ(bw.global_addresses, wp.global_addresses);
   // The blockwise tables are smaller: globals plus one block's locals.
-  EXPECT_LT(bw.stats.peakLabelEntries, wp.stats.peakLabelEntries);
-  EXPECT_EQ(wp.stats.peakLabelEntries, p.globals.size() + [&] {
+  EXPECT_LT(bw.stats.peak_label_entries, wp.stats.peak_label_entries);
+  EXPECT_EQ(wp.stats.peak_label_entries, p.globals.size() + [&] {
     size_t n = 0;
     for (const auto& b : p.blocks)
       for (const auto& it : b.items) n += it.kind == ItemKind::Label && !it.global;
     return n;
   }());
-  EXPECT_LE(bw.stats.peakLabelEntries, p.globals.size() + 4);
+  EXPECT_LE(bw.stats.peak_label_entries, p.globals.size() + 4);
   EXPECT_EQ(bw.stats.units, p.blocks.size());
   EXPECT_EQ(wp.stats.units, 1u);
-  EXPECT_GE(bw.stats.relaxPasses, p.blocks.size());
+  EXPECT_GE(bw.stats.relax_passes, p.blocks.size());
   auto d = x86::disassemble(bw.code);
   EXPECT_FALSE(d.error);
 }
@@ -275,31 +275,31 @@ Result streamed(const X86Program& p) {
 }
 
 TEST(Core, StreamingGivesTheBlockwiseResult) {
-  X86Program p = bigProgram(200, 11);
+  X86Program p = big_program(200, 11);
   Result bw = assemble(x86::target(), p, Mode::Blockwise);
   Result st = streamed(p);
-  ASSERT_TRUE(bw.ok() && st.ok()) << errorsOf(bw) << errorsOf(st);
+  ASSERT_TRUE(bw.ok() && st.ok()) << errors_of(bw) << errors_of(st);
   EXPECT_EQ(bw.code, st.code);
-  EXPECT_EQ(bw.blockOffsets, st.blockOffsets);
-  EXPECT_EQ(bw.globalAddresses, st.globalAddresses);
+  EXPECT_EQ(bw.block_offsets, st.block_offsets);
+  EXPECT_EQ(bw.global_addresses, st.global_addresses);
   ASSERT_EQ(bw.items.size(), st.items.size());
   for (size_t b = 0; b < bw.items.size(); b++) {
     ASSERT_EQ(bw.items[b].size(), st.items[b].size());
     for (size_t i = 0; i < bw.items[b].size(); i++) {
       EXPECT_EQ(bw.items[b][i].offset, st.items[b][i].offset);
       EXPECT_EQ(bw.items[b][i].size, st.items[b][i].size);
-      EXPECT_EQ(bw.items[b][i].longForm, st.items[b][i].longForm);
+      EXPECT_EQ(bw.items[b][i].long_form, st.items[b][i].long_form);
     }
   }
-  EXPECT_EQ(bw.stats.peakLabelEntries, st.stats.peakLabelEntries);
-  EXPECT_EQ(bw.stats.encodeCalls, st.stats.encodeCalls);
+  EXPECT_EQ(bw.stats.peak_label_entries, st.stats.peak_label_entries);
+  EXPECT_EQ(bw.stats.encode_calls, st.stats.encode_calls);
 }
 
 TEST(Core, StreamingReportsTheSameErrors) {
   // undefined local and global labels, an undeclared and a twice-defined
   // global, a clash, a duplicate local: every kind, the labels named after
   // their blocks are gone
-  X86Program p = buildProgram({"g", "h", "never"}, {{1, "jmp x\ng::\n"}, {2, "g::\nret\njmp never"},
+  X86Program p = build_program({"g", "h", "never"}, {{1, "jmp x\ng::\n"}, {2, "g::\nret\njmp never"},
                                                    {3, "u::\nh:\njmp h"}, {4, "a:\na:\njmp a"}, {5, "jmp zz"}});
   Result bw = assemble(x86::target(), p, Mode::Blockwise);
   Result st = streamed(p);
@@ -309,24 +309,24 @@ TEST(Core, StreamingReportsTheSameErrors) {
     std::sort(v.begin(), v.end());
     return v;
   };
-  EXPECT_GE(bw.errors.size(), 6u) << errorsOf(bw);
+  EXPECT_GE(bw.errors.size(), 6u) << errors_of(bw);
   EXPECT_EQ(sorted(bw), sorted(st));
   EXPECT_EQ(bw.code, st.code);
 }
 
 // Reports the two modes' cost on a large program (1000 rungs).
 TEST(Core, ModeStatsOnALargeProgram) {
-  X86Program p = bigProgram(1000, 99);
+  X86Program p = big_program(1000, 99);
   Result bw = assemble(x86::target(), p, Mode::Blockwise);
   Result wp = assemble(x86::target(), p, Mode::WholeProgram);
   ASSERT_TRUE(bw.ok() && wp.ok());
   EXPECT_EQ(bw.code, wp.code);
-  EXPECT_LT(bw.stats.peakLabelEntries, wp.stats.peakLabelEntries);
+  EXPECT_LT(bw.stats.peak_label_entries, wp.stats.peak_label_entries);
   for (const auto* r : {&bw, &wp}) {
     std::printf("%-13s %zu bytes, peak label entries %zu, passes %zu, encodes %zu, %.3f ms\n",
                 r == &bw ? "blockwise" : "whole-program", r->code.size(),
-                r->stats.peakLabelEntries, r->stats.relaxPasses, r->stats.encodeCalls,
-                double(r->stats.elapsedNs) / 1e6);
+                r->stats.peak_label_entries, r->stats.relax_passes, r->stats.encode_calls,
+                double(r->stats.elapsed_ns) / 1e6);
   }
 }
 
@@ -350,23 +350,23 @@ constexpr FixupKind kWordKinds[] = {
     {"field8at16", 4, 16, 8, true, true, PcBase::InstructionStart, 1, 4, -1},
 };
 
-void encodeWord(const WordInst& in, bool, Encoding& out) {
+void encode_word(const WordInst& in, bool, Encoding& out) {
   out.put32(in.word);
-  if (!in.label.empty()) out.addFixup(Fixup{0, in.kind, in.label, 0});
+  if (!in.label.empty()) out.add_fixup(Fixup{0, in.kind, in.label, 0});
 }
 
-const Target<WordInst>& wordTarget() {
+const Target<WordInst>& word_target() {
   static const Target<WordInst> t = [] {
     Target<WordInst> t;
     t.name = "toy-c40";
-    t.fixupKinds = kWordKinds;
-    t.encode = encodeWord;
+    t.fixup_kinds = kWordKinds;
+    t.encode = encode_word;
     return t;
   }();
   return t;
 }
 
-uint32_t wordAt(const Result& r, size_t i) {
+uint32_t word_at(const Result& r, size_t i) {
   return uint32_t(r.code[4 * i]) | uint32_t(r.code[4 * i + 1]) << 8 |
          uint32_t(r.code[4 * i + 2]) << 16 | uint32_t(r.code[4 * i + 3]) << 24;
 }
@@ -376,41 +376,41 @@ TEST(Core, WordAddressedTargetUsesScaledBitFields) {
   Program<WordInst> p;
   p.globals = {"far"};
   Block<WordInst> b0;
-  b0.sourceLine = 1;
-  b0.items = {I::labelDef("top"),
+  b0.source_line = 1;
+  b0.items = {I::label_def("top"),
               I::instr({0x60000000, "next", Disp16}),     // word 0 -> next (word 3): 3-1 = 2
               I::instr({0x61000000, "top", Disp24}),      // word 1 -> top (0): 0-2 = -2
               I::instr({0x62000000, "next", Delayed16}),  // word 2 -> 3: 3-5 = -2
-              I::labelDef("next"),
+              I::label_def("next"),
               I::instr({0x63000000, "far", Abs24}),       // word 3 -> far (word 5)
               I::instr({0xAB00CDEF, "top", Field8At16})}; // word 4 -> 0: 0-5 = -5
   Block<WordInst> b1;
-  b1.sourceLine = 2;
-  b1.items = {I::labelDef("far", true), I::instr({0x08000000, "", 0})};
+  b1.source_line = 2;
+  b1.items = {I::label_def("far", true), I::instr({0x08000000, "", 0})};
   p.blocks = {b0, b1};
-  Result r = assemble(wordTarget(), p);
-  ASSERT_TRUE(r.ok()) << errorsOf(r);
+  Result r = assemble(word_target(), p);
+  ASSERT_TRUE(r.ok()) << errors_of(r);
   ASSERT_EQ(r.code.size(), 24u);
-  EXPECT_EQ(wordAt(r, 0), 0x60000002u);
-  EXPECT_EQ(wordAt(r, 1), 0x61FFFFFEu);
-  EXPECT_EQ(wordAt(r, 2), 0x6200FFFEu);
-  EXPECT_EQ(wordAt(r, 3), 0x63000005u);
-  EXPECT_EQ(wordAt(r, 4), 0xABFBCDEFu);  // only bits 16..23 changed
+  EXPECT_EQ(word_at(r, 0), 0x60000002u);
+  EXPECT_EQ(word_at(r, 1), 0x61FFFFFEu);
+  EXPECT_EQ(word_at(r, 2), 0x6200FFFEu);
+  EXPECT_EQ(word_at(r, 3), 0x63000005u);
+  EXPECT_EQ(word_at(r, 4), 0xABFBCDEFu);  // only bits 16..23 changed
   ASSERT_EQ(r.relocations.size(), 1u);   // the absolute field
   EXPECT_EQ(r.relocations[0].offset, 12u);
-  EXPECT_EQ(r.globalAddresses[0], 20);
+  EXPECT_EQ(r.global_addresses[0], 20);
 }
 
 TEST(Core, OutOfRangeFieldWithoutLongerFormIsAnError) {
   using I = Item<WordInst>;
   Program<WordInst> p;
   Block<WordInst> b;
-  b.sourceLine = 42;
+  b.source_line = 42;
   b.items.push_back(I::instr({0, "there", Field8At16}));
   for (int i = 0; i < 200; ++i) b.items.push_back(I::instr({0, "", 0}));
-  b.items.push_back(I::labelDef("there"));
+  b.items.push_back(I::label_def("there"));
   p.blocks = {b};
-  Result r = assemble(wordTarget(), p);
+  Result r = assemble(word_target(), p);
   ASSERT_EQ(r.errors.size(), 1u);
   EXPECT_EQ(r.errors[0].line, 42);
   EXPECT_NE(r.errors[0].message.find("label 'there' out of range for fixup field8at16"),
@@ -422,10 +422,10 @@ TEST(Core, InvalidFixupFromAnEncoderIsAnError) {
   using I = Item<WordInst>;
   Program<WordInst> p;
   Block<WordInst> b;
-  b.sourceLine = 7;
-  b.items = {I::labelDef("x"), I::instr({0, "x", 99})};
+  b.source_line = 7;
+  b.items = {I::label_def("x"), I::instr({0, "x", 99})};
   p.blocks = {b};
-  Result r = assemble(wordTarget(), p);
+  Result r = assemble(word_target(), p);
   ASSERT_EQ(r.errors.size(), 1u);
   EXPECT_EQ(r.errors[0].line, 7);
   EXPECT_NE(r.errors[0].message.find("invalid fixup"), std::string::npos);
@@ -434,17 +434,17 @@ TEST(Core, InvalidFixupFromAnEncoderIsAnError) {
 TEST(Core, FixupHelpers) {
   const FixupKind& k = kWordKinds[Disp16];
   int64_t v = 0;
-  EXPECT_TRUE(fixupValue(k, 400, 0, 100, 4, v));
+  EXPECT_TRUE(fixup_value(k, 400, 0, 100, 4, v));
   EXPECT_EQ(v, 74);  // (400 - (100 + 4)) / 4
-  EXPECT_FALSE(fixupValue(k, 402, 0, 100, 4, v));  // not word aligned
-  EXPECT_TRUE(fixupFits(k, 32767));
-  EXPECT_FALSE(fixupFits(k, 32768));
-  EXPECT_TRUE(fixupFits(k, -32768));
-  EXPECT_FALSE(fixupFits(k, -32769));
-  EXPECT_FALSE(fixupFits(kWordKinds[Abs24], -1));
-  EXPECT_TRUE(fixupFits(kWordKinds[Abs24], 0xFFFFFF));
+  EXPECT_FALSE(fixup_value(k, 402, 0, 100, 4, v));  // not word aligned
+  EXPECT_TRUE(fixup_fits(k, 32767));
+  EXPECT_FALSE(fixup_fits(k, 32768));
+  EXPECT_TRUE(fixup_fits(k, -32768));
+  EXPECT_FALSE(fixup_fits(k, -32769));
+  EXPECT_FALSE(fixup_fits(kWordKinds[Abs24], -1));
+  EXPECT_TRUE(fixup_fits(kWordKinds[Abs24], 0xFFFFFF));
   std::vector<uint8_t> code = {0xFF, 0xFF, 0xFF, 0xFF};
-  applyFixup(kWordKinds[Field8At16], code, 0, 0x12);
+  apply_fixup(kWordKinds[Field8At16], code, 0, 0x12);
   EXPECT_EQ(code, (std::vector<uint8_t>{0xFF, 0xFF, 0x12, 0xFF}));
 }
 

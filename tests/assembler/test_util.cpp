@@ -12,7 +12,7 @@
 
 namespace ldc::as::test {
 
-std::vector<Row> loadRows(const std::string& path) {
+std::vector<Row> load_rows(const std::string& path) {
   std::ifstream in(path);
   std::vector<Row> rows;
   if (!in) return rows;
@@ -34,7 +34,7 @@ std::vector<Row> loadRows(const std::string& path) {
   return rows;
 }
 
-void rewriteRows(const std::vector<std::string>& hexes, const std::string& path) {
+void rewrite_rows(const std::vector<std::string>& hexes, const std::string& path) {
   std::ifstream in(path);
   std::vector<std::string> lines;
   std::string line;
@@ -60,7 +60,7 @@ void rewriteRows(const std::vector<std::string>& hexes, const std::string& path)
   std::ofstream(path) << out.str();
 }
 
-std::string toHex(const std::vector<uint8_t>& bytes) {
+std::string to_hex(const std::vector<uint8_t>& bytes) {
   std::string s;
   char buf[4];
   for (uint8_t b : bytes) {
@@ -70,7 +70,7 @@ std::string toHex(const std::vector<uint8_t>& bytes) {
   return s;
 }
 
-std::vector<uint8_t> fromHex(const std::string& hex) {
+std::vector<uint8_t> from_hex(const std::string& hex) {
   std::vector<uint8_t> v;
   for (size_t i = 0; i + 1 < hex.size(); i += 2)
     v.push_back(uint8_t(std::stoul(hex.substr(i, 2), nullptr, 16)));
@@ -90,7 +90,7 @@ std::vector<x86::Instruction> variants(const x86::Instruction& in) {
     if (seen.insert(print(v)).second) out.push_back(v);
   };
   add(in);
-  for (unsigned i = 0; i < in.numOperands; ++i) {
+  for (unsigned i = 0; i < in.num_operands; ++i) {
     const Operand& o = in.ops[i];
     Instruction v = in;
     Operand& w = v.ops[i];
@@ -142,24 +142,24 @@ std::vector<x86::Instruction> variants(const x86::Instruction& in) {
   return out;
 }
 
-std::vector<x86::Instruction> allRowVariants() {
+std::vector<x86::Instruction> all_row_variants() {
   std::vector<x86::Instruction> all;
   std::set<std::string> seen;
-  for (const Row& r : loadRows()) {
+  for (const Row& r : load_rows()) {
     x86::Instruction in = x86::parse(r.text);
-    if (in.numOperands && in.ops[0].kind == x86::OperandKind::Address) continue;
+    if (in.num_operands && in.ops[0].kind == x86::OperandKind::Address) continue;
     for (auto& v : variants(in))
       if (seen.insert(x86::print(v)).second) all.push_back(v);
   }
   return all;
 }
 
-x86::X86Program buildProgram(std::vector<std::string> globals, const std::vector<BlockText>& blocks) {
+x86::X86Program build_program(std::vector<std::string> globals, const std::vector<BlockText>& blocks) {
   x86::X86Program p;
   p.globals = std::move(globals);
   for (const BlockText& bt : blocks) {
     Block<x86::Instruction> b;
-    b.sourceLine = bt.line;
+    b.source_line = bt.line;
     std::istringstream in(bt.text);
     std::string l;
     while (std::getline(in, l)) {
@@ -171,9 +171,9 @@ x86::X86Program buildProgram(std::vector<std::string> globals, const std::vector
         size_t t = l.find_first_not_of(" \t", 1);
         b.items.push_back(Item<x86::Instruction>::note(t == std::string::npos ? "" : l.substr(t)));
       } else if (l.size() > 2 && l.substr(l.size() - 2) == "::") {
-        b.items.push_back(Item<x86::Instruction>::labelDef(l.substr(0, l.size() - 2), true));
+        b.items.push_back(Item<x86::Instruction>::label_def(l.substr(0, l.size() - 2), true));
       } else if (l.back() == ':') {
-        b.items.push_back(Item<x86::Instruction>::labelDef(l.substr(0, l.size() - 1)));
+        b.items.push_back(Item<x86::Instruction>::label_def(l.substr(0, l.size() - 1)));
       } else {
         b.items.push_back(Item<x86::Instruction>::instr(x86::parse(l)));
       }
@@ -230,14 +230,14 @@ struct TempDir {
   }
 };
 
-std::vector<uint8_t> readFile(const std::string& p) {
+std::vector<uint8_t> read_file(const std::string& p) {
   std::ifstream in(p, std::ios::binary);
   return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
 }
 
 }  // namespace
 
-bool binutilsAvailable(std::string* why) {
+bool binutils_available(std::string* why) {
   for (const char* tool : {"as", "objcopy", "objdump"}) {
     std::string out;
     if (run({tool, "--version"}, out) != 0 || out.find("GNU") == std::string::npos) {
@@ -250,7 +250,7 @@ bool binutilsAvailable(std::string* why) {
   return true;
 }
 
-std::vector<uint8_t> gnuAssemble(const std::string& source, std::string* error) {
+std::vector<uint8_t> gnu_assemble(const std::string& source, std::string* error) {
   TempDir dir;
   if (dir.path.empty()) return *error = "cannot create a temporary directory", std::vector<uint8_t>{};
   std::string s = dir.path + "/x.s", o = dir.path + "/x.o", bin = dir.path + "/x.bin", out;
@@ -258,10 +258,10 @@ std::vector<uint8_t> gnuAssemble(const std::string& source, std::string* error) 
   if (run({"as", "--64", "-o", o, s}, out) != 0) return *error = "as failed:\n" + out, std::vector<uint8_t>{};
   if (run({"objcopy", "-O", "binary", "-j", ".text", o, bin}, out) != 0)
     return *error = "objcopy failed:\n" + out, std::vector<uint8_t>{};
-  return readFile(bin);
+  return read_file(bin);
 }
 
-std::vector<ObjdumpInsn> objdumpIntel(const std::vector<uint8_t>& code, std::string* error) {
+std::vector<ObjdumpInsn> objdump_intel(const std::vector<uint8_t>& code, std::string* error) {
   TempDir dir;
   std::vector<ObjdumpInsn> r;
   if (dir.path.empty()) return *error = "cannot create a temporary directory", r;
@@ -280,7 +280,7 @@ std::vector<ObjdumpInsn> objdumpIntel(const std::vector<uint8_t>& code, std::str
   return r;
 }
 
-std::string normalizeObjdump(const std::string& text) {
+std::string normalize_objdump(const std::string& text) {
   std::string t = std::regex_replace(text, std::regex(R"(\s*<[^>]*>)"), "");
   t = std::regex_replace(t, std::regex(R"(\s*#.*$)"), "");
   // objdump prints negative rip displacements as 64-bit unsigned numbers.

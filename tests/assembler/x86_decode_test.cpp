@@ -10,7 +10,7 @@ namespace {
 
 TEST(X86Decode, DisassemblesABufferWithAbsoluteTargets) {
   // 0: jmp 0x7 ; 2: je 0x0 ; 4: nop ; 5: call 0xa ; a: ret
-  std::vector<uint8_t> code = fromHex("eb03" "74fc" "90" "e800000000" "c3");
+  std::vector<uint8_t> code = from_hex("eb03" "74fc" "90" "e800000000" "c3");
   auto d = x86::disassemble(code);
   ASSERT_FALSE(d.error) << d.error->message;
   ASSERT_EQ(d.insts.size(), 5u);
@@ -22,11 +22,11 @@ TEST(X86Decode, DisassemblesABufferWithAbsoluteTargets) {
 }
 
 TEST(X86Decode, LongFormThatCouldBeShortIsMarked) {
-  std::vector<uint8_t> code = fromHex("90" "e900000000" "0f8400000000");
+  std::vector<uint8_t> code = from_hex("90" "e900000000" "0f8400000000");
   auto d = x86::disassemble(code);
   ASSERT_FALSE(d.error);
   ASSERT_EQ(d.insts.size(), 3u);
-  EXPECT_TRUE(d.insts[1].inst.longBranch);
+  EXPECT_TRUE(d.insts[1].inst.long_branch);
   EXPECT_EQ(x86::print(d.insts[1].inst), "{disp32} jmp 0x6");
   EXPECT_EQ(x86::print(d.insts[2].inst), "{disp32} je 0xc");
 }
@@ -49,7 +49,7 @@ TEST(X86Decode, ReportsUnknownBytesWithOffset) {
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.hex);
-    auto d = x86::disassemble(fromHex(c.hex));
+    auto d = x86::disassemble(from_hex(c.hex));
     ASSERT_TRUE(d.error.has_value());
     EXPECT_EQ(d.error->offset, c.offset);
     EXPECT_FALSE(d.error->message.empty());
@@ -57,8 +57,8 @@ TEST(X86Decode, ReportsUnknownBytesWithOffset) {
 }
 
 TEST(X86Decode, TruncatedInstructionsAreErrors) {
-  for (const Row& r : loadRows()) {
-    std::vector<uint8_t> full = fromHex(r.hex);
+  for (const Row& r : load_rows()) {
+    std::vector<uint8_t> full = from_hex(r.hex);
     for (size_t n = 1; n < full.size(); ++n) {
       // Exactly sized heap copies so that ASan catches any over-read.
       std::vector<uint8_t> part(full.begin(), full.begin() + long(n));
@@ -73,20 +73,20 @@ TEST(X86Decode, TruncatedInstructionsAreErrors) {
   }
   x86::DecodeError err;
   EXPECT_FALSE(x86::decode(std::vector<uint8_t>{}, 0, &err));
-  EXPECT_FALSE(x86::decode(fromHex("90"), 5, &err));
+  EXPECT_FALSE(x86::decode(from_hex("90"), 5, &err));
 }
 
 // Whatever the encoder produces, the decoder reads back exactly.
 TEST(X86Decode, EveryEncodableVariantDecodes) {
-  auto all = allRowVariants();
+  auto all = all_row_variants();
   EXPECT_GT(all.size(), 5000u);
   for (const auto& in : all) {
-    auto bytes = x86::encodeAt(in, 0);
+    auto bytes = x86::encode_at(in, 0);
     x86::DecodeError err;
     auto d = x86::decode(bytes, 0, &err);
-    ASSERT_TRUE(d) << x86::print(in) << " (" << toHex(bytes) << "): " << err.message;
+    ASSERT_TRUE(d) << x86::print(in) << " (" << to_hex(bytes) << "): " << err.message;
     EXPECT_EQ(d->length, bytes.size()) << x86::print(in);
-    EXPECT_EQ(toHex(x86::encodeAt(d->inst, 0)), toHex(bytes)) << x86::print(in);
+    EXPECT_EQ(to_hex(x86::encode_at(d->inst, 0)), to_hex(bytes)) << x86::print(in);
     EXPECT_TRUE(x86::parse(x86::print(d->inst)) == d->inst) << x86::print(d->inst);
   }
 }
@@ -113,8 +113,8 @@ TEST(X86Decode, RandomBytesNeverCrash) {
     if (!d) continue;
     ++accepted;
     ASSERT_LE(at + d->length, n);
-    auto again = x86::encodeAt(d->inst, at);
-    ASSERT_EQ(toHex(again), toHex(std::vector<uint8_t>(buf.begin() + long(at),
+    auto again = x86::encode_at(d->inst, at);
+    ASSERT_EQ(to_hex(again), to_hex(std::vector<uint8_t>(buf.begin() + long(at),
                                                         buf.begin() + long(at + d->length))));
   }
   EXPECT_GT(accepted, 1000u);

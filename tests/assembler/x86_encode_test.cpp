@@ -14,12 +14,12 @@ using namespace ldc::as::test;
 namespace {
 
 TEST(X86Encode, RowsFileIsReadable) {
-  auto rows = loadRows();
+  auto rows = load_rows();
   ASSERT_GT(rows.size(), 400u) << "cannot read " << LDC_X86_ROWS;
 }
 
 TEST(X86Encode, Rows) {
-  auto rows = loadRows();
+  auto rows = load_rows();
   const char* upd = std::getenv("LDC_UPDATE");
   bool update = upd && std::string(upd) == "1";
   std::vector<std::string> hexes;
@@ -35,19 +35,19 @@ TEST(X86Encode, Rows) {
     }
     std::vector<uint8_t> bytes;
     try {
-      bytes = x86::encodeAt(in, 0);
+      bytes = x86::encode_at(in, 0);
     } catch (const AsmError& e) {
       ADD_FAILURE() << "encode: " << e.what();
       hexes.push_back(r.hex);
       continue;
     }
-    hexes.push_back(toHex(bytes));
+    hexes.push_back(to_hex(bytes));
     if (!update) {
-      EXPECT_EQ(toHex(bytes), r.hex);
+      EXPECT_EQ(to_hex(bytes), r.hex);
     }
 
     // Decode the golden bytes back.
-    std::vector<uint8_t> golden = update ? bytes : fromHex(r.hex);
+    std::vector<uint8_t> golden = update ? bytes : from_hex(r.hex);
     x86::DecodeError err;
     auto d = x86::decode(golden, 0, &err);
     if (!d) {
@@ -62,7 +62,7 @@ TEST(X86Encode, Rows) {
     EXPECT_TRUE(again == in) << "reparsed as " << x86::print(again);
   }
   if (update) {
-    rewriteRows(hexes);
+    rewrite_rows(hexes);
     std::printf("rewrote %zu rows in %s\n", hexes.size(), LDC_X86_ROWS);
   }
 }
@@ -70,15 +70,15 @@ TEST(X86Encode, Rows) {
 // Every table form shows up in the rows (so every form is checked by as).
 TEST(X86Encode, RowsCoverEveryMnemonicAndCondition) {
   std::set<std::string> seen;
-  for (const Row& r : loadRows()) {
+  for (const Row& r : load_rows()) {
     auto in = x86::parse(r.text);
-    seen.insert(std::string(x86::mnemonicName(in.mnemonic, in.cond)));
+    seen.insert(std::string(x86::mnemonic_name(in.mnemonic, in.cond)));
   }
   for (unsigned m = 0; m < unsigned(x86::Mnemonic::Count_); ++m) {
     auto mn = x86::Mnemonic(m);
     bool cc = mn == x86::Mnemonic::Setcc || mn == x86::Mnemonic::Cmovcc || mn == x86::Mnemonic::Jcc;
     for (unsigned c = 0; c < (cc ? 16u : 1u); ++c) {
-      std::string name(x86::mnemonicName(mn, x86::Cond(c)));
+      std::string name(x86::mnemonic_name(mn, x86::Cond(c)));
       EXPECT_TRUE(seen.count(name)) << name << " has no golden row";
     }
   }
@@ -89,17 +89,17 @@ TEST(X86Encode, FixupsForLabels) {
   Encoding e = x86::encode(in, false);
   ASSERT_EQ(e.size, 2);
   EXPECT_EQ(e.bytes[0], 0x75);
-  ASSERT_EQ(e.numFixups, 1);
+  ASSERT_EQ(e.num_fixups, 1);
   EXPECT_EQ(e.fixups[0].offset, 1u);
   EXPECT_EQ(e.fixups[0].kind, x86::Rel8);
   EXPECT_EQ(e.fixups[0].label, "done");
-  EXPECT_EQ(x86::target().fixupKinds[x86::Rel8].relaxTo, x86::Rel32);
+  EXPECT_EQ(x86::target().fixup_kinds[x86::Rel8].relax_to, x86::Rel32);
 
   e = x86::encode(in, true);
   ASSERT_EQ(e.size, 6);
   EXPECT_EQ(e.bytes[0], 0x0f);
   EXPECT_EQ(e.bytes[1], 0x85);
-  ASSERT_EQ(e.numFixups, 1);
+  ASSERT_EQ(e.num_fixups, 1);
   EXPECT_EQ(e.fixups[0].offset, 2u);
   EXPECT_EQ(e.fixups[0].kind, x86::Rel32);
 
@@ -127,10 +127,10 @@ TEST(X86Encode, RejectsOperandsOutsideTheSubset) {
 
 TEST(X86Encode, EncodeAtResolvesAddresses) {
   auto in = x86::parse("jmp 0x100");
-  EXPECT_EQ(toHex(x86::encodeAt(in, 0x90)), "eb6e");        // 0x100 - 0x92
-  EXPECT_EQ(toHex(x86::encodeAt(in, 0x7f)), "eb7f");        // 0x100 - 0x81
-  EXPECT_EQ(toHex(x86::encodeAt(in, 0x7e)), "e97d000000");  // 0x100 - 0x83
-  EXPECT_THROW(x86::encodeAt(x86::parse("jmp somewhere")), AsmError);
+  EXPECT_EQ(to_hex(x86::encode_at(in, 0x90)), "eb6e");        // 0x100 - 0x92
+  EXPECT_EQ(to_hex(x86::encode_at(in, 0x7f)), "eb7f");        // 0x100 - 0x81
+  EXPECT_EQ(to_hex(x86::encode_at(in, 0x7e)), "e97d000000");  // 0x100 - 0x83
+  EXPECT_THROW(x86::encode_at(x86::parse("jmp somewhere")), AsmError);
 }
 
 }  // namespace

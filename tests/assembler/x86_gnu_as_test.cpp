@@ -13,10 +13,10 @@ namespace {
 
 // Assembles the rows with GNU as, each at its own label, and compares.
 // printed=false feeds the row text itself, printed=true our printer's text.
-void checkRowsWithGnuAs(bool printed) {
+void check_rows_with_gnu_as(bool printed) {
   std::string why;
-  ASSERT_TRUE(binutilsAvailable(&why)) << why;
-  auto rows = loadRows();
+  ASSERT_TRUE(binutils_available(&why)) << why;
+  auto rows = load_rows();
   ASSERT_FALSE(rows.empty());
   std::string src = ".intel_syntax noprefix\n.text\n";
   std::vector<uint8_t> ours;
@@ -26,15 +26,15 @@ void checkRowsWithGnuAs(bool printed) {
     std::string label = ".Lrow" + std::to_string(i);
     // Numeric branch targets are relative to the row: those rows go through
     // the printer, which writes them as `.LrowN+0x12`.
-    bool branch = in.numOperands && in.ops[0].kind == x86::OperandKind::Address;
+    bool branch = in.num_operands && in.ops[0].kind == x86::OperandKind::Address;
     std::string text = printed || branch ? x86::print(in, false, label) : rows[i].text;
     src += label + ":\n\t" + text + "\n";
     starts.push_back(ours.size());
-    auto b = fromHex(rows[i].hex);
+    auto b = from_hex(rows[i].hex);
     ours.insert(ours.end(), b.begin(), b.end());
   }
   std::string err;
-  std::vector<uint8_t> theirs = gnuAssemble(src, &err);
+  std::vector<uint8_t> theirs = gnu_assemble(src, &err);
   ASSERT_TRUE(err.empty()) << err;
   starts.push_back(ours.size());
   for (size_t i = 0; i < rows.size(); ++i) {
@@ -48,7 +48,7 @@ void checkRowsWithGnuAs(bool printed) {
                            theirs.begin() + long(std::min(theirs.size(), starts[i] + n)));
     if (a != b) {
       ADD_FAILURE() << "x86_encode.rows:" << rows[i].line << ": " << rows[i].text
-                    << "\n  ours: " << toHex(a) << "\n  as:   " << toHex(b)
+                    << "\n  ours: " << to_hex(a) << "\n  as:   " << to_hex(b)
                     << " (rows after this one are not compared)";
       return;
     }
@@ -56,27 +56,27 @@ void checkRowsWithGnuAs(bool printed) {
   EXPECT_EQ(ours.size(), theirs.size());
 }
 
-TEST(GnuAs, EveryRowAssemblesToTheSameBytes) { checkRowsWithGnuAs(false); }
+TEST(GnuAs, EveryRowAssemblesToTheSameBytes) { check_rows_with_gnu_as(false); }
 
-TEST(GnuAs, PrintedRowsAssembleToTheSameBytes) { checkRowsWithGnuAs(true); }
+TEST(GnuAs, PrintedRowsAssembleToTheSameBytes) { check_rows_with_gnu_as(true); }
 
 // Thousands of register/memory/immediate variants of the rows.
 TEST(GnuAs, RowVariantsAssembleToTheSameBytes) {
   std::string why;
-  ASSERT_TRUE(binutilsAvailable(&why)) << why;
-  auto all = allRowVariants();
+  ASSERT_TRUE(binutils_available(&why)) << why;
+  auto all = all_row_variants();
   std::string src = ".intel_syntax noprefix\n.text\n";
   std::vector<uint8_t> ours;
   std::vector<size_t> starts;
   for (const auto& in : all) {
     src += "\t" + x86::print(in) + "\n";
     starts.push_back(ours.size());
-    auto b = x86::encodeAt(in, 0);
+    auto b = x86::encode_at(in, 0);
     ours.insert(ours.end(), b.begin(), b.end());
   }
   starts.push_back(ours.size());
   std::string err;
-  auto theirs = gnuAssemble(src, &err);
+  auto theirs = gnu_assemble(src, &err);
   ASSERT_TRUE(err.empty()) << err;
   for (size_t i = 0; i < all.size(); ++i) {
     size_t n = starts[i + 1] - starts[i];
@@ -85,9 +85,9 @@ TEST(GnuAs, RowVariantsAssembleToTheSameBytes) {
                     theirs.begin() + long(starts[i]))) {
       size_t e = std::min(theirs.size(), starts[i] + n);
       ADD_FAILURE() << x86::print(all[i]) << "\n  ours: "
-                    << toHex({ours.begin() + long(starts[i]), ours.begin() + long(starts[i + 1])})
+                    << to_hex({ours.begin() + long(starts[i]), ours.begin() + long(starts[i + 1])})
                     << "\n  as:   "
-                    << toHex({theirs.begin() + long(std::min(starts[i], e)), theirs.begin() + long(e)})
+                    << to_hex({theirs.begin() + long(std::min(starts[i], e)), theirs.begin() + long(e)})
                     << " (later instructions are not compared)";
       return;
     }
@@ -96,11 +96,11 @@ TEST(GnuAs, RowVariantsAssembleToTheSameBytes) {
   std::printf("%zu variants match GNU as\n", all.size());
 }
 
-void compareWithObjdump(const std::vector<uint8_t>& code) {
+void compare_with_objdump(const std::vector<uint8_t>& code) {
   auto ours = x86::disassemble(code);
   ASSERT_FALSE(ours.error) << ours.error->message << " at " << ours.error->offset;
   std::string err;
-  auto theirs = objdumpIntel(code, &err);
+  auto theirs = objdump_intel(code, &err);
   ASSERT_TRUE(err.empty()) << err;
   ASSERT_EQ(theirs.size(), ours.insts.size());
   size_t failures = 0;
@@ -110,14 +110,14 @@ void compareWithObjdump(const std::vector<uint8_t>& code) {
     ASSERT_EQ(theirs[i].address, mine.offset) << "instruction boundaries differ";
     x86::Instruction a = mine.inst, b;
     try {
-      b = x86::parse(normalizeObjdump(theirs[i].text));
+      b = x86::parse(normalize_objdump(theirs[i].text));
     } catch (const AsmError& e) {
       ADD_FAILURE() << "cannot read objdump's text: " << e.what();
       ++failures;
       continue;
     }
     // objdump does not show {disp32}; the boundary check covers it.
-    a.longBranch = b.longBranch = false;
+    a.long_branch = b.long_branch = false;
     if (!(a == b)) {
       ADD_FAILURE() << "objdump's text parses as " << x86::print(b);
       ++failures;
@@ -127,28 +127,28 @@ void compareWithObjdump(const std::vector<uint8_t>& code) {
 
 TEST(GnuAs, ObjdumpAgreesOnRowVariants) {
   std::string why;
-  ASSERT_TRUE(binutilsAvailable(&why)) << why;
+  ASSERT_TRUE(binutils_available(&why)) << why;
   std::vector<uint8_t> code;
-  for (const auto& in : allRowVariants()) {
-    auto b = x86::encodeAt(in, 0);
+  for (const auto& in : all_row_variants()) {
+    auto b = x86::encode_at(in, 0);
     code.insert(code.end(), b.begin(), b.end());
   }
-  compareWithObjdump(code);
+  compare_with_objdump(code);
 }
 
 TEST(GnuAs, ObjdumpAgreesWithOurDisassembler) {
   std::string why;
-  ASSERT_TRUE(binutilsAvailable(&why)) << why;
+  ASSERT_TRUE(binutils_available(&why)) << why;
   std::vector<uint8_t> code;
-  for (const Row& r : loadRows()) {
+  for (const Row& r : load_rows()) {
     // Branch rows are written for address 0; move them to where they sit.
     x86::Instruction in = x86::parse(r.text);
-    if (in.numOperands && in.ops[0].kind == x86::OperandKind::Address)
+    if (in.num_operands && in.ops[0].kind == x86::OperandKind::Address)
       in.ops[0].imm += int64_t(code.size());
-    auto b = x86::encodeAt(in, code.size());
+    auto b = x86::encode_at(in, code.size());
     code.insert(code.end(), b.begin(), b.end());
   }
-  compareWithObjdump(code);
+  compare_with_objdump(code);
 }
 
 }  // namespace

@@ -11,7 +11,7 @@ namespace {
 TEST(X86Text, ParsesOperandKinds) {
   Instruction in = parse("  MOV EAX, DWORD PTR [RBX+RCX*4-0x10]   # comment");
   EXPECT_EQ(in.mnemonic, Mnemonic::Mov);
-  ASSERT_EQ(in.numOperands, 2);
+  ASSERT_EQ(in.num_operands, 2);
   EXPECT_EQ(in.ops[0].reg, r32(AX));
   const Mem& m = in.ops[1].mem;
   EXPECT_EQ(m.size, Size::Dword);
@@ -32,7 +32,7 @@ TEST(X86Text, ParsesOperandKinds) {
   EXPECT_EQ(in.ops[0].imm, 0x40);
 
   in = parse("{disp32} jmp rung_7");
-  EXPECT_TRUE(in.longBranch);
+  EXPECT_TRUE(in.long_branch);
   EXPECT_EQ(print(in), "{disp32} jmp rung_7");
 
   in = parse("add eax, -1");
@@ -101,7 +101,7 @@ TEST(X86Text, ErrorsNameTheProblem) {
 TEST(X86Text, EveryRegisterNameRoundTrips) {
   for (unsigned n = 0; n < 16; ++n) {
     for (Reg r : {r8(n), r32(n), r64(n), xmm(n)}) {
-      std::string name(regName(r));
+      std::string name(reg_name(r));
       Instruction in = r.cls == RegClass::Xmm   ? parse("movd " + name + ", eax")
                        : r.cls == RegClass::Gp8 ? parse("sete " + name)
                        : r.cls == RegClass::Gp32 ? parse("not " + name)

@@ -34,26 +34,26 @@ std::vector<std::string> programs() {
 // disassembler's instructions.
 void check_against_binutils(const Program& p, const std::string& name, int opt_level) {
   std::string why;
-  ASSERT_TRUE(as::test::binutilsAvailable(&why)) << why;
+  ASSERT_TRUE(as::test::binutils_available(&why)) << why;
   SCOPED_TRACE("-O" + std::to_string(opt_level));
   NativeBuild nb = build_x86(p, name, as::Mode::Blockwise, opt_level);
   const auto& ours = nb.asm_result.code;
   std::string err;
-  auto theirs = as::test::gnuAssemble(as::x86::toGnuAs(nb.gen.program), &err);
+  auto theirs = as::test::gnu_assemble(as::x86::to_gnu_as(nb.gen.program), &err);
   ASSERT_TRUE(err.empty()) << err;
   ASSERT_EQ(theirs.size(), ours.size());
   for (size_t i = 0; i < ours.size(); i++) ASSERT_EQ(theirs[i], ours[i]) << "first difference at code offset " << i;
 
   auto dis = as::x86::disassemble(ours);
   ASSERT_FALSE(dis.error) << dis.error->message << " at " << dis.error->offset;
-  auto od = as::test::objdumpIntel(ours, &err);
+  auto od = as::test::objdump_intel(ours, &err);
   ASSERT_TRUE(err.empty()) << err;
   ASSERT_EQ(od.size(), dis.insts.size());
   for (size_t i = 0; i < od.size(); i++) {
     ASSERT_EQ(od[i].address, dis.insts[i].offset) << "instruction boundaries differ";
-    as::x86::Instruction theirs_inst = as::x86::parse(as::test::normalizeObjdump(od[i].text));
+    as::x86::Instruction theirs_inst = as::x86::parse(as::test::normalize_objdump(od[i].text));
     as::x86::Instruction mine = dis.insts[i].inst;
-    mine.longBranch = false;  // objdump does not spell the rel32 choice; the bytes above agree
+    mine.long_branch = false;  // objdump does not spell the rel32 choice; the bytes above agree
     EXPECT_EQ(as::x86::print(theirs_inst), as::x86::print(mine)) << "at " << od[i].address << ": objdump says " << od[i].text;
   }
 }

@@ -63,8 +63,8 @@ TEST(Targets, EveryRowMakesAnImageItsHooksAccept) {
       EXPECT_EQ(read_image(write_image(img), "t.bin"), img);
       for (const LineEntry& l : img.lines) {
         uint32_t b = c.rung_blocks[l.rung];
-        EXPECT_GE(l.code_offset, c.assembled.blockOffsets[b]);
-        EXPECT_LE(l.code_offset, b + 1 < c.assembled.blockOffsets.size() ? c.assembled.blockOffsets[b + 1] : img.code.size());
+        EXPECT_GE(l.code_offset, c.assembled.block_offsets[b]);
+        EXPECT_LE(l.code_offset, b + 1 < c.assembled.block_offsets.size() ? c.assembled.block_offsets[b + 1] : img.code.size());
       }
       EXPECT_NE(t.disassemble(img).find("; rung 2, line 6\n;   LOAD X3"), std::string::npos);
       EXPECT_NE(t.gnu_as(p, "t.il", opt).find("t.il"), std::string::npos);

@@ -38,13 +38,13 @@ uint32_t get(const Image& img, uint32_t word_index) {
   std::memcpy(&w, img.code.data() + 4 * word_index, 4);
   return w;
 }
-uint32_t enc(const std::string& text, int64_t at = 0) { return encodeAt(parse(text), at); }
+uint32_t enc(const std::string& text, int64_t at = 0) { return encode_at(parse(text), at); }
 
 // the first word of a mnemonic in the code
 uint32_t find(const Image& img, Mnemonic m, Cond c = Cond::U) {
   for (uint32_t i = 0; i < img.code.size() / 4; i++) {
-    auto in = decodeWord(get(img, i), i);
-    if (in && in->mnemonic == m && (!hasCond(m) || in->cond == c)) return i;
+    auto in = decode_word(get(img, i), i);
+    if (in && in->mnemonic == m && (!has_cond(m) || in->cond == c)) return i;
   }
   return UINT32_MAX;
 }
@@ -150,7 +150,7 @@ TEST(C40Image, RefusesBranchTargetsOutsideTheCode) {
   uint32_t n = uint32_t(img.code.size() / 4);
   uint32_t i = find(img, Mnemonic::Br);
   ASSERT_NE(i, UINT32_MAX);
-  put(img, i, encodeAt(make(Mnemonic::Br, {as::c40::Operand::a(n + 5)}), i));
+  put(img, i, encode_at(make(Mnemonic::Br, {as::c40::Operand::a(n + 5)}), i));
   std::string why = refusal(img);
   EXPECT_NE(why.find("outside the code"), std::string::npos) << why;
   // calls may go to the math ROM's entries, and nowhere else outside
@@ -159,9 +159,9 @@ TEST(C40Image, RefusesBranchTargetsOutsideTheCode) {
   ASSERT_NE(i, UINT32_MAX);
   EXPECT_EQ(refusal(img), "");
   for (uint32_t k = i; k < img.code.size() / 4; k++) {
-    auto in = decodeWord(get(img, k), k);
+    auto in = decode_word(get(img, k), k);
     if (in->mnemonic == Mnemonic::Call && in->ops[0].imm >= int64_t(c40gen::kRomBase)) {
-      put(img, k, encodeAt(make(Mnemonic::Call, {as::c40::Operand::a(c40gen::kRomBase + 1)}), k));
+      put(img, k, encode_at(make(Mnemonic::Call, {as::c40::Operand::a(c40gen::kRomBase + 1)}), k));
       break;
     }
   }
@@ -184,7 +184,7 @@ TEST(C40Image, RefusesControlInDelaySlots) {
 TEST(C40Image, ALoopStopsAtTheScanCycleBudget) {
   Program p = parse_il_text(".rung line 1\n    LOAD X1\n    OUT Y0\n.end\n", "t.il");
   Image img = make_c40_image(p, build_c40(p, "t.il"));
-  put(img, img.entry / 4, encodeAt(make(Mnemonic::Br, {as::c40::Operand::a(img.entry / 4)}), img.entry / 4));
+  put(img, img.entry / 4, encode_at(make(Mnemonic::Br, {as::c40::Operand::a(img.entry / 4)}), img.entry / 4));
   ASSERT_EQ(refusal(img), "");
   auto eng = make_c40sim_engine(img.code, img.entry, img.layout);
   Memory m(img.layout);

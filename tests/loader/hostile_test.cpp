@@ -39,8 +39,8 @@ std::vector<uint8_t> piece(const std::string& text, size_t at, size_t body) {
     return b;
   }
   x86::Instruction in = x86::parse(text);
-  if (in.numOperands && in.ops[0].kind == x86::OperandKind::Address) in.ops[0].imm += int64_t(body);
-  return x86::encodeAt(in, at);
+  if (in.num_operands && in.ops[0].kind == x86::OperandKind::Address) in.ops[0].imm += int64_t(body);
+  return x86::encode_at(in, at);
 }
 
 const uint32_t kSize = Layout::standard(0).size;
@@ -56,16 +56,16 @@ std::vector<uint8_t> scan_function(const std::vector<std::string>& body, std::ve
                                    bool slots = false, int leas = x86::kNumBases, int32_t k0 = kK0, int32_t k1 = kK1) {
   std::vector<uint8_t> code;
   auto put = [&](const std::vector<uint8_t>& b) { code.insert(code.end(), b.begin(), b.end()); };
-  for (const auto& in : x86::scanPrologue(slots)) put(x86::encodeAt(in, code.size()));
+  for (const auto& in : x86::scan_prologue(slots)) put(x86::encode_at(in, code.size()));
   for (int i = 0; slots && i < leas; i++)
-    put(x86::encodeAt(x86::baseLea(x86::kBaseRegs[i], i == 0 ? k0 : i == 1 ? k1 : kK2), code.size()));
+    put(x86::encode_at(x86::base_lea(x86::kBaseRegs[i], i == 0 ? k0 : i == 1 ? k1 : kK2), code.size()));
   const size_t base = code.size();
   offsets.clear();
   for (const std::string& t : body) {
     offsets.push_back(uint32_t(code.size()));
     put(piece(t, code.size(), base));
   }
-  for (const auto& in : x86::scanEpilogue(slots)) put(x86::encodeAt(in, code.size()));
+  for (const auto& in : x86::scan_epilogue(slots)) put(x86::encode_at(in, code.size()));
   return code;
 }
 
@@ -327,14 +327,14 @@ TEST(Hostile, BaseRegisters) {
   EXPECT_EQ(refusal(image_around(scan_function({"setne r15b"}, at, true, 0))), "");  // that frame's slot
   std::vector<uint8_t> swapped;
   auto put = [&](const x86::Instruction& in) {
-    auto b = x86::encodeAt(in, swapped.size());
+    auto b = x86::encode_at(in, swapped.size());
     swapped.insert(swapped.end(), b.begin(), b.end());
   };
-  for (const auto& in : x86::scanPrologue(true)) put(in);
-  for (int i : {1, 0}) put(x86::baseLea(x86::kBaseRegs[i], i ? kK1 : kK0));
+  for (const auto& in : x86::scan_prologue(true)) put(in);
+  for (int i : {1, 0}) put(x86::base_lea(x86::kBaseRegs[i], i ? kK1 : kK0));
   size_t hostile_at = swapped.size();
   put(x86::parse("mov byte ptr [r15+0x10], al"));
-  for (const auto& in : x86::scanEpilogue(true)) put(in);
+  for (const auto& in : x86::scan_epilogue(true)) put(in);
   std::string why = refusal(image_around(swapped));
   EXPECT_NE(why.find("at code offset " + hex(hostile_at) + ": 'mov byte ptr [r15+0x10], al': memory operand based on r15, not rbx"),
             std::string::npos)
@@ -343,7 +343,7 @@ TEST(Hostile, BaseRegisters) {
 
 // The shared timer/counter routines after the epilogue (docs/x86.md, "Shared
 // routines"): a call may go only to the entry of a routine that is exactly one
-// of the bodies as::x86::scanRoutine makes for the image's layout.
+// of the bodies as::x86::scan_routine makes for the image's layout.
 x86::RoutineAreas layout_areas() {
   Layout l = Layout::standard(0);
   x86::RoutineAreas a;
@@ -369,7 +369,7 @@ std::vector<uint8_t> with_routines(const std::vector<std::vector<x86::Instructio
   call_at = at[3];
   for (const auto& r : routines)
     for (const auto& in : r) {
-      std::vector<uint8_t> b = x86::encodeAt(in, code.size());
+      std::vector<uint8_t> b = x86::encode_at(in, code.size());
       code.insert(code.end(), b.begin(), b.end());
     }
   return code;
@@ -377,12 +377,12 @@ std::vector<uint8_t> with_routines(const std::vector<std::vector<x86::Instructio
 
 TEST(Hostile, CallsOnlyToTheSharedRoutines) {
   const x86::RoutineAreas areas = layout_areas();
-  const auto ton = x86::scanRoutine(x86::Routine::Ton, areas), ctu = x86::scanRoutine(x86::Routine::Ctu, areas);
+  const auto ton = x86::scan_routine(x86::Routine::Ton, areas), ctu = x86::scan_routine(x86::Routine::Ctu, areas);
   uint32_t call_at = 0;
   // the harmless twin: a call to the entry of a canonical routine, with another after it
   EXPECT_EQ(refusal(image_around(with_routines({ton, ctu}, 0, call_at))), "");
   int64_t ton_size = 0;
-  for (const auto& in : ton) ton_size += int64_t(x86::encodeAt(in, 0).size());
+  for (const auto& in : ton) ton_size += int64_t(x86::encode_at(in, 0).size());
   EXPECT_EQ(refusal(image_around(with_routines({ton, ctu}, ton_size, call_at))), "");  // rt_ctu's entry
   auto refused = [&](const Image& im, const std::string& reason, bool at_call) {
     std::string why = refusal(im);
@@ -392,11 +392,11 @@ TEST(Hostile, CallsOnlyToTheSharedRoutines) {
     }
   };
   // a call into the middle of a routine (past its mask, on an instruction boundary)
-  int64_t mask = int64_t(x86::encodeAt(ton[0], 0).size());
+  int64_t mask = int64_t(x86::encode_at(ton[0], 0).size());
   refused(image_around(with_routines({ton}, mask, call_at)), "a direct call not to the entry of one of the code's routines", true);
   // a call to code that is no routine: the epilogue, and the body itself
   int64_t epilogue = 0;
-  for (const auto& in : x86::scanEpilogue(false)) epilogue += int64_t(x86::encodeAt(in, 0).size());
+  for (const auto& in : x86::scan_epilogue(false)) epilogue += int64_t(x86::encode_at(in, 0).size());
   refused(image_around(with_routines({ton}, -epilogue, call_at)), "a direct call not to the entry", true);
   refused(image_around(with_routines({}, -epilogue - 1, call_at)), "a direct call not to the entry", true);
   // an unmasked operand: the routine without its `movzx edx, dl`
@@ -409,7 +409,7 @@ TEST(Hostile, CallsOnlyToTheSharedRoutines) {
   // a routine built for other areas: its accesses are not the layout's timers
   x86::RoutineAreas off = areas;
   off.tw = int32_t(kSize) - 4;
-  refused(image_around(with_routines({x86::scanRoutine(x86::Routine::Ton, off)}, 0, call_at)),
+  refused(image_around(with_routines({x86::scan_routine(x86::Routine::Ton, off)}, 0, call_at)),
           "does not end with the scan function's epilogue", false);
 }
 

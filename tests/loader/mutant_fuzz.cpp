@@ -248,7 +248,7 @@ class Mutator {
       x86::Instruction in;
       in.mnemonic = f.mn;
       in.cond = x86::Cond(pick(16));
-      unsigned n = x86::detail::numOps(f);
+      unsigned n = x86::detail::num_ops(f);
       bool ok = true;
       for (unsigned k = 0; k < n && ok; k++) {
         std::optional<x86::Operand> o = operand(f.ops[k], code_size);
@@ -256,10 +256,10 @@ class Mutator {
         else in.ops[k] = *o;
       }
       if (!ok) continue;
-      in.numOperands = uint8_t(n);
-      in.longBranch = f.ops[0] == OT::Rel32 && chance(50);
+      in.num_operands = uint8_t(n);
+      in.long_branch = f.ops[0] == OT::Rel32 && chance(50);
       try {
-        return x86::encodeAt(in, at);
+        return x86::encode_at(in, at);
       } catch (const std::exception&) {
       }
     }
@@ -293,14 +293,14 @@ class Mutator {
   std::string retarget(std::vector<uint8_t>& code, const std::vector<x86::Decoded>& in) {
     const x86::Decoded* b = find(in, [](const x86::Instruction& i) {
       return (i.mnemonic == x86::Mnemonic::Jmp || i.mnemonic == x86::Mnemonic::Jcc || i.mnemonic == x86::Mnemonic::Call) &&
-             i.numOperands && i.ops[0].kind == x86::OperandKind::Address;  // calls: to the shared routines
+             i.num_operands && i.ops[0].kind == x86::OperandKind::Address;  // calls: to the shared routines
     });
     if (!b) return replace(code, in[pick(in.size())]);
     x86::Instruction i = b->inst;
     i.ops[0].imm = target(code.size());
     std::vector<uint8_t> bytes;
     try {
-      bytes = x86::encodeAt(i, b->offset);
+      bytes = x86::encode_at(i, b->offset);
     } catch (const std::exception&) {
       return "retarget-unencodable";
     }
@@ -310,20 +310,20 @@ class Mutator {
 
   std::string displace(std::vector<uint8_t>& code, const std::vector<x86::Decoded>& in) {
     const x86::Decoded* m = find(in, [](const x86::Instruction& i) {
-      for (unsigned k = 0; k < i.numOperands; k++)
+      for (unsigned k = 0; k < i.num_operands; k++)
         if (i.ops[k].kind == x86::OperandKind::Mem) return true;
       return false;
     });
     if (!m) return replace(code, in[pick(in.size())]);
     x86::Instruction i = m->inst;
-    for (unsigned k = 0; k < i.numOperands; k++)
+    for (unsigned k = 0; k < i.num_operands; k++)
       if (i.ops[k].kind == x86::OperandKind::Mem) {
         x86::Size s = i.ops[k].mem.size;
         i.ops[k].mem.disp = disp_for(i.ops[k].mem.base, s == x86::Size::Byte ? 1 : s == x86::Size::Qword ? 8 : 4);
         if (chance(10)) i.ops[k].mem = mem(s);
       }
     try {
-      place(code, *m, x86::encodeAt(i, m->offset));
+      place(code, *m, x86::encode_at(i, m->offset));
     } catch (const std::exception&) {
       return "displace-unencodable";
     }
@@ -332,11 +332,11 @@ class Mutator {
 
   std::string reregister(std::vector<uint8_t>& code, const x86::Decoded& v) {
     x86::Instruction i = v.inst;
-    for (unsigned k = 0; k < i.numOperands; k++)
+    for (unsigned k = 0; k < i.num_operands; k++)
       if (i.ops[k].kind == x86::OperandKind::Reg && i.ops[k].reg.cls != x86::RegClass::Rip && chance(70))
         i.ops[k].reg = reg(i.ops[k].reg.cls);
     try {
-      place(code, v, x86::encodeAt(i, v.offset));
+      place(code, v, x86::encode_at(i, v.offset));
     } catch (const std::exception&) {
       return "reregister-unencodable";
     }

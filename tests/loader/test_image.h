@@ -13,7 +13,7 @@ namespace ldc::test {
 inline std::vector<uint8_t> assemble(const std::vector<std::string>& lines) {
   std::vector<uint8_t> code;
   for (const std::string& l : lines) {
-    auto b = as::x86::encodeAt(as::x86::parse(l), code.size());
+    auto b = as::x86::encode_at(as::x86::parse(l), code.size());
     code.insert(code.end(), b.begin(), b.end());
   }
   return code;
@@ -23,19 +23,19 @@ inline std::vector<uint8_t> assemble(const std::vector<std::string>& lines) {
 // epilogue.  Branch operands in the body are offsets from the body's start.
 inline std::vector<uint8_t> framed(const std::vector<std::string>& body) {
   std::vector<uint8_t> code;
-  for (const auto& in : as::x86::scanPrologue(false)) {
-    auto b = as::x86::encodeAt(in, code.size());
+  for (const auto& in : as::x86::scan_prologue(false)) {
+    auto b = as::x86::encode_at(in, code.size());
     code.insert(code.end(), b.begin(), b.end());
   }
   const size_t base = code.size();
   for (const std::string& l : body) {
     as::x86::Instruction in = as::x86::parse(l);
-    if (in.numOperands && in.ops[0].kind == as::x86::OperandKind::Address) in.ops[0].imm += int64_t(base);
-    auto b = as::x86::encodeAt(in, code.size());
+    if (in.num_operands && in.ops[0].kind == as::x86::OperandKind::Address) in.ops[0].imm += int64_t(base);
+    auto b = as::x86::encode_at(in, code.size());
     code.insert(code.end(), b.begin(), b.end());
   }
-  for (const auto& in : as::x86::scanEpilogue(false)) {
-    auto b = as::x86::encodeAt(in, code.size());
+  for (const auto& in : as::x86::scan_epilogue(false)) {
+    auto b = as::x86::encode_at(in, code.size());
     code.insert(code.end(), b.begin(), b.end());
   }
   return code;

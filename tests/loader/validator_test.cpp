@@ -98,13 +98,13 @@ TEST(Validator, MutatedImagesAreRefusedOrHarmless) {
         size_t pick = rng() % (hostile.size() + 2);
         std::vector<uint8_t> b = pick == hostile.size()     ? std::vector<uint8_t>{0x0f, 0x05}  // syscall
                                  : pick == hostile.size() + 1 ? std::vector<uint8_t>{0xcc}      // int3
-                                 : x86::encodeAt(x86::parse(hostile[pick]), victim.offset);
+                                 : x86::encode_at(x86::parse(hostile[pick]), victim.offset);
         for (size_t k = 0; k < b.size() && victim.offset + k < code.size(); k++) code[victim.offset + k] = b[k];
         break;
       }
       case 2: {  // a jump into the middle of an instruction, forward or backward
         uint32_t target = uint32_t(rng() % code.size());
-        std::vector<uint8_t> b = x86::encodeAt(x86::make(x86::Mnemonic::Jmp, {x86::Operand::a(target)}), victim.offset);
+        std::vector<uint8_t> b = x86::encode_at(x86::make(x86::Mnemonic::Jmp, {x86::Operand::a(target)}), victim.offset);
         for (size_t k = 0; k < b.size() && victim.offset + k < code.size(); k++) code[victim.offset + k] = b[k];
         break;
       }

@@ -223,7 +223,7 @@ TEST(C40Interp, DispatchTableFollowsOpsDef) {
 TEST(C40Gen, TemplatesHaveThePaperShape) {
   Program p = parse_il_text(".rung line 1\n    LOAD X1\n    AND X2\n    ORN X3\n    OUT Y0\n.end\n", "t.il");
   C40Code c = generate_c40(p, p.layout());
-  std::string text = as::c40::toGnuAs(c.program);
+  std::string text = as::c40::to_gnu_as(c.program);
   EXPECT_NE(text.find("LDI 0, R10"), std::string::npos) << text;
   EXPECT_NE(text.find("LDHI 0xffff, R11"), std::string::npos) << text;
   EXPECT_NE(text.find("LDPK 0x80"), std::string::npos) << text;
@@ -242,12 +242,12 @@ TEST(C40Gen, AccessesOutsideTheDataPageSwitchAndRestoreDp) {
   ASSERT_GT(w.addr(Area::E, 30000) >> 16, kDataPage);
   for (int opt = 0; opt <= 2; opt++) {
     C40Code c = generate_c40(p, p.layout(), opt);
-    std::string text = as::c40::toGnuAs(c.program);
+    std::string text = as::c40::to_gnu_as(c.program);
     EXPECT_NE(text.find("LDPK 0x81"), std::string::npos) << text;
     // run the far edge on the simulator
     auto res = as::assemble(as::c40::target(), c.program);
     ASSERT_TRUE(res.ok());
-    auto words = as::c40::wordsOf(res.code);
+    auto words = as::c40::words_of(res.code);
     C40Machine m(p.layout(), words, 0);
     Memory mem(p.layout());
     for (int k = 0; k < 4; k++) {
@@ -315,7 +315,7 @@ TEST(C40Opt, RungsThatReadAnEarlierRungsStackStayExact) {
       ".rung line 3\n    LOAD X4\n    OUT Y2\n.end\n";
   Program p = parse_il_text(il, "t.il");
   for (int opt = 0; opt <= 2; opt++) {
-    std::string text = as::c40::toGnuAs(generate_c40(p, p.layout(), opt).program);
+    std::string text = as::c40::to_gnu_as(generate_c40(p, p.layout(), opt).program);
     EXPECT_EQ(text.find("stack in registers"), std::string::npos) << text;
     std::unique_ptr<Engine> nat = test::make_native(p, opt), model = test::make_model(p);
     Memory a(p.layout()), b(p.layout());
@@ -331,7 +331,7 @@ TEST(C40Opt, RungsThatReadAnEarlierRungsStackStayExact) {
   }
   // without the second rung the same program keeps its stack in registers
   Program q = parse_il_text(".rung line 1\n    LOAD X1\n    LOAD X2\n    OUT Y0\n.end\n", "t.il");
-  EXPECT_NE(as::c40::toGnuAs(generate_c40(q, q.layout(), 2).program).find("stack in registers"), std::string::npos);
+  EXPECT_NE(as::c40::to_gnu_as(generate_c40(q, q.layout(), 2).program).find("stack in registers"), std::string::npos);
 }
 
 // Each level is faster than the one below on every example (the cycles of the
@@ -368,21 +368,21 @@ TEST(C40Opt, EveryLevelPaysOnEveryExample) {
 // ------------------------------------------------------------------ GNU as
 
 std::vector<uint32_t> gnu_words(const std::string& source) {
-  std::string as = as::c40::test::tic4xTool("as"), objcopy = as::c40::test::tic4xTool("objcopy");
+  std::string as = as::c40::test::tic4x_tool("as"), objcopy = as::c40::test::tic4x_tool("objcopy");
   if (as.empty() || objcopy.empty()) return {};
-  std::string dir = as::c40::test::tempDir();
+  std::string dir = as::c40::test::temp_dir();
   std::ofstream(dir + "/a.s") << source;
   std::string out;
-  if (as::c40::test::runCommand(as + " -mcpu=40 -o " + dir + "/a.o " + dir + "/a.s", &out) != 0) {
+  if (as::c40::test::run_command(as + " -mcpu=40 -o " + dir + "/a.o " + dir + "/a.s", &out) != 0) {
     ADD_FAILURE() << "GNU as failed:\n" << out;
     return {};
   }
-  if (as::c40::test::runCommand(objcopy + " -O binary -j .text " + dir + "/a.o " + dir + "/a.bin", &out) != 0) {
+  if (as::c40::test::run_command(objcopy + " -O binary -j .text " + dir + "/a.o " + dir + "/a.bin", &out) != 0) {
     ADD_FAILURE() << "objcopy failed:\n" << out;
     return {};
   }
   std::string b = read(dir + "/a.bin");
-  as::c40::test::runCommand("rm -rf " + dir, nullptr);
+  as::c40::test::run_command("rm -rf " + dir, nullptr);
   std::vector<uint32_t> w(b.size() / 4);
   std::memcpy(w.data(), b.data(), w.size() * 4);
   return w;
@@ -404,8 +404,8 @@ TEST(C40GnuAs, EveryExampleAssemblesToOurWords) {
       C40Code c = generate_c40(p, p.layout(), opt);
       auto res = as::assemble(as::c40::target(), c.program);
       ASSERT_TRUE(res.ok()) << name << " -O" << opt;
-      auto ours = as::c40::wordsOf(res.code);
-      auto theirs = gnu_words(as::c40::toGnuAs(c.program));
+      auto ours = as::c40::words_of(res.code);
+      auto theirs = gnu_words(as::c40::to_gnu_as(c.program));
       EXPECT_EQ(theirs.size(), ours.size()) << name << " -O" << opt;
       EXPECT_TRUE(theirs == ours) << name << " -O" << opt;
     }

@@ -250,7 +250,7 @@ void Run::divmod() {
   if (op_ == Op::DIV && (a.real || b.real)) {
     float x = a.ieee(), y = b.ieee();
     Ext cx = a.c40(), cy = b.c40();
-    bool czero = fp::isZero(cy), rzero = y == 0.0f;
+    bool czero = fp::is_zero(cy), rzero = y == 0.0f;
     if (!check_) {
       if (czero) return set_error();
       return store_real(d, 0, real_div(cx, cy), Fmt::In);

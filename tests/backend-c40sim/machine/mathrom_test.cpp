@@ -23,15 +23,15 @@ struct Caller {
   Caller(RomFn f) : code(words(f)), m(Layout::standard(0), code, 0) {}
   static std::vector<uint32_t> words(RomFn f) {
     using namespace as::c40;
-    return {encodeAt(make(Mnemonic::Call, {as::c40::Operand::a(rom_entry(f))}), 0), encodeAt(parse("RETSU"), 1)};
+    return {encode_at(make(Mnemonic::Call, {as::c40::Operand::a(rom_entry(f))}), 0), encode_at(parse("RETSU"), 1)};
   }
   double run(double x, uint64_t* cycles) {
-    m.sim().setExt(as::c40::Reg::R0, fp::fromDouble(x).v);
-    m.sim().setReg(as::c40::Reg::SP, kStackBase);
+    m.sim().set_ext(as::c40::Reg::R0, fp::from_double(x).v);
+    m.sim().set_reg(as::c40::Reg::SP, kStackBase);
     c40sim::RunResult r = m.sim().call(0, 100000);  // no image to copy: the routine alone
     EXPECT_TRUE(r.ok()) << r.error;
     *cycles = r.cycles - 4 - 4 - 4;  // not the CALL, its RETS or ours
-    return fp::toDouble(m.sim().ext(as::c40::Reg::R0));
+    return fp::to_double(m.sim().ext(as::c40::Reg::R0));
   }
   std::vector<uint32_t> code;
   C40Machine m;
@@ -82,7 +82,7 @@ TEST(MathRom, TheServiceReturnsTheHostResult) {
     for (double x : {0.5, 1.0, 2.0, 3.0, -0.75, 100.0, 1e-3}) {
       uint64_t cyc = 0;
       double y = c.run(x, &cyc);
-      EXPECT_EQ(y, fp::toDouble(rom_result(RomFn(k), fp::fromDouble(x).v))) << rom_name(RomFn(k)) << " " << x;
+      EXPECT_EQ(y, fp::to_double(rom_result(RomFn(k), fp::from_double(x).v))) << rom_name(RomFn(k)) << " " << x;
     }
     EXPECT_EQ(c.m.rom().calls(RomFn(k)), 7u);
   }

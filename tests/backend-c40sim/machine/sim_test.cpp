@@ -12,34 +12,34 @@
 using namespace ldc::as;
 using namespace ldc::as::c40;
 using namespace ldc::c40sim;
-using ldc::as::c40::test::buildProgram;
+using ldc::as::c40::test::build_program;
 
 namespace {
 
 constexpr uint32_t C = 0x01, V = 0x02, Z = 0x04, N = 0x08, UF = 0x10, LV = 0x20, LUF = 0x40;
 constexpr uint32_t kData = 0x3000, kIo = 0x80000000u;
 
-Config config(unsigned codeWaits = 0) {
+Config config(unsigned code_waits = 0) {
   Config c;
-  c.regions = {{"code", 0x0000, 0x1000, codeWaits},
+  c.regions = {{"code", 0x0000, 0x1000, code_waits},
                {"stack", 0x2000, 0x100, 0},
                {"data", kData, 0x100, 0},
                {"io", kIo, 0x1000, 1}};  // 50 ns SRAM: 1 wait state at 50 ns/cycle
   return c;
 }
 
-std::vector<uint32_t> assembleText(const std::string& text) {
-  Result r = assemble(target(), buildProgram({}, {{1, text}}));
+std::vector<uint32_t> assemble_text(const std::string& text) {
+  Result r = assemble(target(), build_program({}, {{1, text}}));
   if (!r.ok()) throw std::runtime_error(r.errors[0].message);
-  return wordsOf(r.code);
+  return words_of(r.code);
 }
 
 struct Fixture : ::testing::Test {
   C40Sim sim{config()};
-  RunResult run(const std::string& text, uint64_t maxCycles = 100000) {
-    sim.load(assembleText(text), 0);
-    sim.setReg(Reg::SP, 0x1FFF);  // PUSH and CALL increment SP first
-    return sim.call(0, maxCycles);
+  RunResult run(const std::string& text, uint64_t max_cycles = 100000) {
+    sim.load(assemble_text(text), 0);
+    sim.set_reg(Reg::SP, 0x1FFF);  // PUSH and CALL increment SP first
+    return sim.call(0, max_cycles);
   }
   uint32_t flags() const { return sim.st() & 0x7F; }
 };
@@ -79,29 +79,29 @@ TEST_F(SimInt, AddSubCompareFlags) {
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(std::string(c.op) + " " + std::to_string(c.src) + ", " + std::to_string(c.dst));
-    sim.setReg(Reg::ST, 0);
-    sim.setReg(Reg::R0, c.dst);
-    sim.setReg(Reg::R1, c.src);
+    sim.set_reg(Reg::ST, 0);
+    sim.set_reg(Reg::R0, c.dst);
+    sim.set_reg(Reg::R1, c.src);
     RunResult r = run(std::string(c.op) + " R1, R0\nRETSU\n");
     ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_EQ(sim.reg(Reg::R0), c.out);
     EXPECT_EQ(flags(), c.st);
   }
   // CMPI: signed and unsigned conditions
-  sim.setReg(Reg::ST, 0);
-  sim.setReg(Reg::R0, uint32_t(-1));
+  sim.set_reg(Reg::ST, 0);
+  sim.set_reg(Reg::R0, uint32_t(-1));
   run("CMPI 1, R0\nRETSU\n");  // -1 - 1
   EXPECT_EQ(flags(), N);       // LT (signed) and HS (no borrow: 0xffffffff >= 1)
-  sim.setReg(Reg::R0, 0x80000000);
+  sim.set_reg(Reg::R0, 0x80000000);
   run("CMPI 1, R0\nRETSU\n");
   EXPECT_EQ(flags() & (N | V | C), N | V);  // exact -2^31 - 1 is negative: LT holds
   // NEGI / ABSI of the most negative integer overflow
-  sim.setReg(Reg::ST, 0);
-  sim.setReg(Reg::R1, 0x80000000);
+  sim.set_reg(Reg::ST, 0);
+  sim.set_reg(Reg::R1, 0x80000000);
   run("NEGI R1, R0\nRETSU\n");
   EXPECT_EQ(sim.reg(Reg::R0), 0x80000000u);
   EXPECT_EQ(flags(), V | C | LV);  // exact 2^31 > 0, borrow
-  sim.setReg(Reg::ST, 0);
+  sim.set_reg(Reg::ST, 0);
   run("ABSI R1, R0\nRETSU\n");
   EXPECT_EQ(sim.reg(Reg::R0), 0x80000000u);
   EXPECT_EQ(flags(), V | LV);
@@ -135,16 +135,16 @@ TEST_F(SimInt, Shifts) {
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(std::string(c.op) + " " + std::to_string(c.count));
-    sim.setReg(Reg::ST, 0);
-    sim.setReg(Reg::R0, c.v);
-    sim.setReg(Reg::R1, uint32_t(c.count));
+    sim.set_reg(Reg::ST, 0);
+    sim.set_reg(Reg::R0, c.v);
+    sim.set_reg(Reg::R1, uint32_t(c.count));
     RunResult r = run(std::string(c.op) + " R1, R0\nRETSU\n");
     ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_EQ(sim.reg(Reg::R0), c.out);
     EXPECT_EQ(flags(), c.st);
   }
   // the paper's bit stack: LSH -1 / LSH 1 on R10, and the 3-operand forms
-  sim.setReg(Reg::R10, 0x6);
+  sim.set_reg(Reg::R10, 0x6);
   run("LSH -1, R10\nLSH3 3, R10, R11\nASH3 -1, R11, R1\nSUBI3 R1, R11, R2\nRETSU\n");
   EXPECT_EQ(sim.reg(Reg::R10), 3u);
   EXPECT_EQ(sim.reg(Reg::R11), 24u);
@@ -187,76 +187,76 @@ RETSU
 double single(float f) { return double(f); }
 
 TEST(SimFp, FormatAndConversions) {
-  EXPECT_EQ(fp::toSingle(fp::fromDouble(0.0).v), 0x80000000u);
-  EXPECT_EQ(fp::toSingle(fp::fromDouble(1.0).v), 0x00000000u);
-  EXPECT_EQ(fp::toSingle(fp::fromDouble(-1.0).v), 0xFF800000u);  // -2 * 2^-1
-  EXPECT_EQ(fp::toSingle(fp::fromDouble(-2.0).v), 0x00800000u);
-  EXPECT_EQ(fp::toSingle(fp::fromDouble(0.5).v), 0xFF000000u);
-  EXPECT_EQ(fp::toSingle(fp::fromDouble(3.0).v), 0x01400000u);
-  EXPECT_EQ(fp::toDouble(fp::fromSingle(0x01400000)), 3.0);
-  EXPECT_EQ(fp::toDouble(fp::fromShort(0x0400)), 1.5);
-  EXPECT_EQ(fp::toDouble(fp::fromShort(0x8000)), 0.0);
-  EXPECT_EQ(fp::toDouble(fp::fromInt(INT32_MIN).v), -2147483648.0);
-  EXPECT_EQ(fp::toDouble(fp::fromInt(INT32_MAX).v), 2147483647.0);  // exact in 40 bits
-  EXPECT_EQ(fp::toDouble(fp::fromDouble(-0.1).v) <= -0.1, true);     // truncation toward -inf
+  EXPECT_EQ(fp::to_single(fp::from_double(0.0).v), 0x80000000u);
+  EXPECT_EQ(fp::to_single(fp::from_double(1.0).v), 0x00000000u);
+  EXPECT_EQ(fp::to_single(fp::from_double(-1.0).v), 0xFF800000u);  // -2 * 2^-1
+  EXPECT_EQ(fp::to_single(fp::from_double(-2.0).v), 0x00800000u);
+  EXPECT_EQ(fp::to_single(fp::from_double(0.5).v), 0xFF000000u);
+  EXPECT_EQ(fp::to_single(fp::from_double(3.0).v), 0x01400000u);
+  EXPECT_EQ(fp::to_double(fp::from_single(0x01400000)), 3.0);
+  EXPECT_EQ(fp::to_double(fp::from_short(0x0400)), 1.5);
+  EXPECT_EQ(fp::to_double(fp::from_short(0x8000)), 0.0);
+  EXPECT_EQ(fp::to_double(fp::from_int(INT32_MIN).v), -2147483648.0);
+  EXPECT_EQ(fp::to_double(fp::from_int(INT32_MAX).v), 2147483647.0);  // exact in 40 bits
+  EXPECT_EQ(fp::to_double(fp::from_double(-0.1).v) <= -0.1, true);     // truncation toward -inf
   bool ov = false;
-  EXPECT_EQ(fp::fix(fp::fromDouble(-1.5).v, &ov), -2);  // floor
-  EXPECT_EQ(fp::fix(fp::fromDouble(1.99).v, &ov), 1);
-  EXPECT_EQ(fp::fix(fp::fromDouble(-0.25).v, &ov), -1);
-  EXPECT_EQ(fp::fix(fp::fromDouble(-2147483648.0).v, &ov), INT32_MIN);
+  EXPECT_EQ(fp::fix(fp::from_double(-1.5).v, &ov), -2);  // floor
+  EXPECT_EQ(fp::fix(fp::from_double(1.99).v, &ov), 1);
+  EXPECT_EQ(fp::fix(fp::from_double(-0.25).v, &ov), -1);
+  EXPECT_EQ(fp::fix(fp::from_double(-2147483648.0).v, &ov), INT32_MIN);
   EXPECT_FALSE(ov);
-  EXPECT_EQ(fp::fix(fp::fromDouble(3e9).v, &ov), INT32_MAX);
+  EXPECT_EQ(fp::fix(fp::from_double(3e9).v, &ov), INT32_MAX);
   EXPECT_TRUE(ov);
-  EXPECT_EQ(fp::fix(fp::fromDouble(-3e9).v, &ov), INT32_MIN);
+  EXPECT_EQ(fp::fix(fp::from_double(-3e9).v, &ov), INT32_MIN);
   EXPECT_TRUE(ov);
   // overflow saturates, underflow flushes to zero
-  fp::Res big = fp::mul(fp::fromDouble(std::ldexp(1.5, 100)).v, fp::fromDouble(std::ldexp(1.5, 100)).v);
+  fp::Res big = fp::mul(fp::from_double(std::ldexp(1.5, 100)).v, fp::from_double(std::ldexp(1.5, 100)).v);
   EXPECT_TRUE(big.overflow);
-  EXPECT_EQ(fp::toSingle(big.v), 0x7F7FFFFFu);
-  fp::Res tiny = fp::mul(fp::fromDouble(std::ldexp(1.0, -100)).v, fp::fromDouble(std::ldexp(1.0, -100)).v);
+  EXPECT_EQ(fp::to_single(big.v), 0x7F7FFFFFu);
+  fp::Res tiny = fp::mul(fp::from_double(std::ldexp(1.0, -100)).v, fp::from_double(std::ldexp(1.0, -100)).v);
   EXPECT_TRUE(tiny.underflow);
-  EXPECT_TRUE(fp::isZero(tiny.v));
-  fp::Res negBig = fp::neg(fp::fromSingle(0x7F800000));
-  EXPECT_TRUE(negBig.overflow);  // -(-2^128) does not fit
-  EXPECT_EQ(fp::toSingle(negBig.v), 0x7F7FFFFFu);
-  EXPECT_EQ(fp::compare(fp::fromDouble(-3).v, fp::fromDouble(2).v), -1);
-  EXPECT_EQ(fp::compare(fp::kZero, fp::fromSingle(0x80123456)), 0);  // every e=-128 is zero
+  EXPECT_TRUE(fp::is_zero(tiny.v));
+  fp::Res neg_big = fp::neg(fp::from_single(0x7F800000));
+  EXPECT_TRUE(neg_big.overflow);  // -(-2^128) does not fit
+  EXPECT_EQ(fp::to_single(neg_big.v), 0x7F7FFFFFu);
+  EXPECT_EQ(fp::compare(fp::from_double(-3).v, fp::from_double(2).v), -1);
+  EXPECT_EQ(fp::compare(fp::kZero, fp::from_single(0x80123456)), 0);  // every e=-128 is zero
 }
 
 TEST(SimFp, IeeeConversionTables) {
   // TMS320C3x/C4x tables: C4x -> IEEE
-  EXPECT_EQ(fp::toIeee(fp::kZero), 0x00000000u);
-  EXPECT_EQ(fp::toIeee(fp::fromSingle(0x81000000)), 0x00000000u);  // e = -127: too small
-  EXPECT_EQ(fp::toIeee(fp::fromDouble(1.0).v), 0x3F800000u);
-  EXPECT_EQ(fp::toIeee(fp::fromDouble(-1.0).v), 0xBF800000u);      // negative, f = 0
-  EXPECT_EQ(fp::toIeee(fp::fromDouble(-1.5).v), 0xBFC00000u);      // negative, f != 0
-  EXPECT_EQ(fp::toIeee(fp::fromSingle(0x7F800000)), 0xFF800000u);  // most negative: -inf
-  EXPECT_EQ(fp::toIeee(fp::fromSingle(0x7F7FFFFF)), 0x7F7FFFFFu);  // most positive
+  EXPECT_EQ(fp::to_ieee(fp::kZero), 0x00000000u);
+  EXPECT_EQ(fp::to_ieee(fp::from_single(0x81000000)), 0x00000000u);  // e = -127: too small
+  EXPECT_EQ(fp::to_ieee(fp::from_double(1.0).v), 0x3F800000u);
+  EXPECT_EQ(fp::to_ieee(fp::from_double(-1.0).v), 0xBF800000u);      // negative, f = 0
+  EXPECT_EQ(fp::to_ieee(fp::from_double(-1.5).v), 0xBFC00000u);      // negative, f != 0
+  EXPECT_EQ(fp::to_ieee(fp::from_single(0x7F800000)), 0xFF800000u);  // most negative: -inf
+  EXPECT_EQ(fp::to_ieee(fp::from_single(0x7F7FFFFF)), 0x7F7FFFFFu);  // most positive
   // IEEE -> C4x
-  EXPECT_TRUE(fp::isZero(fp::fromIeee(0x80000000).v));  // -0
-  EXPECT_TRUE(fp::isZero(fp::fromIeee(0x00000001).v));  // denormal
-  EXPECT_TRUE(fp::fromIeee(0x7F800000).overflow);       // +inf
-  EXPECT_EQ(fp::toSingle(fp::fromIeee(0x7F800000).v), 0x7F7FFFFFu);
-  EXPECT_EQ(fp::toSingle(fp::fromIeee(0xFFC00000).v), 0x7F800000u);  // -NaN: most negative
-  EXPECT_EQ(fp::toDouble(fp::fromIeee(0x00800000).v), std::ldexp(1.0, -126));
-  EXPECT_EQ(fp::toDouble(fp::fromIeee(0x80800000).v), -std::ldexp(1.0, -126));
+  EXPECT_TRUE(fp::is_zero(fp::from_ieee(0x80000000).v));  // -0
+  EXPECT_TRUE(fp::is_zero(fp::from_ieee(0x00000001).v));  // denormal
+  EXPECT_TRUE(fp::from_ieee(0x7F800000).overflow);       // +inf
+  EXPECT_EQ(fp::to_single(fp::from_ieee(0x7F800000).v), 0x7F7FFFFFu);
+  EXPECT_EQ(fp::to_single(fp::from_ieee(0xFFC00000).v), 0x7F800000u);  // -NaN: most negative
+  EXPECT_EQ(fp::to_double(fp::from_ieee(0x00800000).v), std::ldexp(1.0, -126));
+  EXPECT_EQ(fp::to_double(fp::from_ieee(0x80800000).v), -std::ldexp(1.0, -126));
   // Round trips are exact on normal numbers.
   std::mt19937 rng(123);
   for (int i = 0; i < 100000; ++i) {
     uint32_t w = rng();
     uint32_t e8 = w >> 23 & 0xFF;
     if (e8 == 0 || e8 == 255) continue;
-    fp::Res c = fp::fromIeee(w);
+    fp::Res c = fp::from_ieee(w);
     ASSERT_FALSE(c.overflow);
-    ASSERT_EQ(fp::toDouble(c.v), single(std::bit_cast<float>(w))) << std::hex << w;
-    ASSERT_EQ(fp::toIeee(c.v), w) << std::hex << w;
+    ASSERT_EQ(fp::to_double(c.v), single(std::bit_cast<float>(w))) << std::hex << w;
+    ASSERT_EQ(fp::to_ieee(c.v), w) << std::hex << w;
     // and C4x single -> IEEE -> C4x for exponents -126..127
     uint32_t s = rng();
     int e = int(int8_t(s >> 24));
     if (e < -126) continue;
-    Ext x = fp::fromSingle(s);
-    ASSERT_EQ(fp::toSingle(fp::fromIeee(fp::toIeee(x)).v), s) << std::hex << s;
-    ASSERT_EQ(double(std::bit_cast<float>(fp::toIeee(x))), fp::toDouble(x)) << std::hex << s;
+    Ext x = fp::from_single(s);
+    ASSERT_EQ(fp::to_single(fp::from_ieee(fp::to_ieee(x)).v), s) << std::hex << s;
+    ASSERT_EQ(double(std::bit_cast<float>(fp::to_ieee(x))), fp::to_double(x)) << std::hex << s;
   }
 }
 
@@ -265,7 +265,7 @@ TEST(SimFp, IeeeConversionTables) {
 TEST_F(SimFloat, ArithmeticWithinTheStatedBound) {
   std::mt19937 rng(99);
   std::uniform_real_distribution<float> d(-1000.0f, 1000.0f);
-  auto prog = assembleText(R"(LDF *AR0, R0
+  auto prog = assemble_text(R"(LDF *AR0, R0
 LDF *+AR0(1), R1
 ADDF3 R1, R0, R2
 SUBF3 R1, R0, R3
@@ -278,22 +278,22 @@ RETSU
   sim.load(prog, 0);
   for (int i = 0; i < 3000; ++i) {
     float a = d(rng), b = d(rng);
-    sim.write(kData, fp::toSingle(fp::fromDouble(a).v));
-    sim.write(kData + 1, fp::toSingle(fp::fromDouble(b).v));
-    sim.setReg(Reg::AR0, kData);
-    sim.setReg(Reg::SP, 0x1FFF);
+    sim.write(kData, fp::to_single(fp::from_double(a).v));
+    sim.write(kData + 1, fp::to_single(fp::from_double(b).v));
+    sim.set_reg(Reg::AR0, kData);
+    sim.set_reg(Reg::SP, 0x1FFF);
     ASSERT_TRUE(sim.call(0, 1000).ok());
     double exact[3] = {double(a) + b, double(a) - b, double(a) * b};
     Ext regs[3] = {sim.ext(Reg::R2), sim.ext(Reg::R3), sim.ext(Reg::R4)};
     for (int k = 0; k < 3; ++k) {
-      double stored = fp::toDouble(fp::fromSingle(sim.read(kData + 2 + k)));
-      double inReg = fp::toDouble(regs[k]);
+      double stored = fp::to_double(fp::from_single(sim.read(kData + 2 + k)));
+      double in_reg = fp::to_double(regs[k]);
       if (exact[k] == 0) {
         EXPECT_EQ(stored, 0.0);
         continue;
       }
       EXPECT_LE(std::fabs(stored - exact[k]), std::ldexp(std::fabs(exact[k]), -23)) << a << " " << b << " " << k;
-      EXPECT_LE(std::fabs(inReg - exact[k]), std::ldexp(std::fabs(exact[k]), -31)) << a << " " << b << " " << k;
+      EXPECT_LE(std::fabs(in_reg - exact[k]), std::ldexp(std::fabs(exact[k]), -31)) << a << " " << b << " " << k;
       EXPECT_LE(stored, exact[k]);  // truncation toward -infinity
     }
   }
@@ -318,23 +318,23 @@ LDF 0.0, R9
 RETSU
 )");
   ASSERT_TRUE(r.ok()) << r.error;
-  EXPECT_EQ(sim.getFloat(Reg::R1), -4.5);
+  EXPECT_EQ(sim.get_float(Reg::R1), -4.5);
   EXPECT_EQ(sim.reg(Reg::R2), uint32_t(-5));  // floor(-4.5)
-  EXPECT_EQ(sim.getFloat(Reg::R3), 4.5);
-  EXPECT_EQ(sim.getFloat(Reg::R4), 4.5);
-  EXPECT_EQ(sim.getFloat(Reg::R5), 1.5);
+  EXPECT_EQ(sim.get_float(Reg::R3), 4.5);
+  EXPECT_EQ(sim.get_float(Reg::R4), 4.5);
+  EXPECT_EQ(sim.get_float(Reg::R5), 1.5);
   EXPECT_EQ(sim.read(kData + 1), 0xC0900000u);  // IEEE -4.5
-  EXPECT_EQ(sim.getFloat(Reg::R7), 2.0);        // CMPF 1.5 - 1.5 set Z
-  EXPECT_NEAR(sim.getFloat(Reg::R8), 1 / 1.5, std::ldexp(1.0, -8));
-  EXPECT_LE(sim.getFloat(Reg::R8), 1 / 1.5);
+  EXPECT_EQ(sim.get_float(Reg::R7), 2.0);        // CMPF 1.5 - 1.5 set Z
+  EXPECT_NEAR(sim.get_float(Reg::R8), 1 / 1.5, std::ldexp(1.0, -8));
+  EXPECT_LE(sim.get_float(Reg::R8), 1 / 1.5);
   EXPECT_EQ(flags(), Z);  // LDF 0.0
   // float overflow sets V and latches LV; underflow sets UF and LUF
-  sim.setReg(Reg::ST, 0);
-  sim.setExt(Reg::R0, fp::fromDouble(std::ldexp(1.0, 120)).v);
+  sim.set_reg(Reg::ST, 0);
+  sim.set_ext(Reg::R0, fp::from_double(std::ldexp(1.0, 120)).v);
   r = run("MPYF R0, R0\nRETSU\n");
   EXPECT_EQ(flags(), V | LV);
-  sim.setReg(Reg::ST, 0);
-  sim.setExt(Reg::R0, fp::fromDouble(std::ldexp(1.0, -120)).v);
+  sim.set_reg(Reg::ST, 0);
+  sim.set_ext(Reg::R0, fp::from_double(std::ldexp(1.0, -120)).v);
   r = run("MPYF R0, R0\nRETSU\n");
   EXPECT_EQ(flags(), Z | UF | LUF);
 }
@@ -342,7 +342,7 @@ RETSU
 // Newton division as docs/c40.md describes it: a/b = a * x2 with
 // x0 = RCPF b and x(n+1) = x(n) * (2 - b * x(n)).
 TEST_F(SimFloat, NewtonDivision) {
-  auto prog = assembleText(R"(RCPF R1, R2
+  auto prog = assemble_text(R"(RCPF R1, R2
 MPYF3 R2, R1, R3
 NEGF R3, R3
 ADDF 2.0, R3
@@ -360,12 +360,12 @@ RETSU
   for (int i = 0; i < 2000; ++i) {
     float a = d(rng), b = d(rng);
     if (std::fabs(b) < 1e-3f) continue;
-    sim.setExt(Reg::R0, fp::fromDouble(a).v);
-    sim.setExt(Reg::R1, fp::fromDouble(b).v);
-    sim.setReg(Reg::SP, 0x1FFF);
+    sim.set_ext(Reg::R0, fp::from_double(a).v);
+    sim.set_ext(Reg::R1, fp::from_double(b).v);
+    sim.set_reg(Reg::SP, 0x1FFF);
     ASSERT_TRUE(sim.call(0, 1000).ok());
     double q = double(a) / double(b);
-    EXPECT_LE(std::fabs(sim.getFloat(Reg::R0) - q), std::ldexp(std::fabs(q), -21)) << a << "/" << b;
+    EXPECT_LE(std::fabs(sim.get_float(Reg::R0) - q), std::ldexp(std::fabs(q), -21)) << a << "/" << b;
   }
 }
 
@@ -459,14 +459,14 @@ TEST_F(SimFlow, RegisterConflictStalls) {
 
 TEST(SimWait, WaitStatesOnFetchAndData) {
   C40Sim sim(config(2));  // code in 2-wait-state memory
-  sim.load(assembleText("NOP\nNOP\nRETSU\n"), 0);
-  sim.setReg(Reg::SP, 0x1FFF);
+  sim.load(assemble_text("NOP\nNOP\nRETSU\n"), 0);
+  sim.set_reg(Reg::SP, 0x1FFF);
   RunResult r = sim.call(0, 1000);
   ASSERT_TRUE(r.ok()) << r.error;
   EXPECT_EQ(r.cycles, 3u * 2 + 1 + 1 + 4);
   C40Sim io(config());
-  io.load(assembleText("LDPK 0x8000\nNOP\nNOP\nLDI @0x2, R0\nSTI R0, @0x3\nADDI @0x2, R0\nRETSU\n"), 0);
-  io.setReg(Reg::SP, 0x1FFF);
+  io.load(assemble_text("LDPK 0x8000\nNOP\nNOP\nLDI @0x2, R0\nSTI R0, @0x3\nADDI @0x2, R0\nRETSU\n"), 0);
+  io.set_reg(Reg::SP, 0x1FFF);
   io.write(kIo + 2, 20);
   r = io.call(0, 1000);
   ASSERT_TRUE(r.ok()) << r.error;
@@ -477,9 +477,9 @@ TEST(SimWait, WaitStatesOnFetchAndData) {
 
 TEST_F(SimFlow, Stops) {
   // an illegal word, with its address
-  sim.load(assembleText("NOP\nNOP\n"), 0);
+  sim.load(assemble_text("NOP\nNOP\n"), 0);
   sim.write(2, 0xFFFFFFFF);
-  sim.setReg(Reg::SP, 0x1FFF);
+  sim.set_reg(Reg::SP, 0x1FFF);
   RunResult r = sim.call(0, 1000);
   EXPECT_EQ(r.stop, Stop::IllegalInstruction);
   EXPECT_EQ(r.pc, 2u);
@@ -494,10 +494,10 @@ TEST_F(SimFlow, Stops) {
   EXPECT_EQ(r.stop, Stop::CycleLimit);
   EXPECT_GE(r.cycles, 10000u);
   Config c = config();
-  c.maxInstructions = 500;
+  c.max_instructions = 500;
   C40Sim s2(c);
-  s2.load(assembleText("loop:\nBUD loop\nNOP\nNOP\nNOP\n"), 0);
-  s2.setReg(Reg::SP, 0x1FFF);
+  s2.load(assemble_text("loop:\nBUD loop\nNOP\nNOP\nNOP\n"), 0);
+  s2.set_reg(Reg::SP, 0x1FFF);
   r = s2.call(0, 1u << 30);
   EXPECT_EQ(r.stop, Stop::InstructionLimit);
   EXPECT_EQ(r.instructions, 500u);
@@ -508,7 +508,7 @@ TEST_F(SimFlow, Stops) {
   r = run("LDI 0x3000, AR0\nNOP\nNOP\nLDI *AR0++(1)%, R0\nRETSU\n");
   EXPECT_EQ(r.stop, Stop::Unsupported);
   // stack outside memory
-  sim.setReg(Reg::SP, 0x10000);
+  sim.set_reg(Reg::SP, 0x10000);
   r = sim.call(0, 100);
   EXPECT_EQ(r.stop, Stop::MemoryFault);
 }
@@ -535,7 +535,7 @@ RETSU
 
 TEST_F(SimFlow, FloatLoopWithDelayedBranchAndExactCycles) {
   const float xs[4] = {1.25f, -2.5f, 3.0f, 0.125f};
-  for (int i = 0; i < 4; ++i) sim.write(kData + i, fp::toSingle(fp::fromDouble(xs[i]).v));
+  for (int i = 0; i < 4; ++i) sim.write(kData + i, fp::to_single(fp::from_double(xs[i]).v));
   RunResult r = run(R"(LDI 0x3000, AR0
 LDF 0.0, R0
 LDI 3, AR1
@@ -549,7 +549,7 @@ NOP
 RETSU
 )");
   ASSERT_TRUE(r.ok()) << r.error;
-  EXPECT_EQ(sim.getFloat(Reg::R0), 1.5 * (1.25 - 2.5 + 3.0 + 0.125));
+  EXPECT_EQ(sim.get_float(Reg::R0), 1.5 * (1.25 - 2.5 + 3.0 + 0.125));
   // 4 loads; first MPYF3 stalls 1 (AR1 written 1 instruction earlier... two:
   // LDI AR1 then LDF, so 1 cycle); 4 x 5 single-cycle instructions; RETSU 4.
   EXPECT_EQ(r.cycles, 4u + 1 + 4 * 5 + 4);
