@@ -6,7 +6,6 @@
 #include <cstdio>
 
 #include "driver/targets.h"
-#include "loader/c40_check.h"
 
 namespace ldc {
 
@@ -77,7 +76,6 @@ const Target& c40_target() {
       .gnu_as = gnu_as,
       .listing = listing,
       .disassemble = disassemble,
-      .check = check_c40_code,
       .engines = kEngines,
   };
   return t;

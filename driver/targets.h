@@ -55,9 +55,6 @@ struct Target {
   // ldobjdump: the code of an image of this kind, with the line map's rungs
   // and IL interleaved (line_notes), after the line naming the file.
   std::string (*disassemble)(const Image& image);
-  // The loader's code check for this image kind (read_image applies it):
-  // "" if the code passes, else where and why not.
-  std::string (*check)(std::span<const uint8_t> code, uint32_t entry, const Layout& layout);
   // ldrun --engine=NAME for each of these.
   std::span<const TargetEngine> engines;
 };

@@ -104,7 +104,6 @@ const Target& x86_64_target() {
       .gnu_as = gnu_as,
       .listing = listing,
       .disassemble = disassemble,
-      .check = check_x86_code,
       .engines = kEngines,
   };
   return t;

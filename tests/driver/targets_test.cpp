@@ -59,7 +59,7 @@ TEST(Targets, EveryRowMakesAnImageItsHooksAccept) {
       ASSERT_EQ(c.rung_blocks.size(), p.rungs.size());
       Image img = target_image(t, p, "t.il", opt);
       EXPECT_EQ(img.target, t.image_kind);
-      EXPECT_EQ(t.check(img.code, img.entry, img.layout), "");
+      EXPECT_EQ(find_image_kind(uint8_t(t.image_kind))->check(img.code, img.entry, img.layout, nullptr), "");
       EXPECT_EQ(read_image(write_image(img), "t.bin"), img);
       for (const LineEntry& l : img.lines) {
         uint32_t b = c.rung_blocks[l.rung];

@@ -63,7 +63,7 @@ std::string hashes() {
     for (int level = 0; level <= 2; level++)
       for (const Target& t : targets()) {
         Image im = target_image(t, c.il, f, level);
-        std::string why = t.check(im.code, im.entry, im.layout);
+        std::string why = find_image_kind(uint8_t(t.image_kind))->check(im.code, im.entry, im.layout, nullptr);
         out += why.empty() ? line_for(f, std::string(t.name), level, im)
                            : f + " -O" + std::to_string(level) + " " + std::string(t.name) + " refused by the code check: " + why + "\n";
       }
