@@ -16,17 +16,30 @@ std::string upper(std::string_view s) {
   return u;
 }
 
-std::vector<std::string> source_lines(std::string_view text) {
+bool iequals(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); i++)
+    if (std::toupper((unsigned char)a[i]) != std::toupper((unsigned char)b[i])) return false;
+  return true;
+}
+
+std::vector<std::string_view> source_line_views(std::string_view text) {
   if (text.size() > kMaxSourceBytes) throw CompileError(1, 1, "source file too large (at most 64 MiB)");
-  std::vector<std::string> lines;
+  std::vector<std::string_view> lines;
   size_t pos = 0;
   while (pos < text.size()) {
     size_t nl = text.find('\n', pos);
-    std::string l(text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos));
-    if (!l.empty() && l.back() == '\r') l.pop_back();
-    lines.push_back(std::move(l));
+    std::string_view l = text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
+    if (!l.empty() && l.back() == '\r') l.remove_suffix(1);
+    lines.push_back(l);
     pos = nl == std::string_view::npos ? text.size() : nl + 1;
   }
+  return lines;
+}
+
+std::vector<std::string> source_lines(std::string_view text) {
+  std::vector<std::string> lines;
+  for (std::string_view l : source_line_views(text)) lines.emplace_back(l);
   return lines;
 }
 
@@ -34,13 +47,17 @@ DeviceRef resolve_device(const std::string& text, int col, const std::map<std::s
                          const std::string& what) {
   auto it = names.find(upper(text));
   if (it != names.end()) return it->second;
+  return resolve_device_spelling(text, col, what.c_str());
+}
+
+DeviceRef resolve_device_spelling(std::string_view text, int col, const char* what) {
   std::string why;
   DeviceRef d;
   if (auto p = parse_device(text)) d = *p;
   else if (auto q = parse_iec_address(text, why)) d = *q;
-  else throw CompileError(0, col, why.empty() ? "unknown " + what + " '" + text + "'" : why);
+  else throw CompileError(0, col, why.empty() ? "unknown " + std::string(what) + " '" + std::string(text) + "'" : why);
   if (d.index >= device_count(d.dev))
-    throw CompileError(0, col, "index out of range: " + text + " (" + dev_name(d.dev) + "0.." + dev_name(d.dev) +
+    throw CompileError(0, col, "index out of range: " + std::string(text) + " (" + dev_name(d.dev) + "0.." + dev_name(d.dev) +
                                    std::to_string(device_count(d.dev) - 1) + ")");
   return d;
 }

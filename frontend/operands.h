@@ -15,10 +15,16 @@ std::string upper(std::string_view s);
 // The lines of a source file, a '\r' before each '\n' dropped; throws
 // CompileError(1, 1) above kMaxSourceBytes (frontend.h).
 std::vector<std::string> source_lines(std::string_view text);
+// The same lines as views into `text` (no copies).
+std::vector<std::string_view> source_line_views(std::string_view text);
 // A name of `names` (upper-case keys), a device spelling or an IEC address,
 // range-checked; else CompileError(0, col, "unknown <what> '<text>'" or why).
 DeviceRef resolve_device(const std::string& text, int col, const std::map<std::string, DeviceRef>& names,
                          const std::string& what);
+// The same without names: a device spelling or an IEC address, range-checked.
+DeviceRef resolve_device_spelling(std::string_view text, int col, const char* what);
+// ASCII case-insensitive equality (names and keywords).
+bool iequals(std::string_view a, std::string_view b);
 bool is_identifier(std::string_view s);
 // 42, -7, 16#FF, 0xFF, 2#1010, 1.5, -2.0e3, 500ms, 2s, T#1m30s (durations in ms).
 std::optional<Operand> parse_constant(std::string_view s, std::string& why);

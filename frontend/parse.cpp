@@ -6,6 +6,12 @@
 // and outputs hang on the node on their left.  Series/parallel reduction of that
 // graph gives the rung tree of paper 003 (Fig. 5); what does not reduce is a
 // bridge and is refused.
+//
+// The reader copies nothing it does not keep: lines and words are views into
+// the source text; a rung's cells, points, nodes and adjacency lists live in
+// flat arrays that every rung reuses; the reduction works on a small forest of
+// indices (Forest) and builds each TreeNode once, at the end
+// (docs/architecture.md, "The .ld reader").
 #include <algorithm>
 #include <cstring>
 #include <map>
@@ -41,31 +47,38 @@ using K = TreeNode::Kind;
 
 [[noreturn]] void fail(int line, int col, const std::string& msg) { throw CompileError(line, col, msg); }
 
+std::string str(std::string_view s) { return std::string(s); }
+
 // Element keywords are read by position (the first word of a multi-word
 // element), so an alias may be called `start`, `reset` or `S`.  Only `END`,
 // a one-word output of its own, would be ambiguous.
-bool is_keyword(std::string_view s) { return upper(s) == "END"; }
+bool is_keyword(std::string_view s) { return iequals(s, "END"); }
 
 struct Word {
-  std::string text;
-  int col;  // 1-based column in the source line
+  std::string_view text;  // a view into the source
+  int col;                // 1-based column in the source line
 };
 
-std::vector<Word> split_words(std::string_view s, int col0) {
-  std::vector<Word> w;
+// The blank-separated words of s into w (its storage reused).
+void split_words(std::string_view s, int col0, std::vector<Word>& w) {
+  w.clear();
   size_t i = 0;
   while (i < s.size()) {
     if (s[i] == ' ') { i++; continue; }
     size_t st = i;
     while (i < s.size() && s[i] != ' ') i++;
-    w.push_back({std::string(s.substr(st, i - st)), col0 + int(st)});
+    w.push_back({s.substr(st, i - st), col0 + int(st)});
   }
-  return w;
 }
 
-std::string trim(std::string_view s) {
+std::string_view trim(std::string_view s) {
   size_t a = s.find_first_not_of(" \t"), b = s.find_last_not_of(" \t");
-  return a == std::string_view::npos ? std::string() : std::string(s.substr(a, b - a + 1));
+  return a == std::string_view::npos ? std::string_view() : s.substr(a, b - a + 1);
+}
+
+bool is_comment(std::string_view s) {
+  std::string_view t = trim(s);
+  return t.starts_with("#") || t.starts_with("//");
 }
 
 // ------------------------------------------------------------------ cells
@@ -77,32 +90,116 @@ struct Token {
   bool output;
 };
 
+// One rung's cells, row-major in flat arrays that the next rung reuses.
 struct Grid {
   int rail = 0;       // column of the left rail
   int width = 0;      // columns, rail included
-  std::vector<std::vector<Cell>> cell;
-  std::vector<std::vector<int>> tok;  // token index at Elem/Out cells, else -1
+  int rows = 0;
+  std::vector<Cell> cell;    // rows * width
+  std::vector<int> tok;      // token index at Elem/Out cells, else -1
   std::vector<Token> tokens;
-  std::vector<bool> joined;  // row joined to the left rail
+  std::vector<char> joined;  // row joined to the left rail
+  std::vector<std::string_view> text;  // the rows, trailing comment and blanks cut
+  std::vector<int> right_rails;
+
+  size_t idx(int r, int c) const { return size_t(r) * size_t(width) + size_t(c); }
   Cell at(int r, int c) const {
-    if (r < 0 || r >= int(cell.size()) || c < 0 || c >= width) return Cell::Blank;
-    return cell[r][c];
+    if (r < 0 || r >= rows || c < 0 || c >= width) return Cell::Blank;
+    return cell[idx(r, c)];
   }
-  bool token_starts(int r, int c) const { return (at(r, c) == Cell::Elem || at(r, c) == Cell::Out) && tokens[tok[r][c]].c0 == c; }
-  bool token_ends(int r, int c) const { return (at(r, c) == Cell::Elem || at(r, c) == Cell::Out) && tokens[tok[r][c]].c1 == c; }
-  bool elem_ends(int r, int c) const { return at(r, c) == Cell::Elem && tokens[tok[r][c]].c1 == c; }
-  bool out_ends(int r, int c) const { return at(r, c) == Cell::Out && tokens[tok[r][c]].c1 == c; }
+  const Token& token(int r, int c) const { return tokens[size_t(tok[idx(r, c)])]; }
+  bool token_starts(int r, int c) const { return (at(r, c) == Cell::Elem || at(r, c) == Cell::Out) && token(r, c).c0 == c; }
+  bool token_ends(int r, int c) const { return (at(r, c) == Cell::Elem || at(r, c) == Cell::Out) && token(r, c).c1 == c; }
+  bool elem_ends(int r, int c) const { return at(r, c) == Cell::Elem && token(r, c).c1 == c; }
+  bool out_ends(int r, int c) const { return at(r, c) == Cell::Out && token(r, c).c1 == c; }
   bool vertical(int r, int c) const { return at(r, c) == Cell::Junction || at(r, c) == Cell::Vert; }
 };
 
 struct UnionFind {
   std::vector<int> p;
-  explicit UnionFind(size_t n) : p(n) { std::iota(p.begin(), p.end(), 0); }
+  void reset(size_t n) {
+    p.resize(n);
+    std::iota(p.begin(), p.end(), 0);
+  }
   int find(int x) {
     while (p[x] != x) x = p[x] = p[p[x]];
     return x;
   }
   void join(int a, int b) { p[find(a)] = find(b); }
+};
+
+// ------------------------------------------------------------------ the forest
+// The rung's tree while the graph is reduced.  A leaf stands for a parsed
+// element (an index into Parser::elems_); a node's kids are a list through
+// `next`, so flattening a node into its parent and merging two sorted lists of
+// branches splice indices.  `loc` is the location of the node's first element
+// (the key branches are sorted by, top to bottom).
+
+struct PNode {
+  K kind;
+  int elem = -1;                      // Leaf / Output: the element
+  int first = -1, last = -1, next = -1;
+  SrcLoc loc;
+};
+
+bool before(SrcLoc x, SrcLoc y) { return x.line != y.line ? x.line < y.line : x.col < y.col; }
+
+struct Forest {
+  std::vector<PNode> nodes;
+
+  int leaf(K k, int elem, SrcLoc loc) {
+    nodes.push_back({k, elem, -1, -1, -1, loc});
+    return int(nodes.size()) - 1;
+  }
+  int add(K k, int first, int last) {
+    nodes.push_back({k, -1, first, last, -1, nodes[size_t(first)].loc});
+    return int(nodes.size()) - 1;
+  }
+  // x's kids if it is of kind k (flattening), else x alone
+  void list(K k, int x, int& first, int& last) {
+    PNode& n = nodes[size_t(x)];
+    if (n.kind == k) { first = n.first, last = n.last; }
+    else { first = last = x, n.next = -1; }
+  }
+  // Combine terms into a node of kind k, flattening nested nodes of the same
+  // kind; `sort`: branches by their first element (a stable merge: both lists
+  // are sorted already).
+  int combine(K k, int a, int b, bool sort) {
+    int fa, la, fb, lb;
+    list(k, a, fa, la);
+    list(k, b, fb, lb);
+    if (!sort) {
+      nodes[size_t(la)].next = fb;
+      return add(k, fa, lb);
+    }
+    int head = -1, tail = -1;
+    auto append = [&](int x) {
+      if (tail < 0) head = x;
+      else nodes[size_t(tail)].next = x;
+      tail = x;
+    };
+    while (fa >= 0 && fb >= 0) {
+      int& from = before(nodes[size_t(fb)].loc, nodes[size_t(fa)].loc) ? fb : fa;
+      int x = from;
+      from = nodes[size_t(x)].next;
+      append(x);
+    }
+    if (fa >= 0) append(fa), tail = la;
+    else if (fb >= 0) append(fb), tail = lb;
+    return add(k, head, tail);
+  }
+  int then(int cond, int action) {
+    nodes[size_t(cond)].next = action;
+    nodes[size_t(action)].next = -1;
+    return add(K::Then, cond, action);
+  }
+};
+
+struct Edge {
+  int from, to;
+  int term;  // a node of the forest
+  bool action;
+  bool alive = true;
 };
 
 // ------------------------------------------------------------------ parser
@@ -117,10 +214,6 @@ class Parser {
   TreeProgram program();
 
  private:
-  struct Line {
-    std::string text;
-    int no;
-  };
   struct LabelDef {
     std::string name;
     int line;
@@ -128,85 +221,133 @@ class Parser {
 
   std::string_view text_;
   std::string file_;
-  std::vector<Line> lines_;
+  std::vector<std::string_view> lines_;       // line n is lines_[n - 1]
   std::map<std::string, DeviceRef> aliases_;  // key: upper-case name
   std::vector<LabelDef> labels_;
   std::vector<Alias> alias_list_;  // in source order
   std::vector<DeviceRef> retain_;  // `retain Dn` lines, in source order
+  size_t rung_count_ = 0;          // rungs in the file (seen by declarations)
+
+  // per-rung working storage, reused by the next rung
+  Grid g_;
+  UnionFind uf_;
+  std::vector<int> node_of_;  // point -> node
+  int nodes_ = 0;
+  std::vector<Edge> edges_;
+  std::vector<TreeNode> elems_;              // the parsed elements
+  Forest forest_;
+  std::vector<std::vector<int>> out_, in_;   // edges leaving / entering each node
+  std::vector<char> from_rail_, to_out_;
+  std::vector<int> stack_;
+  std::vector<Word> words_, words2_;
+  std::string key_;
 
   void read_lines();
   void declarations();
+  void declaration(int no);
+  void alias_declaration(int no, int col0);
+  size_t rung_end(size_t i, int rail);
   TreeRung rung(size_t first, size_t last, int rail);
-  Grid grid(size_t first, size_t last, int rail);
+  void grid(size_t first, size_t last, int rail);
+  void grid_rows(size_t first, int rail);
+  void grid_cells(size_t first, int rail);
+  void grid_right_rails(size_t first);
   void check_cells(const Grid& g, int line0);
   TreeNode reduce(const Grid& g, int line0);
+  void join_points(const Grid& g);
+  int node(int pt);
+  void element_edges(const Grid& g, int line0);
+  void check_paths();
+  void reach(int start, bool forward, std::vector<char>& seen);
+  void series_parallel(int rail, int sink);
+  [[noreturn]] void refuse_bridge(int rail);
+  void build(int term, TreeNode& out);
 
-  TreeNode input_element(const std::string& inner, int line, int col);
-  TreeNode output_element(const std::string& inner, int line, int col, int rung_line);
+  TreeNode input_element(std::string_view inner, int line, int col);
+  TreeNode output_element(std::string_view inner, int line, int col, int rung_line);
 
+  const DeviceRef* alias(std::string_view name);
   DeviceRef device(const Word& w);
   Operand bit(const Word& w, char sig);
   Operand value(const Word& w, char sig);
   Operand timer_or_counter(const Word& w, char sig);
 };
 
-void Parser::read_lines() {
-  int no = 0;
-  for (std::string& l : source_lines(text_)) lines_.push_back({std::move(l), ++no});
-}
-
-bool is_comment(const std::string& s) {
-  std::string t = trim(s);
-  return t.rfind("#", 0) == 0 || t.rfind("//", 0) == 0;
-}
+void Parser::read_lines() { lines_ = source_line_views(text_); }
 
 // declarations: alias = "alias" NAME "=" device ;  label = "label" NAME ;
 // Read first, so aliases and labels may be used anywhere in the file.
 void Parser::declarations() {
-  for (const Line& l : lines_) {
-    std::string t = trim(l.text);
-    if (t.empty() || is_comment(t) || t[0] == '|') continue;
-    int col0 = int(l.text.find_first_not_of(" \t")) + 1;
-    auto w = split_words(l.text.substr(col0 - 1), col0);
-    std::string kw = upper(w[0].text);
-    if (kw == "ALIAS") {
-      // allow "alias a=X1" and "alias a = X1"
-      std::string rest = trim(l.text.substr(col0 - 1 + 5));
-      size_t eq = rest.find('=');
-      int rest_col = int(l.text.find(rest, col0 - 1 + 5)) + 1;
-      if (eq == std::string::npos) fail(l.no, col0, "expected: alias NAME = DEVICE");
-      std::string name = trim(rest.substr(0, eq)), target = trim(rest.substr(eq + 1));
-      if (!is_identifier(name)) fail(l.no, rest_col, "alias name '" + name + "' must be letters, digits and _");
-      std::string why;
-      if (parse_device(name) || parse_iec_address(name, why) || is_keyword(name))
-        fail(l.no, rest_col, "'" + name + "' cannot be an alias name: it is a device or a keyword");
-      std::string key = upper(name);
-      if (aliases_.count(key)) fail(l.no, rest_col, "alias '" + name + "' is already defined");
-      if (target.empty()) fail(l.no, rest_col + int(eq) + 1, "expected a device after '='");
-      int tcol = int(l.text.rfind(target)) + 1;
-      try {
-        aliases_[key] = device(Word{target, tcol});
-      } catch (CompileError& e) { fail(l.no, e.col, e.what()); }
-      alias_list_.push_back({name, aliases_[key]});
-    } else if (kw == "LABEL") {
-      if (w.size() != 2 || !is_identifier(w[1].text)) fail(l.no, col0, "expected: label NAME");
-      for (auto& d : labels_)
-        if (upper(d.name) == upper(w[1].text))
-          fail(l.no, w[1].col, "duplicate label '" + w[1].text + "' (first defined on line " + std::to_string(d.line) + ")");
-      labels_.push_back({w[1].text, l.no});
-    } else if (kw == "RETAIN") {
-      // retain = "retain" D-word : the word keeps its value across restarts (docs/il.md, .retain)
-      if (w.size() != 2) fail(l.no, col0, "expected: retain Dn");
-      DeviceRef d = device(w[1]);
-      if (d.dev != Dev::D) fail(l.no, w[1].col, "retain needs a D word (D0..D" + std::to_string(device_count(Dev::D) - 1) + ")");
-      if (std::find(retain_.begin(), retain_.end(), d) == retain_.end()) retain_.push_back(d);
-    } else if (kw != "RUNG") {
-      fail(l.no, col0, "expected a rung row starting with '|', 'alias', 'label', 'retain', 'rung \"title\"' or a comment");
-    }
+  bool in_rung = false;
+  for (size_t i = 0; i < lines_.size(); i++) {
+    std::string_view t = trim(lines_[i]);
+    bool row = !t.empty() && t[0] == '|';
+    rung_count_ += row && !in_rung;
+    in_rung = row;
+    if (t.empty() || is_comment(t) || row) continue;
+    declaration(int(i) + 1);
   }
 }
 
-DeviceRef Parser::device(const Word& w) { return resolve_device(w.text, w.col, aliases_, "device or alias"); }
+void Parser::declaration(int no) {
+  std::string_view text = lines_[size_t(no - 1)];
+  int col0 = int(text.find_first_not_of(" \t")) + 1;
+  split_words(text.substr(col0 - 1), col0, words_);
+  const std::vector<Word>& w = words_;
+  if (iequals(w[0].text, "ALIAS")) {
+    alias_declaration(no, col0);
+  } else if (iequals(w[0].text, "LABEL")) {
+    if (w.size() != 2 || !is_identifier(w[1].text)) fail(no, col0, "expected: label NAME");
+    for (auto& d : labels_)
+      if (iequals(d.name, w[1].text))
+        fail(no, w[1].col, "duplicate label '" + str(w[1].text) + "' (first defined on line " + std::to_string(d.line) + ")");
+    labels_.push_back({str(w[1].text), no});
+  } else if (iequals(w[0].text, "RETAIN")) {
+    // retain = "retain" D-word : the word keeps its value across restarts (docs/il.md, .retain)
+    if (w.size() != 2) fail(no, col0, "expected: retain Dn");
+    DeviceRef d = device(w[1]);
+    if (d.dev != Dev::D) fail(no, w[1].col, "retain needs a D word (D0..D" + std::to_string(device_count(Dev::D) - 1) + ")");
+    if (std::find(retain_.begin(), retain_.end(), d) == retain_.end()) retain_.push_back(d);
+  } else if (!iequals(w[0].text, "RUNG")) {
+    fail(no, col0, "expected a rung row starting with '|', 'alias', 'label', 'retain', 'rung \"title\"' or a comment");
+  }
+}
+
+// alias = "alias" NAME "=" device      ("alias a=X1" and "alias a = X1")
+void Parser::alias_declaration(int no, int col0) {
+  std::string_view text = lines_[size_t(no - 1)];
+  std::string rest = str(trim(text.substr(col0 - 1 + 5)));
+  size_t eq = rest.find('=');
+  int rest_col = int(text.find(rest, col0 - 1 + 5)) + 1;
+  if (eq == std::string::npos) fail(no, col0, "expected: alias NAME = DEVICE");
+  std::string name = str(trim(std::string_view(rest).substr(0, eq)));
+  std::string_view target = trim(std::string_view(rest).substr(eq + 1));
+  if (!is_identifier(name)) fail(no, rest_col, "alias name '" + name + "' must be letters, digits and _");
+  std::string why;
+  if (parse_device(name) || parse_iec_address(name, why) || is_keyword(name))
+    fail(no, rest_col, "'" + name + "' cannot be an alias name: it is a device or a keyword");
+  std::string key = upper(name);
+  if (aliases_.count(key)) fail(no, rest_col, "alias '" + name + "' is already defined");
+  if (target.empty()) fail(no, rest_col + int(eq) + 1, "expected a device after '='");
+  int tcol = int(text.rfind(target)) + 1;
+  try {
+    aliases_[key] = device(Word{target, tcol});
+  } catch (CompileError& e) { fail(no, e.col, e.what()); }
+  alias_list_.push_back({name, aliases_[key]});
+}
+
+const DeviceRef* Parser::alias(std::string_view name) {
+  if (aliases_.empty()) return nullptr;
+  key_.assign(name);
+  for (char& c : key_) c = char(std::toupper((unsigned char)c));
+  auto it = aliases_.find(key_);
+  return it == aliases_.end() ? nullptr : &it->second;
+}
+
+DeviceRef Parser::device(const Word& w) {
+  if (const DeviceRef* d = alias(w.text)) return *d;
+  return resolve_device_spelling(w.text, w.col, "device or alias");
+}
 
 std::string spell(DeviceRef d) { return std::string(dev_name(d.dev)) + std::to_string(d.index); }
 
@@ -230,12 +371,12 @@ Operand Parser::bit(const Word& w, char sig) {
 // A word or constant: 'v' any, 'i' INT32 only, 'd' writable destination.
 Operand Parser::value(const Word& w, char sig) {
   std::string why;
-  bool named = aliases_.count(upper(w.text)) || parse_device(w.text) || w.text[0] == '%';
+  bool named = alias(w.text) || parse_device(w.text) || w.text[0] == '%';
   if (!named) {
     auto c = parse_constant(w.text, why);
-    if (!c) fail(0, w.col, why.empty() ? "unknown device or alias '" + w.text + "'" : why);
+    if (!c) fail(0, w.col, why.empty() ? "unknown device or alias '" + str(w.text) + "'" : why);
     if (sig == 'd') fail(0, w.col, "a constant cannot be a destination");
-    if (sig == 'i' && c->kind == OpdKind::ConstReal) fail(0, w.col, "INT32 needed here, not the REAL constant " + w.text);
+    if (sig == 'i' && c->kind == OpdKind::ConstReal) fail(0, w.col, "INT32 needed here, not the REAL constant " + str(w.text));
     return *c;
   }
   DeviceRef d = device(w);
@@ -257,20 +398,26 @@ Operand Parser::timer_or_counter(const Word& w, char sig) {
 }
 
 std::string joined_words(const std::vector<Word>& w) {
+  size_t n = 0;
+  for (auto& x : w) n += x.text.size() + 1;
   std::string s;
-  for (auto& x : w) s += (s.empty() ? "" : " ") + x.text;
+  s.reserve(n);
+  for (auto& x : w) {
+    if (!s.empty()) s += ' ';
+    s += x.text;
+  }
   return s;
 }
 
 // contact = ["/"] bit | ("P" | "N") bit | value cmp value | "TRUE"
 // cmp     = "==" | "=" | "!=" | "<>" | "<" | "<=" | ">" | ">="
-TreeNode Parser::input_element(const std::string& inner, int line, int col) {
+TreeNode Parser::input_element(std::string_view inner, int line, int col) {
   TreeNode n;
   n.kind = K::Leaf;
   n.elem.loc = {line, col};
   int icol = col + 1;  // column of inner[0]
   size_t opos = inner.find_first_of("=!<>");
-  if (opos != std::string::npos) {
+  if (opos != std::string_view::npos) {
     static const std::pair<const char*, Op> cmps[] = {{"==", Op::LDEQ}, {"!=", Op::LDNE}, {"<>", Op::LDNE},
                                                       {"<=", Op::LDLE}, {">=", Op::LDGE}, {"<", Op::LDLT},
                                                       {">", Op::LDGT},  {"=", Op::LDEQ}};
@@ -279,7 +426,10 @@ TreeNode Parser::input_element(const std::string& inner, int line, int col) {
     for (auto& [s, o] : cmps)
       if (inner.compare(opos, std::strlen(s), s) == 0) { op = o; len = std::strlen(s); break; }
     if (!len) fail(line, icol + int(opos), "unknown compare operator; use == != <> < <= > >=");
-    auto lhs = split_words(inner.substr(0, opos), icol), rhs = split_words(inner.substr(opos + len), icol + int(opos + len));
+    std::vector<Word>& lhs = words_;
+    std::vector<Word>& rhs = words2_;
+    split_words(inner.substr(0, opos), icol, lhs);
+    split_words(inner.substr(opos + len), icol + int(opos + len), rhs);
     if (lhs.size() != 1) fail(line, lhs.empty() ? icol + int(opos) : lhs[1].col, "a compare needs one operand on each side");
     if (rhs.size() != 1) fail(line, rhs.empty() ? icol + int(opos) : rhs[1].col, "a compare needs one operand on each side");
     n.elem.op = op;
@@ -287,10 +437,12 @@ TreeNode Parser::input_element(const std::string& inner, int line, int col) {
       n.elem.a[0] = value(lhs[0], 'v');
       n.elem.a[1] = value(rhs[0], 'v');
     } catch (CompileError& e) { fail(line, e.col, e.what()); }
-    n.text = lhs[0].text + " " + inner.substr(opos, len) + " " + rhs[0].text;
+    n.text.reserve(lhs[0].text.size() + len + rhs[0].text.size() + 2);
+    n.text.append(lhs[0].text).append(" ").append(inner.substr(opos, len)).append(" ").append(rhs[0].text);
     return n;
   }
-  auto w = split_words(inner, icol);
+  std::vector<Word>& w = words_;
+  split_words(inner, icol, w);
   if (w.empty()) fail(line, col, "empty contact []");
   try {
     if (w[0].text[0] == '/') {
@@ -299,12 +451,12 @@ TreeNode Parser::input_element(const std::string& inner, int line, int col) {
       if (w.size() != 1) fail(0, col, "expected a normally-closed contact like [/X1]");
       n.elem.op = Op::LOADN;
       n.elem.a[0] = bit(w[0], 'b');
-      n.text = "/" + w[0].text;
-    } else if (w.size() == 2 && (upper(w[0].text) == "P" || upper(w[0].text) == "N")) {
-      n.elem.op = upper(w[0].text) == "P" ? Op::LOADP : Op::LOADF;
+      n.text.append("/").append(w[0].text);
+    } else if (w.size() == 2 && (iequals(w[0].text, "P") || iequals(w[0].text, "N"))) {
+      n.elem.op = iequals(w[0].text, "P") ? Op::LOADP : Op::LOADF;
       n.elem.a[0] = bit(w[1], 'b');
-      n.text = upper(w[0].text) + " " + w[1].text;
-    } else if (w.size() == 1 && upper(w[0].text) == "TRUE" && !aliases_.count("TRUE")) {
+      n.text.append(upper(w[0].text)).append(" ").append(w[1].text);
+    } else if (w.size() == 1 && iequals(w[0].text, "TRUE") && !aliases_.count("TRUE")) {
       n.elem.op = Op::TRUE;  // always closed (IL TRUE); an alias named TRUE keeps its meaning
       n.text = "TRUE";
     } else if (w.size() == 1) {
@@ -312,33 +464,47 @@ TreeNode Parser::input_element(const std::string& inner, int line, int col) {
       n.elem.a[0] = bit(w[0], 'b');
       n.text = w[0].text;
     } else {
-      fail(0, col, "cannot read contact [" + inner + "]; expected [X1], [/X1], [P X1], [N X1] or a compare like [D0 > 100]");
+      fail(0, col, "cannot read contact [" + str(inner) + "]; expected [X1], [/X1], [P X1], [N X1] or a compare like [D0 > 100]");
     }
   } catch (CompileError& e) { fail(line, e.col, e.what()); }
   return n;
+}
+
+struct NamedOp {
+  const char* name;
+  Op op;
+};
+// word arithmetic and logic: a b destination
+constexpr NamedOp kArith[] = {{"ADD", Op::ADD}, {"SUB", Op::SUB}, {"MUL", Op::MUL},   {"DIV", Op::DIV},
+                              {"MOD", Op::MOD}, {"AND", Op::WAND}, {"OR", Op::WOR},   {"XOR", Op::WXOR},
+                              {"SHL", Op::SHL}, {"SHR", Op::SHR}};
+// a destination
+constexpr NamedOp kUnary[] = {{"NOT", Op::WNOT}, {"SIN", Op::SIN}, {"COS", Op::COS}, {"TAN", Op::TAN}, {"SQRT", Op::SQRT},
+                              {"EXP", Op::EXP},  {"LN", Op::LN},   {"ABS", Op::ABS}, {"MOV", Op::MOV}};
+
+template <size_t N>
+const NamedOp* find_op(const NamedOp (&table)[N], std::string_view kw) {
+  for (const NamedOp& o : table)
+    if (kw == o.name) return &o;
+  return nullptr;
 }
 
 // output = bit | "/" bit | ("S"|"R") bit | "RST" (bit|timer|counter)
 //        | ("TON"|"TOF"|"TP"|"MTON"|"MTOF"|"MTP") timer preset | ("CTU"|"CTD") counter preset
 //        | "MOV" value dst | ("ADD"|"SUB"|"MUL"|"DIV"|"MOD"|"AND"|"OR"|"XOR"|"SHL"|"SHR") value value dst
 //        | ("NOT"|"SIN"|"COS"|"TAN"|"SQRT"|"EXP"|"LN"|"ABS") value dst | "JMP" label | "END"
-TreeNode Parser::output_element(const std::string& inner, int line, int col, int rung_line) {
+TreeNode Parser::output_element(std::string_view inner, int line, int col, int rung_line) {
   TreeNode n;
   n.kind = K::Output;
   n.elem.loc = {line, col};
-  auto w = split_words(inner, col + 1);
+  std::vector<Word>& w = words_;
+  split_words(inner, col + 1, w);
   if (w.empty()) fail(line, col, "empty output ()");
   n.text = joined_words(w);
   std::string kw = upper(w[0].text);
   auto want = [&](size_t count, const char* form) {
     if (w.size() != count) fail(line, col, "expected (" + std::string(form) + ")");
   };
-  static const std::map<std::string, Op> arith = {
-      {"ADD", Op::ADD}, {"SUB", Op::SUB}, {"MUL", Op::MUL}, {"DIV", Op::DIV}, {"MOD", Op::MOD}, {"AND", Op::WAND},
-      {"OR", Op::WOR},  {"XOR", Op::WXOR}, {"SHL", Op::SHL}, {"SHR", Op::SHR}};
-  static const std::map<std::string, Op> unary = {{"NOT", Op::WNOT}, {"SIN", Op::SIN}, {"COS", Op::COS},
-                                                  {"TAN", Op::TAN},  {"SQRT", Op::SQRT}, {"EXP", Op::EXP},
-                                                  {"LN", Op::LN},    {"ABS", Op::ABS},  {"MOV", Op::MOV}};
   try {
     Instr& in = n.elem;
     auto operands = [&](Op op) {
@@ -357,9 +523,9 @@ TreeNode Parser::output_element(const std::string& inner, int line, int col, int
       in.op = Op::JMP;
       const LabelDef* def = nullptr;
       for (auto& d : labels_)
-        if (upper(d.name) == upper(w[1].text)) def = &d;
-      if (!def) fail(0, w[1].col, "undefined label '" + w[1].text + "'");
-      if (def->line < rung_line) fail(0, w[1].col, "backward jump to label '" + w[1].text + "' (line " + std::to_string(def->line) + "); jumps go forward only");
+        if (iequals(d.name, w[1].text)) def = &d;
+      if (!def) fail(0, w[1].col, "undefined label '" + str(w[1].text) + "'");
+      if (def->line < rung_line) fail(0, w[1].col, "backward jump to label '" + str(w[1].text) + "' (line " + std::to_string(def->line) + "); jumps go forward only");
       in.a[0].kind = OpdKind::Label;
       in.a[0].label = def->name;
     } else if ((kw == "S" || kw == "SET" || kw == "R" || kw == "RESET") && w.size() == 2) {
@@ -378,19 +544,19 @@ TreeNode Parser::output_element(const std::string& inner, int line, int col, int
     } else if (kw == "CTU" || kw == "CTD") {
       want(3, (kw + " Cn preset").c_str());
       operands(kw == "CTU" ? Op::CTU : Op::CTD);
-    } else if (arith.count(kw)) {
+    } else if (const NamedOp* ar = find_op(kArith, kw)) {
       want(4, (kw + " a b destination").c_str());
-      operands(arith.at(kw));
-    } else if (unary.count(kw)) {
+      operands(ar->op);
+    } else if (const NamedOp* un = find_op(kUnary, kw)) {
       want(3, (kw + " a destination").c_str());
-      operands(unary.at(kw));
+      operands(un->op);
     } else if (w.size() == 1 || (w.size() == 2 && w[0].text == "/")) {
       bool neg = w[0].text[0] == '/';
       Word target = w.size() == 2 ? w[1] : neg ? Word{w[0].text.substr(1), w[0].col + 1} : w[0];
       in.op = neg ? Op::OUTN : Op::OUT;
       in.a[0] = bit(target, 'w');
     } else {
-      fail(0, col, "unknown output element (" + inner + ")");
+      fail(0, col, "unknown output element (" + str(inner) + ")");
     }
   } catch (CompileError& e) { fail(line, e.col, e.what()); }
   return n;
@@ -398,62 +564,88 @@ TreeNode Parser::output_element(const std::string& inner, int line, int col, int
 
 // ------------------------------------------------------------------ grids
 
-Grid Parser::grid(size_t first, size_t last, int rail) {
-  Grid g;
+// The rung's rows into g_: views of the source lines, cut before a trailing
+// "# comment" and trailing blanks; the widest row sets the grid's width.
+void Parser::grid(size_t first, size_t last, int rail) {
+  Grid& g = g_;
   g.rail = rail;
-  int rows = int(last - first);
-  if (rows > kMaxRungRows) fail(lines_[first].no, rail + 1, "rung too tall (at most " + std::to_string(kMaxRungRows) + " rows)");
-  std::vector<std::string> text(rows);
-  for (int r = 0; r < rows; r++) {
-    const Line& l = lines_[first + r];
+  g.rows = int(last - first);
+  g.width = 0;
+  if (g.rows > kMaxRungRows) fail(int(first) + 1, rail + 1, "rung too tall (at most " + std::to_string(kMaxRungRows) + " rows)");
+  grid_rows(first, rail);
+  grid_cells(first, rail);
+  grid_right_rails(first);
+  g.joined.assign(size_t(g.rows), 0);
+  for (int r = 0; r < g.rows; r++) {
+    Cell k = g.at(r, rail + 1);
+    g.joined[size_t(r)] = k == Cell::Wire || k == Cell::Elem || k == Cell::Out;
+  }
+}
+
+void Parser::grid_rows(size_t first, int /*rail*/) {
+  Grid& g = g_;
+  g.text.resize(size_t(g.rows));
+  for (int r = 0; r < g.rows; r++) {
+    int no = int(first) + r + 1;
     // cut a trailing "# comment" (a '#' outside any element)
-    std::string s = l.text;
+    std::string_view s = lines_[first + size_t(r)];
     int depth = 0;
     for (size_t i = 0; i < s.size(); i++) {
       char c = s[i];
       if (c == '[' || c == '(') depth++;
       else if ((c == ']' || c == ')') && depth > 0) depth--;
-      else if (c == '#' && depth == 0) { s.resize(i); break; }
+      else if (c == '#' && depth == 0) { s = s.substr(0, i); break; }
     }
-    while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.pop_back();
-    if (s.size() > size_t(kMaxRowWidth)) fail(l.no, kMaxRowWidth, "rung row too wide (at most " + std::to_string(kMaxRowWidth) + " columns)");
+    while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+    if (s.size() > size_t(kMaxRowWidth)) fail(no, kMaxRowWidth, "rung row too wide (at most " + std::to_string(kMaxRowWidth) + " columns)");
     size_t tab = s.find('\t');
-    if (tab != std::string::npos) fail(l.no, int(tab) + 1, "tab in a rung row; use spaces so the grid lines up");
-    text[r] = s;
+    if (tab != std::string_view::npos) fail(no, int(tab) + 1, "tab in a rung row; use spaces so the grid lines up");
+    g.text[size_t(r)] = s;
     g.width = std::max(g.width, int(s.size()) + 1);
   }
-  g.cell.assign(rows, std::vector<Cell>(g.width, Cell::Blank));
-  g.tok.assign(rows, std::vector<int>(g.width, -1));
-  for (int r = 0; r < rows; r++) {
-    const std::string& s = text[r];
-    int no = lines_[first + r].no;
+}
+
+// cell = "-" | "+" | "|" | " " | "[" ... "]" | "(" ... ")"
+void Parser::grid_cells(size_t first, int rail) {
+  Grid& g = g_;
+  g.cell.assign(size_t(g.rows) * size_t(g.width), Cell::Blank);
+  g.tok.assign(size_t(g.rows) * size_t(g.width), -1);
+  g.tokens.clear();
+  for (int r = 0; r < g.rows; r++) {
+    std::string_view s = g.text[size_t(r)];
+    int no = int(first) + r + 1;
     for (int c = rail + 1; c < int(s.size()); c++) {
       char ch = s[c];
       if (ch == '[' || ch == '(') {
         char close = ch == '[' ? ']' : ')';
-        size_t e = s.find_first_of("[]()", c + 1);
-        if (e == std::string::npos || s[e] != close)
+        size_t e = s.find_first_of("[]()", size_t(c) + 1);
+        if (e == std::string_view::npos || s[e] != close)
           fail(no, c + 1, std::string("'") + ch + "' without a closing '" + close + "'");
         g.tokens.push_back({r, c, int(e), ch == '('});
         for (int k = c; k <= int(e); k++) {
-          g.cell[r][k] = ch == '(' ? Cell::Out : Cell::Elem;
-          g.tok[r][k] = int(g.tokens.size()) - 1;
+          g.cell[g.idx(r, k)] = ch == '(' ? Cell::Out : Cell::Elem;
+          g.tok[g.idx(r, k)] = int(g.tokens.size()) - 1;
         }
         c = int(e);
       } else if (ch == ']' || ch == ')') {
         fail(no, c + 1, std::string("unmatched '") + ch + "'");
-      } else if (ch == '-') g.cell[r][c] = Cell::Wire;
-      else if (ch == '+') g.cell[r][c] = Cell::Junction;
-      else if (ch == '|') g.cell[r][c] = Cell::Vert;
+      } else if (ch == '-') g.cell[g.idx(r, c)] = Cell::Wire;
+      else if (ch == '+') g.cell[g.idx(r, c)] = Cell::Junction;
+      else if (ch == '|') g.cell[g.idx(r, c)] = Cell::Vert;
       else if (ch != ' ')
         fail(no, c + 1, std::string("unexpected '") + ch + "' in a rung; elements are written [..] and (..)");
     }
   }
-  // What may follow an output: wire, blanks and the right rail.
-  std::vector<int> right_rails;
+}
+
+// What may follow an output: wire, blanks and the right rail, which, where
+// drawn, is not part of the network.
+void Parser::grid_right_rails(size_t first) {
+  Grid& g = g_;
+  g.right_rails.clear();
   for (const Token& t : g.tokens) {
     if (!t.output) continue;
-    int no = lines_[first + t.row].no;
+    int no = int(first) + t.row + 1;
     int last_nb = -1;
     for (int c = t.c1 + 1; c < g.width; c++)
       if (g.at(t.row, c) != Cell::Blank) last_nb = c;
@@ -463,31 +655,24 @@ Grid Parser::grid(size_t first, size_t last, int rail) {
       if (k == Cell::Elem) fail(no, c + 1, "an element cannot follow an output; the output must end its row");
       if (k == Cell::Junction) fail(no, c + 1, "a branch cannot start after an output; the output must end its row");
       if (k == Cell::Vert && c != last_nb) fail(no, c + 1, "unexpected '|' after an output");
-      if (k == Cell::Vert) right_rails.push_back(c);
+      if (k == Cell::Vert) g.right_rails.push_back(c);
     }
   }
-  // The right rail, where drawn, is not part of the network.
-  for (int r = 0; r < rows; r++) {
+  if (g.right_rails.empty()) return;
+  for (int r = 0; r < g.rows; r++) {
     int last_nb = -1;
     for (int c = 0; c < g.width; c++)
-      if (g.cell[r][c] != Cell::Blank) last_nb = c;
-    if (last_nb >= 0 && g.cell[r][last_nb] == Cell::Vert &&
-        std::find(right_rails.begin(), right_rails.end(), last_nb) != right_rails.end())
-      g.cell[r][last_nb] = Cell::Blank;
+      if (g.cell[g.idx(r, c)] != Cell::Blank) last_nb = c;
+    if (last_nb >= 0 && g.cell[g.idx(r, last_nb)] == Cell::Vert &&
+        std::find(g.right_rails.begin(), g.right_rails.end(), last_nb) != g.right_rails.end())
+      g.cell[g.idx(r, last_nb)] = Cell::Blank;
   }
-  g.joined.resize(rows);
-  for (int r = 0; r < rows; r++) {
-    Cell k = g.at(r, rail + 1);
-    g.joined[r] = k == Cell::Wire || k == Cell::Elem || k == Cell::Out;
-  }
-  return g;
 }
 
 // Every wire end, junction and vertical link must connect to something.
 void Parser::check_cells(const Grid& g, int line0) {
-  int rows = int(g.cell.size());
   auto left_ok = [&](int r, int c) {  // something on the left of column c feeds it
-    if (c == g.rail + 1) return bool(g.joined[r]);
+    if (c == g.rail + 1) return bool(g.joined[size_t(r)]);
     Cell k = g.at(r, c - 1);
     return k == Cell::Wire || k == Cell::Junction || g.token_ends(r, c - 1);
   };
@@ -495,11 +680,11 @@ void Parser::check_cells(const Grid& g, int line0) {
     Cell k = g.at(r, c + 1);
     return k == Cell::Wire || k == Cell::Junction || g.token_starts(r, c + 1);
   };
-  for (int r = 0; r < rows; r++) {
+  for (int r = 0; r < g.rows; r++) {
     int no = line0 + r;
     bool tail = false;  // this run of wire is drawn after an output (found once per run: linear in the width)
     for (int c = g.rail + 1; c < g.width; c++) {
-      Cell k = g.cell[r][c];
+      Cell k = g.cell[g.idx(r, c)];
       if (k == Cell::Wire) {
         if (!left_ok(r, c)) fail(no, c + 1, "dangling wire: nothing connects to its left end");
         if (g.at(r, c - 1) != Cell::Wire) tail = g.out_ends(r, c - 1);
@@ -512,7 +697,7 @@ void Parser::check_cells(const Grid& g, int line0) {
         if (!g.vertical(r - 1, c) || !g.vertical(r + 1, c))
           fail(no, c + 1, "dangling vertical link: '|' must connect '+' or '|' above and below");
       } else if (g.token_starts(r, c)) {
-        const Token& t = g.tokens[g.tok[r][c]];
+        const Token& t = g.token(r, c);
         if (g.out_ends(r, c - 1)) fail(no, c + 1, t.output ? "outputs cannot be in series" : "an element cannot follow an output");
         if (!left_ok(r, c))
           fail(no, c + 1, c == g.rail + 1 ? "not connected to the left rail" : "element not connected on its left");
@@ -524,184 +709,210 @@ void Parser::check_cells(const Grid& g, int line0) {
 }
 
 // ------------------------------------------------------------------ reduction
+// Points: boundary (r, c) = r * W + c; vertical link cell (r, c) =
+// rows * W + r * W + c; the rail is the point before the last.
 
-struct Edge {
-  int from, to;
-  TreeNode term;
-  bool action;
-  bool alive = true;
-};
-
-SrcLoc first_loc(const TreeNode& n) {
-  const TreeNode* p = &n;
-  while (!p->kids.empty()) p = &p->kids[0];
-  return p->elem.loc;
-}
-bool before(const TreeNode& a, const TreeNode& b) {
-  SrcLoc x = first_loc(a), y = first_loc(b);
-  return x.line != y.line ? x.line < y.line : x.col < y.col;
-}
-
-// Combine terms into a node of kind k, flattening nested nodes of the same kind.
-TreeNode combine(K k, TreeNode a, TreeNode b, bool sort) {
-  TreeNode n;
-  n.kind = k;
-  for (TreeNode* x : {&a, &b}) {
-    if (x->kind == k) for (auto& kid : x->kids) n.kids.push_back(std::move(kid));
-    else n.kids.push_back(std::move(*x));
-  }
-  if (sort) std::stable_sort(n.kids.begin(), n.kids.end(), before);
-  return n;
-}
-
-TreeNode Parser::reduce(const Grid& g, int line0) {
-  int rows = int(g.cell.size()), W = g.width + 1;
-  // points: boundary (r, c) = r * W + c; vertical link cell (r, c) = rows * W + r * W + c
+void Parser::join_points(const Grid& g) {
+  int rows = g.rows, W = g.width + 1;
   int npts = 2 * rows * W + 2;
   const int RAIL = npts - 2;
-  UnionFind uf(npts);
+  uf_.reset(size_t(npts));
   auto B = [&](int r, int c) { return r * W + c; };
   auto V = [&](int r, int c) { return g.at(r, c) == Cell::Junction ? B(r, c) : rows * W + r * W + c; };
   for (int r = 0; r < rows; r++) {
-    if (g.joined[r]) uf.join(B(r, g.rail + 1), RAIL);
+    if (g.joined[size_t(r)]) uf_.join(B(r, g.rail + 1), RAIL);
     for (int c = g.rail + 1; c < g.width; c++) {
-      Cell k = g.cell[r][c];
-      if (k == Cell::Wire || k == Cell::Junction) uf.join(B(r, c), B(r, c + 1));
-      if (g.vertical(r, c) && g.vertical(r + 1, c)) uf.join(V(r, c), V(r + 1, c));
+      Cell k = g.cell[g.idx(r, c)];
+      if (k == Cell::Wire || k == Cell::Junction) uf_.join(B(r, c), B(r, c + 1));
+      if (g.vertical(r, c) && g.vertical(r + 1, c)) uf_.join(V(r, c), V(r + 1, c));
     }
   }
-  // nodes and edges
-  std::vector<int> node_of(size_t(npts), -1);
-  int nodes = 0;
-  auto node = [&](int pt) {
-    int& id = node_of[size_t(uf.find(pt))];
-    if (id < 0) id = nodes++;
-    return id;
-  };
-  int rail = node(RAIL);
-  std::vector<Edge> edges;
-  std::vector<int> outputs_at;
+  node_of_.assign(size_t(npts), -1);
+  nodes_ = 0;
+}
+
+int Parser::node(int pt) {
+  int& id = node_of_[size_t(uf_.find(pt))];
+  if (id < 0) id = nodes_++;
+  return id;
+}
+
+// Every element an edge (outputs: to the sink, numbered once all nodes are).
+void Parser::element_edges(const Grid& g, int line0) {
+  int W = g.width + 1;
+  edges_.clear();
+  elems_.clear();
+  forest_.nodes.clear();
   int rung_line = line0;
   for (const Token& t : g.tokens) {
     int no = line0 + t.row;
-    const std::string& src = lines_[size_t(no - 1)].text;
-    std::string raw = src.substr(t.c0 + 1, t.c1 - t.c0 - 1);
+    std::string_view raw = lines_[size_t(no - 1)].substr(size_t(t.c0) + 1, size_t(t.c1 - t.c0 - 1));
     Edge e;
-    e.from = node(B(t.row, t.c0));
+    e.from = node(t.row * W + t.c0);
+    e.action = t.output;
+    e.to = -1;  // an output's sink, set by the caller
     if (t.output) {
-      e.term = output_element(raw, no, t.c0 + 1, rung_line);
-      e.to = -1;  // the sink, set below
-      e.action = true;
-      outputs_at.push_back(e.from);
+      elems_.push_back(output_element(raw, no, t.c0 + 1, rung_line));
     } else {
-      e.term = input_element(raw, no, t.c0 + 1);
-      e.to = node(B(t.row, t.c1 + 1));
-      e.action = false;
+      elems_.push_back(input_element(raw, no, t.c0 + 1));
+      e.to = node(t.row * W + t.c1 + 1);
       if (e.from == e.to) fail(no, t.c0 + 1, "element is short-circuited: a wire joins its two ends");
     }
-    edges.push_back(std::move(e));
+    const TreeNode& n = elems_.back();
+    e.term = forest_.leaf(n.kind, int(elems_.size()) - 1, n.elem.loc);
+    edges_.push_back(e);
   }
-  if (outputs_at.empty()) fail(line0, g.rail + 1, "rung has no output");
-  const int SINK = nodes;
-  int nn = SINK + 1;
-  for (auto& e : edges)
-    if (e.action) e.to = SINK;
-  // every element must lie on a path from the rail to an output
-  std::vector<std::vector<int>> fwd(nn), bwd(nn);
-  for (size_t i = 0; i < edges.size(); i++) {
-    fwd[edges[i].from].push_back(int(i));
-    bwd[edges[i].to].push_back(int(i));
-  }
-  auto reach = [&](int start, bool forward) {
-    std::vector<char> seen(nn, 0);
-    std::vector<int> st{start};
-    seen[start] = 1;
-    while (!st.empty()) {
-      int v = st.back();
-      st.pop_back();
-      for (int ei : (forward ? fwd[v] : bwd[v])) {
-        int u = forward ? edges[ei].to : edges[ei].from;
-        if (!seen[u]) { seen[u] = 1; st.push_back(u); }
-      }
+}
+
+void Parser::reach(int start, bool forward, std::vector<char>& seen) {
+  seen.assign(size_t(nodes_) + 1, 0);
+  stack_.assign(1, start);
+  seen[size_t(start)] = 1;
+  while (!stack_.empty()) {
+    int v = stack_.back();
+    stack_.pop_back();
+    for (int ei : (forward ? out_[size_t(v)] : in_[size_t(v)])) {
+      int u = forward ? edges_[size_t(ei)].to : edges_[size_t(ei)].from;
+      if (!seen[size_t(u)]) { seen[size_t(u)] = 1; stack_.push_back(u); }
     }
-    return seen;
-  };
-  auto from_rail = reach(rail, true), to_out = reach(SINK, false);
-  for (auto& e : edges) {
-    SrcLoc l = e.term.elem.loc;
-    if (!from_rail[e.from]) fail(l.line, l.col, "not connected to the left power rail");
-    if (!to_out[e.to]) fail(l.line, l.col, "element reaches no output");
   }
-  // series/parallel reduction, keeping the adjacency lists up to date
-  std::vector<std::vector<int>> out(nn), in(nn);
-  for (size_t i = 0; i < edges.size(); i++) {
-    out[edges[i].from].push_back(int(i));
-    in[edges[i].to].push_back(int(i));
+}
+
+// Every element must lie on a path from the rail (node 0) to an output (the
+// sink); builds the adjacency lists the reduction keeps up to date.
+void Parser::check_paths() {
+  size_t nn = size_t(nodes_) + 1;
+  if (out_.size() < nn) out_.resize(nn), in_.resize(nn);
+  for (size_t u = 0; u < nn; u++) out_[u].clear(), in_[u].clear();
+  for (size_t i = 0; i < edges_.size(); i++) {
+    out_[size_t(edges_[i].from)].push_back(int(i));
+    in_[size_t(edges_[i].to)].push_back(int(i));
   }
+  reach(0, true, from_rail_);
+  reach(nodes_, false, to_out_);
+  for (const Edge& e : edges_) {
+    SrcLoc l = forest_.nodes[size_t(e.term)].loc;
+    if (!from_rail_[size_t(e.from)]) fail(l.line, l.col, "not connected to the left power rail");
+    if (!to_out_[size_t(e.to)]) fail(l.line, l.col, "element reaches no output");
+  }
+}
+
+// Series/parallel reduction, keeping the adjacency lists up to date.
+void Parser::series_parallel(int rail, int sink) {
   auto unlink = [](std::vector<int>& v, int e) { v.erase(std::find(v.begin(), v.end(), e)); };
   for (bool changed = true; changed;) {
     changed = false;
-    for (int u = 0; u < nn; u++) {
+    for (int u = 0; u <= sink; u++) {
       // parallel: edges from u with the same far end become one
-      auto& o = out[u];
+      auto& o = out_[size_t(u)];
       for (size_t a = 0; a < o.size(); a++) {
         for (size_t b = a + 1; b < o.size();) {
-          Edge& ea = edges[o[a]];
-          Edge& eb = edges[o[b]];
+          Edge& ea = edges_[size_t(o[a])];
+          Edge& eb = edges_[size_t(o[b])];
           if (eb.to != ea.to) { b++; continue; }
-          ea.term = combine(ea.action ? K::Fork : K::Parallel, std::move(ea.term), std::move(eb.term), true);
+          ea.term = forest_.combine(ea.action ? K::Fork : K::Parallel, ea.term, eb.term, true);
           eb.alive = false;
-          unlink(in[eb.to], o[b]);
+          unlink(in_[size_t(eb.to)], o[b]);
           o.erase(o.begin() + long(b));
           changed = true;
         }
       }
       // series: u with one edge in and one edge out joins them
-      if (u == rail || u == SINK || in[u].size() != 1 || out[u].size() != 1 || in[u][0] == out[u][0]) continue;
-      int i1 = in[u][0], i2 = out[u][0];
-      Edge& e1 = edges[i1];
-      Edge& e2 = edges[i2];
+      auto& i = in_[size_t(u)];
+      if (u == rail || u == sink || i.size() != 1 || o.size() != 1 || i[0] == o[0]) continue;
+      int i1 = i[0], i2 = o[0];
+      Edge& e1 = edges_[size_t(i1)];
+      Edge& e2 = edges_[size_t(i2)];
       if (e2.action) {
-        TreeNode t;
-        t.kind = K::Then;
-        t.kids.push_back(std::move(e1.term));
-        t.kids.push_back(std::move(e2.term));
-        e1.term = std::move(t);
+        e1.term = forest_.then(e1.term, e2.term);
         e1.action = true;
       } else {
-        e1.term = combine(K::Series, std::move(e1.term), std::move(e2.term), false);
+        e1.term = forest_.combine(K::Series, e1.term, e2.term, false);
       }
-      unlink(in[e2.to], i2);
-      in[e2.to].push_back(i1);
+      unlink(in_[size_t(e2.to)], i2);
+      in_[size_t(e2.to)].push_back(i1);
       e1.to = e2.to;
       e2.alive = false;
-      in[u].clear();
-      out[u].clear();
+      i.clear();
+      o.clear();
       changed = true;
     }
   }
+}
+
+// Not series-parallel: point at a bridging element if there is one.
+void Parser::refuse_bridge(int rail) {
   std::vector<Edge*> left;
-  for (auto& e : edges)
+  for (auto& e : edges_)
     if (e.alive) left.push_back(&e);
-  if (left.size() == 1 && left[0]->from == rail && left[0]->to == SINK) return std::move(left[0]->term);
-  // Not series-parallel: point at a bridging element if there is one.
-  std::vector<int> indeg(nn), outdeg(nn);
-  for (Edge* e : left) { outdeg[e->from]++; indeg[e->to]++; }
+  std::vector<int> indeg(size_t(nodes_) + 1), outdeg(size_t(nodes_) + 1);
+  for (Edge* e : left) { outdeg[size_t(e->from)]++; indeg[size_t(e->to)]++; }
   Edge* culprit = left[0];
   for (Edge* e : left)
-    if (!e->action && outdeg[e->from] >= 2 && indeg[e->to] >= 2 && e->from != rail) { culprit = e; break; }
-  SrcLoc l = first_loc(culprit->term);
+    if (!e->action && outdeg[size_t(e->from)] >= 2 && indeg[size_t(e->to)] >= 2 && e->from != rail) { culprit = e; break; }
+  SrcLoc l = forest_.nodes[size_t(culprit->term)].loc;
   fail(l.line, l.col, "network is not series-parallel (a bridge); redraw it as series and parallel blocks");
 }
 
+// The forest's node `term` as a TreeNode, each node built once.
+void Parser::build(int term, TreeNode& out) {
+  const PNode& p = forest_.nodes[size_t(term)];
+  if (p.elem >= 0) {
+    out = std::move(elems_[size_t(p.elem)]);
+    return;
+  }
+  out.kind = p.kind;
+  size_t n = 0;
+  for (int k = p.first; k >= 0; k = forest_.nodes[size_t(k)].next) n++;
+  out.kids.resize(n);
+  n = 0;
+  for (int k = p.first; k >= 0; k = forest_.nodes[size_t(k)].next) build(k, out.kids[n++]);
+}
+
+TreeNode Parser::reduce(const Grid& g, int line0) {
+  join_points(g);
+  int rail = node(2 * g.rows * (g.width + 1));  // node 0
+  element_edges(g, line0);
+  bool outputs = false;
+  for (Edge& e : edges_) outputs |= e.action;
+  if (!outputs) fail(line0, g.rail + 1, "rung has no output");
+  const int SINK = nodes_;
+  for (auto& e : edges_)
+    if (e.action) e.to = SINK;
+  check_paths();
+  series_parallel(rail, SINK);
+  const Edge* only = nullptr;
+  size_t alive = 0;
+  for (const Edge& e : edges_)
+    if (e.alive && !alive++) only = &e;
+  if (alive != 1 || only->from != rail || only->to != SINK) refuse_bridge(rail);
+  TreeNode root;
+  build(only->term, root);
+  return root;
+}
+
 TreeRung Parser::rung(size_t first, size_t last, int rail) {
-  Grid g = grid(first, last, rail);
-  int line0 = lines_[first].no;
-  check_cells(g, line0);
+  grid(first, last, rail);
+  int line0 = int(first) + 1;
+  check_cells(g_, line0);
   TreeRung r;
   r.line = line0;
-  r.root = reduce(g, line0);
+  r.root = reduce(g_, line0);
   return r;
+}
+
+// The rows of the rung starting at line index i: up to the first line whose
+// first non-blank character is not '|'; every row's rail in column `rail`.
+size_t Parser::rung_end(size_t i, int rail) {
+  size_t j = i;
+  while (j < lines_.size()) {
+    std::string_view u = trim(lines_[j]);
+    if (u.empty() || u[0] != '|') break;
+    int c = int(lines_[j].find_first_not_of(" \t"));
+    if (c != rail) fail(int(j) + 1, c + 1, "left rail out of line: this rung's rail is in column " + std::to_string(rail + 1));
+    j++;
+  }
+  return j;
 }
 
 // program = { blank | comment | alias | label | title | rung }
@@ -714,47 +925,40 @@ TreeProgram Parser::program() {
   p.source = file_;
   p.aliases = alias_list_;
   p.retain = retain_;
+  p.rungs.reserve(std::min(rung_count_, kMaxRungs));
   std::vector<std::string> labels;
   std::string title;
   int title_line = 0;
   for (size_t i = 0; i < lines_.size();) {
-    const Line& l = lines_[i];
-    std::string t = trim(l.text);
-    int col0 = int(l.text.find_first_not_of(" \t")) + 1;
+    std::string_view text = lines_[i];
+    int no = int(i) + 1;
+    std::string_view t = trim(text);
+    int col0 = int(text.find_first_not_of(" \t")) + 1;
     if (title_line && (t.empty() || t[0] != '|'))
       fail(title_line, 1, "a rung title must be directly above its rung");
     if (t.empty() || is_comment(t)) { i++; continue; }
     if (t[0] == '|') {
-      int rail = col0 - 1;
-      size_t j = i;
-      while (j < lines_.size()) {
-        std::string u = trim(lines_[j].text);
-        if (u.empty() || u[0] != '|') break;
-        int c = int(lines_[j].text.find_first_not_of(" \t"));
-        if (c != rail) fail(lines_[j].no, c + 1, "left rail out of line: this rung's rail is in column " + std::to_string(rail + 1));
-        j++;
-      }
-      if (p.rungs.size() >= kMaxRungs) fail(l.no, col0, "too many rungs (at most " + std::to_string(kMaxRungs) + ")");
-      TreeRung r = rung(i, j, rail);
+      size_t j = rung_end(i, col0 - 1);
+      if (p.rungs.size() >= kMaxRungs) fail(no, col0, "too many rungs (at most " + std::to_string(kMaxRungs) + ")");
+      TreeRung r = rung(i, j, col0 - 1);
       r.labels = std::move(labels);
       labels.clear();
-      r.title = title;
+      r.title = std::move(title);
       title.clear();
       title_line = 0;
       p.rungs.push_back(std::move(r));
       i = j;
       continue;
     }
-    auto w = split_words(t, col0);
-    std::string kw = upper(w[0].text);
-    if (kw == "LABEL") labels.push_back(w[1].text);
-    else if (kw == "RUNG") {
-      size_t q1 = l.text.find('"'), q2 = l.text.rfind('"');
-      if (q1 == std::string::npos || q2 == q1 || trim(l.text.substr(q2 + 1)) != "" ||
-          upper(trim(l.text.substr(0, q1))) != "RUNG")
-        fail(l.no, col0, "expected: rung \"title\"");
-      title = l.text.substr(q1 + 1, q2 - q1 - 1);
-      title_line = l.no;
+    split_words(t, col0, words_);
+    if (iequals(words_[0].text, "LABEL")) labels.push_back(str(words_[1].text));
+    else if (iequals(words_[0].text, "RUNG")) {
+      size_t q1 = text.find('"'), q2 = text.rfind('"');
+      if (q1 == std::string_view::npos || q2 == q1 || !trim(text.substr(q2 + 1)).empty() ||
+          !iequals(trim(text.substr(0, q1)), "RUNG"))
+        fail(no, col0, "expected: rung \"title\"");
+      title = str(text.substr(q1 + 1, q2 - q1 - 1));
+      title_line = no;
     }
     i++;
   }
