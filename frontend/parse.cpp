@@ -90,23 +90,24 @@ struct Token {
   bool output;
 };
 
-// One rung's cells, row-major in flat arrays that the next rung reuses.
+// One rung's cells, row-major in flat arrays that the next rung reuses.  A
+// border of blank cells around the grid lets every neighbour look-up (one
+// row or column off the grid) go without a bounds check.
 struct Grid {
   int rail = 0;       // column of the left rail
   int width = 0;      // columns, rail included
   int rows = 0;
-  std::vector<Cell> cell;    // rows * width
+  std::vector<Cell> cell;    // (rows + 2) * (width + 2), the border included
   std::vector<int> tok;      // token index at Elem/Out cells, else -1
   std::vector<Token> tokens;
   std::vector<char> joined;  // row joined to the left rail
   std::vector<std::string_view> text;  // the rows, trailing comment and blanks cut
   std::vector<int> right_rails;
 
-  size_t idx(int r, int c) const { return size_t(r) * size_t(width) + size_t(c); }
-  Cell at(int r, int c) const {
-    if (r < 0 || r >= rows || c < 0 || c >= width) return Cell::Blank;
-    return cell[idx(r, c)];
-  }
+  // (r, c) for -1 <= r <= rows, -1 <= c <= width
+  size_t idx(int r, int c) const { return size_t(r + 1) * size_t(width + 2) + size_t(c + 1); }
+  size_t cells() const { return size_t(rows + 2) * size_t(width + 2); }
+  Cell at(int r, int c) const { return cell[idx(r, c)]; }
   const Token& token(int r, int c) const { return tokens[size_t(tok[idx(r, c)])]; }
   bool token_starts(int r, int c) const { return (at(r, c) == Cell::Elem || at(r, c) == Cell::Out) && token(r, c).c0 == c; }
   bool token_ends(int r, int c) const { return (at(r, c) == Cell::Elem || at(r, c) == Cell::Out) && token(r, c).c1 == c; }
@@ -482,6 +483,17 @@ constexpr NamedOp kArith[] = {{"ADD", Op::ADD}, {"SUB", Op::SUB}, {"MUL", Op::MU
 constexpr NamedOp kUnary[] = {{"NOT", Op::WNOT}, {"SIN", Op::SIN}, {"COS", Op::COS}, {"TAN", Op::TAN}, {"SQRT", Op::SQRT},
                               {"EXP", Op::EXP},  {"LN", Op::LN},   {"ABS", Op::ABS}, {"MOV", Op::MOV}};
 
+constexpr NamedOp kTimers[] = {{"TON", Op::TON},   {"TOF", Op::TOF},   {"TP", Op::TP},
+                               {"MTON", Op::MTON}, {"MTOF", Op::MTOF}, {"MTP", Op::MTP}};
+
+// `word` upper-case in buf when it is short enough to be a keyword, else ""
+// (which is no keyword).
+std::string_view keyword(std::string_view word, char (&buf)[8]) {
+  if (word.size() >= sizeof buf) return {};
+  for (size_t i = 0; i < word.size(); i++) buf[i] = char(std::toupper((unsigned char)word[i]));
+  return {buf, word.size()};
+}
+
 template <size_t N>
 const NamedOp* find_op(const NamedOp (&table)[N], std::string_view kw) {
   for (const NamedOp& o : table)
@@ -501,7 +513,8 @@ TreeNode Parser::output_element(std::string_view inner, int line, int col, int r
   split_words(inner, col + 1, w);
   if (w.empty()) fail(line, col, "empty output ()");
   n.text = joined_words(w);
-  std::string kw = upper(w[0].text);
+  char kwbuf[8];  // the first word upper-case (keywords are short)
+  std::string_view kw = keyword(w[0].text, kwbuf);
   auto want = [&](size_t count, const char* form) {
     if (w.size() != count) fail(line, col, "expected (" + std::string(form) + ")");
   };
@@ -537,18 +550,18 @@ TreeNode Parser::output_element(std::string_view inner, int line, int col, int r
       if (d.dev == Dev::T) { in.op = Op::RSTT; in.a[0] = timer_or_counter(w[1], 't'); }
       else if (d.dev == Dev::C) { in.op = Op::RSTC; in.a[0] = timer_or_counter(w[1], 'c'); }
       else { in.op = Op::RST; in.a[0] = bit(w[1], 'w'); }
-    } else if (kw == "TON" || kw == "TOF" || kw == "TP" || kw == "MTON" || kw == "MTOF" || kw == "MTP") {
-      want(3, (kw + " Tn preset").c_str());
-      operands(*op_from_name(kw));
+    } else if (const NamedOp* tm = find_op(kTimers, kw)) {
+      want(3, (str(kw) + " Tn preset").c_str());
+      operands(tm->op);
       if (in.a[1].kind == OpdKind::ConstInt && in.a[1].ival < 0) fail(0, w[2].col, "a timer preset cannot be negative");
     } else if (kw == "CTU" || kw == "CTD") {
-      want(3, (kw + " Cn preset").c_str());
+      want(3, (str(kw) + " Cn preset").c_str());
       operands(kw == "CTU" ? Op::CTU : Op::CTD);
     } else if (const NamedOp* ar = find_op(kArith, kw)) {
-      want(4, (kw + " a b destination").c_str());
+      want(4, (str(kw) + " a b destination").c_str());
       operands(ar->op);
     } else if (const NamedOp* un = find_op(kUnary, kw)) {
-      want(3, (kw + " a destination").c_str());
+      want(3, (str(kw) + " a destination").c_str());
       operands(un->op);
     } else if (w.size() == 1 || (w.size() == 2 && w[0].text == "/")) {
       bool neg = w[0].text[0] == '/';
@@ -563,6 +576,19 @@ TreeNode Parser::output_element(std::string_view inner, int line, int col, int r
 }
 
 // ------------------------------------------------------------------ grids
+
+// A rung row without its trailing "# comment" (a '#' outside any element).
+std::string_view cut_comment(std::string_view s) {
+  if (s.find('#') == std::string_view::npos) return s;
+  int depth = 0;
+  for (size_t i = 0; i < s.size(); i++) {
+    char c = s[i];
+    if (c == '[' || c == '(') depth++;
+    else if ((c == ']' || c == ')') && depth > 0) depth--;
+    else if (c == '#' && depth == 0) return s.substr(0, i);
+  }
+  return s;
+}
 
 // The rung's rows into g_: views of the source lines, cut before a trailing
 // "# comment" and trailing blanks; the widest row sets the grid's width.
@@ -587,15 +613,7 @@ void Parser::grid_rows(size_t first, int /*rail*/) {
   g.text.resize(size_t(g.rows));
   for (int r = 0; r < g.rows; r++) {
     int no = int(first) + r + 1;
-    // cut a trailing "# comment" (a '#' outside any element)
-    std::string_view s = lines_[first + size_t(r)];
-    int depth = 0;
-    for (size_t i = 0; i < s.size(); i++) {
-      char c = s[i];
-      if (c == '[' || c == '(') depth++;
-      else if ((c == ']' || c == ')') && depth > 0) depth--;
-      else if (c == '#' && depth == 0) { s = s.substr(0, i); break; }
-    }
+    std::string_view s = cut_comment(lines_[first + size_t(r)]);
     while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
     if (s.size() > size_t(kMaxRowWidth)) fail(no, kMaxRowWidth, "rung row too wide (at most " + std::to_string(kMaxRowWidth) + " columns)");
     size_t tab = s.find('\t');
@@ -608,8 +626,8 @@ void Parser::grid_rows(size_t first, int /*rail*/) {
 // cell = "-" | "+" | "|" | " " | "[" ... "]" | "(" ... ")"
 void Parser::grid_cells(size_t first, int rail) {
   Grid& g = g_;
-  g.cell.assign(size_t(g.rows) * size_t(g.width), Cell::Blank);
-  g.tok.assign(size_t(g.rows) * size_t(g.width), -1);
+  g.cell.assign(g.cells(), Cell::Blank);
+  g.tok.assign(g.cells(), -1);
   g.tokens.clear();
   for (int r = 0; r < g.rows; r++) {
     std::string_view s = g.text[size_t(r)];
@@ -854,19 +872,23 @@ void Parser::refuse_bridge(int rail) {
   fail(l.line, l.col, "network is not series-parallel (a bridge); redraw it as series and parallel blocks");
 }
 
-// The forest's node `term` as a TreeNode, each node built once.
+// The kids of the forest's inner node `term` into `out` (exactly as many
+// as it has); each TreeNode is built once, elements are moved in.
 void Parser::build(int term, TreeNode& out) {
   const PNode& p = forest_.nodes[size_t(term)];
-  if (p.elem >= 0) {
-    out = std::move(elems_[size_t(p.elem)]);
-    return;
-  }
   out.kind = p.kind;
   size_t n = 0;
   for (int k = p.first; k >= 0; k = forest_.nodes[size_t(k)].next) n++;
-  out.kids.resize(n);
-  n = 0;
-  for (int k = p.first; k >= 0; k = forest_.nodes[size_t(k)].next) build(k, out.kids[n++]);
+  out.kids.reserve(n);
+  for (int k = p.first; k >= 0; k = forest_.nodes[size_t(k)].next) {
+    const PNode& kid = forest_.nodes[size_t(k)];
+    if (kid.elem >= 0) {
+      out.kids.push_back(std::move(elems_[size_t(kid.elem)]));
+    } else {
+      out.kids.emplace_back();
+      build(k, out.kids.back());
+    }
+  }
 }
 
 TreeNode Parser::reduce(const Grid& g, int line0) {
@@ -886,6 +908,8 @@ TreeNode Parser::reduce(const Grid& g, int line0) {
   for (const Edge& e : edges_)
     if (e.alive && !alive++) only = &e;
   if (alive != 1 || only->from != rail || only->to != SINK) refuse_bridge(rail);
+  const PNode& top = forest_.nodes[size_t(only->term)];
+  if (top.elem >= 0) return std::move(elems_[size_t(top.elem)]);
   TreeNode root;
   build(only->term, root);
   return root;

@@ -2,6 +2,7 @@
 //   X1 AND (X2 OR (X3 AND X4))  ->  LOAD X1, LOAD X2, LOAD X3, AND X4, ORBLK, ANDBLK
 // Parallel outputs after a shared condition use MPS / MRD / MPP.
 #include <algorithm>
+#include <iterator>
 
 #include "ir/ir.h"
 
@@ -26,7 +27,7 @@ struct Lowering {
                              " bit-stack entries");
     for (int i = 0; i < in.nopd(); i++)
       if (op_info(in.op).operands[i] == 'e') in.a[i] = Operand{OpdKind::Edge, Area::Sys, edges++};
-    out->push_back(in);
+    out->push_back(std::move(in));
   }
   void emit0(Op op, SrcLoc loc) {
     Instr in;
@@ -166,15 +167,18 @@ Program lower_to_il(const TreeProgram& tp) {
   p.aliases = tp.aliases;
   p.retain = tp.retain;
   Lowering low;
+  std::vector<Instr> code;  // one rung's, reused; each rung keeps an exact copy
+  low.out = &code;
+  p.rungs.reserve(tp.rungs.size());
   for (const auto& tr : tp.rungs) {
-    Rung r;
+    Rung& r = p.rungs.emplace_back();
     r.labels = tr.labels;
     r.title = tr.title;
     r.line = tr.line;
-    low.out = &r.code;
+    code.clear();
     low.depth = low.max_depth = 0;
     low.action(tr.root, false);
-    p.rungs.push_back(std::move(r));
+    r.code.assign(std::make_move_iterator(code.begin()), std::make_move_iterator(code.end()));
   }
   p.edge_slots = low.edges;
   return p;
