@@ -19,7 +19,7 @@ std::string upper(std::string_view s) {
 bool iequals(std::string_view a, std::string_view b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); i++)
-    if (std::toupper((unsigned char)a[i]) != std::toupper((unsigned char)b[i])) return false;
+    if (a[i] != b[i] && std::toupper((unsigned char)a[i]) != std::toupper((unsigned char)b[i])) return false;
   return true;
 }
 

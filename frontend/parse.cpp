@@ -71,10 +71,22 @@ void split_words(std::string_view s, int col0, std::vector<Word>& w) {
   }
 }
 
+bool is_blank(char c) { return c == ' ' || c == '\t'; }
+
 std::string_view trim(std::string_view s) {
-  size_t a = s.find_first_not_of(" \t"), b = s.find_last_not_of(" \t");
-  return a == std::string_view::npos ? std::string_view() : s.substr(a, b - a + 1);
+  while (!s.empty() && is_blank(s.front())) s.remove_prefix(1);
+  while (!s.empty() && is_blank(s.back())) s.remove_suffix(1);
+  return s;
 }
+
+// The column (0-based) of the first character that is not a blank, -1 for none.
+int indent(std::string_view s) {
+  size_t i = 0;
+  while (i < s.size() && is_blank(s[i])) i++;
+  return i == s.size() ? -1 : int(i);
+}
+
+char upper_ascii(char c) { return c >= 'a' && c <= 'z' ? char(c - 'a' + 'A') : c; }
 
 bool is_comment(std::string_view s) {
   std::string_view t = trim(s);
@@ -292,7 +304,7 @@ void Parser::declarations() {
 
 void Parser::declaration(int no) {
   std::string_view text = lines_[size_t(no - 1)];
-  int col0 = int(text.find_first_not_of(" \t")) + 1;
+  int col0 = indent(text) + 1;
   split_words(text.substr(col0 - 1), col0, words_);
   const std::vector<Word>& w = words_;
   if (iequals(w[0].text, "ALIAS")) {
@@ -340,7 +352,7 @@ void Parser::alias_declaration(int no, int col0) {
 const DeviceRef* Parser::alias(std::string_view name) {
   if (aliases_.empty()) return nullptr;
   key_.assign(name);
-  for (char& c : key_) c = char(std::toupper((unsigned char)c));
+  for (char& c : key_) c = upper_ascii(c);
   auto it = aliases_.find(key_);
   return it == aliases_.end() ? nullptr : &it->second;
 }
@@ -472,7 +484,7 @@ TreeNode Parser::input_element(std::string_view inner, int line, int col) {
 }
 
 struct NamedOp {
-  const char* name;
+  std::string_view name;
   Op op;
 };
 // word arithmetic and logic: a b destination
@@ -490,7 +502,7 @@ constexpr NamedOp kTimers[] = {{"TON", Op::TON},   {"TOF", Op::TOF},   {"TP", Op
 // (which is no keyword).
 std::string_view keyword(std::string_view word, char (&buf)[8]) {
   if (word.size() >= sizeof buf) return {};
-  for (size_t i = 0; i < word.size(); i++) buf[i] = char(std::toupper((unsigned char)word[i]));
+  for (size_t i = 0; i < word.size(); i++) buf[i] = upper_ascii(word[i]);
   return {buf, word.size()};
 }
 
@@ -636,8 +648,9 @@ void Parser::grid_cells(size_t first, int rail) {
       char ch = s[c];
       if (ch == '[' || ch == '(') {
         char close = ch == '[' ? ']' : ')';
-        size_t e = s.find_first_of("[]()", size_t(c) + 1);
-        if (e == std::string_view::npos || s[e] != close)
+        size_t e = size_t(c) + 1;
+        while (e < s.size() && s[e] != '[' && s[e] != ']' && s[e] != '(' && s[e] != ')') e++;
+        if (e == s.size() || s[e] != close)
           fail(no, c + 1, std::string("'") + ch + "' without a closing '" + close + "'");
         g.tokens.push_back({r, c, int(e), ch == '('});
         for (int k = c; k <= int(e); k++) {
@@ -932,7 +945,7 @@ size_t Parser::rung_end(size_t i, int rail) {
   while (j < lines_.size()) {
     std::string_view u = trim(lines_[j]);
     if (u.empty() || u[0] != '|') break;
-    int c = int(lines_[j].find_first_not_of(" \t"));
+    int c = indent(lines_[j]);
     if (c != rail) fail(int(j) + 1, c + 1, "left rail out of line: this rung's rail is in column " + std::to_string(rail + 1));
     j++;
   }
@@ -957,7 +970,7 @@ TreeProgram Parser::program() {
     std::string_view text = lines_[i];
     int no = int(i) + 1;
     std::string_view t = trim(text);
-    int col0 = int(text.find_first_not_of(" \t")) + 1;
+    int col0 = indent(text) + 1;
     if (title_line && (t.empty() || t[0] != '|'))
       fail(title_line, 1, "a rung title must be directly above its rung");
     if (t.empty() || is_comment(t)) { i++; continue; }
