@@ -56,6 +56,10 @@ DeviceRef resolve_device_spelling(std::string_view text, int col, const char* wh
   if (auto p = parse_device(text)) d = *p;
   else if (auto q = parse_iec_address(text, why)) d = *q;
   else throw CompileError(0, col, why.empty() ? "unknown " + std::string(what) + " '" + std::string(text) + "'" : why);
+  return device_in_range(d, text, col);
+}
+
+DeviceRef device_in_range(DeviceRef d, std::string_view text, int col) {
   if (d.index >= device_count(d.dev))
     throw CompileError(0, col, "index out of range: " + std::string(text) + " (" + dev_name(d.dev) + "0.." + dev_name(d.dev) +
                                    std::to_string(device_count(d.dev) - 1) + ")");

@@ -23,6 +23,8 @@ DeviceRef resolve_device(const std::string& text, int col, const std::map<std::s
                          const std::string& what);
 // The same without names: a device spelling or an IEC address, range-checked.
 DeviceRef resolve_device_spelling(std::string_view text, int col, const char* what);
+// d, spelled `text`, if its index is in range; else CompileError(0, col, ...).
+DeviceRef device_in_range(DeviceRef d, std::string_view text, int col);
 // ASCII case-insensitive equality (names and keywords).
 bool iequals(std::string_view a, std::string_view b);
 bool is_identifier(std::string_view s);

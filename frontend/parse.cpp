@@ -93,6 +93,9 @@ bool is_comment(std::string_view s) {
   return t.starts_with("#") || t.starts_with("//");
 }
 
+// A `rung "title"` line (read with its rung): its first word is "rung".
+bool is_title(std::string_view t) { return t.size() >= 4 && iequals(t.substr(0, 4), "RUNG") && (t.size() == 4 || t[4] == ' '); }
+
 // ------------------------------------------------------------------ cells
 
 enum class Cell : uint8_t { Blank, Wire, Junction, Vert, Elem, Out };
@@ -116,9 +119,10 @@ struct Grid {
   std::vector<std::string_view> text;  // the rows, trailing comment and blanks cut
   std::vector<int> right_rails;
 
+  int stride = 0;     // width + 2
   // (r, c) for -1 <= r <= rows, -1 <= c <= width
-  size_t idx(int r, int c) const { return size_t(r + 1) * size_t(width + 2) + size_t(c + 1); }
-  size_t cells() const { return size_t(rows + 2) * size_t(width + 2); }
+  size_t idx(int r, int c) const { return size_t(r * stride + c + stride + 1); }
+  size_t cells() const { return size_t(rows + 2) * size_t(stride); }
   Cell at(int r, int c) const { return cell[idx(r, c)]; }
   const Token& token(int r, int c) const { return tokens[size_t(tok[idx(r, c)])]; }
   bool token_starts(int r, int c) const { return (at(r, c) == Cell::Elem || at(r, c) == Cell::Out) && token(r, c).c0 == c; }
@@ -297,7 +301,7 @@ void Parser::declarations() {
     bool row = !t.empty() && t[0] == '|';
     rung_count_ += row && !in_rung;
     in_rung = row;
-    if (t.empty() || is_comment(t) || row) continue;
+    if (t.empty() || is_comment(t) || row || is_title(t)) continue;
     declaration(int(i) + 1);
   }
 }
@@ -384,7 +388,9 @@ Operand Parser::bit(const Word& w, char sig) {
 // A word or constant: 'v' any, 'i' INT32 only, 'd' writable destination.
 Operand Parser::value(const Word& w, char sig) {
   std::string why;
-  bool named = alias(w.text) || parse_device(w.text) || w.text[0] == '%';
+  const DeviceRef* al = alias(w.text);
+  std::optional<DeviceRef> spelled = al ? std::nullopt : parse_device(w.text);
+  bool named = al || spelled || w.text[0] == '%';
   if (!named) {
     auto c = parse_constant(w.text, why);
     if (!c) fail(0, w.col, why.empty() ? "unknown device or alias '" + str(w.text) + "'" : why);
@@ -392,7 +398,7 @@ Operand Parser::value(const Word& w, char sig) {
     if (sig == 'i' && c->kind == OpdKind::ConstReal) fail(0, w.col, "INT32 needed here, not the REAL constant " + str(w.text));
     return *c;
   }
-  DeviceRef d = device(w);
+  DeviceRef d = al ? *al : spelled ? device_in_range(*spelled, w.text, w.col) : device(w);
   Area a = word_area(d.dev);
   if (a == Area::Count) fail(0, w.col, spell(d) + " is a bit; a word or a constant is needed here");
   if (sig == 'i' && a == Area::F) fail(0, w.col, "INT32 needed here; " + spell(d) + " is REAL");
@@ -638,6 +644,7 @@ void Parser::grid_rows(size_t first, int /*rail*/) {
 // cell = "-" | "+" | "|" | " " | "[" ... "]" | "(" ... ")"
 void Parser::grid_cells(size_t first, int rail) {
   Grid& g = g_;
+  g.stride = g.width + 2;
   g.cell.assign(g.cells(), Cell::Blank);
   g.tok.assign(g.cells(), -1);
   g.tokens.clear();
