@@ -120,6 +120,7 @@ struct Grid {
   std::vector<int> right_rails;
 
   int stride = 0;     // width + 2
+  int verts = 0;      // '|' cells drawn
   // (r, c) for -1 <= r <= rows, -1 <= c <= width
   size_t idx(int r, int c) const { return size_t(r * stride + c + stride + 1); }
   size_t cells() const { return size_t(rows + 2) * size_t(stride); }
@@ -250,6 +251,7 @@ class Parser {
   UnionFind uf_;
   std::vector<int> node_of_;  // point -> node
   int nodes_ = 0;
+  int rail_point_ = 0;
   std::vector<Edge> edges_;
   std::vector<TreeNode> elems_;              // the parsed elements
   Forest forest_;
@@ -648,6 +650,7 @@ void Parser::grid_cells(size_t first, int rail) {
   g.cell.assign(g.cells(), Cell::Blank);
   g.tok.assign(g.cells(), -1);
   g.tokens.clear();
+  g.verts = 0;
   for (int r = 0; r < g.rows; r++) {
     std::string_view s = g.text[size_t(r)];
     int no = int(first) + r + 1;
@@ -669,7 +672,7 @@ void Parser::grid_cells(size_t first, int rail) {
         fail(no, c + 1, std::string("unmatched '") + ch + "'");
       } else if (ch == '-') g.cell[g.idx(r, c)] = Cell::Wire;
       else if (ch == '+') g.cell[g.idx(r, c)] = Cell::Junction;
-      else if (ch == '|') g.cell[g.idx(r, c)] = Cell::Vert;
+      else if (ch == '|') g.cell[g.idx(r, c)] = Cell::Vert, g.verts++;
       else if (ch != ' ')
         fail(no, c + 1, std::string("unexpected '") + ch + "' in a rung; elements are written [..] and (..)");
     }
@@ -748,12 +751,13 @@ void Parser::check_cells(const Grid& g, int line0) {
 
 // ------------------------------------------------------------------ reduction
 // Points: boundary (r, c) = r * W + c; vertical link cell (r, c) =
-// rows * W + r * W + c; the rail is the point before the last.
+// rows * W + r * W + c (only a grid with a '|' drawn has them); the rail is
+// the point before the last.
 
 void Parser::join_points(const Grid& g) {
   int rows = g.rows, W = g.width + 1;
-  int npts = 2 * rows * W + 2;
-  const int RAIL = npts - 2;
+  int npts = rows * W + (g.verts ? rows * W : 0) + 2;
+  const int RAIL = rail_point_ = npts - 2;
   uf_.reset(size_t(npts));
   auto B = [&](int r, int c) { return r * W + c; };
   auto V = [&](int r, int c) { return g.at(r, c) == Cell::Junction ? B(r, c) : rows * W + r * W + c; };
@@ -913,7 +917,7 @@ void Parser::build(int term, TreeNode& out) {
 
 TreeNode Parser::reduce(const Grid& g, int line0) {
   join_points(g);
-  int rail = node(2 * g.rows * (g.width + 1));  // node 0
+  int rail = node(rail_point_);  // node 0
   element_edges(g, line0);
   bool outputs = false;
   for (Edge& e : edges_) outputs |= e.action;
