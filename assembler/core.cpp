@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <mutex>
 #include <unordered_map>
 
 namespace ldc::as {
@@ -12,6 +13,47 @@ std::string listing_field(const char* fmt, uint32_t v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, fmt, v);
   return buf;
+}
+
+// The name table: chunks of strings that never move, so views into them
+// (and ids read without the lock) stay valid while others intern.
+namespace {
+constexpr uint32_t kChunkBits = 12, kChunkSize = 1u << kChunkBits, kMaxChunks = 1u << 16;
+struct NameTable {
+  std::mutex lock;
+  std::unordered_map<std::string_view, uint32_t> ids;
+  std::array<std::unique_ptr<std::string[]>, kMaxChunks> chunks;
+  uint32_t next = 1;  // 0: the empty name
+};
+NameTable& names() {
+  static NameTable* t = new NameTable;  // never destroyed: names outlive static destructors
+  return *t;
+}
+}  // namespace
+
+uint32_t Name::intern(std::string_view text) {
+  NameTable& t = names();
+  std::lock_guard<std::mutex> g(t.lock);
+  auto it = t.ids.find(text);
+  if (it != t.ids.end()) return it->second;
+  uint32_t id = t.next;
+  auto& chunk = t.chunks[id >> kChunkBits];
+  if (!chunk) chunk = std::make_unique<std::string[]>(kChunkSize);
+  std::string& slot = chunk[id & (kChunkSize - 1)];
+  slot = text;
+  t.ids.emplace(std::string_view(slot), id);
+  t.next++;
+  return id;
+}
+
+std::string_view Name::view() const {
+  if (id_ == 0) return {};
+  return names().chunks[id_ >> kChunkBits][id_ & (kChunkSize - 1)];
+}
+
+const std::string& Note::str() const {
+  static const std::string empty;
+  return p_ ? *p_ : empty;
 }
 
 AsmError::AsmError(Error e) : std::runtime_error(e.message), error_(std::move(e)) {}

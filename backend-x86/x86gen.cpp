@@ -64,7 +64,7 @@ const std::vector<Instruction>* bit_template(Op op) {
 
 Operand R(Reg r) { return Operand::r(r); }
 Operand I(int64_t v) { return Operand::i(v); }
-Operand L(std::string s) { return Operand::l(std::move(s)); }
+Operand L(as::Name s) { return Operand::l(s); }
 Mem mem_at(Size size, uint32_t addr) {
   Mem m;
   m.size = size;
@@ -298,7 +298,7 @@ class Gen : public ClassGen<Gen> {
   void timer_gated(const ldc::Instr& in);
   void call_routine(as::x86::Routine r) {
     used_->set(size_t(r));
-    emit(M::Call, {L(std::string(as::x86::routine_name(r)))});
+    emit(M::Call, {L(as::x86::routine_name(r))});
   }
   void counter_gated(const ldc::Instr& in);
   void reset_masked(std::initializer_list<Operand> dwords, std::initializer_list<Operand> bytes);
@@ -767,7 +767,7 @@ bool reads_reg(const Instruction& i, uint8_t num) {
   return i.mnemonic == M::Idiv && num == DX;
 }
 bool same_text(const Instruction& i, const char* text) {
-  static std::map<std::string, Instruction> cache;
+  static std::map<const char*, Instruction> cache;  // by the literal's address: no string made per call
   auto it = cache.find(text);
   if (it == cache.end()) it = cache.emplace(text, parse(text)).first;
   return i == it->second;
@@ -811,18 +811,18 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
     if (in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) { eax_top = false; eax_byte = -1; }
   }
   // backward: is the stack (ebp) read again?
-  std::map<std::string, bool> live_at;
+  std::map<uint32_t, bool> live_at;  // by label name id
   bool live = false;
   for (size_t k = items.size(); k-- > 0;) {
     Item& it = items[k];
     if (drop[k]) continue;
-    if (it.kind == as::ItemKind::Label) { live_at[it.label] = live; continue; }
+    if (it.kind == as::ItemKind::Label) { live_at[it.label.id()] = live; continue; }
     if (it.kind != as::ItemKind::Instruction) continue;
     const Instruction& in = it.inst;
     if (in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) {
       bool target = false;  // global targets (other rungs, scan_exit): the stack is dead there
       if (in.ops[0].kind == OperandKind::Label) {
-        auto t = live_at.find(in.ops[0].label);
+        auto t = live_at.find(in.ops[0].label.id());
         if (t != live_at.end()) target = t->second;
       }
       live = in.mnemonic == M::Jmp ? target : (live || target);
