@@ -283,7 +283,8 @@ class Core {
     note_peak();
 
     // First encoding: short forms, long ones for non-local targets.
-    std::vector<InstState> insts;
+    std::vector<InstState>& insts = insts_;  // kept between units: no reallocation per block
+    insts.clear();
     for (uint32_t b = first; b < last; ++b) {
       for (uint32_t i = 0; i < p_->num_items(b); ++i) {
         if (p_->kind(b, i) != ItemKind::Instruction) continue;
@@ -305,7 +306,8 @@ class Core {
     }
 
     // Relaxation: grow the forms that do not reach, until nothing changes.
-    std::vector<uint32_t> block_start(last - first);
+    std::vector<uint32_t>& block_start = block_start_;
+    block_start.assign(last - first, 0);
     for (;;) {
       ++r_.stats.relax_passes;
       layout(first, last, insts, block_start);
@@ -445,6 +447,8 @@ class Core {
   std::unordered_map<LocalKey, uint32_t, LocalKeyHash> locals_;
   std::vector<int64_t> localAddr_;
   std::vector<Pending> pending_;
+  std::vector<InstState> insts_;       // assemble_unit's instructions
+  std::vector<uint32_t> block_start_;  // assemble_unit's block starts
 };
 
 }  // namespace core_impl

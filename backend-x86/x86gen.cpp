@@ -142,8 +142,19 @@ class Gen : public ClassGen<Gen> {
   template <class G>
   friend void ldc::gen_by_class(G& g, const ldc::Instr& in);
 
-  void emit(Instruction i) { items_.push_back(Item::instr(std::move(i))); }
-  void emit(M m, std::initializer_list<Operand> ops) { emit(make(m, ops)); }
+  // a new instruction item at the end, built in place (no Item or Instruction copied)
+  Instruction& next_instr() {
+    Item& it = items_.emplace_back();
+    it.kind = as::ItemKind::Instruction;
+    return it.inst;
+  }
+  void emit(const Instruction& i) { next_instr() = i; }
+  void emit(M m, std::initializer_list<Operand> ops) {
+    if (ops.size() > 3) throw std::logic_error("x86 backend: more than 3 operands");
+    Instruction& in = next_instr();
+    in.mnemonic = m;
+    for (const Operand& o : ops) in.ops[in.num_operands++] = o;
+  }
   void jcc(Cond c, const std::string& label) { emit(make_cc(M::Jcc, c, {L(label)})); }
   void jump(const std::string& label) { emit(M::Jmp, {L(label)}); }
   void label(const std::string& l) { items_.push_back(Item::label_def(l)); }
