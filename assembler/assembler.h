@@ -132,9 +132,19 @@ struct Encoding {
   std::array<Fixup, 2> fixups{};
   uint8_t num_fixups = 0;
 
-  void put(uint8_t b);
-  void put32(uint32_t v);
-  void add_fixup(Fixup f);
+  void put(uint8_t b) {  // inline: the encoders call it per byte
+    if (size >= bytes.size()) too_long();
+    bytes[size++] = b;
+  }
+  void put32(uint32_t v) {
+    for (int i = 0; i < 4; ++i) put(uint8_t(v >> (8 * i)));
+  }
+  void add_fixup(Fixup f) {
+    if (num_fixups >= fixups.size()) too_many_fixups();
+    fixups[num_fixups++] = f;
+  }
+  [[noreturn]] static void too_long();
+  [[noreturn]] static void too_many_fixups();
   std::span<const uint8_t> view() const { return {bytes.data(), size}; }
 };
 

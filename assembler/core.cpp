@@ -58,19 +58,9 @@ const std::string& Note::str() const {
 
 AsmError::AsmError(Error e) : std::runtime_error(e.message), error_(std::move(e)) {}
 
-void Encoding::put(uint8_t b) {
-  if (size >= bytes.size()) throw AsmError("instruction longer than 16 bytes");
-  bytes[size++] = b;
-}
+void Encoding::too_long() { throw AsmError("instruction longer than 16 bytes"); }
 
-void Encoding::put32(uint32_t v) {
-  for (int i = 0; i < 4; ++i) put(uint8_t(v >> (8 * i)));
-}
-
-void Encoding::add_fixup(Fixup f) {
-  if (num_fixups >= fixups.size()) throw AsmError("too many fixups in one instruction");
-  fixups[num_fixups++] = f;
-}
+void Encoding::too_many_fixups() { throw AsmError("too many fixups in one instruction"); }
 
 bool fixup_value(const FixupKind& k, int64_t target, int64_t addend,
                 int64_t inst_start, int64_t inst_size, int64_t& value) {
