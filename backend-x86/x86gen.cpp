@@ -974,7 +974,7 @@ class Blocks {
     starts.reserve(r.code.size());
     for (const auto& l : r.labels) b.items.push_back(Item::label_def(x86_label_name(l), true));
     if (notes_) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
-    bool slots = o2_ && stack_fits_slots(r.code, kNumSlots);
+    bool slots = o2_ && fits_slots(ri);
     Gen g(layout_, b.items, slots, o2_, &used_);
     for (const ldc::Instr& in : r.code) {
       starts.push_back(uint32_t(b.items.size()));
@@ -1047,11 +1047,19 @@ class Blocks {
   }
 
  private:
+  // stack_fits_slots of rung ri, worked out once (-O2 makes each rung twice)
+  bool fits_slots(size_t ri) {
+    if (fits_.empty()) fits_.assign(p_.rungs.size(), -1);
+    if (fits_[ri] < 0) fits_[ri] = stack_fits_slots(p_.rungs[ri].code, kNumSlots);
+    return fits_[ri] != 0;
+  }
+
   const Program& p_;
   const Layout& layout_;
   int opt_;
   bool o2_, notes_;
   std::bitset<8> used_;
+  std::vector<signed char> fits_;  // per rung: -1 not known yet, else fits_slots
 };
 
 }  // namespace
