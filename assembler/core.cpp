@@ -16,14 +16,17 @@ std::string listing_field(const char* fmt, uint32_t v) {
 }
 
 // The name table: chunks of strings that never move, so views into them
-// (and ids read without the lock) stay valid while others intern.
+// (and ids read without the lock) stay valid while others intern.  `chunks`
+// is reserved once and never reallocates; untouched, the reservation costs
+// address space, not memory.
 namespace {
-constexpr uint32_t kChunkBits = 12, kChunkSize = 1u << kChunkBits, kMaxChunks = 1u << 16;
+constexpr uint32_t kChunkBits = 10, kChunkSize = 1u << kChunkBits, kMaxChunks = 1u << 16;  // 2^26 names
 struct NameTable {
   std::mutex lock;
   std::unordered_map<std::string_view, uint32_t> ids;
-  std::array<std::unique_ptr<std::string[]>, kMaxChunks> chunks;
+  std::vector<std::unique_ptr<std::string[]>> chunks;
   uint32_t next = 1;  // 0: the empty name
+  NameTable() { chunks.reserve(kMaxChunks); }
 };
 NameTable& names() {
   static NameTable* t = new NameTable;  // never destroyed: names outlive static destructors
@@ -37,9 +40,9 @@ uint32_t Name::intern(std::string_view text) {
   auto it = t.ids.find(text);
   if (it != t.ids.end()) return it->second;
   uint32_t id = t.next;
-  auto& chunk = t.chunks[id >> kChunkBits];
-  if (!chunk) chunk = std::make_unique<std::string[]>(kChunkSize);
-  std::string& slot = chunk[id & (kChunkSize - 1)];
+  if ((id >> kChunkBits) >= kMaxChunks) throw AsmError("too many distinct label names");
+  if ((id >> kChunkBits) >= t.chunks.size()) t.chunks.push_back(std::make_unique<std::string[]>(kChunkSize));
+  std::string& slot = t.chunks[id >> kChunkBits][id & (kChunkSize - 1)];
   slot = text;
   t.ids.emplace(std::string_view(slot), id);
   t.next++;
