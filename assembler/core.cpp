@@ -202,7 +202,7 @@ class Core {
   // Pass 1: each global label definition of block b must be declared and
   // defined once.
   void define_globals(uint32_t b) {
-    for (size_t i = 0; i < p_->num_items(b); ++i) {
+    for (size_t i = 0, n_items = p_->num_items(b); i < n_items; ++i) {
       if (p_->kind(b, i) != ItemKind::Label || !p_->is_global(b, i)) continue;
       std::string_view name = p_->label(b, i);
       auto it = globals_.find(name);
@@ -259,7 +259,7 @@ class Core {
     localAddr_.clear();
     // Local label table.
     for (uint32_t b = first; b < last; ++b) {
-      for (size_t i = 0; i < p_->num_items(b); ++i) {
+      for (size_t i = 0, n_items = p_->num_items(b); i < n_items; ++i) {
         if (p_->kind(b, i) != ItemKind::Label || p_->is_global(b, i)) continue;
         std::string_view name = p_->label(b, i);
         if (globals_.count(name)) {
@@ -279,9 +279,9 @@ class Core {
     std::vector<InstState>& insts = insts_;  // kept between units: no reallocation per block
     insts.clear();
     for (uint32_t b = first; b < last; ++b) {
-      for (uint32_t i = 0; i < p_->num_items(b); ++i) {
+      for (uint32_t i = 0, n_items = uint32_t(p_->num_items(b)); i < n_items; ++i) {
         if (p_->kind(b, i) != ItemKind::Instruction) continue;
-        InstState s;
+        InstState& s = insts.emplace_back();  // built in place
         s.block = b;
         s.item = i;
         encode_state(s);
@@ -294,7 +294,6 @@ class Core {
           encode_state(s);
           resolve_refs(s);
         }
-        insts.push_back(std::move(s));
       }
     }
 
@@ -336,7 +335,7 @@ class Core {
     size_t n = 0;
     for (uint32_t b = first; b < last; ++b) {
       block_start[b - first] = cur;
-      for (size_t i = 0; i < p_->num_items(b); ++i) {
+      for (size_t i = 0, n_items = p_->num_items(b); i < n_items; ++i) {
         switch (p_->kind(b, i)) {
           case ItemKind::Label:
             if (!p_->is_global(b, i)) {
@@ -363,7 +362,7 @@ class Core {
     for (uint32_t b = first; b < last; ++b) {
       r_.block_offsets[b] = base + block_start[b - first];
       uint32_t cur = r_.block_offsets[b];
-      for (size_t i = 0; i < p_->num_items(b); ++i) {
+      for (size_t i = 0, n_items = p_->num_items(b); i < n_items; ++i) {
         ItemLayout& lay = r_.items[b][i];
         lay.offset = cur;
         ItemKind kind = p_->kind(b, i);
