@@ -210,7 +210,6 @@ bool matches(OT t, const Operand& o, const Form& f, const Instruction& in, bool 
   return false;
 }
 
-// The forms of each mnemonic, in table order (find_form looks at these only).
 // The forms of each mnemonic and operand count, in table order (find_form
 // looks at these only).
 struct FormIndex {
