@@ -45,6 +45,53 @@ class AsmError : public std::runtime_error {
   Error error_;
 };
 
+// ------------------------------------------------------------------ names
+
+// An interned label name: a 4-byte id, equal ids for equal text.  The text
+// lives in a process-wide table (never freed, safe to intern from several
+// threads), so a Name is trivially copied and its view() stays valid for
+// the life of the process.  Id 0 is the empty name.
+class Name {
+ public:
+  Name() = default;
+  Name(std::string_view text) : id_(text.empty() ? 0 : intern(text)) {}  // NOLINT: implicit on purpose
+  Name(const std::string& text) : Name(std::string_view(text)) {}        // NOLINT
+  Name(const char* text) : Name(std::string_view(text)) {}               // NOLINT
+  std::string_view view() const;
+  std::string str() const { return std::string(view()); }
+  operator std::string_view() const { return view(); }  // NOLINT
+  bool empty() const { return id_ == 0; }
+  uint32_t id() const { return id_; }
+  friend bool operator==(Name, Name) = default;
+
+ private:
+  static uint32_t intern(std::string_view text);
+  uint32_t id_ = 0;
+};
+
+inline std::string operator+(std::string a, Name b) { return a.append(b.view()); }
+inline std::string operator+(Name a, std::string_view b) { return a.str().append(b); }
+
+// An optional comment: one pointer, no allocation when empty.
+class Note {
+ public:
+  Note() = default;
+  Note(std::string text)  // NOLINT: implicit on purpose
+      : p_(text.empty() ? nullptr : std::make_unique<std::string>(std::move(text))) {}
+  Note(const char* text) : Note(std::string(text)) {}  // NOLINT
+  Note(const Note& o) : p_(o.p_ ? std::make_unique<std::string>(*o.p_) : nullptr) {}
+  Note(Note&&) noexcept = default;
+  Note& operator=(const Note& o) { return *this = Note(o); }
+  Note& operator=(Note&&) noexcept = default;
+  bool empty() const { return !p_; }
+  const std::string& str() const;
+  operator const std::string&() const { return str(); }  // NOLINT
+  friend bool operator==(const Note& a, const Note& b) { return a.str() == b.str(); }
+
+ private:
+  std::unique_ptr<std::string> p_;
+};
+
 // ----------------------------------------------------------- fixup kinds
 
 // Where a pc-relative field measures from.
@@ -85,9 +132,19 @@ struct Encoding {
   std::array<Fixup, 2> fixups{};
   uint8_t num_fixups = 0;
 
-  void put(uint8_t b);
-  void put32(uint32_t v);
-  void add_fixup(Fixup f);
+  void put(uint8_t b) {  // inline: the encoders call it per byte
+    if (size >= bytes.size()) too_long();
+    bytes[size++] = b;
+  }
+  void put32(uint32_t v) {
+    for (int i = 0; i < 4; ++i) put(uint8_t(v >> (8 * i)));
+  }
+  void add_fixup(Fixup f) {
+    if (num_fixups >= fixups.size()) too_many_fixups();
+    fixups[num_fixups++] = f;
+  }
+  [[noreturn]] static void too_long();
+  [[noreturn]] static void too_many_fixups();
   std::span<const uint8_t> view() const { return {bytes.data(), size}; }
 };
 
@@ -124,26 +181,26 @@ enum class ItemKind : uint8_t { Label, Instruction, Comment };
 template <class Inst>
 struct Item {
   ItemKind kind = ItemKind::Comment;
-  std::string label;  // for Label
   bool global = false;  // for Label: defines a declared global label
+  Name label;           // for Label
   Inst inst{};          // for Instruction
-  std::string comment;  // optional, for listings
+  Note comment;         // optional, for listings
 
-  static Item label_def(std::string name, bool is_global = false) {
+  static Item label_def(Name name, bool is_global = false) {
     Item it;
     it.kind = ItemKind::Label;
-    it.label = std::move(name);
+    it.label = name;
     it.global = is_global;
     return it;
   }
-  static Item instr(Inst i, std::string comment = {}) {
+  static Item instr(Inst i, Note comment = {}) {
     Item it;
     it.kind = ItemKind::Instruction;
     it.inst = std::move(i);
     it.comment = std::move(comment);
     return it;
   }
-  static Item note(std::string comment) {
+  static Item note(Note comment) {
     Item it;
     it.comment = std::move(comment);
     return it;
@@ -153,7 +210,7 @@ struct Item {
 // For peephole passes: is the first item after `i` that is neither a
 // comment nor dropped the definition of `label`?
 template <class Inst>
-bool label_follows(const std::vector<Item<Inst>>& items, size_t i, const std::string& label,
+bool label_follows(const std::vector<Item<Inst>>& items, size_t i, Name label,
                   const std::vector<char>& drop) {
   for (size_t j = i + 1; j < items.size(); j++) {
     if (items[j].kind == ItemKind::Comment || drop[j]) continue;
@@ -311,7 +368,9 @@ std::string gnu_as_text(const Program<Inst>& p, std::string head, std::string_vi
     std::set<std::string_view> locals;
     for (const auto& it : blk.items)
       if (it.kind == ItemKind::Label && !it.global) locals.insert(it.label);
-    auto mangle = [&](const std::string& n) { return locals.count(n) ? ".L" + std::to_string(b) + "_" + n : n; };
+    auto mangle = [&](std::string_view n) {
+      return locals.count(n) ? ".L" + std::to_string(b) + "_" + std::string(n) : std::string(n);
+    };
     out += std::string(mark) + " block " + std::to_string(b) + ", line " + std::to_string(blk.source_line) + "\n";
     for (const auto& it : blk.items) {
       if (it.kind == ItemKind::Label) {
@@ -327,7 +386,7 @@ std::string gnu_as_text(const Program<Inst>& p, std::string head, std::string_vi
         }
         out += "\t" + print(in, outside);
       }
-      if (!it.comment.empty()) out += "\t" + std::string(mark) + " " + it.comment;
+      if (!it.comment.empty()) out += "\t" + std::string(mark) + " " + it.comment.str();
       if (it.kind != ItemKind::Comment || !it.comment.empty()) out += "\n";
     }
   }
@@ -353,7 +412,7 @@ std::string listing_text(const Program<Inst>& p, const Result& r, std::string_vi
       std::string line = item_head(lay);
       if (it.kind == ItemKind::Label) line += it.label + ":";
       else if (it.kind == ItemKind::Instruction) line += "\t" + print(it.inst, lay);
-      if (!it.comment.empty()) line += "\t" + std::string(mark) + " " + it.comment;
+      if (!it.comment.empty()) line += "\t" + std::string(mark) + " " + it.comment.str();
       out += line + "\n";
     }
   }

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <mutex>
 #include <unordered_map>
 
 namespace ldc::as {
@@ -14,21 +15,55 @@ std::string listing_field(const char* fmt, uint32_t v) {
   return buf;
 }
 
+// The name table: chunks of strings that never move, so views into them
+// (and ids read without the lock) stay valid while others intern.  `chunks`
+// is reserved once and never reallocates; untouched, the reservation costs
+// address space, not memory.
+namespace {
+constexpr uint32_t kChunkBits = 10, kChunkSize = 1u << kChunkBits, kMaxChunks = 1u << 16;  // 2^26 names
+struct NameTable {
+  std::mutex lock;
+  std::unordered_map<std::string_view, uint32_t> ids;
+  std::vector<std::unique_ptr<std::string[]>> chunks;
+  uint32_t next = 1;  // 0: the empty name
+  NameTable() { chunks.reserve(kMaxChunks); }
+};
+NameTable& names() {
+  static NameTable* t = new NameTable;  // never destroyed: names outlive static destructors
+  return *t;
+}
+}  // namespace
+
+uint32_t Name::intern(std::string_view text) {
+  NameTable& t = names();
+  std::lock_guard<std::mutex> g(t.lock);
+  auto it = t.ids.find(text);
+  if (it != t.ids.end()) return it->second;
+  uint32_t id = t.next;
+  if ((id >> kChunkBits) >= kMaxChunks) throw AsmError("too many distinct label names");
+  if ((id >> kChunkBits) >= t.chunks.size()) t.chunks.push_back(std::make_unique<std::string[]>(kChunkSize));
+  std::string& slot = t.chunks[id >> kChunkBits][id & (kChunkSize - 1)];
+  slot = text;
+  t.ids.emplace(std::string_view(slot), id);
+  t.next++;
+  return id;
+}
+
+std::string_view Name::view() const {
+  if (id_ == 0) return {};
+  return names().chunks[id_ >> kChunkBits][id_ & (kChunkSize - 1)];
+}
+
+const std::string& Note::str() const {
+  static const std::string empty;
+  return p_ ? *p_ : empty;
+}
+
 AsmError::AsmError(Error e) : std::runtime_error(e.message), error_(std::move(e)) {}
 
-void Encoding::put(uint8_t b) {
-  if (size >= bytes.size()) throw AsmError("instruction longer than 16 bytes");
-  bytes[size++] = b;
-}
+void Encoding::too_long() { throw AsmError("instruction longer than 16 bytes"); }
 
-void Encoding::put32(uint32_t v) {
-  for (int i = 0; i < 4; ++i) put(uint8_t(v >> (8 * i)));
-}
-
-void Encoding::add_fixup(Fixup f) {
-  if (num_fixups >= fixups.size()) throw AsmError("too many fixups in one instruction");
-  fixups[num_fixups++] = f;
-}
+void Encoding::too_many_fixups() { throw AsmError("too many fixups in one instruction"); }
 
 bool fixup_value(const FixupKind& k, int64_t target, int64_t addend,
                 int64_t inst_start, int64_t inst_size, int64_t& value) {
@@ -167,7 +202,7 @@ class Core {
   // Pass 1: each global label definition of block b must be declared and
   // defined once.
   void define_globals(uint32_t b) {
-    for (size_t i = 0; i < p_->num_items(b); ++i) {
+    for (size_t i = 0, n_items = p_->num_items(b); i < n_items; ++i) {
       if (p_->kind(b, i) != ItemKind::Label || !p_->is_global(b, i)) continue;
       std::string_view name = p_->label(b, i);
       auto it = globals_.find(name);
@@ -224,7 +259,7 @@ class Core {
     localAddr_.clear();
     // Local label table.
     for (uint32_t b = first; b < last; ++b) {
-      for (size_t i = 0; i < p_->num_items(b); ++i) {
+      for (size_t i = 0, n_items = p_->num_items(b); i < n_items; ++i) {
         if (p_->kind(b, i) != ItemKind::Label || p_->is_global(b, i)) continue;
         std::string_view name = p_->label(b, i);
         if (globals_.count(name)) {
@@ -241,11 +276,12 @@ class Core {
     note_peak();
 
     // First encoding: short forms, long ones for non-local targets.
-    std::vector<InstState> insts;
+    std::vector<InstState>& insts = insts_;  // kept between units: no reallocation per block
+    insts.clear();
     for (uint32_t b = first; b < last; ++b) {
-      for (uint32_t i = 0; i < p_->num_items(b); ++i) {
+      for (uint32_t i = 0, n_items = uint32_t(p_->num_items(b)); i < n_items; ++i) {
         if (p_->kind(b, i) != ItemKind::Instruction) continue;
-        InstState s;
+        InstState& s = insts.emplace_back();  // built in place
         s.block = b;
         s.item = i;
         encode_state(s);
@@ -258,12 +294,12 @@ class Core {
           encode_state(s);
           resolve_refs(s);
         }
-        insts.push_back(std::move(s));
       }
     }
 
     // Relaxation: grow the forms that do not reach, until nothing changes.
-    std::vector<uint32_t> block_start(last - first);
+    std::vector<uint32_t>& block_start = block_start_;
+    block_start.assign(last - first, 0);
     for (;;) {
       ++r_.stats.relax_passes;
       layout(first, last, insts, block_start);
@@ -299,7 +335,7 @@ class Core {
     size_t n = 0;
     for (uint32_t b = first; b < last; ++b) {
       block_start[b - first] = cur;
-      for (size_t i = 0; i < p_->num_items(b); ++i) {
+      for (size_t i = 0, n_items = p_->num_items(b); i < n_items; ++i) {
         switch (p_->kind(b, i)) {
           case ItemKind::Label:
             if (!p_->is_global(b, i)) {
@@ -326,7 +362,7 @@ class Core {
     for (uint32_t b = first; b < last; ++b) {
       r_.block_offsets[b] = base + block_start[b - first];
       uint32_t cur = r_.block_offsets[b];
-      for (size_t i = 0; i < p_->num_items(b); ++i) {
+      for (size_t i = 0, n_items = p_->num_items(b); i < n_items; ++i) {
         ItemLayout& lay = r_.items[b][i];
         lay.offset = cur;
         ItemKind kind = p_->kind(b, i);
@@ -403,6 +439,8 @@ class Core {
   std::unordered_map<LocalKey, uint32_t, LocalKeyHash> locals_;
   std::vector<int64_t> localAddr_;
   std::vector<Pending> pending_;
+  std::vector<InstState> insts_;       // assemble_unit's instructions
+  std::vector<uint32_t> block_start_;  // assemble_unit's block starts
 };
 
 }  // namespace core_impl

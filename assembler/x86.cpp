@@ -210,9 +210,20 @@ bool matches(OT t, const Operand& o, const Form& f, const Instruction& in, bool 
   return false;
 }
 
+// The forms of each mnemonic and operand count, in table order (find_form
+// looks at these only).
+struct FormIndex {
+  std::array<std::array<std::vector<const Form*>, 4>, size_t(Mnemonic::Count_)> forms;
+  FormIndex() {
+    for (const Form& f : kForms) forms[size_t(f.mn)][num_ops(f)].push_back(&f);
+  }
+};
+
 const Form* find_form(const Instruction& in, bool long_form) {
-  for (const Form& f : kForms) {
-    if (f.mn != in.mnemonic || num_ops(f) != in.num_operands) continue;
+  static const FormIndex index;
+  if (size_t(in.mnemonic) >= index.forms.size() || in.num_operands > 3) return nullptr;
+  for (const Form* fp : index.forms[size_t(in.mnemonic)][in.num_operands]) {
+    const Form& f = *fp;
     bool ok = true;
     for (unsigned i = 0; i < in.num_operands && ok; ++i)
       ok = matches(f.ops[i], in.ops[i], f, in, long_form);

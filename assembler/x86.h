@@ -50,14 +50,14 @@ struct Operand {
   OperandKind kind = OperandKind::None;
   Reg reg;
   Mem mem;
+  Name label;         // Label name (interned)
   int64_t imm = 0;    // Imm value, or the Address target
-  std::string label;  // Label name
   friend bool operator==(const Operand&, const Operand&) = default;
 
   static Operand r(Reg x) { Operand o; o.kind = OperandKind::Reg; o.reg = x; return o; }
   static Operand m(Mem x) { Operand o; o.kind = OperandKind::Mem; o.mem = x; return o; }
   static Operand i(int64_t v) { Operand o; o.kind = OperandKind::Imm; o.imm = v; return o; }
-  static Operand l(std::string n) { Operand o; o.kind = OperandKind::Label; o.label = std::move(n); return o; }
+  static Operand l(Name n) { Operand o; o.kind = OperandKind::Label; o.label = n; return o; }
   static Operand a(int64_t t) { Operand o; o.kind = OperandKind::Address; o.imm = t; return o; }
 };
 
@@ -78,9 +78,9 @@ struct Instruction {
   Mnemonic mnemonic = Mnemonic::Nop;
   Cond cond = Cond::O;  // for Setcc, Cmovcc, Jcc
   uint8_t num_operands = 0;
-  std::array<Operand, 3> ops{};
   // Always use the rel32 form of jmp/jcc (printed as `{disp32}`).
   bool long_branch = false;
+  std::array<Operand, 3> ops{};
   friend bool operator==(const Instruction&, const Instruction&) = default;
 };
 

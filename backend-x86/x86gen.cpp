@@ -64,7 +64,7 @@ const std::vector<Instruction>* bit_template(Op op) {
 
 Operand R(Reg r) { return Operand::r(r); }
 Operand I(int64_t v) { return Operand::i(v); }
-Operand L(std::string s) { return Operand::l(std::move(s)); }
+Operand L(as::Name s) { return Operand::l(s); }
 Mem mem_at(Size size, uint32_t addr) {
   Mem m;
   m.size = size;
@@ -142,8 +142,19 @@ class Gen : public ClassGen<Gen> {
   template <class G>
   friend void ldc::gen_by_class(G& g, const ldc::Instr& in);
 
-  void emit(Instruction i) { items_.push_back(Item::instr(std::move(i))); }
-  void emit(M m, std::initializer_list<Operand> ops) { emit(make(m, ops)); }
+  // a new instruction item at the end, built in place (no Item or Instruction copied)
+  Instruction& next_instr() {
+    Item& it = items_.emplace_back();
+    it.kind = as::ItemKind::Instruction;
+    return it.inst;
+  }
+  void emit(const Instruction& i) { next_instr() = i; }
+  void emit(M m, std::initializer_list<Operand> ops) {
+    if (ops.size() > 3) throw std::logic_error("x86 backend: more than 3 operands");
+    Instruction& in = next_instr();
+    in.mnemonic = m;
+    for (const Operand& o : ops) in.ops[in.num_operands++] = o;
+  }
   void jcc(Cond c, const std::string& label) { emit(make_cc(M::Jcc, c, {L(label)})); }
   void jump(const std::string& label) { emit(M::Jmp, {L(label)}); }
   void label(const std::string& l) { items_.push_back(Item::label_def(l)); }
@@ -298,7 +309,7 @@ class Gen : public ClassGen<Gen> {
   void timer_gated(const ldc::Instr& in);
   void call_routine(as::x86::Routine r) {
     used_->set(size_t(r));
-    emit(M::Call, {L(std::string(as::x86::routine_name(r)))});
+    emit(M::Call, {L(as::x86::routine_name(r))});
   }
   void counter_gated(const ldc::Instr& in);
   void reset_masked(std::initializer_list<Operand> dwords, std::initializer_list<Operand> bytes);
@@ -767,7 +778,7 @@ bool reads_reg(const Instruction& i, uint8_t num) {
   return i.mnemonic == M::Idiv && num == DX;
 }
 bool same_text(const Instruction& i, const char* text) {
-  static std::map<std::string, Instruction> cache;
+  static std::map<const char*, Instruction> cache;  // by the literal's address: no string made per call
   auto it = cache.find(text);
   if (it == cache.end()) it = cache.emplace(text, parse(text)).first;
   return i == it->second;
@@ -811,18 +822,18 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
     if (in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) { eax_top = false; eax_byte = -1; }
   }
   // backward: is the stack (ebp) read again?
-  std::map<std::string, bool> live_at;
+  std::map<uint32_t, bool> live_at;  // by label name id
   bool live = false;
   for (size_t k = items.size(); k-- > 0;) {
     Item& it = items[k];
     if (drop[k]) continue;
-    if (it.kind == as::ItemKind::Label) { live_at[it.label] = live; continue; }
+    if (it.kind == as::ItemKind::Label) { live_at[it.label.id()] = live; continue; }
     if (it.kind != as::ItemKind::Instruction) continue;
     const Instruction& in = it.inst;
     if (in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) {
       bool target = false;  // global targets (other rungs, scan_exit): the stack is dead there
       if (in.ops[0].kind == OperandKind::Label) {
-        auto t = live_at.find(in.ops[0].label);
+        auto t = live_at.find(in.ops[0].label.id());
         if (t != live_at.end()) target = t->second;
       }
       live = in.mnemonic == M::Jmp ? target : (live || target);
@@ -963,7 +974,7 @@ class Blocks {
     starts.reserve(r.code.size());
     for (const auto& l : r.labels) b.items.push_back(Item::label_def(x86_label_name(l), true));
     if (notes_) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
-    bool slots = o2_ && stack_fits_slots(r.code, kNumSlots);
+    bool slots = o2_ && fits_slots(ri);
     Gen g(layout_, b.items, slots, o2_, &used_);
     for (const ldc::Instr& in : r.code) {
       starts.push_back(uint32_t(b.items.size()));
@@ -1036,11 +1047,19 @@ class Blocks {
   }
 
  private:
+  // stack_fits_slots of rung ri, worked out once (-O2 makes each rung twice)
+  bool fits_slots(size_t ri) {
+    if (fits_.empty()) fits_.assign(p_.rungs.size(), -1);
+    if (fits_[ri] < 0) fits_[ri] = stack_fits_slots(p_.rungs[ri].code, kNumSlots);
+    return fits_[ri] != 0;
+  }
+
   const Program& p_;
   const Layout& layout_;
   int opt_;
   bool o2_, notes_;
   std::bitset<8> used_;
+  std::vector<signed char> fits_;  // per rung: -1 not known yet, else fits_slots
 };
 
 }  // namespace

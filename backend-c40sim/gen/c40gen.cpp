@@ -1023,7 +1023,7 @@ constexpr uint64_t kLiveAcross = (uint64_t(1) << unsigned(Reg::R8)) | (uint64_t(
 std::vector<uint64_t> liveness(const std::vector<Item>& items) {
   std::map<std::string, size_t> at;
   for (size_t i = 0; i < items.size(); i++)
-    if (items[i].kind == as::ItemKind::Label) at[items[i].label] = i;
+    if (items[i].kind == as::ItemKind::Label) at[items[i].label.str()] = i;
   std::vector<uint64_t> live(items.size() + 1, 0);
   live[items.size()] = kLiveAcross;
   auto target = [&](const Instruction& in) {
@@ -1164,7 +1164,7 @@ void fill_delay_slots_slow(std::vector<Item>& items, std::vector<uint32_t>& star
 void fill_delay_slots(std::vector<Item>& items, std::vector<uint32_t>& starts) {
   std::map<std::string, size_t> label_at;
   for (size_t i = 0; i < items.size(); i++)
-    if (items[i].kind == as::ItemKind::Label) label_at[items[i].label] = i;
+    if (items[i].kind == as::ItemKind::Label) label_at[items[i].label.str()] = i;
   bool forward = true;
   for (size_t i = 0; i < items.size(); i++)
     if (items[i].kind == as::ItemKind::Instruction) {
