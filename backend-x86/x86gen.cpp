@@ -115,6 +115,8 @@ class Gen : public ClassGen<Gen> {
   bool slots_;     // -O2: the stack in kSlots; else the -O0 shift register in ebp
   bool gate_;      // -O2: branch-free power gating (cmov) instead of `je skip`
   bool bases_;     // -O2: the frame sets the base registers (rdi is reloaded after a REAL call)
+  KnownStack known_;  // -O2: the stack's values known at compile time
+  bool on_ = false;   // -O2: this instruction's power is on for certain (no gate, no test)
   std::bitset<8>* used_;  // the shared routines called (as::x86::Routine)
   int depth_ = 0;  // stack positions in use before the current instruction
 
@@ -240,7 +242,7 @@ class Gen : public ClassGen<Gen> {
   // if the top of the stack is 0, skip to the returned label; with gate_,
   // nothing ("" : the stores are gated instead)
   std::string skip_unless_power() {
-    if (gate_) return "";
+    if (gate_ || on_) return "";
     std::string skip = fresh();
     test_top();
     jcc(Cond::E, skip);
@@ -455,7 +457,7 @@ void Gen::shift(Op op, const ldc::Operand& a, const ldc::Operand& n) {
   if (n.kind == OpdKind::ConstInt) {
     if (n.ival < 0 || n.ival > 31) emit(M::Xor, {R(eax), R(eax)});
     else if (n.ival > 0) emit(m, {R(eax), I(n.ival)});
-  } else if (gate_) {  // unsigned above 31: negative counts too
+  } else if (bases_) {  // -O2, branch-free; unsigned above 31: negative counts too
     load_int(n, ecx);
     emit(m, {R(eax), R(cl)});
     emit(M::Xor, {R(edx), R(edx)});
@@ -653,8 +655,19 @@ void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
   emit(M::Mov, {B(cq), R(al)});
 }
 
+// At -O2 an instruction of the move, arith, logic or special class whose power
+// is on for certain (KnownStack: a rung from the rail, `TRUE`) is emitted with
+// neither gate nor test; timers and counters still call their routines.
 void Gen::instr(const ldc::Instr& in) {
-  gen_by_class(*this, in);
+  OpClass k = op_info(in.op).klass;
+  on_ = bases_ && known_.on() &&
+        (k == OpClass::Move || k == OpClass::Arith || k == OpClass::Logic || k == OpClass::Special);
+  {
+    Ungated plain(gate_, on_);
+    gen_by_class(*this, in);
+  }
+  on_ = false;
+  if (bases_) known_.step(in);
   depth_ += op_info(in.op).push - op_info(in.op).pop;
 }
 

@@ -196,6 +196,8 @@ class Gen : public ClassGen<Gen> {
   bool group_open_ = false;    // a power test's branch to group_ is pending (-O1)
   std::string group_;
   std::vector<Fuse> fuse_;     // per IL instruction of the rung (-O1)
+  KnownStack known_;           // the stack's values known at compile time (-O2)
+  bool on_ = false;            // this guarded instruction's power is on for certain: no test (-O2)
   size_t at_ = 0;              // index of the IL instruction being built
 
   // Application instructions: executed only when the top is 1, stack unchanged.
@@ -375,6 +377,7 @@ class Gen : public ClassGen<Gen> {
   // the stack nor the slot registers.
   std::string skip_unless_power() {
     std::string skip = fresh();
+    if (on_) return skip;
     if (opt_ == 0) {
       test_top();
       branch(Cond::EQ, skip);
@@ -697,8 +700,11 @@ void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
 void Gen::instr(const ldc::Instr& in) {
   r0_value_.reset();
   Fuse f = at_ < fuse_.size() ? fuse_[at_] : Fuse::None;
+  on_ = opt_ >= 2 && guarded(in.op) && known_.on();  // -O2: a power on for certain needs no test
   if (slots_ && bit_template(in.op)) bit_slots(in);
   else if (f == Fuse::None || !bit_fused(in, f)) gen_by_class(*this, in);
+  on_ = false;
+  if (opt_ >= 2) known_.step(in);
   depth_ += op_info(in.op).push - op_info(in.op).pop;
   at_++;
 }
