@@ -1255,6 +1255,60 @@ void fill_delay_slots(std::vector<Item>& items, std::vector<uint32_t>& starts) {
   items = std::move(out);
 }
 
+// ------------------------------------------------------------ reloads (-O2)
+//
+// A rung that starts by loading what the rung before it stored from the same
+// register (`STI R8, @Y0` ... `LDI @Y0, R8`) needs no load: Held follows,
+// from block to block, which image words the registers hold.  A load is
+// dropped when its register holds that word already and the flags it would
+// set are dead.  Forgotten: a register's word when anything else writes the
+// register or the word; everything at a call, an indirect store and a label
+// (where DP is the main page again: -O1 restores it right after each far
+// access).
+struct Held {
+  std::map<Reg, std::pair<int64_t, int64_t>> word;  // register -> (DP page, offset)
+  int64_t dp = kDataPage;
+  void forget_word(std::pair<int64_t, int64_t> w) {
+    std::erase_if(word, [&](const auto& kv) { return kv.second == w; });
+  }
+};
+
+bool redundant_load(const Instruction& in, const Held& h) {
+  if (in.mnemonic != M::Ldi || in.num_operands != 2 || in.ops[0].kind != OperandKind::Direct) return false;
+  auto it = h.word.find(in.ops[1].reg);
+  return it != h.word.end() && it->second == std::pair(h.dp, in.ops[0].imm);
+}
+
+void track(const Instruction& in, Held& h) {
+  if (in.mnemonic == M::Ldpk) { h.dp = in.ops[0].imm; return; }
+  if (in.mnemonic == M::Call || in.mnemonic == M::Callc) { h.word.clear(); return; }
+  Effect e = effect_of(in);
+  if (e.store) {
+    if (in.ops[1].kind != OperandKind::Direct) { h.word.clear(); return; }
+    std::pair<int64_t, int64_t> w(h.dp, in.ops[1].imm);
+    h.forget_word(w);
+    if (in.mnemonic == M::Sti && in.ops[0].kind == OperandKind::Reg) h.word[in.ops[0].reg] = w;
+    return;
+  }
+  std::erase_if(h.word, [&](const auto& kv) { return writes_reg(in, kv.first); });
+  if (in.mnemonic == M::Ldi && in.ops[0].kind == OperandKind::Direct) h.word[in.ops[1].reg] = {h.dp, in.ops[0].imm};
+}
+
+void drop_reloads(std::vector<Item>& items, std::vector<uint32_t>& starts, Held& h) {
+  std::vector<uint64_t> live = liveness(items);
+  std::vector<char> drop(items.size(), 0);
+  for (size_t i = 0; i < items.size(); i++) {
+    if (items[i].kind == as::ItemKind::Label) {
+      h.word.clear();
+      h.dp = kDataPage;
+    }
+    if (items[i].kind != as::ItemKind::Instruction) continue;
+    if (redundant_load(items[i].inst, h) && !(live[i + 1] & kFlags)) drop[i] = 1;
+    else track(items[i].inst, h);
+  }
+  as::remove_items(items, drop, starts);
+}
+
 }  // namespace
 
 C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
@@ -1284,6 +1338,7 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
   prog.blocks.push_back(std::move(pro));
 
   int next_label = 0;
+  Held held;
   for (const Rung& r : p.rungs) {
     as::Block<Instruction> b;
     b.source_line = r.line;
@@ -1303,6 +1358,7 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
       g.instr(in);
     }
     g.finish();
+    if (opt_level >= 2) drop_reloads(b.items, starts, held);
     if (opt_level >= 1) {
       drop_jumps_to_next(b.items, starts);
       fill_delay_slots(b.items, starts);

@@ -290,6 +290,24 @@ TEST(C40Opt, TheLevelsHaveTheirShape) {
             "LDI 5, R0\nSTI R0, @0x8b21\nLDI @0x8b21, R0\nADDI @0x8b22, R0\nSTI R0, @0x8b23\n");
 }
 
+// -O2 drops a rung's first load when the register holds that word from the
+// rung before (`STI R8, @Y0` ... `LDI @Y0, R8`), but not when the load's
+// flags are the power test after it, nor after a label (a jump may land there),
+// and a rung from the rail (`TRUE`) has no power test.
+TEST(C40Opt, ReloadsAndKnownPower) {
+  std::string il = ".edges 0\n.rung line 1\n    LOAD X1\n    OUT Y0\n.rung line 2\n    LOAD Y0\n    OUT Y1\n"
+                   ".rung line 3\n    LOAD Y1\n    OUT Y2\n.rung line 4\n    LOAD Y2\n    MOV 5 D1\n"
+                   ".rung line 5\n    TRUE\n    MOV 6 D2\n.end\n";
+  EXPECT_EQ(rung_text(il, 2),
+            "LDI @0x21, R8\nSTI R8, @0x2020\nSTI R8, @0x2021\nSTI R8, @0x2022\n"
+            "LDI @0x2022, R8\nBEQ L1\nLDI 5, R0\nSTI R0, @0x8b21\n"
+            "LDI 1, R8\nLDI 6, R0\nSTI R0, @0x8b22\n");
+  std::string jumped = ".rung line 1\n    LOAD X1\n    OUT Y0\n    JMP skip\n.label skip\n.rung line 2\n"
+                       "    LOAD Y0\n    OUT Y1\n.end\n";
+  std::string t = rung_text(jumped, 2);
+  EXPECT_NE(t.find("LDI @0x2020, R8"), std::string::npos) << t;
+}
+
 // -O1 (and -O2) turn a branch into its delayed form where two or three
 // useful instructions fill the slots: TOF's jump over its off branch takes
 // the three instructions before it, the test of IN the preset load before
