@@ -1,4 +1,5 @@
 // x86-64 target: names, one-line parser, printer, GNU as source, listings.
+#include <array>
 #include <cctype>
 #include <cstdio>
 #include <set>
@@ -464,6 +465,20 @@ Instruction base_lea(RegNum reg, int32_t k) {
   m.disp = k;
   m.size = Size::None;
   return make(Mnemonic::Lea, {Operand::r(r64(reg)), Operand::m(m)});
+}
+
+std::span<const Instruction> safe_divisor() {
+  using M = Mnemonic;
+  Mem rcx1;
+  rcx1.base = r64(CX);
+  rcx1.disp = 1;
+  rcx1.size = Size::None;
+  static const std::array<Instruction, 4> seq = {
+      make(M::Lea, {Operand::r(r32(DX)), Operand::m(rcx1)}),
+      make(M::Cmp, {Operand::r(r32(DX)), Operand::i(1)}),
+      make(M::Mov, {Operand::r(r32(DX)), Operand::i(1)}),
+      make_cc(M::Cmovcc, Cond::BE, {Operand::r(r32(CX)), Operand::r(r32(DX))})};
+  return seq;
 }
 
 std::string_view routine_name(Routine r) {

@@ -277,6 +277,7 @@ class Gen : public ClassGen<Gen> {
   void abs_int(const ldc::Operand& a, const ldc::Operand& d);
   void real_fn(Op op, const ldc::Operand& a, const ldc::Operand& d);
   uint32_t area_addr(Area a, uint32_t n) const { return L_.addr(a, n); }
+  bool gated_divmod(const ldc::Instr& in);
   bool gated_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
   bool gated_counter(const ldc::Instr& in, uint32_t cw, uint32_t cq);
   void put_word(uint32_t a, int32_t v) { emit(M::Mov, {Dw(a), I(v)}); }
@@ -417,6 +418,54 @@ DivLabels Gen::div_labels(bool real) {
     l.minus_one = fresh();
   }
   return l;
+}
+
+// -O2: DIV and MOD without a branch (docs/x86.md, "Branch-free division").
+// r8b = the divisor is zero; an INT32 divisor of 0 or -1 becomes 1 before the
+// division (as::x86::safe_divisor), and x / -1 is then negated; the result is
+// stored unless the divisor is zero or there is no power, and S0 |= power and
+// a zero divisor.
+bool Gen::gated_divmod(const ldc::Instr& in) {
+  if (!bases_) return false;
+  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
+  const Reg r8d = r32(R8), r8b = r8(R8);
+  bool mod = in.op == Op::MOD;
+  if (!mod && (a.is_real() || b.is_real())) {
+    load_reals(a, b);
+    emit(M::Xorps, {R(xmm2), R(xmm2)});
+    emit(M::Ucomiss, {R(xmm1), R(xmm2)});
+    emit(make_cc(M::Setcc, Cond::E, {R(r8b)}));
+    emit(make_cc(M::Setcc, Cond::NP, {R(cl)}));  // a NaN divisor is not zero
+    emit(M::And, {R(r8b), R(cl)});
+    emit(M::Divss, {R(xmm0), R(xmm1)});
+    if (d.kind == OpdKind::Real) emit(M::Movd, {R(eax), R(xmm0)});
+    else real_to_int_eax();
+  } else {
+    load_ints(a, b);
+    emit(M::Mov, {R(r8d), R(ecx)});
+    for (const Instruction& i : as::x86::safe_divisor()) emit(i);
+    emit(M::Cdq, {});
+    emit(M::Idiv, {R(ecx)});
+    if (mod) emit(M::Mov, {R(eax), R(edx)});  // 0 for a divisor of 0 or -1
+    else {
+      emit(M::Mov, {R(edx), R(eax)});
+      emit(M::Neg, {R(edx)});
+      emit(M::Cmp, {R(r8d), I(-1)});
+      emit(make_cc(M::Cmovcc, Cond::E, {R(eax), R(edx)}));  // x / -1 = -x, wrapping
+    }
+    emit(M::Test, {R(r8d), R(r8d)});
+    emit(make_cc(M::Setcc, Cond::E, {R(r8b)}));
+    if (d.kind == OpdKind::Real) { emit(M::Cvtsi2ss, {R(xmm0), R(eax)}); emit(M::Movd, {R(eax), R(xmm0)}); }
+  }
+  emit(M::Test, {R(r8b), R(r8b)});
+  emit(make_cc(M::Cmovcc, Cond::NE, {R(eax), Dw(addr(d))}));
+  if (on_) emit(M::Mov, {Dw(addr(d)), R(eax)});
+  else {
+    gated_store(d);
+    emit(M::And, {R(r8d), R(power())});
+  }
+  emit(M::Or, {B(L_.addr(Area::S, kBitError)), R(r8b)});
+  return true;
 }
 
 void Gen::branch_zero_real(const DivLabels& l) {
@@ -684,14 +733,12 @@ void Gen::bit_slots(const ldc::Instr& in) {
     case Op::LOADN: emit(M::Movzx, {R(dw), b0}); return emit(M::Xor, {R(dw), I(1)});
     case Op::AND: return emit(M::And, {R(t), b0});
     case Op::OR: return emit(M::Or, {R(t), b0});
-    case Op::ANDN:  // top & ~b: the upper bits of ~b meet zeros
-      emit(M::Movzx, {R(eax), b0});
-      emit(M::Not, {R(eax)});
-      return emit(M::And, {R(tw), R(eax)});
-    case Op::ORN:
-      emit(M::Movzx, {R(eax), b0});
-      emit(M::Xor, {R(eax), I(1)});
-      return emit(M::Or, {R(tw), R(eax)});
+    case Op::ANDN:  // top & !b of two 0/1 bytes is top > b
+      emit(M::Cmp, {R(t), b0});
+      return emit(make_cc(M::Setcc, Cond::A, {R(t)}));
+    case Op::ORN:  // top | !b is top >= b
+      emit(M::Cmp, {R(t), b0});
+      return emit(make_cc(M::Setcc, Cond::AE, {R(t)}));
     case Op::LOADP:  // d = b & !e; e = b
       emit(M::Movzx, {R(dw), b0});
       emit(M::Movzx, {R(eax), b1});

@@ -109,7 +109,8 @@ struct DivLabels {
 //    advance(tw) (ET), unless_power(l) / if_power(l) (branch when the top is 0 /
 //    1), if_flag(addr, set, l), restart_et(tw), et_below(l) (ET < PT), q_et(tq,
 //    rel) (Q = ET rel PT), q_preset(tq) (Q = PT > 0), tof_on, remember_input(ti),
-//    count(in, cw, cq) (CTU / CTD).
+//    count(in, cw, cq) (CTU / CTD); gated_divmod(in) (true if G made a DIV or
+//    MOD another way).
 template <class G>
 class ClassGen {
  public:
@@ -151,6 +152,7 @@ class ClassGen {
   // (wrapping), x MOD -1 = 0.
   void divmod(const Instr& in) {
     const Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
+    if (g().gated_divmod(in)) return;
     bool mod = in.op == Op::MOD, real = !mod && (a.is_real() || b.is_real());
     [[maybe_unused]] auto plain = g().ungated(in);
     std::string skip = g().skip_unless_power();

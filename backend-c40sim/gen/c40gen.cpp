@@ -435,6 +435,7 @@ class Gen : public ClassGen<Gen> {
   void abs_int(const ldc::Operand& a, const ldc::Operand& d);
   void real_fn(Op o, const ldc::Operand& a, const ldc::Operand& d);
   uint32_t area_addr(Area a, uint32_t n) const { return W_.addr(a, n); }
+  bool gated_divmod(const ldc::Instr&) { return false; }
   bool gated_timer(const ldc::Instr&, uint32_t, uint32_t, uint32_t) { return false; }
   bool gated_counter(const ldc::Instr&, uint32_t, uint32_t) { return false; }
   void r0_value(int32_t v);
