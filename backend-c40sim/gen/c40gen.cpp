@@ -5,6 +5,7 @@
 #include <cstring>
 #include <map>
 #include <optional>
+#include <set>
 #include <stdexcept>
 
 #include "ir/codegen.h"
@@ -196,6 +197,7 @@ class Gen : public ClassGen<Gen> {
   bool group_open_ = false;    // a power test's branch to group_ is pending (-O1)
   std::string group_;
   std::vector<Fuse> fuse_;     // per IL instruction of the rung (-O1)
+  Reg pt_ = Reg::R1;           // the timer's preset (IR0 for a short constant at -O2: no flags)
   KnownStack known_;           // the stack's values known at compile time (-O2)
   bool on_ = false;            // this guarded instruction's power is on for certain: no test (-O2)
   size_t at_ = 0;              // index of the IL instruction being built
@@ -219,7 +221,10 @@ class Gen : public ClassGen<Gen> {
     for (unsigned k = 0; k < i.num_operands; k++) direct |= i.ops[k].kind == OperandKind::Direct;
     if (writes_reg(i, r0) || writes_reg(i, Reg::R10)) r0_top_ = false;
     if (writes_reg(i, r0)) r0_value_.reset();
-    if (i.mnemonic != M::Sti && i.mnemonic != M::Stf) z_of_ = -1;  // stores leave the flags alone
+    // stores leave the flags alone, and so do loads into registers outside R0-R11
+    bool flags_kept = i.mnemonic == M::Sti || i.mnemonic == M::Stf ||
+                      (i.mnemonic == M::Ldi && i.ops[1].kind == OperandKind::Reg && !is_extended(i.ops[1].reg));
+    if (!flags_kept) z_of_ = -1;
     if (direct && page_ != kDataPage) {
       items_.push_back(Item::instr(make(M::Ldpk, {I(page_)})));
       items_.push_back(Item::instr(std::move(i)));
@@ -448,7 +453,7 @@ class Gen : public ClassGen<Gen> {
     branch(set ? Cond::NE : Cond::EQ, l);
   }
   void restart_et(uint32_t tw) { op(M::Ldi, {I(0), R(r2)}); op(M::Sti, {R(r2), D(tw)}); }
-  void et_below(const std::string& l) { op(M::Cmpi, {R(r1), R(r2)}); branch(Cond::LT, l); }
+  void et_below(const std::string& l) { op(M::Cmpi, {R(pt_), R(r2)}); branch(Cond::LT, l); }
   void q_et(uint32_t tq, Rel rel);
   void q_preset(uint32_t tq);
   void tof_on(uint32_t tw, uint32_t tq, uint32_t ti) { put_flag(tq, 1); put_flag(ti, 1); put_word(tw, 0); }
@@ -619,9 +624,16 @@ void Gen::real_fn(Op o, const ldc::Operand& a, const ldc::Operand& d) {
   }
 }
 
-// R1 = timer preset, a negative one counted as 0
+// pt_ = timer preset, a negative one counted as 0: R1, or at -O2 IR0 for a
+// constant that one LDI loads (a load into IR0 leaves the flags, so the power
+// test after it can still use the Z of the rung's last contact)
 void Gen::preset(const ldc::Operand& pt) {
-  if (is_const(pt)) return load_imm32(std::max(const_int(pt), 0), r1);
+  pt_ = r1;
+  if (is_const(pt)) {
+    int32_t v = std::max(const_int(pt), 0);
+    if (opt_ >= 2 && v <= 32767) pt_ = Reg::IR0;
+    return load_imm32(v, pt_);
+  }
   load_int(pt, r1);
   opc(M::Ldic, Cond::LT, {I(0), R(r1)});
 }
@@ -632,11 +644,11 @@ void Gen::advance(uint32_t tw) {
   op(M::Ldi, {D(tw), R(r0)});
   op(M::Ldi, {R(r0), R(r2)});
   op(M::Addi, {D(W_.addr(Area::Sys, kSysDtWord)), R(r2)});
-  opc(M::Ldic, Cond::V, {R(r1), R(r2)});
-  op(M::Cmpi, {R(r1), R(r2)});
-  opc(M::Ldic, Cond::GT, {R(r1), R(r2)});
-  op(M::Cmpi, {R(r1), R(r0)});
-  opc(M::Ldic, Cond::GE, {R(r1), R(r2)});
+  opc(M::Ldic, Cond::V, {R(pt_), R(r2)});
+  op(M::Cmpi, {R(pt_), R(r2)});
+  opc(M::Ldic, Cond::GT, {R(pt_), R(r2)});
+  op(M::Cmpi, {R(pt_), R(r0)});
+  opc(M::Ldic, Cond::GE, {R(pt_), R(r2)});
   op(M::Sti, {R(r2), D(tw)});
 }
 
@@ -651,7 +663,7 @@ void Gen::r0_value(int32_t v) {
 // tq = (R2 rel R1): Q from ET and PT
 void Gen::q_et(uint32_t tq, Rel rel) {
   r0_value(0);
-  op(M::Cmpi, {R(r1), R(r2)});
+  op(M::Cmpi, {R(pt_), R(r2)});
   opc(M::Ldic, cond_of(rel), {I(1), R(r0)});
   op(M::Sti, {R(r0), D(tq)});
 }
@@ -659,7 +671,7 @@ void Gen::q_et(uint32_t tq, Rel rel) {
 // tq = (R1 > 0): Q when a timing starts
 void Gen::q_preset(uint32_t tq) {
   r0_value(0);
-  op(M::Cmpi, {I(0), R(r1)});
+  op(M::Cmpi, {I(0), R(pt_)});
   opc(M::Ldic, Cond::GT, {I(1), R(r0)});
   op(M::Sti, {R(r0), D(tq)});
 }
@@ -1258,49 +1270,69 @@ void fill_delay_slots(std::vector<Item>& items, std::vector<uint32_t>& starts) {
 
 // ------------------------------------------------------------ reloads (-O2)
 //
-// A rung that starts by loading what the rung before it stored from the same
-// register (`STI R8, @Y0` ... `LDI @Y0, R8`) needs no load: Held follows,
-// from block to block, which image words the registers hold.  A load is
-// dropped when its register holds that word already and the flags it would
-// set are dead.  Forgotten: a register's word when anything else writes the
-// register or the word; everything at a call, an indirect store and a label
-// (where DP is the main page again: -O1 restores it right after each far
-// access).
-struct Held {
-  std::map<Reg, std::pair<int64_t, int64_t>> word;  // register -> (DP page, offset)
-  int64_t dp = kDataPage;
-  void forget_word(std::pair<int64_t, int64_t> w) {
-    std::erase_if(word, [&](const auto& kv) { return kv.second == w; });
-  }
+// A load of what a register holds already is dropped when the flags it would
+// set are dead: a rung that starts by loading what the rung before it stored
+// from the same register (`STI R8, @Y0` ... `LDI @Y0, R8`), or a constant
+// loaded again (`LDI 0, R0` of each RSTT in a row).  Held follows, from block
+// to block, what the registers hold: an image word or a constant.  Forgotten:
+// a register's value when anything else writes the register, a word when it
+// is written; everything at a call, an indirect store and a label that a
+// branch may reach (where DP is the main page again: -O1 restores it right
+// after each far access).
+struct Known {
+  bool constant;
+  int64_t a, b;  // constant: (value, 0); word: (DP page, offset)
+  bool operator==(const Known&) const = default;
 };
 
+struct Held {
+  std::map<Reg, Known> reg;
+  int64_t dp = kDataPage;
+};
+
+// the value `LDI x, Rk` gives Rk, if x is a constant or an image word
+std::optional<Known> loaded(const Instruction& in, int64_t dp) {
+  if (in.mnemonic != M::Ldi || in.num_operands != 2 || in.ops[1].kind != OperandKind::Reg) return std::nullopt;
+  if (in.ops[0].kind == OperandKind::Direct) return Known{false, dp, in.ops[0].imm};
+  if (in.ops[0].kind == OperandKind::Imm) return Known{true, in.ops[0].imm, 0};
+  return std::nullopt;
+}
+
 bool redundant_load(const Instruction& in, const Held& h) {
-  if (in.mnemonic != M::Ldi || in.num_operands != 2 || in.ops[0].kind != OperandKind::Direct) return false;
-  auto it = h.word.find(in.ops[1].reg);
-  return it != h.word.end() && it->second == std::pair(h.dp, in.ops[0].imm);
+  std::optional<Known> k = loaded(in, h.dp);
+  auto it = k ? h.reg.find(in.ops[1].reg) : h.reg.end();
+  return it != h.reg.end() && it->second == *k;
 }
 
 void track(const Instruction& in, Held& h) {
   if (in.mnemonic == M::Ldpk) { h.dp = in.ops[0].imm; return; }
-  if (in.mnemonic == M::Call || in.mnemonic == M::Callc) { h.word.clear(); return; }
+  if (in.mnemonic == M::Call || in.mnemonic == M::Callc) { h.reg.clear(); return; }
   Effect e = effect_of(in);
   if (e.store) {
-    if (in.ops[1].kind != OperandKind::Direct) { h.word.clear(); return; }
-    std::pair<int64_t, int64_t> w(h.dp, in.ops[1].imm);
-    h.forget_word(w);
-    if (in.mnemonic == M::Sti && in.ops[0].kind == OperandKind::Reg) h.word[in.ops[0].reg] = w;
+    if (in.ops[1].kind != OperandKind::Direct) { h.reg.clear(); return; }
+    Known w{false, h.dp, in.ops[1].imm};
+    std::erase_if(h.reg, [&](const auto& kv) { return kv.second == w; });
+    if (in.mnemonic == M::Sti && in.ops[0].kind == OperandKind::Reg) {  // a constant is kept, a word replaced
+      auto it = h.reg.find(in.ops[0].reg);
+      if (it == h.reg.end() || !it->second.constant) h.reg[in.ops[0].reg] = w;
+    }
     return;
   }
-  std::erase_if(h.word, [&](const auto& kv) { return writes_reg(in, kv.first); });
-  if (in.mnemonic == M::Ldi && in.ops[0].kind == OperandKind::Direct) h.word[in.ops[1].reg] = {h.dp, in.ops[0].imm};
+  std::erase_if(h.reg, [&](const auto& kv) { return writes_reg(in, kv.first); });
+  if (std::optional<Known> k = loaded(in, h.dp)) h.reg[in.ops[1].reg] = *k;
 }
 
 void drop_reloads(std::vector<Item>& items, std::vector<uint32_t>& starts, Held& h) {
   std::vector<uint64_t> live = liveness(items);
+  std::set<std::string> targets;  // the block's local labels that a branch names
+  for (const Item& it : items)
+    if (it.kind == as::ItemKind::Instruction)
+      for (unsigned k = 0; k < it.inst.num_operands; k++)
+        if (it.inst.ops[k].kind == OperandKind::Label) targets.insert(it.inst.ops[k].label);
   std::vector<char> drop(items.size(), 0);
   for (size_t i = 0; i < items.size(); i++) {
-    if (items[i].kind == as::ItemKind::Label) {
-      h.word.clear();
+    if (items[i].kind == as::ItemKind::Label && (items[i].global || targets.count(items[i].label))) {
+      h.reg.clear();
       h.dp = kDataPage;
     }
     if (items[i].kind != as::ItemKind::Instruction) continue;
