@@ -346,8 +346,13 @@ constexpr const X86Rel& x86_rel(Rel r) { return kX86Rels[int(r)]; }
 void Gen::compare_ints(const ldc::Operand& a, const ldc::Operand& b, Rel rel) {
   const X86Rel& x = x86_rel(rel);
   if (slots_) emit(M::Xor, {R(wide(slot(depth_))), R(wide(slot(depth_)))});  // no partial-register chain
-  load_int(a, eax);
-  emit(M::Cmp, {R(eax), int_src(b)});
+  bool word = !is_const(a) && a.kind != OpdKind::Real;
+  if (bases_ && word && b.kind == OpdKind::ConstInt) {
+    emit(M::Cmp, {Dw(addr(a)), I(b.ival)});  // -O2: the word against the constant, no load
+  } else {
+    load_int(a, eax);
+    emit(M::Cmp, {R(eax), int_src(b)});
+  }
   if (slots_) return emit(make_cc(M::Setcc, x.int_cc, {R(slot(depth_))}));
   emit(make_cc(M::Setcc, x.int_cc, {R(al)}));
   push_al();
