@@ -505,10 +505,10 @@ std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& a) {
     t.push_back("mov " + cq + ", r8b");
   } else {
     // PT = max(preset, 0); r8d = advance(ET, dt, PT) (see the backend's advance_edx)
-    for (const std::string& x : std::initializer_list<std::string>{"xor eax, eax", "test ecx, ecx", "cmovs ecx, eax", "mov eax, " + tw, "xor r11d, r11d",
+    for (const std::string& x : std::initializer_list<std::string>{"xor eax, eax", "test ecx, ecx", "cmovs ecx, eax", "mov eax, " + tw,
                           "mov r8d, eax", "add r8d, dword ptr [rbx+" + std::to_string(a.dt) + "]", "mov r10d, r8d",
-                          std::string("cmovo r8d, ecx"), std::string("setl r11b"), std::string("cmp r8d, ecx"),
-                          std::string("cmovg r8d, ecx"), std::string("test r11d, r11d"), std::string("cmovne r8d, r10d"),
+                          std::string("setl r11b"), std::string("cmp r8d, ecx"),
+                          std::string("cmova r8d, ecx"), std::string("test r11b, r11b"), std::string("cmovne r8d, r10d"),
                           std::string("cmp eax, ecx"), std::string("cmovge r8d, ecx"), std::string("xor r10d, r10d"),
                           std::string("xor r9d, r9d")})
       t.push_back(x);

@@ -585,19 +585,18 @@ void Gen::advance(uint32_t tw) {
 // ecx (>= 0).  The IL's rule: ET >= PT ? PT : min(ET + dt, PT) with the sum
 // exact.  After the add, L says the exact sum is negative (below PT: the
 // wrapped sum is exact then unless it overflowed downwards, when the IL keeps
-// the wrapped value); O without L is an upward overflow (above PT).
+// the wrapped value); otherwise the sum above PT unsigned is above PT exactly,
+// an upward overflow too (its wrapped value is 2^32 less, over 2^31 unsigned).
 void Gen::advance_edx(uint32_t tw) {
-  const Reg r11d = r32(R11), r11b = r8(R11);
+  const Reg r11b = r8(R11);
   emit(M::Mov, {R(eax), Dw(tw)});
-  emit(M::Xor, {R(r11d), R(r11d)});
   emit(M::Mov, {R(edx), R(eax)});
   emit(M::Add, {R(edx), Dw(kSysDt)});
   emit(M::Mov, {R(r10d), R(edx)});
-  emit(make_cc(M::Cmovcc, Cond::O, {R(edx), R(ecx)}));
   emit(make_cc(M::Setcc, Cond::L, {R(r11b)}));
   emit(M::Cmp, {R(edx), R(ecx)});
-  emit(make_cc(M::Cmovcc, Cond::G, {R(edx), R(ecx)}));
-  emit(M::Test, {R(r11d), R(r11d)});
+  emit(make_cc(M::Cmovcc, Cond::A, {R(edx), R(ecx)}));
+  emit(M::Test, {R(r11b), R(r11b)});
   emit(make_cc(M::Cmovcc, Cond::NE, {R(edx), R(r10d)}));
   emit(M::Cmp, {R(eax), R(ecx)});
   emit(make_cc(M::Cmovcc, Cond::GE, {R(edx), R(ecx)}));
