@@ -604,6 +604,11 @@ void Gen::advance_edx(uint32_t tw) {
 
 // RSTT / RSTC with power: each operand &= (top - 1), 0 with power, all ones without
 void Gen::reset_masked(std::initializer_list<Operand> dwords, std::initializer_list<Operand> bytes) {
+  if (known_.on()) {  // power on for certain: plain zero stores
+    for (const Operand& o : dwords) emit(M::Mov, {o, I(0)});
+    for (const Operand& o : bytes) emit(M::Mov, {o, I(0)});
+    return;
+  }
   if (slots_) emit(M::Movzx, {R(ecx), R(top8())});
   else { emit(M::Mov, {R(ecx), R(ebp)}); emit(M::And, {R(ecx), I(1)}); }
   emit(M::Sub, {R(ecx), I(1)});
@@ -660,11 +665,17 @@ void Gen::remember_input(uint32_t ti) {
 // in ecx and the edge in esi.
 void Gen::counter_gated(const ldc::Instr& in) {
   uint32_t e = addr(in.a[2]);
-  top_to_eax();
-  emit(M::Movzx, {R(esi), B(e)});
-  emit(M::Mov, {B(e), R(al)});
-  emit(M::Not, {R(esi)});
-  emit(M::And, {R(esi), R(eax)});  // rising edge of the input
+  if (known_.on()) {  // power on for certain: the edge is the input's first scan
+    emit(M::Movzx, {R(esi), B(e)});
+    emit(M::Mov, {B(e), I(1)});
+    emit(M::Xor, {R(esi), I(1)});
+  } else {
+    top_to_eax();
+    emit(M::Movzx, {R(esi), B(e)});
+    emit(M::Mov, {B(e), R(al)});
+    emit(M::Not, {R(esi)});
+    emit(M::And, {R(esi), R(eax)});  // rising edge of the input
+  }
   emit(M::Mov, {R(r8(DX)), I(int32_t(in.a[0].index & 0xff))});  // the routine takes dl only (movzx edx, dl)
   bool up = in.op == Op::CTU;
   if (up) load_int(in.a[1], ecx);

@@ -398,6 +398,7 @@ const char* kKnownPowerIl = R"(; power on for certain, and not
     WNOT    WX5 D4
     RSTT    T0
     RSTC    C0
+    CTU     C2 5 E1
     OUT     Y0
 .rung line 2
     TRUE
