@@ -81,6 +81,21 @@ class KnownStack {
   signed char& top();
 };
 
+// -O2: a contact pushed only to be combined later can wait for the combine.
+// `LOAD a; B; ANDBLK`, where the block B (at least one push) only pushes and
+// combines bits (contacts, edges, compares, TRUE, the blocks; no output, no
+// MPS / MRD / MPP, no jump), computes `B; AND a`; LOADN gives ANDN, ORBLK
+// gives OR / ORN.  The result is the same bit (B's reads and a's commute; an
+// edge instruction in B writes only its edge slot, which no contact reads),
+// in one register less and one instruction less.  partner[i] = j for such a
+// contact at i and its block instruction at j, partner[j] = i; -1 elsewhere.
+// A contact is looked for at most kDeferReach instructions ahead.
+constexpr size_t kDeferReach = 64;
+std::vector<int> deferred_contacts(const std::vector<Instr>& code);
+// The contact instruction that the block instruction `blk` (ANDBLK / ORBLK)
+// becomes for the deferred `contact` (LOAD / LOADN): AND ANDN OR ORN a.
+Instr combined_contact(const Instr& contact, const Instr& blk);
+
 // The labels of DIV / MOD (ClassGen::divmod), made in the target's order:
 // err (zero divisor), divide (after the REAL zero test, x86), minus_one (the
 // INT32 divisor -1), store (the shared store of the INT32 result, C40); a label

@@ -197,6 +197,8 @@ class Gen : public ClassGen<Gen> {
   bool group_open_ = false;    // a power test's branch to group_ is pending (-O1)
   std::string group_;
   std::vector<Fuse> fuse_;     // per IL instruction of the rung (-O1)
+  std::vector<int> defer_;     // deferred_contacts of the rung (-O2, stack in registers)
+  std::vector<ldc::Instr> contacts_;  // the rung's deferred contacts, by their index
   Reg pt_ = Reg::R1;           // the timer's preset (IR0 for a short constant at -O2: no flags)
   KnownStack known_;           // the stack's values known at compile time (-O2)
   bool on_ = false;            // this guarded instruction's power is on for certain: no test (-O2)
@@ -714,11 +716,17 @@ void Gen::instr(const ldc::Instr& in) {
   r0_value_.reset();
   Fuse f = at_ < fuse_.size() ? fuse_[at_] : Fuse::None;
   on_ = opt_ >= 2 && guarded(in.op) && known_.on();  // -O2: a power on for certain needs no test
-  if (slots_ && bit_template(in.op)) bit_slots(in);
-  else if (f == Fuse::None || !bit_fused(in, f)) gen_by_class(*this, in);
+  int partner = at_ < defer_.size() ? defer_[at_] : -1;
+  if (partner >= 0) {  // -O2: a deferred contact pushes nothing; its block instruction applies it
+    if (size_t(partner) < at_) bit_slots(combined_contact(contacts_[size_t(partner)], in));
+  } else if (slots_ && bit_template(in.op)) {
+    bit_slots(in);
+  } else if (f == Fuse::None || !bit_fused(in, f)) {
+    gen_by_class(*this, in);
+  }
   on_ = false;
   if (opt_ >= 2) known_.step(in);
-  depth_ += op_info(in.op).push - op_info(in.op).pop;
+  if (partner < 0) depth_ += op_info(in.op).push - op_info(in.op).pop;
   at_++;
 }
 
@@ -730,6 +738,11 @@ void Gen::instr(const ldc::Instr& in) {
 // 4, the start 1 less for LOADN and the same for LOAD, and the push 1 more
 // than LOAD's shift: a run pays when it has an AND or ends in a block.
 void Gen::plan_runs(const std::vector<ldc::Instr>& code) {
+  defer_.clear();
+  if (opt_ >= 2 && slots_) {
+    defer_ = deferred_contacts(code);
+    contacts_ = code;
+  }
   fuse_.assign(code.size(), Fuse::None);
   if (opt_ < 1 || slots_) return;
   for (size_t i = 0; i < code.size(); i++) {
@@ -1286,8 +1299,12 @@ struct Known {
 };
 
 struct Held {
-  std::map<Reg, Known> reg;
+  std::map<Reg, std::vector<Known>> reg;  // a register may equal a constant and several words
   int64_t dp = kDataPage;
+  bool holds(Reg r, const Known& k) const {
+    auto it = reg.find(r);
+    return it != reg.end() && std::find(it->second.begin(), it->second.end(), k) != it->second.end();
+  }
 };
 
 // the value `LDI x, Rk` gives Rk, if x is a constant or an image word
@@ -1300,8 +1317,7 @@ std::optional<Known> loaded(const Instruction& in, int64_t dp) {
 
 bool redundant_load(const Instruction& in, const Held& h) {
   std::optional<Known> k = loaded(in, h.dp);
-  auto it = k ? h.reg.find(in.ops[1].reg) : h.reg.end();
-  return it != h.reg.end() && it->second == *k;
+  return k && h.holds(in.ops[1].reg, *k);
 }
 
 void track(const Instruction& in, Held& h) {
@@ -1311,15 +1327,12 @@ void track(const Instruction& in, Held& h) {
   if (e.store) {
     if (in.ops[1].kind != OperandKind::Direct) { h.reg.clear(); return; }
     Known w{false, h.dp, in.ops[1].imm};
-    std::erase_if(h.reg, [&](const auto& kv) { return kv.second == w; });
-    if (in.mnemonic == M::Sti && in.ops[0].kind == OperandKind::Reg) {  // a constant is kept, a word replaced
-      auto it = h.reg.find(in.ops[0].reg);
-      if (it == h.reg.end() || !it->second.constant) h.reg[in.ops[0].reg] = w;
-    }
+    for (auto& [r, ks] : h.reg) std::erase(ks, w);
+    if (in.mnemonic == M::Sti && in.ops[0].kind == OperandKind::Reg) h.reg[in.ops[0].reg].push_back(w);
     return;
   }
   std::erase_if(h.reg, [&](const auto& kv) { return writes_reg(in, kv.first); });
-  if (std::optional<Known> k = loaded(in, h.dp)) h.reg[in.ops[1].reg] = *k;
+  if (std::optional<Known> k = loaded(in, h.dp)) h.reg[in.ops[1].reg] = {*k};
 }
 
 void drop_reloads(std::vector<Item>& items, std::vector<uint32_t>& starts, Held& h) {

@@ -287,7 +287,7 @@ TEST(C40Opt, TheLevelsHaveTheirShape) {
             "LDI 5, R0\nSTI R0, @0x8b21\nLDI @0x8b21, R0\nADDI @0x8b22, R0\nSTI R0, @0x8b23\n");
   EXPECT_EQ(rung_text(il, 2),
             "LDI @0x21, R8\nAND @0x22, R8\nSTI R8, @0x2020\nBEQ L1\n"  // Z is still that of AND: no TSTB
-            "LDI 5, R0\nSTI R0, @0x8b21\nLDI @0x8b21, R0\nADDI @0x8b22, R0\nSTI R0, @0x8b23\n");
+            "LDI 5, R0\nSTI R0, @0x8b21\nADDI @0x8b22, R0\nSTI R0, @0x8b23\n");  // R0 holds D1: no reload
 }
 
 // -O2 drops a load of what the register holds: a rung's first load of the
@@ -307,6 +307,15 @@ TEST(C40Opt, ReloadsAndKnownPower) {
                        "    LOAD Y0\n    OUT Y1\n.end\n";
   std::string t = rung_text(jumped, 2);
   EXPECT_NE(t.find("LDI @0x2020, R8"), std::string::npos) << t;
+  // a contact pushed only for a block's combine waits for it: paper 001's
+  // equation (1), X1 AND (X2 OR (X3 AND X4)), in four instructions and one register
+  EXPECT_EQ(rung_text(".rung line 1\n    LOAD X1\n    LOAD X2\n    LOAD X3\n    AND X4\n    ORBLK\n    ANDBLK\n"
+                      "    OUT Y1\n.end\n", 2),
+            "LDI @0x23, R8\nAND @0x24, R8\nOR @0x22, R8\nAND @0x21, R8\nSTI R8, @0x2021\n");
+  EXPECT_EQ(rung_text(".rung line 1\n    LOADN X1\n    LOAD X2\n    ORBLK\n    OUT Y1\n.end\n", 2),
+            "LDI @0x22, R8\nLDI @0x21, R0\nXOR 0x1, R0\nOR R0, R8\nSTI R8, @0x2021\n");  // ORN
+  EXPECT_NE(rung_text(".rung line 1\n    LOAD X1\n    LOAD X2\n    OUT Y0\n    ANDBLK\n    OUT Y1\n.end\n", 2)
+                .find("LDI @0x21, R8"), std::string::npos);  // an output inside the block: no wait
   // a constant loaded again: two RSTT share one `LDI 0, R0`
   EXPECT_EQ(rung_text(".rung line 1\n    LOAD X2\n    RSTT T0\n    RSTT T4\n.end\n", 2),
             "LDI @0x22, R8\nBEQ L1\nLDI 0, R0\nSTI R0, @0xaf20\nSTI R0, @0x8020\nSTI R0, @0x8220\n"
