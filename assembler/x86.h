@@ -164,6 +164,13 @@ constexpr int kNumBases = 3;
 constexpr RegNum kBaseRegs[kNumBases] = {DI, R15, R14};
 Instruction base_lea(RegNum reg, int32_t k);  // lea reg, [rbx+k]
 
+// The -O2 division's guard (docs/x86.md, "Branch-free division"): before
+// `cdq; idiv ecx`, a divisor of 0 or -1 (ecx+1 unsigned <= 1) becomes 1, so
+// the division cannot fault; the code then fixes the results with cmov.
+// `lea edx, [rcx+1]; cmp edx, 1; mov edx, 1; cmovbe ecx, edx`.  The loader's
+// code check accepts this guard or the `test/je, cmp/je` one before an idiv.
+std::span<const Instruction> safe_divisor();
+
 // ------------------------------------------------------ shared routines
 // Timers and counters at -O2 call one routine per kind, placed after the
 // epilogue (docs/x86.md, "Shared routines").  A routine is branch-free and

@@ -1,4 +1,5 @@
 // x86-64 target: names, one-line parser, printer, GNU as source, listings.
+#include <array>
 #include <cctype>
 #include <cstdio>
 #include <set>
@@ -466,6 +467,20 @@ Instruction base_lea(RegNum reg, int32_t k) {
   return make(Mnemonic::Lea, {Operand::r(r64(reg)), Operand::m(m)});
 }
 
+std::span<const Instruction> safe_divisor() {
+  using M = Mnemonic;
+  Mem rcx1;
+  rcx1.base = r64(CX);
+  rcx1.disp = 1;
+  rcx1.size = Size::None;
+  static const std::array<Instruction, 4> seq = {
+      make(M::Lea, {Operand::r(r32(DX)), Operand::m(rcx1)}),
+      make(M::Cmp, {Operand::r(r32(DX)), Operand::i(1)}),
+      make(M::Mov, {Operand::r(r32(DX)), Operand::i(1)}),
+      make_cc(M::Cmovcc, Cond::BE, {Operand::r(r32(CX)), Operand::r(r32(DX))})};
+  return seq;
+}
+
 std::string_view routine_name(Routine r) {
   static const char* const names[] = {"rt_ton", "rt_tof", "rt_tp", "rt_ctu", "rt_ctd"};
   return names[int(r)];
@@ -490,10 +505,10 @@ std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& a) {
     t.push_back("mov " + cq + ", r8b");
   } else {
     // PT = max(preset, 0); r8d = advance(ET, dt, PT) (see the backend's advance_edx)
-    for (const std::string& x : std::initializer_list<std::string>{"xor eax, eax", "test ecx, ecx", "cmovs ecx, eax", "mov eax, " + tw, "xor r11d, r11d",
+    for (const std::string& x : std::initializer_list<std::string>{"xor eax, eax", "test ecx, ecx", "cmovs ecx, eax", "mov eax, " + tw,
                           "mov r8d, eax", "add r8d, dword ptr [rbx+" + std::to_string(a.dt) + "]", "mov r10d, r8d",
-                          std::string("cmovo r8d, ecx"), std::string("setl r11b"), std::string("cmp r8d, ecx"),
-                          std::string("cmovg r8d, ecx"), std::string("test r11d, r11d"), std::string("cmovne r8d, r10d"),
+                          std::string("setl r11b"), std::string("cmp r8d, ecx"),
+                          std::string("cmova r8d, ecx"), std::string("test r11b, r11b"), std::string("cmovne r8d, r10d"),
                           std::string("cmp eax, ecx"), std::string("cmovge r8d, ecx"), std::string("xor r10d, r10d"),
                           std::string("xor r9d, r9d")})
       t.push_back(x);

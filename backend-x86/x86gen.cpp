@@ -115,6 +115,8 @@ class Gen : public ClassGen<Gen> {
   bool slots_;     // -O2: the stack in kSlots; else the -O0 shift register in ebp
   bool gate_;      // -O2: branch-free power gating (cmov) instead of `je skip`
   bool bases_;     // -O2: the frame sets the base registers (rdi is reloaded after a REAL call)
+  KnownStack known_;  // -O2: the stack's values known at compile time
+  bool on_ = false;   // -O2: this instruction's power is on for certain (no gate, no test)
   std::bitset<8>* used_;  // the shared routines called (as::x86::Routine)
   int depth_ = 0;  // stack positions in use before the current instruction
 
@@ -251,7 +253,7 @@ class Gen : public ClassGen<Gen> {
   // if the top of the stack is 0, skip to the returned label; with gate_,
   // nothing ("" : the stores are gated instead)
   std::string skip_unless_power() {
-    if (gate_) return "";
+    if (gate_ || on_) return "";
     std::string skip = fresh();
     test_top();
     jcc(Cond::E, skip);
@@ -286,6 +288,7 @@ class Gen : public ClassGen<Gen> {
   void abs_int(const ldc::Operand& a, const ldc::Operand& d);
   void real_fn(Op op, const ldc::Operand& a, const ldc::Operand& d);
   uint32_t area_addr(Area a, uint32_t n) const { return L_.addr(a, n); }
+  bool gated_divmod(const ldc::Instr& in);
   bool gated_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
   bool gated_counter(const ldc::Instr& in, uint32_t cw, uint32_t cq);
   void put_word(uint32_t a, int32_t v) { emit(M::Mov, {Dw(a), I(v)}); }
@@ -354,8 +357,13 @@ constexpr const X86Rel& x86_rel(Rel r) { return kX86Rels[int(r)]; }
 void Gen::compare_ints(const ldc::Operand& a, const ldc::Operand& b, Rel rel) {
   const X86Rel& x = x86_rel(rel);
   if (slots_) emit(M::Xor, {R(wide(slot(depth_))), R(wide(slot(depth_)))});  // no partial-register chain
-  load_int(a, eax);
-  emit(M::Cmp, {R(eax), int_src(b)});
+  bool word = !is_const(a) && a.kind != OpdKind::Real;
+  if (bases_ && word && b.kind == OpdKind::ConstInt) {
+    emit(M::Cmp, {Dw(addr(a)), I(b.ival)});  // -O2: the word against the constant, no load
+  } else {
+    load_int(a, eax);
+    emit(M::Cmp, {R(eax), int_src(b)});
+  }
   if (slots_) return emit(make_cc(M::Setcc, x.int_cc, {R(slot(depth_))}));
   emit(make_cc(M::Setcc, x.int_cc, {R(al)}));
   push_al();
@@ -428,6 +436,54 @@ DivLabels Gen::div_labels(bool real) {
   return l;
 }
 
+// -O2: DIV and MOD without a branch (docs/x86.md, "Branch-free division").
+// r8b = the divisor is zero; an INT32 divisor of 0 or -1 becomes 1 before the
+// division (as::x86::safe_divisor), and x / -1 is then negated; the result is
+// stored unless the divisor is zero or there is no power, and S0 |= power and
+// a zero divisor.
+bool Gen::gated_divmod(const ldc::Instr& in) {
+  if (!bases_) return false;
+  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
+  const Reg r8d = r32(R8), r8b = r8(R8);
+  bool mod = in.op == Op::MOD;
+  if (!mod && (a.is_real() || b.is_real())) {
+    load_reals(a, b);
+    emit(M::Xorps, {R(xmm2), R(xmm2)});
+    emit(M::Ucomiss, {R(xmm1), R(xmm2)});
+    emit(make_cc(M::Setcc, Cond::E, {R(r8b)}));
+    emit(make_cc(M::Setcc, Cond::NP, {R(cl)}));  // a NaN divisor is not zero
+    emit(M::And, {R(r8b), R(cl)});
+    emit(M::Divss, {R(xmm0), R(xmm1)});
+    if (d.kind == OpdKind::Real) emit(M::Movd, {R(eax), R(xmm0)});
+    else real_to_int_eax();
+  } else {
+    load_ints(a, b);
+    emit(M::Mov, {R(r8d), R(ecx)});
+    for (const Instruction& i : as::x86::safe_divisor()) emit(i);
+    emit(M::Cdq, {});
+    emit(M::Idiv, {R(ecx)});
+    if (mod) emit(M::Mov, {R(eax), R(edx)});  // 0 for a divisor of 0 or -1
+    else {
+      emit(M::Mov, {R(edx), R(eax)});
+      emit(M::Neg, {R(edx)});
+      emit(M::Cmp, {R(r8d), I(-1)});
+      emit(make_cc(M::Cmovcc, Cond::E, {R(eax), R(edx)}));  // x / -1 = -x, wrapping
+    }
+    emit(M::Test, {R(r8d), R(r8d)});
+    emit(make_cc(M::Setcc, Cond::E, {R(r8b)}));
+    if (d.kind == OpdKind::Real) { emit(M::Cvtsi2ss, {R(xmm0), R(eax)}); emit(M::Movd, {R(eax), R(xmm0)}); }
+  }
+  emit(M::Test, {R(r8b), R(r8b)});
+  emit(make_cc(M::Cmovcc, Cond::NE, {R(eax), Dw(addr(d))}));
+  if (on_) emit(M::Mov, {Dw(addr(d)), R(eax)});
+  else {
+    gated_store(d);
+    emit(M::And, {R(r8d), R(power())});
+  }
+  emit(M::Or, {B(L_.addr(Area::S, kBitError)), R(r8b)});
+  return true;
+}
+
 void Gen::branch_zero_real(const DivLabels& l) {
   emit(M::Xorps, {R(xmm2), R(xmm2)});
   emit(M::Ucomiss, {R(xmm1), R(xmm2)});
@@ -466,7 +522,7 @@ void Gen::shift(Op op, const ldc::Operand& a, const ldc::Operand& n) {
   if (n.kind == OpdKind::ConstInt) {
     if (n.ival < 0 || n.ival > 31) emit(M::Xor, {R(eax), R(eax)});
     else if (n.ival > 0) emit(m, {R(eax), I(n.ival)});
-  } else if (gate_) {  // unsigned above 31: negative counts too
+  } else if (bases_) {  // -O2, branch-free; unsigned above 31: negative counts too
     load_int(n, ecx);
     emit(m, {R(eax), R(cl)});
     emit(M::Xor, {R(edx), R(edx)});
@@ -540,19 +596,18 @@ void Gen::advance(uint32_t tw) {
 // ecx (>= 0).  The IL's rule: ET >= PT ? PT : min(ET + dt, PT) with the sum
 // exact.  After the add, L says the exact sum is negative (below PT: the
 // wrapped sum is exact then unless it overflowed downwards, when the IL keeps
-// the wrapped value); O without L is an upward overflow (above PT).
+// the wrapped value); otherwise the sum above PT unsigned is above PT exactly,
+// an upward overflow too (its wrapped value is 2^32 less, over 2^31 unsigned).
 void Gen::advance_edx(uint32_t tw) {
-  const Reg r11d = r32(R11), r11b = r8(R11);
+  const Reg r11b = r8(R11);
   emit(M::Mov, {R(eax), Dw(tw)});
-  emit(M::Xor, {R(r11d), R(r11d)});
   emit(M::Mov, {R(edx), R(eax)});
   emit(M::Add, {R(edx), Dw(kSysDt)});
   emit(M::Mov, {R(r10d), R(edx)});
-  emit(make_cc(M::Cmovcc, Cond::O, {R(edx), R(ecx)}));
   emit(make_cc(M::Setcc, Cond::L, {R(r11b)}));
   emit(M::Cmp, {R(edx), R(ecx)});
-  emit(make_cc(M::Cmovcc, Cond::G, {R(edx), R(ecx)}));
-  emit(M::Test, {R(r11d), R(r11d)});
+  emit(make_cc(M::Cmovcc, Cond::A, {R(edx), R(ecx)}));
+  emit(M::Test, {R(r11b), R(r11b)});
   emit(make_cc(M::Cmovcc, Cond::NE, {R(edx), R(r10d)}));
   emit(M::Cmp, {R(eax), R(ecx)});
   emit(make_cc(M::Cmovcc, Cond::GE, {R(edx), R(ecx)}));
@@ -560,6 +615,11 @@ void Gen::advance_edx(uint32_t tw) {
 
 // RSTT / RSTC with power: each operand &= (top - 1), 0 with power, all ones without
 void Gen::reset_masked(std::initializer_list<Operand> dwords, std::initializer_list<Operand> bytes) {
+  if (known_.on()) {  // power on for certain: plain zero stores
+    for (const Operand& o : dwords) emit(M::Mov, {o, I(0)});
+    for (const Operand& o : bytes) emit(M::Mov, {o, I(0)});
+    return;
+  }
   if (slots_) emit(M::Movzx, {R(ecx), R(top8())});
   else { emit(M::Mov, {R(ecx), R(ebp)}); emit(M::And, {R(ecx), I(1)}); }
   emit(M::Sub, {R(ecx), I(1)});
@@ -616,11 +676,17 @@ void Gen::remember_input(uint32_t ti) {
 // in ecx and the edge in esi.
 void Gen::counter_gated(const ldc::Instr& in) {
   uint32_t e = addr(in.a[2]);
-  top_to_eax();
-  emit(M::Movzx, {R(esi), B(e)});
-  emit(M::Mov, {B(e), R(al)});
-  emit(M::Not, {R(esi)});
-  emit(M::And, {R(esi), R(eax)});  // rising edge of the input
+  if (known_.on()) {  // power on for certain: the edge is the input's first scan
+    emit(M::Movzx, {R(esi), B(e)});
+    emit(M::Mov, {B(e), I(1)});
+    emit(M::Xor, {R(esi), I(1)});
+  } else {
+    top_to_eax();
+    emit(M::Movzx, {R(esi), B(e)});
+    emit(M::Mov, {B(e), R(al)});
+    emit(M::Not, {R(esi)});
+    emit(M::And, {R(esi), R(eax)});  // rising edge of the input
+  }
   emit(M::Mov, {R(r8(DX)), I(int32_t(in.a[0].index & 0xff))});  // the routine takes dl only (movzx edx, dl)
   bool up = in.op == Op::CTU;
   if (up) load_int(in.a[1], ecx);
@@ -664,8 +730,19 @@ void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
   emit(M::Mov, {B(cq), R(al)});
 }
 
+// At -O2 an instruction of the move, arith, logic or special class whose power
+// is on for certain (KnownStack: a rung from the rail, `TRUE`) is emitted with
+// neither gate nor test; timers and counters still call their routines.
 void Gen::instr(const ldc::Instr& in) {
-  gen_by_class(*this, in);
+  OpClass k = op_info(in.op).klass;
+  on_ = bases_ && known_.on() &&
+        (k == OpClass::Move || k == OpClass::Arith || k == OpClass::Logic || k == OpClass::Special);
+  {
+    Ungated plain(gate_, on_);
+    gen_by_class(*this, in);
+  }
+  on_ = false;
+  if (bases_) known_.step(in);
   depth_ += op_info(in.op).push - op_info(in.op).pop;
 }
 
@@ -682,14 +759,12 @@ void Gen::bit_slots(const ldc::Instr& in) {
     case Op::LOADN: emit(M::Movzx, {R(dw), b0}); return emit(M::Xor, {R(dw), I(1)});
     case Op::AND: return emit(M::And, {R(t), b0});
     case Op::OR: return emit(M::Or, {R(t), b0});
-    case Op::ANDN:  // top & ~b: the upper bits of ~b meet zeros
-      emit(M::Movzx, {R(eax), b0});
-      emit(M::Not, {R(eax)});
-      return emit(M::And, {R(tw), R(eax)});
-    case Op::ORN:
-      emit(M::Movzx, {R(eax), b0});
-      emit(M::Xor, {R(eax), I(1)});
-      return emit(M::Or, {R(tw), R(eax)});
+    case Op::ANDN:  // top & !b of two 0/1 bytes is top > b
+      emit(M::Cmp, {R(t), b0});
+      return emit(make_cc(M::Setcc, Cond::A, {R(t)}));
+    case Op::ORN:  // top | !b is top >= b
+      emit(M::Cmp, {R(t), b0});
+      return emit(make_cc(M::Setcc, Cond::AE, {R(t)}));
     case Op::LOADP:  // d = b & !e; e = b
       emit(M::Movzx, {R(dw), b0});
       emit(M::Movzx, {R(eax), b1});

@@ -1241,6 +1241,26 @@ struct Report {
     row("issue 15: ns per basic IL instruction", "≤ 0.1 ns", b0, b2, 0.1, false, 3, " ns", "");
     row("issue 15: IL instructions compiled per second at -O2 (best source)", "≥ 2 M/s", best_il_s, best2, 2, true, 2,
         " M/s", "");
+    const MemRow* big = nullptr;  // the largest .ld plant of the memory table
+    for (const MemRow& m : memrows)
+      if (m.source == ".ld" && m.il && m.error.empty() && (!big || m.il > big->il)) big = &m;
+    if (big)
+      row("issue 15: ldc peak memory per IL instruction, plant of " + std::to_string(big->rungs) + " rungs (-O0)",
+          "≤ 200 B", (big->peak_kb() - big->before_kb) * 1024.0 / double(big->il), NAN, 200, false, 0, " B", "");
+    // no class slower than its C route: C/-O2 of the powered one-class programs
+    // (compares left out: gcc deletes those whose result nobody reads)
+    double worst = INFINITY;
+    std::string worst_class, each;
+    for (Subject* s : R.of("classes")) {
+      if (!s->powered || s->klass == op_class_name(OpClass::Compare)) continue;
+      double r = s->t[kC].median / s->t[kNativeO2].median;
+      if (!std::isfinite(r)) continue;
+      each += (each.empty() ? "" : ", ") + s->klass + " " + fixed(r, 2) + "×";
+      if (r < worst) worst = r, worst_class = s->klass;
+    }
+    if (std::isfinite(worst))
+      row("issue 15: slowest class against its C route (C time / native time): " + worst_class, "≥ 1.0×", NAN, worst, 1,
+          true, 2, "×", each);
     md += "\nThe typical mix is the 3,000-instruction program of P_basic = 0.689 (the paper's Fig. 10 range ends "
           "at 3,000); the last column gives the spread over the typical-mix programs of 300 to 100,000 instructions. "
           "Basic: the one-class program of 3,000 basic instructions.  Bytes: the least-squares slope over the "

@@ -64,6 +64,38 @@ void gen_by_class(Gen& g, const Instr& in) {
   }
 }
 
+// The values of a rung's bit stack known while compiling it (-O2's constant
+// folding of power): TRUE pushes 1, and the bit instructions carry what their
+// operands decide (AND with a known 0 is 0, OR with a known 1 is 1, MPS copies,
+// ANDBLK / ORBLK combine); every other push is unknown, and the application
+// classes leave the stack alone.  A backend asks on() before an instruction:
+// its power is on for certain, so the instruction needs no gate or test.
+class KnownStack {
+ public:
+  bool on() const { return !v_.empty() && v_.back() == 1; }
+  void step(const Instr& in);  // after in
+
+ private:
+  std::vector<signed char> v_;  // bottom first: -1 unknown, 0, 1; what lies below is unknown
+  signed char pop();
+  signed char& top();
+};
+
+// -O2: a contact pushed only to be combined later can wait for the combine.
+// `LOAD a; B; ANDBLK`, where the block B (at least one push) only pushes and
+// combines bits (contacts, edges, compares, TRUE, the blocks; no output, no
+// MPS / MRD / MPP, no jump), computes `B; AND a`; LOADN gives ANDN, ORBLK
+// gives OR / ORN.  The result is the same bit (B's reads and a's commute; an
+// edge instruction in B writes only its edge slot, which no contact reads),
+// in one register less and one instruction less.  partner[i] = j for such a
+// contact at i and its block instruction at j, partner[j] = i; -1 elsewhere.
+// A contact is looked for at most kDeferReach instructions ahead.
+constexpr size_t kDeferReach = 64;
+std::vector<int> deferred_contacts(const std::vector<Instr>& code);
+// The contact instruction that the block instruction `blk` (ANDBLK / ORBLK)
+// becomes for the deferred `contact` (LOAD / LOADN): AND ANDN OR ORN a.
+Instr combined_contact(const Instr& contact, const Instr& blk);
+
 // The labels of DIV / MOD (ClassGen::divmod), made in the target's order:
 // err (zero divisor), divide (after the REAL zero test, x86), minus_one (the
 // INT32 divisor -1), store (the shared store of the INT32 result, C40); a label
@@ -76,7 +108,8 @@ struct DivLabels {
 // once over the primitives of the target's code generator G (CRTP: G derives
 // from ClassGen<G> and befriends it).  G supplies:
 //  * labels and power: fresh(), label(l), jump(l), skip_unless_power() (a label
-//    to end_skip(l) at, "" if the stores are gated instead), ungated(in) (an
+//    to end_skip(l) at, "" if the stores are gated instead or the power is on for
+//    certain, KnownStack), ungated(in) (an
 //    object that turns gating off for in's code while it lives, if G needs that);
 //  * values: load_int(o) (the INT32 accumulator), load_ints(a, b) and
 //    load_reals(a, b) (the two INT32 / REAL working registers), store_int(d),
@@ -91,7 +124,8 @@ struct DivLabels {
 //    advance(tw) (ET), unless_power(l) / if_power(l) (branch when the top is 0 /
 //    1), if_flag(addr, set, l), restart_et(tw), et_below(l) (ET < PT), q_et(tq,
 //    rel) (Q = ET rel PT), q_preset(tq) (Q = PT > 0), tof_on, remember_input(ti),
-//    count(in, cw, cq) (CTU / CTD).
+//    count(in, cw, cq) (CTU / CTD); gated_divmod(in) (true if G made a DIV or
+//    MOD another way).
 template <class G>
 class ClassGen {
  public:
@@ -133,9 +167,11 @@ class ClassGen {
   // (wrapping), x MOD -1 = 0.
   void divmod(const Instr& in) {
     const Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
+    if (g().gated_divmod(in)) return;
     bool mod = in.op == Op::MOD, real = !mod && (a.is_real() || b.is_real());
     [[maybe_unused]] auto plain = g().ungated(in);
     std::string skip = g().skip_unless_power();
+    if (skip.empty()) skip = g().fresh();  // power on for certain: no test, but the branches end here
     DivLabels l = g().div_labels(real);
     if (real) {
       g().load_reals(a, b);

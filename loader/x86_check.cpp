@@ -111,9 +111,23 @@ const std::array<x86::Instruction, 6>& guarded_division() {
   return seq;
 }
 
-// Is insts[k] an idiv that ends a whole guarded division (branch targets aside)?
-bool is_guarded_division(const std::vector<x86::Decoded>& insts, size_t k, size_t body_first) {
-  const auto& seq = guarded_division();
+// The -O2 form (as::x86::safe_divisor): a divisor of 0 or -1 replaced by 1.
+const std::array<x86::Instruction, 6>& safe_division() {
+  using M = x86::Mnemonic;
+  static const std::array<x86::Instruction, 6> seq = [] {
+    std::array<x86::Instruction, 6> s;
+    std::span<const x86::Instruction> guard = x86::safe_divisor();
+    std::copy(guard.begin(), guard.end(), s.begin());
+    s[4] = x86::make(M::Cdq);
+    s[5] = x86::make(M::Idiv, {x86::Operand::r(x86::r32(x86::CX))});
+    return s;
+  }();
+  return seq;
+}
+
+// Does insts[k] end the instructions of seq (branch displacements aside)?
+bool ends_with(const std::vector<x86::Decoded>& insts, size_t k, size_t body_first,
+               const std::array<x86::Instruction, 6>& seq) {
   if (k < body_first + seq.size() - 1) return false;
   for (size_t j = 0; j < seq.size(); j++) {
     x86::Instruction a = insts[k + 1 - seq.size() + j].inst;
@@ -123,6 +137,13 @@ bool is_guarded_division(const std::vector<x86::Decoded>& insts, size_t k, size_
     if (!(a == seq[j])) return false;
   }
   return true;
+}
+
+// Is insts[k] an idiv that ends a whole guarded division, of either form
+// (branch targets aside)?
+bool is_guarded_division(const std::vector<x86::Decoded>& insts, size_t k, size_t body_first) {
+  static_assert(std::tuple_size_v<std::remove_cvref_t<decltype(guarded_division())>> == 6);
+  return ends_with(insts, k, body_first, guarded_division()) || ends_with(insts, k, body_first, safe_division());
 }
 
 }  // namespace
@@ -260,7 +281,8 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     if (in.mnemonic == M::Idiv) {
       if (!is_guarded_division(d.insts, k, body_first))
         return at(di.offset) + text_of(in) +
-               ": a division not guarded against 0 and -1 (only 'test ecx, ecx; je; cmp ecx, -1; je; cdq; idiv ecx')";
+               ": a division not guarded against 0 and -1 (only 'test ecx, ecx; je; cmp ecx, -1; je; cdq; idiv ecx' or "
+               "'lea edx, [rcx+1]; cmp edx, 1; mov edx, 1; cmovbe ecx, edx; cdq; idiv ecx')";
       for (size_t j = k + 2 - guarded_division().size(); j <= k; j++) guarded.push_back(d.insts[j].offset);
     }
     if (in.mnemonic == M::Call && in.num_operands && in.ops[0].kind == x86::OperandKind::Address &&

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <map>
 #include <optional>
+#include <set>
 #include <stdexcept>
 
 #include "ir/codegen.h"
@@ -196,6 +197,11 @@ class Gen : public ClassGen<Gen> {
   bool group_open_ = false;    // a power test's branch to group_ is pending (-O1)
   std::string group_;
   std::vector<Fuse> fuse_;     // per IL instruction of the rung (-O1)
+  std::vector<int> defer_;     // deferred_contacts of the rung (-O2, stack in registers)
+  std::vector<ldc::Instr> contacts_;  // the rung's deferred contacts, by their index
+  Reg pt_ = Reg::R1;           // the timer's preset (IR0 for a short constant at -O2: no flags)
+  KnownStack known_;           // the stack's values known at compile time (-O2)
+  bool on_ = false;            // this guarded instruction's power is on for certain: no test (-O2)
   size_t at_ = 0;              // index of the IL instruction being built
 
   // Application instructions: executed only when the top is 1, stack unchanged.
@@ -217,7 +223,10 @@ class Gen : public ClassGen<Gen> {
     for (unsigned k = 0; k < i.num_operands; k++) direct |= i.ops[k].kind == OperandKind::Direct;
     if (writes_reg(i, r0) || writes_reg(i, Reg::R10)) r0_top_ = false;
     if (writes_reg(i, r0)) r0_value_.reset();
-    if (i.mnemonic != M::Sti && i.mnemonic != M::Stf) z_of_ = -1;  // stores leave the flags alone
+    // stores leave the flags alone, and so do loads into registers outside R0-R11
+    bool flags_kept = i.mnemonic == M::Sti || i.mnemonic == M::Stf ||
+                      (i.mnemonic == M::Ldi && i.ops[1].kind == OperandKind::Reg && !is_extended(i.ops[1].reg));
+    if (!flags_kept) z_of_ = -1;
     if (direct && page_ != kDataPage) {
       items_.push_back(Item::instr(make(M::Ldpk, {I(page_)})));
       items_.push_back(Item::instr(std::move(i)));
@@ -375,6 +384,7 @@ class Gen : public ClassGen<Gen> {
   // the stack nor the slot registers.
   std::string skip_unless_power() {
     std::string skip = fresh();
+    if (on_) return skip;
     if (opt_ == 0) {
       test_top();
       branch(Cond::EQ, skip);
@@ -432,6 +442,7 @@ class Gen : public ClassGen<Gen> {
   void abs_int(const ldc::Operand& a, const ldc::Operand& d);
   void real_fn(Op o, const ldc::Operand& a, const ldc::Operand& d);
   uint32_t area_addr(Area a, uint32_t n) const { return W_.addr(a, n); }
+  bool gated_divmod(const ldc::Instr&) { return false; }
   bool gated_timer(const ldc::Instr&, uint32_t, uint32_t, uint32_t) { return false; }
   bool gated_counter(const ldc::Instr&, uint32_t, uint32_t) { return false; }
   void r0_value(int32_t v);
@@ -444,7 +455,7 @@ class Gen : public ClassGen<Gen> {
     branch(set ? Cond::NE : Cond::EQ, l);
   }
   void restart_et(uint32_t tw) { op(M::Ldi, {I(0), R(r2)}); op(M::Sti, {R(r2), D(tw)}); }
-  void et_below(const std::string& l) { op(M::Cmpi, {R(r1), R(r2)}); branch(Cond::LT, l); }
+  void et_below(const std::string& l) { op(M::Cmpi, {R(pt_), R(r2)}); branch(Cond::LT, l); }
   void q_et(uint32_t tq, Rel rel);
   void q_preset(uint32_t tq);
   void tof_on(uint32_t tw, uint32_t tq, uint32_t ti) { put_flag(tq, 1); put_flag(ti, 1); put_word(tw, 0); }
@@ -615,9 +626,16 @@ void Gen::real_fn(Op o, const ldc::Operand& a, const ldc::Operand& d) {
   }
 }
 
-// R1 = timer preset, a negative one counted as 0
+// pt_ = timer preset, a negative one counted as 0: R1, or at -O2 IR0 for a
+// constant that one LDI loads (a load into IR0 leaves the flags, so the power
+// test after it can still use the Z of the rung's last contact)
 void Gen::preset(const ldc::Operand& pt) {
-  if (is_const(pt)) return load_imm32(std::max(const_int(pt), 0), r1);
+  pt_ = r1;
+  if (is_const(pt)) {
+    int32_t v = std::max(const_int(pt), 0);
+    if (opt_ >= 2 && v <= 32767) pt_ = Reg::IR0;
+    return load_imm32(v, pt_);
+  }
   load_int(pt, r1);
   opc(M::Ldic, Cond::LT, {I(0), R(r1)});
 }
@@ -628,11 +646,11 @@ void Gen::advance(uint32_t tw) {
   op(M::Ldi, {D(tw), R(r0)});
   op(M::Ldi, {R(r0), R(r2)});
   op(M::Addi, {D(W_.addr(Area::Sys, kSysDtWord)), R(r2)});
-  opc(M::Ldic, Cond::V, {R(r1), R(r2)});
-  op(M::Cmpi, {R(r1), R(r2)});
-  opc(M::Ldic, Cond::GT, {R(r1), R(r2)});
-  op(M::Cmpi, {R(r1), R(r0)});
-  opc(M::Ldic, Cond::GE, {R(r1), R(r2)});
+  opc(M::Ldic, Cond::V, {R(pt_), R(r2)});
+  op(M::Cmpi, {R(pt_), R(r2)});
+  opc(M::Ldic, Cond::GT, {R(pt_), R(r2)});
+  op(M::Cmpi, {R(pt_), R(r0)});
+  opc(M::Ldic, Cond::GE, {R(pt_), R(r2)});
   op(M::Sti, {R(r2), D(tw)});
 }
 
@@ -647,7 +665,7 @@ void Gen::r0_value(int32_t v) {
 // tq = (R2 rel R1): Q from ET and PT
 void Gen::q_et(uint32_t tq, Rel rel) {
   r0_value(0);
-  op(M::Cmpi, {R(r1), R(r2)});
+  op(M::Cmpi, {R(pt_), R(r2)});
   opc(M::Ldic, cond_of(rel), {I(1), R(r0)});
   op(M::Sti, {R(r0), D(tq)});
 }
@@ -655,7 +673,7 @@ void Gen::q_et(uint32_t tq, Rel rel) {
 // tq = (R1 > 0): Q when a timing starts
 void Gen::q_preset(uint32_t tq) {
   r0_value(0);
-  op(M::Cmpi, {I(0), R(r1)});
+  op(M::Cmpi, {I(0), R(pt_)});
   opc(M::Ldic, Cond::GT, {I(1), R(r0)});
   op(M::Sti, {R(r0), D(tq)});
 }
@@ -697,9 +715,18 @@ void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
 void Gen::instr(const ldc::Instr& in) {
   r0_value_.reset();
   Fuse f = at_ < fuse_.size() ? fuse_[at_] : Fuse::None;
-  if (slots_ && bit_template(in.op)) bit_slots(in);
-  else if (f == Fuse::None || !bit_fused(in, f)) gen_by_class(*this, in);
-  depth_ += op_info(in.op).push - op_info(in.op).pop;
+  on_ = opt_ >= 2 && guarded(in.op) && known_.on();  // -O2: a power on for certain needs no test
+  int partner = at_ < defer_.size() ? defer_[at_] : -1;
+  if (partner >= 0) {  // -O2: a deferred contact pushes nothing; its block instruction applies it
+    if (size_t(partner) < at_) bit_slots(combined_contact(contacts_[size_t(partner)], in));
+  } else if (slots_ && bit_template(in.op)) {
+    bit_slots(in);
+  } else if (f == Fuse::None || !bit_fused(in, f)) {
+    gen_by_class(*this, in);
+  }
+  on_ = false;
+  if (opt_ >= 2) known_.step(in);
+  if (partner < 0) depth_ += op_info(in.op).push - op_info(in.op).pop;
   at_++;
 }
 
@@ -711,6 +738,11 @@ void Gen::instr(const ldc::Instr& in) {
 // 4, the start 1 less for LOADN and the same for LOAD, and the push 1 more
 // than LOAD's shift: a run pays when it has an AND or ends in a block.
 void Gen::plan_runs(const std::vector<ldc::Instr>& code) {
+  defer_.clear();
+  if (opt_ >= 2 && slots_) {
+    defer_ = deferred_contacts(code);
+    contacts_ = code;
+  }
   fuse_.assign(code.size(), Fuse::None);
   if (opt_ < 1 || slots_) return;
   for (size_t i = 0; i < code.size(); i++) {
@@ -1249,6 +1281,80 @@ void fill_delay_slots(std::vector<Item>& items, std::vector<uint32_t>& starts) {
   items = std::move(out);
 }
 
+// ------------------------------------------------------------ reloads (-O2)
+//
+// A load of what a register holds already is dropped when the flags it would
+// set are dead: a rung that starts by loading what the rung before it stored
+// from the same register (`STI R8, @Y0` ... `LDI @Y0, R8`), or a constant
+// loaded again (`LDI 0, R0` of each RSTT in a row).  Held follows, from block
+// to block, what the registers hold: an image word or a constant.  Forgotten:
+// a register's value when anything else writes the register, a word when it
+// is written; everything at a call, an indirect store and a label that a
+// branch may reach (where DP is the main page again: -O1 restores it right
+// after each far access).
+struct Known {
+  bool constant;
+  int64_t a, b;  // constant: (value, 0); word: (DP page, offset)
+  bool operator==(const Known&) const = default;
+};
+
+struct Held {
+  std::map<Reg, std::vector<Known>> reg;  // a register may equal a constant and several words
+  int64_t dp = kDataPage;
+  bool holds(Reg r, const Known& k) const {
+    auto it = reg.find(r);
+    return it != reg.end() && std::find(it->second.begin(), it->second.end(), k) != it->second.end();
+  }
+};
+
+// the value `LDI x, Rk` gives Rk, if x is a constant or an image word
+std::optional<Known> loaded(const Instruction& in, int64_t dp) {
+  if (in.mnemonic != M::Ldi || in.num_operands != 2 || in.ops[1].kind != OperandKind::Reg) return std::nullopt;
+  if (in.ops[0].kind == OperandKind::Direct) return Known{false, dp, in.ops[0].imm};
+  if (in.ops[0].kind == OperandKind::Imm) return Known{true, in.ops[0].imm, 0};
+  return std::nullopt;
+}
+
+bool redundant_load(const Instruction& in, const Held& h) {
+  std::optional<Known> k = loaded(in, h.dp);
+  return k && h.holds(in.ops[1].reg, *k);
+}
+
+void track(const Instruction& in, Held& h) {
+  if (in.mnemonic == M::Ldpk) { h.dp = in.ops[0].imm; return; }
+  if (in.mnemonic == M::Call || in.mnemonic == M::Callc) { h.reg.clear(); return; }
+  Effect e = effect_of(in);
+  if (e.store) {
+    if (in.ops[1].kind != OperandKind::Direct) { h.reg.clear(); return; }
+    Known w{false, h.dp, in.ops[1].imm};
+    for (auto& [r, ks] : h.reg) std::erase(ks, w);
+    if (in.mnemonic == M::Sti && in.ops[0].kind == OperandKind::Reg) h.reg[in.ops[0].reg].push_back(w);
+    return;
+  }
+  std::erase_if(h.reg, [&](const auto& kv) { return writes_reg(in, kv.first); });
+  if (std::optional<Known> k = loaded(in, h.dp)) h.reg[in.ops[1].reg] = {*k};
+}
+
+void drop_reloads(std::vector<Item>& items, std::vector<uint32_t>& starts, Held& h) {
+  std::vector<uint64_t> live = liveness(items);
+  std::set<std::string> targets;  // the block's local labels that a branch names
+  for (const Item& it : items)
+    if (it.kind == as::ItemKind::Instruction)
+      for (unsigned k = 0; k < it.inst.num_operands; k++)
+        if (it.inst.ops[k].kind == OperandKind::Label) targets.insert(it.inst.ops[k].label);
+  std::vector<char> drop(items.size(), 0);
+  for (size_t i = 0; i < items.size(); i++) {
+    if (items[i].kind == as::ItemKind::Label && (items[i].global || targets.count(items[i].label))) {
+      h.reg.clear();
+      h.dp = kDataPage;
+    }
+    if (items[i].kind != as::ItemKind::Instruction) continue;
+    if (redundant_load(items[i].inst, h) && !(live[i + 1] & kFlags)) drop[i] = 1;
+    else track(items[i].inst, h);
+  }
+  as::remove_items(items, drop, starts);
+}
+
 }  // namespace
 
 C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
@@ -1278,6 +1384,7 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
   prog.blocks.push_back(std::move(pro));
 
   int next_label = 0;
+  Held held;
   for (const Rung& r : p.rungs) {
     as::Block<Instruction> b;
     b.source_line = r.line;
@@ -1297,6 +1404,7 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
       g.instr(in);
     }
     g.finish();
+    if (opt_level >= 2) drop_reloads(b.items, starts, held);
     if (opt_level >= 1) {
       drop_jumps_to_next(b.items, starts);
       fill_delay_slots(b.items, starts);

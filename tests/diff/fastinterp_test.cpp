@@ -381,16 +381,84 @@ const char* kTimerEdgeIl = R"(; timers and counters at their limits
 .end
 )";
 
+// Power known while compiling (-O2's KnownStack): rungs from the rail, and
+// what AND, OR, the blocks and MPS / MRD / MPP make of a known 1; the
+// instructions after an unknown top must stay gated.
+const char* kKnownPowerIl = R"(; power on for certain, and not
+.edges 2
+.rung line 1
+    TRUE
+    MOV     WX0 D0
+    DIV     WX1 WX2 D1
+    MOD     WX1 WX3 D2
+    DIV     F0 F1 F2
+    SIN     F0 F3
+    ADD     F0 F1 F4
+    SHL     WX3 WX4 D3
+    WNOT    WX5 D4
+    RSTT    T0
+    RSTC    C0
+    CTU     C2 5 E1
+    OUT     Y0
+.rung line 2
+    TRUE
+    AND     X0
+    MOV     WX5 D5
+    OR      X1
+    SUB     D5 WX6 D6
+.rung line 3
+    LOAD    X2
+    TRUE
+    ORBLK
+    MOV     WX6 D7
+    TRUE
+    ANDBLK
+    ADD     D7 1 D8
+    ANDN    X3
+    MUL     D8 3 D9
+.rung line 4
+    TRUE
+    MPS
+    AND     X4
+    MOV     WX7 D10
+    MRD
+    MOV     WX8 D11
+    MPP
+    WXOR    D11 WX9 D12
+.rung line 5
+    LOAD    X5
+    MPS
+    TRUE
+    ORBLK
+    MOV     WX10 D13
+    MPP
+    MOV     WX11 D14
+.rung line 6
+    TRUE
+    ORN     X6
+    SUB     D14 1 D15
+    LOADN   X7
+    TRUE
+    ANDBLK
+    ORBLK
+    ADD     D15 2 D16
+    TON     T1 WX12
+    CTU     C1 WX13 E0
+.end
+)";
+
 // The native code at every level on the operand forms, the timer limits and
 // the class programs (the -O2 code is branch-free there: cmov, setcc, masks).
 TEST(NativeEdges, EveryLevelMatchesOnOperandFormsAndTimerLimits) {
   struct Level { const char* name; EngineFactory make; };
   const Level levels[] = {{"-O0", make_native}, {"-O1", make_native_o1}, {"-O2", make_native_o2}};
-  Program edge = parse_il_text(kEdgeIl, "edge.il"), timers = parse_il_text(kTimerEdgeIl, "timers.il");
+  Program edge = parse_il_text(kEdgeIl, "edge.il"), timers = parse_il_text(kTimerEdgeIl, "timers.il"),
+          known = parse_il_text(kKnownPowerIl, "known.il");
   for (const Level& lv : levels) {
     for (uint64_t seed = 1; seed <= 12; seed++) {
       EXPECT_EQ(compare_il(edge, seed, 60, seed % 2 == 0, lv.make, true), "") << lv.name << " seed " << seed;
       EXPECT_EQ(compare_il(timers, seed, 200, true, lv.make, seed % 3 != 0), "") << lv.name << " seed " << seed;
+      EXPECT_EQ(compare_il(known, seed, 60, true, lv.make, seed % 2 == 0), "") << lv.name << " seed " << seed;
     }
     for (OpClass c : {OpClass::Move, OpClass::Arith, OpClass::Logic, OpClass::Special, OpClass::Timer, OpClass::Counter})
       for (bool powered : {true, false}) {

@@ -192,6 +192,21 @@ const std::vector<Case>& cases() {
        0, "is inside a guarded division"},
       {"division: a branch onto the idiv", {"jmp 0xc", "test ecx, ecx", "je 0xe", "cmp ecx, -0x1", "je 0xe", "cdq", "idiv ecx", "nop"},
        0, "is inside a guarded division"},
+      // the -O2 guard: a divisor of 0 or -1 (ecx+1 unsigned <= 1) becomes 1 (as::x86::safe_divisor)
+      {"division: safe guard with cmovb (lets -1 through)",
+       {"lea edx, [rcx+0x1]", "cmp edx, 0x1", "mov edx, 0x1", "cmovb ecx, edx", "cdq", "idiv ecx"}, 5, "a division not guarded"},
+      {"division: safe guard compares 0",
+       {"lea edx, [rcx+0x1]", "cmp edx, 0x0", "mov edx, 0x1", "cmovbe ecx, edx", "cdq", "idiv ecx"}, 5, "a division not guarded"},
+      {"division: safe guard replaces by 0",
+       {"lea edx, [rcx+0x1]", "cmp edx, 0x1", "mov edx, 0x0", "cmovbe ecx, edx", "cdq", "idiv ecx"}, 5, "a division not guarded"},
+      {"division: safe guard of another register",
+       {"lea edx, [rax+0x1]", "cmp edx, 0x1", "mov edx, 0x1", "cmovbe ecx, edx", "cdq", "idiv ecx"}, 5, "a division not guarded"},
+      {"division: safe guard, then ecx written",
+       {"lea edx, [rcx+0x1]", "cmp edx, 0x1", "mov edx, 0x1", "cmovbe ecx, edx", "xor ecx, ecx", "cdq", "idiv ecx"}, 6,
+       "a division not guarded"},
+      {"division: a branch past the safe guard's compare",
+       {"jmp 0x8", "lea edx, [rcx+0x1]", "cmp edx, 0x1", "mov edx, 0x1", "cmovbe ecx, edx", "cdq", "idiv ecx", "nop"},
+       0, "is inside a guarded division"},
       // branches into the middle of an instruction
       {"mid-instruction: jmp", {"jmp 0x4", "mov eax, 0xc3c3c3c3"}, 0, "is inside an instruction, not on an instruction boundary"},
       {"mid-instruction: jcc rel32", {"raw: 0f 85 01 00 00 00", "mov eax, 0x90909090"}, 0,
@@ -250,6 +265,7 @@ TEST(Hostile, HarmlessTwinsAreAccepted) {
       {"jmp 0x2", "nop", "nop", "jne 0x6"},                                  // forward, to boundaries and to the exit
       {"mov eax, ebx", "lea eax, [rbx+0x10]", "cmp ebx, eax", "test ebx, ebx"},  // rbx read, not written
       {"jmp 0x2", "test ecx, ecx", "je 0xe", "cmp ecx, -0x1", "je 0xe", "cdq", "idiv ecx", "nop"},  // into the guard's test
+      {"lea edx, [rcx+0x1]", "cmp edx, 0x1", "mov edx, 0x1", "cmovbe ecx, edx", "cdq", "idiv ecx"},  // the -O2 guard
   };
   for (const auto& body : ok) {
     std::vector<uint32_t> at;
