@@ -1344,7 +1344,7 @@ void drop_reloads(std::vector<Item>& items, std::vector<uint32_t>& starts, Held&
         if (it.inst.ops[k].kind == OperandKind::Label) targets.insert(it.inst.ops[k].label);
   std::vector<char> drop(items.size(), 0);
   for (size_t i = 0; i < items.size(); i++) {
-    if (items[i].kind == as::ItemKind::Label && (items[i].global || targets.count(items[i].label))) {
+    if (items[i].kind == as::ItemKind::Label && (items[i].global || targets.count(items[i].label.str()))) {
       h.reg.clear();
       h.dp = kDataPage;
     }
