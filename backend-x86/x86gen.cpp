@@ -6,6 +6,7 @@
 #include <climits>
 #include <cstring>
 #include <map>
+#include <set>
 #include <stdexcept>
 
 #include "backend-x86/backend_x86.h"
@@ -293,8 +294,15 @@ class Gen : public ClassGen<Gen> {
   bool gated_counter(const ldc::Instr& in, uint32_t cw, uint32_t cq);
   void put_word(uint32_t a, int32_t v) { emit(M::Mov, {Dw(a), I(v)}); }
   void put_flag(uint32_t a, int32_t v) { emit(M::Mov, {B(a), I(v)}); }
-  void unless_power(const std::string& l) { test_top(); jcc(Cond::E, l); }
-  void if_power(const std::string& l) { test_top(); jcc(Cond::NE, l); }
+  // the timers' power tests; none (or a jump) where the power is on for certain
+  void unless_power(const std::string& l) {
+    if (!known_.on()) test_top(), jcc(Cond::E, l);
+  }
+  void if_power(const std::string& l) {
+    if (known_.on()) return jump(l);
+    test_top();
+    jcc(Cond::NE, l);
+  }
   void if_flag(uint32_t a, bool set, const std::string& l) {
     emit(M::Cmp, {B(a), I(0)});
     jcc(set ? Cond::NE : Cond::E, l);
@@ -442,7 +450,8 @@ DivLabels Gen::div_labels(bool real) {
 // stored unless the divisor is zero or there is no power, and S0 |= power and
 // a zero divisor.
 bool Gen::gated_divmod(const ldc::Instr& in) {
-  if (!bases_) return false;
+  // power on for certain: only the divisor's rare 0 and -1 branch, predicted
+  if (!bases_ || on_) return false;
   const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
   const Reg r8d = r32(R8), r8b = r8(R8);
   bool mod = in.op == Op::MOD;
@@ -644,6 +653,9 @@ void Gen::timer_gated(const ldc::Instr& in) {
 // ldc's own rules; MatIEC's timers stay inline)
 bool Gen::gated_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti) {
   if (!gate_) return false;
+  // power on for certain: the inline timer without its power tests (TOF is
+  // three stores; TON and TP branch on their flags, which change rarely)
+  if (in.op != Op::RSTT && known_.on()) return false;
   if (in.op == Op::RSTT) reset_masked({Dw(tw)}, {B(tq), B(ti)});
   else if (in.op == Op::TON || in.op == Op::TOF || in.op == Op::TP) timer_gated(in);
   else return false;
@@ -676,17 +688,11 @@ void Gen::remember_input(uint32_t ti) {
 // in ecx and the edge in esi.
 void Gen::counter_gated(const ldc::Instr& in) {
   uint32_t e = addr(in.a[2]);
-  if (known_.on()) {  // power on for certain: the edge is the input's first scan
-    emit(M::Movzx, {R(esi), B(e)});
-    emit(M::Mov, {B(e), I(1)});
-    emit(M::Xor, {R(esi), I(1)});
-  } else {
-    top_to_eax();
-    emit(M::Movzx, {R(esi), B(e)});
-    emit(M::Mov, {B(e), R(al)});
-    emit(M::Not, {R(esi)});
-    emit(M::And, {R(esi), R(eax)});  // rising edge of the input
-  }
+  top_to_eax();
+  emit(M::Movzx, {R(esi), B(e)});
+  emit(M::Mov, {B(e), R(al)});
+  emit(M::Not, {R(esi)});
+  emit(M::And, {R(esi), R(eax)});  // rising edge of the input
   emit(M::Mov, {R(r8(DX)), I(int32_t(in.a[0].index & 0xff))});  // the routine takes dl only (movzx edx, dl)
   bool up = in.op == Op::CTU;
   if (up) load_int(in.a[1], ecx);
@@ -696,6 +702,9 @@ void Gen::counter_gated(const ldc::Instr& in) {
 // -O2: RSTC gated by a mask, CTU CTD by the shared routines
 bool Gen::gated_counter(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
   if (!gate_) return false;
+  // power on for certain: the edge comes only on the first scan, so count()'s
+  // branch on it is always predicted and beats the routine's straight line
+  if (in.op != Op::RSTC && known_.on()) return false;
   if (in.op == Op::RSTC) reset_masked({Dw(cw)}, {B(cq)});
   else counter_gated(in);
   return true;
@@ -732,7 +741,8 @@ void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
 
 // At -O2 an instruction of the move, arith, logic or special class whose power
 // is on for certain (KnownStack: a rung from the rail, `TRUE`) is emitted with
-// neither gate nor test; timers and counters still call their routines.
+// neither gate nor test; timers and counters then take their inline code
+// without the power tests (gated_timer, gated_counter).
 void Gen::instr(const ldc::Instr& in) {
   OpClass k = op_info(in.op).klass;
   on_ = bases_ && known_.on() &&
@@ -857,6 +867,35 @@ bool same_text(const Instruction& i, const char* text) {
   auto it = cache.find(text);
   if (it == cache.end()) it = cache.emplace(text, parse(text)).first;
   return i == it->second;
+}
+
+// -O2: code that no branch reaches goes (after an unconditional jmp, up to a
+// label some branch names; the power tests that KnownStack drops leave such
+// code behind), and then a jmp to the label right after it.
+void drop_unreachable(std::vector<Item>& items, std::vector<uint32_t>& starts) {
+  std::vector<char> drop(items.size(), 0);
+  for (bool changed = true; changed;) {  // dropped branches may leave their labels unnamed
+    std::set<uint32_t> named;            // labels a kept branch of the block names (ids)
+    for (size_t i = 0; i < items.size(); i++)
+      if (!drop[i] && items[i].kind == as::ItemKind::Instruction)
+        for (unsigned k = 0; k < items[i].inst.num_operands; k++)
+          if (items[i].inst.ops[k].kind == OperandKind::Label) named.insert(as::Name(items[i].inst.ops[k].label).id());
+    changed = false;
+    bool dead = false;
+    for (size_t i = 0; i < items.size(); i++) {
+      const Item& it = items[i];
+      if (it.kind == as::ItemKind::Label && (it.global || named.count(it.label.id()))) dead = false;
+      else if (it.kind != as::ItemKind::Comment && dead && !drop[i]) drop[i] = 1, changed = true;
+      if (!drop[i] && it.kind == as::ItemKind::Instruction && it.inst.mnemonic == M::Jmp) dead = true;
+    }
+  }
+  for (size_t i = 0; i < items.size(); i++) {
+    const Item& it = items[i];
+    if (!drop[i] && it.kind == as::ItemKind::Instruction && it.inst.mnemonic == M::Jmp &&
+        it.inst.ops[0].kind == OperandKind::Label && as::label_follows(items, i, as::Name(it.inst.ops[0].label), drop))
+      drop[i] = 1;
+  }
+  as::remove_items(items, drop, starts);
 }
 
 void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
@@ -1057,6 +1096,7 @@ class Blocks {
       g.instr(in);
     }
     if (opt_ >= 1 && !slots) peephole(b.items, starts);
+  if (o2_) drop_unreachable(b.items, starts);
   }
 
   as::Block<Instruction> epilogue() const {

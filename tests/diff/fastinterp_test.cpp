@@ -399,6 +399,9 @@ const char* kKnownPowerIl = R"(; power on for certain, and not
     RSTT    T0
     RSTC    C0
     CTU     C2 5 E1
+    TON     T3 WX14
+    TOF     T4 300
+    TP      T5 WX15
     OUT     Y0
 .rung line 2
     TRUE
