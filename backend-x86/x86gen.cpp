@@ -291,6 +291,7 @@ class Gen : public ClassGen<Gen> {
   uint32_t area_addr(Area a, uint32_t n) const { return L_.addr(a, n); }
   bool gated_divmod(const ldc::Instr& in);
   bool gated_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
+  void ton_on(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
   bool gated_counter(const ldc::Instr& in, uint32_t cw, uint32_t cq);
   void put_word(uint32_t a, int32_t v) { emit(M::Mov, {Dw(a), I(v)}); }
   void put_flag(uint32_t a, int32_t v) { emit(M::Mov, {B(a), I(v)}); }
@@ -649,12 +650,28 @@ void Gen::timer_gated(const ldc::Instr& in) {
   call_routine(in.op == Op::TON ? as::x86::Routine::Ton : in.op == Op::TOF ? as::x86::Routine::Tof : as::x86::Routine::Tp);
 }
 
+// -O2, TON with power on for certain: ET = TI ? advance(ET) : 0 (the input's
+// first scan), Q = ET >= PT, TI = 1, without a branch or a call.
+void Gen::ton_on(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti) {
+  preset(in.a[1]);
+  advance_edx(tw);
+  emit(M::Xor, {R(eax), R(eax)});
+  emit(M::Cmp, {B(ti), I(0)});
+  emit(make_cc(M::Cmovcc, Cond::E, {R(edx), R(eax)}));
+  emit(M::Mov, {Dw(tw), R(edx)});
+  emit(M::Cmp, {R(edx), R(ecx)});
+  emit(make_cc(M::Setcc, Cond::GE, {R(al)}));
+  emit(M::Mov, {B(tq), R(al)});
+  emit(M::Mov, {B(ti), I(1)});
+}
+
 // -O2: RSTT gated by a mask, TON TOF TP by the shared routines (they have
 // ldc's own rules; MatIEC's timers stay inline)
 bool Gen::gated_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti) {
   if (!gate_) return false;
-  // power on for certain: the inline timer without its power tests (TOF is
-  // three stores; TON and TP branch on their flags, which change rarely)
+  // power on for certain: TON straight-line (ton_on); TOF and TP inline without
+  // their power tests (TOF is three stores, TP branches on flags that change rarely)
+  if (in.op == Op::TON && known_.on()) return ton_on(in, tw, tq, ti), true;
   if (in.op != Op::RSTT && known_.on()) return false;
   if (in.op == Op::RSTT) reset_masked({Dw(tw)}, {B(tq), B(ti)});
   else if (in.op == Op::TON || in.op == Op::TOF || in.op == Op::TP) timer_gated(in);
