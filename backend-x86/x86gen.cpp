@@ -890,6 +890,8 @@ bool same_text(const Instruction& i, const char* text) {
 // label some branch names; the power tests that KnownStack drops leave such
 // code behind), and then a jmp to the label right after it.
 void drop_unreachable(std::vector<Item>& items, std::vector<uint32_t>& starts) {
+  auto is_jmp = [](const Item& it) { return it.kind == as::ItemKind::Instruction && it.inst.mnemonic == M::Jmp; };
+  if (std::none_of(items.begin(), items.end(), is_jmp)) return;  // most rungs: nothing to look for
   std::vector<char> drop(items.size(), 0);
   for (bool changed = true; changed;) {  // dropped branches may leave their labels unnamed
     std::set<uint32_t> named;            // labels a kept branch of the block names (ids)
