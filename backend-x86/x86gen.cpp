@@ -485,11 +485,8 @@ bool Gen::gated_divmod(const ldc::Instr& in) {
   }
   emit(M::Test, {R(r8b), R(r8b)});
   emit(make_cc(M::Cmovcc, Cond::NE, {R(eax), Dw(addr(d))}));
-  if (on_) emit(M::Mov, {Dw(addr(d)), R(eax)});
-  else {
-    gated_store(d);
-    emit(M::And, {R(r8d), R(power())});
-  }
+  gated_store(d);
+  emit(M::And, {R(r8d), R(power())});
   emit(M::Or, {B(L_.addr(Area::S, kBitError)), R(r8b)});
   return true;
 }
