@@ -883,6 +883,17 @@ bool same_text(const Instruction& i, const char* text) {
   return i == it->second;
 }
 
+// Marks in `drop` each branch that `is_branch` picks, not dropped yet, whose
+// target is the label right after it (the -O1 peephole, drop_unreachable).
+template <class IsBranch>
+void drop_jumps_to_next(const std::vector<Item>& items, std::vector<char>& drop, IsBranch is_branch) {
+  for (size_t i = 0; i < items.size(); i++) {
+    const Item& it = items[i];
+    if (drop[i] || !is_branch(it)) continue;
+    if (it.inst.ops[0].kind == OperandKind::Label && as::label_follows(items, i, it.inst.ops[0].label, drop)) drop[i] = 1;
+  }
+}
+
 // -O2: code that no branch reaches goes (after an unconditional jmp, up to a
 // label some branch names; the power tests that KnownStack drops leave such
 // code behind), and then a jmp to the label right after it.
@@ -895,22 +906,17 @@ void drop_unreachable(std::vector<Item>& items, std::vector<uint32_t>& starts) {
     for (size_t i = 0; i < items.size(); i++)
       if (!drop[i] && items[i].kind == as::ItemKind::Instruction)
         for (unsigned k = 0; k < items[i].inst.num_operands; k++)
-          if (items[i].inst.ops[k].kind == OperandKind::Label) named.insert(as::Name(items[i].inst.ops[k].label).id());
+          if (items[i].inst.ops[k].kind == OperandKind::Label) named.insert(items[i].inst.ops[k].label.id());
     changed = false;
     bool dead = false;
     for (size_t i = 0; i < items.size(); i++) {
       const Item& it = items[i];
       if (it.kind == as::ItemKind::Label && (it.global || named.count(it.label.id()))) dead = false;
       else if (it.kind != as::ItemKind::Comment && dead && !drop[i]) drop[i] = 1, changed = true;
-      if (!drop[i] && it.kind == as::ItemKind::Instruction && it.inst.mnemonic == M::Jmp) dead = true;
+      if (!drop[i] && is_jmp(it)) dead = true;
     }
   }
-  for (size_t i = 0; i < items.size(); i++) {
-    const Item& it = items[i];
-    if (!drop[i] && it.kind == as::ItemKind::Instruction && it.inst.mnemonic == M::Jmp &&
-        it.inst.ops[0].kind == OperandKind::Label && as::label_follows(items, i, as::Name(it.inst.ops[0].label), drop))
-      drop[i] = 1;
-  }
+  drop_jumps_to_next(items, drop, is_jmp);
   as::remove_items(items, drop, starts);
 }
 
@@ -973,12 +979,9 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
     if (writes_reg(in, BP) && !reads_reg(in, BP)) live = false;
     if (reads_reg(in, BP)) live = true;
   }
-  // jumps to the very next item
-  for (size_t i = 0; i < items.size(); i++) {
-    const Item& it = items[i];
-    if (drop[i] || it.kind != as::ItemKind::Instruction || (it.inst.mnemonic != M::Jmp && it.inst.mnemonic != M::Jcc)) continue;
-    if (it.inst.ops[0].kind == OperandKind::Label && as::label_follows(items, i, it.inst.ops[0].label, drop)) drop[i] = 1;
-  }
+  drop_jumps_to_next(items, drop, [](const Item& it) {
+    return it.kind == as::ItemKind::Instruction && (it.inst.mnemonic == M::Jmp || it.inst.mnemonic == M::Jcc);
+  });
   as::remove_items(items, drop, starts);
 }
 
