@@ -8,7 +8,10 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <charconv>
 #include <cstdlib>
+#include <deque>
+#include <unordered_map>
 
 #include "ir/ir.h"
 
@@ -49,39 +52,52 @@ std::string print_il_text(const Program& p) {
 
 namespace {
 
+// A token of one line: a view into the text, or for a quoted string into
+// `Line::unquoted` (escapes removed).
 struct Tok {
-  std::string text;
+  std::string_view text;
   int col;  // 1-based
   bool quoted = false;
 };
 
-std::vector<Tok> split(std::string_view line, int lineno) {
-  std::vector<Tok> t;
+struct Line {
+  std::vector<Tok> toks;
+  std::deque<std::string> unquoted;  // stable addresses for the quoted tokens' views
+};
+
+bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f' || c == '\n'; }
+
+void split(std::string_view line, int lineno, Line& out) {
+  out.toks.clear();
+  out.unquoted.clear();
   size_t i = 0;
   while (i < line.size()) {
     char c = line[i];
     if (c == ';') break;
-    if (std::isspace((unsigned char)c)) { i++; continue; }
+    if (is_blank(c)) { i++; continue; }
     Tok tok;
     tok.col = int(i) + 1;
     if (c == '"') {
       tok.quoted = true;
+      std::string& text = out.unquoted.emplace_back();
       i++;
       while (i < line.size() && line[i] != '"') {
         if (line[i] == '\\' && i + 1 < line.size()) i++;
-        tok.text += line[i++];
+        text += line[i++];
       }
       if (i >= line.size()) throw CompileError(lineno, tok.col, "unterminated string");
       i++;
+      tok.text = text;
     } else {
-      while (i < line.size() && !std::isspace((unsigned char)line[i]) && line[i] != ';') tok.text += line[i++];
+      size_t from = i;
+      while (i < line.size() && !is_blank(line[i]) && line[i] != ';') i++;
+      tok.text = line.substr(from, i - from);
     }
-    t.push_back(tok);
+    out.toks.push_back(tok);
   }
-  return t;
 }
 
-bool is_name(const std::string& s) {
+bool is_name(std::string_view s) {
   if (s.empty() || !(std::isalpha((unsigned char)s[0]) || s[0] == '_')) return false;
   for (char c : s)
     if (!std::isalnum((unsigned char)c) && c != '_') return false;
@@ -89,24 +105,30 @@ bool is_name(const std::string& s) {
 }
 
 // Numeric constant: INT32 or REAL (a '.', an exponent, inf or nan makes it REAL).
-bool parse_number(const std::string& s, Operand& o) {
+// What strtoll (base 10) and strtof accept, whole.
+bool parse_number(std::string_view s, Operand& o) {
   if (s.empty()) return false;
   char first = s[0];
   if (!(std::isdigit((unsigned char)first) || first == '-' || first == '+' || first == '.')) return false;
-  bool real = s.find_first_of(".eEnN") != std::string::npos;
-  errno = 0;
-  char* end = nullptr;
+  bool real = s.find_first_of(".eEnN") != std::string_view::npos;
   if (real) {
-    float f = std::strtof(s.c_str(), &end);
+    std::string z(s);
+    errno = 0;
+    char* end = nullptr;
+    float f = std::strtof(z.c_str(), &end);
     if (*end || errno == ERANGE) return false;
     o.kind = OpdKind::ConstReal;
     o.fval = f;
-  } else {
-    long long v = std::strtoll(s.c_str(), &end, 10);
-    if (*end || errno == ERANGE || v < INT32_MIN || v > INT32_MAX) return false;
-    o.kind = OpdKind::ConstInt;
-    o.ival = int32_t(v);
+    return true;
   }
+  std::string_view digits = s;
+  if (first == '+') digits.remove_prefix(1);  // strtoll takes one sign, '+' included
+  if (digits.empty() || digits[0] == '+' || (digits[0] == '-' && first == '+')) return false;
+  int64_t v = 0;
+  auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v);
+  if (ec != std::errc() || end != digits.data() + digits.size() || v < INT32_MIN || v > INT32_MAX) return false;
+  o.kind = OpdKind::ConstInt;
+  o.ival = int32_t(v);
   return true;
 }
 
@@ -114,16 +136,16 @@ Operand parse_operand(char sig, const Tok& t, int lineno, uint32_t edges) {
   Operand o;
   auto fail = [&](const std::string& m) -> Operand { throw CompileError(lineno, t.col, m); };
   if (sig == 'l') {
-    if (!is_name(t.text)) fail("expected a label name, found '" + t.text + "'");
+    if (!is_name(t.text)) fail("expected a label name, found '" + std::string(t.text) + "'");
     o.kind = OpdKind::Label;
-    o.label = t.text;
+    o.label = std::string(t.text);
     return o;
   }
   if (sig == 'e') {
     if (t.text.size() < 2 || std::toupper((unsigned char)t.text[0]) != 'E') fail("expected an edge slot E<n>");
     Operand n;
-    if (!parse_number(t.text.substr(1), n) || n.kind != OpdKind::ConstInt || n.ival < 0) fail("bad edge slot '" + t.text + "'");
-    if (uint32_t(n.ival) >= edges) fail("edge slot " + t.text + " outside the .edges count");
+    if (!parse_number(t.text.substr(1), n) || n.kind != OpdKind::ConstInt || n.ival < 0) fail("bad edge slot '" + std::string(t.text) + "'");
+    if (uint32_t(n.ival) >= edges) fail("edge slot " + std::string(t.text) + " outside the .edges count");
     o.kind = OpdKind::Edge;
     o.index = uint32_t(n.ival);
     return o;
@@ -133,8 +155,8 @@ Operand parse_operand(char sig, const Tok& t, int lineno, uint32_t edges) {
     return o;
   }
   auto d = parse_device(t.text);
-  if (!d) fail("expected a device, found '" + t.text + "'");
-  if (d->index >= device_count(d->dev)) fail("device index out of range: " + t.text);
+  if (!d) fail("expected a device, found '" + std::string(t.text) + "'");
+  if (d->index >= device_count(d->dev)) fail("device index out of range: " + std::string(t.text));
   if (sig == 't' || sig == 'c') {
     if (d->dev != (sig == 't' ? Dev::T : Dev::C)) fail(std::string("expected a ") + (sig == 't' ? "timer" : "counter"));
     o.kind = sig == 't' ? OpdKind::Timer : OpdKind::Counter;
@@ -143,7 +165,7 @@ Operand parse_operand(char sig, const Tok& t, int lineno, uint32_t edges) {
   }
   bool bitctx = sig == 'b' || sig == 'w';
   Area a = bitctx ? bit_area(d->dev) : word_area(d->dev);
-  if (a == Area::Count || !operand_area_ok(sig, a, d->index)) fail("device " + t.text + " is not allowed here");
+  if (a == Area::Count || !operand_area_ok(sig, a, d->index)) fail("device " + std::string(t.text) + " is not allowed here");
   o.area = a;
   o.index = d->index;
   o.kind = bitctx ? OpdKind::Bit : (area_is_real(a) ? OpdKind::Real : OpdKind::Int);
@@ -155,8 +177,10 @@ Operand parse_operand(char sig, const Tok& t, int lineno, uint32_t edges) {
 Program parse_il_text(std::string_view text, const std::string& filename) {
   Program p;
   p.source = filename;
-  std::vector<std::string> pending_labels, all_labels;
+  std::vector<std::string> pending_labels;
+  std::unordered_map<std::string, size_t> label_rung;  // label -> index of the rung it precedes
   Rung* cur = nullptr;
+  Line ln;
   bool ended = false;
   int lineno = 0;
   size_t pos = 0;
@@ -165,7 +189,8 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
     std::string_view line = text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
     pos = nl == std::string_view::npos ? text.size() + 1 : nl + 1;
     lineno++;
-    auto toks = split(line, lineno);
+    split(line, lineno, ln);
+    const std::vector<Tok>& toks = ln.toks;
     if (toks.empty()) continue;
     const Tok& head = toks[0];
     if (ended) throw CompileError(lineno, head.col, "text after .end");
@@ -181,7 +206,7 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
       std::optional<DeviceRef> d;
       if (toks.size() != 3 || !is_name(toks[1].text) || !(d = parse_device(toks[2].text)) || d->index >= device_count(d->dev))
         throw CompileError(lineno, head.col, ".alias needs a name and a device");
-      p.aliases.push_back({toks[1].text, *d});
+      p.aliases.push_back({std::string(toks[1].text), *d});
     } else if (head.text == ".retain") {
       std::optional<DeviceRef> d;
       if (toks.size() != 2 || !(d = parse_device(toks[1].text)) || d->dev != Dev::D || d->index >= device_count(Dev::D))
@@ -189,10 +214,10 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
       if (std::find(p.retain.begin(), p.retain.end(), *d) == p.retain.end()) p.retain.push_back(*d);
     } else if (head.text == ".label") {
       if (toks.size() != 2 || !is_name(toks[1].text)) throw CompileError(lineno, head.col, ".label needs a name");
-      for (auto& l : all_labels)
-        if (l == toks[1].text) throw CompileError(lineno, toks[1].col, "duplicate label '" + l + "'");
-      all_labels.push_back(toks[1].text);
-      pending_labels.push_back(toks[1].text);
+      std::string name(toks[1].text);
+      if (!label_rung.emplace(name, p.rungs.size()).second)
+        throw CompileError(lineno, toks[1].col, "duplicate label '" + name + "'");
+      pending_labels.push_back(std::move(name));
       cur = nullptr;
     } else if (head.text == ".rung") {
       Operand n;
@@ -204,13 +229,13 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
       pending_labels.clear();
       if (toks.size() >= 4) {
         if (!toks[3].quoted || toks.size() > 4) throw CompileError(lineno, toks[3].col, "expected a quoted rung title");
-        r.title = toks[3].text;
+        r.title = std::string(toks[3].text);
       }
       p.rungs.push_back(std::move(r));
       cur = &p.rungs.back();
     } else {
       auto op = op_from_name(head.text);
-      if (!op) throw CompileError(lineno, head.col, "unknown mnemonic '" + head.text + "'");
+      if (!op) throw CompileError(lineno, head.col, "unknown mnemonic '" + std::string(head.text) + "'");
       if (!cur) throw CompileError(lineno, head.col, "instruction outside a .rung");
       Instr in;
       in.op = *op;
@@ -220,23 +245,19 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
       if (int(toks.size()) - 1 != n)
         throw CompileError(lineno, head.col, std::string(op_info(*op).name) + " takes " + std::to_string(n) + " operand(s)");
       for (int i = 0; i < n; i++) in.a[i] = parse_operand(sig[i], toks[i + 1], lineno, p.edge_slots);
-      cur->code.push_back(in);
+      cur->code.push_back(std::move(in));
     }
   }
   if (!ended) throw CompileError(lineno, 1, "missing .end");
   p.end_labels = std::move(pending_labels);
   // Every jump goes forward to a defined label.
-  std::vector<std::pair<std::string, size_t>> where;  // label -> index of the rung it precedes
-  for (size_t r = 0; r < p.rungs.size(); r++)
-    for (auto& l : p.rungs[r].labels) where.emplace_back(l, r);
-  for (auto& l : p.end_labels) where.emplace_back(l, p.rungs.size());
   for (size_t r = 0; r < p.rungs.size(); r++)
     for (const Instr& in : p.rungs[r].code)
       for (int i = 0; i < in.nopd(); i++)
         if (in.a[i].kind == OpdKind::Label) {
           const auto& name = in.a[i].label;
-          auto it = std::find_if(where.begin(), where.end(), [&](auto& w) { return w.first == name; });
-          if (it == where.end()) throw CompileError(in.loc.line, in.loc.col, "undefined label '" + name + "'");
+          auto it = label_rung.find(name);
+          if (it == label_rung.end()) throw CompileError(in.loc.line, in.loc.col, "undefined label '" + name + "'");
           if (it->second <= r) throw CompileError(in.loc.line, in.loc.col, "backward jump to '" + name + "'");
         }
   return p;

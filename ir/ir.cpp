@@ -2,6 +2,7 @@
 #include "ir/ir.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -56,17 +57,31 @@ Op compare_op(Rel r) {
   throw std::logic_error("compare_op: no compare for this relation");
 }
 
+static char ascii_upper(char c) { return c >= 'a' && c <= 'z' ? char(c - 'a' + 'A') : c; }
+
 static bool iequals(std::string_view a, std::string_view b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); i++)
-    if (std::toupper((unsigned char)a[i]) != std::toupper((unsigned char)b[i])) return false;
+    if (ascii_upper(a[i]) != ascii_upper(b[i])) return false;
   return true;
 }
 
+// By binary search over the names in upper case (every name in ops.def is).
 std::optional<Op> op_from_name(std::string_view name) {
-  for (int i = 0; i < kOpCount; i++)
-    if (iequals(name, kOps[i].name)) return Op(i);
-  return std::nullopt;
+  using Entry = std::pair<std::string_view, Op>;
+  static const std::array<Entry, kOpCount> sorted = [] {
+    std::array<Entry, kOpCount> t;
+    for (int i = 0; i < kOpCount; i++) t[i] = {kOps[i].name, Op(i)};
+    std::sort(t.begin(), t.end());
+    return t;
+  }();
+  char up[16];
+  if (name.size() > sizeof up) return std::nullopt;
+  for (size_t i = 0; i < name.size(); i++) up[i] = ascii_upper(name[i]);
+  std::string_view key(up, name.size());
+  auto it = std::lower_bound(sorted.begin(), sorted.end(), key, [](const Entry& e, std::string_view k) { return e.first < k; });
+  if (it == sorted.end() || it->first != key) return std::nullopt;
+  return it->second;
 }
 
 const char* op_class_name(OpClass c) {
@@ -74,7 +89,7 @@ const char* op_class_name(OpClass c) {
   return n[int(c)];
 }
 
-int Instr::nopd() const { return int(std::strlen(op_info(op).operands)); }
+int Instr::nopd() const { return op_info(op).nopd; }
 
 bool Instr::operator==(const Instr& o) const {
   if (op != o.op) return false;

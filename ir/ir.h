@@ -183,9 +183,11 @@ struct OpInfo {
   OpClass klass;
   Rel rel;               // Compare: its relation; else None
   RealFn fn;             // Special: its REAL function; else None
+  int nopd;              // the number of operands: strlen(operands)
 };
+constexpr int count_operands(const char* s) { return *s ? 1 + count_operands(s + 1) : 0; }
 inline constexpr OpInfo kOps[kOpCount] = {
-#define OP(name, opds, push, pop, klass, rel, fn) {#name, opds, push, pop, OpClass::klass, Rel::rel, RealFn::fn},
+#define OP(name, opds, push, pop, klass, rel, fn) {#name, opds, push, pop, OpClass::klass, Rel::rel, RealFn::fn, count_operands(opds)},
 #include "ops.def"
 };
 constexpr const OpInfo& op_info(Op op) { return kOps[int(op)]; }

@@ -62,6 +62,30 @@ TEST(IlText, ErrorsCarryLineAndColumn) {
   EXPECT_THROW(parse_il_text(".rung line 1\nLOAD X0\nJMP nowhere\n.end\n", "b.il"), CompileError);
 }
 
+// INT32 constants are what strtoll (base 10) takes whole, inside INT32: one
+// sign, '+' included; mnemonics are found in any case; labels are unique.
+TEST(IlText, ConstantsMnemonicsAndLabels) {
+  auto constant = [](const std::string& c) {
+    Program p = parse_il_text(".rung line 1\nLOAD X0\nMOV " + c + " D0\n.end\n", "c.il");
+    return p.rungs[0].code[1].a[0];
+  };
+  EXPECT_EQ(constant("+7").ival, 7);
+  EXPECT_EQ(constant("-2147483648").ival, INT32_MIN);
+  EXPECT_EQ(constant("2147483647").ival, INT32_MAX);
+  EXPECT_EQ(constant("007").ival, 7);
+  EXPECT_EQ(constant("1e3").kind, OpdKind::ConstReal);
+  EXPECT_EQ(constant("-.5").fval, -0.5f);
+  for (const char* bad : {"2147483648", "-2147483649", "+-5", "++5", "--5", "-+5", "+", "-", "0x10", "5x", "99999999999999999999"})
+    EXPECT_THROW(constant(bad), CompileError) << bad;
+  EXPECT_EQ(parse_il_text(".rung line 1\nlOaD X0\nout Y0\n.end\n", "c.il").rungs[0].code[1].op, Op::OUT);
+  EXPECT_THROW(parse_il_text(".rung line 1\nLOADNOTANOPCODE X0\n.end\n", "c.il"), CompileError);
+  EXPECT_THROW(parse_il_text(".label a\n.rung line 1\nLOAD X0\n.label a\n.rung line 2\nLOAD X0\n.end\n", "c.il"),
+               CompileError);
+  Program p = parse_il_text(".rung line 1\nLOAD X0\nJMP b\n.label a\n.rung line 2\nLOAD X1\nJMP b\n.label b\n.end\n", "c.il");
+  EXPECT_EQ(p.end_labels, std::vector<std::string>{"b"});
+  EXPECT_EQ(p.rungs[1].labels, std::vector<std::string>{"a"});
+}
+
 // .retain Dn (docs/il.md): printed after the aliases, read back once per word;
 // anything but an existing D word is refused.
 TEST(IlText, RetainRoundTripsAndRefusesNonDWords) {

@@ -28,6 +28,31 @@ std::string refusal(const Image& im) { return refusal(write_image(im)); }
     for (const std::string& part_ : std::initializer_list<std::string>{__VA_ARGS__}) EXPECT_NE(msg_.find(part_), std::string::npos) << msg_; \
   } while (0)
 
+// ------------------------------------------------------------------ the checksum
+
+// The CRC-32 check value, and the eight-bytes-a-step loop against the plain
+// bitwise definition at every length and split point near its step.
+TEST(Image, Crc32MatchesTheBitwiseDefinition) {
+  const std::string check = "123456789";
+  EXPECT_EQ(crc32({reinterpret_cast<const uint8_t*>(check.data()), check.size()}), 0xCBF43926u);
+  auto bitwise = [](std::span<const uint8_t> b, uint32_t c) {
+    c = ~c;
+    for (uint8_t x : b) {
+      c ^= x;
+      for (int k = 0; k < 8; k++) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    }
+    return ~c;
+  };
+  std::mt19937 rng(7);
+  std::vector<uint8_t> b(70);
+  for (auto& x : b) x = uint8_t(rng());
+  for (size_t n = 0; n <= b.size(); n++) {
+    std::span<const uint8_t> s(b.data(), n);
+    EXPECT_EQ(crc32(s), bitwise(s, 0)) << n;
+    for (size_t cut = 0; cut <= n; cut += 3) EXPECT_EQ(crc32(s.subspan(cut), crc32(s.subspan(0, cut))), bitwise(s, 0)) << n << " " << cut;
+  }
+}
+
 // ------------------------------------------------------------------ round trips
 
 TEST(Image, RoundTripKeepsEveryField) {
