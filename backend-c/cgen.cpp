@@ -257,7 +257,7 @@ class CGen {
         uint32_t n = a[0].index;
         return guarded("wr_i(m, " + u(L_.addr(Area::CW, n)) + ", 0); m[" + u(L_.addr(Area::CQ, n)) + "] = 0;");
       }
-      case Op::JMP: return line("if (" + top() + ") goto lbl_" + a[0].label + ";");
+      case Op::JMP: return line("if (" + top() + ") goto lbl_" + a[0].label.str() + ";");
       case Op::END: return line("if (" + top() + ") return;");
       case Op::Count: break;
     }

@@ -1206,7 +1206,7 @@ struct Writer {
         case Op::SET: need(1); line("S " + opd(in.a[0])); break;
         case Op::RST: need(1); line("R " + opd(in.a[0])); break;
         case Op::RSTT: case Op::RSTC: need(1); line("R " + opd(in.a[0])); break;
-        case Op::JMP: need(1); line("JMPC " + in.a[0].label); break;
+        case Op::JMP: need(1); line("JMPC " + in.a[0].label.str()); break;
         case Op::END: need(1); line("RETC"); break;
         case Op::TON: case Op::TOF: case Op::TP: {
           need(1);

@@ -589,7 +589,7 @@ TreeNode Importer::out(Op op, std::vector<Operand> a, const Element* el, const s
   std::string t = op == Op::OUT ? "" : op == Op::OUTN ? "/" : std::string(op_info(op).name) + " ";
   for (size_t i = 0; i < a.size(); i++) {
     n.elem.a[i] = a[i];
-    t += (i ? " " : "") + (a[i].kind == OpdKind::Label ? a[i].label : i == 0 && !text.empty() ? text : spell(a[i]));
+    t += (i ? " " : "") + (a[i].kind == OpdKind::Label ? a[i].label.str() : i == 0 && !text.empty() ? text : spell(a[i]));
   }
   n.text = t;
   return n;

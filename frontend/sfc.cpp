@@ -624,7 +624,7 @@ SfcBody SfcParser::lower_body(const TreeProgram& tp, Program p) {
     for (auto& l : r.labels) rename(l);
     for (Instr& in : r.code)
       for (int k = 0; k < in.nopd(); k++) {
-        if (in.a[k].kind == OpdKind::Label) rename(in.a[k].label);
+        if (in.a[k].kind == OpdKind::Label) in.a[k].label = prefix + upper(in.a[k].label.str());
         if (in.a[k].kind == OpdKind::Edge) in.a[k].index += c_.edge_slots;
       }
   }

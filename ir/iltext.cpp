@@ -255,7 +255,7 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
     for (const Instr& in : p.rungs[r].code)
       for (int i = 0; i < in.nopd(); i++)
         if (in.a[i].kind == OpdKind::Label) {
-          const auto& name = in.a[i].label;
+          const std::string& name = in.a[i].label;
           auto it = label_rung.find(name);
           if (it == label_rung.end()) throw CompileError(in.loc.line, in.loc.col, "undefined label '" + name + "'");
           if (it->second <= r) throw CompileError(in.loc.line, in.loc.col, "backward jump to '" + name + "'");

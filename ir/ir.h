@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -200,13 +201,35 @@ bool operand_area_ok(char sig, Area a, uint32_t idx);
 
 enum class OpdKind : uint8_t { None, Bit, Int, Real, ConstInt, ConstReal, Edge, Timer, Counter, Label };
 
+// A label operand's name (only JMP has one): one pointer, null when empty, so
+// that an Operand is 24 bytes and not 48 (an IL instruction holds three).
+class LabelText {
+ public:
+  LabelText() = default;
+  LabelText(std::string s)  // NOLINT: implicit on purpose
+      : p_(s.empty() ? nullptr : std::make_unique<std::string>(std::move(s))) {}
+  LabelText(const char* s) : LabelText(std::string(s)) {}  // NOLINT
+  LabelText(const LabelText& o) : p_(o.p_ ? std::make_unique<std::string>(*o.p_) : nullptr) {}
+  LabelText(LabelText&&) noexcept = default;
+  LabelText& operator=(const LabelText& o) { return *this = LabelText(o); }
+  LabelText& operator=(LabelText&&) noexcept = default;
+  const std::string& str() const { return p_ ? *p_ : empty_; }
+  operator const std::string&() const { return str(); }  // NOLINT
+  bool empty() const { return !p_; }
+  friend bool operator==(const LabelText& a, const LabelText& b) { return a.str() == b.str(); }
+
+ private:
+  static inline const std::string empty_;
+  std::unique_ptr<std::string> p_;
+};
+
 struct Operand {
   OpdKind kind = OpdKind::None;
   Area area = Area::Sys;  // Bit / Int / Real
   uint32_t index = 0;     // device index, edge slot, timer/counter number, label target
   int32_t ival = 0;       // ConstInt
   float fval = 0;         // ConstReal
-  std::string label;      // Label name
+  LabelText label;        // Label name
 
   bool is_real() const { return kind == OpdKind::Real || kind == OpdKind::ConstReal; }
   bool operator==(const Operand&) const = default;
