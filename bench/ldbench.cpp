@@ -974,8 +974,8 @@ std::pair<long, long> rss_hwm_kb() {
 }
 
 // `ldbench --compile-child FILE`: compiles FILE (.ld or .il) through every phase, as
-// the ldc driver does for an image (the tree freed after lowering; the IL, the
-// code and the image alive at the end), and prints "rss_before_kb hwm_parse hwm_lower hwm_generate
+// the ldc driver does for an image (a .ld lowered rung by rung as it is read,
+// parse_ld_to_il; the IL, the code and the image alive at the end), and prints "rss_before_kb hwm_parse hwm_lower hwm_generate
 // hwm_assemble hwm_image il code_bytes image_bytes seconds".
 int compile_child(const std::string& file) {
   std::string text = read_file(file);
@@ -983,18 +983,10 @@ int compile_child(const std::string& file) {
   long hwm[5];
   auto t0 = Clock::now();
   bool il_text = file.size() > 3 && file.compare(file.size() - 3, 3, ".il") == 0;
-  TreeProgram tp;
-  Program p;
-  if (il_text) {
-    p = parse_il_text(text, file);
-    hwm[0] = hwm[1] = rss_hwm_kb().second;
-  } else {
-    tp = parse_ld(text, file);
-    hwm[0] = rss_hwm_kb().second;
-    p = lower_to_il(tp);
-    hwm[1] = rss_hwm_kb().second;
-    tp = {};  // as ldc does for an image: the tree is not needed past lowering
-  }
+  // as ldc does for an image: a .ld is lowered rung by rung as it is read, so
+  // parse and lower share one high-water mark
+  Program p = il_text ? parse_il_text(text, file) : parse_ld_to_il(text, file);
+  hwm[0] = hwm[1] = rss_hwm_kb().second;
   // as ldc does (no listing notes): generation and assembly interleave, block by
   // block, so they share one high-water mark
   NativeBuild nb = build_x86(p, file, as::Mode::Blockwise, 0, false);
@@ -1820,7 +1812,7 @@ struct Report {
              "error"});
       md += "## Peak memory of compiling (child process, VmHWM)\n\n";
       md += "Peak resident memory (VmHWM) after each phase; the source text is already in memory; generation and assembly "
-            "interleave block by block, as in ldc, so they share one figure, and the tree is freed after lowering.  The .ld reader "
+            "interleave block by block, as in ldc, so they share one figure; a .ld is lowered rung by rung as it is read (parse_ld_to_il, as in ldc), so parse and lower share one figure too and the whole tree never lives at once.  The .ld reader "
             "refuses more than 65,536 rungs (frontend kMaxRungs), so the 100,000-rung plant is compiled from its IL text "
             "(no grid to read, no lowering).\n\n";
       md += md_head({"plant rungs", "IL", "source file", "image", "RSS before", "after parse", "after lower",

@@ -109,7 +109,7 @@ std::shared_ptr<Project> plcopen_project(PlcopenImport& im, const std::string& p
 
 }  // namespace
 
-Compiled compile_source(const std::string& path, bool allow_project, const std::string& task) {
+Compiled compile_source(const std::string& path, bool allow_project, const std::string& task, bool keep_tree) {
   if (!task.empty() && !ends_with(path, ".xml")) throw UserError(path + ": error: --task is for a PLCopen configuration of several tasks");
   std::string text = read_file(path);
   Compiled c;
@@ -158,8 +158,12 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
       }
     } else {
       c.from_ld = true;
-      c.tree = parse_ld(text, path);
-      c.il = lower_to_il(c.tree);
+      if (keep_tree) {
+        c.tree = parse_ld(text, path);
+        c.il = lower_to_il(c.tree);
+      } else {
+        c.il = parse_ld_to_il(text, path);
+      }
     }
   } catch (CompileError& e) {
     std::string msg = format_error(path, text, e.line, e.col, e.what());

@@ -40,7 +40,10 @@ struct Compiled {
 // A PLCopen configuration of several tasks is a project (one program per
 // task, `project`) when allow_project is set, and an error otherwise.
 // `task` picks one task's program of such a configuration (`--task NAME`).
-Compiled compile_source(const std::string& path, bool allow_project = false, const std::string& task = "");
+// Without `keep_tree`, a .ld grid is lowered rung by rung as it is read
+// (parse_ld_to_il) and `tree` stays empty: the whole tree never lives at once.
+Compiled compile_source(const std::string& path, bool allow_project = false, const std::string& task = "",
+                        bool keep_tree = false);
 
 // read_image_file (loader.h) with its errors as UserError.
 Image load_image_file(const std::string& path);

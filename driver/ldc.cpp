@@ -80,7 +80,7 @@ static int ldc_main(int argc, char** argv) {
   if (input.empty()) { std::fprintf(stderr, "ldc: error: no input file\n%s", usage().c_str()); return 1; }
   const Target* t = find_target(target);
   if (!t) throw UserError("ldc: error: unknown target '" + target + "' (" + target_names() + ")");
-  Compiled c = compile_source(input, emit.empty() && t->host, task);  // parse + lower
+  Compiled c = compile_source(input, emit.empty() && t->host, task, emit == "tree");  // parse + lower
   if (c.project) return write_project(*c.project, output);  // a PLCopen configuration of several tasks
   if (emit.empty() || emit == "hex") c.tree = {};  // an image needs only the IL: free the tree before code generation
   std::string text;

@@ -13,6 +13,10 @@ namespace ldc {
 // Parses a ladder source file into one series/parallel tree per rung, with every
 // device resolved and type-checked.  Throws CompileError (line, col, message).
 TreeProgram parse_ld(std::string_view text, const std::string& filename);
+// lower_to_il(parse_ld(text, filename)) in one pass: each rung is lowered as it
+// is read and its tree freed, so the whole tree never lives at once (what an
+// image needs; the IL is the same).
+Program parse_ld_to_il(std::string_view text, const std::string& filename);
 // ... with names known beforehand (an SFC's aliases and steps); the file may
 // not redefine them.
 TreeProgram parse_ld(std::string_view text, const std::string& filename, const std::vector<Alias>& predefined);

@@ -14,6 +14,7 @@
 // (docs/architecture.md, "The .ld reader").
 #include <algorithm>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <numeric>
 
@@ -229,7 +230,9 @@ class Parser {
   void predefine(const std::vector<Alias>& names) {
     for (const Alias& a : names) aliases_[upper(a.name)] = a.dev;
   }
-  TreeProgram program();
+  // The program; each rung's tree goes to `sink` as it is read (the returned
+  // program then has no rungs), or, without a sink, into the program.
+  TreeProgram program(const std::function<void(TreeRung&&)>& sink = nullptr);
 
  private:
   struct LabelDef {
@@ -966,14 +969,15 @@ size_t Parser::rung_end(size_t i, int rail) {
 // program = { blank | comment | alias | label | title | rung }
 // title   = "rung" STRING         (directly above its rung)
 // rung    = row { row }           (first non-blank character '|', all in one column)
-TreeProgram Parser::program() {
+TreeProgram Parser::program(const std::function<void(TreeRung&&)>& sink) {
   read_lines();
   declarations();
   TreeProgram p;
   p.source = file_;
   p.aliases = alias_list_;
   p.retain = retain_;
-  p.rungs.reserve(std::min(rung_count_, kMaxRungs));
+  if (!sink) p.rungs.reserve(std::min(rung_count_, kMaxRungs));
+  size_t rungs = 0;
   std::vector<std::string> labels;
   std::string title;
   int title_line = 0;
@@ -987,14 +991,16 @@ TreeProgram Parser::program() {
     if (t.empty() || is_comment(t)) { i++; continue; }
     if (t[0] == '|') {
       size_t j = rung_end(i, col0 - 1);
-      if (p.rungs.size() >= kMaxRungs) fail(no, col0, "too many rungs (at most " + std::to_string(kMaxRungs) + ")");
+      if (rungs >= kMaxRungs) fail(no, col0, "too many rungs (at most " + std::to_string(kMaxRungs) + ")");
       TreeRung r = rung(i, j, col0 - 1);
       r.labels = std::move(labels);
       labels.clear();
       r.title = std::move(title);
       title.clear();
       title_line = 0;
-      p.rungs.push_back(std::move(r));
+      rungs++;
+      if (sink) sink(std::move(r));
+      else p.rungs.push_back(std::move(r));
       i = j;
       continue;
     }
@@ -1012,13 +1018,23 @@ TreeProgram Parser::program() {
   }
   if (title_line) fail(title_line, 1, "a rung title must be directly above its rung");
   p.end_labels = std::move(labels);
-  if (p.rungs.empty()) fail(std::max(1, int(lines_.size())), 1, "no rungs in this program");
+  if (rungs == 0) fail(std::max(1, int(lines_.size())), 1, "no rungs in this program");
   return p;
 }
 
 }  // namespace
 
 TreeProgram parse_ld(std::string_view text, const std::string& filename) { return Parser(text, filename).program(); }
+
+Program parse_ld_to_il(std::string_view text, const std::string& filename) {
+  Program il;
+  TreeProgram head = Parser(text, filename).program([&](TreeRung&& r) { lower_rung(r, il); });
+  il.source = std::move(head.source);
+  il.aliases = std::move(head.aliases);
+  il.end_labels = std::move(head.end_labels);
+  il.retain = std::move(head.retain);
+  return il;
+}
 
 TreeProgram parse_ld(std::string_view text, const std::string& filename, const std::vector<Alias>& predefined) {
   Parser p(text, filename);

@@ -311,6 +311,10 @@ struct TreeProgram {
 std::string print_tree(const TreeProgram& p);
 // Tree -> IL.  Throws CompileError if a rung needs more than 32 bit-stack entries.
 Program lower_to_il(const TreeProgram& p);
+// One rung of it, appended to p: its edge slots follow p.edge_slots, which it
+// advances.  A front end that lowers each rung as it reads it (and then frees
+// the tree) builds the same Program as lower_to_il.
+void lower_rung(const TreeRung& r, Program& p);
 constexpr int kMaxStackDepth = 32;
 
 // Can a code generator keep this rung's bit stack in `slots` registers, stack

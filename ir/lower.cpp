@@ -160,27 +160,28 @@ std::string print_tree(const TreeProgram& p) {
   return out;
 }
 
+void lower_rung(const TreeRung& tr, Program& p) {
+  Lowering low;
+  low.edges = p.edge_slots;
+  std::vector<Instr> code;
+  low.out = &code;
+  low.action(tr.root, false);
+  Rung& r = p.rungs.emplace_back();
+  r.labels = tr.labels;
+  r.title = tr.title;
+  r.line = tr.line;
+  r.code.assign(std::make_move_iterator(code.begin()), std::make_move_iterator(code.end()));  // exact capacity
+  p.edge_slots = low.edges;
+}
+
 Program lower_to_il(const TreeProgram& tp) {
   Program p;
   p.source = tp.source;
   p.end_labels = tp.end_labels;
   p.aliases = tp.aliases;
   p.retain = tp.retain;
-  Lowering low;
-  std::vector<Instr> code;  // one rung's, reused; each rung keeps an exact copy
-  low.out = &code;
   p.rungs.reserve(tp.rungs.size());
-  for (const auto& tr : tp.rungs) {
-    Rung& r = p.rungs.emplace_back();
-    r.labels = tr.labels;
-    r.title = tr.title;
-    r.line = tr.line;
-    code.clear();
-    low.depth = low.max_depth = 0;
-    low.action(tr.root, false);
-    r.code.assign(std::make_move_iterator(code.begin()), std::make_move_iterator(code.end()));
-  }
-  p.edge_slots = low.edges;
+  for (const auto& tr : tp.rungs) lower_rung(tr, p);
   return p;
 }
 

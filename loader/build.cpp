@@ -32,6 +32,8 @@ Image make_image(ImageTarget target, const Program& p, const as::Result& code,
   img.aliases = p.aliases;
   img.retentive = retentive_ranges(p);
   size_t k = 0;
+  img.rung_titles.reserve(p.rungs.size());
+  img.lines.reserve(bin.instr_offset.size());
   for (size_t r = 0; r < p.rungs.size(); r++) {
     img.rung_titles.push_back(p.rungs[r].title);
     uint32_t b = rung_blocks[r];

@@ -159,8 +159,20 @@ static uint32_t image_checksum(std::span<const uint8_t> file) {
 
 // ---------------------------------------------------------------- write_image
 
+// What write_image will write, give or take the alignment padding: reserved
+// at once, so that a large image is not copied while it grows.
+static size_t image_size_hint(const Image& im) {
+  size_t n = kOffSections + 8 * kSectionEntrySize + 8 * 3 + im.code.size() + im.il.size() + 16 * im.lines.size() +
+             4 + im.source.size() + 4 + 12 * im.retentive.size() + 4 + 4 + 64;
+  for (const std::string& t : im.rung_titles) n += 4 + t.size();
+  for (const Alias& a : im.aliases) n += 9 + a.name.size();
+  if (im.config) n += 64 + 3 * 256 + 16 * im.config->rows.size();
+  return n;
+}
+
 std::vector<uint8_t> write_image(const Image& im) {
   Writer w;
+  w.out.reserve(image_size_hint(im));
   w.bytes(kMagic);
   w.u16(kVersion);
   w.u8(uint8_t(im.target));

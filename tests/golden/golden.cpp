@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
     if (!getcwd(cwd.data(), cwd.size()) || chdir(dir.c_str()) != 0) { std::fprintf(stderr, "cannot enter %s\n", dir.c_str()); return 1; }
     cases++;
     try {
-      Compiled c = compile_source(file);
+      Compiled c = compile_source(file, false, "", true);  // with the tree, for NAME.tree
       if (exists(stem + ".err") && !update) {
         std::fprintf(stderr, "%s: expected an error (%s.err) but it compiled\n", file.c_str(), stem.c_str());
         failures++;

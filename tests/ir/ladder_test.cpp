@@ -24,6 +24,8 @@ void expect_round_trip(const std::string& il) {
   std::string grid = grid_of(p);
   Program q = lower_to_il(parse_ld(grid, "t.ld"));
   EXPECT_EQ(il_body(p), il_body(q)) << grid;
+  // lowered rung by rung as it is read: the same IL, line numbers, labels and edge slots included
+  EXPECT_EQ(print_il_text(q), print_il_text(parse_ld_to_il(grid, "t.ld"))) << grid;
 }
 
 std::string refusal(const std::string& il) {
