@@ -10,16 +10,18 @@
 
 namespace ldc {
 
+char upper_ascii(char c) { return c >= 'a' && c <= 'z' ? char(c - 'a' + 'A') : c; }
+
 std::string upper(std::string_view s) {
   std::string u(s);
-  for (char& c : u) c = char(std::toupper((unsigned char)c));
+  for (char& c : u) c = upper_ascii(c);
   return u;
 }
 
 bool iequals(std::string_view a, std::string_view b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); i++)
-    if (a[i] != b[i] && std::toupper((unsigned char)a[i]) != std::toupper((unsigned char)b[i])) return false;
+    if (upper_ascii(a[i]) != upper_ascii(b[i])) return false;
   return true;
 }
 

@@ -11,6 +11,8 @@
 
 namespace ldc {
 
+// ASCII upper case (names and keywords are ASCII; no locale).
+char upper_ascii(char c);
 std::string upper(std::string_view s);
 // The lines of a source file, a '\r' before each '\n' dropped; throws
 // CompileError(1, 1) above kMaxSourceBytes (frontend.h).

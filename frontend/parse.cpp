@@ -87,8 +87,6 @@ int indent(std::string_view s) {
   return i == s.size() ? -1 : int(i);
 }
 
-char upper_ascii(char c) { return c >= 'a' && c <= 'z' ? char(c - 'a' + 'A') : c; }
-
 bool is_comment(std::string_view s) {
   std::string_view t = trim(s);
   return t.starts_with("#") || t.starts_with("//");
