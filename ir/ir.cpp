@@ -89,8 +89,6 @@ const char* op_class_name(OpClass c) {
   return n[int(c)];
 }
 
-int Instr::nopd() const { return op_info(op).nopd; }
-
 bool Instr::operator==(const Instr& o) const {
   if (op != o.op) return false;
   for (int i = 0; i < 3; i++)
@@ -462,15 +460,16 @@ bool stack_fits_slots(const std::vector<Instr>& code, int slots) {
     }
   }
   // for every point between instructions: the positions read again before
-  // they are written must lie within one window of `slots`
-  for (size_t at = 0; at <= code.size(); at++) {
+  // they are written must lie within one window of `slots`.  Swept from the
+  // end: next[p] is what the first event of position p at or after the point
+  // does (0 none, 1 read, 2 write).
+  std::array<uint8_t, kMaxStackDepth + 2> next{};
+  size_t j = ev.size();
+  for (size_t at = code.size() + 1; at-- > 0;) {
+    for (; j > 0 && ev[j - 1].at >= at; j--) next[size_t(ev[j - 1].pos)] = ev[j - 1].write ? 2 : 1;
     int lo = std::numeric_limits<int>::max(), hi = std::numeric_limits<int>::min();
-    std::vector<int> decided;
-    for (const Ev& e : ev) {
-      if (e.at < at || std::find(decided.begin(), decided.end(), e.pos) != decided.end()) continue;
-      decided.push_back(e.pos);  // the first event at or after `at` decides
-      if (!e.write) { lo = std::min(lo, e.pos); hi = std::max(hi, e.pos); }
-    }
+    for (int p = 0; p < int(next.size()); p++)
+      if (next[size_t(p)] == 1) lo = std::min(lo, p), hi = std::max(hi, p);
     if (lo <= hi && hi - lo >= slots) return false;
   }
   return true;

@@ -252,7 +252,7 @@ struct Instr {
   Op op{};
   Operand a[3];
   SrcLoc loc;  // the element (or rung) this instruction came from
-  int nopd() const;
+  int nopd() const { return kOps[int(op)].nopd; }
   bool operator==(const Instr& o) const;  // op and operands; loc ignored
 };
 
