@@ -991,13 +991,17 @@ int compile_child(const std::string& file) {
   // block, so they share one high-water mark
   NativeBuild nb = build_x86(p, file, as::Mode::Blockwise, 0, false);
   hwm[2] = hwm[3] = rss_hwm_kb().second;
-  std::vector<uint8_t> img = write_image(make_x86_image(p, nb));
+  size_t code_bytes = nb.asm_result.code.size();
+  // as ldc does (target_image): the image takes the code over, the rest of the build is dropped
+  Image im = make_image(ImageTarget::X86_64, p, std::move(nb.asm_result), nb.gen.il_items, rung_blocks(nb.gen));
+  nb = {};
+  std::vector<uint8_t> img = write_image(im);
   hwm[4] = rss_hwm_kb().second;
   double s = secs_since(t0);
   size_t il = 0;
   for (const Rung& r : p.rungs) il += r.code.size();
   std::printf("%ld %ld %ld %ld %ld %ld %zu %zu %zu %.3f\n", before, hwm[0], hwm[1], hwm[2], hwm[3], hwm[4], il,
-              nb.asm_result.code.size(), img.size(), s);
+              code_bytes, img.size(), s);
   return 0;
 }
 

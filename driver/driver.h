@@ -25,7 +25,7 @@ int run_tool(const char* tool, const std::function<int()>& work);
 
 std::string read_file(const std::string& path);  // throws UserError
 // Writes to path.tmp.PID, then renames, so no half-written output is left.
-void write_file_atomic(const std::string& path, const std::string& data);  // throws UserError
+void write_file_atomic(const std::string& path, std::string_view data);  // throws UserError
 
 struct Project;
 struct Compiled {

@@ -44,7 +44,7 @@ static int write_project(const Project& p, const std::string& outdir) {
   for (const BuiltTask& b : built) {
     std::vector<uint8_t> bin = write_image(b.image);
     files.push_back(b.spec.name + ".bin");
-    write_file_atomic(outdir + "/" + files.back(), std::string(bin.begin(), bin.end()));
+    write_file_atomic(outdir + "/" + files.back(), std::string_view(reinterpret_cast<const char*>(bin.data()), bin.size()));
   }
   write_file_atomic(outdir + "/" + p.name + ".ldp", print_project(p, files));
   return 0;
@@ -110,7 +110,8 @@ static int ldc_main(int argc, char** argv) {
     if (emit == "hex") text = write_intel_hex(bin);
     else {
       if (output.empty()) throw UserError("ldc: error: an image needs -o FILE (or --emit=hex for text on stdout)");
-      text.assign(bin.begin(), bin.end());
+      write_file_atomic(output, std::string_view(reinterpret_cast<const char*>(bin.data()), bin.size()));  // no copy
+      return 0;
     }
   } else {
     throw UserError("ldc: error: " + (emit.empty() ? std::string("image output (-o FILE.bin)") : "--emit=" + emit) +

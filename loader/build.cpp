@@ -19,13 +19,15 @@ std::vector<RetentiveRange> retentive_ranges(const Program& p) {
   return r;
 }
 
-Image make_image(ImageTarget target, const Program& p, const as::Result& code,
-                 const std::vector<std::vector<uint32_t>>& il_items, std::span<const uint32_t> rung_blocks) {
+namespace {
+
+// Everything of the image but its code bytes.
+Image image_without_code(ImageTarget target, const Program& p, const as::Result& code,
+                         const std::vector<std::vector<uint32_t>>& il_items, std::span<const uint32_t> rung_blocks) {
   Image img;
   img.target = target;
   img.source = p.source;
   img.layout = p.layout();
-  img.code = code.code;
   img.entry = 0;
   BinaryIl bin = encode_il(p);
   img.il = bin.code;
@@ -46,6 +48,22 @@ Image make_image(ImageTarget target, const Program& p, const as::Result& code,
                            in.loc.line ? in.loc.line : p.rungs[r].line, uint32_t(r)});
     }
   }
+  return img;
+}
+
+}  // namespace
+
+Image make_image(ImageTarget target, const Program& p, const as::Result& code,
+                 const std::vector<std::vector<uint32_t>>& il_items, std::span<const uint32_t> rung_blocks) {
+  Image img = image_without_code(target, p, code, il_items, rung_blocks);
+  img.code = code.code;
+  return img;
+}
+
+Image make_image(ImageTarget target, const Program& p, as::Result&& code,
+                 const std::vector<std::vector<uint32_t>>& il_items, std::span<const uint32_t> rung_blocks) {
+  Image img = image_without_code(target, p, code, il_items, rung_blocks);
+  img.code = std::move(code.code);
   return img;
 }
 

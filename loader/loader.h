@@ -80,6 +80,9 @@ struct ImageError : std::runtime_error {
 // map).  The K area and the IL's .retain words are retentive.
 Image make_image(ImageTarget target, const Program& p, const as::Result& code,
                  const std::vector<std::vector<uint32_t>>& il_items, std::span<const uint32_t> rung_blocks);
+// The same, taking the code bytes over instead of copying them.
+Image make_image(ImageTarget target, const Program& p, as::Result&& code,
+                 const std::vector<std::vector<uint32_t>>& il_items, std::span<const uint32_t> rung_blocks);
 std::vector<RetentiveRange> retentive_ranges(const Program& p);
 
 // Serializes an image.  Writes the fields as they are (read_image does the
