@@ -568,8 +568,11 @@ void Gen::real_fn(Op op, const ldc::Operand& a, const ldc::Operand& d) {
   load_real(a, xmm0);
   if (real_fn_info(fn).called) {
     emit(M::Call, {Operand::m(mem_at(Size::Qword, uint32_t(call_slot_disp(fn))))});
-    // the call may clobber rdi: point it back (its K is filled in by set_bases)
-    if (bases_) emit(as::x86::base_lea(DI, 0));
+    // the call may clobber the caller-saved base registers (rdi): point them
+    // back (their K is filled in with the region's, BasePlan::rewrite)
+    if (bases_)
+      for (RegNum r : as::x86::kBaseRegs)
+        if (as::x86::caller_saved(r)) emit(as::x86::base_lea(r, 0));
   } else if (fn == RealFn::Sqrt) {
     emit(M::Sqrtss, {R(xmm0), R(xmm0)});
   } else {  // Abs: the sign bit cleared
@@ -1000,11 +1003,11 @@ as::x86::RoutineAreas x86_routine_areas(const Layout& l) {
   return a;
 }
 
-// -O2 compact addressing (docs/x86.md): pick K for each base register
-// (as::x86::kBaseRegs) so that their disp8 windows [K-128, K+127] cover as many of
-// the program's [rbx+disp32] operands as possible (greedily: the fullest
-// window first), rewrite those operands to [reg+d8], and fill K
-// into the prologue's leas and the reloads after REAL calls.
+// -O2 compact addressing (docs/x86.md, "Compact addressing"): the rungs are
+// taken in regions of consecutive blocks; at the start of each region the
+// base registers (as::x86::kBaseRegs) are pointed where that region's
+// [rbx+disp32] operands are (a `lea reg, [rbx+K]` where one pays), and the
+// operands inside a register's disp8 window [K-128, K+127] become [reg+d8].
 bool rewritable(const Instruction& in, const as::x86::Operand& o) {
   return o.kind == OperandKind::Mem && in.mnemonic != M::Call && in.mnemonic != M::Lea && o.mem.base == r64(BX) &&
          !o.mem.index.valid() && (o.mem.disp < -128 || o.mem.disp > 127);
@@ -1014,7 +1017,15 @@ uint32_t mem_width(const Mem& m) { return m.size == Size::Dword ? 4 : m.size == 
 namespace {
 
 using Ops = std::vector<std::pair<int64_t, int64_t>>;  // (first, last) byte of each rewritable operand
-using Bases = std::array<int64_t, kNumBases>;
+constexpr int64_t kBaseKMin = 128;  // the loader's range for K: [128, size - 135], so that every
+constexpr int64_t kBaseKTop = 135;  // [reg+d8] access of up to 8 bytes stays inside the image
+constexpr int64_t kLeaBytes = 7;    // lea reg, [rbx+disp32]
+constexpr int64_t kSavedBytes = 3;  // a disp8 instead of a disp32 (2 where r15/r14 add a REX)
+// A region ends after the block that brings it kRegionOps operands; its
+// registers are chosen over it and the next kLookahead regions.  Picked by
+// measuring code bytes of ldbench's plant and synthetic programs (docs/x86.md).
+constexpr size_t kRegionOps = 12;
+constexpr size_t kLookahead = 1;
 
 void collect_ops(const as::Block<Instruction>& b, Ops& ops) {
   for (const Item& it : b.items) {
@@ -1025,59 +1036,197 @@ void collect_ops(const as::Block<Instruction>& b, Ops& ops) {
   }
 }
 
-Bases choose_bases(Ops ops, uint32_t image_size) {
-  Bases ks{};
-  for (int r = 0; r < kNumBases; r++) {
-    // window [lo, lo+255]: the operands with first >= lo and last <= lo+255,
-    // counted per width from sorted first bytes
-    std::map<int64_t, std::vector<int64_t>> by_width;
-    for (const auto& o : ops) by_width[o.second - o.first].push_back(o.first);
-    for (auto& [w, v] : by_width) std::sort(v.begin(), v.end());
-    size_t best = 0;
-    int64_t best_lo = 0;
-    for (const auto& [w0, cand] : by_width)
-      for (size_t i = 0; i < cand.size(); i++) {
-        if (i > 0 && cand[i] == cand[i - 1]) continue;
-        int64_t lo = cand[i];
-        size_t n = 0;
-        for (const auto& [w, v] : by_width)
-          n += size_t(std::upper_bound(v.begin(), v.end(), lo + 255 - w) - std::lower_bound(v.begin(), v.end(), lo));
-        if (n > best) best = n, best_lo = lo;
-      }
-    ks[r] = best ? best_lo + 128 : 128;
-    if (ks[r] >= int64_t(image_size)) ks[r] = int64_t(image_size) - 1;
-    Ops rest;
-    for (const auto& o : ops)
-      if (!(o.first >= ks[r] - 128 && o.second <= ks[r] + 127)) rest.push_back(o);
-    ops.swap(rest);
+bool covers(int64_t k, const std::pair<int64_t, int64_t>& o) { return o.first >= k - 128 && o.second <= k + 127; }
+
+// The fullest window [lo, lo+255] over ops (sorted): (operands inside, lo).
+// O(n) but for operands whose last bytes fall just past a window's end.
+std::pair<size_t, int64_t> best_window(const Ops& ops) {
+  size_t best = 0, end = 0;
+  int64_t best_lo = 0;
+  for (size_t i = 0; i < ops.size(); i++) {
+    if (i > 0 && ops[i].first == ops[i - 1].first) continue;
+    int64_t lo = ops[i].first;
+    while (end < ops.size() && ops[end].first <= lo + 255) end++;
+    size_t n = end - i;
+    for (size_t j = end; j-- > i && ops[j].first > lo + 255 - 8;)  // wider operands may end past the window
+      if (ops[j].second > lo + 255) n--;
+    if (n > best) best = n, best_lo = lo;
   }
-  return ks;
+  return {best, best_lo};
 }
 
-void apply_bases(as::Block<Instruction>& b, const Bases& ks) {
-  for (Item& it : b.items) {
-    if (it.kind != as::ItemKind::Instruction) continue;
-    Instruction& in = it.inst;
-    if (in.mnemonic == M::Lea && in.ops[0].kind == OperandKind::Reg && in.ops[0].reg.cls == RegClass::Gp64 &&
-        in.ops[1].mem.base == r64(BX)) {
-      for (int r = 0; r < kNumBases; r++)
-        if (in.ops[0].reg.num == kBaseRegs[r]) in.ops[1].mem.disp = int32_t(ks[r]);
-      continue;
-    }
-    for (unsigned k = 0; k < in.num_operands; k++) {
-      if (!rewritable(in, in.ops[k])) continue;
-      Mem& m = in.ops[k].mem;
+// The base registers' K as the regions go (unknown after a jump target, which
+// a path from elsewhere may reach with other values).
+class BasePlan {
+ public:
+  explicit BasePlan(uint32_t image_size) : kmax_(int64_t(image_size) - kBaseKTop) {
+    if (kmax_ < kBaseKMin) throw std::logic_error("x86 backend: memory image too small for base registers");
+  }
+  bool known(int r) const { return known_[size_t(r)]; }
+  int64_t k(int r) const { return k_[size_t(r)]; }
+  void forget() { known_.fill(false); }
+  void set(int r, int64_t k) { k_[size_t(r)] = k, known_[size_t(r)] = true; }
+
+  // Points the registers for a region with these operands; returns those that
+  // need a lea at its start.  Greedy, up to one step per register: keep the
+  // register whose present K covers most of the operands left, or point a
+  // free one (the one covering least) at their fullest window, whichever
+  // saves more bytes after the lea's (nothing when `free`: the prologue's
+  // leas); every register is set when `free`.
+  std::array<bool, kNumBases> plan(Ops ops, bool free) {
+    std::sort(ops.begin(), ops.end());
+    std::array<bool, kNumBases> fixed{}, lea{};
+    auto count = [&](int r) {
+      return known(r) ? size_t(std::count_if(ops.begin(), ops.end(), [&](const auto& o) { return covers(k(r), o); })) : 0;
+    };
+    for (int step = 0; step < kNumBases && !ops.empty(); step++) {
+      int keep = -1, spare = -1;
+      size_t keep_n = 0, spare_n = SIZE_MAX;
       for (int r = 0; r < kNumBases; r++) {
-        int64_t d = int64_t(m.disp) - ks[r];
-        if (d >= -128 && d + mem_width(m) - 1 <= 127) {
-          m.base = r64(as::x86::kBaseRegs[r]);
-          m.disp = int32_t(d);
-          break;
-        }
+        if (fixed[size_t(r)]) continue;
+        size_t n = count(r);
+        if (known(r) && n > keep_n) keep = r, keep_n = n;
+        if (n < spare_n) spare = r, spare_n = n;
+      }
+      auto [new_n, lo] = best_window(ops);
+      // a new window costs the lea and what the spare register's K covers
+      int64_t keep_gain = kSavedBytes * int64_t(keep_n),
+              new_gain = kSavedBytes * (int64_t(new_n) - int64_t(spare_n)) - (free ? 0 : kLeaBytes);
+      if (std::max(keep_gain, new_gain) <= 0) break;
+      int r = keep;
+      if (new_gain > keep_gain) {
+        r = spare;
+        set(r, std::clamp(lo + 128, kBaseKMin, kmax_));
+        lea[size_t(r)] = true;
+      }
+      fixed[size_t(r)] = true;
+      std::erase_if(ops, [&](const auto& o) { return covers(k(r), o); });
+    }
+    if (free)
+      for (int r = 0; r < kNumBases; r++)
+        if (!lea[size_t(r)]) set(r, known(r) ? k(r) : kBaseKMin), lea[size_t(r)] = true;
+    return lea;
+  }
+
+  // Rewrites b's operands through the known registers, and fills in the K of
+  // the leas after REAL calls (the reloads): the region's, or the lowest K for
+  // a register the region does not use (known from then on: `reloaded`).
+  void rewrite(as::Block<Instruction>& b, std::array<bool, kNumBases>& reloaded) const {
+    for (Item& it : b.items) {
+      if (it.kind != as::ItemKind::Instruction) continue;
+      Instruction& in = it.inst;
+      if (in.mnemonic == M::Lea) {
+        for (int r = 0; r < kNumBases; r++)
+          if (in.ops[0].reg == r64(kBaseRegs[r]) && in.ops[1].mem.base == r64(BX))
+            in.ops[1].mem.disp = int32_t(known(r) ? k(r) : kBaseKMin), reloaded[size_t(r)] = true;
+        continue;
+      }
+      for (unsigned j = 0; j < in.num_operands; j++) {
+        if (!rewritable(in, in.ops[j])) continue;
+        Mem& m = in.ops[j].mem;
+        const std::pair<int64_t, int64_t> o{m.disp, int64_t(m.disp) + mem_width(m) - 1};
+        for (int r = 0; r < kNumBases; r++)
+          if (known(r) && covers(k(r), o)) {
+            m.base = r64(kBaseRegs[r]);
+            m.disp = int32_t(o.first - k(r));
+            break;
+          }
       }
     }
   }
-}
+
+ private:
+  int64_t kmax_;
+  std::array<int64_t, kNumBases> k_{};
+  std::array<bool, kNumBases> known_{};
+};
+
+// -O2: the blocks gathered into regions, each given its base registers, then
+// handed to the sink in order (the prologue, held until the first region
+// fills in its leas, and each rung's IL starts).  A region's registers are
+// chosen from its own operands and those of the next kLookahead regions (up
+// to a jump target, where the registers are set again), so that a window
+// that pays only over several regions is taken at once.
+class Regions {
+ public:
+  Regions(uint32_t image_size, as::Block<Instruction> prologue, std::vector<std::vector<uint32_t>>& il_items,
+          const X86BlockSink& sink)
+      : plan_(image_size), prologue_(std::move(prologue)), il_items_(il_items), sink_(sink) {
+    regions_.emplace_back();
+  }
+
+  // a rung's block; `target`: it starts with labels that jumps name
+  void add(as::Block<Instruction>& b, std::vector<uint32_t>& starts, bool target) {
+    if (target && !regions_.back().blocks.empty()) close();
+    Region& g = regions_.back();
+    if (target) g.target = true;
+    collect_ops(b, g.ops);
+    g.blocks.push_back(std::move(b));
+    g.starts.push_back(std::move(starts));
+    if (g.ops.size() >= kRegionOps) close();
+  }
+  void finish() {
+    while (!regions_.empty()) flush_front();
+  }
+
+ private:
+  struct Region {
+    std::vector<as::Block<Instruction>> blocks;
+    std::vector<std::vector<uint32_t>> starts;
+    Ops ops;
+    bool target = false;  // its first block is a jump target
+  };
+
+  void close() {
+    regions_.emplace_back();
+    if (regions_.size() > kLookahead + 1) flush_front();
+  }
+
+  void flush_front() {
+    Region g = std::move(regions_.front());
+    regions_.erase(regions_.begin());
+    bool free = prologue_.has_value();
+    if (g.target) plan_.forget();
+    Ops ops = g.ops;
+    for (const Region& next : regions_) {
+      if (next.target) break;
+      ops.insert(ops.end(), next.ops.begin(), next.ops.end());
+    }
+    std::array<bool, kNumBases> lea = plan_.plan(std::move(ops), free);
+    if (free) {
+      for (Item& it : prologue_->items)
+        for (int r = 0; r < kNumBases; r++)
+          if (it.kind == as::ItemKind::Instruction && it.inst.mnemonic == M::Lea && it.inst.ops[0].reg == r64(kBaseRegs[r]))
+            it.inst.ops[1].mem.disp = int32_t(plan_.k(r));
+      sink_(*prologue_);
+      prologue_.reset();
+    }
+    std::array<bool, kNumBases> reloaded{};
+    for (auto& b : g.blocks) plan_.rewrite(b, reloaded);
+    if (!free && !g.blocks.empty()) {  // the leas, after the first block's labels
+      std::vector<Item>& items = g.blocks[0].items;
+      size_t at = 0;
+      while (at < items.size() && items[at].kind == as::ItemKind::Label) at++;
+      std::vector<Item> leas;
+      for (int r = 0; r < kNumBases; r++)
+        if (lea[size_t(r)]) leas.push_back(Item::instr(base_lea(kBaseRegs[r], int32_t(plan_.k(r)))));
+      items.insert(items.begin() + ptrdiff_t(at), leas.begin(), leas.end());
+      for (uint32_t& s : g.starts[0]) s += uint32_t(leas.size());
+    }
+    for (int r = 0; r < kNumBases; r++)
+      if (reloaded[size_t(r)] && !plan_.known(r)) plan_.set(r, kBaseKMin);
+    for (size_t i = 0; i < g.blocks.size(); i++) {
+      il_items_.push_back(std::move(g.starts[i]));
+      sink_(g.blocks[i]);
+    }
+  }
+
+  BasePlan plan_;
+  std::optional<as::Block<Instruction>> prologue_;
+  std::vector<std::vector<uint32_t>>& il_items_;
+  const X86BlockSink& sink_;
+  std::vector<Region> regions_;  // the last one open; at most kLookahead + 1
+};
 
 // The blocks of a program in order (block 0 the prologue, one per rung, the
 // epilogue, the shared routines if any are called), each handed to `sink`.
@@ -1094,7 +1243,7 @@ class Blocks {
                                          : "scan(image): rbx = image, ebp = bit stack"));
     for (const Instruction& i : scan_prologue(o2_)) pro.items.push_back(Item::instr(i));
     if (o2_)
-      for (RegNum r : as::x86::kBaseRegs) pro.items.push_back(Item::instr(as::x86::base_lea(r, 0)));  // K: set_bases
+      for (RegNum r : as::x86::kBaseRegs) pro.items.push_back(Item::instr(as::x86::base_lea(r, 0)));  // K: Regions::flush
     return pro;
   }
 
@@ -1142,58 +1291,39 @@ class Blocks {
     return rt;
   }
 
-  // -O2: the base registers' K over every block, from a first sweep that keeps
-  // only the operands (the blocks are made again by the second).
-  Bases bases() {
-    Ops ops;
-    collect_ops(prologue(), ops);
+  void run(std::vector<std::vector<uint32_t>>& il_items, const X86BlockSink& sink) {
+    il_items.reserve(p_.rungs.size());
     as::Block<Instruction> b;
     std::vector<uint32_t> starts;
-    for (size_t r = 0; r < p_.rungs.size(); r++) {
-      rung(r, b, starts);
-      collect_ops(b, ops);
-    }
-    collect_ops(epilogue(), ops);
-    if (auto rt = routines()) collect_ops(*rt, ops);
-    used_.reset();
-    return choose_bases(std::move(ops), layout_.size);
-  }
-
-  void run(std::vector<std::vector<uint32_t>>& il_items, const X86BlockSink& sink) {
-    Bases ks{};
-    if (o2_) ks = bases();
-    auto give = [&](as::Block<Instruction>& b) {
-      if (o2_) apply_bases(b, ks);
+    if (o2_) {
+      Regions regions(layout_.size, prologue(), il_items, sink);
+      for (size_t r = 0; r < p_.rungs.size(); r++) {
+        rung(r, b, starts);
+        regions.add(b, starts, !p_.rungs[r].labels.empty());
+      }
+      regions.finish();
+    } else {
+      b = prologue();
       sink(b);
-    };
-    as::Block<Instruction> b = prologue();
-    give(b);
-    il_items.reserve(p_.rungs.size());
-    std::vector<uint32_t> starts;
-    for (size_t r = 0; r < p_.rungs.size(); r++) {
-      rung(r, b, starts);
-      il_items.push_back(starts);
-      give(b);
+      for (size_t r = 0; r < p_.rungs.size(); r++) {
+        rung(r, b, starts);
+        il_items.push_back(starts);
+        sink(b);
+      }
     }
     b = epilogue();
-    give(b);
-    if (auto rt = routines()) give(*rt);
+    sink(b);
+    if (auto rt = routines()) sink(*rt);
   }
 
  private:
-  // stack_fits_slots of rung ri, worked out once (-O2 makes each rung twice)
-  bool fits_slots(size_t ri) {
-    if (fits_.empty()) fits_.assign(p_.rungs.size(), -1);
-    if (fits_[ri] < 0) fits_[ri] = stack_fits_slots(p_.rungs[ri].code, kNumSlots);
-    return fits_[ri] != 0;
-  }
+  bool fits_slots(size_t ri) const { return stack_fits_slots(p_.rungs[ri].code, kNumSlots); }
 
   const Program& p_;
   const Layout& layout_;
   int opt_;
   bool o2_, notes_;
   std::bitset<8> used_;
-  std::vector<signed char> fits_;  // per rung: -1 not known yet, else fits_slots
 };
 
 }  // namespace
