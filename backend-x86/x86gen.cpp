@@ -51,6 +51,7 @@ const OpTemplate kBitTemplates[] = {
 };
 
 constexpr int32_t kMark[2] = {0x10000000, 0x20000000};
+constexpr const char* kLabelPrefix = "lbl_";  // x86_label_name
 
 // The templates, parsed once; %k becomes the placeholder [rbx+kMark[k]].
 const std::vector<Instruction>* bit_template(Op op) {
@@ -990,7 +991,7 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
 
 }  // namespace
 
-std::string x86_label_name(const std::string& il_label) { return "lbl_" + il_label; }
+std::string x86_label_name(const std::string& il_label) { return std::string(kLabelPrefix) + il_label; }
 
 as::x86::RoutineAreas x86_routine_areas(const Layout& l) {
   as::x86::RoutineAreas a;
@@ -1064,7 +1065,7 @@ class BasePlan {
   }
   bool known(int r) const { return known_[size_t(r)]; }
   int64_t k(int r) const { return k_[size_t(r)]; }
-  void forget() { known_.fill(false); }
+  void forget(int r) { known_[size_t(r)] = false; }
   void set(int r, int64_t k) { k_[size_t(r)] = k, known_[size_t(r)] = true; }
 
   // Points the registers for a region with these operands; returns those that
@@ -1186,7 +1187,7 @@ class Regions {
     Region g = std::move(regions_.front());
     regions_.erase(regions_.begin());
     bool free = prologue_.has_value();
-    if (g.target) plan_.forget();
+    if (g.target) arrive(g.blocks[0]);
     Ops ops = g.ops;
     for (const Region& next : regions_) {
       if (next.target) break;
@@ -1213,6 +1214,7 @@ class Regions {
       items.insert(items.begin() + ptrdiff_t(at), leas.begin(), leas.end());
       for (uint32_t& s : g.starts[0]) s += uint32_t(leas.size());
     }
+    for (const auto& b : g.blocks) depart(b);  // before the reloads make a register known
     for (int r = 0; r < kNumBases; r++)
       if (reloaded[size_t(r)] && !plan_.known(r)) plan_.set(r, kBaseKMin);
     for (size_t i = 0; i < g.blocks.size(); i++) {
@@ -1221,7 +1223,36 @@ class Regions {
     }
   }
 
+  // The jumps to the rungs' global labels (all forward, so all made before
+  // their target's region): the registers' K at each, -1 where not known.
+  void depart(const as::Block<Instruction>& b) {
+    for (const Item& it : b.items) {
+      if (it.kind != as::ItemKind::Instruction || (it.inst.mnemonic != M::Jmp && it.inst.mnemonic != M::Jcc) ||
+          it.inst.ops[0].kind != OperandKind::Label || !it.inst.ops[0].label.view().starts_with(kLabelPrefix))
+        continue;
+      std::array<int64_t, kNumBases> now;
+      for (int r = 0; r < kNumBases; r++) now[size_t(r)] = plan_.known(r) ? plan_.k(r) : -1;
+      auto [at, fresh] = at_jumps_.emplace(it.inst.ops[0].label.id(), now);
+      if (!fresh)
+        for (int r = 0; r < kNumBases; r++)
+          if (at->second[size_t(r)] != now[size_t(r)]) at->second[size_t(r)] = -1;
+    }
+  }
+  // A region that starts at jump targets keeps a register's K only where
+  // every jump to them brings the same K as the code falling through.
+  void arrive(const as::Block<Instruction>& b) {
+    for (const Item& it : b.items) {
+      if (it.kind != as::ItemKind::Label) break;
+      auto at = at_jumps_.find(it.label.id());
+      if (at == at_jumps_.end()) continue;
+      for (int r = 0; r < kNumBases; r++)
+        if (at->second[size_t(r)] != (plan_.known(r) ? plan_.k(r) : -1)) plan_.forget(r);
+      at_jumps_.erase(at);
+    }
+  }
+
   BasePlan plan_;
+  std::map<uint32_t, std::array<int64_t, kNumBases>> at_jumps_;  // by label name id
   std::optional<as::Block<Instruction>> prologue_;
   std::vector<std::vector<uint32_t>>& il_items_;
   const X86BlockSink& sink_;
