@@ -1017,43 +1017,60 @@ uint32_t mem_width(const Mem& m) { return m.size == Size::Dword ? 4 : m.size == 
 
 namespace {
 
-using Ops = std::vector<std::pair<int64_t, int64_t>>;  // (first, last) byte of each rewritable operand
+struct Op {
+  int64_t first, last;  // the bytes a rewritable operand accesses
+  bool rex;             // its instruction has a REX prefix anyway (r15/r14 then cost no byte more than rdi)
+  auto operator<=>(const Op&) const = default;
+};
+using Ops = std::vector<Op>;
 constexpr int64_t kBaseKMin = 128;  // the loader's range for K: [128, size - 135], so that every
 constexpr int64_t kBaseKTop = 135;  // [reg+d8] access of up to 8 bytes stays inside the image
 constexpr int64_t kLeaBytes = 7;    // lea reg, [rbx+disp32]
-constexpr int64_t kSavedBytes = 3;  // a disp8 instead of a disp32 (2 where r15/r14 add a REX)
 // A region ends after the block that brings it kRegionOps operands; its
 // registers are chosen over it and the next kLookahead regions.  Picked by
 // measuring code bytes of ldbench's plant and synthetic programs (docs/x86.md).
-constexpr size_t kRegionOps = 12;
+constexpr size_t kRegionOps = 24;
 constexpr size_t kLookahead = 1;
+constexpr int kNewWindows = 3;  // windows a region may point registers to (the fullest ones)
+
+bool has_rex(const Instruction& in) {
+  for (unsigned k = 0; k < in.num_operands; k++) {
+    const Operand& o = in.ops[k];
+    if (o.kind == OperandKind::Reg && (o.reg.num >= 8 || o.reg.cls == RegClass::Gp64 || (o.reg.cls == RegClass::Gp8 && o.reg.num >= 4)))
+      return true;
+  }
+  return false;
+}
 
 void collect_ops(const as::Block<Instruction>& b, Ops& ops) {
   for (const Item& it : b.items) {
     if (it.kind != as::ItemKind::Instruction) continue;
     for (unsigned k = 0; k < it.inst.num_operands; k++)
-      if (rewritable(it.inst, it.inst.ops[k]))
-        ops.push_back({it.inst.ops[k].mem.disp, int64_t(it.inst.ops[k].mem.disp) + mem_width(it.inst.ops[k].mem) - 1});
+      if (rewritable(it.inst, it.inst.ops[k])) {
+        const Mem& m = it.inst.ops[k].mem;
+        ops.push_back({m.disp, int64_t(m.disp) + mem_width(m) - 1, has_rex(it.inst)});
+      }
   }
 }
 
-bool covers(int64_t k, const std::pair<int64_t, int64_t>& o) { return o.first >= k - 128 && o.second <= k + 127; }
+bool covers(int64_t k, int64_t first, int64_t last) { return first >= k - 128 && last <= k + 127; }
 
-// The fullest window [lo, lo+255] over ops (sorted): (operands inside, lo).
-// O(n) but for operands whose last bytes fall just past a window's end.
-std::pair<size_t, int64_t> best_window(const Ops& ops) {
+// The fullest window [lo, lo+255] over ops (sorted), as the K in the middle of
+// the slack its operands leave (0 if none).  O(n) but for operands whose last
+// bytes fall just past a window's end.
+int64_t best_window(const Ops& ops) {
   size_t best = 0, end = 0;
-  int64_t best_lo = 0;
+  int64_t best_k = 0;
   for (size_t i = 0; i < ops.size(); i++) {
     if (i > 0 && ops[i].first == ops[i - 1].first) continue;
-    int64_t lo = ops[i].first;
+    int64_t lo = ops[i].first, last = lo;
     while (end < ops.size() && ops[end].first <= lo + 255) end++;
-    size_t n = end - i;
-    for (size_t j = end; j-- > i && ops[j].first > lo + 255 - 8;)  // wider operands may end past the window
-      if (ops[j].second > lo + 255) n--;
-    if (n > best) best = n, best_lo = lo;
+    size_t n = 0;
+    for (size_t j = i; j < end; j++)
+      if (ops[j].last <= lo + 255) n++, last = std::max(last, ops[j].last);
+    if (n > best) best = n, best_k = (lo + 128 + last - 127) / 2;
   }
-  return {best, best_lo};
+  return best_k;
 }
 
 // The base registers' K as the regions go (unknown after a jump target, which
@@ -1069,40 +1086,70 @@ class BasePlan {
   void set(int r, int64_t k) { k_[size_t(r)] = k, known_[size_t(r)] = true; }
 
   // Points the registers for a region with these operands; returns those that
-  // need a lea at its start.  Greedy, up to one step per register: keep the
-  // register whose present K covers most of the operands left, or point a
-  // free one (the one covering least) at their fullest window, whichever
-  // saves more bytes after the lea's (nothing when `free`: the prologue's
-  // leas); every register is set when `free`.
+  // need a lea at its start.  Each register keeps its K or takes one of the
+  // kNewWindows fullest windows (found greedily: the fullest, then the fullest
+  // of the operands it leaves ...); every such choice is counted in bytes
+  // saved (3 an operand through rdi, 2 or 3 through r15/r14, which need a REX)
+  // less 7 a lea (none when `free`: the prologue's), and the best one taken.
+  // Operands are grouped by the windows that cover them, so a choice is
+  // counted over the groups, not the operands.  Every register is set when `free`.
   std::array<bool, kNumBases> plan(Ops ops, bool free) {
     std::sort(ops.begin(), ops.end());
-    std::array<bool, kNumBases> fixed{}, lea{};
-    auto count = [&](int r) {
-      return known(r) ? size_t(std::count_if(ops.begin(), ops.end(), [&](const auto& o) { return covers(k(r), o); })) : 0;
-    };
-    for (int step = 0; step < kNumBases && !ops.empty(); step++) {
-      int keep = -1, spare = -1;
-      size_t keep_n = 0, spare_n = SIZE_MAX;
-      for (int r = 0; r < kNumBases; r++) {
-        if (fixed[size_t(r)]) continue;
-        size_t n = count(r);
-        if (known(r) && n > keep_n) keep = r, keep_n = n;
-        if (n < spare_n) spare = r, spare_n = n;
-      }
-      auto [new_n, lo] = best_window(ops);
-      // a new window costs the lea and what the spare register's K covers
-      int64_t keep_gain = kSavedBytes * int64_t(keep_n),
-              new_gain = kSavedBytes * (int64_t(new_n) - int64_t(spare_n)) - (free ? 0 : kLeaBytes);
-      if (std::max(keep_gain, new_gain) <= 0) break;
-      int r = keep;
-      if (new_gain > keep_gain) {
-        r = spare;
-        set(r, std::clamp(lo + 128, kBaseKMin, kmax_));
-        lea[size_t(r)] = true;
-      }
-      fixed[size_t(r)] = true;
-      std::erase_if(ops, [&](const auto& o) { return covers(k(r), o); });
+    std::vector<int64_t> news;  // the new windows' K
+    for (Ops rest = ops; news.size() < size_t(kNewWindows) && !rest.empty();) {
+      int64_t kw = std::clamp(best_window(rest), kBaseKMin, kmax_);
+      size_t before = rest.size();
+      std::erase_if(rest, [&](const Op& o) { return covers(kw, o.first, o.last); });
+      if (rest.size() == before) break;
+      news.push_back(kw);
     }
+    // windows: 0..2 the registers' present K (if known), 3.. the new ones
+    const size_t nw = kNumBases + news.size();
+    auto window_k = [&](size_t w) { return w < kNumBases ? k(int(w)) : news[w - kNumBases]; };
+    std::map<std::pair<uint32_t, bool>, int64_t> groups;  // (windows covering, rex) -> operands
+    for (const Op& o : ops) {
+      uint32_t mask = 0;
+      for (size_t w = 0; w < nw; w++)
+        if ((w >= kNumBases || known(int(w))) && covers(window_k(w), o.first, o.last)) mask |= 1u << w;
+      if (mask) groups[{mask, o.rex}]++;
+    }
+    // choice[r]: the window register r takes: r itself (keep, or nothing if not known) or a new one
+    std::array<size_t, kNumBases> choice{}, best_choice{};
+    for (int r = 0; r < kNumBases; r++) best_choice[size_t(r)] = size_t(r);
+    int64_t best = INT64_MIN;
+    std::vector<std::pair<uint32_t, int64_t>> by_mask;
+    const size_t options = 1 + news.size();
+    size_t combos = 1;
+    for (int r = 0; r < kNumBases; r++) combos *= options;
+    for (size_t c = 0; c < combos; c++) {
+      size_t rest = c;
+      uint32_t used = 0;
+      int64_t leas = 0;
+      bool dup = false;
+      for (int r = 0; r < kNumBases; r++) {
+        size_t o = rest % options;
+        rest /= options;
+        choice[size_t(r)] = o == 0 ? size_t(r) : kNumBases + o - 1;
+        if (o) {
+          leas++;
+          dup |= (used >> choice[size_t(r)]) & 1;
+          used |= 1u << choice[size_t(r)];
+        }
+      }
+      if (dup) continue;
+      const uint32_t rdi_w = 1u << choice[0];
+      uint32_t other_w = 0;
+      for (int r = 1; r < kNumBases; r++) other_w |= 1u << choice[size_t(r)];
+      int64_t saved = free ? 0 : -kLeaBytes * leas;
+      for (const auto& [key, n] : groups) {
+        if (key.first & rdi_w) saved += 3 * n;
+        else if (key.first & other_w) saved += (key.second ? 3 : 2) * n;
+      }
+      if (saved > best) best = saved, best_choice = choice;
+    }
+    std::array<bool, kNumBases> lea{};
+    for (int r = 0; r < kNumBases; r++)
+      if (best_choice[size_t(r)] != size_t(r)) set(r, window_k(best_choice[size_t(r)])), lea[size_t(r)] = true;
     if (free)
       for (int r = 0; r < kNumBases; r++)
         if (!lea[size_t(r)]) set(r, known(r) ? k(r) : kBaseKMin), lea[size_t(r)] = true;
@@ -1125,11 +1172,11 @@ class BasePlan {
       for (unsigned j = 0; j < in.num_operands; j++) {
         if (!rewritable(in, in.ops[j])) continue;
         Mem& m = in.ops[j].mem;
-        const std::pair<int64_t, int64_t> o{m.disp, int64_t(m.disp) + mem_width(m) - 1};
+        const int64_t first = m.disp, last = first + mem_width(m) - 1;
         for (int r = 0; r < kNumBases; r++)
-          if (known(r) && covers(k(r), o)) {
+          if (known(r) && covers(k(r), first, last)) {
             m.base = r64(kBaseRegs[r]);
-            m.disp = int32_t(o.first - k(r));
+            m.disp = int32_t(first - k(r));
             break;
           }
       }
