@@ -1026,11 +1026,11 @@ using Ops = std::vector<Op>;
 constexpr int64_t kBaseKMin = 128;  // the loader's range for K: [128, size - 135], so that every
 constexpr int64_t kBaseKTop = 135;  // [reg+d8] access of up to 8 bytes stays inside the image
 constexpr int64_t kLeaBytes = 7;    // lea reg, [rbx+disp32]
-// A region ends after the block that brings it kRegionOps operands; its
-// registers are chosen over it and the next kLookahead regions.  Picked by
-// measuring code bytes of ldbench's plant and synthetic programs (docs/x86.md).
-constexpr size_t kRegionOps = 24;
-constexpr size_t kLookahead = 1;
+// A region ends after the block that brings it kRegionOps operands (or before
+// a jump target).  Picked by measuring code bytes of ldbench's plant and
+// synthetic programs (docs/x86.md): 16 to 64 operands and one region of
+// lookahead or none come within 0.5% of each other.
+constexpr size_t kRegionOps = 32;
 constexpr int kNewWindows = 3;  // windows a region may point registers to (the fullest ones)
 
 bool has_rex(const Instruction& in) {
@@ -1056,21 +1056,24 @@ void collect_ops(const as::Block<Instruction>& b, Ops& ops) {
 bool covers(int64_t k, int64_t first, int64_t last) { return first >= k - 128 && last <= k + 127; }
 
 // The fullest window [lo, lo+255] over ops (sorted), as the K in the middle of
-// the slack its operands leave (0 if none).  O(n) but for operands whose last
-// bytes fall just past a window's end.
+// the slack its operands leave (0 if none).  O(n): an operand is at most 8
+// bytes, so only those starting in the window's last 7 bytes may end past it.
 int64_t best_window(const Ops& ops) {
-  size_t best = 0, end = 0;
-  int64_t best_k = 0;
+  size_t best = 0, end = 0, best_i = 0, best_end = 0;
   for (size_t i = 0; i < ops.size(); i++) {
     if (i > 0 && ops[i].first == ops[i - 1].first) continue;
-    int64_t lo = ops[i].first, last = lo;
+    int64_t lo = ops[i].first;
     while (end < ops.size() && ops[end].first <= lo + 255) end++;
-    size_t n = 0;
-    for (size_t j = i; j < end; j++)
-      if (ops[j].last <= lo + 255) n++, last = std::max(last, ops[j].last);
-    if (n > best) best = n, best_k = (lo + 128 + last - 127) / 2;
+    size_t n = end - i;
+    for (size_t j = end; j-- > i && ops[j].first > lo + 248;)
+      if (ops[j].last > lo + 255) n--;
+    if (n > best) best = n, best_i = i, best_end = end;
   }
-  return best_k;
+  if (!best) return 0;
+  int64_t lo = ops[best_i].first, last = lo;
+  for (size_t j = best_i; j < best_end; j++)
+    if (ops[j].last <= lo + 255) last = std::max(last, ops[j].last);
+  return (lo + 128 + last - 127) / 2;
 }
 
 // The base registers' K as the regions go (unknown after a jump target, which
@@ -1093,7 +1096,8 @@ class BasePlan {
   // less 7 a lea (none when `free`: the prologue's), and the best one taken.
   // Operands are grouped by the windows that cover them, so a choice is
   // counted over the groups, not the operands.  Every register is set when `free`.
-  std::array<bool, kNumBases> plan(Ops ops, bool free) {
+  std::array<bool, kNumBases> plan(Ops& ops, bool free) {
+    if (ops.empty() && !free) return {};
     std::sort(ops.begin(), ops.end());
     std::vector<int64_t> news;  // the new windows' K
     for (Ops rest = ops; news.size() < size_t(kNewWindows) && !rest.empty();) {
@@ -1106,46 +1110,44 @@ class BasePlan {
     // windows: 0..2 the registers' present K (if known), 3.. the new ones
     const size_t nw = kNumBases + news.size();
     auto window_k = [&](size_t w) { return w < kNumBases ? k(int(w)) : news[w - kNumBases]; };
-    std::map<std::pair<uint32_t, bool>, int64_t> groups;  // (windows covering, rex) -> operands
+    std::vector<Group>& groups = groups_;  // a few: a linear search
+    groups.clear();
     for (const Op& o : ops) {
       uint32_t mask = 0;
       for (size_t w = 0; w < nw; w++)
         if ((w >= kNumBases || known(int(w))) && covers(window_k(w), o.first, o.last)) mask |= 1u << w;
-      if (mask) groups[{mask, o.rex}]++;
+      if (!mask) continue;
+      auto g = std::find_if(groups.begin(), groups.end(), [&](const Group& x) { return x.mask == mask && x.rex == o.rex; });
+      if (g == groups.end()) groups.push_back({mask, o.rex, 1});
+      else g->n++;
     }
     // choice[r]: the window register r takes: r itself (keep, or nothing if not known) or a new one
     std::array<size_t, kNumBases> choice{}, best_choice{};
     for (int r = 0; r < kNumBases; r++) best_choice[size_t(r)] = size_t(r);
     int64_t best = INT64_MIN;
-    std::vector<std::pair<uint32_t, int64_t>> by_mask;
-    const size_t options = 1 + news.size();
-    size_t combos = 1;
-    for (int r = 0; r < kNumBases; r++) combos *= options;
-    for (size_t c = 0; c < combos; c++) {
-      size_t rest = c;
-      uint32_t used = 0;
+    std::array<size_t, kNumBases> o{};  // an odometer over the choices: 0 keep, j > 0 new window j-1
+    for (bool more = true; more;) {
+      uint32_t used = 0, rdi_w = 0, other_w = 0;
       int64_t leas = 0;
       bool dup = false;
       for (int r = 0; r < kNumBases; r++) {
-        size_t o = rest % options;
-        rest /= options;
-        choice[size_t(r)] = o == 0 ? size_t(r) : kNumBases + o - 1;
-        if (o) {
-          leas++;
-          dup |= (used >> choice[size_t(r)]) & 1;
-          used |= 1u << choice[size_t(r)];
+        choice[size_t(r)] = o[size_t(r)] == 0 ? size_t(r) : kNumBases + o[size_t(r)] - 1;
+        const uint32_t bit = 1u << choice[size_t(r)];
+        if (o[size_t(r)]) leas++, dup |= (used & bit) != 0, used |= bit;
+        (r == 0 ? rdi_w : other_w) |= bit;
+      }
+      if (!dup) {
+        int64_t saved = free ? 0 : -kLeaBytes * leas;
+        for (const Group& g : groups) {
+          if (g.mask & rdi_w) saved += 3 * g.n;
+          else if (g.mask & other_w) saved += (g.rex ? 3 : 2) * g.n;
         }
+        if (saved > best) best = saved, best_choice = choice;
       }
-      if (dup) continue;
-      const uint32_t rdi_w = 1u << choice[0];
-      uint32_t other_w = 0;
-      for (int r = 1; r < kNumBases; r++) other_w |= 1u << choice[size_t(r)];
-      int64_t saved = free ? 0 : -kLeaBytes * leas;
-      for (const auto& [key, n] : groups) {
-        if (key.first & rdi_w) saved += 3 * n;
-        else if (key.first & other_w) saved += (key.second ? 3 : 2) * n;
-      }
-      if (saved > best) best = saved, best_choice = choice;
+      more = false;
+      for (int r = 0; r < kNumBases && !more; r++)
+        if (++o[size_t(r)] <= news.size()) more = true;
+        else o[size_t(r)] = 0;
     }
     std::array<bool, kNumBases> lea{};
     for (int r = 0; r < kNumBases; r++)
@@ -1187,60 +1189,40 @@ class BasePlan {
   int64_t kmax_;
   std::array<int64_t, kNumBases> k_{};
   std::array<bool, kNumBases> known_{};
+  struct Group {
+    uint32_t mask;  // the windows covering its operands
+    bool rex;       // Op::rex
+    int64_t n;      // operands
+  };
+  std::vector<Group> groups_;  // plan's, kept for its storage
 };
 
 // -O2: the blocks gathered into regions, each given its base registers, then
 // handed to the sink in order (the prologue, held until the first region
-// fills in its leas, and each rung's IL starts).  A region's registers are
-// chosen from its own operands and those of the next kLookahead regions (up
-// to a jump target, where the registers are set again), so that a window
-// that pays only over several regions is taken at once.
+// fills in its leas, and each rung's IL starts).
 class Regions {
  public:
   Regions(uint32_t image_size, as::Block<Instruction> prologue, std::vector<std::vector<uint32_t>>& il_items,
           const X86BlockSink& sink)
-      : plan_(image_size), prologue_(std::move(prologue)), il_items_(il_items), sink_(sink) {
-    regions_.emplace_back();
-  }
+      : plan_(image_size), prologue_(std::move(prologue)), il_items_(il_items), sink_(sink) {}
 
   // a rung's block; `target`: it starts with labels that jumps name
   void add(as::Block<Instruction>& b, std::vector<uint32_t>& starts, bool target) {
-    if (target && !regions_.back().blocks.empty()) close();
-    Region& g = regions_.back();
-    if (target) g.target = true;
-    collect_ops(b, g.ops);
-    g.blocks.push_back(std::move(b));
-    g.starts.push_back(std::move(starts));
-    if (g.ops.size() >= kRegionOps) close();
+    if (target) flush(), target_ = true;
+    collect_ops(b, ops_);
+    blocks_.push_back(std::move(b));
+    starts_.push_back(std::move(starts));
+    if (!spare_.empty()) b = std::move(spare_.back()), spare_.pop_back();  // reuse a sunk block's storage
+    if (ops_.size() >= kRegionOps) flush();
   }
-  void finish() {
-    while (!regions_.empty()) flush_front();
-  }
+  void finish() { flush(); }
 
  private:
-  struct Region {
-    std::vector<as::Block<Instruction>> blocks;
-    std::vector<std::vector<uint32_t>> starts;
-    Ops ops;
-    bool target = false;  // its first block is a jump target
-  };
-
-  void close() {
-    regions_.emplace_back();
-    if (regions_.size() > kLookahead + 1) flush_front();
-  }
-
-  void flush_front() {
-    Region g = std::move(regions_.front());
-    regions_.erase(regions_.begin());
+  void flush() {
+    if (blocks_.empty() && !prologue_) return;
     bool free = prologue_.has_value();
-    if (g.target) arrive(g.blocks[0]);
-    Ops ops = g.ops;
-    for (const Region& next : regions_) {
-      if (next.target) break;
-      ops.insert(ops.end(), next.ops.begin(), next.ops.end());
-    }
-    std::array<bool, kNumBases> lea = plan_.plan(std::move(ops), free);
+    if (target_) arrive(blocks_[0]);
+    std::array<bool, kNumBases> lea = plan_.plan(ops_, free);
     if (free) {
       for (Item& it : prologue_->items)
         for (int r = 0; r < kNumBases; r++)
@@ -1250,24 +1232,29 @@ class Regions {
       prologue_.reset();
     }
     std::array<bool, kNumBases> reloaded{};
-    for (auto& b : g.blocks) plan_.rewrite(b, reloaded);
-    if (!free && !g.blocks.empty()) {  // the leas, after the first block's labels
-      std::vector<Item>& items = g.blocks[0].items;
+    for (auto& b : blocks_) plan_.rewrite(b, reloaded);
+    if (!free && !blocks_.empty()) {  // the leas, after the first block's labels
+      std::vector<Item>& items = blocks_[0].items;
       size_t at = 0;
       while (at < items.size() && items[at].kind == as::ItemKind::Label) at++;
       std::vector<Item> leas;
       for (int r = 0; r < kNumBases; r++)
         if (lea[size_t(r)]) leas.push_back(Item::instr(base_lea(kBaseRegs[r], int32_t(plan_.k(r)))));
       items.insert(items.begin() + ptrdiff_t(at), leas.begin(), leas.end());
-      for (uint32_t& s : g.starts[0]) s += uint32_t(leas.size());
+      for (uint32_t& s : starts_[0]) s += uint32_t(leas.size());
     }
-    for (const auto& b : g.blocks) depart(b);  // before the reloads make a register known
+    for (const auto& b : blocks_) depart(b);  // before the reloads make a register known
     for (int r = 0; r < kNumBases; r++)
       if (reloaded[size_t(r)] && !plan_.known(r)) plan_.set(r, kBaseKMin);
-    for (size_t i = 0; i < g.blocks.size(); i++) {
-      il_items_.push_back(std::move(g.starts[i]));
-      sink_(g.blocks[i]);
+    for (size_t i = 0; i < blocks_.size(); i++) {
+      il_items_.push_back(std::move(starts_[i]));
+      sink_(blocks_[i]);
+      if (spare_.size() < 4) spare_.push_back(std::move(blocks_[i]));
     }
+    blocks_.clear();
+    starts_.clear();
+    ops_.clear();
+    target_ = false;
   }
 
   // The jumps to the rungs' global labels (all forward, so all made before
@@ -1303,7 +1290,11 @@ class Regions {
   std::optional<as::Block<Instruction>> prologue_;
   std::vector<std::vector<uint32_t>>& il_items_;
   const X86BlockSink& sink_;
-  std::vector<Region> regions_;  // the last one open; at most kLookahead + 1
+  std::vector<as::Block<Instruction>> blocks_;  // the region's
+  std::vector<std::vector<uint32_t>> starts_;
+  Ops ops_;
+  bool target_ = false;  // the region's first block is a jump target
+  std::vector<as::Block<Instruction>> spare_;  // blocks sunk, their items' storage for rungs to come
 };
 
 // The blocks of a program in order (block 0 the prologue, one per rung, the
