@@ -151,17 +151,19 @@ std::span<const Instruction> scan_epilogue(bool with_slots);
 
 // The -O2 frame's base registers (docs/x86.md, "Compact addressing"): right
 // after the -O2 prologue, `lea rdi, [rbx+K0]; lea r15, [rbx+K1]; lea r14,
-// [rbx+K2]` point them
-// into the memory image at offsets the compiler picks per program, so that
-// devices near K take [rdi+disp8] / [r15+disp8] / [r14+disp8] instead of
-// [rbx+disp32].  The
-// body never writes them, except that each call through the REAL function
-// table (which may clobber rdi) is followed at once by `lea rdi, [rbx+K0]`.
-// r15 and r14 are callee-saved (they were bit-stack slots before); the shared
-// routines use none of the three.  The loader's validator reads the K from the prologue and checks every [reg+disp]
-// against the memory image as K+disp.
+// [rbx+K2]` point them into the memory image, and the body may point them
+// again (`lea reg, [rbx+K]`, the only write of a base register it contains),
+// region by region, so that devices near K take [rdi+disp8] / [r15+disp8] /
+// [r14+disp8] instead of [rbx+disp32].  Each call through the REAL function
+// table (which may clobber the caller-saved rdi) is followed at once by the
+// leas of the caller-saved base registers.  r15 and r14 are callee-saved (they
+// were bit-stack slots before); the shared routines use none of the three.
+// The loader's validator accepts any K in [128, size-135] and base-register
+// operands with a disp8 only, so every access stays inside the image.
 constexpr int kNumBases = 3;
 constexpr RegNum kBaseRegs[kNumBases] = {DI, R15, R14};
+// System V: may a called function change the register?
+constexpr bool caller_saved(RegNum r) { return !(r == BX || r == SP || r == BP || r >= R12); }
 Instruction base_lea(RegNum reg, int32_t k);  // lea reg, [rbx+k]
 
 // The -O2 division's guard (docs/x86.md, "Branch-free division"): before

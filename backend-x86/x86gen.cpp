@@ -51,6 +51,7 @@ const OpTemplate kBitTemplates[] = {
 };
 
 constexpr int32_t kMark[2] = {0x10000000, 0x20000000};
+constexpr const char* kLabelPrefix = "lbl_";  // x86_label_name
 
 // The templates, parsed once; %k becomes the placeholder [rbx+kMark[k]].
 const std::vector<Instruction>* bit_template(Op op) {
@@ -568,8 +569,11 @@ void Gen::real_fn(Op op, const ldc::Operand& a, const ldc::Operand& d) {
   load_real(a, xmm0);
   if (real_fn_info(fn).called) {
     emit(M::Call, {Operand::m(mem_at(Size::Qword, uint32_t(call_slot_disp(fn))))});
-    // the call may clobber rdi: point it back (its K is filled in by set_bases)
-    if (bases_) emit(as::x86::base_lea(DI, 0));
+    // the call may clobber the caller-saved base registers (rdi): point them
+    // back (their K is filled in with the region's, BasePlan::rewrite)
+    if (bases_)
+      for (RegNum r : as::x86::kBaseRegs)
+        if (as::x86::caller_saved(r)) emit(as::x86::base_lea(r, 0));
   } else if (fn == RealFn::Sqrt) {
     emit(M::Sqrtss, {R(xmm0), R(xmm0)});
   } else {  // Abs: the sign bit cleared
@@ -987,7 +991,7 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
 
 }  // namespace
 
-std::string x86_label_name(const std::string& il_label) { return "lbl_" + il_label; }
+std::string x86_label_name(const std::string& il_label) { return std::string(kLabelPrefix) + il_label; }
 
 as::x86::RoutineAreas x86_routine_areas(const Layout& l) {
   as::x86::RoutineAreas a;
@@ -1000,11 +1004,11 @@ as::x86::RoutineAreas x86_routine_areas(const Layout& l) {
   return a;
 }
 
-// -O2 compact addressing (docs/x86.md): pick K for each base register
-// (as::x86::kBaseRegs) so that their disp8 windows [K-128, K+127] cover as many of
-// the program's [rbx+disp32] operands as possible (greedily: the fullest
-// window first), rewrite those operands to [reg+d8], and fill K
-// into the prologue's leas and the reloads after REAL calls.
+// -O2 compact addressing (docs/x86.md, "Compact addressing"): the rungs are
+// taken in regions of consecutive blocks; at the start of each region the
+// base registers (as::x86::kBaseRegs) are pointed where that region's
+// [rbx+disp32] operands are (a `lea reg, [rbx+K]` where one pays), and the
+// operands inside a register's disp8 window [K-128, K+127] become [reg+d8].
 bool rewritable(const Instruction& in, const as::x86::Operand& o) {
   return o.kind == OperandKind::Mem && in.mnemonic != M::Call && in.mnemonic != M::Lea && o.mem.base == r64(BX) &&
          !o.mem.index.valid() && (o.mem.disp < -128 || o.mem.disp > 127);
@@ -1013,71 +1017,285 @@ uint32_t mem_width(const Mem& m) { return m.size == Size::Dword ? 4 : m.size == 
 
 namespace {
 
-using Ops = std::vector<std::pair<int64_t, int64_t>>;  // (first, last) byte of each rewritable operand
-using Bases = std::array<int64_t, kNumBases>;
+struct Op {
+  int64_t first, last;  // the bytes a rewritable operand accesses
+  bool rex;             // its instruction has a REX prefix anyway (r15/r14 then cost no byte more than rdi)
+  auto operator<=>(const Op&) const = default;
+};
+using Ops = std::vector<Op>;
+constexpr int64_t kBaseKMin = 128;  // the loader's range for K: [128, size - 135], so that every
+constexpr int64_t kBaseKTop = 135;  // [reg+d8] access of up to 8 bytes stays inside the image
+constexpr int64_t kLeaBytes = 7;    // lea reg, [rbx+disp32]
+// A region ends after the block that brings it kRegionOps operands (or before
+// a jump target).  Picked by measuring code bytes of ldbench's plant and
+// synthetic programs (docs/x86.md): 16 to 64 operands and one region of
+// lookahead or none come within 0.5% of each other.
+constexpr size_t kRegionOps = 32;
+constexpr int kNewWindows = 3;  // windows a region may point registers to (the fullest ones)
+
+bool has_rex(const Instruction& in) {
+  for (unsigned k = 0; k < in.num_operands; k++) {
+    const Operand& o = in.ops[k];
+    if (o.kind == OperandKind::Reg && (o.reg.num >= 8 || o.reg.cls == RegClass::Gp64 || (o.reg.cls == RegClass::Gp8 && o.reg.num >= 4)))
+      return true;
+  }
+  return false;
+}
 
 void collect_ops(const as::Block<Instruction>& b, Ops& ops) {
   for (const Item& it : b.items) {
     if (it.kind != as::ItemKind::Instruction) continue;
     for (unsigned k = 0; k < it.inst.num_operands; k++)
-      if (rewritable(it.inst, it.inst.ops[k]))
-        ops.push_back({it.inst.ops[k].mem.disp, int64_t(it.inst.ops[k].mem.disp) + mem_width(it.inst.ops[k].mem) - 1});
-  }
-}
-
-Bases choose_bases(Ops ops, uint32_t image_size) {
-  Bases ks{};
-  for (int r = 0; r < kNumBases; r++) {
-    // window [lo, lo+255]: the operands with first >= lo and last <= lo+255,
-    // counted per width from sorted first bytes
-    std::map<int64_t, std::vector<int64_t>> by_width;
-    for (const auto& o : ops) by_width[o.second - o.first].push_back(o.first);
-    for (auto& [w, v] : by_width) std::sort(v.begin(), v.end());
-    size_t best = 0;
-    int64_t best_lo = 0;
-    for (const auto& [w0, cand] : by_width)
-      for (size_t i = 0; i < cand.size(); i++) {
-        if (i > 0 && cand[i] == cand[i - 1]) continue;
-        int64_t lo = cand[i];
-        size_t n = 0;
-        for (const auto& [w, v] : by_width)
-          n += size_t(std::upper_bound(v.begin(), v.end(), lo + 255 - w) - std::lower_bound(v.begin(), v.end(), lo));
-        if (n > best) best = n, best_lo = lo;
+      if (rewritable(it.inst, it.inst.ops[k])) {
+        const Mem& m = it.inst.ops[k].mem;
+        ops.push_back({m.disp, int64_t(m.disp) + mem_width(m) - 1, has_rex(it.inst)});
       }
-    ks[r] = best ? best_lo + 128 : 128;
-    if (ks[r] >= int64_t(image_size)) ks[r] = int64_t(image_size) - 1;
-    Ops rest;
-    for (const auto& o : ops)
-      if (!(o.first >= ks[r] - 128 && o.second <= ks[r] + 127)) rest.push_back(o);
-    ops.swap(rest);
   }
-  return ks;
 }
 
-void apply_bases(as::Block<Instruction>& b, const Bases& ks) {
-  for (Item& it : b.items) {
-    if (it.kind != as::ItemKind::Instruction) continue;
-    Instruction& in = it.inst;
-    if (in.mnemonic == M::Lea && in.ops[0].kind == OperandKind::Reg && in.ops[0].reg.cls == RegClass::Gp64 &&
-        in.ops[1].mem.base == r64(BX)) {
-      for (int r = 0; r < kNumBases; r++)
-        if (in.ops[0].reg.num == kBaseRegs[r]) in.ops[1].mem.disp = int32_t(ks[r]);
-      continue;
+bool covers(int64_t k, int64_t first, int64_t last) { return first >= k - 128 && last <= k + 127; }
+
+// The fullest window [lo, lo+255] over ops (sorted), as the K in the middle of
+// the slack its operands leave (0 if none).  O(n): an operand is at most 8
+// bytes, so only those starting in the window's last 7 bytes may end past it.
+int64_t best_window(const Ops& ops) {
+  size_t best = 0, end = 0, best_i = 0, best_end = 0;
+  for (size_t i = 0; i < ops.size(); i++) {
+    if (i > 0 && ops[i].first == ops[i - 1].first) continue;
+    int64_t lo = ops[i].first;
+    while (end < ops.size() && ops[end].first <= lo + 255) end++;
+    size_t n = end - i;
+    for (size_t j = end; j-- > i && ops[j].first > lo + 248;)
+      if (ops[j].last > lo + 255) n--;
+    if (n > best) best = n, best_i = i, best_end = end;
+  }
+  if (!best) return 0;
+  int64_t lo = ops[best_i].first, last = lo;
+  for (size_t j = best_i; j < best_end; j++)
+    if (ops[j].last <= lo + 255) last = std::max(last, ops[j].last);
+  return (lo + 128 + last - 127) / 2;
+}
+
+// The base registers' K as the regions go (unknown after a jump target, which
+// a path from elsewhere may reach with other values).
+class BasePlan {
+ public:
+  explicit BasePlan(uint32_t image_size) : kmax_(int64_t(image_size) - kBaseKTop) {
+    if (kmax_ < kBaseKMin) throw std::logic_error("x86 backend: memory image too small for base registers");
+  }
+  bool known(int r) const { return known_[size_t(r)]; }
+  int64_t k(int r) const { return k_[size_t(r)]; }
+  void forget(int r) { known_[size_t(r)] = false; }
+  void set(int r, int64_t k) { k_[size_t(r)] = k, known_[size_t(r)] = true; }
+
+  // Points the registers for a region with these operands; returns those that
+  // need a lea at its start.  Each register keeps its K or takes one of the
+  // kNewWindows fullest windows (found greedily: the fullest, then the fullest
+  // of the operands it leaves ...); every such choice is counted in bytes
+  // saved (3 an operand through rdi, 2 or 3 through r15/r14, which need a REX)
+  // less 7 a lea (none when `free`: the prologue's), and the best one taken.
+  // Operands are grouped by the windows that cover them, so a choice is
+  // counted over the groups, not the operands.  Every register is set when `free`.
+  std::array<bool, kNumBases> plan(Ops& ops, bool free) {
+    if (ops.empty() && !free) return {};
+    std::sort(ops.begin(), ops.end());
+    std::vector<int64_t> news;  // the new windows' K
+    for (Ops rest = ops; news.size() < size_t(kNewWindows) && !rest.empty();) {
+      int64_t kw = std::clamp(best_window(rest), kBaseKMin, kmax_);
+      size_t before = rest.size();
+      std::erase_if(rest, [&](const Op& o) { return covers(kw, o.first, o.last); });
+      if (rest.size() == before) break;
+      news.push_back(kw);
     }
-    for (unsigned k = 0; k < in.num_operands; k++) {
-      if (!rewritable(in, in.ops[k])) continue;
-      Mem& m = in.ops[k].mem;
+    // windows: 0..2 the registers' present K (if known), 3.. the new ones
+    const size_t nw = kNumBases + news.size();
+    auto window_k = [&](size_t w) { return w < kNumBases ? k(int(w)) : news[w - kNumBases]; };
+    std::vector<Group>& groups = groups_;  // a few: a linear search
+    groups.clear();
+    for (const Op& o : ops) {
+      uint32_t mask = 0;
+      for (size_t w = 0; w < nw; w++)
+        if ((w >= kNumBases || known(int(w))) && covers(window_k(w), o.first, o.last)) mask |= 1u << w;
+      if (!mask) continue;
+      auto g = std::find_if(groups.begin(), groups.end(), [&](const Group& x) { return x.mask == mask && x.rex == o.rex; });
+      if (g == groups.end()) groups.push_back({mask, o.rex, 1});
+      else g->n++;
+    }
+    // choice[r]: the window register r takes: r itself (keep, or nothing if not known) or a new one
+    std::array<size_t, kNumBases> choice{}, best_choice{};
+    for (int r = 0; r < kNumBases; r++) best_choice[size_t(r)] = size_t(r);
+    int64_t best = INT64_MIN;
+    std::array<size_t, kNumBases> o{};  // an odometer over the choices: 0 keep, j > 0 new window j-1
+    for (bool more = true; more;) {
+      uint32_t used = 0, rdi_w = 0, other_w = 0;
+      int64_t leas = 0;
+      bool dup = false;
       for (int r = 0; r < kNumBases; r++) {
-        int64_t d = int64_t(m.disp) - ks[r];
-        if (d >= -128 && d + mem_width(m) - 1 <= 127) {
-          m.base = r64(as::x86::kBaseRegs[r]);
-          m.disp = int32_t(d);
-          break;
+        choice[size_t(r)] = o[size_t(r)] == 0 ? size_t(r) : kNumBases + o[size_t(r)] - 1;
+        const uint32_t bit = 1u << choice[size_t(r)];
+        if (o[size_t(r)]) leas++, dup |= (used & bit) != 0, used |= bit;
+        (r == 0 ? rdi_w : other_w) |= bit;
+      }
+      if (!dup) {
+        int64_t saved = free ? 0 : -kLeaBytes * leas;
+        for (const Group& g : groups) {
+          if (g.mask & rdi_w) saved += 3 * g.n;
+          else if (g.mask & other_w) saved += (g.rex ? 3 : 2) * g.n;
         }
+        if (saved > best) best = saved, best_choice = choice;
+      }
+      more = false;
+      for (int r = 0; r < kNumBases && !more; r++)
+        if (++o[size_t(r)] <= news.size()) more = true;
+        else o[size_t(r)] = 0;
+    }
+    std::array<bool, kNumBases> lea{};
+    for (int r = 0; r < kNumBases; r++)
+      if (best_choice[size_t(r)] != size_t(r)) set(r, window_k(best_choice[size_t(r)])), lea[size_t(r)] = true;
+    if (free)
+      for (int r = 0; r < kNumBases; r++)
+        if (!lea[size_t(r)]) set(r, known(r) ? k(r) : kBaseKMin), lea[size_t(r)] = true;
+    return lea;
+  }
+
+  // Rewrites b's operands through the known registers, and fills in the K of
+  // the leas after REAL calls (the reloads): the region's, or the lowest K for
+  // a register the region does not use (known from then on: `reloaded`).
+  void rewrite(as::Block<Instruction>& b, std::array<bool, kNumBases>& reloaded) const {
+    for (Item& it : b.items) {
+      if (it.kind != as::ItemKind::Instruction) continue;
+      Instruction& in = it.inst;
+      if (in.mnemonic == M::Lea) {
+        for (int r = 0; r < kNumBases; r++)
+          if (in.ops[0].reg == r64(kBaseRegs[r]) && in.ops[1].mem.base == r64(BX))
+            in.ops[1].mem.disp = int32_t(known(r) ? k(r) : kBaseKMin), reloaded[size_t(r)] = true;
+        continue;
+      }
+      for (unsigned j = 0; j < in.num_operands; j++) {
+        if (!rewritable(in, in.ops[j])) continue;
+        Mem& m = in.ops[j].mem;
+        const int64_t first = m.disp, last = first + mem_width(m) - 1;
+        for (int r = 0; r < kNumBases; r++)
+          if (known(r) && covers(k(r), first, last)) {
+            m.base = r64(kBaseRegs[r]);
+            m.disp = int32_t(first - k(r));
+            break;
+          }
       }
     }
   }
-}
+
+ private:
+  int64_t kmax_;
+  std::array<int64_t, kNumBases> k_{};
+  std::array<bool, kNumBases> known_{};
+  struct Group {
+    uint32_t mask;  // the windows covering its operands
+    bool rex;       // Op::rex
+    int64_t n;      // operands
+  };
+  std::vector<Group> groups_;  // plan's, kept for its storage
+};
+
+// -O2: the blocks gathered into regions, each given its base registers, then
+// handed to the sink in order (the prologue, held until the first region
+// fills in its leas, and each rung's IL starts).
+class Regions {
+ public:
+  Regions(uint32_t image_size, as::Block<Instruction> prologue, std::vector<std::vector<uint32_t>>& il_items,
+          const X86BlockSink& sink)
+      : plan_(image_size), prologue_(std::move(prologue)), il_items_(il_items), sink_(sink) {}
+
+  // a rung's block; `target`: it starts with labels that jumps name
+  void add(as::Block<Instruction>& b, std::vector<uint32_t>& starts, bool target) {
+    if (target) flush(), target_ = true;
+    collect_ops(b, ops_);
+    blocks_.push_back(std::move(b));
+    starts_.push_back(std::move(starts));
+    if (!spare_.empty()) b = std::move(spare_.back()), spare_.pop_back();  // reuse a sunk block's storage
+    if (ops_.size() >= kRegionOps) flush();
+  }
+  void finish() { flush(); }
+
+ private:
+  void flush() {
+    if (blocks_.empty() && !prologue_) return;
+    bool free = prologue_.has_value();
+    if (target_) arrive(blocks_[0]);
+    std::array<bool, kNumBases> lea = plan_.plan(ops_, free);
+    if (free) {
+      for (Item& it : prologue_->items)
+        for (int r = 0; r < kNumBases; r++)
+          if (it.kind == as::ItemKind::Instruction && it.inst.mnemonic == M::Lea && it.inst.ops[0].reg == r64(kBaseRegs[r]))
+            it.inst.ops[1].mem.disp = int32_t(plan_.k(r));
+      sink_(*prologue_);
+      prologue_.reset();
+    }
+    std::array<bool, kNumBases> reloaded{};
+    for (auto& b : blocks_) plan_.rewrite(b, reloaded);
+    if (!free && !blocks_.empty()) {  // the leas, after the first block's labels
+      std::vector<Item>& items = blocks_[0].items;
+      size_t at = 0;
+      while (at < items.size() && items[at].kind == as::ItemKind::Label) at++;
+      std::vector<Item> leas;
+      for (int r = 0; r < kNumBases; r++)
+        if (lea[size_t(r)]) leas.push_back(Item::instr(base_lea(kBaseRegs[r], int32_t(plan_.k(r)))));
+      items.insert(items.begin() + ptrdiff_t(at), leas.begin(), leas.end());
+      for (uint32_t& s : starts_[0]) s += uint32_t(leas.size());
+    }
+    for (const auto& b : blocks_) depart(b);  // before the reloads make a register known
+    for (int r = 0; r < kNumBases; r++)
+      if (reloaded[size_t(r)] && !plan_.known(r)) plan_.set(r, kBaseKMin);
+    for (size_t i = 0; i < blocks_.size(); i++) {
+      il_items_.push_back(std::move(starts_[i]));
+      sink_(blocks_[i]);
+      if (spare_.size() < 4) spare_.push_back(std::move(blocks_[i]));
+    }
+    blocks_.clear();
+    starts_.clear();
+    ops_.clear();
+    target_ = false;
+  }
+
+  // The jumps to the rungs' global labels (all forward, so all made before
+  // their target's region): the registers' K at each, -1 where not known.
+  void depart(const as::Block<Instruction>& b) {
+    for (const Item& it : b.items) {
+      if (it.kind != as::ItemKind::Instruction || (it.inst.mnemonic != M::Jmp && it.inst.mnemonic != M::Jcc) ||
+          it.inst.ops[0].kind != OperandKind::Label || !it.inst.ops[0].label.view().starts_with(kLabelPrefix))
+        continue;
+      std::array<int64_t, kNumBases> now;
+      for (int r = 0; r < kNumBases; r++) now[size_t(r)] = plan_.known(r) ? plan_.k(r) : -1;
+      auto [at, fresh] = at_jumps_.emplace(it.inst.ops[0].label.id(), now);
+      if (!fresh)
+        for (int r = 0; r < kNumBases; r++)
+          if (at->second[size_t(r)] != now[size_t(r)]) at->second[size_t(r)] = -1;
+    }
+  }
+  // A region that starts at jump targets keeps a register's K only where
+  // every jump to them brings the same K as the code falling through.
+  void arrive(const as::Block<Instruction>& b) {
+    for (const Item& it : b.items) {
+      if (it.kind != as::ItemKind::Label) break;
+      auto at = at_jumps_.find(it.label.id());
+      if (at == at_jumps_.end()) continue;
+      for (int r = 0; r < kNumBases; r++)
+        if (at->second[size_t(r)] != (plan_.known(r) ? plan_.k(r) : -1)) plan_.forget(r);
+      at_jumps_.erase(at);
+    }
+  }
+
+  BasePlan plan_;
+  std::map<uint32_t, std::array<int64_t, kNumBases>> at_jumps_;  // by label name id
+  std::optional<as::Block<Instruction>> prologue_;
+  std::vector<std::vector<uint32_t>>& il_items_;
+  const X86BlockSink& sink_;
+  std::vector<as::Block<Instruction>> blocks_;  // the region's
+  std::vector<std::vector<uint32_t>> starts_;
+  Ops ops_;
+  bool target_ = false;  // the region's first block is a jump target
+  std::vector<as::Block<Instruction>> spare_;  // blocks sunk, their items' storage for rungs to come
+};
 
 // The blocks of a program in order (block 0 the prologue, one per rung, the
 // epilogue, the shared routines if any are called), each handed to `sink`.
@@ -1094,7 +1312,7 @@ class Blocks {
                                          : "scan(image): rbx = image, ebp = bit stack"));
     for (const Instruction& i : scan_prologue(o2_)) pro.items.push_back(Item::instr(i));
     if (o2_)
-      for (RegNum r : as::x86::kBaseRegs) pro.items.push_back(Item::instr(as::x86::base_lea(r, 0)));  // K: set_bases
+      for (RegNum r : as::x86::kBaseRegs) pro.items.push_back(Item::instr(as::x86::base_lea(r, 0)));  // K: Regions::flush
     return pro;
   }
 
@@ -1142,58 +1360,39 @@ class Blocks {
     return rt;
   }
 
-  // -O2: the base registers' K over every block, from a first sweep that keeps
-  // only the operands (the blocks are made again by the second).
-  Bases bases() {
-    Ops ops;
-    collect_ops(prologue(), ops);
+  void run(std::vector<std::vector<uint32_t>>& il_items, const X86BlockSink& sink) {
+    il_items.reserve(p_.rungs.size());
     as::Block<Instruction> b;
     std::vector<uint32_t> starts;
-    for (size_t r = 0; r < p_.rungs.size(); r++) {
-      rung(r, b, starts);
-      collect_ops(b, ops);
-    }
-    collect_ops(epilogue(), ops);
-    if (auto rt = routines()) collect_ops(*rt, ops);
-    used_.reset();
-    return choose_bases(std::move(ops), layout_.size);
-  }
-
-  void run(std::vector<std::vector<uint32_t>>& il_items, const X86BlockSink& sink) {
-    Bases ks{};
-    if (o2_) ks = bases();
-    auto give = [&](as::Block<Instruction>& b) {
-      if (o2_) apply_bases(b, ks);
+    if (o2_) {
+      Regions regions(layout_.size, prologue(), il_items, sink);
+      for (size_t r = 0; r < p_.rungs.size(); r++) {
+        rung(r, b, starts);
+        regions.add(b, starts, !p_.rungs[r].labels.empty());
+      }
+      regions.finish();
+    } else {
+      b = prologue();
       sink(b);
-    };
-    as::Block<Instruction> b = prologue();
-    give(b);
-    il_items.reserve(p_.rungs.size());
-    std::vector<uint32_t> starts;
-    for (size_t r = 0; r < p_.rungs.size(); r++) {
-      rung(r, b, starts);
-      il_items.push_back(starts);
-      give(b);
+      for (size_t r = 0; r < p_.rungs.size(); r++) {
+        rung(r, b, starts);
+        il_items.push_back(starts);
+        sink(b);
+      }
     }
     b = epilogue();
-    give(b);
-    if (auto rt = routines()) give(*rt);
+    sink(b);
+    if (auto rt = routines()) sink(*rt);
   }
 
  private:
-  // stack_fits_slots of rung ri, worked out once (-O2 makes each rung twice)
-  bool fits_slots(size_t ri) {
-    if (fits_.empty()) fits_.assign(p_.rungs.size(), -1);
-    if (fits_[ri] < 0) fits_[ri] = stack_fits_slots(p_.rungs[ri].code, kNumSlots);
-    return fits_[ri] != 0;
-  }
+  bool fits_slots(size_t ri) const { return stack_fits_slots(p_.rungs[ri].code, kNumSlots); }
 
   const Program& p_;
   const Layout& layout_;
   int opt_;
   bool o2_, notes_;
   std::bitset<8> used_;
-  std::vector<signed char> fits_;  // per rung: -1 not known yet, else fits_slots
 };
 
 }  // namespace

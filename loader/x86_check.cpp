@@ -43,12 +43,15 @@ uint32_t width(x86::Size s) {
   return 1;
 }
 
-// The -O2 frame's base registers (as::x86::kBaseRegs) and the offsets K its
-// prologue points them to; absent under the -O0 frame.
+// The -O2 frame's base registers (as::x86::kBaseRegs), set when its prologue
+// points all of them into the image; absent under the -O0 frame.  No value is
+// tracked: every write of a base register is `lea reg, [rbx+K]` with K in
+// [kBaseKMin, size - kBaseKTop] and every access through one is [reg+d] with
+// d in [-128, 127] and at most 8 bytes, so [K+d, K+d+8) lies inside the image
+// whatever K a path brought (docs/image-format.md, "The x86-64 code check").
 struct Bases {
   bool set = false;
-  int64_t k[x86::kNumBases] = {};
-  // which base register r is (0, 1), or -1
+  // which base register r is (0, 1, 2), or -1
   static int which(const x86::Reg& r) {
     if (r.cls != x86::RegClass::Gp64) return -1;
     for (int i = 0; i < x86::kNumBases; i++)
@@ -56,27 +59,37 @@ struct Bases {
     return -1;
   }
 };
+constexpr int64_t kBaseKMin = 128;  // K-128 >= 0
+constexpr int64_t kBaseKTop = 135;  // K+127+8 <= size
 
-// Is `in` exactly `lea reg, [rbx+k]`, the one instruction that sets base register i?
-bool is_base_lea(const x86::Instruction& in, int i, int64_t k) {
+// Is `in` of the form `lea reg, [rbx+k]` for base register i (any k)?
+bool is_base_lea(const x86::Instruction& in, int i) {
   return in.mnemonic == x86::Mnemonic::Lea && in.num_operands == 2 && in.ops[0].kind == x86::OperandKind::Reg &&
          in.ops[0].reg == x86::r64(x86::kBaseRegs[i]) && in.ops[1].kind == x86::OperandKind::Mem &&
-         in.ops[1].mem.base == x86::r64(x86::BX) && !in.ops[1].mem.index.valid() && in.ops[1].mem.disp == k;
+         in.ops[1].mem.base == x86::r64(x86::BX) && !in.ops[1].mem.index.valid();
 }
 
-// "" if the memory operand is [rbx+disp] (or, under the -O2 frame, [rdi+disp]
-// [r15+disp] or [r14+disp], i.e. the image at K+disp) with [disp, disp+width) inside the image.
+// "" if base register i's lea `in` (is_base_lea) sets a K every [reg+d8] access stays inside the image from
+std::string base_k_error(const x86::Instruction& in, int i, uint32_t image_size) {
+  int64_t k = in.ops[1].mem.disp;
+  if (k >= kBaseKMin && k <= int64_t(image_size) - kBaseKTop) return "";
+  return "sets " + std::string(x86::reg_name(x86::r64(x86::kBaseRegs[i]))) + " = rbx+" + std::to_string(k) +
+         ", outside [" + std::to_string(kBaseKMin) + ", " + std::to_string(int64_t(image_size) - kBaseKTop) +
+         "] (a base register's K must keep every [reg-0x80] .. [reg+0x7f] access of up to 8 bytes inside the memory image [0, " +
+         hex(image_size) + "))";
+}
+
+// "" if the memory operand is [rbx+disp] with [disp, disp+width) inside the
+// image, or, under the -O2 frame, [rdi/r15/r14+disp] with disp in [-128, 127].
 std::string check_mem(const x86::Mem& m, uint32_t image_size, const Bases& bases) {
   const x86::Reg& base = m.base;
   if (int b = Bases::which(base); b >= 0 && bases.set) {
     if (m.index.valid())
       return "indexed memory operand (index " + std::string(x86::reg_name(m.index)) + "): its address cannot be checked";
-    int64_t lo = bases.k[b] + m.disp, hi = lo + width(m.size);
-    if (lo < 0 || hi > int64_t(image_size))
+    static_assert(kBaseKTop >= 127 + 8);
+    if (m.disp < -128 || m.disp > 127 || width(m.size) > 8)
       return "memory operand [" + std::string(x86::reg_name(base)) + (m.disp < 0 ? "-" : "+") +
-             hex(m.disp < 0 ? -int64_t(m.disp) : m.disp) + "] (image offset " + std::to_string(lo) + ", " +
-             std::to_string(width(m.size)) + " bytes; the frame sets " + std::string(x86::reg_name(base)) + " = rbx+" +
-             std::to_string(bases.k[b]) + ") outside the memory image [0, " + hex(image_size) + ")";
+             hex(m.disp < 0 ? -int64_t(m.disp) : m.disp) + "]: a base register of the -O2 frame takes a displacement in [-0x80, 0x7f] only";
     return "";
   }
   if (base.cls == x86::RegClass::Rip) return "rip-relative memory operand (only [rbx+disp] may address memory)";
@@ -189,16 +202,16 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
   size_t body_first = first + x86::scan_prologue(slots).size();
   Bases bases;
   // The -O2 frame may then set its base registers (lea rdi, [rbx+K0]; lea
-  // r15, [rbx+K1]; lea r14, [rbx+K2]); without all, it is the frame before compact addressing,
-  // whose body may not address memory through them.
+  // r15, [rbx+K1]; lea r14, [rbx+K2]), each K in range; without all, it is the
+  // frame before compact addressing, whose body may not address memory through them.
   if (slots && body_first + x86::kNumBases <= d.insts.size()) {
     bool all = true;
-    for (int i = 0; i < x86::kNumBases && all; i++) {
-      const x86::Instruction& l = d.insts[body_first + size_t(i)].inst;
-      all = l.num_operands == 2 && l.ops[1].kind == x86::OperandKind::Mem && is_base_lea(l, i, l.ops[1].mem.disp);
-      if (all) bases.k[i] = l.ops[1].mem.disp;
-    }
+    for (int i = 0; i < x86::kNumBases && all; i++) all = is_base_lea(d.insts[body_first + size_t(i)].inst, i);
     if (all) {
+      for (int i = 0; i < x86::kNumBases; i++) {
+        const x86::Decoded& l = d.insts[body_first + size_t(i)];
+        if (std::string why = base_k_error(l.inst, i, layout.size); !why.empty()) return at(l.offset) + text_of(l.inst) + ": " + why;
+      }
       bases.set = true;
       body_first += x86::kNumBases;
     }
@@ -260,19 +273,32 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
         (in.ops[0].reg.num == x86::BX || in.ops[0].reg.num == x86::SP))
       return at(di.offset) + text_of(in) + ": writes " + std::string(x86::reg_name(in.ops[0].reg)) +
              " (the image base and the stack pointer are fixed in the scan body)";
-    // the base registers are fixed in the -O2 body: only rdi's reload after a
-    // call through the REAL function table (below) may set it, to its K
+    // the base registers of the -O2 body: only `lea reg, [rbx+K]` with K in range may set one
     if (bases.set && writes_first && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm) {
-      for (int b = 0; b < x86::kNumBases; b++)
-        if (in.ops[0].reg.num == x86::kBaseRegs[b] && !(b == 0 && is_base_lea(in, 0, bases.k[0])))
+      for (int b = 0; b < x86::kNumBases; b++) {
+        if (in.ops[0].reg.num != x86::kBaseRegs[b]) continue;
+        std::string reg(x86::reg_name(x86::r64(x86::kBaseRegs[b])));
+        if (!is_base_lea(in, b))
           return at(di.offset) + text_of(in) + ": writes " + std::string(x86::reg_name(in.ops[0].reg)) +
-                 ", a base register of the -O2 frame (only rdi's reload 'lea rdi, [rbx+" + std::to_string(bases.k[0]) +
-                 "]' may set one)";
+                 ", a base register of the -O2 frame (only 'lea " + reg + ", [rbx+K]' may set one)";
+        if (std::string why = base_k_error(in, b, layout.size); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
+      }
     }
-    if (bases.set && in.mnemonic == M::Call && in.num_operands && in.ops[0].kind == x86::OperandKind::Mem &&
-        (k + 1 >= body_end || !is_base_lea(d.insts[k + 1].inst, 0, bases.k[0])))
-      return at(di.offset) + text_of(in) + ": a call through the REAL function table not followed at once by 'lea rdi, [rbx+" +
-             std::to_string(bases.k[0]) + "]' (the call may change rdi, a base register of the -O2 frame)";
+    // a call through the REAL function table may change the caller-saved base
+    // registers: the leas resetting each of them (kBaseRegs order) follow it at once
+    if (bases.set && in.mnemonic == M::Call && in.num_operands && in.ops[0].kind == x86::OperandKind::Mem) {
+      size_t j = k + 1;
+      std::string want;
+      for (int b = 0; b < x86::kNumBases; b++) {
+        if (!x86::caller_saved(x86::kBaseRegs[b])) continue;
+        std::string reg(x86::reg_name(x86::r64(x86::kBaseRegs[b])));
+        want += std::string(want.empty() ? "" : "; ") + "lea " + reg + ", [rbx+K]";
+        if (j >= body_end || !is_base_lea(d.insts[j].inst, b))
+          return at(di.offset) + text_of(in) + ": a call through the REAL function table not followed at once by '" + want +
+                 "' (the call may change " + reg + ", a base register of the -O2 frame)";
+        j++;
+      }
+    }
     // r12-r15 belong to the caller (System V) unless the frame saved them
     if (writes_first && !slots && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm &&
         in.ops[0].reg.num >= x86::R12)

@@ -44,10 +44,12 @@ std::vector<uint8_t> piece(const std::string& text, size_t at, size_t body) {
 }
 
 const uint32_t kSize = Layout::standard(0).size;
-// The base registers' offsets of the -O2 frames built here: rdi's window
-// starts 0x40 - 0x80 below the image, r15's ends at its last byte, r14's
-// is in the middle.
-const int32_t kK0 = 0x40, kK1 = int32_t(kSize) - 0x80, kK2 = 0x1000;
+// The base registers' offsets of the -O2 frames built here, at the ends of
+// the range the validator accepts: rdi's window [K0-0x80, K0+0x7f] starts at
+// the image's first byte, r15's 8-byte accesses end at its last byte
+// (K1 = size - 135), r14's is in the middle.
+const int32_t kKMin = 0x80, kKMax = int32_t(kSize) - 135;
+const int32_t kK0 = kKMin, kK1 = kKMax, kK2 = 0x1000;
 
 // A scan function: the -O0 prologue (the -O2 one with `slots`, followed by
 // its base registers' leas, `leas` of them, with K0 and K1), the body, the
@@ -276,23 +278,32 @@ TEST(Hostile, HarmlessTwinsAreAccepted) {
 }
 
 // The -O2 frame's base registers (docs/x86.md, "Compact addressing"): the
-// prologue sets rdi = rbx+K0, r15 = rbx+K1 and r14 = rbx+K2; the body may
-// address [rdi+d] / [r15+d] / [r14+d] inside the image as K+d, never write
-// them, and reloads rdi right after each call through the REAL function table.
+// prologue sets rdi, r15 and r14 to rbx+K, and so may `lea reg, [rbx+K]`
+// anywhere in the body, any K in [128, size-135]; the body addresses
+// [rdi+d] / [r15+d] / [r14+d] with d in [-0x80, 0x7f] only, never writes them
+// otherwise, and resets rdi right after each call through the REAL function
+// table.  No K is tracked: whatever path a branch takes, every access stays
+// inside the image.
 TEST(Hostile, BaseRegisters) {
-  const std::string lo = "[rdi-0x40]", hi = "[r15+0x7f]";  // image bytes 0 and kSize-1
+  const std::string lo = "[rdi-0x80]", hi = "[r15+0x7f]";  // image byte 0; bytes kSize-8.. of r15
+  const std::string kmin = hex(kKMin), kmax = hex(uint32_t(kKMax));
   std::vector<uint32_t> at;
-  // harmless twins: the first and last bytes of the image, lea arithmetic, the reload
+  // harmless twins: the edges of the image, lea arithmetic, leas anywhere, the reload
   const std::vector<std::vector<std::string>> ok = {
-      {"movzx eax, byte ptr " + lo, "mov byte ptr " + hi + ", al", "mov dword ptr [r15+0x7c], eax"},
-      {"call qword ptr [rbx-0x40]", "lea rdi, [rbx+" + hex(kK0) + "]", "mov eax, dword ptr [rdi+0x10]"},
+      {"movzx eax, byte ptr " + lo, "mov byte ptr " + hi + ", al", "mov dword ptr [r15+0x7f], eax",
+       "mov qword ptr [r15+0x7f], rax"},
+      {"call qword ptr [rbx-0x40]", "lea rdi, [rbx+" + kmin + "]", "mov eax, dword ptr [rdi+0x10]"},
       {"lea rax, [rdi+0x7f]", "lea eax, [r15-0x80]", "cmp rdi, rax", "test r15, r15", "mov rax, rdi"},
       {"mov eax, dword ptr [r14-0x80]", "add dword ptr [r14+0x7c], eax", "cmp r14d, 0x1"},
-      {"lea rdi, [rbx+" + hex(kK0) + "]", "je 0xd", "call qword ptr [rbx-0x20]", "lea rdi, [rbx+" + hex(kK0) + "]", "nop"},
+      // a reload to another K, a branch over it
+      {"lea rdi, [rbx+" + kmin + "]", "je 0x13", "call qword ptr [rbx-0x20]", "lea rdi, [rbx+" + kmax + "]", "nop"},
+      // the body points every register again, at both ends of the range, and a branch skips one lea
+      {"lea r15, [rbx+" + kmin + "]", "lea r14, [rbx+" + kmax + "]", "jne 0x17", "lea rdi, [rbx+0x5000]",
+       "mov byte ptr [r15-0x80], al", "mov qword ptr [r14+0x7f], rax", "mov byte ptr [rdi+0x7f], al"},
   };
   for (const auto& body : ok) EXPECT_EQ(refusal(image_around(scan_function(body, at, true))), "") << body[0];
-  // a K outside the image is fine as long as every K+d is inside
-  EXPECT_EQ(refusal(image_around(scan_function({"mov byte ptr [r15-0x20], al"}, at, true, x86::kNumBases, kK0, int32_t(kSize) + 0x10))), "");
+  // the prologue at both ends of the range
+  EXPECT_EQ(refusal(image_around(scan_function({"mov byte ptr [rdi-0x80], al"}, at, true, x86::kNumBases, kKMax, kKMin))), "");
 
   auto refused = [&](const std::vector<std::string>& body, size_t hostile, const std::string& reason, bool slots = true,
                      int leas = x86::kNumBases, int32_t k0 = kK0, int32_t k1 = kK1) {
@@ -300,45 +311,65 @@ TEST(Hostile, BaseRegisters) {
     EXPECT_NE(why.find("at code offset " + hex(at[hostile]) + ": "), std::string::npos) << body[hostile] << ": " << why;
     EXPECT_NE(why.find(reason), std::string::npos) << body[hostile] << ": " << why;
   };
-  const std::string base = "a base register of the -O2 frame";
-  // writing a base register, every width and form
+  const std::string base = "a base register of the -O2 frame (only 'lea ";
+  // writing a base register, every width and form but the lea
   refused({"nop", "mov edi, eax"}, 1, base);
   refused({"mov rdi, rbx"}, 0, base);  // even to the image base
   refused({"setne dil"}, 0, base);
   refused({"add r15, 0x10"}, 0, base);
   refused({"xor r15d, r15d"}, 0, base);
   refused({"mov r15b, 0x1"}, 0, base);
-  refused({"lea rdi, [rbx+" + hex(kK0 + 1) + "]"}, 0, base);  // a lea to another K
-  refused({"lea r15, [rbx+" + hex(kK1) + "]"}, 0, base);      // r15 is never reloaded
-  refused({"lea rdi, [rdi+0x0]"}, 0, base);
   refused({"imul edi, eax, 0x3"}, 0, base);
   refused({"setne r14b"}, 0, base);  // r14 was a bit-stack slot before compact addressing
   refused({"mov r14, rdi"}, 0, base);
-  refused({"lea r14, [rbx+" + hex(kK2) + "]"}, 0, base);
-  // the REAL call without its reload (or with a wrong one, or at the end)
-  refused({"call qword ptr [rbx-0x40]", "nop"}, 0, "not followed at once by 'lea rdi, [rbx+");
-  refused({"call qword ptr [rbx-0x40]", "lea rdi, [rbx+" + hex(kK0 + 4) + "]"}, 0, "not followed at once");
+  refused({"movzx r14d, al"}, 0, base);
+  // near misses of the lea: another base, an index, 32 bits
+  refused({"lea rdi, [rdi+0x0]"}, 0, base);
+  refused({"lea r15, [r14+0x100]"}, 0, base);
+  refused({"lea rdi, [rbx+rax*1+0x100]"}, 0, base);
+  refused({"lea edi, [rbx+0x100]"}, 0, base);
+  refused({"lea r14d, [rbx+0x100]"}, 0, base);
+  refused({"pop rdi"}, 0, "the stack is touched only by the prologue and the epilogue");
+  refused({"raw: 48 87 f8"}, 0, "undecodable bytes");  // xchg rax, rdi: outside the subset
+  // a K one byte outside the range, in the body and in the prologue
+  const std::string range = "outside [128, " + std::to_string(kKMax) + "]";
+  refused({"lea rdi, [rbx+0x7f]"}, 0, "sets rdi = rbx+127, " + range);
+  refused({"nop", "lea r15, [rbx+" + hex(uint32_t(kKMax) + 1) + "]"}, 1, "sets r15 = rbx+" + std::to_string(kKMax + 1));
+  refused({"lea r14, [rbx-0x40]"}, 0, "sets r14 = rbx+-64, " + range);
+  for (int32_t k : {kKMin - 1, kKMax + 1}) {
+    for (int i : {0, 1}) {
+      std::string why = refusal(image_around(scan_function({"nop"}, at, true, x86::kNumBases, i ? kK0 : k, i ? k : kK1)));
+      std::string reg = i ? "r15" : "rdi";
+      EXPECT_NE(why.find("'lea " + reg + ", [rbx+" + hex(uint32_t(k)) + "]': sets " + reg + " = rbx+" + std::to_string(k) + ", " + range),
+                std::string::npos)
+          << why;
+    }
+  }
+  // the REAL call without its reload (or with a bad one, or at the end)
+  refused({"call qword ptr [rbx-0x40]", "nop"}, 0, "not followed at once by 'lea rdi, [rbx+K]'");
+  refused({"call qword ptr [rbx-0x40]", "lea r15, [rbx+0x100]"}, 0, "not followed at once by 'lea rdi, [rbx+K]'");
+  refused({"call qword ptr [rbx-0x40]", "lea rdi, [rbx+rax*1+0x100]"}, 0, "not followed at once");
+  refused({"call qword ptr [rbx-0x40]", "lea rdi, [rbx+0x7f]"}, 1, "sets rdi = rbx+127, " + range);
   refused({"nop", "call qword ptr [rbx-0x38]"}, 1, "not followed at once");
-  // one byte outside, below and above, for bytes and dwords, on both registers
-  refused({"mov byte ptr [rdi-0x41], al"}, 0, "outside the memory image");
-  refused({"mov byte ptr [r15+0x80], al"}, 0, "outside the memory image", true, x86::kNumBases, kK0, kK1 + 1);
-  refused({"mov dword ptr [r15+0x7d], eax"}, 0, "outside the memory image");
-  refused({"mov byte ptr [r14+0x10], al"}, 0, "memory operand based on r14, not rbx", false);
-  refused({"movzx eax, byte ptr [rdi-0x80]"}, 0, "outside the memory image");
-  refused({"mov eax, dword ptr [r15+0x7f]"}, 0, "outside the memory image");
-  refused({"movss xmm0, dword ptr [r15-0x20]"}, 0, "outside the memory image", true, x86::kNumBases, kK0, int32_t(kSize) + 0x1d);
-  refused({"mov byte ptr [r14-0x1001], al"}, 0, "outside the memory image");  // K2 - 0x1001 = -1
-  EXPECT_EQ(refusal(image_around(scan_function({"mov byte ptr [r14-0x1000], al"}, at, true))), "");  // byte 0
+  // displacements one past the disp8 reach, on every register, whatever K
+  const std::string reach = "a base register of the -O2 frame takes a displacement in [-0x80, 0x7f] only";
+  refused({"mov byte ptr [rdi-0x81], al"}, 0, reach);
+  refused({"mov byte ptr [r15+0x80], al"}, 0, reach);
+  refused({"mov dword ptr [r14+0x1000], eax"}, 0, reach);
+  refused({"lea rdi, [rbx+0x5000]", "movzx eax, byte ptr [rdi+0x80]"}, 1, reach);  // even where K+d is inside
   // indexed through a base register
   refused({"mov al, byte ptr [rdi+rax*1]"}, 0, "indexed memory operand");
   // the wrong frame: the -O0 frame sets no base register
   refused({"mov byte ptr [rdi+0x10], al"}, 0, "memory operand based on rdi, not rbx", false);
   refused({"movzx eax, byte ptr [r15+0x10]"}, 0, "memory operand based on r15, not rbx", false);
-  // a -O2 prologue without both leas, or with them swapped, is the frame
-  // before compact addressing: it sets no base register
+  refused({"mov byte ptr [r14+0x10], al"}, 0, "memory operand based on r14, not rbx", false);
+  // a -O2 prologue without all leas, or with them swapped, is the frame
+  // before compact addressing: it sets no base register, and a lea in its body
+  // does not make one (a branch could pass it by)
   for (int leas = 0; leas < x86::kNumBases; leas++) {
     refused({"mov byte ptr [rdi+0x10], al"}, 0, "memory operand based on rdi, not rbx", true, leas);
     refused({"mov byte ptr [r15+0x10], al"}, 0, "memory operand based on r15, not rbx", true, leas);
+    refused({"nop", "lea r14, [rbx+0x100]", "mov byte ptr [r14+0x10], al"}, 2, "memory operand based on r14, not rbx", true, leas);
   }
   EXPECT_EQ(refusal(image_around(scan_function({"setne r15b"}, at, true, 0))), "");  // that frame's slot
   std::vector<uint8_t> swapped;
@@ -355,6 +386,15 @@ TEST(Hostile, BaseRegisters) {
   EXPECT_NE(why.find("at code offset " + hex(hostile_at) + ": 'mov byte ptr [r15+0x10], al': memory operand based on r15, not rbx"),
             std::string::npos)
       << why;
+  // the shared routines, which run between base-register accesses without a
+  // reload, write no base register (the loader matches them whole)
+  x86::RoutineAreas areas;
+  for (int r = 0; r < int(x86::Routine::Count); r++)
+    for (const x86::Instruction& in : x86::scan_routine(x86::Routine(r), areas))
+      for (x86::RegNum b : x86::kBaseRegs)
+        EXPECT_FALSE(in.num_operands && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm &&
+                     in.ops[0].reg.num == b && in.mnemonic != x86::Mnemonic::Cmp && in.mnemonic != x86::Mnemonic::Test)
+            << x86::print(in);
 }
 
 // The shared timer/counter routines after the epilogue (docs/x86.md, "Shared

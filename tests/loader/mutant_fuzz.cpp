@@ -132,16 +132,19 @@ class Mutator {
     x86::Disassembly d = x86::disassemble(code);
     if (d.insts.empty()) return flip(code);
     insts_ = &d.insts;
-    // the -O2 frame's base registers: their K from the prologue's leas
+    // the -O2 frame's base registers: their K from the last leas (the
+    // prologue's, or the body's, which points them region by region) before
+    // the instruction picked
     for (int64_t& k : k_) k = 0;
-    for (size_t i = 0; i < d.insts.size() && i < 16; i++) {
+    size_t vi = pick(d.insts.size());
+    for (size_t i = 0; i < vi; i++) {
       const x86::Instruction& in = d.insts[i].inst;
       if (in.mnemonic == x86::Mnemonic::Lea && in.ops[0].kind == x86::OperandKind::Reg && in.ops[1].kind == x86::OperandKind::Mem &&
           in.ops[1].mem.base == x86::r64(x86::BX))
         for (int b = 0; b < x86::kNumBases; b++)
           if (in.ops[0].reg == x86::r64(x86::kBaseRegs[b])) k_[b] = in.ops[1].mem.disp;
     }
-    const x86::Decoded& v = d.insts[pick(d.insts.size())];
+    const x86::Decoded& v = d.insts[vi];
     unsigned r = unsigned(pick(100));
     if (r < 40) return replace(code, v);
     if (r < 55) return retarget(code, d.insts);
