@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -461,16 +462,17 @@ bool stack_fits_slots(const std::vector<Instr>& code, int slots) {
   }
   // for every point between instructions: the positions read again before
   // they are written must lie within one window of `slots`.  Swept from the
-  // end: next[p] is what the first event of position p at or after the point
-  // does (0 none, 1 read, 2 write).
-  std::array<uint8_t, kMaxStackDepth + 2> next{};
+  // end: bit p of `reads` says the first event of position p at or after the
+  // point reads it (positions are at most kMaxStackDepth).
+  static_assert(kMaxStackDepth < 64);
+  uint64_t reads = 0;
   size_t j = ev.size();
   for (size_t at = code.size() + 1; at-- > 0;) {
-    for (; j > 0 && ev[j - 1].at >= at; j--) next[size_t(ev[j - 1].pos)] = ev[j - 1].write ? 2 : 1;
-    int lo = std::numeric_limits<int>::max(), hi = std::numeric_limits<int>::min();
-    for (int p = 0; p < int(next.size()); p++)
-      if (next[size_t(p)] == 1) lo = std::min(lo, p), hi = std::max(hi, p);
-    if (lo <= hi && hi - lo >= slots) return false;
+    for (; j > 0 && ev[j - 1].at >= at; j--) {
+      uint64_t bit = uint64_t(1) << ev[j - 1].pos;
+      reads = ev[j - 1].write ? reads & ~bit : reads | bit;
+    }
+    if (reads && (63 - std::countl_zero(reads)) - std::countr_zero(reads) >= slots) return false;
   }
   return true;
 }
