@@ -11,6 +11,7 @@
 
 #include "backend-x86/backend_x86.h"
 #include "ir/codegen.h"
+#include "ir/scanopt.h"
 
 namespace ldc {
 namespace {
@@ -108,7 +109,7 @@ class Gen : public ClassGen<Gen> {
   Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used)
       : L_(l), items_(items), slots_(slots), gate_(gate), bases_(gate), used_(used) {}
 
-  void instr(const ldc::Instr& in);
+  void instr(const ldc::Instr& in, uint8_t facts = 0);  // facts: ScanFlag bits (ir/scanopt.h)
 
  private:
   const Layout& L_;
@@ -761,11 +762,17 @@ void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
 // is on for certain (KnownStack: a rung from the rail, `TRUE`) is emitted with
 // neither gate nor test; timers and counters then take their inline code
 // without the power tests (gated_timer, gated_counter).
-void Gen::instr(const ldc::Instr& in) {
+//
+// A dead store needs no code, an unread stack entry none but an edge
+// contact's edge update (ir/scanopt.h); the stack is followed all the same.
+void Gen::instr(const ldc::Instr& in, uint8_t facts) {
   OpClass k = op_info(in.op).klass;
   on_ = bases_ && known_.on() &&
         (k == OpClass::Move || k == OpClass::Arith || k == OpClass::Logic || k == OpClass::Special);
-  {
+  if ((facts & kUnread) && (in.op == Op::LOADP || in.op == Op::LOADF)) {
+    emit(M::Movzx, {R(eax), B(addr(in.a[0]))});
+    emit(M::Mov, {B(addr(in.a[1])), R(al)});
+  } else if (!(facts & (kDeadStore | kUnread))) {
     Ungated plain(gate_, on_);
     gen_by_class(*this, in);
   }
@@ -1327,10 +1334,14 @@ class Blocks {
     if (notes_) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
     bool slots = o2_ && fits_slots(ri);
     Gen g(layout_, b.items, slots, o2_, &used_);
-    for (const ldc::Instr& in : r.code) {
+    uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into ebp
+    for (size_t k = 0; k < r.code.size(); k++) {
+      const ldc::Instr& in = r.code[k];
       starts.push_back(uint32_t(b.items.size()));
       if (notes_) b.items.push_back(Item::note(instr_text(in)));
-      g.instr(in);
+      if (!facts_) { g.instr(in); continue; }
+      const ldc::Instr* alt = facts_->replacement(ri, k);
+      g.instr(alt ? *alt : in, facts_->at(ri, k) & keep);
     }
     if (opt_ >= 1 && !slots) peephole(b.items, starts);
   if (o2_) drop_unreachable(b.items, starts);
@@ -1365,6 +1376,7 @@ class Blocks {
     as::Block<Instruction> b;
     std::vector<uint32_t> starts;
     if (o2_) {
+      facts_ = scan_facts(p_, layout_, kNumSlots);
       Regions regions(layout_.size, prologue(), il_items, sink);
       for (size_t r = 0; r < p_.rungs.size(); r++) {
         rung(r, b, starts);
@@ -1393,6 +1405,7 @@ class Blocks {
   int opt_;
   bool o2_, notes_;
   std::bitset<8> used_;
+  std::optional<ScanFacts> facts_;  // -O2: what the scan cannot observe
 };
 
 }  // namespace

@@ -450,18 +450,85 @@ const char* kKnownPowerIl = R"(; power on for certain, and not
 .end
 )";
 
+// What one scan cannot observe (ir/scanopt.h, -O2): stores overwritten unread
+// (across rungs, with and without a read, JMP or END between, SET/RST, gated
+// and certain application stores, DIV), unread stack entries (compares, an
+// edge contact whose edge must still move), and constants folded or known.
+const char* kScanFactsIl = R"(; dead stores, unread entries, folded constants
+.edges 3
+.rung line 1
+    LOAD    X0
+    OUT     Y0
+    LDGT    WX0 5
+    LOADP   X1 E0
+    MPP
+    SET     Y1
+    TRUE
+    MOV     WX1 D1
+    ADD     D1 3 D2
+    MOV     7 D3
+    MOV     2.5 F4
+.rung line 2
+    LOAD    X2
+    OUT     Y0
+    LOAD    X3
+    RST     Y1
+    LOAD    X4
+    MOV     WX2 D2
+    ADD     D3 D3 D4
+    MUL     F4 WX3 D5
+    DIV     WX4 WX5 D6
+    LDLT    D3 WX6
+    OUT     Y2
+.rung line 3
+    LOAD    X5
+    JMP     skip
+.rung line 4
+    LOAD    X6
+    OUT     Y0
+    TRUE
+    MOV     WX7 D6
+    MOV     D3 D7
+    SQRT    16.0 F5
+    LOADF   X7 E1
+    LOAD    X8
+    ORBLK
+    LOAD    X9
+    AND     X10
+.label skip
+.rung line 5
+    LOAD    X11
+    OUTN    Y0
+    ADD     D3 1 D8
+    LOAD    X12
+    SET     Y1
+    TRUE
+    MOV     WX8 D2
+    LOAD    X13
+    END
+.rung line 6
+    LOAD    X14
+    OUT     Y1
+    TRUE
+    MOV     WX9 D6
+    LOADP   X15 E2
+    OUT     Y0
+.end
+)";
+
 // The native code at every level on the operand forms, the timer limits and
 // the class programs (the -O2 code is branch-free there: cmov, setcc, masks).
 TEST(NativeEdges, EveryLevelMatchesOnOperandFormsAndTimerLimits) {
   struct Level { const char* name; EngineFactory make; };
   const Level levels[] = {{"-O0", make_native}, {"-O1", make_native_o1}, {"-O2", make_native_o2}};
   Program edge = parse_il_text(kEdgeIl, "edge.il"), timers = parse_il_text(kTimerEdgeIl, "timers.il"),
-          known = parse_il_text(kKnownPowerIl, "known.il");
+          known = parse_il_text(kKnownPowerIl, "known.il"), facts = parse_il_text(kScanFactsIl, "facts.il");
   for (const Level& lv : levels) {
     for (uint64_t seed = 1; seed <= 12; seed++) {
       EXPECT_EQ(compare_il(edge, seed, 60, seed % 2 == 0, lv.make, true), "") << lv.name << " seed " << seed;
       EXPECT_EQ(compare_il(timers, seed, 200, true, lv.make, seed % 3 != 0), "") << lv.name << " seed " << seed;
       EXPECT_EQ(compare_il(known, seed, 60, true, lv.make, seed % 2 == 0), "") << lv.name << " seed " << seed;
+      EXPECT_EQ(compare_il(facts, seed, 60, seed % 2 == 0, lv.make), "") << lv.name << " seed " << seed;
     }
     for (OpClass c : {OpClass::Move, OpClass::Arith, OpClass::Logic, OpClass::Special, OpClass::Timer, OpClass::Counter})
       for (bool powered : {true, false}) {

@@ -1,0 +1,294 @@
+// ir/scanopt.cpp -- dead stores, unread stack entries and folded constants
+// of one scan (ir/scanopt.h).
+#include "ir/scanopt.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <optional>
+#include <unordered_map>
+
+#include "ir/codegen.h"
+
+namespace ldc {
+
+const Instr* ScanFacts::replacement(size_t rung, size_t k) const {
+  uint32_t i = first[rung] + uint32_t(k);
+  auto it = std::lower_bound(replaced.begin(), replaced.end(), i,
+                             [](const std::pair<uint32_t, Instr>& e, uint32_t v) { return e.first < v; });
+  return it != replaced.end() && it->first == i ? &it->second : nullptr;
+}
+
+size_t ScanFacts::count(ScanFlag f) const {
+  return size_t(std::count_if(flags.begin(), flags.end(), [f](uint8_t x) { return (x & f) != 0; }));
+}
+
+namespace {
+
+bool is_device(const Operand& o) {
+  return o.kind == OpdKind::Bit || o.kind == OpdKind::Int || o.kind == OpdKind::Real;
+}
+bool is_const(const Operand& o) { return o.kind == OpdKind::ConstInt || o.kind == OpdKind::ConstReal; }
+bool is_app(Op op) {
+  OpClass k = op_info(op).klass;
+  return k == OpClass::Move || k == OpClass::Arith || k == OpClass::Logic || k == OpClass::Special;
+}
+// DIV and MOD may also set S0 (a zero divisor), and then keep their destination.
+bool is_divmod(Op op) { return op == Op::DIV || op == Op::MOD; }
+
+// The devices one instruction reads and writes, by image address (a device's
+// first byte: areas never overlap, so the address names the device).
+struct Access {
+  uint32_t reads[4] = {};
+  uint32_t writes[3] = {};
+  int nr = 0, nw = 0;
+  bool uncond = false;     // its writes happen whatever the power
+  bool removable = false;  // its writes are its only effect
+  void read(uint32_t a) { reads[nr++] = a; }
+  void write(uint32_t a) { writes[nw++] = a; }
+};
+
+uint32_t addr(const Layout& l, const Operand& o) { return l.addr(o.area, o.index); }
+
+void timer_access(const Layout& l, const Instr& in, Access& a) {
+  uint32_t n = in.a[0].index;
+  bool counter = in.a[0].kind == OpdKind::Counter;
+  Area w = counter ? Area::CW : Area::TW, q = counter ? Area::CQ : Area::TQ;
+  a.read(l.addr(w, n)), a.read(l.addr(q, n));
+  a.write(l.addr(w, n)), a.write(l.addr(q, n));
+  if (!counter) a.read(l.addr(Area::TI, n)), a.write(l.addr(Area::TI, n));
+  for (int k = 1; k < in.nopd(); k++)
+    if (is_device(in.a[k])) a.read(addr(l, in.a[k]));
+    else if (in.a[k].kind == OpdKind::Edge) a.read(l.addr(Area::E, in.a[k].index));
+}
+
+// `on`: the instruction's power is 1 for certain (KnownStack)
+Access access(const Layout& l, const Instr& in, bool on) {
+  Access a;
+  const OpInfo& info = op_info(in.op);
+  switch (in.op) {
+    case Op::OUT: case Op::OUTN: a.write(addr(l, in.a[0])); a.uncond = a.removable = true; return a;
+    case Op::SET: case Op::RST: a.write(addr(l, in.a[0])); a.removable = true; return a;
+    case Op::LOADP: case Op::LOADF:
+      a.read(addr(l, in.a[0]));
+      a.read(l.addr(Area::E, in.a[1].index)), a.write(l.addr(Area::E, in.a[1].index));
+      return a;
+    default: break;
+  }
+  if (info.klass == OpClass::Timer || info.klass == OpClass::Counter) {
+    timer_access(l, in, a);
+    return a;
+  }
+  for (int k = 0; k < in.nopd(); k++)
+    if (is_device(in.a[k]) && !(is_app(in.op) && k == in.nopd() - 1)) a.read(addr(l, in.a[k]));
+  if (!is_app(in.op)) return a;
+  a.write(addr(l, in.a[in.nopd() - 1]));
+  if (is_divmod(in.op)) {  // S0 |= zero divisor, and d kept then
+    uint32_t s0 = l.addr(Area::S, kBitError);
+    a.read(s0), a.write(s0);
+    return a;
+  }
+  a.uncond = on;
+  a.removable = true;
+  return a;
+}
+
+// Is the power of each instruction 1 for certain?  (per instruction, in order)
+std::vector<char> powered(const Program& p, size_t total) {
+  std::vector<char> on;
+  on.reserve(total);
+  for (const Rung& r : p.rungs) {
+    KnownStack known;
+    for (const Instr& in : r.code) {
+      on.push_back(known.on());
+      known.step(in);
+    }
+  }
+  return on;
+}
+
+// Backward over the whole program: a store to a device that a later store
+// overwrites for certain, with no read, JMP or END between, is dead.  Labels
+// need nothing: every jump goes forward, and a JMP forgets what lies after it.
+void dead_stores(const Program& p, const Layout& l, const std::vector<char>& on, ScanFacts& f) {
+  std::vector<uint32_t> stamp(l.size, 0);  // killed: stamp == gen
+  uint32_t gen = 1;
+  for (size_t ri = p.rungs.size(); ri-- > 0;) {
+    const std::vector<Instr>& code = p.rungs[ri].code;
+    for (size_t k = code.size(); k-- > 0;) {
+      const Instr& in = code[k];
+      uint32_t i = f.first[ri] + uint32_t(k);
+      if (in.op == Op::JMP || in.op == Op::END) { gen++; continue; }
+      Access a = access(l, in, on[i]);
+      bool dead = a.removable && a.nw > 0;
+      for (int w = 0; w < a.nw; w++) dead = dead && stamp[a.writes[w]] == gen;
+      if (dead) { f.flags[i] |= kDeadStore; continue; }
+      if (a.uncond)
+        for (int w = 0; w < a.nw; w++) stamp[a.writes[w]] = gen;
+      for (int r = 0; r < a.nr; r++) stamp[a.reads[r]] = 0;
+    }
+  }
+}
+
+// The stack position an instruction writes (depth d before it), or -1, and
+// the ones it reads.
+struct StackUse {
+  int write = -1;
+  int reads[2] = {-1, -1};
+};
+StackUse stack_use(Op op, int d) {
+  StackUse u;
+  switch (op) {
+    case Op::AND: case Op::ANDN: case Op::OR: case Op::ORN: u.write = d - 1; u.reads[0] = d - 1; return u;
+    case Op::ANDBLK: case Op::ORBLK: u.write = d - 2; u.reads[0] = d - 1; u.reads[1] = d - 2; return u;
+    case Op::MPS: u.write = d; u.reads[0] = d - 1; return u;
+    case Op::MRD: u.write = d - 1; u.reads[0] = d - 2; return u;
+    case Op::MPP: return u;
+    default: break;
+  }
+  const OpInfo& i = op_info(op);
+  if (i.push == 1) u.write = d;  // contacts, edges, TRUE, compares
+  else u.reads[0] = d - 1;       // outputs, applications, timers, counters, JMP, END: the power
+  return u;
+}
+
+// Backward over one rung whose stack is private: an entry written and never
+// read before the rung ends or the position is written again is unread.
+void unread_entries(const std::vector<Instr>& code, uint32_t first, ScanFacts& f) {
+  std::vector<int> depth(code.size());
+  int d = 0, most = 0;
+  for (size_t k = 0; k < code.size(); k++) {
+    depth[k] = d;
+    d += op_info(code[k].op).push - op_info(code[k].op).pop;
+    most = std::max(most, d);
+  }
+  std::vector<char> live(size_t(most) + 1, 0);  // a private stack reads no position below 0
+  for (size_t k = code.size(); k-- > 0;) {
+    if (f.flags[first + k] & kDeadStore) continue;
+    StackUse u = stack_use(code[k].op, depth[k]);
+    if (u.write >= 0) {
+      if (!live[size_t(u.write)]) { f.flags[first + k] |= kUnread; continue; }
+      live[size_t(u.write)] = 0;
+    }
+    for (int r : u.reads)
+      if (r >= 0) live[size_t(r)] = 1;
+  }
+}
+
+
+// The value of an application instruction whose sources are constants, as
+// the reference interpreter computes it (`TRUE; in` on a zero image, the
+// destination read back and cleared); nullopt where the instruction has
+// another effect (S0), calls a C library function, or gives a NaN.
+class Folder {
+ public:
+  explicit Folder(const Layout& l) : mem_(l) {}
+  std::optional<Operand> fold(const Instr& in);
+
+ private:
+  Memory mem_;
+};
+
+std::optional<Operand> Folder::fold(const Instr& in) {
+  RealFn fn = op_info(in.op).fn;
+  if (fn != RealFn::None && real_fn_info(fn).called) return std::nullopt;
+  Program p;
+  p.rungs.emplace_back().code = {Instr{Op::TRUE, {}, {}}, in};
+  BinaryIl il = encode_il(p);
+  Interpreter(il.code, mem_.layout).scan(mem_.data());
+  const Operand& d = in.a[in.nopd() - 1];
+  uint8_t* at = mem_.data() + mem_.layout.addr(d.area, d.index);
+  uint8_t& s0 = mem_.bytes[mem_.layout.addr(Area::S, kBitError)];
+  uint32_t bits;
+  std::memcpy(&bits, at, 4);
+  bool error = s0 != 0;
+  std::memset(at, 0, 4), s0 = 0;
+  if (error) return std::nullopt;
+  Operand c;
+  if (d.kind == OpdKind::Real) {
+    float v;
+    std::memcpy(&v, &bits, 4);
+    if (std::isnan(v)) return std::nullopt;
+    c.kind = OpdKind::ConstReal, c.fval = v;
+  } else {
+    c.kind = OpdKind::ConstInt, c.ival = int32_t(bits);
+  }
+  return c;
+}
+
+// Forward over the program: the words a store of a constant with power on
+// for certain made known, until something else writes them or a rung that
+// jumps land on starts.  Sources known are replaced by their constants, and
+// an instruction whose sources are all constants becomes a MOV of its result.
+class Propagate {
+ public:
+  Propagate(const Layout& l, const std::vector<char>& on, ScanFacts& f) : l_(l), on_(on), f_(f), folder_(l) {}
+  void rung(const Rung& r, uint32_t first) {
+    if (!r.labels.empty()) known_.clear();
+    for (size_t k = 0; k < r.code.size(); k++) instr(r.code[k], first + uint32_t(k));
+  }
+
+ private:
+  void instr(const Instr& in, uint32_t i) {
+    const OpInfo& info = op_info(in.op);
+    if (info.klass == OpClass::Timer || info.klass == OpClass::Counter) {
+      known_.erase(l_.addr(info.klass == OpClass::Timer ? Area::TW : Area::CW, in.a[0].index));
+      return;
+    }
+    if (!is_app(in.op)) return;
+    Instr use = in;
+    bool changed = false, all = true;
+    int last = in.nopd() - 1;
+    for (int k = 0; k < last; k++) {
+      if (is_device(use.a[k])) {
+        auto it = known_.find(addr(l_, use.a[k]));
+        if (it != known_.end()) use.a[k] = it->second, changed = true;
+      }
+      all = all && is_const(use.a[k]);
+    }
+    bool plain = in.op == Op::MOV && is_const(in.a[0]);  // already what folding makes
+    std::optional<Operand> c = plain ? moved(in.a[0], in.a[1]) : all ? folder_.fold(use) : std::nullopt;
+    if (c && !plain) use = Instr{Op::MOV, {*c, use.a[last]}, in.loc};
+    if ((c && !plain) || changed) f_.replaced.emplace_back(i, use);
+    uint32_t d = addr(l_, in.a[last]);
+    if (c && on_[i]) known_[d] = *c;
+    else known_.erase(d);
+  }
+
+  // what `MOV c d` stores, as the constant of d's type (docs/il.md, MOV)
+  static std::optional<Operand> moved(const Operand& c, const Operand& d) {
+    Operand v;
+    if (d.kind == OpdKind::Real) {
+      v.kind = OpdKind::ConstReal, v.fval = c.kind == OpdKind::ConstReal ? c.fval : int_to_real(c.ival);
+      if (std::isnan(v.fval)) return std::nullopt;
+    } else {
+      v.kind = OpdKind::ConstInt, v.ival = c.kind == OpdKind::ConstInt ? c.ival : real_to_int(c.fval);
+    }
+    return v;
+  }
+
+  const Layout& l_;
+  const std::vector<char>& on_;
+  ScanFacts& f_;
+  Folder folder_;
+  std::unordered_map<uint32_t, Operand> known_;  // by address
+};
+
+}  // namespace
+
+ScanFacts scan_facts(const Program& p, const Layout& layout, int slots) {
+  ScanFacts f;
+  f.first.reserve(p.rungs.size());
+  uint32_t n = 0;
+  for (const Rung& r : p.rungs) f.first.push_back(n), n += uint32_t(r.code.size());
+  f.flags.assign(n, 0);
+  std::vector<char> on = powered(p, n);
+  dead_stores(p, layout, on, f);
+  Propagate prop(layout, on, f);
+  for (size_t ri = 0; ri < p.rungs.size(); ri++) prop.rung(p.rungs[ri], f.first[ri]);
+  for (size_t ri = 0; ri < p.rungs.size(); ri++)
+    if (stack_fits_slots(p.rungs[ri].code, slots)) unread_entries(p.rungs[ri].code, f.first[ri], f);
+  return f;
+}
+
+}  // namespace ldc

@@ -1,0 +1,140 @@
+// ir/scanopt.h: the dead stores, unread stack entries and folded constants of
+// one scan, rule by rule, with the cases that must stay live beside each.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "ir/scanopt.h"
+
+using namespace ldc;
+
+namespace {
+
+// The facts of an IL program given as rungs ("|" separates instructions).
+struct Facts {
+  Program prog;
+  ScanFacts f;
+  explicit Facts(const std::string& body, int slots = 3)
+      : prog(parse_il_text(".edges 4\n" + body + ".end\n", "t.il")), f(scan_facts(prog, prog.layout(), slots)) {}
+  uint8_t at(size_t rung, size_t k) const { return f.at(rung, k); }
+  bool dead(size_t rung, size_t k) const { return at(rung, k) & kDeadStore; }
+  bool unread(size_t rung, size_t k) const { return at(rung, k) & kUnread; }
+  std::string replaced(size_t rung, size_t k) const {
+    const Instr* in = f.replacement(rung, k);
+    return in ? instr_text(*in) : "";
+  }
+};
+
+std::string rung(const std::string& code, const std::string& labels = "") {
+  std::string s = labels;
+  s += ".rung line 1\n";
+  size_t at = 0;
+  while (at <= code.size()) {
+    size_t bar = code.find('|', at);
+    if (bar == std::string::npos) bar = code.size();
+    s += code.substr(at, bar - at) + "\n";
+    at = bar + 1;
+  }
+  return s;
+}
+
+TEST(ScanFacts, AnOutputOverwrittenUnreadIsDead) {
+  Facts t(rung("LOAD X0|OUT Y0") + rung("LOAD X1|OUT Y0"));
+  EXPECT_TRUE(t.dead(0, 1));
+  EXPECT_FALSE(t.dead(1, 1));  // the last store is what the scan leaves
+  // the contact that fed it is read by nothing now
+  EXPECT_TRUE(t.unread(0, 0));
+  EXPECT_FALSE(t.unread(1, 0));
+}
+
+TEST(ScanFacts, AReadBetweenKeepsTheStore) {
+  Facts t(rung("LOAD X0|OUT Y0") + rung("LOAD Y0|OUT Y1") + rung("LOAD X1|OUT Y0"));
+  EXPECT_FALSE(t.dead(0, 1));
+  Facts words(rung("LOAD X0|MOV 5 D0") + rung("LDGT D0 3|OUT Y1") + rung("TRUE|MOV 6 D0"));
+  EXPECT_FALSE(words.dead(0, 1));
+  Facts timer(rung("LOAD X0|MOV 5 T0") + rung("LOAD X1|TON T0 100") + rung("TRUE|MOV 6 T0"));
+  EXPECT_FALSE(timer.dead(0, 1));  // the timer reads its elapsed time
+}
+
+TEST(ScanFacts, AJumpOrEndBetweenKeepsTheStore) {
+  Facts jmp(rung("LOAD X0|OUT Y0") + rung("LOAD X2|JMP L") + rung("LOAD X1|OUT Y0") + rung("LOAD X3|OUT Y3", ".label L\n"));
+  EXPECT_FALSE(jmp.dead(0, 1));
+  // the store the jump skips is overwritten on its own path: a label needs nothing
+  Facts skipped(rung("LOAD X2|JMP L") + rung("LOAD X0|OUT Y0") + rung("LOAD X1|OUT Y0", ".label L\n"));
+  EXPECT_TRUE(skipped.dead(1, 1));
+  Facts end(rung("LOAD X0|OUT Y0") + rung("LOAD X2|END") + rung("LOAD X1|OUT Y0"));
+  EXPECT_FALSE(end.dead(0, 1));
+}
+
+TEST(ScanFacts, OnlyACertainStoreKills) {
+  Facts set(rung("LOAD X0|OUT Y0") + rung("LOAD X1|SET Y0"));
+  EXPECT_FALSE(set.dead(0, 1));  // SET writes only with power
+  Facts set_first(rung("LOAD X0|SET Y0") + rung("LOAD X1|OUTN Y0"));
+  EXPECT_TRUE(set_first.dead(0, 1));
+  Facts gated(rung("LOAD X0|MOV 5 D0") + rung("LOAD X1|MOV 6 D0"));
+  EXPECT_FALSE(gated.dead(0, 1));  // the power of the second MOV is not known
+  Facts powered(rung("LOAD X0|MOV 5 D0") + rung("TRUE|ADD D1 D2 D0"));
+  EXPECT_TRUE(powered.dead(0, 1));
+  Facts div(rung("LOAD X0|MOV 5 D0") + rung("TRUE|DIV D1 D2 D0"));
+  EXPECT_FALSE(div.dead(0, 1));  // a zero divisor keeps D0
+  Facts div_dead(rung("TRUE|DIV D1 D2 D0") + rung("TRUE|MOV 6 D0"));
+  EXPECT_FALSE(div_dead.dead(0, 1));  // and may set S0
+}
+
+TEST(ScanFacts, UnreadStackEntries) {
+  Facts mpp(rung("LOAD X0|LDGT D1 5|MPP|OUT Y0"));
+  EXPECT_TRUE(mpp.unread(0, 1));
+  EXPECT_FALSE(mpp.unread(0, 0));
+  Facts tail(rung("LOAD X0|OUT Y0|LOAD X1|AND X2"));
+  EXPECT_TRUE(tail.unread(0, 2));
+  EXPECT_TRUE(tail.unread(0, 3));
+  Facts edge(rung("LOADP X0 E0|LOAD X1|OUT Y0"));
+  EXPECT_TRUE(edge.unread(0, 0));  // flagged; the code generator keeps the edge update
+  Facts block(rung("LOAD X0|LOAD X1|LOAD X2|ORBLK|ANDBLK|OUT Y0"));
+  for (size_t k = 0; k < 6; k++) EXPECT_EQ(block.at(0, k), 0) << k;
+  Facts mrd(rung("LOAD X0|MPS|AND X1|OUT Y0|MRD|AND X2|OUT Y1|MPP|OUT Y2"));
+  for (size_t k = 0; k < 9; k++) EXPECT_EQ(mrd.at(0, k), 0) << k;
+}
+
+TEST(ScanFacts, NoUnreadFlagsWhereTheStackIsNotPrivate) {
+  std::string deep = "LOAD X0|LOAD X1|LOAD X2|LOAD X3|ANDBLK|ANDBLK|ANDBLK|OUT Y0|LOAD X4";
+  Facts three(rung(deep), 3);
+  EXPECT_FALSE(three.unread(0, 8));  // four live entries do not fit three slots
+  Facts five(rung(deep), 5);
+  EXPECT_TRUE(five.unread(0, 8));
+}
+
+TEST(ScanFacts, ConstantsFoldByTheInterpreter) {
+  Facts t(rung("LOAD X0|ADD 2 3 D0|SHL 1 31 D1|DIV 7 2 D2|DIV 7 0 D3|MOD -7 2 D4|SQRT 4.0 F0|SIN 1.0 F1|"
+               "ADD 1.5 2 D5|MUL 2147483647 2 D6|MOV 3 D7"));
+  EXPECT_EQ(t.replaced(0, 1), "MOV 5 D0");
+  EXPECT_EQ(t.replaced(0, 2), "MOV -2147483648 D1");
+  EXPECT_EQ(t.replaced(0, 3), "MOV 3 D2");
+  EXPECT_EQ(t.replaced(0, 4), "");  // sets S0
+  EXPECT_EQ(t.replaced(0, 5), "MOV -1 D4");
+  EXPECT_EQ(t.replaced(0, 6), "MOV 2.0 F0");
+  EXPECT_EQ(t.replaced(0, 7), "");  // the running machine's sinf decides
+  EXPECT_EQ(t.replaced(0, 8), "MOV 3 D5");  // REAL 3.5, truncated
+  EXPECT_EQ(t.replaced(0, 9), "MOV -2 D6");
+  EXPECT_EQ(t.replaced(0, 10), "");  // already a constant move
+}
+
+TEST(ScanFacts, KnownWordsAfterACertainStore) {
+  Facts t(rung("TRUE|MOV 7 D1|MOV 2.5 F1") + rung("LOAD X0|ADD D1 1 D2|MUL F1 D9 D3|MOV D1 F4"));
+  EXPECT_EQ(t.replaced(1, 1), "MOV 8 D2");
+  EXPECT_EQ(t.replaced(1, 2), "MUL 2.5 D9 D3");
+  EXPECT_EQ(t.replaced(1, 3), "MOV 7.0 F4");
+  Facts gated(rung("LOAD X1|MOV 7 D1") + rung("LOAD X0|ADD D1 1 D2"));
+  EXPECT_EQ(gated.replaced(1, 1), "");  // D1 was written only with power
+  Facts label(rung("TRUE|MOV 7 D1") + rung("LOAD X2|JMP L") + rung("LOAD X0|ADD D1 1 D2", ".label L\n"));
+  EXPECT_EQ(label.replaced(2, 1), "");  // a jump lands here from before the store
+  Facts overwritten(rung("TRUE|MOV 7 D1") + rung("LOAD X1|ADD D5 D6 D1") + rung("LOAD X0|ADD D1 1 D2"));
+  EXPECT_EQ(overwritten.replaced(2, 1), "");
+  Facts timer(rung("TRUE|MOV 7 T0") + rung("LOAD X1|TON T0 100") + rung("LOAD X0|ADD T0 1 D2"));
+  EXPECT_EQ(timer.replaced(2, 1), "");
+  Facts chain(rung("TRUE|MOV 7 D1|ADD D1 D1 D2|MUL D2 D1 D3") + rung("LOAD X0|MOV D3 D4"));
+  EXPECT_EQ(chain.replaced(0, 3), "MOV 98 D3");
+  EXPECT_EQ(chain.replaced(1, 1), "MOV 98 D4");
+}
+
+}  // namespace
