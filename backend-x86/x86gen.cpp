@@ -996,6 +996,69 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
   as::remove_items(items, drop, starts);
 }
 
+// ------------------------------------------------------------ -O2: a word kept in eax
+//
+// After `mov dword ptr [w], eax` (every gated store ends so) or `mov eax,
+// dword ptr [w]`, eax holds the word w until something writes eax or w, a
+// call, or a label (a jump may arrive with anything in eax).  Meanwhile a
+// `mov eax, [w]` is dropped, a read of w as the second operand of mov, cmp,
+// add, sub, and, or, xor, imul, cmov or cvtsi2ss reads eax instead, and
+// `cmp dword ptr [w], imm` becomes `cmp eax, imm`: no load, and shorter.
+// What eax holds carries over from one rung to the next (a rung that jumps
+// land on starts with its labels, which forget it).
+class WordInEax {
+ public:
+  void forget() { word_ = -1; }
+  void run(std::vector<Item>& items, std::vector<uint32_t>& starts) {
+    std::vector<char> drop(items.size(), 0);
+    for (size_t i = 0; i < items.size(); i++) {
+      Item& it = items[i];
+      if (it.kind == as::ItemKind::Label) forget();
+      if (it.kind != as::ItemKind::Instruction) continue;
+      if (loads(it.inst) && held(it.inst.ops[1])) { drop[i] = 1; continue; }
+      use_eax(it.inst);
+      after(it.inst);
+    }
+    if (std::any_of(drop.begin(), drop.end(), [](char d) { return d != 0; })) as::remove_items(items, drop, starts);
+  }
+
+ private:
+  static bool eax32(const Operand& o) { return o.kind == OperandKind::Reg && o.reg == r32(AX); }
+  static bool image_dword(const Operand& o) {
+    return o.kind == OperandKind::Mem && o.mem.size == Size::Dword && o.mem.base == r64(BX) && !o.mem.index.valid();
+  }
+  bool held(const Operand& o) const { return word_ >= 0 && image_dword(o) && o.mem.disp == word_; }
+  static bool loads(const Instruction& in) { return in.mnemonic == M::Mov && eax32(in.ops[0]) && image_dword(in.ops[1]); }
+  static bool reads_second(M m) {
+    switch (m) {
+      case M::Mov: case M::Cmp: case M::Add: case M::Sub: case M::And: case M::Or: case M::Xor: case M::Imul:
+      case M::Cmovcc: case M::Cvtsi2ss:
+        return true;
+      default: return false;
+    }
+  }
+  void use_eax(Instruction& in) const {
+    if (in.num_operands == 2 && reads_second(in.mnemonic) && held(in.ops[1])) in.ops[1] = Operand::r(r32(AX));
+    else if (in.mnemonic == M::Cmp && in.num_operands == 2 && held(in.ops[0]) && in.ops[1].kind == OperandKind::Imm)
+      in.ops[0] = Operand::r(r32(AX));
+  }
+  // may `in` write the bytes of the word held?
+  bool hits(const Instruction& in) const {
+    if (in.num_operands == 0 || in.ops[0].kind != OperandKind::Mem || in.mnemonic == M::Cmp || in.mnemonic == M::Test)
+      return false;
+    const Mem& m = in.ops[0].mem;
+    if (!(m.base == r64(BX)) || m.index.valid()) return true;
+    return m.disp < word_ + 4 && word_ < m.disp + 8;
+  }
+  void after(const Instruction& in) {
+    if (in.mnemonic == M::Mov && image_dword(in.ops[0]) && eax32(in.ops[1])) { word_ = in.ops[0].mem.disp; return; }
+    if (loads(in)) { word_ = in.ops[1].mem.disp; return; }
+    if (writes_reg(in, AX) || in.mnemonic == M::Call || (word_ >= 0 && hits(in))) forget();
+  }
+
+  int64_t word_ = -1;  // the image offset of the word eax holds, or -1
+};
+
 }  // namespace
 
 std::string x86_label_name(const std::string& il_label) { return std::string(kLabelPrefix) + il_label; }
@@ -1344,7 +1407,9 @@ class Blocks {
       g.instr(alt ? *alt : in, facts_->at(ri, k) & keep);
     }
     if (opt_ >= 1 && !slots) peephole(b.items, starts);
-  if (o2_) drop_unreachable(b.items, starts);
+    if (!o2_) return;
+    drop_unreachable(b.items, starts);
+    eax_.run(b.items, starts);
   }
 
   as::Block<Instruction> epilogue() const {
@@ -1406,6 +1471,7 @@ class Blocks {
   bool o2_, notes_;
   std::bitset<8> used_;
   std::optional<ScanFacts> facts_;  // -O2: what the scan cannot observe
+  WordInEax eax_;                   // -O2: the word eax holds, from rung to rung
 };
 
 }  // namespace
