@@ -288,7 +288,21 @@ std::string c_code(const std::vector<Instr>& code, const Layout& layout, const s
   return g.out;
 }
 
+// A rung's stack lives in C locals whose places are counted from the rung's
+// first push, so a program where a rung reads what an earlier one left (IL
+// text can say that) is refused where it does so.
+void refuse_shared_stack(const Program& p) {
+  for (const Rung& r : p.rungs)
+    if (int i = foreign_stack_use(r.code); i >= 0) {
+      const Instr& in = r.code[size_t(i)];
+      throw CompileError(in.loc.line, in.loc.col,
+                         std::string("the C route cannot compile ") + op_info(in.op).name +
+                             " here: it uses a stack entry an earlier rung left (native code and the interpreters can)");
+    }
+}
+
 std::string generate_c(const Program& p, const Layout& layout) {
+  refuse_shared_stack(p);
   return std::string("/* ldc: ") + p.source + " as C (the C route). */\n" + kPrelude + "\n" + c_scan_head() +
          c_rungs(p.rungs, p.end_labels, layout, "  ") + "  (void)s0;\n}\n";
 }

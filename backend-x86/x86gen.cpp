@@ -860,7 +860,8 @@ void Gen::flow(const ldc::Instr& in) {
 //    or after the same pair) is dropped; `test ebp, 1` becomes `test eax, eax`;
 //  * `movzx eax, byte ptr [m]` when eax already holds that byte is dropped;
 //  * a push (`lea ebp, ...`) whose stack is never read again is dropped: the
-//    stack is dead at the end of a rung and at jumps out of it;
+//    stack is dead at the end of a rung and at jumps out of it, unless a rung
+//    of the program reads what an earlier one left (`shared`, shares_stack);
 //  * a jump to the label right after it is dropped.
 // Notes (the IL text items) stay, so IL instructions keep their places.
 bool is_reg(const Operand& o, uint8_t num) { return o.kind == OperandKind::Reg && o.reg.cls != RegClass::Xmm && o.reg.num == num; }
@@ -931,7 +932,7 @@ void drop_unreachable(std::vector<Item>& items, std::vector<uint32_t>& starts) {
   as::remove_items(items, drop, starts);
 }
 
-void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
+void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts, bool shared) {
   std::vector<char> drop(items.size(), 0);
   auto next_instr = [&](size_t i) {
     for (size_t j = i + 1; j < items.size(); j++)
@@ -970,7 +971,7 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
   }
   // backward: is the stack (ebp) read again?
   std::map<uint32_t, bool> live_at;  // by label name id
-  bool live = false;
+  bool live = shared;
   for (size_t k = items.size(); k-- > 0;) {
     Item& it = items[k];
     if (drop[k]) continue;
@@ -978,7 +979,7 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts) {
     if (it.kind != as::ItemKind::Instruction) continue;
     const Instruction& in = it.inst;
     if (in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) {
-      bool target = false;  // global targets (other rungs, scan_exit): the stack is dead there
+      bool target = shared;  // global targets (other rungs, scan_exit): the stack is dead there, if not shared
       if (in.ops[0].kind == OperandKind::Label) {
         auto t = live_at.find(in.ops[0].label.id());
         if (t != live_at.end()) target = t->second;
@@ -1372,7 +1373,7 @@ class Regions {
 class Blocks {
  public:
   Blocks(const Program& p, const Layout& layout, int opt_level, bool notes)
-      : p_(p), layout_(layout), opt_(opt_level), o2_(opt_level >= 2), notes_(notes) {}
+      : p_(p), layout_(layout), opt_(opt_level), o2_(opt_level >= 2), notes_(notes), shared_(shares_stack(p)) {}
 
   as::Block<Instruction> prologue() const {
     // keep rbx/rbp for the caller, 16-byte stack alignment for calls
@@ -1406,7 +1407,7 @@ class Blocks {
       const ldc::Instr* alt = facts_->replacement(ri, k);
       g.instr(alt ? *alt : in, facts_->at(ri, k) & keep);
     }
-    if (opt_ >= 1 && !slots) peephole(b.items, starts);
+    if (opt_ >= 1 && !slots) peephole(b.items, starts, shared_);
     if (!o2_) return;
     drop_unreachable(b.items, starts);
     eax_.run(b.items, starts);
@@ -1463,12 +1464,14 @@ class Blocks {
   }
 
  private:
-  bool fits_slots(size_t ri) const { return stack_fits_slots(p_.rungs[ri].code, kNumSlots); }
+  // a rung's stack in the slot registers: not where a rung reads what an earlier one left in ebp
+  bool fits_slots(size_t ri) const { return !shared_ && stack_fits_slots(p_.rungs[ri].code, kNumSlots); }
 
   const Program& p_;
   const Layout& layout_;
   int opt_;
   bool o2_, notes_;
+  bool shared_;  // shares_stack(p): the stack lives in ebp from rung to rung
   std::bitset<8> used_;
   std::optional<ScanFacts> facts_;  // -O2: what the scan cannot observe
   WordInEax eax_;                   // -O2: the word eax holds, from rung to rung

@@ -84,23 +84,27 @@ static int ldc_main(int argc, char** argv) {
   if (c.project) return write_project(*c.project, output);  // a PLCopen configuration of several tasks
   if (emit.empty() || emit == "hex") c.tree = {};  // an image needs only the IL: free the tree before code generation
   std::string text;
+  // a CompileError of a stage after the reader, shown at its place in the source
+  auto at_source = [&](auto make) -> std::string {
+    try {
+      return make();
+    } catch (CompileError& e) {
+      std::string msg = format_error(input, read_file(input), e.line, e.col, e.what());
+      if (!msg.empty() && msg.back() == '\n') msg.pop_back();
+      throw UserError(msg);
+    }
+  };
   if (emit == "tree") {
     if (!c.from_ld) throw UserError("ldc: error: --emit=tree needs a .ld source");
     text = print_tree(c.tree);
   } else if (emit == "il") {
     text = print_il_text(c.il);
   } else if (emit == "ld") {                               // the ladder grid (docs/format.md)
-    try {
-      text = print_ladder(draw_ladder(raise_to_tree(c.il)), input);
-    } catch (CompileError& e) {
-      std::string msg = format_error(input, read_file(input), e.line, e.col, e.what());
-      if (!msg.empty() && msg.back() == '\n') msg.pop_back();
-      throw UserError(msg);
-    }
+    text = at_source([&] { return print_ladder(draw_ladder(raise_to_tree(c.il)), input); });
   } else if (emit == "iec-il") {                           // IEC 61131-3 IL
     text = print_iec_il(c.il);
   } else if (emit == "c") {                                   // the C route
-    text = c_source(c);
+    text = at_source([&] { return c_source(c); });
   } else if (emit == "asm") {                              // macro compiler
     text = t->gnu_as(c.il, input, opt);
   } else if (emit == "listing") {                          // + blockwise assembler

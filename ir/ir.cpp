@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <initializer_list>
 #include <limits>
 
 namespace ldc {
@@ -475,6 +476,42 @@ bool stack_fits_slots(const std::vector<Instr>& code, int slots) {
     if (reads && (63 - std::countl_zero(reads)) - std::countr_zero(reads) >= slots) return false;
   }
   return true;
+}
+
+
+StackUse stack_use(Op op, int d) {
+  StackUse u;
+  auto rw = [&](int w, std::initializer_list<int> r) {
+    u.writes = true, u.write = w;
+    for (int x : r) u.reads[u.nreads++] = x;
+  };
+  switch (op) {
+    case Op::AND: case Op::ANDN: case Op::OR: case Op::ORN: rw(d - 1, {d - 1}); return u;
+    case Op::ANDBLK: case Op::ORBLK: rw(d - 2, {d - 1, d - 2}); return u;
+    case Op::MPS: rw(d, {d - 1}); return u;
+    case Op::MRD: rw(d - 1, {d - 2}); return u;
+    case Op::MPP: return u;
+    default: break;
+  }
+  if (op_info(op).push == 1) rw(d, {});  // contacts, edges, TRUE, compares
+  else u.reads[u.nreads++] = d - 1;      // outputs, applications, timers, counters, JMP, END
+  return u;
+}
+
+int foreign_stack_use(const std::vector<Instr>& code) {
+  int d = 0;
+  for (size_t i = 0; i < code.size(); i++) {
+    StackUse u = stack_use(code[i].op, d);
+    for (int r = 0; r < u.nreads; r++)
+      if (u.reads[r] < 0) return int(i);
+    d += op_info(code[i].op).push - op_info(code[i].op).pop;
+    if (d < 0) return int(i);
+  }
+  return -1;
+}
+
+bool shares_stack(const Program& p) {
+  return std::any_of(p.rungs.begin(), p.rungs.end(), [](const Rung& r) { return foreign_stack_use(r.code) >= 0; });
 }
 
 }  // namespace ldc

@@ -326,6 +326,27 @@ constexpr int kMaxStackDepth = 32;
 // again).  Such a rung does not depend on the stack the rungs before it left.
 bool stack_fits_slots(const std::vector<Instr>& code, int slots);
 
+// The stack positions one instruction writes and reads, at depth d before it
+// (position 0 is the rung's first push): a push writes d; AND..ORN read and
+// write d-1; ANDBLK/ORBLK read d-1 and d-2 and write d-2; MPS reads d-1 and
+// writes d; MRD reads d-2 and writes d-1; MPP nothing; every other
+// instruction (outputs, applications, timers, counters, JMP, END) reads the
+// top, d-1.
+struct StackUse {
+  bool writes = false;
+  int write = 0;
+  int nreads = 0;
+  int reads[2] = {};
+};
+StackUse stack_use(Op op, int d);
+// The first instruction of a rung that reads or pops a stack entry the rung
+// did not push itself, or -1.  IL text may do that (a rung reading what the
+// rung before it left); the optimizing code generators keep a rung's stack
+// to the rung only in programs where no rung does.
+int foreign_stack_use(const std::vector<Instr>& code);
+// Does any rung of p read or pop what an earlier rung left on the stack?
+bool shares_stack(const Program& p);
+
 // ---------------------------------------------------------------- SFC charts
 // A sequential function chart (paper 001; docs/sfc.md) after the front end has
 // resolved it: steps grouped into scopes (the main sequence and every branch of a

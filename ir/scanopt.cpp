@@ -130,28 +130,6 @@ void dead_stores(const Program& p, const Layout& l, const std::vector<char>& on,
   }
 }
 
-// The stack position an instruction writes (depth d before it), or -1, and
-// the ones it reads.
-struct StackUse {
-  int write = -1;
-  int reads[2] = {-1, -1};
-};
-StackUse stack_use(Op op, int d) {
-  StackUse u;
-  switch (op) {
-    case Op::AND: case Op::ANDN: case Op::OR: case Op::ORN: u.write = d - 1; u.reads[0] = d - 1; return u;
-    case Op::ANDBLK: case Op::ORBLK: u.write = d - 2; u.reads[0] = d - 1; u.reads[1] = d - 2; return u;
-    case Op::MPS: u.write = d; u.reads[0] = d - 1; return u;
-    case Op::MRD: u.write = d - 1; u.reads[0] = d - 2; return u;
-    case Op::MPP: return u;
-    default: break;
-  }
-  const OpInfo& i = op_info(op);
-  if (i.push == 1) u.write = d;  // contacts, edges, TRUE, compares
-  else u.reads[0] = d - 1;       // outputs, applications, timers, counters, JMP, END: the power
-  return u;
-}
-
 // Backward over one rung whose stack is private: an entry written and never
 // read before the rung ends or the position is written again is unread.
 void unread_entries(const std::vector<Instr>& code, uint32_t first, ScanFacts& f) {
@@ -166,12 +144,11 @@ void unread_entries(const std::vector<Instr>& code, uint32_t first, ScanFacts& f
   for (size_t k = code.size(); k-- > 0;) {
     if (f.flags[first + k] & kDeadStore) continue;
     StackUse u = stack_use(code[k].op, depth[k]);
-    if (u.write >= 0) {
+    if (u.writes) {
       if (!live[size_t(u.write)]) { f.flags[first + k] |= kUnread; continue; }
       live[size_t(u.write)] = 0;
     }
-    for (int r : u.reads)
-      if (r >= 0) live[size_t(r)] = 1;
+    for (int r = 0; r < u.nreads; r++) live[size_t(u.reads[r])] = 1;
   }
 }
 
@@ -286,6 +263,7 @@ ScanFacts scan_facts(const Program& p, const Layout& layout, int slots) {
   dead_stores(p, layout, on, f);
   Propagate prop(layout, on, f);
   for (size_t ri = 0; ri < p.rungs.size(); ri++) prop.rung(p.rungs[ri], f.first[ri]);
+  if (shares_stack(p)) return f;  // an entry may be read by a later rung
   for (size_t ri = 0; ri < p.rungs.size(); ri++)
     if (stack_fits_slots(p.rungs[ri].code, slots)) unread_entries(p.rungs[ri].code, f.first[ri], f);
   return f;

@@ -42,7 +42,8 @@ struct ScanFacts {
 };
 
 // The facts of a whole program (stores die across rungs).  Rungs whose stack
-// is not private (stack_fits_slots(code, slots) false) get no kUnread flags.
+// is not private (stack_fits_slots(code, slots) false, or any rung of the
+// program reads what an earlier one left: shares_stack) get no kUnread flags.
 ScanFacts scan_facts(const Program& p, const Layout& layout, int slots);
 
 }  // namespace ldc

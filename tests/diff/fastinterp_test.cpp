@@ -15,6 +15,7 @@
 #include <limits>
 #include <sstream>
 
+#include "backend-c/backend_c.h"
 #include "bench/synth.h"
 #include "runtime/fastinterp.h"
 #include "tests/diff/harness.h"
@@ -516,19 +517,56 @@ const char* kScanFactsIl = R"(; dead stores, unread entries, folded constants
 .end
 )";
 
+// Rungs that read what the rung before them left on the stack (IL text may):
+// every native level keeps the stack in ebp from rung to rung then (no slot
+// registers, no push dropped at a rung's end, no unread entries); the C route
+// refuses such a program by name.
+const char* kSharedStackIl = R"(; stack entries read across rungs
+.edges 1
+.rung line 1
+    LOAD    X1
+    LOAD    X2
+    OUT     Y0
+.rung line 2
+    ORBLK
+    AND     X3
+    OUT     Y1
+.rung line 3
+    LOADP   X4 E0
+    LOAD    X5
+    LDGT    WX0 3
+.rung line 4
+    ANDBLK
+    MOV     WX1 D0
+    ORBLK
+    OUT     Y2
+.rung line 5
+    LOAD    X6
+    OUT     Y3
+.end
+)";
+
 // The native code at every level on the operand forms, the timer limits and
 // the class programs (the -O2 code is branch-free there: cmov, setcc, masks).
 TEST(NativeEdges, EveryLevelMatchesOnOperandFormsAndTimerLimits) {
   struct Level { const char* name; EngineFactory make; };
   const Level levels[] = {{"-O0", make_native}, {"-O1", make_native_o1}, {"-O2", make_native_o2}};
   Program edge = parse_il_text(kEdgeIl, "edge.il"), timers = parse_il_text(kTimerEdgeIl, "timers.il"),
-          known = parse_il_text(kKnownPowerIl, "known.il"), facts = parse_il_text(kScanFactsIl, "facts.il");
+          known = parse_il_text(kKnownPowerIl, "known.il"), facts = parse_il_text(kScanFactsIl, "facts.il"),
+          shared = parse_il_text(kSharedStackIl, "shared.il");
+  try {
+    generate_c(shared, shared.layout());
+    ADD_FAILURE() << "the C route compiled a shared stack";
+  } catch (CompileError& e) {
+    EXPECT_EQ(e.line, 8);  // ORBLK in rung 2
+  }
   for (const Level& lv : levels) {
     for (uint64_t seed = 1; seed <= 12; seed++) {
       EXPECT_EQ(compare_il(edge, seed, 60, seed % 2 == 0, lv.make, true), "") << lv.name << " seed " << seed;
       EXPECT_EQ(compare_il(timers, seed, 200, true, lv.make, seed % 3 != 0), "") << lv.name << " seed " << seed;
       EXPECT_EQ(compare_il(known, seed, 60, true, lv.make, seed % 2 == 0), "") << lv.name << " seed " << seed;
       EXPECT_EQ(compare_il(facts, seed, 60, seed % 2 == 0, lv.make), "") << lv.name << " seed " << seed;
+      EXPECT_EQ(compare_il(shared, seed, 40, false, lv.make), "") << lv.name << " seed " << seed;
     }
     for (OpClass c : {OpClass::Move, OpClass::Arith, OpClass::Logic, OpClass::Special, OpClass::Timer, OpClass::Counter})
       for (bool powered : {true, false}) {
