@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "ir/codegen.h"
+#include "ir/scanopt.h"
 
 namespace ldc::c40gen {
 
@@ -172,7 +173,7 @@ class Gen : public ClassGen<Gen> {
   // opt: the -O level; slots: this rung keeps its stack in kSlots (-O2)
   Gen(const C40Layout& w, std::vector<Item>& items, int& next_label, int opt, bool slots)
       : W_(w), items_(items), next_label_(next_label), opt_(opt), slots_(slots) {}
-  void instr(const ldc::Instr& in);
+  void instr(const ldc::Instr& in, uint8_t facts = 0);  // facts: ScanFlag bits (ir/scanopt.h)
   void ldpk_main() { items_.push_back(Item::instr(make(M::Ldpk, {I(kDataPage)}))); }
   // -O1: which instructions of the rung run in R0 (before the first instr())
   void plan_runs(const std::vector<ldc::Instr>& code);
@@ -712,12 +713,18 @@ void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
   op(M::Sti, {R(r0), D(cq)});
 }
 
-void Gen::instr(const ldc::Instr& in) {
+// -O2: a dead store, or an unread stack entry of a contact, compare or
+// combine that no deferred contact pairs with, needs no code (ir/scanopt.h;
+// an edge contact keeps its code, for its edge update).
+void Gen::instr(const ldc::Instr& in, uint8_t facts) {
   r0_value_.reset();
   Fuse f = at_ < fuse_.size() ? fuse_[at_] : Fuse::None;
   on_ = opt_ >= 2 && guarded(in.op) && known_.on();  // -O2: a power on for certain needs no test
   int partner = at_ < defer_.size() ? defer_[at_] : -1;
-  if (partner >= 0) {  // -O2: a deferred contact pushes nothing; its block instruction applies it
+  bool edge = in.op == Op::LOADP || in.op == Op::LOADF;
+  if (partner < 0 && ((facts & kDeadStore) || ((facts & kUnread) && !edge))) {
+    // nothing
+  } else if (partner >= 0) {  // -O2: a deferred contact pushes nothing; its block instruction applies it
     if (size_t(partner) < at_) bit_slots(combined_contact(contacts_[size_t(partner)], in));
   } else if (slots_ && bit_template(in.op)) {
     bit_slots(in);
@@ -1385,6 +1392,8 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
 
   int next_label = 0;
   Held held;
+  std::optional<ScanFacts> facts;  // -O2: what the scan cannot observe
+  if (opt_level >= 2) facts = scan_facts(p, layout, kNumSlots);
   for (const Rung& r : p.rungs) {
     as::Block<Instruction> b;
     b.source_line = r.line;
@@ -1395,13 +1404,18 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
     Gen g(w, b.items, next_label, opt_level, slots);
     g.plan_runs(r.code);
     std::vector<uint32_t> starts;
-    for (const ldc::Instr& in : r.code) {
+    uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into R10
+    size_t ri = size_t(&r - p.rungs.data());
+    for (size_t k = 0; k < r.code.size(); k++) {
+      // the facts' flags only: constants are folded by the reference interpreter's
+      // IEEE arithmetic, and the C40 computes REALs in its own format
+      const ldc::Instr& in = r.code[k];
       g.before(in);
       starts.push_back(uint32_t(b.items.size()));
       b.items.push_back(Item::note(instr_text(in)));
       // -O0: once per block, with the first instruction: the block does not depend on DP from elsewhere
       if (starts.size() == 1 && opt_level == 0) g.ldpk_main();
-      g.instr(in);
+      g.instr(in, facts ? facts->at(ri, k) & keep : 0);
     }
     g.finish();
     if (opt_level >= 2) drop_reloads(b.items, starts, held);
