@@ -200,7 +200,13 @@ void remove_tree(const std::string& dir) {
 }
 
 std::string c_source(const Compiled& c) {
-  return c.chart ? generate_sfc_c(*c.chart, c.il.layout()) : generate_c(c.il, c.il.layout());
+  try {
+    return c.chart ? generate_sfc_c(*c.chart, c.il.layout()) : generate_c(c.il, c.il.layout());
+  } catch (CompileError& e) {  // what the C route refuses, at its place in the source
+    std::string msg = format_error(c.il.source, read_file(c.il.source), e.line, e.col, e.what());
+    if (!msg.empty() && msg.back() == '\n') msg.pop_back();
+    throw UserError(msg);
+  }
 }
 
 std::string build_c_shared_object(const Compiled& c, const std::string& dir) {

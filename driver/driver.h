@@ -49,7 +49,7 @@ Compiled compile_source(const std::string& path, bool allow_project = false, con
 Image load_image_file(const std::string& path);
 
 // `ldc --emit=c` of a source: the SFC switch form for a chart, else the C route.
-std::string c_source(const Compiled& c);
+std::string c_source(const Compiled& c);  // what the C route refuses: "file:line:col: error: ..."
 // The C route's shared object of a compiled source (backend-c/c_shared.h:
 // DIR/prog.c compiled into DIR/prog.so; returns its path), errors as UserError.
 std::string build_c_shared_object(const Compiled& c, const std::string& dir);

@@ -104,7 +104,7 @@ static int ldc_main(int argc, char** argv) {
   } else if (emit == "iec-il") {                           // IEC 61131-3 IL
     text = print_iec_il(c.il);
   } else if (emit == "c") {                                   // the C route
-    text = at_source([&] { return c_source(c); });
+    text = c_source(c);
   } else if (emit == "asm") {                              // macro compiler
     text = t->gnu_as(c.il, input, opt);
   } else if (emit == "listing") {                          // + blockwise assembler

@@ -65,6 +65,14 @@ printf 'X0,dt\n1,abc\n' > "$tmp/bad.csv"
 expect_fail "bad trace" "bad.csv:2:3: error: bad value 'abc'" "$bin/ldrun" "$tmp/t.bin" --trace "$tmp/bad.csv"
 expect_fail "missing file" "cannot open" "$bin/ldc" "$tmp/nope.ld"
 
+# IL whose rung reads what the rung before it left: the C route refuses it at its place, with
+# no output file left, while native code runs it
+printf '.rung line 1\n    LOAD X1\n    LOAD X2\n    OUT Y0\n.rung line 2\n    ORBLK\n    OUT Y1\n.end\n' > "$tmp/shared.il"
+expect_fail "C route, shared stack" "shared.il:6:5: error: the C route cannot compile ORBLK" "$bin/ldc" "$tmp/shared.il" --emit=c -o "$tmp/shared.c"
+if [ -e "$tmp/shared.c" ]; then bad "C output left behind after an error"; else ok; fi
+expect_fail "ldrun C route, shared stack" "shared.il:6:5: error: the C route cannot compile ORBLK" "$bin/ldrun" "$tmp/shared.il" --engine=c
+"$bin/ldrun" "$tmp/shared.il" -O2 --scans 1 > /dev/null && ok || bad "native -O2 on a shared stack"
+
 echo "$checks checks, $fails failed"
 echo "$((checks - fails)) passed, $fails failed"
 [ $fails -eq 0 ]
