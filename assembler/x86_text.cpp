@@ -504,11 +504,11 @@ std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& a) {
     else { t.push_back("test eax, eax"); t.push_back("setle r8b"); }
     t.push_back("mov " + cq + ", r8b");
   } else {
-    // PT = max(preset, 0); r8d = advance(ET, dt, PT) (see the backend's advance_edx)
-    for (const std::string& x : std::initializer_list<std::string>{"xor eax, eax", "test ecx, ecx", "cmovs ecx, eax", "mov eax, " + tw,
-                          "mov r8d, eax", "add r8d, dword ptr [rbx+" + std::to_string(a.dt) + "]", "mov r10d, r8d",
-                          std::string("setl r11b"), std::string("cmp r8d, ecx"),
-                          std::string("cmova r8d, ecx"), std::string("test r11b, r11b"), std::string("cmovne r8d, r10d"),
+    // r8d = advance(ET, dt, PT) (see the backend's advance_edx); the caller
+    // passes PT >= 0 (a negative preset counts as 0: its call site clamps it)
+    for (const std::string& x : std::initializer_list<std::string>{"mov eax, " + tw, "mov r10d, eax",
+                          "add r10d, dword ptr [rbx+" + std::to_string(a.dt) + "]", std::string("mov r8d, ecx"),
+                          std::string("cmovl r8d, r10d"), std::string("cmp r10d, ecx"), std::string("cmovbe r8d, r10d"),
                           std::string("cmp eax, ecx"), std::string("cmovge r8d, ecx"), std::string("xor r10d, r10d"),
                           std::string("xor r9d, r9d")})
       t.push_back(x);

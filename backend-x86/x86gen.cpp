@@ -605,22 +605,20 @@ void Gen::advance(uint32_t tw) {
 }
 
 // edx = advance(ET, dt, PT) without a branch; eax = ET (read from tw), PT in
-// ecx (>= 0).  The IL's rule: ET >= PT ? PT : min(ET + dt, PT) with the sum
-// exact.  After the add, L says the exact sum is negative (below PT: the
-// wrapped sum is exact then unless it overflowed downwards, when the IL keeps
-// the wrapped value); otherwise the sum above PT unsigned is above PT exactly,
-// an upward overflow too (its wrapped value is 2^32 less, over 2^31 unsigned).
+// ecx (>= 0), r10d the wrapped sum.  The IL's rule: ET >= PT ? PT : min(ET +
+// dt, PT) with the sum exact.  edx starts at PT; after the add, L says the
+// exact sum is negative (below PT: the IL keeps the wrapped sum, exact unless
+// it overflowed downwards); else the sum at most PT unsigned is the sum itself,
+// and above PT unsigned it is above PT exactly (an upward overflow too: its
+// wrapped value is 2^32 less, over 2^31 unsigned).
 void Gen::advance_edx(uint32_t tw) {
-  const Reg r11b = r8(R11);
   emit(M::Mov, {R(eax), Dw(tw)});
-  emit(M::Mov, {R(edx), R(eax)});
-  emit(M::Add, {R(edx), Dw(kSysDt)});
-  emit(M::Mov, {R(r10d), R(edx)});
-  emit(make_cc(M::Setcc, Cond::L, {R(r11b)}));
-  emit(M::Cmp, {R(edx), R(ecx)});
-  emit(make_cc(M::Cmovcc, Cond::A, {R(edx), R(ecx)}));
-  emit(M::Test, {R(r11b), R(r11b)});
-  emit(make_cc(M::Cmovcc, Cond::NE, {R(edx), R(r10d)}));
+  emit(M::Mov, {R(r10d), R(eax)});
+  emit(M::Add, {R(r10d), Dw(kSysDt)});
+  emit(M::Mov, {R(edx), R(ecx)});
+  emit(make_cc(M::Cmovcc, Cond::L, {R(edx), R(r10d)}));
+  emit(M::Cmp, {R(r10d), R(ecx)});
+  emit(make_cc(M::Cmovcc, Cond::BE, {R(edx), R(r10d)}));
   emit(M::Cmp, {R(eax), R(ecx)});
   emit(make_cc(M::Cmovcc, Cond::GE, {R(edx), R(ecx)}));
 }
@@ -645,10 +643,8 @@ void Gen::reset_masked(std::initializer_list<Operand> dwords, std::initializer_l
 void Gen::timer_gated(const ldc::Instr& in) {
   Reg p = power();
   if (p != esi) emit(M::Mov, {R(esi), R(p)});
+  preset(in.a[1]);  // clamped here, not in the routine: most presets are constants
   emit(M::Mov, {R(r8(DX)), I(int32_t(in.a[0].index & 0xff))});  // the routine takes dl only (movzx edx, dl)
-  const ldc::Operand& pt = in.a[1];
-  if (pt.kind == OpdKind::ConstInt) emit(M::Mov, {R(ecx), I(pt.ival < 0 ? 0 : pt.ival)});
-  else load_int(pt, ecx);
   call_routine(in.op == Op::TON ? as::x86::Routine::Ton : in.op == Op::TOF ? as::x86::Routine::Tof : as::x86::Routine::Tp);
 }
 
