@@ -983,7 +983,8 @@ std::pair<long, long> rss_hwm_kb() {
 
 // `ldbench --compile-child FILE`: compiles FILE (.ld or .il) through every phase, as
 // the ldc driver does for an image (a .ld lowered rung by rung as it is read,
-// parse_ld_to_il; the IL, the code and the image alive at the end), and prints "rss_before_kb hwm_parse hwm_lower hwm_generate
+// parse_ld_to_il; the IL, the code and the image alive at the end, the image
+// written to FILE.bin), and prints "rss_before_kb hwm_parse hwm_lower hwm_generate
 // hwm_assemble hwm_image il code_bytes image_bytes seconds".
 int compile_child(const std::string& file) {
   std::string text = read_file(file);
@@ -1003,13 +1004,14 @@ int compile_child(const std::string& file) {
   // as ldc does (target_image): the image takes the code over, the rest of the build is dropped
   Image im = make_image(ImageTarget::X86_64, p, std::move(nb.asm_result.code), nb.line_offsets);
   nb = {};
-  std::vector<uint8_t> img = write_image(im);
+  size_t image_bytes = 0;  // as ldc does: written straight into the file (FILE.bin, beside the source)
+  write_file_atomic(file + ".bin", [&](std::FILE* f) { return (image_bytes = write_image_file(im, f)) != 0; });
   hwm[4] = rss_hwm_kb().second;
   double s = secs_since(t0);
   size_t il = 0;
   for (const Rung& r : p.rungs) il += r.code.size();
   std::printf("%ld %ld %ld %ld %ld %ld %zu %zu %zu %.3f\n", before, hwm[0], hwm[1], hwm[2], hwm[3], hwm[4], il,
-              code_bytes, img.size(), s);
+              code_bytes, image_bytes, s);
   return 0;
 }
 

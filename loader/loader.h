@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -102,6 +103,12 @@ Image make_image(ImageTarget target, const Program& p, std::vector<uint8_t> code
 // Serializes an image.  Writes the fields as they are (read_image does the
 // checking); throws ImageError only if the image is too large for the format.
 std::vector<uint8_t> write_image(const Image& image);
+// The same bytes written to `file` (open for writing and seeking, at its
+// start) as they are made, in pieces of 64 KiB, the checksum last: no copy
+// of the image is held.  Throws ImageError as write_image does, before
+// writing anything.  Returns the bytes written, or 0 if the file cannot seek;
+// a failed write is left in the file's error indicator (std::ferror).
+size_t write_image_file(const Image& image, std::FILE* file);
 
 // The target byte of an image's header, from the file's first bytes and
 // nothing else checked (read_image checks it all); nullopt if `head` does not
