@@ -1,6 +1,8 @@
 // IL text and binary forms, the validator, and lowering limits.
 #include <gtest/gtest.h>
 
+#include <thread>
+
 #include "ir/ir.h"
 
 using namespace ldc;
@@ -16,6 +18,29 @@ const char* kAll =
     "TAN F0 F5\nSQRT F0 F6\nEXP F0 F7\nLN F0 F8\nABS D0 D11\nTON T0 100\nTOF T1 D0\nTP T2 5\nRSTT T3\n"
     "MTON T4 0\nMTOF T5 D0\nMTP T6 5\n"
     "CTU C0 10 E2\nCTD C1 D3\n";
+
+// A label operand's name is interned: equal text, equal (4-byte) names, and
+// the text comes back, from several threads at once.
+TEST(LabelText, InternedNamesKeepTheirText) {
+  static_assert(sizeof(LabelText) == 4 && sizeof(Operand) == 20);
+  EXPECT_TRUE(LabelText().empty());
+  EXPECT_TRUE(LabelText("").empty());
+  EXPECT_EQ(LabelText("").str(), "");
+  std::vector<std::vector<LabelText>> made(4);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; t++)
+    threads.emplace_back([&made, t] {
+      for (int i = 0; i < 3000; i++) made[size_t(t)].push_back(LabelText("lbl" + std::to_string((i * 7 + t) % 2500)));
+    });
+  for (auto& th : threads) th.join();
+  for (int t = 0; t < 4; t++)
+    for (int i = 0; i < 3000; i++) {
+      const LabelText& l = made[size_t(t)][size_t(i)];
+      ASSERT_EQ(l.str(), "lbl" + std::to_string((i * 7 + t) % 2500));
+      EXPECT_EQ(l, LabelText(l.str()));
+      EXPECT_FALSE(l == LabelText(l.str() + "x"));
+    }
+}
 
 TEST(IlText, EveryMnemonicRoundTrips) {
   // CTD above lacks its edge operand: the reader must say so
