@@ -208,7 +208,7 @@ enum class OpdKind : uint8_t { None, Bit, Int, Real, ConstInt, ConstReal, Edge, 
 // life of the process.  Id 0 is the empty name.
 class LabelText {
  public:
-  LabelText() = default;
+  LabelText() = default;  // trivial (an Operand keeps it in a union): LabelText{} is the empty name
   LabelText(const std::string& s) : id_(s.empty() ? 0 : intern(s)) {}  // NOLINT: implicit on purpose
   LabelText(const char* s) : LabelText(std::string(s)) {}              // NOLINT
   const std::string& str() const;
@@ -218,21 +218,31 @@ class LabelText {
 
  private:
   static uint32_t intern(const std::string& s);
-  uint32_t id_ = 0;
+  uint32_t id_;
 };
 
+// The value of a constant and a label's name share their 4 bytes: an operand
+// has at most one of them (by its kind), and one not set reads as 0 / empty.
 struct Operand {
   OpdKind kind = OpdKind::None;
   Area area = Area::Sys;  // Bit / Int / Real
   uint32_t index = 0;     // device index, edge slot, timer/counter number, label target
-  int32_t ival = 0;       // ConstInt
-  float fval = 0;         // ConstReal
-  LabelText label;        // Label name
+  union {
+    int32_t ival = 0;     // ConstInt
+    float fval;           // ConstReal
+    LabelText label;      // Label name
+  };
 
   bool is_real() const { return kind == OpdKind::Real || kind == OpdKind::ConstReal; }
-  bool operator==(const Operand&) const = default;
+  // Kind, area, index, and the value the kind has (REAL constants as floats).
+  bool operator==(const Operand& o) const {
+    if (kind != o.kind || area != o.area || index != o.index) return false;
+    if (kind == OpdKind::ConstReal) return fval == o.fval;
+    if (kind == OpdKind::Label) return label == o.label;
+    return ival == o.ival;
+  }
 };
-static_assert(sizeof(Operand) == 20, "an IL instruction holds three: keep it small (docs/architecture.md)");
+static_assert(sizeof(Operand) == 12, "an IL instruction holds three: keep it small (docs/architecture.md)");
 
 struct SrcLoc {
   int line = 0, col = 0;
