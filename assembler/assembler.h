@@ -309,8 +309,11 @@ struct StreamDeleter {
   void operator()(Stream* s) const;
 };
 std::unique_ptr<Stream, StreamDeleter> stream_begin(const TargetInfo& target, std::vector<std::string> globals);
-// `block` answers for one block only, numbered by how many came before it.
-void stream_block(Stream& s, const ProgramView& block);
+// `block` answers for one block only, numbered by how many came before it;
+// without keep_items its item layout is kept only until the next block.
+void stream_block(Stream& s, const ProgramView& block, bool keep_items);
+std::span<const ItemLayout> stream_last_items(const Stream& s);  // the last block's item layout
+uint32_t stream_code_size(const Stream& s);                       // the bytes emitted so far
 Result stream_finish(Stream& s);
 }  // namespace detail
 
@@ -425,16 +428,24 @@ std::string listing_text(const Program<Inst>& p, const Result& r, std::string_vi
 // stay until finish().  The bytes are those of assemble(target, program) on the
 // same blocks (Mode::Blockwise); the errors are the same, though a block's
 // global-definition errors come with that block, not before every other one.
+// With Items::LastOnly, Result::items stays empty: a caller that needs the
+// item layout (a line map) reads each block's from last_items() after add(),
+// so that the layout of every item never lives at once.
 template <class Inst>
 class Assembler {
  public:
-  Assembler(const Target<Inst>& target, std::vector<std::string> globals)
-      : t_(target), s_(detail::stream_begin(target, std::move(globals))) {}
+  enum class Items : uint8_t { All, LastOnly };
+  Assembler(const Target<Inst>& target, std::vector<std::string> globals, Items items = Items::All)
+      : t_(target), s_(detail::stream_begin(target, std::move(globals))), keep_(items == Items::All) {}
   void add(const Block<Inst>& b) {
     View v(t_, b, n_++);
-    detail::stream_block(*s_, v);
+    detail::stream_block(*s_, v, keep_);
   }
   size_t blocks() const { return n_; }
+  // The layout of the items of the block added last (valid until the next add)
+  // and the code bytes emitted so far: the block ends there.
+  std::span<const ItemLayout> last_items() const { return detail::stream_last_items(*s_); }
+  uint32_t code_size() const { return detail::stream_code_size(*s_); }
   // The result, as assemble() gives it; the assembler is spent afterwards.
   Result finish() { return detail::stream_finish(*s_); }
 
@@ -460,6 +471,7 @@ class Assembler {
   };
   const Target<Inst>& t_;
   std::unique_ptr<detail::Stream, detail::StreamDeleter> s_;
+  bool keep_;
   size_t n_ = 0;
 };
 

@@ -173,15 +173,25 @@ class Core {
 
   // One block more (Assembler::add): `p` answers for block `b` only, which is
   // the next one; its items are not looked at again after this call.
-  void block(const ProgramView& p, uint32_t b) {
+  // With keep_items false the block's item layout replaces the last block's
+  // (last_items) instead of joining Result::items.
+  void block(const ProgramView& p, uint32_t b, bool keep_items) {
     p_ = &p;
     lines_.push_back(p.source_line(b));
     r_.block_offsets.push_back(0);
-    r_.items.emplace_back(p.num_items(b));
+    keep_items_ = keep_items;
+    if (keep_items) r_.items.emplace_back(p.num_items(b));
+    else last_.assign(p.num_items(b), ItemLayout{});
     define_globals(b);
     assemble_unit(b, b + 1);
     p_ = nullptr;
   }
+
+  std::span<const ItemLayout> last_items() const { 
+    if (!keep_items_) return last_;
+    return r_.items.empty() ? std::span<const ItemLayout>() : std::span<const ItemLayout>(r_.items.back());
+  }
+  uint32_t code_size() const { return uint32_t(r_.code.size()); }
 
   Result finish() {
     resolve_pending();
@@ -363,7 +373,7 @@ class Core {
       r_.block_offsets[b] = base + block_start[b - first];
       uint32_t cur = r_.block_offsets[b];
       for (size_t i = 0, n_items = p_->num_items(b); i < n_items; ++i) {
-        ItemLayout& lay = r_.items[b][i];
+        ItemLayout& lay = keep_items_ ? r_.items[b][i] : last_[i];
         lay.offset = cur;
         ItemKind kind = p_->kind(b, i);
         if (kind == ItemKind::Label && p_->is_global(b, i)) {
@@ -441,6 +451,8 @@ class Core {
   std::vector<Pending> pending_;
   std::vector<InstState> insts_;       // assemble_unit's instructions
   std::vector<uint32_t> block_start_;  // assemble_unit's block starts
+  bool keep_items_ = true;             // every block's item layout goes into r_.items
+  std::vector<ItemLayout> last_;       // else the last block's, alone
 };
 
 }  // namespace core_impl
@@ -473,11 +485,14 @@ std::unique_ptr<Stream, StreamDeleter> stream_begin(const TargetInfo& target, st
   return s;
 }
 
-void stream_block(Stream& s, const ProgramView& block) {
+void stream_block(Stream& s, const ProgramView& block, bool keep_items) {
   auto t0 = std::chrono::steady_clock::now();
-  s.core.block(block, s.blocks++);
+  s.core.block(block, s.blocks++, keep_items);
   s.ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
 }
+
+std::span<const ItemLayout> stream_last_items(const Stream& s) { return s.core.last_items(); }
+uint32_t stream_code_size(const Stream& s) { return s.core.code_size(); }
 
 Result stream_finish(Stream& s) {
   auto t0 = std::chrono::steady_clock::now();

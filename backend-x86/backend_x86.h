@@ -47,6 +47,11 @@ X86Code generate_x86(const Program& p, const Layout& layout, int opt_level = 0, 
 using X86BlockSink = std::function<void(as::Block<as::x86::Instruction>&)>;
 std::vector<std::vector<uint32_t>> generate_x86_blocks(const Program& p, const Layout& layout, int opt_level, bool notes,
                                                        const X86BlockSink& sink);
+// The same, il_items filled in as the blocks go: rung r's entry is there when
+// its block (X86Code::rung_block(r)) reaches the sink, as the last one, and the
+// sink may free it (a line map made while assembling).
+void generate_x86_blocks(const Program& p, const Layout& layout, int opt_level, bool notes, const X86BlockSink& sink,
+                         std::vector<std::vector<uint32_t>>& il_items);
 std::vector<std::string> x86_globals(const Program& p);
 
 // Names of the global labels the backend defines.

@@ -1486,10 +1486,15 @@ std::vector<std::string> x86_globals(const Program& p) {
   return g;
 }
 
+void generate_x86_blocks(const Program& p, const Layout& layout, int opt_level, bool notes, const X86BlockSink& sink,
+                         std::vector<std::vector<uint32_t>>& il_items) {
+  Blocks(p, layout, opt_level, notes).run(il_items, sink);
+}
+
 std::vector<std::vector<uint32_t>> generate_x86_blocks(const Program& p, const Layout& layout, int opt_level, bool notes,
                                                        const X86BlockSink& sink) {
   std::vector<std::vector<uint32_t>> il_items;
-  Blocks(p, layout, opt_level, notes).run(il_items, sink);
+  generate_x86_blocks(p, layout, opt_level, notes, sink, il_items);
   return il_items;
 }
 

@@ -404,7 +404,7 @@ void prepare(Subject& s, const Options& o) {
     TargetCode tc = x86.generate(s.prog, s.name, lvl, /*notes=*/false);
     s.native_build_at[lvl] = secs_since(t0);
     s.native_bytes_at[lvl] = tc.assembled.code.size();
-    Image img = make_image(x86.image_kind, s.prog, tc.assembled, tc.il_items, tc.rung_blocks);
+    Image img = make_image(x86.image_kind, s.prog, tc.assembled.code, tc.line_offsets);
     if (lvl == 0) s.image_bytes = write_image(img).size();
     s.eng[kNativeAt[lvl]] = find_engine("native").engine->make(img);
   }
@@ -870,12 +870,20 @@ Phases compile_once(const std::string& text, bool is_ld, int opt = 0) {
   double asm_s = 0;
   {
     nb.gen.program.globals = x86_globals(p);
-    as::Assembler<as::x86::Instruction> a(as::x86::target(), nb.gen.program.globals);
-    nb.gen.il_items = generate_x86_blocks(p, p.layout(), opt, false, [&](as::Block<as::x86::Instruction>& b) {
+    using Asm = as::Assembler<as::x86::Instruction>;
+    Asm a(as::x86::target(), nb.gen.program.globals, Asm::Items::LastOnly);
+    std::vector<std::vector<uint32_t>> il_items;
+    size_t blocks = 0;
+    generate_x86_blocks(p, p.layout(), opt, false, [&](as::Block<as::x86::Instruction>& b) {
       auto t0 = Clock::now();
       a.add(b);
+      if (!il_items.empty() && X86Code::rung_block(il_items.size() - 1) == blocks) {  // as build_x86
+        append_line_offsets(nb.line_offsets, a.last_items(), a.code_size(), il_items.back());
+        il_items.back() = {};
+      }
+      blocks++;
       asm_s += secs_since(t0);
-    });
+    }, il_items);
     auto t0 = Clock::now();
     nb.asm_result = a.finish();
     asm_s += secs_since(t0);
@@ -975,7 +983,8 @@ std::pair<long, long> rss_hwm_kb() {
 
 // `ldbench --compile-child FILE`: compiles FILE (.ld or .il) through every phase, as
 // the ldc driver does for an image (a .ld lowered rung by rung as it is read,
-// parse_ld_to_il; the IL, the code and the image alive at the end), and prints "rss_before_kb hwm_parse hwm_lower hwm_generate
+// parse_ld_to_il; the IL, the code and the image alive at the end, the image
+// written to FILE.bin), and prints "rss_before_kb hwm_parse hwm_lower hwm_generate
 // hwm_assemble hwm_image il code_bytes image_bytes seconds".
 int compile_child(const std::string& file) {
   std::string text = read_file(file);
@@ -993,15 +1002,16 @@ int compile_child(const std::string& file) {
   hwm[2] = hwm[3] = rss_hwm_kb().second;
   size_t code_bytes = nb.asm_result.code.size();
   // as ldc does (target_image): the image takes the code over, the rest of the build is dropped
-  Image im = make_image(ImageTarget::X86_64, p, std::move(nb.asm_result), nb.gen.il_items, rung_blocks(nb.gen));
+  Image im = make_image(ImageTarget::X86_64, p, std::move(nb.asm_result.code), nb.line_offsets);
   nb = {};
-  std::vector<uint8_t> img = write_image(im);
+  size_t image_bytes = 0;  // as ldc does: written straight into the file (FILE.bin, beside the source)
+  write_file_atomic(file + ".bin", [&](std::FILE* f) { return (image_bytes = write_image_file(im, f)) != 0; });
   hwm[4] = rss_hwm_kb().second;
   double s = secs_since(t0);
   size_t il = 0;
   for (const Rung& r : p.rungs) il += r.code.size();
   std::printf("%ld %ld %ld %ld %ld %ld %zu %zu %zu %.3f\n", before, hwm[0], hwm[1], hwm[2], hwm[3], hwm[4], il,
-              code_bytes, img.size(), s);
+              code_bytes, image_bytes, s);
   return 0;
 }
 

@@ -32,10 +32,21 @@ std::string read_file(const std::string& path) {
 }
 
 void write_file_atomic(const std::string& path, std::string_view data) {
+  write_file_atomic(path, [&](std::FILE* f) { return std::fwrite(data.data(), 1, data.size(), f) == data.size(); });
+}
+
+void write_file_atomic(const std::string& path, const std::function<bool(std::FILE*)>& write) {
   std::string tmp = path + ".tmp." + std::to_string(getpid());
   FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) throw UserError(path + ": error: cannot create: " + std::strerror(errno));
-  bool ok = std::fwrite(data.data(), 1, data.size(), f) == data.size();
+  bool ok;
+  try {
+    ok = write(f) && !std::ferror(f);
+  } catch (...) {
+    std::fclose(f);
+    std::remove(tmp.c_str());
+    throw;
+  }
   ok &= std::fflush(f) == 0;
   ok &= std::fclose(f) == 0;
   if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {

@@ -3,6 +3,7 @@
 // without leaving a half-written file behind.
 #pragma once
 
+#include <cstdio>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -26,6 +27,9 @@ int run_tool(const char* tool, const std::function<int()>& work);
 std::string read_file(const std::string& path);  // throws UserError
 // Writes to path.tmp.PID, then renames, so no half-written output is left.
 void write_file_atomic(const std::string& path, std::string_view data);  // throws UserError
+// The same, the bytes written by `write` (false: it could not write them);
+// what it throws is thrown on, the file removed.
+void write_file_atomic(const std::string& path, const std::function<bool(std::FILE*)>& write);
 
 struct Project;
 struct Compiled {

@@ -110,11 +110,12 @@ static int ldc_main(int argc, char** argv) {
   } else if (emit == "listing") {                          // + blockwise assembler
     text = t->listing(c.il, input, opt);
   } else if (emit.empty() || emit == "hex") {              // + loader
-    std::vector<uint8_t> bin = write_image(target_image(*t, c.il, input, opt));
-    if (emit == "hex") text = write_intel_hex(bin);
+    Image image = target_image(*t, c.il, input, opt);
+    if (emit == "hex") text = write_intel_hex(write_image(image));
     else {
       if (output.empty()) throw UserError("ldc: error: an image needs -o FILE (or --emit=hex for text on stdout)");
-      write_file_atomic(output, std::string_view(reinterpret_cast<const char*>(bin.data()), bin.size()));  // no copy
+      // straight into the file: no copy of the image in memory
+      write_file_atomic(output, [&](std::FILE* f) { return write_image_file(image, f) != 0; });
       return 0;
     }
   } else {

@@ -86,7 +86,7 @@ FoundEngine find_engine(std::string_view name) {
 
 Image target_image(const Target& t, const Program& p, const std::string& source_name, int opt_level) {
   TargetCode c = t.generate(p, source_name, opt_level, /*notes=*/false);
-  return make_image(t.image_kind, p, std::move(c.assembled), c.il_items, c.rung_blocks);
+  return make_image(t.image_kind, p, std::move(c.assembled.code), c.line_offsets);
 }
 
 void throw_assembly_errors(const as::Result& r, const std::string& source_name) {

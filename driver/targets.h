@@ -21,10 +21,13 @@ namespace ldc {
 
 // The code a target made of a program, as the driver and the loader see it:
 // the assembled bytes, and where each rung's and each IL instruction's code is.
+// An image's build (no notes) may keep only line_offsets: il_items,
+// rung_blocks and assembled.items are then empty (x86-64: made block by block).
 struct TargetCode {
   as::Result assembled;
   std::vector<std::vector<uint32_t>> il_items;  // [rung][IL instruction]: its first item in the rung's block
   std::vector<uint32_t> rung_blocks;            // [rung]: the block holding the rung's code
+  std::vector<uint32_t> line_offsets;           // [IL instruction]: its code offset (loader.h, line_offsets)
 };
 
 // How ldrun and ldbench run a target's programs: on the image's code (an
@@ -100,7 +103,8 @@ std::vector<uint32_t> rung_blocks(const Code& gen) {
 template <class Code>
 TargetCode target_code(Code gen, as::Result assembled) {
   std::vector<uint32_t> blocks = rung_blocks(gen);
-  return {std::move(assembled), std::move(gen.il_items), std::move(blocks)};
+  std::vector<uint32_t> offsets = line_offsets(assembled, gen.il_items, blocks);
+  return {std::move(assembled), std::move(gen.il_items), std::move(blocks), std::move(offsets)};
 }
 // What a disassembly prints before the instruction at each code address
 // (the offset in the code divided by `unit`, the bytes of an address):

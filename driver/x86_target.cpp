@@ -9,31 +9,54 @@
 
 namespace ldc {
 
+namespace {
+
+// An image's build: each block assembled as it is made, then dropped, and
+// the line map's code offsets taken from its item layout right away.
+void stream_x86(const Program& p, int opt_level, NativeBuild& b) {
+  b.gen.program.globals = x86_globals(p);
+  using Asm = as::Assembler<as::x86::Instruction>;
+  Asm a(as::x86::target(), b.gen.program.globals, Asm::Items::LastOnly);
+  std::vector<std::vector<uint32_t>> il_items;  // a rung's, freed once its block is laid out
+  size_t blocks = 0;
+  auto sink = [&](as::Block<as::x86::Instruction>& blk) {
+    a.add(blk);
+    if (!il_items.empty() && X86Code::rung_block(il_items.size() - 1) == blocks) {
+      append_line_offsets(b.line_offsets, a.last_items(), a.code_size(), il_items.back());
+      il_items.back() = {};
+    }
+    blocks++;
+  };
+  generate_x86_blocks(p, p.layout(), opt_level, false, sink, il_items);
+  b.asm_result = a.finish();
+}
+
+}  // namespace
+
 NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode, int opt_level, bool notes) {
   NativeBuild b;
-  if (mode == as::Mode::Blockwise && !notes) {  // an image: each block assembled as it is made, then dropped
-    b.gen.program.globals = x86_globals(p);
-    as::Assembler<as::x86::Instruction> a(as::x86::target(), b.gen.program.globals);
-    b.gen.il_items = generate_x86_blocks(p, p.layout(), opt_level, false,
-                                         [&](as::Block<as::x86::Instruction>& blk) { a.add(blk); });
-    b.asm_result = a.finish();
+  if (mode == as::Mode::Blockwise && !notes) {  // an image
+    stream_x86(p, opt_level, b);
     throw_assembly_errors(b.asm_result, source_name);
     return b;
   }
   b.gen = generate_x86(p, p.layout(), opt_level, notes);
   b.asm_result = assemble_or_throw(as::x86::target(), b.gen.program, source_name, mode);
+  b.line_offsets = line_offsets(b.asm_result, b.gen.il_items, rung_blocks(b.gen));
   return b;
 }
 
 Image make_x86_image(const Program& p, const NativeBuild& nb) {
-  return make_image(ImageTarget::X86_64, p, nb.asm_result, nb.gen.il_items, rung_blocks(nb.gen));
+  return make_image(ImageTarget::X86_64, p, nb.asm_result.code, nb.line_offsets);
 }
 
 namespace {
 
 TargetCode generate(const Program& p, const std::string& source_name, int opt_level, bool notes) {
   NativeBuild b = build_x86(p, source_name, as::Mode::Blockwise, opt_level, notes);
-  return target_code(std::move(b.gen), std::move(b.asm_result));
+  TargetCode c = target_code(std::move(b.gen), std::move(b.asm_result));
+  c.line_offsets = std::move(b.line_offsets);
+  return c;
 }
 
 std::string gnu_as(const Program& p, const std::string& source_name, int opt_level) {

@@ -14,10 +14,13 @@ namespace ldc {
 // Assembly errors become UserError with the rung's source line.  Without notes
 // (an image) in Mode::Blockwise the blocks are streamed: each is assembled as
 // soon as it is generated and dropped (as::Assembler), so gen.program holds
-// only the global names; with notes (listings, --emit=asm) it holds every block.
+// only the global names, and neither gen.il_items nor asm_result.items is
+// kept (line_offsets is made block by block); with notes (listings,
+// --emit=asm) gen holds every block and asm_result every item's layout.
 struct NativeBuild {
   X86Code gen;
   as::Result asm_result;
+  std::vector<uint32_t> line_offsets;  // each IL instruction's code offset (loader.h, line_offsets)
 };
 NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode = as::Mode::Blockwise,
                       int opt_level = 0, bool notes = true);

@@ -1173,7 +1173,7 @@ void Importer::coil(const Elem& e) {
 void Importer::uart(const Elem& e) {
   const std::string& k = e.kw;
   SrcLoc loc = e.loc();
-  Operand rx = int_opd(Area::WX, kUartRx), tx = int_opd(Area::WY, kUartTx), seen = int_opd(Area::D, kUartSeen);
+  Operand rx = int_opd(Area::WX, kUartRx), seen = int_opd(Area::D, kUartSeen);
   auto fresh = [&] { return Cond::of(leaf_node(Op::LDNE, {rx, seen}, e)); };
   if (k == "UART_RECV_AVAIL") return rb_.restart(fresh(), loc);
   if (is_uart_flag(k)) return rb_.restart(bit_leaf(Op::LOADN, Area::M, kUartBusy, e), loc);

@@ -10,8 +10,51 @@
 #include <cstring>
 #include <initializer_list>
 #include <limits>
+#include <mutex>
+#include <unordered_map>
 
 namespace ldc {
+
+// ---------------------------------------------------------------- label names
+
+// The label table: chunks of strings that never move, so references into
+// them (and ids read without the lock) stay valid while others intern.
+// `chunks` is reserved once and never reallocates.
+namespace {
+constexpr uint32_t kLabelChunkBits = 10, kLabelChunkSize = 1u << kLabelChunkBits, kLabelMaxChunks = 1u << 16;
+struct LabelTable {
+  std::mutex lock;
+  std::unordered_map<std::string_view, uint32_t> ids;
+  std::vector<std::unique_ptr<std::string[]>> chunks;
+  uint32_t next = 1;  // 0: the empty name
+  LabelTable() { chunks.reserve(kLabelMaxChunks); }
+};
+LabelTable& label_table() {
+  static LabelTable* t = new LabelTable;  // never destroyed: labels outlive static destructors
+  return *t;
+}
+}  // namespace
+
+uint32_t LabelText::intern(const std::string& text) {
+  LabelTable& t = label_table();
+  std::lock_guard<std::mutex> g(t.lock);
+  auto it = t.ids.find(text);
+  if (it != t.ids.end()) return it->second;
+  uint32_t id = t.next;
+  if ((id >> kLabelChunkBits) >= kLabelMaxChunks) throw std::length_error("too many distinct IL label names");
+  if ((id >> kLabelChunkBits) >= t.chunks.size()) t.chunks.push_back(std::make_unique<std::string[]>(kLabelChunkSize));
+  std::string& slot = t.chunks[id >> kLabelChunkBits][id & (kLabelChunkSize - 1)];
+  slot = text;
+  t.ids.emplace(std::string_view(slot), id);
+  t.next++;
+  return id;
+}
+
+const std::string& LabelText::str() const {
+  static const std::string empty;
+  if (id_ == 0) return empty;
+  return label_table().chunks[id_ >> kLabelChunkBits][id_ & (kLabelChunkSize - 1)];
+}
 
 static const char* const kAreaNames[kAreaCount] = {"Sys", "S",  "X",  "Y",  "M",  "K",  "TQ", "CQ",
                                                    "TI",  "WX", "WY", "D",  "F",  "TW", "CW", "E"};

@@ -201,39 +201,48 @@ bool operand_area_ok(char sig, Area a, uint32_t idx);
 
 enum class OpdKind : uint8_t { None, Bit, Int, Real, ConstInt, ConstReal, Edge, Timer, Counter, Label };
 
-// A label operand's name (only JMP has one): one pointer, null when empty, so
-// that an Operand is 24 bytes and not 48 (an IL instruction holds three).
+// A label operand's name (only JMP has one): an interned 4-byte id, equal ids
+// for equal text, so that an Operand is 20 bytes and not 24 or 48 (an IL
+// instruction holds three).  The text lives in a process-wide table (never
+// freed, safe to intern from several threads), so str() stays valid for the
+// life of the process.  Id 0 is the empty name.
 class LabelText {
  public:
-  LabelText() = default;
-  LabelText(std::string s)  // NOLINT: implicit on purpose
-      : p_(s.empty() ? nullptr : std::make_unique<std::string>(std::move(s))) {}
-  LabelText(const char* s) : LabelText(std::string(s)) {}  // NOLINT
-  LabelText(const LabelText& o) : p_(o.p_ ? std::make_unique<std::string>(*o.p_) : nullptr) {}
-  LabelText(LabelText&&) noexcept = default;
-  LabelText& operator=(const LabelText& o) { return *this = LabelText(o); }
-  LabelText& operator=(LabelText&&) noexcept = default;
-  const std::string& str() const { return p_ ? *p_ : empty_; }
+  LabelText() = default;  // trivial (an Operand keeps it in a union): LabelText{} is the empty name
+  LabelText(const std::string& s) : id_(s.empty() ? 0 : intern(s)) {}  // NOLINT: implicit on purpose
+  LabelText(const char* s) : LabelText(std::string(s)) {}              // NOLINT
+  const std::string& str() const;
   operator const std::string&() const { return str(); }  // NOLINT
-  bool empty() const { return !p_; }
-  friend bool operator==(const LabelText& a, const LabelText& b) { return a.str() == b.str(); }
+  bool empty() const { return id_ == 0; }
+  friend bool operator==(LabelText a, LabelText b) { return a.id_ == b.id_; }
 
  private:
-  static inline const std::string empty_;
-  std::unique_ptr<std::string> p_;
+  static uint32_t intern(const std::string& s);
+  uint32_t id_;
 };
 
+// The value of a constant and a label's name share their 4 bytes: an operand
+// has at most one of them (by its kind), and one not set reads as 0 / empty.
 struct Operand {
   OpdKind kind = OpdKind::None;
   Area area = Area::Sys;  // Bit / Int / Real
   uint32_t index = 0;     // device index, edge slot, timer/counter number, label target
-  int32_t ival = 0;       // ConstInt
-  float fval = 0;         // ConstReal
-  LabelText label;        // Label name
+  union {
+    int32_t ival = 0;     // ConstInt
+    float fval;           // ConstReal
+    LabelText label;      // Label name
+  };
 
   bool is_real() const { return kind == OpdKind::Real || kind == OpdKind::ConstReal; }
-  bool operator==(const Operand&) const = default;
+  // Kind, area, index, and the value the kind has (REAL constants as floats).
+  bool operator==(const Operand& o) const {
+    if (kind != o.kind || area != o.area || index != o.index) return false;
+    if (kind == OpdKind::ConstReal) return fval == o.fval;
+    if (kind == OpdKind::Label) return label == o.label;
+    return ival == o.ival;
+  }
 };
+static_assert(sizeof(Operand) == 12, "an IL instruction holds three: keep it small (docs/architecture.md)");
 
 struct SrcLoc {
   int line = 0, col = 0;

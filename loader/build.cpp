@@ -1,6 +1,7 @@
 // loader/build.cpp -- an image from a program and its assembled code
 // (loader.h: make_image, retentive_ranges).
 #include <algorithm>
+#include <stdexcept>
 
 #include "loader/loader.h"
 
@@ -19,18 +20,34 @@ std::vector<RetentiveRange> retentive_ranges(const Program& p) {
   return r;
 }
 
-namespace {
+void append_line_offsets(std::vector<uint32_t>& out, std::span<const as::ItemLayout> items, uint32_t block_end,
+                         std::span<const uint32_t> starts) {
+  for (uint32_t at : starts)  // an instruction that emitted nothing at the rung's end: the block's end
+    out.push_back(at < items.size() ? items[at].offset : block_end);
+}
 
-// Everything of the image but its code bytes.
-Image image_without_code(ImageTarget target, const Program& p, const as::Result& code,
-                         const std::vector<std::vector<uint32_t>>& il_items, std::span<const uint32_t> rung_blocks) {
+std::vector<uint32_t> line_offsets(const as::Result& code, const std::vector<std::vector<uint32_t>>& il_items,
+                                   std::span<const uint32_t> rung_blocks) {
+  std::vector<uint32_t> out;
+  for (size_t r = 0; r < il_items.size(); r++) {
+    uint32_t b = rung_blocks[r];
+    uint32_t block_end = b + 1 < code.block_offsets.size() ? code.block_offsets[b + 1] : uint32_t(code.code.size());
+    append_line_offsets(out, code.items[b], block_end, il_items[r]);
+  }
+  return out;
+}
+
+Image make_image(ImageTarget target, const Program& p, std::vector<uint8_t> code, std::span<const uint32_t> offsets) {
   Image img;
   img.target = target;
   img.source = p.source;
   img.layout = p.layout();
   img.entry = 0;
   BinaryIl bin = encode_il(p);
-  img.il = bin.code;
+  if (offsets.size() != bin.instr_offset.size())
+    throw std::invalid_argument("make_image: " + std::to_string(offsets.size()) + " code offsets for " +
+                                std::to_string(bin.instr_offset.size()) + " IL instructions");
+  img.il = std::move(bin.code);
   img.aliases = p.aliases;
   img.retentive = retentive_ranges(p);
   size_t k = 0;
@@ -38,33 +55,24 @@ Image image_without_code(ImageTarget target, const Program& p, const as::Result&
   img.lines.reserve(bin.instr_offset.size());
   for (size_t r = 0; r < p.rungs.size(); r++) {
     img.rung_titles.push_back(p.rungs[r].title);
-    uint32_t b = rung_blocks[r];
-    const auto& items = code.items[b];
-    uint32_t block_end = b + 1 < code.block_offsets.size() ? code.block_offsets[b + 1] : uint32_t(code.code.size());
-    for (size_t i = 0; i < p.rungs[r].code.size(); i++, k++) {
-      const Instr& in = p.rungs[r].code[i];
-      uint32_t at = il_items[r][i];  // an instruction that emitted nothing at the rung's end: the block's end
-      img.lines.push_back({at < items.size() ? items[at].offset : block_end, bin.instr_offset[k],
-                           in.loc.line ? in.loc.line : p.rungs[r].line, uint32_t(r)});
+    for (const Instr& in : p.rungs[r].code) {
+      img.lines.push_back({offsets[k], bin.instr_offset[k], in.loc.line ? in.loc.line : p.rungs[r].line, uint32_t(r)});
+      k++;
     }
   }
+  img.code = std::move(code);
   return img;
 }
 
-}  // namespace
-
 Image make_image(ImageTarget target, const Program& p, const as::Result& code,
                  const std::vector<std::vector<uint32_t>>& il_items, std::span<const uint32_t> rung_blocks) {
-  Image img = image_without_code(target, p, code, il_items, rung_blocks);
-  img.code = code.code;
-  return img;
+  return make_image(target, p, code.code, line_offsets(code, il_items, rung_blocks));
 }
 
 Image make_image(ImageTarget target, const Program& p, as::Result&& code,
                  const std::vector<std::vector<uint32_t>>& il_items, std::span<const uint32_t> rung_blocks) {
-  Image img = image_without_code(target, p, code, il_items, rung_blocks);
-  img.code = std::move(code.code);
-  return img;
+  std::vector<uint32_t> offsets = line_offsets(code, il_items, rung_blocks);
+  return make_image(target, p, std::move(code.code), offsets);
 }
 
 }  // namespace ldc

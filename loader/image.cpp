@@ -5,6 +5,7 @@
 // the section and the offset.
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 
@@ -46,19 +47,55 @@ std::string hex(uint64_t v) {
 
 // ---------------------------------------------------------------- writing
 
+// The bytes of an image in file order: kept whole (write_image), only
+// counted (the layout pass of write_image_file), or handed to a file in
+// pieces with their CRC-32 summed on the way (write_image_file).
 struct Writer {
-  std::vector<uint8_t> out;
-  void u8(uint8_t v) { out.push_back(v); }
+  enum class Mode : uint8_t { Keep, Count, Stream };
+  static constexpr size_t kChunk = 64 << 10;
+  Mode mode = Mode::Keep;
+  std::vector<uint8_t> out;    // Keep: every byte; Stream: those not yet written
+  size_t done = 0;             // Count, Stream: the bytes before `out`
+  uint32_t crc = 0;            // Stream: the CRC-32 of those
+  std::FILE* file = nullptr;   // Stream
+
+  size_t size() const { return done + out.size(); }
+  void u8(uint8_t v) {
+    if (mode == Mode::Count) done++;
+    else out.push_back(v);
+  }
   void u16(uint16_t v) { u8(uint8_t(v)); u8(uint8_t(v >> 8)); }
-  void u32(uint32_t v) { for (int i = 0; i < 4; i++) u8(uint8_t(v >> (8 * i))); }
-  void bytes(std::span<const uint8_t> b) { out.insert(out.end(), b.begin(), b.end()); }
+  void u32(uint32_t v) {
+    for (int i = 0; i < 4; i++) u8(uint8_t(v >> (8 * i)));
+    if (mode == Mode::Stream && out.size() >= kChunk) flush();
+  }
+  void bytes(std::span<const uint8_t> b) {
+    if (mode == Mode::Count) {
+      done += b.size();
+    } else if (mode == Mode::Stream && b.size() >= kChunk) {  // large: written from where it is, not copied
+      flush();
+      put(b);
+    } else {
+      out.insert(out.end(), b.begin(), b.end());
+      if (mode == Mode::Stream && out.size() >= kChunk) flush();
+    }
+  }
   void str(const std::string& s) {
     if (s.size() > kImageMaxSize) throw ImageError("image: string too long for the image format");
     u32(uint32_t(s.size()));
-    out.insert(out.end(), s.begin(), s.end());
+    bytes({reinterpret_cast<const uint8_t*>(s.data()), s.size()});
   }
-  void align4() { while (out.size() % 4) u8(0); }
+  void align4() { while (size() % 4) u8(0); }
   void put32_at(size_t at, uint32_t v) { for (int i = 0; i < 4; i++) out[at + i] = uint8_t(v >> (8 * i)); }
+  void flush() {
+    put(out);
+    out.clear();
+  }
+  void put(std::span<const uint8_t> b) {  // a failed write: the file's error indicator (ferror)
+    crc = crc32(b, crc);
+    if (!b.empty()) std::fwrite(b.data(), 1, b.size(), file);
+    done += b.size();
+  }
 };
 
 uint32_t count32(size_t n, const char* what) {
@@ -170,75 +207,119 @@ static size_t image_size_hint(const Image& im) {
   return n;
 }
 
-std::vector<uint8_t> write_image(const Image& im) {
-  Writer w;
-  w.out.reserve(image_size_hint(im));
+// Sections 1..7 always; 'config' only when the image has a configuration
+// table, so images without one are byte for byte what they always were.
+static uint32_t section_count(const Image& im) { return im.config ? kConfig : kConfig - 1; }
+
+// The header and the section table: each section's offset and size from
+// `table` (two per section), or 0 to be patched (write_image); the checksum 0.
+static void put_header(Writer& w, const Image& im, std::span<const uint32_t> table, uint32_t total) {
+  const uint32_t nsections = section_count(im);
   w.bytes(kMagic);
   w.u16(kVersion);
   w.u8(uint8_t(im.target));
   w.u8(0);  // flags
-  // Sections 1..7 always; 'config' only when the image has a configuration
-  // table, so images without one are byte for byte what they always were.
-  const uint32_t nsections = im.config ? kConfig : kConfig - 1;
   w.u32(kOffSections + nsections * kSectionEntrySize);
-  w.u32(0);  // total size, patched below
+  w.u32(total);
   w.u32(nsections);
-  w.u32(0);  // checksum, patched below
+  w.u32(0);  // checksum
   w.u32(0);  // reserved
   w.u32(kAreaCount);
   for (uint32_t c : im.layout.count) w.u32(c);
   for (uint32_t o : im.layout.offset) w.u32(o);
   w.u32(im.layout.size);
-  size_t table = w.out.size();
-  for (uint32_t i = 1; i <= nsections; i++) w.u32(i), w.u32(0), w.u32(0);
+  for (uint32_t i = 1; i <= nsections; i++)
+    w.u32(i), w.u32(table.empty() ? 0 : table[2 * (i - 1)]), w.u32(table.empty() ? 0 : table[2 * i - 1]);
+}
 
-  for (uint32_t id = 1; id <= nsections; id++) {
-    w.align4();
-    size_t start = w.out.size();
-    switch (SectionId(id)) {
-      case kCode: w.bytes(im.code); break;
-      case kIl: w.bytes(im.il); break;
-      case kLines:
-        count32(im.lines.size(), "line map entries");
-        for (const LineEntry& e : im.lines) w.u32(e.code_offset), w.u32(e.il_offset), w.u32(uint32_t(e.line)), w.u32(e.rung);
-        break;
-      case kStrings:
-        w.str(im.source);
-        w.u32(count32(im.rung_titles.size(), "rung titles"));
-        for (const std::string& t : im.rung_titles) w.str(t);
-        break;
-      case kAliases:
-        w.u32(count32(im.aliases.size(), "aliases"));
-        for (const Alias& a : im.aliases) w.u8(uint8_t(a.dev.dev)), w.u32(a.dev.index), w.str(a.name);
-        break;
-      case kRetentive:
-        count32(im.retentive.size(), "retentive ranges");
-        for (const RetentiveRange& r : im.retentive) w.u32(uint32_t(r.area)), w.u32(r.first), w.u32(r.count);
-        break;
-      case kEntry: w.u32(im.entry); break;
-      case kConfig: {
-        const IoConfig& c = *im.config;
-        w.u32(c.block_size), w.u32(c.processor), w.u32(c.period_us), w.u32(c.priority);
-        w.str(c.resource), w.str(c.task), w.str(c.program);
-        w.u32(count32(c.rows.size(), "configuration rows"));
-        for (const ConfigRow& r : c.rows) {
-          w.u8(uint8_t(r.area)), w.u8(r.flags), w.u16(0);
-          w.u32(r.block), w.u32(r.writer), w.u32(r.period_us);
-        }
-        break;
+static void put_section(Writer& w, const Image& im, uint32_t id) {
+  switch (SectionId(id)) {
+    case kCode: w.bytes(im.code); break;
+    case kIl: w.bytes(im.il); break;
+    case kLines:
+      count32(im.lines.size(), "line map entries");
+      for (const LineEntry& e : im.lines) w.u32(e.code_offset), w.u32(e.il_offset), w.u32(uint32_t(e.line)), w.u32(e.rung);
+      break;
+    case kStrings:
+      w.str(im.source);
+      w.u32(count32(im.rung_titles.size(), "rung titles"));
+      for (const std::string& t : im.rung_titles) w.str(t);
+      break;
+    case kAliases:
+      w.u32(count32(im.aliases.size(), "aliases"));
+      for (const Alias& a : im.aliases) w.u8(uint8_t(a.dev.dev)), w.u32(a.dev.index), w.str(a.name);
+      break;
+    case kRetentive:
+      count32(im.retentive.size(), "retentive ranges");
+      for (const RetentiveRange& r : im.retentive) w.u32(uint32_t(r.area)), w.u32(r.first), w.u32(r.count);
+      break;
+    case kEntry: w.u32(im.entry); break;
+    case kConfig: {
+      const IoConfig& c = *im.config;
+      w.u32(c.block_size), w.u32(c.processor), w.u32(c.period_us), w.u32(c.priority);
+      w.str(c.resource), w.str(c.task), w.str(c.program);
+      w.u32(count32(c.rows.size(), "configuration rows"));
+      for (const ConfigRow& r : c.rows) {
+        w.u8(uint8_t(r.area)), w.u8(r.flags), w.u16(0);
+        w.u32(r.block), w.u32(r.writer), w.u32(r.period_us);
       }
-      case kSectionIdEnd: break;
+      break;
     }
-    if (w.out.size() > kImageMaxSize) throw ImageError("image: larger than the format allows (" + hex(kImageMaxSize) + " bytes)");
-    size_t at = table + (id - 1) * kSectionEntrySize;
-    w.put32_at(at + 4, uint32_t(start));
-    w.put32_at(at + 8, uint32_t(w.out.size() - start));
+    case kSectionIdEnd: break;
+  }
+}
+
+static void check_size(const Writer& w) {
+  if (w.size() > kImageMaxSize) throw ImageError("image: larger than the format allows (" + hex(kImageMaxSize) + " bytes)");
+}
+
+// The sections after the header, each aligned to 4 bytes, and the padding
+// after the last; returns each section's offset and size (two per section).
+static std::vector<uint32_t> put_sections(Writer& w, const Image& im) {
+  std::vector<uint32_t> table;
+  for (uint32_t id = 1; id <= section_count(im); id++) {
+    w.align4();
+    size_t start = w.size();
+    put_section(w, im, id);
+    check_size(w);
+    table.push_back(uint32_t(start));
+    table.push_back(uint32_t(w.size() - start));
   }
   w.align4();
-  if (w.out.size() > kImageMaxSize) throw ImageError("image: larger than the format allows (" + hex(kImageMaxSize) + " bytes)");
+  check_size(w);
+  return table;
+}
+
+std::vector<uint8_t> write_image(const Image& im) {
+  Writer w;
+  w.out.reserve(image_size_hint(im));
+  put_header(w, im, {}, 0);
+  std::vector<uint32_t> table = put_sections(w, im);
+  for (uint32_t i = 0; i < section_count(im); i++) {
+    size_t at = kOffSections + i * kSectionEntrySize;
+    w.put32_at(at + 4, table[2 * i]);
+    w.put32_at(at + 8, table[2 * i + 1]);
+  }
   w.put32_at(kOffTotalSize, uint32_t(w.out.size()));
   w.put32_at(kOffChecksum, image_checksum(w.out));
   return std::move(w.out);
+}
+
+size_t write_image_file(const Image& im, std::FILE* file) {
+  Writer count{Writer::Mode::Count};  // first the layout: the header names every section's place
+  put_header(count, im, {}, 0);
+  std::vector<uint32_t> table = put_sections(count, im);
+  Writer w{Writer::Mode::Stream};
+  w.file = file;
+  w.out.reserve(Writer::kChunk + 64);
+  put_header(w, im, table, uint32_t(count.size()));
+  put_sections(w, im);
+  w.flush();
+  uint8_t sum[4];
+  for (int i = 0; i < 4; i++) sum[i] = uint8_t(w.crc >> (8 * i));  // the checksum field was written as 0
+  if (std::fseek(file, kOffChecksum, SEEK_SET) != 0 || std::fwrite(sum, 1, 4, file) != 4 || std::fseek(file, 0, SEEK_END) != 0)
+    return 0;
+  return w.done;
 }
 
 // "1 = x86-64, 2 = C40": the known target bytes, for the header's message.

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -85,9 +86,29 @@ Image make_image(ImageTarget target, const Program& p, as::Result&& code,
                  const std::vector<std::vector<uint32_t>>& il_items, std::span<const uint32_t> rung_blocks);
 std::vector<RetentiveRange> retentive_ranges(const Program& p);
 
+// The line map's code column: where each IL instruction's code starts, in
+// program order.  Made whole from il_items and rung_blocks as above, or block
+// by block while assembling (as::Assembler<...>::Items::LastOnly): for one
+// rung's block, `items` its item layout, `block_end` the code offset where it
+// ends, starts[i] the item where IL instruction i starts (past the items: the
+// block's end).  Both ways give the same offsets.
+void append_line_offsets(std::vector<uint32_t>& out, std::span<const as::ItemLayout> items, uint32_t block_end,
+                         std::span<const uint32_t> starts);
+std::vector<uint32_t> line_offsets(const as::Result& code, const std::vector<std::vector<uint32_t>>& il_items,
+                                   std::span<const uint32_t> rung_blocks);
+// The image of a program, its code bytes and the line map's code column
+// (one offset per IL instruction, line_offsets).
+Image make_image(ImageTarget target, const Program& p, std::vector<uint8_t> code, std::span<const uint32_t> offsets);
+
 // Serializes an image.  Writes the fields as they are (read_image does the
 // checking); throws ImageError only if the image is too large for the format.
 std::vector<uint8_t> write_image(const Image& image);
+// The same bytes written to `file` (open for writing and seeking, at its
+// start) as they are made, in pieces of 64 KiB, the checksum last: no copy
+// of the image is held.  Throws ImageError as write_image does, before
+// writing anything.  Returns the bytes written, or 0 if the file cannot seek;
+// a failed write is left in the file's error indicator (std::ferror).
+size_t write_image_file(const Image& image, std::FILE* file);
 
 // The target byte of an image's header, from the file's first bytes and
 // nothing else checked (read_image checks it all); nullopt if `head` does not

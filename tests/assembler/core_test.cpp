@@ -295,6 +295,31 @@ TEST(Core, StreamingGivesTheBlockwiseResult) {
   EXPECT_EQ(bw.stats.encode_calls, st.stats.encode_calls);
 }
 
+// With Items::LastOnly each block's item layout is there right after its
+// add() (last_items, code_size its end) and no block's stays in the result.
+TEST(Core, StreamingLastItemsAreEachBlocksLayout) {
+  X86Program p = big_program(200, 13);
+  Result bw = assemble(x86::target(), p, Mode::Blockwise);
+  using Asm = Assembler<x86::Instruction>;
+  Asm a(x86::target(), p.globals, Asm::Items::LastOnly);
+  for (size_t b = 0; b < p.blocks.size(); b++) {
+    a.add(p.blocks[b]);
+    std::span<const ItemLayout> last = a.last_items();
+    ASSERT_EQ(last.size(), bw.items[b].size()) << "block " << b;
+    for (size_t i = 0; i < last.size(); i++) {
+      EXPECT_EQ(last[i].offset, bw.items[b][i].offset) << "block " << b << " item " << i;
+      EXPECT_EQ(last[i].size, bw.items[b][i].size);
+      EXPECT_EQ(last[i].long_form, bw.items[b][i].long_form);
+    }
+    EXPECT_EQ(a.code_size(), b + 1 < p.blocks.size() ? bw.block_offsets[b + 1] : bw.code.size());
+  }
+  Result st = a.finish();
+  ASSERT_TRUE(bw.ok() && st.ok()) << errors_of(bw) << errors_of(st);
+  EXPECT_EQ(bw.code, st.code);
+  EXPECT_EQ(bw.block_offsets, st.block_offsets);
+  EXPECT_TRUE(st.items.empty());
+}
+
 TEST(Core, StreamingReportsTheSameErrors) {
   // undefined local and global labels, an undeclared and a twice-defined
   // global, a clash, a duplicate local: every kind, the labels named after

@@ -1,6 +1,9 @@
 // IL text and binary forms, the validator, and lowering limits.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <thread>
+
 #include "ir/ir.h"
 
 using namespace ldc;
@@ -16,6 +19,57 @@ const char* kAll =
     "TAN F0 F5\nSQRT F0 F6\nEXP F0 F7\nLN F0 F8\nABS D0 D11\nTON T0 100\nTOF T1 D0\nTP T2 5\nRSTT T3\n"
     "MTON T4 0\nMTOF T5 D0\nMTP T6 5\n"
     "CTU C0 10 E2\nCTD C1 D3\n";
+
+// A label operand's name is interned: equal text, equal (4-byte) names, and
+// the text comes back, from several threads at once.
+TEST(LabelText, InternedNamesKeepTheirText) {
+  static_assert(sizeof(LabelText) == 4 && sizeof(Operand) == 12 && sizeof(Instr) == 48);
+  EXPECT_TRUE(LabelText{}.empty());
+  EXPECT_TRUE(Operand{OpdKind::Label}.label.empty());
+  EXPECT_TRUE(LabelText("").empty());
+  EXPECT_EQ(LabelText("").str(), "");
+  std::vector<std::vector<LabelText>> made(4);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; t++)
+    threads.emplace_back([&made, t] {
+      for (int i = 0; i < 3000; i++) made[size_t(t)].push_back(LabelText("lbl" + std::to_string((i * 7 + t) % 2500)));
+    });
+  for (auto& th : threads) th.join();
+  for (int t = 0; t < 4; t++)
+    for (int i = 0; i < 3000; i++) {
+      const LabelText& l = made[size_t(t)][size_t(i)];
+      ASSERT_EQ(l.str(), "lbl" + std::to_string((i * 7 + t) % 2500));
+      EXPECT_EQ(l, LabelText(l.str()));
+      EXPECT_FALSE(l == LabelText(l.str() + "x"));
+    }
+}
+
+// An operand's constant and label share a union: == compares the one its kind has.
+TEST(Operand, EqualityComparesTheValueOfItsKind) {
+  auto k = [](OpdKind kind) { return Operand{kind}; };
+  Operand i5 = k(OpdKind::ConstInt), i6 = k(OpdKind::ConstInt), r = k(OpdKind::ConstReal), r2 = k(OpdKind::ConstReal);
+  i5.ival = 5, i6.ival = 6;
+  EXPECT_EQ(i5, i5);
+  EXPECT_FALSE(i5 == i6);
+  r.fval = 0.0f, r2.fval = -0.0f;
+  EXPECT_EQ(r, r2);  // as floats: -0 == 0
+  r.fval = r2.fval = std::nanf("");
+  EXPECT_FALSE(r == r2);  // and NaN is unequal to itself, as before
+  Operand a = k(OpdKind::Label), b = k(OpdKind::Label);
+  EXPECT_EQ(a, b);
+  a.label = "x";
+  EXPECT_FALSE(a == b);
+  b.label = std::string("x");
+  EXPECT_EQ(a, b);
+  Operand zero_int = k(OpdKind::ConstInt), zero_real = k(OpdKind::ConstReal);
+  zero_real.fval = 0;
+  EXPECT_FALSE(zero_int == zero_real);  // the kinds differ
+  Operand d = k(OpdKind::Int);
+  d.area = Area::D, d.index = 3;
+  Operand d4 = d;
+  d4.index = 4;
+  EXPECT_FALSE(d == d4);
+}
 
 TEST(IlText, EveryMnemonicRoundTrips) {
   // CTD above lacks its edge operand: the reader must say so

@@ -1,6 +1,7 @@
 // Tests of the binary image: round trips, and one refusal per class of bad input.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -74,6 +75,35 @@ TEST(Image, RoundTripKeepsEveryField) {
   EXPECT_EQ(back.retentive, im.retentive);
   EXPECT_TRUE(back == im);
   EXPECT_EQ(write_image(back), b);  // the writer is deterministic
+}
+
+// write_image_file writes write_image's bytes, a piece at a time: a tiny
+// image, one with a configuration table, and one of many 64 KiB pieces
+// (code, line map and titles each larger than a piece).
+std::vector<uint8_t> written_to_file(const Image& im) {
+  std::FILE* f = std::tmpfile();
+  EXPECT_NE(f, nullptr);
+  size_t n = write_image_file(im, f);
+  EXPECT_FALSE(std::ferror(f));
+  std::vector<uint8_t> b(n);
+  std::rewind(f);
+  EXPECT_EQ(std::fread(b.data(), 1, n, f), n);
+  EXPECT_EQ(std::fgetc(f), EOF);
+  std::fclose(f);
+  return b;
+}
+
+TEST(Image, WrittenToAFileAsWriteImageWritesIt) {
+  Image tiny = tiny_image();
+  Image configured = tiny_image();
+  configured.config = IoConfig{32, 1, 10000, 2, "cpu", "fast", "prog", {{Area::X, 0, kBlockRead, kNoProcessor, 10000}}};
+  Image big = tiny_image();
+  std::mt19937 rng(11);
+  big.code.resize(300001);
+  for (auto& x : big.code) x = uint8_t(rng());
+  for (uint32_t i = 0; i < 20000; i++) big.lines.push_back({uint32_t(rng() % 300001), 0, int32_t(i), i});
+  for (int i = 0; i < 9000; i++) big.rung_titles.push_back(std::string(rng() % 20, char('a' + i % 26)));
+  for (const Image* im : {&tiny, &configured, &big}) EXPECT_EQ(written_to_file(*im), write_image(*im));
 }
 
 TEST(Image, RoundTripEmptyOptionalFields) {
