@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "backend-x86/backend_x86.h"
+#include "backend-x86/base_savings.h"
 #include "ir/codegen.h"
 
 namespace ldc {
@@ -1032,6 +1033,7 @@ constexpr int64_t kLeaBytes = 7;    // lea reg, [rbx+disp32]
 // lookahead or none come within 0.5% of each other.
 constexpr size_t kRegionOps = 32;
 constexpr int kNewWindows = 3;  // windows a region may point registers to (the fullest ones)
+static_assert(size_t(kNumBases + kNewWindows) <= x86gen::BaseSavings::kMaxWindows);
 
 bool has_rex(const Instruction& in) {
   for (unsigned k = 0; k < in.num_operands; k++) {
@@ -1094,8 +1096,8 @@ class BasePlan {
   // of the operands it leaves ...); every such choice is counted in bytes
   // saved (3 an operand through rdi, 2 or 3 through r15/r14, which need a REX)
   // less 7 a lea (none when `free`: the prologue's), and the best one taken.
-  // Operands are grouped by the windows that cover them, so a choice is
-  // counted over the groups, not the operands.  Every register is set when `free`.
+  // Operands are counted by the set of windows that cover them (BaseSavings), so
+  // a choice costs O(1), not O(operands).  Every register is set when `free`.
   std::array<bool, kNumBases> plan(Ops& ops, bool free) {
     if (ops.empty() && !free) return {};
     std::sort(ops.begin(), ops.end());
@@ -1110,17 +1112,15 @@ class BasePlan {
     // windows: 0..2 the registers' present K (if known), 3.. the new ones
     const size_t nw = kNumBases + news.size();
     auto window_k = [&](size_t w) { return w < kNumBases ? k(int(w)) : news[w - kNumBases]; };
-    std::vector<Group>& groups = groups_;  // a few: a linear search
-    groups.clear();
+    x86gen::BaseSavings& sv = savings_;
+    sv.clear(nw);
     for (const Op& o : ops) {
       uint32_t mask = 0;
       for (size_t w = 0; w < nw; w++)
         if ((w >= kNumBases || known(int(w))) && covers(window_k(w), o.first, o.last)) mask |= 1u << w;
-      if (!mask) continue;
-      auto g = std::find_if(groups.begin(), groups.end(), [&](const Group& x) { return x.mask == mask && x.rex == o.rex; });
-      if (g == groups.end()) groups.push_back({mask, o.rex, 1});
-      else g->n++;
+      if (mask) sv.add(mask, o.rex);
     }
+    sv.sum_subsets();
     // choice[r]: the window register r takes: r itself (keep, or nothing if not known) or a new one
     std::array<size_t, kNumBases> choice{}, best_choice{};
     for (int r = 0; r < kNumBases; r++) best_choice[size_t(r)] = size_t(r);
@@ -1137,11 +1137,7 @@ class BasePlan {
         (r == 0 ? rdi_w : other_w) |= bit;
       }
       if (!dup) {
-        int64_t saved = free ? 0 : -kLeaBytes * leas;
-        for (const Group& g : groups) {
-          if (g.mask & rdi_w) saved += 3 * g.n;
-          else if (g.mask & other_w) saved += (g.rex ? 3 : 2) * g.n;
-        }
+        int64_t saved = (free ? 0 : -kLeaBytes * leas) + sv.saved(rdi_w, other_w);
         if (saved > best) best = saved, best_choice = choice;
       }
       more = false;
@@ -1189,12 +1185,7 @@ class BasePlan {
   int64_t kmax_;
   std::array<int64_t, kNumBases> k_{};
   std::array<bool, kNumBases> known_{};
-  struct Group {
-    uint32_t mask;  // the windows covering its operands
-    bool rex;       // Op::rex
-    int64_t n;      // operands
-  };
-  std::vector<Group> groups_;  // plan's, kept for its storage
+  x86gen::BaseSavings savings_;  // plan's
 };
 
 // -O2: the blocks gathered into regions, each given its base registers, then
