@@ -218,7 +218,7 @@ class Core {
 
   void encode_state(InstState& s) {
     ++r_.stats.encode_calls;
-    s.enc = Encoding{};
+    s.enc.size = 0, s.enc.num_fixups = 0;  // empty: what lies past the counts is never read
     try {
       p_->encode(s.block, s.item, s.long_form, s.enc);
       for (unsigned f = 0; f < s.enc.num_fixups; ++f) {
