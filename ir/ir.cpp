@@ -67,22 +67,40 @@ static bool iequals(std::string_view a, std::string_view b) {
   return true;
 }
 
-// By binary search over the names in upper case (every name in ops.def is).
+// By hash over the names in upper case (every name in ops.def is): an open
+// addressed table of op numbers, its slots more than twice the ops.
+namespace {
+uint32_t name_hash(std::string_view s) {
+  uint32_t h = 2166136261u;  // FNV-1a
+  for (char c : s) h = (h ^ uint8_t(c)) * 16777619u;
+  return h;
+}
+struct OpNames {
+  static constexpr size_t kSlots = 512;
+  static_assert(kSlots >= 2 * size_t(kOpCount) && (kSlots & (kSlots - 1)) == 0);
+  std::array<std::string_view, kOpCount> name;
+  std::array<int16_t, kSlots> slot;  // an op number, -1 empty
+  OpNames() {
+    slot.fill(-1);
+    for (int i = 0; i < kOpCount; i++) {
+      name[size_t(i)] = kOps[i].name;
+      size_t at = name_hash(name[size_t(i)]) & (kSlots - 1);
+      while (slot[at] >= 0) at = (at + 1) & (kSlots - 1);
+      slot[at] = int16_t(i);
+    }
+  }
+};
+}  // namespace
+
 std::optional<Op> op_from_name(std::string_view name) {
-  using Entry = std::pair<std::string_view, Op>;
-  static const std::array<Entry, kOpCount> sorted = [] {
-    std::array<Entry, kOpCount> t;
-    for (int i = 0; i < kOpCount; i++) t[i] = {kOps[i].name, Op(i)};
-    std::sort(t.begin(), t.end());
-    return t;
-  }();
+  static const OpNames t;
   char up[16];
   if (name.size() > sizeof up) return std::nullopt;
   for (size_t i = 0; i < name.size(); i++) up[i] = ascii_upper(name[i]);
   std::string_view key(up, name.size());
-  auto it = std::lower_bound(sorted.begin(), sorted.end(), key, [](const Entry& e, std::string_view k) { return e.first < k; });
-  if (it == sorted.end() || it->first != key) return std::nullopt;
-  return it->second;
+  for (size_t at = name_hash(key) & (OpNames::kSlots - 1); t.slot[at] >= 0; at = (at + 1) & (OpNames::kSlots - 1))
+    if (t.name[size_t(t.slot[at])] == key) return Op(t.slot[at]);
+  return std::nullopt;
 }
 
 const char* op_class_name(OpClass c) {
@@ -334,6 +352,8 @@ namespace ldc {
 // ---------------------------------------------------------------- device spelling
 
 static const char* const kDevNames[] = {"X", "Y", "M", "K", "S", "T", "C", "WX", "WY", "D", "F"};
+static constexpr std::string_view kDevViews[] = {"X", "Y", "M", "K", "S", "T", "C", "WX", "WY", "D", "F"};
+static_assert(std::size(kDevViews) == std::size(kDevNames));
 const char* dev_name(Dev d) { return kDevNames[int(d)]; }
 
 std::optional<DeviceRef> parse_device(std::string_view s) {
@@ -345,7 +365,7 @@ std::optional<DeviceRef> parse_device(std::string_view s) {
     if (!std::isdigit((unsigned char)ch)) return std::nullopt;
   if (digits.size() > 9) return DeviceRef{Dev::X, UINT32_MAX};  // surely out of range
   for (int i = 0; i <= int(Dev::F); i++) {
-    if (iequals(prefix, kDevNames[i])) {
+    if (iequals(prefix, kDevViews[i])) {
       uint32_t v = 0;
       for (char ch : digits) v = v * 10 + uint32_t(ch - '0');
       return DeviceRef{Dev(i), v};
