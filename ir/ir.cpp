@@ -457,6 +457,7 @@ Area word_area(Dev d) {
 bool stack_fits_slots(const std::vector<Instr>& code, int slots) {
   struct Ev { size_t at; int pos; bool write; };
   std::vector<Ev> ev;
+  ev.reserve(3 * code.size());  // at most 3 an instruction (ANDBLK/ORBLK): one allocation
   int d = 0;
   for (size_t i = 0; i < code.size(); i++) {
     auto rd = [&](int p) { ev.push_back({i, p, false}); return p >= 0; };
