@@ -1240,7 +1240,7 @@ class Regions {
     for (size_t i = 0; i < blocks_.size(); i++) {
       il_items_.push_back(std::move(starts_[i]));
       sink_(blocks_[i]);
-      if (spare_.size() < 4) spare_.push_back(std::move(blocks_[i]));
+      if (spare_.size() < kSpareBlocks) spare_.push_back(std::move(blocks_[i]));
     }
     blocks_.clear();
     starts_.clear();
@@ -1285,7 +1285,10 @@ class Regions {
   std::vector<std::vector<uint32_t>> starts_;
   Ops ops_;
   bool target_ = false;  // the region's first block is a jump target
-  std::vector<as::Block<Instruction>> spare_;  // blocks sunk, their items' storage for rungs to come
+  // Blocks sunk, their items' storage for rungs to come: enough for a region's
+  // blocks, so that a rung's items seldom grow a new vector from nothing.
+  static constexpr size_t kSpareBlocks = 64;
+  std::vector<as::Block<Instruction>> spare_;
 };
 
 // The blocks of a program in order (block 0 the prologue, one per rung, the
