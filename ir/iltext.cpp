@@ -11,6 +11,7 @@
 #include <charconv>
 #include <cstdlib>
 #include <deque>
+#include <iterator>
 #include <unordered_map>
 
 #include "ir/ir.h"
@@ -180,6 +181,15 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
   std::vector<std::string> pending_labels;
   std::unordered_map<std::string, size_t> label_rung;  // label -> index of the rung it precedes
   Rung* cur = nullptr;
+  // cur's instructions, gathered here and moved into it when it ends: one
+  // allocation a rung, not one each time its code doubles
+  std::vector<Instr> code;
+  code.reserve(256);
+  auto end_rung = [&] {
+    if (cur) cur->code.assign(std::make_move_iterator(code.begin()), std::make_move_iterator(code.end()));
+    code.clear();
+    cur = nullptr;
+  };
   Line ln;
   bool ended = false;
   int lineno = 0;
@@ -196,6 +206,7 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
     if (ended) throw CompileError(lineno, head.col, "text after .end");
     if (head.text == ".end") {
       if (toks.size() > 1) throw CompileError(lineno, toks[1].col, "unexpected text after .end");
+      end_rung();
       ended = true;
     } else if (head.text == ".edges") {
       Operand n;
@@ -218,7 +229,7 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
       if (!label_rung.emplace(name, p.rungs.size()).second)
         throw CompileError(lineno, toks[1].col, "duplicate label '" + name + "'");
       pending_labels.push_back(std::move(name));
-      cur = nullptr;
+      end_rung();
     } else if (head.text == ".rung") {
       Operand n;
       if (toks.size() < 3 || toks[1].text != "line" || !parse_number(toks[2].text, n) || n.kind != OpdKind::ConstInt)
@@ -231,6 +242,7 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
         if (!toks[3].quoted || toks.size() > 4) throw CompileError(lineno, toks[3].col, "expected a quoted rung title");
         r.title = std::string(toks[3].text);
       }
+      end_rung();
       p.rungs.push_back(std::move(r));
       cur = &p.rungs.back();
     } else {
@@ -245,7 +257,7 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
       if (int(toks.size()) - 1 != n)
         throw CompileError(lineno, head.col, std::string(op_info(*op).name) + " takes " + std::to_string(n) + " operand(s)");
       for (int i = 0; i < n; i++) in.a[i] = parse_operand(sig[i], toks[i + 1], lineno, p.edge_slots);
-      cur->code.push_back(std::move(in));
+      code.push_back(std::move(in));
     }
   }
   if (!ended) throw CompileError(lineno, 1, "missing .end");
