@@ -70,7 +70,7 @@ bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' |
 
 void split(std::string_view line, int lineno, Line& out) {
   out.toks.clear();
-  out.unquoted.clear();
+  if (!out.unquoted.empty()) out.unquoted.clear();
   size_t i = 0;
   while (i < line.size()) {
     char c = line[i];

@@ -60,13 +60,6 @@ Op compare_op(Rel r) {
 
 static char ascii_upper(char c) { return c >= 'a' && c <= 'z' ? char(c - 'a' + 'A') : c; }
 
-static bool iequals(std::string_view a, std::string_view b) {
-  if (a.size() != b.size()) return false;
-  for (size_t i = 0; i < a.size(); i++)
-    if (ascii_upper(a[i]) != ascii_upper(b[i])) return false;
-  return true;
-}
-
 // By hash over the names in upper case (every name in ops.def is): an open
 // addressed table of op numbers, its slots more than twice the ops.
 namespace {
@@ -364,8 +357,20 @@ std::optional<DeviceRef> parse_device(std::string_view s) {
   for (char ch : digits)
     if (!std::isdigit((unsigned char)ch)) return std::nullopt;
   if (digits.size() > 9) return DeviceRef{Dev::X, UINT32_MAX};  // surely out of range
-  for (int i = 0; i <= int(Dev::F); i++) {
-    if (iequals(prefix, kDevViews[i])) {
+  // the names (one or two letters) and the prefix as keys: their letters in upper case, packed
+  auto key = [](std::string_view name) {
+    uint32_t k = 0;
+    for (size_t i = 0; i < name.size(); i++) k |= uint32_t(uint8_t(ascii_upper(name[i]))) << (8 * i);
+    return k;
+  };
+  static const auto dev_keys = [&] {
+    std::array<uint32_t, std::size(kDevViews)> k{};
+    for (size_t i = 0; i < k.size(); i++) k[i] = key(kDevViews[i]);
+    return k;
+  }();
+  const uint32_t pk = key(prefix);
+  for (size_t i = 0; i < dev_keys.size(); i++) {
+    if (pk == dev_keys[i]) {
       uint32_t v = 0;
       for (char ch : digits) v = v * 10 + uint32_t(ch - '0');
       return DeviceRef{Dev(i), v};
