@@ -5,6 +5,7 @@
 //             | ".alias" NAME DEVICE | ".retain" DEVICE
 //             | ".end" | MNEMONIC { operand } ;          (";" starts a comment)
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -67,6 +68,12 @@ struct Line {
 };
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f' || c == '\n'; }
+// A token's end: a blank or ';' (by table, for the loop over a token's characters).
+const std::array<bool, 256> kEndsToken = [] {
+  std::array<bool, 256> t{};
+  for (int c = 0; c < 256; c++) t[size_t(c)] = is_blank(char(c)) || c == ';';
+  return t;
+}();
 
 void split(std::string_view line, int lineno, Line& out) {
   out.toks.clear();
@@ -91,7 +98,7 @@ void split(std::string_view line, int lineno, Line& out) {
       tok.text = text;
     } else {
       size_t from = i;
-      while (i < line.size() && !is_blank(line[i]) && line[i] != ';') i++;
+      while (i < line.size() && !kEndsToken[uint8_t(line[i])]) i++;
       tok.text = line.substr(from, i - from);
     }
     out.toks.push_back(tok);
@@ -203,8 +210,23 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
     const std::vector<Tok>& toks = ln.toks;
     if (toks.empty()) continue;
     const Tok& head = toks[0];
+    auto instruction = [&] {  // built in place at the end of the rung's code
+      auto op = op_from_name(head.text);
+      if (!op) throw CompileError(lineno, head.col, "unknown mnemonic '" + std::string(head.text) + "'");
+      if (!cur) throw CompileError(lineno, head.col, "instruction outside a .rung");
+      const char* sig = op_info(*op).operands;
+      const int n = kOps[int(*op)].nopd;
+      if (int(toks.size()) - 1 != n)
+        throw CompileError(lineno, head.col, std::string(op_info(*op).name) + " takes " + std::to_string(n) + " operand(s)");
+      Instr& in = code.emplace_back();
+      in.op = *op;
+      in.loc = {lineno, head.col};
+      for (int i = 0; i < n; i++) in.a[i] = parse_operand(sig[i], toks[i + 1], lineno, p.edge_slots);
+    };
     if (ended) throw CompileError(lineno, head.col, "text after .end");
-    if (head.text == ".end") {
+    if (!head.text.starts_with('.')) {  // every directive starts with '.', no mnemonic does
+      instruction();
+    } else if (head.text == ".end") {
       if (toks.size() > 1) throw CompileError(lineno, toks[1].col, "unexpected text after .end");
       end_rung();
       ended = true;
@@ -246,18 +268,7 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
       p.rungs.push_back(std::move(r));
       cur = &p.rungs.back();
     } else {
-      auto op = op_from_name(head.text);
-      if (!op) throw CompileError(lineno, head.col, "unknown mnemonic '" + std::string(head.text) + "'");
-      if (!cur) throw CompileError(lineno, head.col, "instruction outside a .rung");
-      Instr in;
-      in.op = *op;
-      in.loc = {lineno, head.col};
-      const char* sig = op_info(*op).operands;
-      int n = in.nopd();
-      if (int(toks.size()) - 1 != n)
-        throw CompileError(lineno, head.col, std::string(op_info(*op).name) + " takes " + std::to_string(n) + " operand(s)");
-      for (int i = 0; i < n; i++) in.a[i] = parse_operand(sig[i], toks[i + 1], lineno, p.edge_slots);
-      code.push_back(std::move(in));
+      instruction();
     }
   }
   if (!ended) throw CompileError(lineno, 1, "missing .end");
