@@ -30,7 +30,7 @@ Image image_without_code(ImageTarget target, const Program& p, const as::Result&
   img.layout = p.layout();
   img.entry = 0;
   BinaryIl bin = encode_il(p);
-  img.il = bin.code;
+  img.il = std::move(bin.code);  // bin.instr_offset is still read below
   img.aliases = p.aliases;
   img.retentive = retentive_ranges(p);
   size_t k = 0;

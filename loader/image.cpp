@@ -50,7 +50,10 @@ struct Writer {
   std::vector<uint8_t> out;
   void u8(uint8_t v) { out.push_back(v); }
   void u16(uint16_t v) { u8(uint8_t(v)); u8(uint8_t(v >> 8)); }
-  void u32(uint32_t v) { for (int i = 0; i < 4; i++) u8(uint8_t(v >> (8 * i))); }
+  void u32(uint32_t v) {  // little-endian, appended at once
+    const uint8_t b[4] = {uint8_t(v), uint8_t(v >> 8), uint8_t(v >> 16), uint8_t(v >> 24)};
+    out.insert(out.end(), b, b + 4);
+  }
   void bytes(std::span<const uint8_t> b) { out.insert(out.end(), b.begin(), b.end()); }
   void str(const std::string& s) {
     if (s.size() > kImageMaxSize) throw ImageError("image: string too long for the image format");
