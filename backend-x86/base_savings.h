@@ -2,6 +2,7 @@
 // BasePlan), in O(1) a choice.  Internal to backend-x86 (and its test).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -18,15 +19,15 @@ class BaseSavings {
 
   void clear(size_t windows) {
     full_ = (1u << windows) - 1;
-    rdi_.fill(0), other_.fill(0);
+    std::fill_n(rdi_.begin(), full_ + 1, 0), std::fill_n(other_.begin(), full_ + 1, 0);
   }
   void add(uint32_t mask, bool rex) { rdi_[mask] += 3, other_[mask] += rex ? 3 : 2; }
 
   // Each entry becomes the sum over its subsets (the zeta transform, bit by bit).
   void sum_subsets() {
     for (uint32_t bit = 1; bit <= full_; bit <<= 1)
-      for (uint32_t x = 0; x <= full_; x++)
-        if (x & bit) rdi_[x] += rdi_[x ^ bit], other_[x] += other_[x ^ bit];
+      for (uint32_t x = bit; x <= full_; x = (x + 1) | bit)  // the sets with `bit`, in order
+        rdi_[x] += rdi_[x ^ bit], other_[x] += other_[x ^ bit];
   }
 
   // Operands meeting rdi: all less those inside its complement; operands

@@ -1114,10 +1114,15 @@ class BasePlan {
     auto window_k = [&](size_t w) { return w < kNumBases ? k(int(w)) : news[w - kNumBases]; };
     x86gen::BaseSavings& sv = savings_;
     sv.clear(nw);
+    std::array<int64_t, x86gen::BaseSavings::kMaxWindows> wk{};  // the windows in use: their K
+    size_t nk = 0;
+    std::array<uint32_t, x86gen::BaseSavings::kMaxWindows> wbit{};
+    for (size_t w = 0; w < nw; w++)
+      if (w >= kNumBases || known(int(w))) wk[nk] = window_k(w), wbit[nk++] = 1u << w;
     for (const Op& o : ops) {
       uint32_t mask = 0;
-      for (size_t w = 0; w < nw; w++)
-        if ((w >= kNumBases || known(int(w))) && covers(window_k(w), o.first, o.last)) mask |= 1u << w;
+      for (size_t j = 0; j < nk; j++)
+        if (covers(wk[j], o.first, o.last)) mask |= wbit[j];
       if (mask) sv.add(mask, o.rex);
     }
     sv.sum_subsets();
