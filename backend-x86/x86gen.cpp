@@ -1078,6 +1078,29 @@ int64_t best_window(const Ops& ops) {
   return (lo + 128 + last - 127) / 2;
 }
 
+// The window each register takes for a region (BasePlan::plan): r itself
+// (keep, or nothing if not known) or new window j (kNumBases + j), no new one
+// twice; the most bytes saved, the first found of equal ones, trying register
+// 0's choice fastest, then 1's, then 2's (keep first, then the new ones in order).
+std::array<size_t, kNumBases> best_windows(size_t news, bool free, const x86gen::BaseSavings& sv) {
+  static_assert(kNumBases == 3);
+  auto window = [](size_t r, size_t o) { return o == 0 ? r : kNumBases + o - 1; };  // o: 0 keep, j > 0 new j-1
+  std::array<size_t, kNumBases> best_choice{0, 1, 2};
+  int64_t best = INT64_MIN;
+  for (size_t o2 = 0; o2 <= news; o2++)
+    for (size_t o1 = 0; o1 <= news; o1++) {
+      if (o1 && o1 == o2) continue;
+      const uint32_t other_w = 1u << window(1, o1) | 1u << window(2, o2);
+      const int64_t leas = (o1 != 0) + (o2 != 0);
+      for (size_t o0 = 0; o0 <= news; o0++) {
+        if (o0 && (o0 == o1 || o0 == o2)) continue;
+        const int64_t saved = (free ? 0 : -kLeaBytes * (leas + (o0 != 0))) + sv.saved(1u << window(0, o0), other_w);
+        if (saved > best) best = saved, best_choice = {window(0, o0), window(1, o1), window(2, o2)};
+      }
+    }
+  return best_choice;
+}
+
 // The base registers' K as the regions go (unknown after a jump target, which
 // a path from elsewhere may reach with other values).
 class BasePlan {
@@ -1126,30 +1149,7 @@ class BasePlan {
       if (mask) sv.add(mask, o.rex);
     }
     sv.sum_subsets();
-    // choice[r]: the window register r takes: r itself (keep, or nothing if not known) or a new one
-    std::array<size_t, kNumBases> choice{}, best_choice{};
-    for (int r = 0; r < kNumBases; r++) best_choice[size_t(r)] = size_t(r);
-    int64_t best = INT64_MIN;
-    std::array<size_t, kNumBases> o{};  // an odometer over the choices: 0 keep, j > 0 new window j-1
-    for (bool more = true; more;) {
-      uint32_t used = 0, rdi_w = 0, other_w = 0;
-      int64_t leas = 0;
-      bool dup = false;
-      for (int r = 0; r < kNumBases; r++) {
-        choice[size_t(r)] = o[size_t(r)] == 0 ? size_t(r) : kNumBases + o[size_t(r)] - 1;
-        const uint32_t bit = 1u << choice[size_t(r)];
-        if (o[size_t(r)]) leas++, dup |= (used & bit) != 0, used |= bit;
-        (r == 0 ? rdi_w : other_w) |= bit;
-      }
-      if (!dup) {
-        int64_t saved = (free ? 0 : -kLeaBytes * leas) + sv.saved(rdi_w, other_w);
-        if (saved > best) best = saved, best_choice = choice;
-      }
-      more = false;
-      for (int r = 0; r < kNumBases && !more; r++)
-        if (++o[size_t(r)] <= news.size()) more = true;
-        else o[size_t(r)] = 0;
-    }
+    const std::array<size_t, kNumBases> best_choice = best_windows(news.size(), free, sv);
     std::array<bool, kNumBases> lea{};
     for (int r = 0; r < kNumBases; r++)
       if (best_choice[size_t(r)] != size_t(r)) set(r, window_k(best_choice[size_t(r)])), lea[size_t(r)] = true;
