@@ -81,8 +81,11 @@ void split(std::string_view line, int lineno, Line& out) {
   size_t i = 0;
   while (i < line.size()) {
     char c = line[i];
-    if (c == ';') break;
-    if (is_blank(c)) { i++; continue; }
+    if (kEndsToken[uint8_t(c)]) {  // a blank, or ';' and the comment to the end of the line
+      if (c == ';') break;
+      i++;
+      continue;
+    }
     Tok tok;
     tok.col = int(i) + 1;
     if (c == '"') {

@@ -349,13 +349,18 @@ static constexpr std::string_view kDevViews[] = {"X", "Y", "M", "K", "S", "T", "
 static_assert(std::size(kDevViews) == std::size(kDevNames));
 const char* dev_name(Dev d) { return kDevNames[int(d)]; }
 
+// isalpha and isdigit of the "C" locale, the one ldc runs in (it never sets
+// another), without their table look-ups through the locale
+static bool ascii_alpha(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); }
+static bool ascii_digit(char c) { return c >= '0' && c <= '9'; }
+
 std::optional<DeviceRef> parse_device(std::string_view s) {
   size_t n = 0;
-  while (n < s.size() && std::isalpha((unsigned char)s[n])) n++;
+  while (n < s.size() && ascii_alpha(s[n])) n++;
   if (n == 0 || n == s.size() || n > 2) return std::nullopt;
   std::string_view prefix = s.substr(0, n), digits = s.substr(n);
   for (char ch : digits)
-    if (!std::isdigit((unsigned char)ch)) return std::nullopt;
+    if (!ascii_digit(ch)) return std::nullopt;
   if (digits.size() > 9) return DeviceRef{Dev::X, UINT32_MAX};  // surely out of range
   // the names (one or two letters) and the prefix as keys: their letters in upper case, packed
   auto key = [](std::string_view name) {
