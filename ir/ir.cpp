@@ -466,12 +466,18 @@ Area word_area(Dev d) {
 
 bool stack_fits_slots(const std::vector<Instr>& code, int slots) {
   struct Ev { size_t at; int pos; bool write; };
-  std::vector<Ev> ev;
-  ev.reserve(3 * code.size());  // at most 3 an instruction (ANDBLK/ORBLK): one allocation
+  // at most 3 events an instruction (ANDBLK/ORBLK): on the stack for rungs of
+  // up to 32 instructions, else one allocation
+  constexpr size_t kOnStack = 96;
+  std::array<Ev, kOnStack> small;
+  std::vector<Ev> big;
+  if (3 * code.size() > kOnStack) big.resize(3 * code.size());
+  Ev* const ev = big.empty() ? small.data() : big.data();
+  size_t nev = 0;
   int d = 0;
   for (size_t i = 0; i < code.size(); i++) {
-    auto rd = [&](int p) { ev.push_back({i, p, false}); return p >= 0; };
-    auto wr = [&](int p) { ev.push_back({i, p, true}); };
+    auto rd = [&](int p) { ev[nev++] = {i, p, false}; return p >= 0; };
+    auto wr = [&](int p) { ev[nev++] = {i, p, true}; };
     switch (code[i].op) {
       case Op::LOAD: case Op::LOADN: case Op::LOADP: case Op::LOADF: case Op::TRUE:
       case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE:
@@ -497,7 +503,7 @@ bool stack_fits_slots(const std::vector<Instr>& code, int slots) {
   // point reads it (positions are at most kMaxStackDepth).
   static_assert(kMaxStackDepth < 64);
   uint64_t reads = 0;
-  size_t j = ev.size();
+  size_t j = nev;
   for (size_t at = code.size() + 1; at-- > 0;) {
     for (; j > 0 && ev[j - 1].at >= at; j--) {
       uint64_t bit = uint64_t(1) << ev[j - 1].pos;
