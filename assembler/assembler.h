@@ -170,7 +170,9 @@ template <class Inst>
 struct Target : TargetInfo {
   // Encodes one instruction. long_form asks for the long variant of a
   // relaxable instruction (and is set from the start for references to
-  // global labels and absolute addresses). Throws AsmError.
+  // global labels and absolute addresses). `out` comes empty (size and
+  // num_fixups 0; the bytes and fixups past them are stale, never read).
+  // Throws AsmError.
   void (*encode)(const Inst& inst, bool long_form, Encoding& out) = nullptr;
 };
 

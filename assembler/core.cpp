@@ -2,6 +2,7 @@
 // and fixup resolution. Knows nothing about any instruction set.
 #include "assembler/assembler.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <mutex>
@@ -228,7 +229,7 @@ class Core {
 
   void encode_state(InstState& s) {
     ++r_.stats.encode_calls;
-    s.enc = Encoding{};
+    s.enc.size = 0, s.enc.num_fixups = 0;  // empty: what lies past the counts is never read
     try {
       p_->encode(s.block, s.item, s.long_form, s.enc);
       for (unsigned f = 0; f < s.enc.num_fixups; ++f) {
@@ -368,6 +369,9 @@ class Core {
   void emit(uint32_t first, uint32_t last, std::vector<InstState>& insts,
             const std::vector<uint32_t>& block_start) {
     const uint32_t base = uint32_t(r_.code.size());
+    size_t unit_bytes = 0;
+    for (const InstState& s : insts) unit_bytes += s.enc.size;
+    r_.code.resize(base + unit_bytes);  // the unit's bytes copied in place below
     size_t n = 0;
     for (uint32_t b = first; b < last; ++b) {
       r_.block_offsets[b] = base + block_start[b - first];
@@ -385,7 +389,7 @@ class Core {
         InstState& s = insts[n++];
         lay.size = s.enc.size;
         lay.long_form = s.long_form;
-        r_.code.insert(r_.code.end(), s.enc.bytes.begin(), s.enc.bytes.begin() + s.enc.size);
+        std::copy_n(s.enc.bytes.begin(), s.enc.size, r_.code.begin() + cur);
         for (unsigned f = 0; f < s.enc.num_fixups; ++f) {
           const Fixup& fx = s.enc.fixups[f];
           // a pending fixup outlives the block: name its label from the global table
@@ -408,14 +412,15 @@ class Core {
   void patch(const Pending& pd, int64_t target) {
     const FixupKind& k = t_.fixup_kinds[pd.kind];
     int64_t v;
-    std::string what = pd.label.empty() ? "address " + std::to_string(pd.addend)
-                                        : "label '" + std::string(pd.label) + "'";
+    auto what = [&] {  // only for an error: most patches succeed
+      return pd.label.empty() ? "address " + std::to_string(pd.addend) : "label '" + std::string(pd.label) + "'";
+    };
     if (!fixup_value(k, target, pd.addend, pd.inst_start, pd.inst_size, v)) {
-      error(int(pd.block), what + " is not aligned for fixup " + std::string(k.name));
+      error(int(pd.block), what() + " is not aligned for fixup " + std::string(k.name));
       return;
     }
     if (!fixup_fits(k, v)) {
-      error(int(pd.block), what + " out of range for fixup " + std::string(k.name));
+      error(int(pd.block), what() + " out of range for fixup " + std::string(k.name));
       return;
     }
     apply_fixup(k, r_.code, pd.field_offset, v);

@@ -219,7 +219,7 @@ struct FormIndex {
   }
 };
 
-const Form* find_form(const Instruction& in, bool long_form) {
+const Form* find_form_in_table(const Instruction& in, bool long_form) {
   static const FormIndex index;
   if (size_t(in.mnemonic) >= index.forms.size() || in.num_operands > 3) return nullptr;
   for (const Form* fp : index.forms[size_t(in.mnemonic)][in.num_operands]) {
@@ -230,6 +230,48 @@ const Form* find_form(const Instruction& in, bool long_form) {
     if (ok) return &f;
   }
   return nullptr;
+}
+
+// The ranges of imm_fits that v falls in, one bit each.
+uint64_t imm_ranges(int64_t v) {
+  return uint64_t(imm_fits(OT::IB, v, false)) | uint64_t(imm_fits(OT::One, v, false)) << 1 |
+         uint64_t(imm_fits(OT::I32, v, true)) << 2 | uint64_t(imm_fits(OT::I32, v, false)) << 3 |
+         uint64_t(imm_fits(OT::I8, v, true)) << 4 | uint64_t(imm_fits(OT::I8, v, false)) << 5;
+}
+
+// Everything of an instruction that matches() looks at, packed: the mnemonic,
+// the operand count, whether a rel8 may be taken, and per operand its kind and
+// its register (class and number), memory size or immediate ranges (14 bits).
+uint64_t form_key(const Instruction& in, bool long_form) {
+  uint64_t k = uint64_t(in.mnemonic) | uint64_t(in.num_operands) << 8 | uint64_t(!long_form && !in.long_branch) << 10;
+  for (unsigned i = 0; i < in.num_operands; ++i) {
+    const Operand& o = in.ops[i];
+    uint64_t part = uint64_t(o.kind);
+    if (o.kind == OperandKind::Reg) part |= uint64_t(o.reg.cls) << 3 | uint64_t(o.reg.num) << 6;
+    else if (o.kind == OperandKind::Mem) part |= uint64_t(o.mem.size) << 3;
+    else if (o.kind == OperandKind::Imm) part |= imm_ranges(o.imm) << 3;
+    k |= part << (11 + 14 * i);
+  }
+  return k;
+}
+
+// find_form_in_table's answers by form_key, in a direct-mapped cache of the
+// thread's own (the code generators encode few shapes, over and over).
+const Form* find_form(const Instruction& in, bool long_form) {
+  static_assert(sizeof(Mnemonic) == 1 && sizeof(OperandKind) == 1 && sizeof(RegClass) == 1 && sizeof(Size) == 1);
+  if (in.num_operands > 3) return nullptr;
+  constexpr size_t kSlots = 1024;
+  struct Cache {
+    std::array<uint64_t, kSlots> key{};  // form_key + 1, 0 empty
+    std::array<const Form*, kSlots> form{};
+  };
+  thread_local Cache cache;
+  const uint64_t key = form_key(in, long_form) + 1;
+  const size_t slot = size_t((key * 0x9E3779B97F4A7C15ull) >> 54);
+  if (cache.key[slot] == key) return cache.form[slot];
+  const Form* f = find_form_in_table(in, long_form);
+  if (f) cache.key[slot] = key, cache.form[slot] = f;
+  return f;
 }
 
 uint8_t hi(Reg r) { return (r.num >> 3) & 1; }

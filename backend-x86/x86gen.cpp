@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "backend-x86/backend_x86.h"
+#include "backend-x86/base_savings.h"
 #include "ir/codegen.h"
 #include "ir/scanopt.h"
 
@@ -1099,6 +1100,7 @@ constexpr int64_t kLeaBytes = 7;    // lea reg, [rbx+disp32]
 // lookahead or none come within 0.5% of each other.
 constexpr size_t kRegionOps = 32;
 constexpr int kNewWindows = 3;  // windows a region may point registers to (the fullest ones)
+static_assert(size_t(kNumBases + kNewWindows) <= x86gen::BaseSavings::kMaxWindows);
 
 bool has_rex(const Instruction& in) {
   for (unsigned k = 0; k < in.num_operands; k++) {
@@ -1143,6 +1145,29 @@ int64_t best_window(const Ops& ops) {
   return (lo + 128 + last - 127) / 2;
 }
 
+// The window each register takes for a region (BasePlan::plan): r itself
+// (keep, or nothing if not known) or new window j (kNumBases + j), no new one
+// twice; the most bytes saved, the first found of equal ones, trying register
+// 0's choice fastest, then 1's, then 2's (keep first, then the new ones in order).
+std::array<size_t, kNumBases> best_windows(size_t news, bool free, const x86gen::BaseSavings& sv) {
+  static_assert(kNumBases == 3);
+  auto window = [](size_t r, size_t o) { return o == 0 ? r : kNumBases + o - 1; };  // o: 0 keep, j > 0 new j-1
+  std::array<size_t, kNumBases> best_choice{0, 1, 2};
+  int64_t best = INT64_MIN;
+  for (size_t o2 = 0; o2 <= news; o2++)
+    for (size_t o1 = 0; o1 <= news; o1++) {
+      if (o1 && o1 == o2) continue;
+      const uint32_t other_w = 1u << window(1, o1) | 1u << window(2, o2);
+      const int64_t leas = (o1 != 0) + (o2 != 0);
+      for (size_t o0 = 0; o0 <= news; o0++) {
+        if (o0 && (o0 == o1 || o0 == o2)) continue;
+        const int64_t saved = (free ? 0 : -kLeaBytes * (leas + (o0 != 0))) + sv.saved(1u << window(0, o0), other_w);
+        if (saved > best) best = saved, best_choice = {window(0, o0), window(1, o1), window(2, o2)};
+      }
+    }
+  return best_choice;
+}
+
 // The base registers' K as the regions go (unknown after a jump target, which
 // a path from elsewhere may reach with other values).
 class BasePlan {
@@ -1161,8 +1186,8 @@ class BasePlan {
   // of the operands it leaves ...); every such choice is counted in bytes
   // saved (3 an operand through rdi, 2 or 3 through r15/r14, which need a REX)
   // less 7 a lea (none when `free`: the prologue's), and the best one taken.
-  // Operands are grouped by the windows that cover them, so a choice is
-  // counted over the groups, not the operands.  Every register is set when `free`.
+  // Operands are counted by the set of windows that cover them (BaseSavings), so
+  // a choice costs O(1), not O(operands).  Every register is set when `free`.
   std::array<bool, kNumBases> plan(Ops& ops, bool free) {
     if (ops.empty() && !free) return {};
     std::sort(ops.begin(), ops.end());
@@ -1177,45 +1202,21 @@ class BasePlan {
     // windows: 0..2 the registers' present K (if known), 3.. the new ones
     const size_t nw = kNumBases + news.size();
     auto window_k = [&](size_t w) { return w < kNumBases ? k(int(w)) : news[w - kNumBases]; };
-    std::vector<Group>& groups = groups_;  // a few: a linear search
-    groups.clear();
+    x86gen::BaseSavings& sv = savings_;
+    sv.clear(nw);
+    std::array<int64_t, x86gen::BaseSavings::kMaxWindows> wk{};  // the windows in use: their K
+    size_t nk = 0;
+    std::array<uint32_t, x86gen::BaseSavings::kMaxWindows> wbit{};
+    for (size_t w = 0; w < nw; w++)
+      if (w >= kNumBases || known(int(w))) wk[nk] = window_k(w), wbit[nk++] = 1u << w;
     for (const Op& o : ops) {
       uint32_t mask = 0;
-      for (size_t w = 0; w < nw; w++)
-        if ((w >= kNumBases || known(int(w))) && covers(window_k(w), o.first, o.last)) mask |= 1u << w;
-      if (!mask) continue;
-      auto g = std::find_if(groups.begin(), groups.end(), [&](const Group& x) { return x.mask == mask && x.rex == o.rex; });
-      if (g == groups.end()) groups.push_back({mask, o.rex, 1});
-      else g->n++;
+      for (size_t j = 0; j < nk; j++)
+        if (covers(wk[j], o.first, o.last)) mask |= wbit[j];
+      if (mask) sv.add(mask, o.rex);
     }
-    // choice[r]: the window register r takes: r itself (keep, or nothing if not known) or a new one
-    std::array<size_t, kNumBases> choice{}, best_choice{};
-    for (int r = 0; r < kNumBases; r++) best_choice[size_t(r)] = size_t(r);
-    int64_t best = INT64_MIN;
-    std::array<size_t, kNumBases> o{};  // an odometer over the choices: 0 keep, j > 0 new window j-1
-    for (bool more = true; more;) {
-      uint32_t used = 0, rdi_w = 0, other_w = 0;
-      int64_t leas = 0;
-      bool dup = false;
-      for (int r = 0; r < kNumBases; r++) {
-        choice[size_t(r)] = o[size_t(r)] == 0 ? size_t(r) : kNumBases + o[size_t(r)] - 1;
-        const uint32_t bit = 1u << choice[size_t(r)];
-        if (o[size_t(r)]) leas++, dup |= (used & bit) != 0, used |= bit;
-        (r == 0 ? rdi_w : other_w) |= bit;
-      }
-      if (!dup) {
-        int64_t saved = free ? 0 : -kLeaBytes * leas;
-        for (const Group& g : groups) {
-          if (g.mask & rdi_w) saved += 3 * g.n;
-          else if (g.mask & other_w) saved += (g.rex ? 3 : 2) * g.n;
-        }
-        if (saved > best) best = saved, best_choice = choice;
-      }
-      more = false;
-      for (int r = 0; r < kNumBases && !more; r++)
-        if (++o[size_t(r)] <= news.size()) more = true;
-        else o[size_t(r)] = 0;
-    }
+    sv.sum_subsets();
+    const std::array<size_t, kNumBases> best_choice = best_windows(news.size(), free, sv);
     std::array<bool, kNumBases> lea{};
     for (int r = 0; r < kNumBases; r++)
       if (best_choice[size_t(r)] != size_t(r)) set(r, window_k(best_choice[size_t(r)])), lea[size_t(r)] = true;
@@ -1256,12 +1257,7 @@ class BasePlan {
   int64_t kmax_;
   std::array<int64_t, kNumBases> k_{};
   std::array<bool, kNumBases> known_{};
-  struct Group {
-    uint32_t mask;  // the windows covering its operands
-    bool rex;       // Op::rex
-    int64_t n;      // operands
-  };
-  std::vector<Group> groups_;  // plan's, kept for its storage
+  x86gen::BaseSavings savings_;  // plan's
 };
 
 // -O2: the blocks gathered into regions, each given its base registers, then
@@ -1316,7 +1312,7 @@ class Regions {
     for (size_t i = 0; i < blocks_.size(); i++) {
       il_items_.push_back(std::move(starts_[i]));
       sink_(blocks_[i]);
-      if (spare_.size() < 4) spare_.push_back(std::move(blocks_[i]));
+      if (spare_.size() < kSpareBlocks) spare_.push_back(std::move(blocks_[i]));
     }
     blocks_.clear();
     starts_.clear();
@@ -1361,7 +1357,10 @@ class Regions {
   std::vector<std::vector<uint32_t>> starts_;
   Ops ops_;
   bool target_ = false;  // the region's first block is a jump target
-  std::vector<as::Block<Instruction>> spare_;  // blocks sunk, their items' storage for rungs to come
+  // Blocks sunk, their items' storage for rungs to come: enough for a region's
+  // blocks, so that a rung's items seldom grow a new vector from nothing.
+  static constexpr size_t kSpareBlocks = 64;
+  std::vector<as::Block<Instruction>> spare_;
 };
 
 // The blocks of a program in order (block 0 the prologue, one per rung, the

@@ -5,12 +5,14 @@
 //             | ".alias" NAME DEVICE | ".retain" DEVICE
 //             | ".end" | MNEMONIC { operand } ;          (";" starts a comment)
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <charconv>
 #include <cstdlib>
 #include <deque>
+#include <iterator>
 #include <unordered_map>
 
 #include "ir/ir.h"
@@ -66,15 +68,24 @@ struct Line {
 };
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f' || c == '\n'; }
+// A token's end: a blank or ';' (by table, for the loop over a token's characters).
+const std::array<bool, 256> kEndsToken = [] {
+  std::array<bool, 256> t{};
+  for (int c = 0; c < 256; c++) t[size_t(c)] = is_blank(char(c)) || c == ';';
+  return t;
+}();
 
 void split(std::string_view line, int lineno, Line& out) {
   out.toks.clear();
-  out.unquoted.clear();
+  if (!out.unquoted.empty()) out.unquoted.clear();
   size_t i = 0;
   while (i < line.size()) {
     char c = line[i];
-    if (c == ';') break;
-    if (is_blank(c)) { i++; continue; }
+    if (kEndsToken[uint8_t(c)]) {  // a blank, or ';' and the comment to the end of the line
+      if (c == ';') break;
+      i++;
+      continue;
+    }
     Tok tok;
     tok.col = int(i) + 1;
     if (c == '"') {
@@ -90,7 +101,7 @@ void split(std::string_view line, int lineno, Line& out) {
       tok.text = text;
     } else {
       size_t from = i;
-      while (i < line.size() && !is_blank(line[i]) && line[i] != ';') i++;
+      while (i < line.size() && !kEndsToken[uint8_t(line[i])]) i++;
       tok.text = line.substr(from, i - from);
     }
     out.toks.push_back(tok);
@@ -180,6 +191,15 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
   std::vector<std::string> pending_labels;
   std::unordered_map<std::string, size_t> label_rung;  // label -> index of the rung it precedes
   Rung* cur = nullptr;
+  // cur's instructions, gathered here and moved into it when it ends: one
+  // allocation a rung, not one each time its code doubles
+  std::vector<Instr> code;
+  code.reserve(256);
+  auto end_rung = [&] {
+    if (cur) cur->code.assign(std::make_move_iterator(code.begin()), std::make_move_iterator(code.end()));
+    code.clear();
+    cur = nullptr;
+  };
   Line ln;
   bool ended = false;
   int lineno = 0;
@@ -193,9 +213,25 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
     const std::vector<Tok>& toks = ln.toks;
     if (toks.empty()) continue;
     const Tok& head = toks[0];
+    auto instruction = [&] {  // built in place at the end of the rung's code
+      auto op = op_from_name(head.text);
+      if (!op) throw CompileError(lineno, head.col, "unknown mnemonic '" + std::string(head.text) + "'");
+      if (!cur) throw CompileError(lineno, head.col, "instruction outside a .rung");
+      const char* sig = op_info(*op).operands;
+      const int n = kOps[int(*op)].nopd;
+      if (int(toks.size()) - 1 != n)
+        throw CompileError(lineno, head.col, std::string(op_info(*op).name) + " takes " + std::to_string(n) + " operand(s)");
+      Instr& in = code.emplace_back();
+      in.op = *op;
+      in.loc = {lineno, head.col};
+      for (int i = 0; i < n; i++) in.a[i] = parse_operand(sig[i], toks[i + 1], lineno, p.edge_slots);
+    };
     if (ended) throw CompileError(lineno, head.col, "text after .end");
-    if (head.text == ".end") {
+    if (!head.text.starts_with('.')) {  // every directive starts with '.', no mnemonic does
+      instruction();
+    } else if (head.text == ".end") {
       if (toks.size() > 1) throw CompileError(lineno, toks[1].col, "unexpected text after .end");
+      end_rung();
       ended = true;
     } else if (head.text == ".edges") {
       Operand n;
@@ -218,7 +254,7 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
       if (!label_rung.emplace(name, p.rungs.size()).second)
         throw CompileError(lineno, toks[1].col, "duplicate label '" + name + "'");
       pending_labels.push_back(std::move(name));
-      cur = nullptr;
+      end_rung();
     } else if (head.text == ".rung") {
       Operand n;
       if (toks.size() < 3 || toks[1].text != "line" || !parse_number(toks[2].text, n) || n.kind != OpdKind::ConstInt)
@@ -231,21 +267,11 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
         if (!toks[3].quoted || toks.size() > 4) throw CompileError(lineno, toks[3].col, "expected a quoted rung title");
         r.title = std::string(toks[3].text);
       }
+      end_rung();
       p.rungs.push_back(std::move(r));
       cur = &p.rungs.back();
     } else {
-      auto op = op_from_name(head.text);
-      if (!op) throw CompileError(lineno, head.col, "unknown mnemonic '" + std::string(head.text) + "'");
-      if (!cur) throw CompileError(lineno, head.col, "instruction outside a .rung");
-      Instr in;
-      in.op = *op;
-      in.loc = {lineno, head.col};
-      const char* sig = op_info(*op).operands;
-      int n = in.nopd();
-      if (int(toks.size()) - 1 != n)
-        throw CompileError(lineno, head.col, std::string(op_info(*op).name) + " takes " + std::to_string(n) + " operand(s)");
-      for (int i = 0; i < n; i++) in.a[i] = parse_operand(sig[i], toks[i + 1], lineno, p.edge_slots);
-      cur->code.push_back(std::move(in));
+      instruction();
     }
   }
   if (!ended) throw CompileError(lineno, 1, "missing .end");

@@ -104,29 +104,40 @@ Op compare_op(Rel r) {
 
 static char ascii_upper(char c) { return c >= 'a' && c <= 'z' ? char(c - 'a' + 'A') : c; }
 
-static bool iequals(std::string_view a, std::string_view b) {
-  if (a.size() != b.size()) return false;
-  for (size_t i = 0; i < a.size(); i++)
-    if (ascii_upper(a[i]) != ascii_upper(b[i])) return false;
-  return true;
+// By hash over the names in upper case (every name in ops.def is): an open
+// addressed table of op numbers, its slots more than twice the ops.
+namespace {
+uint32_t name_hash(std::string_view s) {
+  uint32_t h = 2166136261u;  // FNV-1a
+  for (char c : s) h = (h ^ uint8_t(c)) * 16777619u;
+  return h;
 }
+struct OpNames {
+  static constexpr size_t kSlots = 512;
+  static_assert(kSlots >= 2 * size_t(kOpCount) && (kSlots & (kSlots - 1)) == 0);
+  std::array<std::string_view, kOpCount> name;
+  std::array<int16_t, kSlots> slot;  // an op number, -1 empty
+  OpNames() {
+    slot.fill(-1);
+    for (int i = 0; i < kOpCount; i++) {
+      name[size_t(i)] = kOps[i].name;
+      size_t at = name_hash(name[size_t(i)]) & (kSlots - 1);
+      while (slot[at] >= 0) at = (at + 1) & (kSlots - 1);
+      slot[at] = int16_t(i);
+    }
+  }
+};
+}  // namespace
 
-// By binary search over the names in upper case (every name in ops.def is).
 std::optional<Op> op_from_name(std::string_view name) {
-  using Entry = std::pair<std::string_view, Op>;
-  static const std::array<Entry, kOpCount> sorted = [] {
-    std::array<Entry, kOpCount> t;
-    for (int i = 0; i < kOpCount; i++) t[i] = {kOps[i].name, Op(i)};
-    std::sort(t.begin(), t.end());
-    return t;
-  }();
+  static const OpNames t;
   char up[16];
   if (name.size() > sizeof up) return std::nullopt;
   for (size_t i = 0; i < name.size(); i++) up[i] = ascii_upper(name[i]);
   std::string_view key(up, name.size());
-  auto it = std::lower_bound(sorted.begin(), sorted.end(), key, [](const Entry& e, std::string_view k) { return e.first < k; });
-  if (it == sorted.end() || it->first != key) return std::nullopt;
-  return it->second;
+  for (size_t at = name_hash(key) & (OpNames::kSlots - 1); t.slot[at] >= 0; at = (at + 1) & (OpNames::kSlots - 1))
+    if (t.name[size_t(t.slot[at])] == key) return Op(t.slot[at]);
+  return std::nullopt;
 }
 
 const char* op_class_name(OpClass c) {
@@ -378,18 +389,37 @@ namespace ldc {
 // ---------------------------------------------------------------- device spelling
 
 static const char* const kDevNames[] = {"X", "Y", "M", "K", "S", "T", "C", "WX", "WY", "D", "F"};
+static constexpr std::string_view kDevViews[] = {"X", "Y", "M", "K", "S", "T", "C", "WX", "WY", "D", "F"};
+static_assert(std::size(kDevViews) == std::size(kDevNames));
 const char* dev_name(Dev d) { return kDevNames[int(d)]; }
+
+// isalpha and isdigit of the "C" locale, the one ldc runs in (it never sets
+// another), without their table look-ups through the locale
+static bool ascii_alpha(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); }
+static bool ascii_digit(char c) { return c >= '0' && c <= '9'; }
 
 std::optional<DeviceRef> parse_device(std::string_view s) {
   size_t n = 0;
-  while (n < s.size() && std::isalpha((unsigned char)s[n])) n++;
+  while (n < s.size() && ascii_alpha(s[n])) n++;
   if (n == 0 || n == s.size() || n > 2) return std::nullopt;
   std::string_view prefix = s.substr(0, n), digits = s.substr(n);
   for (char ch : digits)
-    if (!std::isdigit((unsigned char)ch)) return std::nullopt;
+    if (!ascii_digit(ch)) return std::nullopt;
   if (digits.size() > 9) return DeviceRef{Dev::X, UINT32_MAX};  // surely out of range
-  for (int i = 0; i <= int(Dev::F); i++) {
-    if (iequals(prefix, kDevNames[i])) {
+  // the names (one or two letters) and the prefix as keys: their letters in upper case, packed
+  auto key = [](std::string_view name) {
+    uint32_t k = 0;
+    for (size_t i = 0; i < name.size(); i++) k |= uint32_t(uint8_t(ascii_upper(name[i]))) << (8 * i);
+    return k;
+  };
+  static const auto dev_keys = [&] {
+    std::array<uint32_t, std::size(kDevViews)> k{};
+    for (size_t i = 0; i < k.size(); i++) k[i] = key(kDevViews[i]);
+    return k;
+  }();
+  const uint32_t pk = key(prefix);
+  for (size_t i = 0; i < dev_keys.size(); i++) {
+    if (pk == dev_keys[i]) {
       uint32_t v = 0;
       for (char ch : digits) v = v * 10 + uint32_t(ch - '0');
       return DeviceRef{Dev(i), v};
@@ -480,11 +510,18 @@ Area word_area(Dev d) {
 
 bool stack_fits_slots(const std::vector<Instr>& code, int slots) {
   struct Ev { size_t at; int pos; bool write; };
-  std::vector<Ev> ev;
+  // at most 3 events an instruction (ANDBLK/ORBLK): on the stack for rungs of
+  // up to 32 instructions, else one allocation
+  constexpr size_t kOnStack = 96;
+  std::array<Ev, kOnStack> small;
+  std::vector<Ev> big;
+  if (3 * code.size() > kOnStack) big.resize(3 * code.size());
+  Ev* const ev = big.empty() ? small.data() : big.data();
+  size_t nev = 0;
   int d = 0;
   for (size_t i = 0; i < code.size(); i++) {
-    auto rd = [&](int p) { ev.push_back({i, p, false}); return p >= 0; };
-    auto wr = [&](int p) { ev.push_back({i, p, true}); };
+    auto rd = [&](int p) { ev[nev++] = {i, p, false}; return p >= 0; };
+    auto wr = [&](int p) { ev[nev++] = {i, p, true}; };
     switch (code[i].op) {
       case Op::LOAD: case Op::LOADN: case Op::LOADP: case Op::LOADF: case Op::TRUE:
       case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE:
@@ -510,7 +547,7 @@ bool stack_fits_slots(const std::vector<Instr>& code, int slots) {
   // point reads it (positions are at most kMaxStackDepth).
   static_assert(kMaxStackDepth < 64);
   uint64_t reads = 0;
-  size_t j = ev.size();
+  size_t j = nev;
   for (size_t at = code.size() + 1; at-- > 0;) {
     for (; j > 0 && ev[j - 1].at >= at; j--) {
       uint64_t bit = uint64_t(1) << ev[j - 1].pos;

@@ -65,8 +65,13 @@ struct Writer {
     else out.push_back(v);
   }
   void u16(uint16_t v) { u8(uint8_t(v)); u8(uint8_t(v >> 8)); }
-  void u32(uint32_t v) {
-    for (int i = 0; i < 4; i++) u8(uint8_t(v >> (8 * i)));
+  void u32(uint32_t v) {  // little-endian, appended at once
+    if (mode == Mode::Count) {
+      done += 4;
+      return;
+    }
+    const uint8_t b[4] = {uint8_t(v), uint8_t(v >> 8), uint8_t(v >> 16), uint8_t(v >> 24)};
+    out.insert(out.end(), b, b + 4);
     if (mode == Mode::Stream && out.size() >= kChunk) flush();
   }
   void bytes(std::span<const uint8_t> b) {

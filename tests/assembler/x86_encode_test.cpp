@@ -3,8 +3,11 @@
 // of x86_encode.rows from our encoder.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <random>
 #include <set>
+#include <thread>
 
 #include "test_util.h"
 
@@ -65,6 +68,41 @@ TEST(X86Encode, Rows) {
     rewrite_rows(hexes);
     std::printf("rewrote %zu rows in %s\n", hexes.size(), LDC_X86_ROWS);
   }
+}
+
+// The encoder remembers the form it found for each shape of operands (a cache
+// of the thread's own): every row encodes the same after all the others, in
+// reverse and in a shuffled order, each on a fresh thread, as in table order.
+TEST(X86Encode, RowsEncodeTheSameInAnyOrder) {
+  auto rows = load_rows();
+  std::vector<std::pair<x86::Instruction, std::string>> ins;
+  for (const Row& r : rows) {
+    try {
+      x86::Instruction in = x86::parse(r.text);
+      ins.emplace_back(in, to_hex(x86::encode_at(in, 0)));
+    } catch (const AsmError&) {
+    }
+  }
+  ASSERT_GT(ins.size(), 400u);
+  std::vector<size_t> order(ins.size());
+  for (size_t i = 0; i < order.size(); i++) order[i] = i;
+  auto check = [&](const std::vector<size_t>& ord) {
+    std::thread t([&] {
+      for (size_t i : ord)
+        for (bool long_form : {false, true}) {
+          Encoding e = x86::encode(ins[i].first, long_form), f = x86::encode(ins[i].first, long_form);
+          EXPECT_EQ(e.view().size(), f.view().size());
+          EXPECT_TRUE(std::equal(e.view().begin(), e.view().end(), f.view().begin(), f.view().end()));
+        }
+      for (size_t i : ord) EXPECT_EQ(to_hex(x86::encode_at(ins[i].first, 0)), ins[i].second) << x86::print(ins[i].first);
+    });
+    t.join();
+  };
+  std::reverse(order.begin(), order.end());
+  check(order);
+  std::mt19937 rng(15);
+  std::shuffle(order.begin(), order.end(), rng);
+  check(order);
 }
 
 // Every table form shows up in the rows (so every form is checked by as).

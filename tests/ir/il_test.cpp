@@ -1,6 +1,7 @@
 // IL text and binary forms, the validator, and lowering limits.
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <cmath>
 #include <thread>
 
@@ -98,6 +99,45 @@ TEST(IlText, EveryMnemonicRoundTrips) {
     }
   }
   EXPECT_EQ(off, b.code.size());
+}
+
+// op_from_name's hash table (ir.cpp): every mnemonic in any case, and
+// near misses (an extra letter, too long, empty) refused, a letter less
+// found only when it is another mnemonic.
+TEST(IlText, OpFromNameFindsEveryMnemonicAndNothingElse) {
+  for (int i = 0; i < kOpCount; i++) {
+    std::string name = kOps[i].name, lower = name;
+    for (char& c : lower) c = char(std::tolower((unsigned char)c));
+    EXPECT_EQ(op_from_name(name), Op(i)) << name;
+    EXPECT_EQ(op_from_name(lower), Op(i)) << lower;
+    EXPECT_EQ(op_from_name(name + "Q"), std::nullopt) << name;
+    for (const std::string& miss : {name.substr(1), name.substr(0, name.size() - 1)}) {
+      auto got = op_from_name(miss);  // only the op of exactly that name, if any
+      if (got) {
+        EXPECT_EQ(std::string(kOps[int(*got)].name), miss);
+      }
+    }
+  }
+  EXPECT_EQ(op_from_name(""), std::nullopt);
+  EXPECT_EQ(op_from_name("LOADLOADLOADLOADL"), std::nullopt);
+  EXPECT_EQ(op_from_name("LOA"), std::nullopt);
+}
+
+// parse_device: every device name in either case, with its index.
+TEST(IlText, ParseDeviceReadsEveryName) {
+  for (int d = 0; d <= int(Dev::F); d++) {
+    std::string name = dev_name(Dev(d)), lower = name;
+    for (char& c : lower) c = char(std::tolower((unsigned char)c));
+    for (const std::string& n : {name, lower}) {
+      auto r = parse_device(n + "12");
+      ASSERT_TRUE(r.has_value()) << n;
+      EXPECT_EQ(r->dev, Dev(d));
+      EXPECT_EQ(r->index, 12u);
+    }
+  }
+  EXPECT_EQ(parse_device("Q1"), std::nullopt);
+  EXPECT_EQ(parse_device("WZ1"), std::nullopt);
+  EXPECT_EQ(parse_device("X"), std::nullopt);
 }
 
 TEST(IlText, ErrorsCarryLineAndColumn) {
