@@ -86,6 +86,7 @@ constexpr Form kForms[] = {
     F2(M::Imul, OT::R32, OT::RM32, 0xAF, Enc::RM),
     F(M::Imul, OT::R32, OT::RM32, OT::I8, 0, 1, 0x6B, 0, Enc::RM),
     F(M::Imul, OT::R32, OT::RM32, OT::I32, 0, 1, 0x69, 0, Enc::RM),
+    F1(M::Imul, OT::RM32, N, 0xF7, Enc::M, 5),  // edx:eax = eax * r/m32, signed (division by a constant)
     F1(M::Cdq, N, N, 0x99, Enc::ZO),
     F1(M::Idiv, OT::RM32, N, 0xF7, Enc::M, 7),
     F2(M::Setcc, OT::RM8, N, 0x90, Enc::M, 0, true),

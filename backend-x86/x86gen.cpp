@@ -293,6 +293,7 @@ class Gen : public ClassGen<Gen> {
   void real_fn(Op op, const ldc::Operand& a, const ldc::Operand& d);
   uint32_t area_addr(Area a, uint32_t n) const { return L_.addr(a, n); }
   bool gated_divmod(const ldc::Instr& in);
+  bool divide_by_constant(const ldc::Instr& in);
   bool gated_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
   void ton_on(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
   bool gated_counter(const ldc::Instr& in, uint32_t cw, uint32_t cq);
@@ -453,7 +454,58 @@ DivLabels Gen::div_labels(bool real) {
 // division (as::x86::safe_divisor), and x / -1 is then negated; the result is
 // stored unless the divisor is zero or there is no power, and S0 |= power and
 // a zero divisor.
+// The signed magic number of a constant divisor d, 2 <= |d| < 2^31: for every
+// INT32 n, n / d (truncated) is hi32(m * n) (+ n where d > 0 > m, - n where
+// d < 0 < m) shifted right arithmetically by s, plus 1 where that is negative
+// (Warren, Hacker's Delight, 10-1).
+struct Magic {
+  int32_t m;
+  int s;
+};
+Magic magic_of(int32_t d) {
+  const uint32_t two31 = 0x80000000u, ad = d < 0 ? 0u - uint32_t(d) : uint32_t(d);
+  const uint32_t t = two31 + (uint32_t(d) >> 31), anc = t - 1 - t % ad;
+  int p = 31;
+  uint32_t q1 = two31 / anc, r1 = two31 - q1 * anc, q2 = two31 / ad, r2 = two31 - q2 * ad, delta;
+  do {
+    p++;
+    q1 *= 2, r1 *= 2;
+    if (r1 >= anc) q1++, r1 -= anc;
+    q2 *= 2, r2 *= 2;
+    if (r2 >= ad) q2++, r2 -= ad;
+    delta = ad - r2;
+  } while (q1 < delta || (q1 == delta && r1 == 0));
+  uint32_t m = q2 + 1;
+  return {int32_t(d < 0 ? 0u - m : m), p - 32};
+}
+
+// -O2: INT32 DIV / MOD by a constant other than 0, 1, -1 and INT32_MIN: no
+// idiv, no S0, a multiply by the magic number; eax = the result, n kept in ecx.
+bool Gen::divide_by_constant(const ldc::Instr& in) {
+  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
+  if (!bases_ || a.is_real() || b.kind != OpdKind::ConstInt || b.ival == INT32_MIN || (b.ival >= -1 && b.ival <= 1))
+    return false;
+  Magic mg = magic_of(b.ival);
+  load_int(a, ecx);
+  emit(M::Mov, {R(eax), I(mg.m)});
+  emit(M::Imul, {R(ecx)});  // edx = hi32(m * n)
+  if (b.ival > 0 && mg.m < 0) emit(M::Add, {R(edx), R(ecx)});
+  if (b.ival < 0 && mg.m > 0) emit(M::Sub, {R(edx), R(ecx)});
+  if (mg.s > 0) emit(M::Sar, {R(edx), I(mg.s)});
+  emit(M::Mov, {R(eax), R(edx)});
+  emit(M::Shr, {R(eax), I(31)});
+  emit(M::Add, {R(eax), R(edx)});  // the quotient, truncated
+  if (in.op == Op::MOD) {
+    emit(M::Imul, {R(eax), R(eax), I(b.ival)});
+    emit(M::Sub, {R(ecx), R(eax)});
+    emit(M::Mov, {R(eax), R(ecx)});  // n - q * d: the sign of n
+  }
+  store_int(d);
+  return true;
+}
+
 bool Gen::gated_divmod(const ldc::Instr& in) {
+  if (divide_by_constant(in)) return true;
   // power on for certain: only the divisor's rare 0 and -1 branch, predicted
   if (!bases_ || on_) return false;
   const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
@@ -870,6 +922,7 @@ bool writes_reg(const Instruction& i, uint8_t num) {
   // a call keeps the callee-saved registers (the shared routines and libm alike): ebp's stack survives it
   if (i.mnemonic == M::Call) return !(num == BX || num == BP || num >= R12);
   if ((i.mnemonic == M::Idiv && (num == AX || num == DX)) || (i.mnemonic == M::Cdq && num == DX)) return true;
+  if (i.mnemonic == M::Imul && i.num_operands == 1) return num == AX || num == DX;  // edx:eax = eax * r/m32
   if (i.mnemonic == M::Cmp || i.mnemonic == M::Test || i.mnemonic == M::Push || i.num_operands == 0) return false;
   if (i.mnemonic == M::Jmp || i.mnemonic == M::Jcc || i.mnemonic == M::Ucomiss) return false;
   return is_reg(i.ops[0], num);

@@ -546,6 +546,24 @@ const char* kSharedStackIl = R"(; stack entries read across rungs
 .end
 )";
 
+// INT32 DIV and MOD by constants (-O2 multiplies by a magic number: no idiv,
+// no S0), with and without power, into words and REALs, on the edge values of
+// compare_il's inputs; the divisors around the powers of two, both signs.
+std::string constant_division_il() {
+  std::string s = ".rung line 1\n    TRUE\n";
+  std::string gated = ".rung line 2\n    LOAD X0\n";
+  int k = 0;
+  for (int32_t d : {2, 3, 5, 6, 7, 9, 10, 12, 25, 60, 100, 125, 641, 1000, 3600, 65535, 65536, 65537, 1000000007,
+                    INT32_MAX, INT32_MIN + 1, -2, -3, -7, -10, -60, -641, -65536, -1000000007}) {
+    std::string ds = std::to_string(d), wx = "WX" + std::to_string(k % 16);
+    s += "    DIV " + wx + " " + ds + " D" + std::to_string(2 * k) + "\n    MOD " + wx + " " + ds + " D" + std::to_string(2 * k + 1) + "\n";
+    gated += "    DIV D" + std::to_string(k % 16) + " " + ds + " D" + std::to_string(100 + 2 * k) + "\n    MOD " + wx + " " + ds +
+             " D" + std::to_string(101 + 2 * k) + "\n    DIV " + wx + " " + ds + " F" + std::to_string(8 + k) + "\n";
+    k++;
+  }
+  return s + gated + ".end\n";
+}
+
 // The native code at every level on the operand forms, the timer limits and
 // the class programs (the -O2 code is branch-free there: cmov, setcc, masks).
 TEST(NativeEdges, EveryLevelMatchesOnOperandFormsAndTimerLimits) {
@@ -553,7 +571,7 @@ TEST(NativeEdges, EveryLevelMatchesOnOperandFormsAndTimerLimits) {
   const Level levels[] = {{"-O0", make_native}, {"-O1", make_native_o1}, {"-O2", make_native_o2}};
   Program edge = parse_il_text(kEdgeIl, "edge.il"), timers = parse_il_text(kTimerEdgeIl, "timers.il"),
           known = parse_il_text(kKnownPowerIl, "known.il"), facts = parse_il_text(kScanFactsIl, "facts.il"),
-          shared = parse_il_text(kSharedStackIl, "shared.il");
+          shared = parse_il_text(kSharedStackIl, "shared.il"), divisions = parse_il_text(constant_division_il(), "div.il");
   try {
     generate_c(shared, shared.layout());
     ADD_FAILURE() << "the C route compiled a shared stack";
@@ -567,6 +585,7 @@ TEST(NativeEdges, EveryLevelMatchesOnOperandFormsAndTimerLimits) {
       EXPECT_EQ(compare_il(known, seed, 60, true, lv.make, seed % 2 == 0), "") << lv.name << " seed " << seed;
       EXPECT_EQ(compare_il(facts, seed, 60, seed % 2 == 0, lv.make), "") << lv.name << " seed " << seed;
       EXPECT_EQ(compare_il(shared, seed, 40, false, lv.make), "") << lv.name << " seed " << seed;
+      EXPECT_EQ(compare_il(divisions, seed, 40, seed % 2 == 1, lv.make), "") << lv.name << " seed " << seed;
     }
     for (OpClass c : {OpClass::Move, OpClass::Arith, OpClass::Logic, OpClass::Special, OpClass::Timer, OpClass::Counter})
       for (bool powered : {true, false}) {
