@@ -1444,7 +1444,7 @@ class Blocks {
     starts.reserve(r.code.size());
     for (const auto& l : r.labels) b.items.push_back(Item::label_def(x86_label_name(l), true));
     if (notes_) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
-    bool slots = o2_ && fits_slots(ri);
+    bool slots = o2_ && !shared_ && facts_->fits[ri];  // the rung's stack in the slot registers
     Gen g(layout_, b.items, slots, o2_, &used_);
     uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into ebp
     for (size_t k = 0; k < r.code.size(); k++) {
@@ -1512,8 +1512,6 @@ class Blocks {
   }
 
  private:
-  // a rung's stack in the slot registers: not where a rung reads what an earlier one left in ebp
-  bool fits_slots(size_t ri) const { return !shared_ && stack_fits_slots(p_.rungs[ri].code, kNumSlots); }
 
   const Program& p_;
   const Layout& layout_;

@@ -74,6 +74,7 @@ class KnownStack {
  public:
   bool on() const { return !v_.empty() && v_.back() == 1; }
   void step(const Instr& in);  // after in
+  void reset() { v_.clear(); }  // a new rung (the storage is kept)
 
  private:
   std::vector<signed char> v_;  // bottom first: -1 unknown, 0, 1; what lies below is unknown

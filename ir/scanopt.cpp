@@ -97,8 +97,9 @@ Access access(const Layout& l, const Instr& in, bool on) {
 std::vector<char> powered(const Program& p, size_t total) {
   std::vector<char> on;
   on.reserve(total);
+  KnownStack known;
   for (const Rung& r : p.rungs) {
-    KnownStack known;
+    known.reset();
     for (const Instr& in : r.code) {
       on.push_back(known.on());
       known.step(in);
@@ -132,15 +133,17 @@ void dead_stores(const Program& p, const Layout& l, const std::vector<char>& on,
 
 // Backward over one rung whose stack is private: an entry written and never
 // read before the rung ends or the position is written again is unread.
-void unread_entries(const std::vector<Instr>& code, uint32_t first, ScanFacts& f) {
-  std::vector<int> depth(code.size());
+// depth and live: storage kept from rung to rung.
+void unread_entries(const std::vector<Instr>& code, uint32_t first, ScanFacts& f, std::vector<int>& depth,
+                    std::vector<char>& live) {
+  depth.resize(code.size());
   int d = 0, most = 0;
   for (size_t k = 0; k < code.size(); k++) {
     depth[k] = d;
     d += op_info(code[k].op).push - op_info(code[k].op).pop;
     most = std::max(most, d);
   }
-  std::vector<char> live(size_t(most) + 1, 0);  // a private stack reads no position below 0
+  live.assign(size_t(most) + 1, 0);  // a private stack reads no position below 0
   for (size_t k = code.size(); k-- > 0;) {
     if (f.flags[first + k] & kDeadStore) continue;
     StackUse u = stack_use(code[k].op, depth[k]);
@@ -209,7 +212,7 @@ class Propagate {
   void instr(const Instr& in, uint32_t i) {
     const OpInfo& info = op_info(in.op);
     if (info.klass == OpClass::Timer || info.klass == OpClass::Counter) {
-      known_.erase(l_.addr(info.klass == OpClass::Timer ? Area::TW : Area::CW, in.a[0].index));
+      if (!known_.empty()) known_.erase(l_.addr(info.klass == OpClass::Timer ? Area::TW : Area::CW, in.a[0].index));
       return;
     }
     if (!is_app(in.op)) return;
@@ -217,7 +220,7 @@ class Propagate {
     bool changed = false, all = true;
     int last = in.nopd() - 1;
     for (int k = 0; k < last; k++) {
-      if (is_device(use.a[k])) {
+      if (!known_.empty() && is_device(use.a[k])) {
         auto it = known_.find(addr(l_, use.a[k]));
         if (it != known_.end()) use.a[k] = it->second, changed = true;
       }
@@ -227,9 +230,8 @@ class Propagate {
     std::optional<Operand> c = plain ? moved(in.a[0], in.a[1]) : all ? folder_.fold(use) : std::nullopt;
     if (c && !plain) use = Instr{Op::MOV, {*c, use.a[last]}, in.loc};
     if ((c && !plain) || changed) f_.replaced.emplace_back(i, use);
-    uint32_t d = addr(l_, in.a[last]);
-    if (c && on_[i]) known_[d] = *c;
-    else known_.erase(d);
+    if (c && on_[i]) known_[addr(l_, in.a[last])] = *c;
+    else if (!known_.empty()) known_.erase(addr(l_, in.a[last]));
   }
 
   // what `MOV c d` stores, as the constant of d's type (docs/il.md, MOV)
@@ -263,9 +265,14 @@ ScanFacts scan_facts(const Program& p, const Layout& layout, int slots) {
   dead_stores(p, layout, on, f);
   Propagate prop(layout, on, f);
   for (size_t ri = 0; ri < p.rungs.size(); ri++) prop.rung(p.rungs[ri], f.first[ri]);
+  f.fits.assign(p.rungs.size(), 0);
   if (shares_stack(p)) return f;  // an entry may be read by a later rung
-  for (size_t ri = 0; ri < p.rungs.size(); ri++)
-    if (stack_fits_slots(p.rungs[ri].code, slots)) unread_entries(p.rungs[ri].code, f.first[ri], f);
+  std::vector<int> depth;
+  std::vector<char> live;
+  for (size_t ri = 0; ri < p.rungs.size(); ri++) {
+    f.fits[ri] = stack_fits_slots(p.rungs[ri].code, slots);
+    if (f.fits[ri]) unread_entries(p.rungs[ri].code, f.first[ri], f, depth, live);
+  }
   return f;
 }
 

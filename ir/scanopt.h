@@ -31,6 +31,7 @@ enum ScanFlag : uint8_t {
 
 struct ScanFacts {
   std::vector<uint32_t> first;  // per rung: the index of its first instruction
+  std::vector<char> fits;       // per rung: its stack is private and fits the slots (no kUnread elsewhere)
   std::vector<uint8_t> flags;   // per IL instruction of the program, in order
   // (index, the instruction to compile in its place), by index: sources
   // replaced by their known constants, or a MOV of the folded result
