@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <memory>
 #include <sstream>
 
 #include "backend-c/backend_c.h"
@@ -35,7 +36,29 @@ void write_file_atomic(const std::string& path, std::string_view data) {
   write_file_atomic(path, [&](std::FILE* f) { return std::fwrite(data.data(), 1, data.size(), f) == data.size(); });
 }
 
+// A device or a pipe (`-o /dev/null`, `/dev/stdout`, a FIFO) is written in
+// place: a rename would replace it with a regular file (and, for root, /dev/null).
+// The bytes go to an anonymous temporary file first (the image writer seeks
+// back to its checksum, which a pipe cannot), then are copied.
+static void write_in_place(const std::string& path, const std::function<bool(std::FILE*)>& write) {
+  std::unique_ptr<FILE, int (*)(FILE*)> t(std::tmpfile(), &std::fclose);
+  if (!t) throw UserError(path + ": error: cannot create a temporary file: " + std::strerror(errno));
+  if (!write(t.get()) || std::ferror(t.get()) || std::fflush(t.get()) != 0)
+    throw UserError(path + ": error: cannot write: " + std::strerror(errno));
+  std::rewind(t.get());
+  FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) throw UserError(path + ": error: cannot open: " + std::strerror(errno));
+  char buf[1 << 16];
+  bool ok = true;
+  for (size_t n; ok && (n = std::fread(buf, 1, sizeof buf, t.get())) > 0;) ok = std::fwrite(buf, 1, n, f) == n;
+  ok = ok && !std::ferror(t.get());
+  ok &= std::fclose(f) == 0;
+  if (!ok) throw UserError(path + ": error: cannot write: " + std::strerror(errno));
+}
+
 void write_file_atomic(const std::string& path, const std::function<bool(std::FILE*)>& write) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) return write_in_place(path, write);
   std::string tmp = path + ".tmp." + std::to_string(getpid());
   FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) throw UserError(path + ": error: cannot create: " + std::strerror(errno));
