@@ -66,15 +66,14 @@ expect_fail "bad trace" "bad.csv:2:3: error: bad value 'abc'" "$bin/ldrun" "$tmp
 expect_fail "missing file" "cannot open" "$bin/ldc" "$tmp/nope.ld"
 
 # -o a device or a pipe writes into it and never replaces it with a file (as root a rename
-# would replace /dev/null): a FIFO with a reader gets the image, and stays a FIFO
+# would replace /dev/null): a FIFO with a reader gets the image, and stays a FIFO (a FIFO
+# in the test's own folder, so that a regression cannot break the machine's /dev/null)
 mkfifo "$tmp/pipe"
 cat "$tmp/pipe" > "$tmp/piped.bin" &
 reader=$!
 "$bin/ldc" "$src/examples/traffic.ld" -o "$tmp/pipe" && ok || bad "ldc -o FIFO"
 if [ -p "$tmp/pipe" ]; then wait $reader; ok; else kill $reader 2>/dev/null; bad "ldc -o replaced the FIFO with a file"; fi
 cmp -s "$tmp/piped.bin" "$tmp/t.bin" && ok || bad "the image written into a FIFO differs from ldc -o FILE"
-"$bin/ldc" "$src/examples/traffic.ld" --emit=il -o /dev/null && ok || bad "ldc -o /dev/null"
-[ -c /dev/null ] && ok || bad "/dev/null is no longer a character device"
 
 # IL whose rung reads what the rung before it left: the C route refuses it at its place, with
 # no output file left, while native code runs it
