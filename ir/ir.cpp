@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <initializer_list>
 #include <limits>
 #include <mutex>
 #include <unordered_map>
@@ -520,26 +519,14 @@ bool stack_fits_slots(const std::vector<Instr>& code, int slots) {
   size_t nev = 0;
   int d = 0;
   for (size_t i = 0; i < code.size(); i++) {
-    auto rd = [&](int p) { ev[nev++] = {i, p, false}; return p >= 0; };
-    auto wr = [&](int p) { ev[nev++] = {i, p, true}; };
-    switch (code[i].op) {
-      case Op::LOAD: case Op::LOADN: case Op::LOADP: case Op::LOADF: case Op::TRUE:
-      case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE:
-        wr(d++);
-        if (d > kMaxStackDepth) return false;
-        break;
-      case Op::ANDBLK: case Op::ORBLK:
-        if (!rd(d - 1) || !rd(d - 2)) return false;
-        wr(d - 2); d--; break;
-      case Op::MPS:
-        if (!rd(d - 1)) return false;
-        wr(d); d++;
-        if (d > kMaxStackDepth) return false;
-        break;
-      case Op::MRD: if (!rd(d - 2)) return false; wr(d - 1); break;
-      case Op::MPP: if (--d < 0) return false; break;
-      default: if (!rd(d - 1)) return false; break;  // AND.., outputs, applications, flow
+    StackUse u = stack_use(code[i].op, d);
+    for (int r = 0; r < u.nreads; r++) {
+      if (u.reads[r] < 0) return false;  // an entry an earlier rung left
+      ev[nev++] = {i, u.reads[r], false};
     }
+    if (u.writes) ev[nev++] = {i, u.write, true};
+    d += op_info(code[i].op).push - op_info(code[i].op).pop;
+    if (d < 0 || d > kMaxStackDepth) return false;
   }
   // for every point between instructions: the positions read again before
   // they are written must lie within one window of `slots`.  Swept from the
@@ -556,26 +543,6 @@ bool stack_fits_slots(const std::vector<Instr>& code, int slots) {
     if (reads && (63 - std::countl_zero(reads)) - std::countr_zero(reads) >= slots) return false;
   }
   return true;
-}
-
-
-StackUse stack_use(Op op, int d) {
-  StackUse u;
-  auto rw = [&](int w, std::initializer_list<int> r) {
-    u.writes = true, u.write = w;
-    for (int x : r) u.reads[u.nreads++] = x;
-  };
-  switch (op) {
-    case Op::AND: case Op::ANDN: case Op::OR: case Op::ORN: rw(d - 1, {d - 1}); return u;
-    case Op::ANDBLK: case Op::ORBLK: rw(d - 2, {d - 1, d - 2}); return u;
-    case Op::MPS: rw(d, {d - 1}); return u;
-    case Op::MRD: rw(d - 1, {d - 2}); return u;
-    case Op::MPP: return u;
-    default: break;
-  }
-  if (op_info(op).push == 1) rw(d, {});  // contacts, edges, TRUE, compares
-  else u.reads[u.nreads++] = d - 1;      // outputs, applications, timers, counters, JMP, END
-  return u;
 }
 
 int foreign_stack_use(const std::vector<Instr>& code) {

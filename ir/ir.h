@@ -347,7 +347,24 @@ struct StackUse {
   int nreads = 0;
   int reads[2] = {};
 };
-StackUse stack_use(Op op, int d);
+inline StackUse stack_use(Op op, int d) {
+  StackUse u;
+  switch (op) {
+    case Op::AND: case Op::ANDN: case Op::OR: case Op::ORN:
+      u.writes = true, u.write = d - 1, u.nreads = 1, u.reads[0] = d - 1;
+      return u;
+    case Op::ANDBLK: case Op::ORBLK:
+      u.writes = true, u.write = d - 2, u.nreads = 2, u.reads[0] = d - 1, u.reads[1] = d - 2;
+      return u;
+    case Op::MPS: u.writes = true, u.write = d, u.nreads = 1, u.reads[0] = d - 1; return u;
+    case Op::MRD: u.writes = true, u.write = d - 1, u.nreads = 1, u.reads[0] = d - 2; return u;
+    case Op::MPP: return u;
+    default: break;
+  }
+  if (op_info(op).push == 1) u.writes = true, u.write = d;  // contacts, edges, TRUE, compares
+  else u.nreads = 1, u.reads[0] = d - 1;                    // outputs, applications, timers, counters, JMP, END
+  return u;
+}
 // The first instruction of a rung that reads or pops a stack entry the rung
 // did not push itself, or -1.  IL text may do that (a rung reading what the
 // rung before it left); the optimizing code generators keep a rung's stack
