@@ -162,23 +162,26 @@ void unread_entries(const std::vector<Instr>& code, uint32_t first, ScanFacts& f
 // another effect (S0), calls a C library function, or gives a NaN.
 class Folder {
  public:
-  explicit Folder(const Layout& l) : mem_(l) {}
+  explicit Folder(const Layout& l) : layout_(l) {}
   std::optional<Operand> fold(const Instr& in);
 
  private:
-  Memory mem_;
+  const Layout& layout_;
+  std::optional<Memory> mem_;  // made at the first fold: most programs have none
 };
 
 std::optional<Operand> Folder::fold(const Instr& in) {
   RealFn fn = op_info(in.op).fn;
   if (fn != RealFn::None && real_fn_info(fn).called) return std::nullopt;
+  if (!mem_) mem_.emplace(layout_);
+  Memory& mem = *mem_;
   Program p;
   p.rungs.emplace_back().code = {Instr{Op::TRUE, {}, {}}, in};
   BinaryIl il = encode_il(p);
-  Interpreter(il.code, mem_.layout).scan(mem_.data());
+  Interpreter(il.code, mem.layout).scan(mem.data());
   const Operand& d = in.a[in.nopd() - 1];
-  uint8_t* at = mem_.data() + mem_.layout.addr(d.area, d.index);
-  uint8_t& s0 = mem_.bytes[mem_.layout.addr(Area::S, kBitError)];
+  uint8_t* at = mem.data() + mem.layout.addr(d.area, d.index);
+  uint8_t& s0 = mem.bytes[mem.layout.addr(Area::S, kBitError)];
   uint32_t bits;
   std::memcpy(&bits, at, 4);
   bool error = s0 != 0;
