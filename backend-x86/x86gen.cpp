@@ -449,11 +449,6 @@ DivLabels Gen::div_labels(bool real) {
   return l;
 }
 
-// -O2: DIV and MOD without a branch (docs/x86.md, "Branch-free division").
-// r8b = the divisor is zero; an INT32 divisor of 0 or -1 becomes 1 before the
-// division (as::x86::safe_divisor), and x / -1 is then negated; the result is
-// stored unless the divisor is zero or there is no power, and S0 |= power and
-// a zero divisor.
 // The signed magic number of a constant divisor d, 2 <= |d| < 2^31: for every
 // INT32 n, n / d (truncated) is hi32(m * n) (+ n where d > 0 > m, - n where
 // d < 0 < m) shifted right arithmetically by s, plus 1 where that is negative
@@ -504,6 +499,12 @@ bool Gen::divide_by_constant(const ldc::Instr& in) {
   return true;
 }
 
+// -O2: DIV and MOD without a branch (docs/x86.md, "Branch-free division").
+// r8b = the divisor is zero; an INT32 divisor of 0 or -1 becomes 1 before the
+// division (as::x86::safe_divisor), and x / -1 is then negated; the result is
+// stored unless the divisor is zero or there is no power, and S0 |= power and
+// a zero divisor.
+// A constant divisor takes divide_by_constant instead.
 bool Gen::gated_divmod(const ldc::Instr& in) {
   if (divide_by_constant(in)) return true;
   // power on for certain: only the divisor's rare 0 and -1 branch, predicted
@@ -1444,7 +1445,7 @@ class Blocks {
     starts.reserve(r.code.size());
     for (const auto& l : r.labels) b.items.push_back(Item::label_def(x86_label_name(l), true));
     if (notes_) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
-    bool slots = o2_ && !shared_ && facts_->fits[ri];  // the rung's stack in the slot registers
+    bool slots = o2_ && facts_->fits[ri];  // the rung's stack in the slot registers (none where shared_)
     Gen g(layout_, b.items, slots, o2_, &used_);
     uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into ebp
     for (size_t k = 0; k < r.code.size(); k++) {
@@ -1512,7 +1513,6 @@ class Blocks {
   }
 
  private:
-
   const Program& p_;
   const Layout& layout_;
   int opt_;
