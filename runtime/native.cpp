@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 #include <stdexcept>
 
@@ -12,14 +13,13 @@
 namespace ldc {
 namespace {
 
+constexpr size_t kHuge = size_t(2) << 20;
+
 class NativeEngine : public Engine {
  public:
   NativeEngine(std::span<const uint8_t> code, uint32_t entry) {
     if (code.empty() || entry >= code.size()) throw std::runtime_error("native code: empty, or entry outside the code");
-    size_t page = size_t(sysconf(_SC_PAGESIZE));
-    size_ = (code.size() + page - 1) / page * page;
-    void* p = mmap(nullptr, size_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    if (p == MAP_FAILED) throw std::runtime_error(std::string("cannot map code: ") + std::strerror(errno));
+    void* p = map_code(code.size());
     std::memcpy(p, code.data(), code.size());
     if (mprotect(p, size_, PROT_READ | PROT_EXEC) != 0) {
       int e = errno;
@@ -33,6 +33,26 @@ class NativeEngine : public Engine {
   void scan(uint8_t* mem) override { fn_(mem); }
 
  private:
+  void* map_code(size_t n) {
+    size_t page = size_t(sysconf(_SC_PAGESIZE));
+    size_ = (n + page - 1) / page * page;
+    if (n >= kHuge / 8) {
+      size_t huge = (n + kHuge - 1) / kHuge * kHuge;
+      void* q = mmap(nullptr, huge + kHuge, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      if (q != MAP_FAILED) {
+        uintptr_t a = (reinterpret_cast<uintptr_t>(q) + kHuge - 1) & ~(kHuge - 1);
+        size_t before = a - reinterpret_cast<uintptr_t>(q), after = kHuge - before;
+        if (before) munmap(q, before);
+        if (after) munmap(reinterpret_cast<void*>(a + huge), after);
+        madvise(reinterpret_cast<void*>(a), huge, MADV_HUGEPAGE);
+        size_ = huge;
+        return reinterpret_cast<void*>(a);
+      }
+    }
+    void* p = mmap(nullptr, size_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) throw std::runtime_error(std::string("cannot map code: ") + std::strerror(errno));
+    return p;
+  }
   void* base_ = nullptr;
   size_t size_ = 0;
   void (*fn_)(uint8_t*) = nullptr;

@@ -641,5 +641,25 @@ TEST(Sandbox, AScanStoppedInTheSandboxFaultsTheRuntime) {
   EXPECT_EQ(logged.back(), m);
 }
 
+// Native code of any size runs from its own mapping: code of 256 KiB and more
+// goes on 2 MiB-aligned memory with MADV_HUGEPAGE (one iTLB entry for the
+// whole program where the kernel grants it; docs/runtime.md), the rest on
+// ordinary pages.  Each body is `add dword ptr [rdi], 1` (83 07 01) repeated,
+// then `ret`: a copy cut short or misplaced counts wrong or faults.
+TEST(NativeEngine, CodeOfEverySizeRunsWhole) {
+  for (size_t reps : {size_t(1), size_t(30000), size_t(87381), size_t(250000), size_t(700000), size_t(1400000)}) {
+    std::vector<uint8_t> code;
+    code.reserve(reps * 3 + 1);
+    for (size_t i = 0; i < reps; i++) code.insert(code.end(), {0x83, 0x07, 0x01});
+    code.push_back(0xc3);
+    std::unique_ptr<Engine> e = make_native_engine(code, 0);
+    uint32_t mem[2] = {0, 0};
+    e->scan(reinterpret_cast<uint8_t*>(mem));
+    e->scan(reinterpret_cast<uint8_t*>(mem));
+    EXPECT_EQ(mem[0], uint32_t(2 * reps)) << code.size() << " bytes of code";
+    EXPECT_EQ(mem[1], 0u);
+  }
+}
+
 }  // namespace
 }  // namespace ldc
