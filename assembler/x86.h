@@ -148,13 +148,22 @@ Disassembly disassemble(std::span<const uint8_t> code);
 // the loader's validator accepts nothing else.
 std::span<const Instruction> scan_prologue(bool with_slots);
 std::span<const Instruction> scan_epilogue(bool with_slots);
+// The register holding the memory image: rbx in the -O0/-O1 frame (ebp the
+// bit stack), rbp in the -O2 frame, so that bl, which needs no REX prefix,
+// can be the first bit-stack slot (ebx then also the bit stack of the rungs
+// whose stack does not fit the slots).
+constexpr RegNum image_reg(bool with_slots) { return with_slots ? BP : BX; }
+// The -O2 prologue of images made before bl became a slot: rbx the image,
+// r12b r13b bpl the slots (`mov rbx, rdi; xor ebp, ebp`), its routines and
+// leas based on rbx.  The loader still accepts it; ldc no longer makes it.
+std::span<const Instruction> scan_prologue_rbx_slots();
 
 // The -O2 frame's base registers (docs/x86.md, "Compact addressing"): right
-// after the -O2 prologue, `lea rdi, [rbx+K0]; lea r15, [rbx+K1]; lea r14,
-// [rbx+K2]` point them into the memory image, and the body may point them
-// again (`lea reg, [rbx+K]`, the only write of a base register it contains),
+// after the -O2 prologue, `lea rdi, [rbp+K0]; lea r15, [rbp+K1]; lea r14,
+// [rbp+K2]` point them into the memory image, and the body may point them
+// again (`lea reg, [rbp+K]`, the only write of a base register it contains),
 // region by region, so that devices near K take [rdi+disp8] / [r15+disp8] /
-// [r14+disp8] instead of [rbx+disp32].  Each call through the REAL function
+// [r14+disp8] instead of [rbp+disp32].  Each call through the REAL function
 // table (which may clobber the caller-saved rdi) is followed at once by the
 // leas of the caller-saved base registers.  r15 and r14 are callee-saved (they
 // were bit-stack slots before); the shared routines use none of the three.
@@ -164,7 +173,7 @@ constexpr int kNumBases = 3;
 constexpr RegNum kBaseRegs[kNumBases] = {DI, R15, R14};
 // System V: may a called function change the register?
 constexpr bool caller_saved(RegNum r) { return !(r == BX || r == SP || r == BP || r >= R12); }
-Instruction base_lea(RegNum reg, int32_t k);  // lea reg, [rbx+k]
+Instruction base_lea(RegNum reg, int32_t k, RegNum image = image_reg(true));  // lea reg, [image+k]
 
 // The -O2 division's guard (docs/x86.md, "Branch-free division"): before
 // `cdq; idiv ecx`, a divisor of 0 or -1 (ecx+1 unsigned <= 1) becomes 1, so
@@ -179,7 +188,8 @@ std::span<const Instruction> safe_divisor();
 // ends with its one `ret`; it takes
 //   edx  the timer or counter number; the routine's first instruction masks it
 //        (`movzx edx, dl`), so whatever the caller passes, every access
-//        [rbx + rdx*k + area] stays inside areas of 256 elements
+//        [image + rdx*k + area] stays inside areas of 256 elements (the
+//        routines run in the -O2 frame: image is rbp, rbx in its old form)
 //   ecx  the preset (timers clamp a negative one to 0)
 //   esi  the input: the rung's power (timers) or its rising edge (counters), 0 or 1
 // and clobbers eax ecx edx r8-r11 and the flags.  The areas' offsets are the
@@ -189,7 +199,7 @@ enum class Routine : uint8_t { Ton, Tof, Tp, Ctu, Ctd, Count };
 struct RoutineAreas {
   int32_t tw = 0, tq = 0, ti = 0, cw = 0, cq = 0, dt = 0;  // offsets of T0's ET, Q, IN memory; C0's CV, Q; dt
 };
-std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& areas);
+std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& areas, RegNum image = image_reg(true));
 std::string_view routine_name(Routine r);  // the assembly label: rt_ton, rt_tof, rt_tp, rt_ctu, rt_ctd
 
 // ---------------------------------------------------------- whole programs

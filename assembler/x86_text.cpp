@@ -437,11 +437,22 @@ std::span<const Instruction> scan_prologue(bool with_slots) {
   static const std::vector<Instruction> o2 = [] {
     std::vector<Instruction> v;
     for (const char* t : {"push rbx", "push rbp", "push r12", "push r13", "push r14", "push r15", "push rax",
-                          "mov rbx, rdi", "xor ebp, ebp"})
+                          "mov rbp, rdi", "xor ebx, ebx"})
       v.push_back(parse(t));
     return v;
   }();
   return with_slots ? o2 : o0;
+}
+
+std::span<const Instruction> scan_prologue_rbx_slots() {
+  static const std::vector<Instruction> v = [] {
+    std::vector<Instruction> v;
+    for (const char* t : {"push rbx", "push rbp", "push r12", "push r13", "push r14", "push r15", "push rax",
+                          "mov rbx, rdi", "xor ebp, ebp"})
+      v.push_back(parse(t));
+    return v;
+  }();
+  return v;
 }
 
 std::span<const Instruction> scan_epilogue(bool with_slots) {
@@ -459,9 +470,9 @@ std::span<const Instruction> scan_epilogue(bool with_slots) {
   return with_slots ? o2 : o0;
 }
 
-Instruction base_lea(RegNum reg, int32_t k) {
+Instruction base_lea(RegNum reg, int32_t k, RegNum image) {
   Mem m;
-  m.base = r64(BX);
+  m.base = r64(image);
   m.disp = k;
   m.size = Size::None;
   return make(Mnemonic::Lea, {Operand::r(r64(reg)), Operand::m(m)});
@@ -486,9 +497,10 @@ std::string_view routine_name(Routine r) {
   return names[int(r)];
 }
 
-std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& a) {
+std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& a, RegNum image) {
   std::vector<std::string> t;
-  auto at = [](const char* index, int32_t disp) { return std::string("[rbx+") + index + "+" + std::to_string(disp) + "]"; };
+  const std::string img(reg_name(r64(image)));
+  auto at = [&](const char* index, int32_t disp) { return "[" + img + "+" + index + "+" + std::to_string(disp) + "]"; };
   const std::string tw = "dword ptr " + at("rdx*4", a.tw), tq = "byte ptr " + at("rdx*1", a.tq),
                     ti = "byte ptr " + at("rdx*1", a.ti), cw = "dword ptr " + at("rdx*4", a.cw),
                     cq = "byte ptr " + at("rdx*1", a.cq);
@@ -507,7 +519,7 @@ std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& a) {
     // r8d = advance(ET, dt, PT) (see the backend's advance_edx); the caller
     // passes PT >= 0 (a negative preset counts as 0: its call site clamps it)
     for (const std::string& x : std::initializer_list<std::string>{"mov eax, " + tw, "mov r10d, eax",
-                          "add r10d, dword ptr [rbx+" + std::to_string(a.dt) + "]", std::string("mov r8d, ecx"),
+                          "add r10d, dword ptr [" + img + "+" + std::to_string(a.dt) + "]", std::string("mov r8d, ecx"),
                           std::string("cmovl r8d, r10d"), std::string("cmp r10d, ecx"), std::string("cmovbe r8d, r10d"),
                           std::string("cmp eax, ecx"), std::string("cmovge r8d, ecx"), std::string("xor r10d, r10d"),
                           std::string("xor r9d, r9d")})

@@ -92,8 +92,12 @@ uint32_t float_bits(float f) {
 // stack position p lives in kSlots[p % kNumSlots] (0 or 1 in the low byte).
 // They survive the calls to the REAL functions.  r15 and r14 are base
 // registers (as::x86::kBaseRegs, compact addressing), so three slots.
-const Reg kSlots[] = {r8(R12), r8(R13), r8(BP)};
+// Rungs are generated in the -O0 frame's registers (rbx the image, ebp the
+// bit stack) and then moved to the -O2 frame's (to_o2_frame: rbx and rbp
+// swap), so the first slot, bpl here, is bl there: no REX prefix.
+const Reg kSlots[] = {r8(BP), r8(R12), r8(R13)};
 constexpr int kNumSlots = 3;
+const as::x86::Reg kO2Image = r64(as::x86::image_reg(true));  // rbp
 
 // Turns gate_ off for one instruction's code (restored at the end of scope).
 struct Ungated {
@@ -627,10 +631,11 @@ void Gen::real_fn(Op op, const ldc::Operand& a, const ldc::Operand& d) {
   if (real_fn_info(fn).called) {
     emit(M::Call, {Operand::m(mem_at(Size::Qword, uint32_t(call_slot_disp(fn))))});
     // the call may clobber the caller-saved base registers (rdi): point them
-    // back (their K is filled in with the region's, BasePlan::rewrite)
+    // back (their K is filled in with the region's, BasePlan::rewrite), from
+    // rbx, which to_o2_frame makes the -O2 frame's image register
     if (bases_)
       for (RegNum r : as::x86::kBaseRegs)
-        if (as::x86::caller_saved(r)) emit(as::x86::base_lea(r, 0));
+        if (as::x86::caller_saved(r)) emit(M::Lea, {R(r64(r)), Operand::m(mem_at(Size::None, 0))});
   } else if (fn == RealFn::Sqrt) {
     emit(M::Sqrtss, {R(xmm0), R(xmm0)});
   } else {  // Abs: the sign bit cleared
@@ -1050,6 +1055,28 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts, bool shar
   as::remove_items(items, drop, starts);
 }
 
+// ------------------------------------------------------------ -O2: the frame's registers
+//
+// A rung is generated with rbx the image and ebp the bit stack (the -O0
+// templates and the slot code alike); the -O2 frame (as::x86::image_reg) has
+// them the other way round, so every register and memory operand of the rung
+// swaps rbx and rbp, at every width.  A permutation of two callee-saved
+// registers, so the code computes exactly the same.
+RegNum swapped(RegNum n) { return n == BX ? BP : n == BP ? BX : n; }
+void swap_reg(as::x86::Reg& r) {
+  if (r.cls == RegClass::Gp8 || r.cls == RegClass::Gp32 || r.cls == RegClass::Gp64) r.num = swapped(RegNum(r.num));
+}
+void to_o2_frame(std::vector<Item>& items) {
+  for (Item& it : items) {
+    if (it.kind != as::ItemKind::Instruction) continue;
+    for (unsigned k = 0; k < it.inst.num_operands; k++) {
+      Operand& o = it.inst.ops[k];
+      if (o.kind == OperandKind::Reg) swap_reg(o.reg);
+      else if (o.kind == OperandKind::Mem) swap_reg(o.mem.base), swap_reg(o.mem.index);
+    }
+  }
+}
+
 // ------------------------------------------------------------ -O2: a word kept in eax
 //
 // After `mov dword ptr [w], eax` (every gated store ends so) or `mov eax,
@@ -1079,7 +1106,7 @@ class WordInEax {
  private:
   static bool eax32(const Operand& o) { return o.kind == OperandKind::Reg && o.reg == r32(AX); }
   static bool image_dword(const Operand& o) {
-    return o.kind == OperandKind::Mem && o.mem.size == Size::Dword && o.mem.base == r64(BX) && !o.mem.index.valid();
+    return o.kind == OperandKind::Mem && o.mem.size == Size::Dword && o.mem.base == kO2Image && !o.mem.index.valid();
   }
   bool held(const Operand& o) const { return word_ >= 0 && image_dword(o) && o.mem.disp == word_; }
   static bool loads(const Instruction& in) { return in.mnemonic == M::Mov && eax32(in.ops[0]) && image_dword(in.ops[1]); }
@@ -1101,7 +1128,7 @@ class WordInEax {
     if (in.num_operands == 0 || in.ops[0].kind != OperandKind::Mem || in.mnemonic == M::Cmp || in.mnemonic == M::Test)
       return false;
     const Mem& m = in.ops[0].mem;
-    if (!(m.base == r64(BX)) || m.index.valid()) return true;
+    if (!(m.base == kO2Image) || m.index.valid()) return true;
     return m.disp < word_ + 4 && word_ < m.disp + 8;
   }
   void after(const Instruction& in) {
@@ -1134,7 +1161,7 @@ as::x86::RoutineAreas x86_routine_areas(const Layout& l) {
 // [rbx+disp32] operands are (a `lea reg, [rbx+K]` where one pays), and the
 // operands inside a register's disp8 window [K-128, K+127] become [reg+d8].
 bool rewritable(const Instruction& in, const as::x86::Operand& o) {
-  return o.kind == OperandKind::Mem && in.mnemonic != M::Call && in.mnemonic != M::Lea && o.mem.base == r64(BX) &&
+  return o.kind == OperandKind::Mem && in.mnemonic != M::Call && in.mnemonic != M::Lea && o.mem.base == kO2Image &&
          !o.mem.index.valid() && (o.mem.disp < -128 || o.mem.disp > 127);
 }
 uint32_t mem_width(const Mem& m) { return m.size == Size::Dword ? 4 : m.size == Size::Qword ? 8 : 1; }
@@ -1291,7 +1318,7 @@ class BasePlan {
       Instruction& in = it.inst;
       if (in.mnemonic == M::Lea) {
         for (int r = 0; r < kNumBases; r++)
-          if (in.ops[0].reg == r64(kBaseRegs[r]) && in.ops[1].mem.base == r64(BX))
+          if (in.ops[0].reg == r64(kBaseRegs[r]) && in.ops[1].mem.base == kO2Image)
             in.ops[1].mem.disp = int32_t(known(r) ? k(r) : kBaseKMin), reloaded[size_t(r)] = true;
         continue;
       }
@@ -1430,7 +1457,7 @@ class Blocks {
     // keep rbx/rbp for the caller, 16-byte stack alignment for calls
     as::Block<Instruction> pro;
     pro.source_line = p_.rungs.empty() ? 0 : p_.rungs[0].line;
-    pro.items.push_back(Item::note(o2_ ? "scan(image): rbx = image, bit stack in r12b r13b bpl, bases rdi r15 r14 (-O2)"
+    pro.items.push_back(Item::note(o2_ ? "scan(image): rbp = image, bit stack in bl r12b r13b (or ebx), bases rdi r15 r14 (-O2)"
                                          : "scan(image): rbx = image, ebp = bit stack"));
     for (const Instruction& i : scan_prologue(o2_)) pro.items.push_back(Item::instr(i));
     if (o2_)
@@ -1460,6 +1487,7 @@ class Blocks {
     }
     if (opt_ >= 1 && !slots) peephole(b.items, starts, shared_);
     if (!o2_) return;
+    to_o2_frame(b.items);
     drop_unreachable(b.items, starts);
     eax_.run(b.items, starts);
   }

@@ -1,6 +1,6 @@
 // loader/x86_check.cpp -- the x86-64 code check of the loader: every byte
-// decodes with our disassembler, every memory operand is [rbx+disp] inside the
-// memory image, every direct branch lands on an instruction boundary inside the
+// decodes with our disassembler, every memory operand is [rbx+disp] (the -O2
+// frame: [rbp+disp], or a base register's) inside the memory image, every direct branch lands on an instruction boundary inside the
 // code and goes forward, and the only division is the guarded one
 // (docs/image-format.md, "The x86-64 code check").
 #include <algorithm>
@@ -45,7 +45,7 @@ uint32_t width(x86::Size s) {
 
 // The -O2 frame's base registers (as::x86::kBaseRegs), set when its prologue
 // points all of them into the image; absent under the -O0 frame.  No value is
-// tracked: every write of a base register is `lea reg, [rbx+K]` with K in
+// tracked: every write of a base register is `lea reg, [rbp+K]` with K in
 // [kBaseKMin, size - kBaseKTop] and every access through one is [reg+d] with
 // d in [-128, 127] and at most 8 bytes, so [K+d, K+d+8) lies inside the image
 // whatever K a path brought (docs/image-format.md, "The x86-64 code check").
@@ -62,27 +62,30 @@ struct Bases {
 constexpr int64_t kBaseKMin = 128;  // K-128 >= 0
 constexpr int64_t kBaseKTop = 135;  // K+127+8 <= size
 
-// Is `in` of the form `lea reg, [rbx+k]` for base register i (any k)?
-bool is_base_lea(const x86::Instruction& in, int i) {
+// Is `in` of the form `lea reg, [img+k]` for base register i (any k)?
+bool is_base_lea(const x86::Instruction& in, int i, x86::Reg img) {
   return in.mnemonic == x86::Mnemonic::Lea && in.num_operands == 2 && in.ops[0].kind == x86::OperandKind::Reg &&
          in.ops[0].reg == x86::r64(x86::kBaseRegs[i]) && in.ops[1].kind == x86::OperandKind::Mem &&
-         in.ops[1].mem.base == x86::r64(x86::BX) && !in.ops[1].mem.index.valid();
+         in.ops[1].mem.base == img && !in.ops[1].mem.index.valid();
 }
 
 // "" if base register i's lea `in` (is_base_lea) sets a K every [reg+d8] access stays inside the image from
 std::string base_k_error(const x86::Instruction& in, int i, uint32_t image_size) {
   int64_t k = in.ops[1].mem.disp;
   if (k >= kBaseKMin && k <= int64_t(image_size) - kBaseKTop) return "";
-  return "sets " + std::string(x86::reg_name(x86::r64(x86::kBaseRegs[i]))) + " = rbx+" + std::to_string(k) +
+  return "sets " + std::string(x86::reg_name(x86::r64(x86::kBaseRegs[i]))) + " = " +
+         std::string(x86::reg_name(in.ops[1].mem.base)) + "+" + std::to_string(k) +
          ", outside [" + std::to_string(kBaseKMin) + ", " + std::to_string(int64_t(image_size) - kBaseKTop) +
          "] (a base register's K must keep every [reg-0x80] .. [reg+0x7f] access of up to 8 bytes inside the memory image [0, " +
          hex(image_size) + "))";
 }
 
-// "" if the memory operand is [rbx+disp] with [disp, disp+width) inside the
-// image, or, under the -O2 frame, [rdi/r15/r14+disp] with disp in [-128, 127].
-std::string check_mem(const x86::Mem& m, uint32_t image_size, const Bases& bases) {
+// "" if the memory operand is [img+disp] (img: rbx, or rbp under the -O2
+// frame) with [disp, disp+width) inside the image, or, under the -O2 frame,
+// [rdi/r15/r14+disp] with disp in [-128, 127].
+std::string check_mem(const x86::Mem& m, uint32_t image_size, const Bases& bases, x86::Reg img) {
   const x86::Reg& base = m.base;
+  const std::string img_name(x86::reg_name(img)), only = " (only [" + img_name + "+disp] may address memory)";
   if (int b = Bases::which(base); b >= 0 && bases.set) {
     if (m.index.valid())
       return "indexed memory operand (index " + std::string(x86::reg_name(m.index)) + "): its address cannot be checked";
@@ -92,19 +95,17 @@ std::string check_mem(const x86::Mem& m, uint32_t image_size, const Bases& bases
              hex(m.disp < 0 ? -int64_t(m.disp) : m.disp) + "]: a base register of the -O2 frame takes a displacement in [-0x80, 0x7f] only";
     return "";
   }
-  if (base.cls == x86::RegClass::Rip) return "rip-relative memory operand (only [rbx+disp] may address memory)";
-  if (!base.valid()) return "absolute memory operand (only [rbx+disp] may address memory)";
-  if (base.cls == x86::RegClass::Gp64 && (base.num == x86::SP || base.num == x86::BP))
-    return "stack-relative memory operand based on " + std::string(x86::reg_name(base)) +
-           " (only [rbx+disp] may address memory)";
-  if (base != x86::r64(x86::BX))
-    return "memory operand based on " + std::string(x86::reg_name(base)) + ", not rbx";
+  if (base.cls == x86::RegClass::Rip) return "rip-relative memory operand" + only;
+  if (!base.valid()) return "absolute memory operand" + only;
+  if (base.cls == x86::RegClass::Gp64 && (base.num == x86::SP || (base.num == x86::BP && base != img)))
+    return "stack-relative memory operand based on " + std::string(x86::reg_name(base)) + only;
+  if (base != img) return "memory operand based on " + std::string(x86::reg_name(base)) + ", not " + img_name;
   if (m.index.valid())
     return "indexed memory operand (index " + std::string(x86::reg_name(m.index)) +
            "): its address cannot be checked";
   int64_t lo = m.disp, hi = int64_t(m.disp) + width(m.size);
   if (lo < 0 || hi > int64_t(image_size))
-    return "memory operand [rbx" + std::string(m.disp < 0 ? "-" : "+") + hex(m.disp < 0 ? -int64_t(m.disp) : m.disp) +
+    return "memory operand [" + img_name + std::string(m.disp < 0 ? "-" : "+") + hex(m.disp < 0 ? -int64_t(m.disp) : m.disp) +
            "] (" + std::to_string(width(m.size)) + " bytes) outside the memory image [0, " + hex(image_size) + ")";
   return "";
 }
@@ -196,17 +197,23 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     }
     return true;
   };
-  bool slots = first < d.insts.size() && d.insts[first].offset == entry && matches(first, x86::scan_prologue(true));
-  if (!slots && !(first < d.insts.size() && d.insts[first].offset == entry && matches(first, x86::scan_prologue(false))))
-    return at(entry) + "the entry is not the scan function's prologue (push rbx; push rbp; ...; mov rbx, rdi)";
+  // the -O2 frame (rbp the image), the same with rbx the image (images made
+  // before bl was a slot), or the -O0 frame (rbx the image, ebp the stack)
+  const bool at_entry = first < d.insts.size() && d.insts[first].offset == entry;
+  const bool o2 = at_entry && matches(first, x86::scan_prologue(true));
+  const bool slots = o2 || (at_entry && matches(first, x86::scan_prologue_rbx_slots()));
+  if (!slots && !(at_entry && matches(first, x86::scan_prologue(false))))
+    return at(entry) + "the entry is not the scan function's prologue (push rbx; push rbp; ...; mov rbx, rdi, or mov rbp, rdi at -O2)";
+  const x86::Reg img = x86::r64(x86::image_reg(o2));  // the image register: nothing in the body writes it
+  const std::string img_name(x86::reg_name(img));
   size_t body_first = first + x86::scan_prologue(slots).size();
   Bases bases;
-  // The -O2 frame may then set its base registers (lea rdi, [rbx+K0]; lea
-  // r15, [rbx+K1]; lea r14, [rbx+K2]), each K in range; without all, it is the
+  // The -O2 frame may then set its base registers (lea rdi, [img+K0]; lea
+  // r15, [img+K1]; lea r14, [img+K2]), each K in range; without all, it is the
   // frame before compact addressing, whose body may not address memory through them.
   if (slots && body_first + x86::kNumBases <= d.insts.size()) {
     bool all = true;
-    for (int i = 0; i < x86::kNumBases && all; i++) all = is_base_lea(d.insts[body_first + size_t(i)].inst, i);
+    for (int i = 0; i < x86::kNumBases && all; i++) all = is_base_lea(d.insts[body_first + size_t(i)].inst, i, img);
     if (all) {
       for (int i = 0; i < x86::kNumBases; i++) {
         const x86::Decoded& l = d.insts[body_first + size_t(i)];
@@ -236,7 +243,7 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
                 layout.count[int(Area::CQ)] >= 256;
     std::vector<std::vector<x86::Instruction>> bodies;
     if (full)
-      for (int r = 0; r < int(x86::Routine::Count); r++) bodies.push_back(x86::scan_routine(x86::Routine(r), areas));
+      for (int r = 0; r < int(x86::Routine::Count); r++) bodies.push_back(x86::scan_routine(x86::Routine(r), areas, x86::RegNum(img.num)));
     for (bool found = true; found;) {
       found = false;
       for (const auto& b : bodies) {
@@ -265,22 +272,22 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     using M = x86::Mnemonic;
     if (in.mnemonic == M::Push || in.mnemonic == M::Pop || in.mnemonic == M::Ret)
       return at(di.offset) + text_of(in) + ": the stack is touched only by the prologue and the epilogue";
-    // rbx holds the image base and rsp the frame: no instruction of the body may change them
+    // img holds the image base and rsp the frame: no instruction of the body may change them
     bool writes_first = in.num_operands > 0 && in.mnemonic != M::Cmp && in.mnemonic != M::Test &&
                         in.mnemonic != M::Ucomiss && in.mnemonic != M::Jmp && in.mnemonic != M::Jcc &&
                         in.mnemonic != M::Call;
     if (writes_first && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm &&
-        (in.ops[0].reg.num == x86::BX || in.ops[0].reg.num == x86::SP))
+        (in.ops[0].reg.num == img.num || in.ops[0].reg.num == x86::SP))
       return at(di.offset) + text_of(in) + ": writes " + std::string(x86::reg_name(in.ops[0].reg)) +
              " (the image base and the stack pointer are fixed in the scan body)";
-    // the base registers of the -O2 body: only `lea reg, [rbx+K]` with K in range may set one
+    // the base registers of the -O2 body: only `lea reg, [img+K]` with K in range may set one
     if (bases.set && writes_first && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm) {
       for (int b = 0; b < x86::kNumBases; b++) {
         if (in.ops[0].reg.num != x86::kBaseRegs[b]) continue;
         std::string reg(x86::reg_name(x86::r64(x86::kBaseRegs[b])));
-        if (!is_base_lea(in, b))
+        if (!is_base_lea(in, b, img))
           return at(di.offset) + text_of(in) + ": writes " + std::string(x86::reg_name(in.ops[0].reg)) +
-                 ", a base register of the -O2 frame (only 'lea " + reg + ", [rbx+K]' may set one)";
+                 ", a base register of the -O2 frame (only 'lea " + reg + ", [" + img_name + "+K]' may set one)";
         if (std::string why = base_k_error(in, b, layout.size); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
       }
     }
@@ -292,8 +299,8 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
       for (int b = 0; b < x86::kNumBases; b++) {
         if (!x86::caller_saved(x86::kBaseRegs[b])) continue;
         std::string reg(x86::reg_name(x86::r64(x86::kBaseRegs[b])));
-        want += std::string(want.empty() ? "" : "; ") + "lea " + reg + ", [rbx+K]";
-        if (j >= body_end || !is_base_lea(d.insts[j].inst, b))
+        want += std::string(want.empty() ? "" : "; ") + "lea " + reg + ", [" + img_name + "+K]";
+        if (j >= body_end || !is_base_lea(d.insts[j].inst, b, img))
           return at(di.offset) + text_of(in) + ": a call through the REAL function table not followed at once by '" + want +
                  "' (the call may change " + reg + ", a base register of the -O2 frame)";
         j++;
@@ -338,14 +345,14 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
           // the one indirect branch: a call through the read-only table of REAL
           // functions below the image (ir.h, kCallTableDisp)
           const x86::Mem& m = o.mem;
-          bool table = m.base == x86::r64(x86::BX) && !m.index.valid() && m.size == x86::Size::Qword &&
+          bool table = m.base == img && !m.index.valid() && m.size == x86::Size::Qword &&
                        m.disp >= kCallTableDisp && m.disp < kCallTableDisp + 8 * kCallSlots &&
                        (m.disp - kCallTableDisp) % 8 == 0;
           if (!table) return at(di.offset) + text_of(in) + ": indirect call not through the REAL function table";
           continue;
         }
         if (branch) return at(di.offset) + text_of(in) + ": indirect branch through memory";
-        if (std::string why = check_mem(o.mem, layout.size, bases); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
+        if (std::string why = check_mem(o.mem, layout.size, bases, img); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
       } else if (o.kind == x86::OperandKind::Reg && branch) {
         return at(di.offset) + text_of(in) + ": indirect branch through a register";
       } else if (o.kind == x86::OperandKind::Address) {

@@ -28,6 +28,20 @@ namespace {
 
 // ------------------------------------------------------------------ x86-64
 
+// The -O2 frame the tests of base registers build: rbp the image (ldc's), or
+// rbx (images made before bl was a bit-stack slot; the loader still takes them).
+x86::RegNum g_o2_image = x86::image_reg(true);
+// text with every "IMG" made that frame's image register
+std::string with_image(std::string text) {
+  const std::string name(x86::reg_name(x86::r64(g_o2_image)));
+  for (size_t at; (at = text.find("IMG")) != std::string::npos;) text.replace(at, 3, name);
+  return text;
+}
+
+std::span<const x86::Instruction> o2_prologue() {
+  return g_o2_image == x86::image_reg(true) ? x86::scan_prologue(true) : x86::scan_prologue_rbx_slots();
+}
+
 // One instruction of a hostile body: GNU-as-style Intel syntax that our
 // assembler encodes (branch targets are offsets from the body's start), or
 // "raw: 0f 05" for bytes it would never produce.
@@ -38,7 +52,7 @@ std::vector<uint8_t> piece(const std::string& text, size_t at, size_t body) {
     for (std::string h; in >> h;) b.push_back(uint8_t(std::stoul(h, nullptr, 16)));
     return b;
   }
-  x86::Instruction in = x86::parse(text);
+  x86::Instruction in = x86::parse(with_image(text));
   if (in.num_operands && in.ops[0].kind == x86::OperandKind::Address) in.ops[0].imm += int64_t(body);
   return x86::encode_at(in, at);
 }
@@ -58,9 +72,9 @@ std::vector<uint8_t> scan_function(const std::vector<std::string>& body, std::ve
                                    bool slots = false, int leas = x86::kNumBases, int32_t k0 = kK0, int32_t k1 = kK1) {
   std::vector<uint8_t> code;
   auto put = [&](const std::vector<uint8_t>& b) { code.insert(code.end(), b.begin(), b.end()); };
-  for (const auto& in : x86::scan_prologue(slots)) put(x86::encode_at(in, code.size()));
+  for (const auto& in : slots ? o2_prologue() : x86::scan_prologue(false)) put(x86::encode_at(in, code.size()));
   for (int i = 0; slots && i < leas; i++)
-    put(x86::encode_at(x86::base_lea(x86::kBaseRegs[i], i == 0 ? k0 : i == 1 ? k1 : kK2), code.size()));
+    put(x86::encode_at(x86::base_lea(x86::kBaseRegs[i], i == 0 ? k0 : i == 1 ? k1 : kK2, g_o2_image), code.size()));
   const size_t base = code.size();
   offsets.clear();
   for (const std::string& t : body) {
@@ -284,7 +298,7 @@ TEST(Hostile, HarmlessTwinsAreAccepted) {
 // otherwise, and resets rdi right after each call through the REAL function
 // table.  No K is tracked: whatever path a branch takes, every access stays
 // inside the image.
-TEST(Hostile, BaseRegisters) {
+void base_registers() {
   const std::string lo = "[rdi-0x80]", hi = "[r15+0x7f]";  // image byte 0; bytes kSize-8.. of r15
   const std::string kmin = hex(kKMin), kmax = hex(uint32_t(kKMax));
   std::vector<uint32_t> at;
@@ -292,13 +306,13 @@ TEST(Hostile, BaseRegisters) {
   const std::vector<std::vector<std::string>> ok = {
       {"movzx eax, byte ptr " + lo, "mov byte ptr " + hi + ", al", "mov dword ptr [r15+0x7f], eax",
        "mov qword ptr [r15+0x7f], rax"},
-      {"call qword ptr [rbx-0x40]", "lea rdi, [rbx+" + kmin + "]", "mov eax, dword ptr [rdi+0x10]"},
+      {"call qword ptr [IMG-0x40]", "lea rdi, [IMG+" + kmin + "]", "mov eax, dword ptr [rdi+0x10]"},
       {"lea rax, [rdi+0x7f]", "lea eax, [r15-0x80]", "cmp rdi, rax", "test r15, r15", "mov rax, rdi"},
       {"mov eax, dword ptr [r14-0x80]", "add dword ptr [r14+0x7c], eax", "cmp r14d, 0x1"},
       // a reload to another K, a branch over it
-      {"lea rdi, [rbx+" + kmin + "]", "je 0x13", "call qword ptr [rbx-0x20]", "lea rdi, [rbx+" + kmax + "]", "nop"},
+      {"lea rdi, [IMG+" + kmin + "]", "je 0x13", "call qword ptr [IMG-0x20]", "lea rdi, [IMG+" + kmax + "]", "nop"},
       // the body points every register again, at both ends of the range, and a branch skips one lea
-      {"lea r15, [rbx+" + kmin + "]", "lea r14, [rbx+" + kmax + "]", "jne 0x17", "lea rdi, [rbx+0x5000]",
+      {"lea r15, [IMG+" + kmin + "]", "lea r14, [IMG+" + kmax + "]", "jne 0x17", "lea rdi, [IMG+0x5000]",
        "mov byte ptr [r15-0x80], al", "mov qword ptr [r14+0x7f], rax", "mov byte ptr [rdi+0x7f], al"},
   };
   for (const auto& body : ok) EXPECT_EQ(refusal(image_around(scan_function(body, at, true))), "") << body[0];
@@ -309,12 +323,12 @@ TEST(Hostile, BaseRegisters) {
                      int leas = x86::kNumBases, int32_t k0 = kK0, int32_t k1 = kK1) {
     std::string why = refusal(image_around(scan_function(body, at, slots, leas, k0, k1)));
     EXPECT_NE(why.find("at code offset " + hex(at[hostile]) + ": "), std::string::npos) << body[hostile] << ": " << why;
-    EXPECT_NE(why.find(reason), std::string::npos) << body[hostile] << ": " << why;
+    EXPECT_NE(why.find(with_image(reason)), std::string::npos) << body[hostile] << ": " << why;
   };
   const std::string base = "a base register of the -O2 frame (only 'lea ";
   // writing a base register, every width and form but the lea
   refused({"nop", "mov edi, eax"}, 1, base);
-  refused({"mov rdi, rbx"}, 0, base);  // even to the image base
+  refused({"mov rdi, IMG"}, 0, base);  // even to the image base
   refused({"setne dil"}, 0, base);
   refused({"add r15, 0x10"}, 0, base);
   refused({"xor r15d, r15d"}, 0, base);
@@ -326,37 +340,37 @@ TEST(Hostile, BaseRegisters) {
   // near misses of the lea: another base, an index, 32 bits
   refused({"lea rdi, [rdi+0x0]"}, 0, base);
   refused({"lea r15, [r14+0x100]"}, 0, base);
-  refused({"lea rdi, [rbx+rax*1+0x100]"}, 0, base);
-  refused({"lea edi, [rbx+0x100]"}, 0, base);
-  refused({"lea r14d, [rbx+0x100]"}, 0, base);
+  refused({"lea rdi, [IMG+rax*1+0x100]"}, 0, base);
+  refused({"lea edi, [IMG+0x100]"}, 0, base);
+  refused({"lea r14d, [IMG+0x100]"}, 0, base);
   refused({"pop rdi"}, 0, "the stack is touched only by the prologue and the epilogue");
   refused({"raw: 48 87 f8"}, 0, "undecodable bytes");  // xchg rax, rdi: outside the subset
   // a K one byte outside the range, in the body and in the prologue
   const std::string range = "outside [128, " + std::to_string(kKMax) + "]";
-  refused({"lea rdi, [rbx+0x7f]"}, 0, "sets rdi = rbx+127, " + range);
-  refused({"nop", "lea r15, [rbx+" + hex(uint32_t(kKMax) + 1) + "]"}, 1, "sets r15 = rbx+" + std::to_string(kKMax + 1));
-  refused({"lea r14, [rbx-0x40]"}, 0, "sets r14 = rbx+-64, " + range);
+  refused({"lea rdi, [IMG+0x7f]"}, 0, "sets rdi = IMG+127, " + range);
+  refused({"nop", "lea r15, [IMG+" + hex(uint32_t(kKMax) + 1) + "]"}, 1, "sets r15 = IMG+" + std::to_string(kKMax + 1));
+  refused({"lea r14, [IMG-0x40]"}, 0, "sets r14 = IMG+-64, " + range);
   for (int32_t k : {kKMin - 1, kKMax + 1}) {
     for (int i : {0, 1}) {
       std::string why = refusal(image_around(scan_function({"nop"}, at, true, x86::kNumBases, i ? kK0 : k, i ? k : kK1)));
       std::string reg = i ? "r15" : "rdi";
-      EXPECT_NE(why.find("'lea " + reg + ", [rbx+" + hex(uint32_t(k)) + "]': sets " + reg + " = rbx+" + std::to_string(k) + ", " + range),
+      EXPECT_NE(why.find(with_image("'lea " + reg + ", [IMG+" + hex(uint32_t(k)) + "]': sets " + reg + " = IMG+" + std::to_string(k) + ", " + range)),
                 std::string::npos)
           << why;
     }
   }
   // the REAL call without its reload (or with a bad one, or at the end)
-  refused({"call qword ptr [rbx-0x40]", "nop"}, 0, "not followed at once by 'lea rdi, [rbx+K]'");
-  refused({"call qword ptr [rbx-0x40]", "lea r15, [rbx+0x100]"}, 0, "not followed at once by 'lea rdi, [rbx+K]'");
-  refused({"call qword ptr [rbx-0x40]", "lea rdi, [rbx+rax*1+0x100]"}, 0, "not followed at once");
-  refused({"call qword ptr [rbx-0x40]", "lea rdi, [rbx+0x7f]"}, 1, "sets rdi = rbx+127, " + range);
-  refused({"nop", "call qword ptr [rbx-0x38]"}, 1, "not followed at once");
+  refused({"call qword ptr [IMG-0x40]", "nop"}, 0, "not followed at once by 'lea rdi, [IMG+K]'");
+  refused({"call qword ptr [IMG-0x40]", "lea r15, [IMG+0x100]"}, 0, "not followed at once by 'lea rdi, [IMG+K]'");
+  refused({"call qword ptr [IMG-0x40]", "lea rdi, [IMG+rax*1+0x100]"}, 0, "not followed at once");
+  refused({"call qword ptr [IMG-0x40]", "lea rdi, [IMG+0x7f]"}, 1, "sets rdi = IMG+127, " + range);
+  refused({"nop", "call qword ptr [IMG-0x38]"}, 1, "not followed at once");
   // displacements one past the disp8 reach, on every register, whatever K
   const std::string reach = "a base register of the -O2 frame takes a displacement in [-0x80, 0x7f] only";
   refused({"mov byte ptr [rdi-0x81], al"}, 0, reach);
   refused({"mov byte ptr [r15+0x80], al"}, 0, reach);
   refused({"mov dword ptr [r14+0x1000], eax"}, 0, reach);
-  refused({"lea rdi, [rbx+0x5000]", "movzx eax, byte ptr [rdi+0x80]"}, 1, reach);  // even where K+d is inside
+  refused({"lea rdi, [IMG+0x5000]", "movzx eax, byte ptr [rdi+0x80]"}, 1, reach);  // even where K+d is inside
   // indexed through a base register
   refused({"mov al, byte ptr [rdi+rax*1]"}, 0, "indexed memory operand");
   // the wrong frame: the -O0 frame sets no base register
@@ -367,9 +381,9 @@ TEST(Hostile, BaseRegisters) {
   // before compact addressing: it sets no base register, and a lea in its body
   // does not make one (a branch could pass it by)
   for (int leas = 0; leas < x86::kNumBases; leas++) {
-    refused({"mov byte ptr [rdi+0x10], al"}, 0, "memory operand based on rdi, not rbx", true, leas);
-    refused({"mov byte ptr [r15+0x10], al"}, 0, "memory operand based on r15, not rbx", true, leas);
-    refused({"nop", "lea r14, [rbx+0x100]", "mov byte ptr [r14+0x10], al"}, 2, "memory operand based on r14, not rbx", true, leas);
+    refused({"mov byte ptr [rdi+0x10], al"}, 0, "memory operand based on rdi, not IMG", true, leas);
+    refused({"mov byte ptr [r15+0x10], al"}, 0, "memory operand based on r15, not IMG", true, leas);
+    refused({"nop", "lea r14, [IMG+0x100]", "mov byte ptr [r14+0x10], al"}, 2, "memory operand based on r14, not IMG", true, leas);
   }
   EXPECT_EQ(refusal(image_around(scan_function({"setne r15b"}, at, true, 0))), "");  // that frame's slot
   std::vector<uint8_t> swapped;
@@ -377,13 +391,13 @@ TEST(Hostile, BaseRegisters) {
     auto b = x86::encode_at(in, swapped.size());
     swapped.insert(swapped.end(), b.begin(), b.end());
   };
-  for (const auto& in : x86::scan_prologue(true)) put(in);
-  for (int i : {1, 0}) put(x86::base_lea(x86::kBaseRegs[i], i ? kK1 : kK0));
+  for (const auto& in : o2_prologue()) put(in);
+  for (int i : {1, 0}) put(x86::base_lea(x86::kBaseRegs[i], i ? kK1 : kK0, g_o2_image));
   size_t hostile_at = swapped.size();
   put(x86::parse("mov byte ptr [r15+0x10], al"));
   for (const auto& in : x86::scan_epilogue(true)) put(in);
   std::string why = refusal(image_around(swapped));
-  EXPECT_NE(why.find("at code offset " + hex(hostile_at) + ": 'mov byte ptr [r15+0x10], al': memory operand based on r15, not rbx"),
+  EXPECT_NE(why.find(with_image("at code offset " + hex(hostile_at) + ": 'mov byte ptr [r15+0x10], al': memory operand based on r15, not IMG")),
             std::string::npos)
       << why;
   // the shared routines, which run between base-register accesses without a
@@ -395,6 +409,48 @@ TEST(Hostile, BaseRegisters) {
         EXPECT_FALSE(in.num_operands && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm &&
                      in.ops[0].reg.num == b && in.mnemonic != x86::Mnemonic::Cmp && in.mnemonic != x86::Mnemonic::Test)
             << x86::print(in);
+}
+
+TEST(Hostile, BaseRegisters) { base_registers(); }
+
+// The same attacks on the -O2 frame of images made before bl became a
+// bit-stack slot (rbx the image), which the loader still accepts.
+TEST(Hostile, BaseRegistersOfTheOlderO2Frame) {
+  g_o2_image = x86::BX;
+  base_registers();
+  g_o2_image = x86::image_reg(true);
+}
+
+// The -O2 frame's image register is rbp and its first bit-stack slot bl: the
+// body may write rbx at every width but never rbp, addresses memory through
+// rbp (or a base register) only, and calls the REAL functions through
+// [rbp+slot]; the older -O2 frame the other way round.
+TEST(Hostile, TheO2FrameSwapsRbxAndRbp) {
+  std::vector<uint32_t> at;
+  const std::string k = hex(kKMin);
+  for (const std::vector<std::string>& ok : std::vector<std::vector<std::string>>{
+           {"movzx ebx, byte ptr [rbp+0x50]", "and bl, byte ptr [rbp+0x51]", "mov byte ptr [rbp+0x60], bl"},
+           {"setne bl", "xor ebx, ebx", "lea ebx, [rax+rbx*2]", "mov rbx, rax", "test bl, bl"},
+           {"call qword ptr [rbp-0x40]", "lea rdi, [rbp+" + k + "]", "mov eax, dword ptr [rbp+0x0]"}})
+    EXPECT_EQ(refusal(image_around(scan_function(ok, at, true))), "") << ok[0];
+  auto refused = [&](const std::vector<std::string>& body, size_t hostile, const std::string& reason) {
+    std::string why = refusal(image_around(scan_function(body, at, true)));
+    EXPECT_NE(why.find("at code offset " + hex(at[hostile]) + ": "), std::string::npos) << body[hostile] << ": " << why;
+    EXPECT_NE(why.find(reason), std::string::npos) << body[hostile] << ": " << why;
+  };
+  const std::string fixed = "(the image base and the stack pointer are fixed in the scan body)";
+  for (const char* w : {"mov ebp, eax", "setne bpl", "xor ebp, ebp", "lea rbp, [rbp+0x10]", "add rbp, 0x8", "movzx ebp, al"})
+    refused({"nop", w}, 1, fixed);
+  refused({"mov byte ptr [rbx+0x10], al"}, 0, "memory operand based on rbx, not rbp");
+  refused({"movzx eax, byte ptr [rbp+" + S + "]"}, 0, "memory operand [rbp+" + S + "] (1 bytes) outside the memory image");
+  refused({"call qword ptr [rbx-0x40]", "lea rdi, [rbp+" + k + "]"}, 0, "indirect call not through the REAL function table");
+  refused({"lea rdi, [rbx+" + k + "]"}, 0, "a base register of the -O2 frame (only 'lea rdi, [rbp+K]' may set one)");
+  // the older frame: rbp is a slot there, rbx the image
+  g_o2_image = x86::BX;
+  EXPECT_EQ(refusal(image_around(scan_function({"setne bpl", "mov byte ptr [rbx+0x60], bpl"}, at, true))), "");
+  refused({"nop", "setne bl"}, 1, fixed);
+  refused({"mov byte ptr [rbp+0x10], al"}, 0, "stack-relative memory operand based on rbp (only [rbx+disp] may address memory)");
+  g_o2_image = x86::image_reg(true);
 }
 
 // The shared timer/counter routines after the epilogue (docs/x86.md, "Shared
@@ -412,16 +468,17 @@ x86::RoutineAreas layout_areas() {
   return a;
 }
 
-// A scan function whose body calls `call_to` (an offset from the first
-// routine's entry), followed by the routines; `call_at` gets the call's offset.
+// A scan function in the -O2 frame (the routines' own) whose body calls
+// `call_to` (an offset from the first routine's entry), followed by the
+// routines; `call_at` gets the call's offset.
 std::vector<uint8_t> with_routines(const std::vector<std::vector<x86::Instruction>>& routines, int64_t call_to,
                                    uint32_t& call_at) {
   std::vector<uint32_t> at;
   std::vector<std::string> body = {"mov esi, 0x1", "mov edx, 0x3", "mov ecx, 0x64", "call 0x0", "nop"};
-  std::vector<uint8_t> code = scan_function(body, at);  // the call is rel32: its size does not change
+  std::vector<uint8_t> code = scan_function(body, at, true);  // the call is rel32: its size does not change
   const int64_t base = at[0], entry = int64_t(code.size());
   body[3] = "call " + std::to_string(entry + call_to - base);
-  code = scan_function(body, at);
+  code = scan_function(body, at, true);
   call_at = at[3];
   for (const auto& r : routines)
     for (const auto& in : r) {
@@ -452,7 +509,7 @@ TEST(Hostile, CallsOnlyToTheSharedRoutines) {
   refused(image_around(with_routines({ton}, mask, call_at)), "a direct call not to the entry of one of the code's routines", true);
   // a call to code that is no routine: the epilogue, and the body itself
   int64_t epilogue = 0;
-  for (const auto& in : x86::scan_epilogue(false)) epilogue += int64_t(x86::encode_at(in, 0).size());
+  for (const auto& in : x86::scan_epilogue(true)) epilogue += int64_t(x86::encode_at(in, 0).size());
   refused(image_around(with_routines({ton}, -epilogue, call_at)), "a direct call not to the entry", true);
   refused(image_around(with_routines({}, -epilogue - 1, call_at)), "a direct call not to the entry", true);
   // an unmasked operand: the routine without its `movzx edx, dl`
@@ -462,6 +519,9 @@ TEST(Hostile, CallsOnlyToTheSharedRoutines) {
   std::vector<x86::Instruction> loops = ctu;
   loops.insert(loops.end() - 1, x86::parse("jmp -0x40"));
   refused(image_around(with_routines({loops}, 0, call_at)), "does not end with the scan function's epilogue", false);
+  // a routine built for the older -O2 frame's image register (rbx)
+  refused(image_around(with_routines({x86::scan_routine(x86::Routine::Ton, areas, x86::BX)}, 0, call_at)),
+          "does not end with the scan function's epilogue", false);
   // a routine built for other areas: its accesses are not the layout's timers
   x86::RoutineAreas off = areas;
   off.tw = int32_t(kSize) - 4;
