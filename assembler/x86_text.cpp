@@ -428,30 +428,33 @@ std::string listing(const X86Program& p, const Result& r) {
       [](const Instruction& in, const ItemLayout& lay) { return print(in, lay.long_form); });
 }
 
+namespace {
+
+// The prologue of a frame that saves r12-r15 too (the -O2 frames), the image
+// in `image` and the bit stack `stack` cleared.
+std::vector<Instruction> slots_prologue(std::string_view image, std::string_view stack) {
+  std::vector<Instruction> v;
+  for (const char* t : {"push rbx", "push rbp", "push r12", "push r13", "push r14", "push r15", "push rax"})
+    v.push_back(parse(t));
+  v.push_back(parse("mov " + std::string(image) + ", rdi"));
+  v.push_back(parse("xor " + std::string(stack) + ", " + std::string(stack)));
+  return v;
+}
+
+}  // namespace
+
 std::span<const Instruction> scan_prologue(bool with_slots) {
   static const std::vector<Instruction> o0 = [] {
     std::vector<Instruction> v;
     for (const char* t : {"push rbx", "push rbp", "push rax", "mov rbx, rdi", "xor ebp, ebp"}) v.push_back(parse(t));
     return v;
   }();
-  static const std::vector<Instruction> o2 = [] {
-    std::vector<Instruction> v;
-    for (const char* t : {"push rbx", "push rbp", "push r12", "push r13", "push r14", "push r15", "push rax",
-                          "mov rbp, rdi", "xor ebx, ebx"})
-      v.push_back(parse(t));
-    return v;
-  }();
+  static const std::vector<Instruction> o2 = slots_prologue("rbp", "ebx");
   return with_slots ? o2 : o0;
 }
 
 std::span<const Instruction> scan_prologue_rbx_slots() {
-  static const std::vector<Instruction> v = [] {
-    std::vector<Instruction> v;
-    for (const char* t : {"push rbx", "push rbp", "push r12", "push r13", "push r14", "push r15", "push rax",
-                          "mov rbx, rdi", "xor ebp, ebp"})
-      v.push_back(parse(t));
-    return v;
-  }();
+  static const std::vector<Instruction> v = slots_prologue("rbx", "ebp");
   return v;
 }
 
