@@ -191,13 +191,18 @@ std::span<const Instruction> safe_divisor();
 //        [image + rdx*k + area] stays inside areas of 256 elements (the
 //        routines run in the -O2 frame: image is rbp, rbx in its old form)
 //   ecx  the preset (timers clamp a negative one to 0)
-//   esi  the input: the rung's power (timers) or its rising edge (counters), 0 or 1
+//   esi  the input: the rung's power, 0 or 1
+//   r8d  counters: the number of the edge slot that keeps the input for the
+//        rising edge; one outside the image's e_count counts as slot 0, so
+//        [image + r8 + e] stays inside the edge area (in the older -O2 frame
+//        the call site computed the edge and passed it in esi)
 // and clobbers eax ecx edx r8-r11 and the flags.  The areas' offsets are the
 // memory layout's; the loader builds the same bodies and accepts a call only
 // to the entry of one of them.
 enum class Routine : uint8_t { Ton, Tof, Tp, Ctu, Ctd, Count };
 struct RoutineAreas {
   int32_t tw = 0, tq = 0, ti = 0, cw = 0, cq = 0, dt = 0;  // offsets of T0's ET, Q, IN memory; C0's CV, Q; dt
+  int32_t e = 0, e_count = 0;                              // the edge slots: offset and count (at least 1)
 };
 std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& areas, RegNum image = image_reg(true));
 std::string_view routine_name(Routine r);  // the assembly label: rt_ton, rt_tof, rt_tp, rt_ctu, rt_ctd

@@ -508,6 +508,16 @@ std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& a, RegNum i
                     ti = "byte ptr " + at("rdx*1", a.ti), cw = "dword ptr " + at("rdx*4", a.cw),
                     cq = "byte ptr " + at("rdx*1", a.cq);
   t.push_back("movzx edx, dl");  // the mask: 0..255 whatever the caller passed
+  if ((r == Routine::Ctu || r == Routine::Ctd) && image == image_reg(true)) {
+    // esi = the input, r8d = the edge slot: one of the image's (else slot 0,
+    // which only breaks the program's own rule); esi becomes the rising edge.
+    // (The older -O2 frame's counters take the edge itself in esi.)
+    const std::string e = "byte ptr " + at("r8*1", a.e);
+    for (const std::string& x : {std::string("xor r9d, r9d"), "cmp r8d, " + std::to_string(a.e_count),
+                                  std::string("cmovae r8d, r9d"), "movzx eax, " + e, "mov " + e + ", sil",
+                                  std::string("not eax"), std::string("and esi, eax")})
+      t.push_back(x);
+  }
   if (r == Routine::Ctu || r == Routine::Ctd) {
     // CV' = CV +- edge unless that overflows; Q' = CV' >= PV (CTU) or CV' <= 0 (CTD)
     t.push_back("mov eax, " + cw);

@@ -759,16 +759,12 @@ void Gen::remember_input(uint32_t ti) {
 }
 
 
-// -O2 counters: the rising edge here (the edge slot is not in the routine's
-// reach), then the shared routine with the counter number in edx, the preset
-// in ecx and the edge in esi.
+// -O2 counters: the shared routine with the counter number in edx, the preset
+// in ecx, the power in esi and the edge slot's number in r8d (the routine
+// keeps the input there and counts its rising edge).
 void Gen::counter_gated(const ldc::Instr& in) {
-  uint32_t e = addr(in.a[2]);
-  top_to_eax();
-  emit(M::Movzx, {R(esi), B(e)});
-  emit(M::Mov, {B(e), R(al)});
-  emit(M::Not, {R(esi)});
-  emit(M::And, {R(esi), R(eax)});  // rising edge of the input
+  if (Reg p = power(); p != esi) emit(M::Mov, {R(esi), R(p)});
+  emit(M::Mov, {R(r32(R8)), I(int32_t(in.a[2].index))});
   emit(M::Mov, {R(r8(DX)), I(int32_t(in.a[0].index & 0xff))});  // the routine takes dl only (movzx edx, dl)
   bool up = in.op == Op::CTU;
   if (up) load_int(in.a[1], ecx);
@@ -1152,6 +1148,8 @@ as::x86::RoutineAreas x86_routine_areas(const Layout& l) {
   a.cw = int32_t(l.addr(Area::CW, 0));
   a.cq = int32_t(l.addr(Area::CQ, 0));
   a.dt = int32_t(kSysDt);
+  a.e = int32_t(l.addr(Area::E, 0));
+  a.e_count = int32_t(l.count[int(Area::E)]);
   return a;
 }
 

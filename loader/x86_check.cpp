@@ -237,13 +237,19 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     areas.cw = int32_t(layout.addr(Area::CW, 0));
     areas.cq = int32_t(layout.addr(Area::CQ, 0));
     areas.dt = int32_t(kSysDt);
+    areas.e = int32_t(layout.addr(Area::E, 0));
+    areas.e_count = int32_t(layout.count[int(Area::E)]);
     // the mask keeps numbers below 256: every area a routine indexes has 256 elements
     bool full = layout.count[int(Area::TW)] >= 256 && layout.count[int(Area::TQ)] >= 256 &&
                 layout.count[int(Area::TI)] >= 256 && layout.count[int(Area::CW)] >= 256 &&
                 layout.count[int(Area::CQ)] >= 256;
     std::vector<std::vector<x86::Instruction>> bodies;
     if (full)
-      for (int r = 0; r < int(x86::Routine::Count); r++) bodies.push_back(x86::scan_routine(x86::Routine(r), areas, x86::RegNum(img.num)));
+      for (int r = 0; r < int(x86::Routine::Count); r++) {
+        bool counter = x86::Routine(r) == x86::Routine::Ctu || x86::Routine(r) == x86::Routine::Ctd;
+        if (counter && o2 && areas.e_count < 1) continue;  // its edge slots: none to keep an access inside
+        bodies.push_back(x86::scan_routine(x86::Routine(r), areas, x86::RegNum(img.num)));
+      }
     for (bool found = true; found;) {
       found = false;
       for (const auto& b : bodies) {

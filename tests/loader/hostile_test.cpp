@@ -456,8 +456,8 @@ TEST(Hostile, TheO2FrameSwapsRbxAndRbp) {
 // The shared timer/counter routines after the epilogue (docs/x86.md, "Shared
 // routines"): a call may go only to the entry of a routine that is exactly one
 // of the bodies as::x86::scan_routine makes for the image's layout.
-x86::RoutineAreas layout_areas() {
-  Layout l = Layout::standard(0);
+x86::RoutineAreas layout_areas(uint32_t edges) {
+  Layout l = Layout::standard(edges);
   x86::RoutineAreas a;
   a.tw = int32_t(l.addr(Area::TW, 0));
   a.tq = int32_t(l.addr(Area::TQ, 0));
@@ -465,6 +465,8 @@ x86::RoutineAreas layout_areas() {
   a.cw = int32_t(l.addr(Area::CW, 0));
   a.cq = int32_t(l.addr(Area::CQ, 0));
   a.dt = int32_t(kSysDt);
+  a.e = int32_t(l.addr(Area::E, 0));
+  a.e_count = int32_t(l.count[int(Area::E)]);
   return a;
 }
 
@@ -489,14 +491,15 @@ std::vector<uint8_t> with_routines(const std::vector<std::vector<x86::Instructio
 }
 
 TEST(Hostile, CallsOnlyToTheSharedRoutines) {
-  const x86::RoutineAreas areas = layout_areas();
+  constexpr uint32_t kEdges = 4;  // the counters' edge slots: the image's
+  const x86::RoutineAreas areas = layout_areas(kEdges);
   const auto ton = x86::scan_routine(x86::Routine::Ton, areas), ctu = x86::scan_routine(x86::Routine::Ctu, areas);
   uint32_t call_at = 0;
   // the harmless twin: a call to the entry of a canonical routine, with another after it
-  EXPECT_EQ(refusal(image_around(with_routines({ton, ctu}, 0, call_at))), "");
+  EXPECT_EQ(refusal(image_around(with_routines({ton, ctu}, 0, call_at), kEdges)), "");
   int64_t ton_size = 0;
   for (const auto& in : ton) ton_size += int64_t(x86::encode_at(in, 0).size());
-  EXPECT_EQ(refusal(image_around(with_routines({ton, ctu}, ton_size, call_at))), "");  // rt_ctu's entry
+  EXPECT_EQ(refusal(image_around(with_routines({ton, ctu}, ton_size, call_at), kEdges)), "");  // rt_ctu's entry
   auto refused = [&](const Image& im, const std::string& reason, bool at_call) {
     std::string why = refusal(im);
     EXPECT_NE(why.find(reason), std::string::npos) << why;
@@ -506,26 +509,34 @@ TEST(Hostile, CallsOnlyToTheSharedRoutines) {
   };
   // a call into the middle of a routine (past its mask, on an instruction boundary)
   int64_t mask = int64_t(x86::encode_at(ton[0], 0).size());
-  refused(image_around(with_routines({ton}, mask, call_at)), "a direct call not to the entry of one of the code's routines", true);
+  refused(image_around(with_routines({ton}, mask, call_at), kEdges), "a direct call not to the entry of one of the code's routines", true);
   // a call to code that is no routine: the epilogue, and the body itself
   int64_t epilogue = 0;
   for (const auto& in : x86::scan_epilogue(true)) epilogue += int64_t(x86::encode_at(in, 0).size());
-  refused(image_around(with_routines({ton}, -epilogue, call_at)), "a direct call not to the entry", true);
-  refused(image_around(with_routines({}, -epilogue - 1, call_at)), "a direct call not to the entry", true);
+  refused(image_around(with_routines({ton}, -epilogue, call_at), kEdges), "a direct call not to the entry", true);
+  refused(image_around(with_routines({}, -epilogue - 1, call_at), kEdges), "a direct call not to the entry", true);
   // an unmasked operand: the routine without its `movzx edx, dl`
   std::vector<x86::Instruction> unmasked(ton.begin() + 1, ton.end());
-  refused(image_around(with_routines({unmasked}, 0, call_at)), "does not end with the scan function's epilogue", false);
+  refused(image_around(with_routines({unmasked}, 0, call_at), kEdges), "does not end with the scan function's epilogue", false);
   // a routine that loops: a jump back to its entry before the ret
   std::vector<x86::Instruction> loops = ctu;
   loops.insert(loops.end() - 1, x86::parse("jmp -0x40"));
-  refused(image_around(with_routines({loops}, 0, call_at)), "does not end with the scan function's epilogue", false);
+  refused(image_around(with_routines({loops}, 0, call_at), kEdges), "does not end with the scan function's epilogue", false);
   // a routine built for the older -O2 frame's image register (rbx)
-  refused(image_around(with_routines({x86::scan_routine(x86::Routine::Ton, areas, x86::BX)}, 0, call_at)),
+  refused(image_around(with_routines({x86::scan_routine(x86::Routine::Ton, areas, x86::BX)}, 0, call_at), kEdges),
           "does not end with the scan function's epilogue", false);
   // a routine built for other areas: its accesses are not the layout's timers
   x86::RoutineAreas off = areas;
   off.tw = int32_t(kSize) - 4;
-  refused(image_around(with_routines({x86::scan_routine(x86::Routine::Ton, off)}, 0, call_at)),
+  refused(image_around(with_routines({x86::scan_routine(x86::Routine::Ton, off)}, 0, call_at), kEdges),
+          "does not end with the scan function's epilogue", false);
+  // a counter routine that keeps its edge slot number below another count
+  // than the image's edge slots, or in an image without edge slots
+  x86::RoutineAreas more = areas;
+  more.e_count = int32_t(kEdges) + 1;
+  refused(image_around(with_routines({x86::scan_routine(x86::Routine::Ctu, more)}, 0, call_at), kEdges),
+          "does not end with the scan function's epilogue", false);
+  refused(image_around(with_routines({x86::scan_routine(x86::Routine::Ctd, layout_areas(0))}, 0, call_at), 0),
           "does not end with the scan function's epilogue", false);
 }
 
