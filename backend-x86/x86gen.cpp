@@ -853,18 +853,12 @@ void Gen::bit_slots(const ldc::Instr& in) {
     case Op::ORN:  // top | !b is top >= b
       emit(M::Cmp, {R(t), b0});
       return emit(make_cc(M::Setcc, Cond::AE, {R(t)}));
-    case Op::LOADP:  // d = b & !e; e = b
+    case Op::LOADP:  // d = b & !e (of 0/1 bytes: b > e); e = b (mov keeps the flags)
+    case Op::LOADF:  // d = !b & e (b < e); e = b
       emit(M::Movzx, {R(dw), b0});
-      emit(M::Movzx, {R(eax), b1});
+      emit(M::Cmp, {R(d), b1});
       emit(M::Mov, {b1, R(d)});
-      emit(M::Not, {R(eax)});
-      return emit(M::And, {R(dw), R(eax)});
-    case Op::LOADF:  // d = !b & e; e = b
-      emit(M::Movzx, {R(eax), b0});
-      emit(M::Movzx, {R(dw), b1});
-      emit(M::Mov, {b1, R(al)});
-      emit(M::Not, {R(eax)});
-      return emit(M::And, {R(dw), R(eax)});
+      return emit(make_cc(M::Setcc, in.op == Op::LOADP ? Cond::A : Cond::B, {R(d)}));
     case Op::TRUE: return emit(M::Mov, {R(dw), I(1)});
     case Op::ANDBLK: return emit(M::And, {R(uw), R(tw)});
     case Op::ORBLK: return emit(M::Or, {R(uw), R(tw)});
