@@ -237,14 +237,28 @@ static void put_header(Writer& w, const Image& im, std::span<const uint32_t> tab
     w.u32(i), w.u32(table.empty() ? 0 : table[2 * (i - 1)]), w.u32(table.empty() ? 0 : table[2 * i - 1]);
 }
 
+// The line map, packed a batch of entries at a time: one entry per IL
+// instruction, four u32 each, is the most fields of any section.
+static void put_lines(Writer& w, std::span<const LineEntry> lines) {
+  count32(lines.size(), "line map entries");
+  constexpr size_t kBatch = 256;
+  uint8_t buf[kBatch * kLineEntrySize];
+  for (size_t at = 0; at < lines.size(); at += kBatch) {
+    const size_t n = std::min(kBatch, lines.size() - at);
+    uint8_t* p = buf;
+    for (const LineEntry& e : lines.subspan(at, n)) {
+      for (uint32_t v : {e.code_offset, e.il_offset, uint32_t(e.line), e.rung})
+        for (int i = 0; i < 4; i++) *p++ = uint8_t(v >> (8 * i));
+    }
+    w.bytes({buf, n * kLineEntrySize});
+  }
+}
+
 static void put_section(Writer& w, const Image& im, uint32_t id) {
   switch (SectionId(id)) {
     case kCode: w.bytes(im.code); break;
     case kIl: w.bytes(im.il); break;
-    case kLines:
-      count32(im.lines.size(), "line map entries");
-      for (const LineEntry& e : im.lines) w.u32(e.code_offset), w.u32(e.il_offset), w.u32(uint32_t(e.line)), w.u32(e.rung);
-      break;
+    case kLines: put_lines(w, im.lines); break;
     case kStrings:
       w.str(im.source);
       w.u32(count32(im.rung_titles.size(), "rung titles"));
