@@ -262,7 +262,7 @@ struct Stats {
   size_t units = 0;             // blocks (blockwise) or 1 (whole program)
   size_t encode_calls = 0;
   size_t global_fixups = 0;      // fixups resolved after layout
-  int64_t elapsed_ns = 0;        // wall time of assemble()
+  int64_t elapsed_ns = 0;        // wall time of assemble(); 0 from the streaming Assembler
 };
 
 struct ItemLayout {

@@ -510,11 +510,12 @@ Result assemble(const TargetInfo& target, const ProgramView& program, Mode mode)
   return r;
 }
 
+// The streaming assembler keeps no clock: read twice a block, it cost more than a
+// small block's layout (Stats::elapsed_ns stays 0; its callers time their calls).
 struct Stream {
   std::vector<std::string> globals;
   Core core;
   uint32_t blocks = 0;
-  int64_t ns = 0;
   Stream(const TargetInfo& t, std::vector<std::string> g)
       : globals(std::move(g)), core(t, globals, Mode::Blockwise) {}
 };
@@ -522,28 +523,15 @@ struct Stream {
 void StreamDeleter::operator()(Stream* s) const { delete s; }
 
 std::unique_ptr<Stream, StreamDeleter> stream_begin(const TargetInfo& target, std::vector<std::string> globals) {
-  auto t0 = std::chrono::steady_clock::now();
-  std::unique_ptr<Stream, StreamDeleter> s(new Stream(target, std::move(globals)));
-  s->ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
-  return s;
+  return std::unique_ptr<Stream, StreamDeleter>(new Stream(target, std::move(globals)));
 }
 
-void stream_block(Stream& s, const ProgramView& block, bool keep_items) {
-  auto t0 = std::chrono::steady_clock::now();
-  s.core.block(block, s.blocks++, keep_items);
-  s.ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
-}
+void stream_block(Stream& s, const ProgramView& block, bool keep_items) { s.core.block(block, s.blocks++, keep_items); }
 
 std::span<const ItemLayout> stream_last_items(const Stream& s) { return s.core.last_items(); }
 uint32_t stream_code_size(const Stream& s) { return s.core.code_size(); }
 
-Result stream_finish(Stream& s) {
-  auto t0 = std::chrono::steady_clock::now();
-  Result r = s.core.finish();
-  s.ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
-  r.stats.elapsed_ns = s.ns;
-  return r;
-}
+Result stream_finish(Stream& s) { return s.core.finish(); }
 
 }  // namespace detail
 }  // namespace ldc::as

@@ -261,6 +261,11 @@ BinaryIl encode_il(const Program& p) {
   BinaryIl b;
   std::vector<std::pair<size_t, std::string>> fix;
   std::vector<std::pair<std::string, uint32_t>> labels;
+  size_t n = 0;
+  for (const Rung& r : p.rungs) n += r.code.size();
+  b.instr_offset.reserve(n);  // sized once, not grown by doubling and copied
+  b.rung_offset.reserve(p.rungs.size());
+  b.code.reserve(8 * n);  // an opcode byte and two operands of 3 or 5 bytes is typical
   for (const Rung& r : p.rungs) {
     for (const auto& l : r.labels) labels.emplace_back(l, uint32_t(b.code.size()));
     b.rung_offset.push_back(uint32_t(b.code.size()));
