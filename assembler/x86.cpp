@@ -1,6 +1,8 @@
 // x86-64 target: form table, encoder, decoder.
 #include "assembler/x86_forms.h"
 
+#include <cstring>
+
 namespace ldc::as::x86 {
 namespace detail {
 namespace {
@@ -292,7 +294,22 @@ void check_mem(const Mem& m) {
   if (!m.index.valid() && m.scale != 1) throw AsmError("scale without an index register");
 }
 
-void put_mod_rm(Encoding& out, uint8_t reg, const Operand& rm) {
+// One instruction's bytes, gathered in a local buffer and handed to the
+// Encoding at once: a byte stored through Encoding::put may alias its size
+// (both uint8_t), so every put reloaded and stored the size.
+struct Bytes {
+  uint8_t b[16] = {};
+  unsigned n = 0;
+  void put(uint8_t v) {
+    if (n >= sizeof b) Encoding::too_long();
+    b[n++] = v;
+  }
+  void put32(uint32_t v) {
+    for (int i = 0; i < 4; ++i) put(uint8_t(v >> (8 * i)));
+  }
+};
+
+void put_mod_rm(Bytes& out, uint8_t reg, const Operand& rm) {
   if (rm.kind == OperandKind::Reg) {
     out.put(uint8_t(0xC0 | (reg & 7) << 3 | lo(rm.reg)));
     return;
@@ -327,7 +344,7 @@ void put_mod_rm(Encoding& out, uint8_t reg, const Operand& rm) {
   if (mod == 2) out.put32(uint32_t(m.disp));
 }
 
-void encode_form(const Form& f, const Instruction& in, Encoding& out) {
+void encode_form(const Form& f, const Instruction& in, Bytes& out, Encoding& enc) {
   const Operand* reg_op = nullptr;  // goes in ModRM.reg
   const Operand* rm_op = nullptr;   // goes in ModRM.rm
   uint8_t reg_field = 0;
@@ -372,13 +389,13 @@ void encode_form(const Form& f, const Instruction& in, Encoding& out) {
       out.put32(uint32_t(o.imm));
     } else if (is_rel_type(t)) {
       Fixup fx;
-      fx.offset = out.size;
+      fx.offset = out.n;
       fx.kind = t == OT::Rel8 ? Rel8 : Rel32;
       if (o.kind == OperandKind::Label) fx.label = o.label;
       else fx.addend = o.imm;
       if (t == OT::Rel8) out.put(0);
       else out.put32(0);
-      out.add_fixup(fx);
+      enc.add_fixup(fx);
     }
   }
 }
@@ -387,7 +404,10 @@ void encode_hook(const Instruction& in, bool long_form, Encoding& out) {
   if (in.num_operands > 3) throw AsmError("too many operands");
   const Form* f = find_form(in, long_form);
   if (!f) throw AsmError("invalid operands for '" + print(in) + "'");
-  encode_form(*f, in, out);
+  Bytes bytes;
+  encode_form(*f, in, bytes, out);
+  std::memcpy(out.bytes.data(), bytes.b, sizeof bytes.b);
+  out.size = uint8_t(bytes.n);
 }
 
 constexpr FixupKind kFixupKinds[] = {
