@@ -315,16 +315,19 @@ class Core {
     }
     note_peak();
 
-    // First encoding: short forms, long ones for non-local targets.
-    std::vector<InstState>& insts = insts_;  // kept between units: no reallocation per block
-    insts.clear();
+    // First encoding: short forms, long ones for non-local targets.  The states
+    // are kept from unit to unit and reset field by field: a new one is zeroed
+    // whole (128 bytes), which cost more than the rest of its setting up.
+    size_t count = 0;
     for (uint32_t b = first; b < last; ++b) {
       const std::span<const ItemKind> kinds = kinds_of(b);
       for (uint32_t i = 0; i < uint32_t(kinds.size()); ++i) {
         if (kinds[i] != ItemKind::Instruction) continue;
-        InstState& s = insts.emplace_back();  // built in place
+        if (count == insts_.size()) insts_.emplace_back();
+        InstState& s = insts_[count++];
         s.block = b;
         s.item = i;
+        s.long_form = s.bad = false;  // the rest is set by encode_state, resolve_refs and layout
         encode_state(s);
         resolve_refs(s, true);
         bool far = false;
@@ -337,6 +340,8 @@ class Core {
         }
       }
     }
+
+    const std::span<InstState> insts(insts_.data(), count);
 
     // Relaxation: grow the forms that do not reach, until nothing changes.
     std::vector<uint32_t>& block_start = block_start_;
@@ -370,7 +375,7 @@ class Core {
     emit(first, last, insts, block_start);
   }
 
-  void layout(uint32_t first, uint32_t last, std::vector<InstState>& insts,
+  void layout(uint32_t first, uint32_t last, std::span<InstState> insts,
               std::vector<uint32_t>& block_start) {
     uint32_t cur = 0;
     size_t n = 0;
@@ -397,7 +402,7 @@ class Core {
     }
   }
 
-  void emit(uint32_t first, uint32_t last, std::vector<InstState>& insts,
+  void emit(uint32_t first, uint32_t last, std::span<InstState> insts,
             const std::vector<uint32_t>& block_start) {
     const uint32_t base = uint32_t(r_.code.size());
     size_t unit_bytes = 0;
@@ -489,7 +494,7 @@ class Core {
   std::unordered_map<LocalKey, uint32_t, LocalKeyHash> locals_;
   std::vector<int64_t> localAddr_;
   std::vector<Pending> pending_;
-  std::vector<InstState> insts_;       // assemble_unit's instructions
+  std::vector<InstState> insts_;       // assemble_unit's instructions (the first of them), reused
   std::vector<uint32_t> block_start_;  // assemble_unit's block starts
   std::vector<ItemKind> kinds_;        // gather_kinds: the items' kinds, block after block
   std::vector<uint32_t> kinds_at_;     // where each block starts in kinds_, and the end

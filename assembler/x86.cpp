@@ -1,8 +1,6 @@
 // x86-64 target: form table, encoder, decoder.
 #include "assembler/x86_forms.h"
 
-#include <cstring>
-
 namespace ldc::as::x86 {
 namespace detail {
 namespace {
@@ -264,16 +262,17 @@ const Form* find_form(const Instruction& in, bool long_form) {
   static_assert(sizeof(Mnemonic) == 1 && sizeof(OperandKind) == 1 && sizeof(RegClass) == 1 && sizeof(Size) == 1);
   if (in.num_operands > 3) return nullptr;
   constexpr size_t kSlots = 1024;
-  struct Cache {
-    std::array<uint64_t, kSlots> key{};  // form_key + 1, 0 empty
-    std::array<const Form*, kSlots> form{};
+  struct Slot {
+    uint64_t key = 0;  // form_key + 1, 0 empty
+    const Form* form = nullptr;
   };
+  using Cache = std::array<Slot, kSlots>;  // a slot's key and form in one cache line
   thread_local Cache cache;
   const uint64_t key = form_key(in, long_form) + 1;
   const size_t slot = size_t((key * 0x9E3779B97F4A7C15ull) >> 54);
-  if (cache.key[slot] == key) return cache.form[slot];
+  if (cache[slot].key == key) return cache[slot].form;
   const Form* f = find_form_in_table(in, long_form);
-  if (f) cache.key[slot] = key, cache.form[slot] = f;
+  if (f) cache[slot] = {key, f};
   return f;
 }
 
@@ -294,14 +293,17 @@ void check_mem(const Mem& m) {
   if (!m.index.valid() && m.scale != 1) throw AsmError("scale without an index register");
 }
 
-// One instruction's bytes, gathered in a local buffer and handed to the
-// Encoding at once: a byte stored through Encoding::put may alias its size
-// (both uint8_t), so every put reloaded and stored the size.
+// One instruction's bytes, written into the Encoding's buffer with their
+// count kept here (in a register) and stored once at the end: a byte stored
+// through Encoding::put may alias its size (both uint8_t), so every put
+// reloaded and stored the size.  (Gathering them in a local buffer and copying
+// 16 bytes at once stalls on that load of bytes just stored one by one.)
 struct Bytes {
-  uint8_t b[16] = {};
+  uint8_t* b;
   unsigned n = 0;
+  explicit Bytes(Encoding& e) : b(e.bytes.data()) {}
   void put(uint8_t v) {
-    if (n >= sizeof b) Encoding::too_long();
+    if (n >= sizeof(Encoding::bytes)) Encoding::too_long();
     b[n++] = v;
   }
   void put32(uint32_t v) {
@@ -404,9 +406,8 @@ void encode_hook(const Instruction& in, bool long_form, Encoding& out) {
   if (in.num_operands > 3) throw AsmError("too many operands");
   const Form* f = find_form(in, long_form);
   if (!f) throw AsmError("invalid operands for '" + print(in) + "'");
-  Bytes bytes;
+  Bytes bytes(out);
   encode_form(*f, in, bytes, out);
-  std::memcpy(out.bytes.data(), bytes.b, sizeof bytes.b);
   out.size = uint8_t(bytes.n);
 }
 

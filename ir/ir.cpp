@@ -232,49 +232,66 @@ void Memory::set_real(uint32_t i, float v) { std::memcpy(&bytes[layout.addr(Area
 
 enum : uint8_t { kTagInt = 1, kTagReal = 2, kTagEdge = 3, kTagLabel = 4, kTagArea = 0x10 };
 
-static void put16(std::vector<uint8_t>& v, uint32_t x) { v.push_back(uint8_t(x)); v.push_back(uint8_t(x >> 8)); }
-static void put32(std::vector<uint8_t>& v, uint32_t x) {
-  for (int i = 0; i < 4; i++) v.push_back(uint8_t(x >> (8 * i)));
+// The binary IL is written through a pointer into room made ahead: a byte
+// appended with push_back may alias the vector's own end pointer (uint8_t
+// stores alias anything), so each push_back reloaded and stored it.
+static uint8_t* put16(uint8_t* p, uint32_t x) {
+  p[0] = uint8_t(x), p[1] = uint8_t(x >> 8);
+  return p + 2;
+}
+static uint8_t* put32(uint8_t* p, uint32_t x) {
+  for (int i = 0; i < 4; i++) p[i] = uint8_t(x >> (8 * i));
+  return p + 4;
 }
 static uint32_t get16(const uint8_t* p) { return p[0] | (p[1] << 8); }
 static uint32_t get32(const uint8_t* p) { return p[0] | (p[1] << 8) | (p[2] << 16) | (uint32_t(p[3]) << 24); }
 
-static void encode_operand(std::vector<uint8_t>& out, const Operand& o, std::vector<std::pair<size_t, std::string>>& fix) {
+// Writes o's bytes at p (a tag and a u16 or a u32); a label's offset is left
+// 0 and listed in `fix` (`at`: the offset of p in the code).
+static uint8_t* encode_operand(uint8_t* p, size_t at, const Operand& o, std::vector<std::pair<size_t, std::string>>& fix) {
   switch (o.kind) {
-    case OpdKind::None: break;
-    case OpdKind::Bit: case OpdKind::Int: case OpdKind::Real:
-      out.push_back(uint8_t(kTagArea + int(o.area))); put16(out, o.index); break;
-    case OpdKind::Timer: out.push_back(uint8_t(kTagArea + int(Area::TW))); put16(out, o.index); break;
-    case OpdKind::Counter: out.push_back(uint8_t(kTagArea + int(Area::CW))); put16(out, o.index); break;
-    case OpdKind::ConstInt: out.push_back(kTagInt); put32(out, uint32_t(o.ival)); break;
+    case OpdKind::None: return p;
+    case OpdKind::Bit: case OpdKind::Int: case OpdKind::Real: *p = uint8_t(kTagArea + int(o.area)); return put16(p + 1, o.index);
+    case OpdKind::Timer: *p = uint8_t(kTagArea + int(Area::TW)); return put16(p + 1, o.index);
+    case OpdKind::Counter: *p = uint8_t(kTagArea + int(Area::CW)); return put16(p + 1, o.index);
+    case OpdKind::ConstInt: *p = kTagInt; return put32(p + 1, uint32_t(o.ival));
     case OpdKind::ConstReal: {
-      uint32_t u; std::memcpy(&u, &o.fval, 4);
-      out.push_back(kTagReal); put32(out, u); break;
+      uint32_t u;
+      std::memcpy(&u, &o.fval, 4);
+      *p = kTagReal;
+      return put32(p + 1, u);
     }
-    case OpdKind::Edge: out.push_back(kTagEdge); put32(out, o.index); break;
-    case OpdKind::Label:
-      out.push_back(kTagLabel); fix.emplace_back(out.size(), o.label); put32(out, 0); break;
+    case OpdKind::Edge: *p = kTagEdge; return put32(p + 1, o.index);
+    case OpdKind::Label: *p = kTagLabel; fix.emplace_back(at + 1, o.label); return put32(p + 1, 0);
   }
+  return p;
 }
 
 BinaryIl encode_il(const Program& p) {
+  constexpr size_t kMaxInstrBytes = 1 + 3 * 5;  // an opcode and three operands of 5 bytes
   BinaryIl b;
   std::vector<std::pair<size_t, std::string>> fix;
   std::vector<std::pair<std::string, uint32_t>> labels;
   size_t n = 0;
   for (const Rung& r : p.rungs) n += r.code.size();
-  b.instr_offset.reserve(n);  // sized once, not grown by doubling and copied
+  b.instr_offset.reserve(n);
   b.rung_offset.reserve(p.rungs.size());
-  b.code.reserve(8 * n);  // an opcode byte and two operands of 3 or 5 bytes is typical
+  b.code.resize(8 * n + kMaxInstrBytes);  // about 8 bytes an instruction; grown below if short, cut at the end
+  size_t used = 0;
   for (const Rung& r : p.rungs) {
-    for (const auto& l : r.labels) labels.emplace_back(l, uint32_t(b.code.size()));
-    b.rung_offset.push_back(uint32_t(b.code.size()));
+    for (const auto& l : r.labels) labels.emplace_back(l, uint32_t(used));
+    b.rung_offset.push_back(uint32_t(used));
     for (const Instr& in : r.code) {
-      b.instr_offset.push_back(uint32_t(b.code.size()));
-      b.code.push_back(uint8_t(in.op));
-      for (int i = 0; i < in.nopd(); i++) encode_operand(b.code, in.a[i], fix);
+      if (b.code.size() - used < kMaxInstrBytes) b.code.resize(2 * b.code.size());
+      b.instr_offset.push_back(uint32_t(used));
+      uint8_t* const start = b.code.data();
+      uint8_t* at = start + used;
+      *at++ = uint8_t(in.op);
+      for (int i = 0; i < in.nopd(); i++) at = encode_operand(at, size_t(at - start), in.a[i], fix);
+      used = size_t(at - start);
     }
   }
+  b.code.resize(used);
   for (const auto& l : p.end_labels) labels.emplace_back(l, uint32_t(b.code.size()));
   for (auto& [pos, name] : fix) {
     uint32_t target = 0;
