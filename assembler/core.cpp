@@ -219,15 +219,15 @@ class Core {
     if (n > r_.stats.peak_label_entries) r_.stats.peak_label_entries = n;
   }
 
-  // The kinds of the items of blocks [first, last), read once from the view:
-  // every pass over a unit asks for each item's (a virtual call each).
+  // The kinds of the items of blocks [first, last), read once from the view
+  // (a virtual call a block): every pass over a unit looks at each item's.
   void gather_kinds(uint32_t first, uint32_t last) {
     kinds_first_ = first;
     kinds_.clear();
     kinds_at_.clear();
     for (uint32_t b = first; b < last; ++b) {
       kinds_at_.push_back(uint32_t(kinds_.size()));
-      for (size_t i = 0, n_items = p_->num_items(b); i < n_items; ++i) kinds_.push_back(p_->kind(b, i));
+      p_->append_kinds(b, kinds_);
     }
     kinds_at_.push_back(uint32_t(kinds_.size()));
   }
