@@ -262,7 +262,7 @@ struct Stats {
   size_t units = 0;             // blocks (blockwise) or 1 (whole program)
   size_t encode_calls = 0;
   size_t global_fixups = 0;      // fixups resolved after layout
-  int64_t elapsed_ns = 0;        // wall time of assemble()
+  int64_t elapsed_ns = 0;        // wall time of assemble(); 0 from the streaming Assembler
 };
 
 struct ItemLayout {
@@ -297,7 +297,8 @@ class ProgramView {
   virtual size_t num_blocks() const = 0;
   virtual int source_line(size_t block) const = 0;
   virtual size_t num_items(size_t block) const = 0;
-  virtual ItemKind kind(size_t block, size_t item) const = 0;
+  // The kinds of the block's items, appended to `out` (one call a block, not an item).
+  virtual void append_kinds(size_t block, std::vector<ItemKind>& out) const = 0;
   virtual std::string_view label(size_t block, size_t item) const = 0;
   virtual bool is_global(size_t block, size_t item) const = 0;
   virtual void encode(size_t block, size_t item, bool long_form,
@@ -331,8 +332,8 @@ Result assemble(const Target<Inst>& target, const Program<Inst>& program,
     size_t num_blocks() const override { return p_.blocks.size(); }
     int source_line(size_t b) const override { return p_.blocks[b].source_line; }
     size_t num_items(size_t b) const override { return p_.blocks[b].items.size(); }
-    ItemKind kind(size_t b, size_t i) const override {
-      return p_.blocks[b].items[i].kind;
+    void append_kinds(size_t b, std::vector<ItemKind>& out) const override {
+      for (const auto& it : p_.blocks[b].items) out.push_back(it.kind);
     }
     std::string_view label(size_t b, size_t i) const override {
       return p_.blocks[b].items[i].label;
@@ -459,7 +460,9 @@ class Assembler {
     size_t num_blocks() const override { return index_ + 1; }
     int source_line(size_t) const override { return b_.source_line; }
     size_t num_items(size_t) const override { return b_.items.size(); }
-    ItemKind kind(size_t, size_t i) const override { return b_.items[i].kind; }
+    void append_kinds(size_t, std::vector<ItemKind>& out) const override {
+      for (const auto& it : b_.items) out.push_back(it.kind);
+    }
     std::string_view label(size_t, size_t i) const override { return b_.items[i].label; }
     bool is_global(size_t, size_t i) const override { return b_.items[i].global; }
     void encode(size_t, size_t i, bool long_form, Encoding& out) const override {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <mutex>
 #include <unordered_map>
 
@@ -162,11 +163,18 @@ class Core {
     r_.block_offsets.assign(nb, 0);
     r_.items.resize(nb);
     for (size_t b = 0; b < nb; ++b) r_.items[b].resize(p.num_items(b));
-    for (uint32_t b = 0; b < nb; ++b) define_globals(b);
+    for (uint32_t b = 0; b < nb; ++b) {
+      gather_kinds(b, b + 1);
+      define_globals(b);
+    }
     note_peak();
     if (mode_ == Mode::Blockwise) {
-      for (uint32_t b = 0; b < nb; ++b) assemble_unit(b, b + 1);
+      for (uint32_t b = 0; b < nb; ++b) {
+        gather_kinds(b, b + 1);
+        assemble_unit(b, b + 1);
+      }
     } else {
+      gather_kinds(0, uint32_t(nb));
       assemble_unit(0, uint32_t(nb));
     }
     return finish();
@@ -183,6 +191,7 @@ class Core {
     keep_items_ = keep_items;
     if (keep_items) r_.items.emplace_back(p.num_items(b));
     else last_.assign(p.num_items(b), ItemLayout{});
+    gather_kinds(b, b + 1);
     define_globals(b);
     assemble_unit(b, b + 1);
     p_ = nullptr;
@@ -210,11 +219,30 @@ class Core {
     if (n > r_.stats.peak_label_entries) r_.stats.peak_label_entries = n;
   }
 
+  // The kinds of the items of blocks [first, last), read once from the view
+  // (a virtual call a block): every pass over a unit looks at each item's.
+  void gather_kinds(uint32_t first, uint32_t last) {
+    kinds_first_ = first;
+    kinds_.clear();
+    kinds_at_.clear();
+    for (uint32_t b = first; b < last; ++b) {
+      kinds_at_.push_back(uint32_t(kinds_.size()));
+      p_->append_kinds(b, kinds_);
+    }
+    kinds_at_.push_back(uint32_t(kinds_.size()));
+  }
+  // The kinds of block b's items (one a item), of the blocks gathered last.
+  std::span<const ItemKind> kinds_of(uint32_t b) const {
+    const uint32_t at = kinds_at_[b - kinds_first_];
+    return {kinds_.data() + at, kinds_at_[b - kinds_first_ + 1] - at};
+  }
+
   // Pass 1: each global label definition of block b must be declared and
   // defined once.
   void define_globals(uint32_t b) {
-    for (size_t i = 0, n_items = p_->num_items(b); i < n_items; ++i) {
-      if (p_->kind(b, i) != ItemKind::Label || !p_->is_global(b, i)) continue;
+    const std::span<const ItemKind> kinds = kinds_of(b);
+    for (size_t i = 0; i < kinds.size(); ++i) {
+      if (kinds[i] != ItemKind::Label || !p_->is_global(b, i)) continue;
       std::string_view name = p_->label(b, i);
       auto it = globals_.find(name);
       if (it == globals_.end()) {
@@ -270,8 +298,9 @@ class Core {
     localAddr_.clear();
     // Local label table.
     for (uint32_t b = first; b < last; ++b) {
-      for (size_t i = 0, n_items = p_->num_items(b); i < n_items; ++i) {
-        if (p_->kind(b, i) != ItemKind::Label || p_->is_global(b, i)) continue;
+      const std::span<const ItemKind> kinds = kinds_of(b);
+      for (size_t i = 0; i < kinds.size(); ++i) {
+        if (kinds[i] != ItemKind::Label || p_->is_global(b, i)) continue;
         std::string_view name = p_->label(b, i);
         if (globals_.count(name)) {
           error(int(b), "local label '" + std::string(name) + "' clashes with a global label");
@@ -286,15 +315,19 @@ class Core {
     }
     note_peak();
 
-    // First encoding: short forms, long ones for non-local targets.
-    std::vector<InstState>& insts = insts_;  // kept between units: no reallocation per block
-    insts.clear();
+    // First encoding: short forms, long ones for non-local targets.  The states
+    // are kept from unit to unit and reset field by field: a new one is zeroed
+    // whole (128 bytes), which cost more than the rest of its setting up.
+    size_t count = 0;
     for (uint32_t b = first; b < last; ++b) {
-      for (uint32_t i = 0, n_items = uint32_t(p_->num_items(b)); i < n_items; ++i) {
-        if (p_->kind(b, i) != ItemKind::Instruction) continue;
-        InstState& s = insts.emplace_back();  // built in place
+      const std::span<const ItemKind> kinds = kinds_of(b);
+      for (uint32_t i = 0; i < uint32_t(kinds.size()); ++i) {
+        if (kinds[i] != ItemKind::Instruction) continue;
+        if (count == insts_.size()) insts_.emplace_back();
+        InstState& s = insts_[count++];
         s.block = b;
         s.item = i;
+        s.long_form = s.bad = false;  // the rest is set by encode_state, resolve_refs and layout
         encode_state(s);
         resolve_refs(s, true);
         bool far = false;
@@ -307,6 +340,8 @@ class Core {
         }
       }
     }
+
+    const std::span<InstState> insts(insts_.data(), count);
 
     // Relaxation: grow the forms that do not reach, until nothing changes.
     std::vector<uint32_t>& block_start = block_start_;
@@ -340,14 +375,15 @@ class Core {
     emit(first, last, insts, block_start);
   }
 
-  void layout(uint32_t first, uint32_t last, std::vector<InstState>& insts,
+  void layout(uint32_t first, uint32_t last, std::span<InstState> insts,
               std::vector<uint32_t>& block_start) {
     uint32_t cur = 0;
     size_t n = 0;
     for (uint32_t b = first; b < last; ++b) {
       block_start[b - first] = cur;
-      for (size_t i = 0, n_items = p_->num_items(b); i < n_items; ++i) {
-        switch (p_->kind(b, i)) {
+      const std::span<const ItemKind> kinds = kinds_of(b);
+      for (size_t i = 0; i < kinds.size(); ++i) {
+        switch (kinds[i]) {
           case ItemKind::Label:
             if (!p_->is_global(b, i)) {
               auto it = locals_.find(LocalKey{b, p_->label(b, i)});
@@ -366,7 +402,7 @@ class Core {
     }
   }
 
-  void emit(uint32_t first, uint32_t last, std::vector<InstState>& insts,
+  void emit(uint32_t first, uint32_t last, std::span<InstState> insts,
             const std::vector<uint32_t>& block_start) {
     const uint32_t base = uint32_t(r_.code.size());
     size_t unit_bytes = 0;
@@ -376,20 +412,24 @@ class Core {
     for (uint32_t b = first; b < last; ++b) {
       r_.block_offsets[b] = base + block_start[b - first];
       uint32_t cur = r_.block_offsets[b];
-      for (size_t i = 0, n_items = p_->num_items(b); i < n_items; ++i) {
+      const std::span<const ItemKind> kinds = kinds_of(b);
+      for (size_t i = 0; i < kinds.size(); ++i) {
         ItemLayout& lay = keep_items_ ? r_.items[b][i] : last_[i];
         lay.offset = cur;
-        ItemKind kind = p_->kind(b, i);
-        if (kind == ItemKind::Label && p_->is_global(b, i)) {
+        const ItemKind k = kinds[i];
+        if (k == ItemKind::Label && p_->is_global(b, i)) {
           auto g = globals_.find(p_->label(b, i));
           if (g != globals_.end() && globalDefBlock_[g->second] == int(b))
             r_.global_addresses[g->second] = cur;
         }
-        if (kind != ItemKind::Instruction) continue;
+        if (k != ItemKind::Instruction) continue;
         InstState& s = insts[n++];
         lay.size = s.enc.size;
         lay.long_form = s.long_form;
-        std::copy_n(s.enc.bytes.begin(), s.enc.size, r_.code.begin() + cur);
+        // all 16 bytes where they fit (a fixed-size copy, no call); the bytes past
+        // the size are the next instruction's, copied over them after
+        if (r_.code.size() - cur >= s.enc.bytes.size()) std::memcpy(&r_.code[cur], s.enc.bytes.data(), s.enc.bytes.size());
+        else std::copy_n(s.enc.bytes.begin(), s.enc.size, r_.code.begin() + cur);
         for (unsigned f = 0; f < s.enc.num_fixups; ++f) {
           const Fixup& fx = s.enc.fixups[f];
           // a pending fixup outlives the block: name its label from the global table
@@ -454,8 +494,11 @@ class Core {
   std::unordered_map<LocalKey, uint32_t, LocalKeyHash> locals_;
   std::vector<int64_t> localAddr_;
   std::vector<Pending> pending_;
-  std::vector<InstState> insts_;       // assemble_unit's instructions
+  std::vector<InstState> insts_;       // assemble_unit's instructions (the first of them), reused
   std::vector<uint32_t> block_start_;  // assemble_unit's block starts
+  std::vector<ItemKind> kinds_;        // gather_kinds: the items' kinds, block after block
+  std::vector<uint32_t> kinds_at_;     // where each block starts in kinds_, and the end
+  uint32_t kinds_first_ = 0;           // the first block gathered
   bool keep_items_ = true;             // every block's item layout goes into r_.items
   std::vector<ItemLayout> last_;       // else the last block's, alone
 };
@@ -472,11 +515,12 @@ Result assemble(const TargetInfo& target, const ProgramView& program, Mode mode)
   return r;
 }
 
+// The streaming assembler keeps no clock: read twice a block, it cost more than a
+// small block's layout (Stats::elapsed_ns stays 0; its callers time their calls).
 struct Stream {
   std::vector<std::string> globals;
   Core core;
   uint32_t blocks = 0;
-  int64_t ns = 0;
   Stream(const TargetInfo& t, std::vector<std::string> g)
       : globals(std::move(g)), core(t, globals, Mode::Blockwise) {}
 };
@@ -484,28 +528,15 @@ struct Stream {
 void StreamDeleter::operator()(Stream* s) const { delete s; }
 
 std::unique_ptr<Stream, StreamDeleter> stream_begin(const TargetInfo& target, std::vector<std::string> globals) {
-  auto t0 = std::chrono::steady_clock::now();
-  std::unique_ptr<Stream, StreamDeleter> s(new Stream(target, std::move(globals)));
-  s->ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
-  return s;
+  return std::unique_ptr<Stream, StreamDeleter>(new Stream(target, std::move(globals)));
 }
 
-void stream_block(Stream& s, const ProgramView& block, bool keep_items) {
-  auto t0 = std::chrono::steady_clock::now();
-  s.core.block(block, s.blocks++, keep_items);
-  s.ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
-}
+void stream_block(Stream& s, const ProgramView& block, bool keep_items) { s.core.block(block, s.blocks++, keep_items); }
 
 std::span<const ItemLayout> stream_last_items(const Stream& s) { return s.core.last_items(); }
 uint32_t stream_code_size(const Stream& s) { return s.core.code_size(); }
 
-Result stream_finish(Stream& s) {
-  auto t0 = std::chrono::steady_clock::now();
-  Result r = s.core.finish();
-  s.ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
-  r.stats.elapsed_ns = s.ns;
-  return r;
-}
+Result stream_finish(Stream& s) { return s.core.finish(); }
 
 }  // namespace detail
 }  // namespace ldc::as

@@ -262,16 +262,17 @@ const Form* find_form(const Instruction& in, bool long_form) {
   static_assert(sizeof(Mnemonic) == 1 && sizeof(OperandKind) == 1 && sizeof(RegClass) == 1 && sizeof(Size) == 1);
   if (in.num_operands > 3) return nullptr;
   constexpr size_t kSlots = 1024;
-  struct Cache {
-    std::array<uint64_t, kSlots> key{};  // form_key + 1, 0 empty
-    std::array<const Form*, kSlots> form{};
+  struct Slot {
+    uint64_t key = 0;  // form_key + 1, 0 empty
+    const Form* form = nullptr;
   };
+  using Cache = std::array<Slot, kSlots>;  // a slot's key and form in one cache line
   thread_local Cache cache;
   const uint64_t key = form_key(in, long_form) + 1;
   const size_t slot = size_t((key * 0x9E3779B97F4A7C15ull) >> 54);
-  if (cache.key[slot] == key) return cache.form[slot];
+  if (cache[slot].key == key) return cache[slot].form;
   const Form* f = find_form_in_table(in, long_form);
-  if (f) cache.key[slot] = key, cache.form[slot] = f;
+  if (f) cache[slot] = {key, f};
   return f;
 }
 
@@ -292,7 +293,25 @@ void check_mem(const Mem& m) {
   if (!m.index.valid() && m.scale != 1) throw AsmError("scale without an index register");
 }
 
-void put_mod_rm(Encoding& out, uint8_t reg, const Operand& rm) {
+// One instruction's bytes, written into the Encoding's buffer with their
+// count kept here (in a register) and stored once at the end: a byte stored
+// through Encoding::put may alias its size (both uint8_t), so every put
+// reloaded and stored the size.  (Gathering them in a local buffer and copying
+// 16 bytes at once stalls on that load of bytes just stored one by one.)
+struct Bytes {
+  uint8_t* b;
+  unsigned n = 0;
+  explicit Bytes(Encoding& e) : b(e.bytes.data()) {}
+  void put(uint8_t v) {
+    if (n >= sizeof(Encoding::bytes)) Encoding::too_long();
+    b[n++] = v;
+  }
+  void put32(uint32_t v) {
+    for (int i = 0; i < 4; ++i) put(uint8_t(v >> (8 * i)));
+  }
+};
+
+void put_mod_rm(Bytes& out, uint8_t reg, const Operand& rm) {
   if (rm.kind == OperandKind::Reg) {
     out.put(uint8_t(0xC0 | (reg & 7) << 3 | lo(rm.reg)));
     return;
@@ -327,7 +346,7 @@ void put_mod_rm(Encoding& out, uint8_t reg, const Operand& rm) {
   if (mod == 2) out.put32(uint32_t(m.disp));
 }
 
-void encode_form(const Form& f, const Instruction& in, Encoding& out) {
+void encode_form(const Form& f, const Instruction& in, Bytes& out, Encoding& enc) {
   const Operand* reg_op = nullptr;  // goes in ModRM.reg
   const Operand* rm_op = nullptr;   // goes in ModRM.rm
   uint8_t reg_field = 0;
@@ -372,13 +391,13 @@ void encode_form(const Form& f, const Instruction& in, Encoding& out) {
       out.put32(uint32_t(o.imm));
     } else if (is_rel_type(t)) {
       Fixup fx;
-      fx.offset = out.size;
+      fx.offset = out.n;
       fx.kind = t == OT::Rel8 ? Rel8 : Rel32;
       if (o.kind == OperandKind::Label) fx.label = o.label;
       else fx.addend = o.imm;
       if (t == OT::Rel8) out.put(0);
       else out.put32(0);
-      out.add_fixup(fx);
+      enc.add_fixup(fx);
     }
   }
 }
@@ -387,7 +406,9 @@ void encode_hook(const Instruction& in, bool long_form, Encoding& out) {
   if (in.num_operands > 3) throw AsmError("too many operands");
   const Form* f = find_form(in, long_form);
   if (!f) throw AsmError("invalid operands for '" + print(in) + "'");
-  encode_form(*f, in, out);
+  Bytes bytes(out);
+  encode_form(*f, in, bytes, out);
+  out.size = uint8_t(bytes.n);
 }
 
 constexpr FixupKind kFixupKinds[] = {

@@ -115,10 +115,28 @@ bool is_name(std::string_view s) {
   return true;
 }
 
+// The common case of parse_number, in one pass: an optional '-' and 1 to 9
+// decimal digits (never outside INT32).  False for anything else, which the
+// general path then reads.
+bool plain_int(std::string_view s, Operand& o) {
+  const bool neg = s[0] == '-';
+  const size_t from = neg ? 1 : 0;
+  if (s.size() == from || s.size() - from > 9) return false;
+  int32_t v = 0;
+  for (size_t i = from; i < s.size(); i++) {
+    if (s[i] < '0' || s[i] > '9') return false;
+    v = v * 10 + (s[i] - '0');
+  }
+  o.kind = OpdKind::ConstInt;
+  o.ival = neg ? -v : v;
+  return true;
+}
+
 // Numeric constant: INT32 or REAL (a '.', an exponent, inf or nan makes it REAL).
 // What strtoll (base 10) and strtof accept, whole.
 bool parse_number(std::string_view s, Operand& o) {
   if (s.empty()) return false;
+  if (plain_int(s, o)) return true;
   char first = s[0];
   if (!(std::isdigit((unsigned char)first) || first == '-' || first == '+' || first == '.')) return false;
   bool real = s.find_first_of(".eEnN") != std::string_view::npos;

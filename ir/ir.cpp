@@ -104,23 +104,36 @@ Op compare_op(Rel r) {
 static char ascii_upper(char c) { return c >= 'a' && c <= 'z' ? char(c - 'a' + 'A') : c; }
 
 // By hash over the names in upper case (every name in ops.def is): an open
-// addressed table of op numbers, its slots more than twice the ops.
+// addressed table of op numbers, its slots more than twice the ops.  A name
+// of up to 16 characters is packed into two words, so a probe compares two
+// integers and the length, not strings.
 namespace {
-uint32_t name_hash(std::string_view s) {
-  uint32_t h = 2166136261u;  // FNV-1a
-  for (char c : s) h = (h ^ uint8_t(c)) * 16777619u;
-  return h;
+struct NameKey {
+  uint64_t w[2] = {0, 0};
+  size_t len = 0;
+  bool operator==(const NameKey&) const = default;
+};
+// The letters of `s` in upper case, packed little-endian; false if longer than 16.
+bool pack_upper(std::string_view s, NameKey& k) {
+  if (s.size() > 16) return false;
+  k.len = s.size();
+  for (size_t i = 0; i < s.size(); i++) k.w[i >> 3] |= uint64_t(uint8_t(ascii_upper(s[i]))) << (8 * (i & 7));
+  return true;
+}
+size_t key_hash(const NameKey& k) {
+  uint64_t h = (k.w[0] ^ (k.w[1] * 0xC2B2AE3D27D4EB4Full) ^ k.len) * 0x9E3779B97F4A7C15ull;
+  return size_t(h >> 40);
 }
 struct OpNames {
   static constexpr size_t kSlots = 512;
   static_assert(kSlots >= 2 * size_t(kOpCount) && (kSlots & (kSlots - 1)) == 0);
-  std::array<std::string_view, kOpCount> name;
+  std::array<NameKey, kOpCount> key;
   std::array<int16_t, kSlots> slot;  // an op number, -1 empty
   OpNames() {
     slot.fill(-1);
     for (int i = 0; i < kOpCount; i++) {
-      name[size_t(i)] = kOps[i].name;
-      size_t at = name_hash(name[size_t(i)]) & (kSlots - 1);
+      pack_upper(kOps[i].name, key[size_t(i)]);
+      size_t at = key_hash(key[size_t(i)]) & (kSlots - 1);
       while (slot[at] >= 0) at = (at + 1) & (kSlots - 1);
       slot[at] = int16_t(i);
     }
@@ -130,12 +143,10 @@ struct OpNames {
 
 std::optional<Op> op_from_name(std::string_view name) {
   static const OpNames t;
-  char up[16];
-  if (name.size() > sizeof up) return std::nullopt;
-  for (size_t i = 0; i < name.size(); i++) up[i] = ascii_upper(name[i]);
-  std::string_view key(up, name.size());
-  for (size_t at = name_hash(key) & (OpNames::kSlots - 1); t.slot[at] >= 0; at = (at + 1) & (OpNames::kSlots - 1))
-    if (t.name[size_t(t.slot[at])] == key) return Op(t.slot[at]);
+  NameKey k;
+  if (!pack_upper(name, k)) return std::nullopt;
+  for (size_t at = key_hash(k) & (OpNames::kSlots - 1); t.slot[at] >= 0; at = (at + 1) & (OpNames::kSlots - 1))
+    if (t.key[size_t(t.slot[at])] == k) return Op(t.slot[at]);
   return std::nullopt;
 }
 
@@ -221,44 +232,66 @@ void Memory::set_real(uint32_t i, float v) { std::memcpy(&bytes[layout.addr(Area
 
 enum : uint8_t { kTagInt = 1, kTagReal = 2, kTagEdge = 3, kTagLabel = 4, kTagArea = 0x10 };
 
-static void put16(std::vector<uint8_t>& v, uint32_t x) { v.push_back(uint8_t(x)); v.push_back(uint8_t(x >> 8)); }
-static void put32(std::vector<uint8_t>& v, uint32_t x) {
-  for (int i = 0; i < 4; i++) v.push_back(uint8_t(x >> (8 * i)));
+// The binary IL is written through a pointer into room made ahead: a byte
+// appended with push_back may alias the vector's own end pointer (uint8_t
+// stores alias anything), so each push_back reloaded and stored it.
+static uint8_t* put16(uint8_t* p, uint32_t x) {
+  p[0] = uint8_t(x), p[1] = uint8_t(x >> 8);
+  return p + 2;
+}
+static uint8_t* put32(uint8_t* p, uint32_t x) {
+  for (int i = 0; i < 4; i++) p[i] = uint8_t(x >> (8 * i));
+  return p + 4;
 }
 static uint32_t get16(const uint8_t* p) { return p[0] | (p[1] << 8); }
 static uint32_t get32(const uint8_t* p) { return p[0] | (p[1] << 8) | (p[2] << 16) | (uint32_t(p[3]) << 24); }
 
-static void encode_operand(std::vector<uint8_t>& out, const Operand& o, std::vector<std::pair<size_t, std::string>>& fix) {
+// Writes o's bytes at p (a tag and a u16 or a u32); a label's offset is left
+// 0 and listed in `fix` (`at`: the offset of p in the code).
+static uint8_t* encode_operand(uint8_t* p, size_t at, const Operand& o, std::vector<std::pair<size_t, std::string>>& fix) {
   switch (o.kind) {
-    case OpdKind::None: break;
-    case OpdKind::Bit: case OpdKind::Int: case OpdKind::Real:
-      out.push_back(uint8_t(kTagArea + int(o.area))); put16(out, o.index); break;
-    case OpdKind::Timer: out.push_back(uint8_t(kTagArea + int(Area::TW))); put16(out, o.index); break;
-    case OpdKind::Counter: out.push_back(uint8_t(kTagArea + int(Area::CW))); put16(out, o.index); break;
-    case OpdKind::ConstInt: out.push_back(kTagInt); put32(out, uint32_t(o.ival)); break;
+    case OpdKind::None: return p;
+    case OpdKind::Bit: case OpdKind::Int: case OpdKind::Real: *p = uint8_t(kTagArea + int(o.area)); return put16(p + 1, o.index);
+    case OpdKind::Timer: *p = uint8_t(kTagArea + int(Area::TW)); return put16(p + 1, o.index);
+    case OpdKind::Counter: *p = uint8_t(kTagArea + int(Area::CW)); return put16(p + 1, o.index);
+    case OpdKind::ConstInt: *p = kTagInt; return put32(p + 1, uint32_t(o.ival));
     case OpdKind::ConstReal: {
-      uint32_t u; std::memcpy(&u, &o.fval, 4);
-      out.push_back(kTagReal); put32(out, u); break;
+      uint32_t u;
+      std::memcpy(&u, &o.fval, 4);
+      *p = kTagReal;
+      return put32(p + 1, u);
     }
-    case OpdKind::Edge: out.push_back(kTagEdge); put32(out, o.index); break;
-    case OpdKind::Label:
-      out.push_back(kTagLabel); fix.emplace_back(out.size(), o.label); put32(out, 0); break;
+    case OpdKind::Edge: *p = kTagEdge; return put32(p + 1, o.index);
+    case OpdKind::Label: *p = kTagLabel; fix.emplace_back(at + 1, o.label); return put32(p + 1, 0);
   }
+  return p;
 }
 
 BinaryIl encode_il(const Program& p) {
+  constexpr size_t kMaxInstrBytes = 1 + 3 * 5;  // an opcode and three operands of 5 bytes
   BinaryIl b;
   std::vector<std::pair<size_t, std::string>> fix;
   std::vector<std::pair<std::string, uint32_t>> labels;
+  size_t n = 0;
+  for (const Rung& r : p.rungs) n += r.code.size();
+  b.instr_offset.reserve(n);
+  b.rung_offset.reserve(p.rungs.size());
+  b.code.resize(8 * n + kMaxInstrBytes);  // about 8 bytes an instruction; grown below if short, cut at the end
+  size_t used = 0;
   for (const Rung& r : p.rungs) {
-    for (const auto& l : r.labels) labels.emplace_back(l, uint32_t(b.code.size()));
-    b.rung_offset.push_back(uint32_t(b.code.size()));
+    for (const auto& l : r.labels) labels.emplace_back(l, uint32_t(used));
+    b.rung_offset.push_back(uint32_t(used));
     for (const Instr& in : r.code) {
-      b.instr_offset.push_back(uint32_t(b.code.size()));
-      b.code.push_back(uint8_t(in.op));
-      for (int i = 0; i < in.nopd(); i++) encode_operand(b.code, in.a[i], fix);
+      if (b.code.size() - used < kMaxInstrBytes) b.code.resize(2 * b.code.size());
+      b.instr_offset.push_back(uint32_t(used));
+      uint8_t* const start = b.code.data();
+      uint8_t* at = start + used;
+      *at++ = uint8_t(in.op);
+      for (int i = 0; i < in.nopd(); i++) at = encode_operand(at, size_t(at - start), in.a[i], fix);
+      used = size_t(at - start);
     }
   }
+  b.code.resize(used);
   for (const auto& l : p.end_labels) labels.emplace_back(l, uint32_t(b.code.size()));
   for (auto& [pos, name] : fix) {
     uint32_t target = 0;
@@ -397,33 +430,29 @@ const char* dev_name(Dev d) { return kDevNames[int(d)]; }
 static bool ascii_alpha(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); }
 static bool ascii_digit(char c) { return c >= '0' && c <= '9'; }
 
+// One pass over the name: the prefix packed in upper case as it is read, the
+// digits summed as they are checked.
 std::optional<DeviceRef> parse_device(std::string_view s) {
-  size_t n = 0;
-  while (n < s.size() && ascii_alpha(s[n])) n++;
-  if (n == 0 || n == s.size() || n > 2) return std::nullopt;
-  std::string_view prefix = s.substr(0, n), digits = s.substr(n);
-  for (char ch : digits)
-    if (!ascii_digit(ch)) return std::nullopt;
-  if (digits.size() > 9) return DeviceRef{Dev::X, UINT32_MAX};  // surely out of range
-  // the names (one or two letters) and the prefix as keys: their letters in upper case, packed
-  auto key = [](std::string_view name) {
-    uint32_t k = 0;
-    for (size_t i = 0; i < name.size(); i++) k |= uint32_t(uint8_t(ascii_upper(name[i]))) << (8 * i);
-    return k;
-  };
-  static const auto dev_keys = [&] {
+  // the names (one or two letters) as keys: their letters in upper case, packed
+  static const auto dev_keys = [] {
     std::array<uint32_t, std::size(kDevViews)> k{};
-    for (size_t i = 0; i < k.size(); i++) k[i] = key(kDevViews[i]);
+    for (size_t i = 0; i < k.size(); i++)
+      for (size_t j = 0; j < kDevViews[i].size(); j++) k[i] |= uint32_t(uint8_t(kDevViews[i][j])) << (8 * j);
     return k;
   }();
-  const uint32_t pk = key(prefix);
-  for (size_t i = 0; i < dev_keys.size(); i++) {
-    if (pk == dev_keys[i]) {
-      uint32_t v = 0;
-      for (char ch : digits) v = v * 10 + uint32_t(ch - '0');
-      return DeviceRef{Dev(i), v};
-    }
+  size_t n = 0;
+  uint32_t pk = 0;
+  for (; n < s.size() && ascii_alpha(s[n]); n++)
+    if (n < 2) pk |= uint32_t(uint8_t(ascii_upper(s[n]))) << (8 * n);
+  if (n == 0 || n == s.size() || n > 2) return std::nullopt;
+  uint32_t v = 0;  // wraps past 9 digits (unsigned, defined), then not used
+  for (size_t i = n; i < s.size(); i++) {
+    if (!ascii_digit(s[i])) return std::nullopt;
+    v = v * 10 + uint32_t(s[i] - '0');
   }
+  if (s.size() - n > 9) return DeviceRef{Dev::X, UINT32_MAX};  // surely out of range
+  for (size_t i = 0; i < dev_keys.size(); i++)
+    if (pk == dev_keys[i]) return DeviceRef{Dev(i), v};
   return std::nullopt;
 }
 

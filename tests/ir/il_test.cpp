@@ -121,6 +121,8 @@ TEST(IlText, OpFromNameFindsEveryMnemonicAndNothingElse) {
   EXPECT_EQ(op_from_name(""), std::nullopt);
   EXPECT_EQ(op_from_name("LOADLOADLOADLOADL"), std::nullopt);
   EXPECT_EQ(op_from_name("LOA"), std::nullopt);
+  EXPECT_EQ(op_from_name(std::string_view("AND\0", 4)), std::nullopt);  // the length is part of the key
+  EXPECT_EQ(op_from_name(std::string_view("AN\0", 3)), std::nullopt);
 }
 
 // parse_device: every device name in either case, with its index.
@@ -138,6 +140,11 @@ TEST(IlText, ParseDeviceReadsEveryName) {
   EXPECT_EQ(parse_device("Q1"), std::nullopt);
   EXPECT_EQ(parse_device("WZ1"), std::nullopt);
   EXPECT_EQ(parse_device("X"), std::nullopt);
+  EXPECT_EQ(parse_device("D999999999")->index, 999999999u);
+  EXPECT_EQ(parse_device("d0000000000")->index, UINT32_MAX);  // ten digits: out of range
+  EXPECT_EQ(parse_device("X99999999999999999999")->index, UINT32_MAX);
+  EXPECT_EQ(parse_device("D12a"), std::nullopt);
+  EXPECT_EQ(parse_device("XYZ1"), std::nullopt);
 }
 
 TEST(IlText, ErrorsCarryLineAndColumn) {
@@ -167,9 +174,15 @@ TEST(IlText, ConstantsMnemonicsAndLabels) {
   EXPECT_EQ(constant("-2147483648").ival, INT32_MIN);
   EXPECT_EQ(constant("2147483647").ival, INT32_MAX);
   EXPECT_EQ(constant("007").ival, 7);
+  // either side of the one-pass reading of '-' and 1 to 9 digits (parse_number)
+  EXPECT_EQ(constant("-0").ival, 0);
+  EXPECT_EQ(constant("999999999").ival, 999999999);
+  EXPECT_EQ(constant("-999999999").ival, -999999999);
+  EXPECT_EQ(constant("1000000000").ival, 1000000000);
+  EXPECT_EQ(constant("-0000000001").ival, -1);
   EXPECT_EQ(constant("1e3").kind, OpdKind::ConstReal);
   EXPECT_EQ(constant("-.5").fval, -0.5f);
-  for (const char* bad : {"2147483648", "-2147483649", "+-5", "++5", "--5", "-+5", "+", "-", "0x10", "5x", "99999999999999999999"})
+  for (const char* bad : {"2147483648", "-2147483649", "5-", "1-2", "+-5", "++5", "--5", "-+5", "+", "-", "0x10", "5x", "99999999999999999999"})
     EXPECT_THROW(constant(bad), CompileError) << bad;
   EXPECT_EQ(parse_il_text(".rung line 1\nlOaD X0\nout Y0\n.end\n", "c.il").rungs[0].code[1].op, Op::OUT);
   EXPECT_THROW(parse_il_text(".rung line 1\nLOADNOTANOPCODE X0\n.end\n", "c.il"), CompileError);
