@@ -1,8 +1,9 @@
 // loader/x86_check.cpp -- the x86-64 code check of the loader: every byte
 // decodes with our disassembler, every memory operand is [rbx+disp] (the -O2
-// frame: [rbp+disp], or a base register's) inside the memory image, every direct branch lands on an instruction boundary inside the
-// code and goes forward, and the only division is the guarded one
-// (docs/image-format.md, "The x86-64 code check").
+// frame: [rbp+disp], or a base register's) inside the memory image, every
+// direct branch lands on an instruction boundary inside the code and goes
+// forward, and the only division is the guarded one (docs/image-format.md,
+// "The x86-64 code check").
 #include <algorithm>
 #include <array>
 #include <cstdio>
