@@ -1150,7 +1150,7 @@ as::x86::RoutineAreas x86_routine_areas(const Layout& l) {
 // -O2 compact addressing (docs/x86.md, "Compact addressing"): the rungs are
 // taken in regions of consecutive blocks; at the start of each region the
 // base registers (as::x86::kBaseRegs) are pointed where that region's
-// [rbx+disp32] operands are (a `lea reg, [rbx+K]` where one pays), and the
+// [rbp+disp32] operands are (a `lea reg, [rbp+K]` where one pays), and the
 // operands inside a register's disp8 window [K-128, K+127] become [reg+d8].
 bool rewritable(const Instruction& in, const as::x86::Operand& o) {
   return o.kind == OperandKind::Mem && in.mnemonic != M::Call && in.mnemonic != M::Lea && o.mem.base == kO2Image &&
@@ -1168,7 +1168,7 @@ struct Op {
 using Ops = std::vector<Op>;
 constexpr int64_t kBaseKMin = 128;  // the loader's range for K: [128, size - 135], so that every
 constexpr int64_t kBaseKTop = 135;  // [reg+d8] access of up to 8 bytes stays inside the image
-constexpr int64_t kLeaBytes = 7;    // lea reg, [rbx+disp32]
+constexpr int64_t kLeaBytes = 7;    // lea reg, [rbp+disp32]
 // A region ends after the block that brings it kRegionOps operands (or before
 // a jump target).  Picked by measuring code bytes of ldbench's plant and
 // synthetic programs (docs/x86.md): 16 to 64 operands and one region of
