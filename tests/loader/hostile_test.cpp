@@ -540,6 +540,57 @@ TEST(Hostile, CallsOnlyToTheSharedRoutines) {
           "does not end with the scan function's epilogue", false);
 }
 
+// Both -O2 frames run: a body in ldc's frame (rbp the image, bl a slot) and
+// the same in the older one (rbx the image, bpl a slot), each calling its
+// frame's counter routine, is accepted by the loader and counts the rising
+// edges of X0 into C0, its bit-stack slot copied to Y0.
+TEST(Hostile, BothO2FramesRunTheirCounterRoutines) {
+  constexpr uint32_t kEdges = 1;
+  const Layout L = Layout::standard(kEdges);
+  const x86::RoutineAreas areas = layout_areas(kEdges);
+  const std::string x0 = hex(L.addr(Area::X, 0)), y0 = hex(L.addr(Area::Y, 0)), e0 = hex(L.addr(Area::E, 0));
+  for (x86::RegNum image : {x86::image_reg(true), x86::BX}) {
+    g_o2_image = image;
+    const bool ldc_frame = image == x86::image_reg(true);
+    const std::string slot = ldc_frame ? "bl" : "bpl", slot32 = ldc_frame ? "ebx" : "ebp";
+    // the older frame's call site computes the edge itself and passes it in esi
+    std::vector<std::string> body = {"movzx " + slot32 + ", byte ptr [IMG+" + x0 + "]",
+                                     "mov byte ptr [IMG+" + y0 + "], " + slot};
+    if (ldc_frame) {
+      body.insert(body.end(), {"mov esi, " + slot32, "mov r8d, 0x0"});
+    } else {
+      body.insert(body.end(), {"movzx eax, " + slot, "movzx esi, byte ptr [IMG+" + e0 + "]", "mov byte ptr [IMG+" + e0 + "], al",
+                               "not esi", "and esi, eax"});
+    }
+    body.insert(body.end(), {"mov dl, 0x0", "mov ecx, 0x64", "call 0x0"});
+    std::vector<uint32_t> at;
+    std::vector<uint8_t> code = scan_function(body, at, true);  // the call is rel32: its size does not change
+    const int64_t entry = int64_t(code.size());
+    body.back() = "call " + std::to_string(entry - int64_t(at[0]));
+    code = scan_function(body, at, true);
+    for (const auto& in : x86::scan_routine(x86::Routine::Ctu, areas, image)) {
+      std::vector<uint8_t> b = x86::encode_at(in, code.size());
+      code.insert(code.end(), b.begin(), b.end());
+    }
+    Image im = image_around(code, kEdges);
+    ASSERT_EQ(refusal(im), "") << x86::reg_name(x86::r64(image));
+    Memory m(L);
+    auto eng = make_native_engine(im.code, im.entry);
+    int rising = 0, before = 0;
+    for (int x : {1, 0, 1, 1, 0, 1}) {
+      m.bytes[L.addr(Area::X, 0)] = uint8_t(x);
+      eng->scan(m.data());
+      rising += x && !before;
+      before = x;
+      EXPECT_EQ(m.bytes[L.addr(Area::Y, 0)], x);
+      int32_t cv;
+      std::memcpy(&cv, m.data() + L.addr(Area::CW, 0), 4);
+      EXPECT_EQ(cv, rising) << x86::reg_name(x86::r64(image));
+    }
+  }
+  g_o2_image = x86::image_reg(true);
+}
+
 TEST(Hostile, EntryPointsMustBeTheFrame) {
   std::vector<uint32_t> at;
   Image im = image_around(scan_function({"nop"}, at));
