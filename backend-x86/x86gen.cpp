@@ -143,6 +143,10 @@ class Gen : public ClassGen<Gen> {
     emit(M::And, {R(esi), I(1)});
     return esi;
   }
+  // esi = the top, 0 or 1: the power a shared routine takes
+  void power_to_esi() {
+    if (Reg p = power(); p != esi) emit(M::Mov, {R(esi), R(p)});
+  }
   // eax = the top, 0 or 1
   void top_to_eax() {
     if (slots_) emit(M::Movzx, {R(eax), R(top8())});
@@ -702,8 +706,7 @@ void Gen::reset_masked(std::initializer_list<Operand> dwords, std::initializer_l
 // branch-free, conditional moves over every outcome) with the timer number in
 // edx, the preset in ecx and the input in esi.
 void Gen::timer_gated(const ldc::Instr& in) {
-  Reg p = power();
-  if (p != esi) emit(M::Mov, {R(esi), R(p)});
+  power_to_esi();
   preset(in.a[1]);  // clamped here, not in the routine: most presets are constants
   emit(M::Mov, {R(r8(DX)), I(int32_t(in.a[0].index & 0xff))});  // the routine takes dl only (movzx edx, dl)
   call_routine(in.op == Op::TON ? as::x86::Routine::Ton : in.op == Op::TOF ? as::x86::Routine::Tof : as::x86::Routine::Tp);
@@ -763,7 +766,7 @@ void Gen::remember_input(uint32_t ti) {
 // in ecx, the power in esi and the edge slot's number in r8d (the routine
 // keeps the input there and counts its rising edge).
 void Gen::counter_gated(const ldc::Instr& in) {
-  if (Reg p = power(); p != esi) emit(M::Mov, {R(esi), R(p)});
+  power_to_esi();
   emit(M::Mov, {R(r32(R8)), I(int32_t(in.a[2].index))});
   emit(M::Mov, {R(r8(DX)), I(int32_t(in.a[0].index & 0xff))});  // the routine takes dl only (movzx edx, dl)
   bool up = in.op == Op::CTU;

@@ -470,18 +470,21 @@ x86::RoutineAreas layout_areas(uint32_t edges) {
   return a;
 }
 
-// A scan function in the -O2 frame (the routines' own) whose body calls
-// `call_to` (an offset from the first routine's entry), followed by the
-// routines; `call_at` gets the call's offset.
+// A scan function in the -O2 frame (the routines' own) whose body is `setup`,
+// then a call to `call_to` (an offset from the first routine's entry), then a
+// nop, followed by the routines; `call_at` gets the call's offset.
 std::vector<uint8_t> with_routines(const std::vector<std::vector<x86::Instruction>>& routines, int64_t call_to,
-                                   uint32_t& call_at) {
+                                   uint32_t& call_at,
+                                   std::vector<std::string> setup = {"mov esi, 0x1", "mov edx, 0x3", "mov ecx, 0x64"}) {
   std::vector<uint32_t> at;
-  std::vector<std::string> body = {"mov esi, 0x1", "mov edx, 0x3", "mov ecx, 0x64", "call 0x0", "nop"};
+  std::vector<std::string> body = std::move(setup);
+  const size_t call = body.size();
+  body.insert(body.end(), {"call 0x0", "nop"});
   std::vector<uint8_t> code = scan_function(body, at, true);  // the call is rel32: its size does not change
   const int64_t base = at[0], entry = int64_t(code.size());
-  body[3] = "call " + std::to_string(entry + call_to - base);
+  body[call] = "call " + std::to_string(entry + call_to - base);
   code = scan_function(body, at, true);
-  call_at = at[3];
+  call_at = at[call];
   for (const auto& r : routines)
     for (const auto& in : r) {
       std::vector<uint8_t> b = x86::encode_at(in, code.size());
@@ -562,17 +565,9 @@ TEST(Hostile, BothO2FramesRunTheirCounterRoutines) {
       body.insert(body.end(), {"movzx eax, " + slot, "movzx esi, byte ptr [IMG+" + e0 + "]", "mov byte ptr [IMG+" + e0 + "], al",
                                "not esi", "and esi, eax"});
     }
-    body.insert(body.end(), {"mov dl, 0x0", "mov ecx, 0x64", "call 0x0"});
-    std::vector<uint32_t> at;
-    std::vector<uint8_t> code = scan_function(body, at, true);  // the call is rel32: its size does not change
-    const int64_t entry = int64_t(code.size());
-    body.back() = "call " + std::to_string(entry - int64_t(at[0]));
-    code = scan_function(body, at, true);
-    for (const auto& in : x86::scan_routine(x86::Routine::Ctu, areas, image)) {
-      std::vector<uint8_t> b = x86::encode_at(in, code.size());
-      code.insert(code.end(), b.begin(), b.end());
-    }
-    Image im = image_around(code, kEdges);
+    body.insert(body.end(), {"mov dl, 0x0", "mov ecx, 0x64"});
+    uint32_t call_at = 0;
+    Image im = image_around(with_routines({x86::scan_routine(x86::Routine::Ctu, areas, image)}, 0, call_at, body), kEdges);
     ASSERT_EQ(refusal(im), "") << x86::reg_name(x86::r64(image));
     Memory m(L);
     auto eng = make_native_engine(im.code, im.entry);
