@@ -114,7 +114,8 @@ class Gen : public ClassGen<Gen> {
   Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used)
       : L_(l), items_(items), slots_(slots), gate_(gate), bases_(gate), used_(used) {}
 
-  void instr(const ldc::Instr& in, uint8_t facts = 0);  // facts: ScanFlag bits (ir/scanopt.h)
+  // facts: ScanFlag bits (ir/scanopt.h); reuse: the earlier division it takes, if any
+  void instr(const ldc::Instr& in, uint8_t facts = 0, const ldc::DivReuse* reuse = nullptr);
 
  private:
   const Layout& L_;
@@ -125,6 +126,7 @@ class Gen : public ClassGen<Gen> {
   bool bases_;     // -O2: the frame sets the base registers (rdi is reloaded after a REAL call)
   KnownStack known_;  // -O2: the stack's values known at compile time
   bool on_ = false;   // -O2: this instruction's power is on for certain (no gate, no test)
+  const ldc::DivReuse* reuse_ = nullptr;  // -O2: this division's earlier result (ScanFacts::reused)
   std::bitset<8>* used_;  // the shared routines called (as::x86::Routine)
   int depth_ = 0;  // stack positions in use before the current instruction
 
@@ -301,6 +303,7 @@ class Gen : public ClassGen<Gen> {
   void real_fn(Op op, const ldc::Operand& a, const ldc::Operand& d);
   uint32_t area_addr(Area a, uint32_t n) const { return L_.addr(a, n); }
   bool gated_divmod(const ldc::Instr& in);
+  void reused_division(const ldc::Instr& in, const ldc::DivReuse& r);
   bool divide_by_constant(const ldc::Instr& in);
   bool gated_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
   void ton_on(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
@@ -516,6 +519,7 @@ bool Gen::divide_by_constant(const ldc::Instr& in) {
 // form: this one's `or` into S0 chains every division of the scan through
 // memory (the one-class arithmetic program 880 ns -> 1.31 us a scan with it).
 bool Gen::gated_divmod(const ldc::Instr& in) {
+  if (reuse_ && on_) return reused_division(in, *reuse_), true;
   if (divide_by_constant(in)) return true;
   if (!bases_ || on_) return false;
   const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
@@ -555,6 +559,25 @@ bool Gen::gated_divmod(const ldc::Instr& in) {
   emit(M::And, {R(r8d), R(p)});
   emit(M::Or, {B(L_.addr(Area::S, kBitError)), R(r8b)});
   return true;
+}
+
+// -O2, power on for certain: an INT32 division whose operands were divided
+// before in the scan (ScanFacts::reused) takes that result, or a - q*b for a
+// MOD after a DIV, where the divisor is not 0; where it is, d keeps its value
+// and S0 is still set from the earlier division.  No idiv, no branch.
+void Gen::reused_division(const ldc::Instr& in, const ldc::DivReuse& r) {
+  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
+  if (r.remainder_from_quotient) {
+    emit(M::Mov, {R(ecx), Dw(addr(r.from))});
+    emit(M::Imul, {R(ecx), Dw(addr(b))});
+    load_int(a, eax);
+    emit(M::Sub, {R(eax), R(ecx)});  // a - (a / b) * b, wrapping: 0 for b = -1
+  } else {
+    load_int(r.from, eax);
+  }
+  emit(M::Cmp, {Dw(addr(b)), I(0)});
+  emit(make_cc(M::Cmovcc, Cond::E, {R(eax), Dw(addr(d))}));
+  emit(M::Mov, {Dw(addr(d)), R(eax)});
 }
 
 void Gen::branch_zero_real(const DivLabels& l) {
@@ -821,8 +844,9 @@ void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
 //
 // A dead store needs no code, an unread stack entry none but an edge
 // contact's edge update (ir/scanopt.h); the stack is followed all the same.
-void Gen::instr(const ldc::Instr& in, uint8_t facts) {
+void Gen::instr(const ldc::Instr& in, uint8_t facts, const ldc::DivReuse* reuse) {
   OpClass k = op_info(in.op).klass;
+  reuse_ = reuse;
   on_ = bases_ && known_.on() &&
         (k == OpClass::Move || k == OpClass::Arith || k == OpClass::Logic || k == OpClass::Special);
   if ((facts & kUnread) && (in.op == Op::LOADP || in.op == Op::LOADF)) {
@@ -833,6 +857,7 @@ void Gen::instr(const ldc::Instr& in, uint8_t facts) {
     gen_by_class(*this, in);
   }
   on_ = false;
+  reuse_ = nullptr;
   if (bases_) known_.step(in);
   depth_ += op_info(in.op).push - op_info(in.op).pop;
 }
@@ -1478,7 +1503,7 @@ class Blocks {
       if (notes_) b.items.push_back(Item::note(instr_text(in)));
       if (!facts_) { g.instr(in); continue; }
       const ldc::Instr* alt = facts_->replacement(ri, k);
-      g.instr(alt ? *alt : in, facts_->at(ri, k) & keep);
+      g.instr(alt ? *alt : in, facts_->at(ri, k) & keep, facts_->reuse(ri, k));
     }
     if (opt_ >= 1 && !slots) peephole(b.items, starts, shared_);
     if (!o2_) return;

@@ -1,5 +1,5 @@
-// ir/scanopt.cpp -- dead stores, unread stack entries and folded constants
-// of one scan (ir/scanopt.h).
+// ir/scanopt.cpp -- dead stores, unread stack entries, folded constants and
+// repeated divisions of one scan (ir/scanopt.h).
 #include "ir/scanopt.h"
 
 #include <algorithm>
@@ -12,12 +12,17 @@
 
 namespace ldc {
 
-const Instr* ScanFacts::replacement(size_t rung, size_t k) const {
-  uint32_t i = first[rung] + uint32_t(k);
-  auto it = std::lower_bound(replaced.begin(), replaced.end(), i,
-                             [](const std::pair<uint32_t, Instr>& e, uint32_t v) { return e.first < v; });
-  return it != replaced.end() && it->first == i ? &it->second : nullptr;
+namespace {
+// the entry of `v` (sorted by index) for instruction i, or nullptr
+template <class T>
+const T* entry_at(const std::vector<std::pair<uint32_t, T>>& v, uint32_t i) {
+  auto it = std::lower_bound(v.begin(), v.end(), i, [](const std::pair<uint32_t, T>& e, uint32_t x) { return e.first < x; });
+  return it != v.end() && it->first == i ? &it->second : nullptr;
 }
+}  // namespace
+
+const Instr* ScanFacts::replacement(size_t rung, size_t k) const { return entry_at(replaced, first[rung] + uint32_t(k)); }
+const DivReuse* ScanFacts::reuse(size_t rung, size_t k) const { return entry_at(reused, first[rung] + uint32_t(k)); }
 
 size_t ScanFacts::count(ScanFlag f) const {
   return size_t(std::count_if(flags.begin(), flags.end(), [f](uint8_t x) { return (x & f) != 0; }));
@@ -256,6 +261,82 @@ class Propagate {
   std::unordered_map<uint32_t, Operand> known_;  // by address
 };
 
+// Forward over the program (ScanFacts::reused): the INT32 divisions done with
+// power on for certain whose operands and destination nothing has written
+// since, until a rung that jumps land on starts; by their operands' pair,
+// with the pairs each address takes part in, so a write forgets them at once.
+class Divisions {
+ public:
+  Divisions(const Layout& l, const std::vector<char>& on, ScanFacts& f) : l_(l), on_(on), f_(f) {}
+  void rung(const Rung& r, uint32_t first) {
+    if (!r.labels.empty()) forget();
+    for (size_t k = 0; k < r.code.size(); k++) {
+      uint32_t i = first + uint32_t(k);
+      const Instr* alt = entry_at(f_.replaced, i);
+      instr(alt ? *alt : r.code[k], i);
+    }
+  }
+
+ private:
+  struct Done {
+    uint32_t a, b, d;
+    Operand dst;
+  };
+  struct Pair {
+    std::optional<Done> q, r;  // the quotient's and the remainder's
+  };
+  static uint64_t key(uint32_t a, uint32_t b) { return uint64_t(a) << 32 | b; }
+
+  void instr(const Instr& in, uint32_t i) {
+    std::optional<Done> now = division(in, i);
+    bool mod = in.op == Op::MOD;
+    if (now) reuse(*now, mod, i);
+    if (!pairs_.empty()) wrote(in, i);
+    if (!now || now->d == now->a || now->d == now->b) return;
+    Pair& p = pairs_[key(now->a, now->b)];
+    (mod ? p.r : p.q) = *now;
+    for (uint32_t at : {now->a, now->b, now->d}) users_[at].push_back(key(now->a, now->b));
+  }
+  // an INT32 division of two words into a word, with power on for certain
+  std::optional<Done> division(const Instr& in, uint32_t i) const {
+    if (!is_divmod(in.op) || !on_[i]) return std::nullopt;
+    for (int k = 0; k < 3; k++)
+      if (in.a[k].kind != OpdKind::Int) return std::nullopt;
+    return Done{addr(l_, in.a[0]), addr(l_, in.a[1]), addr(l_, in.a[2]), in.a[2]};
+  }
+  void reuse(const Done& now, bool mod, uint32_t i) {
+    auto it = pairs_.find(key(now.a, now.b));
+    if (it == pairs_.end()) return;
+    const std::optional<Done>& same = mod ? it->second.r : it->second.q;
+    if (same) f_.reused.emplace_back(i, DivReuse{same->dst, false});
+    else if (mod && it->second.q) f_.reused.emplace_back(i, DivReuse{it->second.q->dst, true});
+  }
+  void wrote(const Instr& in, uint32_t i) {
+    const Access acc = access(l_, in, on_[i]);
+    for (int w = 0; w < acc.nw; w++) {
+      const uint32_t at = acc.writes[w];
+      if (at == l_.addr(Area::S, kBitError) && !is_divmod(in.op)) return forget();  // a zero divisor's S0 may be gone
+      auto u = users_.find(at);
+      if (u == users_.end()) continue;
+      for (uint64_t k : u->second) {
+        auto p = pairs_.find(k);
+        if (p == pairs_.end()) continue;
+        for (std::optional<Done>* x : {&p->second.q, &p->second.r})
+          if (*x && ((*x)->a == at || (*x)->b == at || (*x)->d == at)) x->reset();
+        if (!p->second.q && !p->second.r) pairs_.erase(p);
+      }
+      users_.erase(u);
+    }
+  }
+  void forget() { pairs_.clear(), users_.clear(); }
+
+  const Layout& l_;
+  const std::vector<char>& on_;
+  ScanFacts& f_;
+  std::unordered_map<uint64_t, Pair> pairs_;
+  std::unordered_map<uint32_t, std::vector<uint64_t>> users_;  // the pairs whose operands or destinations lie there
+};
+
 }  // namespace
 
 ScanFacts scan_facts(const Program& p, const Layout& layout, int slots) {
@@ -268,6 +349,8 @@ ScanFacts scan_facts(const Program& p, const Layout& layout, int slots) {
   dead_stores(p, layout, on, f);
   Propagate prop(layout, on, f);
   for (size_t ri = 0; ri < p.rungs.size(); ri++) prop.rung(p.rungs[ri], f.first[ri]);
+  Divisions divs(layout, on, f);
+  for (size_t ri = 0; ri < p.rungs.size(); ri++) divs.rung(p.rungs[ri], f.first[ri]);
   f.fits.assign(p.rungs.size(), 0);
   if (shares_stack(p)) return f;  // an entry may be read by a later rung
   std::vector<int> depth;

@@ -13,7 +13,13 @@
 //    a store earlier in the same scan made constant for certain, is computed
 //    while compiling, by the reference interpreter itself (folded: a MOV of
 //    the result), unless it has another effect (a zero divisor sets S0) or
-//    calls a C library function (its result is the running machine's).
+//    calls a C library function (its result is the running machine's);
+//  * an INT32 DIV or MOD with power on for certain whose two word operands
+//    were divided so before in the same scan, with neither they nor that
+//    division's destination written since, takes the earlier result
+//    (ScanFacts::reused): a copy of the same quotient or remainder, or the
+//    remainder from the quotient (a - q*b), unless the divisor is 0 (then the
+//    destination keeps its value, and S0 is still set from the first).
 #pragma once
 
 #include <cstdint>
@@ -29,6 +35,16 @@ enum ScanFlag : uint8_t {
   kUnread = 2,     // the stack entry it writes is never read: no code but an edge update
 };
 
+// What an INT32 DIV or MOD takes from an earlier one (docs/x86.md, "Words at
+// -O2"): `from` holds the earlier quotient (DIV) or remainder (MOD); if the
+// divisor is not 0, the destination becomes `from` (the same operation) or
+// a - from * b (a MOD after a DIV); if it is 0, the destination keeps its
+// value (S0 is 1 since the earlier division, which nothing has cleared).
+struct DivReuse {
+  Operand from;
+  bool remainder_from_quotient = false;
+};
+
 struct ScanFacts {
   std::vector<uint32_t> first;  // per rung: the index of its first instruction
   std::vector<char> fits;       // per rung: its stack is private and fits the slots (no kUnread elsewhere)
@@ -36,9 +52,12 @@ struct ScanFacts {
   // (index, the instruction to compile in its place), by index: sources
   // replaced by their known constants, or a MOV of the folded result
   std::vector<std::pair<uint32_t, Instr>> replaced;
+  std::vector<std::pair<uint32_t, DivReuse>> reused;  // by index, of the instruction replaced or not
+
 
   uint8_t at(size_t rung, size_t k) const { return flags[first[rung] + k]; }
   const Instr* replacement(size_t rung, size_t k) const;  // nullptr if none
+  const DivReuse* reuse(size_t rung, size_t k) const;     // nullptr if none
   size_t count(ScanFlag f) const;
 };
 

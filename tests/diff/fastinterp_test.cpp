@@ -564,6 +564,60 @@ std::string constant_division_il() {
   return s + gated + ".end\n";
 }
 
+// INT32 divisions of one pair of words after another with power on for
+// certain (-O2 takes the earlier result: ScanFacts::reused): the same
+// operation again, a MOD after a DIV (a - q*b), a DIV after a MOD (divides),
+// and the cases that must divide again: an operand or the earlier
+// destination written since, a destination that is an operand, S0 cleared,
+// a jump that may skip the earlier division, a gated division in between.
+// compare_il's edgy inputs give divisors of 0, -1 and INT32_MIN.
+const char* const kRepeatedDivisionIl = R"(
+.rung line 1
+    TRUE
+    DIV     WX0 WX1 D20
+    MOD     WX0 WX1 D21
+    DIV     WX0 WX1 D22
+    MOD     WX0 WX1 D23
+    MOD     WX2 WX3 D24
+    DIV     WX2 WX3 D25
+    MOD     WX2 WX3 D26
+    DIV     WX1 WX2 D27
+    MOD     WX1 WX2 D28
+    MOV     D8 D27
+    MOD     WX1 WX2 D29
+    DIV     D10 D11 D30
+    ADD     D10 1 D10
+    DIV     D10 D11 D31
+    DIV     D11 D10 D11
+    DIV     D11 D10 D32
+    MOD     D11 D10 D33
+.rung line 2
+    LOAD    X2
+    DIV     WX0 WX1 D34
+    DIV     WX4 WX5 D35
+.rung line 3
+    TRUE
+    DIV     WX4 WX5 D36
+    RST     S0
+.rung line 4
+    TRUE
+    DIV     WX0 WX1 D37
+    MOD     WX4 WX5 D38
+.rung line 5
+    LOAD    X1
+    JMP     past
+.rung line 6
+    TRUE
+    DIV     WX6 WX7 D39
+.label past
+.rung line 7
+    TRUE
+    DIV     WX6 WX7 D40
+    MOD     WX6 WX7 D41
+    DIV     WX0 WX1 D42
+.end
+)";
+
 // The native code at every level on the operand forms, the timer limits and
 // the class programs (the -O2 code is branch-free there: cmov, setcc, masks).
 TEST(NativeEdges, EveryLevelMatchesOnOperandFormsAndTimerLimits) {
@@ -571,7 +625,8 @@ TEST(NativeEdges, EveryLevelMatchesOnOperandFormsAndTimerLimits) {
   const Level levels[] = {{"-O0", make_native}, {"-O1", make_native_o1}, {"-O2", make_native_o2}};
   Program edge = parse_il_text(kEdgeIl, "edge.il"), timers = parse_il_text(kTimerEdgeIl, "timers.il"),
           known = parse_il_text(kKnownPowerIl, "known.il"), facts = parse_il_text(kScanFactsIl, "facts.il"),
-          shared = parse_il_text(kSharedStackIl, "shared.il"), divisions = parse_il_text(constant_division_il(), "div.il");
+          shared = parse_il_text(kSharedStackIl, "shared.il"), divisions = parse_il_text(constant_division_il(), "div.il"),
+          repeated = parse_il_text(kRepeatedDivisionIl, "repeated.il");
   try {
     generate_c(shared, shared.layout());
     ADD_FAILURE() << "the C route compiled a shared stack";
@@ -586,6 +641,7 @@ TEST(NativeEdges, EveryLevelMatchesOnOperandFormsAndTimerLimits) {
       EXPECT_EQ(compare_il(facts, seed, 60, seed % 2 == 0, lv.make), "") << lv.name << " seed " << seed;
       EXPECT_EQ(compare_il(shared, seed, 40, false, lv.make), "") << lv.name << " seed " << seed;
       EXPECT_EQ(compare_il(divisions, seed, 40, seed % 2 == 1, lv.make), "") << lv.name << " seed " << seed;
+      EXPECT_EQ(compare_il(repeated, seed, 60, seed % 4 != 0, lv.make), "") << lv.name << " seed " << seed;
     }
     for (OpClass c : {OpClass::Move, OpClass::Arith, OpClass::Logic, OpClass::Special, OpClass::Timer, OpClass::Counter})
       for (bool powered : {true, false}) {

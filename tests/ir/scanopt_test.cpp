@@ -1,5 +1,5 @@
-// ir/scanopt.h: the dead stores, unread stack entries and folded constants of
-// one scan, rule by rule, with the cases that must stay live beside each.
+// ir/scanopt.h: the dead stores, unread stack entries, folded constants and
+// repeated divisions of one scan, rule by rule, with the cases that must stay live beside each.
 #include <gtest/gtest.h>
 
 #include <string>
@@ -19,6 +19,15 @@ struct Facts {
   uint8_t at(size_t rung, size_t k) const { return f.at(rung, k); }
   bool dead(size_t rung, size_t k) const { return at(rung, k) & kDeadStore; }
   bool unread(size_t rung, size_t k) const { return at(rung, k) & kUnread; }
+  // the device the division at (rung, k) takes its result from ("q D5": a
+  // remainder from the quotient in D5), "" if it divides
+  std::string reused(size_t rung, size_t k) const {
+    const DivReuse* r = f.reuse(rung, k);
+    if (!r) return "";
+    Instr mov{Op::MOV, {r->from, r->from}, {}};
+    std::string text = instr_text(mov);  // "MOV D5 D5": the device's name twice
+    return (r->remainder_from_quotient ? "q " : "") + text.substr(text.rfind(' ') + 1);
+  }
   std::string replaced(size_t rung, size_t k) const {
     const Instr* in = f.replacement(rung, k);
     return in ? instr_text(*in) : "";
@@ -135,6 +144,28 @@ TEST(ScanFacts, KnownWordsAfterACertainStore) {
   Facts chain(rung("TRUE|MOV 7 D1|ADD D1 D1 D2|MUL D2 D1 D3") + rung("LOAD X0|MOV D3 D4"));
   EXPECT_EQ(chain.replaced(0, 3), "MOV 98 D3");
   EXPECT_EQ(chain.replaced(1, 1), "MOV 98 D4");
+}
+
+TEST(ScanFacts, ARepeatedDivisionTakesTheEarlierResult) {
+  Facts t(rung("TRUE|DIV WX0 WX1 D1|DIV WX0 WX1 D2|MOD WX0 WX1 D3|MOD WX0 WX1 D4|MOD WX2 WX3 D5|DIV WX2 WX3 D6"));
+  EXPECT_EQ(t.reused(0, 2), "D1");
+  EXPECT_EQ(t.reused(0, 3), "q D2");  // a - q*b: the latest quotient
+  EXPECT_EQ(t.reused(0, 4), "D3");    // the same remainder
+  EXPECT_EQ(t.reused(0, 6), "");      // a DIV after a MOD divides
+  Facts gated(rung("LOAD X0|DIV WX0 WX1 D1") + rung("TRUE|DIV WX0 WX1 D2"));
+  EXPECT_EQ(gated.reused(1, 1), "");  // D1 was written only with power
+  Facts written(rung("TRUE|DIV D0 WX1 D1|MOV WX5 D0|DIV D0 WX1 D2|DIV WX0 WX1 D3|ADD D3 1 D3|DIV WX0 WX1 D4"));
+  EXPECT_EQ(written.reused(0, 3), "");  // an operand written since
+  EXPECT_EQ(written.reused(0, 6), "");  // the earlier destination written since
+  Facts self(rung("TRUE|DIV D0 WX1 D0|DIV D0 WX1 D2"));
+  EXPECT_EQ(self.reused(0, 2), "");  // the destination was an operand
+  Facts s0(rung("TRUE|DIV WX0 WX1 D1|RST S0|DIV WX0 WX1 D2"));
+  EXPECT_EQ(s0.reused(0, 3), "");  // a zero divisor must set S0 again
+  Facts label(rung("TRUE|DIV WX0 WX1 D1") + rung("LOAD X2|JMP L") + rung("TRUE|DIV WX0 WX1 D2", ".label L\n"));
+  EXPECT_EQ(label.reused(2, 1), "");  // a jump lands here from before the division
+  Facts real(rung("TRUE|DIV WX0 WX1 F1|DIV WX0 WX1 D2|DIV WX0 WX1 F2"));
+  EXPECT_EQ(real.reused(0, 2), "");  // F1 holds the quotient converted
+  EXPECT_EQ(real.reused(0, 3), "");  // into a REAL: not taken
 }
 
 }  // namespace
