@@ -153,6 +153,14 @@ std::span<const Instruction> scan_epilogue(bool with_slots);
 // can be the first bit-stack slot (ebx then also the bit stack of the rungs
 // whose stack does not fit the slots).
 constexpr RegNum image_reg(bool with_slots) { return with_slots ? BP : BX; }
+// The -O2 frame's image register points kImageBias bytes into the memory
+// image (`lea rbp, [rdi+0x40]`), so that [rbp+d8] reaches image offsets
+// [-0x40, 0xbf]: the REAL function table below the image, the system words
+// and bits, and X0..X111; the device at image offset a is [rbp + a - 0x40].
+constexpr int32_t kImageBias = 0x40;
+// The -O2 prologue of images made before the bias (`mov rbp, rdi`): their
+// operands, leas and routines take image offsets.  The loader still accepts it.
+std::span<const Instruction> scan_prologue_unbiased();
 // The -O2 prologue of images made before bl became a slot: rbx the image,
 // r12b r13b bpl the slots (`mov rbx, rdi; xor ebp, ebp`), its routines and
 // leas based on rbx.  The loader still accepts it; ldc no longer makes it.
@@ -204,7 +212,9 @@ struct RoutineAreas {
   int32_t tw = 0, tq = 0, ti = 0, cw = 0, cq = 0, dt = 0;  // offsets of T0's ET, Q, IN memory; C0's CV, Q; dt
   int32_t e = 0, e_count = 0;                              // the edge slots: offset and count (at least 1)
 };
-std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& areas, RegNum image = image_reg(true));
+// bias: the frame's (kImageBias in ldc's -O2 frame, 0 in the older ones)
+std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& areas, RegNum image = image_reg(true),
+                                      int32_t bias = kImageBias);
 std::string_view routine_name(Routine r);  // the assembly label: rt_ton, rt_tof, rt_tp, rt_ctu, rt_ctd
 
 // ---------------------------------------------------------- whole programs

@@ -2,6 +2,7 @@
 #include <array>
 #include <cctype>
 #include <cstdio>
+#include <cstdlib>
 #include <set>
 
 #include "assembler/x86_forms.h"
@@ -431,12 +432,13 @@ std::string listing(const X86Program& p, const Result& r) {
 namespace {
 
 // The prologue of a frame that saves r12-r15 too (the -O2 frames), the image
-// in `image` and the bit stack `stack` cleared.
-std::vector<Instruction> slots_prologue(std::string_view image, std::string_view stack) {
+// in `image` (`bias` bytes into it) and the bit stack `stack` cleared.
+std::vector<Instruction> slots_prologue(std::string_view image, std::string_view stack, int32_t bias = 0) {
   std::vector<Instruction> v;
   for (const char* t : {"push rbx", "push rbp", "push r12", "push r13", "push r14", "push r15", "push rax"})
     v.push_back(parse(t));
-  v.push_back(parse("mov " + std::string(image) + ", rdi"));
+  v.push_back(parse(bias ? "lea " + std::string(image) + ", [rdi+" + std::to_string(bias) + "]"
+                         : "mov " + std::string(image) + ", rdi"));
   v.push_back(parse("xor " + std::string(stack) + ", " + std::string(stack)));
   return v;
 }
@@ -449,8 +451,13 @@ std::span<const Instruction> scan_prologue(bool with_slots) {
     for (const char* t : {"push rbx", "push rbp", "push rax", "mov rbx, rdi", "xor ebp, ebp"}) v.push_back(parse(t));
     return v;
   }();
-  static const std::vector<Instruction> o2 = slots_prologue("rbp", "ebx");
+  static const std::vector<Instruction> o2 = slots_prologue("rbp", "ebx", kImageBias);
   return with_slots ? o2 : o0;
+}
+
+std::span<const Instruction> scan_prologue_unbiased() {
+  static const std::vector<Instruction> v = slots_prologue("rbp", "ebx");
+  return v;
 }
 
 std::span<const Instruction> scan_prologue_rbx_slots() {
@@ -500,10 +507,11 @@ std::string_view routine_name(Routine r) {
   return names[int(r)];
 }
 
-std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& a, RegNum image) {
+std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& a, RegNum image, int32_t bias) {
   std::vector<std::string> t;
   const std::string img(reg_name(r64(image)));
-  auto at = [&](const char* index, int32_t disp) { return "[" + img + "+" + index + "+" + std::to_string(disp) + "]"; };
+  auto plus = [&](int32_t disp) { return (disp < bias ? "-" : "+") + std::to_string(std::abs(int64_t(disp) - bias)); };
+  auto at = [&](const char* index, int32_t disp) { return "[" + img + "+" + index + plus(disp) + "]"; };
   const std::string tw = "dword ptr " + at("rdx*4", a.tw), tq = "byte ptr " + at("rdx*1", a.tq),
                     ti = "byte ptr " + at("rdx*1", a.ti), cw = "dword ptr " + at("rdx*4", a.cw),
                     cq = "byte ptr " + at("rdx*1", a.cq);
@@ -532,7 +540,7 @@ std::vector<Instruction> scan_routine(Routine r, const RoutineAreas& a, RegNum i
     // r8d = advance(ET, dt, PT) (see the backend's advance_edx); the caller
     // passes PT >= 0 (a negative preset counts as 0: its call site clamps it)
     for (const std::string& x : std::initializer_list<std::string>{"mov eax, " + tw, "mov r10d, eax",
-                          "add r10d, dword ptr [" + img + "+" + std::to_string(a.dt) + "]", std::string("mov r8d, ecx"),
+                          "add r10d, dword ptr [" + img + plus(a.dt) + "]", std::string("mov r8d, ecx"),
                           std::string("cmovl r8d, r10d"), std::string("cmp r10d, ecx"), std::string("cmovbe r8d, r10d"),
                           std::string("cmp eax, ecx"), std::string("cmovge r8d, ecx"), std::string("xor r10d, r10d"),
                           std::string("xor r9d, r9d")})

@@ -98,6 +98,7 @@ uint32_t float_bits(float f) {
 const Reg kSlots[] = {r8(BP), r8(R12), r8(R13)};
 constexpr int kNumSlots = 3;
 const as::x86::Reg kO2Image = r64(as::x86::image_reg(true));  // rbp
+using as::x86::kImageBias;  // rbp = image + kImageBias: operands are made with image offsets, biased last
 
 // Turns gate_ off for one instruction's code (restored at the end of scope).
 struct Ungated {
@@ -1182,7 +1183,16 @@ as::x86::RoutineAreas x86_routine_areas(const Layout& l) {
 // operands inside a register's disp8 window [K-128, K+127] become [reg+d8].
 bool rewritable(const Instruction& in, const as::x86::Operand& o) {
   return o.kind == OperandKind::Mem && in.mnemonic != M::Call && in.mnemonic != M::Lea && o.mem.base == kO2Image &&
-         !o.mem.index.valid() && (o.mem.disp < -128 || o.mem.disp > 127);
+         !o.mem.index.valid() && (o.mem.disp - kImageBias < -128 || o.mem.disp - kImageBias > 127);
+}
+// rbp points kImageBias bytes into the image (as::x86::kImageBias): every
+// operand based on it, made with the image offset, takes its displacement so
+void bias_image_operands(as::Block<Instruction>& b) {
+  for (Item& it : b.items) {
+    if (it.kind != as::ItemKind::Instruction) continue;
+    for (unsigned j = 0; j < it.inst.num_operands; j++)
+      if (it.inst.ops[j].kind == OperandKind::Mem && it.inst.ops[j].mem.base == kO2Image) it.inst.ops[j].mem.disp -= kImageBias;
+  }
 }
 uint32_t mem_width(const Mem& m) { return m.size == Size::Dword ? 4 : m.size == Size::Qword ? 8 : 1; }
 
@@ -1394,6 +1404,7 @@ class Regions {
         for (int r = 0; r < kNumBases; r++)
           if (it.kind == as::ItemKind::Instruction && it.inst.mnemonic == M::Lea && it.inst.ops[0].reg == r64(kBaseRegs[r]))
             it.inst.ops[1].mem.disp = int32_t(plan_.k(r));
+      bias_image_operands(*prologue_);
       sink_(*prologue_);
       prologue_.reset();
     }
@@ -1414,6 +1425,7 @@ class Regions {
       if (reloaded[size_t(r)] && !plan_.known(r)) plan_.set(r, kBaseKMin);
     for (size_t i = 0; i < blocks_.size(); i++) {
       il_items_.push_back(std::move(starts_[i]));
+      bias_image_operands(blocks_[i]);
       sink_(blocks_[i]);
       if (spare_.size() < kSpareBlocks) spare_.push_back(std::move(blocks_[i]));
     }

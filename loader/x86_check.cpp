@@ -71,20 +71,23 @@ bool is_base_lea(const x86::Instruction& in, int i, x86::Reg img) {
 }
 
 // "" if base register i's lea `in` (is_base_lea) sets a K every [reg+d8] access stays inside the image from
-std::string base_k_error(const x86::Instruction& in, int i, uint32_t image_size) {
-  int64_t k = in.ops[1].mem.disp;
+// (bias: where the image register points into the image, as::x86::kImageBias)
+std::string base_k_error(const x86::Instruction& in, int i, uint32_t image_size, int32_t bias) {
+  int64_t k = int64_t(in.ops[1].mem.disp) + bias;
   if (k >= kBaseKMin && k <= int64_t(image_size) - kBaseKTop) return "";
   return "sets " + std::string(x86::reg_name(x86::r64(x86::kBaseRegs[i]))) + " = " +
-         std::string(x86::reg_name(in.ops[1].mem.base)) + "+" + std::to_string(k) +
+         std::string(x86::reg_name(in.ops[1].mem.base)) + "+" + std::to_string(in.ops[1].mem.disp) +
+         (bias ? " (image offset " + std::to_string(k) + ")" : "") +
          ", outside [" + std::to_string(kBaseKMin) + ", " + std::to_string(int64_t(image_size) - kBaseKTop) +
          "] (a base register's K must keep every [reg-0x80] .. [reg+0x7f] access of up to 8 bytes inside the memory image [0, " +
          hex(image_size) + "))";
 }
 
 // "" if the memory operand is [img+disp] (img: rbx, or rbp under the -O2
-// frame) with [disp, disp+width) inside the image, or, under the -O2 frame,
-// [rdi/r15/r14+disp] with disp in [-128, 127].
-std::string check_mem(const x86::Mem& m, uint32_t image_size, const Bases& bases, x86::Reg img) {
+// frame, pointing `bias` bytes into the image) with [bias+disp, bias+disp+width)
+// inside the image, or, under the -O2 frame, [rdi/r15/r14+disp] with disp in
+// [-128, 127].
+std::string check_mem(const x86::Mem& m, uint32_t image_size, const Bases& bases, x86::Reg img, int32_t bias) {
   const x86::Reg& base = m.base;
   const std::string img_name(x86::reg_name(img)), only = " (only [" + img_name + "+disp] may address memory)";
   if (int b = Bases::which(base); b >= 0 && bases.set) {
@@ -104,10 +107,11 @@ std::string check_mem(const x86::Mem& m, uint32_t image_size, const Bases& bases
   if (m.index.valid())
     return "indexed memory operand (index " + std::string(x86::reg_name(m.index)) +
            "): its address cannot be checked";
-  int64_t lo = m.disp, hi = int64_t(m.disp) + width(m.size);
+  int64_t lo = int64_t(m.disp) + bias, hi = lo + width(m.size);
   if (lo < 0 || hi > int64_t(image_size))
     return "memory operand [" + img_name + std::string(m.disp < 0 ? "-" : "+") + hex(m.disp < 0 ? -int64_t(m.disp) : m.disp) +
-           "] (" + std::to_string(width(m.size)) + " bytes) outside the memory image [0, " + hex(image_size) + ")";
+           "] (" + std::to_string(width(m.size)) + " bytes" + (bias ? ", image offset " + std::to_string(lo) : "") +
+           ") outside the memory image [0, " + hex(image_size) + ")";
   return "";
 }
 
@@ -201,8 +205,10 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
   // the -O2 frame (rbp the image), the same with rbx the image (images made
   // before bl was a slot), or the -O0 frame (rbx the image, ebp the stack)
   const bool at_entry = first < d.insts.size() && d.insts[first].offset == entry;
-  const bool o2 = at_entry && matches(first, x86::scan_prologue(true));
+  const bool biased = at_entry && matches(first, x86::scan_prologue(true));
+  const bool o2 = biased || (at_entry && matches(first, x86::scan_prologue_unbiased()));  // rbp the image
   const bool slots = o2 || (at_entry && matches(first, x86::scan_prologue_rbx_slots()));
+  const int32_t bias = biased ? x86::kImageBias : 0;  // where the image register points into the image
   if (!slots && !(at_entry && matches(first, x86::scan_prologue(false))))
     return at(entry) + "the entry is not the scan function's prologue (push rbx; push rbp; ...; mov rbx, rdi, or mov rbp, rdi at -O2)";
   const x86::Reg img = x86::r64(x86::image_reg(o2));  // the image register: nothing in the body writes it
@@ -218,7 +224,7 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     if (all) {
       for (int i = 0; i < x86::kNumBases; i++) {
         const x86::Decoded& l = d.insts[body_first + size_t(i)];
-        if (std::string why = base_k_error(l.inst, i, layout.size); !why.empty()) return at(l.offset) + text_of(l.inst) + ": " + why;
+        if (std::string why = base_k_error(l.inst, i, layout.size, bias); !why.empty()) return at(l.offset) + text_of(l.inst) + ": " + why;
       }
       bases.set = true;
       body_first += x86::kNumBases;
@@ -249,7 +255,7 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
       for (int r = 0; r < int(x86::Routine::Count); r++) {
         bool counter = x86::Routine(r) == x86::Routine::Ctu || x86::Routine(r) == x86::Routine::Ctd;
         if (counter && o2 && areas.e_count < 1) continue;  // its edge slots: none to keep an access inside
-        bodies.push_back(x86::scan_routine(x86::Routine(r), areas, x86::RegNum(img.num)));
+        bodies.push_back(x86::scan_routine(x86::Routine(r), areas, x86::RegNum(img.num), bias));
       }
     for (bool found = true; found;) {
       found = false;
@@ -295,7 +301,7 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
         if (!is_base_lea(in, b, img))
           return at(di.offset) + text_of(in) + ": writes " + std::string(x86::reg_name(in.ops[0].reg)) +
                  ", a base register of the -O2 frame (only 'lea " + reg + ", [" + img_name + "+K]' may set one)";
-        if (std::string why = base_k_error(in, b, layout.size); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
+        if (std::string why = base_k_error(in, b, layout.size, bias); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
       }
     }
     // a call through the REAL function table may change the caller-saved base
@@ -353,13 +359,13 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
           // functions below the image (ir.h, kCallTableDisp)
           const x86::Mem& m = o.mem;
           bool table = m.base == img && !m.index.valid() && m.size == x86::Size::Qword &&
-                       m.disp >= kCallTableDisp && m.disp < kCallTableDisp + 8 * kCallSlots &&
-                       (m.disp - kCallTableDisp) % 8 == 0;
+                       int64_t(m.disp) + bias >= kCallTableDisp && int64_t(m.disp) + bias < kCallTableDisp + 8 * kCallSlots &&
+                       (int64_t(m.disp) + bias - kCallTableDisp) % 8 == 0;
           if (!table) return at(di.offset) + text_of(in) + ": indirect call not through the REAL function table";
           continue;
         }
         if (branch) return at(di.offset) + text_of(in) + ": indirect branch through memory";
-        if (std::string why = check_mem(o.mem, layout.size, bases, img); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
+        if (std::string why = check_mem(o.mem, layout.size, bases, img, bias); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
       } else if (o.kind == x86::OperandKind::Reg && branch) {
         return at(di.offset) + text_of(in) + ": indirect branch through a register";
       } else if (o.kind == x86::OperandKind::Address) {

@@ -8,7 +8,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <regex>
 #include <sstream>
 
 #include "assembler/c40.h"
@@ -28,18 +30,48 @@ namespace {
 
 // ------------------------------------------------------------------ x86-64
 
-// The -O2 frame the tests of base registers build: rbp the image (ldc's), or
-// rbx (images made before bl was a bit-stack slot; the loader still takes them).
-x86::RegNum g_o2_image = x86::image_reg(true);
-// text with every "IMG" made that frame's image register
+// The -O2 frame the tests of base registers build: ldc's (rbp the image,
+// pointing kImageBias bytes into it), rbp at the image's start (images made
+// before the bias), or rbx (images made before bl was a bit-stack slot); the
+// loader takes all three.
+struct O2Frame {
+  x86::RegNum image;
+  int32_t bias;
+};
+constexpr O2Frame kLdcFrame{x86::image_reg(true), x86::kImageBias}, kUnbiasedFrame{x86::image_reg(true), 0},
+    kRbxFrame{x86::BX, 0};
+O2Frame g_o2 = kLdcFrame;
+std::string img_name() { return std::string(x86::reg_name(x86::r64(g_o2.image))); }
+
+// text with every "IMG" made that frame's image register, and the image
+// offset after it in an operand ("[IMG+0x80]", "[IMG+rax*1-0x40]") its
+// displacement in that frame, printed as the disassembler prints it
 std::string with_image(std::string text) {
-  const std::string name(x86::reg_name(x86::r64(g_o2_image)));
-  for (size_t at; (at = text.find("IMG")) != std::string::npos;) text.replace(at, 3, name);
+  static const std::regex operand(R"(\[IMG((?:\+\w+\*\d)?)([+-])(0x[0-9a-f]+|\d+)\])");
+  std::string out;
+  std::sregex_iterator it(text.begin(), text.end(), operand), end;
+  size_t done = 0;
+  for (; it != end; ++it) {
+    const std::smatch& m = *it;
+    int64_t off = std::stoll(m[3].str(), nullptr, 0) * (m[2] == "-" ? -1 : 1), disp = off - g_o2.bias;
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%s0x%llx", disp < 0 ? "-" : "+", static_cast<unsigned long long>(disp < 0 ? -disp : disp));
+    out += text.substr(done, size_t(m.position()) - done) + "[IMG" + m[1].str() + buf + "]";
+    done = size_t(m.position() + m.length());
+  }
+  text = out + text.substr(done);
+  for (size_t at; (at = text.find("IMG")) != std::string::npos;) text.replace(at, 3, img_name());
   return text;
+}
+// the loader's words for a base register set to image offset k
+std::string sets(const std::string& reg, int64_t k) {
+  return "sets " + reg + " = " + img_name() + "+" + std::to_string(k - g_o2.bias) +
+         (g_o2.bias ? " (image offset " + std::to_string(k) + ")" : "");
 }
 
 std::span<const x86::Instruction> o2_prologue() {
-  return g_o2_image == x86::image_reg(true) ? x86::scan_prologue(true) : x86::scan_prologue_rbx_slots();
+  if (g_o2.image == x86::BX) return x86::scan_prologue_rbx_slots();
+  return g_o2.bias ? x86::scan_prologue(true) : x86::scan_prologue_unbiased();
 }
 
 // One instruction of a hostile body: GNU-as-style Intel syntax that our
@@ -65,16 +97,36 @@ const uint32_t kSize = Layout::standard(0).size;
 const int32_t kKMin = 0x80, kKMax = int32_t(kSize) - 135;
 const int32_t kK0 = kKMin, kK1 = kKMax, kK2 = 0x1000;
 
+// A branch target "@N" in a body piece: piece N (its offset from the body's
+// start, from `at`, the pieces' offsets), so that the target follows the
+// sizes the frame's displacements give the pieces before it.
+std::string at_piece(std::string text, const std::vector<uint32_t>& at) {
+  size_t p = text.find('@');
+  if (p == std::string::npos) return text;
+  size_t n = std::stoul(text.substr(p + 1));
+  char target[16];
+  std::snprintf(target, sizeof target, "0x%x", n < at.size() ? at[n] - at[0] : 0u);
+  return text.replace(p, std::string::npos, target);
+}
+
 // A scan function: the -O0 prologue (the -O2 one with `slots`, followed by
 // its base registers' leas, `leas` of them, with K0 and K1), the body, the
 // epilogue; `offsets` gets the code offset of every body piece.
 std::vector<uint8_t> scan_function(const std::vector<std::string>& body, std::vector<uint32_t>& offsets,
                                    bool slots = false, int leas = x86::kNumBases, int32_t k0 = kK0, int32_t k1 = kK1) {
+  if (std::any_of(body.begin(), body.end(), [](const std::string& t) { return t.find('@') != std::string::npos; })) {
+    std::vector<std::string> placed;
+    for (const std::string& t : body) placed.push_back(at_piece(t, {}));  // "@N" as 0: the pieces' sizes
+    scan_function(placed, offsets, slots, leas, k0, k1);
+    placed.clear();
+    for (const std::string& t : body) placed.push_back(at_piece(t, offsets));
+    return scan_function(placed, offsets, slots, leas, k0, k1);
+  }
   std::vector<uint8_t> code;
   auto put = [&](const std::vector<uint8_t>& b) { code.insert(code.end(), b.begin(), b.end()); };
   for (const auto& in : slots ? o2_prologue() : x86::scan_prologue(false)) put(x86::encode_at(in, code.size()));
   for (int i = 0; slots && i < leas; i++)
-    put(x86::encode_at(x86::base_lea(x86::kBaseRegs[i], i == 0 ? k0 : i == 1 ? k1 : kK2, g_o2_image), code.size()));
+    put(x86::encode_at(x86::base_lea(x86::kBaseRegs[i], (i == 0 ? k0 : i == 1 ? k1 : kK2) - g_o2.bias, g_o2.image), code.size()));
   const size_t base = code.size();
   offsets.clear();
   for (const std::string& t : body) {
@@ -310,9 +362,9 @@ void base_registers() {
       {"lea rax, [rdi+0x7f]", "lea eax, [r15-0x80]", "cmp rdi, rax", "test r15, r15", "mov rax, rdi"},
       {"mov eax, dword ptr [r14-0x80]", "add dword ptr [r14+0x7c], eax", "cmp r14d, 0x1"},
       // a reload to another K, a branch over it
-      {"lea rdi, [IMG+" + kmin + "]", "je 0x13", "call qword ptr [IMG-0x20]", "lea rdi, [IMG+" + kmax + "]", "nop"},
+      {"lea rdi, [IMG+" + kmin + "]", "je @4", "call qword ptr [IMG-0x20]", "lea rdi, [IMG+" + kmax + "]", "nop"},
       // the body points every register again, at both ends of the range, and a branch skips one lea
-      {"lea r15, [IMG+" + kmin + "]", "lea r14, [IMG+" + kmax + "]", "jne 0x17", "lea rdi, [IMG+0x5000]",
+      {"lea r15, [IMG+" + kmin + "]", "lea r14, [IMG+" + kmax + "]", "jne @4", "lea rdi, [IMG+0x5000]",
        "mov byte ptr [r15-0x80], al", "mov qword ptr [r14+0x7f], rax", "mov byte ptr [rdi+0x7f], al"},
   };
   for (const auto& body : ok) EXPECT_EQ(refusal(image_around(scan_function(body, at, true))), "") << body[0];
@@ -347,14 +399,14 @@ void base_registers() {
   refused({"raw: 48 87 f8"}, 0, "undecodable bytes");  // xchg rax, rdi: outside the subset
   // a K one byte outside the range, in the body and in the prologue
   const std::string range = "outside [128, " + std::to_string(kKMax) + "]";
-  refused({"lea rdi, [IMG+0x7f]"}, 0, "sets rdi = IMG+127, " + range);
-  refused({"nop", "lea r15, [IMG+" + hex(uint32_t(kKMax) + 1) + "]"}, 1, "sets r15 = IMG+" + std::to_string(kKMax + 1));
-  refused({"lea r14, [IMG-0x40]"}, 0, "sets r14 = IMG+-64, " + range);
+  refused({"lea rdi, [IMG+0x7f]"}, 0, sets("rdi", 127) + ", " + range);
+  refused({"nop", "lea r15, [IMG+" + hex(uint32_t(kKMax) + 1) + "]"}, 1, sets("r15", kKMax + 1));
+  refused({"lea r14, [IMG-0x40]"}, 0, sets("r14", -64) + ", " + range);
   for (int32_t k : {kKMin - 1, kKMax + 1}) {
     for (int i : {0, 1}) {
       std::string why = refusal(image_around(scan_function({"nop"}, at, true, x86::kNumBases, i ? kK0 : k, i ? k : kK1)));
       std::string reg = i ? "r15" : "rdi";
-      EXPECT_NE(why.find(with_image("'lea " + reg + ", [IMG+" + hex(uint32_t(k)) + "]': sets " + reg + " = IMG+" + std::to_string(k) + ", " + range)),
+      EXPECT_NE(why.find(with_image("'lea " + reg + ", [IMG+" + hex(uint32_t(k)) + "]': " + sets(reg, k) + ", " + range)),
                 std::string::npos)
           << why;
     }
@@ -363,7 +415,7 @@ void base_registers() {
   refused({"call qword ptr [IMG-0x40]", "nop"}, 0, "not followed at once by 'lea rdi, [IMG+K]'");
   refused({"call qword ptr [IMG-0x40]", "lea r15, [IMG+0x100]"}, 0, "not followed at once by 'lea rdi, [IMG+K]'");
   refused({"call qword ptr [IMG-0x40]", "lea rdi, [IMG+rax*1+0x100]"}, 0, "not followed at once");
-  refused({"call qword ptr [IMG-0x40]", "lea rdi, [IMG+0x7f]"}, 1, "sets rdi = IMG+127, " + range);
+  refused({"call qword ptr [IMG-0x40]", "lea rdi, [IMG+0x7f]"}, 1, sets("rdi", 127) + ", " + range);
   refused({"nop", "call qword ptr [IMG-0x38]"}, 1, "not followed at once");
   // displacements one past the disp8 reach, on every register, whatever K
   const std::string reach = "a base register of the -O2 frame takes a displacement in [-0x80, 0x7f] only";
@@ -392,7 +444,7 @@ void base_registers() {
     swapped.insert(swapped.end(), b.begin(), b.end());
   };
   for (const auto& in : o2_prologue()) put(in);
-  for (int i : {1, 0}) put(x86::base_lea(x86::kBaseRegs[i], i ? kK1 : kK0, g_o2_image));
+  for (int i : {1, 0}) put(x86::base_lea(x86::kBaseRegs[i], (i ? kK1 : kK0) - g_o2.bias, g_o2.image));
   size_t hostile_at = swapped.size();
   put(x86::parse("mov byte ptr [r15+0x10], al"));
   for (const auto& in : x86::scan_epilogue(true)) put(in);
@@ -416,9 +468,16 @@ TEST(Hostile, BaseRegisters) { base_registers(); }
 // The same attacks on the -O2 frame of images made before bl became a
 // bit-stack slot (rbx the image), which the loader still accepts.
 TEST(Hostile, BaseRegistersOfTheOlderO2Frame) {
-  g_o2_image = x86::BX;
+  g_o2 = kRbxFrame;
   base_registers();
-  g_o2_image = x86::image_reg(true);
+  g_o2 = kLdcFrame;
+}
+
+// And on the -O2 frame of images made before rbp pointed into the image.
+TEST(Hostile, BaseRegistersOfTheUnbiasedO2Frame) {
+  g_o2 = kUnbiasedFrame;
+  base_registers();
+  g_o2 = kLdcFrame;
 }
 
 // The -O2 frame's image register is rbp and its first bit-stack slot bl: the
@@ -431,7 +490,7 @@ TEST(Hostile, TheO2FrameSwapsRbxAndRbp) {
   for (const std::vector<std::string>& ok : std::vector<std::vector<std::string>>{
            {"movzx ebx, byte ptr [rbp+0x50]", "and bl, byte ptr [rbp+0x51]", "mov byte ptr [rbp+0x60], bl"},
            {"setne bl", "xor ebx, ebx", "lea ebx, [rax+rbx*2]", "mov rbx, rax", "test bl, bl"},
-           {"call qword ptr [rbp-0x40]", "lea rdi, [rbp+" + k + "]", "mov eax, dword ptr [rbp+0x0]"}})
+           {"call qword ptr [IMG-0x40]", "lea rdi, [rbp+" + k + "]", "mov eax, dword ptr [IMG+0x0]"}})
     EXPECT_EQ(refusal(image_around(scan_function(ok, at, true))), "") << ok[0];
   auto refused = [&](const std::vector<std::string>& body, size_t hostile, const std::string& reason) {
     std::string why = refusal(image_around(scan_function(body, at, true)));
@@ -442,15 +501,20 @@ TEST(Hostile, TheO2FrameSwapsRbxAndRbp) {
   for (const char* w : {"mov ebp, eax", "setne bpl", "xor ebp, ebp", "lea rbp, [rbp+0x10]", "add rbp, 0x8", "movzx ebp, al"})
     refused({"nop", w}, 1, fixed);
   refused({"mov byte ptr [rbx+0x10], al"}, 0, "memory operand based on rbx, not rbp");
-  refused({"movzx eax, byte ptr [rbp+" + S + "]"}, 0, "memory operand [rbp+" + S + "] (1 bytes) outside the memory image");
+  refused({"movzx eax, byte ptr [IMG+" + S + "]"}, 0,
+          with_image("memory operand [IMG+" + S + "] (1 bytes, image offset " + std::to_string(kSize) + ") outside the memory image"));
   refused({"call qword ptr [rbx-0x40]", "lea rdi, [rbp+" + k + "]"}, 0, "indirect call not through the REAL function table");
+  // rbp points kImageBias bytes into the image: a displacement counts from there
+  refused({"movzx eax, byte ptr [IMG-0x1]"}, 0, "memory operand [rbp-0x41] (1 bytes, image offset -1) outside the memory image");
+  refused({"mov qword ptr [IMG+" + hex(kSize - 7) + "], rax"}, 0, "(8 bytes, image offset " + std::to_string(kSize - 7) + ")");
+  refused({"call qword ptr [rbp-0x40]", "lea rdi, [rbp+" + k + "]"}, 0, "indirect call not through the REAL function table");
   refused({"lea rdi, [rbx+" + k + "]"}, 0, "a base register of the -O2 frame (only 'lea rdi, [rbp+K]' may set one)");
   // the older frame: rbp is a slot there, rbx the image
-  g_o2_image = x86::BX;
+  g_o2 = kRbxFrame;
   EXPECT_EQ(refusal(image_around(scan_function({"setne bpl", "mov byte ptr [rbx+0x60], bpl"}, at, true))), "");
   refused({"nop", "setne bl"}, 1, fixed);
   refused({"mov byte ptr [rbp+0x10], al"}, 0, "stack-relative memory operand based on rbp (only [rbx+disp] may address memory)");
-  g_o2_image = x86::image_reg(true);
+  g_o2 = kLdcFrame;
 }
 
 // The shared timer/counter routines after the epilogue (docs/x86.md, "Shared
@@ -525,6 +589,9 @@ TEST(Hostile, CallsOnlyToTheSharedRoutines) {
   std::vector<x86::Instruction> loops = ctu;
   loops.insert(loops.end() - 1, x86::parse("jmp -0x40"));
   refused(image_around(with_routines({loops}, 0, call_at), kEdges), "does not end with the scan function's epilogue", false);
+  // a routine built for rbp at the image's start (the unbiased frame's)
+  refused(image_around(with_routines({x86::scan_routine(x86::Routine::Ton, areas, x86::image_reg(true), 0)}, 0, call_at), kEdges),
+          "does not end with the scan function's epilogue", false);
   // a routine built for the older -O2 frame's image register (rbx)
   refused(image_around(with_routines({x86::scan_routine(x86::Routine::Ton, areas, x86::BX)}, 0, call_at), kEdges),
           "does not end with the scan function's epilogue", false);
@@ -543,17 +610,19 @@ TEST(Hostile, CallsOnlyToTheSharedRoutines) {
           "does not end with the scan function's epilogue", false);
 }
 
-// Both -O2 frames run: a body in ldc's frame (rbp the image, bl a slot) and
-// the same in the older one (rbx the image, bpl a slot), each calling its
-// frame's counter routine, is accepted by the loader and counts the rising
-// edges of X0 into C0, its bit-stack slot copied to Y0.
-TEST(Hostile, BothO2FramesRunTheirCounterRoutines) {
+// Every -O2 frame runs: a body in ldc's frame (rbp the image, kImageBias
+// bytes into it, bl a slot), the same with rbp at the image's start, and in
+// the oldest (rbx the image, bpl a slot), each calling its frame's counter
+// routine, is accepted by the loader and counts the rising edges of X0 into
+// C0, its bit-stack slot copied to Y0.
+TEST(Hostile, EveryO2FrameRunsItsCounterRoutine) {
   constexpr uint32_t kEdges = 1;
   const Layout L = Layout::standard(kEdges);
   const x86::RoutineAreas areas = layout_areas(kEdges);
   const std::string x0 = hex(L.addr(Area::X, 0)), y0 = hex(L.addr(Area::Y, 0)), e0 = hex(L.addr(Area::E, 0));
-  for (x86::RegNum image : {x86::image_reg(true), x86::BX}) {
-    g_o2_image = image;
+  for (O2Frame frame : {kLdcFrame, kUnbiasedFrame, kRbxFrame}) {
+    g_o2 = frame;
+    const x86::RegNum image = frame.image;
     const bool ldc_frame = image == x86::image_reg(true);
     const std::string slot = ldc_frame ? "bl" : "bpl", slot32 = ldc_frame ? "ebx" : "ebp";
     // the older frame's call site computes the edge itself and passes it in esi
@@ -567,7 +636,8 @@ TEST(Hostile, BothO2FramesRunTheirCounterRoutines) {
     }
     body.insert(body.end(), {"mov dl, 0x0", "mov ecx, 0x64"});
     uint32_t call_at = 0;
-    Image im = image_around(with_routines({x86::scan_routine(x86::Routine::Ctu, areas, image)}, 0, call_at, body), kEdges);
+    Image im = image_around(with_routines({x86::scan_routine(x86::Routine::Ctu, areas, image, frame.bias)}, 0, call_at, body),
+                            kEdges);
     ASSERT_EQ(refusal(im), "") << x86::reg_name(x86::r64(image));
     Memory m(L);
     auto eng = make_native_engine(im.code, im.entry);
@@ -580,10 +650,10 @@ TEST(Hostile, BothO2FramesRunTheirCounterRoutines) {
       EXPECT_EQ(m.bytes[L.addr(Area::Y, 0)], x);
       int32_t cv;
       std::memcpy(&cv, m.data() + L.addr(Area::CW, 0), 4);
-      EXPECT_EQ(cv, rising) << x86::reg_name(x86::r64(image));
+      EXPECT_EQ(cv, rising) << x86::reg_name(x86::r64(image)) << " bias " << frame.bias;
     }
   }
-  g_o2_image = x86::image_reg(true);
+  g_o2 = kLdcFrame;
 }
 
 TEST(Hostile, EntryPointsMustBeTheFrame) {
