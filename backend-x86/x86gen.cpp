@@ -1084,16 +1084,17 @@ class WordInEax {
  public:
   void forget() { word_ = -1; }
   void run(std::vector<Item>& items, std::vector<uint32_t>& starts) {
-    std::vector<char> drop(items.size(), 0);
+    drop_.assign(items.size(), 0);
+    bool any = false;
     for (size_t i = 0; i < items.size(); i++) {
       Item& it = items[i];
       if (it.kind == as::ItemKind::Label) forget();
       if (it.kind != as::ItemKind::Instruction) continue;
-      if (loads(it.inst) && held(it.inst.ops[1])) { drop[i] = 1; continue; }
+      if (loads(it.inst) && held(it.inst.ops[1])) { drop_[i] = 1, any = true; continue; }
       use_eax(it.inst);
       after(it.inst);
     }
-    if (std::any_of(drop.begin(), drop.end(), [](char d) { return d != 0; })) as::remove_items(items, drop, starts);
+    if (any) as::remove_items(items, drop_, starts);
   }
 
  private:
@@ -1131,6 +1132,7 @@ class WordInEax {
   }
 
   int64_t word_ = -1;  // the image offset of the word eax holds, or -1
+  std::vector<char> drop_;  // run's, kept from rung to rung
 };
 
 }  // namespace
