@@ -111,8 +111,9 @@ struct Ungated {
 
 class Gen : public ClassGen<Gen> {
  public:
-  Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used)
-      : L_(l), items_(items), slots_(slots), gate_(gate), bases_(gate), used_(used) {}
+  // known: the rung's (empty), storage the caller keeps from rung to rung
+  Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used, KnownStack& known)
+      : L_(l), items_(items), slots_(slots), gate_(gate), bases_(gate), known_(known), used_(used) {}
 
   void instr(const ldc::Instr& in, uint8_t facts = 0);  // facts: ScanFlag bits (ir/scanopt.h)
 
@@ -123,7 +124,7 @@ class Gen : public ClassGen<Gen> {
   bool slots_;     // -O2: the stack in kSlots; else the -O0 shift register in ebp
   bool gate_;      // -O2: branch-free power gating (cmov) instead of `je skip`
   bool bases_;     // -O2: the frame sets the base registers (rdi is reloaded after a REAL call)
-  KnownStack known_;  // -O2: the stack's values known at compile time
+  KnownStack& known_;  // -O2: the stack's values known at compile time
   bool on_ = false;   // -O2: this instruction's power is on for certain (no gate, no test)
   std::bitset<8>* used_;  // the shared routines called (as::x86::Routine)
   int depth_ = 0;  // stack positions in use before the current instruction
@@ -1493,7 +1494,8 @@ class Blocks {
     for (const auto& l : r.labels) b.items.push_back(Item::label_def(x86_label_name(l), true));
     if (notes_) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
     bool slots = o2_ && facts_->fits[ri];  // the rung's stack in the slot registers (none where shared_)
-    Gen g(layout_, b.items, slots, o2_, &used_);
+    known_.reset();
+    Gen g(layout_, b.items, slots, o2_, &used_, known_);
     uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into ebp
     for (size_t k = 0; k < r.code.size(); k++) {
       const ldc::Instr& in = r.code[k];
@@ -1569,6 +1571,7 @@ class Blocks {
   std::bitset<8> used_;
   std::optional<ScanFacts> facts_;  // -O2: what the scan cannot observe
   WordInEax eax_;                   // -O2: the word eax holds, from rung to rung
+  KnownStack known_;                // a rung's Gen's (its storage kept)
 };
 
 }  // namespace
