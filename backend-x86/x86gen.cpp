@@ -1056,9 +1056,8 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts, bool shar
 // them the other way round, so every register and memory operand of the rung
 // swaps rbx and rbp, at every width.  A permutation of two callee-saved
 // registers, so the code computes exactly the same.
-RegNum swapped(RegNum n) { return n == BX ? BP : n == BP ? BX : n; }
 void swap_reg(as::x86::Reg& r) {
-  if (r.cls == RegClass::Gp8 || r.cls == RegClass::Gp32 || r.cls == RegClass::Gp64) r.num = swapped(RegNum(r.num));
+  if ((r.num == BX || r.num == BP) && r.cls != RegClass::Xmm) r.num ^= BX ^ BP;  // 3 <-> 5
 }
 void to_o2_frame(std::vector<Item>& items) {
   for (Item& it : items) {
