@@ -129,7 +129,10 @@ class Gen : public ClassGen<Gen> {
   std::bitset<8>* used_;  // the shared routines called (as::x86::Routine)
   int depth_ = 0;  // stack positions in use before the current instruction
 
-  Reg slot(int pos) const { return kSlots[((pos % kNumSlots) + kNumSlots) % kNumSlots]; }
+  // pos >= -2 (bit_slots names the two entries below the top of a stack that
+  // never goes below the rung's first push): one unsigned remainder, of pos
+  // moved up by a multiple of kNumSlots
+  Reg slot(int pos) const { return kSlots[unsigned(pos + kNumSlots * kMaxStackDepth) % kNumSlots]; }
   Reg top8() const { return slot(depth_ - 1); }
   static Reg wide(Reg r8) { return r32(r8.num); }
   void test_top() {
