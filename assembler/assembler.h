@@ -223,18 +223,21 @@ bool label_follows(const std::vector<Item<Inst>>& items, size_t i, Name label,
 
 // Removes the items marked in `drop` (one flag per item); `index` holds item
 // indices (e.g. where each IL instruction's code starts) and is moved along.
+// In place: the kept items move down, and the vector keeps its storage for
+// the code generator's next block.
 template <class Inst>
 void remove_items(std::vector<Item<Inst>>& items, const std::vector<char>& drop, std::vector<uint32_t>& index) {
   std::vector<uint32_t> new_index(items.size() + 1);
-  std::vector<Item<Inst>> kept;
-  kept.reserve(items.size());
+  size_t kept = 0;
   for (size_t i = 0; i < items.size(); i++) {
-    new_index[i] = uint32_t(kept.size());
-    if (!drop[i]) kept.push_back(std::move(items[i]));
+    new_index[i] = uint32_t(kept);
+    if (drop[i]) continue;
+    if (kept != i) items[kept] = std::move(items[i]);
+    kept++;
   }
-  new_index[items.size()] = uint32_t(kept.size());
+  new_index[items.size()] = uint32_t(kept);
   for (auto& s : index) s = new_index[s];
-  items = std::move(kept);
+  items.erase(items.begin() + ptrdiff_t(kept), items.end());
 }
 
 template <class Inst>

@@ -112,8 +112,9 @@ struct Ungated {
 
 class Gen : public ClassGen<Gen> {
  public:
-  Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used)
-      : L_(l), items_(items), slots_(slots), gate_(gate), bases_(gate), used_(used) {}
+  // known: the rung's (empty), storage the caller keeps from rung to rung
+  Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used, KnownStack& known)
+      : L_(l), items_(items), slots_(slots), gate_(gate), bases_(gate), known_(known), used_(used) {}
 
   // facts: ScanFlag bits (ir/scanopt.h); reuse: the earlier division it takes, if any
   void instr(const ldc::Instr& in, uint8_t facts = 0, const ldc::DivReuse* reuse = nullptr);
@@ -125,13 +126,16 @@ class Gen : public ClassGen<Gen> {
   bool slots_;     // -O2: the stack in kSlots; else the -O0 shift register in ebp
   bool gate_;      // -O2: branch-free power gating (cmov) instead of `je skip`
   bool bases_;     // -O2: the frame sets the base registers (rdi is reloaded after a REAL call)
-  KnownStack known_;  // -O2: the stack's values known at compile time
+  KnownStack& known_;  // -O2: the stack's values known at compile time
   bool on_ = false;   // -O2: this instruction's power is on for certain (no gate, no test)
   const ldc::DivReuse* reuse_ = nullptr;  // -O2: this division's earlier result (ScanFacts::reused)
   std::bitset<8>* used_;  // the shared routines called (as::x86::Routine)
   int depth_ = 0;  // stack positions in use before the current instruction
 
-  Reg slot(int pos) const { return kSlots[((pos % kNumSlots) + kNumSlots) % kNumSlots]; }
+  // pos >= -2 (bit_slots names the two entries below the top of a stack that
+  // never goes below the rung's first push): one unsigned remainder, of pos
+  // moved up by a multiple of kNumSlots
+  Reg slot(int pos) const { return kSlots[unsigned(pos + kNumSlots * kMaxStackDepth) % kNumSlots]; }
   Reg top8() const { return slot(depth_ - 1); }
   static Reg wide(Reg r8) { return r32(r8.num); }
   void test_top() {
@@ -1081,9 +1085,8 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts, bool shar
 // them the other way round, so every register and memory operand of the rung
 // swaps rbx and rbp, at every width.  A permutation of two callee-saved
 // registers, so the code computes exactly the same.
-RegNum swapped(RegNum n) { return n == BX ? BP : n == BP ? BX : n; }
 void swap_reg(as::x86::Reg& r) {
-  if (r.cls == RegClass::Gp8 || r.cls == RegClass::Gp32 || r.cls == RegClass::Gp64) r.num = swapped(RegNum(r.num));
+  if ((r.num == BX || r.num == BP) && r.cls != RegClass::Xmm) r.num ^= BX ^ BP;  // 3 <-> 5
 }
 void to_o2_frame(std::vector<Item>& items) {
   for (Item& it : items) {
@@ -1110,16 +1113,17 @@ class WordInEax {
  public:
   void forget() { word_ = -1; }
   void run(std::vector<Item>& items, std::vector<uint32_t>& starts) {
-    std::vector<char> drop(items.size(), 0);
+    drop_.assign(items.size(), 0);
+    bool any = false;
     for (size_t i = 0; i < items.size(); i++) {
       Item& it = items[i];
       if (it.kind == as::ItemKind::Label) forget();
       if (it.kind != as::ItemKind::Instruction) continue;
-      if (loads(it.inst) && held(it.inst.ops[1])) { drop[i] = 1; continue; }
+      if (loads(it.inst) && held(it.inst.ops[1])) { drop_[i] = 1, any = true; continue; }
       use_eax(it.inst);
       after(it.inst);
     }
-    if (std::any_of(drop.begin(), drop.end(), [](char d) { return d != 0; })) as::remove_items(items, drop, starts);
+    if (any) as::remove_items(items, drop_, starts);
   }
 
  private:
@@ -1157,6 +1161,7 @@ class WordInEax {
   }
 
   int64_t word_ = -1;  // the image offset of the word eax holds, or -1
+  std::vector<char> drop_;  // run's, kept from rung to rung
 };
 
 }  // namespace
@@ -1224,16 +1229,47 @@ bool has_rex(const Instruction& in) {
   return false;
 }
 
-void collect_ops(const as::Block<Instruction>& b, Ops& ops) {
-  for (const Item& it : b.items) {
-    if (it.kind != as::ItemKind::Instruction) continue;
-    for (unsigned k = 0; k < it.inst.num_operands; k++)
-      if (rewritable(it.inst, it.inst.ops[k])) {
-        const Mem& m = it.inst.ops[k].mem;
-        ops.push_back({m.disp, int64_t(m.disp) + mem_width(m) - 1, has_rex(it.inst)});
-      }
-  }
+// Is `in` a reload of a base register after a REAL call (`lea reg, [rbp+K]`)?
+bool reloads_base(const Instruction& in) {
+  if (in.mnemonic != M::Lea || in.ops[1].mem.base != kO2Image) return false;
+  for (RegNum r : kBaseRegs)
+    if (in.ops[0].reg == r64(r)) return true;
+  return false;
 }
+
+// Is `in` a jump to a rung's global label?
+bool jumps_to_rung(const Instruction& in) {
+  return (in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) && in.ops[0].kind == OperandKind::Label &&
+         in.ops[0].label.view().starts_with(kLabelPrefix);
+}
+
+// What a region's plan and rewrite look at, gathered as each of its blocks
+// comes (one look at the items, not one a pass): the rewritable operands (their
+// bytes for the plan, where they are for the rewrite), the reloads of the base
+// registers and the jumps to the rungs' global labels.  The pointers stay valid
+// while the blocks wait in the region: a moved vector keeps its storage.
+struct RegionRefs {
+  Ops ops;
+  std::vector<Mem*> mems;              // ops' operands, in order
+  std::vector<Instruction*> reloads;   // reloads_base
+  std::vector<uint32_t> jumps;         // jumps_to_rung: their labels' ids
+
+  void add(as::Block<Instruction>& b) {
+    for (Item& it : b.items) {
+      if (it.kind != as::ItemKind::Instruction) continue;
+      Instruction& in = it.inst;
+      if (reloads_base(in)) reloads.push_back(&in);
+      else if (jumps_to_rung(in)) jumps.push_back(in.ops[0].label.id());
+      for (unsigned k = 0; k < in.num_operands; k++)
+        if (rewritable(in, in.ops[k])) {
+          Mem& m = in.ops[k].mem;
+          ops.push_back({m.disp, int64_t(m.disp) + mem_width(m) - 1, has_rex(in)});
+          mems.push_back(&m);
+        }
+    }
+  }
+  void clear() { ops.clear(), mems.clear(), reloads.clear(), jumps.clear(); }
+};
 
 bool covers(int64_t k, int64_t first, int64_t last) { return first >= k - 128 && last <= k + 127; }
 
@@ -1339,30 +1375,23 @@ class BasePlan {
     return lea;
   }
 
-  // Rewrites b's operands through the known registers, and fills in the K of
-  // the leas after REAL calls (the reloads): the region's, or the lowest K for
-  // a register the region does not use (known from then on: `reloaded`).
-  void rewrite(as::Block<Instruction>& b, std::array<bool, kNumBases>& reloaded) const {
-    for (Item& it : b.items) {
-      if (it.kind != as::ItemKind::Instruction) continue;
-      Instruction& in = it.inst;
-      if (in.mnemonic == M::Lea) {
-        for (int r = 0; r < kNumBases; r++)
-          if (in.ops[0].reg == r64(kBaseRegs[r]) && in.ops[1].mem.base == kO2Image)
-            in.ops[1].mem.disp = int32_t(known(r) ? k(r) : kBaseKMin), reloaded[size_t(r)] = true;
-        continue;
-      }
-      for (unsigned j = 0; j < in.num_operands; j++) {
-        if (!rewritable(in, in.ops[j])) continue;
-        Mem& m = in.ops[j].mem;
-        const int64_t first = m.disp, last = first + mem_width(m) - 1;
-        for (int r = 0; r < kNumBases; r++)
-          if (known(r) && covers(k(r), first, last)) {
-            m.base = r64(kBaseRegs[r]);
-            m.disp = int32_t(first - k(r));
-            break;
-          }
-      }
+  // Rewrites a region's operands through the known registers, and fills in
+  // the K of the leas after REAL calls (the reloads): the region's, or the
+  // lowest K for a register the region does not use (known from then on:
+  // `reloaded`).
+  void rewrite(const RegionRefs& refs, std::array<bool, kNumBases>& reloaded) const {
+    for (Instruction* in : refs.reloads)
+      for (int r = 0; r < kNumBases; r++)
+        if (in->ops[0].reg == r64(kBaseRegs[r]))
+          in->ops[1].mem.disp = int32_t(known(r) ? k(r) : kBaseKMin), reloaded[size_t(r)] = true;
+    for (Mem* m : refs.mems) {
+      const int64_t first = m->disp, last = first + mem_width(*m) - 1;
+      for (int r = 0; r < kNumBases; r++)
+        if (known(r) && covers(k(r), first, last)) {
+          m->base = r64(kBaseRegs[r]);
+          m->disp = int32_t(first - k(r));
+          break;
+        }
     }
   }
 
@@ -1385,11 +1414,11 @@ class Regions {
   // a rung's block; `target`: it starts with labels that jumps name
   void add(as::Block<Instruction>& b, std::vector<uint32_t>& starts, bool target) {
     if (target) flush(), target_ = true;
-    collect_ops(b, ops_);
+    refs_.add(b);
     blocks_.push_back(std::move(b));
     starts_.push_back(std::move(starts));
     if (!spare_.empty()) b = std::move(spare_.back()), spare_.pop_back();  // reuse a sunk block's storage
-    if (ops_.size() >= kRegionOps) flush();
+    if (refs_.ops.size() >= kRegionOps) flush();
   }
   void finish() { flush(); }
 
@@ -1398,7 +1427,7 @@ class Regions {
     if (blocks_.empty() && !prologue_) return;
     bool free = prologue_.has_value();
     if (target_) arrive(blocks_[0]);
-    std::array<bool, kNumBases> lea = plan_.plan(ops_, free);
+    std::array<bool, kNumBases> lea = plan_.plan(refs_.ops, free);
     if (free) {
       for (Item& it : prologue_->items)
         for (int r = 0; r < kNumBases; r++)
@@ -1409,7 +1438,7 @@ class Regions {
       prologue_.reset();
     }
     std::array<bool, kNumBases> reloaded{};
-    for (auto& b : blocks_) plan_.rewrite(b, reloaded);
+    plan_.rewrite(refs_, reloaded);
     if (!free && !blocks_.empty()) {  // the leas, after the first block's labels
       std::vector<Item>& items = blocks_[0].items;
       size_t at = 0;
@@ -1420,7 +1449,7 @@ class Regions {
       items.insert(items.begin() + ptrdiff_t(at), leas.begin(), leas.end());
       for (uint32_t& s : starts_[0]) s += uint32_t(leas.size());
     }
-    for (const auto& b : blocks_) depart(b);  // before the reloads make a register known
+    depart();  // before the reloads make a register known
     for (int r = 0; r < kNumBases; r++)
       if (reloaded[size_t(r)] && !plan_.known(r)) plan_.set(r, kBaseKMin);
     for (size_t i = 0; i < blocks_.size(); i++) {
@@ -1431,20 +1460,17 @@ class Regions {
     }
     blocks_.clear();
     starts_.clear();
-    ops_.clear();
+    refs_.clear();
     target_ = false;
   }
 
-  // The jumps to the rungs' global labels (all forward, so all made before
-  // their target's region): the registers' K at each, -1 where not known.
-  void depart(const as::Block<Instruction>& b) {
-    for (const Item& it : b.items) {
-      if (it.kind != as::ItemKind::Instruction || (it.inst.mnemonic != M::Jmp && it.inst.mnemonic != M::Jcc) ||
-          it.inst.ops[0].kind != OperandKind::Label || !it.inst.ops[0].label.view().starts_with(kLabelPrefix))
-        continue;
-      std::array<int64_t, kNumBases> now;
-      for (int r = 0; r < kNumBases; r++) now[size_t(r)] = plan_.known(r) ? plan_.k(r) : -1;
-      auto [at, fresh] = at_jumps_.emplace(it.inst.ops[0].label.id(), now);
+  // The region's jumps to the rungs' global labels (all forward, so all made
+  // before their target's region): the registers' K at each, -1 where not known.
+  void depart() {
+    std::array<int64_t, kNumBases> now;
+    for (int r = 0; r < kNumBases; r++) now[size_t(r)] = plan_.known(r) ? plan_.k(r) : -1;
+    for (uint32_t label : refs_.jumps) {
+      auto [at, fresh] = at_jumps_.emplace(label, now);
       if (!fresh)
         for (int r = 0; r < kNumBases; r++)
           if (at->second[size_t(r)] != now[size_t(r)]) at->second[size_t(r)] = -1;
@@ -1470,7 +1496,7 @@ class Regions {
   const X86BlockSink& sink_;
   std::vector<as::Block<Instruction>> blocks_;  // the region's
   std::vector<std::vector<uint32_t>> starts_;
-  Ops ops_;
+  RegionRefs refs_;  // the blocks' operands, reloads and jumps
   bool target_ = false;  // the region's first block is a jump target
   // Blocks sunk, their items' storage for rungs to come: enough for a region's
   // blocks, so that a rung's items seldom grow a new vector from nothing.
@@ -1507,7 +1533,8 @@ class Blocks {
     for (const auto& l : r.labels) b.items.push_back(Item::label_def(x86_label_name(l), true));
     if (notes_) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
     bool slots = o2_ && facts_->fits[ri];  // the rung's stack in the slot registers (none where shared_)
-    Gen g(layout_, b.items, slots, o2_, &used_);
+    known_.reset();
+    Gen g(layout_, b.items, slots, o2_, &used_, known_);
     uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into ebp
     for (size_t k = 0; k < r.code.size(); k++) {
       const ldc::Instr& in = r.code[k];
@@ -1583,6 +1610,7 @@ class Blocks {
   std::bitset<8> used_;
   std::optional<ScanFacts> facts_;  // -O2: what the scan cannot observe
   WordInEax eax_;                   // -O2: the word eax holds, from rung to rung
+  KnownStack known_;                // a rung's Gen's (its storage kept)
 };
 
 }  // namespace
