@@ -116,8 +116,10 @@ class Gen : public ClassGen<Gen> {
   Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used, KnownStack& known)
       : L_(l), items_(items), slots_(slots), gate_(gate), bases_(gate), known_(known), used_(used) {}
 
-  // facts: ScanFlag bits (ir/scanopt.h); reuse: the earlier division it takes, if any
-  void instr(const ldc::Instr& in, uint8_t facts = 0, const ldc::DivReuse* reuse = nullptr);
+  // facts: ScanFlag bits (ir/scanopt.h); reuse: the earlier division it takes,
+  // quotient_to: where a MOD also stores its quotient (ScanFacts), if any
+  void instr(const ldc::Instr& in, uint8_t facts = 0, const ldc::DivReuse* reuse = nullptr,
+             const ldc::Operand* quotient_to = nullptr);
 
  private:
   const Layout& L_;
@@ -129,6 +131,7 @@ class Gen : public ClassGen<Gen> {
   KnownStack& known_;  // -O2: the stack's values known at compile time
   bool on_ = false;   // -O2: this instruction's power is on for certain (no gate, no test)
   const ldc::DivReuse* reuse_ = nullptr;  // -O2: this division's earlier result (ScanFacts::reused)
+  const ldc::Operand* quotient_to_ = nullptr;  // -O2: this MOD's quotient goes there too (ScanFacts::early_quotient)
   std::bitset<8>* used_;  // the shared routines called (as::x86::Routine)
   int depth_ = 0;  // stack positions in use before the current instruction
 
@@ -524,7 +527,10 @@ bool Gen::divide_by_constant(const ldc::Instr& in) {
 // form: this one's `or` into S0 chains every division of the scan through
 // memory (the one-class arithmetic program 880 ns -> 1.31 us a scan with it).
 bool Gen::gated_divmod(const ldc::Instr& in) {
-  if (reuse_ && on_) return reused_division(in, *reuse_), true;
+  if (reuse_ && on_) {
+    if (!reuse_->stored_early) reused_division(in, *reuse_);  // else the MOD before stored the quotient
+    return true;
+  }
   if (divide_by_constant(in)) return true;
   if (!bases_ || on_) return false;
   const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
@@ -602,11 +608,17 @@ void Gen::divisor_branch(int32_t v, const std::string& l) {
 void Gen::divide_int(bool mod) {
   emit(M::Cdq, {});
   emit(M::Idiv, {R(ecx)});
+  if (mod && quotient_to_) emit(M::Mov, {Dw(addr(*quotient_to_)), R(eax)});  // for a DIV after it
   if (mod) emit(M::Mov, {R(eax), R(edx)});
 }
 
 // every branch of DIV / MOD goes forward
 void Gen::minus_one_result(bool mod) {
+  if (mod && quotient_to_) {  // x / -1 = -x, wrapping, for a DIV after it
+    emit(M::Mov, {R(edx), R(eax)});
+    emit(M::Neg, {R(edx)});
+    emit(M::Mov, {Dw(addr(*quotient_to_)), R(edx)});
+  }
   if (mod) emit(M::Xor, {R(eax), R(eax)});
   else emit(M::Neg, {R(eax)});
 }
@@ -849,9 +861,10 @@ void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
 //
 // A dead store needs no code, an unread stack entry none but an edge
 // contact's edge update (ir/scanopt.h); the stack is followed all the same.
-void Gen::instr(const ldc::Instr& in, uint8_t facts, const ldc::DivReuse* reuse) {
+void Gen::instr(const ldc::Instr& in, uint8_t facts, const ldc::DivReuse* reuse, const ldc::Operand* quotient_to) {
   OpClass k = op_info(in.op).klass;
   reuse_ = reuse;
+  quotient_to_ = quotient_to;
   on_ = bases_ && known_.on() &&
         (k == OpClass::Move || k == OpClass::Arith || k == OpClass::Logic || k == OpClass::Special);
   if ((facts & kUnread) && (in.op == Op::LOADP || in.op == Op::LOADF)) {
@@ -863,6 +876,7 @@ void Gen::instr(const ldc::Instr& in, uint8_t facts, const ldc::DivReuse* reuse)
   }
   on_ = false;
   reuse_ = nullptr;
+  quotient_to_ = nullptr;
   if (bases_) known_.step(in);
   depth_ += op_info(in.op).push - op_info(in.op).pop;
 }
@@ -1542,7 +1556,7 @@ class Blocks {
       if (notes_) b.items.push_back(Item::note(instr_text(in)));
       if (!facts_) { g.instr(in); continue; }
       const ldc::Instr* alt = facts_->replacement(ri, k);
-      g.instr(alt ? *alt : in, facts_->at(ri, k) & keep, facts_->reuse(ri, k));
+      g.instr(alt ? *alt : in, facts_->at(ri, k) & keep, facts_->reuse(ri, k), facts_->quotient_to(ri, k));
     }
     if (opt_ >= 1 && !slots) peephole(b.items, starts, shared_);
     if (!o2_) return;

@@ -23,6 +23,9 @@ const T* entry_at(const std::vector<std::pair<uint32_t, T>>& v, uint32_t i) {
 
 const Instr* ScanFacts::replacement(size_t rung, size_t k) const { return entry_at(replaced, first[rung] + uint32_t(k)); }
 const DivReuse* ScanFacts::reuse(size_t rung, size_t k) const { return entry_at(reused, first[rung] + uint32_t(k)); }
+const Operand* ScanFacts::quotient_to(size_t rung, size_t k) const {
+  return entry_at(early_quotient, first[rung] + uint32_t(k));
+}
 
 size_t ScanFacts::count(ScanFlag f) const {
   return size_t(std::count_if(flags.begin(), flags.end(), [f](uint8_t x) { return (x & f) != 0; }));
@@ -278,9 +281,11 @@ class Divisions {
   }
 
  private:
+  static constexpr uint32_t kNone = UINT32_MAX;
   struct Done {
     uint32_t a, b, d;
     Operand dst;
+    uint32_t at;  // the instruction's index, kNone if it took an earlier result (no idiv to store a quotient)
   };
   struct Pair {
     std::optional<Done> q, r;  // the quotient's and the remainder's
@@ -290,8 +295,9 @@ class Divisions {
   void instr(const Instr& in, uint32_t i) {
     std::optional<Done> now = division(in, i);
     bool mod = in.op == Op::MOD;
-    if (now) reuse(*now, mod, i);
-    if (!pairs_.empty()) wrote(in, i);
+    if (now && reuse(*now, mod, i)) now->at = kNone;
+    if (in.op == Op::JMP || in.op == Op::END) exit_ = i;
+    if (!pairs_.empty() || now) wrote(in, i);  // a division's own accesses count for a DIV it may serve
     if (!now || now->d == now->a || now->d == now->b) return;
     Pair& p = pairs_[key(now->a, now->b)];
     (mod ? p.r : p.q) = *now;
@@ -302,17 +308,36 @@ class Divisions {
     if (!is_divmod(in.op) || !on_[i]) return std::nullopt;
     for (int k = 0; k < 3; k++)
       if (in.a[k].kind != OpdKind::Int) return std::nullopt;
-    return Done{addr(l_, in.a[0]), addr(l_, in.a[1]), addr(l_, in.a[2]), in.a[2]};
+    return Done{addr(l_, in.a[0]), addr(l_, in.a[1]), addr(l_, in.a[2]), in.a[2], i};
   }
-  void reuse(const Done& now, bool mod, uint32_t i) {
+  // records what the division takes from an earlier one, if anything (true then)
+  bool reuse(const Done& now, bool mod, uint32_t i) {
     auto it = pairs_.find(key(now.a, now.b));
-    if (it == pairs_.end()) return;
+    if (it == pairs_.end()) return false;
     const std::optional<Done>& same = mod ? it->second.r : it->second.q;
     if (same) f_.reused.emplace_back(i, DivReuse{same->dst, false});
     else if (mod && it->second.q) f_.reused.emplace_back(i, DivReuse{it->second.q->dst, true});
+    else if (!mod && it->second.r && untouched_since(now.d, it->second.r->at)) {
+      // the MOD divided: it stores the quotient here too, and this DIV needs no code
+      f_.reused.emplace_back(i, DivReuse{it->second.r->dst, false, true});
+      f_.early_quotient.emplace_back(it->second.r->at, now.dst);
+    } else {
+      return false;
+    }
+    return true;
+  }
+  // May the division at `since` store into d already?  Nothing has read or
+  // written d since (its own operands and destination included), and no JMP
+  // or END could leave before this instruction.
+  bool untouched_since(uint32_t d, uint32_t since) const {
+    if (since == kNone) return false;
+    auto a = access_.find(d);
+    return (a == access_.end() || a->second < since) && (exit_ == kNone || exit_ < since);
   }
   void wrote(const Instr& in, uint32_t i) {
     const Access acc = access(l_, in, on_[i]);
+    for (int k = 0; k < acc.nr; k++) access_[acc.reads[k]] = i;
+    for (int k = 0; k < acc.nw; k++) access_[acc.writes[k]] = i;
     for (int w = 0; w < acc.nw; w++) {
       const uint32_t at = acc.writes[w];
       if (at == l_.addr(Area::S, kBitError) && !is_divmod(in.op)) return forget();  // a zero divisor's S0 may be gone
@@ -335,6 +360,9 @@ class Divisions {
   ScanFacts& f_;
   std::unordered_map<uint64_t, Pair> pairs_;
   std::unordered_map<uint32_t, std::vector<uint64_t>> users_;  // the pairs whose operands or destinations lie there
+  // while any pair is kept: the last instruction that read or wrote each address, and the last JMP or END
+  std::unordered_map<uint32_t, uint32_t> access_;
+  uint32_t exit_ = kNone;
 };
 
 }  // namespace
@@ -351,6 +379,8 @@ ScanFacts scan_facts(const Program& p, const Layout& layout, int slots) {
   for (size_t ri = 0; ri < p.rungs.size(); ri++) prop.rung(p.rungs[ri], f.first[ri]);
   Divisions divs(layout, on, f);
   for (size_t ri = 0; ri < p.rungs.size(); ri++) divs.rung(p.rungs[ri], f.first[ri]);
+  std::sort(f.early_quotient.begin(), f.early_quotient.end(),
+            [](const auto& x, const auto& y) { return x.first < y.first; });
   f.fits.assign(p.rungs.size(), 0);
   if (shares_stack(p)) return f;  // an entry may be read by a later rung
   std::vector<int> depth;

@@ -19,7 +19,10 @@
 //    division's destination written since, takes the earlier result
 //    (ScanFacts::reused): a copy of the same quotient or remainder, or the
 //    remainder from the quotient (a - q*b), unless the divisor is 0 (then the
-//    destination keeps its value, and S0 is still set from the first).
+//    destination keeps its value, and S0 is still set from the first); a DIV
+//    after a MOD of the pair takes no code where nothing has touched its
+//    destination since the MOD and no JMP or END lies between: the MOD
+//    stores the quotient there too (ScanFacts::early_quotient).
 #pragma once
 
 #include <cstdint>
@@ -43,6 +46,7 @@ enum ScanFlag : uint8_t {
 struct DivReuse {
   Operand from;
   bool remainder_from_quotient = false;
+  bool stored_early = false;  // a DIV whose quotient the earlier MOD stored: no code
 };
 
 struct ScanFacts {
@@ -53,11 +57,14 @@ struct ScanFacts {
   // replaced by their known constants, or a MOV of the folded result
   std::vector<std::pair<uint32_t, Instr>> replaced;
   std::vector<std::pair<uint32_t, DivReuse>> reused;  // by index, of the instruction replaced or not
+  // by index: a MOD that also stores its quotient (where the divisor is not 0) into this word
+  std::vector<std::pair<uint32_t, Operand>> early_quotient;
 
 
   uint8_t at(size_t rung, size_t k) const { return flags[first[rung] + k]; }
   const Instr* replacement(size_t rung, size_t k) const;  // nullptr if none
   const DivReuse* reuse(size_t rung, size_t k) const;     // nullptr if none
+  const Operand* quotient_to(size_t rung, size_t k) const;  // nullptr if none
   size_t count(ScanFlag f) const;
 };
 

@@ -569,7 +569,10 @@ std::string constant_division_il() {
 // operation again, a MOD after a DIV (a - q*b), a DIV after a MOD (divides),
 // and the cases that must divide again: an operand or the earlier
 // destination written since, a destination that is an operand, S0 cleared,
-// a jump that may skip the earlier division, a gated division in between.
+// a jump that may skip the earlier division, a gated division in between;
+// a DIV after a MOD whose quotient the MOD stores (no code), and the cases
+// where it may not: the DIV's destination read or written since, the MOD a
+// copy itself, a JMP or END between.
 // compare_il's edgy inputs give divisors of 0, -1 and INT32_MIN.
 const char* const kRepeatedDivisionIl = R"(
 .rung line 1
@@ -615,6 +618,37 @@ const char* const kRepeatedDivisionIl = R"(
     DIV     WX6 WX7 D40
     MOD     WX6 WX7 D41
     DIV     WX0 WX1 D42
+.rung line 8
+    TRUE
+    MOD     WX8 WX9 D43
+    DIV     WX8 WX9 D44
+    MOD     WX10 WX11 D45
+    MOV     D46 D48
+    DIV     WX10 WX11 D46
+    MOD     WX12 WX13 D49
+    MOV     WX0 D50
+    DIV     WX12 WX13 D50
+    MOD     WX14 WX15 D51
+    MOD     WX14 WX15 D52
+    DIV     WX14 WX15 D53
+    MOD     WX3 WX9 D54
+.rung line 9
+    LOAD    X4
+    JMP     after
+.rung line 10
+    TRUE
+    DIV     WX3 WX9 D55
+    MOD     WX5 WX9 D56
+.rung line 11
+    LOAD    X5
+    END
+.rung line 12
+    TRUE
+    DIV     WX5 WX9 D57
+.label after
+.rung line 13
+    TRUE
+    DIV     WX3 WX9 D58
 .end
 )";
 

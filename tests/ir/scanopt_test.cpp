@@ -24,6 +24,7 @@ struct Facts {
   std::string reused(size_t rung, size_t k) const {
     const DivReuse* r = f.reuse(rung, k);
     if (!r) return "";
+    if (r->stored_early) return "early";
     Instr mov{Op::MOV, {r->from, r->from}, {}};
     std::string text = instr_text(mov);  // "MOV D5 D5": the device's name twice
     return (r->remainder_from_quotient ? "q " : "") + text.substr(text.rfind(' ') + 1);
@@ -151,7 +152,7 @@ TEST(ScanFacts, ARepeatedDivisionTakesTheEarlierResult) {
   EXPECT_EQ(t.reused(0, 2), "D1");
   EXPECT_EQ(t.reused(0, 3), "q D2");  // a - q*b: the latest quotient
   EXPECT_EQ(t.reused(0, 4), "D3");    // the same remainder
-  EXPECT_EQ(t.reused(0, 6), "");      // a DIV after a MOD divides
+  EXPECT_EQ(t.reused(0, 6), "early");  // a DIV after a MOD: the MOD stores the quotient too
   Facts gated(rung("LOAD X0|DIV WX0 WX1 D1") + rung("TRUE|DIV WX0 WX1 D2"));
   EXPECT_EQ(gated.reused(1, 1), "");  // D1 was written only with power
   Facts written(rung("TRUE|DIV D0 WX1 D1|MOV WX5 D0|DIV D0 WX1 D2|DIV WX0 WX1 D3|ADD D3 1 D3|DIV WX0 WX1 D4"));
@@ -163,6 +164,20 @@ TEST(ScanFacts, ARepeatedDivisionTakesTheEarlierResult) {
   EXPECT_EQ(s0.reused(0, 3), "");  // a zero divisor must set S0 again
   Facts label(rung("TRUE|DIV WX0 WX1 D1") + rung("LOAD X2|JMP L") + rung("TRUE|DIV WX0 WX1 D2", ".label L\n"));
   EXPECT_EQ(label.reused(2, 1), "");  // a jump lands here from before the division
+  Facts early(rung("TRUE|MOD WX0 WX1 D1|ADD D7 1 D8|DIV WX0 WX1 D2"));
+  EXPECT_EQ(early.reused(0, 3), "early");  // the MOD stores the quotient into D2 too
+  ASSERT_NE(early.f.quotient_to(0, 1), nullptr);
+  EXPECT_EQ(early.f.quotient_to(0, 1)->index, 2u);
+  for (const char* between : {"MOV D2 D9", "MOV 1 D2", "LOAD X1|JMP L", "LOAD X1|END"}) {
+    Facts touched(rung(std::string("TRUE|MOD WX0 WX1 D1|") + between + "|TRUE|DIV WX0 WX1 D2") + rung("TRUE", ".label L\n"));
+    EXPECT_EQ(touched.reused(0, 3 + (std::string(between).find('|') != std::string::npos)), "") << between;
+    EXPECT_EQ(touched.f.quotient_to(0, 1), nullptr) << between;
+  }
+  Facts copy(rung("TRUE|MOD WX0 WX1 D1|MOD WX0 WX1 D3|DIV WX0 WX1 D2"));
+  EXPECT_EQ(copy.reused(0, 2), "D1");
+  EXPECT_EQ(copy.reused(0, 3), "");  // the latest MOD is a copy: it has no quotient to store
+  Facts own(rung("TRUE|MOD WX0 WX1 D1|DIV WX0 WX1 D1"));
+  EXPECT_EQ(own.reused(0, 2), "");  // the MOD's own destination
   Facts real(rung("TRUE|DIV WX0 WX1 F1|DIV WX0 WX1 D2|DIV WX0 WX1 F2"));
   EXPECT_EQ(real.reused(0, 2), "");  // F1 holds the quotient converted
   EXPECT_EQ(real.reused(0, 3), "");  // into a REAL: not taken
