@@ -1305,8 +1305,10 @@ class BasePlan {
   std::array<bool, kNumBases> plan(Ops& ops, bool free) {
     if (ops.empty() && !free) return {};
     std::sort(ops.begin(), ops.end());
-    std::vector<int64_t> news;  // the new windows' K
-    for (Ops rest = ops; news.size() < size_t(kNewWindows) && !rest.empty();) {
+    std::vector<int64_t>& news = news_;  // the new windows' K
+    Ops& rest = rest_;
+    news.clear();
+    for (rest.assign(ops.begin(), ops.end()); news.size() < size_t(kNewWindows) && !rest.empty();) {
       int64_t kw = std::clamp(best_window(rest), kBaseKMin, kmax_);
       size_t before = rest.size();
       std::erase_if(rest, [&](const Op& o) { return covers(kw, o.first, o.last); });
@@ -1365,6 +1367,8 @@ class BasePlan {
   std::array<int64_t, kNumBases> k_{};
   std::array<bool, kNumBases> known_{};
   x86gen::BaseSavings savings_;  // plan's
+  std::vector<int64_t> news_;    // plan's, kept from region to region
+  Ops rest_;                     // plan's, kept from region to region
 };
 
 // -O2: the blocks gathered into regions, each given its base registers, then
@@ -1407,7 +1411,8 @@ class Regions {
       std::vector<Item>& items = blocks_[0].items;
       size_t at = 0;
       while (at < items.size() && items[at].kind == as::ItemKind::Label) at++;
-      std::vector<Item> leas;
+      std::vector<Item>& leas = leas_;
+      leas.clear();
       for (int r = 0; r < kNumBases; r++)
         if (lea[size_t(r)]) leas.push_back(Item::instr(base_lea(kBaseRegs[r], int32_t(plan_.k(r)))));
       items.insert(items.begin() + ptrdiff_t(at), leas.begin(), leas.end());
@@ -1460,6 +1465,7 @@ class Regions {
   std::vector<as::Block<Instruction>> blocks_;  // the region's
   std::vector<std::vector<uint32_t>> starts_;
   RegionRefs refs_;  // the blocks' operands, reloads and jumps
+  std::vector<Item> leas_;  // flush's, kept from region to region
   bool target_ = false;  // the region's first block is a jump target
   // Blocks sunk, their items' storage for rungs to come: enough for a region's
   // blocks, so that a rung's items seldom grow a new vector from nothing.
