@@ -1478,7 +1478,10 @@ class Regions {
 class Blocks {
  public:
   Blocks(const Program& p, const Layout& layout, int opt_level, bool notes)
-      : p_(p), layout_(layout), opt_(opt_level), o2_(opt_level >= 2), notes_(notes), shared_(shares_stack(p)) {}
+      : p_(p), layout_(layout), opt_(opt_level), o2_(opt_level >= 2), notes_(notes) {
+    if (o2_) facts_ = scan_facts(p_, layout_, kNumSlots);
+    shared_ = facts_ ? facts_->shared : shares_stack(p);
+  }
 
   as::Block<Instruction> prologue() const {
     // keep rbx/rbp for the caller, 16-byte stack alignment for calls
@@ -1549,7 +1552,6 @@ class Blocks {
     as::Block<Instruction> b;
     std::vector<uint32_t> starts;
     if (o2_) {
-      facts_ = scan_facts(p_, layout_, kNumSlots);
       Regions regions(layout_.size, prologue(), il_items, sink);
       for (size_t r = 0; r < p_.rungs.size(); r++) {
         rung(r, b, starts);

@@ -36,6 +36,7 @@ struct ScanFacts {
   // (index, the instruction to compile in its place), by index: sources
   // replaced by their known constants, or a MOV of the folded result
   std::vector<std::pair<uint32_t, Instr>> replaced;
+  bool shared = false;          // shares_stack(p): some rung reads what an earlier one left
 
   uint8_t at(size_t rung, size_t k) const { return flags[first[rung] + k]; }
   const Instr* replacement(size_t rung, size_t k) const;  // nullptr if none
