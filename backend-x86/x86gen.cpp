@@ -924,13 +924,16 @@ bool mem_uses(const Operand& o, uint8_t num) {
                                         (o.mem.index.valid() && o.mem.index.num == num));
 }
 bool writes_reg(const Instruction& i, uint8_t num) {
-  // a call keeps the callee-saved registers (the shared routines and libm alike): ebp's stack survives it
-  if (i.mnemonic == M::Call) return !(num == BX || num == BP || num >= R12);
-  if ((i.mnemonic == M::Idiv && (num == AX || num == DX)) || (i.mnemonic == M::Cdq && num == DX)) return true;
-  if (i.mnemonic == M::Imul && i.num_operands == 1) return num == AX || num == DX;  // edx:eax = eax * r/m32
-  if (i.mnemonic == M::Cmp || i.mnemonic == M::Test || i.mnemonic == M::Push || i.num_operands == 0) return false;
-  if (i.mnemonic == M::Jmp || i.mnemonic == M::Jcc || i.mnemonic == M::Ucomiss) return false;
-  return is_reg(i.ops[0], num);
+  switch (i.mnemonic) {  // (one jump by a table: WordInEax asks this of every instruction)
+    // a call keeps the callee-saved registers (the shared routines and libm alike): ebp's stack survives it
+    case M::Call: return !(num == BX || num == BP || num >= R12);
+    case M::Idiv: if (num == AX || num == DX) return true; break;
+    case M::Cdq: if (num == DX) return true; break;
+    case M::Imul: if (i.num_operands == 1) return num == AX || num == DX; break;  // edx:eax = eax * r/m32
+    case M::Cmp: case M::Test: case M::Push: case M::Jmp: case M::Jcc: case M::Ucomiss: return false;
+    default: break;
+  }
+  return i.num_operands != 0 && is_reg(i.ops[0], num);
 }
 bool reads_reg(const Instruction& i, uint8_t num) {
   for (unsigned k = 0; k < i.num_operands; k++) {
