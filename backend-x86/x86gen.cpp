@@ -171,7 +171,8 @@ class Gen : public ClassGen<Gen> {
     if (ops.size() > 3) throw std::logic_error("x86 backend: more than 3 operands");
     Instruction& in = next_instr();
     in.mnemonic = m;
-    for (const Operand& o : ops) in.ops[in.num_operands++] = o;
+    in.num_operands = uint8_t(ops.size());  // set once: a count bumped in memory is reloaded after each operand stored
+    for (size_t k = 0; k < ops.size(); k++) in.ops[k] = ops.begin()[k];
   }
   void jcc(Cond c, const std::string& label) { emit(make_cc(M::Jcc, c, {L(label)})); }
   void jump(const std::string& label) { emit(M::Jmp, {L(label)}); }
