@@ -60,18 +60,6 @@ static const char* const kAreaNames[kAreaCount] = {"Sys", "S",  "X",  "Y",  "M",
 
 const char* area_name(Area a) { return kAreaNames[int(a)]; }
 
-bool area_is_bit(Area a) {
-  switch (a) {
-    case Area::Sys: case Area::S: case Area::X: case Area::Y: case Area::M: case Area::K:
-    case Area::TQ: case Area::CQ: case Area::TI: case Area::E:
-      return true;
-    default:
-      return false;
-  }
-}
-bool area_is_real(Area a) { return a == Area::F; }
-bool area_is_word(Area a) { return !area_is_bit(a); }
-
 Layout Layout::standard(uint32_t edge_slots) {
   Layout l;
   auto set = [&](Area a, uint32_t n) { l.count[int(a)] = n; };

@@ -34,9 +34,18 @@ enum class Area : uint8_t {
 constexpr int kAreaCount = static_cast<int>(Area::Count);
 
 const char* area_name(Area a);         // "X", "TQ", ... (internal name)
-bool area_is_bit(Area a);              // one byte per element, value 0/1
-bool area_is_real(Area a);             // F
-bool area_is_word(Area a);             // 4 bytes per element
+// (inline: Layout::addr asks area_is_bit of every operand the code generators address)
+constexpr bool area_is_bit(Area a) {   // one byte per element, value 0/1
+  switch (a) {
+    case Area::Sys: case Area::S: case Area::X: case Area::Y: case Area::M: case Area::K:
+    case Area::TQ: case Area::CQ: case Area::TI: case Area::E:
+      return true;
+    default:
+      return false;
+  }
+}
+constexpr bool area_is_real(Area a) { return a == Area::F; }       // F
+constexpr bool area_is_word(Area a) { return !area_is_bit(a); }    // 4 bytes per element
 
 // A device as spelled in source: prefix and index ("WX3" -> {WX, 3}).  The area
 // depends on use: T and C are a done bit where a bit is wanted, a word elsewhere.
