@@ -131,8 +131,8 @@ unsigned num_ops(const Form& f) {
 
 namespace {
 
-bool is_imm_type(OT t) { return t == OT::I8 || t == OT::IB || t == OT::I32; }
-bool is_rel_type(OT t) { return t == OT::Rel8 || t == OT::Rel32; }
+constexpr bool is_imm_type(OT t) { return t == OT::I8 || t == OT::IB || t == OT::I32; }
+constexpr bool is_rel_type(OT t) { return t == OT::Rel8 || t == OT::Rel32; }
 bool is_mem_only(OT t) { return t == OT::M8 || t == OT::M32 || t == OT::M64 || t == OT::MA; }
 bool is_reg_only(OT t) {
   return t == OT::R8 || t == OT::R32 || t == OT::R64 || t == OT::X;
@@ -256,26 +256,6 @@ uint64_t form_key(const Instruction& in, bool long_form) {
   return k;
 }
 
-// find_form_in_table's answers by form_key, in a direct-mapped cache of the
-// thread's own (the code generators encode few shapes, over and over).
-const Form* find_form(const Instruction& in, bool long_form) {
-  static_assert(sizeof(Mnemonic) == 1 && sizeof(OperandKind) == 1 && sizeof(RegClass) == 1 && sizeof(Size) == 1);
-  if (in.num_operands > 3) return nullptr;
-  constexpr size_t kSlots = 1024;
-  struct Slot {
-    uint64_t key = 0;  // form_key + 1, 0 empty
-    const Form* form = nullptr;
-  };
-  using Cache = std::array<Slot, kSlots>;  // a slot's key and form in one cache line
-  thread_local Cache cache;
-  const uint64_t key = form_key(in, long_form) + 1;
-  const size_t slot = size_t((key * 0x9E3779B97F4A7C15ull) >> 54);
-  if (cache[slot].key == key) return cache[slot].form;
-  const Form* f = find_form_in_table(in, long_form);
-  if (f) cache[slot] = {key, f};
-  return f;
-}
-
 uint8_t hi(Reg r) { return (r.num >> 3) & 1; }
 uint8_t lo(Reg r) { return r.num & 7; }
 bool needs_rex(Reg r) { return r.cls == RegClass::Gp8 && r.num >= 4 && r.num <= 7; }
@@ -346,68 +326,125 @@ void put_mod_rm(Bytes& out, uint8_t reg, const Operand& rm) {
   if (mod == 2) out.put32(uint32_t(m.disp));
 }
 
-void encode_form(const Form& f, const Instruction& in, Bytes& out, Encoding& enc) {
-  const Operand* reg_op = nullptr;  // goes in ModRM.reg
-  const Operand* rm_op = nullptr;   // goes in ModRM.rm
-  uint8_t reg_field = 0;
+// What an instruction's encoding takes from its form and its registers
+// alone, both of which form_key holds: the prefix, the REX bits but a memory
+// operand's, the opcode bytes but a condition code, and where the operands
+// go.  Worked out once a key (find_plan's cache); encode_hook adds the rest.
+struct Plan {
+  uint8_t prefix = 0;      // mandatory prefix, 0 none
+  uint8_t rex = 0;         // W, and R and B of register operands
+  bool force_rex = false;  // spl bpl sil dil: a REX prefix even with no bit set
+  bool cc = false;         // the condition code is added to the last opcode byte
+  uint8_t len = 0;         // opcode bytes (an O form's register added to the last)
+  std::array<uint8_t, 2> op{};
+  int8_t rm = -1;          // the operand in ModRM.rm, -1 none
+  uint8_t reg_field = 0;   // ModRM.reg: the register operand's number or the form's digit
+  int8_t imm = -1;         // the immediate operand, -1 none
+  uint8_t imm_bytes = 0;   // 1 (I8, IB) or 4 (I32)
+  int8_t rel = -1;         // the branch displacement operand, -1 none
+  uint16_t rel_kind = 0;   // Rel8 or Rel32
+};
+
+// At most one immediate or displacement a form: the plan has room for one.
+static_assert([] {
+  for (const Form& f : kForms) {
+    int n = 0;
+    for (OT t : f.ops) n += is_imm_type(t) || is_rel_type(t);
+    if (n > 1) return false;
+  }
+  return true;
+}());
+
+Plan make_plan(const Form& f, const Instruction& in) {
+  Plan p;
+  const Operand* reg_op = nullptr;  // goes in ModRM.reg (or the opcode, Enc::O)
   switch (f.enc) {
-    case Enc::MR: rm_op = &in.ops[0]; reg_op = &in.ops[1]; break;
-    case Enc::RM: reg_op = &in.ops[0]; rm_op = &in.ops[1]; break;
-    case Enc::M: rm_op = &in.ops[0]; reg_field = uint8_t(f.digit); break;
+    case Enc::MR: p.rm = 0; reg_op = &in.ops[1]; break;
+    case Enc::RM: reg_op = &in.ops[0]; p.rm = 1; break;
+    case Enc::M: p.rm = 0; p.reg_field = uint8_t(f.digit); break;
     case Enc::O: reg_op = &in.ops[0]; break;
     default: break;
   }
-  if (reg_op) reg_field = reg_op->reg.num;
-  uint8_t rex = f.w ? 0x08 : 0;
-  bool force_rex = false;
-  if (f.enc == Enc::O) {
-    rex |= hi(reg_op->reg);
-  } else if (reg_op) {
-    rex |= uint8_t(hi(reg_op->reg) << 2);
-  }
-  if (rm_op && rm_op->kind == OperandKind::Reg) rex |= hi(rm_op->reg);
-  if (rm_op && rm_op->kind == OperandKind::Mem) {
-    check_mem(rm_op->mem);
-    if (rm_op->mem.index.valid()) rex |= uint8_t(hi(rm_op->mem.index) << 1);
-    if (rm_op->mem.base.cls == RegClass::Gp64) rex |= hi(rm_op->mem.base);
-  }
+  if (reg_op) p.reg_field = reg_op->reg.num;
+  p.rex = f.w ? 0x08 : 0;
+  if (f.enc == Enc::O) p.rex |= hi(reg_op->reg);
+  else if (reg_op) p.rex |= uint8_t(hi(reg_op->reg) << 2);
+  if (p.rm >= 0 && in.ops[size_t(p.rm)].kind == OperandKind::Reg) p.rex |= hi(in.ops[size_t(p.rm)].reg);
   for (unsigned i = 0; i < in.num_operands; ++i)
-    if (in.ops[i].kind == OperandKind::Reg && needs_rex(in.ops[i].reg)) force_rex = true;
-
-  if (f.prefix) out.put(f.prefix);
-  if (rex || force_rex) out.put(uint8_t(0x40 | rex));
-  for (unsigned i = 0; i + 1 < f.len; ++i) out.put(f.op[i]);
-  uint8_t last = f.op[f.len - 1];
-  if (f.cc) last = uint8_t(last + uint8_t(in.cond));
-  if (f.enc == Enc::O) last = uint8_t(last + lo(reg_op->reg));
-  out.put(last);
-  if (rm_op) put_mod_rm(out, reg_field, *rm_op);
+    if (in.ops[i].kind == OperandKind::Reg && needs_rex(in.ops[i].reg)) p.force_rex = true;
+  p.prefix = f.prefix;
+  p.len = f.len;
+  p.op = {f.op[0], f.op[1]};
+  if (f.enc == Enc::O) p.op[f.len - 1] = uint8_t(p.op[f.len - 1] + lo(reg_op->reg));
+  p.cc = f.cc;
   for (unsigned i = 0; i < in.num_operands; ++i) {
-    OT t = f.ops[i];
-    const Operand& o = in.ops[i];
-    if (t == OT::I8 || t == OT::IB) {
-      out.put(uint8_t(o.imm));
-    } else if (t == OT::I32) {
-      out.put32(uint32_t(o.imm));
-    } else if (is_rel_type(t)) {
-      Fixup fx;
-      fx.offset = out.n;
-      fx.kind = t == OT::Rel8 ? Rel8 : Rel32;
-      if (o.kind == OperandKind::Label) fx.label = o.label;
-      else fx.addend = o.imm;
-      if (t == OT::Rel8) out.put(0);
-      else out.put32(0);
-      enc.add_fixup(fx);
-    }
+    const OT t = f.ops[i];
+    if (t == OT::I8 || t == OT::IB) p.imm = int8_t(i), p.imm_bytes = 1;
+    else if (t == OT::I32) p.imm = int8_t(i), p.imm_bytes = 4;
+    else if (is_rel_type(t)) p.rel = int8_t(i), p.rel_kind = t == OT::Rel8 ? Rel8 : Rel32;
   }
+  return p;
+}
+
+// The plan of an instruction's form, by form_key, in a direct-mapped cache of
+// the thread's own (the code generators encode few shapes, over and over);
+// nullptr if no form fits.
+const Plan* find_plan(const Instruction& in, bool long_form) {
+  static_assert(sizeof(Mnemonic) == 1 && sizeof(OperandKind) == 1 && sizeof(RegClass) == 1 && sizeof(Size) == 1);
+  if (in.num_operands > 3) return nullptr;
+  constexpr size_t kSlots = 1024;
+  struct Slot {
+    uint64_t key = 0;  // form_key + 1, 0 empty
+    Plan plan;
+  };
+  thread_local std::array<Slot, kSlots> cache;
+  const uint64_t key = form_key(in, long_form) + 1;
+  Slot& slot = cache[size_t((key * 0x9E3779B97F4A7C15ull) >> 54)];
+  if (slot.key == key) return &slot.plan;
+  const Form* f = find_form_in_table(in, long_form);
+  if (!f) return nullptr;
+  slot = {key, make_plan(*f, in)};
+  return &slot.plan;
+}
+
+[[noreturn]] void no_form(const Instruction& in) {
+  if (in.num_operands > 3) throw AsmError("too many operands");
+  throw AsmError("invalid operands for '" + print(in) + "'");
+}
+
+void put_fixup(const Plan& p, const Operand& o, Bytes& out, Encoding& enc) {
+  Fixup fx;
+  fx.offset = out.n;
+  fx.kind = p.rel_kind;
+  if (o.kind == OperandKind::Label) fx.label = o.label;
+  else fx.addend = o.imm;
+  if (p.rel_kind == Rel8) out.put(0);
+  else out.put32(0);
+  enc.add_fixup(fx);
 }
 
 void encode_hook(const Instruction& in, bool long_form, Encoding& out) {
-  if (in.num_operands > 3) throw AsmError("too many operands");
-  const Form* f = find_form(in, long_form);
-  if (!f) throw AsmError("invalid operands for '" + print(in) + "'");
+  const Plan* p = find_plan(in, long_form);
+  if (!p) no_form(in);
+  const Operand* rm = p->rm >= 0 ? &in.ops[size_t(p->rm)] : nullptr;
+  uint8_t rex = p->rex;
+  if (rm && rm->kind == OperandKind::Mem) {
+    check_mem(rm->mem);
+    if (rm->mem.index.valid()) rex |= uint8_t(hi(rm->mem.index) << 1);
+    if (rm->mem.base.cls == RegClass::Gp64) rex |= hi(rm->mem.base);
+  }
   Bytes bytes(out);
-  encode_form(*f, in, bytes, out);
+  if (p->prefix) bytes.put(p->prefix);
+  if (rex || p->force_rex) bytes.put(uint8_t(0x40 | rex));
+  if (p->len == 2) bytes.put(p->op[0]);
+  bytes.put(uint8_t(p->op[p->len - 1] + (p->cc ? uint8_t(in.cond) : 0)));
+  if (rm) put_mod_rm(bytes, p->reg_field, *rm);
+  if (p->imm >= 0) {
+    const int64_t v = in.ops[size_t(p->imm)].imm;
+    if (p->imm_bytes == 1) bytes.put(uint8_t(v));
+    else bytes.put32(uint32_t(v));
+  }
+  if (p->rel >= 0) put_fixup(*p, in.ops[size_t(p->rel)], bytes, out);
   out.size = uint8_t(bytes.n);
 }
 

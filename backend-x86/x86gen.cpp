@@ -177,7 +177,8 @@ class Gen : public ClassGen<Gen> {
     if (ops.size() > 3) throw std::logic_error("x86 backend: more than 3 operands");
     Instruction& in = next_instr();
     in.mnemonic = m;
-    for (const Operand& o : ops) in.ops[in.num_operands++] = o;
+    in.num_operands = uint8_t(ops.size());  // set once: a count bumped in memory is reloaded after each operand stored
+    for (size_t k = 0; k < ops.size(); k++) in.ops[k] = ops.begin()[k];
   }
   void jcc(Cond c, const std::string& label) { emit(make_cc(M::Jcc, c, {L(label)})); }
   void jump(const std::string& label) { emit(M::Jmp, {L(label)}); }
@@ -964,13 +965,16 @@ bool mem_uses(const Operand& o, uint8_t num) {
                                         (o.mem.index.valid() && o.mem.index.num == num));
 }
 bool writes_reg(const Instruction& i, uint8_t num) {
-  // a call keeps the callee-saved registers (the shared routines and libm alike): ebp's stack survives it
-  if (i.mnemonic == M::Call) return !(num == BX || num == BP || num >= R12);
-  if ((i.mnemonic == M::Idiv && (num == AX || num == DX)) || (i.mnemonic == M::Cdq && num == DX)) return true;
-  if (i.mnemonic == M::Imul && i.num_operands == 1) return num == AX || num == DX;  // edx:eax = eax * r/m32
-  if (i.mnemonic == M::Cmp || i.mnemonic == M::Test || i.mnemonic == M::Push || i.num_operands == 0) return false;
-  if (i.mnemonic == M::Jmp || i.mnemonic == M::Jcc || i.mnemonic == M::Ucomiss) return false;
-  return is_reg(i.ops[0], num);
+  switch (i.mnemonic) {  // (one jump by a table: WordInEax asks this of every instruction)
+    // a call keeps the callee-saved registers (the shared routines and libm alike): ebp's stack survives it
+    case M::Call: return !(num == BX || num == BP || num >= R12);
+    case M::Idiv: if (num == AX || num == DX) return true; break;
+    case M::Cdq: if (num == DX) return true; break;
+    case M::Imul: if (i.num_operands == 1) return num == AX || num == DX; break;  // edx:eax = eax * r/m32
+    case M::Cmp: case M::Test: case M::Push: case M::Jmp: case M::Jcc: case M::Ucomiss: return false;
+    default: break;
+  }
+  return i.num_operands != 0 && is_reg(i.ops[0], num);
 }
 bool reads_reg(const Instruction& i, uint8_t num) {
   for (unsigned k = 0; k < i.num_operands; k++) {
@@ -1354,8 +1358,10 @@ class BasePlan {
   std::array<bool, kNumBases> plan(Ops& ops, bool free) {
     if (ops.empty() && !free) return {};
     std::sort(ops.begin(), ops.end());
-    std::vector<int64_t> news;  // the new windows' K
-    for (Ops rest = ops; news.size() < size_t(kNewWindows) && !rest.empty();) {
+    std::vector<int64_t>& news = news_;  // the new windows' K
+    Ops& rest = rest_;
+    news.clear();
+    for (rest.assign(ops.begin(), ops.end()); news.size() < size_t(kNewWindows) && !rest.empty();) {
       int64_t kw = std::clamp(best_window(rest), kBaseKMin, kmax_);
       size_t before = rest.size();
       std::erase_if(rest, [&](const Op& o) { return covers(kw, o.first, o.last); });
@@ -1414,6 +1420,8 @@ class BasePlan {
   std::array<int64_t, kNumBases> k_{};
   std::array<bool, kNumBases> known_{};
   x86gen::BaseSavings savings_;  // plan's
+  std::vector<int64_t> news_;    // plan's, kept from region to region
+  Ops rest_;                     // plan's, kept from region to region
 };
 
 // -O2: the blocks gathered into regions, each given its base registers, then
@@ -1457,7 +1465,8 @@ class Regions {
       std::vector<Item>& items = blocks_[0].items;
       size_t at = 0;
       while (at < items.size() && items[at].kind == as::ItemKind::Label) at++;
-      std::vector<Item> leas;
+      std::vector<Item>& leas = leas_;
+      leas.clear();
       for (int r = 0; r < kNumBases; r++)
         if (lea[size_t(r)]) leas.push_back(Item::instr(base_lea(kBaseRegs[r], int32_t(plan_.k(r)))));
       items.insert(items.begin() + ptrdiff_t(at), leas.begin(), leas.end());
@@ -1511,6 +1520,7 @@ class Regions {
   std::vector<as::Block<Instruction>> blocks_;  // the region's
   std::vector<std::vector<uint32_t>> starts_;
   RegionRefs refs_;  // the blocks' operands, reloads and jumps
+  std::vector<Item> leas_;  // flush's, kept from region to region
   bool target_ = false;  // the region's first block is a jump target
   // Blocks sunk, their items' storage for rungs to come: enough for a region's
   // blocks, so that a rung's items seldom grow a new vector from nothing.
@@ -1523,7 +1533,10 @@ class Regions {
 class Blocks {
  public:
   Blocks(const Program& p, const Layout& layout, int opt_level, bool notes)
-      : p_(p), layout_(layout), opt_(opt_level), o2_(opt_level >= 2), notes_(notes), shared_(shares_stack(p)) {}
+      : p_(p), layout_(layout), opt_(opt_level), o2_(opt_level >= 2), notes_(notes) {
+    if (o2_) facts_ = scan_facts(p_, layout_, kNumSlots);
+    shared_ = facts_ ? facts_->shared : shares_stack(p);
+  }
 
   as::Block<Instruction> prologue() const {
     // keep rbx/rbp for the caller, 16-byte stack alignment for calls
@@ -1594,7 +1607,6 @@ class Blocks {
     as::Block<Instruction> b;
     std::vector<uint32_t> starts;
     if (o2_) {
-      facts_ = scan_facts(p_, layout_, kNumSlots);
       Regions regions(layout_.size, prologue(), il_items, sink);
       for (size_t r = 0; r < p_.rungs.size(); r++) {
         rung(r, b, starts);

@@ -60,18 +60,6 @@ static const char* const kAreaNames[kAreaCount] = {"Sys", "S",  "X",  "Y",  "M",
 
 const char* area_name(Area a) { return kAreaNames[int(a)]; }
 
-bool area_is_bit(Area a) {
-  switch (a) {
-    case Area::Sys: case Area::S: case Area::X: case Area::Y: case Area::M: case Area::K:
-    case Area::TQ: case Area::CQ: case Area::TI: case Area::E:
-      return true;
-    default:
-      return false;
-  }
-}
-bool area_is_real(Area a) { return a == Area::F; }
-bool area_is_word(Area a) { return !area_is_bit(a); }
-
 Layout Layout::standard(uint32_t edge_slots) {
   Layout l;
   auto set = [&](Area a, uint32_t n) { l.count[int(a)] = n; };
@@ -304,19 +292,6 @@ BinaryIl encode_il(const Program& p) {
   return b;
 }
 
-bool operand_area_ok(char sig, Area a, uint32_t idx) {
-  switch (sig) {
-    case 'b': return a == Area::S || a == Area::X || a == Area::Y || a == Area::M || a == Area::K || a == Area::TQ || a == Area::CQ;
-    case 'w': return a == Area::Y || a == Area::M || a == Area::K || (a == Area::S && idx == kBitError);
-    case 'v': return a == Area::WX || a == Area::WY || a == Area::D || a == Area::F || a == Area::TW || a == Area::CW;
-    case 'i': return a == Area::WX || a == Area::WY || a == Area::D || a == Area::TW || a == Area::CW;
-    case 'd': return a == Area::WY || a == Area::D || a == Area::F || a == Area::TW || a == Area::CW;
-    case 't': return a == Area::TW;
-    case 'c': return a == Area::CW;
-  }
-  return false;
-}
-
 // One operand: checks the tag against the signature letter and the index
 // against the layout.  Returns "" or the reason.
 static std::string check_operand(char sig, const uint8_t* p, size_t avail, const Layout& L, size_t& len,
@@ -456,16 +431,6 @@ std::optional<DeviceRef> parse_device(std::string_view s) {
   return std::nullopt;
 }
 
-uint32_t device_count(Dev d) {
-  switch (d) {
-    case Dev::X: case Dev::Y: case Dev::M: case Dev::K: case Dev::D: return 8192;
-    case Dev::S: return kSysBits;
-    case Dev::T: case Dev::C: return 256;
-    case Dev::WX: case Dev::WY: case Dev::F: return 1024;
-  }
-  return 0;
-}
-
 // iec_address = "%" ("I"|"Q"|"M") ("X" a "." b | "W" n | "D" n)
 //   %IXa.b = X(8a+b)   %QXa.b = Y(8a+b)   %MXa.b = M(8a+b)
 //   %IWn = WXn         %QWn = WYn         %MWn = Dn          %MDn = Fn
@@ -509,31 +474,6 @@ std::optional<DeviceRef> parse_iec_address(std::string_view s, std::string& why)
   if (size == 'D' && region == 'M') return DeviceRef{Dev::F, idx};
   why = "unsupported IEC address " + std::string(s) + " (use %IX %QX %MX %IW %QW %MW %MD)";
   return std::nullopt;
-}
-
-Area bit_area(Dev d) {
-  switch (d) {
-    case Dev::X: return Area::X;
-    case Dev::Y: return Area::Y;
-    case Dev::M: return Area::M;
-    case Dev::K: return Area::K;
-    case Dev::S: return Area::S;
-    case Dev::T: return Area::TQ;
-    case Dev::C: return Area::CQ;
-    default: return Area::Count;
-  }
-}
-
-Area word_area(Dev d) {
-  switch (d) {
-    case Dev::WX: return Area::WX;
-    case Dev::WY: return Area::WY;
-    case Dev::D: return Area::D;
-    case Dev::F: return Area::F;
-    case Dev::T: return Area::TW;
-    case Dev::C: return Area::CW;
-    default: return Area::Count;
-  }
 }
 
 bool stack_fits_slots(const std::vector<Instr>& code, int slots) {

@@ -34,9 +34,18 @@ enum class Area : uint8_t {
 constexpr int kAreaCount = static_cast<int>(Area::Count);
 
 const char* area_name(Area a);         // "X", "TQ", ... (internal name)
-bool area_is_bit(Area a);              // one byte per element, value 0/1
-bool area_is_real(Area a);             // F
-bool area_is_word(Area a);             // 4 bytes per element
+// (inline: Layout::addr asks area_is_bit of every operand the code generators address)
+constexpr bool area_is_bit(Area a) {   // one byte per element, value 0/1
+  switch (a) {
+    case Area::Sys: case Area::S: case Area::X: case Area::Y: case Area::M: case Area::K:
+    case Area::TQ: case Area::CQ: case Area::TI: case Area::E:
+      return true;
+    default:
+      return false;
+  }
+}
+constexpr bool area_is_real(Area a) { return a == Area::F; }       // F
+constexpr bool area_is_word(Area a) { return !area_is_bit(a); }    // 4 bytes per element
 
 // A device as spelled in source: prefix and index ("WX3" -> {WX, 3}).  The area
 // depends on use: T and C are a done bit where a bit is wanted, a word elsewhere.
@@ -54,9 +63,9 @@ std::optional<DeviceRef> parse_device(std::string_view s);
 // nullopt if `s` is not one; `why` says what is wrong when it looks like one.
 std::optional<DeviceRef> parse_iec_address(std::string_view s, std::string& why);
 const char* dev_name(Dev d);
-uint32_t device_count(Dev d);         // X: 8192, WX: 1024, T: 256 ...
-Area bit_area(Dev d);                 // X->X, T->TQ, C->CQ; Area::Count if not a bit
-Area word_area(Dev d);                // WX->WX, T->TW, C->CW, F->F; Area::Count if not a word
+constexpr uint32_t device_count(Dev d);  // X: 8192, WX: 1024, T: 256 ...
+constexpr Area bit_area(Dev d);          // X->X, T->TQ, C->CQ; Area::Count if not a bit
+constexpr Area word_area(Dev d);         // WX->WX, T->TW, C->CW, F->F; Area::Count if not a word
 
 // Byte offsets of every area in the memory image.  Bits take one byte (0/1),
 // words four (little-endian INT32 or IEEE binary32).  The edge area is last so
@@ -131,6 +140,40 @@ constexpr uint32_t kBitError = 0;      // S0
 constexpr uint32_t kBitFirstScan = 1;  // S1
 constexpr uint32_t kSysBits = 16;
 
+// (inline: the IL readers ask these of every device operand)
+constexpr uint32_t device_count(Dev d) {
+  switch (d) {
+    case Dev::X: case Dev::Y: case Dev::M: case Dev::K: case Dev::D: return 8192;
+    case Dev::S: return kSysBits;
+    case Dev::T: case Dev::C: return 256;
+    case Dev::WX: case Dev::WY: case Dev::F: return 1024;
+  }
+  return 0;
+}
+constexpr Area bit_area(Dev d) {
+  switch (d) {
+    case Dev::X: return Area::X;
+    case Dev::Y: return Area::Y;
+    case Dev::M: return Area::M;
+    case Dev::K: return Area::K;
+    case Dev::S: return Area::S;
+    case Dev::T: return Area::TQ;
+    case Dev::C: return Area::CQ;
+    default: return Area::Count;
+  }
+}
+constexpr Area word_area(Dev d) {
+  switch (d) {
+    case Dev::WX: return Area::WX;
+    case Dev::WY: return Area::WY;
+    case Dev::D: return Area::D;
+    case Dev::F: return Area::F;
+    case Dev::T: return Area::TW;
+    case Dev::C: return Area::CW;
+    default: return Area::Count;
+  }
+}
+
 // ---------------------------------------------------------------- the IL
 
 enum class Op : uint8_t {
@@ -197,7 +240,18 @@ Op compare_op(Rel r);
 std::optional<Op> op_from_name(std::string_view name);  // case-insensitive
 const char* op_class_name(OpClass c);
 // May a device of area `a`, index `idx`, stand for signature letter `sig`?
-bool operand_area_ok(char sig, Area a, uint32_t idx);
+constexpr bool operand_area_ok(char sig, Area a, uint32_t idx) {
+  switch (sig) {
+    case 'b': return a == Area::S || a == Area::X || a == Area::Y || a == Area::M || a == Area::K || a == Area::TQ || a == Area::CQ;
+    case 'w': return a == Area::Y || a == Area::M || a == Area::K || (a == Area::S && idx == kBitError);
+    case 'v': return a == Area::WX || a == Area::WY || a == Area::D || a == Area::F || a == Area::TW || a == Area::CW;
+    case 'i': return a == Area::WX || a == Area::WY || a == Area::D || a == Area::TW || a == Area::CW;
+    case 'd': return a == Area::WY || a == Area::D || a == Area::F || a == Area::TW || a == Area::CW;
+    case 't': return a == Area::TW;
+    case 'c': return a == Area::CW;
+  }
+  return false;
+}
 
 enum class OpdKind : uint8_t { None, Bit, Int, Real, ConstInt, ConstReal, Edge, Timer, Counter, Label };
 

@@ -382,7 +382,8 @@ ScanFacts scan_facts(const Program& p, const Layout& layout, int slots) {
   std::sort(f.early_quotient.begin(), f.early_quotient.end(),
             [](const auto& x, const auto& y) { return x.first < y.first; });
   f.fits.assign(p.rungs.size(), 0);
-  if (shares_stack(p)) return f;  // an entry may be read by a later rung
+  f.shared = shares_stack(p);
+  if (f.shared) return f;  // an entry may be read by a later rung
   std::vector<int> depth;
   std::vector<char> live;
   for (size_t ri = 0; ri < p.rungs.size(); ri++) {

@@ -59,7 +59,7 @@ struct ScanFacts {
   std::vector<std::pair<uint32_t, DivReuse>> reused;  // by index, of the instruction replaced or not
   // by index: a MOD that also stores its quotient (where the divisor is not 0) into this word
   std::vector<std::pair<uint32_t, Operand>> early_quotient;
-
+  bool shared = false;          // shares_stack(p): some rung reads what an earlier one left
 
   uint8_t at(size_t rung, size_t k) const { return flags[first[rung] + k]; }
   const Instr* replacement(size_t rung, size_t k) const;  // nullptr if none

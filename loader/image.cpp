@@ -5,6 +5,7 @@
 // the section and the offset.
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -243,18 +244,31 @@ static void put_header(Writer& w, const Image& im, std::span<const uint32_t> tab
     w.u32(i), w.u32(table.empty() ? 0 : table[2 * (i - 1)]), w.u32(table.empty() ? 0 : table[2 * i - 1]);
 }
 
+// v little-endian at p: one store on a little-endian machine
+static uint8_t* put_le32(uint8_t* p, uint32_t v) {
+  if constexpr (std::endian::native == std::endian::little) std::memcpy(p, &v, 4);
+  else
+    for (int i = 0; i < 4; i++) p[i] = uint8_t(v >> (8 * i));
+  return p + 4;
+}
+
 // The line map, packed a batch of entries at a time: one entry per IL
-// instruction, four u32 each, is the most fields of any section.
+// instruction, four u32 each, is the most fields of any section.  The
+// layout pass (Mode::Count) needs its size only.
 static void put_lines(Writer& w, std::span<const LineEntry> lines) {
   count32(lines.size(), "line map entries");
+  if (w.mode == Writer::Mode::Count) {
+    w.done += lines.size() * kLineEntrySize;
+    return;
+  }
   constexpr size_t kBatch = 256;
   uint8_t buf[kBatch * kLineEntrySize];
   for (size_t at = 0; at < lines.size(); at += kBatch) {
     const size_t n = std::min(kBatch, lines.size() - at);
     uint8_t* p = buf;
     for (const LineEntry& e : lines.subspan(at, n)) {
-      for (uint32_t v : {e.code_offset, e.il_offset, uint32_t(e.line), e.rung})
-        for (int i = 0; i < 4; i++) *p++ = uint8_t(v >> (8 * i));
+      p = put_le32(p, e.code_offset), p = put_le32(p, e.il_offset);
+      p = put_le32(p, uint32_t(e.line)), p = put_le32(p, e.rung);
     }
     w.bytes({buf, n * kLineEntrySize});
   }
