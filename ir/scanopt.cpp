@@ -274,6 +274,8 @@ class Divisions {
   void rung(const Rung& r, uint32_t first) {
     if (!r.labels.empty()) forget();
     for (size_t k = 0; k < r.code.size(); k++) {
+      const Op op = r.code[k].op;
+      if (pairs_.empty() && !is_divmod(op) && op != Op::JMP && op != Op::END) continue;  // nothing kept to forget
       uint32_t i = first + uint32_t(k);
       const Instr* alt = entry_at(f_.replaced, i);
       instr(alt ? *alt : r.code[k], i);
@@ -330,12 +332,12 @@ class Divisions {
   // written d since (its own operands and destination included), and no JMP
   // or END could leave before this instruction.
   bool untouched_since(uint32_t d, uint32_t since) const {
-    if (since == kNone) return false;
-    auto a = access_.find(d);
-    return (a == access_.end() || a->second < since) && (exit_ == kNone || exit_ < since);
+    if (since == kNone || d >= access_.size()) return false;
+    return (access_[d] == kNone || access_[d] < since) && (exit_ == kNone || exit_ < since);
   }
   void wrote(const Instr& in, uint32_t i) {
     const Access acc = access(l_, in, on_[i]);
+    if (access_.empty()) access_.assign(l_.size, kNone);  // the first division kept: from here on
     for (int k = 0; k < acc.nr; k++) access_[acc.reads[k]] = i;
     for (int k = 0; k < acc.nw; k++) access_[acc.writes[k]] = i;
     for (int w = 0; w < acc.nw; w++) {
@@ -361,7 +363,7 @@ class Divisions {
   std::unordered_map<uint64_t, Pair> pairs_;
   std::unordered_map<uint32_t, std::vector<uint64_t>> users_;  // the pairs whose operands or destinations lie there
   // while any pair is kept: the last instruction that read or wrote each address, and the last JMP or END
-  std::unordered_map<uint32_t, uint32_t> access_;
+  std::vector<uint32_t> access_;  // by image address, kNone: not since the first division
   uint32_t exit_ = kNone;
 };
 
