@@ -1098,7 +1098,7 @@ class WordInEax {
       if (it.kind == as::ItemKind::Label) forget();
       if (it.kind != as::ItemKind::Instruction) continue;
       if (loads(it.inst) && held(it.inst.ops[1])) { drop_[i] = 1, any = true; continue; }
-      use_eax(it.inst);
+      if (word_ >= 0) use_eax(it.inst);
       after(it.inst);
     }
     if (any) as::remove_items(items, drop_, starts);
@@ -1135,7 +1135,7 @@ class WordInEax {
   void after(const Instruction& in) {
     if (in.mnemonic == M::Mov && image_dword(in.ops[0]) && eax32(in.ops[1])) { word_ = in.ops[0].mem.disp; return; }
     if (loads(in)) { word_ = in.ops[1].mem.disp; return; }
-    if (writes_reg(in, AX) || in.mnemonic == M::Call || (word_ >= 0 && hits(in))) forget();
+    if (word_ >= 0 && (writes_reg(in, AX) || in.mnemonic == M::Call || hits(in))) forget();  // (held: else nothing to forget)
   }
 
   int64_t word_ = -1;  // the image offset of the word eax holds, or -1
