@@ -1175,7 +1175,6 @@ namespace {
 struct Op {
   int64_t first, last;  // the bytes a rewritable operand accesses
   bool rex;             // its instruction has a REX prefix anyway (r15/r14 then cost no byte more than rdi)
-  auto operator<=>(const Op&) const = default;
 };
 using Ops = std::vector<Op>;
 constexpr int64_t kBaseKMin = 128;  // the loader's range for K: [128, size - 135], so that every
@@ -1308,7 +1307,8 @@ class BasePlan {
   // a choice costs O(1), not O(operands).  Every register is set when `free`.
   std::array<bool, kNumBases> plan(Ops& ops, bool free) {
     if (ops.empty() && !free) return {};
-    std::sort(ops.begin(), ops.end());
+    // by first byte, as best_window walks them (the order of ties changes nothing below)
+    std::sort(ops.begin(), ops.end(), [](const Op& a, const Op& b) { return a.first < b.first; });
     std::vector<int64_t>& news = news_;  // the new windows' K
     Ops& rest = rest_;
     news.clear();
