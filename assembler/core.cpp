@@ -428,13 +428,17 @@ class Core {
     size_t unit_bytes = 0;
     for (const InstState& s : insts) unit_bytes += s.enc.size;
     r_.code.resize(base + unit_bytes);  // the unit's bytes copied in place below
+    // (read once: each byte copied might alias the vector's own fields)
+    uint8_t* const code = r_.code.data();
+    const size_t code_size = r_.code.size();
     size_t n = 0;
     for (uint32_t b = first; b < last; ++b) {
       r_.block_offsets[b] = base + block_start[b - first];
       uint32_t cur = r_.block_offsets[b];
       const std::span<const ItemKind> kinds = kinds_of(b);
+      ItemLayout* const lays = keep_items_ ? r_.items[b].data() : last_.data();
       for (size_t i = 0; i < kinds.size(); ++i) {
-        ItemLayout& lay = keep_items_ ? r_.items[b][i] : last_[i];
+        ItemLayout& lay = lays[i];
         lay.offset = cur;
         const ItemKind k = kinds[i];
         if (k == ItemKind::Label && p_->is_global(b, i)) {
@@ -448,8 +452,8 @@ class Core {
         lay.long_form = s.long_form;
         // all 16 bytes where they fit (a fixed-size copy, no call); the bytes past
         // the size are the next instruction's, copied over them after
-        if (r_.code.size() - cur >= s.enc.bytes.size()) std::memcpy(&r_.code[cur], s.enc.bytes.data(), s.enc.bytes.size());
-        else std::copy_n(s.enc.bytes.begin(), s.enc.size, r_.code.begin() + cur);
+        if (code_size - cur >= s.enc.bytes.size()) std::memcpy(code + cur, s.enc.bytes.data(), s.enc.bytes.size());
+        else std::copy_n(s.enc.bytes.begin(), s.enc.size, code + cur);
         for (unsigned f = 0; f < s.enc.num_fixups; ++f) {
           const Fixup& fx = s.enc.fixups[f];
           // a pending fixup outlives the block: name its label from the global table
