@@ -1391,6 +1391,7 @@ class Regions {
     blocks_.push_back(std::move(b));
     starts_.push_back(std::move(starts));
     if (!spare_.empty()) b = std::move(spare_.back()), spare_.pop_back();  // reuse a sunk block's storage
+    if (!spare_starts_.empty()) starts = std::move(spare_starts_.back()), spare_starts_.pop_back();
     if (refs_.ops.size() >= kRegionOps) flush();
   }
   void finish() { flush(); }
@@ -1428,6 +1429,8 @@ class Regions {
     for (size_t i = 0; i < blocks_.size(); i++) {
       il_items_.push_back(std::move(starts_[i]));
       sink_(blocks_[i]);
+      if (il_items_.back().empty() && spare_starts_.size() < kSpareBlocks)  // the sink is done with it
+        spare_starts_.push_back(std::move(il_items_.back()));
       if (spare_.size() < kSpareBlocks) spare_.push_back(std::move(blocks_[i]));
     }
     blocks_.clear();
@@ -1475,6 +1478,7 @@ class Regions {
   // blocks, so that a rung's items seldom grow a new vector from nothing.
   static constexpr size_t kSpareBlocks = 64;
   std::vector<as::Block<Instruction>> spare_;
+  std::vector<std::vector<uint32_t>> spare_starts_;  // the same for the il_items entries the sink cleared
 };
 
 // The blocks of a program in order (block 0 the prologue, one per rung, the
@@ -1567,8 +1571,9 @@ class Blocks {
       sink(b);
       for (size_t r = 0; r < p_.rungs.size(); r++) {
         rung(r, b, starts);
-        il_items.push_back(starts);
+        il_items.push_back(std::move(starts));
         sink(b);
+        if (il_items.back().empty()) starts = std::move(il_items.back());  // the sink is done with it
       }
     }
     b = epilogue();
