@@ -319,6 +319,7 @@ class Core {
     // are kept from unit to unit and reset field by field: a new one is zeroed
     // whole (128 bytes), which cost more than the rest of its setting up.
     size_t count = 0;
+    bool any_local = false;
     for (uint32_t b = first; b < last; ++b) {
       const std::span<const ItemKind> kinds = kinds_of(b);
       for (uint32_t i = 0; i < uint32_t(kinds.size()); ++i) {
@@ -338,14 +339,24 @@ class Core {
           encode_state(s);
           resolve_refs(s);
         }
+        any_local |= s.has_local;
       }
     }
 
     const std::span<InstState> insts(insts_.data(), count);
-
-    // Relaxation: grow the forms that do not reach, until nothing changes.
     std::vector<uint32_t>& block_start = block_start_;
     block_start.assign(last - first, 0);
+    if (any_local) {
+      relax(first, last, insts, block_start);
+    } else {  // nothing can grow: one pass, for the blocks' starts only
+      ++r_.stats.relax_passes;
+      block_starts(first, last, insts, block_start);
+    }
+    emit(first, last, insts, block_start);
+  }
+
+  // Relaxation: grow the forms that do not reach, until nothing changes.
+  void relax(uint32_t first, uint32_t last, std::span<InstState> insts, std::vector<uint32_t>& block_start) {
     for (;;) {
       ++r_.stats.relax_passes;
       layout(first, last, insts, block_start);
@@ -371,8 +382,17 @@ class Core {
       }
       if (!changed) break;
     }
+  }
 
-    emit(first, last, insts, block_start);
+  // Where each block of a unit starts: its instructions (insts, in order) end there.
+  static void block_starts(uint32_t first, uint32_t last, std::span<const InstState> insts,
+                           std::vector<uint32_t>& block_start) {
+    uint32_t cur = 0;
+    size_t n = 0;
+    for (uint32_t b = first; b < last; ++b) {
+      block_start[b - first] = cur;
+      for (; n < insts.size() && insts[n].block == b; ++n) cur += insts[n].enc.size;
+    }
   }
 
   void layout(uint32_t first, uint32_t last, std::span<InstState> insts,
@@ -408,13 +428,17 @@ class Core {
     size_t unit_bytes = 0;
     for (const InstState& s : insts) unit_bytes += s.enc.size;
     r_.code.resize(base + unit_bytes);  // the unit's bytes copied in place below
+    // (read once: each byte copied might alias the vector's own fields)
+    uint8_t* const code = r_.code.data();
+    const size_t code_size = r_.code.size();
     size_t n = 0;
     for (uint32_t b = first; b < last; ++b) {
       r_.block_offsets[b] = base + block_start[b - first];
       uint32_t cur = r_.block_offsets[b];
       const std::span<const ItemKind> kinds = kinds_of(b);
+      ItemLayout* const lays = keep_items_ ? r_.items[b].data() : last_.data();
       for (size_t i = 0; i < kinds.size(); ++i) {
-        ItemLayout& lay = keep_items_ ? r_.items[b][i] : last_[i];
+        ItemLayout& lay = lays[i];
         lay.offset = cur;
         const ItemKind k = kinds[i];
         if (k == ItemKind::Label && p_->is_global(b, i)) {
@@ -428,8 +452,8 @@ class Core {
         lay.long_form = s.long_form;
         // all 16 bytes where they fit (a fixed-size copy, no call); the bytes past
         // the size are the next instruction's, copied over them after
-        if (r_.code.size() - cur >= s.enc.bytes.size()) std::memcpy(&r_.code[cur], s.enc.bytes.data(), s.enc.bytes.size());
-        else std::copy_n(s.enc.bytes.begin(), s.enc.size, r_.code.begin() + cur);
+        if (code_size - cur >= s.enc.bytes.size()) std::memcpy(code + cur, s.enc.bytes.data(), s.enc.bytes.size());
+        else std::copy_n(s.enc.bytes.begin(), s.enc.size, code + cur);
         for (unsigned f = 0; f < s.enc.num_fixups; ++f) {
           const Fixup& fx = s.enc.fixups[f];
           // a pending fixup outlives the block: name its label from the global table

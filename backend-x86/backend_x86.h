@@ -49,7 +49,8 @@ std::vector<std::vector<uint32_t>> generate_x86_blocks(const Program& p, const L
                                                        const X86BlockSink& sink);
 // The same, il_items filled in as the blocks go: rung r's entry is there when
 // its block (X86Code::rung_block(r)) reaches the sink, as the last one, and the
-// sink may free it (a line map made while assembling).
+// sink may clear it once read (a line map made while assembling): the
+// generator then takes its storage back for a rung to come.
 void generate_x86_blocks(const Program& p, const Layout& layout, int opt_level, bool notes, const X86BlockSink& sink,
                          std::vector<std::vector<uint32_t>>& il_items);
 std::vector<std::string> x86_globals(const Program& p);

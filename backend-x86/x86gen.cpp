@@ -1138,7 +1138,7 @@ class WordInEax {
       if (it.kind == as::ItemKind::Label) forget();
       if (it.kind != as::ItemKind::Instruction) continue;
       if (loads(it.inst) && held(it.inst.ops[1])) { drop_[i] = 1, any = true; continue; }
-      use_eax(it.inst);
+      if (word_ >= 0) use_eax(it.inst);
       after(it.inst);
     }
     if (any) as::remove_items(items, drop_, starts);
@@ -1175,7 +1175,7 @@ class WordInEax {
   void after(const Instruction& in) {
     if (in.mnemonic == M::Mov && image_dword(in.ops[0]) && eax32(in.ops[1])) { word_ = in.ops[0].mem.disp; return; }
     if (loads(in)) { word_ = in.ops[1].mem.disp; return; }
-    if (writes_reg(in, AX) || in.mnemonic == M::Call || (word_ >= 0 && hits(in))) forget();
+    if (word_ >= 0 && (writes_reg(in, AX) || in.mnemonic == M::Call || hits(in))) forget();  // (held: else nothing to forget)
   }
 
   int64_t word_ = -1;  // the image offset of the word eax holds, or -1
@@ -1224,7 +1224,6 @@ namespace {
 struct Op {
   int64_t first, last;  // the bytes a rewritable operand accesses
   bool rex;             // its instruction has a REX prefix anyway (r15/r14 then cost no byte more than rdi)
-  auto operator<=>(const Op&) const = default;
 };
 using Ops = std::vector<Op>;
 constexpr int64_t kBaseKMin = 128;  // the loader's range for K: [128, size - 135], so that every
@@ -1357,7 +1356,8 @@ class BasePlan {
   // a choice costs O(1), not O(operands).  Every register is set when `free`.
   std::array<bool, kNumBases> plan(Ops& ops, bool free) {
     if (ops.empty() && !free) return {};
-    std::sort(ops.begin(), ops.end());
+    // by first byte, as best_window walks them (the order of ties changes nothing below)
+    std::sort(ops.begin(), ops.end(), [](const Op& a, const Op& b) { return a.first < b.first; });
     std::vector<int64_t>& news = news_;  // the new windows' K
     Ops& rest = rest_;
     news.clear();
@@ -1440,6 +1440,7 @@ class Regions {
     blocks_.push_back(std::move(b));
     starts_.push_back(std::move(starts));
     if (!spare_.empty()) b = std::move(spare_.back()), spare_.pop_back();  // reuse a sunk block's storage
+    if (!spare_starts_.empty()) starts = std::move(spare_starts_.back()), spare_starts_.pop_back();
     if (refs_.ops.size() >= kRegionOps) flush();
   }
   void finish() { flush(); }
@@ -1479,6 +1480,8 @@ class Regions {
       il_items_.push_back(std::move(starts_[i]));
       bias_image_operands(blocks_[i]);
       sink_(blocks_[i]);
+      if (il_items_.back().empty() && spare_starts_.size() < kSpareBlocks)  // the sink is done with it
+        spare_starts_.push_back(std::move(il_items_.back()));
       if (spare_.size() < kSpareBlocks) spare_.push_back(std::move(blocks_[i]));
     }
     blocks_.clear();
@@ -1526,6 +1529,7 @@ class Regions {
   // blocks, so that a rung's items seldom grow a new vector from nothing.
   static constexpr size_t kSpareBlocks = 64;
   std::vector<as::Block<Instruction>> spare_;
+  std::vector<std::vector<uint32_t>> spare_starts_;  // the same for the il_items entries the sink cleared
 };
 
 // The blocks of a program in order (block 0 the prologue, one per rung, the
@@ -1618,8 +1622,9 @@ class Blocks {
       sink(b);
       for (size_t r = 0; r < p_.rungs.size(); r++) {
         rung(r, b, starts);
-        il_items.push_back(starts);
+        il_items.push_back(std::move(starts));
         sink(b);
+        if (il_items.back().empty()) starts = std::move(il_items.back());  // the sink is done with it
       }
     }
     b = epilogue();

@@ -879,7 +879,7 @@ Phases compile_once(const std::string& text, bool is_ld, int opt = 0) {
       a.add(b);
       if (!il_items.empty() && X86Code::rung_block(il_items.size() - 1) == blocks) {  // as build_x86
         append_line_offsets(nb.line_offsets, a.last_items(), a.code_size(), il_items.back());
-        il_items.back() = {};
+        il_items.back().clear();  // read: the generator reuses its storage
       }
       blocks++;
       asm_s += secs_since(t0);

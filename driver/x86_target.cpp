@@ -17,13 +17,13 @@ void stream_x86(const Program& p, int opt_level, NativeBuild& b) {
   b.gen.program.globals = x86_globals(p);
   using Asm = as::Assembler<as::x86::Instruction>;
   Asm a(as::x86::target(), b.gen.program.globals, Asm::Items::LastOnly);
-  std::vector<std::vector<uint32_t>> il_items;  // a rung's, freed once its block is laid out
+  std::vector<std::vector<uint32_t>> il_items;  // a rung's, cleared once its block is laid out
   size_t blocks = 0;
   auto sink = [&](as::Block<as::x86::Instruction>& blk) {
     a.add(blk);
     if (!il_items.empty() && X86Code::rung_block(il_items.size() - 1) == blocks) {
       append_line_offsets(b.line_offsets, a.last_items(), a.code_size(), il_items.back());
-      il_items.back() = {};
+      il_items.back().clear();  // read: the generator reuses its storage
     }
     blocks++;
   };

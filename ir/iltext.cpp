@@ -100,9 +100,9 @@ void split(std::string_view line, int lineno, Line& out) {
       i++;
       tok.text = text;
     } else {
-      size_t from = i;
-      while (i < line.size() && !kEndsToken[uint8_t(line[i])]) i++;
-      tok.text = line.substr(from, i - from);
+      const size_t from = i;
+      while (++i < line.size() && !kEndsToken[uint8_t(line[i])]) {}  // line[from] does not end it
+      tok.text = std::string_view(line.data() + from, i - from);
     }
     out.toks.push_back(tok);
   }
