@@ -268,15 +268,20 @@ ScanFacts scan_facts(const Program& p, const Layout& layout, int slots) {
   dead_stores(p, layout, on, f);
   Propagate prop(layout, on, f);
   for (size_t ri = 0; ri < p.rungs.size(); ri++) prop.rung(p.rungs[ri], f.first[ri]);
-  f.fits.assign(p.rungs.size(), 0);
-  f.shared = shares_stack(p);
-  if (f.shared) return f;  // an entry may be read by a later rung
+  f.fits.resize(p.rungs.size());
+  for (size_t ri = 0; ri < p.rungs.size(); ri++) f.fits[ri] = stack_fits_slots(p.rungs[ri].code, slots);
+  // shares_stack(p), asked of the rungs that do not fit only: one that fits
+  // reads nothing an earlier rung left
+  for (size_t ri = 0; ri < p.rungs.size() && !f.shared; ri++)
+    f.shared = !f.fits[ri] && foreign_stack_use(p.rungs[ri].code) >= 0;
+  if (f.shared) {  // an entry may be read by a later rung
+    f.fits.assign(p.rungs.size(), 0);
+    return f;
+  }
   std::vector<int> depth;
   std::vector<char> live;
-  for (size_t ri = 0; ri < p.rungs.size(); ri++) {
-    f.fits[ri] = stack_fits_slots(p.rungs[ri].code, slots);
+  for (size_t ri = 0; ri < p.rungs.size(); ri++)
     if (f.fits[ri]) unread_entries(p.rungs[ri].code, f.first[ri], f, depth, live);
-  }
   return f;
 }
 
