@@ -12,13 +12,6 @@
 
 namespace ldc {
 
-const Instr* ScanFacts::replacement(size_t rung, size_t k) const {
-  uint32_t i = first[rung] + uint32_t(k);
-  auto it = std::lower_bound(replaced.begin(), replaced.end(), i,
-                             [](const std::pair<uint32_t, Instr>& e, uint32_t v) { return e.first < v; });
-  return it != replaced.end() && it->first == i ? &it->second : nullptr;
-}
-
 size_t ScanFacts::count(ScanFlag f) const {
   return size_t(std::count_if(flags.begin(), flags.end(), [f](uint8_t x) { return (x & f) != 0; }));
 }

@@ -16,6 +16,7 @@
 //    calls a C library function (its result is the running machine's).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -39,7 +40,13 @@ struct ScanFacts {
   bool shared = false;          // shares_stack(p): some rung reads what an earlier one left
 
   uint8_t at(size_t rung, size_t k) const { return flags[first[rung] + k]; }
-  const Instr* replacement(size_t rung, size_t k) const;  // nullptr if none
+  // nullptr if none (inline: the code generators ask it of every instruction)
+  const Instr* replacement(size_t rung, size_t k) const {
+    const uint32_t i = first[rung] + uint32_t(k);
+    auto it = std::lower_bound(replaced.begin(), replaced.end(), i,
+                               [](const std::pair<uint32_t, Instr>& e, uint32_t v) { return e.first < v; });
+    return it != replaced.end() && it->first == i ? &it->second : nullptr;
+  }
   size_t count(ScanFlag f) const;
 };
 
