@@ -476,7 +476,8 @@ Instruction make_cc(Mnemonic m, Cond c, std::initializer_list<Operand> ops) {
   in.mnemonic = m;
   in.cond = c;
   if (ops.size() > 3) throw AsmError("too many operands");
-  for (const Operand& o : ops) in.ops[in.num_operands++] = o;
+  in.num_operands = uint8_t(ops.size());  // set once: a count bumped in memory is reloaded after each operand stored
+  for (size_t k = 0; k < ops.size(); k++) in.ops[k] = ops.begin()[k];
   return in;
 }
 

@@ -166,12 +166,10 @@ class Gen : public ClassGen<Gen> {
   template <class G>
   friend void ldc::gen_by_class(G& g, const ldc::Instr& in);
 
-  // a new instruction item at the end, built in place (no Item or Instruction copied)
-  Instruction& next_instr() {
-    Item& it = items_.emplace_back();
-    it.kind = as::ItemKind::Instruction;
-    return it.inst;
-  }
+  // a new instruction item at the end, a copy of an empty one (a few wide
+  // moves; one built in place is zeroed by `rep stos`, slow to start)
+  Instruction& next_instr() { return items_.emplace_back(kEmptyInstr).inst; }
+  static inline const Item kEmptyInstr = Item::instr({});
   void emit(const Instruction& i) { next_instr() = i; }
   void emit(M m, std::initializer_list<Operand> ops) {
     if (ops.size() > 3) throw std::logic_error("x86 backend: more than 3 operands");

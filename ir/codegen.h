@@ -70,16 +70,49 @@ void gen_by_class(Gen& g, const Instr& in) {
 // ANDBLK / ORBLK combine); every other push is unknown, and the application
 // classes leave the stack alone.  A backend asks on() before an instruction:
 // its power is on for certain, so the instruction needs no gate or test.
+// (Inline: scan_facts and the -O2 code generators step it through every instruction.)
 class KnownStack {
  public:
   bool on() const { return !v_.empty() && v_.back() == 1; }
-  void step(const Instr& in);  // after in
   void reset() { v_.clear(); }  // a new rung (the storage is kept)
+  void step(const Instr& in) {  // after in
+    switch (in.op) {
+      case Op::TRUE: v_.push_back(1); return;
+      case Op::AND:
+      case Op::ANDN: top() = top() == 0 ? 0 : -1; return;
+      case Op::OR:
+      case Op::ORN: top() = top() == 1 ? 1 : -1; return;
+      case Op::MPS: v_.push_back(v_.empty() ? -1 : v_.back()); return;
+      case Op::MRD: top() = v_.size() >= 2 ? v_[v_.size() - 2] : -1; return;
+      case Op::ANDBLK: {
+        signed char a = pop(), &t = top();
+        t = (a == 0 || t == 0) ? 0 : (a == 1 && t == 1) ? 1 : -1;
+        return;
+      }
+      case Op::ORBLK: {
+        signed char a = pop(), &t = top();
+        t = (a == 1 || t == 1) ? 1 : (a == 0 && t == 0) ? 0 : -1;
+        return;
+      }
+      default: break;
+    }
+    const OpInfo& i = op_info(in.op);
+    for (int k = 0; k < i.pop; k++) pop();
+    for (int k = 0; k < i.push; k++) v_.push_back(-1);
+  }
 
  private:
   std::vector<signed char> v_;  // bottom first: -1 unknown, 0, 1; what lies below is unknown
-  signed char pop();
-  signed char& top();
+  signed char pop() {
+    if (v_.empty()) return -1;
+    signed char v = v_.back();
+    v_.pop_back();
+    return v;
+  }
+  signed char& top() {
+    if (v_.empty()) v_.push_back(-1);
+    return v_.back();
+  }
 };
 
 // -O2: a contact pushed only to be combined later can wait for the combine.

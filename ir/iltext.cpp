@@ -203,9 +203,18 @@ Operand parse_operand(char sig, const Tok& t, int lineno, uint32_t edges) {
 
 }  // namespace
 
+// Room for the rungs up front (each `.rung` counted, a few in comments or
+// titles too many): the rungs are not moved each time their vector doubles.
+static size_t rungs_in(std::string_view text) {
+  size_t n = 0;
+  for (size_t at = text.find(".rung"); at != std::string_view::npos; at = text.find(".rung", at + 5)) n++;
+  return n;
+}
+
 Program parse_il_text(std::string_view text, const std::string& filename) {
   Program p;
   p.source = filename;
+  p.rungs.reserve(rungs_in(text));
   std::vector<std::string> pending_labels;
   std::unordered_map<std::string, size_t> label_rung;  // label -> index of the rung it precedes
   Rung* cur = nullptr;

@@ -12,21 +12,6 @@
 
 namespace ldc {
 
-namespace {
-// the entry of `v` (sorted by index) for instruction i, or nullptr
-template <class T>
-const T* entry_at(const std::vector<std::pair<uint32_t, T>>& v, uint32_t i) {
-  auto it = std::lower_bound(v.begin(), v.end(), i, [](const std::pair<uint32_t, T>& e, uint32_t x) { return e.first < x; });
-  return it != v.end() && it->first == i ? &it->second : nullptr;
-}
-}  // namespace
-
-const Instr* ScanFacts::replacement(size_t rung, size_t k) const { return entry_at(replaced, first[rung] + uint32_t(k)); }
-const DivReuse* ScanFacts::reuse(size_t rung, size_t k) const { return entry_at(reused, first[rung] + uint32_t(k)); }
-const Operand* ScanFacts::quotient_to(size_t rung, size_t k) const {
-  return entry_at(early_quotient, first[rung] + uint32_t(k));
-}
-
 size_t ScanFacts::count(ScanFlag f) const {
   return size_t(std::count_if(flags.begin(), flags.end(), [f](uint8_t x) { return (x & f) != 0; }));
 }
@@ -383,15 +368,20 @@ ScanFacts scan_facts(const Program& p, const Layout& layout, int slots) {
   for (size_t ri = 0; ri < p.rungs.size(); ri++) divs.rung(p.rungs[ri], f.first[ri]);
   std::sort(f.early_quotient.begin(), f.early_quotient.end(),
             [](const auto& x, const auto& y) { return x.first < y.first; });
-  f.fits.assign(p.rungs.size(), 0);
-  f.shared = shares_stack(p);
-  if (f.shared) return f;  // an entry may be read by a later rung
+  f.fits.resize(p.rungs.size());
+  for (size_t ri = 0; ri < p.rungs.size(); ri++) f.fits[ri] = stack_fits_slots(p.rungs[ri].code, slots);
+  // shares_stack(p), asked of the rungs that do not fit only: one that fits
+  // reads nothing an earlier rung left
+  for (size_t ri = 0; ri < p.rungs.size() && !f.shared; ri++)
+    f.shared = !f.fits[ri] && foreign_stack_use(p.rungs[ri].code) >= 0;
+  if (f.shared) {  // an entry may be read by a later rung
+    f.fits.assign(p.rungs.size(), 0);
+    return f;
+  }
   std::vector<int> depth;
   std::vector<char> live;
-  for (size_t ri = 0; ri < p.rungs.size(); ri++) {
-    f.fits[ri] = stack_fits_slots(p.rungs[ri].code, slots);
+  for (size_t ri = 0; ri < p.rungs.size(); ri++)
     if (f.fits[ri]) unread_entries(p.rungs[ri].code, f.first[ri], f, depth, live);
-  }
   return f;
 }
 

@@ -25,6 +25,7 @@
 //    stores the quotient there too (ScanFacts::early_quotient).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -49,6 +50,13 @@ struct DivReuse {
   bool stored_early = false;  // a DIV whose quotient the earlier MOD stored: no code
 };
 
+// The entry of `v` (sorted by index) for instruction i, or nullptr.
+template <class T>
+const T* entry_at(const std::vector<std::pair<uint32_t, T>>& v, uint32_t i) {
+  auto it = std::lower_bound(v.begin(), v.end(), i, [](const std::pair<uint32_t, T>& e, uint32_t x) { return e.first < x; });
+  return it != v.end() && it->first == i ? &it->second : nullptr;
+}
+
 struct ScanFacts {
   std::vector<uint32_t> first;  // per rung: the index of its first instruction
   std::vector<char> fits;       // per rung: its stack is private and fits the slots (no kUnread elsewhere)
@@ -62,9 +70,10 @@ struct ScanFacts {
   bool shared = false;          // shares_stack(p): some rung reads what an earlier one left
 
   uint8_t at(size_t rung, size_t k) const { return flags[first[rung] + k]; }
-  const Instr* replacement(size_t rung, size_t k) const;  // nullptr if none
-  const DivReuse* reuse(size_t rung, size_t k) const;     // nullptr if none
-  const Operand* quotient_to(size_t rung, size_t k) const;  // nullptr if none
+  // nullptr if none (inline: the code generators ask them of every instruction)
+  const Instr* replacement(size_t rung, size_t k) const { return entry_at(replaced, first[rung] + uint32_t(k)); }
+  const DivReuse* reuse(size_t rung, size_t k) const { return entry_at(reused, first[rung] + uint32_t(k)); }
+  const Operand* quotient_to(size_t rung, size_t k) const { return entry_at(early_quotient, first[rung] + uint32_t(k)); }
   size_t count(ScanFlag f) const;
 };
 

