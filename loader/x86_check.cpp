@@ -202,15 +202,16 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
     }
     return true;
   };
-  // the -O2 frame (rbp the image), the same with rbx the image (images made
-  // before bl was a slot), or the -O0 frame (rbx the image, ebp the stack)
+  // the -O2 frame (rbp the image, kImageBias bytes into it), the same with rbp
+  // at the image's start (images made before the bias) or with rbx the image
+  // (before bl was a slot), or the -O0 frame (rbx the image, ebp the stack)
   const bool at_entry = first < d.insts.size() && d.insts[first].offset == entry;
   const bool biased = at_entry && matches(first, x86::scan_prologue(true));
   const bool o2 = biased || (at_entry && matches(first, x86::scan_prologue_unbiased()));  // rbp the image
   const bool slots = o2 || (at_entry && matches(first, x86::scan_prologue_rbx_slots()));
   const int32_t bias = biased ? x86::kImageBias : 0;  // where the image register points into the image
   if (!slots && !(at_entry && matches(first, x86::scan_prologue(false))))
-    return at(entry) + "the entry is not the scan function's prologue (push rbx; push rbp; ...; mov rbx, rdi, or mov rbp, rdi at -O2)";
+    return at(entry) + "the entry is not the scan function's prologue (push rbx; push rbp; ...; mov rbx, rdi, or lea rbp, [rdi+0x40] at -O2)";
   const x86::Reg img = x86::r64(x86::image_reg(o2));  // the image register: nothing in the body writes it
   const std::string img_name(x86::reg_name(img));
   size_t body_first = first + x86::scan_prologue(slots).size();
