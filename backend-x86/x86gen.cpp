@@ -1095,7 +1095,7 @@ class WordInEax {
   void run(std::vector<Item>& items, std::vector<uint32_t>& starts) {
     drop_.assign(items.size(), 0);
     bool any = false;
-    for (size_t i = 0; i < items.size(); i++) {
+    for (size_t i = 0, n = items.size(); i < n; i++) {  // (n read once: for all the compiler knows, the stores change it)
       Item& it = items[i];
       if (it.kind == as::ItemKind::Label) forget();
       if (it.kind != as::ItemKind::Instruction) continue;
