@@ -239,7 +239,16 @@ class Core {
 
   // Pass 1: each global label definition of block b must be declared and
   // defined once.
+  // Does block b (of those gathered last) define a label?  Most blocks define
+  // none: one memchr, not a look at each item.
+  bool has_labels(uint32_t b) const {
+    static_assert(sizeof(ItemKind) == 1);
+    const std::span<const ItemKind> kinds = kinds_of(b);
+    return !kinds.empty() && std::memchr(kinds.data(), int(ItemKind::Label), kinds.size());
+  }
+
   void define_globals(uint32_t b) {
+    if (!has_labels(b)) return;
     const std::span<const ItemKind> kinds = kinds_of(b);
     for (size_t i = 0; i < kinds.size(); ++i) {
       if (kinds[i] != ItemKind::Label || !p_->is_global(b, i)) continue;
@@ -305,6 +314,7 @@ class Core {
     localAddr_.clear();
     // Local label table.
     for (uint32_t b = first; b < last; ++b) {
+      if (!has_labels(b)) continue;
       const std::span<const ItemKind> kinds = kinds_of(b);
       for (size_t i = 0; i < kinds.size(); ++i) {
         if (kinds[i] != ItemKind::Label || p_->is_global(b, i)) continue;
