@@ -161,19 +161,11 @@ bool parse_number(std::string_view s, Operand& o) {
   return true;
 }
 
-// The message `before` + text + `after` (built here, apart from parse_operand,
-// whose every call then saved registers and stack for the strings).
-[[noreturn]] void operand_error(int lineno, int col, const char* before, std::string_view text, const char* after) {
-  throw CompileError(lineno, col, before + std::string(text) + after);
-}
-
 Operand parse_operand(char sig, const Tok& t, int lineno, uint32_t edges) {
   Operand o;
-  auto fail = [&](const char* before, std::string_view text = {}, const char* after = "") {
-    operand_error(lineno, t.col, before, text, after);
-  };
+  auto fail = [&](const std::string& m) -> Operand { throw CompileError(lineno, t.col, m); };
   if (sig == 'l') {
-    if (!is_name(t.text)) fail("expected a label name, found '", t.text, "'");
+    if (!is_name(t.text)) fail("expected a label name, found '" + std::string(t.text) + "'");
     o.kind = OpdKind::Label;
     o.label = std::string(t.text);
     return o;
@@ -181,8 +173,8 @@ Operand parse_operand(char sig, const Tok& t, int lineno, uint32_t edges) {
   if (sig == 'e') {
     if (t.text.size() < 2 || std::toupper((unsigned char)t.text[0]) != 'E') fail("expected an edge slot E<n>");
     Operand n;
-    if (!parse_number(t.text.substr(1), n) || n.kind != OpdKind::ConstInt || n.ival < 0) fail("bad edge slot '", t.text, "'");
-    if (uint32_t(n.ival) >= edges) fail("edge slot ", t.text, " outside the .edges count");
+    if (!parse_number(t.text.substr(1), n) || n.kind != OpdKind::ConstInt || n.ival < 0) fail("bad edge slot '" + std::string(t.text) + "'");
+    if (uint32_t(n.ival) >= edges) fail("edge slot " + std::string(t.text) + " outside the .edges count");
     o.kind = OpdKind::Edge;
     o.index = uint32_t(n.ival);
     return o;
@@ -192,17 +184,17 @@ Operand parse_operand(char sig, const Tok& t, int lineno, uint32_t edges) {
     return o;
   }
   auto d = parse_device(t.text);
-  if (!d) fail("expected a device, found '", t.text, "'");
-  if (d->index >= device_count(d->dev)) fail("device index out of range: ", t.text);
+  if (!d) fail("expected a device, found '" + std::string(t.text) + "'");
+  if (d->index >= device_count(d->dev)) fail("device index out of range: " + std::string(t.text));
   if (sig == 't' || sig == 'c') {
-    if (d->dev != (sig == 't' ? Dev::T : Dev::C)) fail(sig == 't' ? "expected a timer" : "expected a counter");
+    if (d->dev != (sig == 't' ? Dev::T : Dev::C)) fail(std::string("expected a ") + (sig == 't' ? "timer" : "counter"));
     o.kind = sig == 't' ? OpdKind::Timer : OpdKind::Counter;
     o.index = d->index;
     return o;
   }
   bool bitctx = sig == 'b' || sig == 'w';
   Area a = bitctx ? bit_area(d->dev) : word_area(d->dev);
-  if (a == Area::Count || !operand_area_ok(sig, a, d->index)) fail("device ", t.text, " is not allowed here");
+  if (a == Area::Count || !operand_area_ok(sig, a, d->index)) fail("device " + std::string(t.text) + " is not allowed here");
   o.area = a;
   o.index = d->index;
   o.kind = bitctx ? OpdKind::Bit : (area_is_real(a) ? OpdKind::Real : OpdKind::Int);
