@@ -1065,7 +1065,7 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts, bool shar
 // and index need no test of their class: rip and none are number 0).
 constexpr std::array<uint8_t, 16> kSwapped = [] {
   std::array<uint8_t, 16> t{};
-  for (uint8_t n = 0; n < 16; n++) t[n] = n == BX ? BP : n == BP ? BX : n;
+  for (uint8_t n = 0; n < 16; n++) t[n] = n == BX ? uint8_t(BP) : n == BP ? uint8_t(BX) : n;
   return t;
 }();
 void to_o2_frame(std::vector<Item>& items) {
