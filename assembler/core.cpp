@@ -239,7 +239,16 @@ class Core {
 
   // Pass 1: each global label definition of block b must be declared and
   // defined once.
+  // Does block b (of those gathered last) define a label?  Most blocks define
+  // none: one memchr, not a look at each item.
+  bool has_labels(uint32_t b) const {
+    static_assert(sizeof(ItemKind) == 1);
+    const std::span<const ItemKind> kinds = kinds_of(b);
+    return !kinds.empty() && std::memchr(kinds.data(), int(ItemKind::Label), kinds.size());
+  }
+
   void define_globals(uint32_t b) {
+    if (!has_labels(b)) return;
     const std::span<const ItemKind> kinds = kinds_of(b);
     for (size_t i = 0; i < kinds.size(); ++i) {
       if (kinds[i] != ItemKind::Label || !p_->is_global(b, i)) continue;
@@ -260,17 +269,24 @@ class Core {
     s.enc.size = 0, s.enc.num_fixups = 0;  // empty: what lies past the counts is never read
     try {
       p_->encode(s.block, s.item, s.long_form, s.enc);
-      for (unsigned f = 0; f < s.enc.num_fixups; ++f) {
-        const Fixup& fx = s.enc.fixups[f];
-        if (fx.kind >= t_.fixup_kinds.size() ||
-            fx.offset + t_.fixup_kinds[fx.kind].container_bytes > s.enc.size)
-          throw AsmError("encoder produced an invalid fixup");
-      }
+      if (s.enc.num_fixups) check_fixups(s.enc);
     } catch (const AsmError& e) {
-      if (!s.bad) error(int(s.block), "item " + std::to_string(s.item) + ": " + e.what());
-      s.bad = true;
-      s.enc = Encoding{};
+      failed(s, e);
     }
+  }
+  void check_fixups(const Encoding& enc) const {
+    for (unsigned f = 0; f < enc.num_fixups; ++f) {
+      const Fixup& fx = enc.fixups[f];
+      if (fx.kind >= t_.fixup_kinds.size() || fx.offset + t_.fixup_kinds[fx.kind].container_bytes > enc.size)
+        throw AsmError("encoder produced an invalid fixup");
+    }
+  }
+  // An encoding that failed (apart from encode_state, every instruction's path:
+  // building this message there made it save six registers a call).
+  void failed(InstState& s, const AsmError& e) {
+    if (!s.bad) error(int(s.block), "item " + std::to_string(s.item) + ": " + e.what());
+    s.bad = true;
+    s.enc = Encoding{};
   }
 
   Ref resolve(uint32_t block, std::string_view name, bool report) {
@@ -298,6 +314,7 @@ class Core {
     localAddr_.clear();
     // Local label table.
     for (uint32_t b = first; b < last; ++b) {
+      if (!has_labels(b)) continue;
       const std::span<const ItemKind> kinds = kinds_of(b);
       for (size_t i = 0; i < kinds.size(); ++i) {
         if (kinds[i] != ItemKind::Label || p_->is_global(b, i)) continue;

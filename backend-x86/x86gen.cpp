@@ -1101,16 +1101,20 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts, bool shar
 // them the other way round, so every register and memory operand of the rung
 // swaps rbx and rbp, at every width.  A permutation of two callee-saved
 // registers, so the code computes exactly the same.
-void swap_reg(as::x86::Reg& r) {
-  if ((r.num == BX || r.num == BP) && r.cls != RegClass::Xmm) r.num ^= BX ^ BP;  // 3 <-> 5
-}
+// A register's number in the other frame, by table (a memory operand's base
+// and index need no test of their class: rip and none are number 0).
+constexpr std::array<uint8_t, 16> kSwapped = [] {
+  std::array<uint8_t, 16> t{};
+  for (uint8_t n = 0; n < 16; n++) t[n] = n == BX ? uint8_t(BP) : n == BP ? uint8_t(BX) : n;
+  return t;
+}();
 void to_o2_frame(std::vector<Item>& items) {
   for (Item& it : items) {
     if (it.kind != as::ItemKind::Instruction) continue;
     for (unsigned k = 0; k < it.inst.num_operands; k++) {
       Operand& o = it.inst.ops[k];
-      if (o.kind == OperandKind::Reg) swap_reg(o.reg);
-      else if (o.kind == OperandKind::Mem) swap_reg(o.mem.base), swap_reg(o.mem.index);
+      if (o.kind == OperandKind::Reg && o.reg.cls != RegClass::Xmm) o.reg.num = kSwapped[o.reg.num];
+      else if (o.kind == OperandKind::Mem) o.mem.base.num = kSwapped[o.mem.base.num], o.mem.index.num = kSwapped[o.mem.index.num];
     }
   }
 }
@@ -1131,7 +1135,7 @@ class WordInEax {
   void run(std::vector<Item>& items, std::vector<uint32_t>& starts) {
     drop_.assign(items.size(), 0);
     bool any = false;
-    for (size_t i = 0; i < items.size(); i++) {
+    for (size_t i = 0, n = items.size(); i < n; i++) {  // (n read once: for all the compiler knows, the stores change it)
       Item& it = items[i];
       if (it.kind == as::ItemKind::Label) forget();
       if (it.kind != as::ItemKind::Instruction) continue;

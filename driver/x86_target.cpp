@@ -18,6 +18,9 @@ void stream_x86(const Program& p, int opt_level, NativeBuild& b) {
   using Asm = as::Assembler<as::x86::Instruction>;
   Asm a(as::x86::target(), b.gen.program.globals, Asm::Items::LastOnly);
   std::vector<std::vector<uint32_t>> il_items;  // a rung's, cleared once its block is laid out
+  size_t il = 0;
+  for (const Rung& r : p.rungs) il += r.code.size();
+  b.line_offsets.reserve(il);  // an entry an IL instruction: not copied as it grows
   size_t blocks = 0;
   auto sink = [&](as::Block<as::x86::Instruction>& blk) {
     a.add(blk);

@@ -124,27 +124,29 @@ void dead_stores(const Program& p, const Layout& l, const std::vector<char>& on,
   }
 }
 
-// Backward over one rung whose stack is private: an entry written and never
-// read before the rung ends or the position is written again is unread.
-// depth and live: storage kept from rung to rung.
-void unread_entries(const std::vector<Instr>& code, uint32_t first, ScanFacts& f, std::vector<int>& depth,
-                    std::vector<char>& live) {
+// Backward over one rung whose stack is private and fits the slots: an entry
+// written and never read before the rung ends or the position is written
+// again is unread.  depth: storage kept from rung to rung.
+void unread_entries(const std::vector<Instr>& code, uint32_t first, ScanFacts& f, std::vector<int>& depth) {
   depth.resize(code.size());
-  int d = 0, most = 0;
+  int d = 0;
   for (size_t k = 0; k < code.size(); k++) {
     depth[k] = d;
     d += op_info(code[k].op).push - op_info(code[k].op).pop;
-    most = std::max(most, d);
   }
-  live.assign(size_t(most) + 1, 0);  // a private stack reads no position below 0
+  // bit p: position p is read before it is written again; a stack that fits
+  // holds at most kMaxStackDepth entries and reads no position below 0
+  static_assert(kMaxStackDepth < 64);
+  uint64_t live = 0;
   for (size_t k = code.size(); k-- > 0;) {
     if (f.flags[first + k] & kDeadStore) continue;
     StackUse u = stack_use(code[k].op, depth[k]);
     if (u.writes) {
-      if (!live[size_t(u.write)]) { f.flags[first + k] |= kUnread; continue; }
-      live[size_t(u.write)] = 0;
+      const uint64_t bit = uint64_t(1) << u.write;
+      if (!(live & bit)) { f.flags[first + k] |= kUnread; continue; }
+      live &= ~bit;
     }
-    for (int r = 0; r < u.nreads; r++) live[size_t(u.reads[r])] = 1;
+    for (int r = 0; r < u.nreads; r++) live |= uint64_t(1) << u.reads[r];
   }
 }
 
@@ -379,9 +381,8 @@ ScanFacts scan_facts(const Program& p, const Layout& layout, int slots) {
     return f;
   }
   std::vector<int> depth;
-  std::vector<char> live;
   for (size_t ri = 0; ri < p.rungs.size(); ri++)
-    if (f.fits[ri]) unread_entries(p.rungs[ri].code, f.first[ri], f, depth, live);
+    if (f.fits[ri]) unread_entries(p.rungs[ri].code, f.first[ri], f, depth);
   return f;
 }
 
