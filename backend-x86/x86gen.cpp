@@ -98,7 +98,7 @@ uint32_t float_bits(float f) {
 const Reg kSlots[] = {r8(BP), r8(R12), r8(R13)};
 constexpr int kNumSlots = 3;
 const as::x86::Reg kO2Image = r64(as::x86::image_reg(true));  // rbp
-using as::x86::kImageBias;  // rbp = image + kImageBias: operands are made with image offsets, biased last
+using as::x86::kImageBias;  // rbp = image + kImageBias: to_o2_frame biases the displacements made from image offsets
 
 // Turns gate_ off for one instruction's code (restored at the end of scope).
 struct Ungated {
@@ -1114,7 +1114,10 @@ void to_o2_frame(std::vector<Item>& items) {
     for (unsigned k = 0; k < it.inst.num_operands; k++) {
       Operand& o = it.inst.ops[k];
       if (o.kind == OperandKind::Reg && o.reg.cls != RegClass::Xmm) o.reg.num = kSwapped[o.reg.num];
-      else if (o.kind == OperandKind::Mem) o.mem.base.num = kSwapped[o.mem.base.num], o.mem.index.num = kSwapped[o.mem.index.num];
+      else if (o.kind == OperandKind::Mem) {
+        o.mem.base.num = kSwapped[o.mem.base.num], o.mem.index.num = kSwapped[o.mem.index.num];
+        if (o.mem.base == kO2Image) o.mem.disp -= kImageBias;  // rbp points kImageBias bytes into the image
+      }
     }
   }
 }
@@ -1206,18 +1209,11 @@ as::x86::RoutineAreas x86_routine_areas(const Layout& l) {
 // base registers (as::x86::kBaseRegs) are pointed where that region's
 // [rbp+disp32] operands are (a `lea reg, [rbp+K]` where one pays), and the
 // operands inside a register's disp8 window [K-128, K+127] become [reg+d8].
+// (Displacements from rbp, which points kImageBias bytes into the image: the
+// frame swap biases them, to_o2_frame, and K is counted from rbp too.)
 bool rewritable(const Instruction& in, const as::x86::Operand& o) {
   return o.kind == OperandKind::Mem && in.mnemonic != M::Call && in.mnemonic != M::Lea && o.mem.base == kO2Image &&
-         !o.mem.index.valid() && (o.mem.disp - kImageBias < -128 || o.mem.disp - kImageBias > 127);
-}
-// rbp points kImageBias bytes into the image (as::x86::kImageBias): every
-// operand based on it, made with the image offset, takes its displacement so
-void bias_image_operands(as::Block<Instruction>& b) {
-  for (Item& it : b.items) {
-    if (it.kind != as::ItemKind::Instruction) continue;
-    for (unsigned j = 0; j < it.inst.num_operands; j++)
-      if (it.inst.ops[j].kind == OperandKind::Mem && it.inst.ops[j].mem.base == kO2Image) it.inst.ops[j].mem.disp -= kImageBias;
-  }
+         !o.mem.index.valid() && (o.mem.disp < -128 || o.mem.disp > 127);
 }
 uint32_t mem_width(const Mem& m) { return m.size == Size::Dword ? 4 : m.size == Size::Qword ? 8 : 1; }
 
@@ -1228,8 +1224,10 @@ struct Op {
   bool rex;             // its instruction has a REX prefix anyway (r15/r14 then cost no byte more than rdi)
 };
 using Ops = std::vector<Op>;
-constexpr int64_t kBaseKMin = 128;  // the loader's range for K: [128, size - 135], so that every
-constexpr int64_t kBaseKTop = 135;  // [reg+d8] access of up to 8 bytes stays inside the image
+// the loader's range for K, an image offset: [128, size - 135], so that every
+// [reg+d8] access of up to 8 bytes stays inside the image; here from rbp
+constexpr int64_t kBaseKMin = 128 - kImageBias;
+constexpr int64_t kBaseKTop = 135 + kImageBias;
 constexpr int64_t kLeaBytes = 7;    // lea reg, [rbp+disp32]
 // A region ends after the block that brings it kRegionOps operands (or before
 // a jump target).  Picked by measuring code bytes of ldbench's plant and
@@ -1458,7 +1456,6 @@ class Regions {
         for (int r = 0; r < kNumBases; r++)
           if (it.kind == as::ItemKind::Instruction && it.inst.mnemonic == M::Lea && it.inst.ops[0].reg == r64(kBaseRegs[r]))
             it.inst.ops[1].mem.disp = int32_t(plan_.k(r));
-      bias_image_operands(*prologue_);
       sink_(*prologue_);
       prologue_.reset();
     }
@@ -1480,7 +1477,6 @@ class Regions {
       if (reloaded[size_t(r)] && !plan_.known(r)) plan_.set(r, kBaseKMin);
     for (size_t i = 0; i < blocks_.size(); i++) {
       il_items_.push_back(std::move(starts_[i]));
-      bias_image_operands(blocks_[i]);
       sink_(blocks_[i]);
       if (il_items_.back().empty() && spare_starts_.size() < kSpareBlocks)  // the sink is done with it
         spare_starts_.push_back(std::move(il_items_.back()));
