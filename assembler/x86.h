@@ -178,6 +178,8 @@ std::span<const Instruction> scan_prologue_rbx_slots();
 // The loader's validator accepts any K in [128, size-135] and base-register
 // operands with a disp8 only, so every access stays inside the image.
 constexpr int kNumBases = 3;
+// That range of K as image offsets: K-128 >= 0 and K+127+8 <= size.
+constexpr int64_t kBaseKMin = 128, kBaseKTop = 135;
 constexpr RegNum kBaseRegs[kNumBases] = {DI, R15, R14};
 // System V: may a called function change the register?
 constexpr bool caller_saved(RegNum r) { return !(r == BX || r == SP || r == BP || r >= R12); }

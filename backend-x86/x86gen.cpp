@@ -1224,10 +1224,10 @@ struct Op {
   bool rex;             // its instruction has a REX prefix anyway (r15/r14 then cost no byte more than rdi)
 };
 using Ops = std::vector<Op>;
-// the loader's range for K, an image offset: [128, size - 135], so that every
-// [reg+d8] access of up to 8 bytes stays inside the image; here from rbp
-constexpr int64_t kBaseKMin = 128 - kImageBias;
-constexpr int64_t kBaseKTop = 135 + kImageBias;
+// the loader's range for K (as::x86::kBaseKMin, kBaseKTop: image offsets),
+// here counted from rbp
+constexpr int64_t kBaseKMin = as::x86::kBaseKMin - kImageBias;
+constexpr int64_t kBaseKTop = as::x86::kBaseKTop + kImageBias;
 constexpr int64_t kLeaBytes = 7;    // lea reg, [rbp+disp32]
 // A region ends after the block that brings it kRegionOps operands (or before
 // a jump target).  Picked by measuring code bytes of ldbench's plant and
@@ -1544,7 +1544,7 @@ class Blocks {
     // keep rbx/rbp for the caller, 16-byte stack alignment for calls
     as::Block<Instruction> pro;
     pro.source_line = p_.rungs.empty() ? 0 : p_.rungs[0].line;
-    pro.items.push_back(Item::note(o2_ ? "scan(image): rbp = image, bit stack in bl r12b r13b (or ebx), bases rdi r15 r14 (-O2)"
+    pro.items.push_back(Item::note(o2_ ? "scan(image): rbp = image+" + std::to_string(kImageBias) + ", bit stack in bl r12b r13b (or ebx), bases rdi r15 r14 (-O2)"
                                          : "scan(image): rbx = image, ebp = bit stack"));
     for (const Instruction& i : scan_prologue(o2_)) pro.items.push_back(Item::instr(i));
     if (o2_)

@@ -286,7 +286,7 @@ class Divisions {
     bool mod = in.op == Op::MOD;
     if (now && reuse(*now, mod, i)) now->at = kNone;
     if (in.op == Op::JMP || in.op == Op::END) exit_ = i;
-    if (!pairs_.empty() || now) wrote(in, i);  // a division's own accesses count for a DIV it may serve
+    if (!pairs_.empty() || now) accessed(in, i);  // a division's own accesses count for a DIV it may serve
     if (!now || now->d == now->a || now->d == now->b) return;
     Pair& p = pairs_[key(now->a, now->b)];
     (mod ? p.r : p.q) = *now;
@@ -322,7 +322,9 @@ class Divisions {
     if (since == kNone || d >= access_.size()) return false;
     return (access_[d] == kNone || access_[d] < since) && (exit_ == kNone || exit_ < since);
   }
-  void wrote(const Instr& in, uint32_t i) {
+  // in's reads and writes: the last access of each address, and the kept
+  // divisions a write forgets
+  void accessed(const Instr& in, uint32_t i) {
     const Access acc = access(l_, in, on_[i]);
     if (access_.empty()) access_.assign(l_.size, kNone);  // the first division kept: from here on
     for (int k = 0; k < acc.nr; k++) access_[acc.reads[k]] = i;

@@ -60,8 +60,8 @@ struct Bases {
     return -1;
   }
 };
-constexpr int64_t kBaseKMin = 128;  // K-128 >= 0
-constexpr int64_t kBaseKTop = 135;  // K+127+8 <= size
+using x86::kBaseKMin;  // K-128 >= 0
+using x86::kBaseKTop;  // K+127+8 <= size
 
 // Is `in` of the form `lea reg, [img+k]` for base register i (any k)?
 bool is_base_lea(const x86::Instruction& in, int i, x86::Reg img) {
