@@ -569,8 +569,11 @@ void check_trace_args(const TraceArgs& a, const FoundEngine& fe, const Target* i
     std::vector<std::string> code;
     for (const Target& t : targets())
       for (const std::string& e : engines_of(t, true)) code.push_back(e);
+    const std::string why = is_image_file(a.input) ? "an image is already compiled"
+                            : a.engine == "c"      ? "the C route is compiled by the system C compiler at -O2"
+                                                   : "the " + a.engine + " engine interprets the IL";
     throw UserError("ldrun: error: -O" + std::to_string(a.opt_level) + " is for a source compiled to native code (--engine=" +
-                    or_list(code) + "); an image is already compiled");
+                    or_list(code) + "); " + why);
   }
 }
 

@@ -38,7 +38,9 @@ for o in -O0 -O1 -O2; do
 done
 "$bin/ldrun" "$src/examples/traffic.ld" --engine=fast --trace "$src/examples/traffic.csv" --watch Y0,Y1,Y2,T0 > "$tmp/srcfast" || bad "ldrun source fast"
 cmp -s "$tmp/srcfast" "$tmp/t.bin.native" && ok || bad "ldrun source on fast differs from the image on native"
-expect_fail "-O on an image" "is for a source compiled to native code" "$bin/ldrun" "$tmp/t.bin" -O2
+expect_fail "-O on an image" "is for a source compiled to native code (.*); an image is already compiled" "$bin/ldrun" "$tmp/t.bin" -O2
+expect_fail "-O on an interpreter" "is for a source compiled to native code (.*); the fast engine interprets the IL" \
+  "$bin/ldrun" "$src/examples/traffic.ld" --engine=fast -O2
 
 # ldobjdump lists every rung with its IL
 "$bin/ldobjdump" "$tmp/t.bin" > "$tmp/dump" && ok || bad "ldobjdump"
