@@ -51,6 +51,14 @@ std::string hex(uint64_t v) {
 
 // ---------------------------------------------------------------- writing
 
+// v little-endian at p: one store on a little-endian machine
+static uint8_t* put_le32(uint8_t* p, uint32_t v) {
+  if constexpr (std::endian::native == std::endian::little) std::memcpy(p, &v, 4);
+  else
+    for (int i = 0; i < 4; i++) p[i] = uint8_t(v >> (8 * i));
+  return p + 4;
+}
+
 // The bytes of an image in file order: kept whole (write_image), only
 // counted (the layout pass of write_image_file), or handed to a file in
 // pieces with their CRC-32 summed on the way (write_image_file).
@@ -74,7 +82,8 @@ struct Writer {
       done += 4;
       return;
     }
-    const uint8_t b[4] = {uint8_t(v), uint8_t(v >> 8), uint8_t(v >> 16), uint8_t(v >> 24)};
+    uint8_t b[4];
+    put_le32(b, v);
     out.insert(out.end(), b, b + 4);
     if (mode == Mode::Stream && out.size() >= kChunk) flush();
   }
@@ -297,14 +306,6 @@ static void put_header(Writer& w, const Image& im, std::span<const uint32_t> tab
   w.u32(im.layout.size);
   for (uint32_t i = 1; i <= nsections; i++)
     w.u32(i), w.u32(table.empty() ? 0 : table[2 * (i - 1)]), w.u32(table.empty() ? 0 : table[2 * i - 1]);
-}
-
-// v little-endian at p: one store on a little-endian machine
-static uint8_t* put_le32(uint8_t* p, uint32_t v) {
-  if constexpr (std::endian::native == std::endian::little) std::memcpy(p, &v, 4);
-  else
-    for (int i = 0; i < 4; i++) p[i] = uint8_t(v >> (8 * i));
-  return p + 4;
 }
 
 // The line map, packed a batch of entries at a time: one entry per IL

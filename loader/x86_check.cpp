@@ -359,9 +359,9 @@ std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layou
           // the one indirect branch: a call through the read-only table of REAL
           // functions below the image (ir.h, kCallTableDisp)
           const x86::Mem& m = o.mem;
-          bool table = m.base == img && !m.index.valid() && m.size == x86::Size::Qword &&
-                       int64_t(m.disp) + bias >= kCallTableDisp && int64_t(m.disp) + bias < kCallTableDisp + 8 * kCallSlots &&
-                       (int64_t(m.disp) + bias - kCallTableDisp) % 8 == 0;
+          const int64_t off = int64_t(m.disp) + bias;  // from the image's start
+          bool table = m.base == img && !m.index.valid() && m.size == x86::Size::Qword && off >= kCallTableDisp &&
+                       off < kCallTableDisp + 8 * kCallSlots && (off - kCallTableDisp) % 8 == 0;
           if (!table) return at(di.offset) + text_of(in) + ": indirect call not through the REAL function table";
           continue;
         }
