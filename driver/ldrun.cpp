@@ -19,8 +19,8 @@
 #include "driver/project.h"
 #include "driver/ldrun_io.h"
 #include "driver/targets.h"
-#include "runtime/modbus.h"
-#include "runtime/monitor.h"
+#include "runtime/net/modbus.h"
+#include "runtime/net/monitor.h"
 #include "runtime/plc.h"
 #include "runtime/runtime.h"
 #include "runtime/sandbox.h"
@@ -65,7 +65,7 @@ struct RtArgs {
   std::string modbus, modbus_connections;  // --modbus [HOST:]PORT, --modbus-connections N
   bool free_run = false, rt = false, cold = false, stop = false, stats = false, reload = false;
   bool sandbox = false;  // also in trace mode: it does not select the runtime
-  std::string monitor;   // --monitor HOST:PORT (runtime/monitor.h)
+  std::string monitor;   // --monitor HOST:PORT (runtime/net/monitor.h)
   bool monitor_write = false, monitor_remote = false;
 };
 

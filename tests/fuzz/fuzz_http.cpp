@@ -1,11 +1,11 @@
-// Fuzz the monitor's HTTP request parser (runtime/http.h): parse_request on
+// Fuzz the monitor's HTTP request parser (runtime/net/http.h): parse_request on
 // the bytes, then on what follows each complete request (pipelining), and
 // the form decoder on queries and bodies.  Besides not crashing, a complete
 // request must consume only bytes it was given, and must parse the same way
 // when exactly its own bytes are given.
 #include <cstdlib>
 
-#include "runtime/http.h"
+#include "runtime/net/http.h"
 #include "tests/fuzz/fuzz_common.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -1,11 +1,11 @@
-// Fuzz the Modbus TCP protocol (runtime/modbus.h): the input is the byte
+// Fuzz the Modbus TCP protocol (runtime/net/modbus.h): the input is the byte
 // stream of one connection, served request by request as the server does,
 // over a two-task view; every reply must be a well-formed frame answering its
 // request, and every write must land inside the memory image (ASan checks).
 #include <cstring>
 #include <vector>
 
-#include "runtime/modbus.h"
+#include "runtime/net/modbus.h"
 #include "tests/fuzz/fuzz_common.h"
 
 using namespace ldc;

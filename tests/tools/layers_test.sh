@@ -6,7 +6,8 @@
 #   frontend  includes only ir
 #   assembler includes nothing of ours but assembler, and assembler.h nothing of ours at all
 #   loader    includes ir, assembler and loader: no backend, no runtime
-#   runtime   includes ir, loader and runtime: no backend
+#   runtime   includes ir, loader and runtime: no backend, and not its servers (runtime/net)
+#   runtime/net  the servers (HTTP, monitor, Modbus): ir, loader, runtime and runtime/net
 #   backends  include ir, assembler and loader's image-format facts, never runtime or driver
 #   backend-c40sim/gen      the C40 code generator: besides those, of machine/ only the float format
 #   backend-c40sim/machine  the simulated board: never gen/
@@ -30,7 +31,8 @@ out=$( {
   allowed frontend 'ir/[a-z_]+\.h|frontend/[a-z_0-9]+\.h'
   allowed assembler 'assembler/[a-z_0-9]+\.h'
   allowed loader 'ir/[a-z_]+\.h|assembler/[a-z_0-9]+\.h|loader/[a-z_0-9]+\.h'
-  allowed runtime 'ir/[a-z_]+\.h|loader/[a-z_0-9]+\.h|runtime/[a-z_0-9]+\.h|monitor_page\.h'
+  allowed runtime 'ir/[a-z_]+\.h|loader/[a-z_0-9]+\.h|runtime/[a-z_0-9]+\.h'
+  allowed runtime/net 'ir/[a-z_]+\.h|loader/[a-z_0-9]+\.h|runtime/[a-z_0-9]+\.h|runtime/net/[a-z_0-9]+\.h|runtime/monitor_page\.h'
   allowed backend-x86 'ir/[a-z_]+\.h|assembler/[a-z_0-9]+\.h|backend-x86/[a-z_0-9]+\.h'
   allowed backend-c40sim/gen 'ir/[a-z_]+\.h|assembler/[a-z_0-9]+\.h|loader/c40_map\.h|backend-c40sim/gen/[a-z_0-9]+\.h|backend-c40sim/machine/c40float\.h'
   allowed backend-c40sim/machine 'ir/[a-z_]+\.h|assembler/[a-z_0-9]+\.h|loader/c40_map\.h|backend-c40sim/machine/[a-z_0-9]+\.h'
@@ -47,4 +49,4 @@ if [ -n "$out" ]; then
   echo "0 passed, $n failed"
   exit 1
 fi
-echo "11 passed, 0 failed"
+echo "12 passed, 0 failed"

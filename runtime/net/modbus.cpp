@@ -1,7 +1,7 @@
-// runtime/modbus.cpp -- the Modbus TCP protocol (runtime/modbus.h): framing,
+// runtime/net/modbus.cpp -- the Modbus TCP protocol (runtime/net/modbus.h): framing,
 // the eight function codes, the address map, exception replies.  A pure
 // function of the request bytes and a read-only view of the memory.
-#include "runtime/modbus.h"
+#include "runtime/net/modbus.h"
 
 #include <cstring>
 

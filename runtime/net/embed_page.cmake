@@ -1,6 +1,6 @@
-# Writes OUT: a header with the monitor page's files (runtime/monitor_page/)
+# Writes OUT: a header with the monitor page's files (runtime/net/monitor_page/)
 # as raw string literals kMonitorHtml, kMonitorJs, kMonitorCss.
-set(_out "// generated from runtime/monitor_page by embed_page.cmake\n#pragma once\n")
+set(_out "// generated from runtime/net/monitor_page by embed_page.cmake\n#pragma once\n")
 foreach(_pair "index.html;kMonitorHtml" "monitor.js;kMonitorJs" "monitor.css;kMonitorCss")
   list(GET _pair 0 _file)
   list(GET _pair 1 _var)

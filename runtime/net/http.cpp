@@ -1,11 +1,11 @@
-// runtime/http.cpp -- see http.h.  The grammar the parser accepts (RFC 9112,
+// runtime/net/http.cpp -- see http.h.  The grammar the parser accepts (RFC 9112,
 // narrowed to what the monitor needs):
 //   request = request-line *( header-field EOL ) EOL [ body ]
 //   request-line = method SP origin-target SP ( "HTTP/1.1" | "HTTP/1.0" ) EOL
 //   header-field = token ":" OWS value OWS          EOL = CRLF | LF
 // No obsolete line folding, no Transfer-Encoding (501), a body only by
 // Content-Length.
-#include "runtime/http.h"
+#include "runtime/net/http.h"
 
 #include <arpa/inet.h>
 #include <fcntl.h>

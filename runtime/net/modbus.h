@@ -1,4 +1,4 @@
-// runtime/modbus.h -- a Modbus TCP server for the soft-PLC runtime
+// runtime/net/modbus.h -- a Modbus TCP server for the soft-PLC runtime
 // (`ldrun --modbus HOST:PORT`, docs/runtime.md "Modbus TCP").
 //
 // Two parts: the protocol -- serve(), a pure function from the bytes a client

@@ -1,8 +1,8 @@
-// runtime/monitor.h -- the live ladder view of `ldrun --monitor HOST:PORT`
+// runtime/net/monitor.h -- the live ladder view of `ldrun --monitor HOST:PORT`
 // (docs/runtime.md, "The monitor"): an I/O driver decorator that copies a
 // snapshot of each task's memory at its scan boundary (only when a page is
 // watching) and applies queued writes and forced inputs at the next boundary,
-// and an HTTP server (runtime/http.h) that serves one built-in page, the rungs
+// and an HTTP server (runtime/net/http.h) that serves one built-in page, the rungs
 // as grids (ir/ladder.h), their power flow evaluated on the snapshot off the
 // scan thread, a device table, statistics and, with --monitor-write, RUN/STOP,
 // writes and forcing.

@@ -1,4 +1,4 @@
-// tests/runtime/http_test.cpp -- the monitor's HTTP request parser (a pure
+// tests/runtime/net/http_test.cpp -- the monitor's HTTP request parser (a pure
 // function of the bytes received), form decoding, addresses, and the server
 // on a loopback socket: replies, limits, timeouts, the connection bound.
 #include <arpa/inet.h>
@@ -11,8 +11,8 @@
 #include <chrono>
 #include <thread>
 
-#include "runtime/http.h"
-#include "runtime/monitor.h"
+#include "runtime/net/http.h"
+#include "runtime/net/monitor.h"
 
 using namespace ldc::http;
 using S = Parse::Status;

@@ -1,5 +1,5 @@
-// runtime/monitor.cpp -- see monitor.h.
-#include "runtime/monitor.h"
+// runtime/net/monitor.cpp -- see monitor.h.
+#include "runtime/net/monitor.h"
 
 #include <algorithm>
 #include <atomic>
@@ -13,7 +13,7 @@
 #include <thread>
 
 #include "ir/ladder.h"
-#include "runtime/http.h"
+#include "runtime/net/http.h"
 #include "runtime/monitor_page.h"  // generated: kMonitorHtml, kMonitorJs, kMonitorCss
 
 namespace ldc::plc {

@@ -1,4 +1,4 @@
-// runtime/http.h -- the small HTTP/1.1 server behind `ldrun --monitor`
+// runtime/net/http.h -- the small HTTP/1.1 server behind `ldrun --monitor`
 // (docs/runtime.md, "The monitor"): a request parser that is a pure function
 // of the bytes received, and a poll() loop on POSIX sockets serving a bounded
 // number of connections, some of them Server-Sent Event streams.

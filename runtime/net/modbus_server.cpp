@@ -1,5 +1,5 @@
-// runtime/modbus_server.cpp -- the Modbus TCP server of `ldrun --modbus`
-// (runtime/modbus.h): an IoDriver decorator and a network thread.
+// runtime/net/modbus_server.cpp -- the Modbus TCP server of `ldrun --modbus`
+// (runtime/net/modbus.h): an IoDriver decorator and a network thread.
 //
 // The scan threads never wait on the network thread.  After each published
 // scan the task's thread copies the areas of the map (X Y M K WX WY from the
@@ -33,7 +33,7 @@
 #include <thread>
 
 #include "loader/config.h"
-#include "runtime/modbus.h"
+#include "runtime/net/modbus.h"
 
 namespace ldc::modbus {
 

@@ -3,7 +3,7 @@
 
 usage: modbus_clients.py LDRUN SRCDIR
 
-Runs tests/runtime/modbus/echo.ld under ldrun --io=stdio --modbus 127.0.0.1:0 and
+Runs tests/runtime/net/modbus/echo.ld under ldrun --io=stdio --modbus 127.0.0.1:0 and
 drives it with mbpoll and pymodbus: every area of the map read and written, a
 write reaching the program's outputs on the next scan, exception replies, bad
 frames.  Then the trace mode (--trace with --modbus).  Every step has a timeout;
@@ -31,7 +31,7 @@ if not shutil.which("mbpoll"):
     sys.exit(77)
 
 LDRUN, SRC = sys.argv[1], sys.argv[2]
-ECHO = os.path.join(SRC, "tests/runtime/modbus/echo.ld")
+ECHO = os.path.join(SRC, "tests/runtime/net/modbus/echo.ld")
 failures = []
 
 
@@ -265,7 +265,7 @@ with tempfile.TemporaryDirectory() as tmp:
     check("trace mode: Y2 = X0 of the trace", [r[2] for r in rows], ["0"] * 100 + ["1"] * 200)
 
 # ---------------------------------------------------------------- a project: unit identifiers pick the task
-p, port = start(["--project", os.path.join(SRC, "tests/runtime/modbus/two.ldp"), "--io=stdio", "--modbus", ":0"])
+p, port = start(["--project", os.path.join(SRC, "tests/runtime/net/modbus/two.ldp"), "--io=stdio", "--modbus", ":0"])
 try:
     check("project: wait", command(p, "wait 3"), "ok")
     c = ModbusTcpClient("127.0.0.1", port=port, timeout=5)

@@ -1,4 +1,4 @@
-// The Modbus TCP protocol (runtime/modbus.h): every function code, the
+// The Modbus TCP protocol (runtime/net/modbus.h): every function code, the
 // address map, every exception, framing; and the server driver in a Runtime
 // over a real socket.
 #include <arpa/inet.h>
@@ -11,7 +11,7 @@
 
 #include <gtest/gtest.h>
 
-#include "runtime/modbus.h"
+#include "runtime/net/modbus.h"
 #include "runtime/runtime.h"
 
 #include <thread>
