@@ -288,7 +288,7 @@ void zero_segment_outputs() {
 }
 
 void fatal(const char* what) {
-  if (!claim()) _exit(kFatalExit);
+  if (!g_armed.load() || !claim()) _exit(kFatalExit);  // a forked child leaves the segment alone
   release_reserve();
   std::snprintf(g_reason, sizeof g_reason,
                 "ldrun: fatal: %s; outputs driven to the safe state (all Y off, WY 0); the runtime is in FAULT", what);

@@ -135,8 +135,8 @@ struct Segment {
   ~Segment() {
     if (h) munmap(h, shm::kTotalSize);
   }
-  // Maps `name` once ldrun has initialized it and published Y0 = 1.
-  bool map_when_on(const std::string& name) {
+  // Maps `name` once ldrun has created and initialized it.
+  bool map(const std::string& name) {
     for (int i = 0; i < 1000; i++, std::this_thread::sleep_for(10ms)) {
       if (!h) {
         int fd = shm_open(name.c_str(), O_RDWR, 0);
@@ -149,8 +149,15 @@ struct Segment {
         if (m == MAP_FAILED) continue;
         h = static_cast<shm::Header*>(m);
       }
-      if (!*shm::check(h, shm::kTotalSize) && y(0) == 1 && y(1) == 1 && wy(0) == 1234) return true;
+      if (!*shm::check(h, shm::kTotalSize)) return true;
     }
+    return false;
+  }
+  // ... and waits until the program's outputs are on.
+  bool map_when_on(const std::string& name) {
+    if (!map(name)) return false;
+    for (int i = 0; i < 1000; i++, std::this_thread::sleep_for(10ms))
+      if (y(0) == 1 && y(1) == 1 && wy(0) == 1234) return true;
     return false;
   }
   uint8_t y(int i) const { return shm::load8(shm::base(h) + shm::kYOffset + i); }
@@ -321,11 +328,14 @@ TEST(FailSafe, SegvAndAbortDeliveredToLdrun) {
 // A driver that throws while publishing outputs: FAULT with the reason,
 // outputs off, and ldrun lives on in FAULT (owner running) until `run`
 // restarts it; the hook fires once, so the restart turns the outputs on again.
+// The fault comes at the 200th publication, so the 199 before it published
+// the outputs on (the program sets them every scan; the header counts scans).
 TEST(FailSafe, AFailedIoDriverFaultsTheRuntime) {
   LdrunRun r({"--control=stdin"}, {"LDC_FAULT_INJECT=io:throw@200"}, true);
-  ASSERT_TRUE(r.seg.map_when_on(r.name)) << r.ldrun->err();
-  for (int i = 0; i < 1000 && r.seg.state() != shm::kFault; i++) std::this_thread::sleep_for(5ms);
+  ASSERT_TRUE(r.seg.map(r.name)) << r.ldrun->err();
+  for (int i = 0; i < 2000 && r.seg.state() != shm::kFault; i++) std::this_thread::sleep_for(5ms);
   ASSERT_EQ(r.seg.state(), uint32_t(shm::kFault)) << r.ldrun->err();
+  EXPECT_EQ(shm::at(r.seg.h->scans).load(), 199u);
   EXPECT_EQ(r.seg.y(0), 0);
   EXPECT_EQ(r.seg.y(1), 0);
   EXPECT_EQ(r.seg.wy(0), 0);
