@@ -122,6 +122,7 @@ void append(char* buf, size_t cap, const char* s) {
 // had before install() (the default: the process ends and its status names
 // the signal; under ASan, its report).
 void on_fatal_signal(int sig) {
+  const int saved_errno = errno;
   size_t k = 0;
   while (k < kSignals && kFatalSignals[k].no != sig) k++;
   if (g_armed.load() && k < kSignals && claim()) {
@@ -136,6 +137,7 @@ void on_fatal_signal(int sig) {
   if (k < kSignals) sigaction(sig, &g_previous[k], nullptr);
   else signal(sig, SIG_DFL);
   raise(sig);  // blocked while the handler runs: delivered when it returns (a fault strikes again)
+  errno = saved_errno;
 }
 
 void on_terminate() {
@@ -240,11 +242,13 @@ void install() {
   pthread_atfork(nullptr, nullptr, [] { g_armed.store(false); });
   std::set_terminate(on_terminate);
   for (size_t k = 0; k < kSignals; k++) {
+    sigaction(kFatalSignals[k].no, nullptr, &g_previous[k]);
+    if (g_previous[k].sa_handler == SIG_IGN) continue;  // ignored by who started ldrun (nohup): stays so
     struct sigaction sa {};
     sa.sa_handler = on_fatal_signal;
     sa.sa_flags = SA_ONSTACK;
     sigemptyset(&sa.sa_mask);
-    sigaction(kFatalSignals[k].no, &sa, &g_previous[k]);
+    sigaction(kFatalSignals[k].no, &sa, nullptr);
   }
 }
 
