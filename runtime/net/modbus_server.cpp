@@ -33,6 +33,7 @@
 #include <thread>
 
 #include "loader/config.h"
+#include "runtime/failsafe.h"
 #include "runtime/net/modbus.h"
 
 namespace ldc::modbus {
@@ -338,6 +339,7 @@ class ModbusDriver : public IoDriver {
           log(std::string("ldrun: modbus: accept: ") + std::strerror(errno));
         return;
       }
+      failsafe::inject("modbus");  // the test hook of docs/faults.md (LDC_FAULT_INJECT=modbus:...)
       if (conns_.size() >= o_.max_connections) {
         ::close(fd);
         if (refused_++ % 100 == 0)
