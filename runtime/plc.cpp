@@ -656,7 +656,8 @@ struct Runtime::Impl {
 
   // ---- requests at a task's scan boundary
   // Runs f on the task's thread at its next boundary; false on timeout
-  // (f then never runs).
+  // (f then never runs).  What f throws is thrown here, on the caller's
+  // thread (it used to leave the caller waiting for ever).
   bool at_boundary(Task& t, std::function<void()> f, int64_t timeout_ms) {
     struct Shared {
       std::atomic<int> phase{0};  // 0 queued, 1 taken, 2 cancelled
@@ -669,16 +670,21 @@ struct Runtime::Impl {
       t.reqs.push_back([sh, f = std::move(f)] {
         int expect = 0;
         if (!sh->phase.compare_exchange_strong(expect, 1)) return;
-        f();
-        sh->done.set_value();
+        try {
+          f();
+          sh->done.set_value();
+        } catch (...) {  // the caller gets it: its request failed, the task scans on
+          sh->done.set_exception(std::current_exception());
+        }
       });
       t.has_req.store(true, std::memory_order_release);
     }
     t.req_cv.notify_all();
-    if (fut.wait_for(std::chrono::milliseconds(timeout_ms)) == std::future_status::ready) return true;
-    int expect = 0;
-    if (sh->phase.compare_exchange_strong(expect, 2)) return false;
-    fut.wait();  // taken just now: it finishes soon
+    if (fut.wait_for(std::chrono::milliseconds(timeout_ms)) != std::future_status::ready) {
+      int expect = 0;
+      if (sh->phase.compare_exchange_strong(expect, 2)) return false;
+    }
+    fut.get();  // taken: it finishes soon; rethrows what f threw
     return true;
   }
 
