@@ -10,6 +10,8 @@
 
 #include <cstring>
 #include <fstream>
+#include <map>
+#include <random>
 #include <sstream>
 
 #include "bench/ldgen.h"
@@ -17,6 +19,7 @@
 #include "frontend/frontend.h"
 #include "loader/c40_check.h"
 #include "tests/loader/c40_hostile.h"
+#include "tests/loader/c40_mutants.h"
 #include "loader/loader.h"
 #include "runtime/plc.h"
 #include "runtime/runtime.h"
@@ -413,6 +416,40 @@ TEST(C40Stack, ASimulatorFaultPutsTheRuntimeInFaultWithOutputsOff) {
     ASSERT_FALSE(logged.empty());
     EXPECT_EQ(logged.back(), m);
   }
+}
+
+// The mutant fuzzer's judge (c40_mutants.h) on images that skip the check:
+// each kind of escape is seen, and a program that stores only through its
+// own direct operands is not one.
+TEST(C40Stack, TheFuzzersJudgeSeesEachEscape) {
+  const Image probe = test::c40_image_with_code({"RETSU"});
+  const uint32_t y0 = test::c40_addr(probe, Area::Y, 0), d0 = test::c40_addr(probe, Area::D, 0);
+  auto judged = [](const Image& img) {
+    std::mt19937_64 rng(1);
+    std::map<std::string, uint64_t> stops;
+    return test::run_c40_judged(img, rng, stops);
+  };
+  const std::string hi = "LDHI " + test::c40_hex(y0 >> 16), lo = "OR " + test::c40_hex(y0 & 0xFFFF);
+  // Y0 written by an indirect store, and by a PUSH through SP pointed at it
+  EXPECT_EQ(judged(test::c40_image_with_code({hi + ", AR0", lo + ", AR0", "LDI 1, R0", "STI R0, *AR0", "RETSU"})),
+            "memory image word " + test::c40_hexw(y0) + " changed with no store of the checked code to it");
+  EXPECT_EQ(judged(test::c40_image_with_code({"LDI SP, R5", hi + ", SP", lo + ", SP", "SUBI 1, SP", "LDI 1, R0", "PUSH R0",
+                                              "LDI R5, SP", "RETSU"})),
+            "memory image word " + test::c40_hexw(y0) + " changed with no store of the checked code to it");
+  // a fetch from the memory image, a store into the code
+  char fetch[48];
+  std::snprintf(fetch, sizeof fetch, "fetch of 0x%08x outside the code", d0);
+  EXPECT_NE(judged(test::c40_image_with_code({"LDHI " + test::c40_hex(d0 >> 16) + ", R0", "OR " + test::c40_hex(d0 & 0xFFFF) + ", R0",
+                                              "BU R0"}))
+                .find(fetch),
+            std::string::npos);
+  EXPECT_NE(judged(test::c40_image_with_code({"LDI 3, AR0", "NOP", "NOP", "STI R0, *AR0", "RETSU"})).find("read-only region 'code'"),
+            std::string::npos);
+  // the program's own direct stores, a ROM call and a routine: no escape
+  Image own = test::c40_image_with_code({"LDPK 080h", "LDI 1, R0", "STI R0, @" + test::c40_hex(y0 & 0xFFFF), "CALL 6",
+                                         "CALL " + std::to_string(c40gen::kRomBase), "RETSU", "PUSH R0", "POP R1", "RETSU"});
+  ASSERT_EQ(refusal(own), "");
+  EXPECT_EQ(judged(own), "");
 }
 
 // ---------------------------------------------------------------- memory (issue 24, item 10)
