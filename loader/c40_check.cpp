@@ -86,6 +86,8 @@ bool names_reg(const Instruction& in, Reg r) {
   return false;
 }
 
+// LDPK, or DP in any operand: generated code never names DP, so the check
+// need not tell a read of it from a write and takes either as a write.
 bool writes_dp(const Instruction& in) { return in.mnemonic == Mnemonic::Ldpk || names_reg(in, Reg::DP); }
 
 bool is_call(Mnemonic m) { return m == Mnemonic::Call || m == Mnemonic::Callc; }
@@ -215,7 +217,8 @@ class C40Check {
     direct_operands(i, in, dp);
     if (writes_dp(in)) {
       if (st & kCalled)
-        throw Refusal{i, quote(in) + "sets the data page inside a routine that a CALL enters (its callers keep their DP across the call)"};
+        throw Refusal{i, quote(in) + (in.mnemonic == Mnemonic::Ldpk ? "sets" : "names") +
+                             " the data page inside a routine that a CALL enters (its callers keep their DP across the call)"};
       dp = in.mnemonic == Mnemonic::Ldpk ? page_class(uint32_t(in.ops[0].imm)) : kDpUnknown;
     }
     st = stack_after(i, in, st);

@@ -340,7 +340,7 @@ TEST(C40Stack, StoresIntoTheCodeAreRefused) {
   Memory m(routine.layout);
   EXPECT_NE(run_unchecked(routine, m).find("write of 0x00000003 into the read-only region 'code'"), std::string::npos);
   expect_refused_at(test::c40_image_with_code({"LDPK 080h", "CALL 4", "STI R0, @3", "RETSU", "LDI 0, DP", "RETSU"}), 4,
-                    "sets the data page inside a routine");
+                    "'LDI 0, DP': names the data page inside a routine");
 }
 
 // The shapes ldc emits pass: a routine entered by CALL that moves words
