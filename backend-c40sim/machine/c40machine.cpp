@@ -7,12 +7,16 @@ namespace ldc::c40gen {
 
 c40sim::Config board_config(const C40Layout& w, uint32_t code_words, uint32_t il_words) {
   c40sim::Config cfg;
+  // Instructions run from the code and the ROM only, and never store into
+  // them: whatever the loader's check missed stays inside the code it checked
+  // (docs/c40.md, "Stops").  The IL is read-only data for the interpreter.
+  constexpr bool kExec = true, kData = false, kWritable = true, kReadOnly = false;
   cfg.regions = {  // the data first: the simulator looks regions up in order
-      {"data", kDataBase, w.words, kDataWaitStates},
-      {"code", kCodeBase, std::max<uint32_t>(code_words, 1), 0},
-      {"il", kIlBase, std::max<uint32_t>(il_words, 1), 0},
-      {"rom", kRomBase, kRomWords, 0},
-      {"stack", kStackBase, kStackWords, 0},
+      {"data", kDataBase, w.words, kDataWaitStates, kData, kWritable},
+      {"code", kCodeBase, std::max<uint32_t>(code_words, 1), 0, kExec, kReadOnly},
+      {"il", kIlBase, std::max<uint32_t>(il_words, 1), 0, kData, kReadOnly},
+      {"rom", kRomBase, kRomWords, 0, kExec, kReadOnly},
+      {"stack", kStackBase, kStackWords, 0, kData, kWritable},
   };
   cfg.ns_per_cycle = kNsPerCycle;
   cfg.max_instructions = UINT64_MAX;

@@ -3,6 +3,7 @@
 // docs/c40.md for what is modelled and how.
 #include "backend-c40sim/machine/sim.h"
 
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -94,20 +95,23 @@ std::string_view stop_name(Stop s) {
   return "?";
 }
 
-C40Sim::C40Sim(Config config) : cfg_(std::move(config)) {
+C40Sim::C40Sim(Config config) : cfg_(std::move(config)), cache_(cfg_.regions.size()) {
   for (const Region& r : cfg_.regions) mem_.emplace_back(r.size, 0u);
   for (Ext& e : ext_) e = Ext{0, 0};
 }
 
+size_t C40Sim::region_index(uint32_t a) const {
+  for (size_t i = 0; i < cfg_.regions.size(); i++)
+    if (a >= cfg_.regions[i].base && uint64_t(a) - cfg_.regions[i].base < cfg_.regions[i].size) return i;
+  return SIZE_MAX;
+}
 Region* C40Sim::region(uint32_t a) {
-  for (Region& r : cfg_.regions)
-    if (a >= r.base && uint64_t(a) - r.base < r.size) return &r;
-  return nullptr;
+  size_t i = region_index(a);
+  return i == SIZE_MAX ? nullptr : &cfg_.regions[i];
 }
 const Region* C40Sim::region(uint32_t a) const {
-  for (const Region& r : cfg_.regions)
-    if (a >= r.base && uint64_t(a) - r.base < r.size) return &r;
-  return nullptr;
+  size_t i = region_index(a);
+  return i == SIZE_MAX ? nullptr : &cfg_.regions[i];
 }
 
 void C40Sim::load(std::span<const uint32_t> words, uint32_t base) {
@@ -156,23 +160,26 @@ uint32_t C40Sim::mem_read(uint32_t a) {
 void C40Sim::mem_write(uint32_t a, uint32_t v) {
   Region* r = region(a);
   if (!r) throw SimError{Stop::MemoryFault, "write of " + hex(a) + " outside memory"};
+  if (!r->writable) throw SimError{Stop::MemoryFault, "write of " + hex(a) + " into the read-only region '" + r->name + "'"};
   waits_ += r->wait_states;
   mem_[size_t(r - cfg_.regions.data())][a - r->base] = v;
 }
 
 const C40Sim::Cached& C40Sim::fetch(uint32_t pc) {
-  Region* r = region(pc);
-  if (!r) throw SimError{Stop::MemoryFault, "fetch of " + hex(pc) + " outside memory"};
-  waits_ += r->wait_states;
-  uint32_t w = mem_[size_t(r - cfg_.regions.data())][pc - r->base];
-  Cached& c = cache_[pc];
-  if (c.word != w || (!c.ok && c.error.empty())) {
-    c.word = w;
-    DecodeError e;
-    auto in = decode_word(w, pc, &e);
-    c.ok = bool(in);
+  size_t ri = region_index(pc);
+  if (ri == SIZE_MAX) throw SimError{Stop::MemoryFault, "fetch of " + hex(pc) + " outside memory"};
+  const Region& r = cfg_.regions[ri];
+  if (!r.executable)
+    throw SimError{Stop::MemoryFault, "fetch of " + hex(pc) + " outside the code (region '" + r.name + "' is not executable)"};
+  waits_ += r.wait_states;
+  uint32_t w = mem_[ri][pc - r.base];
+  std::vector<Cached>& cache = cache_[ri];
+  if (cache.empty()) cache.resize(std::bit_ceil(std::min(r.size, kCacheWords)));
+  Cached& c = cache[(pc - r.base) & (cache.size() - 1)];
+  if (!c.valid || c.pc != pc || c.word != w) {
+    auto in = decode_word(w, pc);
+    c.pc = pc, c.word = w, c.valid = true, c.ok = bool(in);
     if (in) c.inst = *in;
-    c.error = in ? "" : e.message;
   }
   return c;
 }
@@ -611,7 +618,7 @@ RunResult C40Sim::call(uint32_t entry, uint64_t max_cycles) {
   uint64_t cycles = 0, count = 0;
   // The cycle (end of execute) of the last write to each register group.
   int64_t last_write[3] = {INT64_MIN / 2, INT64_MIN / 2, INT64_MIN / 2};
-  uint32_t pc = entry;
+  uint32_t pc = entry, prev = entry;  // prev: the instruction before pc, for fault messages
   int delay = 0;  // instructions left in the delay slots of a taken delayed branch
   uint32_t delayed_target = 0;
   auto finish = [&](Stop s, std::string err) {
@@ -643,7 +650,11 @@ RunResult C40Sim::call(uint32_t entry, uint64_t max_cycles) {
     const Instruction* inst = nullptr;
     try {
       const Cached& c = fetch(pc);
-      if (!c.ok) return finish(Stop::IllegalInstruction, "illegal instruction at " + hex(pc) + ": " + c.error);
+      if (!c.ok) {
+        DecodeError e;
+        decode_word(c.word, pc, &e);
+        return finish(Stop::IllegalInstruction, "illegal instruction at " + hex(pc) + ": " + e.message);
+      }
       inst = &c.inst;
       if (delay > 0 && is_control(inst->mnemonic))
         return finish(Stop::Unsupported, "branch in a delay slot at " + hex(pc));
@@ -661,7 +672,7 @@ RunResult C40Sim::call(uint32_t entry, uint64_t max_cycles) {
       for (int g = 0; g < 3; ++g)
         if (writes >> g & 1) last_write[g] = int64_t(cycles);
     } catch (const SimError& e) {
-      return finish(e.stop, e.message + " at PC " + hex(pc));
+      return finish(e.stop, e.message + ", at PC " + hex(pc) + (count ? " (after the instruction at " + hex(prev) + ")" : ""));
     }
     ++count;
     if (trace_) trace_(TraceEntry{pc, inst, cycles - cost, cost});
@@ -676,6 +687,7 @@ RunResult C40Sim::call(uint32_t entry, uint64_t max_cycles) {
     } else if (delay > 0 && --delay == 0) {
       next = delayed_target;
     }
+    prev = pc;
     pc = next;
   }
 }

@@ -7,7 +7,6 @@
 #include <functional>
 #include <span>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include "assembler/c40.h"
@@ -24,6 +23,13 @@ struct Region {
   uint32_t base = 0;
   uint32_t size = 0;        // words
   unsigned wait_states = 0;  // extra cycles per access (fetch, read or write)
+  // What instructions may do here (the host's load/write always may): a
+  // fetch from a region that is not executable and a store into one that is
+  // not writable stop the run with a MemoryFault.  The board
+  // (c40machine.h) makes its code and ROM executable and read-only, the
+  // rest writable data.
+  bool executable = true;
+  bool writable = true;
 };
 
 struct Config {
@@ -37,7 +43,7 @@ enum class Stop : uint8_t {
   Returned,          // RETS came back to Config::return_address
   CycleLimit,
   InstructionLimit,
-  MemoryFault,       // access outside every region
+  MemoryFault,       // access outside every region, a fetch outside the executable ones, a store into a read-only one
   IllegalInstruction,
   Unsupported,       // e.g. circular addressing, a branch in a delay slot
 };
@@ -89,16 +95,20 @@ class C40Sim {
   const Config& config() const { return cfg_; }
 
  private:
+  // The decode cache: per region, direct-mapped on the word address, at most
+  // kCacheWords entries, so that its memory is a constant however large the
+  // code (an entry is about 190 bytes; code words are 4).
   struct Cached {
-    uint32_t word = 0;
-    bool ok = false;
+    uint32_t pc = 0, word = 0;
+    bool valid = false, ok = false;
     as::c40::Instruction inst;
-    std::string error;
   };
+  static constexpr uint32_t kCacheWords = 1u << 16;
   struct Fault {
     Stop stop;
     std::string message;
   };
+  size_t region_index(uint32_t address) const;  // SIZE_MAX: none
   Region* region(uint32_t address);
   const Region* region(uint32_t address) const;
   uint32_t mem_read(uint32_t address);
@@ -108,7 +118,7 @@ class C40Sim {
 
   Config cfg_;
   std::vector<std::vector<uint32_t>> mem_;
-  std::unordered_map<uint32_t, Cached> cache_;
+  std::vector<std::vector<Cached>> cache_;  // per region, allocated at its first fetch
   uint32_t r32_[as::c40::kNumRegs] = {};
   Ext ext_[12];
   // per instruction

@@ -11,9 +11,12 @@
 // scans in the sandbox (ldrun --sandbox): a forked child that seccomp confines
 // to one socket, with the memory image between PROT_NONE pages and a canary
 // after it.  A fault, a system call, a hang, a write past the image or a
-// refusal that does not name the code section is an escape.
+// refusal that does not name the code section is an escape.  C40 mutants
+// (c40_mutants.h: stack shapes among the mutations, large bodies too) run
+// three scans on the simulated board instead, which records what they run
+// and store; c40_mutants.h defines their escapes.
 //
-//   mutant_fuzz [--count N] [--seed S] [--save DIR] [--quiet]
+//   mutant_fuzz [--count N] [--seed S] [--target all|x86|c40] [--save DIR] [--quiet]
 //
 // Exit status 0 when no mutant escaped, 1 otherwise.
 #include <algorithm>
@@ -30,6 +33,7 @@
 #include "driver/x86_target.h"
 #include "runtime/runtime.h"
 #include "runtime/sandbox.h"
+#include "tests/loader/c40_mutants.h"
 #include "tests/loader/programs.h"
 
 using namespace ldc;
@@ -43,12 +47,14 @@ struct Base {
   Image image;
 };
 
-std::vector<Base> bases() {
+// The images of one target ("x86", "c40") or both ("all").
+std::vector<Base> bases(const std::string& only) {
   std::vector<Program> ps = test::examples_and_random_programs(12, 25);
   std::vector<Base> out;
   for (const Program& p : ps)
     for (int level : {0, 1, 2})
       for (bool c40 : {false, true}) {
+        if (only != "all" && c40 != (only == "c40")) continue;
         Image im = c40 ? make_c40_image(p, build_c40(p, p.source, level))
                        : make_x86_image(p, build_x86(p, p.source, as::Mode::Blockwise, level, false));
         im.lines.clear();  // so that only the code check decides
@@ -57,57 +63,6 @@ std::vector<Base> bases() {
       }
   return out;
 }
-
-// C40 mutants: words are swapped for real encodings taken from every C40
-// image (the assembler's output), their operand fields (the low 16 bits: a
-// direct address, a displacement or an immediate) set at random or to the
-// edges of the memory image, neighbours swapped, bits flipped, the entry moved.
-class C40Mutator {
- public:
-  C40Mutator(uint64_t seed, const std::vector<uint32_t>& pool) : rng_(seed), pool_(pool) {}
-  std::string mutate(std::vector<uint8_t>& code, uint32_t& entry) {
-    size_t words = code.size() / 4;
-    if (!words) return "";
-    std::string what;
-    for (int i = 0, n = 1 + int(rng_() % 3); i < n; i++) {
-      size_t w = rng_() % words;
-      uint32_t v = get(code, w);
-      switch (rng_() % 6) {
-        case 0: case 1: v = pool_[rng_() % pool_.size()], what += "word@"; break;
-        case 2: v = (v & 0xffff0000u) | edge16(), what += "field@"; break;
-        case 3: v ^= 1u << (rng_() % 32), what += "flip@"; break;
-        case 4:
-          if (w + 1 < words) {
-            uint32_t next = get(code, w + 1);
-            put(code, w + 1, v), v = next;
-          }
-          what += "swap@";
-          break;
-        default: entry = uint32_t(rng_() % (code.size() + 8)) & ~3u, what += "entry@"; break;
-      }
-      put(code, w, v);
-      what += std::to_string(w) + " ";
-    }
-    return what;
-  }
-
- private:
-  uint16_t edge16() {
-    switch (rng_() % 4) {
-      case 0: return uint16_t(0xffff - rng_() % 4);
-      case 1: return uint16_t(rng_() % 8);
-      default: return uint16_t(rng_());
-    }
-  }
-  static uint32_t get(const std::vector<uint8_t>& c, size_t w) {
-    return uint32_t(c[4 * w]) | uint32_t(c[4 * w + 1]) << 8 | uint32_t(c[4 * w + 2]) << 16 | uint32_t(c[4 * w + 3]) << 24;
-  }
-  static void put(std::vector<uint8_t>& c, size_t w, uint32_t v) {
-    for (int k = 0; k < 4; k++) c[4 * w + k] = uint8_t(v >> (8 * k));
-  }
-  std::mt19937_64 rng_;
-  const std::vector<uint32_t>& pool_;
-};
 
 class Mutator {
  public:
@@ -378,22 +333,6 @@ class Mutator {
   const std::vector<x86::Decoded>* insts_ = nullptr;
 };
 
-// Three scans of an accepted C40 mutant on the simulator, which bounds-checks
-// every access and stops a scan at its cycle budget: either ends the scan or
-// stops with a message (counted in `stopped`); anything else is a crash.
-void run_simulated(const Image& im, std::mt19937_64& rng, uint64_t& stopped) {
-  Memory m(im.layout);
-  try {
-    auto e = make_c40sim_engine(im.code, im.entry, im.layout);
-    for (int scan = 0; scan < 3; scan++) {
-      for (uint32_t i = 0; i < 32; i++) m.data()[im.layout.addr(Area::X, i)] = rng() & 1;
-      e->scan(m.data());
-    }
-  } catch (const std::exception&) {
-    stopped++;
-  }
-}
-
 // Three scans of an accepted mutant in the sandbox; "" if they ran and ended.
 std::string run_confined(const Image& im, std::mt19937_64& rng) {
   Memory m(im.layout);
@@ -416,52 +355,79 @@ std::string run_confined(const Image& im, std::mt19937_64& rng) {
 std::string reason_class(const std::string& why) {
   std::string r = why;
   if (size_t at = r.find("at code offset "); at != std::string::npos) r = r.substr(r.find(": ", at) + 2);
+  else if (size_t at = r.find(" (code offset "); at != std::string::npos) {  // C40: the instruction and numbers out
+    r = r.substr(r.find("): ", at) + 3);
+    if (!r.empty() && r[0] == '\'' && r.find("': ") != std::string::npos) r = r.substr(r.find("': ") + 3);
+    return test::stop_class(r).substr(0, 60);
+  }
   if (!r.empty() && r[0] == '\'') r = r.substr(r.find("': ") == std::string::npos ? 0 : r.find("': ") + 3);
   for (const char* cut : {" (", " 0x", " [", " -", " '", ","})
     if (size_t c = r.find(cut); c != std::string::npos && c > 8) r = r.substr(0, c);
   return r.substr(0, 60);
 }
 
+// The large C40 bodies (c40_mutants.h), from the first C40 base: one that
+// every scan runs (70,000 words: past the simulator's 2^16-entry decode
+// cache) and one mostly unreached (300,000 words: past the check's 2^18-word
+// work-list summary).  A mutant starts from one of them once in 500.
+std::vector<Base> large_bases(const std::vector<Base>& bs) {
+  for (const Base& b : bs)
+    if (b.image.target == ImageTarget::C40)
+      return {{b.name + " + 70000 executed words", test::c40_large_body(b.image, 70000, true)},
+              {b.name + " + 300000 unreached NOPs", test::c40_large_body(b.image, 300000, false)}};
+  return {};
+}
+
+void print_top(const char* title, const std::map<std::string, uint64_t>& tally) {
+  std::printf("%s\n", title);
+  std::vector<std::pair<uint64_t, std::string>> top;
+  for (auto& [r, k] : tally) top.push_back({k, r});
+  std::sort(top.rbegin(), top.rend());
+  for (size_t i = 0; i < top.size() && i < 15; i++) std::printf("  %9llu  %s\n", (unsigned long long)top[i].first, top[i].second.c_str());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   uint64_t count = 20000, seed = 1;
-  std::string save;
+  std::string save, only = "all";
   bool quiet = false;
   for (int i = 1; i < argc; i++) {
     std::string a = argv[i];
     if (a == "--count" && i + 1 < argc) count = std::stoull(argv[++i]);
     else if (a == "--seed" && i + 1 < argc) seed = std::stoull(argv[++i]);
     else if (a == "--save" && i + 1 < argc) save = argv[++i];
+    else if (a == "--target" && i + 1 < argc && (only = argv[++i], only == "all" || only == "x86" || only == "c40")) {}
     else if (a == "--quiet") quiet = true;
     else {
-      std::fprintf(stderr, "usage: mutant_fuzz [--count N] [--seed S] [--save DIR] [--quiet]\n");
+      std::fprintf(stderr, "usage: mutant_fuzz [--count N] [--seed S] [--target all|x86|c40] [--save DIR] [--quiet]\n");
       return 2;
     }
   }
   auto t0 = std::chrono::steady_clock::now();
-  std::vector<Base> bs = bases();
+  std::vector<Base> bs = bases(only);
   std::vector<uint32_t> pool;  // every word of every C40 image
   for (const Base& b : bs)
     if (b.image.target == ImageTarget::C40)
-      for (size_t k = 0; k + 4 <= b.image.code.size(); k += 4)
-        pool.push_back(uint32_t(b.image.code[k]) | uint32_t(b.image.code[k + 1]) << 8 |
-                       uint32_t(b.image.code[k + 2]) << 16 | uint32_t(b.image.code[k + 3]) << 24);
+      for (size_t k = 0; k + 4 <= b.image.code.size(); k += 4) pool.push_back(test::c40_get(b.image.code, k / 4));
+  std::vector<Base> large = large_bases(bs);
   std::mt19937_64 rng(seed);
-  uint64_t refused = 0, accepted = 0, escapes = 0, c40_accepted = 0, c40_stopped = 0;
-  std::map<std::string, uint64_t> reasons;
+  uint64_t refused = 0, accepted = 0, escapes = 0, c40_accepted = 0, c40_stopped = 0, large_mutants = 0;
+  std::map<std::string, uint64_t> reasons, stops;
   for (uint64_t n = 0; n < count; n++) {
-    const Base& b = bs[rng() % bs.size()];
+    const bool big = !large.empty() && rng() % 500 == 0;
+    const Base& b = big ? large[rng() % large.size()] : bs[rng() % bs.size()];
+    large_mutants += big;
     Image im = b.image;
     const bool c40 = im.target == ImageTarget::C40;
-    std::string what = c40 ? C40Mutator(rng(), pool).mutate(im.code, im.entry)
+    std::string what = c40 ? test::C40Mutator(rng(), pool, im.layout).mutate(im.code, im.entry)
                            : Mutator(rng(), im.layout.size).mutate(im.code, im.entry);
     std::vector<uint8_t> bytes = write_image(im);  // a well-formed file: the CRC fixed
     std::string escape;
     try {
       Image back = read_image(bytes, "mutant.bin");
       accepted++;
-      if (c40) c40_accepted++, run_simulated(back, rng, c40_stopped);
+      if (c40) c40_accepted++, escape = test::run_c40_judged(back, rng, stops);
       else escape = run_confined(back, rng);
     } catch (const ImageError& e) {
       refused++;
@@ -481,17 +447,16 @@ int main(int argc, char** argv) {
     }
   }
   double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (auto& [r, k] : stops) c40_stopped += k;
   if (!quiet) {
-    std::printf("reasons of refusal (top):\n");
-    std::vector<std::pair<uint64_t, std::string>> top;
-    for (auto& [r, k] : reasons) top.push_back({k, r});
-    std::sort(top.rbegin(), top.rend());
-    for (size_t i = 0; i < top.size() && i < 15; i++) std::printf("  %9llu  %s\n", (unsigned long long)top[i].first, top[i].second.c_str());
+    print_top("reasons of refusal (top):", reasons);
+    if (!stops.empty()) print_top("C40 scans the simulator stopped (contained), by reason:", stops);
   }
-  std::printf("%llu mutants of %zu images (seed %llu): %llu refused, %llu accepted and ran (x86-64: %llu in the sandbox;"
-              " C40: %llu on the simulator, %llu of them stopped by it), %llu escapes, %.1f s\n",
-              (unsigned long long)count, bs.size(), (unsigned long long)seed, (unsigned long long)refused,
-              (unsigned long long)accepted, (unsigned long long)(accepted - c40_accepted), (unsigned long long)c40_accepted,
-              (unsigned long long)c40_stopped, (unsigned long long)escapes, secs);
+  std::printf("%llu mutants of %zu images (%s, seed %llu; %llu from the large C40 bodies): %llu refused, %llu accepted and ran"
+              " (x86-64: %llu in the sandbox; C40: %llu on the simulator, %llu of them stopped by it), %llu escapes, %.1f s\n",
+              (unsigned long long)count, bs.size() + large.size(), only.c_str(), (unsigned long long)seed,
+              (unsigned long long)large_mutants, (unsigned long long)refused, (unsigned long long)accepted,
+              (unsigned long long)(accepted - c40_accepted), (unsigned long long)c40_accepted, (unsigned long long)c40_stopped,
+              (unsigned long long)escapes, secs);
   return escapes ? 1 : 0;
 }

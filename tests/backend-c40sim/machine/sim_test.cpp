@@ -513,6 +513,105 @@ TEST_F(SimFlow, Stops) {
   EXPECT_EQ(r.stop, Stop::MemoryFault);
 }
 
+// The board's protection (issue 24): a fetch from a region that is not
+// executable and a store into one that is not writable stop the run with a
+// MemoryFault naming the address and the PC, and leave memory as it was.
+Config protected_config() {
+  Config c = config();
+  c.regions[0].writable = false;    // code: read and execute
+  c.regions[1].executable = false;  // stack
+  c.regions[2].executable = false;  // data
+  c.regions[3].executable = false;  // io
+  return c;
+}
+
+TEST(SimProtection, AFetchOutsideTheCodeFaults) {
+  for (const char* how : {"BU R1", "BR 0x3000", "RETSU"}) {  // a computed branch, a direct one, a return to data
+    C40Sim sim(protected_config());
+    sim.load(assemble_text(std::string("LDI 0x3000, R1\nPUSH R1\n") + how + "\n"), 0);
+    sim.write(kData, assemble_text("RETSU\n")[0]);  // a word that would decode and return
+    sim.set_reg(Reg::SP, 0x1FFF);
+    RunResult r = sim.call(0, 1000);
+    EXPECT_EQ(r.stop, Stop::MemoryFault) << how;
+    EXPECT_EQ(r.pc, kData) << how;
+    EXPECT_NE(r.error.find("fetch of 0x00003000 outside the code (region 'data' is not executable), at PC 0x00003000 "
+                           "(after the instruction at 0x00000002)"),
+              std::string::npos) << how << ": " << r.error;
+    EXPECT_EQ(r.instructions, 3u) << how;
+  }
+  // falling off the end of the code into the stack region is the same fault
+  Config c = protected_config();
+  c.regions = {{"code", 0, 2, 0, true, false}, {"stack", 2, 0x100, 0, false, true}};
+  C40Sim sim(c);
+  sim.load(assemble_text("NOP\nNOP\n"), 0);
+  sim.set_reg(Reg::SP, 0x10);
+  RunResult r = sim.call(0, 1000);
+  EXPECT_EQ(r.stop, Stop::MemoryFault);
+  EXPECT_NE(r.error.find("fetch of 0x00000002 outside the code (region 'stack' is not executable)"), std::string::npos) << r.error;
+  // the same code where every region is executable (the default) runs the data word
+  C40Sim open(config());
+  open.load(assemble_text("LDI 0x3000, R1\nBU R1\n"), 0);
+  open.write(kData, assemble_text("RETSU\n")[0]);
+  open.set_reg(Reg::SP, 0x1FFF);
+  EXPECT_TRUE(open.call(0, 1000).ok());
+}
+
+TEST(SimProtection, AStoreIntoTheCodeFaults) {
+  C40Sim sim(protected_config());
+  const std::vector<uint32_t> code = assemble_text("LDI 4, AR0\nLDI 0x3000, R0\nLDI 1, R1\nSTI R1, *AR0\nRETSU\n");
+  sim.load(code, 0);
+  sim.set_reg(Reg::SP, 0x1FFF);
+  RunResult r = sim.call(0, 1000);
+  EXPECT_EQ(r.stop, Stop::MemoryFault);
+  EXPECT_EQ(r.pc, 3u);
+  EXPECT_NE(r.error.find("write of 0x00000004 into the read-only region 'code', at PC 0x00000003"), std::string::npos) << r.error;
+  EXPECT_EQ(sim.read(4), code[4]);  // the RETSU is still there
+  // STF, a direct store and PUSH (SP pointed into the code) are stores too
+  for (const char* how : {"STF R1, *AR0", "LDPK 0\nSTI R1, @4", "LDI 3, SP\nPUSH R1"}) {
+    C40Sim s(protected_config());
+    s.load(assemble_text(std::string("LDI 4, AR0\nNOP\nNOP\n") + how + "\nRETSU\nRETSU\n"), 0);
+    s.set_reg(Reg::SP, 0x1FFF);
+    RunResult q = s.call(0, 1000);
+    EXPECT_EQ(q.stop, Stop::MemoryFault) << how;
+    EXPECT_NE(q.error.find("write of 0x00000004 into the read-only region 'code'"), std::string::npos) << how << ": " << q.error;
+  }
+  // the host may still load code, and data stays writable
+  sim.write(4, 0);
+  EXPECT_EQ(sim.read(4), 0u);
+  C40Sim ok(protected_config());
+  ok.load(assemble_text("LDI 0x3000, AR0\nLDI 7, R1\nNOP\nSTI R1, *AR0\nRETSU\n"), 0);
+  ok.set_reg(Reg::SP, 0x1FFF);
+  ASSERT_TRUE(ok.call(0, 1000).ok());
+  EXPECT_EQ(ok.read(kData), 7u);
+}
+
+// The decode cache holds at most 2^16 entries per region, direct-mapped: code
+// longer than that runs right, words 2^16 apart (one cache entry) included,
+// and a word the host rewrites is decoded again.
+TEST(SimProtection, CodeLongerThanTheDecodeCacheRunsRight) {
+  const uint32_t n = (1u << 16) + 1000;
+  Config c;
+  c.regions = {{"code", 0, n + 1, 0, true, false}, {"stack", 0x100000, 0x10, 0, false, true}};
+  C40Sim sim(c);
+  std::vector<uint32_t> code(n + 1);
+  const uint32_t add1 = encode_at(parse("ADDI 1, R0")), add2 = encode_at(parse("ADDI 2, R0"));
+  for (uint32_t i = 0; i < n; i++) code[i] = i < (1u << 16) ? add1 : add2;  // the last 1,000 share entries with the first
+  code[n] = encode_at(parse("RETSU"));
+  sim.load(code, 0);
+  for (int run = 1; run <= 2; run++) {
+    sim.set_reg(Reg::SP, 0x100000);
+    sim.set_reg(Reg::R0, 0);
+    RunResult r = sim.call(0, 10 * n);
+    ASSERT_TRUE(r.ok()) << r.error;
+    EXPECT_EQ(sim.reg(Reg::R0), (1u << 16) + 2 * 1000) << "run " << run;
+  }
+  sim.write(5, add2);
+  sim.set_reg(Reg::SP, 0x100000);
+  sim.set_reg(Reg::R0, 0);
+  ASSERT_TRUE(sim.call(0, 10 * n).ok());
+  EXPECT_EQ(sim.reg(Reg::R0), (1u << 16) + 2 * 1000 + 1);
+}
+
 // ------------------------------------------------------- tiny programs
 
 TEST_F(SimFlow, SumAWordArrayWithExactCycles) {
