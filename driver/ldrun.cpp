@@ -20,6 +20,7 @@
 #include "driver/project.h"
 #include "driver/ldrun_io.h"
 #include "driver/targets.h"
+#include "runtime/failsafe.h"
 #include "runtime/net/modbus.h"
 #include "runtime/net/monitor.h"
 #include "runtime/plc.h"
@@ -177,6 +178,7 @@ class SoftPlcRun {
     code_ = runtime_engine(engine);
     if (!a_.project.empty() && !input_.empty()) throw UserError("ldrun: error: give a program or --project, not both");
     if (a_.project.empty() && input_.empty()) throw UserError("ldrun: error: no program\n" + usage());
+    install_failsafe();
     read_options(scans);
     read_tasks();
     apply_task_options();
@@ -186,7 +188,13 @@ class SoftPlcRun {
     if (mb) add_modbus(*mb);
     add_monitor();
     start();
-    return finish();
+    try {
+      return finish();
+    } catch (const std::exception& e) {  // the run cannot end in order: end it on the fatal path
+      char what[300];
+      std::snprintf(what, sizeof what, "an unexpected error (%s) on the main thread", e.what());
+      failsafe::fatal(what);
+    }
   }
 
  private:
@@ -208,6 +216,14 @@ class SoftPlcRun {
   std::unique_ptr<Runtime> rt_;
   std::atomic<bool> done_{false};
   std::thread sig_thread_, ctl_thread_, reload_thread_;
+
+  // Whatever ends the run from here on drives the outputs safe first
+  // (runtime/failsafe.h, docs/faults.md): fatal signals, std::terminate.
+  void install_failsafe() {
+    try {
+      failsafe::install();
+    } catch (const std::exception& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
+  }
 
   void read_options(int scans) {
     opt_.log = [](const std::string& m) { std::fprintf(stderr, "%s\n", m.c_str()); };

@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "loader/config.h"
+#include "runtime/failsafe.h"
 #include "runtime/plc.h"
 #include "runtime/shm_layout.h"
 
@@ -99,10 +100,11 @@ class ShmDriver : public IoDriver {
       void* p = mmap(nullptr, shm::kTotalSize, PROT_READ, MAP_SHARED, fd, 0);
       if (p != MAP_FAILED) {
         const shm::Header* h = static_cast<const shm::Header*>(p);
-        int32_t owner = *shm::check(h, shm::kTotalSize) ? 0 : h->owner_pid;
-        uint32_t state = shm::at(const_cast<uint32_t&>(h->state)).load();
+        bool ours = !*shm::check(h, shm::kTotalSize);
+        int32_t owner = ours ? h->owner_pid : 0;
+        bool live = ours && shm::at(const_cast<uint32_t&>(h->state)).load() != shm::kExited && shm::owner_alive(h);
         munmap(p, shm::kTotalSize);
-        if (owner > 0 && owner != getpid() && state != shm::kExited && (::kill(owner, 0) == 0 || errno != ESRCH)) {
+        if (live && owner != getpid()) {
           close(fd);
           throw std::runtime_error("shared memory " + name_ + " is in use by ldrun process " + std::to_string(owner));
         }
@@ -125,6 +127,7 @@ class ShmDriver : public IoDriver {
     layout_ = layout;
     shm::init(h_, block_size, int32_t(getpid()));
     scratch_.resize(shm::kXCount + 4 * shm::kWXCount);
+    failsafe::register_segment(h_);  // a fatal signal zeroes its outputs directly
   }
   // The shm offset of a byte of the X, WX, Y or WY area of the memory image.
   uint32_t shm_offset(uint32_t image_offset) const {
@@ -158,7 +161,9 @@ class ShmDriver : public IoDriver {
     }
   }
   void write_outputs(const uint8_t* global, const ScanContext& c) override {
-    if (!h_) return;
+    failsafe::inject("io");
+    failsafe::Publication pub;
+    if (!h_ || !pub) return;
     uint8_t* b = shm::base(h_);
     if (!c.runs.empty()) {
       shm::begin_write(h_->out_seq);
@@ -172,20 +177,18 @@ class ShmDriver : public IoDriver {
     shm::at(h_->heartbeat_ns).store(uint64_t(ts.tv_sec) * 1000000000 + uint64_t(ts.tv_nsec), std::memory_order_relaxed);
   }
   void safe_outputs(const uint8_t*) override {
-    if (!h_) return;
-    uint8_t* b = shm::base(h_);
-    shm::begin_write(h_->out_seq);
-    for (uint32_t i = 0; i < shm::kYCount; i += 8) shm::at(*reinterpret_cast<uint64_t*>(b + shm::kYOffset + i)).store(0, std::memory_order_relaxed);
-    for (uint32_t i = 0; i < 4 * shm::kWYCount; i += 8)
-      shm::at(*reinterpret_cast<uint64_t*>(b + shm::kWYOffset + i)).store(0, std::memory_order_relaxed);
-    shm::end_write(h_->out_seq);
-    shm::at(h_->out_count).fetch_add(1, std::memory_order_relaxed);
+    failsafe::Publication pub;
+    if (h_ && pub) shm::zero_outputs(h_);
   }
   void state_changed(State s) override {
-    if (h_) shm::at(h_->state).store(uint32_t(s), std::memory_order_release);
+    failsafe::Publication pub;
+    if (h_ && pub) shm::at(h_->state).store(uint32_t(s), std::memory_order_release);
   }
+  // An orderly end: EXITED, and the segment removed.  Once a fatal path has
+  // begun it stays as that path left it (FAULT, the reason, a dead owner).
   void detach() override {
     if (!h_) return;
+    if (!failsafe::unregister_segment(h_)) return;
     shm::at(h_->state).store(shm::kExited, std::memory_order_release);
     munmap(h_, shm::kTotalSize);
     h_ = nullptr;

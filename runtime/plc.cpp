@@ -32,6 +32,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include "runtime/failsafe.h"
+
 namespace ldc::plc {
 
 const char* state_name(State s) {
@@ -83,6 +85,16 @@ class ImageLock {
   ~ImageLock() { pthread_mutex_destroy(&m_); }
   void lock() { pthread_mutex_lock(&m_); }
   void unlock() { pthread_mutex_unlock(&m_); }
+  // The fatal path's lock: it must not wait forever for a thread that died
+  // holding the lock, nor for its own thread.
+  bool try_lock_for_ms(int ms) {
+    timespec t;
+    clock_gettime(CLOCK_REALTIME, &t);
+    t.tv_sec += ms / 1000;
+    t.tv_nsec += long(ms % 1000) * 1000000;
+    if (t.tv_nsec >= 1000000000) t.tv_sec++, t.tv_nsec -= 1000000000;
+    return pthread_mutex_timedlock(&m_, &t) == 0;
+  }
 
  private:
   pthread_mutex_t m_;
@@ -264,7 +276,7 @@ struct Runtime::Impl {
   bool started = false, shut = false;
   std::thread saver, monitor;
   std::mutex ctl_mu;   // control operations (replace, get, status) among themselves
-  std::mutex save_mu;  // one retentive save at a time
+  std::timed_mutex save_mu;  // one retentive save at a time (timed: the fatal path's rescue waits a bounded time)
   uint64_t retain_seq = 0;
   std::vector<RetainRecord> last_saved;
   std::atomic<bool> warned_rt{false};
@@ -305,18 +317,88 @@ struct Runtime::Impl {
 
   // ---- state changes (all under glock)
   void fault(const std::string& msg) {
+    std::string driver_error;
     {
       std::lock_guard<ImageLock> g(glock);
       if (state.load() == State::Fault) return;
       state.store(State::Fault);
       fault_msg = msg;
-      clear_shared_outputs(global.data(), glayout);
-      io->safe_outputs(global.data());
-      io->state_changed(State::Fault);
+      failsafe::note_fault(msg.c_str());
+      driver_error = enter_safe_state(State::Fault);
     }
     log(msg);
+    if (!driver_error.empty()) log(driver_error);
     std::lock_guard<std::mutex> l(mu);
     cv.notify_all();
+  }
+
+  // Under glock: the global outputs to 0, published through the driver,
+  // and the new state.  A driver that fails here cannot stop the safe
+  // state: the shared-memory segment is zeroed directly; "" or what failed.
+  std::string enter_safe_state(State s) {
+    clear_shared_outputs(global.data(), glayout);
+    std::string err;
+    try {
+      io->safe_outputs(global.data());
+    } catch (const std::exception& e) {
+      failsafe::zero_segment_outputs();
+      err = std::string("ldrun: the I/O driver failed to drive the outputs safe (") + e.what() +
+            "); the shared-memory outputs were zeroed directly";
+    }
+    try {
+      io->state_changed(s);
+    } catch (const std::exception& e) {
+      if (err.empty()) err = std::string("ldrun: the I/O driver failed to take the state ") + state_name(s) + ": " + e.what();
+    }
+    return err;
+  }
+
+  // ---- the fatal path's rescue (runtime/failsafe.h), on the rescue thread
+  // while the thread that failed waits; the segment's outputs are off
+  // already.  Under the image lock: FAULT with the reason (no scan publishes
+  // after it) and a copy of the retentive memory, consistent because no scan
+  // is half published; then the save; then the outputs through the driver
+  // chain (Modbus and the monitor see them), last because a driver's own lock
+  // may be held by the thread that failed.  Every wait is bounded.
+  static void rescue(void* self, const char* reason) { static_cast<Impl*>(self)->rescue(reason); }
+  void rescue(const char* reason) {
+    if (!glock.try_lock_for_ms(1000)) {
+      log("ldrun: fatal: the image lock stayed taken for 1 s; retentive memory not saved");
+      return;
+    }
+    std::vector<RetainRecord> recs;
+    bool collected = false;
+    try {
+      state.store(State::Fault);
+      fault_msg = reason;
+      clear_shared_outputs(global.data(), glayout);
+      recs = collect_retain();
+      collected = true;
+    } catch (const std::exception& e) {
+      log(std::string("ldrun: fatal: rescue: ") + e.what());
+    }
+    glock.unlock();
+    if (collected) save_in_rescue(std::move(recs));
+    if (!glock.try_lock_for_ms(1000)) return;
+    std::string driver_error;
+    try {
+      driver_error = enter_safe_state(State::Fault);
+    } catch (const std::exception& e) {
+      driver_error = std::string("ldrun: fatal: rescue: ") + e.what();
+    }
+    glock.unlock();
+    if (!driver_error.empty()) log(driver_error);
+  }
+  void save_in_rescue(std::vector<RetainRecord> recs) {
+    if (opt.retain_file.empty()) return;
+    std::unique_lock<std::timed_mutex> l(save_mu, std::chrono::seconds(1));
+    if (!l.owns_lock()) {
+      log("ldrun: fatal: a retentive save under way did not end within 1 s; retentive memory not saved");
+      return;
+    }
+    std::string err = write_snapshot(std::move(recs));
+    log(err.empty() ? "ldrun: fatal: retentive memory saved to " + opt.retain_file
+                    : "ldrun: fatal: retentive memory not saved: " + err);
   }
 
   void clear_nonretentive_shared() {
@@ -371,7 +453,37 @@ struct Runtime::Impl {
           "); tasks run under the normal scheduler");
   }
 
+  // A task's thread.  An error outside the program (the I/O driver) faults
+  // the runtime like the watchdog does, and the task waits for RUN again;
+  // running out of memory ends ldrun on the fatal path.
   void task_main(size_t ti) {
+    Task& t = *tasks[ti];
+    while (true) {
+      try {
+        task_loop(ti);
+        return;
+      } catch (const std::bad_alloc& e) {
+        char where[200];  // no allocation: memory ran out
+        std::snprintf(where, sizeof where, "task '%s'", t.spec.name.c_str());
+        fatal_on_thread(where, e);
+      } catch (const std::exception& e) {
+        t.scan_begin.store(0);
+        fault("ldrun: task '" + t.spec.name + "' scan " + std::to_string(t.scans.load() + 1) +
+              " stopped by an error outside its program (I/O driver): " + e.what() +
+              "; outputs driven to the safe state (all Y off, WY 0); the runtime is in FAULT");
+      }
+    }
+  }
+
+  // The fatal path for an exception on one of the runtime's threads.
+  [[noreturn]] static void fatal_on_thread(const char* where, const std::exception& e) {
+    char what[300];
+    bool oom = dynamic_cast<const std::bad_alloc*>(&e) != nullptr;
+    std::snprintf(what, sizeof what, "%s (%s) on %s", oom ? "out of memory" : "an unexpected error", e.what(), where);
+    failsafe::fatal(what);
+  }
+
+  void task_loop(size_t ti) {
     Task& t = *tasks[ti];
     set_rt_priority(t);
     const int64_t period = int64_t(t.spec.period_us) * 1000;
@@ -508,6 +620,13 @@ struct Runtime::Impl {
 
   // ---- the watchdog monitor: catches a scan that does not end
   void monitor_main() {
+    try {
+      watch_scans();
+    } catch (const std::exception& e) {
+      fatal_on_thread("the watchdog thread", e);
+    }
+  }
+  void watch_scans() {
     uint32_t lim = UINT32_MAX;
     for (auto& t : tasks)
       if (t->watchdog_us) lim = std::min(lim, t->watchdog_us);
@@ -537,7 +656,8 @@ struct Runtime::Impl {
 
   // ---- requests at a task's scan boundary
   // Runs f on the task's thread at its next boundary; false on timeout
-  // (f then never runs).
+  // (f then never runs).  What f throws is thrown here, on the caller's
+  // thread (it used to leave the caller waiting for ever).
   bool at_boundary(Task& t, std::function<void()> f, int64_t timeout_ms) {
     struct Shared {
       std::atomic<int> phase{0};  // 0 queued, 1 taken, 2 cancelled
@@ -550,23 +670,32 @@ struct Runtime::Impl {
       t.reqs.push_back([sh, f = std::move(f)] {
         int expect = 0;
         if (!sh->phase.compare_exchange_strong(expect, 1)) return;
-        f();
-        sh->done.set_value();
+        try {
+          f();
+          sh->done.set_value();
+        } catch (...) {  // the caller gets it: its request failed, the task scans on
+          sh->done.set_exception(std::current_exception());
+        }
       });
       t.has_req.store(true, std::memory_order_release);
     }
     t.req_cv.notify_all();
-    if (fut.wait_for(std::chrono::milliseconds(timeout_ms)) == std::future_status::ready) return true;
-    int expect = 0;
-    if (sh->phase.compare_exchange_strong(expect, 2)) return false;
-    fut.wait();  // taken just now: it finishes soon
+    if (fut.wait_for(std::chrono::milliseconds(timeout_ms)) != std::future_status::ready) {
+      int expect = 0;
+      if (sh->phase.compare_exchange_strong(expect, 2)) return false;
+    }
+    fut.get();  // taken: it finishes soon; rethrows what f threw
     return true;
   }
 
   // ---- retentive memory
   std::vector<RetainRecord> snapshot_retain() {
-    std::vector<RetainRecord> recs;
     std::lock_guard<ImageLock> g(glock);
+    return collect_retain();
+  }
+  // Under glock.
+  std::vector<RetainRecord> collect_retain() {
+    std::vector<RetainRecord> recs;
     for (const RetentiveRange& r : global_ranges) {
       uint32_t off = glayout.addr(r.area, r.first), n = r.count * glayout.elem_size(r.area);
       recs.push_back(RetainRecord{"", r.area, r.first, r.count, {global.begin() + off, global.begin() + off + n}});
@@ -585,9 +714,13 @@ struct Runtime::Impl {
 
   std::string save(bool force) {
     if (opt.retain_file.empty()) return "";
-    std::lock_guard<std::mutex> l(save_mu);
+    std::lock_guard<std::timed_mutex> l(save_mu);
     std::vector<RetainRecord> recs = snapshot_retain();
     if (!force && recs == last_saved) return "";
+    return write_snapshot(std::move(recs));
+  }
+  // Under save_mu.
+  std::string write_snapshot(std::vector<RetainRecord> recs) {
     RetainSnapshot s;
     s.sequence = ++retain_seq;
     timespec ts;
@@ -600,6 +733,13 @@ struct Runtime::Impl {
   }
 
   void saver_main() {
+    try {
+      save_periodically();
+    } catch (const std::exception& e) {
+      fatal_on_thread("the retentive saver thread", e);
+    }
+  }
+  void save_periodically() {
     while (true) {
       {
         std::unique_lock<std::mutex> l(mu);
@@ -775,6 +915,7 @@ void Runtime::start() {
   for (size_t i = 0; i < m.tasks.size(); i++) m.tasks[i]->th = std::thread([&m, i] { m.task_main(i); });
   m.monitor = std::thread([&m] { m.monitor_main(); });
   if (!m.opt.retain_file.empty()) m.saver = std::thread([&m] { m.saver_main(); });
+  failsafe::set_rescue(&Impl::rescue, &m);
 }
 
 void Runtime::run() {
@@ -795,16 +936,16 @@ void Runtime::run() {
 void Runtime::stop() {
   Impl& m = *impl_;
   bool was_run = false;
+  std::string driver_error;
   {
     std::lock_guard<ImageLock> g(m.glock);
     if (m.state.load() == State::Run) {
       was_run = true;
       m.state.store(State::Stop);
-      clear_shared_outputs(m.global.data(), m.glayout);
-      m.io->safe_outputs(m.global.data());
-      m.io->state_changed(State::Stop);
+      driver_error = m.enter_safe_state(State::Stop);
     }
   }
+  if (!driver_error.empty()) m.log(driver_error);
   if (was_run) {
     std::string e = m.save(false);
     if (!e.empty()) m.log("ldrun: warning: retentive save failed: " + e);
@@ -846,6 +987,7 @@ void Runtime::shutdown() {
   Impl& m = *impl_;
   if (m.shut) return;
   m.shut = true;
+  failsafe::clear_rescue(&m);
   State before = m.state.load();
   if (before == State::Run) stop();
   m.stopping.store(true);
@@ -866,7 +1008,13 @@ void Runtime::shutdown() {
   {
     std::lock_guard<ImageLock> g(m.glock);
     clear_shared_outputs(m.global.data(), m.glayout);
-    m.io->safe_outputs(m.global.data());
+    try {
+      m.io->safe_outputs(m.global.data());
+    } catch (const std::exception& e) {
+      failsafe::zero_segment_outputs();
+      m.log(std::string("ldrun: the I/O driver failed to drive the outputs safe (") + e.what() +
+            "); the shared-memory outputs were zeroed directly");
+    }
   }
   m.io->detach();
 }

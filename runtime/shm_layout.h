@@ -16,8 +16,17 @@
 // or was odd, the copy may be torn and is retried.  Only one client writes
 // inputs at a time: it holds the input lock (in_writer = its pid), taken
 // with compare-and-swap and recovered from a client that died holding it.
+//
+// Version 2 adds who owns the segment and why it stopped: the owner's start
+// time (so a reused pid is not taken for the owner) and a reason text.  A
+// fatal error in ldrun (a signal, out of memory, an uncaught exception)
+// drives Y and WY to 0, sets the state to FAULT with the reason and leaves
+// the segment in place; owner_alive() then tells a client the owner is dead
+// (docs/faults.md, "The safe state and fatal errors").  An orderly exit sets
+// EXITED and removes the segment.
 #pragma once
 
+#include <fcntl.h>
 #include <signal.h>
 #include <time.h>
 #include <unistd.h>
@@ -26,12 +35,14 @@
 #include <cerrno>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 namespace ldc::shm {
 
 constexpr char kMagic[8] = {'L', 'D', 'C', 'S', 'H', 'M', '\0', '\1'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;
 constexpr uint32_t kHeaderSize = 4096;
 constexpr uint32_t kXCount = 8192, kYCount = 8192, kWXCount = 1024, kWYCount = 1024;
 constexpr uint32_t kXOffset = kHeaderSize;
@@ -39,6 +50,7 @@ constexpr uint32_t kWXOffset = kXOffset + kXCount;
 constexpr uint32_t kYOffset = kWXOffset + 4 * kWXCount;
 constexpr uint32_t kWYOffset = kYOffset + kYCount;
 constexpr uint32_t kTotalSize = kWYOffset + 4 * kWYCount;  // 28672 bytes
+constexpr uint32_t kReasonSize = 256;  // the reason text, NUL-terminated
 
 enum State : uint32_t { kStop = 0, kRun = 1, kFault = 2, kExited = 3 };
 
@@ -64,6 +76,11 @@ struct Header {
   uint32_t pad1;
   uint64_t heartbeat_ns;         // atomic: CLOCK_MONOTONIC time of the last publication
   uint64_t scans;                // atomic: scans completed by all tasks
+  // version 2
+  uint64_t owner_start;          // the owner's start time: field 22 of /proc/PID/stat (clock ticks after boot); 0: unknown
+  alignas(64) uint32_t reason_seq;  // atomic: sequence of `reason`, odd while ldrun writes it
+  uint32_t pad2;
+  alignas(8) char reason[kReasonSize];  // why the state is FAULT (ldrun's message); "" if it never was
 };
 static_assert(sizeof(Header) <= kHeaderSize);
 static_assert(std::atomic_ref<uint32_t>::is_always_lock_free && std::atomic_ref<uint64_t>::is_always_lock_free);
@@ -120,6 +137,69 @@ inline bool end_read(uint32_t& seq, uint32_t v) {
   return at(seq).load(std::memory_order_relaxed) == v;
 }
 
+// ---- the reason text and the safe state
+// Everything below is async-signal-safe (atomic stores, no locks, no
+// allocation): ldrun's fatal-signal handler calls it.
+
+// Writes `text` (cut to kReasonSize - 1 bytes) as the reason, under reason_seq.
+inline void write_reason(Header* h, const char* text) {
+  alignas(8) char buf[kReasonSize] = {};
+  for (uint32_t i = 0; i + 1 < kReasonSize && text[i]; i++) buf[i] = text[i];
+  begin_write(h->reason_seq);
+  copy_words(reinterpret_cast<uint8_t*>(h->reason), reinterpret_cast<const uint8_t*>(buf), kReasonSize);
+  end_write(h->reason_seq);
+}
+// Reads the reason into out[kReasonSize]; false if it was being written all along.
+inline bool read_reason(Header* h, char* out) {
+  for (int attempt = 0; attempt < 1000; attempt++) {
+    uint32_t v;
+    if (!begin_read(h->reason_seq, v)) continue;
+    copy_words(reinterpret_cast<uint8_t*>(out), reinterpret_cast<const uint8_t*>(h->reason), kReasonSize);
+    if (!end_read(h->reason_seq, v)) continue;
+    out[kReasonSize - 1] = 0;
+    return true;
+  }
+  return false;
+}
+// Every output (Y, WY) to 0 in one update of out_seq.
+inline void zero_outputs(Header* h) {
+  uint8_t* b = base(h);
+  begin_write(h->out_seq);
+  for (uint32_t i = 0; i < kYCount; i += 8) at(*reinterpret_cast<uint64_t*>(b + kYOffset + i)).store(0, std::memory_order_relaxed);
+  for (uint32_t i = 0; i < 4 * kWYCount; i += 8)
+    at(*reinterpret_cast<uint64_t*>(b + kWYOffset + i)).store(0, std::memory_order_relaxed);
+  end_write(h->out_seq);
+  at(h->out_count).fetch_add(1, std::memory_order_relaxed);
+}
+
+// ---- the owner
+// The start time of process `pid` (field 22 of /proc/PID/stat), 0 if unknown.
+inline uint64_t process_start(int32_t pid) {
+  char path[40], buf[1024];
+  std::snprintf(path, sizeof path, "/proc/%d/stat", int(pid));
+  int fd = ::open(path, O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return 0;
+  ssize_t n = ::read(fd, buf, sizeof buf - 1);
+  ::close(fd);
+  if (n <= 0) return 0;
+  buf[n] = 0;
+  const char* p = std::strrchr(buf, ')');  // the command name may hold spaces and ')'
+  if (!p) return 0;
+  // after ") ": field 3 (state) ... field 22 (starttime)
+  for (int field = 2; field < 22 && *p; p++)
+    if (*p == ' ') field++;
+  return std::strtoull(p, nullptr, 10);
+}
+// Whether the ldrun that owns the segment still runs (a pid that exists
+// but started at another time belongs to another process now).
+inline bool owner_alive(const Header* h) {
+  int32_t pid = h->owner_pid;
+  if (pid <= 0) return false;
+  if (::kill(pid, 0) != 0 && errno == ESRCH) return false;
+  uint64_t recorded = h->owner_start, now = recorded ? process_start(pid) : 0;
+  return recorded == 0 || now == 0 || now == recorded;
+}
+
 // ---- the input lock (clients only)
 // Takes the input lock for `pid`; a holder that no longer exists is replaced.
 // Returns false if another live client kept it for `spins` attempts.
@@ -156,6 +236,7 @@ inline void init(Header* h, uint32_t block_size, int32_t owner) {
   h->wy_offset = kWYOffset, h->wy_count = kWYCount;
   h->block_size = block_size;
   h->owner_pid = owner;
+  h->owner_start = process_start(owner);
 }
 // "" if a mapped segment of `size` bytes is one this header describes, else why not.
 inline const char* check(const Header* h, size_t size) {

@@ -5,7 +5,9 @@
 //   shm_client [--name /ldc] set X3 1 WX0 250    one atomic update of inputs
 //   shm_client [--name /ldc] get Y0 WY1 X3       one consistent snapshot
 //   shm_client [--name /ldc] wait Y0 1 [MS]      poll until Y0 is 1 (exit 1 on timeout)
-//   shm_client [--name /ldc] status              state, scans, output publications
+//   shm_client [--name /ldc] status              owner (running or dead), state, scans,
+//                                                output publications, the reason of a FAULT;
+//                                                exit status 3 if the owner is dead
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <time.h>
@@ -103,6 +105,12 @@ int main(int argc, char** argv) {
     return 1;
   }
   uint8_t* b = shm::base(h);
+  // A segment outlives an ldrun that ended on a fatal error (docs/faults.md):
+  // its outputs are then the safe state that ldrun left, no longer live.
+  const bool alive = shm::owner_alive(h);
+  if (!alive && cmd != "status")
+    std::fprintf(stderr, "shm_client: warning: ldrun process %d that owns %s is not running: nothing is scanned\n",
+                 h->owner_pid, name.c_str());
 
   if (cmd == "set") {
     if ((argc - i) % 2 || i >= argc) return usage();
@@ -174,10 +182,12 @@ int main(int argc, char** argv) {
   if (cmd == "status") {
     static const char* states[] = {"STOP", "RUN", "FAULT", "EXITED"};
     uint32_t s = shm::at(h->state).load();
-    std::printf("owner %d state %s scans %llu publications %llu block %u\n", h->owner_pid, s < 4 ? states[s] : "?",
-                (unsigned long long)shm::at(h->scans).load(), (unsigned long long)shm::at(h->out_count).load(),
-                h->block_size);
-    return 0;
+    std::printf("owner %d (%s) state %s scans %llu publications %llu block %u\n", h->owner_pid, alive ? "running" : "dead",
+                s < 4 ? states[s] : "?", (unsigned long long)shm::at(h->scans).load(),
+                (unsigned long long)shm::at(h->out_count).load(), h->block_size);
+    char reason[shm::kReasonSize];
+    if (s == shm::kFault && shm::read_reason(h, reason) && reason[0]) std::printf("reason %s\n", reason);
+    return alive ? 0 : 3;
   }
   return usage();
 }

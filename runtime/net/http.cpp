@@ -21,6 +21,8 @@
 #include <memory>
 #include <stdexcept>
 
+#include "runtime/failsafe.h"
+
 namespace ldc::http {
 namespace {
 
@@ -358,6 +360,7 @@ void Server::loop() {
             if (p.status == Parse::Status::Error) { reply_error(c, p.code, p.reason); break; }
             c.in.erase(0, p.consumed);
             c.since = now;
+            failsafe::inject("http");  // the test hook of docs/faults.md (LDC_FAULT_INJECT=http:...)
             Response r;
             try {
               r = handler_(p.req);

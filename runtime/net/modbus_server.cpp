@@ -46,6 +46,7 @@
 #include <thread>
 
 #include "loader/config.h"
+#include "runtime/failsafe.h"
 #include "runtime/net/log_throttle.h"
 #include "runtime/net/modbus.h"
 
@@ -114,8 +115,10 @@ struct TaskWrites {
   explicit TaskWrites(size_t capacity) : shadow(capacity) {}
   WriteShadow shadow;
   // The task's thread try-locks it (it never waits); the network thread
-  // (dropping writes) and state_changed lock it.  Guards taken's updates and:
-  std::mutex mu;
+  // (dropping writes) locks it, state_changed waits for it a bounded time
+  // (on the fatal path a thread that failed may hold it).  Guards taken's
+  // updates and:
+  std::timed_mutex mu;
   WriteShadow::Batch batch;        // taken by the task's scan under way
   bool inflight = false;           // batch taken and not yet done or given back
   bool private_applied = false;    // its D and F written into the task's memory
@@ -196,7 +199,7 @@ class ModbusDriver : public IoDriver {
     inner_->read_inputs(global, c);
     if (c.task >= writes_.size()) return;
     TaskWrites& w = *writes_[c.task];
-    std::unique_lock<std::mutex> l(w.mu, std::try_to_lock);
+    std::unique_lock<std::timed_mutex> l(w.mu, std::try_to_lock);
     if (!l.owns_lock()) return;      // the network thread is dropping writes: the next scan
     if (w.inflight) give_back(w);    // taken by a scan that was not published (a held task)
     if (!w.shadow.take(w.batch)) return;  // a request being merged: the next scan
@@ -210,7 +213,7 @@ class ModbusDriver : public IoDriver {
     inner_->before_scan(c, mem, dt);
     if (c.task >= writes_.size()) return;
     TaskWrites& w = *writes_[c.task];
-    std::unique_lock<std::mutex> l(w.mu, std::try_to_lock);
+    std::unique_lock<std::timed_mutex> l(w.mu, std::try_to_lock);
     if (!l.owns_lock() || !w.inflight || w.private_applied) return;  // not applied: not done, given back next scan
     for (const Write& e : w.batch.writes)
       if (!area_is_shared(e.area)) plc::apply_element(e, mem, layout_);
@@ -224,13 +227,14 @@ class ModbusDriver : public IoDriver {
   }
   // A scan under way will not be published: the writes it applied wholly are
   // in memory (done); the others go back into the shadow, for the next scan
-  // or for exception 06 at their timeout.
+  // or for exception 06 at their timeout.  (If the lock stays taken -- a
+  // thread that failed holds it -- the batch is left to the task's next scan.)
   void state_changed(State s) override {
     inner_->state_changed(s);
     for (auto& wp : writes_) {
       TaskWrites& w = *wp;
-      std::lock_guard<std::mutex> l(w.mu);
-      if (!w.inflight) continue;
+      std::unique_lock<std::timed_mutex> l(w.mu, std::chrono::milliseconds(100));
+      if (!l.owns_lock() || !w.inflight) continue;
       if (w.private_applied) w.done.store(w.batch.ticket), w.inflight = false;
       else give_back(w);
     }
@@ -243,7 +247,7 @@ class ModbusDriver : public IoDriver {
     fill(snaps_[c.task], global, mem);
     snaps_[c.task].publish();
     TaskWrites& w = *writes_[c.task];
-    std::unique_lock<std::mutex> l(w.mu, std::try_to_lock);
+    std::unique_lock<std::timed_mutex> l(w.mu, std::try_to_lock);
     if (!l.owns_lock() || !w.inflight || !w.private_applied) return;  // given back at the next scan
     w.inflight = false;
     if (w.batch.ticket > w.done.load()) {
@@ -407,6 +411,7 @@ class ModbusDriver : public IoDriver {
       socklen_t len = sizeof ss;
       int fd = ::accept4(listen_fd_, reinterpret_cast<sockaddr*>(&ss), &len, SOCK_NONBLOCK | SOCK_CLOEXEC);
       if (fd >= 0) {
+        failsafe::inject("modbus");  // the test hook of docs/faults.md (LDC_FAULT_INJECT=modbus:...)
         admit(fd, ss);
         continue;
       }
@@ -612,7 +617,7 @@ class ModbusDriver : public IoDriver {
     TaskWrites& w = *writes_[task];
     uint64_t lo, hi;
     {
-      std::lock_guard<std::mutex> l(w.mu);  // the scan side only try-locks it
+      std::lock_guard<std::timed_mutex> l(w.mu);  // the scan side only try-locks it
       lo = w.taken.load();
       WriteShadow::Batch dropped;
       if (!w.shadow.take(dropped)) return;  // cannot happen: takes and posts hold w.mu or are ours
