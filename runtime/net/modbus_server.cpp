@@ -81,6 +81,10 @@ int64_t now_ms() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+// What a connection buffers at most: requests read and not served, replies
+// not sent.  Past either, the server stops reading it (TCP back-pressure).
+constexpr size_t kMaxIn = 4096, kMaxOut = 65536;
+
 // The causes of log lines, each throttled on its own.
 constexpr const char* kBadHeader = "closed: not Modbus";
 constexpr const char* kIdle = "closed: idle";
@@ -356,7 +360,7 @@ class ModbusDriver : public IoDriver {
       fds.push_back({wake_fd_, POLLIN, 0});
       for (Conn& c : conns_) {
         short ev = 0;
-        if (!c.pending && c.in.size() < 4096 && c.out.size() < 65536) ev |= POLLIN;
+        if (!c.pending && c.in.size() < kMaxIn && c.out.size() < kMaxOut) ev |= POLLIN;
         if (!c.out.empty()) ev |= POLLOUT;
         fds.push_back({c.fd, ev, 0});
         of.push_back(&c);
@@ -502,7 +506,11 @@ class ModbusDriver : public IoDriver {
       close_conn(c);
       return;
     }
-    if (!c.closing && (ev & POLLOUT) && !c.out.empty()) flush(c);
+    if (!c.closing && (ev & POLLOUT) && !c.out.empty()) {
+      flush(c);
+      // requests that waited for the replies to drain
+      if (!c.closing && !c.pending && !c.in.empty() && c.out.size() < kMaxOut) handle_requests(c);
+    }
   }
 
   void flush(Conn& c) {
@@ -534,18 +542,37 @@ class ModbusDriver : public IoDriver {
     return view_;
   }
 
-  // Serves the complete requests of c.in, in order; stops at a write until
-  // its scan is done.
+  // Serves the complete requests of c.in, in order, and sends the replies;
+  // stops at a write until its scan is done, and while the replies the
+  // client has not taken fill their buffer.
   void handle_requests(Conn& c) {
     bool served = false;
-    while (!c.pending && !c.closing) {
+    while (true) {
+      served |= serve_queued(c);
+      if (c.closing || c.out.empty()) break;
+      size_t unsent = c.out.size();
+      flush(c);
+      // room again: on with the requests that waited (else POLLOUT resumes)
+      if (c.closing || c.pending || c.in.empty() || c.out.size() == unsent || c.out.size() >= kMaxOut) break;
+    }
+    if (c.closing) return;
+    // A frame left incomplete began with the bytes that came after the last
+    // request; requests waiting for the replies to drain are no slow frame
+    // (the idle timeout covers a client that does not read).
+    if (c.in.empty() || c.out.size() >= kMaxOut) c.frame_since = 0;
+    else if (served || !c.frame_since) c.frame_since = now_ms();
+  }
+  // The serving part: true if a request was served.
+  bool serve_queued(Conn& c) {
+    bool served = false;
+    while (!c.pending && !c.closing && c.out.size() < kMaxOut) {
       Outcome o = serve(c.in, view_for(c.in));
       if (o.kind == Outcome::NeedMore) break;
       c.in.erase(c.in.begin(), c.in.begin() + o.consumed);
       if (o.kind == Outcome::Close) {
         note(kBadHeader, "closed the connection from " + c.peer + ": " + o.error);
         close_conn(c);
-        return;
+        break;
       }
       served = true;
       c.last_ms = now_ms();
@@ -563,10 +590,7 @@ class ModbusDriver : public IoDriver {
       }
       c.pending = PendingWrite{o.task, ticket, c.last_ms + o_.write_timeout_ms, std::move(o.reply)};
     }
-    // a frame left incomplete began with the bytes that came after the last request
-    if (c.in.empty()) c.frame_since = 0;
-    else if (served) c.frame_since = now_ms();
-    if (!c.out.empty()) flush(c);
+    return served;
   }
 
   // Writes whose scan is done get their reply; the connection goes on.

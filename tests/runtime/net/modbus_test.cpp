@@ -518,6 +518,29 @@ TEST(ModbusServer, WritesFromManyRequestsLandInOrder) {
   }
 }
 
+TEST(ModbusServer, PipelinedRequestsBeyondTheReplyBufferAreAllAnswered) {
+  // 1,000 reads of 125 registers sent at once, the replies (259 KB) read
+  // only after: the server stops reading at 64 KiB of replies not sent and
+  // goes on as they drain; every reply comes, in order.
+  Served p(ServerOptions{}, kM0ToY0);
+  Client c(p.port);
+  Bytes all;
+  for (int i = 0; i < 1000; i++) {
+    Bytes f = frame({3, 0, 0, 0, 125}, 1, uint16_t(i));
+    all.insert(all.end(), f.begin(), f.end());
+  }
+  ASSERT_EQ(send(c.fd, all.data(), all.size(), MSG_NOSIGNAL), ssize_t(all.size()));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  for (int i = 0; i < 1000; i++) {
+    Bytes h(7);
+    ASSERT_TRUE(c.read_n(h.data(), 7)) << i;
+    ASSERT_EQ(h[0] << 8 | h[1], i);
+    Bytes pdu((h[4] << 8 | h[5]) - 1);
+    ASSERT_TRUE(c.read_n(pdu.data(), pdu.size())) << i;
+    ASSERT_EQ(pdu.size(), 252u) << i;
+  }
+}
+
 TEST(ModbusServer, LogLinesAreThrottledPerCause) {
   ServerOptions o;
   o.log_burst = 3;  // window 10 s: the test is well within one
