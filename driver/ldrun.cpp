@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <poll.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -52,6 +53,8 @@ std::string usage() {
     "             [--free-run] [--rt] [--watchdog 200ms] [--retain FILE] [--retain-every 1s] [--cold] [--stop]\n"
     "             [--control=stdin|none] [--reload] [--stats] [--out FILE] [--block 16] [--scans N]\n"
     "             [--modbus [HOST:]PORT] [--modbus-connections 16]   a Modbus TCP server (127.0.0.1 unless HOST is given; also with --trace)\n"
+    "             [--modbus-per-address 8] [--modbus-frame-timeout 2s] [--modbus-idle-timeout 60s]\n"
+    "             [--modbus-write-timeout 1s] [--modbus-pending-writes 8192]   its limits (docs/faults.md)\n"
     "             [--monitor HOST:PORT [--monitor-write] [--monitor-remote]]  (the live ladder view, docs/runtime.md)\n"
     "       FILE: an image (.bin, .hex) or a source ldc reads (.ld, .il, .xml, .rtsp, .sfc), compiled in memory\n"
     "             (native code at -O0 unless -O1 or -O2 is given; --engine=fast is the fast interpreter)\n"
@@ -64,6 +67,7 @@ struct RtArgs {
   bool on = false;
   std::string project, io, control, clock, period, watchdog, retain, retain_every, out, block;
   std::string modbus, modbus_connections;  // --modbus [HOST:]PORT, --modbus-connections N
+  std::string modbus_per_address, modbus_frame_timeout, modbus_idle_timeout, modbus_write_timeout, modbus_pending_writes;
   bool free_run = false, rt = false, cold = false, stop = false, stats = false, reload = false;
   bool sandbox = false;  // also in trace mode: it does not select the runtime
   std::string monitor;   // --monitor HOST:PORT (runtime/net/monitor.h)
@@ -179,7 +183,9 @@ class SoftPlcRun {
     read_tasks();
     apply_task_options();
     open_io();
-    add_modbus();
+    std::optional<modbus::ServerOptions> mb = modbus_options();
+    check_open_files(mb);
+    if (mb) add_modbus(*mb);
     add_monitor();
     start();
     try {
@@ -312,17 +318,52 @@ class SoftPlcRun {
     driver_ = make_trace_driver(trace_file_.empty() ? nullptr : &trace_, probes, nullptr, out_);
   }
 
-  void add_modbus() {
-    if (a_.modbus.empty() && !a_.modbus_connections.empty()) throw UserError("ldrun: error: --modbus-connections needs --modbus");
-    if (a_.modbus.empty()) return;
+  // "--modbus-connections 16" and the like: an integer in lo..hi.
+  static size_t count_arg(const std::string& v, const char* what, size_t lo, size_t hi) {
+    if (v.empty() || v.size() > 6 || v.find_first_not_of("0123456789") != std::string::npos || std::stoul(v) < lo ||
+        std::stoul(v) > hi)
+      throw UserError("ldrun: error: bad " + std::string(what) + " '" + v + "' (" + std::to_string(lo) + ".." +
+                      std::to_string(hi) + ")");
+    return std::stoul(v);
+  }
+  // "--modbus-frame-timeout 2s" and the like: milliseconds in 10 ms..1 h.
+  static int ms_arg(const std::string& v, const char* what) {
+    int64_t us = duration_arg(v, what, 10000);
+    if (us > 3600 * int64_t(1000000)) throw UserError(std::string("ldrun: error: bad ") + what + " '" + v + "' (at most 1h)");
+    return int(us / 1000);
+  }
+
+  // The Modbus server's options and limits (docs/faults.md, "Modbus TCP"), if --modbus.
+  std::optional<modbus::ServerOptions> modbus_options() {
+    std::pair<const char*, const std::string*> limits[] = {
+        {"--modbus-connections", &a_.modbus_connections},     {"--modbus-per-address", &a_.modbus_per_address},
+        {"--modbus-frame-timeout", &a_.modbus_frame_timeout}, {"--modbus-idle-timeout", &a_.modbus_idle_timeout},
+        {"--modbus-write-timeout", &a_.modbus_write_timeout}, {"--modbus-pending-writes", &a_.modbus_pending_writes}};
+    if (a_.modbus.empty()) {
+      for (auto& [name, v] : limits)
+        if (!v->empty()) throw UserError("ldrun: error: " + std::string(name) + " needs --modbus");
+      return std::nullopt;
+    }
     modbus::ServerOptions mo;
     mo.tasks = specs_.size();
     mo.log = opt_.log;
-    if (const std::string& n = a_.modbus_connections; !n.empty()) {
-      if (n.size() > 4 || n.find_first_not_of("0123456789") != std::string::npos || std::stoul(n) < 1 || std::stoul(n) > 1000)
-        throw UserError("ldrun: error: bad --modbus-connections '" + n + "' (1..1000)");
-      mo.max_connections = std::stoul(n);
-    }
+    if (!a_.modbus_connections.empty()) mo.max_connections = count_arg(a_.modbus_connections, "--modbus-connections", 1, 1000);
+    if (!a_.modbus_per_address.empty()) mo.max_per_address = count_arg(a_.modbus_per_address, "--modbus-per-address", 1, 1000);
+    mo.max_per_address = std::min(mo.max_per_address, mo.max_connections);
+    if (!a_.modbus_frame_timeout.empty()) mo.frame_timeout_ms = ms_arg(a_.modbus_frame_timeout, "--modbus-frame-timeout");
+    if (!a_.modbus_idle_timeout.empty()) mo.idle_timeout_ms = ms_arg(a_.modbus_idle_timeout, "--modbus-idle-timeout");
+    // a write waits for its task's next scan: by default 1 s, or two periods of the slowest task
+    uint32_t slowest_us = 0;
+    for (const TaskSpec& t : specs_) slowest_us = std::max(slowest_us, t.period_us);
+    mo.write_timeout_ms = int(std::max<int64_t>(1000, 2 * int64_t(slowest_us) / 1000));
+    if (!a_.modbus_write_timeout.empty()) mo.write_timeout_ms = ms_arg(a_.modbus_write_timeout, "--modbus-write-timeout");
+    // one request writes 1968 coils at most; the map has 34,816 writable elements
+    if (!a_.modbus_pending_writes.empty())
+      mo.pending_writes = count_arg(a_.modbus_pending_writes, "--modbus-pending-writes", 1968, 34816);
+    return mo;
+  }
+
+  void add_modbus(modbus::ServerOptions mo) {
     try {
       modbus::parse_address(a_.modbus, mo);
       driver_ = modbus::make_modbus_driver(std::move(driver_), mo);
@@ -346,6 +387,46 @@ class SoftPlcRun {
     for (const TaskSpec& s : specs_) mts.push_back({s.name, s.period_us, s.image});
     monitor_ = std::make_unique<Monitor>(std::move(mts), mo);
     driver_ = monitor_->wrap(std::move(driver_));
+  }
+
+  // The open-file limit against what the caps let the runtime hold at once:
+  // the servers' connections (a client that takes every descriptor would
+  // make the retentive save fail), the sandbox's sockets, and the files of
+  // the runtime itself.  The soft limit is raised as far as needed if the
+  // hard one allows; else the run is refused, saying what to change.
+  void check_open_files(const std::optional<modbus::ServerOptions>& mb) {
+    // stdin/out/err, the retentive file and its directory, the shared
+    // memory object, the trace and --out files, an image being loaded, and
+    // a margin for the C library (and the C route's shared object)
+    const size_t own = 32;
+    const size_t sandbox = a_.sandbox ? 2 * specs_.size() : 0;
+    const size_t modbus_conns = mb ? mb->max_connections : 0;
+    const size_t modbus_files = mb ? modbus::descriptors_needed(*mb) : 0;
+    // the monitor's connections, a newcomer told 503, its listener and wake-up pipe
+    const size_t monitor_files = a_.monitor.empty() ? 0 : MonitorOptions{}.max_connections + 4;
+    const size_t need = own + sandbox + modbus_files + monitor_files;
+    rlimit rl{};
+    if (getrlimit(RLIMIT_NOFILE, &rl) != 0 || rl.rlim_cur == RLIM_INFINITY || rl.rlim_cur >= need) return;
+    if (rl.rlim_max == RLIM_INFINITY || rl.rlim_max >= need) {
+      rlimit raised{rlim_t(need), rl.rlim_max};
+      if (setrlimit(RLIMIT_NOFILE, &raised) == 0) {
+        opt_.log("ldrun: raised the open-file limit from " + std::to_string(rl.rlim_cur) + " to " + std::to_string(need) +
+                 " (what the connection caps need)");
+        return;
+      }
+    }
+    std::string what = std::to_string(own) + " for the runtime";
+    if (sandbox) what += ", " + std::to_string(sandbox) + " for --sandbox";
+    if (modbus_files)
+      what += ", " + std::to_string(modbus_files) + " for --modbus-connections " + std::to_string(modbus_conns);
+    if (monitor_files) what += ", " + std::to_string(monitor_files) + " for the monitor";
+    // what can be had: the hard limit, or the soft one if raising it failed
+    const size_t limit = rl.rlim_max != RLIM_INFINITY && rl.rlim_max < need ? rl.rlim_max : rl.rlim_cur;
+    std::string fix = "raise the limit (ulimit -n " + std::to_string(need) + ")";
+    if (need - limit < modbus_conns)
+      fix = "lower --modbus-connections to " + std::to_string(modbus_conns - (need - limit)) + " or " + fix;
+    throw UserError("ldrun: error: the open-file limit is " + std::to_string(limit) + " but the connection caps need " +
+                    std::to_string(need) + " descriptors (" + what + "): " + fix);
   }
 
   EngineFactory engines() const {
@@ -686,6 +767,11 @@ int ldrun_main(int argc, char** argv) {
         opt_value("--watchdog", rta.watchdog) || opt_value("--retain-every", rta.retain_every) ||
         opt_value("--retain", rta.retain) || opt_value("--out", rta.out) || opt_value("--block", rta.block) ||
         opt_value("--modbus-connections", rta.modbus_connections) || opt_value("--modbus", rta.modbus) ||
+        opt_value("--modbus-per-address", rta.modbus_per_address) ||
+        opt_value("--modbus-frame-timeout", rta.modbus_frame_timeout) ||
+        opt_value("--modbus-idle-timeout", rta.modbus_idle_timeout) ||
+        opt_value("--modbus-write-timeout", rta.modbus_write_timeout) ||
+        opt_value("--modbus-pending-writes", rta.modbus_pending_writes) ||
         opt_value("--monitor", rta.monitor) || flag("--monitor-write", rta.monitor_write) ||
         flag("--monitor-remote", rta.monitor_remote)) {
     } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");

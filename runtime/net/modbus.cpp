@@ -189,16 +189,4 @@ Outcome serve(std::span<const uint8_t> buf, const View& v) {
   return std::move(r.out);
 }
 
-void apply(const Write& w, uint8_t* mem, const Layout& l) {
-  if (area_is_bit(w.area)) {
-    mem[l.addr(w.area, w.index)] = uint8_t(w.value & 1);
-    return;
-  }
-  uint8_t* at = mem + l.addr(w.area, w.index);
-  uint32_t old;
-  std::memcpy(&old, at, 4);
-  uint32_t now = (old & ~w.mask) | (w.value & w.mask);
-  std::memcpy(at, &now, 4);
-}
-
 }  // namespace ldc::modbus

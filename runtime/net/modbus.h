@@ -4,8 +4,11 @@
 // Two parts: the protocol -- serve(), a pure function from the bytes a client
 // sent to the reply and the writes a request asks for, over a read-only view
 // of the memory (fuzzed by tests/fuzz/fuzz_modbus.cpp) -- and the server, an
-// IoDriver decorator that applies the writes at scan boundaries and takes the
-// view's snapshot after each scan, with a network thread of its own.
+// IoDriver decorator with a network thread of its own: the writes are merged
+// into a shadow per task (runtime/write_shadow.h) that the scan takes at its
+// boundary, and a snapshot of the view is taken after each scan.  Its limits
+// (connections, per address, frame deadline, idle time, pending writes, log
+// lines) are in docs/faults.md, "Modbus TCP".
 #pragma once
 
 #include <cstdint>
@@ -17,6 +20,7 @@
 
 #include "ir/ir.h"
 #include "runtime/plc.h"
+#include "runtime/write_shadow.h"
 
 namespace ldc::modbus {
 
@@ -52,12 +56,8 @@ struct View {
 
 // One element changed by a write request: element = (element & ~mask) |
 // (value & mask).  Bits: value 0/1, mask 1.  Words: INT32 halves or whole.
-struct Write {
-  Area area;
-  uint32_t index;
-  uint32_t value, mask;
-  bool operator==(const Write&) const = default;
-};
+// Applied by plc::apply_element.
+using Write = plc::ElementWrite;
 
 struct Outcome {
   enum Kind { NeedMore, Reply, Close } kind = NeedMore;
@@ -75,19 +75,35 @@ struct Outcome {
 // others get exception 0x0B.  Never reads outside the view.
 Outcome serve(std::span<const uint8_t> buf, const View& view);
 
-// Applies one write to a memory image of the standard layout.
-void apply(const Write& w, uint8_t* mem, const Layout& layout);
-
 // ---------------------------------------------------------------- the server
 struct ServerOptions {
   std::string host = "127.0.0.1";
   uint16_t port = 502;           // 0: any free port (logged)
   size_t tasks = 1;              // the runtime's task count (unit identifiers)
-  size_t max_connections = 16;   // more are accepted and closed at once
-  int idle_timeout_ms = 60000;   // a connection silent that long is closed
+  // Connections open at a time; a newcomer beyond it takes the place of the
+  // idlest connection (no write pending, longest since its last request),
+  // or is closed at once if every one has a write pending.
+  size_t max_connections = 16;
+  // Connections from one address; a newcomer beyond it takes the place of
+  // that address's idlest connection (or is closed), never another's.
+  size_t max_per_address = 8;
+  int idle_timeout_ms = 60000;   // no request for that long: closed
+  int frame_timeout_ms = 2000;   // a frame begun and not complete by then: closed (slowloris)
   int write_timeout_ms = 1000;   // a write no scan took by then: exception 06, not applied
+  // Distinct elements (coils, register words) merged and not yet taken by a
+  // scan, per task: what one scan applies at most.  A write that does not
+  // fit gets exception 06 at once.  At least 1968 (the largest request).
+  size_t pending_writes = 8192;
+  size_t log_burst = 5;          // log lines per cause per window, then one summary
+  int log_window_ms = 10000;
+  int accept_backoff_ms = 250;   // the listener rests that long after accept fails (EMFILE)
   std::function<void(const std::string&)> log;
 };
+
+// Open files the server holds at most: its connections, one newcomer being
+// admitted, the listener, its wake-up eventfd and the spare descriptor kept
+// for EMFILE (ldrun checks RLIMIT_NOFILE against it).
+size_t descriptors_needed(const ServerOptions& o);
 
 // "HOST:PORT", ":PORT", "PORT", "[V6]:PORT" into host and port (the host
 // defaults to 127.0.0.1); throws std::runtime_error with the reason.

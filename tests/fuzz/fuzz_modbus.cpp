@@ -39,7 +39,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (o.task >= view.tasks.size()) __builtin_trap();
     for (const modbus::Write& w : o.writes) {
       if (w.index >= layout.count[int(w.area)]) __builtin_trap();
-      modbus::apply(w, w.area == Area::D || w.area == Area::F ? (o.task ? t1.data() : t0.data()) : global.data(), layout);
+      plc::apply_element(w, w.area == Area::D || w.area == Area::F ? (o.task ? t1.data() : t0.data()) : global.data(), layout);
     }
     in = in.subspan(o.consumed);
   }

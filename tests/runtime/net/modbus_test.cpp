@@ -14,6 +14,8 @@
 #include "runtime/net/modbus.h"
 #include "runtime/runtime.h"
 
+#include <chrono>
+#include <mutex>
 #include <thread>
 
 using namespace ldc;
@@ -173,7 +175,7 @@ TEST(ModbusPdu, WriteMultipleRegistersAcrossWyAndD) {
   EXPECT_EQ(o.writes, (std::vector<Write>{{Area::WY, 1023, 0xFFFF8000u, 0xFFFFFFFFu},
                                           {Area::D, 0, 0x00010000u, 0xFFFF0000u},
                                           {Area::D, 0, 0x86A0u, 0xFFFFu}}));
-  for (const Write& w : o.writes) apply(w, w.area == Area::WY ? m.global.data() : m.t0.data(), m.l);
+  for (const Write& w : o.writes) plc::apply_element(w, w.area == Area::WY ? m.global.data() : m.t0.data(), m.l);
   EXPECT_EQ(int32_t(m.word(m.global, Area::WY, 1023)), -32768);
   EXPECT_EQ(m.word(m.t0, Area::D, 0), 100000u);
   Bytes max{16, 0, 0, 0, 123, 246};
@@ -193,11 +195,11 @@ TEST(ModbusPdu, WriteMultipleRegistersAcrossWyAndD) {
 TEST(ModbusPdu, ApplyMasksBitsAndHalves) {
   Memory m;
   m.word(m.t0, Area::D, 7, 0xAAAABBBB);
-  apply({Area::D, 7, 0x12340000u, 0xFFFF0000u}, m.t0.data(), m.l);
+  plc::apply_element({Area::D, 7, 0x12340000u, 0xFFFF0000u}, m.t0.data(), m.l);
   EXPECT_EQ(m.word(m.t0, Area::D, 7), 0x1234BBBBu);
-  apply({Area::D, 7, 0x5678u, 0xFFFFu}, m.t0.data(), m.l);
+  plc::apply_element({Area::D, 7, 0x5678u, 0xFFFFu}, m.t0.data(), m.l);
   EXPECT_EQ(m.word(m.t0, Area::D, 7), 0x12345678u);
-  apply({Area::Y, 9, 1, 1}, m.global.data(), m.l);
+  plc::apply_element({Area::Y, 9, 1, 1}, m.global.data(), m.l);
   EXPECT_EQ(m.global[m.l.addr(Area::Y, 9)], 1);
 }
 
@@ -236,8 +238,15 @@ TEST(ModbusFraming, IncompleteBadProtocolBadLengthAndPipelining) {
 // A Modbus client on a blocking socket.
 struct Client {
   int fd = -1;
-  explicit Client(uint16_t port) {
+  // From `from` (a loopback address other than 127.0.0.1), or any.
+  explicit Client(uint16_t port, const char* from = nullptr) {
     fd = socket(AF_INET, SOCK_STREAM, 0);
+    if (from) {
+      sockaddr_in s{};
+      s.sin_family = AF_INET;
+      inet_pton(AF_INET, from, &s.sin_addr);
+      if (bind(fd, reinterpret_cast<sockaddr*>(&s), sizeof s) != 0) ADD_FAILURE() << strerror(errno);
+    }
     sockaddr_in a{};
     a.sin_family = AF_INET;
     a.sin_port = htons(port);
@@ -320,34 +329,240 @@ TEST(ModbusServer, WritesApplyAtTheNextScanAndReadsSeeWholeScans) {
   rt.shutdown();
 }
 
-TEST(ModbusServer, ClosesBadFramesAndRefusesConnectionsOverTheLimit) {
-  plc::TaskSpec s;
-  s.name = "main", s.program = "p", s.period_us = 1000;
-  s.image = image_of(".rung line 1\n LOAD M0\n OUT Y0\n.end\n");
-  std::string listening;
-  ServerOptions o;
-  o.port = 0, o.max_connections = 2, o.idle_timeout_ms = 300;
-  o.log = [&](const std::string& m) { if (m.find("listening") != std::string::npos) listening = m; };
-  auto drv = make_modbus_driver(plc::make_null_driver(), o);
-  uint16_t port = port_of(listening);
-  plc::Runtime rt({s}, plc::Options{}, [](const Image& img) { return make_interp_engine(img.il, img.layout); }, std::move(drv));
-  rt.start();
-  {
-    Client a(port), b(port), c(port);
-    EXPECT_EQ(a.call({1, 0, 0, 0, 1}), (Bytes{1, 1, 0}));
-    EXPECT_EQ(b.call({1, 0, 0, 0, 1}), (Bytes{1, 1, 0}));
-    EXPECT_EQ(c.call({1, 0, 0, 0, 1}), Bytes{});  // the third is closed
-    EXPECT_TRUE(c.closed);
-    Bytes bad{0, 1, 0, 9, 0, 6, 1, 3, 0, 0, 0, 1};  // protocol 9
-    ASSERT_EQ(send(a.fd, bad.data(), bad.size(), MSG_NOSIGNAL), ssize_t(bad.size()));
-    EXPECT_EQ(a.read_reply(), Bytes{});
-    EXPECT_TRUE(a.closed);
-    EXPECT_EQ(b.read_reply(), Bytes{});  // b idles out after 300 ms (the client waits up to 5 s)
-    EXPECT_TRUE(b.closed);
+// A Runtime running `il` (one task, 1 ms) with the Modbus driver on a free
+// port of 127.0.0.1, its log lines kept.
+struct Served {
+  std::mutex mu;
+  std::vector<std::string> lines;
+  uint16_t port = 0;
+  std::unique_ptr<plc::Runtime> rt;
+  Served(ServerOptions o, const std::string& il, bool stopped = false) {
+    plc::TaskSpec s;
+    s.name = "main", s.program = "p", s.period_us = 1000;
+    s.image = image_of(il);
+    o.port = 0;
+    o.log = [this](const std::string& m) {
+      std::lock_guard<std::mutex> g(mu);
+      lines.push_back(m);
+    };
+    auto drv = make_modbus_driver(plc::make_null_driver(), o);
+    port = port_of(lines.at(0));
+    plc::Options opt;
+    opt.start_stopped = stopped;
+    rt = std::make_unique<plc::Runtime>(std::vector<plc::TaskSpec>{s}, opt,
+                                         [](const Image& img) { return make_interp_engine(img.il, img.layout); },
+                                         std::move(drv));
+    rt->start();
   }
-  Client d(port);  // room again
-  EXPECT_EQ(d.call({2, 0, 0, 0, 1}), (Bytes{2, 1, 0}));
-  rt.shutdown();
+  ~Served() { rt->shutdown(); }
+  size_t count(const std::string& part) {
+    std::lock_guard<std::mutex> g(mu);
+    size_t n = 0;
+    for (const std::string& l : lines) n += l.find(part) != std::string::npos;
+    return n;
+  }
+};
+const char* const kM0ToY0 = ".rung line 1\n LOAD M0\n OUT Y0\n.end\n";
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+TEST(ModbusServer, ClosesBadFramesAndIdleConnections) {
+  ServerOptions o;
+  o.idle_timeout_ms = 300;
+  Served p(o, kM0ToY0);
+  Client a(p.port), b(p.port);
+  EXPECT_EQ(a.call({1, 0, 0, 0, 1}), (Bytes{1, 1, 0}));
+  EXPECT_EQ(b.call({1, 0, 0, 0, 1}), (Bytes{1, 1, 0}));
+  Bytes bad{0, 1, 0, 9, 0, 6, 1, 3, 0, 0, 0, 1};  // protocol 9
+  ASSERT_EQ(send(a.fd, bad.data(), bad.size(), MSG_NOSIGNAL), ssize_t(bad.size()));
+  EXPECT_EQ(a.read_reply(), Bytes{});
+  EXPECT_TRUE(a.closed);
+  auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(b.read_reply(), Bytes{});  // b idles out after 300 ms (the client waits up to 5 s)
+  EXPECT_TRUE(b.closed);
+  EXPECT_LT(seconds_since(t0), 2.0);
+  EXPECT_EQ(p.count("protocol identifier 9, not 0"), 1u);
+  EXPECT_EQ(p.count("no request for"), 1u);
+}
+
+TEST(ModbusServer, ANewcomerToAFullTableReplacesTheIdlest) {
+  ServerOptions o;
+  o.max_connections = 2;
+  Served p(o, kM0ToY0);
+  Client a(p.port), b(p.port);
+  EXPECT_EQ(a.call({1, 0, 0, 0, 1}), (Bytes{1, 1, 0}));
+  EXPECT_EQ(b.call({1, 0, 0, 0, 1}), (Bytes{1, 1, 0}));  // a is now the idlest
+  Client c(p.port);
+  EXPECT_EQ(c.call({1, 0, 0, 0, 1}), (Bytes{1, 1, 0}));
+  EXPECT_EQ(a.call({1, 0, 0, 0, 1}), Bytes{});
+  EXPECT_TRUE(a.closed);
+  EXPECT_EQ(b.call({2, 0, 0, 0, 1}), (Bytes{2, 1, 0}));
+  EXPECT_EQ(p.count("for one from 127.0.0.1"), 1u);
+}
+
+TEST(ModbusServer, ConnectionsPerAddressAreCappedWithinTheirAddress) {
+  ServerOptions o;
+  o.max_connections = 4, o.max_per_address = 2;
+  Served p(o, kM0ToY0);
+  // 127.0.0.2 is loopback too (127/8): a second client address on one machine.
+  Client a1(p.port, "127.0.0.2"), a2(p.port, "127.0.0.2"), b(p.port);
+  EXPECT_EQ(a1.call({1, 0, 0, 0, 1}), (Bytes{1, 1, 0}));
+  EXPECT_EQ(b.call({1, 0, 0, 0, 1}), (Bytes{1, 1, 0}));  // b is idler than a2 below, but of another address
+  EXPECT_EQ(a2.call({1, 0, 0, 0, 1}), (Bytes{1, 1, 0}));
+  Client a3(p.port, "127.0.0.2");  // the table has room; the address has not: a1 gives way
+  EXPECT_EQ(a3.call({1, 0, 0, 0, 1}), (Bytes{1, 1, 0}));
+  EXPECT_EQ(a1.call({1, 0, 0, 0, 1}), Bytes{});
+  EXPECT_TRUE(a1.closed);
+  EXPECT_EQ(a2.call({1, 0, 0, 0, 1}), (Bytes{1, 1, 0}));
+  EXPECT_EQ(b.call({1, 0, 0, 0, 1}), (Bytes{1, 1, 0}));
+  EXPECT_EQ(p.count("2 connections from 127.0.0.2 are open"), 1u);
+}
+
+TEST(ModbusServer, ANewcomerIsRefusedWhenEveryConnectionWaitsForAWrite) {
+  ServerOptions o;
+  o.max_connections = 1, o.write_timeout_ms = 1500;
+  Served p(o, kM0ToY0, true);  // STOP: the write waits
+  Client a(p.port);
+  Bytes w = frame({5, 0x20, 0x05, 0xFF, 0x00});  // M5 on
+  ASSERT_EQ(send(a.fd, w.data(), w.size(), MSG_NOSIGNAL), ssize_t(w.size()));
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  Client b(p.port);
+  EXPECT_EQ(b.call({1, 0, 0, 0, 1}), Bytes{});
+  EXPECT_TRUE(b.closed);
+  EXPECT_EQ(a.read_reply(), (Bytes{0x85, 6}));  // no scan took it: busy, not applied
+  EXPECT_EQ(p.count("each with a write pending"), 1u);
+  p.rt->run();
+  ASSERT_TRUE(p.rt->wait_scans(2, 5000));
+  EXPECT_EQ(p.rt->get("M5"), "0");
+}
+
+TEST(ModbusServer, AFrameBegunMustBeFinishedInTime) {
+  ServerOptions o;
+  o.frame_timeout_ms = 400;
+  Served p(o, kM0ToY0);
+  Bytes f = frame({1, 0, 0, 0, 1});
+  // a whole frame in three parts within the deadline: answered
+  Client a(p.port);
+  for (size_t at : {0, 3, 8}) {
+    size_t to = at == 8 ? f.size() : at == 0 ? 3 : 8;
+    ASSERT_EQ(send(a.fd, f.data() + at, to - at, MSG_NOSIGNAL), ssize_t(to - at));
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  EXPECT_EQ(a.read_reply(), (Bytes{1, 1, 0}));
+  // a byte every 100 ms: the connection is busy but the frame never ends (slowloris)
+  Client b(p.port);
+  auto t0 = std::chrono::steady_clock::now();
+  size_t sent = 0;
+  while (sent < f.size() - 1 && send(b.fd, f.data() + sent, 1, MSG_NOSIGNAL) == 1) {
+    sent++;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  EXPECT_EQ(b.read_reply(), Bytes{});
+  EXPECT_TRUE(b.closed);
+  double took = seconds_since(t0);
+  EXPECT_GE(took, 0.35);
+  EXPECT_LT(took, 3.0);
+  EXPECT_EQ(p.count("still incomplete"), 1u);
+}
+
+TEST(ModbusServer, AFullShadowAnswersBusyAtOnceAndDropsNothingElse) {
+  ServerOptions o;
+  o.pending_writes = 1968, o.write_timeout_ms = 1500;
+  Served p(o, kM0ToY0, true);  // STOP: nothing takes the shadow
+  Client a(p.port), b(p.port);
+  Bytes all{15, 0x20, 0x00, 0x07, 0xB0, 246};  // M0..M1967 on: the shadow is full
+  all.resize(all.size() + 246, 0xFF);
+  Bytes f = frame(all);
+  ASSERT_EQ(send(a.fd, f.data(), f.size(), MSG_NOSIGNAL), ssize_t(f.size()));
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(b.call({5, 0x27, 0xD0, 0xFF, 0x00}), (Bytes{0x85, 6}));  // M2000: one element more
+  EXPECT_LT(seconds_since(t0), 1.0);
+  EXPECT_EQ(a.read_reply(), (Bytes{0x8F, 6}));  // then a's write times out, not applied
+  p.rt->run();
+  ASSERT_TRUE(p.rt->wait_scans(2, 5000));
+  EXPECT_EQ(p.rt->get("M0"), "0");
+  EXPECT_EQ(p.rt->get("M2000"), "0");
+  // running, the same write is applied and answered
+  EXPECT_EQ(a.call(all), (Bytes{15, 0x20, 0x00, 0x07, 0xB0}));
+  EXPECT_EQ(p.rt->get("M1967"), "1");
+  EXPECT_EQ(p.count("exception 06"), 1u);
+}
+
+TEST(ModbusServer, WritesFromManyRequestsLandInOrder) {
+  // 8 connections each write their own D word 200 times (FC 16) and one
+  // shared coil; the value each reads back right after its write is its own
+  // write (the reply waits for the scan), and at the end each D word holds
+  // the last value its client wrote.
+  Served p(ServerOptions{}, kM0ToY0);
+  std::vector<std::thread> th;
+  std::vector<std::string> errors(8);
+  for (int i = 0; i < 8; i++)
+    th.emplace_back([&, i] {
+      Client c(p.port);
+      uint16_t reg = uint16_t(1024 + 2 * i);
+      for (uint16_t k = 1; k <= 200; k++) {
+        uint16_t hi = uint16_t(i), lo = k;
+        Bytes r = c.call({16, uint8_t(reg >> 8), uint8_t(reg), 0, 2, 4, uint8_t(hi >> 8), uint8_t(hi), uint8_t(lo >> 8), uint8_t(lo)});
+        if (r != Bytes{16, uint8_t(reg >> 8), uint8_t(reg), 0, 2}) return void(errors[i] = "write " + std::to_string(k));
+        if (c.call({3, uint8_t(reg >> 8), uint8_t(reg), 0, 2}) != Bytes{3, 4, 0, uint8_t(i), uint8_t(lo >> 8), uint8_t(lo)})
+          return void(errors[i] = "read after write " + std::to_string(k));
+      }
+    });
+  for (auto& t : th) t.join();
+  for (int i = 0; i < 8; i++) {
+    EXPECT_EQ(errors[i], "") << i;
+    EXPECT_EQ(p.rt->get("D" + std::to_string(i)), std::to_string(i * 65536 + 200));
+  }
+}
+
+TEST(ModbusServer, PipelinedRequestsBeyondTheReplyBufferAreAllAnswered) {
+  // 1,000 reads of 125 registers sent at once, the replies (259 KB) read
+  // only after: the server stops reading at 64 KiB of replies not sent and
+  // goes on as they drain; every reply comes, in order.
+  Served p(ServerOptions{}, kM0ToY0);
+  Client c(p.port);
+  Bytes all;
+  for (int i = 0; i < 1000; i++) {
+    Bytes f = frame({3, 0, 0, 0, 125}, 1, uint16_t(i));
+    all.insert(all.end(), f.begin(), f.end());
+  }
+  ASSERT_EQ(send(c.fd, all.data(), all.size(), MSG_NOSIGNAL), ssize_t(all.size()));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  for (int i = 0; i < 1000; i++) {
+    Bytes h(7);
+    ASSERT_TRUE(c.read_n(h.data(), 7)) << i;
+    ASSERT_EQ(h[0] << 8 | h[1], i);
+    Bytes pdu((h[4] << 8 | h[5]) - 1);
+    ASSERT_TRUE(c.read_n(pdu.data(), pdu.size())) << i;
+    ASSERT_EQ(pdu.size(), 252u) << i;
+  }
+}
+
+TEST(ModbusServer, LogLinesAreThrottledPerCause) {
+  ServerOptions o;
+  o.log_burst = 3;  // window 10 s: the test is well within one
+  auto p = std::make_unique<Served>(o, kM0ToY0);
+  Bytes bad{0, 1, 0, 9, 0, 6, 1, 3, 0, 0, 0, 1};
+  for (int i = 0; i < 50; i++) {
+    Client c(p->port);
+    ASSERT_EQ(send(c.fd, bad.data(), bad.size(), MSG_NOSIGNAL), ssize_t(bad.size()));
+    EXPECT_EQ(c.read_reply(), Bytes{});
+  }
+  EXPECT_EQ(p->count("closed the connection from"), 3u);
+  std::vector<std::string> lines;
+  {
+    Served& s = *p;
+    s.rt->shutdown();  // the server stops: it says what it held back
+    std::lock_guard<std::mutex> g(s.mu);
+    lines = s.lines;
+  }
+  size_t summaries = 0;
+  for (const std::string& l : lines)
+    summaries += l == "ldrun: modbus: 47 more 'closed: not Modbus' messages suppressed in 10 s";
+  EXPECT_EQ(summaries, 1u);
 }
 
 TEST(ModbusAddress, Parses) {
