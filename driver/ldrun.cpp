@@ -52,6 +52,8 @@ std::string usage() {
     "             [--control=stdin|none] [--reload] [--stats] [--out FILE] [--block 16] [--scans N]\n"
     "             [--modbus [HOST:]PORT] [--modbus-connections 16]   a Modbus TCP server (127.0.0.1 unless HOST is given; also with --trace)\n"
     "             [--monitor HOST:PORT [--monitor-write] [--monitor-remote]]  (the live ladder view, docs/runtime.md)\n"
+    "             [--monitor-host NAME[,NAME]] [--monitor-token TOKEN]  (names it is reached by; the write token)\n"
+    "             [--monitor-connections 64] [--monitor-per-address 32] [--monitor-streams 32]  (docs/faults.md)\n"
     "       FILE: an image (.bin, .hex) or a source ldc reads (.ld, .il, .xml, .rtsp, .sfc), compiled in memory\n"
     "             (native code at -O0 unless -O1 or -O2 is given; --engine=fast is the fast interpreter)\n"
     "       FILE.xml: a PLCopen configuration of several tasks runs as a project (--io); --task NAME picks one task's program\n"
@@ -67,6 +69,8 @@ struct RtArgs {
   bool sandbox = false;  // also in trace mode: it does not select the runtime
   std::string monitor;   // --monitor HOST:PORT (runtime/net/monitor.h)
   bool monitor_write = false, monitor_remote = false;
+  std::vector<std::string> monitor_hosts;  // --monitor-host, each a NAME or a comma list
+  std::string monitor_token, monitor_connections, monitor_per_address, monitor_streams;
 };
 
 // --task NAME: one task's program of a PLCopen configuration of several tasks.
@@ -197,7 +201,8 @@ class SoftPlcRun {
   FILE* out_ = nullptr;
   std::unique_ptr<IoDriver> driver_;
   std::unique_ptr<Monitor> monitor_;
-  std::string monitor_host_;
+  std::string monitor_host_, monitor_token_;
+  bool print_token_ = false;  // a token ldrun made: the user learns it here
   sigset_t sigs_;
   std::unique_ptr<Runtime> rt_;
   std::atomic<bool> done_{false};
@@ -316,16 +321,37 @@ class SoftPlcRun {
   // The monitor wraps the driver: snapshots after scans, writes before them.
   void add_monitor() {
     if (a_.monitor.empty()) {
-      if (a_.monitor_write || a_.monitor_remote)
-        throw UserError("ldrun: error: --monitor-write and --monitor-remote need --monitor HOST:PORT");
+      if (a_.monitor_write || a_.monitor_remote || !a_.monitor_hosts.empty() || !a_.monitor_token.empty() ||
+          !a_.monitor_connections.empty() || !a_.monitor_per_address.empty() || !a_.monitor_streams.empty())
+        throw UserError("ldrun: error: the --monitor-... options need --monitor HOST:PORT");
       return;
     }
     MonitorOptions mo;
     try {
       std::tie(mo.host, mo.port) = parse_monitor_address(a_.monitor, a_.monitor_remote);
+      for (const std::string& h : a_.monitor_hosts) parse_monitor_hosts(h, mo.hosts);
+      if (!a_.monitor_token.empty()) {
+        if (!a_.monitor_write) throw std::runtime_error("--monitor-token guards writes: it needs --monitor-write");
+        check_monitor_token(a_.monitor_token);
+        mo.token = a_.monitor_token;
+      } else if (a_.monitor_remote && a_.monitor_write) {
+        mo.token = make_monitor_token();  // printed at start
+        print_token_ = true;
+      }
     } catch (std::exception& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
+    auto count = [](const std::string& v, const char* flag, size_t def) -> size_t {
+      if (v.empty()) return def;
+      if (v.size() > 4 || v.find_first_not_of("0123456789") != std::string::npos || std::stoul(v) < 1 || std::stoul(v) > 1000)
+        throw UserError(std::string("ldrun: error: bad ") + flag + " '" + v + "' (1..1000)");
+      return std::stoul(v);
+    };
+    mo.max_connections = count(a_.monitor_connections, "--monitor-connections", mo.max_connections);
+    mo.max_per_address = count(a_.monitor_per_address, "--monitor-per-address", mo.max_per_address);
+    mo.max_streams = count(a_.monitor_streams, "--monitor-streams", mo.max_streams);
+    mo.log = opt_.log;
     mo.write = a_.monitor_write;
     monitor_host_ = mo.host;
+    monitor_token_ = mo.token;
     std::vector<MonitorTask> mts;
     for (const TaskSpec& s : specs_) mts.push_back({s.name, s.period_us, s.image});
     monitor_ = std::make_unique<Monitor>(std::move(mts), mo);
@@ -368,8 +394,12 @@ class SoftPlcRun {
       monitor_->start();
     } catch (std::exception& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
     std::string host = monitor_host_.find(':') != std::string::npos ? "[" + monitor_host_ + "]" : monitor_host_;
-    std::fprintf(stderr, "ldrun: monitor on http://%s:%u/%s\n", host.c_str(), unsigned(monitor_->port()),
-                 a_.monitor_write ? " (writes allowed)" : "");
+    std::string url = "http://" + host + ":" + std::to_string(monitor_->port()) + "/";
+    std::string note = !a_.monitor_write      ? ""
+                       : monitor_token_.empty() ? " (writes allowed)"
+                       : print_token_           ? " (writes allowed with the token: open " + url + "?token=" + monitor_token_ + " once)"
+                                                : " (writes allowed with the token of --monitor-token: open " + url + "?token=TOKEN once)";
+    std::fprintf(stderr, "ldrun: monitor on %s%s\n", url.c_str(), note.c_str());
   }
 
   void serve_signals() {
@@ -670,8 +700,13 @@ int ldrun_main(int argc, char** argv) {
         opt_value("--watchdog", rta.watchdog) || opt_value("--retain-every", rta.retain_every) ||
         opt_value("--retain", rta.retain) || opt_value("--out", rta.out) || opt_value("--block", rta.block) ||
         opt_value("--modbus-connections", rta.modbus_connections) || opt_value("--modbus", rta.modbus) ||
+        opt_value("--monitor-token", rta.monitor_token) || opt_value("--monitor-connections", rta.monitor_connections) ||
+        opt_value("--monitor-per-address", rta.monitor_per_address) || opt_value("--monitor-streams", rta.monitor_streams) ||
         opt_value("--monitor", rta.monitor) || flag("--monitor-write", rta.monitor_write) ||
         flag("--monitor-remote", rta.monitor_remote)) {
+    } else if (a == "--monitor-host" || a.rfind("--monitor-host=", 0) == 0) {
+      rta.monitor_hosts.push_back(value("--monitor-host"));
+      rta.on = true;
     } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");
     else if (a.rfind("--task", 0) == 0) g_task = value("--task");
     else if (a == "--cycles") cycles = true;  // simulated engines: cycles and us per scan
