@@ -371,8 +371,12 @@ struct Server::Loop {
 
   explicit Loop(Server& srv) : s(srv), cfg(srv.cfg_), logs(srv.cfg_.log, srv.cfg_.log_interval_ms) {}
 
-  bool reads(const Conn& c) const {  // back-pressure: a connection we owe replies to is not read
-    return !c.closing && !c.dead && !c.stream && !c.parked && !c.eof && c.unsent() <= cfg.max_output;
+  // Back-pressure: a connection we owe replies to is not read, nor one that
+  // holds more bytes not parsed yet than the largest request (head, its
+  // blank line, body): those hold a whole request or an error, served first.
+  bool reads(const Conn& c) const {
+    return !c.closing && !c.dead && !c.stream && !c.parked && !c.eof && c.unsent() <= cfg.max_output &&
+           c.in.size() < cfg.limits.max_head + cfg.limits.max_body + 64;
   }
   bool serves(const Conn& c) const {
     return !c.closing && !c.dead && !c.stream && !c.parked && c.unsent() <= cfg.max_output;
@@ -464,6 +468,7 @@ struct Server::Loop {
     if (k > 0) {
       if (c.in.empty()) c.request_since = now;  // a request's deadline runs from its first byte
       c.in.append(tmp, size_t(k));
+      if (c.in.size() > s.peak_input_.load(std::memory_order_relaxed)) s.peak_input_.store(c.in.size(), std::memory_order_relaxed);
       c.need_bytes = false;
       c.last_active = now;
     } else if (k == 0) {

@@ -113,6 +113,9 @@ class Server {
   uint16_t port() const { return port_; }
   size_t connections() const { return nconn_.load(); }
   size_t streams() const { return nstream_.load(); }
+  // The most bytes received and not yet parsed one connection held (at most
+  // the largest request, 12 KiB + 64, plus one 16 KiB read).
+  size_t peak_input() const { return peak_input_.load(); }
 
  private:
   struct Loop;
@@ -124,7 +127,7 @@ class Server {
   uint16_t port_ = 0;
   std::thread th_;
   std::atomic<bool> stop_{false};
-  std::atomic<size_t> nconn_{0}, nstream_{0};
+  std::atomic<size_t> nconn_{0}, nstream_{0}, peak_input_{0};
 };
 
 }  // namespace ldc::http

@@ -398,6 +398,60 @@ TEST(HttpServer, UnreadRepliesStopTheReadingThenTheConnection) {
   s.stop();
 }
 
+// Many small requests pipelined while the replies are read: the server reads
+// no more of a connection than one request's limits (plus one read) ahead of
+// what it has parsed, whatever the client sends.
+TEST(HttpServer, PipelinedInputIsReadOnlyAsFastAsItIsServed) {
+  Server::Config c;
+  std::atomic<int> calls{0};
+  Server s(c, [&](const Request&) { calls++; return Response{200, "text/plain", "ok", false}; }, nullptr);
+  s.start();
+  int t = dial(s.port());
+  const std::string one = "GET / HTTP/1.1\r\nHost: h\r\n\r\n";
+  std::string many;
+  for (int i = 0; i < 20000; i++) many += one;  // 560 KB
+  std::thread reader([&] {
+    std::string got;
+    char b[65536];
+    size_t n = 0;
+    while (n < 20000) {
+      ssize_t k = recv(t, b, sizeof b, 0);
+      if (k <= 0) break;
+      got.append(b, size_t(k));
+      for (size_t at; (at = got.find("200 OK")) != std::string::npos;) got.erase(0, at + 6), n++;
+    }
+  });
+  (void)!send(t, many.data(), many.size(), MSG_NOSIGNAL);
+  reader.join();
+  EXPECT_EQ(calls.load(), 20000);
+  EXPECT_LE(s.peak_input(), c.limits.max_head + c.limits.max_body + 64 + 16384);
+  close(t);
+  s.stop();
+}
+
+// The largest request the limits allow (a head of 8 KiB and its blank line, a
+// body of 4 KiB) is read whole and served, not left waiting for its deadline.
+TEST(HttpServer, TheLargestRequestIsServed) {
+  Server::Config c;
+  c.request_timeout_ms = 3000;
+  Server s(c, [](const Request& r) { return Response{200, "text/plain", std::to_string(r.body.size()), false}; }, nullptr);
+  s.start();
+  std::string head = "POST / HTTP/1.1\r\nHost: h\r\nConnection: close\r\nContent-Length: 4096\r\nX: ";
+  head += std::string(c.limits.max_head + 2 - head.size() - 4, 'p') + "\r\n\r\n";
+  ASSERT_EQ(head.size(), c.limits.max_head + 2);
+  EXPECT_EQ(parse_request(head + std::string(4096, 'b'), c.limits).status, S::Done);
+  int t = dial(s.port());
+  // all but its last 2 bytes, then those: the server must still be reading
+  std::string whole = head + std::string(4096, 'b');
+  (void)!send(t, whole.data(), whole.size() - 2, MSG_NOSIGNAL);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  std::string got = ::exchange(t, whole.substr(whole.size() - 2));
+  EXPECT_EQ(got.rfind("HTTP/1.1 200 OK", 0), 0u) << got.substr(0, 100);
+  EXPECT_EQ(got.substr(got.size() - 4), "4096");
+  close(t);
+  s.stop();
+}
+
 // A handler that cannot answer yet parks the request; the server thread
 // serves the others meanwhile and asks again.
 TEST(HttpServer, ParkedRequestsDoNotBlockTheServer) {

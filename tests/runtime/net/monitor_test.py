@@ -669,14 +669,16 @@ def pipelined_posts(port, parts):
         c = socket.create_connection(("127.0.0.1", port), timeout=60)
         got = []
 
-        def reader():
-            buf = b""
-            while buf.count(b"HTTP/1.1 ") < len(parts[i]):
+        def reader():  # counts replies as they come (not by scanning all so far: that is quadratic)
+            chunks, n, tail, mark = [], 0, b"", b"HTTP/1.1 "
+            while n < len(parts[i]):
                 b = c.recv(1 << 20)
                 if not b:
                     break
-                buf += b
-            got.append(buf)
+                chunks.append(b)
+                n += (tail + b).count(mark) - tail.count(mark)
+                tail = (tail + b)[-len(mark):]
+            got.append(b"".join(chunks))
 
         r = threading.Thread(target=reader)
         r.start()
