@@ -238,6 +238,7 @@ std::optional<std::string> form_value(std::string_view form, std::string_view na
 const char* status_text(int code) {
   switch (code) {
     case 200: return "OK";
+    case 202: return "Accepted";
     case 204: return "No Content";
     case 400: return "Bad Request";
     case 403: return "Forbidden";

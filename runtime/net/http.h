@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -35,6 +36,8 @@ struct Request {
   // long since it was first asked (0 the first time).
   int retries = 0;
   int64_t waited_ms = 0;
+  // The handler's own state for a request it parked (kept with the request).
+  mutable std::shared_ptr<void> state;
   // The first header of that (lower-case) name.
   const std::string* header(std::string_view name) const;
   bool keep_alive() const;  // HTTP/1.1 unless "Connection: close"; 1.0 only with keep-alive

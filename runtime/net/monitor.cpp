@@ -9,7 +9,10 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstring>
+#include <deque>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <set>
@@ -334,6 +337,63 @@ bool same_secret(const std::string& a, const std::string& b) {
   return d == 0;
 }
 
+// The thread that carries out RUN and STOP for the server, one request at a
+// time, so that the server's thread never waits for them.
+class ControlThread {
+ public:
+  static constexpr size_t kMaxJobs = 16;
+  struct Job {
+    std::function<http::Response()> act;
+    http::Response reply;           // valid once done
+    std::atomic<bool> done{false};
+  };
+  ~ControlThread() { stop(); }
+  void start() { th_ = std::thread([this] { loop(); }); }
+  void stop() {
+    {
+      std::lock_guard<std::mutex> l(mu_);
+      quit_ = true;
+    }
+    cv_.notify_all();
+    if (th_.joinable()) th_.join();
+  }
+  // nullptr when kMaxJobs wait already
+  std::shared_ptr<Job> post(std::function<http::Response()> act) {
+    std::lock_guard<std::mutex> l(mu_);
+    if (jobs_.size() >= kMaxJobs) return nullptr;
+    auto j = std::make_shared<Job>();
+    j->act = std::move(act);
+    jobs_.push_back(j);
+    cv_.notify_one();
+    return j;
+  }
+
+ private:
+  void loop() {
+    while (true) {
+      std::shared_ptr<Job> j;
+      {
+        std::unique_lock<std::mutex> l(mu_);
+        cv_.wait(l, [&] { return quit_ || !jobs_.empty(); });
+        if (jobs_.empty()) return;  // quit, and nothing left
+        j = jobs_.front();
+        jobs_.pop_front();
+      }
+      try {
+        j->reply = j->act();
+      } catch (std::exception& e) {
+        j->reply = http::Response{500, "text/plain; charset=utf-8", std::string(e.what()) + "\n", false};
+      }
+      j->done.store(true, std::memory_order_release);
+    }
+  }
+  std::mutex mu_;
+  std::condition_variable cv_;
+  std::deque<std::shared_ptr<Job>> jobs_;
+  bool quit_ = false;
+  std::thread th_;
+};
+
 }  // namespace
 
 struct Monitor::Impl {
@@ -342,6 +402,7 @@ struct Monitor::Impl {
   Layout glayout = Layout::standard(0);
   Runtime* rt = nullptr;
   std::unique_ptr<http::Server> server;
+  ControlThread control;  // RUN/STOP off the server's thread
   std::string program_json;
   std::vector<TaskStats> stats;  // the server thread's
   std::mutex global_mu;          // the global image's snapshot
@@ -646,6 +707,40 @@ struct Monitor::Impl {
     return text(200, release ? "released" : "forced");
   }
 
+  // RUN/STOP go to the control thread (a STOP saves retentive memory: a file
+  // written and fsynced); the request is parked until it is done.
+  http::Response run_or_stop(const http::Request& r, bool run) {
+    if (r.retries > 0) {
+      auto& job = *std::static_pointer_cast<ControlThread::Job>(r.state);
+      if (job.done.load(std::memory_order_acquire)) return job.reply;
+      if (r.waited_ms > 4000) return text(202, std::string(run ? "RUN" : "STOP") + " requested; still under way");
+      return http::Response{200, "", "", false, true};
+    }
+    if (!rt) return text(409, "no runtime");
+    Runtime* runtime = rt;
+    std::function<http::Response()> act;
+    auto task = http::form_value(r.body, "task");
+    if (task && !task->empty()) {  // one task: held or released, the others run on
+      size_t ti = rt->find_task(*task);
+      if (ti == SIZE_MAX) return text(400, "unknown task '" + *task + "'");
+      act = [runtime, ti, run, name = *task] {
+        if (run) runtime->run_task(ti);
+        else runtime->stop_task(ti);
+        return text(200, name + (runtime->task_held(ti) ? " STOP" : " RUN"));
+      };
+    } else {
+      act = [runtime, run] {
+        if (run) runtime->run();
+        else runtime->stop();
+        return text(200, state_name(runtime->state()));
+      };
+    }
+    std::shared_ptr<ControlThread::Job> job = control.post(std::move(act));
+    if (!job) return text(503, "busy: " + std::to_string(ControlThread::kMaxJobs) + " RUN/STOP requests are waiting already");
+    r.state = job;
+    return http::Response{200, "", "", false, true};
+  }
+
   http::Response handle(const http::Request& r) {
     if (!host_ok(r))
       return text(421, "this monitor answers to its own address only (Host: " + std::string(r.header("host") ? *r.header("host") : "") +
@@ -676,18 +771,7 @@ struct Monitor::Impl {
       if (!r.body.empty() && (!ct || ct->rfind("application/x-www-form-urlencoded", 0) != 0))
         return text(415, "the body is application/x-www-form-urlencoded");
       if (p == "/api/write") return write(r);
-      if (!rt) return text(409, "no runtime");
-      auto task = http::form_value(r.body, "task");
-      if (task && !task->empty()) {  // one task: held or released, the others run on
-        size_t ti = rt->find_task(*task);
-        if (ti == SIZE_MAX) return text(400, "unknown task '" + *task + "'");
-        if (p == "/api/run") rt->run_task(ti);
-        else rt->stop_task(ti);
-        return text(200, *task + (rt->task_held(ti) ? " STOP" : " RUN"));
-      }
-      if (p == "/api/run") rt->run();
-      else rt->stop();
-      return text(200, state_name(rt->state()));
+      return run_or_stop(r, p == "/api/run");
     }
     return text(404, "no such page: " + p);
   }
@@ -872,11 +956,13 @@ void Monitor::start() {
         if (!m->server || m->server->streams() == 0) return "";
         return "data: " + m->state_json() + "\n\n";
       });
+  impl_->control.start();
   impl_->server->start();
 }
 
 void Monitor::stop() {
   if (impl_->server) impl_->server->stop();
+  impl_->control.stop();
 }
 
 uint16_t Monitor::port() const { return impl_->server ? impl_->server->port() : 0; }

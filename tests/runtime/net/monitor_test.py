@@ -5,6 +5,7 @@ monitor_test.py LDRUN_DIR LDC_DIR SOURCE_ROOT CASE
 Runs ldrun with the monitor on a free loopback port (port 0; ldrun prints the
 one it got) and talks to it over plain sockets: only the standard library.
 """
+import atexit
 import json
 import os
 import signal
@@ -25,12 +26,20 @@ class Ldrun:
     def __init__(self, args, stdout=subprocess.DEVNULL, **popen):
         self.p = subprocess.Popen([os.path.join(LDRUN_DIR, "ldrun")] + args, stdout=stdout,
                                   stderr=subprocess.PIPE, text=True, cwd=ROOT, **popen)
-        line = self.p.stderr.readline()
+        line, before = self.p.stderr.readline(), ""
+        while line and "monitor on http://" not in line and len(before) < 2000:  # e.g. the retentive file's note
+            before, line = before + line, self.p.stderr.readline()
         if "monitor on http://127.0.0.1:" not in line:
             self.p.kill()
-            fail("no monitor line: " + line + self.p.stderr.read())
+            fail("no monitor line: " + before + line + self.p.stderr.read())
         self.banner = line
         self.port = int(line.split("127.0.0.1:")[1].split("/")[0])
+        atexit.register(self.reap)
+
+    def reap(self):  # a test that failed leaves no ldrun behind
+        if self.p.poll() is None:
+            self.p.kill()
+            self.p.wait()
 
     def stop(self):
         self.p.send_signal(signal.SIGINT)
@@ -848,10 +857,54 @@ def case_fd_exhaustion():
     if code != 200:
         fail("not served after the clients left: %d" % code)
 
+def case_stop_not_blocking():
+    # STOP saves retentive memory (a file written and fsynced): done on the
+    # monitor's control thread, never on the server's.  Here the save blocks:
+    # the retentive file's temporary name is a FIFO no one reads.  The STOP
+    # is parked; other clients are answered within 1 s meanwhile (state
+    # STOP: the outputs went safe before the save).  A reader of the FIFO
+    # lets the save go on (it fails at fsync, says so, and removes the FIFO),
+    # and the STOP is answered.
+    import tempfile
+    import threading
+    d = tempfile.mkdtemp(prefix="ldc_monitor_stop_")
+    ret = os.path.join(d, "plant.ret")
+    os.mkfifo(ret + ".tmp")
+    m = Ldrun(["examples/eq1.ld", "--io=none", "--period", "10ms", "--retain", ret, "--retain-every", "60s",
+               "--monitor", "127.0.0.1:0", "--monitor-write"])
+    p = m.port
+    code, _, text = post(p, "/api/write", "device=K0&value=1")  # retentive memory changes: STOP must save it
+    if code != 200:
+        fail("write K0: %d %s" % (code, text))
+    time.sleep(0.2)
+    stop_reply = []
+    t = threading.Thread(target=lambda: stop_reply.append(post(p, "/api/stop", "")))
+    t.start()
+    time.sleep(0.5)
+    if stop_reply:
+        fail("the STOP was answered while its save could not have finished: %s" % (stop_reply,))
+    worst = max(timed_get(p, "/api/state", 1.0), timed_get(p, "/api/program", 1.0))
+    if get_json(p, "/api/state")["state"] != "STOP":
+        fail("not in STOP while the save waits")
+    fifo = os.open(ret + ".tmp", os.O_RDONLY | os.O_NONBLOCK)
+    t.join(5)
+    os.close(fifo)
+    if not stop_reply or stop_reply[0][0] != 200 or "STOP" not in stop_reply[0][2]:
+        fail("the STOP was not answered once its save went on: %s" % (stop_reply,))
+    err = m.stop()
+    print("a STOP whose save blocks: other clients answered within %.3f s; %s" % (worst, err.strip().split("\n")[0]))
+    if "retentive save failed" not in err:
+        fail("the failed save was not reported: " + err)
+    for f in os.listdir(d):
+        os.unlink(os.path.join(d, f))
+    os.rmdir(d)
+
+
 if __name__ == "__main__":
     {"page_and_stream": case_page_and_stream, "refusals": case_refusals, "write_and_force": case_write_and_force,
      "load": case_load, "project": case_project, "trace_output": case_trace_output,
      "connection_caps": case_connection_caps, "pipelined_flood": case_pipelined_flood, "rebinding": case_rebinding,
      "token": case_token, "state_flood_stop": case_state_flood_stop, "write_backlog": case_write_backlog,
-     "minor_http": case_minor_http, "fd_exhaustion": case_fd_exhaustion}[CASE]()
+     "minor_http": case_minor_http, "fd_exhaustion": case_fd_exhaustion,
+     "stop_not_blocking": case_stop_not_blocking}[CASE]()
     print("ok")
