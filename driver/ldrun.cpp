@@ -56,6 +56,8 @@ std::string usage() {
     "             [--modbus-per-address 8] [--modbus-frame-timeout 2s] [--modbus-idle-timeout 60s]\n"
     "             [--modbus-write-timeout 1s] [--modbus-pending-writes 8192]   its limits (docs/faults.md)\n"
     "             [--monitor HOST:PORT [--monitor-write] [--monitor-remote]]  (the live ladder view, docs/runtime.md)\n"
+    "             [--monitor-host NAME[,NAME]] [--monitor-token TOKEN]  (names it is reached by; the write token)\n"
+    "             [--monitor-connections 64] [--monitor-per-address 32] [--monitor-streams 32]  (docs/faults.md)\n"
     "       FILE: an image (.bin, .hex) or a source ldc reads (.ld, .il, .xml, .rtsp, .sfc), compiled in memory\n"
     "             (native code at -O0 unless -O1 or -O2 is given; --engine=fast is the fast interpreter)\n"
     "       FILE.xml: a PLCopen configuration of several tasks runs as a project (--io); --task NAME picks one task's program\n"
@@ -72,6 +74,8 @@ struct RtArgs {
   bool sandbox = false;  // also in trace mode: it does not select the runtime
   std::string monitor;   // --monitor HOST:PORT (runtime/net/monitor.h)
   bool monitor_write = false, monitor_remote = false;
+  std::vector<std::string> monitor_hosts;  // --monitor-host, each a NAME or a comma list
+  std::string monitor_token, monitor_connections, monitor_per_address, monitor_streams;
 };
 
 // --task NAME: one task's program of a PLCopen configuration of several tasks.
@@ -211,7 +215,8 @@ class SoftPlcRun {
   FILE* out_ = nullptr;
   std::unique_ptr<IoDriver> driver_;
   std::unique_ptr<Monitor> monitor_;
-  std::string monitor_host_;
+  std::string monitor_host_, monitor_token_;
+  bool print_token_ = false;  // a token ldrun made: the user learns it here
   sigset_t sigs_;
   std::unique_ptr<Runtime> rt_;
   std::atomic<bool> done_{false};
@@ -370,19 +375,42 @@ class SoftPlcRun {
     } catch (std::runtime_error& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
   }
 
+  // A --monitor-... count: 1..1000, `def` if not given.
+  static size_t monitor_count(const std::string& v, const char* flag, size_t def) {
+    if (v.empty()) return def;
+    if (v.size() > 4 || v.find_first_not_of("0123456789") != std::string::npos || std::stoul(v) < 1 || std::stoul(v) > 1000)
+      throw UserError(std::string("ldrun: error: bad ") + flag + " '" + v + "' (1..1000)");
+    return std::stoul(v);
+  }
+
   // The monitor wraps the driver: snapshots after scans, writes before them.
   void add_monitor() {
     if (a_.monitor.empty()) {
-      if (a_.monitor_write || a_.monitor_remote)
-        throw UserError("ldrun: error: --monitor-write and --monitor-remote need --monitor HOST:PORT");
+      if (a_.monitor_write || a_.monitor_remote || !a_.monitor_hosts.empty() || !a_.monitor_token.empty() ||
+          !a_.monitor_connections.empty() || !a_.monitor_per_address.empty() || !a_.monitor_streams.empty())
+        throw UserError("ldrun: error: the --monitor-... options need --monitor HOST:PORT");
       return;
     }
     MonitorOptions mo;
     try {
       std::tie(mo.host, mo.port) = parse_monitor_address(a_.monitor, a_.monitor_remote);
+      for (const std::string& h : a_.monitor_hosts) parse_monitor_hosts(h, mo.hosts);
+      if (!a_.monitor_token.empty()) {
+        if (!a_.monitor_write) throw std::runtime_error("--monitor-token guards writes: it needs --monitor-write");
+        check_monitor_token(a_.monitor_token);
+        mo.token = a_.monitor_token;
+      } else if (a_.monitor_remote && a_.monitor_write) {
+        mo.token = make_monitor_token();  // printed at start
+        print_token_ = true;
+      }
     } catch (std::exception& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
+    mo.max_connections = monitor_count(a_.monitor_connections, "--monitor-connections", mo.max_connections);
+    mo.max_per_address = monitor_count(a_.monitor_per_address, "--monitor-per-address", mo.max_per_address);
+    mo.max_streams = monitor_count(a_.monitor_streams, "--monitor-streams", mo.max_streams);
+    mo.log = opt_.log;
     mo.write = a_.monitor_write;
     monitor_host_ = mo.host;
+    monitor_token_ = mo.token;
     std::vector<MonitorTask> mts;
     for (const TaskSpec& s : specs_) mts.push_back({s.name, s.period_us, s.image});
     monitor_ = std::make_unique<Monitor>(std::move(mts), mo);
@@ -403,7 +431,9 @@ class SoftPlcRun {
     const size_t modbus_conns = mb ? mb->max_connections : 0;
     const size_t modbus_files = mb ? modbus::descriptors_needed(*mb) : 0;
     // the monitor's connections, a newcomer told 503, its listener and wake-up pipe
-    const size_t monitor_files = a_.monitor.empty() ? 0 : MonitorOptions{}.max_connections + 4;
+    const size_t monitor_conns =
+        a_.monitor.empty() ? 0 : monitor_count(a_.monitor_connections, "--monitor-connections", MonitorOptions{}.max_connections);
+    const size_t monitor_files = monitor_conns ? monitor_conns + 4 : 0;
     const size_t need = own + sandbox + modbus_files + monitor_files;
     rlimit rl{};
     if (getrlimit(RLIMIT_NOFILE, &rl) != 0 || rl.rlim_cur == RLIM_INFINITY || rl.rlim_cur >= need) return;
@@ -419,10 +449,13 @@ class SoftPlcRun {
     if (sandbox) what += ", " + std::to_string(sandbox) + " for --sandbox";
     if (modbus_files)
       what += ", " + std::to_string(modbus_files) + " for --modbus-connections " + std::to_string(modbus_conns);
-    if (monitor_files) what += ", " + std::to_string(monitor_files) + " for the monitor";
+    if (monitor_files)
+      what += ", " + std::to_string(monitor_files) + " for --monitor-connections " + std::to_string(monitor_conns);
     // what can be had: the hard limit, or the soft one if raising it failed
     const size_t limit = rl.rlim_max != RLIM_INFINITY && rl.rlim_max < need ? rl.rlim_max : rl.rlim_cur;
     std::string fix = "raise the limit (ulimit -n " + std::to_string(need) + ")";
+    if (need - limit < monitor_conns)
+      fix = "lower --monitor-connections to " + std::to_string(monitor_conns - (need - limit)) + " or " + fix;
     if (need - limit < modbus_conns)
       fix = "lower --modbus-connections to " + std::to_string(modbus_conns - (need - limit)) + " or " + fix;
     throw UserError("ldrun: error: the open-file limit is " + std::to_string(limit) + " but the connection caps need " +
@@ -465,8 +498,12 @@ class SoftPlcRun {
       monitor_->start();
     } catch (std::exception& e) { throw UserError(std::string("ldrun: error: ") + e.what()); }
     std::string host = monitor_host_.find(':') != std::string::npos ? "[" + monitor_host_ + "]" : monitor_host_;
-    std::fprintf(stderr, "ldrun: monitor on http://%s:%u/%s\n", host.c_str(), unsigned(monitor_->port()),
-                 a_.monitor_write ? " (writes allowed)" : "");
+    std::string url = "http://" + host + ":" + std::to_string(monitor_->port()) + "/";
+    std::string note = !a_.monitor_write      ? ""
+                       : monitor_token_.empty() ? " (writes allowed)"
+                       : print_token_           ? " (writes allowed with the token: open " + url + "?token=" + monitor_token_ + " once)"
+                                                : " (writes allowed with the token of --monitor-token: open " + url + "?token=TOKEN once)";
+    std::fprintf(stderr, "ldrun: monitor on %s%s\n", url.c_str(), note.c_str());
   }
 
   void serve_signals() {
@@ -772,8 +809,13 @@ int ldrun_main(int argc, char** argv) {
         opt_value("--modbus-idle-timeout", rta.modbus_idle_timeout) ||
         opt_value("--modbus-write-timeout", rta.modbus_write_timeout) ||
         opt_value("--modbus-pending-writes", rta.modbus_pending_writes) ||
+        opt_value("--monitor-token", rta.monitor_token) || opt_value("--monitor-connections", rta.monitor_connections) ||
+        opt_value("--monitor-per-address", rta.monitor_per_address) || opt_value("--monitor-streams", rta.monitor_streams) ||
         opt_value("--monitor", rta.monitor) || flag("--monitor-write", rta.monitor_write) ||
         flag("--monitor-remote", rta.monitor_remote)) {
+    } else if (a == "--monitor-host" || a.rfind("--monitor-host=", 0) == 0) {
+      rta.monitor_hosts.push_back(value("--monitor-host"));
+      rta.on = true;
     } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");
     else if (a.rfind("--task", 0) == 0) g_task = value("--task");
     else if (a == "--cycles") cycles = true;  // simulated engines: cycles and us per scan

@@ -15,11 +15,15 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <chrono>
 #include <cstring>
+#include <map>
 #include <memory>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "runtime/failsafe.h"
 
@@ -27,12 +31,12 @@ namespace ldc::http {
 namespace {
 
 bool is_tchar(char c) {
-  return std::isalnum(static_cast<unsigned char>(c)) || std::strchr("!#$%&'*+-.^_`|~", c) != nullptr;
+  return c != '\0' && (std::isalnum(static_cast<unsigned char>(c)) || std::strchr("!#$%&'*+-.^_`|~", c) != nullptr);
 }
 bool is_token(std::string_view s) {
   if (s.empty()) return false;
   for (char c : s)
-    if (!is_tchar(c) || c == '\0') return false;
+    if (!is_tchar(c)) return false;
   return true;
 }
 std::string lower(std::string_view s) {
@@ -46,6 +50,43 @@ Parse error(int code, std::string why) {
   p.code = code;
   p.reason = std::move(why);
   return p;
+}
+
+const char* const kBadLine = "malformed request line (expected: METHOD /path HTTP/1.1)";
+
+// The request line received so far (no line feed yet), judged as far as it
+// goes: an Error as soon as no ending can make it a request line the full
+// check below accepts -- so a TLS hello or binary junk is refused at its
+// first byte, not after the request timeout.  Every Error here is one there.
+std::optional<Parse> refuse_line_prefix(std::string_view s, const Limits& lim) {
+  size_t i = 0;
+  for (; i < s.size() && s[i] != ' '; i++) {  // method
+    if (!is_tchar(s[i]))
+      return error(400, s[0] == 0x16 ? "not an HTTP request (a TLS handshake? this monitor speaks plain http://)"
+                                     : "malformed method");
+    if (i + 1 > lim.max_method) return error(400, "method longer than " + std::to_string(lim.max_method) + " bytes");
+  }
+  if (i == s.size()) return std::nullopt;
+  if (i == 0) return error(400, kBadLine);
+  const size_t t0 = ++i;
+  for (; i < s.size() && s[i] != ' '; i++) {  // target
+    unsigned char c = static_cast<unsigned char>(s[i]);
+    if (i == t0 && c != '/') return error(400, "the request target must be a path starting with '/'");
+    if (c <= 0x20 || c >= 0x7f) return error(400, "control or non-ASCII character in the request target");
+    if (i - t0 + 1 > lim.max_target) return error(414, "request target longer than " + std::to_string(lim.max_target) + " bytes");
+  }
+  if (i == s.size()) return std::nullopt;
+  if (i == t0) return error(400, kBadLine);
+  const size_t v0 = ++i;
+  static const char kShape[] = "HTTP/0.0";  // 0: any digit; then CR, or the line feed to come
+  for (; i < s.size(); i++) {
+    size_t k = i - v0;
+    char c = s[i];
+    if (k == 8) return c == '\r' && i + 1 == s.size() ? std::nullopt : std::optional<Parse>(error(400, kBadLine));
+    bool fits = kShape[k] == '0' ? std::isdigit(static_cast<unsigned char>(c)) != 0 : c == kShape[k];
+    if (!fits) return error(400, "malformed HTTP version");
+  }
+  return std::nullopt;
 }
 
 }  // namespace
@@ -73,7 +114,8 @@ Parse parse_request(std::string_view buf, const Limits& lim) {
     if (i + 2 < buf.size() && buf[i + 1] == '\r' && buf[i + 2] == '\n') { head_end = i + 1, body_at = i + 3; break; }
   }
   size_t first_eol = buf.find('\n');
-  if (first_eol == std::string_view::npos && buf.size() > lim.max_target + 32) return error(414, "request line too long");
+  if (first_eol == std::string_view::npos)
+    if (std::optional<Parse> e = refuse_line_prefix(buf, lim)) return std::move(*e);
   if (head_end == std::string_view::npos) {
     if (buf.size() > lim.max_head) return error(431, "request head larger than " + std::to_string(lim.max_head) + " bytes");
     // a request line that cannot be right is refused before the rest arrives
@@ -100,9 +142,10 @@ Parse parse_request(std::string_view buf, const Limits& lim) {
   std::string_view rl = lines[0];
   size_t sp1 = rl.find(' '), sp2 = sp1 == std::string_view::npos ? sp1 : rl.find(' ', sp1 + 1);
   if (sp1 == std::string_view::npos || sp2 == std::string_view::npos || rl.find(' ', sp2 + 1) != std::string_view::npos)
-    return error(400, "malformed request line (expected: METHOD /path HTTP/1.1)");
+    return error(400, kBadLine);
   std::string_view method = rl.substr(0, sp1), target = rl.substr(sp1 + 1, sp2 - sp1 - 1), version = rl.substr(sp2 + 1);
   if (!is_token(method)) return error(400, "malformed method");
+  if (method.size() > lim.max_method) return error(400, "method longer than " + std::to_string(lim.max_method) + " bytes");
   if (target.size() > lim.max_target) return error(414, "request target longer than " + std::to_string(lim.max_target) + " bytes");
   if (target.empty() || target[0] != '/') return error(400, "the request target must be a path starting with '/'");
   for (char c : target)
@@ -137,6 +180,8 @@ Parse parse_request(std::string_view buf, const Limits& lim) {
     r.headers.emplace_back(lower(l.substr(0, colon)), std::string(v));
   }
   if (r.version == "HTTP/1.1" && !r.header("host")) return error(400, "HTTP/1.1 request without Host");
+  if (std::count_if(r.headers.begin(), r.headers.end(), [](const auto& h) { return h.first == "host"; }) > 1)
+    return error(400, "more than one Host header (RFC 9112, section 3.2)");
   if (r.header("transfer-encoding")) return error(501, "Transfer-Encoding is not supported; send Content-Length");
   size_t length = 0;
   bool have_length = false;
@@ -197,6 +242,7 @@ std::optional<std::string> form_value(std::string_view form, std::string_view na
 const char* status_text(int code) {
   switch (code) {
     case 200: return "OK";
+    case 202: return "Accepted";
     case 204: return "No Content";
     case 400: return "Bad Request";
     case 403: return "Forbidden";
@@ -217,15 +263,16 @@ const char* status_text(int code) {
   }
 }
 
-std::string format_response(const Response& r, bool keep_alive) {
+std::string format_response(const Response& r, bool keep_alive, bool head_only) {
   std::string h = "HTTP/1.1 " + std::to_string(r.code) + " " + status_text(r.code) + "\r\n";
   h += "Content-Type: " + r.type + "\r\n";
-  h += "Cache-Control: no-store\r\nX-Content-Type-Options: nosniff\r\n";
-  h += "Content-Security-Policy: default-src 'self'; style-src 'self'; script-src 'self'; img-src 'self' data:\r\n";
-  if (r.stream) return h + "Connection: keep-alive\r\n\r\n";
+  h += "Cache-Control: no-store\r\nX-Content-Type-Options: nosniff\r\nReferrer-Policy: no-referrer\r\n";
+  h += "Content-Security-Policy: default-src 'self'; style-src 'self'; script-src 'self'; img-src 'self' data:; "
+       "frame-ancestors 'none'\r\n";
+  if (r.stream) return h + (head_only ? "Connection: close\r\n\r\n" : "Connection: keep-alive\r\n\r\n");
   h += "Content-Length: " + std::to_string(r.body.size()) + "\r\n";
   h += keep_alive ? "Connection: keep-alive\r\n" : "Connection: close\r\n";
-  return h + "\r\n" + r.body;
+  return h + "\r\n" + (head_only ? std::string() : r.body);
 }
 
 // ---------------------------------------------------------------- the server
@@ -236,22 +283,405 @@ int64_t now_ms() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+// One line per cause per interval: the first is written at once, the others
+// are counted and reported with the next line of that cause (or when the
+// interval is over), so a flood of one event costs a few lines, not millions.
+class LogThrottle {
+ public:
+  LogThrottle(std::function<void(const std::string&)> out, int interval_ms) : out_(std::move(out)), interval_(interval_ms) {}
+  // `cause` is one of a fixed set of keys (never a peer address: the map stays small).
+  void log(const std::string& cause, const std::string& line, int64_t now) {
+    if (!out_) return;
+    Cause& c = causes_[cause];
+    if (c.written && now - c.since < interval_) {
+      c.suppressed++;
+      c.last = line;
+      return;
+    }
+    out_(line + suppressed_note(c));
+    c = Cause{true, now, 0, {}};
+  }
+  void flush(int64_t now) {
+    if (!out_) return;
+    for (auto& [cause, c] : causes_)
+      if (c.suppressed && now - c.since >= interval_) {
+        out_(c.last + suppressed_note(c));
+        c = Cause{true, now, 0, {}};
+      }
+  }
+
+ private:
+  struct Cause {
+    bool written = false;
+    int64_t since = 0;
+    uint64_t suppressed = 0;
+    std::string last;
+  };
+  std::string suppressed_note(const Cause& c) const {
+    if (!c.suppressed) return "";
+    return " (" + std::to_string(c.suppressed) + " more like it in the last " + std::to_string(interval_ / 1000) + " s not shown)";
+  }
+  std::function<void(const std::string&)> out_;
+  int64_t interval_;
+  std::map<std::string, Cause> causes_;
+};
+
 struct Conn {
   int fd = -1;
+  std::string peer;              // the client's address, without its port
   std::string in, out;
-  bool stream = false, closing = false;
-  int64_t since = 0;  // start of the request being received (or of idleness)
+  size_t sent = 0;               // bytes of `out` already sent
+  bool stream = false;           // an event stream: no more requests are read
+  bool closing = false;          // no more requests: closed once `out` is sent
+  bool dead = false;             // closed at the end of this round, unsent output dropped
+  bool eof = false;              // the client sent its last byte
+  bool need_bytes = false;       // `in` holds only the start of a request
+  std::optional<Request> parked; // asked again until it is answered
+  int64_t parked_at = 0;
+  int64_t request_since = -1;    // the first byte of the request being received
+  int64_t last_active = 0;       // last byte received or reply queued
+  int64_t last_progress = 0;     // last time unsent output shrank (or appeared)
+  int64_t over_since = -1;       // unsent output above max_output since then
+  size_t unsent() const { return out.size() - sent; }
+  bool idle() const { return !stream && !closing && !dead && !parked && in.empty() && unsent() == 0; }
 };
 
 void set_nonblock(int fd) { fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK); }
 
+std::string peer_address(const sockaddr_storage& ss) {
+  char b[INET6_ADDRSTRLEN] = "?";
+  if (ss.ss_family == AF_INET) {
+    inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in&>(ss).sin_addr, b, sizeof b);
+  } else if (ss.ss_family == AF_INET6) {
+    inet_ntop(AF_INET6, &reinterpret_cast<const sockaddr_in6&>(ss).sin6_addr, b, sizeof b);
+    if (std::strncmp(b, "::ffff:", 7) == 0 && std::strchr(b + 7, '.')) return b + 7;  // an IPv4 client of a v6 socket
+  }
+  return b;
+}
+
+Response plain(int code, const std::string& why) {
+  return Response{code, "text/plain; charset=utf-8", std::to_string(code) + " " + status_text(code) + ": " + why + "\n", false};
+}
+
 }  // namespace
+
+// The state of one run of the server loop: its connections and what it does
+// to them.  Everything here runs on the server thread.
+struct Server::Loop {
+  Server& s;
+  const Config& cfg;
+  std::vector<std::unique_ptr<Conn>> conns;
+  LogThrottle logs;
+  int64_t accept_rest_until = 0;  // the listener is not polled before then
+
+  explicit Loop(Server& srv) : s(srv), cfg(srv.cfg_), logs(srv.cfg_.log, srv.cfg_.log_interval_ms) {}
+
+  // Back-pressure: a connection we owe replies to is not read, nor one that
+  // holds more bytes not parsed yet than the largest request (head, its
+  // blank line, body): those hold a whole request or an error, served first.
+  bool reads(const Conn& c) const {
+    return !c.closing && !c.dead && !c.stream && !c.parked && !c.eof && c.unsent() <= cfg.max_output &&
+           c.in.size() < cfg.limits.max_head + cfg.limits.max_body + 64;
+  }
+  bool serves(const Conn& c) const {
+    return !c.closing && !c.dead && !c.stream && !c.parked && c.unsent() <= cfg.max_output;
+  }
+
+  void queue(Conn& c, std::string_view bytes, int64_t now) {
+    if (c.unsent() == 0) {
+      c.out.clear(), c.sent = 0;
+      c.last_progress = now;
+    } else if (c.sent > c.out.size() / 2) {
+      c.out.erase(0, c.sent), c.sent = 0;
+    }
+    c.out.append(bytes);
+    if (c.unsent() > cfg.max_output && c.over_since < 0) c.over_since = now;
+  }
+
+  void reply_error(Conn& c, int code, const std::string& why, int64_t now) {
+    queue(c, format_response(plain(code, why), false), now);
+    c.closing = true;
+    c.in.clear();
+  }
+
+  // ---- connections in
+
+  // A connection is taken if there is room for it, made by closing the
+  // oldest idle connection of its peer (at the per-address cap) or of anyone
+  // (table full); else it gets 503.
+  void accept_all(int64_t now) {
+    while (true) {
+      sockaddr_storage ss{};
+      socklen_t len = sizeof ss;
+      int fd = accept4(s.listen_fd_, reinterpret_cast<sockaddr*>(&ss), &len, SOCK_CLOEXEC | SOCK_NONBLOCK);
+      if (fd >= 0) {
+        admit(fd, peer_address(ss), now);
+        continue;
+      }
+      if (errno == EINTR || errno == ECONNABORTED || errno == EPROTO) continue;
+      if (errno == EAGAIN || errno == EWOULDBLOCK) return;
+      // EMFILE, ENFILE, ENOBUFS, ENOMEM...: the pending connection stays
+      // queued and the listener readable; polling it again at once would spin.
+      int e = errno;
+      accept_rest_until = now + cfg.accept_backoff_ms;
+      logs.log(std::string("accept:") + std::to_string(e),
+               "ldrun: monitor: accept: " + std::string(std::strerror(e)) + "; new connections wait " +
+                   std::to_string(cfg.accept_backoff_ms) + " ms",
+               now);
+      return;
+    }
+  }
+
+  void admit(int fd, const std::string& peer, int64_t now) {
+    size_t live = 0, same = 0;
+    Conn *oldest = nullptr, *oldest_same = nullptr;
+    for (auto& c : conns) {
+      if (c->dead) continue;
+      live++;
+      bool mine = c->peer == peer;
+      same += mine;
+      if (!c->idle()) continue;
+      if (!oldest || c->last_active < oldest->last_active) oldest = c.get();
+      if (mine && (!oldest_same || c->last_active < oldest_same->last_active)) oldest_same = c.get();
+    }
+    Conn* evict = nullptr;
+    std::string why;
+    if (same >= cfg.max_per_address) {
+      if (!(evict = oldest_same))
+        why = std::to_string(same) + " connections from " + peer + " already (the per-address cap)";
+    } else if (live >= cfg.max_connections) {
+      if (!(evict = oldest)) why = std::to_string(live) + " connections already, none idle (the connection cap)";
+    }
+    if (!why.empty()) {
+      std::string busy = format_response(plain(503, "too many monitor connections: " + why), false);
+      (void)!send(fd, busy.data(), busy.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+      close(fd);
+      logs.log(same >= cfg.max_per_address ? "refused:peer" : "refused:full", "ldrun: monitor: refused a connection: " + why, now);
+      return;
+    }
+    if (evict) evict->dead = true;  // idle: nothing in flight is lost
+    auto c = std::make_unique<Conn>();
+    c->fd = fd;
+    c->peer = peer;
+    c->last_active = now;
+    conns.push_back(std::move(c));
+  }
+
+  void receive(Conn& c, int64_t now) {
+    char tmp[16384];
+    ssize_t k = recv(c.fd, tmp, sizeof tmp, 0);
+    if (k > 0) {
+      if (c.in.empty()) c.request_since = now;  // a request's deadline runs from its first byte
+      c.in.append(tmp, size_t(k));
+      if (c.in.size() > s.peak_input_.load(std::memory_order_relaxed)) s.peak_input_.store(c.in.size(), std::memory_order_relaxed);
+      c.need_bytes = false;
+      c.last_active = now;
+    } else if (k == 0) {
+      c.eof = true;  // requests already received are still answered
+    } else if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+      c.dead = true;
+    }
+  }
+
+  // ---- requests
+
+  Response call(const Request& r) {
+    try {
+      return s.handler_(r);
+    } catch (std::exception& e) {
+      return plain(500, e.what());
+    }
+  }
+
+  void answer(Conn& c, const Request& req, Response r, int64_t now) {
+    bool head = req.method == "HEAD";
+    if (r.stream && !head) {
+      if (s.nstream_.load() >= cfg.max_streams) {
+        r = plain(503, "too many event streams (" + std::to_string(cfg.max_streams) + ", the stream cap)");
+        logs.log("refused:streams", "ldrun: monitor: refused an event stream: " + std::to_string(cfg.max_streams) + " open", now);
+      } else {
+        queue(c, format_response(r, true) + r.body, now);
+        c.stream = true;
+        s.nstream_.fetch_add(1);
+        return;
+      }
+    }
+    bool ka = req.keep_alive() && r.code < 400 && !r.stream;
+    queue(c, format_response(r, ka, head), now);
+    if (!ka) c.closing = true;
+  }
+
+  // Answers the complete requests in `c.in`, up to the round's budget, while
+  // the replies owed to the client stay under the bound.
+  void serve(Conn& c, int64_t now) {
+    for (size_t n = 0; n < cfg.requests_per_round && serves(c) && !c.in.empty(); n++) {
+      Parse p = parse_request(c.in, cfg.limits);
+      if (p.status == Parse::Status::Incomplete) {
+        c.need_bytes = true;
+        break;
+      }
+      if (p.status == Parse::Status::Error) {
+        reply_error(c, p.code, p.reason, now);
+        break;
+      }
+      c.in.erase(0, p.consumed);
+      c.request_since = c.in.empty() ? -1 : now;
+      c.last_active = now;
+      failsafe::inject("http");  // the test hook of docs/faults.md (LDC_FAULT_INJECT=http:...), outside call()'s catch
+      Response r = call(p.req);
+      if (r.defer) {
+        c.parked = std::move(p.req);
+        c.parked_at = now;
+        break;
+      }
+      answer(c, p.req, std::move(r), now);
+    }
+    if (c.eof && serves(c) && (c.in.empty() || c.need_bytes)) c.closing = true;
+  }
+
+  void retry_parked(Conn& c, int64_t now) {
+    Request& q = *c.parked;
+    q.retries++;
+    q.waited_ms = now - c.parked_at;
+    Response r = q.waited_ms > cfg.max_park_ms ? plain(503, "no answer within " + std::to_string(cfg.max_park_ms) + " ms")
+                                               : call(q);
+    if (r.defer) return;
+    Request req = std::move(q);
+    c.parked.reset();
+    answer(c, req, std::move(r), now);
+  }
+
+  // ---- deadlines
+
+  void expire(Conn& c, int64_t now) {
+    if (c.dead) return;
+    if (c.unsent() > 0 && now - c.last_progress > cfg.send_timeout_ms) {
+      drop(c, "replies not read for " + std::to_string(cfg.send_timeout_ms / 1000) + " s", now);
+    } else if (c.over_since >= 0 && now - c.over_since > cfg.send_timeout_ms) {
+      drop(c, "more than " + std::to_string(cfg.max_output >> 10) + " KiB of replies unread for " +
+                  std::to_string(cfg.send_timeout_ms / 1000) + " s", now);
+    } else if (reads(c) && c.request_since >= 0 && now - c.request_since > cfg.request_timeout_ms) {
+      reply_error(c, 408, "the request took over " + std::to_string(cfg.request_timeout_ms / 1000) + " s to arrive", now);
+    } else if (c.idle() && now - c.last_active > cfg.idle_timeout_ms) {
+      c.dead = true;
+    }
+  }
+
+  void drop(Conn& c, const std::string& why, int64_t now) {
+    c.dead = true;
+    logs.log("dropped", "ldrun: monitor: closed a connection from " + c.peer + ": " + why, now);
+  }
+
+  void send_some(Conn& c, int64_t now) {
+    while (c.unsent() > 0) {
+      ssize_t n = send(c.fd, c.out.data() + c.sent, c.unsent(), MSG_NOSIGNAL);
+      if (n > 0) {
+        c.sent += size_t(n);
+        c.last_progress = now;
+        continue;
+      }
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) break;
+      c.dead = true;  // the peer is gone
+      return;
+    }
+    if (c.unsent() == 0) c.out.clear(), c.sent = 0;
+    if (c.unsent() <= cfg.max_output) c.over_since = -1;
+    if (c.closing && c.unsent() == 0) c.dead = true;
+  }
+
+  void tick(int64_t now) {
+    std::string ev = s.tick_ ? s.tick_() : std::string();
+    logs.flush(now);
+    if (ev.empty()) return;
+    for (auto& c : conns) {
+      if (!c->stream || c->dead) continue;
+      if (c->unsent() > cfg.max_pending)
+        drop(*c, "event stream " + std::to_string(cfg.max_pending >> 10) + " KiB behind", now);
+      else
+        queue(*c, ev, now);
+    }
+  }
+
+  void sweep() {
+    for (size_t i = 0; i < conns.size();) {
+      Conn& c = *conns[i];
+      if (!c.dead) {
+        i++;
+        continue;
+      }
+      if (c.stream) s.nstream_.fetch_sub(1);
+      close(c.fd);
+      conns.erase(conns.begin() + long(i));
+    }
+    s.nconn_.store(conns.size());
+  }
+
+  // How long poll may wait: until the next tick, sooner while requests are
+  // parked or the listener rests, not at all while requests wait in a buffer.
+  int wait_ms(int64_t now, int64_t next_tick) const {
+    int64_t until = next_tick;
+    for (const auto& c : conns) {
+      if (c->parked) until = std::min(until, now + cfg.park_poll_ms);
+      if (serves(*c) && !c->in.empty() && !c->need_bytes) return 0;
+    }
+    if (accept_rest_until > now) until = std::min(until, accept_rest_until);
+    return int(std::clamp<int64_t>(until - now, 0, 1000));
+  }
+
+  void run() {
+    int64_t next_tick = now_ms() + cfg.tick_ms;
+    std::vector<pollfd> fds;
+    while (!s.stop_.load()) {
+      int64_t now = now_ms();
+      fds.clear();
+      bool listening = now >= accept_rest_until;
+      fds.push_back({listening ? s.listen_fd_ : -1, POLLIN, 0});
+      fds.push_back({s.wake_[0], POLLIN, 0});
+      for (auto& c : conns) fds.push_back({c->fd, short((reads(*c) ? POLLIN : 0) | (c->unsent() ? POLLOUT : 0)), 0});
+      int n = poll(fds.data(), fds.size(), wait_ms(now, next_tick));
+      if (n < 0 && errno != EINTR) {
+        logs.log("poll", std::string("ldrun: monitor: poll: ") + std::strerror(errno), now);
+        poll(nullptr, 0, cfg.accept_backoff_ms);  // never spin on a failing poll
+        continue;
+      }
+      now = now_ms();
+      const size_t polled = fds.size() - 2;  // connections accepted below were not polled yet
+      for (size_t i = 0; n > 0 && i < polled; i++) {
+        Conn& c = *conns[i];
+        short re = fds[i + 2].revents;
+        if (reads(c) && (re & (POLLIN | POLLHUP | POLLERR))) receive(c, now);
+        else if (re & (POLLHUP | POLLERR)) c.dead = true;  // not read: the hang-up would wake poll forever
+      }
+      if (n > 0 && (fds[0].revents & POLLIN)) accept_all(now);
+      for (auto& c : conns)
+        if (c->parked && !c->dead) retry_parked(*c, now);
+      for (auto& c : conns)
+        if (!c->dead) serve(*c, now);
+      for (auto& c : conns) expire(*c, now);
+      if (now >= next_tick) {
+        next_tick = now + cfg.tick_ms;
+        tick(now);
+      }
+      for (auto& c : conns)
+        if (!c->dead) send_some(*c, now);
+      sweep();
+      if (n > 0 && (fds[1].revents & POLLIN)) {
+        char b[64];
+        while (read(s.wake_[0], b, sizeof b) > 0) {}
+      }
+    }
+    for (auto& c : conns) close(c->fd);
+    conns.clear();
+    s.nconn_.store(0);
+    s.nstream_.store(0);
+  }
+};
 
 Server::Server(Config c, Handler h, std::function<std::string()> tick)
     : cfg_(std::move(c)), handler_(std::move(h)), tick_(std::move(tick)) {}
 
 Server::~Server() { stop(); }
-
 void Server::start() {
   addrinfo hints{}, *res = nullptr;
   hints.ai_family = AF_UNSPEC;
@@ -281,6 +711,7 @@ void Server::start() {
     throw std::runtime_error(std::string("monitor: pipe: ") + std::strerror(errno));
   }
   listen_fd_ = fd;
+  if (cfg_.bound) cfg_.bound(port_);
   th_ = std::thread([this] { loop(); });
 }
 
@@ -296,126 +727,6 @@ void Server::stop() {
   listen_fd_ = wake_[0] = wake_[1] = -1;
 }
 
-void Server::loop() {
-  std::vector<std::unique_ptr<Conn>> conns;
-  int64_t next_tick = now_ms() + cfg_.tick_ms;
-  auto send_some = [](Conn& c) {  // false: the peer is gone
-    while (!c.out.empty()) {
-      ssize_t n = send(c.fd, c.out.data(), c.out.size(), MSG_NOSIGNAL);
-      if (n > 0) { c.out.erase(0, size_t(n)); continue; }
-      if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return true;
-      if (n < 0 && errno == EINTR) continue;
-      return false;
-    }
-    return true;
-  };
-  auto reply_error = [](Conn& c, int code, const std::string& why) {
-    Response r;
-    r.code = code;
-    r.body = std::to_string(code) + " " + status_text(code) + ": " + why + "\n";
-    c.out += format_response(r, false);
-    c.closing = true;
-    c.in.clear();
-  };
-  while (!stop_.load()) {
-    std::vector<pollfd> fds;
-    fds.push_back({listen_fd_, POLLIN, 0});
-    fds.push_back({wake_[0], POLLIN, 0});
-    for (auto& c : conns) fds.push_back({c->fd, short((c->stream || c->closing ? 0 : POLLIN) | (c->out.empty() ? 0 : POLLOUT)), 0});
-    int wait = int(std::max<int64_t>(0, next_tick - now_ms()));
-    int n = poll(fds.data(), fds.size(), wait);
-    if (n < 0 && errno != EINTR) break;
-    int64_t now = now_ms();
-    const size_t polled = fds.size() - 2;  // connections accepted below were not polled yet
-    if (n > 0 && (fds[0].revents & POLLIN)) {
-      while (true) {
-        int fd = accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
-        if (fd < 0) break;
-        if (conns.size() >= cfg_.max_connections) {
-          std::string busy = format_response({503, "text/plain; charset=utf-8", "503 Service Unavailable: too many monitor connections\n"}, false);
-          (void)!send(fd, busy.data(), busy.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
-          close(fd);
-          continue;
-        }
-        auto c = std::make_unique<Conn>();
-        c->fd = fd;
-        c->since = now;
-        conns.push_back(std::move(c));
-      }
-    }
-    for (size_t i = 0; i < polled; i++) {
-      if (n <= 0) break;
-      Conn& c = *conns[i];
-      short re = fds[i + 2].revents;
-      if (re & (POLLIN | POLLHUP | POLLERR)) {
-        char tmp[16384];
-        ssize_t k = recv(c.fd, tmp, sizeof tmp, 0);
-        if (k <= 0 && !(k < 0 && (errno == EAGAIN || errno == EINTR))) { c.closing = true, c.out.clear(); continue; }
-        if (k > 0 && !c.stream && !c.closing) {
-          if (c.in.empty()) c.since = now;
-          c.in.append(tmp, size_t(k));
-          while (!c.closing && !c.stream) {
-            Parse p = parse_request(c.in, cfg_.limits);
-            if (p.status == Parse::Status::Incomplete) break;
-            if (p.status == Parse::Status::Error) { reply_error(c, p.code, p.reason); break; }
-            c.in.erase(0, p.consumed);
-            c.since = now;
-            failsafe::inject("http");  // the test hook of docs/faults.md (LDC_FAULT_INJECT=http:...)
-            Response r;
-            try {
-              r = handler_(p.req);
-            } catch (std::exception& e) {
-              r = Response{500, "text/plain; charset=utf-8", std::string("500 Internal Server Error: ") + e.what() + "\n"};
-            }
-            bool ka = p.req.keep_alive() && r.code < 400;
-            c.out += format_response(r, ka || r.stream);
-            if (r.stream) {
-              c.stream = true;
-              c.out += r.body;
-              nstream_.fetch_add(1);
-            } else if (!ka) {
-              c.closing = true;
-            }
-          }
-        }
-      }
-    }
-    // idle requests, ticks, writes
-    for (auto& c : conns)
-      if (!c->stream && !c->closing && now - c->since > cfg_.idle_timeout_ms) {
-        if (!c->in.empty()) reply_error(*c, 408, "the request took too long to arrive");
-        else c->closing = true;
-      }
-    if (now >= next_tick) {
-      next_tick = now + cfg_.tick_ms;
-      std::string ev = tick_ ? tick_() : std::string();
-      if (!ev.empty())
-        for (auto& c : conns)
-          if (c->stream) {
-            if (c->out.size() > cfg_.max_pending) c->closing = true, c->out.clear();  // too slow: dropped
-            else c->out += ev;
-          }
-    }
-    for (size_t i = 0; i < conns.size();) {
-      Conn& c = *conns[i];
-      bool alive = send_some(c) && !(c.closing && c.out.empty());
-      if (!alive) {
-        if (c.stream) nstream_.fetch_sub(1);
-        close(c.fd);
-        conns.erase(conns.begin() + long(i));
-      } else {
-        i++;
-      }
-    }
-    nconn_.store(conns.size());
-    if (n > 0 && (fds[1].revents & POLLIN)) {
-      char b[64];
-      while (read(wake_[0], b, sizeof b) > 0) {}
-    }
-  }
-  for (auto& c : conns) close(c->fd);
-  nconn_.store(0);
-  nstream_.store(0);
-}
+void Server::loop() { Loop(*this).run(); }
 
 }  // namespace ldc::http

@@ -1,11 +1,18 @@
 // runtime/net/monitor.cpp -- see monitor.h.
 #include "runtime/net/monitor.h"
 
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstring>
+#include <deque>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <set>
@@ -14,6 +21,7 @@
 
 #include "ir/ladder.h"
 #include "runtime/net/http.h"
+#include "runtime/write_shadow.h"
 #include "runtime/monitor_page.h"  // generated: kMonitorHtml, kMonitorJs, kMonitorCss
 
 namespace ldc::plc {
@@ -118,6 +126,14 @@ struct Dev {
   uint32_t index;
 };
 
+// Forced inputs as one consumer (the shared image's, or one task's) last
+// copied them: refreshed when the server changed them and the lock is free,
+// so a scan never waits for the server and always has a complete list.
+struct ForcedCopy {
+  uint64_t version = 0;
+  std::vector<ElementWrite> items;
+};
+
 struct RungView {
   bool drawn = false;
   LadderRung g;
@@ -140,6 +156,11 @@ struct TaskView {
   std::vector<uint8_t> mem;
   uint64_t scan = 0;
   std::atomic<bool> want{false};
+
+  // its own devices written by clients, and what its thread took of them
+  std::unique_ptr<WriteShadow> writes;
+  WriteShadow::Batch batch;
+  ForcedCopy forced;
 };
 
 void collect_devices(TaskView& t, const Program& p) {
@@ -289,11 +310,88 @@ std::string rung_state(const RungView& r, const View& v) {
 
 // ---------------------------------------------------------------- writes
 
-struct Write {
-  size_t task;
-  Area area;
-  uint32_t index;
-  uint32_t bits;  // the value's bytes (bit: 0/1; word: INT32 or binary32)
+std::string lower(std::string_view s) {
+  std::string o(s);
+  for (char& c : o) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return o;
+}
+
+bool loopback(const std::string& h) { return h == "::1" || h.rfind("127.", 0) == 0; }
+bool wildcard(const std::string& h) { return h == "0.0.0.0" || h == "::"; }
+
+// "a.b.c.d:PORT" or "[v6]:PORT", the literal parsing as an address.
+bool ip_literal_with_port(const std::string& h, const std::string& port_suffix) {
+  if (h.size() <= port_suffix.size() || h.compare(h.size() - port_suffix.size(), port_suffix.size(), port_suffix) != 0)
+    return false;
+  std::string a = h.substr(0, h.size() - port_suffix.size());
+  unsigned char buf[16];
+  if (a.size() > 2 && a.front() == '[' && a.back() == ']') return inet_pton(AF_INET6, a.substr(1, a.size() - 2).c_str(), buf) == 1;
+  return inet_pton(AF_INET, a.c_str(), buf) == 1;
+}
+
+// Equal strings of equal length, in time independent of where they differ.
+bool same_secret(const std::string& a, const std::string& b) {
+  if (a.size() != b.size()) return false;
+  unsigned char d = 0;
+  for (size_t i = 0; i < a.size(); i++) d |= static_cast<unsigned char>(a[i] ^ b[i]);
+  return d == 0;
+}
+
+// The thread that carries out RUN and STOP for the server, one request at a
+// time, so that the server's thread never waits for them.
+class ControlThread {
+ public:
+  static constexpr size_t kMaxJobs = 16;
+  struct Job {
+    std::function<http::Response()> act;
+    http::Response reply;           // valid once done
+    std::atomic<bool> done{false};
+  };
+  ~ControlThread() { stop(); }
+  void start() { th_ = std::thread([this] { loop(); }); }
+  void stop() {
+    {
+      std::lock_guard<std::mutex> l(mu_);
+      quit_ = true;
+    }
+    cv_.notify_all();
+    if (th_.joinable()) th_.join();
+  }
+  // nullptr when kMaxJobs wait already
+  std::shared_ptr<Job> post(std::function<http::Response()> act) {
+    std::lock_guard<std::mutex> l(mu_);
+    if (jobs_.size() >= kMaxJobs) return nullptr;
+    auto j = std::make_shared<Job>();
+    j->act = std::move(act);
+    jobs_.push_back(j);
+    cv_.notify_one();
+    return j;
+  }
+
+ private:
+  void loop() {
+    while (true) {
+      std::shared_ptr<Job> j;
+      {
+        std::unique_lock<std::mutex> l(mu_);
+        cv_.wait(l, [&] { return quit_ || !jobs_.empty(); });
+        if (jobs_.empty()) return;  // quit, and nothing left
+        j = jobs_.front();
+        jobs_.pop_front();
+      }
+      try {
+        j->reply = j->act();
+      } catch (std::exception& e) {
+        j->reply = http::Response{500, "text/plain; charset=utf-8", std::string(e.what()) + "\n", false};
+      }
+      j->done.store(true, std::memory_order_release);
+    }
+  }
+  std::mutex mu_;
+  std::condition_variable cv_;
+  std::deque<std::shared_ptr<Job>> jobs_;
+  bool quit_ = false;
+  std::thread th_;
 };
 
 }  // namespace
@@ -304,51 +402,51 @@ struct Monitor::Impl {
   Layout glayout = Layout::standard(0);
   Runtime* rt = nullptr;
   std::unique_ptr<http::Server> server;
+  ControlThread control;  // RUN/STOP off the server's thread
   std::string program_json;
   std::vector<TaskStats> stats;  // the server thread's
   std::mutex global_mu;          // the global image's snapshot
   std::vector<uint8_t> global_snap;
   std::atomic<bool> want_global{false};
   std::chrono::steady_clock::time_point stats_at{};
+  std::set<std::string> hosts;   // Host values this monitor answers to (lower case, with the port)
+  uint16_t port = 0;
 
-  std::mutex wmu;  // writes and forces
-  std::vector<Write> pending;
+  // Writes: shared devices (X Y M K WX WY) in one shadow, applied to the
+  // global image by the first task at its boundary; each task's own devices
+  // (D F T C S) in its shadow, applied to its memory.  The scan takes a
+  // shadow with one swap and never waits (runtime/write_shadow.h).
+  std::unique_ptr<WriteShadow> shared_writes;
+  WriteShadow::Batch shared_batch;  // under the global image's lock
+  // Forced inputs: the server's map, and the copies the scans apply.
+  std::mutex fmu;
   std::map<std::pair<int, uint32_t>, uint32_t> forced;  // shared inputs held at a value
-  std::atomic<bool> have_writes{false};
+  std::atomic<uint64_t> forced_version{0};
+  std::atomic<bool> any_forced{false};
+  ForcedCopy forced_shared;  // under the global image's lock
 
   // ---- on the task threads
-  static void store(uint8_t* base, const Layout& L, Area a, uint32_t i, uint32_t bits) {
-    if (area_is_bit(a)) base[L.addr(a, i)] = uint8_t(bits != 0);
-    else std::memcpy(base + L.addr(a, i), &bits, 4);
+  void refresh(ForcedCopy& c) {
+    if (forced_version.load(std::memory_order_acquire) == c.version) return;
+    std::unique_lock<std::mutex> l(fmu, std::try_to_lock);
+    if (!l.owns_lock()) return;  // the server is changing it: the next scan
+    c.items.clear();
+    for (auto& [k, bits] : forced) c.items.push_back({Area(k.first), k.second, bits, ~0u});
+    c.version = forced_version.load(std::memory_order_relaxed);
   }
-  void apply_shared(uint8_t* global) {
-    if (!have_writes.load(std::memory_order_acquire)) return;
-    std::lock_guard<std::mutex> l(wmu);
-    for (auto& [k, bits] : forced) store(global, glayout, Area(k.first), k.second, bits);
-    for (auto it = pending.begin(); it != pending.end();) {
-      if (is_shared(it->area)) {
-        store(global, glayout, it->area, it->index, it->bits);
-        it = pending.erase(it);
-      } else {
-        ++it;
-      }
+  void apply(ForcedCopy& fc, WriteShadow& shadow, WriteShadow::Batch& batch, uint8_t* mem, const Layout& L) {
+    if (any_forced.load(std::memory_order_relaxed) || !fc.items.empty()) {
+      refresh(fc);
+      for (const ElementWrite& w : fc.items) apply_element(w, mem, L);
     }
-    have_writes.store(!pending.empty() || !forced.empty(), std::memory_order_release);
+    if (shadow.take(batch))
+      for (const ElementWrite& w : batch.writes) apply_element(w, mem, L);
   }
+  void apply_shared(uint8_t* global) { apply(forced_shared, *shared_writes, shared_batch, global, glayout); }
   void apply_private(size_t task, uint8_t* mem) {
-    if (!have_writes.load(std::memory_order_acquire) || task >= tasks.size()) return;
-    std::lock_guard<std::mutex> l(wmu);
-    const Layout& L = tasks[task]->layout;
-    for (auto& [k, bits] : forced) store(mem, L, Area(k.first), k.second, bits);
-    for (auto it = pending.begin(); it != pending.end();) {
-      if (it->task == task && !is_shared(it->area)) {
-        store(mem, L, it->area, it->index, it->bits);
-        it = pending.erase(it);
-      } else {
-        ++it;
-      }
-    }
-    have_writes.store(!pending.empty() || !forced.empty(), std::memory_order_release);
+    if (task >= tasks.size()) return;
+    TaskView& t = *tasks[task];
+    apply(t.forced, *t.writes, t.batch, mem, t.layout);
   }
   // The global image is copied by whichever task reaches its boundary first
   // (a held task does not scan, yet its shared devices stay current).
@@ -407,7 +505,7 @@ struct Monitor::Impl {
       for (size_t d = 0; d < t.devs.size(); d++) s += (d ? "," : "") + jstr(v.text(t.devs[d].area, t.devs[d].index));
       s += "]}";
     }
-    std::lock_guard<std::mutex> l(wmu);
+    std::lock_guard<std::mutex> l(fmu);
     s += "],\"forced\":[";
     bool first = true;
     for (auto& [k, bits] : forced) {
@@ -418,7 +516,8 @@ struct Monitor::Impl {
   }
 
   std::string build_program_json() const {
-    std::string s = "{\"write\":" + std::string(opt.write ? "true" : "false") + ",\"tasks\":[";
+    std::string s = "{\"write\":" + std::string(opt.write ? "true" : "false") +
+                    ",\"token\":" + std::string(opt.token.empty() ? "false" : "true") + ",\"tasks\":[";
     for (size_t ti = 0; ti < tasks.size(); ti++) {
       const TaskView& t = *tasks[ti];
       s += std::string(ti ? "," : "") + "{\"name\":" + jstr(t.name) + ",\"period_us\":" + std::to_string(t.period_us) + ",\"rungs\":[";
@@ -461,12 +560,73 @@ struct Monitor::Impl {
     return s + "]}";
   }
 
+  // The Host values this monitor answers to, once its port is known: its
+  // listen address; the loopback names when it listens on loopback or on
+  // every address; the names of --monitor-host.  A browser sends the name it
+  // resolved, so a page of another site whose name was rebound to this
+  // address still names that site, and is refused.
+  void allow_hosts(uint16_t listen_port) {
+    port = listen_port;
+    const std::string ps = ":" + std::to_string(port);
+    hosts.insert(lower(opt.host.find(':') != std::string::npos ? "[" + opt.host + "]" : opt.host) + ps);
+    if (loopback(opt.host) || wildcard(opt.host))
+      for (const char* n : {"127.0.0.1", "localhost", "[::1]"}) hosts.insert(n + ps);
+    for (const std::string& h : opt.hosts) {
+      bool has_port = h.back() != ']' && h.find(':') != std::string::npos;
+      hosts.insert(lower(has_port ? h : h + ps));
+    }
+  }
+
   bool host_ok(const http::Request& r) const {
-    if (opt.host != "127.0.0.1" && opt.host != "::1" && opt.host.rfind("127.", 0) != 0) return true;
     const std::string* h = r.header("host");
-    if (!h) return r.version == "HTTP/1.0";
-    std::string p = ":" + std::to_string(server ? server->port() : opt.port);
-    return *h == "127.0.0.1" + p || *h == "localhost" + p || *h == "[::1]" + p || *h == opt.host + p;
+    if (!h) return r.version == "HTTP/1.0";  // no browser sends that (and no rebinding without a name)
+    std::string v = lower(*h);
+    if (hosts.count(v) || (port == 80 && hosts.count(v + ":80"))) return true;
+    // listening on every address: any of them, given as an address (an
+    // address literal is never rebound; a name must be given by --monitor-host)
+    return wildcard(opt.host) && ip_literal_with_port(v, ":" + std::to_string(port));
+  }
+
+  // A POST from a page of this monitor: the browser says where the page
+  // came from (Origin; Sec-Fetch-Site on newer ones); clients that are not
+  // browsers send neither.
+  std::string cross_origin(const http::Request& r) const {
+    const std::string* host = r.header("host");
+    if (const std::string* o = r.header("origin"); o && (!host || lower(*o) != "http://" + lower(*host)))
+      return "cross-origin request refused (Origin: " + *o + "); only the monitor's own page may write";
+    if (const std::string* f = r.header("sec-fetch-site"); f && lower(*f) != "same-origin")
+      return "cross-site request refused (Sec-Fetch-Site: " + *f + "); only the monitor's own page may write";
+    return "";
+  }
+
+  std::string token_refusal(const http::Request& r) const {
+    if (opt.token.empty()) return "";
+    const std::string* t = r.header("x-ldc-token");
+    if (!t) return "this monitor needs its write token: open the page once as http://HOST:PORT/?token=TOKEN (ldrun "
+                   "printed the address at start), or send the header X-LDC-Token";
+    if (!same_secret(*t, opt.token)) return "wrong write token (X-LDC-Token); each run of ldrun has its own unless --monitor-token gives one";
+    return "";
+  }
+
+  // ---- /api/state: a picture taken after the request, without waiting on
+  // the server thread: the first call asks the tasks for a snapshot; the
+  // request is parked (the server asks again every few ms) until each
+  // scanning task took one, or 250 ms passed.  In STOP or FAULT nothing
+  // scans: the last picture at once.
+  bool snapshot_ready() const {
+    if (want_global.load()) return false;
+    for (size_t k = 0; k < tasks.size(); k++)
+      if (tasks[k]->want.load() && !(rt && rt->task_held(k))) return false;
+    return true;
+  }
+  http::Response state_reply(const http::Request& r) {
+    if (r.retries == 0) {
+      for (auto& t : tasks) t->want.store(true);
+      want_global.store(true);
+    }
+    bool scanning = rt && rt->state() == State::Run;
+    if (scanning && !snapshot_ready() && r.waited_ms < 250) return http::Response{200, "", "", false, true};
+    return {200, "application/json", state_json(), false};
   }
 
   static http::Response text(int code, const std::string& body) {
@@ -508,8 +668,12 @@ struct Monitor::Impl {
         if (v != "0" && v != "1") return text(400, "a bit is 0 or 1, not '" + v + "'");
         bits = v == "1";
       } else if (p.area == Area::F) {
+        errno = 0;
         float f = std::strtof(v.c_str(), &end);
         if (v.empty() || *end) return text(400, "bad REAL '" + v + "'");
+        if (!std::isfinite(f))
+          return text(400, errno == ERANGE ? "REAL '" + v + "' is out of range (the largest is 3.40282e+38)"
+                                           : "a REAL is a finite number, not '" + v + "'");
         std::memcpy(&bits, &f, 4);
       } else {
         errno = 0;
@@ -518,19 +682,69 @@ struct Monitor::Impl {
         bits = uint32_t(int32_t(x));
       }
     }
-    {
-      std::lock_guard<std::mutex> l(wmu);
-      auto key = std::make_pair(int(p.area), p.index);
-      if (release) forced.erase(key);
-      else if (hold) forced[key] = bits;
-      else pending.push_back({ti, p.area, p.index, bits});
-      have_writes.store(true, std::memory_order_release);
+    if (hold || release) return force_input(p, bits, release);
+    const ElementWrite w{p.area, p.index, bits, ~0u};
+    WriteShadow& shadow = is_shared(p.area) ? *shared_writes : *tasks[ti]->writes;
+    if (shadow.post(std::span<const ElementWrite>(&w, 1)) == 0)
+      return text(503, "busy: " + std::to_string(shadow.capacity()) +
+                           " devices are written and wait for a scan to take them (is the PLC in STOP?); "
+                           "write them again once it runs, or write devices already waiting");
+    return text(200, "queued for the next scan");
+  }
+
+  http::Response force_input(const Probe& p, uint32_t bits, bool release) {
+    std::lock_guard<std::mutex> l(fmu);
+    auto key = std::make_pair(int(p.area), p.index);
+    if (release) {
+      forced.erase(key);
+    } else {
+      if (!forced.count(key) && forced.size() >= opt.max_forced)
+        return text(503, "busy: " + std::to_string(opt.max_forced) + " inputs are forced already; release one first");
+      forced[key] = bits;
     }
-    return text(200, release ? "released" : hold ? "forced" : "queued for the next scan");
+    forced_version.fetch_add(1, std::memory_order_release);
+    any_forced.store(!forced.empty(), std::memory_order_relaxed);
+    return text(200, release ? "released" : "forced");
+  }
+
+  // RUN/STOP go to the control thread (a STOP saves retentive memory: a file
+  // written and fsynced); the request is parked until it is done.
+  http::Response run_or_stop(const http::Request& r, bool run) {
+    if (r.retries > 0) {
+      auto& job = *std::static_pointer_cast<ControlThread::Job>(r.state);
+      if (job.done.load(std::memory_order_acquire)) return job.reply;
+      if (r.waited_ms > 4000) return text(202, std::string(run ? "RUN" : "STOP") + " requested; still under way");
+      return http::Response{200, "", "", false, true};
+    }
+    if (!rt) return text(409, "no runtime");
+    Runtime* runtime = rt;
+    std::function<http::Response()> act;
+    auto task = http::form_value(r.body, "task");
+    if (task && !task->empty()) {  // one task: held or released, the others run on
+      size_t ti = rt->find_task(*task);
+      if (ti == SIZE_MAX) return text(400, "unknown task '" + *task + "'");
+      act = [runtime, ti, run, name = *task] {
+        if (run) runtime->run_task(ti);
+        else runtime->stop_task(ti);
+        return text(200, name + (runtime->task_held(ti) ? " STOP" : " RUN"));
+      };
+    } else {
+      act = [runtime, run] {
+        if (run) runtime->run();
+        else runtime->stop();
+        return text(200, state_name(runtime->state()));
+      };
+    }
+    std::shared_ptr<ControlThread::Job> job = control.post(std::move(act));
+    if (!job) return text(503, "busy: " + std::to_string(ControlThread::kMaxJobs) + " RUN/STOP requests are waiting already");
+    r.state = job;
+    return http::Response{200, "", "", false, true};
   }
 
   http::Response handle(const http::Request& r) {
-    if (!host_ok(r)) return text(421, "this monitor answers to its own address only (Host header)");
+    if (!host_ok(r))
+      return text(421, "this monitor answers to its own address only (Host: " + std::string(r.header("host") ? *r.header("host") : "") +
+                           "); give other names it is reached by with --monitor-host");
     const std::string& p = r.path;
     bool get = r.method == "GET" || r.method == "HEAD";
     if (p == "/" || p == "/index.html" || p == "/monitor.js" || p == "/monitor.css" || p == "/api/program" ||
@@ -539,17 +753,7 @@ struct Monitor::Impl {
       if (p == "/monitor.js") return {200, "text/javascript; charset=utf-8", kMonitorJs, false};
       if (p == "/monitor.css") return {200, "text/css; charset=utf-8", kMonitorCss, false};
       if (p == "/api/program") return {200, "application/json", program_json, false};
-      if (p == "/api/state") {  // a fresh snapshot: wait up to 250 ms for the next scan boundary
-        for (auto& t : tasks) t->want.store(true);
-        want_global.store(true);
-        for (int i = 0; i < 50; i++) {
-          bool all = !want_global.load();
-          for (size_t k = 0; k < tasks.size(); k++) all = all && (!tasks[k]->want.load() || (rt && rt->task_held(k)));
-          if (all) break;
-          std::this_thread::sleep_for(std::chrono::milliseconds(5));
-        }
-        return {200, "application/json", state_json(), false};
-      }
+      if (p == "/api/state") return state_reply(r);
       if (p == "/api/events") {
         for (auto& t : tasks) t->want.store(true);
         return {200, "text/event-stream", "retry: 1000\n\ndata: " + state_json() + "\n\n", true};
@@ -561,22 +765,13 @@ struct Monitor::Impl {
       if (!opt.write) return text(403, "read-only monitor: start ldrun with --monitor-write to allow RUN/STOP and writes");
       const std::string* h = r.header("x-ldc-monitor");
       if (!h || *h != "1") return text(403, "missing header X-LDC-Monitor: 1 (sent by the monitor page)");
+      if (std::string why = cross_origin(r); !why.empty()) return text(403, why);
+      if (std::string why = token_refusal(r); !why.empty()) return text(403, why);
       const std::string* ct = r.header("content-type");
       if (!r.body.empty() && (!ct || ct->rfind("application/x-www-form-urlencoded", 0) != 0))
         return text(415, "the body is application/x-www-form-urlencoded");
       if (p == "/api/write") return write(r);
-      if (!rt) return text(409, "no runtime");
-      auto task = http::form_value(r.body, "task");
-      if (task && !task->empty()) {  // one task: held or released, the others run on
-        size_t ti = rt->find_task(*task);
-        if (ti == SIZE_MAX) return text(400, "unknown task '" + *task + "'");
-        if (p == "/api/run") rt->run_task(ti);
-        else rt->stop_task(ti);
-        return text(200, *task + (rt->task_held(ti) ? " STOP" : " RUN"));
-      }
-      if (p == "/api/run") rt->run();
-      else rt->stop();
-      return text(200, state_name(rt->state()));
+      return run_or_stop(r, p == "/api/run");
     }
     return text(404, "no such page: " + p);
   }
@@ -614,7 +809,6 @@ class MonitorDriver : public IoDriver {
   std::shared_ptr<Monitor::Impl> m_;
 };
 
-bool loopback(const std::string& h) { return h == "::1" || h.rfind("127.", 0) == 0; }
 
 }  // namespace
 
@@ -638,8 +832,72 @@ std::pair<std::string, uint16_t> parse_monitor_address(const std::string& s, boo
   return {host, uint16_t(std::stoul(port))};
 }
 
+void parse_monitor_hosts(const std::string& list, std::vector<std::string>& out) {
+  size_t s = 0;
+  while (true) {
+    size_t e = list.find(',', s);
+    std::string n = list.substr(s, e == std::string::npos ? std::string::npos : e - s);
+    // NAME or NAME:PORT; [v6] or [v6]:PORT
+    std::string name = n, port;
+    bool port_given = false;
+    if (!n.empty() && n[0] == '[') {
+      size_t close = n.find(']');
+      if (close == std::string::npos || (close + 1 < n.size() && n[close + 1] != ':'))
+        throw std::runtime_error("--monitor-host: expected [IPv6] or [IPv6]:PORT, got '" + n + "'");
+      name = n.substr(0, close + 1);
+      port_given = close + 1 < n.size();
+      if (port_given) port = n.substr(close + 2);
+      unsigned char buf[16];
+      if (inet_pton(AF_INET6, name.substr(1, name.size() - 2).c_str(), buf) != 1)
+        throw std::runtime_error("--monitor-host: '" + name + "' is not an IPv6 address");
+    } else if (size_t colon = n.find(':'); colon != std::string::npos) {
+      name = n.substr(0, colon), port = n.substr(colon + 1), port_given = true;
+      if (name.empty()) throw std::runtime_error("--monitor-host: empty name in '" + n + "'");
+    }
+    if (name.empty()) throw std::runtime_error("--monitor-host: empty name in '" + list + "'");
+    if (name[0] != '[' && (name.size() > 253 || name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789.-") !=
+                                                  std::string::npos))
+      throw std::runtime_error("--monitor-host: '" + name + "' is not a host name (letters, digits, '.', '-') or address");
+    if (port_given) {
+      if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos || std::stoul(port) == 0 ||
+          std::stoul(port) > 65535)
+        throw std::runtime_error("--monitor-host: bad port in '" + n + "' (1..65535)");
+    }
+    out.push_back(n);
+    if (e == std::string::npos) break;
+    s = e + 1;
+  }
+}
+
+void check_monitor_token(const std::string& t) {
+  if (t.size() < 16 || t.size() > 128 ||
+      t.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._~-") != std::string::npos)
+    throw std::runtime_error("--monitor-token: 16 to 128 characters of A-Z a-z 0-9 . _ ~ - (a guessable token protects nothing)");
+}
+
+std::string make_monitor_token() {
+  unsigned char b[16];
+  int fd = open("/dev/urandom", O_RDONLY | O_CLOEXEC);
+  size_t got = 0;
+  while (fd >= 0 && got < sizeof b) {
+    ssize_t n = read(fd, b + got, sizeof b - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    got += size_t(n);
+  }
+  if (fd >= 0) close(fd);
+  if (got < sizeof b)
+    throw std::runtime_error(std::string("--monitor-remote --monitor-write: cannot read /dev/urandom for the write token (") +
+                             std::strerror(errno) + "); give one with --monitor-token");
+  static const char hex[] = "0123456789abcdef";
+  std::string t;
+  for (unsigned char c : b) t += hex[c >> 4], t += hex[c & 15];
+  return t;
+}
+
 Monitor::Monitor(std::vector<MonitorTask> tasks, MonitorOptions opt) : impl_(std::make_shared<Impl>()) {
   impl_->opt = std::move(opt);
+  impl_->shared_writes = std::make_unique<WriteShadow>(impl_->opt.write_backlog);
   for (MonitorTask& mt : tasks) {
     auto t = std::make_unique<TaskView>();
     t->name = mt.name;
@@ -647,6 +905,7 @@ Monitor::Monitor(std::vector<MonitorTask> tasks, MonitorOptions opt) : impl_(std
     t->layout = mt.image.layout;
     t->aliases = mt.image.aliases;
     t->mem.assign(t->layout.size, 0);
+    t->writes = std::make_unique<WriteShadow>(impl_->opt.write_backlog);
     Program p = program_of(mt.image);
     collect_devices(*t, p);
     for (const Rung& r : p.rungs) {
@@ -681,22 +940,29 @@ void Monitor::attach(Runtime* rt) { impl_->rt = rt; }
 
 void Monitor::start() {
   http::Server::Config c;
-  c.host = impl_->opt.host;
-  c.port = impl_->opt.port;
-  c.max_connections = impl_->opt.max_connections;
-  c.tick_ms = impl_->opt.tick_ms;
+  const MonitorOptions& o = impl_->opt;
+  c.host = o.host;
+  c.port = o.port;
+  c.max_connections = o.max_connections;
+  c.max_per_address = o.max_per_address;
+  c.max_streams = o.max_streams;
+  c.tick_ms = o.tick_ms;
+  c.log = o.log;
   Impl* m = impl_.get();
+  c.bound = [m](uint16_t port) { m->allow_hosts(port); };
   impl_->server = std::make_unique<http::Server>(
       c, [m](const http::Request& r) { return m->handle(r); },
       [m]() -> std::string {
         if (!m->server || m->server->streams() == 0) return "";
         return "data: " + m->state_json() + "\n\n";
       });
+  impl_->control.start();
   impl_->server->start();
 }
 
 void Monitor::stop() {
   if (impl_->server) impl_->server->stop();
+  impl_->control.stop();
 }
 
 uint16_t Monitor::port() const { return impl_->server ? impl_->server->port() : 0; }

@@ -1,7 +1,8 @@
 // runtime/net/monitor.h -- the live ladder view of `ldrun --monitor HOST:PORT`
 // (docs/runtime.md, "The monitor"): an I/O driver decorator that copies a
 // snapshot of each task's memory at its scan boundary (only when a page is
-// watching) and applies queued writes and forced inputs at the next boundary,
+// watching) and applies client writes (merged in write shadows,
+// runtime/write_shadow.h) and forced inputs at the next boundary,
 // and an HTTP server (runtime/net/http.h) that serves one built-in page, the rungs
 // as grids (ir/ladder.h), their power flow evaluated on the snapshot off the
 // scan thread, a device table, statistics and, with --monitor-write, RUN/STOP,
@@ -9,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -23,13 +25,32 @@ struct MonitorTask {
   Image image;  // its IL, line map, titles and aliases are drawn (the code is not needed)
 };
 
+// The write path's guards and the server's bounds: docs/faults.md, "The
+// monitor (HTTP)".
 struct MonitorOptions {
   std::string host = "127.0.0.1";
   uint16_t port = 0;            // 0: any free port
   bool write = false;           // --monitor-write: RUN/STOP, writes and forcing allowed
-  size_t max_connections = 32;
+  std::vector<std::string> hosts;  // --monitor-host: more names a request's Host may give ("name" or "name:port")
+  std::string token;            // not empty: every POST must carry X-LDC-Token with it
+  size_t max_connections = 64;  // --monitor-connections
+  size_t max_per_address = 32;  // --monitor-per-address
+  size_t max_streams = 32;      // --monitor-streams
+  size_t write_backlog = 8192;  // distinct devices written and not yet taken by a scan (per shadow)
+  size_t max_forced = 256;      // inputs forced at once
   int tick_ms = 50;             // event stream period (20 updates/s)
+  std::function<void(const std::string&)> log;  // throttled server messages (stderr in ldrun)
 };
+
+// --monitor-host NAME[,NAME...]: host names (or IP literals) with an
+// optional :PORT, appended to `out`.  Throws std::runtime_error with the reason.
+void parse_monitor_hosts(const std::string& list, std::vector<std::string>& out);
+// --monitor-token: 16 to 128 of A-Z a-z 0-9 . _ ~ - (fits a URL and a header
+// unescaped).  Throws std::runtime_error with the reason.
+void check_monitor_token(const std::string& token);
+// A fresh write token: 128 bits from /dev/urandom as 32 hex digits.  Throws
+// std::runtime_error if /dev/urandom cannot be read.
+std::string make_monitor_token();
 
 // "127.0.0.1:8080", "[::1]:8080", "localhost:8080", "8080" (loopback) ->
 // host, port.  A host that is not a loopback address needs `remote`.

@@ -2,7 +2,8 @@
 // the bytes, then on what follows each complete request (pipelining), and
 // the form decoder on queries and bodies.  Besides not crashing, a complete
 // request must consume only bytes it was given, and must parse the same way
-// when exactly its own bytes are given.
+// when exactly its own bytes are given; and a prefix refused at once (a
+// request line that cannot be HTTP) must be refused whole too.
 #include <cstdlib>
 
 #include "runtime/net/http.h"
@@ -11,6 +12,12 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::string_view buf = LDC_FUZZ_TEXT(data, size);
   ldc::http::Limits lim;
+  // an Error for a prefix is an Error for the whole: refusing early refuses
+  // nothing the full parse would have served
+  if (ldc::http::parse_request(buf, lim).status != ldc::http::Parse::Status::Error)
+    for (size_t cut = 1; cut < 4; cut++)
+      if (ldc::http::parse_request(buf.substr(0, buf.size() * cut / 4), lim).status == ldc::http::Parse::Status::Error)
+        std::abort();
   for (int k = 0; k < 8 && !buf.empty(); k++) {
     ldc::http::Parse p = ldc::http::parse_request(buf, lim);
     if (p.status != ldc::http::Parse::Status::Done) {

@@ -168,9 +168,23 @@ function update(state) {
   plotTrends(state);
 }
 
+// The write token (ldrun --monitor-remote --monitor-write, docs/runtime.md):
+// given once in the address (/?token=...), kept by this browser for this
+// monitor's origin only, taken out of the address bar and history, and sent
+// with every POST.
+const TOKEN_KEY = 'ldc-monitor-token';
+function takeToken() {
+  const q = new URLSearchParams(location.search);
+  if (q.has('token')) {
+    localStorage.setItem(TOKEN_KEY, q.get('token'));
+    window.history.replaceState(null, '', location.pathname);
+  }
+}
 async function post(path, body) {
-  const r = await fetch(path, {method: 'POST', headers: {'X-LDC-Monitor': '1',
-                               'Content-Type': 'application/x-www-form-urlencoded'}, body: body});
+  const headers = {'X-LDC-Monitor': '1', 'Content-Type': 'application/x-www-form-urlencoded'};
+  const token = localStorage.getItem(TOKEN_KEY);
+  if (token) headers['X-LDC-Token'] = token;
+  const r = await fetch(path, {method: 'POST', headers: headers, body: body});
   document.getElementById('reply').textContent = r.status + ': ' + (await r.text()).trim();
 }
 function form(force) {
@@ -180,8 +194,12 @@ function form(force) {
 }
 
 async function main() {
+  takeToken();
   program = await (await fetch('/api/program')).json();
   render();
+  if (program.write && program.token && !localStorage.getItem(TOKEN_KEY))
+    document.getElementById('reply').textContent =
+      'writes need the token: open the address ldrun printed at start (.../?token=...) once';
   document.getElementById('filter').addEventListener('input', applyFilter);
   document.getElementById('run').addEventListener('click', () => post('/api/run', ''));
   document.getElementById('stop').addEventListener('click', () => post('/api/stop', ''));

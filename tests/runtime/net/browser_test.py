@@ -7,7 +7,10 @@ on a pipe (--remote-debugging-pipe; standard library only).  One page of the
 monitor stays open while examples/traffic.csv runs: the lit elements in its
 DOM must change.  Then on examples/eq1.ld (--monitor-write) the page's own
 form forces X1 and writes X3, X4 (filling the inputs, clicking the buttons):
-the coil Y1 must light in the DOM, and go dark when X1 is forced to 0.  A
+the coil Y1 must light in the DOM, and go dark when X1 is forced to 0.  Then
+with --monitor-remote --monitor-write the page opened at the address ldrun
+printed (/?token=...) keeps the write token and writes with it; without it
+a write is refused 403 and the page says a token is needed.  A
 screenshot of the traffic light goes to OUT_DIR/monitor.png.
 Exit 77 (skipped) when chromium is not installed.
 """
@@ -185,6 +188,43 @@ try:
     time.sleep(0.4)
     if ("rung-0-0", coil) in lit(b.dom()):
         mt.fail("the coil Y1 stayed lit after X1 was forced to 0")
+    m.stop()
+
+    # 3. the write token (--monitor-remote --monitor-write): the page opened once
+    # as ldrun printed it (/?token=...) keeps the token, takes it out of the
+    # address bar, and writes with it -- also when opened again without it
+    m = mt.Ldrun(["examples/eq1.ld", "--io=none", "--period", "10ms", "--monitor", "127.0.0.1:0", "--monitor-remote",
+                  "--monitor-write"])
+    url = m.banner.split("open ")[1].split()[0]
+    if "?token=" not in url:
+        mt.fail("no address with the token printed: " + m.banner)
+    b.open(url)
+    if b.js("location.search") != "":
+        mt.fail("the token stays in the address bar: " + b.js("location.href"))
+    submit("X1", "1", "wforce")
+    b.open("http://127.0.0.1:%d/" % m.port)
+    if mt.get_json(m.port, "/api/state")["forced"] != ["X1"]:
+        mt.fail("the page's force with the token did not arrive")
+    submit("X1", "", "wrelease")
+    if mt.get_json(m.port, "/api/state")["forced"]:
+        mt.fail("the page's release (opened again without ?token=) did not arrive")
+    # a browser without the token is refused, and the page says why
+    b.js("localStorage.clear()")
+    b.open("http://127.0.0.1:%d/" % m.port)
+    time.sleep(0.3)
+    if "token" not in b.js("document.getElementById('reply').textContent"):
+        mt.fail("the page does not say that writes need the token")
+    b.js("document.getElementById('wdev').value = 'X1'; document.getElementById('wval').value = '1';"
+         "document.getElementById('wforce').click();")
+    for _ in range(50):
+        time.sleep(0.05)
+        reply = b.js("document.getElementById('reply').textContent")
+        if reply.startswith("403"):
+            break
+    if not reply.startswith("403") or "token" not in reply:
+        mt.fail("a write without the token: %r" % reply)
+    if mt.get_json(m.port, "/api/state")["forced"]:
+        mt.fail("a write without the token forced an input")
     m.stop()
 finally:
     b.close()
