@@ -341,9 +341,17 @@ def limits():
     check("1000 connections under a hard limit of 64: refused, saying what to change", (rc, err) == (1, want),
           "%d %r" % (rc, err))
     rc, err = refused(args + ["--monitor", "127.0.0.1:0"], (40, 40))
-    want = ("ldrun: error: the open-file limit is 40 but the connection caps need 88 descriptors (32 for the runtime, "
-            "20 for --modbus-connections 16, 36 for the monitor): raise the limit (ulimit -n 88)")
+    # 32 + (16 + 4) + (64 + 4): the runtime, Modbus's default 16 connections, the monitor's default 64
+    want = ("ldrun: error: the open-file limit is 40 but the connection caps need 120 descriptors (32 for the runtime, "
+            "20 for --modbus-connections 16, 68 for --monitor-connections 64): raise the limit (ulimit -n 120)")
     check("Modbus and the monitor under a hard limit of 40: refused", (rc, err) == (1, want), "%d %r" % (rc, err))
+    rc, err = refused(args + ["--monitor", "127.0.0.1:0", "--monitor-connections", "100"], (140, 140))
+    # 32 + 20 + 104 = 156 against 140: 16 too many, so 100 - 16 = 84 monitor connections would fit
+    want = ("ldrun: error: the open-file limit is 140 but the connection caps need 156 descriptors (32 for the runtime, "
+            "20 for --modbus-connections 16, 104 for --monitor-connections 100): lower --monitor-connections to 84 "
+            "or raise the limit (ulimit -n 156)")
+    check("--monitor-connections 100 under a hard limit of 140: refused, saying what to change", (rc, err) == (1, want),
+          "%d %r" % (rc, err))
     rc, err = refused(args + ["--modbus-connections", "28"], (64, 64))
     check("28 connections fit in 64", rc == 0, "%d %r" % (rc, err))
     ld = Ldrun([ECHO, "--io=stdio", "--modbus", "127.0.0.1:0", "--modbus-connections", "1000",
