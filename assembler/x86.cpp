@@ -541,10 +541,12 @@ Encoding encode(const Instruction& inst, bool long_form) {
   return e;
 }
 
-std::vector<uint8_t> encode_at(const Instruction& inst, uint64_t address) {
+namespace {
+// encode_at's bytes in a fixed buffer: the decoder re-encodes every
+// instruction it reads, and the loader decodes every instruction of an image.
+Encoding encode_at_fixed(const Instruction& inst, uint64_t address) {
   for (bool long_form : {false, true}) {
     Encoding e = encode(inst, long_form);
-    std::vector<uint8_t> bytes(e.bytes.begin(), e.bytes.begin() + e.size);
     bool relax = false;
     for (unsigned i = 0; i < e.num_fixups; ++i) {
       const Fixup& fx = e.fixups[i];
@@ -559,11 +561,17 @@ std::vector<uint8_t> encode_at(const Instruction& inst, uint64_t address) {
         }
         throw AsmError("branch target out of range");
       }
-      apply_fixup(k, bytes, fx.offset, v);
+      apply_fixup(k, std::span<uint8_t>(e.bytes.data(), e.size), fx.offset, v);
     }
-    if (!relax) return bytes;
+    if (!relax) return e;
   }
   throw AsmError("branch target out of range");
+}
+}  // namespace
+
+std::vector<uint8_t> encode_at(const Instruction& inst, uint64_t address) {
+  Encoding e = encode_at_fixed(inst, address);
+  return std::vector<uint8_t>(e.bytes.begin(), e.bytes.begin() + e.size);
 }
 
 // ------------------------------------------------------------------ decoder
@@ -744,9 +752,8 @@ std::optional<Decoded> decode(std::span<const uint8_t> code, size_t offset, Deco
     if (!decode_with(f, rd, offset, rex, op, in, end, truncated)) continue;
     // Accept exactly what the encoder produces for this instruction.
     try {
-      std::vector<uint8_t> again = encode_at(in, offset);
-      if (again.size() != end - offset ||
-          !std::equal(again.begin(), again.end(), code.begin() + long(offset)))
+      Encoding again = encode_at_fixed(in, offset);
+      if (again.size != end - offset || !std::equal(again.bytes.begin(), again.bytes.begin() + again.size, code.begin() + long(offset)))
         continue;
     } catch (const AsmError&) {
       continue;
