@@ -131,6 +131,49 @@ TEST(BigImages, EightMiBOfNopsLoadInMemoryBoundedByTheFile) {
   EXPECT_LT(r.seconds, kSeconds);
 }
 
+// Online load (`load FILE` of the line protocol) refuses an image over the
+// budget before reading it: the reply names the file, its size and the flag,
+// the running program goes on, and the refused file's bytes never enter
+// memory (a sparse file of 200 MiB: read, it would add 200 MB to the peak).
+// An image within the default budget is loaded and switched in.
+TEST(BigImages, OnlineLoadRefusesAnImageOverTheBudgetBeforeReadingIt) {
+  const std::string small = temp_path("small.bin"), big = temp_path("big.bin"), huge = temp_path("huge.bin");
+  write_file(small, nop_image(0));
+  write_file(big, nop_image(size_t(4) << 20));
+  write_file(huge, nop_image(0));
+  const uint64_t huge_size = uint64_t(200) << 20;
+  ASSERT_EQ(truncate(huge.c_str(), off_t(huge_size)), 0);
+  const std::vector<std::string> args = {small, "--io=none", "--control=stdin", "--load-budget", "46M"};
+  Outcome idle = ldrun(args, "wait 2\nstatus\nquit\n");
+  Outcome refused = ldrun(args, "load " + huge + "\nwait 2\nstatus\nquit\n");
+  Outcome over = ldrun(args, "load " + big + "\nquit\n");
+  Outcome taken = ldrun({small, "--io=none", "--control=stdin"}, "load " + big + "\nquit\n");
+  for (const std::string& f : {small, big, huge}) unlink(f.c_str());
+  ASSERT_EQ(refused.status, 0) << refused.err;
+  // (46 MiB - 40 MiB) / 3 = 2 MiB: the most a load may read under that budget
+  EXPECT_NE(refused.out.find("error: " + huge + ": error: the file has " + std::to_string(huge_size) +
+                             " bytes, more than the 2 MiB that --load-budget 46M lets one load read"),
+            std::string::npos)
+      << refused.out;
+  EXPECT_NE(refused.out.find("it was not read"), std::string::npos) << refused.out;
+  EXPECT_NE(refused.out.find("state RUN"), std::string::npos) << refused.out;
+  std::printf("peak with a 200 MiB load refused %s, without a load %s\n", mb(refused.peak_bytes).c_str(), mb(idle.peak_bytes).c_str());
+  EXPECT_LT(refused.peak_bytes, idle.peak_bytes + huge_size / 2) << "the refused file was read";
+  EXPECT_NE(over.out.find("error: " + big + ": error: the file has "), std::string::npos) << over.out;  // 4 MiB > 2 MiB
+  ASSERT_EQ(taken.status, 0) << taken.err;
+  EXPECT_NE(taken.out.find("ok task main switched"), std::string::npos) << taken.out << taken.err;
+}
+
+// A budget that is not a size is refused at start, naming the flag.
+TEST(BigImages, ABadBudgetIsRefusedAtStart) {
+  const std::string small = temp_path("small.bin");
+  write_file(small, nop_image(0));
+  Outcome r = ldrun({small, "--io=none", "--load-budget", "lots"});
+  unlink(small.c_str());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("ldrun: error: bad --load-budget 'lots' (bytes, or with K, M or G: 128M)"), std::string::npos) << r.err;
+}
+
 // The format's limit holds for every file ldrun reads: a file over 256 MiB is
 // refused before it is read (the file is sparse: it costs no disk).
 TEST(BigImages, AFileOverTheFormatsLimitIsNotRead) {
