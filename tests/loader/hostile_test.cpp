@@ -641,7 +641,7 @@ TEST(Hostile, EveryO2FrameRunsItsCounterRoutine) {
                             kEdges);
     ASSERT_EQ(refusal(im), "") << x86::reg_name(x86::r64(image));
     Memory m(L);
-    auto eng = make_native_engine(im.code, im.entry);
+    auto eng = make_native_engine(map_checked_code(im.code, im.entry, im.layout));
     int rising = 0, before = 0;
     for (int x : {1, 0, 1, 1, 0, 1}) {
       m.bytes[L.addr(Area::X, 0)] = uint8_t(x);
@@ -879,8 +879,8 @@ TEST(Sandbox, NativeCodeWithItsCallTableRunsAsInProcess) {
       {"movss xmm0, dword ptr [rbx+" + f0 + "]", "call qword ptr [rbx-0x40]", "movss dword ptr [rbx+" + f1 + "], xmm0"}, at);
   ASSERT_EQ(refusal(image_around(code)), "");
   Memory a(L), b(L);
-  auto plain = make_native_engine(code, 0);
-  auto boxed = make_sandboxed_engine(make_native_engine(code, 0), L);
+  auto plain = make_native_engine(map_checked_code(code, 0, L));
+  auto boxed = make_sandboxed_engine(make_native_engine(map_checked_code(code, 0, L)), L);
   for (float x : {0.5f, 1.0f, -2.25f}) {
     a.set_real(0, x), b.set_real(0, x);
     plain->scan(a.data());

@@ -399,7 +399,7 @@ std::string run_confined(const Image& im, std::mt19937_64& rng) {
   Memory m(im.layout);
   std::unique_ptr<Engine> e;
   try {
-    e = make_sandboxed_engine(make_native_engine(im.code, im.entry), im.layout, 5000);
+    e = make_sandboxed_engine(make_native_engine(map_checked_code(im.code, im.entry, im.layout)), im.layout, 5000);
     for (int scan = 0; scan < 3; scan++) {
       for (uint32_t i = 0; i < 32; i++) m.data()[im.layout.addr(Area::X, i)] = rng() & 1;
       int32_t dt = int32_t(rng() % 100);
