@@ -13,8 +13,16 @@
 // after it.  A fault, a system call, a hang, a write past the image or a
 // refusal that does not name the code section is an escape.
 //
-//   mutant_fuzz [--count N] [--seed S] [--save DIR] [--quiet]
+// Large bodies (issue 24: the check must hold, and stay bounded, on long
+// code): one mutant in 500 starts from an image whose body begins with a run
+// of 16 KiB to 1 MiB of one-byte nops (every branch of the body relative, so
+// the image stays valid), and any mutant may insert a nop run of its own (1
+// to 64 Ki nops, often near the rel8 reach and the 64-bit words of the
+// check's bitmaps) at an instruction boundary, moving everything after it.
 //
+//   mutant_fuzz [--count N] [--seed S] [--large] [--save DIR] [--quiet]
+//
+// --large: every x86-64 mutant starts from a large body.
 // Exit status 0 when no mutant escaped, 1 otherwise.
 #include <algorithm>
 #include <chrono>
@@ -43,8 +51,56 @@ struct Base {
   Image image;
 };
 
-std::vector<Base> bases() {
-  std::vector<Program> ps = test::examples_and_random_programs(12, 25);
+// Where the scan body starts: after the prologue and the -O2 base registers' leas.
+size_t body_start(const std::vector<uint8_t>& code) {
+  size_t off = 0;
+  bool o2 = false;
+  for (bool slots : {true, false}) {
+    size_t at = 0;
+    bool ok = true;
+    for (const x86::Instruction& want : x86::scan_prologue(slots)) {
+      std::optional<x86::Decoded> d = x86::decode(code, at);
+      if (!d || !(d->inst == want)) {
+        ok = false;
+        break;
+      }
+      at += d->length;
+    }
+    if (ok) {
+      off = at, o2 = slots;
+      break;
+    }
+  }
+  while (o2) {
+    std::optional<x86::Decoded> d = x86::decode(code, off);
+    if (!d || d->inst.mnemonic != x86::Mnemonic::Lea || d->inst.ops[0].kind != x86::OperandKind::Reg) break;
+    bool base = false;
+    for (int b = 0; b < x86::kNumBases; b++) base |= d->inst.ops[0].reg == x86::r64(x86::kBaseRegs[b]);
+    if (!base) break;
+    off += d->length;
+  }
+  return off;
+}
+
+// Valid x86-64 images with long bodies: a few programs at -O0 and -O2, their
+// body led by `nops` one-byte nops (16 KiB to 1 MiB).
+std::vector<Base> large_bases(const std::vector<Program>& ps) {
+  std::vector<Base> out;
+  for (size_t i = 0; i < ps.size() && i < 3; i++)
+    for (int level : {0, 2})
+      for (size_t nops : {size_t(16) << 10, size_t(256) << 10 | 63, size_t(1) << 20}) {
+        const Program& p = ps[i];
+        Image im = make_x86_image(p, build_x86(p, p.source, as::Mode::Blockwise, level, false));
+        im.lines.clear();
+        size_t at = body_start(im.code);
+        im.code.insert(im.code.begin() + long(at), nops, 0x90);
+        std::string name = p.source + " -O" + std::to_string(level) + " +" + std::to_string(nops) + " nops";
+        out.push_back({name, read_image(write_image(im), name)});  // throws if the loader refuses it: a bug here
+      }
+  return out;
+}
+
+std::vector<Base> bases(const std::vector<Program>& ps) {
   std::vector<Base> out;
   for (const Program& p : ps)
     for (int level : {0, 1, 2})
@@ -151,9 +207,25 @@ class Mutator {
     if (r < 70) return displace(code, d.insts);
     if (r < 80) return reregister(code, v);
     if (r < 83) return reenter(entry);
-    if (r < 90) return swap(code, d.insts);
-    if (r < 95) return erase(code, v);
+    if (r < 88) return swap(code, d.insts);
+    if (r < 92) return erase(code, v);
+    if (r < 96) return nop_run(code, v);
     return flip(code);
+  }
+
+  // Inserts a run of one-byte nops at v's offset, moving the code after it:
+  // branches across it now land elsewhere.  Lengths near the rel8 reach and
+  // the bitmaps' 64-bit words, or up to 64 Ki.
+  std::string nop_run(std::vector<uint8_t>& code, const x86::Decoded& v) {
+    size_t n;
+    switch (pick(4)) {
+      case 0: n = 120 + pick(16); break;
+      case 1: n = 60 + pick(8) + 64 * pick(4); break;
+      case 2: n = 1 + pick(8); break;
+      default: n = 1 + pick(size_t(64) << 10);
+    }
+    code.insert(code.begin() + v.offset, n, 0x90);
+    return "nops" + std::to_string(n) + "@" + std::to_string(v.offset);
   }
 
   // A branch target: mostly an instruction boundary (forward or back), else any offset.
@@ -427,20 +499,23 @@ std::string reason_class(const std::string& why) {
 int main(int argc, char** argv) {
   uint64_t count = 20000, seed = 1;
   std::string save;
-  bool quiet = false;
+  bool quiet = false, all_large = false;
   for (int i = 1; i < argc; i++) {
     std::string a = argv[i];
     if (a == "--count" && i + 1 < argc) count = std::stoull(argv[++i]);
     else if (a == "--seed" && i + 1 < argc) seed = std::stoull(argv[++i]);
     else if (a == "--save" && i + 1 < argc) save = argv[++i];
     else if (a == "--quiet") quiet = true;
+    else if (a == "--large") all_large = true;
     else {
-      std::fprintf(stderr, "usage: mutant_fuzz [--count N] [--seed S] [--save DIR] [--quiet]\n");
+      std::fprintf(stderr, "usage: mutant_fuzz [--count N] [--seed S] [--large] [--save DIR] [--quiet]\n");
       return 2;
     }
   }
   auto t0 = std::chrono::steady_clock::now();
-  std::vector<Base> bs = bases();
+  std::vector<Program> programs = test::examples_and_random_programs(12, 25);
+  std::vector<Base> bs = bases(programs);
+  const std::vector<Base> large = large_bases(programs);
   std::vector<uint32_t> pool;  // every word of every C40 image
   for (const Base& b : bs)
     if (b.image.target == ImageTarget::C40)
@@ -448,10 +523,12 @@ int main(int argc, char** argv) {
         pool.push_back(uint32_t(b.image.code[k]) | uint32_t(b.image.code[k + 1]) << 8 |
                        uint32_t(b.image.code[k + 2]) << 16 | uint32_t(b.image.code[k + 3]) << 24);
   std::mt19937_64 rng(seed);
-  uint64_t refused = 0, accepted = 0, escapes = 0, c40_accepted = 0, c40_stopped = 0;
+  uint64_t refused = 0, accepted = 0, escapes = 0, c40_accepted = 0, c40_stopped = 0, large_count = 0, large_accepted = 0;
   std::map<std::string, uint64_t> reasons;
   for (uint64_t n = 0; n < count; n++) {
-    const Base& b = bs[rng() % bs.size()];
+    const bool from_large = all_large || rng() % 500 == 0;
+    const Base& b = from_large ? large[rng() % large.size()] : bs[rng() % bs.size()];
+    large_count += from_large;
     Image im = b.image;
     const bool c40 = im.target == ImageTarget::C40;
     std::string what = c40 ? C40Mutator(rng(), pool).mutate(im.code, im.entry)
@@ -461,6 +538,7 @@ int main(int argc, char** argv) {
     try {
       Image back = read_image(bytes, "mutant.bin");
       accepted++;
+      large_accepted += from_large;
       if (c40) c40_accepted++, run_simulated(back, rng, c40_stopped);
       else escape = run_confined(back, rng);
     } catch (const ImageError& e) {
@@ -489,9 +567,11 @@ int main(int argc, char** argv) {
     for (size_t i = 0; i < top.size() && i < 15; i++) std::printf("  %9llu  %s\n", (unsigned long long)top[i].first, top[i].second.c_str());
   }
   std::printf("%llu mutants of %zu images (seed %llu): %llu refused, %llu accepted and ran (x86-64: %llu in the sandbox;"
-              " C40: %llu on the simulator, %llu of them stopped by it), %llu escapes, %.1f s\n",
-              (unsigned long long)count, bs.size(), (unsigned long long)seed, (unsigned long long)refused,
+              " C40: %llu on the simulator, %llu of them stopped by it; from %zu large x86-64 bodies: %llu mutants,"
+              " %llu accepted), %llu escapes, %.1f s\n",
+              (unsigned long long)count, bs.size() + large.size(), (unsigned long long)seed, (unsigned long long)refused,
               (unsigned long long)accepted, (unsigned long long)(accepted - c40_accepted), (unsigned long long)c40_accepted,
-              (unsigned long long)c40_stopped, (unsigned long long)escapes, secs);
+              (unsigned long long)c40_stopped, large.size(), (unsigned long long)large_count,
+              (unsigned long long)large_accepted, (unsigned long long)escapes, secs);
   return escapes ? 1 : 0;
 }
