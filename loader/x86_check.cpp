@@ -3,7 +3,10 @@
 // frame: [rbp+disp], or a base register's) inside the memory image, every
 // direct branch lands on an instruction boundary inside the code and goes
 // forward, and the only division is the guarded one (docs/image-format.md,
-// "The x86-64 code check").
+// "The x86-64 code check").  The registers an instruction writes are its
+// form's row in the assembler's form table (x86.h, Effects).  The check holds
+// a few bits per byte of code, never a record per instruction: it decodes
+// again where it looks (docs/image-format.md, "What the loader allocates").
 #include <algorithm>
 #include <array>
 #include <cstdio>
