@@ -102,9 +102,11 @@ uint64_t size_arg(const std::string& v, const char* flag) {
   size_t digits = v.find_first_not_of("0123456789");
   std::string unit = digits == std::string::npos ? "" : v.substr(digits);
   int shift = unit.empty() ? 0 : unit == "K" || unit == "KiB" ? 10 : unit == "M" || unit == "MiB" ? 20 : unit == "G" || unit == "GiB" ? 30 : -1;
-  if (digits == 0 || shift < 0 || v.size() - unit.size() > 12)
+  if (v.empty() || digits == 0 || shift < 0 || v.size() - unit.size() > 12)
     throw UserError(std::string("ldrun: error: bad ") + flag + " '" + v + "' (bytes, or with K, M or G: 128M)");
-  return std::stoull(v.substr(0, v.size() - unit.size())) << shift;
+  uint64_t n = std::stoull(v.substr(0, v.size() - unit.size()));
+  if (n > (UINT64_MAX >> shift)) throw UserError(std::string("ldrun: error: ") + flag + " '" + v + "' is too large");
+  return n << shift;
 }
 
 std::string stem(const std::string& path) {
