@@ -8,116 +8,162 @@ namespace {
 using M = Mnemonic;
 constexpr OT N = OT::None;
 
-constexpr Form F(M mn, OT a, OT b, OT c, uint8_t pfx, uint8_t len, uint8_t o0, uint8_t o1,
+// The effects column: what each form reads and writes (Effects, x86.h).
+// fx(uses of the explicit operands), then what it does besides.
+constexpr Use R = Use::R, W = Use::W, RW = Use::RW, A = Use::Addr, _ = Use::None;
+constexpr Effects fx(Use a = _, Use b = _, Use c = _) { return Effects{{a, b, c}}; }
+constexpr Effects flags_out(Effects e) { return e.writes_flags = true, e; }  // writes the flags
+constexpr Effects flags_in(Effects e) { return e.reads_flags = true, e; }    // reads them (a condition)
+constexpr Effects implicit(Effects e, uint16_t reads, uint16_t writes) { return e.reads = reads, e.writes = writes, e; }
+constexpr Effects stack(Effects e, StackUse s) { return e.stack = s, e; }
+constexpr uint16_t kEax = reg_bit(AX), kEdx = reg_bit(DX);
+constexpr Effects kMove = fx(W, R);                // mov, movzx, movd, cvt..: the destination written whole or in part
+constexpr Effects kAlu = flags_out(fx(RW, R));     // add, or, and, sub, xor, shifts: op0 = op0 . op1
+constexpr Effects kCompare = flags_out(fx(R, R));  // cmp, test, ucomiss: both read, only the flags written
+
+constexpr Form F(M mn, OT a, OT b, OT c, Effects fx, uint8_t pfx, uint8_t len, uint8_t o0, uint8_t o1,
                  Enc e, int8_t digit = -1, bool w = false, bool cc = false) {
-  return Form{mn, {a, b, c}, pfx, len, {o0, o1}, e, digit, w, cc};
+  return Form{mn, {a, b, c}, pfx, len, {o0, o1}, e, digit, w, cc, fx};
 }
 // One-byte opcode.
-constexpr Form F1(M mn, OT a, OT b, uint8_t o, Enc e, int8_t d = -1, bool w = false) {
-  return F(mn, a, b, N, 0, 1, o, 0, e, d, w);
+constexpr Form F1(M mn, OT a, OT b, Effects fx, uint8_t o, Enc e, int8_t d = -1, bool w = false) {
+  return F(mn, a, b, N, fx, 0, 1, o, 0, e, d, w);
 }
 // 0F-prefixed opcode.
-constexpr Form F2(M mn, OT a, OT b, uint8_t o, Enc e, int8_t d = -1, bool cc = false) {
-  return F(mn, a, b, N, 0, 2, 0x0F, o, e, d, false, cc);
+constexpr Form F2(M mn, OT a, OT b, Effects fx, uint8_t o, Enc e, int8_t d = -1, bool cc = false) {
+  return F(mn, a, b, N, fx, 0, 2, 0x0F, o, e, d, false, cc);
 }
 // SSE: mandatory prefix + 0F opcode.
-constexpr Form FS(M mn, uint8_t pfx, OT a, OT b, uint8_t o, Enc e) {
-  return F(mn, a, b, N, pfx, 2, 0x0F, o, e);
+constexpr Form FS(M mn, uint8_t pfx, OT a, OT b, Effects fx, uint8_t o, Enc e) {
+  return F(mn, a, b, N, fx, pfx, 2, 0x0F, o, e);
 }
 
 // The order matters: the encoder takes the first form that fits, which
 // reproduces GNU as's choices (imm8 before the accumulator form before
 // imm32, the store direction 89 for register moves, ...).
-#define ALU(MN, D)                                        \
-  F1(MN, OT::RM32, OT::R32, (D) * 8 + 1, Enc::MR),        \
-  F1(MN, OT::R32, OT::RM32, (D) * 8 + 3, Enc::RM),        \
-  F1(MN, OT::RM64, OT::R64, (D) * 8 + 1, Enc::MR, -1, true), \
-  F1(MN, OT::R64, OT::RM64, (D) * 8 + 3, Enc::RM, -1, true), \
-  F1(MN, OT::RM32, OT::I8, 0x83, Enc::M, D),              \
-  F1(MN, OT::Eax, OT::I32, (D) * 8 + 5, Enc::ZO),         \
-  F1(MN, OT::RM32, OT::I32, 0x81, Enc::M, D),             \
-  F1(MN, OT::RM64, OT::I8, 0x83, Enc::M, D, true),        \
-  F1(MN, OT::Rax, OT::I32, (D) * 8 + 5, Enc::ZO, -1, true), \
-  F1(MN, OT::RM64, OT::I32, 0x81, Enc::M, D, true),       \
-  F1(MN, OT::RM8, OT::R8, (D) * 8 + 0, Enc::MR),          \
-  F1(MN, OT::R8, OT::RM8, (D) * 8 + 2, Enc::RM),          \
-  F1(MN, OT::Al, OT::IB, (D) * 8 + 4, Enc::ZO),           \
-  F1(MN, OT::RM8, OT::IB, 0x80, Enc::M, D)
+#define ALU(MN, D, FX)                                           \
+  F1(MN, OT::RM32, OT::R32, FX, (D) * 8 + 1, Enc::MR),           \
+  F1(MN, OT::R32, OT::RM32, FX, (D) * 8 + 3, Enc::RM),           \
+  F1(MN, OT::RM64, OT::R64, FX, (D) * 8 + 1, Enc::MR, -1, true), \
+  F1(MN, OT::R64, OT::RM64, FX, (D) * 8 + 3, Enc::RM, -1, true), \
+  F1(MN, OT::RM32, OT::I8, FX, 0x83, Enc::M, D),                 \
+  F1(MN, OT::Eax, OT::I32, FX, (D) * 8 + 5, Enc::ZO),            \
+  F1(MN, OT::RM32, OT::I32, FX, 0x81, Enc::M, D),                \
+  F1(MN, OT::RM64, OT::I8, FX, 0x83, Enc::M, D, true),           \
+  F1(MN, OT::Rax, OT::I32, FX, (D) * 8 + 5, Enc::ZO, -1, true),  \
+  F1(MN, OT::RM64, OT::I32, FX, 0x81, Enc::M, D, true),          \
+  F1(MN, OT::RM8, OT::R8, FX, (D) * 8 + 0, Enc::MR),             \
+  F1(MN, OT::R8, OT::RM8, FX, (D) * 8 + 2, Enc::RM),             \
+  F1(MN, OT::Al, OT::IB, FX, (D) * 8 + 4, Enc::ZO),              \
+  F1(MN, OT::RM8, OT::IB, FX, 0x80, Enc::M, D)
 
 #define SHIFT(MN, D)                                      \
-  F1(MN, OT::RM32, OT::One, 0xD1, Enc::M, D),             \
-  F1(MN, OT::RM32, OT::Cl, 0xD3, Enc::M, D),              \
-  F1(MN, OT::RM32, OT::IB, 0xC1, Enc::M, D),              \
-  F1(MN, OT::RM64, OT::One, 0xD1, Enc::M, D, true),       \
-  F1(MN, OT::RM64, OT::Cl, 0xD3, Enc::M, D, true),        \
-  F1(MN, OT::RM64, OT::IB, 0xC1, Enc::M, D, true)
+  F1(MN, OT::RM32, OT::One, kAlu, 0xD1, Enc::M, D),       \
+  F1(MN, OT::RM32, OT::Cl, kAlu, 0xD3, Enc::M, D),        \
+  F1(MN, OT::RM32, OT::IB, kAlu, 0xC1, Enc::M, D),        \
+  F1(MN, OT::RM64, OT::One, kAlu, 0xD1, Enc::M, D, true), \
+  F1(MN, OT::RM64, OT::Cl, kAlu, 0xD3, Enc::M, D, true),  \
+  F1(MN, OT::RM64, OT::IB, kAlu, 0xC1, Enc::M, D, true)
 
-#define SSE_ARITH(MN, O) FS(MN, 0xF3, OT::X, OT::XM32, O, Enc::RM)
+#define SSE_ARITH(MN, O, FX) FS(MN, 0xF3, OT::X, OT::XM32, FX, O, Enc::RM)
 
 constexpr Form kForms[] = {
-    F1(M::Mov, OT::RM32, OT::R32, 0x89, Enc::MR),
-    F1(M::Mov, OT::R32, OT::RM32, 0x8B, Enc::RM),
-    F1(M::Mov, OT::RM64, OT::R64, 0x89, Enc::MR, -1, true),
-    F1(M::Mov, OT::R64, OT::RM64, 0x8B, Enc::RM, -1, true),
-    F1(M::Mov, OT::R32, OT::I32, 0xB8, Enc::O),
-    F1(M::Mov, OT::RM32, OT::I32, 0xC7, Enc::M, 0),
-    F1(M::Mov, OT::RM8, OT::R8, 0x88, Enc::MR),
-    F1(M::Mov, OT::R8, OT::RM8, 0x8A, Enc::RM),
-    F1(M::Mov, OT::R8, OT::IB, 0xB0, Enc::O),
-    F1(M::Mov, OT::RM8, OT::IB, 0xC6, Enc::M, 0),
-    F2(M::Movzx, OT::R32, OT::RM8, 0xB6, Enc::RM),
-    F2(M::Movsx, OT::R32, OT::RM8, 0xBE, Enc::RM),
-    F1(M::Lea, OT::R32, OT::MA, 0x8D, Enc::RM),
-    F1(M::Lea, OT::R64, OT::MA, 0x8D, Enc::RM, -1, true),
-    ALU(M::Add, 0), ALU(M::Or, 1), ALU(M::And, 4), ALU(M::Sub, 5), ALU(M::Xor, 6),
-    ALU(M::Cmp, 7),
-    F1(M::Test, OT::RM32, OT::R32, 0x85, Enc::MR),
-    F1(M::Test, OT::RM64, OT::R64, 0x85, Enc::MR, -1, true),
-    F1(M::Test, OT::Eax, OT::I32, 0xA9, Enc::ZO),
-    F1(M::Test, OT::RM32, OT::I32, 0xF7, Enc::M, 0),
-    F1(M::Test, OT::Rax, OT::I32, 0xA9, Enc::ZO, -1, true),
-    F1(M::Test, OT::RM64, OT::I32, 0xF7, Enc::M, 0, true),
-    F1(M::Test, OT::RM8, OT::R8, 0x84, Enc::MR),
-    F1(M::Test, OT::Al, OT::IB, 0xA8, Enc::ZO),
-    F1(M::Test, OT::RM8, OT::IB, 0xF6, Enc::M, 0),
+    F1(M::Mov, OT::RM32, OT::R32, kMove, 0x89, Enc::MR),
+    F1(M::Mov, OT::R32, OT::RM32, kMove, 0x8B, Enc::RM),
+    F1(M::Mov, OT::RM64, OT::R64, kMove, 0x89, Enc::MR, -1, true),
+    F1(M::Mov, OT::R64, OT::RM64, kMove, 0x8B, Enc::RM, -1, true),
+    F1(M::Mov, OT::R32, OT::I32, kMove, 0xB8, Enc::O),
+    F1(M::Mov, OT::RM32, OT::I32, kMove, 0xC7, Enc::M, 0),
+    F1(M::Mov, OT::RM8, OT::R8, kMove, 0x88, Enc::MR),
+    F1(M::Mov, OT::R8, OT::RM8, kMove, 0x8A, Enc::RM),
+    F1(M::Mov, OT::R8, OT::IB, kMove, 0xB0, Enc::O),
+    F1(M::Mov, OT::RM8, OT::IB, kMove, 0xC6, Enc::M, 0),
+    F2(M::Movzx, OT::R32, OT::RM8, kMove, 0xB6, Enc::RM),
+    F2(M::Movsx, OT::R32, OT::RM8, kMove, 0xBE, Enc::RM),
+    F1(M::Lea, OT::R32, OT::MA, fx(W, A), 0x8D, Enc::RM),
+    F1(M::Lea, OT::R64, OT::MA, fx(W, A), 0x8D, Enc::RM, -1, true),
+    ALU(M::Add, 0, kAlu), ALU(M::Or, 1, kAlu), ALU(M::And, 4, kAlu), ALU(M::Sub, 5, kAlu), ALU(M::Xor, 6, kAlu),
+    ALU(M::Cmp, 7, kCompare),
+    F1(M::Test, OT::RM32, OT::R32, kCompare, 0x85, Enc::MR),
+    F1(M::Test, OT::RM64, OT::R64, kCompare, 0x85, Enc::MR, -1, true),
+    F1(M::Test, OT::Eax, OT::I32, kCompare, 0xA9, Enc::ZO),
+    F1(M::Test, OT::RM32, OT::I32, kCompare, 0xF7, Enc::M, 0),
+    F1(M::Test, OT::Rax, OT::I32, kCompare, 0xA9, Enc::ZO, -1, true),
+    F1(M::Test, OT::RM64, OT::I32, kCompare, 0xF7, Enc::M, 0, true),
+    F1(M::Test, OT::RM8, OT::R8, kCompare, 0x84, Enc::MR),
+    F1(M::Test, OT::Al, OT::IB, kCompare, 0xA8, Enc::ZO),
+    F1(M::Test, OT::RM8, OT::IB, kCompare, 0xF6, Enc::M, 0),
     SHIFT(M::Shl, 4), SHIFT(M::Shr, 5), SHIFT(M::Sar, 7),
-    F1(M::Not, OT::RM32, N, 0xF7, Enc::M, 2),
-    F1(M::Neg, OT::RM32, N, 0xF7, Enc::M, 3),
-    F2(M::Imul, OT::R32, OT::RM32, 0xAF, Enc::RM),
-    F(M::Imul, OT::R32, OT::RM32, OT::I8, 0, 1, 0x6B, 0, Enc::RM),
-    F(M::Imul, OT::R32, OT::RM32, OT::I32, 0, 1, 0x69, 0, Enc::RM),
-    F1(M::Imul, OT::RM32, N, 0xF7, Enc::M, 5),  // edx:eax = eax * r/m32, signed (division by a constant)
-    F1(M::Cdq, N, N, 0x99, Enc::ZO),
-    F1(M::Idiv, OT::RM32, N, 0xF7, Enc::M, 7),
-    F2(M::Setcc, OT::RM8, N, 0x90, Enc::M, 0, true),
-    F2(M::Cmovcc, OT::R32, OT::RM32, 0x40, Enc::RM, -1, true),
-    F(M::Jcc, OT::Rel8, N, N, 0, 1, 0x70, 0, Enc::D, -1, false, true),
-    F2(M::Jcc, OT::Rel32, N, 0x80, Enc::D, -1, true),
-    F1(M::Jmp, OT::Rel8, N, 0xEB, Enc::D),
-    F1(M::Jmp, OT::Rel32, N, 0xE9, Enc::D),
-    F1(M::Jmp, OT::RM64, N, 0xFF, Enc::M, 4),
-    F1(M::Call, OT::Rel32, N, 0xE8, Enc::D),
-    F1(M::Call, OT::RM64, N, 0xFF, Enc::M, 2),
-    F1(M::Ret, N, N, 0xC3, Enc::ZO),
-    F1(M::Push, OT::R64, N, 0x50, Enc::O),
-    F1(M::Pop, OT::R64, N, 0x58, Enc::O),
-    F1(M::Nop, N, N, 0x90, Enc::ZO),
-    FS(M::Movss, 0xF3, OT::X, OT::XM32, 0x10, Enc::RM),
-    FS(M::Movss, 0xF3, OT::M32, OT::X, 0x11, Enc::MR),
-    FS(M::Movd, 0x66, OT::X, OT::RM32, 0x6E, Enc::RM),
-    FS(M::Movd, 0x66, OT::RM32, OT::X, 0x7E, Enc::MR),
-    FS(M::Cvtsi2ss, 0xF3, OT::X, OT::RM32, 0x2A, Enc::RM),
-    FS(M::Cvttss2si, 0xF3, OT::R32, OT::XM32, 0x2C, Enc::RM),
-    SSE_ARITH(M::Addss, 0x58), SSE_ARITH(M::Subss, 0x5C), SSE_ARITH(M::Mulss, 0x59),
-    SSE_ARITH(M::Divss, 0x5E), SSE_ARITH(M::Sqrtss, 0x51), SSE_ARITH(M::Minss, 0x5D),
-    SSE_ARITH(M::Maxss, 0x5F),
-    FS(M::Ucomiss, 0, OT::X, OT::XM32, 0x2E, Enc::RM),
-    FS(M::Andps, 0, OT::X, OT::X, 0x54, Enc::RM),
-    FS(M::Xorps, 0, OT::X, OT::X, 0x57, Enc::RM),
+    F1(M::Not, OT::RM32, N, fx(RW), 0xF7, Enc::M, 2),  // the one ALU form that leaves the flags
+    F1(M::Neg, OT::RM32, N, flags_out(fx(RW)), 0xF7, Enc::M, 3),
+    F2(M::Imul, OT::R32, OT::RM32, kAlu, 0xAF, Enc::RM),
+    F(M::Imul, OT::R32, OT::RM32, OT::I8, flags_out(fx(W, R, R)), 0, 1, 0x6B, 0, Enc::RM),
+    F(M::Imul, OT::R32, OT::RM32, OT::I32, flags_out(fx(W, R, R)), 0, 1, 0x69, 0, Enc::RM),
+    // edx:eax = eax * r/m32, signed (division by a constant)
+    F1(M::Imul, OT::RM32, N, implicit(flags_out(fx(R)), kEax, kEax | kEdx), 0xF7, Enc::M, 5),
+    F1(M::Cdq, N, N, implicit(fx(), kEax, kEdx), 0x99, Enc::ZO),  // edx = the sign of eax
+    // eax, edx = edx:eax / r/m32, edx:eax % r/m32 (the flags undefined)
+    F1(M::Idiv, OT::RM32, N, implicit(flags_out(fx(R)), kEax | kEdx, kEax | kEdx), 0xF7, Enc::M, 7),
+    F2(M::Setcc, OT::RM8, N, flags_in(fx(W)), 0x90, Enc::M, 0, true),
+    // a 32-bit cmov writes its destination even when the condition is false:
+    // bits 63..32 become 0 (tests/assembler: X86Effects.CmovZeroExtendsWhenTheConditionIsFalse)
+    F2(M::Cmovcc, OT::R32, OT::RM32, flags_in(fx(RW, R)), 0x40, Enc::RM, -1, true),
+    F(M::Jcc, OT::Rel8, N, N, flags_in(fx(A)), 0, 1, 0x70, 0, Enc::D, -1, false, true),
+    F2(M::Jcc, OT::Rel32, N, flags_in(fx(A)), 0x80, Enc::D, -1, true),
+    F1(M::Jmp, OT::Rel8, N, fx(A), 0xEB, Enc::D),
+    F1(M::Jmp, OT::Rel32, N, fx(A), 0xE9, Enc::D),
+    F1(M::Jmp, OT::RM64, N, fx(R), 0xFF, Enc::M, 4),  // reads its target
+    F1(M::Call, OT::Rel32, N, stack(fx(A), StackUse::Call), 0xE8, Enc::D),
+    F1(M::Call, OT::RM64, N, stack(fx(R), StackUse::Call), 0xFF, Enc::M, 2),
+    F1(M::Ret, N, N, stack(fx(), StackUse::Ret), 0xC3, Enc::ZO),
+    F1(M::Push, OT::R64, N, stack(fx(R), StackUse::Push), 0x50, Enc::O),
+    F1(M::Pop, OT::R64, N, stack(fx(W), StackUse::Pop), 0x58, Enc::O),
+    F1(M::Nop, N, N, fx(), 0x90, Enc::ZO),
+    FS(M::Movss, 0xF3, OT::X, OT::XM32, kMove, 0x10, Enc::RM),
+    FS(M::Movss, 0xF3, OT::M32, OT::X, kMove, 0x11, Enc::MR),
+    FS(M::Movd, 0x66, OT::X, OT::RM32, kMove, 0x6E, Enc::RM),
+    FS(M::Movd, 0x66, OT::RM32, OT::X, kMove, 0x7E, Enc::MR),
+    FS(M::Cvtsi2ss, 0xF3, OT::X, OT::RM32, kMove, 0x2A, Enc::RM),
+    FS(M::Cvttss2si, 0xF3, OT::R32, OT::XM32, kMove, 0x2C, Enc::RM),
+    SSE_ARITH(M::Addss, 0x58, fx(RW, R)), SSE_ARITH(M::Subss, 0x5C, fx(RW, R)), SSE_ARITH(M::Mulss, 0x59, fx(RW, R)),
+    SSE_ARITH(M::Divss, 0x5E, fx(RW, R)), SSE_ARITH(M::Sqrtss, 0x51, fx(W, R)), SSE_ARITH(M::Minss, 0x5D, fx(RW, R)),
+    SSE_ARITH(M::Maxss, 0x5F, fx(RW, R)),
+    FS(M::Ucomiss, 0, OT::X, OT::XM32, kCompare, 0x2E, Enc::RM),
+    FS(M::Andps, 0, OT::X, OT::X, fx(RW, R), 0x54, Enc::RM),
+    FS(M::Xorps, 0, OT::X, OT::X, fx(RW, R), 0x57, Enc::RM),
 };
 #undef ALU
 #undef SHIFT
 #undef SSE_ARITH
+
+// Every form has its effects row, and the row fits the form: an effect for
+// each operand and none past them; branch targets and lea's address not
+// accessed, immediates read; the condition forms read the flags; the stack
+// column is the stack instructions'.  A form added without its row does not
+// compile (the column has no default), one with a row that does not fit it
+// stops here.  tests/assembler/x86_effects_test.cpp checks the rows against
+// the CPU.
+constexpr bool row_fits(const Form& f) {
+  for (int i = 0; i < 3; i++) {
+    const OT t = f.ops[i];
+    const Use u = f.effects.ops[size_t(i)];
+    if ((t == OT::None) != (u == Use::None)) return false;
+    const bool addr = t == OT::Rel8 || t == OT::Rel32 || t == OT::MA;
+    if (addr != (u == Use::Addr)) return false;
+    const bool imm = t == OT::I8 || t == OT::IB || t == OT::I32 || t == OT::One;
+    if (imm && u != Use::R) return false;
+  }
+  if (f.cc != f.effects.reads_flags) return false;
+  const StackUse s = f.effects.stack;
+  return (f.mn == M::Push) == (s == StackUse::Push) && (f.mn == M::Pop) == (s == StackUse::Pop) &&
+         (f.mn == M::Call) == (s == StackUse::Call) && (f.mn == M::Ret) == (s == StackUse::Ret);
+}
+constexpr bool every_row_fits() {
+  for (const Form& f : kForms)
+    if (!row_fits(f)) return false;
+  return true;
+}
+static_assert(every_row_fits(), "x86 form table: a form whose effects row does not fit it (assembler/x86.h, Effects)");
 
 }  // namespace
 
@@ -483,16 +529,24 @@ Instruction make_cc(Mnemonic m, Cond c, std::initializer_list<Operand> ops) {
 
 const Target<Instruction>& target() { return kTarget; }
 
+Effects effects(const Instruction& inst) {
+  const Form* f = find_form_in_table(inst, inst.long_branch);
+  if (!f) no_form(inst);
+  return f->effects;
+}
+
 Encoding encode(const Instruction& inst, bool long_form) {
   Encoding e;
   encode_hook(inst, long_form, e);
   return e;
 }
 
-std::vector<uint8_t> encode_at(const Instruction& inst, uint64_t address) {
+namespace {
+// encode_at's bytes in a fixed buffer: the decoder re-encodes every
+// instruction it reads, and the loader decodes every instruction of an image.
+Encoding encode_at_fixed(const Instruction& inst, uint64_t address) {
   for (bool long_form : {false, true}) {
     Encoding e = encode(inst, long_form);
-    std::vector<uint8_t> bytes(e.bytes.begin(), e.bytes.begin() + e.size);
     bool relax = false;
     for (unsigned i = 0; i < e.num_fixups; ++i) {
       const Fixup& fx = e.fixups[i];
@@ -507,11 +561,17 @@ std::vector<uint8_t> encode_at(const Instruction& inst, uint64_t address) {
         }
         throw AsmError("branch target out of range");
       }
-      apply_fixup(k, bytes, fx.offset, v);
+      apply_fixup(k, std::span<uint8_t>(e.bytes.data(), e.size), fx.offset, v);
     }
-    if (!relax) return bytes;
+    if (!relax) return e;
   }
   throw AsmError("branch target out of range");
+}
+}  // namespace
+
+std::vector<uint8_t> encode_at(const Instruction& inst, uint64_t address) {
+  Encoding e = encode_at_fixed(inst, address);
+  return std::vector<uint8_t>(e.bytes.begin(), e.bytes.begin() + e.size);
 }
 
 // ------------------------------------------------------------------ decoder
@@ -544,6 +604,35 @@ bool opcode_matches(const Form& f, const uint8_t* op, unsigned len) {
   if (f.cc) return (last & 0xF0) == want;
   if (f.enc == Enc::O) return (last & 0xF8) == want;
   return last == want;
+}
+
+// The forms whose prefix and opcode bytes match, in table order, looked up by
+// the prefix, the opcode length and the last opcode byte (a two-byte opcode
+// is always 0F xx): the decoder tries these instead of every form, so decoding
+// costs the same for the first form and the last (the loader decodes every
+// instruction of an image; docs/image-format.md, "The x86-64 code check").
+struct DecodeIndex {
+  static int prefix_slot(uint8_t prefix) { return prefix == 0 ? 0 : prefix == 0x66 ? 1 : prefix == 0xF3 ? 2 : -1; }
+  std::array<std::array<std::array<std::vector<const Form*>, 256>, 2>, 3> by;
+  DecodeIndex() {
+    for (const Form& f : kForms) {
+      int slot = prefix_slot(f.prefix);
+      if (slot < 0 || f.len < 1 || f.len > 2 || (f.len == 2 && f.op[0] != 0x0F))
+        throw std::logic_error("x86 form table: a prefix or opcode the decoder cannot index");
+      for (unsigned last = 0; last < 256; last++) {
+        uint8_t op[2] = {f.op[0], f.op[1]};
+        op[f.len - 1] = uint8_t(last);
+        if (opcode_matches(f, op, f.len)) by[size_t(slot)][f.len - 1u][last].push_back(&f);
+      }
+    }
+  }
+};
+
+std::span<const Form* const> decode_candidates(uint8_t prefix, const uint8_t* op, unsigned len) {
+  static const DecodeIndex index;
+  int slot = DecodeIndex::prefix_slot(prefix);
+  if (slot < 0 || len < 1 || len > 2 || (len == 2 && op[0] != 0x0F)) return {};
+  return index.by[size_t(slot)][len - 1][op[len - 1]];
 }
 
 // Decodes with one form; returns false if the bytes do not fit it.
@@ -654,8 +743,8 @@ std::optional<Decoded> decode(std::span<const uint8_t> code, size_t offset, Deco
   if (b == 0x0F) op[1] = rd.u8(), len = 2;
   if (!rd.ok) return fail("truncated instruction");
   bool saw_opcode = false, truncated = false;
-  for (const Form& f : kForms) {
-    if (f.prefix != prefix || !opcode_matches(f, op, len)) continue;
+  for (const Form* fp : decode_candidates(prefix, op, len)) {
+    const Form& f = *fp;
     if (bool((rex >> 3) & 1) != f.w) continue;
     saw_opcode = true;
     Instruction in;
@@ -663,14 +752,13 @@ std::optional<Decoded> decode(std::span<const uint8_t> code, size_t offset, Deco
     if (!decode_with(f, rd, offset, rex, op, in, end, truncated)) continue;
     // Accept exactly what the encoder produces for this instruction.
     try {
-      std::vector<uint8_t> again = encode_at(in, offset);
-      if (again.size() != end - offset ||
-          !std::equal(again.begin(), again.end(), code.begin() + long(offset)))
+      Encoding again = encode_at_fixed(in, offset);
+      if (again.size != end - offset || !std::equal(again.bytes.begin(), again.bytes.begin() + again.size, code.begin() + long(offset)))
         continue;
     } catch (const AsmError&) {
       continue;
     }
-    return Decoded{std::move(in), uint32_t(offset), uint32_t(end - offset)};
+    return Decoded{std::move(in), uint32_t(offset), uint32_t(end - offset), f.effects};
   }
   if (truncated) return fail("truncated instruction");
   return fail(saw_opcode ? "invalid or non-canonical encoding"

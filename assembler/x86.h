@@ -87,6 +87,44 @@ struct Instruction {
 Instruction make(Mnemonic m, std::initializer_list<Operand> ops = {});
 Instruction make_cc(Mnemonic m, Cond c, std::initializer_list<Operand> ops = {});
 
+// What an instruction form reads and writes: a column of the form table
+// (assembler/x86.cpp), one row per form, so an instruction's effects are its
+// form's, never guessed from its mnemonic (docs/x86.md, "What each form reads
+// and writes").  The loader's code check takes every register an instruction
+// writes from here.
+enum class Use : uint8_t {
+  None,  // no such operand
+  R,     // read (an immediate, a source, a compared operand, a divisor)
+  W,     // written, whatever it held: a 32-bit register write clears bits 63..32;
+         // an 8-bit register or an xmm scalar write keeps the rest of the register
+  RW,    // read, then written (add, cmov: written even when the condition is false)
+  Addr,  // not accessed: lea's memory operand (an address computed), a branch target
+};
+// How an instruction moves rsp and touches the stack ([rsp]).
+enum class StackUse : uint8_t {
+  None,
+  Push,  // rsp -= 8, then writes [rsp]
+  Pop,   // reads [rsp], then rsp += 8
+  Call,  // pushes the return address; the callee runs and returns: what it writes, the caller does not know here
+  Ret,   // pops the return address into rip
+};
+struct Effects {
+  std::array<Use, 3> ops{};  // explicit operands; a memory operand's Use is the memory's
+  uint16_t reads = 0;        // general registers read implicitly, bit RegNum (cdq: eax)
+  uint16_t writes = 0;       // general registers written implicitly (cdq: edx), in their 32-bit width or more
+  bool reads_flags = false;
+  bool writes_flags = false;  // may write: a shift by 0 leaves them
+  StackUse stack = StackUse::None;
+  friend constexpr bool operator==(const Effects&, const Effects&) = default;
+};
+constexpr uint16_t reg_bit(RegNum r) { return uint16_t(1u << r); }
+constexpr bool writes_operand(Use u) { return u == Use::W || u == Use::RW; }
+constexpr bool reads_operand(Use u) { return u == Use::R || u == Use::RW; }
+
+// The effects of the form encode() takes for `inst`; throws AsmError if the
+// instruction is not in the subset.
+Effects effects(const Instruction& inst);
+
 // Fixup kinds of the x86-64 target (indices into target().fixup_kinds).
 enum FixupKindId : uint16_t { Rel8 = 0, Rel32 = 1 };
 
@@ -121,6 +159,7 @@ struct Decoded {
   Instruction inst;
   uint32_t offset = 0;
   uint32_t length = 0;
+  Effects effects;  // its form's
 };
 struct DecodeError {
   uint32_t offset = 0;

@@ -40,6 +40,7 @@ struct Form {
   int8_t digit;      // ModRM.reg for Enc::M, else -1
   bool w;            // REX.W
   bool cc;           // condition code added to the last opcode byte
+  Effects effects;   // what it reads and writes (x86.h, Effects)
 };
 
 std::span<const Form> forms();

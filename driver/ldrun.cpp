@@ -51,7 +51,7 @@ std::string usage() {
     "usage: ldrun FILE [--engine=" + engines + "] [-O0|-O1|-O2] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms] [--cycles] [--sandbox]\n"
     "       ldrun FILE|--project P.ldp --io=stdio|shm[:/NAME]|trace|none [--period 1ms|500us] [--clock=real|virtual]\n"
     "             [--free-run] [--rt] [--watchdog 200ms] [--retain FILE] [--retain-every 1s] [--cold] [--stop]\n"
-    "             [--control=stdin|none] [--reload] [--stats] [--out FILE] [--block 16] [--scans N]\n"
+    "             [--control=stdin|none] [--reload] [--load-budget 128M] [--stats] [--out FILE] [--block 16] [--scans N]\n"
     "             [--modbus [HOST:]PORT] [--modbus-connections 16]   a Modbus TCP server (127.0.0.1 unless HOST is given; also with --trace)\n"
     "             [--modbus-per-address 8] [--modbus-frame-timeout 2s] [--modbus-idle-timeout 60s]\n"
     "             [--modbus-write-timeout 1s] [--modbus-pending-writes 8192]   its limits (docs/faults.md)\n"
@@ -70,6 +70,7 @@ struct RtArgs {
   std::string project, io, control, clock, period, watchdog, retain, retain_every, out, block;
   std::string modbus, modbus_connections;  // --modbus [HOST:]PORT, --modbus-connections N
   std::string modbus_per_address, modbus_frame_timeout, modbus_idle_timeout, modbus_write_timeout, modbus_pending_writes;
+  std::string load_budget;                 // --load-budget SIZE: the memory an online load may take
   bool free_run = false, rt = false, cold = false, stop = false, stats = false, reload = false;
   bool sandbox = false;  // also in trace mode: it does not select the runtime
   std::string monitor;   // --monitor HOST:PORT (runtime/net/monitor.h)
@@ -86,6 +87,35 @@ Image load_program(const std::string& file) {
   if (is_image_file(file)) return load_image_file(file);
   Compiled c = compile_source(file, false, g_task);
   return target_image(host_target(), c.il, file, 0);
+}
+
+// Online load (`load`, --reload) into a running runtime: an image file is
+// refused before it is read if loading it could take more than the budget.
+// Loading holds the file, the image's copies of its code and IL and a few bits
+// per byte of code, at most 3 times the file, and up to 40 MiB of rung titles
+// and aliases (kImageMaxRungTitles, kImageMaxAliases; docs/runtime.md,
+// "Online download").
+constexpr uint64_t kDefaultLoadBudget = uint64_t(128) << 20, kLoadFixedCost = uint64_t(40) << 20;
+Image load_program_online(const std::string& file, uint64_t budget, const std::string& budget_text) {
+  if (!is_image_file(file)) return load_program(file);
+  uint64_t max_file = budget > kLoadFixedCost ? (budget - kLoadFixedCost) / 3 : 0;
+  try {
+    return read_image_file(file, max_file, "that --load-budget " + budget_text + " lets one load read (a load holds up to 3 times the file, and 40 MiB)");
+  } catch (const ImageError& e) {
+    throw UserError(e.what());
+  }
+}
+
+// "128M", "64MiB", "1G", "4096": bytes.
+uint64_t size_arg(const std::string& v, const char* flag) {
+  size_t digits = v.find_first_not_of("0123456789");
+  std::string unit = digits == std::string::npos ? "" : v.substr(digits);
+  int shift = unit.empty() ? 0 : unit == "K" || unit == "KiB" ? 10 : unit == "M" || unit == "MiB" ? 20 : unit == "G" || unit == "GiB" ? 30 : -1;
+  if (v.empty() || digits == 0 || shift < 0 || v.size() - unit.size() > 12)
+    throw UserError(std::string("ldrun: error: bad ") + flag + " '" + v + "' (bytes, or with K, M or G: 128M)");
+  uint64_t n = std::stoull(v.substr(0, v.size() - unit.size()));
+  if (n > (UINT64_MAX >> shift)) throw UserError(std::string("ldrun: error: ") + flag + " '" + v + "' is too large");
+  return n << shift;
 }
 
 std::string stem(const std::string& path) {
@@ -217,6 +247,8 @@ class SoftPlcRun {
   std::unique_ptr<Monitor> monitor_;
   std::string monitor_host_, monitor_token_;
   bool print_token_ = false;  // a token ldrun made: the user learns it here
+  uint64_t load_budget_ = kDefaultLoadBudget;  // --load-budget
+  std::string load_budget_text_ = "128M";
   sigset_t sigs_;
   std::unique_ptr<Runtime> rt_;
   std::atomic<bool> done_{false};
@@ -243,6 +275,7 @@ class SoftPlcRun {
     opt_.start_stopped = a_.stop;
     opt_.cold = a_.cold;
     opt_.scans = scans;
+    if (!a_.load_budget.empty()) load_budget_ = size_arg(a_.load_budget, "--load-budget"), load_budget_text_ = a_.load_budget;
   }
 
   // The tasks: a project's (a PLCopen configuration of several tasks is a
@@ -519,7 +552,7 @@ class SoftPlcRun {
 
   // The line protocol on stdin (docs/runtime.md), replies on stdout.
   void serve_control() {
-    Control c{*rt_, [](const std::string& f) { return load_program(f); }};
+    Control c{*rt_, [this](const std::string& f) { return load_program_online(f, load_budget_, load_budget_text_); }};
     LineReader in;
     std::string line;
     while (!done_.load()) {
@@ -578,7 +611,7 @@ class SoftPlcRun {
         if (!stat_of(seen[i].file, mt, sz) || (mt == seen[i].mtime_ns && sz == seen[i].size)) continue;
         seen[i].mtime_ns = mt, seen[i].size = sz;
         try {
-          SwapReport r = rt_->replace(rt_->task_name(i), load_program(seen[i].file), seen[i].file);
+          SwapReport r = rt_->replace(rt_->task_name(i), load_program_online(seen[i].file, load_budget_, load_budget_text_), seen[i].file);
           std::fprintf(stderr, "ldrun: reloaded %s: %s\n", seen[i].file.c_str(), r.text().c_str());
         } catch (std::exception& e) {
           std::fprintf(stderr, "ldrun: reload of %s refused: %s\n", seen[i].file.c_str(), e.what());
@@ -812,6 +845,7 @@ int ldrun_main(int argc, char** argv) {
         opt_value("--monitor-token", rta.monitor_token) || opt_value("--monitor-connections", rta.monitor_connections) ||
         opt_value("--monitor-per-address", rta.monitor_per_address) || opt_value("--monitor-streams", rta.monitor_streams) ||
         opt_value("--monitor", rta.monitor) || flag("--monitor-write", rta.monitor_write) ||
+        opt_value("--load-budget", rta.load_budget) ||
         flag("--monitor-remote", rta.monitor_remote)) {
     } else if (a == "--monitor-host" || a.rfind("--monitor-host=", 0) == 0) {
       rta.monitor_hosts.push_back(value("--monitor-host"));

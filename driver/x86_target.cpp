@@ -112,7 +112,9 @@ std::string disassemble(const Image& img) {
 
 const as::TargetInfo& assembler() { return as::x86::target(); }
 
-std::unique_ptr<Engine> native_engine(const Image& img) { return make_native_engine(img.code, img.entry); }
+std::unique_ptr<Engine> native_engine(const Image& img) {
+  return make_native_engine(map_checked_code(img.code, img.entry, img.layout));
+}
 
 const TargetEngine kEngines[] = {{"native", true, native_engine}};
 

@@ -330,32 +330,43 @@ static std::string check_operand(char sig, const uint8_t* p, size_t avail, const
   return "";
 }
 
+// Two passes over the code, holding a bit per byte of it (where the
+// instructions start), not a record per instruction: the loader runs this on
+// untrusted images (docs/image-format.md, "What the loader allocates").  The
+// first checks every operand and marks the starts, the second every jump's
+// target against them.
 std::string validate_il(std::span<const uint8_t> code, const Layout& layout) {
-  std::vector<uint32_t> starts;
-  std::vector<std::pair<uint32_t, uint32_t>> jumps;  // (instr offset, target)
-  size_t off = 0;
-  while (off < code.size()) {
-    starts.push_back(uint32_t(off));
-    uint8_t opb = code[off];
-    if (opb >= kOpCount) return "offset " + std::to_string(off) + ": unknown opcode " + std::to_string(opb);
-    const OpInfo& oi = op_info(Op(opb));
-    size_t p = off + 1;
-    for (const char* s = oi.operands; *s; s++) {
-      size_t len = 0;
-      uint32_t target = UINT32_MAX;
-      std::string e = check_operand(*s, code.data() + p, code.size() - p, layout, len, target);
-      if (!e.empty()) return "offset " + std::to_string(p) + ": " + oi.name + ": " + e;
-      if (target != UINT32_MAX) jumps.emplace_back(uint32_t(off), target);
-      p += len;
+  std::vector<bool> starts(code.size());
+  // Walks the instructions, calling jump(offset, target) for each jump
+  // operand; an operand's error ends the walk.
+  auto walk = [&](auto&& jump) -> std::string {
+    size_t off = 0;
+    while (off < code.size()) {
+      uint8_t opb = code[off];
+      if (opb >= kOpCount) return "offset " + std::to_string(off) + ": unknown opcode " + std::to_string(opb);
+      const OpInfo& oi = op_info(Op(opb));
+      size_t p = off + 1;
+      for (const char* s = oi.operands; *s; s++) {
+        size_t len = 0;
+        uint32_t target = UINT32_MAX;
+        std::string e = check_operand(*s, code.data() + p, code.size() - p, layout, len, target);
+        if (!e.empty()) return "offset " + std::to_string(p) + ": " + oi.name + ": " + e;
+        if (target != UINT32_MAX)
+          if (std::string why = jump(uint32_t(off), target); !why.empty()) return why;
+        p += len;
+      }
+      starts[off] = true;
+      off = p;
     }
-    off = p;
-  }
-  for (auto [from, to] : jumps) {
-    bool at_boundary = to == code.size() || std::binary_search(starts.begin(), starts.end(), to);
+    return "";
+  };
+  if (std::string why = walk([](uint32_t, uint32_t) { return std::string(); }); !why.empty()) return why;
+  return walk([&](uint32_t from, uint32_t to) -> std::string {
+    bool at_boundary = to == code.size() || (to < code.size() && starts[to]);
     if (!at_boundary) return "offset " + std::to_string(from) + ": jump target " + std::to_string(to) + " is not an instruction boundary";
     if (to <= from) return "offset " + std::to_string(from) + ": backward jump";
-  }
-  return "";
+    return "";
+  });
 }
 
 uint32_t decode_instr(std::span<const uint8_t> code, uint32_t off, Instr& out) {

@@ -8,12 +8,13 @@
 #include <vector>
 
 #include "ir/ir.h"
+#include "loader/loader.h"
 
 namespace ldc::detail {
 
 // "" if the x86-64 code passes (see check_x86_code), else "at code offset 0x..: why".
-// If `starts` is given it receives the offset of every instruction, ascending.
-std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layout& layout,
-                      std::vector<uint32_t>* starts);
+// If it passes and `starts` is given, `starts` becomes the set of offsets where
+// an instruction starts.
+std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layout& layout, OffsetBits* starts);
 
 }  // namespace ldc::detail

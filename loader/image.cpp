@@ -116,8 +116,10 @@ struct Writer {
   }
 };
 
-uint32_t count32(size_t n, const char* what) {
-  if (n > kImageMaxSize) throw ImageError(std::string("image: too many ") + what + " for the image format");
+uint32_t count32(size_t n, const char* what, size_t limit = kImageMaxSize) {
+  if (n > limit)
+    throw ImageError(std::string("image: too many ") + what + " for the image format (" + std::to_string(n) + ", at most " +
+                     std::to_string(limit) + ")");
   return uint32_t(n);
 }
 
@@ -337,11 +339,11 @@ static void put_section(Writer& w, const Image& im, uint32_t id) {
     case kLines: put_lines(w, im.lines); break;
     case kStrings:
       w.str(im.source);
-      w.u32(count32(im.rung_titles.size(), "rung titles"));
+      w.u32(count32(im.rung_titles.size(), "rung titles", kImageMaxRungTitles));
       for (const std::string& t : im.rung_titles) w.str(t);
       break;
     case kAliases:
-      w.u32(count32(im.aliases.size(), "aliases"));
+      w.u32(count32(im.aliases.size(), "aliases", kImageMaxAliases));
       for (const Alias& a : im.aliases) w.u8(uint8_t(a.dev.dev)), w.u32(a.dev.index), w.str(a.name);
       break;
     case kRetentive:
@@ -459,7 +461,7 @@ class ImageReader {
   std::vector<SectionEntry> table_;
   const SectionEntry* by_id_[kSectionIdEnd] = {};
   const ImageKind* kind_ = nullptr;
-  std::vector<uint32_t> code_starts_;  // instruction starts, for the line map
+  OffsetBits code_starts_;  // instruction starts, for the line map
 
   ImageError fail(uint64_t off, const std::string& msg) const {
     return ImageError(name_ + ": offset " + hex(off) + ": " + msg);
@@ -666,6 +668,9 @@ class ImageReader {
     // Each title takes at least its 4-byte length: n can never exceed what is left.
     if (r.error.empty() && n > (r.data.size() - r.pos) / 4)
       r.error = "rung title count " + std::to_string(n) + " does not fit in the section";
+    // A title held costs a string (32 bytes) for the 4 of an empty one in the file: the count's limit bounds that.
+    if (r.error.empty() && n > kImageMaxRungTitles)
+      r.error = "rung title count " + std::to_string(n) + " exceeds the limit " + std::to_string(kImageMaxRungTitles);
     for (uint32_t i = 0; i < n && r.error.empty(); i++) im_.rung_titles.push_back(r.str("rung title"));
     finish(r, s);
   }
@@ -675,6 +680,9 @@ class ImageReader {
     uint32_t n = r.u32("alias count");
     if (r.error.empty() && n > (r.data.size() - r.pos) / 9)
       r.error = "alias count " + std::to_string(n) + " does not fit in the section";
+    // An alias held costs a string and a device (40 bytes) for its 10 in the file: the count's limit bounds that.
+    if (r.error.empty() && n > kImageMaxAliases)
+      r.error = "alias count " + std::to_string(n) + " exceeds the limit " + std::to_string(kImageMaxAliases);
     for (uint32_t i = 0; i < n && r.error.empty(); i++) {
       size_t at = r.pos;
       uint8_t dev = r.u8("alias");
@@ -737,14 +745,14 @@ class ImageReader {
     if (std::string why = kind_->check(im_.code, im_.entry, im_.layout, &code_starts_); !why.empty()) throw sfail(code, why);
   }
 
-  bool code_boundary(uint32_t off) const { return std::binary_search(code_starts_.begin(), code_starts_.end(), off); }
+  bool code_boundary(uint32_t off) const { return code_starts_.has(off); }
 
   void check_lines() {
     const SectionEntry* s = by_id_[kLines];
     if (!s) return;
-    std::vector<uint32_t> il_starts;
+    OffsetBits il_starts(im_.il.size());
     for (uint32_t off = 0; off < im_.il.size();) {
-      il_starts.push_back(off);
+      il_starts.add(off);
       Instr in;
       off = decode_instr(im_.il, off, in);
     }
@@ -755,7 +763,7 @@ class ImageReader {
         throw sfail(*s, where + "code offset " + hex(l.code_offset) + " outside the code (" + std::to_string(im_.code.size()) + " bytes)");
       if (l.code_offset < im_.code.size() && !code_boundary(l.code_offset))
         throw sfail(*s, where + "code offset " + hex(l.code_offset) + " is not an instruction boundary");
-      if (!std::binary_search(il_starts.begin(), il_starts.end(), l.il_offset))
+      if (!il_starts.has(l.il_offset))
         throw sfail(*s, where + "IL offset " + std::to_string(l.il_offset) +
                             (l.il_offset >= im_.il.size() ? " outside the IL (" + std::to_string(im_.il.size()) + " bytes)"
                                                           : " is not an IL instruction boundary"));

@@ -21,16 +21,40 @@ namespace ldc {
 // The kind of machine code an image holds: the header's target byte.
 enum class ImageTarget : uint8_t { X86_64 = 1, C40 = 2 };
 
+// A set of offsets into a section, one bit per byte: where the instructions
+// of the code (or of the IL) start.  It costs an eighth of the section's size,
+// whatever the section holds (a vector of offsets cost four bytes per
+// instruction, 4x a section of one-byte instructions; docs/image-format.md,
+// "What the loader allocates").
+class OffsetBits {
+ public:
+  OffsetBits() = default;
+  explicit OffsetBits(size_t size) : bits_((size + 63) / 64), size_(size) {}
+  size_t size() const { return size_; }  // offsets 0 .. size-1
+  void add(uint32_t off) {
+    if (off < size_) bits_[off / 64] |= uint64_t(1) << (off % 64);
+  }
+  bool has(uint64_t off) const { return off < size_ && (bits_[off / 64] >> (off % 64) & 1); }
+  // The greatest offset in the set below `off`, or -1 if none.
+  int64_t before(uint64_t off) const;
+  // Is any offset in both sets?
+  bool meets(const OffsetBits& o) const;
+
+ private:
+  std::vector<uint64_t> bits_;
+  size_t size_ = 0;
+};
+
 // One row per ImageTarget (loader/image_kinds.cpp): what read_image needs to
 // know of a kind of code.  A new target adds its value above and one row.
 struct ImageKind {
   ImageTarget id;
   const char* name;  // in messages: "x86-64", "C40"
   uint32_t unit;     // the code is a sequence of `unit`-byte words (1: bytes)
-  // "" if the code passes its check, else "at ...: why"; fills `starts` with
-  // the offset of every instruction, ascending (line map entries must hit one).
-  std::string (*check)(std::span<const uint8_t> code, uint32_t entry, const Layout& layout,
-                       std::vector<uint32_t>* starts);
+  // "" if the code passes its check, else "at ...: why"; if it passes and
+  // `starts` is given, makes it the set of offsets where an instruction starts
+  // (line map entries must hit one).
+  std::string (*check)(std::span<const uint8_t> code, uint32_t entry, const Layout& layout, OffsetBits* starts);
 };
 std::span<const ImageKind> image_kinds();
 const ImageKind* find_image_kind(uint8_t id);  // nullptr for an unknown byte
@@ -142,11 +166,22 @@ bool looks_like_intel_hex(std::span<const uint8_t> bytes);
 // it fully; every ImageError, a file that cannot be read included, reads
 // "FILE: error: ..." naming the file and the place.
 Image read_image_file(const std::string& path);
+// The same, but a file of more than `max_bytes` bytes is refused before it is
+// read whole: "FILE: error: the file has N bytes, more than the M MiB <whose>;
+// it was not read" (read_image_file(path) passes the format's limit, whose =
+// "an image file may have").
+Image read_image_file(const std::string& path, uint64_t max_bytes, const std::string& whose);
 // True for files ldrun treats as an image: *.bin, *.hex, or the image magic.
 bool is_image_file(const std::string& path);
 
 // Limits of format version 1.
 constexpr uint32_t kImageMaxSize = 256u << 20;    // whole file, bytes
 constexpr uint32_t kImageMaxEdgeSlots = 1u << 20;  // count of the E area
+// Counts whose entries cost the loader more than their bytes in the file (a
+// string each): with these limits a strings or aliases section, however
+// large, costs at most 32 MiB and 2.5 MiB held (docs/image-format.md, "What
+// the loader allocates").
+constexpr uint32_t kImageMaxRungTitles = 1u << 20;
+constexpr uint32_t kImageMaxAliases = 1u << 16;
 
 }  // namespace ldc

@@ -3,10 +3,14 @@
 // frame: [rbp+disp], or a base register's) inside the memory image, every
 // direct branch lands on an instruction boundary inside the code and goes
 // forward, and the only division is the guarded one (docs/image-format.md,
-// "The x86-64 code check").
+// "The x86-64 code check").  The registers an instruction writes are its
+// form's row in the assembler's form table (x86.h, Effects).  The check holds
+// a few bits per byte of code, never a record per instruction: it decodes
+// again where it looks (docs/image-format.md, "What the loader allocates").
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <optional>
 
 #include "assembler/x86.h"
 #include "loader/checks.h"
@@ -144,12 +148,13 @@ const std::array<x86::Instruction, 6>& safe_division() {
   return seq;
 }
 
-// Does insts[k] end the instructions of seq (branch displacements aside)?
-bool ends_with(const std::vector<x86::Decoded>& insts, size_t k, size_t body_first,
-               const std::array<x86::Instruction, 6>& seq) {
-  if (k < body_first + seq.size() - 1) return false;
+// Does the window (the body's last instructions, oldest first) end with the
+// instructions of seq (branch displacements aside)?
+bool ends_with(std::span<const x86::Instruction> window, const std::array<x86::Instruction, 6>& seq) {
+  if (window.size() < seq.size()) return false;
+  window = window.last(seq.size());
   for (size_t j = 0; j < seq.size(); j++) {
-    x86::Instruction a = insts[k + 1 - seq.size() + j].inst;
+    x86::Instruction a = window[j];
     a.long_branch = false;
     if (a.mnemonic == x86::Mnemonic::Jcc && a.num_operands == 1 && a.ops[0].kind == x86::OperandKind::Address) a.ops[0].imm = 0;
     if (a.num_operands == 2 && a.ops[1].kind == x86::OperandKind::Imm) a.ops[1].imm = int32_t(a.ops[1].imm);  // decoded 0xffffffff
@@ -158,238 +163,474 @@ bool ends_with(const std::vector<x86::Decoded>& insts, size_t k, size_t body_fir
   return true;
 }
 
-// Is insts[k] an idiv that ends a whole guarded division, of either form
-// (branch targets aside)?
-bool is_guarded_division(const std::vector<x86::Decoded>& insts, size_t k, size_t body_first) {
+// Does the window end with a whole guarded division of either form, its idiv
+// last (branch targets aside)?
+bool is_guarded_division(std::span<const x86::Instruction> window) {
   static_assert(std::tuple_size_v<std::remove_cvref_t<decltype(guarded_division())>> == 6);
-  return ends_with(insts, k, body_first, guarded_division()) || ends_with(insts, k, body_first, safe_division());
+  return ends_with(window, guarded_division()) || ends_with(window, safe_division());
 }
 
-}  // namespace
-
-std::string check_x86(std::span<const uint8_t> code, uint32_t entry, const Layout& layout,
-                      std::vector<uint32_t>* starts_out) {
-  auto at = [](uint64_t off) { return "at code offset " + hex(off) + ": "; };
-  x86::Disassembly d = x86::disassemble(code);
-  if (d.error) {
-    const x86::DecodeError& e = *d.error;
-    std::string bytes;
-    for (size_t i = e.offset; i < code.size() && i < size_t(e.offset) + 8; i++) {
-      char buf[4];
-      std::snprintf(buf, sizeof buf, "%s%02x", bytes.empty() ? "" : " ", code[i]);
-      bytes += buf;
+// The body's last six instructions seen, oldest first, and their offsets:
+// what the division check looks back on.
+class Window {
+ public:
+  static constexpr size_t kSpan = 6;
+  void push(const x86::Decoded& d) {
+    if (n_ == kSpan) {
+      std::move(insts_.begin() + 1, insts_.end(), insts_.begin());
+      std::move(offs_.begin() + 1, offs_.end(), offs_.begin());
+      n_--;
     }
-    return at(e.offset) + "undecodable bytes " + bytes + (code.size() - e.offset > 8 ? " ..." : "") + " (" + e.message + ")";
+    insts_[n_] = d.inst;
+    offs_[n_] = d.offset;
+    n_++;
   }
-  std::vector<uint32_t> starts;
-  starts.reserve(d.insts.size());
-  for (const x86::Decoded& di : d.insts) starts.push_back(di.offset);
+  std::span<const x86::Instruction> insts() const { return {insts_.data(), n_}; }
+  uint32_t offset(size_t back) const { return offs_[n_ - 1 - back]; }  // back 0: the newest
 
-  if (entry >= code.size())
-    return "entry point " + hex(entry) + " is outside the code (" + std::to_string(code.size()) + " bytes)";
-  if (!std::binary_search(starts.begin(), starts.end(), entry))
-    return "entry point " + hex(entry) + " is inside an instruction, not on an instruction boundary";
+ private:
+  std::array<x86::Instruction, kSpan> insts_{};
+  std::array<uint32_t, kSpan> offs_{};
+  size_t n_ = 0;
+};
 
-  // The frame: the scan function starts with a canonical prologue at the entry
-  // and ends with the matching epilogue; only they push, pop or return.
-  size_t first = size_t(std::lower_bound(starts.begin(), starts.end(), entry) - starts.begin());
-  auto matches = [&](size_t at, std::span<const x86::Instruction> seq) {
-    if (at + seq.size() > d.insts.size()) return false;
-    for (size_t k = 0; k < seq.size(); k++) {
-      x86::Instruction a = d.insts[at + k].inst;
-      a.long_branch = false;
-      if (!(a == seq[k])) return false;
+// The code as the check walks it.  A first pass decodes every instruction
+// once and keeps only where each starts (OffsetBits, a bit per byte); the
+// steps after it decode again where they look, forward or back.  So the check
+// holds no record per instruction: its memory is a few bits per byte of code
+// (docs/image-format.md, "What the loader allocates").
+class Code {
+ public:
+  explicit Code(std::span<const uint8_t> bytes) : bytes_(bytes), starts_(bytes.size()) {}
+
+  // Decodes the whole code, marking each start; the first error, if any.
+  std::optional<x86::DecodeError> scan() {
+    for (size_t pos = 0; pos < bytes_.size();) {
+      x86::DecodeError err;
+      std::optional<x86::Decoded> d = x86::decode(bytes_, pos, &err);
+      if (!d) return err;
+      starts_.add(uint32_t(pos));
+      pos += d->length;
+    }
+    return std::nullopt;
+  }
+  uint32_t size() const { return uint32_t(bytes_.size()); }
+  const OffsetBits& starts() const { return starts_; }
+  OffsetBits take_starts() { return std::move(starts_); }
+  // The instruction at `off`, an instruction start.
+  x86::Decoded at(uint32_t off) const { return *x86::decode(bytes_, off); }
+  // The start of the instruction `n` instructions before `off` (a start or the
+  // end of the code), if it lies at or after `floor`.
+  std::optional<uint32_t> back(uint32_t off, size_t n, uint32_t floor) const {
+    for (; n > 0; n--) {
+      int64_t b = starts_.before(off);
+      if (b < int64_t(floor)) return std::nullopt;
+      off = uint32_t(b);
+    }
+    return off;
+  }
+  // Do the instructions from `off` on equal seq (the long form of a branch
+  // aside)?  `end`: where the instructions that may match stop.
+  bool matches(uint32_t off, std::span<const x86::Instruction> seq, uint32_t end) const {
+    for (const x86::Instruction& want : seq) {
+      if (off >= end) return false;
+      x86::Decoded d = at(off);
+      d.inst.long_branch = false;
+      if (!(d.inst == want)) return false;
+      off += d.length;
     }
     return true;
-  };
+  }
+  // The offset after `n` instructions from `off` (at most the end).
+  uint32_t skip(uint32_t off, size_t n) const {
+    for (; n > 0 && off < size(); n--) off += at(off).length;
+    return off;
+  }
+
+ private:
+  std::span<const uint8_t> bytes_;
+  OffsetBits starts_;
+};
+
+std::string at(uint64_t off) { return "at code offset " + hex(off) + ": "; }
+
+std::string undecodable(std::span<const uint8_t> code, const x86::DecodeError& e) {
+  std::string bytes;
+  for (size_t i = e.offset; i < code.size() && i < size_t(e.offset) + 8; i++) {
+    char buf[4];
+    std::snprintf(buf, sizeof buf, "%s%02x", bytes.empty() ? "" : " ", code[i]);
+    bytes += buf;
+  }
+  return at(e.offset) + "undecodable bytes " + bytes + (code.size() - e.offset > 8 ? " ..." : "") + " (" + e.message + ")";
+}
+
+// The general registers an instruction writes by its form's row (x86.h,
+// Effects): the operands it marks written and the implicit writes, as a set of
+// RegNum bits.  A call's callee is not in it (the caller adds what that writes).
+uint16_t written_registers(const x86::Instruction& in, const x86::Effects& fx) {
+  uint16_t w = fx.writes;
+  for (unsigned i = 0; i < in.num_operands && i < in.ops.size(); i++) {
+    const x86::Operand& o = in.ops[i];
+    if (x86::writes_operand(fx.ops[i]) && o.kind == x86::OperandKind::Reg && o.reg.cls != x86::RegClass::Xmm &&
+        o.reg.cls != x86::RegClass::Rip)
+      w |= uint16_t(1u << o.reg.num);
+  }
+  return w;
+}
+
+// A register an instruction writes, named as the instruction names it: an
+// operand in its width, an implicit write in 32 bits, a callee's in 64.
+struct Written {
+  x86::Reg reg;
+  bool by_callee = false;
+};
+// Every general register an instruction writes, each once, in that order.
+class Writes {
+ public:
+  // its operands and implicit writes by the form table, then, for a call,
+  // what the callee may write (`callee`, bits)
+  Writes(const x86::Instruction& in, const x86::Effects& fx, uint16_t callee) {
+    for (unsigned i = 0; i < in.num_operands && i < in.ops.size(); i++) {
+      const x86::Operand& o = in.ops[i];
+      if (x86::writes_operand(fx.ops[i]) && o.kind == x86::OperandKind::Reg && o.reg.cls != x86::RegClass::Xmm &&
+          o.reg.cls != x86::RegClass::Rip)
+        add({o.reg});
+    }
+    for (unsigned r = 0; r < 16; r++)
+      if (fx.writes >> r & 1) add({x86::r32(r)});
+    for (unsigned r = 0; r < 16; r++)
+      if (callee >> r & 1) add({x86::r64(r), true});
+  }
+  const Written* begin() const { return w_.data(); }
+  const Written* end() const { return w_.data() + n_; }
+
+ private:
+  void add(Written w) {
+    if (named_ >> w.reg.num & 1) return;
+    named_ |= uint16_t(1u << w.reg.num);
+    w_[n_++] = w;
+  }
+  std::array<Written, 16> w_{};
+  size_t n_ = 0;
+  uint16_t named_ = 0;
+};
+
+// What a call through the REAL function table may change: the caller-saved
+// registers of System V.
+uint16_t caller_saved_registers() {
+  uint16_t w = 0;
+  for (unsigned r = 0; r < 16; r++)
+    if (x86::caller_saved(x86::RegNum(r))) w |= uint16_t(1u << r);
+  return w;
+}
+
+// The parts of the code the check found, as offsets: [entry, body) the
+// prologue (and the -O2 base registers' leas), [body, exit) the scan body,
+// [exit, routines) the epilogue, [routines, end) the shared routines.
+struct Frame {
+  bool slots = false, o2 = false;
+  int32_t bias = 0;  // where the image register points into the image
+  x86::Reg img;      // the image register: nothing in the body writes it
+  Bases bases;
+  uint32_t entry = 0, body = 0, exit = 0, routines = 0;
+  std::vector<uint32_t> routine_entries;  // ascending
+  uint16_t routine_writes = 0;            // the registers the routines write (bit RegNum), from the form table
+};
+
+// The bodies as::x86::scan_routine makes for this layout and frame, each a
+// routine the code may end with.
+std::vector<std::vector<x86::Instruction>> routine_bodies(const Layout& layout, const Frame& f) {
+  x86::RoutineAreas areas;
+  areas.tw = int32_t(layout.addr(Area::TW, 0));
+  areas.tq = int32_t(layout.addr(Area::TQ, 0));
+  areas.ti = int32_t(layout.addr(Area::TI, 0));
+  areas.cw = int32_t(layout.addr(Area::CW, 0));
+  areas.cq = int32_t(layout.addr(Area::CQ, 0));
+  areas.dt = int32_t(kSysDt);
+  areas.e = int32_t(layout.addr(Area::E, 0));
+  areas.e_count = int32_t(layout.count[int(Area::E)]);
+  // the mask keeps numbers below 256: every area a routine indexes has 256 elements
+  bool full = layout.count[int(Area::TW)] >= 256 && layout.count[int(Area::TQ)] >= 256 &&
+              layout.count[int(Area::TI)] >= 256 && layout.count[int(Area::CW)] >= 256 &&
+              layout.count[int(Area::CQ)] >= 256;
+  std::vector<std::vector<x86::Instruction>> bodies;
+  if (full)
+    for (int r = 0; r < int(x86::Routine::Count); r++) {
+      bool counter = x86::Routine(r) == x86::Routine::Ctu || x86::Routine(r) == x86::Routine::Ctd;
+      if (counter && f.o2 && areas.e_count < 1) continue;  // its edge slots: none to keep an access inside
+      bodies.push_back(x86::scan_routine(x86::Routine(r), areas, x86::RegNum(f.img.num), f.bias));
+    }
+  return bodies;
+}
+
+// The frame: the scan function starts with a canonical prologue at the entry
+// and ends with the matching epilogue, then the shared routines; only they
+// push, pop or return.  "" and `f` filled, or why not.
+std::string find_frame(const Code& code, uint32_t entry, const Layout& layout, Frame& f) {
+  const uint32_t end = code.size();
+  f.entry = entry;
   // the -O2 frame (rbp the image, kImageBias bytes into it), the same with rbp
   // at the image's start (images made before the bias) or with rbx the image
   // (before bl was a slot), or the -O0 frame (rbx the image, ebp the stack)
-  const bool at_entry = first < d.insts.size() && d.insts[first].offset == entry;
-  const bool biased = at_entry && matches(first, x86::scan_prologue(true));
-  const bool o2 = biased || (at_entry && matches(first, x86::scan_prologue_unbiased()));  // rbp the image
-  const bool slots = o2 || (at_entry && matches(first, x86::scan_prologue_rbx_slots()));
-  const int32_t bias = biased ? x86::kImageBias : 0;  // where the image register points into the image
-  if (!slots && !(at_entry && matches(first, x86::scan_prologue(false))))
+  const bool biased = code.matches(entry, x86::scan_prologue(true), end);
+  f.o2 = biased || code.matches(entry, x86::scan_prologue_unbiased(), end);  // rbp the image
+  f.slots = f.o2 || code.matches(entry, x86::scan_prologue_rbx_slots(), end);
+  f.bias = biased ? x86::kImageBias : 0;
+  if (!f.slots && !code.matches(entry, x86::scan_prologue(false), end))
     return at(entry) + "the entry is not the scan function's prologue (push rbx; push rbp; ...; mov rbx, rdi, or lea rbp, [rdi+0x40] at -O2)";
-  const x86::Reg img = x86::r64(x86::image_reg(o2));  // the image register: nothing in the body writes it
-  const std::string img_name(x86::reg_name(img));
-  size_t body_first = first + x86::scan_prologue(slots).size();
-  Bases bases;
+  f.img = x86::r64(x86::image_reg(f.o2));
+  f.body = code.skip(entry, x86::scan_prologue(f.slots).size());
   // The -O2 frame may then set its base registers (lea rdi, [img+K0]; lea
   // r15, [img+K1]; lea r14, [img+K2]), each K in range; without all, it is the
   // frame before compact addressing, whose body may not address memory through them.
-  if (slots && body_first + x86::kNumBases <= d.insts.size()) {
+  if (f.slots) {
     bool all = true;
-    for (int i = 0; i < x86::kNumBases && all; i++) all = is_base_lea(d.insts[body_first + size_t(i)].inst, i, img);
+    uint32_t off = f.body;
+    for (int i = 0; i < x86::kNumBases && all; i++) {
+      all = off < end && is_base_lea(code.at(off).inst, i, f.img);
+      if (all) off += code.at(off).length;
+    }
     if (all) {
+      off = f.body;
       for (int i = 0; i < x86::kNumBases; i++) {
-        const x86::Decoded& l = d.insts[body_first + size_t(i)];
-        if (std::string why = base_k_error(l.inst, i, layout.size, bias); !why.empty()) return at(l.offset) + text_of(l.inst) + ": " + why;
+        const x86::Decoded l = code.at(off);
+        if (std::string why = base_k_error(l.inst, i, layout.size, f.bias); !why.empty()) return at(l.offset) + text_of(l.inst) + ": " + why;
+        off += l.length;
       }
-      bases.set = true;
-      body_first += x86::kNumBases;
+      f.bases.set = true;
+      f.body = off;
     }
   }
-  size_t epi = x86::scan_epilogue(slots).size();
+  const std::span<const x86::Instruction> epilogue = x86::scan_epilogue(f.slots);
   // After the epilogue: the shared timer/counter routines, each exactly one of
   // the bodies as::x86::scan_routine makes for this layout (branch-free, one
   // `ret`, the index masked by its first instruction), found from the end.
-  std::vector<uint32_t> routine_entries;
-  size_t code_end = d.insts.size();
-  {
-    x86::RoutineAreas areas;
-    areas.tw = int32_t(layout.addr(Area::TW, 0));
-    areas.tq = int32_t(layout.addr(Area::TQ, 0));
-    areas.ti = int32_t(layout.addr(Area::TI, 0));
-    areas.cw = int32_t(layout.addr(Area::CW, 0));
-    areas.cq = int32_t(layout.addr(Area::CQ, 0));
-    areas.dt = int32_t(kSysDt);
-    areas.e = int32_t(layout.addr(Area::E, 0));
-    areas.e_count = int32_t(layout.count[int(Area::E)]);
-    // the mask keeps numbers below 256: every area a routine indexes has 256 elements
-    bool full = layout.count[int(Area::TW)] >= 256 && layout.count[int(Area::TQ)] >= 256 &&
-                layout.count[int(Area::TI)] >= 256 && layout.count[int(Area::CW)] >= 256 &&
-                layout.count[int(Area::CQ)] >= 256;
-    std::vector<std::vector<x86::Instruction>> bodies;
-    if (full)
-      for (int r = 0; r < int(x86::Routine::Count); r++) {
-        bool counter = x86::Routine(r) == x86::Routine::Ctu || x86::Routine(r) == x86::Routine::Ctd;
-        if (counter && o2 && areas.e_count < 1) continue;  // its edge slots: none to keep an access inside
-        bodies.push_back(x86::scan_routine(x86::Routine(r), areas, x86::RegNum(img.num), bias));
-      }
-    for (bool found = true; found;) {
-      found = false;
-      for (const auto& b : bodies) {
-        if (code_end < b.size() + body_first + epi || !matches(code_end - b.size(), b)) continue;
-        code_end -= b.size();
-        routine_entries.push_back(d.insts[code_end].offset);
-        found = true;
-        break;
-      }
+  uint32_t routines = end;
+  const std::vector<std::vector<x86::Instruction>> bodies = routine_bodies(layout, f);
+  for (bool found = true; found;) {
+    found = false;
+    for (const auto& b : bodies) {
+      // room for the routine and the epilogue after the prologue
+      if (!code.back(routines, b.size() + epilogue.size(), f.body)) continue;
+      uint32_t from = *code.back(routines, b.size(), f.body);
+      if (!code.matches(from, b, end)) continue;
+      routines = from;
+      f.routine_entries.push_back(from);
+      for (const x86::Instruction& in : b) f.routine_writes |= written_registers(in, x86::effects(in));
+      found = true;
+      break;
     }
-    std::sort(routine_entries.begin(), routine_entries.end());
   }
-  if (code_end < body_first + epi || !matches(code_end - epi, x86::scan_epilogue(slots)))
-    return at(d.insts.empty() ? 0 : d.insts.back().offset) + "the code does not end with the scan function's epilogue (pop ...; ret)";
-  size_t body_end = code_end - epi;
-  if (first > body_end) return at(entry) + "the prologue is not before the epilogue";
-  uint32_t body_lo = body_first < d.insts.size() ? d.insts[body_first].offset : uint32_t(code.size());
-  uint32_t exit_at = d.insts[body_end].offset;
-  std::vector<uint32_t> guarded;  // offsets inside guarded divisions: no branch may land there
-  for (size_t k = 0; k < d.insts.size(); k++) {
-    if (k >= first && k < body_first) continue;  // the prologue
-    if (k >= body_end) break;                    // the epilogue
-    const x86::Decoded& di = d.insts[k];
+  std::reverse(f.routine_entries.begin(), f.routine_entries.end());  // found from the end: make them ascending
+  std::optional<uint32_t> exit = code.back(routines, epilogue.size(), f.body);
+  if (!exit || !code.matches(*exit, epilogue, end))
+    return at(uint64_t(code.starts().before(end))) + "the code does not end with the scan function's epilogue (pop ...; ret)";
+  f.exit = *exit;
+  f.routines = routines;
+  if (f.entry > f.exit) return at(entry) + "the prologue is not before the epilogue";
+  return "";
+}
+
+// The rules on the body's instructions: the stack, the registers it writes
+// (by the form table: the image register and rsp never, the -O2 base
+// registers only by their lea, r12-r15 only in the frame that saves them),
+// the guarded division, calls and branches.  One instruction at a time, in
+// order.
+class BodyRules {
+ public:
+  BodyRules(const Code& code, const Layout& layout, const Frame& f, OffsetBits& guarded)
+      : code_(code), layout_(layout), f_(f), guarded_(guarded), img_name_(x86::reg_name(f.img)) {}
+
+  std::string check(const x86::Decoded& di) {
     const x86::Instruction& in = di.inst;
-    if (k < first) return at(di.offset) + text_of(in) + ": code before the scan function's entry";
-    using M = x86::Mnemonic;
-    if (in.mnemonic == M::Push || in.mnemonic == M::Pop || in.mnemonic == M::Ret)
-      return at(di.offset) + text_of(in) + ": the stack is touched only by the prologue and the epilogue";
+    if (di.offset < f_.entry) return at(di.offset) + text_of(in) + ": code before the scan function's entry";
+    window_.push(di);
+    auto here = [&] { return at(di.offset) + text_of(in) + ": "; };  // for a refusal only: it prints the instruction
+    using S = x86::StackUse;
+    if (di.effects.stack == S::Push || di.effects.stack == S::Pop || di.effects.stack == S::Ret)
+      return here() + "the stack is touched only by the prologue and the epilogue";
+    const Writes writes(in, di.effects, callee_writes(di));
     // img holds the image base and rsp the frame: no instruction of the body may change them
-    bool writes_first = in.num_operands > 0 && in.mnemonic != M::Cmp && in.mnemonic != M::Test &&
-                        in.mnemonic != M::Ucomiss && in.mnemonic != M::Jmp && in.mnemonic != M::Jcc &&
-                        in.mnemonic != M::Call;
-    if (writes_first && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm &&
-        (in.ops[0].reg.num == img.num || in.ops[0].reg.num == x86::SP))
-      return at(di.offset) + text_of(in) + ": writes " + std::string(x86::reg_name(in.ops[0].reg)) +
-             " (the image base and the stack pointer are fixed in the scan body)";
+    for (const Written& w : writes)
+      if (w.reg.num == f_.img.num || w.reg.num == x86::SP)
+        return here() + (w.by_callee ? "calls code that writes " : "writes ") + std::string(x86::reg_name(w.reg)) +
+               " (the image base and the stack pointer are fixed in the scan body)";
     // the base registers of the -O2 body: only `lea reg, [img+K]` with K in range may set one
-    if (bases.set && writes_first && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm) {
-      for (int b = 0; b < x86::kNumBases; b++) {
-        if (in.ops[0].reg.num != x86::kBaseRegs[b]) continue;
+    if (f_.bases.set)
+      for (const Written& w : writes) {
+        int b = Bases::which(x86::r64(w.reg.num));
+        if (b < 0 || w.by_callee) continue;  // a callee's writes: the reload after the call, below
         std::string reg(x86::reg_name(x86::r64(x86::kBaseRegs[b])));
-        if (!is_base_lea(in, b, img))
-          return at(di.offset) + text_of(in) + ": writes " + std::string(x86::reg_name(in.ops[0].reg)) +
-                 ", a base register of the -O2 frame (only 'lea " + reg + ", [" + img_name + "+K]' may set one)";
-        if (std::string why = base_k_error(in, b, layout.size, bias); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
+        if (!is_base_lea(in, b, f_.img))
+          return here() + "writes " + std::string(x86::reg_name(w.reg)) + ", a base register of the -O2 frame (only 'lea " + reg +
+                 ", [" + img_name_ + "+K]' may set one)";
+        if (std::string why = base_k_error(in, b, layout_.size, f_.bias); !why.empty()) return here() + why;
       }
-    }
-    // a call through the REAL function table may change the caller-saved base
-    // registers: the leas resetting each of them (kBaseRegs order) follow it at once
-    if (bases.set && in.mnemonic == M::Call && in.num_operands && in.ops[0].kind == x86::OperandKind::Mem) {
-      size_t j = k + 1;
-      std::string want;
-      for (int b = 0; b < x86::kNumBases; b++) {
-        if (!x86::caller_saved(x86::kBaseRegs[b])) continue;
-        std::string reg(x86::reg_name(x86::r64(x86::kBaseRegs[b])));
-        want += std::string(want.empty() ? "" : "; ") + "lea " + reg + ", [" + img_name + "+K]";
-        if (j >= body_end || !is_base_lea(d.insts[j].inst, b, img))
-          return at(di.offset) + text_of(in) + ": a call through the REAL function table not followed at once by '" + want +
-                 "' (the call may change " + reg + ", a base register of the -O2 frame)";
-        j++;
-      }
-    }
+    if (std::string why = reload_after_call(di, writes); !why.empty()) return why;
     // r12-r15 belong to the caller (System V) unless the frame saved them
-    if (writes_first && !slots && in.ops[0].kind == x86::OperandKind::Reg && in.ops[0].reg.cls != x86::RegClass::Xmm &&
-        in.ops[0].reg.num >= x86::R12)
-      return at(di.offset) + text_of(in) + ": writes " + std::string(x86::reg_name(in.ops[0].reg)) +
-             ", which the caller owns: only the -O2 frame saves r12-r15";
+    if (!f_.slots)
+      for (const Written& w : writes)
+        if (w.reg.num >= x86::R12)
+          return here() + (w.by_callee ? "calls code that writes " : "writes ") + std::string(x86::reg_name(w.reg)) +
+                 ", which the caller owns: only the -O2 frame saves r12-r15";
+    using M = x86::Mnemonic;
     if (in.mnemonic == M::Idiv) {
-      if (!is_guarded_division(d.insts, k, body_first))
-        return at(di.offset) + text_of(in) +
-               ": a division not guarded against 0 and -1 (only 'test ecx, ecx; je; cmp ecx, -1; je; cdq; idiv ecx' or "
+      if (!is_guarded_division(window_.insts()))
+        return here() +
+               "a division not guarded against 0 and -1 (only 'test ecx, ecx; je; cmp ecx, -1; je; cdq; idiv ecx' or "
                "'lea edx, [rcx+1]; cmp edx, 1; mov edx, 1; cmovbe ecx, edx; cdq; idiv ecx')";
-      for (size_t j = k + 2 - guarded_division().size(); j <= k; j++) guarded.push_back(d.insts[j].offset);
+      for (size_t back = 0; back + 1 < guarded_division().size(); back++) guarded_.add(window_.offset(back));
     }
     if (in.mnemonic == M::Call && in.num_operands && in.ops[0].kind == x86::OperandKind::Address &&
-        !std::binary_search(routine_entries.begin(), routine_entries.end(), uint32_t(in.ops[0].imm)))
-      return at(di.offset) + text_of(in) +
-             ": a direct call not to the entry of one of the code's routines (generated code calls only those and "
+        !std::binary_search(f_.routine_entries.begin(), f_.routine_entries.end(), uint32_t(in.ops[0].imm)))
+      return here() +
+             "a direct call not to the entry of one of the code's routines (generated code calls only those and "
              "the REAL function table)";
     // branches go forward, inside the body or to the epilogue, so a scan always ends
     if ((in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) && in.num_operands && in.ops[0].kind == x86::OperandKind::Address) {
       int64_t t = in.ops[0].imm;
-      if (t <= int64_t(di.offset)) return at(di.offset) + text_of(in) + ": backward branch (a scan runs straight through)";
-      if (t < int64_t(body_lo) || t > int64_t(exit_at))
-        return at(di.offset) + text_of(in) + ": branch target " + hex(uint64_t(t)) + " outside the scan body";
+      if (t <= int64_t(di.offset)) return here() + "backward branch (a scan runs straight through)";
+      if (t < int64_t(f_.body) || t > int64_t(f_.exit)) return here() + "branch target " + hex(uint64_t(t)) + " outside the scan body";
     }
+    return "";
   }
 
-  for (size_t k = 0; k < code_end; k++) {  // the routines were matched whole
-    const x86::Decoded& di = d.insts[k];
-    const x86::Instruction& in = di.inst;
-    bool branch = in.mnemonic == x86::Mnemonic::Jmp || in.mnemonic == x86::Mnemonic::Jcc || in.mnemonic == x86::Mnemonic::Call;
-    for (unsigned i = 0; i < in.num_operands && i < in.ops.size(); i++) {
-      const x86::Operand& o = in.ops[i];
-      if (o.kind == x86::OperandKind::Mem && in.mnemonic == x86::Mnemonic::Lea) {
-        continue;  // lea is arithmetic: it computes an address but touches no memory
-      } else if (o.kind == x86::OperandKind::Mem) {
-        if (in.mnemonic == x86::Mnemonic::Call) {
-          // the one indirect branch: a call through the read-only table of REAL
-          // functions below the image (ir.h, kCallTableDisp)
-          const x86::Mem& m = o.mem;
-          const int64_t off = int64_t(m.disp) + bias;  // from the image's start
-          bool table = m.base == img && !m.index.valid() && m.size == x86::Size::Qword && off >= kCallTableDisp &&
-                       off < kCallTableDisp + 8 * kCallSlots && (off - kCallTableDisp) % 8 == 0;
-          if (!table) return at(di.offset) + text_of(in) + ": indirect call not through the REAL function table";
-          continue;
-        }
-        if (branch) return at(di.offset) + text_of(in) + ": indirect branch through memory";
-        if (std::string why = check_mem(o.mem, layout.size, bases, img, bias); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
-      } else if (o.kind == x86::OperandKind::Reg && branch) {
-        return at(di.offset) + text_of(in) + ": indirect branch through a register";
-      } else if (o.kind == x86::OperandKind::Address) {
-        int64_t t = o.imm;
-        if (t < 0 || uint64_t(t) >= code.size())
-          return at(di.offset) + text_of(in) + ": branch target " + (t < 0 ? "-" + hex(uint64_t(-(t + 1)) + 1) : hex(uint64_t(t))) +
-                 " outside the code (" + std::to_string(code.size()) + " bytes)";
-        if (!std::binary_search(starts.begin(), starts.end(), uint32_t(t)))
-          return at(di.offset) + text_of(in) + ": branch target " + hex(uint64_t(t)) +
-                 " is inside an instruction, not on an instruction boundary";
-        if (std::binary_search(guarded.begin(), guarded.end(), uint32_t(t)))
-          return at(di.offset) + text_of(in) + ": branch target " + hex(uint64_t(t)) +
-                 " is inside a guarded division (past its test of the divisor)";
-      } else if (o.kind == x86::OperandKind::Label) {
-        return at(di.offset) + text_of(in) + ": unresolved label operand";
+ private:
+  // What the callee of a call may write: a direct call goes to one of the
+  // routines (or is refused below), which write what their bodies' forms write;
+  // a call through memory goes to a REAL function (or is refused with its
+  // operand), which may change every caller-saved register; a call through a
+  // register is refused with its operand.
+  uint16_t callee_writes(const x86::Decoded& di) const {
+    if (di.effects.stack != x86::StackUse::Call || !di.inst.num_operands) return 0;
+    if (di.inst.ops[0].kind == x86::OperandKind::Address) return f_.routine_writes;
+    static const uint16_t abi = caller_saved_registers();
+    return di.inst.ops[0].kind == x86::OperandKind::Mem ? abi : 0;
+  }
+
+  // A callee may change a base register: the leas resetting each one it may
+  // write (kBaseRegs order) follow the call at once.
+  std::string reload_after_call(const x86::Decoded& di, const Writes& writes) const {
+    if (!f_.bases.set) return "";
+    uint32_t next = di.offset + di.length;
+    std::string want;
+    const bool table = di.inst.num_operands && di.inst.ops[0].kind == x86::OperandKind::Mem;
+    for (int b = 0; b < x86::kNumBases; b++) {
+      bool clobbered = std::any_of(writes.begin(), writes.end(),
+                                   [&](const Written& w) { return w.by_callee && w.reg.num == x86::kBaseRegs[b]; });
+      if (!clobbered) continue;
+      std::string reg(x86::reg_name(x86::r64(x86::kBaseRegs[b])));
+      want += std::string(want.empty() ? "" : "; ") + "lea " + reg + ", [" + img_name_ + "+K]";
+      if (next >= f_.exit || !is_base_lea(code_.at(next).inst, b, f_.img))
+        return at(di.offset) + text_of(di.inst) + ": a call " + (table ? "through the REAL function table" : "to a routine") +
+               " not followed at once by '" + want + "' (the call may change " + reg + ", a base register of the -O2 frame)";
+      next += code_.at(next).length;
+    }
+    return "";
+  }
+
+  const Code& code_;
+  const Layout& layout_;
+  const Frame& f_;
+  OffsetBits& guarded_;  // offsets inside guarded divisions: no branch may land there
+  const std::string img_name_;
+  Window window_;
+};
+
+// The rules on every operand of the code before the routines (the routines
+// were matched whole): memory operands, indirect and direct branch targets.
+// The one rule it cannot apply in order, that no branch lands inside a guarded
+// division (known only once the division is seen), it leaves to the caller:
+// every target it accepts is added to `targets`.
+std::string check_operands(const x86::Decoded& di, uint32_t code_size, const OffsetBits& starts, const Frame& f,
+                           const Layout& layout, OffsetBits& targets) {
+  const x86::Instruction& in = di.inst;
+  bool branch = in.mnemonic == x86::Mnemonic::Jmp || in.mnemonic == x86::Mnemonic::Jcc || in.mnemonic == x86::Mnemonic::Call;
+  for (unsigned i = 0; i < in.num_operands && i < in.ops.size(); i++) {
+    const x86::Operand& o = in.ops[i];
+    if (o.kind == x86::OperandKind::Mem && di.effects.ops[i] == x86::Use::Addr) {
+      continue;  // lea is arithmetic: it computes an address but touches no memory
+    } else if (o.kind == x86::OperandKind::Mem) {
+      if (in.mnemonic == x86::Mnemonic::Call) {
+        // the one indirect branch: a call through the read-only table of REAL
+        // functions below the image (ir.h, kCallTableDisp)
+        const x86::Mem& m = o.mem;
+        const int64_t off = int64_t(m.disp) + f.bias;  // from the image's start
+        bool table = m.base == f.img && !m.index.valid() && m.size == x86::Size::Qword && off >= kCallTableDisp &&
+                     off < kCallTableDisp + 8 * kCallSlots && (off - kCallTableDisp) % 8 == 0;
+        if (!table) return at(di.offset) + text_of(in) + ": indirect call not through the REAL function table";
+        continue;
       }
+      if (branch) return at(di.offset) + text_of(in) + ": indirect branch through memory";
+      if (std::string why = check_mem(o.mem, layout.size, f.bases, f.img, f.bias); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
+    } else if (o.kind == x86::OperandKind::Reg && branch) {
+      return at(di.offset) + text_of(in) + ": indirect branch through a register";
+    } else if (o.kind == x86::OperandKind::Address) {
+      int64_t t = o.imm;
+      if (t < 0 || uint64_t(t) >= code_size)
+        return at(di.offset) + text_of(in) + ": branch target " + (t < 0 ? "-" + hex(uint64_t(-(t + 1)) + 1) : hex(uint64_t(t))) +
+               " outside the code (" + std::to_string(code_size) + " bytes)";
+      if (!starts.has(uint64_t(t)))
+        return at(di.offset) + text_of(in) + ": branch target " + hex(uint64_t(t)) +
+               " is inside an instruction, not on an instruction boundary";
+      targets.add(uint32_t(t));
+    } else if (o.kind == x86::OperandKind::Label) {
+      return at(di.offset) + text_of(in) + ": unresolved label operand";
     }
   }
-  if (entry >= code.size())
-    return "entry point " + hex(entry) + " is outside the code (" + std::to_string(code.size()) + " bytes)";
-  if (!std::binary_search(starts.begin(), starts.end(), entry))
-    return "entry point " + hex(entry) + " is inside an instruction, not on an instruction boundary";
-  if (starts_out) *starts_out = std::move(starts);
+  return "";
+}
+
+// The message for the first instruction before `stop` with a branch target
+// inside a guarded division, or "".
+std::string first_branch_into_guard(const Code& code, uint32_t stop, const OffsetBits& guarded) {
+  for (uint32_t off = 0; off < stop;) {
+    const x86::Decoded di = code.at(off);
+    for (unsigned i = 0; i < di.inst.num_operands && i < di.inst.ops.size(); i++) {
+      const x86::Operand& o = di.inst.ops[i];
+      if (o.kind == x86::OperandKind::Address && o.imm >= 0 && guarded.has(uint64_t(o.imm)))
+        return at(di.offset) + text_of(di.inst) + ": branch target " + hex(uint64_t(o.imm)) +
+               " is inside a guarded division (past its test of the divisor)";
+    }
+    off += di.length;
+  }
+  return "";
+}
+
+}  // namespace
+
+// Two passes over the code, each decoding an instruction at a time: the first
+// finds where instructions start, the second applies the rules.  The body's
+// rules come before the operands' (a refusal names the first instruction that
+// breaks one of the body's rules, else the first that breaks an operand's),
+// as when each was a loop of its own.
+std::string check_x86(std::span<const uint8_t> bytes, uint32_t entry, const Layout& layout, OffsetBits* starts_out) {
+  Code code(bytes);
+  if (std::optional<x86::DecodeError> e = code.scan()) return undecodable(bytes, *e);
+  if (entry >= bytes.size())
+    return "entry point " + hex(entry) + " is outside the code (" + std::to_string(bytes.size()) + " bytes)";
+  if (!code.starts().has(entry)) return "entry point " + hex(entry) + " is inside an instruction, not on an instruction boundary";
+  Frame f;
+  if (std::string why = find_frame(code, entry, layout, f); !why.empty()) return why;
+
+  OffsetBits guarded(bytes.size()), targets(bytes.size());
+  BodyRules body(code, layout, f, guarded);
+  std::string operand_error;  // the first instruction's that breaks an operand rule
+  uint32_t operand_error_at = f.routines;
+  for (uint32_t off = 0; off < f.routines;) {
+    const x86::Decoded di = code.at(off);
+    const bool prologue = off >= f.entry && off < f.body;
+    if (!prologue && off < f.exit)
+      if (std::string why = body.check(di); !why.empty()) return why;
+    if (operand_error.empty())
+      if (operand_error = check_operands(di, code.size(), code.starts(), f, layout, targets); !operand_error.empty())
+        operand_error_at = off;
+    off += di.length;
+  }
+  if (guarded.meets(targets))
+    if (std::string why = first_branch_into_guard(code, operand_error_at, guarded); !why.empty()) return why;
+  if (!operand_error.empty()) return operand_error;
+  if (starts_out) *starts_out = code.take_starts();
   return "";
 }
 

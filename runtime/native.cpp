@@ -1,5 +1,6 @@
 // runtime/native.cpp -- running native scan code: the code is mapped writable,
-// copied, then made read+execute (never writable and executable at once).
+// copied, checked where it lies (the loader's x86-64 code check), then made
+// read+execute (never writable and executable at once).
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -8,6 +9,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "loader/loader.h"
 #include "runtime/runtime.h"
 
 namespace ldc {
@@ -15,53 +17,77 @@ namespace {
 
 constexpr size_t kHuge = size_t(2) << 20;
 
-class NativeEngine : public Engine {
- public:
-  NativeEngine(std::span<const uint8_t> code, uint32_t entry) {
-    if (code.empty() || entry >= code.size()) throw std::runtime_error("native code: empty, or entry outside the code");
-    void* p = map_code(code.size());
-    std::memcpy(p, code.data(), code.size());
-    if (mprotect(p, size_, PROT_READ | PROT_EXEC) != 0) {
-      int e = errno;
-      munmap(p, size_);
-      throw std::runtime_error(std::string("cannot make code executable: ") + std::strerror(e));
+// Read+write memory for n bytes of code: code of 256 KiB and more on 2 MiB-
+// aligned memory with MADV_HUGEPAGE (one iTLB entry where the kernel grants
+// it; docs/runtime.md), the rest on ordinary pages.  `mapped` gets its size.
+void* map_code(size_t n, size_t& mapped) {
+  size_t page = size_t(sysconf(_SC_PAGESIZE));
+  mapped = (n + page - 1) / page * page;
+  if (n >= kHuge / 8) {
+    size_t huge = (n + kHuge - 1) / kHuge * kHuge;
+    void* q = mmap(nullptr, huge + kHuge, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (q != MAP_FAILED) {
+      uintptr_t a = (reinterpret_cast<uintptr_t>(q) + kHuge - 1) & ~(kHuge - 1);
+      size_t before = a - reinterpret_cast<uintptr_t>(q), after = kHuge - before;
+      if (before) munmap(q, before);
+      if (after) munmap(reinterpret_cast<void*>(a + huge), after);
+      madvise(reinterpret_cast<void*>(a), huge, MADV_HUGEPAGE);
+      mapped = huge;
+      return reinterpret_cast<void*>(a);
     }
-    base_ = p;
-    fn_ = reinterpret_cast<void (*)(uint8_t*)>(static_cast<uint8_t*>(p) + entry);
   }
-  ~NativeEngine() override { munmap(base_, size_); }
-  void scan(uint8_t* mem) override { fn_(mem); }
-
- private:
-  void* map_code(size_t n) {
-    size_t page = size_t(sysconf(_SC_PAGESIZE));
-    size_ = (n + page - 1) / page * page;
-    if (n >= kHuge / 8) {
-      size_t huge = (n + kHuge - 1) / kHuge * kHuge;
-      void* q = mmap(nullptr, huge + kHuge, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-      if (q != MAP_FAILED) {
-        uintptr_t a = (reinterpret_cast<uintptr_t>(q) + kHuge - 1) & ~(kHuge - 1);
-        size_t before = a - reinterpret_cast<uintptr_t>(q), after = kHuge - before;
-        if (before) munmap(q, before);
-        if (after) munmap(reinterpret_cast<void*>(a + huge), after);
-        madvise(reinterpret_cast<void*>(a), huge, MADV_HUGEPAGE);
-        size_ = huge;
-        return reinterpret_cast<void*>(a);
-      }
-    }
-    void* p = mmap(nullptr, size_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    if (p == MAP_FAILED) throw std::runtime_error(std::string("cannot map code: ") + std::strerror(errno));
-    return p;
-  }
-  void* base_ = nullptr;
-  size_t size_ = 0;
-  void (*fn_)(uint8_t*) = nullptr;
-};
+  void* p = mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (p == MAP_FAILED) throw std::runtime_error(std::string("cannot map code: ") + std::strerror(errno));
+  return p;
+}
 
 }  // namespace
 
-std::unique_ptr<Engine> make_native_engine(std::span<const uint8_t> code, uint32_t entry) {
-  return std::make_unique<NativeEngine>(code, entry);
+CheckedCode map_checked_code(std::span<const uint8_t> code, uint32_t entry, const Layout& layout) {
+  if (code.empty() || entry >= code.size()) throw std::runtime_error("native code: empty, or entry outside the code");
+  size_t mapped = 0;
+  void* p = map_code(code.size(), mapped);
+  std::memcpy(p, code.data(), code.size());
+  // the copy is what will run: check it, not the caller's bytes
+  std::string why = check_x86_code({static_cast<const uint8_t*>(p), code.size()}, entry, layout);
+  if (!why.empty()) {
+    munmap(p, mapped);
+    throw std::runtime_error("native code refused: " + why);
+  }
+  if (mprotect(p, mapped, PROT_READ | PROT_EXEC) != 0) {
+    int e = errno;
+    munmap(p, mapped);
+    throw std::runtime_error(std::string("cannot make code executable: ") + std::strerror(e));
+  }
+  return CheckedCode(p, mapped, code.size(), entry);
 }
+
+CheckedCode::CheckedCode(CheckedCode&& o) noexcept : base_(o.base_), mapped_(o.mapped_), size_(o.size_), entry_(o.entry_) {
+  o.base_ = nullptr, o.mapped_ = 0;
+}
+CheckedCode& CheckedCode::operator=(CheckedCode&& o) noexcept {
+  if (this != &o) {
+    if (base_) munmap(base_, mapped_);
+    base_ = o.base_, mapped_ = o.mapped_, size_ = o.size_, entry_ = o.entry_;
+    o.base_ = nullptr, o.mapped_ = 0;
+  }
+  return *this;
+}
+CheckedCode::~CheckedCode() {
+  if (base_) munmap(base_, mapped_);
+}
+
+class NativeEngine : public Engine {
+ public:
+  explicit NativeEngine(CheckedCode code)
+      : code_(std::move(code)), fn_(reinterpret_cast<void (*)(uint8_t*)>(static_cast<uint8_t*>(code_.base_) + code_.entry_)) {}
+  void scan(uint8_t* mem) override { fn_(mem); }
+
+ private:
+  CheckedCode code_;
+  void (*fn_)(uint8_t*) = nullptr;
+};
+
+std::unique_ptr<Engine> make_native_engine(CheckedCode code) { return std::make_unique<NativeEngine>(std::move(code)); }
 
 }  // namespace ldc

@@ -40,10 +40,39 @@ std::unique_ptr<Engine> make_interp_engine(std::vector<uint8_t> il, const Layout
 // once into type-specialized records with resolved offsets, threaded dispatch.
 std::unique_ptr<Engine> make_fast_interp_engine(std::span<const uint8_t> il, const Layout& layout);
 
+// Native x86-64 code that passed the loader's code check, in the memory it
+// runs from: map_checked_code copies the bytes into a fresh mapping, runs
+// check_x86_code (loader.h) on that copy, the bytes that will run, and only
+// then makes the mapping read+execute.  Its constructor is private and
+// map_checked_code is the one function that makes one, so the native engine,
+// which takes nothing else, never runs bytes the check has not seen (a plain
+// vector does not convert: tests/runtime/native_type_test.cpp).
+class CheckedCode {
+ public:
+  CheckedCode(CheckedCode&& o) noexcept;
+  CheckedCode& operator=(CheckedCode&& o) noexcept;
+  CheckedCode(const CheckedCode&) = delete;
+  CheckedCode& operator=(const CheckedCode&) = delete;
+  ~CheckedCode();
+  uint32_t entry() const { return entry_; }
+  size_t size() const { return size_; }
+
+ private:
+  friend CheckedCode map_checked_code(std::span<const uint8_t> code, uint32_t entry, const Layout& layout);
+  friend class NativeEngine;
+  CheckedCode(void* base, size_t mapped, size_t size, uint32_t entry) : base_(base), mapped_(mapped), size_(size), entry_(entry) {}
+  void* base_ = nullptr;  // read+execute
+  size_t mapped_ = 0, size_ = 0;
+  uint32_t entry_ = 0;
+};
+// Throws std::runtime_error ("native code refused: at code offset 0x..: why")
+// if the check refuses the code, or if it cannot be mapped.
+CheckedCode map_checked_code(std::span<const uint8_t> code, uint32_t entry, const Layout& layout);
+
 // Native x86-64 scan code, called as void scan(uint8_t* image).  The image must
 // live in ImageBytes (ir.h): the code calls the REAL functions through the
 // read-only table below it.
-std::unique_ptr<Engine> make_native_engine(std::span<const uint8_t> code, uint32_t entry);
+std::unique_ptr<Engine> make_native_engine(CheckedCode code);
 // A scan function `void symbol(uint8_t* image)` in a shared object (the C route).
 std::unique_ptr<Engine> make_shared_object_engine(const std::string& path, const std::string& symbol);
 

@@ -76,7 +76,7 @@ std::string compare(const Program& p, int level, uint64_t seed, int scans) {
   Layout L = p.layout();
   NativeBuild nb = build_x86(p, p.source, as::Mode::Blockwise, level, false);
   read_image(write_image(make_x86_image(p, nb)), "regions.bin");  // throws if the loader refuses it
-  auto native = make_native_engine(nb.asm_result.code, 0);
+  auto native = make_native_engine(map_checked_code(nb.asm_result.code, 0, L));
   auto ref = make_interp_engine(encode_il(p).code, L);
   Memory a(L), b(L);
   Rng r{seed};

@@ -29,17 +29,17 @@ std::unique_ptr<Engine> make_interp(const Program& p) {
 
 std::unique_ptr<Engine> make_native(const Program& p) {
   NativeBuild nb = build_x86(p, p.source);
-  return make_native_engine(nb.asm_result.code, 0);
+  return make_native_engine(map_checked_code(nb.asm_result.code, 0, p.layout()));
 }
 
 std::unique_ptr<Engine> make_native_o1(const Program& p) {
   NativeBuild nb = build_x86(p, p.source, as::Mode::Blockwise, 1);
-  return make_native_engine(nb.asm_result.code, 0);
+  return make_native_engine(map_checked_code(nb.asm_result.code, 0, p.layout()));
 }
 
 std::unique_ptr<Engine> make_native_o2(const Program& p) {
   NativeBuild nb = build_x86(p, p.source, as::Mode::Blockwise, 2);
-  return make_native_engine(nb.asm_result.code, 0);
+  return make_native_engine(map_checked_code(nb.asm_result.code, 0, p.layout()));
 }
 
 // ------------------------------------------------------------------ naming bytes

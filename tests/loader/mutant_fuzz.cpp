@@ -16,7 +16,17 @@
 // three scans on the simulated board instead, which records what they run
 // and store; c40_mutants.h defines their escapes.
 //
-//   mutant_fuzz [--count N] [--seed S] [--target all|x86|c40] [--save DIR] [--quiet]
+// Large x86-64 bodies (issue 24: the check must hold, and stay bounded, on
+// long code): a mutant may start from an image whose body begins with a run
+// of 16 KiB to 1 MiB of one-byte nops (every branch of the body relative, so
+// the image stays valid), and any mutant may insert a nop run of its own (1
+// to 64 Ki nops, often near the rel8 reach and the 64-bit words of the
+// check's bitmaps) at an instruction boundary, moving everything after it.
+// One mutant in 500 starts from a large body of either target.
+//
+//   mutant_fuzz [--count N] [--seed S] [--target all|x86|c40] [--large] [--save DIR] [--quiet]
+//
+// --large: every mutant starts from a large body.
 //
 // Exit status 0 when no mutant escaped, 1 otherwise.
 #include <algorithm>
@@ -47,9 +57,57 @@ struct Base {
   Image image;
 };
 
+// Where the scan body starts: after the prologue and the -O2 base registers' leas.
+size_t body_start(const std::vector<uint8_t>& code) {
+  size_t off = 0;
+  bool o2 = false;
+  for (bool slots : {true, false}) {
+    size_t at = 0;
+    bool ok = true;
+    for (const x86::Instruction& want : x86::scan_prologue(slots)) {
+      std::optional<x86::Decoded> d = x86::decode(code, at);
+      if (!d || !(d->inst == want)) {
+        ok = false;
+        break;
+      }
+      at += d->length;
+    }
+    if (ok) {
+      off = at, o2 = slots;
+      break;
+    }
+  }
+  while (o2) {
+    std::optional<x86::Decoded> d = x86::decode(code, off);
+    if (!d || d->inst.mnemonic != x86::Mnemonic::Lea || d->inst.ops[0].kind != x86::OperandKind::Reg) break;
+    bool base = false;
+    for (int b = 0; b < x86::kNumBases; b++) base |= d->inst.ops[0].reg == x86::r64(x86::kBaseRegs[b]);
+    if (!base) break;
+    off += d->length;
+  }
+  return off;
+}
+
+// Valid x86-64 images with long bodies: a few programs at -O0 and -O2, their
+// body led by `nops` one-byte nops (16 KiB to 1 MiB).
+std::vector<Base> large_x86_bases(const std::vector<Program>& ps) {
+  std::vector<Base> out;
+  for (size_t i = 0; i < ps.size() && i < 3; i++)
+    for (int level : {0, 2})
+      for (size_t nops : {size_t(16) << 10, size_t(256) << 10 | 63, size_t(1) << 20}) {
+        const Program& p = ps[i];
+        Image im = make_x86_image(p, build_x86(p, p.source, as::Mode::Blockwise, level, false));
+        im.lines.clear();
+        size_t at = body_start(im.code);
+        im.code.insert(im.code.begin() + long(at), nops, 0x90);
+        std::string name = p.source + " -O" + std::to_string(level) + " +" + std::to_string(nops) + " nops";
+        out.push_back({name, read_image(write_image(im), name)});  // throws if the loader refuses it: a bug here
+      }
+  return out;
+}
+
 // The images of one target ("x86", "c40") or both ("all").
-std::vector<Base> bases(const std::string& only) {
-  std::vector<Program> ps = test::examples_and_random_programs(12, 25);
+std::vector<Base> bases(const std::vector<Program>& ps, const std::string& only) {
   std::vector<Base> out;
   for (const Program& p : ps)
     for (int level : {0, 1, 2})
@@ -106,9 +164,25 @@ class Mutator {
     if (r < 70) return displace(code, d.insts);
     if (r < 80) return reregister(code, v);
     if (r < 83) return reenter(entry);
-    if (r < 90) return swap(code, d.insts);
-    if (r < 95) return erase(code, v);
+    if (r < 88) return swap(code, d.insts);
+    if (r < 92) return erase(code, v);
+    if (r < 96) return nop_run(code, v);
     return flip(code);
+  }
+
+  // Inserts a run of one-byte nops at v's offset, moving the code after it:
+  // branches across it now land elsewhere.  Lengths near the rel8 reach and
+  // the bitmaps' 64-bit words, or up to 64 Ki.
+  std::string nop_run(std::vector<uint8_t>& code, const x86::Decoded& v) {
+    size_t n;
+    switch (pick(4)) {
+      case 0: n = 120 + pick(16); break;
+      case 1: n = 60 + pick(8) + 64 * pick(4); break;
+      case 2: n = 1 + pick(8); break;
+      default: n = 1 + pick(size_t(64) << 10);
+    }
+    code.insert(code.begin() + v.offset, n, 0x90);
+    return "nops" + std::to_string(n) + "@" + std::to_string(v.offset);
   }
 
   // A branch target: mostly an instruction boundary (forward or back), else any offset.
@@ -338,7 +412,7 @@ std::string run_confined(const Image& im, std::mt19937_64& rng) {
   Memory m(im.layout);
   std::unique_ptr<Engine> e;
   try {
-    e = make_sandboxed_engine(make_native_engine(im.code, im.entry), im.layout, 5000);
+    e = make_sandboxed_engine(make_native_engine(map_checked_code(im.code, im.entry, im.layout)), im.layout, 5000);
     for (int scan = 0; scan < 3; scan++) {
       for (uint32_t i = 0; i < 32; i++) m.data()[im.layout.addr(Area::X, i)] = rng() & 1;
       int32_t dt = int32_t(rng() % 100);
@@ -369,8 +443,8 @@ std::string reason_class(const std::string& why) {
 // The large C40 bodies (c40_mutants.h), from the first C40 base: one that
 // every scan runs (70,000 words: past the simulator's 2^16-entry decode
 // cache) and one mostly unreached (300,000 words: past the check's 2^18-word
-// work-list summary).  A mutant starts from one of them once in 500.
-std::vector<Base> large_bases(const std::vector<Base>& bs) {
+// work-list summary).
+std::vector<Base> large_c40_bases(const std::vector<Base>& bs) {
   for (const Base& b : bs)
     if (b.image.target == ImageTarget::C40)
       return {{b.name + " + 70000 executed words", test::c40_large_body(b.image, 70000, true)},
@@ -391,7 +465,7 @@ void print_top(const char* title, const std::map<std::string, uint64_t>& tally) 
 int main(int argc, char** argv) {
   uint64_t count = 20000, seed = 1;
   std::string save, only = "all";
-  bool quiet = false;
+  bool quiet = false, all_large = false;
   for (int i = 1; i < argc; i++) {
     std::string a = argv[i];
     if (a == "--count" && i + 1 < argc) count = std::stoull(argv[++i]);
@@ -399,23 +473,27 @@ int main(int argc, char** argv) {
     else if (a == "--save" && i + 1 < argc) save = argv[++i];
     else if (a == "--target" && i + 1 < argc && (only = argv[++i], only == "all" || only == "x86" || only == "c40")) {}
     else if (a == "--quiet") quiet = true;
+    else if (a == "--large") all_large = true;
     else {
-      std::fprintf(stderr, "usage: mutant_fuzz [--count N] [--seed S] [--target all|x86|c40] [--save DIR] [--quiet]\n");
+      std::fprintf(stderr, "usage: mutant_fuzz [--count N] [--seed S] [--target all|x86|c40] [--large] [--save DIR] [--quiet]\n");
       return 2;
     }
   }
   auto t0 = std::chrono::steady_clock::now();
-  std::vector<Base> bs = bases(only);
+  const std::vector<Program> programs = test::examples_and_random_programs(12, 25);
+  std::vector<Base> bs = bases(programs, only);
   std::vector<uint32_t> pool;  // every word of every C40 image
   for (const Base& b : bs)
     if (b.image.target == ImageTarget::C40)
       for (size_t k = 0; k + 4 <= b.image.code.size(); k += 4) pool.push_back(test::c40_get(b.image.code, k / 4));
-  std::vector<Base> large = large_bases(bs);
+  std::vector<Base> large = large_c40_bases(bs);
+  if (only != "c40")
+    for (Base& b : large_x86_bases(programs)) large.push_back(std::move(b));
   std::mt19937_64 rng(seed);
   uint64_t refused = 0, accepted = 0, escapes = 0, c40_accepted = 0, c40_stopped = 0, large_mutants = 0;
   std::map<std::string, uint64_t> reasons, stops;
   for (uint64_t n = 0; n < count; n++) {
-    const bool big = !large.empty() && rng() % 500 == 0;
+    const bool big = !large.empty() && (all_large || rng() % 500 == 0);
     const Base& b = big ? large[rng() % large.size()] : bs[rng() % bs.size()];
     large_mutants += big;
     Image im = b.image;
@@ -452,7 +530,7 @@ int main(int argc, char** argv) {
     print_top("reasons of refusal (top):", reasons);
     if (!stops.empty()) print_top("C40 scans the simulator stopped (contained), by reason:", stops);
   }
-  std::printf("%llu mutants of %zu images (%s, seed %llu; %llu from the large C40 bodies): %llu refused, %llu accepted and ran"
+  std::printf("%llu mutants of %zu images (%s, seed %llu; %llu from the large bodies): %llu refused, %llu accepted and ran"
               " (x86-64: %llu in the sandbox; C40: %llu on the simulator, %llu of them stopped by it), %llu escapes, %.1f s\n",
               (unsigned long long)count, bs.size() + large.size(), only.c_str(), (unsigned long long)seed,
               (unsigned long long)large_mutants, (unsigned long long)refused, (unsigned long long)accepted,

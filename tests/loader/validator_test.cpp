@@ -42,7 +42,7 @@ std::string run_guarded(const Image& img, uint64_t seed) {
     alarm(10);  // an accepted image always ends its scan; a hang is a failure
     Memory m(img.layout);  // between guard pages, the call table below it
     uint8_t* mem = m.data();
-    auto eng = make_native_engine(img.code, img.entry);
+    auto eng = make_native_engine(map_checked_code(img.code, img.entry, img.layout));
     std::mt19937_64 rng(seed);
     for (int scan = 0; scan < 8; scan++) {
       for (uint32_t i = 0; i < 16; i++) mem[img.layout.addr(Area::X, i)] = rng() & 1;

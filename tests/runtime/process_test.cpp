@@ -21,6 +21,7 @@
 
 #include "driver/c40_target.h"
 #include "driver/driver.h"
+#include "assembler/x86.h"
 #include "driver/x86_target.h"
 #include "runtime/plc.h"
 #include "runtime/sandbox.h"
@@ -258,7 +259,8 @@ TEST(OnlineDownload, SwapsDuringTenThousandScansWithNoMixedScan) {
 
   // Identical to running the new image from the switch on, with the memory
   // (timers, counters, edges, data words) carried over.
-  std::unique_ptr<Engine> e1 = make_native_engine(v1.code, v1.entry), e2 = make_native_engine(v2.code, v2.entry);
+  std::unique_ptr<Engine> e1 = make_native_engine(map_checked_code(v1.code, v1.entry, v1.layout)),
+                          e2 = make_native_engine(map_checked_code(v2.code, v2.entry, v2.layout));
   SwitchingEngine sw(*e1, *e2, at1, at2);
   RunOptions ro;
   ro.period_ms = 0;  // 200 us periods on the virtual clock: dt 0,0,0,0,1,... (carried)
@@ -615,7 +617,7 @@ TEST(Sandbox, AScanStoppedInTheSandboxFaultsTheRuntime) {
   int built = 0;
   auto engines = [&](const Image& img) -> std::unique_ptr<Engine> {
     // the first build runs the image's own code; the failing one replaces it
-    if (built++ == 0) return make_sandboxed_engine(make_native_engine(img.code, img.entry), img.layout);
+    if (built++ == 0) return make_sandboxed_engine(make_native_engine(map_checked_code(img.code, img.entry, img.layout)), img.layout);
     return make_sandboxed_engine(std::make_unique<Segfault>(), img.layout);
   };
   plc::Runtime ok(std::vector<plc::TaskSpec>(specs), opt, engines, plc::make_null_driver());
@@ -644,20 +646,36 @@ TEST(Sandbox, AScanStoppedInTheSandboxFaultsTheRuntime) {
 // Native code of any size runs from its own mapping: code of 256 KiB and more
 // goes on 2 MiB-aligned memory with MADV_HUGEPAGE (one iTLB entry for the
 // whole program where the kernel grants it; docs/runtime.md), the rest on
-// ordinary pages.  Each body is `add dword ptr [rdi], 1` (83 07 01) repeated,
-// then `ret`: a copy cut short or misplaced counts wrong or faults.
+// ordinary pages.  Each body is the -O0 frame around `add dword ptr [rbx+0x8],
+// 1` (83 43 08 01: Sys+8, a word the runtime leaves alone) repeated, padded
+// with nops to the size: a copy cut short or misplaced counts wrong or faults.
 TEST(NativeEngine, CodeOfEverySizeRunsWhole) {
-  for (size_t reps : {size_t(1), size_t(30000), size_t(87381), size_t(250000), size_t(700000), size_t(1400000)}) {
+  const Layout L = Layout::standard(0);
+  auto put = [](std::vector<uint8_t>& code, const as::x86::Instruction& in) {
+    std::vector<uint8_t> b = as::x86::encode_at(in, code.size());
+    code.insert(code.end(), b.begin(), b.end());
+  };
+  size_t frame = 0;
+  for (auto seq : {as::x86::scan_prologue(false), as::x86::scan_epilogue(false)})
+    for (const auto& in : seq) frame += as::x86::encode_at(in).size();
+  // sizes around the huge-page threshold (kHuge / 8 = 256 KiB) and 2 MiB boundaries
+  for (size_t size : {size_t(64), size_t(90001), size_t(262143), size_t(262144), size_t(2097153), size_t(4194304)}) {
+    const size_t reps = (size - frame) / 4, pad = (size - frame) % 4;
     std::vector<uint8_t> code;
-    code.reserve(reps * 3 + 1);
-    for (size_t i = 0; i < reps; i++) code.insert(code.end(), {0x83, 0x07, 0x01});
-    code.push_back(0xc3);
-    std::unique_ptr<Engine> e = make_native_engine(code, 0);
-    uint32_t mem[2] = {0, 0};
-    e->scan(reinterpret_cast<uint8_t*>(mem));
-    e->scan(reinterpret_cast<uint8_t*>(mem));
-    EXPECT_EQ(mem[0], uint32_t(2 * reps)) << code.size() << " bytes of code";
-    EXPECT_EQ(mem[1], 0u);
+    code.reserve(size);
+    for (const auto& in : as::x86::scan_prologue(false)) put(code, in);
+    for (size_t i = 0; i < reps; i++) code.insert(code.end(), {0x83, 0x43, 0x08, 0x01});
+    code.insert(code.end(), pad, 0x90);
+    for (const auto& in : as::x86::scan_epilogue(false)) put(code, in);
+    ASSERT_EQ(code.size(), size);
+    std::unique_ptr<Engine> e = make_native_engine(map_checked_code(code, 0, L));
+    Memory m(L);
+    e->scan(m.data());
+    e->scan(m.data());
+    uint32_t count, next;
+    std::memcpy(&count, m.data() + 8, 4), std::memcpy(&next, m.data() + 12, 4);
+    EXPECT_EQ(count, uint32_t(2 * reps)) << code.size() << " bytes of code";
+    EXPECT_EQ(next, 0u);
   }
 }
 
