@@ -26,6 +26,7 @@
 #include "driver/driver.h"
 #include "runtime/plc.h"
 #include "runtime/shm_layout.h"
+#include "tests/runtime/child_wait.h"
 
 extern "C" char** environ;
 
@@ -99,21 +100,7 @@ struct Child {
     ASSERT_EQ(write(in, l.data(), l.size()), ssize_t(l.size()));
   }
   // The raw wait status, or -1 after the timeout (the child is then killed).
-  int wait_status(std::chrono::milliseconds timeout = 20s) {
-    auto deadline = std::chrono::steady_clock::now() + timeout;
-    int st = 0;
-    while (waitpid(pid, &st, WNOHANG) == 0) {
-      if (std::chrono::steady_clock::now() > deadline) {
-        ::kill(pid, SIGKILL);
-        waitpid(pid, &st, 0);
-        pid = -1;
-        return -1;
-      }
-      std::this_thread::sleep_for(2ms);
-    }
-    pid = -1;
-    return st;
-  }
+  int wait_status(std::chrono::milliseconds timeout = 20s) { return test::wait_child(pid, timeout); }
   std::string err() const { return slurp(err_file); }
   std::string out() const { return slurp(out_file); }
   // The first "TEXT<digits>" in stderr (a port ldrun prints), waiting for it.

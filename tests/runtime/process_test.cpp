@@ -25,6 +25,7 @@
 #include "driver/x86_target.h"
 #include "runtime/plc.h"
 #include "runtime/sandbox.h"
+#include "tests/runtime/child_wait.h"
 #include "runtime/runtime.h"
 #include "runtime/shm_layout.h"
 
@@ -114,18 +115,8 @@ struct Proc {
   // Waits for the exit; closes stdin first (end of input quits ldrun) unless keep_stdin.
   int wait(int timeout_ms = 30000, bool keep_stdin = false) {
     if (in >= 0 && !keep_stdin) close(in), in = -1;
-    auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
-    int st = 0;
-    while (waitpid(pid, &st, WNOHANG) == 0) {
-      if (std::chrono::steady_clock::now() > deadline) {
-        ::kill(pid, SIGKILL);
-        waitpid(pid, &st, 0);
-        pid = -1;
-        return -1;
-      }
-      std::this_thread::sleep_for(2ms);
-    }
-    pid = -1;
+    int st = test::wait_child(pid, std::chrono::milliseconds(timeout_ms));
+    if (st < 0) return -1;
     if (out >= 0) close(out), out = -1;
     return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
   }
