@@ -349,7 +349,7 @@ size_t elf_symbol_size(const std::string& path, const std::string& sym, const st
 
 class NullEngine : public Engine {
  public:
-  void scan(uint8_t*) override {}
+  void scan(ImageBytes&) override {}
 };
 
 struct Timing {
@@ -452,7 +452,7 @@ void measure_c40(Subject& s, const Options& o) {
     for (int k = 0; k < scans; k++) {
       s.trace.apply(m.data(), size_t(k) % s.trace.size());
       m.set_bit(Area::S, kBitFirstScan, k == 0);
-      e.scan(m.data());
+      e.scan(m.bytes);
       if (k > 0) cyc.push_back(double(e.last_cost()->cycles));
     }
     return median(cyc);
@@ -497,7 +497,7 @@ void check_agreement(Subject& s, int scans) {
       if (!s.eng[e] || !s.status[e].empty()) continue;
       s.trace.apply(mem[e].data(), size_t(k - 1) % s.trace.size());
       mem[e].set_bit(Area::S, kBitFirstScan, k == 1);
-      s.eng[e]->scan(mem[e].data());
+      s.eng[e]->scan(mem[e].bytes);
       uint32_t n = uint32_t(k);
       std::memcpy(mem[e].data() + kSysScan, &n, 4);
       if (e != kClassic && mem[e].bytes != mem[kClassic].bytes) {
@@ -535,7 +535,7 @@ void measure(Subject& s, const Options& o) {
     for (int k = 0; k < scans; k++) {
       s.trace.apply(m, r);
       if (++r == rows) r = 0;
-      e->scan(m);
+      e->scan(mem[i].bytes);
     }
     auto t1 = Clock::now();
     row[i] = r;

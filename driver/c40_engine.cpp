@@ -13,7 +13,8 @@ class C40MachineEngine : public Engine {
  public:
   C40MachineEngine(const Layout& layout, std::span<const uint32_t> code, uint32_t entry, std::span<const uint32_t> il)
       : m_(layout, code, entry, il) {}
-  void scan(uint8_t* mem) override {
+  void scan(ImageBytes& mem_bytes) override {
+    uint8_t* mem = mem_bytes.data();
     c40gen::ScanCost c = m_.scan(mem);
     last_ = ScanCost{c.cycles, c.instructions, c40gen::kNsPerCycle};
   }

@@ -664,8 +664,8 @@ struct TraceArgs {
 class Recorder : public Engine {
  public:
   explicit Recorder(Engine& e) : e_(e) {}
-  void scan(uint8_t* mem) override {
-    e_.scan(mem);
+  void scan(ImageBytes& mem_bytes) override {
+    e_.scan(mem_bytes);
     costs.push_back(e_.last_cost().value_or(ScanCost{}));
   }
   std::vector<ScanCost> costs;

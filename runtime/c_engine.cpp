@@ -23,7 +23,7 @@ class SharedObjectEngine : public Engine {
     fn_ = reinterpret_cast<void (*)(uint8_t*)>(f);
   }
   ~SharedObjectEngine() override { dlclose(handle_); }
-  void scan(uint8_t* mem) override { fn_(mem); }
+  void scan(ImageBytes& mem) override { fn_(mem.data()); }
 
  private:
   void* handle_ = nullptr;

@@ -455,7 +455,8 @@ __attribute__((always_inline)) inline void timer_step(uint8_t* m, uint32_t tw, u
 #define NEXT() { ++ip; continue; }
 #endif
 
-void FastInterpreter::scan(uint8_t* mem) {
+void FastInterpreter::scan(ImageBytes& mem_bytes) {
+  uint8_t* mem = mem_bytes.data();
   uint8_t* const m = mem;
   const Ins* const base = code_.data();
   const Ins* ip = base;

@@ -38,7 +38,7 @@ class FastInterpreter : public Engine {
 
   // `il` must be valid for `layout` (validate_il), as for Interpreter.
   FastInterpreter(std::span<const uint8_t> il, const Layout& layout);
-  void scan(uint8_t* mem) override;
+  void scan(ImageBytes& mem) override;
 
   size_t il_instructions() const { return il_count_; }
   size_t decoded_bytes() const { return code_.size() * sizeof(Ins); }  // the decoded program

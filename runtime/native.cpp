@@ -81,7 +81,7 @@ class NativeEngine : public Engine {
  public:
   explicit NativeEngine(CheckedCode code)
       : code_(std::move(code)), fn_(reinterpret_cast<void (*)(uint8_t*)>(static_cast<uint8_t*>(code_.base_) + code_.entry_)) {}
-  void scan(uint8_t* mem) override { fn_(mem); }
+  void scan(ImageBytes& mem) override { fn_(mem.data()); }
 
  private:
   CheckedCode code_;

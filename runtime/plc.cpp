@@ -542,7 +542,7 @@ struct Runtime::Impl {
       mem[t.prog->image.layout.addr(Area::S, kBitFirstScan)] = t.first ? 1 : 0;
 
       try {
-        p.engine->scan(mem);
+        p.engine->scan(t.mem);
       } catch (const std::exception& e) {  // the sandbox stopped its child (ldrun --sandbox)
         t.scan_begin.store(0);
         fault("ldrun: task '" + t.spec.name + "' scan " + std::to_string(scan_no) + " failed: " + e.what() +

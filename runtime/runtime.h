@@ -27,7 +27,11 @@ struct ScanCost {
 class Engine {
  public:
   virtual ~Engine() = default;
-  virtual void scan(uint8_t* mem) = 0;
+  // One scan over `mem`.  Only the guarded storage of ir.h is taken: native
+  // code finds its call table below the image and faults past either end,
+  // so no path can hand an engine a plain vector or pointer
+  // (tests/runtime/native_type_test.cpp).
+  virtual void scan(ImageBytes& mem) = 0;
   // The cost of the last scan on a simulated processor; nullopt for an engine
   // that runs on this machine (its time is measured, not counted).
   virtual std::optional<ScanCost> last_cost() const { return std::nullopt; }

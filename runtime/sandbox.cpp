@@ -120,7 +120,8 @@ class SandboxEngine : public Engine {
     reap();
   }
 
-  void scan(uint8_t* mem) override {
+  void scan(ImageBytes& mem_bytes) override {
+    uint8_t* mem = mem_bytes.data();
     if (!dead_.empty()) throw SandboxError(dead_);
     std::memcpy(shared_.data(), mem, shared_.size());
     char go = 's';
@@ -160,7 +161,7 @@ class SandboxEngine : public Engine {
     for (;;) {
       char c;
       if (read(fd, &c, 1) != 1) syscall(SYS_exit_group, 0);
-      inner.scan(shared_.data());
+      inner.scan(shared_);
       Report r;
       if (write(fd, &r, sizeof r) != ssize_t(sizeof r)) syscall(SYS_exit_group, 4);
     }

@@ -24,7 +24,7 @@ std::string trim(std::string_view s) {
 class InterpEngine : public Engine {
  public:
   InterpEngine(std::vector<uint8_t> il, const Layout& l) : il_(std::move(il)), interp_(il_, l) {}
-  void scan(uint8_t* mem) override { interp_.scan(mem); }
+  void scan(ImageBytes& mem) override { interp_.scan(mem.data()); }
  private:
   std::vector<uint8_t> il_;
   Interpreter interp_;
@@ -180,7 +180,7 @@ void run_trace(Engine& engine, const Layout& layout, const Trace* trace, const s
     }
     std::memcpy(mem.data() + kSysDt, &dt, 4);
     mem.set_bit(Area::S, kBitFirstScan, k == 1);
-    engine.scan(mem.data());
+    engine.scan(mem.bytes);
     uint32_t n = uint32_t(k);
     std::memcpy(mem.data() + kSysScan, &n, 4);
     out += std::to_string(k);

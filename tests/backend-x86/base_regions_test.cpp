@@ -96,8 +96,8 @@ std::string compare(const Program& p, int level, uint64_t seed, int scans) {
       a.set_bit(Area::X, i, v);
       b.set_bit(Area::X, i, v);
     }
-    ref->scan(a.data());
-    native->scan(b.data());
+    ref->scan(a.bytes);
+    native->scan(b.bytes);
     for (uint32_t off = 0; off < L.size; off++)
       if (a.bytes[off] != b.bytes[off])
         return "-O" + std::to_string(level) + " seed " + std::to_string(seed) + " scan " + std::to_string(k) +

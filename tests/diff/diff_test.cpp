@@ -267,9 +267,9 @@ TEST(Harness, CatchesAWrongNativeEngine) {
 class AbortOnDiv : public Engine {
  public:
   explicit AbortOnDiv(std::unique_ptr<Engine> e) : e_(std::move(e)) {}
-  void scan(uint8_t* mem) override {
+  void scan(ImageBytes& mem_bytes) override {
     if (++scans_ == 3) std::abort();
-    e_->scan(mem);
+    e_->scan(mem_bytes);
   }
  private:
   std::unique_ptr<Engine> e_;

@@ -149,8 +149,8 @@ std::string compare_il(const Program& p, uint64_t seed, int scans, bool edgy, co
       std::memcpy(m.data() + kSysDt, &dt, 4);
       m.set_bit(Area::S, kBitFirstScan, k == 1);
     });
-    ref->scan(a.data());
-    fast->scan(b.data());
+    ref->scan(a.bytes);
+    fast->scan(b.bytes);
     for (uint32_t off = 0; off < L.size; off++) {
       if (a.bytes[off] == b.bytes[off]) continue;
       Place pl = describe(L, off);

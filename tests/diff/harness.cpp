@@ -173,14 +173,14 @@ Outcome compare_run(const std::string& ld, const std::string& csv, const EngineF
       m->set_bit(Area::S, kBitFirstScan, k == 1);
     }
     try {
-      a->scan(ma.data());
+      a->scan(ma.bytes);
     } catch (std::exception& e) {
       o.kind = Outcome::Kind::FrontEndError;
       o.message = std::string("the reference engine threw: ") + e.what();
       return o;
     }
     try {
-      b->scan(mb.data());
+      b->scan(mb.bytes);
     } catch (std::exception& e) {
       o.kind = Outcome::Kind::TestError;
       o.message = "scan " + std::to_string(k) + ": the engine under test threw: " + e.what();

@@ -76,8 +76,8 @@ TEST(Targets, EveryRowMakesAnImageItsHooksAccept) {
         for (int scan = 0; scan < 8; scan++) {
           for (Memory* x : {&m, &ref})
             for (uint32_t i = 1; i <= 3; i++) x->set_bit(Area::X, i, (scan >> (i - 1)) & 1);
-          eng->scan(m.data());
-          reference->scan(ref.data());
+          eng->scan(m.bytes);
+          reference->scan(ref.bytes);
           EXPECT_EQ(m.get_bit(Area::Y, 0), ref.get_bit(Area::Y, 0)) << e.name << " scan " << scan;
           EXPECT_EQ(m.get_bit(Area::Y, 1), ref.get_bit(Area::Y, 1)) << e.name << " scan " << scan;
         }

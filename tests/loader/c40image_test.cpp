@@ -201,7 +201,7 @@ TEST(C40Image, ALoopStopsAtTheScanCycleBudget) {
   auto eng = make_c40sim_engine(img.code, img.entry, img.layout);
   Memory m(img.layout);
   try {
-    eng->scan(m.data());
+    eng->scan(m.bytes);
     ADD_FAILURE() << "a scan that branches to itself ended";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("cycle limit"), std::string::npos) << e.what();
@@ -222,7 +222,7 @@ TEST(C40Image, ExamplesStayFarBelowTheCycleBudget) {
         for (uint32_t x = 0; x < 16; x++) m.set_bit(Area::X, x, ((k * 7 + x * 3) % 5) < 2);
         for (uint32_t d = 0; d < 8; d++) m.set_int(Area::D, d, k * 977 - int32_t(d) * 3001);
         std::memcpy(m.data() + kSysDt, &k, 4);
-        eng->scan(m.data());
+        eng->scan(m.bytes);
         worst = std::max(worst, eng->last_cost()->cycles);
       }
       EXPECT_LT(worst * 10, budget) << n << " -O" << opt << ": " << worst << " cycles, budget " << budget;
@@ -246,7 +246,7 @@ void expect_refused_at(const Image& img, uint32_t word, const std::string& reaso
 std::string run_unchecked(const Image& img, Memory& m) {
   auto eng = make_c40sim_engine(img.code, img.entry, img.layout);
   try {
-    eng->scan(m.data());
+    eng->scan(m.bytes);
   } catch (const std::exception& e) {
     return e.what();
   }

@@ -645,7 +645,7 @@ TEST(Hostile, EveryO2FrameRunsItsCounterRoutine) {
     int rising = 0, before = 0;
     for (int x : {1, 0, 1, 1, 0, 1}) {
       m.bytes[L.addr(Area::X, 0)] = uint8_t(x);
-      eng->scan(m.data());
+      eng->scan(m.bytes);
       rising += x && !before;
       before = x;
       EXPECT_EQ(m.bytes[L.addr(Area::Y, 0)], x);
@@ -819,24 +819,24 @@ TEST(Guard, NothingAroundTheImageIsMapped) {
 
 struct Copy : Engine {
   Layout L = Layout::standard(0);
-  void scan(uint8_t* m) override { m[L.addr(Area::Y, 0)] = m[L.addr(Area::X, 0)]; }
+  void scan(ImageBytes& m) override { m[L.addr(Area::Y, 0)] = m[L.addr(Area::X, 0)]; }
 };
 struct Syscall : Engine {
-  void scan(uint8_t*) override { syscall(SYS_getppid); }
+  void scan(ImageBytes&) override { syscall(SYS_getppid); }
 };
 struct OpenFile : Engine {
-  void scan(uint8_t*) override { open("/tmp/ldc_sandbox_escape", O_CREAT | O_WRONLY, 0600); }
+  void scan(ImageBytes&) override { open("/tmp/ldc_sandbox_escape", O_CREAT | O_WRONLY, 0600); }
 };
 struct Fault : Engine {
   volatile uintptr_t where = 0x10;
-  void scan(uint8_t*) override { *reinterpret_cast<volatile int*>(where) = 1; }
+  void scan(ImageBytes&) override { *reinterpret_cast<volatile int*>(where) = 1; }
 };
 struct WritePast : Engine {  // into the canary after the image, inside its last page
-  void scan(uint8_t* m) override { m[Layout::standard(0).size + 5] = 1; }
+  void scan(ImageBytes& m) override { m.data()[Layout::standard(0).size + 5] = 1; }
 };
 struct Spin : Engine {
   volatile int sink = 0;
-  void scan(uint8_t*) override {
+  void scan(ImageBytes&) override {
     for (;;) sink = 1;
   }
 };
@@ -847,12 +847,12 @@ std::string sandboxed_failure(std::unique_ptr<Engine> e, int timeout_ms = 2000) 
   auto s = make_sandboxed_engine(std::move(e), L, timeout_ms);
   std::string why;
   try {
-    s->scan(m.data());
+    s->scan(m.bytes);
   } catch (const SandboxError& x) {
     why = x.what();
   }
   try {  // a dead sandbox stays dead
-    s->scan(m.data());
+    s->scan(m.bytes);
     return "the second scan after a failure ran";
   } catch (const SandboxError& x) {
     if (why != x.what()) return "the second scan failed differently: " + std::string(x.what());
@@ -866,7 +866,7 @@ TEST(Sandbox, ScansRunInTheChildAndTheImageComesBack) {
   auto s = make_sandboxed_engine(std::make_unique<Copy>(), L);
   for (int k = 0; k < 50; k++) {
     m.set_bit(Area::X, 0, k % 3 == 0);
-    s->scan(m.data());
+    s->scan(m.bytes);
     ASSERT_EQ(m.get_bit(Area::Y, 0), k % 3 == 0) << k;
   }
 }
@@ -883,8 +883,8 @@ TEST(Sandbox, NativeCodeWithItsCallTableRunsAsInProcess) {
   auto boxed = make_sandboxed_engine(make_native_engine(map_checked_code(code, 0, L)), L);
   for (float x : {0.5f, 1.0f, -2.25f}) {
     a.set_real(0, x), b.set_real(0, x);
-    plain->scan(a.data());
-    boxed->scan(b.data());
+    plain->scan(a.bytes);
+    boxed->scan(b.bytes);
     EXPECT_EQ(a.get_real(1), ::sinf(x));
     EXPECT_TRUE(a.bytes == b.bytes);
   }

@@ -417,7 +417,7 @@ std::string run_confined(const Image& im, std::mt19937_64& rng) {
       for (uint32_t i = 0; i < 32; i++) m.data()[im.layout.addr(Area::X, i)] = rng() & 1;
       int32_t dt = int32_t(rng() % 100);
       std::memcpy(m.data() + kSysDt, &dt, 4);
-      e->scan(m.data());
+      e->scan(m.bytes);
     }
   } catch (const std::exception& x) {
     return x.what();

@@ -48,7 +48,7 @@ std::string run_guarded(const Image& img, uint64_t seed) {
       for (uint32_t i = 0; i < 16; i++) mem[img.layout.addr(Area::X, i)] = rng() & 1;
       int32_t dt = int32_t(rng() % 50);
       std::memcpy(mem + kSysDt, &dt, 4);
-      eng->scan(mem);
+      eng->scan(m.bytes);
     }
     if (!m.bytes.slack_intact()) _exit(4);
     _exit(0);

@@ -2,7 +2,8 @@
 // (runtime.h, CheckedCode): make_native_engine takes a CheckedCode, which
 // nothing but map_checked_code makes, and map_checked_code checks the bytes
 // in the mapping they will run from.  The static_asserts are the test: a path
-// that hands native code a plain vector or span stops the build here.
+// that hands native code a plain vector or span, or hands any engine a
+// memory image outside ImageBytes, stops the build here.
 #include <gtest/gtest.h>
 
 #include <span>
@@ -23,6 +24,15 @@ static_assert(!std::is_copy_constructible_v<CheckedCode>, "one mapping, one owne
 static_assert(!std::is_invocable_v<decltype(&make_native_engine), Bytes>, "the native engine takes no plain bytes");
 static_assert(!std::is_invocable_v<decltype(&make_native_engine), std::span<const uint8_t>>, "nor a span");
 static_assert(std::is_invocable_v<decltype(&make_native_engine), CheckedCode>, "it takes checked code");
+
+// The memory image a scan runs over: only the guarded storage of ir.h
+// (ImageBytes: guard pages on both sides, the REAL call table below it), never
+// a vector's or any other pointer, for every engine (issue #24).
+static_assert(!std::is_invocable_v<decltype(&Engine::scan), Engine&, uint8_t*>, "a scan takes no raw pointer");
+static_assert(!std::is_invocable_v<decltype(&Engine::scan), Engine&, Bytes&>, "nor a vector");
+static_assert(!std::is_invocable_v<decltype(&Engine::scan), Engine&, std::span<uint8_t>>, "nor a span");
+static_assert(!std::is_invocable_v<decltype(&Engine::scan), Engine&, ImageBytes&&>, "nor a temporary");
+static_assert(std::is_invocable_v<decltype(&Engine::scan), Engine&, ImageBytes&>, "it takes the guarded image");
 
 // What map_checked_code refuses never maps: the loader's message comes back.
 TEST(NativeType, UncheckedBytesAreRefusedWithTheChecksMessage) {

@@ -182,9 +182,9 @@ std::string swap_program(int version) {
 class SwitchingEngine : public Engine {
  public:
   SwitchingEngine(Engine& a, Engine& b, uint64_t at1, uint64_t at2) : a_(a), b_(b), at1_(at1), at2_(at2) {}
-  void scan(uint8_t* mem) override {
+  void scan(ImageBytes& mem_bytes) override {
     n_++;
-    (n_ >= at1_ && n_ < at2_ ? b_ : a_).scan(mem);
+    (n_ >= at1_ && n_ < at2_ ? b_ : a_).scan(mem_bytes);
   }
 
  private:
@@ -588,7 +588,8 @@ TEST(Watchdog, ASlowScanStopsTheRuntimeAndDrivesOutputsSafe) {
 // runtime like the watchdog does: outputs safe, the reason named, no crash.
 struct Segfault : Engine {
   volatile uintptr_t where = 0x10;
-  void scan(uint8_t* m) override {
+  void scan(ImageBytes& m_bytes) override {
+    uint8_t* m = m_bytes.data();
     m[Layout::standard(0).addr(Area::Y, 0)] = 1;
     *reinterpret_cast<volatile int*>(where) = 1;
   }
@@ -661,8 +662,8 @@ TEST(NativeEngine, CodeOfEverySizeRunsWhole) {
     ASSERT_EQ(code.size(), size);
     std::unique_ptr<Engine> e = make_native_engine(map_checked_code(code, 0, L));
     Memory m(L);
-    e->scan(m.data());
-    e->scan(m.data());
+    e->scan(m.bytes);
+    e->scan(m.bytes);
     uint32_t count, next;
     std::memcpy(&count, m.data() + 8, 4), std::memcpy(&next, m.data() + 12, 4);
     EXPECT_EQ(count, uint32_t(2 * reps)) << code.size() << " bytes of code";

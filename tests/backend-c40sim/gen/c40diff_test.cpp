@@ -123,13 +123,13 @@ TEST(C40DiffHarness, CatchesAndShrinksAWrongEngine) {
   class OffByOne : public Engine {
    public:
     OffByOne(std::unique_ptr<Engine> e, std::vector<uint32_t> muls) : e_(std::move(e)), muls_(std::move(muls)) {}
-    void scan(uint8_t* mem) override {
+    void scan(ImageBytes& mem) override {
       e_->scan(mem);
       for (uint32_t a : muls_) {
         int32_t v;
-        std::memcpy(&v, mem + a, 4);
+        std::memcpy(&v, mem.data() + a, 4);
         v++;
-        std::memcpy(mem + a, &v, 4);
+        std::memcpy(mem.data() + a, &v, 4);
       }
     }
    private:

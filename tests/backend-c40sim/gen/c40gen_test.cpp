@@ -357,8 +357,8 @@ TEST(C40Opt, RungsThatReadAnEarlierRungsStackStayExact) {
         a.set_bit(Area::X, x, (k >> (x - 1)) & 1);
         b.set_bit(Area::X, x, (k >> (x - 1)) & 1);
       }
-      nat->scan(a.data());
-      model->scan(b.data());
+      nat->scan(a.bytes);
+      model->scan(b.bytes);
       ASSERT_EQ(a.bytes, b.bytes) << "scan " << k << " -O" << opt;
     }
   }
@@ -382,7 +382,7 @@ TEST(C40Opt, EveryLevelPaysOnEveryExample) {
       class Counting : public Engine {
        public:
         explicit Counting(std::unique_ptr<Engine> e) : e_(std::move(e)) {}
-        void scan(uint8_t* mem) override { e_->scan(mem); cycles += e_->last_cost()->cycles; }
+        void scan(ImageBytes& mem) override { e_->scan(mem); cycles += e_->last_cost()->cycles; }
         uint64_t cycles = 0;
        private:
         std::unique_ptr<Engine> e_;

@@ -12,7 +12,8 @@ class ModelEngine : public Engine {
  public:
   ModelEngine(const Program& p, C40Model::Mode mode, CheckReport* out)
       : bin_(encode_il(p)), model_(bin_.code, p.layout(), mode), out_(out) {}
-  void scan(uint8_t* mem) override {
+  void scan(ImageBytes& mem_bytes) override {
+    uint8_t* mem = mem_bytes.data();
     model_.scan(mem);
     if (out_) *out_ = model_.report();
   }
