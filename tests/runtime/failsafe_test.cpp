@@ -26,7 +26,7 @@
 #include "driver/driver.h"
 #include "runtime/plc.h"
 #include "runtime/shm_layout.h"
-#include "tests/runtime/child_wait.h"
+#include "tests/runtime/process_util.h"
 
 extern "C" char** environ;
 
@@ -49,14 +49,7 @@ std::string slurp(const std::string& path) {
   return ss.str();
 }
 
-struct TmpDir {
-  std::string path = make_temp_dir();
-  ~TmpDir() {
-    if (!::testing::Test::HasFailure()) remove_tree(path);
-    else std::fprintf(stderr, "kept %s\n", path.c_str());
-  }
-  std::string operator/(const std::string& f) const { return path + "/" + f; }
-};
+using test::TmpDir;
 
 // A child process: stdin from a pipe (or /dev/null), stdout and stderr to
 // files, extra environment variables.

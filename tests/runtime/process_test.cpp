@@ -25,7 +25,7 @@
 #include "driver/x86_target.h"
 #include "runtime/plc.h"
 #include "runtime/sandbox.h"
-#include "tests/runtime/child_wait.h"
+#include "tests/runtime/process_util.h"
 #include "runtime/runtime.h"
 #include "runtime/shm_layout.h"
 
@@ -138,14 +138,7 @@ struct Proc {
   }
 };
 
-struct TmpDir {
-  std::string path = make_temp_dir();
-  ~TmpDir() {
-    if (!::testing::Test::HasFailure()) remove_tree(path);
-    else std::fprintf(stderr, "kept %s\n", path.c_str());
-  }
-  std::string operator/(const std::string& f) const { return path + "/" + f; }
-};
+using test::TmpDir;
 
 // Compiles a source text to an image file with ldc's own library.
 Image compile_text(const TmpDir& d, const std::string& name, const std::string& text) {

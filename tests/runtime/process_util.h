@@ -1,12 +1,17 @@
-// tests/runtime/child_wait.h -- waiting for an ldrun child with a deadline,
-// for the tests that run ldrun as a process.
+// tests/runtime/process_util.h -- for the tests that run ldrun as a process:
+// waiting for the child with a deadline, and a scratch directory.
 #pragma once
 
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 
 #include <chrono>
+#include <cstdio>
+#include <string>
 #include <thread>
+
+#include "driver/driver.h"
 
 namespace ldc::test {
 
@@ -27,5 +32,16 @@ inline int wait_child(pid_t& pid, std::chrono::milliseconds timeout) {
   pid = -1;
   return st;
 }
+
+// A fresh directory, removed at the end of the test unless it failed (then
+// kept, and named on stderr, to look at).
+struct TmpDir {
+  std::string path = make_temp_dir();
+  ~TmpDir() {
+    if (!::testing::Test::HasFailure()) remove_tree(path);
+    else std::fprintf(stderr, "kept %s\n", path.c_str());
+  }
+  std::string operator/(const std::string& f) const { return path + "/" + f; }
+};
 
 }  // namespace ldc::test
