@@ -40,10 +40,10 @@ std::string print_il_text(const Program& p) {
     if (!r.title.empty()) out += " " + quote(r.title);
     out += "\n";
     for (const Instr& in : r.code) {
-      std::string m = op_info(in.op).name;
+      std::string m = op_spelling(in);
       out += "    " + m;
       if (in.nopd()) out += std::string(m.size() < 8 ? 8 - m.size() : 1, ' ');
-      for (int i = 0; i < in.nopd(); i++) out += (i ? " " : "") + operand_text(in.a[i]);
+      for (int i = 0; i < in.nopd(); i++) out += (i ? " " : "") + operand_text(in, i);
       out += "\n";
     }
   }
@@ -201,6 +201,50 @@ Operand parse_operand(char sig, const Tok& t, int lineno, uint32_t edges) {
   return o;
 }
 
+// A typed instruction's mnemonic: SPELLING.T or SPELLING.T.U (ADD.INT,
+// CONV.DINT.REAL), its types checked against the op's types column.
+std::optional<Op> typed_op(const Tok& head, int lineno, Ty& ty, Ty& src) {
+  std::string_view m = head.text;
+  size_t d1 = m.find('.'), d2 = m.find('.', d1 + 1);
+  auto op = typed_op_from_name(m.substr(0, d1));
+  if (!op) throw CompileError(lineno, head.col, "unknown mnemonic '" + std::string(m) + "'");
+  auto t = ty_from_name(m.substr(d1 + 1, d2 == std::string_view::npos ? std::string_view::npos : d2 - d1 - 1));
+  std::optional<Ty> u;
+  if (d2 != std::string_view::npos) u = ty_from_name(m.substr(d2 + 1));
+  if (!t || (d2 != std::string_view::npos && !u)) throw CompileError(lineno, head.col, "unknown type in '" + std::string(m) + "'");
+  ty = *t, src = u ? *u : Ty::None;
+  if (op_info(*op).typed == 2 && !u) throw CompileError(lineno, head.col, std::string(m) + " needs a source type too (" + std::string(m) + ".TYPE)");
+  if (!op_takes(*op, ty, src)) throw CompileError(lineno, head.col, std::string(m.substr(0, d1)) + " does not take these types");
+  return op;
+}
+
+// An operand of a typed instruction, of type t: a constant of t (written as
+// a number), a device that can hold a t, or an INT32 constant (k).
+Operand parse_typed_operand(char sig, Ty t, const Tok& tok, int lineno) {
+  auto fail = [&](const std::string& m) -> Operand { throw CompileError(lineno, tok.col, m); };
+  Operand o;
+  if (sig == 'k') {
+    if (!parse_number(tok.text, o) || o.kind != OpdKind::ConstInt) fail("expected an INT32 constant, found '" + std::string(tok.text) + "'");
+    return o;
+  }
+  if (auto d = parse_device(tok.text)) {
+    if (d->index >= device_count(d->dev)) fail("device index out of range: " + std::string(tok.text));
+    Area a = t == Ty::BOOL ? bit_area(d->dev) : word_area(d->dev);
+    static const Layout kStandard = Layout::standard(0);
+    if (a == Area::Count || !typed_area_ok(sig, t, a, d->index, kStandard))
+      fail("device " + std::string(tok.text) + " cannot hold this " + ty_info(t).name + " operand");
+    o.area = a;
+    o.index = d->index;
+    o.kind = area_is_bit(a) ? OpdKind::Bit : area_is_real(a) ? OpdKind::Real : OpdKind::Int;
+    return o;
+  }
+  if (sig != 's' && sig != 'x') fail("expected a device, found '" + std::string(tok.text) + "'");
+  std::string why;
+  auto v = parse_typed_const(t, tok.text, why);
+  if (!v) fail(why);
+  return Operand::typed_const(*v);
+}
+
 }  // namespace
 
 // Room for the rungs up front (each `.rung` counted, a few in comments or
@@ -241,8 +285,10 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
     if (toks.empty()) continue;
     const Tok& head = toks[0];
     auto instruction = [&] {  // built in place at the end of the rung's code
-      auto op = op_from_name(head.text);
-      if (!op) throw CompileError(lineno, head.col, "unknown mnemonic '" + std::string(head.text) + "'");
+      Ty ty = Ty::None, src = Ty::None;
+      auto op = head.text.find('.') == std::string_view::npos ? op_from_name(head.text) : typed_op(head, lineno, ty, src);
+      if (!op || op_info(*op).typed != (ty != Ty::None) + (src != Ty::None))
+        throw CompileError(lineno, head.col, "unknown mnemonic '" + std::string(head.text) + "'");
       if (!cur) throw CompileError(lineno, head.col, "instruction outside a .rung");
       const char* sig = op_info(*op).operands;
       const int n = kOps[int(*op)].nopd;
@@ -250,8 +296,11 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
         throw CompileError(lineno, head.col, std::string(op_info(*op).name) + " takes " + std::to_string(n) + " operand(s)");
       Instr& in = code.emplace_back();
       in.op = *op;
+      in.ty = ty, in.src = src;
       in.loc = {lineno, head.col};
-      for (int i = 0; i < n; i++) in.a[i] = parse_operand(sig[i], toks[i + 1], lineno, p.edge_slots);
+      for (int i = 0; i < n; i++)
+        in.a[i] = op_info(*op).typed ? parse_typed_operand(sig[i], operand_type(in, i), toks[i + 1], lineno)
+                                     : parse_operand(sig[i], toks[i + 1], lineno, p.edge_slots);
     };
     if (ended) throw CompileError(lineno, head.col, "text after .end");
     if (!head.text.starts_with('.')) {  // every directive starts with '.', no mnemonic does

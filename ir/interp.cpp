@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "ir/ir.h"
+#include "ir/typed.h"
 
 namespace ldc {
 namespace {
@@ -24,6 +25,8 @@ struct Ctx {
   const Layout* L;
   uint32_t stack;  // the bit stack: top = bit 0
   bool end;
+  uint32_t xr = 0;   // the index register: set by IDX, used by the LDX / STX right after it
+  uint32_t start = 0;  // the offset of the instruction being run
 };
 
 // A decoded operand: where it lives, or its constant value.
@@ -329,6 +332,83 @@ void exec_JMP(Ctx& c) {
 }
 void exec_END(Ctx& c) { if (top(c)) c.end = true; }
 
+
+// ---- typed instructions (ir/typed.h defines each)
+struct TOpd {
+  uint8_t* addr = nullptr;  // a device's bytes; nullptr for a constant
+  Area area = Area::Sys;
+  uint32_t index = 0;
+  uint64_t v = 0;           // the value (of a device: loaded in the operand's type)
+};
+TOpd toperand(Ctx& c, Ty t) {
+  TOpd o;
+  uint8_t tag = c.code[c.pc];
+  if (tag == 5) { o.v = rd32(c.code + c.pc + 1) | (uint64_t(rd32(c.code + c.pc + 5)) << 32); c.pc += 9; return o; }
+  if (tag == 1) { o.v = uint64_t(int64_t(int32_t(rd32(c.code + c.pc + 1)))); c.pc += 5; return o; }
+  o.area = Area(tag - 0x10);
+  o.index = rd16(c.code + c.pc + 1);
+  o.addr = c.mem + c.L->addr(o.area, o.index);
+  if (t != Ty::None) o.v = typed::load(t, o.addr);
+  c.pc += 3;
+  return o;
+}
+void skip_typed(Ctx& c, int n) {
+  for (int k = 0; k < n; k++) {
+    uint8_t tag = c.code[c.pc];
+    c.pc += tag == 5 ? 9 : tag == 1 ? 5 : 3;
+  }
+}
+template <Op op>
+void exec_typed(Ctx& c) {
+  constexpr const OpInfo& oi = kOps[int(op)];
+  const Ty t = Ty(c.code[c.pc++]);
+  const Ty u = oi.typed == 2 ? Ty(c.code[c.pc++]) : Ty::None;
+  if constexpr (oi.push == 1) {
+    uint64_t a = toperand(c, t).v, b = toperand(c, t).v;
+    return push(c, typed::compare(oi.rel, t, a, b));
+  }
+  if (!top(c)) return skip_typed(c, oi.nopd);
+  if constexpr (op == Op::TIDX) {
+    uint64_t i = toperand(c, t).v;
+    int32_t lo = int32_t(toperand(c, Ty::None).v), hi = int32_t(toperand(c, Ty::None).v);
+    if (typed::index_ok(t, i, lo, hi)) { c.xr = uint32_t(int64_t(i) - lo); return; }
+    uint32_t kind = kFaultIndex, at = c.start;
+    std::memcpy(c.mem + kSysFault, &kind, 4);
+    std::memcpy(c.mem + kSysFaultAt, &at, 4);
+    std::memcpy(c.mem + kSysFaultValue, &i, 8);
+    c.end = true;
+  } else if constexpr (op == Op::TLDX) {
+    TOpd base = toperand(c, Ty::None);
+    uint32_t stride = uint32_t(toperand(c, Ty::None).v);
+    TOpd d = toperand(c, Ty::None);
+    uint64_t v = typed::load(t, c.mem + c.L->addr(base.area, base.index + c.xr * stride));
+    typed::store(t, d.addr, v);
+  } else if constexpr (op == Op::TSTX) {
+    uint64_t v = toperand(c, t).v;
+    TOpd base = toperand(c, Ty::None);
+    uint32_t stride = uint32_t(toperand(c, Ty::None).v);
+    typed::store(t, c.mem + c.L->addr(base.area, base.index + c.xr * stride), v);
+  } else if constexpr (oi.nopd == 2) {  // MOVE, NOT, the functions, CONV, TRUNC
+    uint64_t a = toperand(c, u != Ty::None ? u : t).v;
+    TOpd d = toperand(c, Ty::None);
+    uint64_t r = op == Op::TMOVE ? a
+               : op == Op::TNOT ? typed::logic(op, t, a, 0)
+               : op == Op::TCONV ? typed::conv(t, u, a)
+               : op == Op::TTRUNC ? typed::trunc(t, u, a)
+               : typed::unary(op, t, a);
+    typed::store(t, d.addr, r);
+  } else {  // the two-operand ones
+    uint64_t a = toperand(c, t).v, b = toperand(c, u != Ty::None ? u : t).v;
+    TOpd d = toperand(c, Ty::None);
+    bool error = false;
+    uint64_t r = (op == Op::TAND || op == Op::TOR || op == Op::TXOR) ? typed::logic(op, t, a, b)
+               : (op == Op::TSHL || op == Op::TSHR || op == Op::TROL || op == Op::TROR) ? typed::shift(op, t, a, u, b)
+               : typed::arith(op, t, a, b, error);
+    if (error) set_error(c);
+    typed::store(t, d.addr, r);
+  }
+}
+
 // The dispatch table, in ops.def order: a compare's routine is its relation's,
 // a REAL function's its function's, every other mnemonic has its own.
 using Routine = void (*)(Ctx&);
@@ -342,8 +422,9 @@ using Routine = void (*)(Ctx&);
 #define ROUTINE_Timer ROUTINE_OWN
 #define ROUTINE_Counter ROUTINE_OWN
 #define ROUTINE_Flow ROUTINE_OWN
+#define ROUTINE_Typed(name, rel, fn) exec_typed<Op::name>
 const Routine kRoutines[kOpCount] = {
-#define OP(name, opds, push, pop, klass, rel, fn) ROUTINE_##klass(name, rel, fn),
+#define OP(name, opds, push, pop, klass, rel, fn, typed, types) ROUTINE_##klass(name, rel, fn),
 #include "ir/ops.def"
 };
 
@@ -354,6 +435,7 @@ Interpreter::Interpreter(std::span<const uint8_t> code, const Layout& layout) : 
 void Interpreter::scan(uint8_t* mem) const {
   Ctx c{code_.data(), uint32_t(code_.size()), 0, mem, &layout_, 0, false};
   while (c.pc < c.size && !c.end) {
+    c.start = c.pc;
     uint8_t op = c.code[c.pc++];
     kRoutines[op](c);
   }

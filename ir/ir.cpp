@@ -1,5 +1,6 @@
 // ir/ir.cpp -- areas, layout, the op table, operand spelling, the binary IL codec.
 #include "ir/ir.h"
+#include "ir/typed.h"
 
 #include <algorithm>
 #include <array>
@@ -139,12 +140,12 @@ std::optional<Op> op_from_name(std::string_view name) {
 }
 
 const char* op_class_name(OpClass c) {
-  static const char* const n[] = {"basic", "compare", "move", "arith", "logic", "special", "timer", "counter", "flow"};
+  static const char* const n[] = {"basic", "compare", "move", "arith", "logic", "special", "timer", "counter", "flow", "typed"};
   return n[int(c)];
 }
 
 bool Instr::operator==(const Instr& o) const {
-  if (op != o.op) return false;
+  if (op != o.op || ty != o.ty || src != o.src) return false;
   for (int i = 0; i < 3; i++)
     if (!(a[i] == o.a[i])) return false;
   return true;
@@ -179,13 +180,20 @@ std::string operand_text(const Operand& o) {
     case OpdKind::Timer: return "T" + std::to_string(o.index);
     case OpdKind::Counter: return "C" + std::to_string(o.index);
     case OpdKind::Label: return o.label;
+    case OpdKind::ConstT: return "0x" + [&] { char b[24]; std::snprintf(b, sizeof b, "%llx", (unsigned long long)o.bits()); return std::string(b); }();
   }
   return "?";
 }
 
+std::string operand_text(const Instr& in, int i) {
+  const Operand& o = in.a[i];
+  if (o.kind == OpdKind::ConstT) return typed_const_text(operand_type(in, i), o.bits());
+  return operand_text(o);
+}
+
 std::string instr_text(const Instr& in) {
-  std::string s = op_info(in.op).name;
-  for (int i = 0; i < in.nopd(); i++) s += " " + operand_text(in.a[i]);
+  std::string s = op_spelling(in);
+  for (int i = 0; i < in.nopd(); i++) s += " " + operand_text(in, i);
   return s;
 }
 
@@ -218,7 +226,7 @@ void Memory::set_real(uint32_t i, float v) { std::memcpy(&bytes[layout.addr(Area
 // tag 0x03 + u32   edge slot             tag 0x04 + u32   label (byte offset)
 // tag 0x10+area + u16   device (bit, word, timer, counter)
 
-enum : uint8_t { kTagInt = 1, kTagReal = 2, kTagEdge = 3, kTagLabel = 4, kTagArea = 0x10 };
+enum : uint8_t { kTagInt = 1, kTagReal = 2, kTagEdge = 3, kTagLabel = 4, kTagTyped = 5, kTagArea = 0x10 };
 
 // The binary IL is written through a pointer into room made ahead: a byte
 // appended with push_back may alias the vector's own end pointer (uint8_t
@@ -251,12 +259,13 @@ static uint8_t* encode_operand(uint8_t* p, size_t at, const Operand& o, std::vec
     }
     case OpdKind::Edge: *p = kTagEdge; return put32(p + 1, o.index);
     case OpdKind::Label: *p = kTagLabel; fix.emplace_back(at + 1, o.label); return put32(p + 1, 0);
+    case OpdKind::ConstT: *p = kTagTyped; p = put32(p + 1, uint32_t(o.ival)); return put32(p, o.index);
   }
   return p;
 }
 
 BinaryIl encode_il(const Program& p) {
-  constexpr size_t kMaxInstrBytes = 1 + 3 * 5;  // an opcode and three operands of 5 bytes
+  constexpr size_t kMaxInstrBytes = 3 + 3 * 9;  // an opcode, two type bytes and three operands of up to 9 bytes
   BinaryIl b;
   std::vector<std::pair<size_t, std::string>> fix;
   std::vector<std::pair<std::string, uint32_t>> labels;
@@ -275,6 +284,8 @@ BinaryIl encode_il(const Program& p) {
       uint8_t* const start = b.code.data();
       uint8_t* at = start + used;
       *at++ = uint8_t(in.op);
+      if (op_info(in.op).typed) *at++ = uint8_t(in.ty);
+      if (op_info(in.op).typed == 2) *at++ = uint8_t(in.src);
       for (int i = 0; i < in.nopd(); i++) at = encode_operand(at, size_t(at - start), in.a[i], fix);
       used = size_t(at - start);
     }
@@ -330,22 +341,103 @@ static std::string check_operand(char sig, const uint8_t* p, size_t avail, const
   return "";
 }
 
+// A typed operand (s x r a k) of type t.  Returns "" or the reason; a device
+// operand's area and index, a constant's value.
+struct TypedOpd {
+  Area area = Area::Sys;
+  uint32_t index = 0;
+  int64_t value = 0;
+};
+static std::string check_typed_operand(char sig, Ty t, const uint8_t* p, size_t avail, const Layout& L, size_t& len,
+                                       TypedOpd& o) {
+  if (avail < 1) return "truncated operand";
+  uint8_t tag = p[0];
+  if (sig == 'k') {
+    if (tag != kTagInt || avail < 5) return "an INT32 constant is required";
+    len = 5;
+    o.value = int32_t(get32(p + 1));
+    return "";
+  }
+  if (tag == kTagTyped) {
+    if (avail < 9) return "truncated constant";
+    len = 9;
+    if (sig != 's' && sig != 'x') return "constant where a device is required";
+    uint64_t v = get32(p + 1) | (uint64_t(get32(p + 5)) << 32);
+    if (typed::norm(t, v) != v) return std::string("constant not a canonical ") + ty_info(t).name;
+    return "";
+  }
+  if (tag < kTagArea || tag >= kTagArea + kAreaCount || avail < 3) return "bad typed operand";
+  len = 3;
+  o.area = Area(tag - kTagArea);
+  o.index = get16(p + 1);
+  if (!typed_area_ok(sig, t, o.area, o.index, L))
+    return std::string(area_name(o.area)) + std::to_string(o.index) + " cannot hold this " + ty_info(t).name + " operand";
+  return "";
+}
+
+// A typed instruction (its op byte read, p after it): its type bytes and
+// operands.  An LDX / STX must come right after an IDX (`idx_span`: that IDX's
+// hi - lo, or -1 if the instruction before was none), and its base plus the
+// span times its stride must stay inside the base's area.
+static std::string check_typed(Op op, std::span<const uint8_t> code, size_t& p, const Layout& L, int64_t& idx_span) {
+  const OpInfo& oi = op_info(op);
+  if (code.size() - p < size_t(oi.typed)) return "truncated type";
+  Ty t = Ty(code[p]), u = oi.typed == 2 ? Ty(code[p + 1]) : Ty::None;
+  if (int(t) >= kTyCount || (oi.typed == 2 && int(u) >= kTyCount) || !op_takes(op, t, u))
+    return std::string(oi.name + 1) + " does not take type " + (int(t) < kTyCount ? ty_info(t).name : "?") +
+           (oi.typed == 2 ? std::string(".") + (int(u) < kTyCount ? ty_info(u).name : "?") : "");
+  p += size_t(oi.typed);
+  TypedOpd o[3];
+  for (int i = 0; oi.operands[i]; i++) {
+    size_t len = 0;
+    char sig = oi.operands[i];
+    std::string e = check_typed_operand(sig, sig == 'x' ? u : t, code.data() + p, code.size() - p, L, len, o[i]);
+    if (!e.empty()) return "operand " + std::to_string(i + 1) + ": " + e;
+    p += len;
+  }
+  const int64_t span = idx_span;
+  idx_span = -1;
+  if (op == Op::TIDX) {
+    if (o[1].value > o[2].value) return "IDX bounds " + std::to_string(o[1].value) + ".." + std::to_string(o[2].value) + " are empty";
+    idx_span = o[2].value - o[1].value;
+  } else if (op == Op::TLDX || op == Op::TSTX) {
+    if (span < 0) return std::string(oi.name + 1) + " not right after an IDX";
+    const TypedOpd& base = o[op == Op::TLDX ? 0 : 1];
+    int64_t stride = o[op == Op::TLDX ? 1 : 2].value;
+    if (stride < 0) return "negative stride";
+    int64_t last = int64_t(base.index) + span * stride + std::max(ty_info(t).cells, 1) - 1;
+    if (last >= int64_t(L.count[int(base.area)]))
+      return std::string("the array at ") + area_name(base.area) + std::to_string(base.index) + " extends past its area";
+  }
+  return "";
+}
+
 // Two passes over the code, holding a bit per byte of it (where the
 // instructions start), not a record per instruction: the loader runs this on
 // untrusted images (docs/image-format.md, "What the loader allocates").  The
 // first checks every operand and marks the starts, the second every jump's
 // target against them.
 std::string validate_il(std::span<const uint8_t> code, const Layout& layout) {
-  std::vector<bool> starts(code.size());
+  std::vector<bool> starts(code.size()), indexed(code.size());  // instruction starts; LDX / STX
   // Walks the instructions, calling jump(offset, target) for each jump
   // operand; an operand's error ends the walk.
   auto walk = [&](auto&& jump) -> std::string {
     size_t off = 0;
+    int64_t idx_span = -1;
     while (off < code.size()) {
       uint8_t opb = code[off];
       if (opb >= kOpCount) return "offset " + std::to_string(off) + ": unknown opcode " + std::to_string(opb);
       const OpInfo& oi = op_info(Op(opb));
       size_t p = off + 1;
+      if (oi.typed) {
+        if (std::string e = check_typed(Op(opb), code, p, layout, idx_span); !e.empty())
+          return "offset " + std::to_string(off) + ": " + op_info(Op(opb)).name + ": " + e;
+        indexed[off] = Op(opb) == Op::TLDX || Op(opb) == Op::TSTX;
+        starts[off] = true;
+        off = p;
+        continue;
+      }
+      idx_span = -1;
       for (const char* s = oi.operands; *s; s++) {
         size_t len = 0;
         uint32_t target = UINT32_MAX;
@@ -364,6 +456,7 @@ std::string validate_il(std::span<const uint8_t> code, const Layout& layout) {
   return walk([&](uint32_t from, uint32_t to) -> std::string {
     bool at_boundary = to == code.size() || (to < code.size() && starts[to]);
     if (!at_boundary) return "offset " + std::to_string(from) + ": jump target " + std::to_string(to) + " is not an instruction boundary";
+    if (to < code.size() && indexed[to]) return "offset " + std::to_string(from) + ": jump to an LDX / STX past its IDX";
     if (to <= from) return "offset " + std::to_string(from) + ": backward jump";
     return "";
   });
@@ -373,10 +466,14 @@ uint32_t decode_instr(std::span<const uint8_t> code, uint32_t off, Instr& out) {
   out = Instr{};
   out.op = Op(code[off]);
   uint32_t p = off + 1;
-  const char* sig = op_info(out.op).operands;
+  const OpInfo& oi = op_info(out.op);
+  if (oi.typed) out.ty = Ty(code[p++]);
+  if (oi.typed == 2) out.src = Ty(code[p++]);
+  const char* sig = oi.operands;
   for (int i = 0; sig[i]; i++) {
     Operand& o = out.a[i];
     uint8_t tag = code[p];
+    if (tag == kTagTyped) { o = Operand::typed_const(get32(&code[p + 1]) | (uint64_t(get32(&code[p + 5])) << 32)); p += 9; continue; }
     if (tag == kTagInt) { o.kind = OpdKind::ConstInt; o.ival = int32_t(get32(&code[p + 1])); p += 5; continue; }
     if (tag == kTagReal) {
       uint32_t u = get32(&code[p + 1]);

@@ -84,7 +84,7 @@ struct Layout {
 // Fixed addresses inside the Sys area.
 constexpr uint32_t kSysDt = 0;      // INT32: ms elapsed before this scan
 constexpr uint32_t kSysScan = 4;    // UINT32: scans completed
-constexpr uint32_t kSysSize = 64;   // bytes 8..63 are reserved (0)
+constexpr uint32_t kSysSize = 64;   // bytes 8..23: the fault record (kSysFault, below); 24..63 reserved (0)
 
 // Native code calls the REAL functions that have no instruction (float f(float))
 // through a table of 8-byte pointers that lies OUTSIDE the memory image, in the
@@ -174,16 +174,51 @@ constexpr Area word_area(Dev d) {
   }
 }
 
+// ---------------------------------------------------------------- elementary types
+// The IEC 61131-3 elementary types of the typed instructions (types.def).
+enum class Ty : uint8_t {
+#define TYPE(name, bits, kind, cells, c) name,
+#include "types.def"
+  None
+};
+constexpr int kTyCount = static_cast<int>(Ty::None);
+enum class TyKind : uint8_t { Bool, Signed, Unsigned, Bits, Real, Time, Date };
+struct TyInfo {
+  const char* name;  // "INT"
+  int bits;          // 16
+  TyKind kind;
+  int cells;         // words of a word area (0: BOOL, one bit device)
+  const char* c;     // "int16_t"
+};
+inline constexpr TyInfo kTys[] = {
+#define TYPE(name, bits, kind, cells, c) {#name, bits, TyKind::kind, cells, #c},
+#include "types.def"
+};
+constexpr const TyInfo& ty_info(Ty t) { return kTys[int(t)]; }
+// The letter of an op's types column for t's kind (ops.def).
+constexpr char ty_letter(Ty t) {
+  switch (ty_info(t).kind) {
+    case TyKind::Bool: return 'B';
+    case TyKind::Signed: case TyKind::Unsigned: return 'i';
+    case TyKind::Bits: return 'b';
+    case TyKind::Real: return 'f';
+    case TyKind::Time: return 't';
+    case TyKind::Date: return 'd';
+  }
+  return '?';
+}
+std::optional<Ty> ty_from_name(std::string_view name);  // case-insensitive; also the IEC long names (TIME_OF_DAY)
+
 // ---------------------------------------------------------------- the IL
 
 enum class Op : uint8_t {
-#define OP(name, opds, push, pop, klass, rel, fn) name,
+#define OP(name, opds, push, pop, klass, rel, fn, typed, types) name,
 #include "ops.def"
   Count
 };
 constexpr int kOpCount = static_cast<int>(Op::Count);
 
-enum class OpClass : uint8_t { Basic, Compare, Move, Arith, Logic, Special, Timer, Counter, Flow };
+enum class OpClass : uint8_t { Basic, Compare, Move, Arith, Logic, Special, Timer, Counter, Flow, Typed };
 
 // The relation of a compare (ops.def's rel column and REL table).
 enum class Rel : uint8_t {
@@ -228,16 +263,34 @@ struct OpInfo {
   Rel rel;               // Compare: its relation; else None
   RealFn fn;             // Special: its REAL function; else None
   int nopd;              // the number of operands: strlen(operands)
+  int typed;             // 0 untyped, 1 a type T (ADD.INT), 2 and a source type U
+  const char* types;     // the kinds T may have ("ift"), after '|' those of U
 };
 constexpr int count_operands(const char* s) { return *s ? 1 + count_operands(s + 1) : 0; }
 inline constexpr OpInfo kOps[kOpCount] = {
-#define OP(name, opds, push, pop, klass, rel, fn) {#name, opds, push, pop, OpClass::klass, Rel::rel, RealFn::fn, count_operands(opds)},
+#define OP(name, opds, push, pop, klass, rel, fn, typed, types) {#name, opds, push, pop, OpClass::klass, Rel::rel, RealFn::fn, count_operands(opds), typed, types},
 #include "ops.def"
 };
 constexpr const OpInfo& op_info(Op op) { return kOps[int(op)]; }
 // The compare instruction of a relation (LDEQ for Eq).
 Op compare_op(Rel r);
 std::optional<Op> op_from_name(std::string_view name);  // case-insensitive
+// ---- typed instructions (ops.def class Typed, ir/typed.h, ir/typed.cpp)
+// The op of a typed instruction's spelling ("ADD" -> TADD); nullopt if none.
+std::optional<Op> typed_op_from_name(std::string_view spelling);
+// Does op take type t and source type u (ops.def's typed and types columns)?
+bool op_takes(Op op, Ty t, Ty u);
+struct Instr;
+std::string op_spelling(const Instr& in);  // "ADD.INT", "CONV.DINT.REAL", "LOAD"
+Ty operand_type(const Instr& in, int i);   // the type of a typed instruction's operand i; None if untyped
+struct Layout;
+// May a device of area a, index idx, be typed operand `sig` (s x r a) of type t?
+// (A 64-bit type takes two words: idx + 1 must be in the area too.)
+bool typed_area_ok(char sig, Ty t, Area a, uint32_t idx, const Layout& L);
+std::string typed_const_text(Ty t, uint64_t v);  // "-5", "1.5", "1.0000000000000001e-09"
+// The canonical bits (typed.h) of constant s of type t; nullopt and `why` if
+// it is not one or does not fit.
+std::optional<uint64_t> parse_typed_const(Ty t, std::string_view s, std::string& why);
 const char* op_class_name(OpClass c);
 // May a device of area `a`, index `idx`, stand for signature letter `sig`?
 constexpr bool operand_area_ok(char sig, Area a, uint32_t idx) {
@@ -253,7 +306,9 @@ constexpr bool operand_area_ok(char sig, Area a, uint32_t idx) {
   return false;
 }
 
-enum class OpdKind : uint8_t { None, Bit, Int, Real, ConstInt, ConstReal, Edge, Timer, Counter, Label };
+// ConstT: a typed instruction's constant, of the instruction's type (or its
+// source type for an `x` operand): its 64 bits are ival (low) and index (high).
+enum class OpdKind : uint8_t { None, Bit, Int, Real, ConstInt, ConstReal, Edge, Timer, Counter, Label, ConstT };
 
 // A label operand's name (only JMP has one): an interned 4-byte id, equal ids
 // for equal text, so that an Operand is 20 bytes and not 24 or 48 (an IL
@@ -288,6 +343,15 @@ struct Operand {
   };
 
   bool is_real() const { return kind == OpdKind::Real || kind == OpdKind::ConstReal; }
+  // A ConstT's 64 bits (typed.h: the canonical value of its type).
+  uint64_t bits() const { return (uint64_t(index) << 32) | uint32_t(ival); }
+  static Operand typed_const(uint64_t v) {
+    Operand o;
+    o.kind = OpdKind::ConstT;
+    o.index = uint32_t(v >> 32);
+    o.ival = int32_t(uint32_t(v));
+    return o;
+  }
   // Kind, area, index, and the value the kind has (REAL constants as floats).
   bool operator==(const Operand& o) const {
     if (kind != o.kind || area != o.area || index != o.index) return false;
@@ -297,6 +361,15 @@ struct Operand {
   }
 };
 static_assert(sizeof(Operand) == 12, "an IL instruction holds three: keep it small (docs/architecture.md)");
+
+// Fixed addresses inside the Sys area for a fault that ends a scan (an
+// array index out of its bounds, docs/il.md "Index faults"): every engine
+// writes the same record and ends the scan there; the runtime then stops the
+// PLC with outputs off.
+constexpr uint32_t kSysFault = 8;        // UINT32: 0 none, 1 index out of range
+constexpr uint32_t kSysFaultAt = 12;     // UINT32: the IL byte offset of the IDX instruction
+constexpr uint32_t kSysFaultValue = 16;  // INT64: the index
+enum : uint32_t { kFaultNone = 0, kFaultIndex = 1 };
 
 struct SrcLoc {
   int line = 0, col = 0;
@@ -313,6 +386,8 @@ using IlError = CompileError;
 
 struct Instr {
   Op op{};
+  Ty ty = Ty::None;   // a typed instruction's type T (ADD.INT)
+  Ty src = Ty::None;  // and its source type U (CONV.DINT.REAL), where it has one
   Operand a[3];
   SrcLoc loc;  // the element (or rung) this instruction came from
   int nopd() const { return kOps[int(op)].nopd; }
@@ -482,7 +557,8 @@ struct Chart {
 Program lower_chart(const Chart& c);
 
 // Operand spelling in IL text: X3, T0, D5, F1, 42, 1.5, E7, name.
-std::string operand_text(const Operand& o);
+std::string operand_text(const Operand& o);  // a typed constant as its hex bits (it has no type of its own)
+std::string operand_text(const Instr& in, int i);  // operand i, a typed constant in its type ("-5", "1.5")
 std::string instr_text(const Instr& in);  // "LOAD X1", "ADD D0 5 D1"
 std::string real_text(float f);           // %.9g, with ".0" added when needed
 

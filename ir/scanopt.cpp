@@ -171,7 +171,7 @@ std::optional<Operand> Folder::fold(const Instr& in) {
   if (!mem_) mem_.emplace(layout_);
   Memory& mem = *mem_;
   Program p;
-  p.rungs.emplace_back().code = {Instr{Op::TRUE, {}, {}}, in};
+  p.rungs.emplace_back().code = {Instr{Op::TRUE, Ty::None, Ty::None, {}, {}}, in};
   BinaryIl il = encode_il(p);
   Interpreter(il.code, mem.layout).scan(mem.data());
   const Operand& d = in.a[in.nopd() - 1];
@@ -226,7 +226,7 @@ class Propagate {
     }
     bool plain = in.op == Op::MOV && is_const(in.a[0]);  // already what folding makes
     std::optional<Operand> c = plain ? moved(in.a[0], in.a[1]) : all ? folder_.fold(use) : std::nullopt;
-    if (c && !plain) use = Instr{Op::MOV, {*c, use.a[last]}, in.loc};
+    if (c && !plain) use = Instr{Op::MOV, Ty::None, Ty::None, {*c, use.a[last]}, in.loc};
     if ((c && !plain) || changed) f_.replaced.emplace_back(i, use);
     if (c && on_[i]) known_[addr(l_, in.a[last])] = *c;
     else if (!known_.empty()) known_.erase(addr(l_, in.a[last]));

@@ -19,7 +19,16 @@ const char* kAll =
     "WAND D0 255 D5\nWOR D0 1 D6\nWXOR D0 1 D7\nWNOT D0 D8\nSHL D0 3 D9\nSHR D0 3 D10\nSIN F0 F3\nCOS F0 F4\n"
     "TAN F0 F5\nSQRT F0 F6\nEXP F0 F7\nLN F0 F8\nABS D0 D11\nTON T0 100\nTOF T1 D0\nTP T2 5\nRSTT T3\n"
     "MTON T4 0\nMTOF T5 D0\nMTP T6 5\n"
-    "CTU C0 10 E2\nCTD C1 D3\n";
+    "CTU C0 10 E2\nCTD C1 D3\n"
+    "MOVE.INT -5 D20\nADD.DINT D20 7 D21\nSUB.LINT D22 -9000000000 D24\nMUL.LREAL D26 1.5e-09 D28\n"
+    "DIV.UINT D20 3 D30\nMOD.SINT D20 3 D31\nMIN.REAL F0 2.5 F9\nMAX.TIME D22 3500000 D32\nEXPT.REAL F0 2 F10\n"
+    "AND.BOOL M0 1 M1\nOR.WORD D20 255 D33\nXOR.LWORD D22 1 D34\nNOT.BYTE D20 D36\nSHL.WORD.INT D20 3 D37\n"
+    "SHR.DWORD.USINT D20 D20 D38\nROL.BYTE.DINT D20 -1 D39\nROR.LWORD.UDINT D22 65 D40\nNEG.LINT D22 D42\n"
+    "ABS.INT D20 D44\nSQRT.REAL F0 F11\nLN.LREAL D26 D46\nLOG.REAL F0 F12\nEXP.REAL F0 F13\nSIN.LREAL D26 D48\n"
+    "COS.REAL F0 F14\nTAN.REAL F0 F15\nASIN.REAL F0 F16\nACOS.REAL F0 F17\nATAN.LREAL D26 D50\n"
+    "CONV.DINT.REAL F0 D52\nTRUNC.INT.LREAL D26 D53\nEQ.INT D20 -5\nNE.BOOL M0 X1\nLT.ULINT D22 18446744073709551615\n"
+    "LE.DT D22 D24\nGT.TOD D22 0\nGE.USINT D20 200\nIDX.DINT D21 1 10\nLDX.INT D100 2 D54\nIDX.UINT D20 0 3\n"
+    "STX.BOOL M3 M10 1\n";
 
 // A label operand's name is interned: equal text, equal (4-byte) names, and
 // the text comes back, from several threads at once.
@@ -79,7 +88,7 @@ TEST(IlText, EveryMnemonicRoundTrips) {
   text.replace(text.find("CTD C1 D3"), 9, "CTD C1 D3 E2");
   text += "RSTC C1\nJMP out\nEND\n.label out\n.end\n";
   Program p = parse_il_text(text, "a.il");
-  EXPECT_EQ(p.rungs[0].code.size(), size_t(kOpCount));
+  EXPECT_EQ(p.rungs[0].code.size(), size_t(kOpCount) + 1);  // IDX twice: before LDX and before STX
   std::string printed = print_il_text(p);
   Program q = parse_il_text(printed, "a.il");
   EXPECT_EQ(print_il_text(q), printed);

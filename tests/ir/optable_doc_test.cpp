@@ -65,7 +65,7 @@ TEST(OpTable, DocsListTheTable) {
   for (int i = 0; i < kOpCount; i++) {
     const OpInfo& o = op_info(Op(i));
     const auto& r = rows[i];
-    ASSERT_EQ(r.size(), 8u) << "row " << i;
+    ASSERT_EQ(r.size(), 10u) << "row " << i;
     EXPECT_EQ(r[0], std::to_string(i));
     EXPECT_EQ(r[1], o.name) << "row " << i;
     EXPECT_EQ(r[2], *o.operands ? o.operands : "–") << o.name;
@@ -76,6 +76,10 @@ TEST(OpTable, DocsListTheTable) {
     EXPECT_EQ(r[5], klass) << o.name;
     EXPECT_EQ(r[6], o.rel == Rel::None ? "–" : rel_info(o.rel).name) << o.name;
     EXPECT_EQ(r[7], o.fn == RealFn::None ? "–" : real_fn_info(o.fn).name) << o.name;
+    EXPECT_EQ(r[8], std::to_string(o.typed)) << o.name;
+    std::string types = *o.types ? o.types : "–";
+    if (size_t bar = types.find('|'); bar != std::string::npos) types.replace(bar, 1, " / ");  // a table cell has no |
+    EXPECT_EQ(r[9], types) << o.name;
   }
 }
 
@@ -119,10 +123,14 @@ TEST(OpTable, DocsDescribeEveryMnemonic) {
     size_t q = text.find('`', p + 1);
     if (q == std::string::npos) break;
     std::istringstream span(text.substr(p + 1, q - p - 1));
-    for (std::string w; span >> w;) words.insert(w);
+    for (std::string w; span >> w;) words.insert(w), words.insert(w.substr(0, w.find('.')));  // ADD.INT: ADD
     p = q + 1;
   }
-  for (int i = 0; i < kOpCount; i++) EXPECT_TRUE(words.count(op_info(Op(i)).name)) << op_info(Op(i)).name << " is not described";
+  for (int i = 0; i < kOpCount; i++) {
+    const OpInfo& o = op_info(Op(i));
+    const char* spelled = o.typed ? o.name + 1 : o.name;  // a typed op's tag is T + its spelling
+    EXPECT_TRUE(words.count(spelled)) << spelled << " is not described";
+  }
 }
 
 TEST(OpTable, RelationsAreConsistent) {
@@ -142,7 +150,7 @@ TEST(OpTable, RelationsAreConsistent) {
 TEST(OpTable, SpecialsHaveAFunctionAndComparesARelation) {
   for (int i = 0; i < kOpCount; i++) {
     const OpInfo& o = op_info(Op(i));
-    EXPECT_EQ(o.klass == OpClass::Compare, o.rel != Rel::None) << o.name;
+    EXPECT_EQ(o.klass == OpClass::Compare || (o.klass == OpClass::Typed && o.push == 1), o.rel != Rel::None) << o.name;
     EXPECT_EQ(o.klass == OpClass::Special, o.fn != RealFn::None) << o.name;
   }
   for (int f = 0; f < int(RealFn::None); f++)

@@ -25,7 +25,7 @@ struct Facts {
     const DivReuse* r = f.reuse(rung, k);
     if (!r) return "";
     if (r->stored_early) return "early";
-    Instr mov{Op::MOV, {r->from, r->from}, {}};
+    Instr mov{Op::MOV, Ty::None, Ty::None, {r->from, r->from}, {}};
     std::string text = instr_text(mov);  // "MOV D5 D5": the device's name twice
     return (r->remainder_from_quotient ? "q " : "") + text.substr(text.rfind(' ') + 1);
   }

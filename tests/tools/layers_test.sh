@@ -27,7 +27,7 @@ allowed() {
   done
 }
 out=$( {
-  allowed ir 'ir/[a-z_]+\.h|(ir/)?ops\.def'
+  allowed ir 'ir/[a-z_]+\.h|(ir/)?(ops|types)\.def'
   allowed frontend 'ir/[a-z_]+\.h|frontend/[a-z_0-9]+\.h'
   allowed assembler 'assembler/[a-z_0-9]+\.h'
   allowed loader 'ir/[a-z_]+\.h|assembler/[a-z_0-9]+\.h|loader/[a-z_0-9]+\.h'
