@@ -777,9 +777,7 @@ int run_trace_mode(const TraceArgs& a, RunOptions opt) {
     if (code && img.target != fe.target->image_kind) throw UserError(wrong_image(a, fe, target_of(img.target)));
   } else if (a.engine == "c") {
     Compiled c = compile_source(a.input, false, g_task);
-    img.layout = c.il.layout();
-    img.aliases = c.il.aliases;
-    img.retentive = retentive_ranges(c.il);
+    img = il_image(c.il);  // the IL and its line map name a scan fault's place
     tmpdir = make_temp_dir();
     so_path = build_c_shared_object(c, tmpdir);
   } else {
@@ -796,14 +794,21 @@ int run_trace_mode(const TraceArgs& a, RunOptions opt) {
   Trace trace;
   if (!a.trace_file.empty()) trace = load_trace(a.trace_file, img.aliases);
   std::string out;
+  std::optional<ScanFault> fault;
   if (a.cycles) {
     Recorder rec(*eng);
-    run_trace(rec, layout, a.trace_file.empty() ? nullptr : &trace, a.trace_file, opt, out);
+    fault = run_trace(rec, layout, a.trace_file.empty() ? nullptr : &trace, a.trace_file, opt, out);
     out = with_cycles(out, rec.costs);
   } else {
-    run_trace(*eng, layout, a.trace_file.empty() ? nullptr : &trace, a.trace_file, opt, out);
+    fault = run_trace(*eng, layout, a.trace_file.empty() ? nullptr : &trace, a.trace_file, opt, out);
   }
   std::fwrite(out.data(), 1, out.size(), stdout);
+  if (fault) {
+    std::fflush(stdout);
+    std::fprintf(stderr, "ldrun: scan %d: %s; the program stops (a PLC would drive its outputs to the safe state)\n",
+                 fault->scan, describe_scan_fault(*fault, &img).c_str());
+    return 1;
+  }
   return 0;
 }
 

@@ -7,8 +7,16 @@ namespace ldc {
 
 Image il_image(const Program& p) {
   Image img;
+  img.source = p.source;
   img.layout = p.layout();
-  img.il = encode_il(p).code;
+  BinaryIl b = encode_il(p);
+  img.il = std::move(b.code);
+  size_t k = 0;  // the line map without code: where a scan fault's IL offset was written (describe_scan_fault)
+  for (uint32_t r = 0; r < p.rungs.size(); r++) {
+    img.rung_titles.push_back(p.rungs[r].title);
+    for (const Instr& in : p.rungs[r].code)
+      img.lines.push_back({0, b.instr_offset[k++], in.loc.line ? in.loc.line : p.rungs[r].line, r});
+  }
   img.aliases = p.aliases;
   img.retentive = retentive_ranges(p);
   if (std::string why = validate_il(img.il, img.layout); !why.empty()) throw UserError("ldrun: error: IL " + why);

@@ -540,6 +540,7 @@ struct Runtime::Impl {
       int32_t dtv = dt ? *dt : int32_t(dt_ms);
       std::memcpy(mem + kSysDt, &dtv, 4);
       mem[t.prog->image.layout.addr(Area::S, kBitFirstScan)] = t.first ? 1 : 0;
+      std::memset(mem + kSysFault, 0, 4);  // no fault yet (a RUN after a FAULT starts clean)
 
       try {
         p.engine->scan(t.mem);
@@ -560,6 +561,15 @@ struct Runtime::Impl {
         continue;
       }
 
+      // A scan that faulted (an array index outside its bounds) ended early:
+      // it publishes nothing, and the PLC stops with its outputs safe.
+      if (auto f = read_scan_fault(mem)) {
+        t.scan_begin.store(0);
+        fault("ldrun: task '" + t.spec.name + "' scan " + std::to_string(scan_no) + ": " +
+              describe_scan_fault(*f, &t.prog->image) +
+              "; outputs driven to the safe state (all Y off, WY 0); the runtime is in FAULT");
+        continue;
+      }
       uint32_t n32 = uint32_t(scan_no);
       std::memcpy(mem + kSysScan, &n32, 4);
       {

@@ -14,6 +14,8 @@
 
 namespace ldc {
 
+struct Image;  // loader/loader.h
+
 // What one scan cost on a simulated processor (the C40 engines, docs/c40.md):
 // counted cycles and instructions, and the processor's cycle time.
 struct ScanCost {
@@ -109,10 +111,24 @@ struct RunOptions {
   std::vector<Probe> watch;
 };
 
+// A fault that ended a scan (an array index outside its bounds): the record
+// every engine writes at Sys+8 (docs/il.md, "Index faults").
+struct ScanFault {
+  uint32_t kind = kFaultNone;
+  uint32_t il_offset = 0;  // the IL byte offset of the faulting instruction
+  int64_t value = 0;       // the index
+  int scan = 0;            // the scan it ended (run_trace)
+};
+std::optional<ScanFault> read_scan_fault(const uint8_t* mem);
+// "index 11 outside 1..10 at prog.st:12 (rung 3 "POU main")", from the
+// image's IL and line map where it has them (img may be null).
+std::string describe_scan_fault(const ScanFault& f, const Image* img);
+
 // Runs the scans and writes the CSV of watched values to `out`.  Throws
-// std::runtime_error with a located message on a bad trace value.
-void run_trace(Engine& engine, const Layout& layout, const Trace* trace, const std::string& trace_file,
-               const RunOptions& opt, std::string& out);
+// std::runtime_error with a located message on a bad trace value.  A scan
+// that faults ends the run: its row is not written, and the fault is returned.
+std::optional<ScanFault> run_trace(Engine& engine, const Layout& layout, const Trace* trace, const std::string& trace_file,
+                                   const RunOptions& opt, std::string& out);
 
 // Value of a probe, formatted as ldrun prints it (bits 0/1, INT32 decimal, REAL %g).
 std::string format_probe(const Memory& mem, const Probe& p);

@@ -157,8 +157,8 @@ std::string format_probe(const uint8_t* base, const Layout& layout, const Probe&
 
 std::string format_probe(const Memory& mem, const Probe& p) { return format_probe(mem.bytes.data(), mem.layout, p); }
 
-void run_trace(Engine& engine, const Layout& layout, const Trace* trace, const std::string&, const RunOptions& opt,
-               std::string& out) {
+std::optional<ScanFault> run_trace(Engine& engine, const Layout& layout, const Trace* trace, const std::string&,
+                                   const RunOptions& opt, std::string& out) {
   Memory mem(layout);
   int scans = opt.scans >= 0 ? opt.scans : trace ? int(trace->rows.size()) : 1;
   out += "scan";
@@ -181,12 +181,17 @@ void run_trace(Engine& engine, const Layout& layout, const Trace* trace, const s
     std::memcpy(mem.data() + kSysDt, &dt, 4);
     mem.set_bit(Area::S, kBitFirstScan, k == 1);
     engine.scan(mem.bytes);
+    if (auto f = read_scan_fault(mem.data())) {
+      f->scan = k;
+      return f;
+    }
     uint32_t n = uint32_t(k);
     std::memcpy(mem.data() + kSysScan, &n, 4);
     out += std::to_string(k);
     for (const Probe& p : opt.watch) out += "," + format_probe(mem, p);
     out += "\n";
   }
+  return std::nullopt;
 }
 
 }  // namespace ldc

@@ -628,11 +628,39 @@ TEST(Sandbox, AScanStoppedInTheSandboxFaultsTheRuntime) {
   EXPECT_EQ(logged.back(), m);
 }
 
+// A scan whose array index leaves its bounds ends there (docs/il.md, "Index
+// faults"): the runtime publishes nothing of it and stops in FAULT with the
+// outputs safe, naming the index, its bounds and the source line.
+TEST(ScanFault, AnIndexOutOfItsBoundsStopsThePlcWithOutputsSafe) {
+  TmpDir d;
+  plc::TaskSpec s;
+  s.name = "main", s.program = "idx", s.file = d / "idx.il", s.period_us = 1000;
+  s.image = compile_text(d, "idx.il", ".rung line 1 \"POU main\"\nTRUE\nADD.DINT D9 1 D9\nIDX.DINT D9 1 10\n"
+                                      "LDX.INT D20 1 D16\nOUT Y0\nMOVE.INT 5 WY0\n.end\n");  // run by the interpreter below
+  std::vector<plc::TaskSpec> specs;
+  specs.push_back(std::move(s));
+  plc::Options opt;
+  opt.clock = plc::Options::Clock::Virtual, opt.free_run = true, opt.scans = 50;
+  auto engines = [&](const Image& img) -> std::unique_ptr<Engine> { return make_interp_engine(img.il, img.layout); };
+  plc::Runtime rt(std::move(specs), opt, engines, plc::make_null_driver());
+  rt.start();
+  ASSERT_TRUE(rt.wait_finished(10000));
+  ASSERT_TRUE(rt.faulted());
+  std::string m = rt.fault_message();
+  // D9 counts 1, 2, ... from its first scan: 11 on the 11th, outside 1..10 (IDX on line 4)
+  EXPECT_NE(m.find("ldrun: task 'main' scan 11: index 11 outside 1..10 at "), std::string::npos) << m;
+  EXPECT_NE(m.find("idx.il:4 (rung 1 \"POU main\"); outputs driven to the safe state"), std::string::npos) << m;
+  EXPECT_EQ(rt.get("Y0"), "0");
+  EXPECT_EQ(rt.get("WY0"), "0");
+  EXPECT_EQ(rt.get("D9"), "11");  // memory as the fault left it, for the diagnosis
+  rt.shutdown();
+}
+
 // Native code of any size runs from its own mapping: code of 256 KiB and more
 // goes on 2 MiB-aligned memory with MADV_HUGEPAGE (one iTLB entry for the
 // whole program where the kernel grants it; docs/runtime.md), the rest on
 // ordinary pages.  Each body is the -O0 frame around `add dword ptr [rbx+0x8],
-// 1` (83 43 08 01: Sys+8, a word the runtime leaves alone) repeated, padded
+// 1` (83 43 18 01: Sys+24, a reserved word nothing else writes) repeated, padded
 // with nops to the size: a copy cut short or misplaced counts wrong or faults.
 TEST(NativeEngine, CodeOfEverySizeRunsWhole) {
   const Layout L = Layout::standard(0);
@@ -649,7 +677,7 @@ TEST(NativeEngine, CodeOfEverySizeRunsWhole) {
     std::vector<uint8_t> code;
     code.reserve(size);
     for (const auto& in : as::x86::scan_prologue(false)) put(code, in);
-    for (size_t i = 0; i < reps; i++) code.insert(code.end(), {0x83, 0x43, 0x08, 0x01});
+    for (size_t i = 0; i < reps; i++) code.insert(code.end(), {0x83, 0x43, 0x18, 0x01});
     code.insert(code.end(), pad, 0x90);
     for (const auto& in : as::x86::scan_epilogue(false)) put(code, in);
     ASSERT_EQ(code.size(), size);
@@ -658,7 +686,7 @@ TEST(NativeEngine, CodeOfEverySizeRunsWhole) {
     e->scan(m.bytes);
     e->scan(m.bytes);
     uint32_t count, next;
-    std::memcpy(&count, m.data() + 8, 4), std::memcpy(&next, m.data() + 12, 4);
+    std::memcpy(&count, m.data() + 24, 4), std::memcpy(&next, m.data() + 28, 4);
     EXPECT_EQ(count, uint32_t(2 * reps)) << code.size() << " bytes of code";
     EXPECT_EQ(next, 0u);
   }
