@@ -788,6 +788,20 @@ Program plant_program(int rungs) {
   return all;
 }
 
+// Issue 25: typed programs (INT, DINT, LREAL arithmetic, arrays through IDX
+// and LDX / STX, function block instances expanded inline), on every engine.
+void run_typed(Run& R) {
+  say("typed programs\n");
+  for (int k : R.o.smoke ? std::vector<int>{4} : std::vector<int>{20, 200}) {
+    auto s = std::make_unique<Subject>();
+    s->experiment = "typed";
+    s->name = "typed, " + std::to_string(k) + " FB instances";
+    s->prog = parse_il_text(synth::synth_typed_il(k), "typed.il");
+    s->trace = synth_trace(s->prog.layout(), 1024, uint64_t(k) + 25);
+    R.add(std::move(s));
+  }
+}
+
 void run_large(Run& R) {
   int plant = R.o.smoke ? 40 : 20000, gen = R.o.smoke ? 20 : 2000;
   say("large programs\n");
@@ -1138,7 +1152,7 @@ struct Report {
   static std::string cell(const Timing& t) { return t.ok ? mp(t.median, t.p99) : std::string("–"); }
   std::vector<Subject*> headline_subjects() const {
     std::vector<Subject*> head;
-    for (const char* e : {"scaling", "inputs", "repeat", "large"})
+    for (const char* e : {"scaling", "inputs", "repeat", "large", "typed"})
       for (Subject* s : R.of(e)) head.push_back(s);
     return head;
   }
@@ -1241,6 +1255,12 @@ struct Report {
         row("issue 15: code bytes per IL instruction, " + s->name, "≤ 12", double(s->native_bytes_at[0]) / s->n,
             double(s->native_bytes_at[2]) / s->n, 12, false, 2, "", "");
       }
+    for (Subject* s : R.of("typed")) {
+      row("issue 25: native vs the fast interpreter, " + s->name, "≥ 10×", s->t[kFast].median / s->t[kNative].median,
+          s->t[kFast].median / s->t[kNativeO2].median, 10, true, 1, "×", "");
+      row("issue 25: C time / native time, " + s->name, "≥ 1.25×", s->t[kC].median / s->t[kNative].median,
+          s->t[kC].median / s->t[kNativeO2].median, 1.25, true, 2, "×", "");
+    }
     if (mix)
       row("issue 15: C time / native time, typical mix", "≥ 1.25×", mix->t[kC].median / mix->t[kNative].median,
           mix->t[kC].median / mix->t[kNativeO2].median, 1.25, true, 2, "×", "");
@@ -1905,7 +1925,7 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
 
 const char kUsage[] =
     "usage: ldbench [--out DIR] [--smoke] [--samples N] [--batch-us US] [--no-c] [--c-max-il N]\n"
-    "               [--only examples,classes,fig10,scaling,large,compile,memory] [--c40|--no-c40] [--source DIR]\n"
+    "               [--only examples,classes,fig10,scaling,large,typed,compile,memory] [--c40|--no-c40] [--source DIR]\n"
     "               [--doc FILE.md]   (also put the tables between FILE.md's generated-region markers)\n"
     "       ldbench --synth N_EXE P_BASIC [SEED]   (a synthetic program's IL text, to stdout)\n"
     "       ldbench --plant RUNGS                  (the synthetic plant's .ld text, to stdout)\n"
@@ -1989,6 +2009,7 @@ int main(int argc, char** argv) {
     if (o.want("fig10")) run_fig10(R);
     if (o.want("scaling")) run_scaling(R);
     if (o.want("large")) run_large(R);
+    if (o.want("typed")) run_typed(R);
     if (o.want("examples")) run_examples(R);
     if (o.want("scaling")) {  // the same program as at the start of the scaling run: the drift over the run
       say("repeat, to see the drift\n");

@@ -223,7 +223,7 @@ std::string synth_il(const SynthOptions& o) {
   if (o.n_exe < 1) throw std::invalid_argument("synth: n_exe must be at least 1");
   if (!(o.p_basic >= 0 && o.p_basic <= 1)) throw std::invalid_argument("synth: p_basic must be in [0, 1]");
   // Exact counts: basic, then the application classes by largest remainder.
-  std::array<int, 9> rem{};
+  std::array<int, kOpClassCount> rem{};
   rem[int(OpClass::Basic)] = int(std::lround(o.p_basic * o.n_exe));
   int napp = o.n_exe - rem[int(OpClass::Basic)];
   double wsum = 0;
@@ -421,6 +421,54 @@ std::string synth_plant_ld(int rungs, uint64_t seed) {
     }
   }
   return out;
+}
+
+}  // namespace ldc::synth
+
+// ------------------------------------------------------------------ typed programs
+
+namespace ldc::synth {
+
+std::string synth_typed_il(int instances) {
+  if (instances < 1 || instances > kTypedMaxInstances) throw std::invalid_argument("synth_typed_il: instance count");
+  std::string s = "; typed program: " + std::to_string(instances) + " instances of a scaling block\n";
+  auto d = [](int cell) { return "D" + std::to_string(cell); };
+  s += ".rung line 1 \"table\"\nLOAD S1\n";  // the shared lookup table, set on the first scan
+  for (int i = 0; i < 16; i++) s += "MOVE.INT " + std::to_string(i * 37 - 200) + " " + d(kTypedTable + i) + "\n";
+  for (int k = 0; k < instances; k++) {
+    const int b = kTypedBase + kTypedCells * k;
+    // cells: +0 INT count, +1 DINT raw, +2..3 LREAL value, +4..5 LREAL filtered, +6 DINT total,
+    // +7 DINT slot, +8 INT looked up, +9 INT scaled, +10..21 DINT ring of 12, +22..23 LREAL gain
+    const std::string en = "X" + std::to_string(k % SynthDevices::kInX), in = "WX" + std::to_string(k % SynthDevices::kInWX);
+    s += ".rung line " + std::to_string(2 + 3 * k) + " \"fb" + std::to_string(k) + ": scale\"\n";
+    s += "LOAD " + en + "\n";
+    s += "ADD.INT " + d(b) + " 1 " + d(b) + "\n";
+    s += "MOVE.DINT " + in + " " + d(b + 1) + "\n";
+    s += "CONV.LREAL.DINT " + d(b + 1) + " " + d(b + 2) + "\n";
+    s += "MUL.LREAL " + d(b + 2) + " 0.0125 " + d(b + 2) + "\n";
+    s += "SUB.LREAL " + d(b + 2) + " " + d(b + 4) + " " + d(b + 22) + "\n";
+    s += "MUL.LREAL " + d(b + 22) + " 0.25 " + d(b + 22) + "\n";
+    s += "ADD.LREAL " + d(b + 4) + " " + d(b + 22) + " " + d(b + 4) + "\n";
+    s += "ADD.DINT " + d(b + 6) + " " + d(b + 1) + " " + d(b + 6) + "\n";
+    s += "CONV.INT.LREAL " + d(b + 4) + " " + d(b + 9) + "\n";
+    s += ".rung line " + std::to_string(3 + 3 * k) + " \"fb" + std::to_string(k) + ": tables\"\n";
+    s += "LOAD " + en + "\n";
+    s += "MOD.DINT " + d(b + 1) + " 12 " + d(b + 7) + "\n";
+    s += "ABS.DINT " + d(b + 7) + " " + d(b + 7) + "\n";
+    s += "IDX.DINT " + d(b + 7) + " 0 11\n";
+    s += "STX.DINT " + d(b + 6) + " " + d(b + 10) + " 1\n";
+    s += "AND.WORD " + d(b) + " 15 " + d(b + 8) + "\n";
+    s += "IDX.INT " + d(b + 8) + " 0 15\n";
+    s += "LDX.INT " + d(kTypedTable) + " 1 " + d(b + 8) + "\n";
+    s += "ADD.INT " + d(b + 8) + " " + d(b + 9) + " " + d(b + 9) + "\n";
+    s += ".rung line " + std::to_string(4 + 3 * k) + " \"fb" + std::to_string(k) + ": alarm\"\n";
+    s += "GT.LREAL " + d(b + 4) + " 10.0\n";
+    s += "LT.INT " + d(b + 9) + " -100\n";
+    s += "ORBLK\n";
+    s += "AND " + en + "\n";
+    s += "OUT Y" + std::to_string(k % SynthDevices::kBitsY) + "\n";
+  }
+  return s + ".end\n";
 }
 
 }  // namespace ldc::synth

@@ -44,7 +44,7 @@ struct SynthDevices {
 
 // Shares of the application classes among the non-basic instructions, indexed
 // by OpClass (Basic and Flow are ignored).
-using AppMix = std::array<double, 9>;
+using AppMix = std::array<double, kOpClassCount>;
 // Our assumption for the split of the 31.1% application instructions (paper
 // 003's Fig. 9 gives it only as a chart): compare 28%, move 25%, arithmetic
 // 17%, word logic 5%, REAL functions 5%, timers 12%, counters 8%.
@@ -73,7 +73,7 @@ std::string synth_class_il(OpClass c, int n, uint64_t seed, bool powered = true)
 
 // Counts of a program: instructions per class.
 struct ClassCounts {
-  std::array<int, 9> n{};
+  std::array<int, kOpClassCount> n{};
   int total() const;
   double p_basic() const;
 };
@@ -83,5 +83,24 @@ ClassCounts count_classes(const Program& p);
 // seal-in and fault latches, conveyors with TON/TOF, part counters with edge
 // contacts, analog alarms with compares, and production totals.
 std::string synth_plant_ld(int rungs, uint64_t seed = 1);
+
+}  // namespace ldc::synth
+
+namespace ldc::synth {
+
+// A typed program (issue 25) of `instances` instances of one function block,
+// expanded inline per instance as the IEC front ends expand them: a scaling
+// and filtering block over INT, DINT and LREAL (an INT sample counter that
+// wraps at 16 bits, a DINT raw value scaled to LREAL engineering units, a
+// first-order filter in LREAL, a DINT total, a lookup in a shared INT table
+// and a ring buffer of DINT through IDX + LDX / STX, limit alarms as compares
+// driving outputs), as IL text.  Each instance reads its own WX input and X
+// enable bit (the same SynthDevices inputs as synth_il) and owns
+// kTypedCells D cells and one Y.  The same count always gives the same text.
+std::string synth_typed_il(int instances);
+constexpr int kTypedCells = 32;   // D cells of one instance
+constexpr int kTypedBase = 256;   // its first at D256 + 32 k (after SynthDevices' D0..D255)
+constexpr int kTypedTable = 240;  // the shared INT table, D240..D255 (16 entries)
+constexpr int kTypedMaxInstances = (8192 - kTypedBase) / kTypedCells;
 
 }  // namespace ldc::synth

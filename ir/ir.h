@@ -219,6 +219,7 @@ enum class Op : uint8_t {
 constexpr int kOpCount = static_cast<int>(Op::Count);
 
 enum class OpClass : uint8_t { Basic, Compare, Move, Arith, Logic, Special, Timer, Counter, Flow, Typed };
+constexpr int kOpClassCount = 10;
 
 // The relation of a compare (ops.def's rel column and REL table).
 enum class Rel : uint8_t {
