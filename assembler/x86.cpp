@@ -33,9 +33,13 @@ constexpr Form F1(M mn, OT a, OT b, Effects fx, uint8_t o, Enc e, int8_t d = -1,
 constexpr Form F2(M mn, OT a, OT b, Effects fx, uint8_t o, Enc e, int8_t d = -1, bool cc = false) {
   return F(mn, a, b, N, fx, 0, 2, 0x0F, o, e, d, false, cc);
 }
-// SSE: mandatory prefix + 0F opcode.
-constexpr Form FS(M mn, uint8_t pfx, OT a, OT b, Effects fx, uint8_t o, Enc e) {
-  return F(mn, a, b, N, fx, pfx, 2, 0x0F, o, e);
+// SSE: mandatory prefix + 0F opcode (w: REX.W, a 64-bit general register or memory operand).
+constexpr Form FS(M mn, uint8_t pfx, OT a, OT b, Effects fx, uint8_t o, Enc e, bool w = false) {
+  return F(mn, a, b, N, fx, pfx, 2, 0x0F, o, e, -1, w);
+}
+// 0F-prefixed opcode with REX.W.
+constexpr Form F2W(M mn, OT a, OT b, OT c, Effects fx, uint8_t o, Enc e, bool cc = false) {
+  return F(mn, a, b, c, fx, 0, 2, 0x0F, o, e, -1, true, cc);
 }
 
 // The order matters: the encoder takes the first form that fits, which
@@ -66,6 +70,7 @@ constexpr Form FS(M mn, uint8_t pfx, OT a, OT b, Effects fx, uint8_t o, Enc e) {
   F1(MN, OT::RM64, OT::IB, kAlu, 0xC1, Enc::M, D, true)
 
 #define SSE_ARITH(MN, O, FX) FS(MN, 0xF3, OT::X, OT::XM32, FX, O, Enc::RM)
+#define SSE2_ARITH(MN, O, FX) FS(MN, 0xF2, OT::X, OT::XM64, FX, O, Enc::RM)
 
 constexpr Form kForms[] = {
     F1(M::Mov, OT::RM32, OT::R32, kMove, 0x89, Enc::MR),
@@ -131,10 +136,45 @@ constexpr Form kForms[] = {
     FS(M::Ucomiss, 0, OT::X, OT::XM32, kCompare, 0x2E, Enc::RM),
     FS(M::Andps, 0, OT::X, OT::X, fx(RW, R), 0x54, Enc::RM),
     FS(M::Xorps, 0, OT::X, OT::X, fx(RW, R), 0x57, Enc::RM),
+    // the typed instructions' forms (docs/x86.md, "Typed instructions")
+    F2(M::Movzx, OT::R32, OT::M16, kMove, 0xB7, Enc::RM),
+    F2(M::Movsx, OT::R32, OT::M16, kMove, 0xBF, Enc::RM),
+    F1(M::Mov, OT::RM64, OT::I32, kMove, 0xC7, Enc::M, 0, true),   // sign-extended: before the imm64 form
+    F1(M::Mov, OT::R64, OT::I64, kMove, 0xB8, Enc::O, -1, true),   // movabs
+    F1(M::Cwde, N, N, implicit(fx(), kEax, kEax), 0x98, Enc::ZO),            // eax = the sign extension of ax
+    F1(M::Cdqe, N, N, implicit(fx(), kEax, kEax), 0x98, Enc::ZO, -1, true),  // rax = the sign extension of eax
+    F1(M::Cqo, N, N, implicit(fx(), kEax, kEdx), 0x99, Enc::ZO, -1, true),   // rdx = the sign of rax
+    F1(M::Not, OT::RM64, N, fx(RW), 0xF7, Enc::M, 2, true),
+    F1(M::Neg, OT::RM64, N, flags_out(fx(RW)), 0xF7, Enc::M, 3, true),
+    F2W(M::Imul, OT::R64, OT::RM64, N, kAlu, 0xAF, Enc::RM),
+    F(M::Imul, OT::R64, OT::RM64, OT::I8, flags_out(fx(W, R, R)), 0, 1, 0x6B, 0, Enc::RM, -1, true),
+    F(M::Imul, OT::R64, OT::RM64, OT::I32, flags_out(fx(W, R, R)), 0, 1, 0x69, 0, Enc::RM, -1, true),
+    // rax, rdx = rdx:rax / r/m64, rdx:rax % r/m64; div: unsigned (edx:eax, rdx:rax)
+    F1(M::Idiv, OT::RM64, N, implicit(flags_out(fx(R)), kEax | kEdx, kEax | kEdx), 0xF7, Enc::M, 7, true),
+    F1(M::Div, OT::RM32, N, implicit(flags_out(fx(R)), kEax | kEdx, kEax | kEdx), 0xF7, Enc::M, 6),
+    F1(M::Div, OT::RM64, N, implicit(flags_out(fx(R)), kEax | kEdx, kEax | kEdx), 0xF7, Enc::M, 6, true),
+    F2W(M::Cmovcc, OT::R64, OT::RM64, N, flags_in(fx(RW, R)), 0x40, Enc::RM, true),
+    SHIFT(M::Rol, 0), SHIFT(M::Ror, 1),
+    FS(M::Movsd, 0xF2, OT::X, OT::XM64, kMove, 0x10, Enc::RM),
+    FS(M::Movsd, 0xF2, OT::M64, OT::X, kMove, 0x11, Enc::MR),
+    SSE2_ARITH(M::Addsd, 0x58, fx(RW, R)), SSE2_ARITH(M::Subsd, 0x5C, fx(RW, R)), SSE2_ARITH(M::Mulsd, 0x59, fx(RW, R)),
+    SSE2_ARITH(M::Divsd, 0x5E, fx(RW, R)), SSE2_ARITH(M::Sqrtsd, 0x51, fx(W, R)), SSE2_ARITH(M::Minsd, 0x5D, fx(RW, R)),
+    SSE2_ARITH(M::Maxsd, 0x5F, fx(RW, R)),
+    FS(M::Ucomisd, 0x66, OT::X, OT::XM64, kCompare, 0x2E, Enc::RM),
+    FS(M::Cvtss2sd, 0xF3, OT::X, OT::XM32, kMove, 0x5A, Enc::RM),
+    FS(M::Cvtsd2ss, 0xF2, OT::X, OT::XM64, kMove, 0x5A, Enc::RM),
+    FS(M::Cvtsi2sd, 0xF2, OT::X, OT::RM64, kMove, 0x2A, Enc::RM, true),
+    FS(M::Cvtsi2ss, 0xF3, OT::X, OT::RM64, kMove, 0x2A, Enc::RM, true),
+    FS(M::Cvttsd2si, 0xF2, OT::R64, OT::XM64, kMove, 0x2C, Enc::RM, true),
+    FS(M::Cvtsd2si, 0xF2, OT::R64, OT::XM64, kMove, 0x2D, Enc::RM, true),  // rounds by MXCSR: to nearest, ties to even
+    // registers only: GNU as spells movq from memory F3 0F 7E
+    FS(M::Movq, 0x66, OT::X, OT::R64, kMove, 0x6E, Enc::RM, true),
+    FS(M::Movq, 0x66, OT::R64, OT::X, kMove, 0x7E, Enc::MR, true),
 };
 #undef ALU
 #undef SHIFT
 #undef SSE_ARITH
+#undef SSE2_ARITH
 
 // Every form has its effects row, and the row fits the form: an effect for
 // each operand and none past them; branch targets and lea's address not
@@ -150,7 +190,7 @@ constexpr bool row_fits(const Form& f) {
     if ((t == OT::None) != (u == Use::None)) return false;
     const bool addr = t == OT::Rel8 || t == OT::Rel32 || t == OT::MA;
     if (addr != (u == Use::Addr)) return false;
-    const bool imm = t == OT::I8 || t == OT::IB || t == OT::I32 || t == OT::One;
+    const bool imm = t == OT::I8 || t == OT::IB || t == OT::I32 || t == OT::I64 || t == OT::One;
     if (imm && u != Use::R) return false;
   }
   if (f.cc != f.effects.reads_flags) return false;
@@ -177,9 +217,9 @@ unsigned num_ops(const Form& f) {
 
 namespace {
 
-constexpr bool is_imm_type(OT t) { return t == OT::I8 || t == OT::IB || t == OT::I32; }
+constexpr bool is_imm_type(OT t) { return t == OT::I8 || t == OT::IB || t == OT::I32 || t == OT::I64; }
 constexpr bool is_rel_type(OT t) { return t == OT::Rel8 || t == OT::Rel32; }
-bool is_mem_only(OT t) { return t == OT::M8 || t == OT::M32 || t == OT::M64 || t == OT::MA; }
+bool is_mem_only(OT t) { return t == OT::M8 || t == OT::M16 || t == OT::M32 || t == OT::M64 || t == OT::MA; }
 bool is_reg_only(OT t) {
   return t == OT::R8 || t == OT::R32 || t == OT::R64 || t == OT::X;
 }
@@ -190,7 +230,7 @@ RegClass reg_class_of(OT t) {
     case OT::R8: case OT::RM8: case OT::Al: case OT::Cl: return RegClass::Gp8;
     case OT::R32: case OT::RM32: case OT::Eax: return RegClass::Gp32;
     case OT::R64: case OT::RM64: case OT::Rax: return RegClass::Gp64;
-    case OT::X: case OT::XM32: return RegClass::Xmm;
+    case OT::X: case OT::XM32: case OT::XM64: return RegClass::Xmm;
     default: return RegClass::None;
   }
 }
@@ -198,14 +238,19 @@ RegClass reg_class_of(OT t) {
 Size mem_size_of(OT t) {
   switch (t) {
     case OT::M8: case OT::RM8: return Size::Byte;
+    case OT::M16: return Size::Word;
     case OT::M32: case OT::RM32: case OT::XM32: return Size::Dword;
-    case OT::M64: case OT::RM64: return Size::Qword;
+    case OT::M64: case OT::RM64: case OT::XM64: return Size::Qword;
     default: return Size::None;
   }
 }
 
-bool accepts_mem(OT t) { return is_mem_only(t) || t == OT::RM8 || t == OT::RM32 || t == OT::RM64 || t == OT::XM32; }
-bool accepts_reg(OT t) { return is_reg_only(t) || t == OT::RM8 || t == OT::RM32 || t == OT::RM64 || t == OT::XM32; }
+bool accepts_mem(OT t) {
+  return is_mem_only(t) || t == OT::RM8 || t == OT::RM32 || t == OT::RM64 || t == OT::XM32 || t == OT::XM64;
+}
+bool accepts_reg(OT t) {
+  return is_reg_only(t) || t == OT::RM8 || t == OT::RM32 || t == OT::RM64 || t == OT::XM32 || t == OT::XM64;
+}
 
 bool has_reg_operand(const Instruction& in) {
   for (unsigned i = 0; i < in.num_operands; ++i)
@@ -218,6 +263,7 @@ bool imm_fits(OT t, int64_t v, bool w) {
   switch (t) {
     case OT::IB: return v >= -128 && v <= 255;
     case OT::One: return v == 1;
+    case OT::I64: return true;
     case OT::I32:
       return w ? (v >= INT32_MIN && v <= INT32_MAX) : (v >= INT32_MIN && v <= int64_t(UINT32_MAX));
     case OT::I8: {
@@ -386,7 +432,7 @@ struct Plan {
   int8_t rm = -1;          // the operand in ModRM.rm, -1 none
   uint8_t reg_field = 0;   // ModRM.reg: the register operand's number or the form's digit
   int8_t imm = -1;         // the immediate operand, -1 none
-  uint8_t imm_bytes = 0;   // 1 (I8, IB) or 4 (I32)
+  uint8_t imm_bytes = 0;   // 1 (I8, IB), 4 (I32) or 8 (I64)
   int8_t rel = -1;         // the branch displacement operand, -1 none
   uint16_t rel_kind = 0;   // Rel8 or Rel32
 };
@@ -427,6 +473,7 @@ Plan make_plan(const Form& f, const Instruction& in) {
     const OT t = f.ops[i];
     if (t == OT::I8 || t == OT::IB) p.imm = int8_t(i), p.imm_bytes = 1;
     else if (t == OT::I32) p.imm = int8_t(i), p.imm_bytes = 4;
+    else if (t == OT::I64) p.imm = int8_t(i), p.imm_bytes = 8;
     else if (is_rel_type(t)) p.rel = int8_t(i), p.rel_kind = t == OT::Rel8 ? Rel8 : Rel32;
   }
   return p;
@@ -489,6 +536,7 @@ void encode_hook(const Instruction& in, bool long_form, Encoding& out) {
     const int64_t v = in.ops[size_t(p->imm)].imm;
     if (p->imm_bytes == 1) bytes.put(uint8_t(v));
     else bytes.put32(uint32_t(v));
+    if (p->imm_bytes == 8) bytes.put32(uint32_t(uint64_t(v) >> 32));
   }
   if (p->rel >= 0) put_fixup(*p, in.ops[size_t(p->rel)], bytes, out);
   out.size = uint8_t(bytes.n);
@@ -612,8 +660,10 @@ bool opcode_matches(const Form& f, const uint8_t* op, unsigned len) {
 // costs the same for the first form and the last (the loader decodes every
 // instruction of an image; docs/image-format.md, "The x86-64 code check").
 struct DecodeIndex {
-  static int prefix_slot(uint8_t prefix) { return prefix == 0 ? 0 : prefix == 0x66 ? 1 : prefix == 0xF3 ? 2 : -1; }
-  std::array<std::array<std::array<std::vector<const Form*>, 256>, 2>, 3> by;
+  static int prefix_slot(uint8_t prefix) {
+    return prefix == 0 ? 0 : prefix == 0x66 ? 1 : prefix == 0xF3 ? 2 : prefix == 0xF2 ? 3 : -1;
+  }
+  std::array<std::array<std::array<std::vector<const Form*>, 256>, 2>, 4> by;
   DecodeIndex() {
     for (const Form& f : kForms) {
       int slot = prefix_slot(f.prefix);
@@ -707,6 +757,9 @@ bool decode_with(const Form& f, Reader rd, size_t start, uint8_t rex, const uint
     } else if (t == OT::I32) {
       int64_t v = int32_t(rd.u32());
       o = Operand::i(f.w ? v : int64_t(uint32_t(v)));
+    } else if (t == OT::I64) {
+      uint64_t low = rd.u32();
+      o = Operand::i(int64_t(low | uint64_t(rd.u32()) << 32));
     } else if (t == OT::Rel8) {
       int64_t d = int8_t(rd.u8());
       o = Operand::a(int64_t(rd.pos) + d);
@@ -736,7 +789,7 @@ std::optional<Decoded> decode(std::span<const uint8_t> code, size_t offset, Deco
   Reader rd{code, offset};
   uint8_t prefix = 0, rex = 0;
   uint8_t b = rd.u8();
-  if (b == 0x66 || b == 0xF3) prefix = b, b = rd.u8();
+  if (b == 0x66 || b == 0xF3 || b == 0xF2) prefix = b, b = rd.u8();
   if ((b & 0xF0) == 0x40) rex = b, b = rd.u8();
   uint8_t op[2] = {b, 0};
   unsigned len = 1;

@@ -28,7 +28,7 @@ constexpr Reg xmm(unsigned n) { return {RegClass::Xmm, uint8_t(n)}; }
 constexpr Reg rip() { return {RegClass::Rip, 0}; }
 enum RegNum : uint8_t { AX, CX, DX, BX, SP, BP, SI, DI, R8, R9, R10, R11, R12, R13, R14, R15 };
 
-enum class Size : uint8_t { None, Byte, Dword, Qword };
+enum class Size : uint8_t { None, Byte, Dword, Qword, Word };  // Word: movzx / movsx of a 16-bit value
 
 // [base + index*scale + disp]; base may be a Gp64 register, rip or absent,
 // index a Gp64 register other than rsp or absent.
@@ -68,6 +68,11 @@ enum class Mnemonic : uint8_t {
   Setcc, Cmovcc, Jcc, Jmp, Call, Ret, Push, Pop, Nop,
   Movss, Movd, Cvtsi2ss, Cvttss2si,
   Addss, Subss, Mulss, Divss, Sqrtss, Minss, Maxss, Ucomiss, Andps, Xorps,
+  // the typed instructions (docs/x86.md, "Typed instructions"): 64-bit
+  // integers, binary64, the conversions, unsigned division, rotations
+  Movsd, Addsd, Subsd, Mulsd, Divsd, Sqrtsd, Minsd, Maxsd, Ucomisd,
+  Cvtss2sd, Cvtsd2ss, Cvtsi2sd, Cvttsd2si, Cvtsd2si, Movq,
+  Cwde, Cdqe, Cqo, Div, Rol, Ror,
   Count_
 };
 

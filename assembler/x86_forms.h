@@ -10,13 +10,14 @@ namespace ldc::as::x86::detail {
 enum class OT : uint8_t {
   None,
   R8, R32, R64, X,          // registers
-  M8, M32, M64, MA,         // memory (MA: an address, for lea)
-  RM8, RM32, RM64, XM32,    // register or memory
+  M8, M16, M32, M64, MA,    // memory (MA: an address, for lea)
+  RM8, RM32, RM64, XM32, XM64,  // register or memory
   Al, Eax, Rax, Cl,         // fixed registers
   One,                      // the immediate 1 (implicit)
   I8,                       // imm8, sign-extended to the operand size
   IB,                       // imm8 as is (byte operand, shift count)
   I32,                      // imm32 (sign-extended for 64-bit operations)
+  I64,                      // imm64 (mov r64, imm64 only)
   Rel8, Rel32,              // branch displacement
 };
 
@@ -33,7 +34,7 @@ enum class Enc : uint8_t {
 struct Form {
   Mnemonic mn;
   OT ops[3];
-  uint8_t prefix;    // 0, 0x66 or 0xF3 (mandatory prefix)
+  uint8_t prefix;    // 0, 0x66, 0xF3 or 0xF2 (mandatory prefix)
   uint8_t len;       // opcode length (1, or 2 with 0F)
   uint8_t op[2];
   Enc enc;

@@ -25,7 +25,10 @@ constexpr std::string_view kMnemonics[] = {
     "cmp",   "test",  "shl",   "shr",  "sar",  "not",  "neg",      "imul",      "cdq",
     "idiv",  "set",   "cmov",  "j",    "jmp",  "call", "ret",      "push",      "pop",
     "nop",   "movss", "movd",  "cvtsi2ss", "cvttss2si", "addss", "subss", "mulss", "divss",
-    "sqrtss", "minss", "maxss", "ucomiss", "andps", "xorps"};
+    "sqrtss", "minss", "maxss", "ucomiss", "andps", "xorps",
+    "movsd", "addsd", "subsd", "mulsd", "divsd", "sqrtsd", "minsd", "maxsd", "ucomisd",
+    "cvtss2sd", "cvtsd2ss", "cvtsi2sd", "cvttsd2si", "cvtsd2si", "movq",
+    "cwde", "cdqe", "cqo", "div", "rol", "ror"};
 static_assert(std::size(kMnemonics) == size_t(Mnemonic::Count_));
 
 constexpr std::string_view kConds[] = {"o", "no", "b", "ae", "e", "ne", "be", "a",
@@ -84,6 +87,7 @@ std::optional<Size> size_by_name(std::string_view s) {
   if (s == "byte") return Size::Byte;
   if (s == "dword") return Size::Dword;
   if (s == "qword") return Size::Qword;
+  if (s == "word") return Size::Word;
   return std::nullopt;
 }
 
@@ -232,7 +236,7 @@ class Parser {
         if (r->cls == RegClass::Rip) fail("rip is only allowed as a memory base");
         return Operand::r(*r);
       }
-      if (w == "word" || w == "xmmword") fail("operand size '" + w + "' is not supported");
+      if (w == "xmmword") fail("operand size '" + w + "' is not supported");
       if (!branch) fail("unexpected '" + std::string(word) + "'");
       if (is_reserved(w)) fail("'" + std::string(word) + "' cannot be a label");
       return Operand::l(std::string(word));
@@ -325,6 +329,7 @@ std::string mem_text(const Mem& m) {
     case Size::Byte: s = "byte ptr "; break;
     case Size::Dword: s = "dword ptr "; break;
     case Size::Qword: s = "qword ptr "; break;
+    case Size::Word: s = "word ptr "; break;
     case Size::None: break;
   }
   s += '[';

@@ -13,6 +13,8 @@
 #include "backend-x86/base_savings.h"
 #include "ir/codegen.h"
 #include "ir/scanopt.h"
+#include "ir/mathfn.h"
+#include "ir/typed.h"
 
 namespace ldc {
 namespace {
@@ -350,6 +352,44 @@ class Gen : public ClassGen<Gen> {
   void end_skip(const std::string& skip) {
     if (!skip.empty()) label(skip);
   }
+
+  // ---- the typed instructions (docs/x86.md, "Typed instructions"; ir/typed.h)
+ public:
+  void set_il_offset(uint32_t off) { il_offset_ = off; }
+
+ private:
+  uint32_t il_offset_ = 0;  // the IL byte offset of the instruction being compiled (an IDX's fault record)
+  int64_t idx_span_ = -1;   // the last IDX's hi - lo: the bound of the LDX / STX right after it
+  void typed(const ldc::Instr& in);
+  void typed_compare(const ldc::Instr& in);
+  void typed_move(const ldc::Instr& in);
+  void typed_arith(const ldc::Instr& in);
+  void typed_divmod(const ldc::Instr& in);
+  void typed_minmax(const ldc::Instr& in);
+  void typed_logic(const ldc::Instr& in);
+  void typed_shift(const ldc::Instr& in);
+  void typed_neg_abs(const ldc::Instr& in);
+  void typed_math(const ldc::Instr& in);
+  void typed_conv(const ldc::Instr& in);
+  void typed_idx(const ldc::Instr& in);
+  void typed_indexed(const ldc::Instr& in);
+  uint32_t taddr(const ldc::Operand& o) const { return L_.addr(o.area, o.index); }
+  void mov_imm(Reg r64, uint64_t v);
+  void load32(Ty t, const ldc::Operand& o, Reg r);
+  void load_raw32(const ldc::Operand& o, Reg r);
+  void load64(Ty t, const ldc::Operand& o, Reg r);
+  void normalize(Ty t, Reg r);
+  void store_int_reg(Ty t, RegNum n, const ldc::Operand& d);
+  void load_x(Ty t, const ldc::Operand& o, Reg x);
+  void load_xd(Ty t, const ldc::Operand& o, Reg x);
+  Operand real_src(Ty t, const ldc::Operand& o, Reg x);
+  void store_x(Ty t, Reg x, const ldc::Operand& d);
+  void store_xd(Ty t, Reg x, const ldc::Operand& d);
+  void double_const(Reg x, double d);
+  void real_to_unsigned();
+  void unsigned_to_real(Ty to);
+  void guarded_div64(bool is_signed);
+  void call_math(int slot);
 };
 
 // The x86 forms of each relation, in the order of ops.def's REL table.
@@ -946,6 +986,691 @@ void Gen::flow(const ldc::Instr& in) {
   emit(std::move(j));
 }
 
+// ------------------------------------------------------------ typed instructions
+//
+// docs/x86.md, "Typed instructions": the IEC types at their widths, exactly as
+// ir/typed.h computes them.  A type of up to 32 bits works in a 32-bit
+// register, extended to 32 bits as its cell holds it (movsx / movzx loads); a
+// 64-bit type in a 64-bit register; REAL and LREAL in xmm0 / xmm1.  Add, sub,
+// mul, the logic and neg depend only on the low bits of their operands: they
+// take the raw cells and the store cuts the result to the width.  Every typed
+// instruction but the compares is skipped by a branch without power (the
+// -O2 gating by cmov is for the INT32 words); none where the power is on for
+// certain.
+namespace {
+const Reg rax = r64(AX), rcx = r64(CX), rdx = r64(DX), r10 = r64(R10), r11 = r64(R11);
+Operand Q(uint32_t addr) { return Operand::m(mem_at(Size::Qword, addr)); }
+Operand W16(uint32_t addr) { return Operand::m(mem_at(Size::Word, addr)); }
+int ty_bits(Ty t) { return ty_info(t).bits; }
+bool two_cells(Ty t) { return ty_info(t).cells == 2; }
+bool is_tconst(const ldc::Operand& o) { return o.kind == OpdKind::ConstT || o.kind == OpdKind::ConstInt; }
+uint64_t tconst(const ldc::Operand& o) { return o.kind == OpdKind::ConstT ? o.bits() : uint64_t(int64_t(o.ival)); }
+constexpr double kNsPerMsD = double(typed::kNsPerMs);
+constexpr uint64_t kSignBit64 = uint64_t(1) << 63;
+}  // namespace
+
+// r (64-bit) = v, in the shortest form
+void Gen::mov_imm(Reg r, uint64_t v) {
+  if (v <= UINT32_MAX) emit(M::Mov, {R(r32(r.num)), I(int64_t(v))});
+  else emit(M::Mov, {R(r), I(int64_t(v))});  // imm32 sign-extended, or movabs
+}
+
+// r (32-bit) = o's value of type t (up to 32 bits), extended to 32 bits as its cell holds it
+void Gen::load32(Ty t, const ldc::Operand& o, Reg r) {
+  if (is_tconst(o)) return emit(M::Mov, {R(r), I(int64_t(uint32_t(tconst(o))))});
+  const uint32_t a = taddr(o);
+  const bool sgn = typed::is_signed(t);
+  if (t == Ty::BOOL) {  // any byte but 0 is 1 (typed::load)
+    emit(M::Cmp, {B(a), I(0)});
+    emit(make_cc(M::Setcc, Cond::NE, {R(r8(r.num))}));
+    return emit(M::Movzx, {R(r), R(r8(r.num))});
+  }
+  switch (ty_bits(t)) {
+    case 8: return emit(sgn ? M::Movsx : M::Movzx, {R(r), B(a)});
+    case 16: return emit(sgn ? M::Movsx : M::Movzx, {R(r), W16(a)});
+    default: return emit(M::Mov, {R(r), Dw(a)});
+  }
+}
+
+// r (32-bit) = o's cell as it is (the low bits of a wrapping operation)
+void Gen::load_raw32(const ldc::Operand& o, Reg r) {
+  if (is_tconst(o)) return emit(M::Mov, {R(r), I(int64_t(uint32_t(tconst(o))))});
+  emit(M::Mov, {R(r), Dw(taddr(o))});
+}
+
+// r (64-bit) = o's canonical value of type t (typed.h: sign- or zero-extended)
+void Gen::load64(Ty t, const ldc::Operand& o, Reg r) {
+  if (is_tconst(o)) return mov_imm(r, tconst(o));
+  if (two_cells(t)) return emit(M::Mov, {R(r), Q(taddr(o))});
+  load32(t, o, r32(r.num));  // a 32-bit write clears bits 63..32: zero-extended
+  if (!typed::is_signed(t)) return;
+  if (r.num == AX) return emit(M::Cdqe, {});
+  emit(M::Shl, {R(r), I(32)});
+  emit(M::Sar, {R(r), I(32)});
+}
+
+// r (32-bit) cut to t's width and extended as t's cell holds it
+void Gen::normalize(Ty t, Reg r) {
+  if (t == Ty::BOOL || ty_bits(t) >= 32) return;
+  const bool sgn = typed::is_signed(t);
+  if (ty_bits(t) == 8) return emit(sgn ? M::Movsx : M::Movzx, {R(r), R(r8(r.num))});
+  if (!sgn) return emit(M::And, {R(r), I(0xffff)});
+  if (r.num == AX) return emit(M::Cwde, {});
+  emit(M::Shl, {R(r), I(16)});
+  emit(M::Sar, {R(r), I(16)});
+}
+
+// d = register n's value of type t (BOOL: its low byte, 0 or 1)
+void Gen::store_int_reg(Ty t, RegNum n, const ldc::Operand& d) {
+  if (t == Ty::BOOL) return emit(M::Mov, {B(taddr(d)), R(r8(n))});
+  if (two_cells(t)) return emit(M::Mov, {Q(taddr(d)), R(r64(n))});
+  normalize(t, r32(n));
+  emit(M::Mov, {Dw(taddr(d)), R(r32(n))});
+}
+
+// x = o (REAL or LREAL), its bits as they are
+void Gen::load_x(Ty t, const ldc::Operand& o, Reg x) {
+  const bool single = ty_bits(t) == 32;
+  if (is_tconst(o)) {
+    uint64_t v = tconst(o);
+    if (v == 0) return emit(M::Xorps, {R(x), R(x)});
+    if (single) return emit(M::Mov, {R(edx), I(int64_t(uint32_t(v)))}), emit(M::Movd, {R(x), R(edx)});
+    mov_imm(rdx, v);
+    return emit(M::Movq, {R(x), R(rdx)});
+  }
+  if (single) return emit(M::Movss, {R(x), Dw(taddr(o))});
+  emit(M::Movsd, {R(x), Q(taddr(o))});
+}
+
+// x = o's value as a double (a REAL widened: exact)
+void Gen::load_xd(Ty t, const ldc::Operand& o, Reg x) {
+  if (ty_bits(t) == 64) return load_x(t, o, x);
+  if (is_tconst(o)) return double_const(x, double(typed::f32(tconst(o))));
+  emit(M::Cvtss2sd, {R(x), Dw(taddr(o))});
+}
+
+void Gen::double_const(Reg x, double d) {
+  uint64_t v = typed::bits_of(d);
+  if (v == 0) return emit(M::Xorps, {R(x), R(x)});
+  mov_imm(rdx, v);
+  emit(M::Movq, {R(x), R(rdx)});
+}
+
+// the second operand of an SSE operation on type t: o's memory, or x loaded with the constant
+Operand Gen::real_src(Ty t, const ldc::Operand& o, Reg x) {
+  if (!is_tconst(o)) return ty_bits(t) == 32 ? Dw(taddr(o)) : Q(taddr(o));
+  load_x(t, o, x);
+  return R(x);
+}
+
+void Gen::store_x(Ty t, Reg x, const ldc::Operand& d) {
+  if (ty_bits(t) == 32) emit(M::Movss, {Dw(taddr(d)), R(x)});
+  else emit(M::Movsd, {Q(taddr(d)), R(x)});
+}
+
+// d = x, a double, as t (REAL rounds to binary32)
+void Gen::store_xd(Ty t, Reg x, const ldc::Operand& d) {
+  if (ty_bits(t) == 32) emit(M::Cvtsd2ss, {R(x), R(x)});
+  store_x(t, x, d);
+}
+
+void Gen::typed(const ldc::Instr& in) {
+  if (op_info(in.op).push) return typed_compare(in);
+  std::string skip;
+  if (!(bases_ && known_.on())) {
+    skip = fresh();
+    test_top();
+    jcc(Cond::E, skip);
+  }
+  switch (in.op) {
+    case Op::TMOVE: typed_move(in); break;
+    case Op::TADD: case Op::TSUB: case Op::TMUL: typed_arith(in); break;
+    case Op::TDIV: case Op::TMOD: typed_divmod(in); break;
+    case Op::TMIN: case Op::TMAX: typed_minmax(in); break;
+    case Op::TAND: case Op::TOR: case Op::TXOR: case Op::TNOT: typed_logic(in); break;
+    case Op::TSHL: case Op::TSHR: case Op::TROL: case Op::TROR: typed_shift(in); break;
+    case Op::TNEG: case Op::TABS: typed_neg_abs(in); break;
+    case Op::TSQRT: case Op::TLN: case Op::TLOG: case Op::TEXP: case Op::TSIN: case Op::TCOS: case Op::TTAN:
+    case Op::TASIN: case Op::TACOS: case Op::TATAN: case Op::TEXPT: typed_math(in); break;
+    case Op::TCONV: case Op::TTRUNC: typed_conv(in); break;
+    case Op::TIDX: typed_idx(in); break;
+    case Op::TLDX: case Op::TSTX: typed_indexed(in); break;
+    default: throw std::logic_error(std::string("x86 backend: no code for the typed instruction ") + op_info(in.op).name);
+  }
+  end_skip(skip);
+}
+
+// push (a REL b) of type t: signed, unsigned or IEEE (kX86Rels) by the kind
+void Gen::typed_compare(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const X86Rel& x = x86_rel(op_info(in.op).rel);
+  if (typed::is_real(t)) {
+    const bool single = ty_bits(t) == 32;
+    load_x(t, in.a[0], xmm0);
+    load_x(t, in.a[1], xmm1);
+    const M ucom = single ? M::Ucomiss : M::Ucomisd;
+    if (x.swap) emit(ucom, {R(xmm1), R(xmm0)});
+    else emit(ucom, {R(xmm0), R(xmm1)});
+    emit(make_cc(M::Setcc, x.real_cc, {R(al)}));
+    if (x.parity) {
+      emit(make_cc(M::Setcc, x.parity_cc, {R(cl)}));
+      emit(x.parity_op, {R(al), R(cl)});
+    }
+    return push_al();
+  }
+  // signed: the INT32 conditions; unsigned (bits, BOOL): below / above
+  static constexpr Cond kUnsigned[] = {Cond::E, Cond::NE, Cond::B, Cond::BE, Cond::A, Cond::AE};
+  const Cond cc = typed::is_signed(t) ? x.int_cc : kUnsigned[int(op_info(in.op).rel)];
+  if (two_cells(t)) {
+    load64(t, in.a[0], rax);
+    const ldc::Operand& b = in.a[1];
+    if (is_tconst(b) && int64_t(tconst(b)) == int64_t(int32_t(tconst(b)))) emit(M::Cmp, {R(rax), I(int64_t(tconst(b)))});
+    else if (is_tconst(b)) mov_imm(rcx, tconst(b)), emit(M::Cmp, {R(rax), R(rcx)});
+    else emit(M::Cmp, {R(rax), Q(taddr(b))});
+  } else {
+    load32(t, in.a[0], eax);
+    const ldc::Operand& b = in.a[1];
+    if (is_tconst(b)) emit(M::Cmp, {R(eax), I(int64_t(uint32_t(tconst(b))))});
+    else if (ty_bits(t) == 32 && t != Ty::BOOL) emit(M::Cmp, {R(eax), Dw(taddr(b))});
+    else load32(t, b, ecx), emit(M::Cmp, {R(eax), R(ecx)});
+  }
+  emit(make_cc(M::Setcc, cc, {R(al)}));
+  push_al();
+}
+
+// d = a: the value loaded in its type (narrow cells made canonical), stored whole
+void Gen::typed_move(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const ldc::Operand &a = in.a[0], &d = in.a[1];
+  if (is_tconst(a) && t != Ty::BOOL) {
+    const uint64_t v = tconst(a);
+    emit(M::Mov, {Dw(taddr(d)), I(int64_t(uint32_t(v)))});
+    if (two_cells(t)) emit(M::Mov, {Dw(taddr(d) + 4), I(int64_t(uint32_t(v >> 32)))});
+    return;
+  }
+  if (is_tconst(a)) return emit(M::Mov, {B(taddr(d)), I(int64_t(tconst(a) & 1))});
+  if (two_cells(t)) {
+    emit(M::Mov, {R(rax), Q(taddr(a))});
+    return emit(M::Mov, {Q(taddr(d)), R(rax)});
+  }
+  load32(t, a, eax);
+  store_int_reg(t, AX, d);
+}
+
+// ADD SUB MUL: the raw cells (the low bits decide), cut at the store; REAL / LREAL by SSE
+void Gen::typed_arith(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
+  if (typed::is_real(t)) {
+    const bool single = ty_bits(t) == 32;
+    load_x(t, a, xmm0);
+    Operand src = real_src(t, b, xmm1);
+    M m = in.op == Op::TADD ? (single ? M::Addss : M::Addsd) : in.op == Op::TSUB ? (single ? M::Subss : M::Subsd)
+                                                                                  : (single ? M::Mulss : M::Mulsd);
+    emit(m, {R(xmm0), src});
+    return store_x(t, xmm0, d);
+  }
+  const M m = in.op == Op::TADD ? M::Add : in.op == Op::TSUB ? M::Sub : M::Imul;
+  if (two_cells(t)) {
+    load64(t, a, rax);
+    if (is_tconst(b) && int64_t(tconst(b)) == int64_t(int32_t(tconst(b)))) {
+      if (m == M::Imul) emit(M::Imul, {R(rax), R(rax), I(int64_t(tconst(b)))});
+      else emit(m, {R(rax), I(int64_t(tconst(b)))});
+    } else if (is_tconst(b)) {
+      mov_imm(rcx, tconst(b));
+      emit(m, {R(rax), R(rcx)});
+    } else {
+      emit(m, {R(rax), Q(taddr(b))});
+    }
+    return store_int_reg(t, AX, d);
+  }
+  load_raw32(a, eax);
+  if (is_tconst(b)) {
+    const int64_t v = int64_t(int32_t(uint32_t(tconst(b))));
+    if (m == M::Imul) emit(M::Imul, {R(eax), R(eax), I(v)});
+    else emit(m, {R(eax), I(v)});
+  } else {
+    emit(m, {R(eax), Dw(taddr(b))});
+  }
+  store_int_reg(t, AX, d);
+}
+
+// DIV MOD (typed::arith): an integer divisor of 0 gives 0 and sets S0; a
+// signed divisor of -1 gives -a (wrapping) and 0; else C's truncating
+// division of the canonical values.  The division is one of the guarded forms
+// the loader accepts (docs/image-format.md): idiv after its tests of 0 and
+// -1, div after its test of 0.
+void Gen::typed_divmod(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
+  if (typed::is_real(t)) {  // DIV only (ops.def): IEEE, no error
+    load_x(t, a, xmm0);
+    emit(ty_bits(t) == 32 ? M::Divss : M::Divsd, {R(xmm0), real_src(t, b, xmm1)});
+    return store_x(t, xmm0, d);
+  }
+  const bool mod = in.op == Op::TMOD, sgn = typed::is_signed(t), w64 = two_cells(t);
+  const Reg A = w64 ? rax : eax, C = w64 ? rcx : ecx, Dx = w64 ? rdx : edx;
+  std::string zero = fresh(), minus_one = fresh(), store = fresh();
+  if (w64) load64(t, a, rax), load64(t, b, rcx);
+  else load32(t, a, eax), load32(t, b, ecx);
+  emit(M::Test, {R(C), R(C)});
+  jcc(Cond::E, zero);
+  if (sgn) {
+    emit(M::Cmp, {R(C), I(-1)});
+    jcc(Cond::E, minus_one);
+    emit(w64 ? M::Cqo : M::Cdq, {});
+    emit(M::Idiv, {R(C)});
+  } else {
+    emit(M::Xor, {R(edx), R(edx)});
+    emit(M::Div, {R(C)});
+  }
+  if (mod) emit(M::Mov, {R(A), R(Dx)});
+  jump(store);
+  if (sgn) {
+    label(minus_one);
+    if (mod) emit(M::Xor, {R(eax), R(eax)});
+    else emit(M::Neg, {R(A)});
+    jump(store);
+  }
+  label(zero);
+  emit(M::Xor, {R(eax), R(eax)});
+  set_error();
+  label(store);
+  store_int_reg(t, AX, d);
+}
+
+// MIN MAX (typed::arith): b < a ? b : a, b > a ? b : a; minss / maxss
+// (dest b, source a) are exactly that, NaN and signed zeros included
+void Gen::typed_minmax(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const ldc::Operand &a = in.a[0], &b = in.a[1], &d = in.a[2];
+  const bool mx = in.op == Op::TMAX;
+  if (typed::is_real(t)) {
+    const bool single = ty_bits(t) == 32;
+    load_x(t, b, xmm0);
+    emit(single ? (mx ? M::Maxss : M::Minss) : (mx ? M::Maxsd : M::Minsd), {R(xmm0), real_src(t, a, xmm1)});
+    return store_x(t, xmm0, d);
+  }
+  const bool sgn = typed::is_signed(t);
+  const Cond cc = mx ? (sgn ? Cond::G : Cond::A) : (sgn ? Cond::L : Cond::B);
+  if (two_cells(t)) {
+    load64(t, a, rax), load64(t, b, rcx);
+    emit(M::Cmp, {R(rcx), R(rax)});
+    emit(make_cc(M::Cmovcc, cc, {R(rax), R(rcx)}));
+  } else {
+    load32(t, a, eax), load32(t, b, ecx);
+    emit(M::Cmp, {R(ecx), R(eax)});
+    emit(make_cc(M::Cmovcc, cc, {R(eax), R(ecx)}));
+  }
+  store_int_reg(t, AX, d);
+}
+
+// AND OR XOR NOT: BOOL on 0 / 1; bit strings on the raw cells, cut at the store
+void Gen::typed_logic(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const ldc::Operand& a = in.a[0];
+  if (in.op == Op::TNOT) {
+    const ldc::Operand& d = in.a[1];
+    if (t == Ty::BOOL) load32(t, a, eax), emit(M::Xor, {R(eax), I(1)});
+    else if (two_cells(t)) load64(t, a, rax), emit(M::Not, {R(rax)});
+    else load_raw32(a, eax), emit(M::Not, {R(eax)});
+    return store_int_reg(t, AX, d);
+  }
+  const ldc::Operand &b = in.a[1], &d = in.a[2];
+  const M m = in.op == Op::TAND ? M::And : in.op == Op::TOR ? M::Or : M::Xor;
+  if (t == Ty::BOOL) {
+    load32(t, a, eax), load32(t, b, ecx);
+    emit(m, {R(eax), R(ecx)});
+  } else if (two_cells(t)) {
+    load64(t, a, rax), load64(t, b, rcx);
+    emit(m, {R(rax), R(rcx)});
+  } else {
+    load_raw32(a, eax);
+    if (is_tconst(b)) emit(m, {R(eax), I(int64_t(int32_t(uint32_t(tconst(b)))))});
+    else emit(m, {R(eax), Dw(taddr(b))});
+  }
+  store_int_reg(t, AX, d);
+}
+
+// SHL SHR (typed::shift): a count outside 0..width-1 (a negative one too)
+// gives 0; ROL ROR take the count modulo the width, which is what the
+// rotation instructions do at 32 and 64 bits (count & 31, & 63); a BYTE or
+// WORD is replicated over 32 bits first (imul by 0x01010101 / 0x00010001),
+// so rotating those 32 bits by any count rotates each copy by count mod 8 / 16.
+void Gen::typed_shift(const ldc::Instr& in) {
+  const Ty t = in.ty, u = in.src;
+  const ldc::Operand &a = in.a[0], &n = in.a[1], &d = in.a[2];
+  const int w = ty_bits(t);
+  const bool w64 = w == 64;
+  const Reg A = w64 ? rax : eax;
+  if (w64) load64(t, a, rax);
+  else load32(t, a, eax);
+  const bool rotate = in.op == Op::TROL || in.op == Op::TROR;
+  if (is_tconst(n) && !rotate) {
+    const uint64_t c = tconst(n);
+    if ((typed::is_signed(u) && int64_t(c) < 0) || c >= uint64_t(w)) emit(M::Xor, {R(eax), R(eax)});
+    else if (c > 0) emit(in.op == Op::TSHL ? M::Shl : M::Shr, {R(A), I(int64_t(c))});
+    return store_int_reg(t, AX, d);
+  }
+  // the count in rcx: canonical, so a negative signed count is a huge unsigned one
+  if (two_cells(u)) load64(u, n, rcx);
+  else load32(u, n, ecx);
+  if (rotate) {
+    const M m = in.op == Op::TROL ? M::Rol : M::Ror;
+    if (w == 8) emit(M::Imul, {R(eax), R(eax), I(0x01010101)});
+    if (w == 16) emit(M::Imul, {R(eax), R(eax), I(0x00010001)});
+    emit(m, {R(A), R(cl)});
+    return store_int_reg(t, AX, d);
+  }
+  emit(in.op == Op::TSHL ? M::Shl : M::Shr, {R(A), R(cl)});
+  emit(M::Xor, {R(edx), R(edx)});
+  emit(M::Cmp, {R(two_cells(u) ? rcx : ecx), I(w - 1)});
+  emit(make_cc(M::Cmovcc, Cond::A, {R(A), R(w64 ? rdx : edx)}));
+  store_int_reg(t, AX, d);
+}
+
+// NEG ABS: integers wrap at the width (ABS of the most negative is itself);
+// REAL / LREAL flip or clear the sign bit (C's -x and fabs)
+void Gen::typed_neg_abs(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const ldc::Operand &a = in.a[0], &d = in.a[1];
+  const bool neg = in.op == Op::TNEG;
+  if (typed::is_real(t)) {
+    if (ty_bits(t) == 32) {
+      load_raw32(a, eax);
+      emit(neg ? M::Xor : M::And, {R(eax), I(neg ? int64_t(0x80000000u) : 0x7fffffff)});
+      return emit(M::Mov, {Dw(taddr(d)), R(eax)});
+    }
+    load64(t, a, rax);
+    if (neg) mov_imm(rcx, kSignBit64), emit(M::Xor, {R(rax), R(rcx)});
+    else emit(M::Shl, {R(rax), I(1)}), emit(M::Shr, {R(rax), I(1)});
+    return emit(M::Mov, {Q(taddr(d)), R(rax)});
+  }
+  const bool w64 = two_cells(t);
+  const Reg A = w64 ? rax : eax, C = w64 ? rcx : ecx;
+  if (neg) {
+    if (w64) load64(t, a, rax);
+    else load_raw32(a, eax);
+    emit(M::Neg, {R(A)});
+  } else if (typed::is_signed(t)) {  // a < 0 ? -a : a
+    if (w64) load64(t, a, rax);
+    else load32(t, a, eax);
+    emit(M::Mov, {R(C), R(A)});
+    emit(M::Neg, {R(A)});
+    emit(make_cc(M::Cmovcc, Cond::S, {R(A), R(C)}));  // -a negative: a was positive (or the most negative)
+  } else {
+    if (w64) load64(t, a, rax);
+    else load32(t, a, eax);
+  }
+  store_int_reg(t, AX, d);
+}
+
+// xmm0 = f(xmm0) (and xmm1 for pow) through the math table below the image
+void Gen::call_math(int slot) {
+  emit(M::Call, {Operand::m(mem_at(Size::Qword, uint32_t(kMathTableDisp + 8 * slot)))});
+  // the callee may clobber the caller-saved base registers (rdi): point them
+  // back, as real_fn does
+  if (bases_)
+    for (RegNum r : as::x86::kBaseRegs)
+      if (as::x86::caller_saved(r)) emit(M::Lea, {R(r64(r)), Operand::m(mem_at(Size::None, 0))});
+}
+
+// SQRT inline (sqrtsd: exact); the others call the C library's double function
+// (ir.h, MathFn); a REAL goes in widened and comes out rounded, as typed::unary does
+void Gen::typed_math(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const ldc::Operand& a = in.a[0];
+  const ldc::Operand& d = in.a[op_info(in.op).nopd - 1];
+  load_xd(t, a, xmm0);
+  if (in.op == Op::TSQRT) {
+    emit(M::Sqrtsd, {R(xmm0), R(xmm0)});
+  } else {
+    if (in.op == Op::TEXPT) load_xd(t, in.a[1], xmm1);
+    call_math(int(math_fn(in.op)));
+  }
+  store_xd(t, xmm0, d);
+}
+
+// rax = xmm0 (a double) to an unsigned integer as typed::real_to_int: rounded
+// to nearest, ties to even (cvtsd2si under the default MXCSR); 0 for NaN or
+// anything not above 0; 2^63 .. 2^64 from xmm0 - 2^63; INT64_MIN's bits from
+// 2^64 on.  Clobbers rcx, xmm0, xmm1.
+void Gen::real_to_unsigned() {
+  std::string done = fresh(), special = fresh(), zero = fresh();
+  emit(M::Cvtsd2si, {R(rax), R(xmm0)});
+  emit(M::Test, {R(rax), R(rax)});
+  jcc(Cond::G, done);  // (0, 2^63): itself
+  mov_imm(rcx, kSignBit64);
+  emit(M::Cmp, {R(rax), R(rcx)});
+  jcc(Cond::E, special);
+  emit(M::Xor, {R(eax), R(eax)});  // rounded to 0 or below
+  jump(done);
+  label(special);  // NaN, or |xmm0| >= 2^63
+  mov_imm(rcx, typed::bits_of(9223372036854775808.0));
+  emit(M::Movq, {R(xmm1), R(rcx)});
+  emit(M::Ucomisd, {R(xmm0), R(xmm1)});
+  jcc(Cond::B, zero);  // below 2^63, or NaN (unordered sets CF)
+  emit(M::Subsd, {R(xmm0), R(xmm1)});
+  emit(M::Cvtsd2si, {R(rax), R(xmm0)});  // 2^64 on: INT64_MIN, whose bits are the result
+  mov_imm(rcx, kSignBit64);
+  emit(M::Cmp, {R(rax), R(rcx)});
+  jcc(Cond::E, done);
+  emit(M::Xor, {R(rax), R(rcx)});
+  jump(done);
+  label(zero);
+  emit(M::Xor, {R(eax), R(eax)});
+  label(done);
+}
+
+// xmm0 = rax, an unsigned 64-bit value, as `to` (REAL or LREAL) with one
+// rounding: at 2^63 and above, half of it with the lost bit kept sticky, doubled
+// (what a C compiler does for (double) uint64_t)
+void Gen::unsigned_to_real(Ty to) {
+  const bool single = ty_bits(to) == 32;
+  const M cvt = single ? M::Cvtsi2ss : M::Cvtsi2sd;
+  std::string big = fresh(), done = fresh();
+  emit(M::Test, {R(rax), R(rax)});
+  jcc(Cond::S, big);
+  emit(cvt, {R(xmm0), R(rax)});
+  jump(done);
+  label(big);
+  emit(M::Mov, {R(rcx), R(rax)});
+  emit(M::Shr, {R(rcx), I(1)});
+  emit(M::And, {R(eax), I(1)});
+  emit(M::Or, {R(rcx), R(rax)});
+  emit(cvt, {R(xmm0), R(rcx)});
+  emit(single ? M::Addss : M::Addsd, {R(xmm0), R(xmm0)});
+  label(done);
+}
+
+// rax, rdx = rax / rcx, rax % rcx (signed or not), in the guarded form the
+// loader accepts; rcx is a constant other than 0 and -1 here, so the guard's
+// branches are never taken
+void Gen::guarded_div64(bool is_signed) {
+  std::string never = fresh();
+  emit(M::Test, {R(rcx), R(rcx)});
+  jcc(Cond::E, never);
+  if (is_signed) {
+    emit(M::Cmp, {R(rcx), I(-1)});
+    jcc(Cond::E, never);
+    emit(M::Cqo, {});
+    emit(M::Idiv, {R(rcx)});
+  } else {
+    emit(M::Xor, {R(edx), R(edx)});
+    emit(M::Div, {R(rcx)});
+  }
+  label(never);
+}
+
+// CONV (typed::conv) and TRUNC (typed::trunc)
+void Gen::typed_conv(const ldc::Instr& in) {
+  const Ty to = in.ty, from = in.src;
+  const ldc::Operand &a = in.a[0], &d = in.a[1];
+  const TyKind tk = ty_info(to).kind, fk = ty_info(from).kind;
+  auto time_like = [](TyKind k) { return k == TyKind::Time || k == TyKind::Date; };
+  if (in.op == Op::TTRUNC) {  // toward zero; NaN and out of range INT64_MIN, then cut
+    load_xd(from, a, xmm0);
+    emit(M::Cvttsd2si, {R(rax), R(xmm0)});
+    return store_int_reg(to, AX, d);
+  }
+  if (to == from) {
+    ldc::Instr mv = in;
+    mv.op = Op::TMOVE;
+    return typed_move(mv);
+  }
+  if (tk == TyKind::Bool) {  // != 0 (a NaN too)
+    if (fk == TyKind::Real) {
+      load_xd(from, a, xmm0);
+      emit(M::Xorps, {R(xmm1), R(xmm1)});
+      emit(M::Ucomisd, {R(xmm0), R(xmm1)});
+      emit(make_cc(M::Setcc, Cond::NE, {R(al)}));
+      emit(make_cc(M::Setcc, Cond::P, {R(cl)}));
+      emit(M::Or, {R(al), R(cl)});
+    } else {
+      load64(from, a, rax);
+      emit(M::Test, {R(rax), R(rax)});
+      emit(make_cc(M::Setcc, Cond::NE, {R(al)}));
+    }
+    return emit(M::Mov, {B(taddr(d)), R(al)});
+  }
+  if (fk == TyKind::Real) {
+    load_xd(from, a, xmm0);
+    if (tk == TyKind::Real) return store_xd(to, xmm0, d);
+    if (time_like(tk)) {  // ms to ns, toward zero
+      double_const(xmm1, kNsPerMsD);
+      emit(M::Mulsd, {R(xmm0), R(xmm1)});
+      emit(M::Cvttsd2si, {R(rax), R(xmm0)});
+      return store_int_reg(to, AX, d);
+    }
+    if (typed::is_signed(to)) emit(M::Cvtsd2si, {R(rax), R(xmm0)});  // nearest, ties to even; INT64_MIN outside
+    else real_to_unsigned();
+    return store_int_reg(to, AX, d);
+  }
+  load64(from, a, rax);
+  if (time_like(fk)) {
+    if (tk == TyKind::Real) {  // ns to ms
+      emit(M::Cvtsi2sd, {R(xmm0), R(rax)});
+      double_const(xmm1, kNsPerMsD);
+      emit(M::Divsd, {R(xmm0), R(xmm1)});
+      return store_xd(to, xmm0, d);
+    }
+    if (tk == TyKind::Time || tk == TyKind::Date) {
+      if (from == Ty::DT && (to == Ty::DATE || to == Ty::TOD)) {  // the day, floored
+        emit(M::Mov, {R(r64(R8)), R(rax)});
+        mov_imm(rcx, uint64_t(typed::kNsPerDay));
+        guarded_div64(true);  // rax = ns / day, rdx = ns % day
+        emit(M::Mov, {R(rcx), R(rdx)});
+        emit(M::Sar, {R(rcx), I(63)});
+        emit(M::Add, {R(rax), R(rcx)});  // floor: one day less where the remainder is negative
+        mov_imm(rcx, uint64_t(typed::kNsPerDay));
+        emit(M::Imul, {R(rax), R(rcx)});  // the day's start
+        if (to == Ty::TOD) emit(M::Sub, {R(r64(R8)), R(rax)}), emit(M::Mov, {R(rax), R(r64(R8))});
+      }
+      return store_int_reg(to, AX, d);
+    }
+    mov_imm(rcx, uint64_t(typed::kNsPerMs));  // whole ms, toward zero
+    guarded_div64(true);
+    return store_int_reg(to, AX, d);
+  }
+  // from BOOL, an integer or a bit string: rax canonical
+  if (tk == TyKind::Real) {
+    if (!typed::is_signed(from) && two_cells(from)) unsigned_to_real(to);
+    else emit(ty_bits(to) == 32 ? M::Cvtsi2ss : M::Cvtsi2sd, {R(xmm0), R(rax)});
+    return store_x(to, xmm0, d);
+  }
+  if (time_like(tk)) emit(M::Imul, {R(rax), R(rax), I(int64_t(typed::kNsPerMs))});  // ms to ns, wrapping
+  store_int_reg(to, AX, d);
+}
+
+// IDX (typed::index_ok): r11 = index - lo where lo <= index <= hi (as the
+// loader's check of each LDX / STX expects it: 0 .. hi - lo), else the fault
+// record (Sys+8 kind, Sys+12 this IDX's IL offset, Sys+16 the index) and the
+// scan ends
+void Gen::typed_idx(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const int64_t lo = int32_t(tconst(in.a[1])), hi = int32_t(tconst(in.a[2])), span = hi - lo;
+  std::string ok = fresh(), fault = fresh();
+  load64(t, in.a[0], rax);
+  if (!typed::is_signed(t) && two_cells(t) && lo < 0) {  // above INT64_MAX: outside, whatever lo is
+    emit(M::Test, {R(rax), R(rax)});
+    jcc(Cond::S, fault);
+  }
+  emit(M::Mov, {R(r11), R(rax)});
+  emit(M::Sub, {R(r11), I(lo)});
+  if (span <= INT32_MAX) emit(M::Cmp, {R(r11), I(span)});
+  else mov_imm(rcx, uint64_t(span)), emit(M::Cmp, {R(r11), R(rcx)});
+  jcc(Cond::BE, ok);
+  label(fault);
+  emit(M::Mov, {Dw(kSysFault), I(kFaultIndex)});
+  emit(M::Mov, {Dw(kSysFaultAt), I(int64_t(il_offset_))});
+  emit(M::Mov, {Q(kSysFaultValue), R(rax)});
+  Instruction j = make(M::Jmp, {L(kX86ExitLabel)});
+  j.long_branch = true;
+  emit(std::move(j));
+  label(ok);
+  idx_span_ = span;
+}
+
+// LDX / STX: element base + r11 * stride.  The access is right after its own
+// bounds check, `cmp <index>, <last byte offset>; ja scan_exit`, on the very
+// register it indexes with: the loader's code check verifies that pair and
+// the extent (docs/image-format.md), whatever the IDX before did.  A stride
+// whose bytes are 1, 2, 4 or 8 scales r11; another is multiplied into r10.
+void Gen::typed_indexed(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const bool ldx = in.op == Op::TLDX;
+  const ldc::Operand& base = in.a[ldx ? 0 : 1];
+  const int64_t stride = int32_t(tconst(in.a[ldx ? 1 : 2]));
+  if (idx_span_ < 0) throw std::logic_error("x86 backend: LDX / STX not right after an IDX");
+  const int64_t span = idx_span_;
+  const int64_t bytes = stride * int64_t(L_.elem_size(base.area));
+  if (!ldx) {  // the value first
+    if (t == Ty::BOOL) load32(t, in.a[0], eax);
+    else if (two_cells(t)) load64(t, in.a[0], rax);
+    else load32(t, in.a[0], eax);
+  }
+  // the element's bytes as accessed: a BOOL's byte, a 64-bit type's two cells, a
+  // load of a narrow type its low 8 or 16 bits, else the whole cell
+  Size size = t == Ty::BOOL ? Size::Byte : two_cells(t) ? Size::Qword : Size::Dword;
+  if (ldx && ty_bits(t) == 8) size = Size::Byte;
+  if (ldx && ty_bits(t) == 16) size = Size::Word;
+  Mem m = mem_at(size, taddr(base));
+  if (bytes != 0) {
+    Reg idx = r11;
+    int64_t bound = span;
+    if (bytes == 1 || bytes == 2 || bytes == 4 || bytes == 8) {
+      m.scale = uint8_t(bytes);
+    } else {
+      emit(M::Imul, {R(r10), R(r11), I(bytes)});
+      idx = r10;
+      bound = span * bytes;
+    }
+    m.index = idx;
+    emit(M::Cmp, {R(idx), I(bound)});
+    Instruction j = make_cc(M::Jcc, Cond::A, {L(kX86ExitLabel)});
+    j.long_branch = true;
+    emit(std::move(j));
+  }
+  if (!ldx) {
+    if (t == Ty::BOOL) return emit(M::Mov, {Operand::m(m), R(al)});
+    return emit(M::Mov, {Operand::m(m), R(two_cells(t) ? rax : eax)});
+  }
+  const ldc::Operand& d = in.a[2];
+  if (t == Ty::BOOL) {
+    emit(M::Cmp, {Operand::m(m), I(0)});
+    emit(make_cc(M::Setcc, Cond::NE, {R(al)}));
+    return emit(M::Mov, {B(taddr(d)), R(al)});
+  }
+  if (two_cells(t)) {
+    emit(M::Mov, {R(rax), Operand::m(m)});
+    return emit(M::Mov, {Q(taddr(d)), R(rax)});
+  }
+  const bool sgn = typed::is_signed(t);
+  if (ty_bits(t) < 32) emit(sgn ? M::Movsx : M::Movzx, {R(eax), Operand::m(m)});
+  else emit(M::Mov, {R(eax), Operand::m(m)});
+  emit(M::Mov, {Dw(taddr(d)), R(eax)});
+}
+
 // ------------------------------------------------------------ -O1 peephole
 //
 // Over the -O0 templates of one rung:
@@ -966,8 +1691,9 @@ bool writes_reg(const Instruction& i, uint8_t num) {
   switch (i.mnemonic) {  // (one jump by a table: WordInEax asks this of every instruction)
     // a call keeps the callee-saved registers (the shared routines and libm alike): ebp's stack survives it
     case M::Call: return !(num == BX || num == BP || num >= R12);
-    case M::Idiv: if (num == AX || num == DX) return true; break;
-    case M::Cdq: if (num == DX) return true; break;
+    case M::Idiv: case M::Div: if (num == AX || num == DX) return true; break;
+    case M::Cdq: case M::Cqo: if (num == DX) return true; break;
+    case M::Cwde: case M::Cdqe: return num == AX;
     case M::Imul: if (i.num_operands == 1) return num == AX || num == DX; break;  // edx:eax = eax * r/m32
     case M::Cmp: case M::Test: case M::Push: case M::Jmp: case M::Jcc: case M::Ucomiss: return false;
     default: break;
@@ -983,7 +1709,7 @@ bool reads_reg(const Instruction& i, uint8_t num) {
       if (!pure_write) return true;
     }
   }
-  return i.mnemonic == M::Idiv && num == DX;
+  return (i.mnemonic == M::Idiv || i.mnemonic == M::Div) && num == DX;
 }
 bool same_text(const Instruction& i, const char* text) {
   static std::map<const char*, Instruction> cache;  // by the literal's address: no string made per call
@@ -1054,7 +1780,8 @@ void peephole(std::vector<Item>& items, std::vector<uint32_t>& starts, bool shar
       continue;
     }
     if (same_text(in, "test ebp, 1") && eax_top) { in = parse("test eax, eax"); continue; }
-    if (in.mnemonic == M::Movzx && is_reg(in.ops[0], AX) && in.ops[1].kind == OperandKind::Mem && mem_uses(in.ops[1], BX)) {
+    if (in.mnemonic == M::Movzx && is_reg(in.ops[0], AX) && in.ops[1].kind == OperandKind::Mem && mem_uses(in.ops[1], BX) &&
+        in.ops[1].mem.size == Size::Byte && !in.ops[1].mem.index.valid()) {
       if (eax_byte == in.ops[1].mem.disp) { drop[i] = 1; continue; }
       eax_top = false;
       eax_byte = in.ops[1].mem.disp;
@@ -1215,7 +1942,9 @@ bool rewritable(const Instruction& in, const as::x86::Operand& o) {
   return o.kind == OperandKind::Mem && in.mnemonic != M::Call && in.mnemonic != M::Lea && o.mem.base == kO2Image &&
          !o.mem.index.valid() && (o.mem.disp < -128 || o.mem.disp > 127);
 }
-uint32_t mem_width(const Mem& m) { return m.size == Size::Dword ? 4 : m.size == Size::Qword ? 8 : 1; }
+uint32_t mem_width(const Mem& m) {
+  return m.size == Size::Dword ? 4 : m.size == Size::Qword ? 8 : m.size == Size::Word ? 2 : 1;
+}
 
 namespace {
 
@@ -1567,6 +2296,7 @@ class Blocks {
     uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into ebp
     for (size_t k = 0; k < r.code.size(); k++) {
       const ldc::Instr& in = r.code[k];
+      if (in.op == ldc::Op::TIDX) g.set_il_offset(il_offset(ri, k));
       starts.push_back(uint32_t(b.items.size()));
       if (notes_) b.items.push_back(Item::note(instr_text(in)));
       if (!facts_) { g.instr(in); continue; }
@@ -1631,8 +2361,22 @@ class Blocks {
   }
 
  private:
+  // The IL byte offset of rung ri's instruction k in the image's IL section
+  // (encode_il's instr_offset): an IDX's fault record names it.  Encoded once,
+  // for the first IDX.
+  uint32_t il_offset(size_t ri, size_t k) {
+    if (il_offsets_.empty()) {
+      il_offsets_ = encode_il(p_).instr_offset;
+      size_t n = 0;
+      for (const Rung& r : p_.rungs) rung_first_.push_back(n), n += r.code.size();
+    }
+    return il_offsets_[rung_first_[ri] + k];
+  }
+
   const Program& p_;
   const Layout& layout_;
+  std::vector<uint32_t> il_offsets_;
+  std::vector<size_t> rung_first_;
   int opt_;
   bool o2_, notes_;
   bool shared_;  // shares_stack(p): the stack lives in ebp from rung to rung

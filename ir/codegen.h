@@ -6,6 +6,7 @@
 #pragma once
 
 #include <map>
+#include <stdexcept>
 #include <span>
 #include <string>
 #include <vector>
@@ -61,6 +62,9 @@ void gen_by_class(Gen& g, const Instr& in) {
     case OpClass::Timer: return g.timer(in);
     case OpClass::Counter: return g.counter(in);
     case OpClass::Flow: return g.flow(in);
+    case OpClass::Typed:  // the typed instructions (ir/typed.h): a target that has no code for them refuses them
+      if constexpr (requires { g.typed(in); }) return g.typed(in);
+      else throw std::logic_error(std::string("no code for the typed instruction ") + op_info(in.op).name + " on this target");
   }
 }
 

@@ -8,6 +8,7 @@
 #include <new>
 
 #include "ir/ir.h"
+#include "ir/mathfn.h"
 
 namespace ldc {
 namespace {
@@ -15,6 +16,18 @@ namespace {
 // One function of our own per FN row (the table holds their addresses).
 #define FN(name, libm, called, ints) float fn_##name(float x) { return ::libm(x); }
 #include "ir/ops.def"
+
+// The typed instructions' double functions (ir.h, MathFn), as ir/typed.h calls them.
+double m_log(double x) { return std::log(x); }
+double m_log10(double x) { return std::log10(x); }
+double m_exp(double x) { return std::exp(x); }
+double m_sin(double x) { return std::sin(x); }
+double m_cos(double x) { return std::cos(x); }
+double m_tan(double x) { return std::tan(x); }
+double m_asin(double x) { return std::asin(x); }
+double m_acos(double x) { return std::acos(x); }
+double m_atan(double x) { return std::atan(x); }
+double m_pow(double x, double y) { return std::pow(x, y); }
 
 size_t page_size() {
   static const size_t page = size_t(sysconf(_SC_PAGESIZE));
@@ -32,7 +45,18 @@ RealFnPtr real_fn(RealFn f) {
   return table[size_t(f)];
 }
 
+const void* math_fn_address(MathFn f) {
+  static const void* const table[] = {reinterpret_cast<const void*>(m_log),  reinterpret_cast<const void*>(m_log10),
+                                      reinterpret_cast<const void*>(m_exp),  reinterpret_cast<const void*>(m_sin),
+                                      reinterpret_cast<const void*>(m_cos),  reinterpret_cast<const void*>(m_tan),
+                                      reinterpret_cast<const void*>(m_asin), reinterpret_cast<const void*>(m_acos),
+                                      reinterpret_cast<const void*>(m_atan), reinterpret_cast<const void*>(m_pow)};
+  static_assert(sizeof table / sizeof table[0] == size_t(kMathSlots));
+  return table[size_t(f)];
+}
+
 static_assert(kCallTableDisp + 8 * kCallSlots <= 0, "the call table lies below the image");
+static_assert(kMathTableDisp + 8 * kMathSlots == kCallTableDisp, "the typed math table lies right below the REAL one");
 
 void ImageBytes::map(size_t size, Sharing sharing) {
   const size_t page = page_size();
@@ -55,6 +79,10 @@ void ImageBytes::map(size_t size, Sharing sharing) {
   for (int k = 0; k < kCallSlots; k++) {
     RealFnPtr f = real_fn(RealFn(k));
     std::memcpy(image_ + kCallTableDisp + 8 * k, &f, sizeof f);
+  }
+  for (int k = 0; k < kMathSlots; k++) {
+    const void* f = math_fn_address(MathFn(k));
+    std::memcpy(image_ + kMathTableDisp + 8 * k, &f, sizeof f);
   }
   std::memset(image_ + size, kSlackByte, pages * page - size);
   if (mprotect(table, page, PROT_READ) != 0) {

@@ -22,6 +22,10 @@ bool is_device(const Operand& o) {
   return o.kind == OpdKind::Bit || o.kind == OpdKind::Int || o.kind == OpdKind::Real;
 }
 bool is_const(const Operand& o) { return o.kind == OpdKind::ConstInt || o.kind == OpdKind::ConstReal; }
+// A typed instruction (class Typed) is a barrier to every fact here: its
+// operands may take two words, its LDX / STX reach any element of an array,
+// and an IDX may end the scan (docs/x86.md, "Typed instructions").
+bool is_typed(Op op) { return op_info(op).klass == OpClass::Typed; }
 bool is_app(Op op) {
   OpClass k = op_info(op).klass;
   return k == OpClass::Move || k == OpClass::Arith || k == OpClass::Logic || k == OpClass::Special;
@@ -112,7 +116,7 @@ void dead_stores(const Program& p, const Layout& l, const std::vector<char>& on,
     for (size_t k = code.size(); k-- > 0;) {
       const Instr& in = code[k];
       uint32_t i = f.first[ri] + uint32_t(k);
-      if (in.op == Op::JMP || in.op == Op::END) { gen++; continue; }
+      if (in.op == Op::JMP || in.op == Op::END || is_typed(in.op)) { gen++; continue; }
       Access a = access(l, in, on[i]);
       bool dead = a.removable && a.nw > 0;
       for (int w = 0; w < a.nw; w++) dead = dead && stamp[a.writes[w]] == gen;
@@ -209,6 +213,7 @@ class Propagate {
  private:
   void instr(const Instr& in, uint32_t i) {
     const OpInfo& info = op_info(in.op);
+    if (is_typed(in.op)) return known_.clear();
     if (info.klass == OpClass::Timer || info.klass == OpClass::Counter) {
       if (!known_.empty()) known_.erase(l_.addr(info.klass == OpClass::Timer ? Area::TW : Area::CW, in.a[0].index));
       return;
@@ -262,6 +267,10 @@ class Divisions {
     if (!r.labels.empty()) forget();
     for (size_t k = 0; k < r.code.size(); k++) {
       const Op op = r.code[k].op;
+      if (is_typed(op)) {
+        forget();
+        continue;
+      }
       if (pairs_.empty() && !is_divmod(op) && op != Op::JMP && op != Op::END) continue;  // nothing kept to forget
       uint32_t i = first + uint32_t(k);
       const Instr* alt = entry_at(f_.replaced, i);

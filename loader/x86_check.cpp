@@ -13,6 +13,7 @@
 #include <optional>
 
 #include "assembler/x86.h"
+#include "ir/mathfn.h"
 #include "loader/checks.h"
 #include "loader/loader.h"
 
@@ -43,6 +44,7 @@ uint32_t width(x86::Size s) {
     case x86::Size::Byte: return 1;
     case x86::Size::Dword: return 4;
     case x86::Size::Qword: return 8;
+    case x86::Size::Word: return 2;
     case x86::Size::None: return 1;
   }
   return 1;
@@ -90,8 +92,10 @@ std::string base_k_error(const x86::Instruction& in, int i, uint32_t image_size,
 // "" if the memory operand is [img+disp] (img: rbx, or rbp under the -O2
 // frame, pointing `bias` bytes into the image) with [bias+disp, bias+disp+width)
 // inside the image, or, under the -O2 frame, [rdi/r15/r14+disp] with disp in
-// [-128, 127].
-std::string check_mem(const x86::Mem& m, uint32_t image_size, const Bases& bases, x86::Reg img, int32_t bias) {
+// [-128, 127].  An indexed operand [img+reg*s+disp] only where `indexed_checked`:
+// the body's rules found its bounds check right before it (BodyRules::indexed).
+std::string check_mem(const x86::Mem& m, uint32_t image_size, const Bases& bases, x86::Reg img, int32_t bias,
+                      bool indexed_checked = false) {
   const x86::Reg& base = m.base;
   const std::string img_name(x86::reg_name(img)), only = " (only [" + img_name + "+disp] may address memory)";
   if (int b = Bases::which(base); b >= 0 && bases.set) {
@@ -108,6 +112,7 @@ std::string check_mem(const x86::Mem& m, uint32_t image_size, const Bases& bases
   if (base.cls == x86::RegClass::Gp64 && (base.num == x86::SP || (base.num == x86::BP && base != img)))
     return "stack-relative memory operand based on " + std::string(x86::reg_name(base)) + only;
   if (base != img) return "memory operand based on " + std::string(x86::reg_name(base)) + ", not " + img_name;
+  if (m.index.valid() && indexed_checked) return "";
   if (m.index.valid())
     return "indexed memory operand (index " + std::string(x86::reg_name(m.index)) +
            "): its address cannot be checked";
@@ -119,38 +124,39 @@ std::string check_mem(const x86::Mem& m, uint32_t image_size, const Bases& bases
   return "";
 }
 
-// The one form of division ldc emits (x86gen divmod): the divisor in ecx,
-// tested for 0 and -1 (the two divisions that raise #DE) right before it.
-const std::array<x86::Instruction, 6>& guarded_division() {
+// The forms of division ldc emits, each its divisor's tests right before it,
+// so it cannot raise #DE: x86gen divmod's (the divisor in ecx, tested for 0
+// and -1, the two divisions that fault), -O2's safe_divisor, and the typed
+// instructions' (docs/x86.md, "Typed instructions"): the same at 64 bits
+// (cqo; idiv rcx), and the unsigned div after its test of 0 with edx cleared,
+// whose quotient then always fits.
+using Seq = std::vector<x86::Instruction>;
+const std::array<Seq, 5>& guarded_divisions() {
   using M = x86::Mnemonic;
   using O = x86::Operand;
-  static const std::array<x86::Instruction, 6> seq = {
-      x86::make(M::Test, {O::r(x86::r32(x86::CX)), O::r(x86::r32(x86::CX))}),
-      x86::make_cc(M::Jcc, x86::Cond::E, {O::a(0)}),
-      x86::make(M::Cmp, {O::r(x86::r32(x86::CX)), O::i(-1)}),
-      x86::make_cc(M::Jcc, x86::Cond::E, {O::a(0)}),
-      x86::make(M::Cdq),
-      x86::make(M::Idiv, {O::r(x86::r32(x86::CX))})};
-  return seq;
-}
-
-// The -O2 form (as::x86::safe_divisor): a divisor of 0 or -1 replaced by 1.
-const std::array<x86::Instruction, 6>& safe_division() {
-  using M = x86::Mnemonic;
-  static const std::array<x86::Instruction, 6> seq = [] {
-    std::array<x86::Instruction, 6> s;
-    std::span<const x86::Instruction> guard = x86::safe_divisor();
-    std::copy(guard.begin(), guard.end(), s.begin());
-    s[4] = x86::make(M::Cdq);
-    s[5] = x86::make(M::Idiv, {x86::Operand::r(x86::r32(x86::CX))});
-    return s;
+  static const std::array<Seq, 5> seqs = [] {
+    auto signed_form = [](x86::Reg c, M extend) {
+      return Seq{x86::make(M::Test, {O::r(c), O::r(c)}), x86::make_cc(M::Jcc, x86::Cond::E, {O::a(0)}),
+                 x86::make(M::Cmp, {O::r(c), O::i(-1)}), x86::make_cc(M::Jcc, x86::Cond::E, {O::a(0)}),
+                 x86::make(extend), x86::make(M::Idiv, {O::r(c)})};
+    };
+    auto unsigned_form = [](x86::Reg c) {
+      const O edx = O::r(x86::r32(x86::DX));
+      return Seq{x86::make(M::Test, {O::r(c), O::r(c)}), x86::make_cc(M::Jcc, x86::Cond::E, {O::a(0)}),
+                 x86::make(M::Xor, {edx, edx}), x86::make(M::Div, {O::r(c)})};
+    };
+    Seq safe(x86::safe_divisor().begin(), x86::safe_divisor().end());
+    safe.push_back(x86::make(M::Cdq));
+    safe.push_back(x86::make(M::Idiv, {O::r(x86::r32(x86::CX))}));
+    return std::array<Seq, 5>{signed_form(x86::r32(x86::CX), M::Cdq), safe, signed_form(x86::r64(x86::CX), M::Cqo),
+                              unsigned_form(x86::r32(x86::CX)), unsigned_form(x86::r64(x86::CX))};
   }();
-  return seq;
+  return seqs;
 }
 
 // Does the window (the body's last instructions, oldest first) end with the
 // instructions of seq (branch displacements aside)?
-bool ends_with(std::span<const x86::Instruction> window, const std::array<x86::Instruction, 6>& seq) {
+bool ends_with(std::span<const x86::Instruction> window, const Seq& seq) {
   if (window.size() < seq.size()) return false;
   window = window.last(seq.size());
   for (size_t j = 0; j < seq.size(); j++) {
@@ -163,11 +169,12 @@ bool ends_with(std::span<const x86::Instruction> window, const std::array<x86::I
   return true;
 }
 
-// Does the window end with a whole guarded division of either form, its idiv
-// last (branch targets aside)?
-bool is_guarded_division(std::span<const x86::Instruction> window) {
-  static_assert(std::tuple_size_v<std::remove_cvref_t<decltype(guarded_division())>> == 6);
-  return ends_with(window, guarded_division()) || ends_with(window, safe_division());
+// The guarded division the window ends with, its idiv / div last (branch
+// targets aside), or nullptr.
+const Seq* guarded_division(std::span<const x86::Instruction> window) {
+  for (const Seq& seq : guarded_divisions())
+    if (ends_with(window, seq)) return &seq;
+  return nullptr;
 }
 
 // The body's last six instructions seen, oldest first, and their offsets:
@@ -474,13 +481,16 @@ class BodyRules {
           return here() + (w.by_callee ? "calls code that writes " : "writes ") + std::string(x86::reg_name(w.reg)) +
                  ", which the caller owns: only the -O2 frame saves r12-r15";
     using M = x86::Mnemonic;
-    if (in.mnemonic == M::Idiv) {
-      if (!is_guarded_division(window_.insts()))
+    if (in.mnemonic == M::Idiv || in.mnemonic == M::Div) {
+      const Seq* seq = guarded_division(window_.insts());
+      if (!seq)
         return here() +
-               "a division not guarded against 0 and -1 (only 'test ecx, ecx; je; cmp ecx, -1; je; cdq; idiv ecx' or "
-               "'lea edx, [rcx+1]; cmp edx, 1; mov edx, 1; cmovbe ecx, edx; cdq; idiv ecx')";
-      for (size_t back = 0; back + 1 < guarded_division().size(); back++) guarded_.add(window_.offset(back));
+               "a division not guarded against 0 and -1 (only 'test ecx, ecx; je; cmp ecx, -1; je; cdq; idiv ecx', "
+               "'lea edx, [rcx+1]; cmp edx, 1; mov edx, 1; cmovbe ecx, edx; cdq; idiv ecx', the same with rcx and cqo, "
+               "or 'test ecx, ecx; je; xor edx, edx; div ecx' and the same with rcx)";
+      for (size_t back = 0; back + 1 < seq->size(); back++) guarded_.add(window_.offset(back));
     }
+    if (std::string why = indexed(di); !why.empty()) return here() + why;
     if (in.mnemonic == M::Call && in.num_operands && in.ops[0].kind == x86::OperandKind::Address &&
         !std::binary_search(f_.routine_entries.begin(), f_.routine_entries.end(), uint32_t(in.ops[0].imm)))
       return here() +
@@ -506,6 +516,38 @@ class BodyRules {
     if (di.inst.ops[0].kind == x86::OperandKind::Address) return f_.routine_writes;
     static const uint16_t abi = caller_saved_registers();
     return di.inst.ops[0].kind == x86::OperandKind::Mem ? abi : 0;
+  }
+
+  // An indexed memory operand [img + r*s + disp] (an LDX or STX of the typed
+  // instructions) comes right after its bounds check `cmp r, n; ja` on the
+  // same 64-bit register r, with n >= 0 and every byte of [img + disp,
+  // img + disp + n*s + width) inside the image; no branch may land on the
+  // ja or the access (they join the guarded offsets), so the check is never
+  // skipped.  r is then in [0, n] unsigned, whatever the code before did.
+  std::string indexed(const x86::Decoded& di) {
+    const x86::Instruction& in = di.inst;
+    const x86::Mem* m = nullptr;
+    for (unsigned i = 0; i < in.num_operands && i < in.ops.size(); i++)
+      if (in.ops[i].kind == x86::OperandKind::Mem && in.ops[i].mem.index.valid() && di.effects.ops[i] != x86::Use::Addr)
+        m = &in.ops[i].mem;
+    if (!m) return "";
+    const std::span<const x86::Instruction> w = window_.insts();
+    const std::string r(x86::reg_name(m->index));
+    const std::string want = "an indexed access comes right after its bounds check 'cmp " + r + ", n; ja' (docs/image-format.md)";
+    if (m->base != f_.img) return "indexed memory operand based on " + std::string(x86::reg_name(m->base)) + ", not " + img_name_;
+    if (w.size() < 3) return want;
+    const x86::Instruction &cmp = w[w.size() - 3], &ja = w[w.size() - 2];
+    const bool check = cmp.mnemonic == x86::Mnemonic::Cmp && cmp.num_operands == 2 && cmp.ops[0].kind == x86::OperandKind::Reg &&
+                       cmp.ops[0].reg == m->index && cmp.ops[1].kind == x86::OperandKind::Imm && cmp.ops[1].imm >= 0 &&
+                       ja.mnemonic == x86::Mnemonic::Jcc && ja.cond == x86::Cond::A;
+    if (!check) return want;
+    const int64_t first = int64_t(m->disp) + f_.bias, last = first + cmp.ops[1].imm * m->scale + width(m->size);
+    if (first < 0 || last > int64_t(layout_.size))
+      return "indexed memory operand: its bounds check lets it reach image offsets [" + std::to_string(first) + ", " +
+             std::to_string(last) + "), outside the memory image [0, " + hex(layout_.size) + ")";
+    guarded_.add(window_.offset(1));  // the ja
+    guarded_.add(window_.offset(0));  // the access
+    return "";
   }
 
   // A callee may change a base register: the leas resetting each one it may
@@ -556,13 +598,17 @@ std::string check_operands(const x86::Decoded& di, uint32_t code_size, const Off
         // functions below the image (ir.h, kCallTableDisp)
         const x86::Mem& m = o.mem;
         const int64_t off = int64_t(m.disp) + f.bias;  // from the image's start
-        bool table = m.base == f.img && !m.index.valid() && m.size == x86::Size::Qword && off >= kCallTableDisp &&
-                     off < kCallTableDisp + 8 * kCallSlots && (off - kCallTableDisp) % 8 == 0;
+        // (and the typed instructions' math table right below it, kMathTableDisp)
+        bool table = m.base == f.img && !m.index.valid() && m.size == x86::Size::Qword && off >= kMathTableDisp &&
+                     off < kCallTableDisp + 8 * kCallSlots && (off - kMathTableDisp) % 8 == 0;
         if (!table) return at(di.offset) + text_of(in) + ": indirect call not through the REAL function table";
         continue;
       }
       if (branch) return at(di.offset) + text_of(in) + ": indirect branch through memory";
-      if (std::string why = check_mem(o.mem, layout.size, f.bases, f.img, f.bias); !why.empty()) return at(di.offset) + text_of(in) + ": " + why;
+      // an indexed operand in the body passed BodyRules::indexed (its bounds check) already
+      const bool body = di.offset >= f.body && di.offset < f.exit;
+      if (std::string why = check_mem(o.mem, layout.size, f.bases, f.img, f.bias, body); !why.empty())
+        return at(di.offset) + text_of(in) + ": " + why;
     } else if (o.kind == x86::OperandKind::Reg && branch) {
       return at(di.offset) + text_of(in) + ": indirect branch through a register";
     } else if (o.kind == x86::OperandKind::Address) {
@@ -590,7 +636,7 @@ std::string first_branch_into_guard(const Code& code, uint32_t stop, const Offse
       const x86::Operand& o = di.inst.ops[i];
       if (o.kind == x86::OperandKind::Address && o.imm >= 0 && guarded.has(uint64_t(o.imm)))
         return at(di.offset) + text_of(di.inst) + ": branch target " + hex(uint64_t(o.imm)) +
-               " is inside a guarded division (past its test of the divisor)";
+               " is inside a guarded division (past its test of the divisor) or an indexed access's bounds check";
     }
     off += di.length;
   }

@@ -16,6 +16,7 @@
 #include "assembler/c40.h"
 #include "assembler/x86.h"
 #include "assembler/x86_forms.h"
+#include "ir/mathfn.h"
 #include "loader/loader.h"
 #include "runtime/runtime.h"
 #include "runtime/sandbox.h"
@@ -197,7 +198,8 @@ const std::vector<Case>& cases() {
       {"indirect branch: jmp mem", {"jmp qword ptr [rbx-0x40]"}, 0, "indirect branch through memory"},
       {"indirect branch: call through the image", {"call qword ptr [rbx+0x40]"}, 0, "indirect call not through the REAL function table"},
       {"indirect branch: call inside a slot", {"call qword ptr [rbx-0x3c]"}, 0, "indirect call not through the REAL function table"},
-      {"indirect branch: call below the table", {"call qword ptr [rbx-0x48]"}, 0, "indirect call not through the REAL function table"},
+      {"indirect branch: call below the tables", {"call qword ptr [rbx-0x98]"}, 0, "indirect call not through the REAL function table"},
+      {"indirect branch: call inside a math slot", {"call qword ptr [rbx-0x8c]"}, 0, "indirect call not through the REAL function table"},
       {"indirect branch: call past the table", {"call qword ptr [rbx-0x18]"}, 0, "indirect call not through the REAL function table"},
       {"indirect branch: indexed call into the table", {"call qword ptr [rbx+rcx*8-0x40]"}, 0, "indirect call not through the REAL function table"},
       {"indirect branch: call through another base", {"call qword ptr [rcx-0x40]"}, 0, "indirect call not through the REAL function table"},
@@ -240,7 +242,7 @@ const std::vector<Case>& cases() {
       {"fixed registers: push", {"push rax"}, 0, "the stack is touched only by the prologue and the epilogue"},
       {"implicit write: xchg rbx, rax", {"raw: 48 93"}, 0, "undecodable bytes 48 93"},
       {"implicit write: cpuid", {"raw: 0f a2"}, 0, "undecodable bytes 0f a2"},
-      {"implicit write: div ebx", {"raw: f7 f3"}, 0, "undecodable bytes f7 f3"},
+      {"implicit write: div ebx", {"raw: f7 f3"}, 0, "a division not guarded"},
       {"implicit write: leave", {"raw: c9"}, 0, "undecodable bytes c9"},
       {"implicit write: popf", {"raw: 9d"}, 0, "undecodable bytes 9d"},
       {"implicit write: pop rsp", {"raw: 5c"}, 0, "the stack is touched only by the prologue and the epilogue"},
@@ -276,6 +278,43 @@ const std::vector<Case>& cases() {
       {"division: a branch past the safe guard's compare",
        {"jmp 0x8", "lea edx, [rcx+0x1]", "cmp edx, 0x1", "mov edx, 0x1", "cmovbe ecx, edx", "cdq", "idiv ecx", "nop"},
        0, "is inside a guarded division"},
+      // the typed instructions' divisions (docs/x86.md, "Typed instructions"): 64-bit and unsigned
+      {"division: 64-bit idiv, -1 not tested", {"test rcx, rcx", "je @4", "cqo", "idiv rcx", "nop"}, 3, "a division not guarded"},
+      {"division: 64-bit idiv after cdq", {"test rcx, rcx", "je @6", "cmp rcx, -0x1", "je @6", "cdq", "idiv rcx", "nop"}, 5,
+       "a division not guarded"},
+      {"division: div with edx not cleared", {"test ecx, ecx", "je @3", "div ecx", "nop"}, 2, "a division not guarded"},
+      {"division: div of 0 not tested", {"xor edx, edx", "div ecx"}, 1, "a division not guarded"},
+      {"division: div rcx, its test of ecx", {"test ecx, ecx", "je @4", "xor edx, edx", "div rcx", "nop"}, 3, "a division not guarded"},
+      {"division: a branch onto the div", {"jmp @4", "test ecx, ecx", "je @5", "xor edx, edx", "div ecx", "nop"}, 0,
+       "is inside a guarded division"},
+      // indexed accesses (the typed LDX / STX): each right after its bounds
+      // check `cmp r, n; ja` on its own index register, every byte it may
+      // reach inside the image, and no branch past the check
+      {"indexed: no bounds check", {"mov eax, dword ptr [rbx+r11*4+0x100]"}, 0, "comes right after its bounds check"},
+      {"indexed: the check of another register", {"cmp r10, 0x3", "ja @3", "mov eax, dword ptr [rbx+r11*4+0x100]", "nop"}, 2,
+       "comes right after its bounds check"},
+      {"indexed: the check's 32-bit form", {"cmp r11d, 0x3", "ja @3", "mov eax, dword ptr [rbx+r11*4+0x100]", "nop"}, 2,
+       "comes right after its bounds check"},
+      {"indexed: jb for ja", {"cmp r11, 0x3", "jb @3", "mov dword ptr [rbx+r11*4+0x100], eax", "nop"}, 2,
+       "comes right after its bounds check"},
+      {"indexed: a signed test", {"cmp r11, 0x3", "jg @3", "mov dword ptr [rbx+r11*4+0x100], eax", "nop"}, 2,
+       "comes right after its bounds check"},
+      {"indexed: the index written after its check", {"cmp r11, 0x3", "ja @4", "mov r11, rax", "mov eax, dword ptr [rbx+r11*4+0x100]", "nop"},
+       3, "comes right after its bounds check"},
+      {"indexed: a negative bound", {"cmp r11, -0x1", "ja @3", "mov eax, dword ptr [rbx+r11*4+0x100]", "nop"}, 2,
+       "comes right after its bounds check"},
+      {"indexed: the extent leaves the image", {"cmp r11, 0x10000000", "ja @3", "mov qword ptr [rbx+r11*8+0x100], rax", "nop"}, 2,
+       "its bounds check lets it reach"},
+      {"indexed: the last element one byte past", {"cmp r11, " + hex((kSize - 0x100 - 4) / 4 + 1), "ja @3",
+       "mov dword ptr [rbx+r11*4+0x100], eax", "nop"}, 2, "its bounds check lets it reach"},
+      {"indexed: the first element below the image", {"cmp r11, 0x3", "ja @3", "mov eax, dword ptr [rbx+r11*4-0x4]", "nop"}, 2,
+       "its bounds check lets it reach"},
+      {"indexed: based on another register", {"cmp r11, 0x3", "ja @3", "mov eax, dword ptr [rcx+r11*4+0x100]", "nop"}, 2,
+       "indexed memory operand based on rcx"},
+      {"indexed: a jump onto the access", {"jmp @3", "cmp r11, 0x3", "ja @4", "mov eax, dword ptr [rbx+r11*4+0x100]", "nop"}, 0,
+       "or an indexed access's bounds check"},
+      {"indexed: a jump onto the ja", {"jmp @2", "cmp r11, 0x3", "ja @4", "mov eax, dword ptr [rbx+r11*4+0x100]", "nop"}, 0,
+       "or an indexed access's bounds check"},
       // branches into the middle of an instruction
       {"mid-instruction: jmp", {"jmp 0x4", "mov eax, 0xc3c3c3c3"}, 0, "is inside an instruction, not on an instruction boundary"},
       {"mid-instruction: jcc rel32", {"raw: 0f 85 01 00 00 00", "mov eax, 0x90909090"}, 0,
@@ -323,6 +362,70 @@ TEST(Hostile, EveryClassOfEscapeIsRefusedAtItsOffset) {
   EXPECT_GE(n, 80);
 }
 
+// The typed IL's arrays (docs/il.md, "Index faults"): the image's IL section
+// is refused, naming the section and the instruction's offset, for an LDX not
+// right after an IDX, an array whose last element leaves its area, and a
+// jump onto an LDX past its IDX.  Programs built directly (the IL text reader
+// refuses them before).
+TEST(Hostile, TypedArraysInTheIlSection) {
+  auto dev = [](Area a, uint32_t i) {
+    Operand o;
+    o.area = a, o.index = i, o.kind = area_is_bit(a) ? OpdKind::Bit : OpdKind::Int;
+    return o;
+  };
+  auto k = [](int32_t v) {
+    Operand o;
+    o.kind = OpdKind::ConstInt, o.ival = v;
+    return o;
+  };
+  auto typed = [](Op op, Ty t, Operand a, Operand b, Operand c) {
+    Instr in;
+    in.op = op, in.ty = t, in.a[0] = a, in.a[1] = b, in.a[2] = c;
+    return in;
+  };
+  Instr truth, load_x0, jmp;
+  truth.op = Op::TRUE;
+  load_x0.op = Op::LOAD, load_x0.a[0] = dev(Area::X, 0);
+  jmp.op = Op::JMP, jmp.a[0].kind = OpdKind::Label, jmp.a[0].label = "l";
+  const Instr idx = typed(Op::TIDX, Ty::INT, dev(Area::D, 9), k(1), k(10));
+  const Instr ldx = typed(Op::TLDX, Ty::DINT, dev(Area::D, 20), k(1), dev(Area::D, 16));
+  const Instr move = typed(Op::TMOVE, Ty::INT, Operand::typed_const(1), dev(Area::D, 0), Operand{});
+  struct IlCase {
+    const char* what;
+    std::vector<std::vector<Instr>> rungs;  // the last rung's first instruction after a label "l" if jumped to
+    size_t at;                              // the refused instruction: its index in the program
+    const char* reason;
+  };
+  const Instr far_ldx = typed(Op::TLDX, Ty::LINT, dev(Area::D, 8185), k(1), dev(Area::D, 16));  // 8185 + 9 + 1 > 8191
+  const std::vector<IlCase> cases = {
+      {"an LDX not after an IDX", {{truth, move, ldx}}, 2, "LDX not right after an IDX"},
+      {"an LDX whose array leaves its area", {{truth, idx, far_ldx}}, 2, "extends past its area"},
+      {"a jump onto an LDX", {{load_x0, jmp}, {truth, idx}, {ldx}}, 1, "jump to an LDX / STX past its IDX"},
+  };
+  for (const IlCase& c : cases) {
+    SCOPED_TRACE(c.what);
+    Program p;
+    p.source = "hostile.il";
+    for (size_t r = 0; r < c.rungs.size(); r++) {
+      Rung rung;
+      rung.line = int(r) + 1;
+      rung.code = c.rungs[r];
+      if (r == 2) rung.labels.push_back("l");
+      p.rungs.push_back(rung);
+    }
+    Image im = image_around({});
+    std::vector<uint32_t> at;
+    im.code = scan_function({"nop"}, at);
+    BinaryIl bin = encode_il(p);
+    im.il = bin.code;
+    std::string why = refusal(im);
+    EXPECT_NE(why.find("hostile.bin: section 'il' at offset "), std::string::npos) << why;
+    EXPECT_NE(why.find("offset " + std::to_string(bin.instr_offset[c.at]) + ": "), std::string::npos)
+        << why << " (want the IL offset " << bin.instr_offset[c.at] << ")";
+    EXPECT_NE(why.find(c.reason), std::string::npos) << why;
+  }
+}
+
 // The frame and the checks are not refusing everything: the harmless twins of
 // the cases above are accepted.
 TEST(Hostile, HarmlessTwinsAreAccepted) {
@@ -335,6 +438,15 @@ TEST(Hostile, HarmlessTwinsAreAccepted) {
       {"mov eax, ebx", "lea eax, [rbx+0x10]", "cmp ebx, eax", "test ebx, ebx"},  // rbx read, not written
       {"jmp 0x2", "test ecx, ecx", "je 0xe", "cmp ecx, -0x1", "je 0xe", "cdq", "idiv ecx", "nop"},  // into the guard's test
       {"lea edx, [rcx+0x1]", "cmp edx, 0x1", "mov edx, 0x1", "cmovbe ecx, edx", "cdq", "idiv ecx"},  // the -O2 guard
+      // the typed instructions': the math table's first and last slots, the
+      // 64-bit and unsigned divisions, indexed accesses after their checks
+      // (the last byte of the image reachable, a jump onto the check itself)
+      {"call qword ptr [rbx-0x90]", "call qword ptr [rbx-0x48]"},  // log, pow
+      {"test rcx, rcx", "je @6", "cmp rcx, -0x1", "je @6", "cqo", "idiv rcx", "nop"},
+      {"test ecx, ecx", "je @4", "xor edx, edx", "div ecx", "test rcx, rcx", "je @8", "xor edx, edx", "div rcx", "nop"},
+      {"jmp @1", "cmp r11, 0x3", "ja @4", "mov eax, dword ptr [rbx+r11*4+0x100]", "nop"},
+      {"cmp r10, " + hex(kSize - 0x10 - 8), "ja @3", "mov qword ptr [rbx+r10*1+0x10], rax", "imul r10, r11, 0xc",
+       "cmp r10, 0x24", "ja @7", "movsx eax, word ptr [rbx+r10*1+0x100]", "nop"},
   };
   for (const auto& body : ok) {
     std::vector<uint32_t> at;
@@ -793,6 +905,12 @@ TEST(Guard, TheTableSitsReadOnlyRightBelowTheImage) {
     std::memcpy(&slot, b.data() + kCallTableDisp + 8 * f, 8);
     EXPECT_EQ(slot, uint64_t(reinterpret_cast<uintptr_t>(real_fn(RealFn(f))))) << f;
   }
+  for (int f = 0; f < kMathSlots; f++) {  // the typed instructions' double functions, right below (ir/mathfn.h)
+    uint64_t slot;
+    std::memcpy(&slot, b.data() + kMathTableDisp + 8 * f, 8);
+    EXPECT_EQ(slot, uint64_t(reinterpret_cast<uintptr_t>(math_fn_address(MathFn(f))))) << f;
+  }
+  EXPECT_DEATH(touch(b.data() + kMathTableDisp, true), "");
   EXPECT_TRUE(b.slack_intact());
   EXPECT_DEATH(touch(b.data() + kCallTableDisp, true), "");  // the table is not writable
   EXPECT_DEATH(touch(b.data() - 1, true), "");

@@ -1,0 +1,356 @@
+// The typed instructions (ir/typed.h, docs/x86.md "Typed instructions") on
+// native x86-64 code at -O0, -O1 and -O2 against the reference interpreter,
+// scan by scan: every typed op with every type it takes (CONV with every pair),
+// its operands in devices that the test fills before each scan with values
+// at the limits (the extremes of each width, wrap points, NaN, the
+// infinities, ties, 2^63 and 2^64, negative and oversized shift counts ...)
+// or random bits, and with constants of the same kinds; the power of each
+// instruction on or off; arrays through IDX / LDX / STX with strides of 0 to
+// 3 cells and index faults.  The expected values are the interpreter's:
+// ir/typed.h defines each instruction, and every byte of the image must agree
+// after every scan (the fault record in Sys included).
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <random>
+#include <sstream>
+
+#include "driver/x86_target.h"
+#include "ir/ir.h"
+#include "ir/typed.h"
+#include "runtime/runtime.h"
+
+using namespace ldc;
+
+namespace {
+
+// Inputs: 64 slots of two D words each (D0..D127), bits M0..M63 (the typed
+// BOOL operands, which may hold any byte), and the power bits M100..M163.
+constexpr uint32_t kSlots = 64, kPowerBase = 100, kOutBase = 1000, kOutBits = 2000;
+
+Operand dev(Area a, uint32_t index) {
+  Operand o;
+  o.area = a;
+  o.index = index;
+  o.kind = area_is_bit(a) ? OpdKind::Bit : area_is_real(a) ? OpdKind::Real : OpdKind::Int;
+  return o;
+}
+Operand k32(int32_t v) {
+  Operand o;
+  o.kind = OpdKind::ConstInt;
+  o.ival = v;
+  return o;
+}
+
+// Values at the limits, as 64 bits (a narrow type reads the low bits; a
+// REAL the low 32 bits).
+std::vector<uint64_t> limit_values() {
+  std::vector<uint64_t> v = {0, 1, 2, 3, 7, 8, 15, 16, 31, 32, 33, 63, 64, 65, 100, 127, 128, 255, 256, 32767, 32768, 65535,
+                             65536, 0x7fffffff, 0x80000000, 0xffffffff, 0x100000000ull, 0x7fffffffffffffffull,
+                             0x8000000000000000ull, 0xffffffffffffffffull, 0xfffffffffffffffeull, 0xffffffffffffff80ull,
+                             0xffffffffffff8000ull, 0xffffffff80000000ull, 0x00000001ffffff7full, 86400000000000ull,
+                             0xfffffb1ae4d6e001ull /* -5e15: a DT before 1970 */, 1000000, 999999, 0xfffffffffff0bdc1ull};
+  for (double d : {0.5, 1.5, 2.5, -0.5, -1.5, -2.5, 3.0, -7.0, 0.1, -0.0, 1e300, -1e300, 1e-310, 9.2233720368547758e18,
+                   1.8446744073709552e19, 1.9e19, -9.2233720368547758e18, -9.3e18, 4294967295.5, 4294967296.0,
+                   2147483647.5, -2147483648.5, 32767.5, 65535.5, 255.5, 1e10, -1e10, 1e6, 86400000.25,
+                   std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                   std::numeric_limits<double>::quiet_NaN(), -std::numeric_limits<double>::quiet_NaN(), 2.0, 0.25, 1.0,
+                   -1.0, 0.75})
+    v.push_back(typed::bits_of(d));
+  for (float f : {0.5f, 1.5f, 2.5f, -0.5f, -2.5f, 3.0f, -0.0f, 1e30f, -1e30f, 1e-40f, 3.4e38f, 2147483648.0f, 4294967296.0f,
+                  9.3e18f, 1.9e19f, 65535.5f, 255.5f, std::numeric_limits<float>::infinity(),
+                  -std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN(), 2.0f, 0.1f})
+    v.push_back(typed::bits_of(f) | (uint64_t(0xdeadbeef) << 32));  // junk above: REAL reads the low word only
+  return v;
+}
+
+class Inputs {
+ public:
+  explicit Inputs(uint64_t seed) : rng_(seed), limits_(limit_values()) {}
+  uint64_t value() {
+    switch (rng_() % 4) {
+      case 0: return rng_();
+      case 1: return uint64_t(int64_t(int32_t(rng_() % 200) - 100));
+      default: return limits_[rng_() % limits_.size()];
+    }
+  }
+  // this scan's inputs, the same into both images
+  void fill(ImageBytes& a, ImageBytes& b, const Layout& l, double power_on) {
+    for (uint32_t s = 0; s < kSlots; s++) {
+      uint64_t v = value();
+      std::memcpy(a.data() + l.addr(Area::D, 2 * s), &v, 8);
+      std::memcpy(b.data() + l.addr(Area::D, 2 * s), &v, 8);
+    }
+    for (uint32_t m = 0; m < kSlots; m++) {
+      static const uint8_t kBytes[] = {0, 1, 0, 1, 2, 255};
+      uint8_t v = kBytes[rng_() % 6];
+      a[l.addr(Area::M, m)] = b[l.addr(Area::M, m)] = v;
+      uint8_t p = std::uniform_real_distribution<double>(0, 1)(rng_) < power_on ? 1 : 0;
+      a[l.addr(Area::M, kPowerBase + m)] = b[l.addr(Area::M, kPowerBase + m)] = p;
+    }
+  }
+  std::mt19937_64& rng() { return rng_; }
+
+ private:
+  std::mt19937_64 rng_;
+  std::vector<uint64_t> limits_;
+};
+
+// A program of one rung per typed instruction (rung: `LOAD M1xx` or `TRUE`,
+// the instruction, and `OUT M2xxx` after a compare).
+class Builder {
+ public:
+  explicit Builder(uint64_t seed) : rng_(seed), limits_(limit_values()) {}
+
+  Operand source(Ty t) {
+    if (rng_() % 5 == 0) return Operand::typed_const(typed::norm(t, limits_[rng_() % limits_.size()]));
+    if (t == Ty::BOOL) return dev(Area::M, uint32_t(rng_() % kSlots));
+    return dev(Area::D, 2 * uint32_t(rng_() % kSlots));
+  }
+  Operand dest(Ty t) {
+    if (t == Ty::BOOL) return dev(Area::M, kOutBits + next_bit_++);
+    Operand d = dev(Area::D, kOutBase + next_word_);
+    next_word_ += 2;
+    return d;
+  }
+  void rung(std::vector<Instr> code) {
+    Rung r;
+    r.line = int(p_.rungs.size()) + 1;
+    Instr power;
+    if (rng_() % 4 == 0) power.op = Op::TRUE;
+    else power.op = Op::LOAD, power.a[0] = dev(Area::M, kPowerBase + uint32_t(rng_() % kSlots));
+    r.code.push_back(power);
+    for (Instr& in : code) r.code.push_back(in);
+    p_.rungs.push_back(std::move(r));
+  }
+  // one instruction of op with types t, u, its operands drawn
+  void instr(Op op, Ty t, Ty u) {
+    const OpInfo& oi = op_info(op);
+    Instr in;
+    in.op = op, in.ty = t, in.src = oi.typed == 2 ? u : Ty::None;
+    for (int i = 0; i < oi.nopd; i++) {
+      char sig = oi.operands[i];
+      in.a[i] = sig == 's' ? source(t) : sig == 'x' ? source(u) : dest(t);
+    }
+    std::vector<Instr> code{in};
+    if (oi.push) {
+      Instr out;
+      out.op = Op::OUT;
+      out.a[0] = dev(Area::M, kOutBits + next_bit_++);
+      code.push_back(out);
+    }
+    rung(code);
+  }
+  std::mt19937_64& rng() { return rng_; }
+  Program take() { return std::move(p_); }
+
+ private:
+  std::mt19937_64 rng_;
+  std::vector<uint64_t> limits_;
+  Program p_;
+  uint32_t next_word_ = 0, next_bit_ = 0;
+};
+
+// Every typed op but IDX / LDX / STX with every type (pair) it takes, `copies` times.
+Program every_op(uint64_t seed, int copies) {
+  Builder b(seed);
+  for (int c = 0; c < copies; c++)
+    for (int o = 0; o < kOpCount; o++) {
+      Op op = Op(o);
+      if (op_info(op).klass != OpClass::Typed || op == Op::TIDX || op == Op::TLDX || op == Op::TSTX) continue;
+      for (int t = 0; t < kTyCount; t++)
+        for (int u = 0; u < (op_info(op).typed == 2 ? kTyCount : 1); u++)
+          if (op_takes(op, Ty(t), op_info(op).typed == 2 ? Ty(u) : Ty::None)) b.instr(op, Ty(t), Ty(u));
+    }
+  Program p = b.take();
+  p.source = "typed_every_op";
+  return p;
+}
+
+std::unique_ptr<Engine> interp(const Program& p) {
+  BinaryIl bin = encode_il(p);
+  std::string why = validate_il(bin.code, p.layout());
+  if (!why.empty()) throw std::runtime_error("IL " + why);
+  return make_interp_engine(bin.code, p.layout());
+}
+std::unique_ptr<Engine> native(const Program& p, int opt) {
+  NativeBuild nb = build_x86(p, p.source, as::Mode::Blockwise, opt);
+  return make_native_engine(map_checked_code(nb.asm_result.code, 0, p.layout()));
+}
+
+// The first byte where the images differ, described, or "".
+std::string differ(const Program& p, const ImageBytes& ref, const ImageBytes& got) {
+  const Layout l = p.layout();
+  for (uint32_t i = 0; i < l.size; i++) {
+    if (ref[i] == got[i]) continue;
+    std::ostringstream s;
+    s << "image offset " << i;
+    for (int a = 0; a < kAreaCount; a++)
+      if (i >= l.offset[a] && i < l.offset[a] + l.count[a] * l.elem_size(Area(a)))
+        s << " (" << area_name(Area(a)) << (i - l.offset[a]) / l.elem_size(Area(a)) << ")";
+    s << ": interpreter " << int(ref[i]) << ", native " << int(got[i]);
+    // the instruction that writes there, if an output
+    for (const Rung& r : p.rungs)
+      for (const Instr& in : r.code)
+        for (int k = 0; k < in.nopd(); k++)
+          if ((in.a[k].kind == OpdKind::Int || in.a[k].kind == OpdKind::Real || in.a[k].kind == OpdKind::Bit) &&
+              l.addr(in.a[k].area, in.a[k].index) / 8 == i / 8 && k == in.nopd() - 1)
+            s << "\n  written by line " << r.line << ": " << instr_text(in);
+    return s.str();
+  }
+  return "";
+}
+
+// Runs `scans` scans on the interpreter and on native code at `opt`, the same
+// inputs before each; "" or where they first differ.
+std::string compare(const Program& p, int opt, int scans, uint64_t seed, double power_on,
+                    const std::function<void(ImageBytes&, ImageBytes&, std::mt19937_64&)>& extra = nullptr) {
+  const Layout l = p.layout();
+  auto ref = interp(p);
+  auto nat = native(p, opt);
+  ImageBytes a(l.size), b(l.size);
+  Inputs in(seed);
+  for (int s = 1; s <= scans; s++) {
+    in.fill(a, b, l, power_on);
+    if (extra) extra(a, b, in.rng());
+    ref->scan(a);
+    nat->scan(b);
+    if (!(a == b)) return "-O" + std::to_string(opt) + ", scan " + std::to_string(s) + ": " + differ(p, a, b);
+    if (!b.slack_intact()) return "-O" + std::to_string(opt) + ": native code wrote past the image";
+  }
+  return "";
+}
+
+TEST(TypedNative, EveryOpEveryTypeAtTheLimits) {
+  Program p = every_op(20261128, 3);
+  ASSERT_GT(p.rungs.size(), 800u);
+  for (int opt = 0; opt <= 2; opt++) {
+    std::string why = compare(p, opt, 150, 7 + opt, 0.8);
+    EXPECT_TRUE(why.empty()) << why;
+  }
+}
+
+// Operands that are the same device, and the power off more often.
+TEST(TypedNative, SameOperandsAndPowerOff) {
+  Builder b(99);
+  for (int o = 0; o < kOpCount; o++) {
+    Op op = Op(o);
+    if (op_info(op).klass != OpClass::Typed || op == Op::TIDX || op == Op::TLDX || op == Op::TSTX || op_info(op).typed == 2)
+      continue;
+    for (int t = 0; t < kTyCount; t++) {
+      if (!op_takes(op, Ty(t), Ty::None)) continue;
+      Instr in;
+      in.op = op, in.ty = Ty(t);
+      const Operand same = Ty(t) == Ty::BOOL ? dev(Area::M, 5) : dev(Area::D, 10);
+      for (int i = 0; i < op_info(op).nopd; i++) in.a[i] = op_info(op).operands[i] == 'r' ? b.dest(Ty(t)) : same;
+      b.rung({in});
+    }
+  }
+  Program p = b.take();
+  p.source = "typed_same";
+  for (int opt = 0; opt <= 2; opt++) {
+    std::string why = compare(p, opt, 40, 3, 0.5);
+    EXPECT_TRUE(why.empty()) << why;
+  }
+}
+
+// Arrays: IDX of every index type, LDX / STX of every element type, strides
+// 0 to 3 cells; a scan in four makes one index leave its bounds (the fault
+// record, and the scan ends there).
+Program arrays(uint64_t seed, std::vector<std::pair<int32_t, int32_t>>& bounds) {
+  Builder b(seed);
+  std::mt19937_64& rng = b.rng();
+  const Ty index_types[] = {Ty::SINT, Ty::INT, Ty::DINT, Ty::LINT, Ty::USINT, Ty::UINT, Ty::UDINT, Ty::ULINT};
+  uint32_t slot = 0;
+  for (int n = 0; n < int(kSlots); n++) {  // one index slot each
+    Ty it = index_types[n % 8];
+    Ty et = Ty(rng() % kTyCount);
+    int32_t lo = int32_t(rng() % 7) - 3;
+    if (!typed::is_signed(it) && lo < 0 && n % 3) lo = 0;
+    const int32_t hi = lo + int32_t(rng() % 9);
+    bounds.push_back({lo, hi});
+    int32_t stride = int32_t(rng() % 4);
+    Instr idx;
+    idx.op = Op::TIDX, idx.ty = it;
+    idx.a[0] = dev(Area::D, 2 * (slot++ % kSlots));
+    idx.a[1] = k32(lo), idx.a[2] = k32(hi);
+    Instr acc;
+    acc.ty = et;
+    const bool bits = et == Ty::BOOL;
+    const Operand base = bits ? dev(Area::M, 3000 + 40 * uint32_t(n)) : dev(Area::D, 3000 + 40 * uint32_t(n));
+    if (n % 2) {
+      acc.op = Op::TLDX;
+      acc.a[0] = base, acc.a[1] = k32(stride), acc.a[2] = b.dest(et);
+    } else {
+      acc.op = Op::TSTX;
+      acc.a[0] = b.source(et), acc.a[1] = base, acc.a[2] = k32(stride);
+    }
+    b.rung({idx, acc});
+  }
+  Program p = b.take();
+  p.source = "typed_arrays";
+  return p;
+}
+
+TEST(TypedNative, ArraysAndIndexFaults) {
+  std::vector<std::pair<int32_t, int32_t>> bounds;
+  Program p = arrays(5, bounds);
+  const Layout l = p.layout();
+  // the index slots: inside the bounds, but in one scan of four one of them outside
+  auto indices = [&](ImageBytes& a, ImageBytes& b, std::mt19937_64& rng) {
+    const size_t bad = rng() % 4 == 0 ? rng() % bounds.size() : SIZE_MAX;
+    for (size_t n = 0; n < bounds.size(); n++) {
+      auto [lo, hi] = bounds[n];
+      int64_t v = lo + int64_t(rng() % uint64_t(hi - lo + 1));
+      if (n == bad) {
+        static const int64_t kOutside[] = {-1000, -129, 1000, 70000, INT64_MIN, INT64_MAX, -1};
+        v = rng() % 2 ? (rng() % 2 ? hi + 1 : lo - 1) : kOutside[rng() % 7];
+      }
+      if (n % 8 == 7 || n % 8 == 3) {  // LINT / ULINT: also the 64-bit values
+        std::memcpy(a.data() + l.addr(Area::D, 2 * uint32_t(n % kSlots)), &v, 8);
+        std::memcpy(b.data() + l.addr(Area::D, 2 * uint32_t(n % kSlots)), &v, 8);
+      } else {
+        uint32_t w = uint32_t(v);
+        if (n % 8 == 4) w &= 0xff, w |= rng() % 2 ? 0xab00 : 0;  // USINT reads its low byte: junk above
+        std::memcpy(a.data() + l.addr(Area::D, 2 * uint32_t(n % kSlots)), &w, 4);
+        std::memcpy(b.data() + l.addr(Area::D, 2 * uint32_t(n % kSlots)), &w, 4);
+      }
+    }
+  };
+  for (int opt = 0; opt <= 2; opt++) {
+    std::string why = compare(p, opt, 300, 11 + opt, 0.9, indices);
+    EXPECT_TRUE(why.empty()) << why;
+  }
+}
+
+// Hand-written: the examples of docs/il.md run to the same images, and an IDX
+// fault's record names the IDX's IL offset (encode_il's instr_offset).
+TEST(TypedNative, FaultRecordNamesTheIdx) {
+  Program p = parse_il_text(
+      ".rung line 1\nTRUE\nMOVE.INT 32767 D0\nADD.INT D0 1 D1\nCONV.INT.REAL 2.5 D4\n"
+      ".rung line 2\nTRUE\nIDX.INT D9 1 10\nLDX.INT D20 1 D16\n"
+      ".rung line 3\nTRUE\nMOVE.DINT 7 D30\n.end\n",
+      "fault.il");
+  const Layout l = p.layout();
+  BinaryIl bin = encode_il(p);
+  for (int opt = 0; opt <= 2; opt++) {
+    auto nat = native(p, opt);
+    ImageBytes m(l.size);
+    int32_t idx = 11;  // outside 1..10
+    std::memcpy(m.data() + l.addr(Area::D, 9), &idx, 4);
+    nat->scan(m);
+    auto word = [&](uint32_t at) { int32_t v; std::memcpy(&v, m.data() + at, 4); return v; };
+    EXPECT_EQ(word(l.addr(Area::D, 1)), -32768) << "32767 + 1 wraps at 16 bits";
+    EXPECT_EQ(word(l.addr(Area::D, 4)), 2) << "2.5 rounds to even";
+    EXPECT_EQ(word(kSysFault), int32_t(kFaultIndex));
+    EXPECT_EQ(uint32_t(word(kSysFaultAt)), bin.instr_offset[5]) << "the IDX is the program's sixth instruction";
+    int64_t v;
+    std::memcpy(&v, m.data() + kSysFaultValue, 8);
+    EXPECT_EQ(v, 11);
+    EXPECT_EQ(word(l.addr(Area::D, 30)), 0) << "the scan ended at the IDX";
+  }
+}
+
+}  // namespace
