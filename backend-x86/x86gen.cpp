@@ -1237,7 +1237,8 @@ void Gen::typed_arith(const ldc::Instr& in) {
 
 // DIV MOD (typed::arith): an integer divisor of 0 gives 0 and sets S0; a
 // signed divisor of -1 gives -a (wrapping) and 0; else C's truncating
-// division of the canonical values.  The division is one of the guarded forms
+// division of the canonical values (by a constant of a signed type up to 32
+// bits a multiply by its magic number, no division).  The division is one of the guarded forms
 // the loader accepts (docs/image-format.md): idiv after its tests of 0 and
 // -1, div after its test of 0.
 void Gen::typed_divmod(const ldc::Instr& in) {
@@ -1249,6 +1250,27 @@ void Gen::typed_divmod(const ldc::Instr& in) {
     return store_x(t, xmm0, d);
   }
   const bool mod = in.op == Op::TMOD, sgn = typed::is_signed(t), w64 = two_cells(t);
+  if (sgn && !w64 && is_tconst(b)) {  // SINT INT DINT by a constant: the magic multiply of divide_by_constant
+    const int32_t c = int32_t(uint32_t(tconst(b)));
+    if (c != 0 && c != 1 && c != -1 && c != INT32_MIN) {
+      const Magic mg = magic_of(c);
+      load32(t, a, ecx);
+      emit(M::Mov, {R(eax), I(mg.m)});
+      emit(M::Imul, {R(ecx)});  // edx = hi32(m * n)
+      if (c > 0 && mg.m < 0) emit(M::Add, {R(edx), R(ecx)});
+      if (c < 0 && mg.m > 0) emit(M::Sub, {R(edx), R(ecx)});
+      if (mg.s > 0) emit(M::Sar, {R(edx), I(mg.s)});
+      emit(M::Mov, {R(eax), R(edx)});
+      emit(M::Shr, {R(eax), I(31)});
+      emit(M::Add, {R(eax), R(edx)});  // the quotient, truncated
+      if (mod) {
+        emit(M::Imul, {R(eax), R(eax), I(c)});
+        emit(M::Sub, {R(ecx), R(eax)});
+        emit(M::Mov, {R(eax), R(ecx)});  // n - q * c: the sign of n
+      }
+      return store_int_reg(t, AX, d);
+    }
+  }
   const Reg A = w64 ? rax : eax, C = w64 ? rcx : ecx, Dx = w64 ? rdx : edx;
   std::string zero = fresh(), minus_one = fresh(), store = fresh();
   if (w64) load64(t, a, rax), load64(t, b, rcx);

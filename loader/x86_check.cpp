@@ -526,6 +526,8 @@ class BodyRules {
   // skipped.  r is then in [0, n] unsigned, whatever the code before did.
   std::string indexed(const x86::Decoded& di) {
     const x86::Instruction& in = di.inst;
+    using M = x86::Mnemonic;
+    if (in.mnemonic == M::Call || in.mnemonic == M::Jmp) return "";  // no indexed branch: refused with its operand
     const x86::Mem* m = nullptr;
     for (unsigned i = 0; i < in.num_operands && i < in.ops.size(); i++)
       if (in.ops[i].kind == x86::OperandKind::Mem && in.ops[i].mem.index.valid() && di.effects.ops[i] != x86::Use::Addr)
@@ -533,7 +535,8 @@ class BodyRules {
     if (!m) return "";
     const std::span<const x86::Instruction> w = window_.insts();
     const std::string r(x86::reg_name(m->index));
-    const std::string want = "an indexed access comes right after its bounds check 'cmp " + r + ", n; ja' (docs/image-format.md)";
+    const std::string want = "indexed memory operand without its bounds check right before it ('cmp " + r +
+                             ", n; ja' with n >= 0, docs/image-format.md)";
     if (m->base != f_.img) return "indexed memory operand based on " + std::string(x86::reg_name(m->base)) + ", not " + img_name_;
     if (w.size() < 3) return want;
     const x86::Instruction &cmp = w[w.size() - 3], &ja = w[w.size() - 2];

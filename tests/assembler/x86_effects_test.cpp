@@ -132,6 +132,7 @@ std::optional<Instance> instance(const X::detail::Form& f, std::mt19937_64& rng)
       case OT::R64: in.ops[k] = O::r(X::r64(gp())); break;
       case OT::X: in.ops[k] = O::r(X::xmm(unsigned(rng() % 16))); break;
       case OT::M8: in.ops[k] = mem(X::Size::Byte); break;
+      case OT::M16: in.ops[k] = mem(X::Size::Word); break;
       case OT::M32: in.ops[k] = mem(X::Size::Dword); break;
       case OT::M64: in.ops[k] = mem(X::Size::Qword); break;
       case OT::MA: in.ops[k] = mem(X::Size::None); break;
@@ -139,6 +140,7 @@ std::optional<Instance> instance(const X::detail::Form& f, std::mt19937_64& rng)
       case OT::RM32: in.ops[k] = rng() % 2 ? O::r(X::r32(gp())) : mem(X::Size::Dword); break;
       case OT::RM64: in.ops[k] = rng() % 2 ? O::r(X::r64(gp())) : mem(X::Size::Qword); break;
       case OT::XM32: in.ops[k] = rng() % 2 ? O::r(X::xmm(unsigned(rng() % 16))) : mem(X::Size::Dword); break;
+      case OT::XM64: in.ops[k] = rng() % 2 ? O::r(X::xmm(unsigned(rng() % 16))) : mem(X::Size::Qword); break;
       case OT::Al: in.ops[k] = O::r(X::r8(X::AX)); break;
       case OT::Eax: in.ops[k] = O::r(X::r32(X::AX)); break;
       case OT::Rax: in.ops[k] = O::r(X::r64(X::AX)); break;
@@ -147,6 +149,7 @@ std::optional<Instance> instance(const X::detail::Form& f, std::mt19937_64& rng)
       case OT::I8: in.ops[k] = O::i(int8_t(rng())); break;
       case OT::IB: in.ops[k] = O::i(uint8_t(rng())); break;
       case OT::I32: in.ops[k] = O::i(int32_t(rng())); break;
+      case OT::I64: in.ops[k] = O::i(int64_t(rng())); break;
       default: return std::nullopt;  // branch targets: not run here
     }
   }
@@ -175,14 +178,14 @@ bool prepare(const Instance& x, Block& b, std::mt19937_64& rng) {
   b.flag_a = uint32_t(rng()), b.flag_b = uint32_t(rng() % 3 == 0 ? b.flag_a : rng());
   for (uint32_t& v : b.xmm) v = uint32_t(rng());
   for (uint8_t& v : b.scratch) v = uint8_t(rng());
-  if (x.in.mnemonic == X::Mnemonic::Idiv) {  // edx:eax / divisor: edx 0, eax positive, the divisor 7
+  if (x.in.mnemonic == X::Mnemonic::Idiv || x.in.mnemonic == X::Mnemonic::Div) {  // edx:eax / divisor: edx 0, eax positive, the divisor 7
     const X::Operand& d = x.in.ops[0];
     if (d.kind == X::OperandKind::Reg && d.reg.num == X::DX) return false;
     if (d.kind == X::OperandKind::Mem && (d.mem.base == X::r64(X::DX) || d.mem.index == X::r64(X::DX))) return false;  // aim() sets it
     b.regs[X::DX] = 0;
     b.regs[X::AX] = rng() & 0x7fffffff;
     if (d.kind == X::OperandKind::Reg) b.regs[d.reg.num] = 7;
-    else std::memcpy(b.scratch + 32, "\x07\0\0\0", 4);
+    else std::memcpy(b.scratch + 32, "\x07\0\0\0\0\0\0\0", 8);
   }
   return true;
 }
@@ -392,6 +395,7 @@ std::string ot_name(OT t) {
     case OT::R64: return "r64";
     case OT::X: return "xmm";
     case OT::M8: return "m8";
+    case OT::M16: return "m16";
     case OT::M32: return "m32";
     case OT::M64: return "m64";
     case OT::MA: return "m";
@@ -399,6 +403,7 @@ std::string ot_name(OT t) {
     case OT::RM32: return "r/m32";
     case OT::RM64: return "r/m64";
     case OT::XM32: return "xmm/m32";
+    case OT::XM64: return "xmm/m64";
     case OT::Al: return "al";
     case OT::Eax: return "eax";
     case OT::Rax: return "rax";
@@ -406,6 +411,7 @@ std::string ot_name(OT t) {
     case OT::One: return "1";
     case OT::I8: case OT::IB: return "imm8";
     case OT::I32: return "imm32";
+    case OT::I64: return "imm64";
     case OT::Rel8: return "rel8";
     case OT::Rel32: return "rel32";
     case OT::None: break;

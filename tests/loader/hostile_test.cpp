@@ -290,19 +290,19 @@ const std::vector<Case>& cases() {
       // indexed accesses (the typed LDX / STX): each right after its bounds
       // check `cmp r, n; ja` on its own index register, every byte it may
       // reach inside the image, and no branch past the check
-      {"indexed: no bounds check", {"mov eax, dword ptr [rbx+r11*4+0x100]"}, 0, "comes right after its bounds check"},
+      {"indexed: no bounds check", {"mov eax, dword ptr [rbx+r11*4+0x100]"}, 0, "indexed memory operand without its bounds check"},
       {"indexed: the check of another register", {"cmp r10, 0x3", "ja @3", "mov eax, dword ptr [rbx+r11*4+0x100]", "nop"}, 2,
-       "comes right after its bounds check"},
+       "indexed memory operand without its bounds check"},
       {"indexed: the check's 32-bit form", {"cmp r11d, 0x3", "ja @3", "mov eax, dword ptr [rbx+r11*4+0x100]", "nop"}, 2,
-       "comes right after its bounds check"},
+       "indexed memory operand without its bounds check"},
       {"indexed: jb for ja", {"cmp r11, 0x3", "jb @3", "mov dword ptr [rbx+r11*4+0x100], eax", "nop"}, 2,
-       "comes right after its bounds check"},
+       "indexed memory operand without its bounds check"},
       {"indexed: a signed test", {"cmp r11, 0x3", "jg @3", "mov dword ptr [rbx+r11*4+0x100], eax", "nop"}, 2,
-       "comes right after its bounds check"},
+       "indexed memory operand without its bounds check"},
       {"indexed: the index written after its check", {"cmp r11, 0x3", "ja @4", "mov r11, rax", "mov eax, dword ptr [rbx+r11*4+0x100]", "nop"},
-       3, "comes right after its bounds check"},
+       3, "indexed memory operand without its bounds check"},
       {"indexed: a negative bound", {"cmp r11, -0x1", "ja @3", "mov eax, dword ptr [rbx+r11*4+0x100]", "nop"}, 2,
-       "comes right after its bounds check"},
+       "indexed memory operand without its bounds check"},
       {"indexed: the extent leaves the image", {"cmp r11, 0x10000000", "ja @3", "mov qword ptr [rbx+r11*8+0x100], rax", "nop"}, 2,
        "its bounds check lets it reach"},
       {"indexed: the last element one byte past", {"cmp r11, " + hex((kSize - 0x100 - 4) / 4 + 1), "ja @3",
@@ -799,12 +799,13 @@ TEST(Hostile, TheWriteRuleFollowsTheFormTable) {
         else if (t == OT::R32 || t == OT::RM32 || t == OT::Eax) in.ops[j] = O::r(x86::r32(x86::AX));
         else if (t == OT::R64 || t == OT::RM64 || t == OT::Rax) in.ops[j] = O::r(x86::r64(x86::AX));
         else if (t == OT::Cl) in.ops[j] = O::r(x86::r8(x86::CX));
-        else if (t == OT::X || t == OT::XM32) in.ops[j] = O::r(x86::xmm(1));
-        else if (t == OT::M8 || t == OT::M32 || t == OT::M64 || t == OT::MA) {
+        else if (t == OT::X || t == OT::XM32 || t == OT::XM64) in.ops[j] = O::r(x86::xmm(1));
+        else if (t == OT::M8 || t == OT::M16 || t == OT::M32 || t == OT::M64 || t == OT::MA) {
           x86::Mem m;
           m.base = x86::r64(x86::BX);
           m.disp = 0x1000;
-          m.size = t == OT::M8 ? x86::Size::Byte : t == OT::M32 ? x86::Size::Dword : t == OT::M64 ? x86::Size::Qword : x86::Size::None;
+          m.size = t == OT::M8 ? x86::Size::Byte : t == OT::M16 ? x86::Size::Word : t == OT::M32 ? x86::Size::Dword
+                 : t == OT::M64 ? x86::Size::Qword : x86::Size::None;
           in.ops[j] = O::m(m);
         } else in.ops[j] = O::i(1);
       }

@@ -239,7 +239,7 @@ class Mutator {
       if (m.index.num == x86::SP) m.index = {};
       m.scale = uint8_t(1u << pick(4));
     }
-    m.disp = disp_for(m.base, size == x86::Size::Byte ? 1 : size == x86::Size::Qword ? 8 : 4);
+    m.disp = disp_for(m.base, size == x86::Size::Byte ? 1 : size == x86::Size::Qword ? 8 : size == x86::Size::Word ? 2 : 4);
     return m;
   }
 
@@ -252,6 +252,8 @@ class Mutator {
       case OT::R64: return O::r(reg(C::Gp64));
       case OT::X: return O::r(x86::xmm(unsigned(pick(16))));
       case OT::M8: return O::m(mem(x86::Size::Byte));
+      case OT::M16: return O::m(mem(x86::Size::Word));
+      case OT::XM64: return chance(50) ? O::r(x86::xmm(unsigned(pick(16)))) : O::m(mem(x86::Size::Qword));
       case OT::M32: case OT::XM32: return t == OT::XM32 && chance(50) ? O::r(x86::xmm(unsigned(pick(16)))) : O::m(mem(x86::Size::Dword));
       case OT::M64: return O::m(mem(x86::Size::Qword));
       case OT::MA: return O::m(mem(x86::Size::None));
@@ -266,6 +268,7 @@ class Mutator {
       case OT::I8: return O::i(int8_t(rng_()));
       case OT::IB: return O::i(uint8_t(rng_()));
       case OT::I32: return O::i(chance(20) ? -1 : int32_t(rng_()));
+      case OT::I64: return O::i(int64_t(rng_()));
       case OT::Rel8: case OT::Rel32: return O::a(target(code_size));
       case OT::None: break;
     }
