@@ -60,6 +60,7 @@ std::optional<Cond> cond_by_name(std::string_view s) {
 }
 
 std::optional<std::pair<Mnemonic, Cond>> mnemonic_by_name(std::string_view s) {
+  if (s == "movabs") return std::pair{Mnemonic::Mov, Cond::O};  // objdump's spelling of mov r64, imm64
   for (unsigned i = 0; i < std::size(kMnemonics); ++i) {
     Mnemonic m = Mnemonic(i);
     if (!is_cc(m) && kMnemonics[i] == s) return std::pair{m, Cond::O};

@@ -44,7 +44,7 @@ TEST(X86Decode, ReportsUnknownBytesWithOffset) {
       {"41" "90", 0},              // REX on nop
       {"0f94c4", 0},               // sete ah
       {"c5f858c1", 0},             // VEX vaddps
-      {"f2" "0f5801", 0},          // addsd: not in the subset
+      {"f2" "0f7cc1", 0},          // haddps: not in the subset (the F2 prefix is, for the sd forms)
       {"66" "89d8", 0},            // 16-bit mov
   };
   for (const Case& c : cases) {

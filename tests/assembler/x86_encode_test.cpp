@@ -148,7 +148,7 @@ TEST(X86Encode, FixupsForLabels) {
 
 TEST(X86Encode, RejectsOperandsOutsideTheSubset) {
   for (const char* text : {"mov eax, rbx", "add dword ptr [rax], rbx", "add [rax], 0x1",
-                           "mov eax, 0x100000000", "mov byte ptr [rax], 0x100", "imul rax, rbx",
+                           "mov eax, 0x100000000", "mov byte ptr [rax], 0x100", "imul rax, ebx",
                            "shl eax, 0x100", "push eax", "lea eax, ebx", "movss xmm0, eax",
                            "andps xmm0, dword ptr [rax]", "sete eax", "call ecx", "jmp eax",
                            "movzx rax, bl", "add rax, 0x80000000", "ret 0x1"}) {
