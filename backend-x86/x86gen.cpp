@@ -359,6 +359,14 @@ class Gen : public ClassGen<Gen> {
 
  private:
   uint32_t il_offset_ = 0;  // the IL byte offset of the instruction being compiled (an IDX's fault record)
+  std::string typed_skip_;  // the open power test of a run of typed instructions (Gen::typed), "" if none
+ public:
+  // ends a run of typed instructions: the label its power test skips to
+  void close_typed_run() {
+    if (!typed_skip_.empty()) label(typed_skip_), typed_skip_.clear();
+  }
+
+ private:
   int64_t idx_span_ = -1;   // the last IDX's hi - lo: the bound of the LDX / STX right after it
   void typed(const ldc::Instr& in);
   void typed_compare(const ldc::Instr& in);
@@ -902,6 +910,7 @@ void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
 // contact's edge update (ir/scanopt.h); the stack is followed all the same.
 void Gen::instr(const ldc::Instr& in, uint8_t facts, const ldc::DivReuse* reuse, const ldc::Operand* quotient_to) {
   OpClass k = op_info(in.op).klass;
+  if (k != OpClass::Typed || op_info(in.op).push) close_typed_run();
   reuse_ = reuse;
   quotient_to_ = quotient_to;
   on_ = bases_ && known_.on() &&
@@ -1114,13 +1123,16 @@ void Gen::store_xd(Ty t, Reg x, const ldc::Operand& d) {
   store_x(t, x, d);
 }
 
+// A run of typed instructions that do not push shares one power test: none
+// of them changes the stack, so one `test; je` skips the whole run (the label
+// is placed when an instruction of another kind comes, or the rung ends:
+// close_typed_run).
 void Gen::typed(const ldc::Instr& in) {
   if (op_info(in.op).push) return typed_compare(in);
-  std::string skip;
-  if (!(bases_ && known_.on())) {
-    skip = fresh();
+  if (typed_skip_.empty() && !(bases_ && known_.on())) {
+    typed_skip_ = fresh();
     test_top();
-    jcc(Cond::E, skip);
+    jcc(Cond::E, typed_skip_);
   }
   switch (in.op) {
     case Op::TMOVE: typed_move(in); break;
@@ -1137,7 +1149,6 @@ void Gen::typed(const ldc::Instr& in) {
     case Op::TLDX: case Op::TSTX: typed_indexed(in); break;
     default: throw std::logic_error(std::string("x86 backend: no code for the typed instruction ") + op_info(in.op).name);
   }
-  end_skip(skip);
 }
 
 // push (a REL b) of type t: signed, unsigned or IEEE (kX86Rels) by the kind
@@ -1618,7 +1629,7 @@ void Gen::typed_idx(const ldc::Instr& in) {
     jcc(Cond::S, fault);
   }
   emit(M::Mov, {R(r11), R(rax)});
-  emit(M::Sub, {R(r11), I(lo)});
+  if (lo != 0) emit(M::Sub, {R(r11), I(lo)});
   if (span <= INT32_MAX) emit(M::Cmp, {R(r11), I(span)});
   else mov_imm(rcx, uint64_t(span)), emit(M::Cmp, {R(r11), R(rcx)});
   jcc(Cond::BE, ok);
@@ -2325,6 +2336,7 @@ class Blocks {
       const ldc::Instr* alt = facts_->replacement(ri, k);
       g.instr(alt ? *alt : in, facts_->at(ri, k) & keep, facts_->reuse(ri, k), facts_->quotient_to(ri, k));
     }
+    g.close_typed_run();
     if (opt_ >= 1 && !slots) peephole(b.items, starts, shared_);
     if (!o2_) return;
     to_o2_frame(b.items);
