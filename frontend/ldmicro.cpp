@@ -2146,7 +2146,6 @@ TreeProgram Importer::run() {
     fail(1, 1, "not an LDmicro file: the first line should be LDmicro0.1, LDmicro0.2 or LDmicro");
   size_t prog = header();
   program(prog);
-  if (rungs_.empty()) fail(int(lines_.size()), 1, "no rungs in this program");
   for (const auto& [nm, line] : io_list_) {
     char c = nm.empty() ? 0 : nm[0];
     NK k = c == 'X' || c == 'Y' ? NK::Bit : c == 'A' ? NK::Adc : c == 'P' ? NK::Pwm : NK::Var;
@@ -2201,20 +2200,20 @@ TreeProgram Importer::run() {
   p.source = file_;
   p.aliases = aliases_;
   Elem top;
-  top.line = rungs_[0].line;
+  top.line = rungs_.empty() ? int(lines_.size()) : rungs_[0].line;
   top.col = 1;
   if (mcr_used_) {
     // LDmicro sets its master control relay at the start of every cycle
     mcr_ = temp_m(top);
     TreeRung tr;
-    tr.line = rungs_[0].line;
+    tr.line = top.line;
     tr.title = "master control relay on";
     tr.root = out_node(Op::OUT, {bit_opd(Area::M, mcr_)}, top);
     p.rungs.push_back(std::move(tr));
   }
   if (uart_used_) {
     TreeRung tr;
-    tr.line = rungs_[0].line;
+    tr.line = top.line;
     tr.title = "UART transmitter free at the start of the scan";
     tr.root = out_node(Op::OUTN, {bit_opd(Area::M, kUartBusy)}, top);
     p.rungs.push_back(std::move(tr));
@@ -2243,12 +2242,11 @@ TreeProgram Importer::run() {
   }
   if (!init_.empty()) {
     TreeRung tr;
-    tr.line = rungs_[0].line;
+    tr.line = top.line;
     tr.title = "initial values";
     tr.root = then_node(bit_leaf(Op::LOAD, Area::S, kBitFirstScan, top), fork_of(std::move(init_)), top.loc());
     p.rungs.insert(p.rungs.begin() + long(init_at), std::move(tr));
   }
-  if (p.rungs.empty()) fail(int(lines_.size()), 1, "this program has no outputs");
   p.end_labels = pending;
   for (size_t t : targets_)
     if (t >= rungs_.size()) p.end_labels.push_back("rung" + std::to_string(t + 1));
