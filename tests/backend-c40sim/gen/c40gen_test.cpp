@@ -211,8 +211,14 @@ TEST(C40WordIl, EncodesOperandsAndJumpTargets) {
 TEST(C40Interp, DispatchTableFollowsOpsDef) {
   const InterpProgram& ip = interp_program();
   uint32_t table = ip.text.labels.at("dispatch");
-  for (int op = 0; op < kOpCount; op++)
-    EXPECT_EQ(ip.words.at(table + op), ip.text.labels.at(std::string("op_") + op_info(Op(op)).name));
+  for (int op = 0; op < kOpCount; op++) {
+    std::string name = std::string("op_") + op_info(Op(op)).name;
+    if (op_info(Op(op)).klass == OpClass::Typed) {  // refused when the word IL is built (c40typed_tests)
+      EXPECT_EQ(ip.text.labels.count(name), 0u) << name;
+      continue;
+    }
+    EXPECT_EQ(ip.words.at(table + op), ip.text.labels.at(name));
+  }
   EXPECT_EQ(ip.entry, ip.text.labels.at("interp"));
 }
 
