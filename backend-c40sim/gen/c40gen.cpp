@@ -175,7 +175,7 @@ enum class Fuse : uint8_t { None, Start, Contact, Push, Combine };
 // the IL byte offsets (an index fault records its IDX's), and the bounds of
 // the last IDX, which the LDX or STX right after it uses.
 struct TypedState {
-  bool divu = false, f2i = false, i2f = false;
+  bool divu = false, f2i = false, i2f = false, fadd = false, fmul = false, fdiv = false;
   std::vector<uint32_t> il_offset;  // encode_il's instr_offset, when the program has an IDX
   size_t next = 0;                  // program-order index of the instruction being built
   uint32_t span = 0;                // hi - lo of the last IDX
@@ -1198,7 +1198,10 @@ void Gen::typed(const ldc::Instr& in) {
   switch (in.op) {
     case Op::TIDX: typed_index(in); break;
     case Op::TLDX: case Op::TSTX: typed_indexed(in); break;
-    case Op::TDIV: case Op::TMOD: typed_divmod(in); break;
+    case Op::TDIV: case Op::TMOD:
+      if (typed::is_real(t)) goto arith;  // IEEE: no S0
+      typed_divmod(in);
+      break;
     case Op::TMIN: case Op::TMAX: typed_minmax(in); break;
     case Op::TSHL: case Op::TSHR: case Op::TROL: case Op::TROR: typed_shift(in); break;
     case Op::TCONV: typed_conv(in); break;
@@ -1233,9 +1236,18 @@ void Gen::typed(const ldc::Instr& in) {
       op(M::Sti, {R(r0), Dv(in.a[1])});
       break;
     }
-    default: {  // ADD SUB MUL on integers, AND OR XOR
+    arith:
+    default: {  // ADD SUB MUL on integers, AND OR XOR; ADD SUB MUL DIV on REAL
       load_t(in.a[0], t, r0);
       load_t(in.a[1], t, r1);
+      if (typed::is_real(t)) {
+        const char* routine = in.op == Op::TADD ? kFaddLabel : in.op == Op::TSUB ? kFsubLabel
+                            : in.op == Op::TMUL ? kFmulLabel : kFdivLabel;
+        (in.op == Op::TMUL ? ts_.fmul : in.op == Op::TDIV ? ts_.fdiv : ts_.fadd) = true;
+        op(M::Call, {L(routine)});
+        op(M::Sti, {R(r0), Dv(in.a[2])});
+        break;
+      }
       switch (in.op) {
         case Op::TADD: op(M::Addi, {R(r1), R(r0)}); break;
         case Op::TSUB: op(M::Subi, {R(r1), R(r0)}); break;
@@ -1854,6 +1866,331 @@ const char* const kI2fRoutine[] = {
     "RETSU",
 };
 
+// ---- REAL arithmetic as IEEE binary32 in integer code (ADD SUB MUL DIV .REAL):
+// the C40's own floating point truncates and has no NaN, infinity or
+// denormal, so these compute what x86-64's addss / subss / mulss / divss do,
+// bit for bit: round to nearest, ties to even; gradual underflow; a NaN
+// operand gives itself quieted (the first one if both are), an invalid
+// operation the default NaN 0xFFC00000.  R0 = a, R1 = b (IEEE bits); the
+// result in R0.  Use R2-R7, AR0 and two stack words.
+
+// R0 = a, R1 = b: a NaN (|x| > 0x7F800000) returns itself quieted
+#define LDC_C40_NAN_CHECK(p)                                                         \
+    p "_nan: LSH3 1, R0, R3", "LDHI 0FF00h, R4", "CMPI R4, R3", "BHI fnan_a",      \
+    "LSH3 1, R1, R3", "CMPI R4, R3", "BHI fnan_b"
+
+// M in R0 (0 < M < 2^31), the exponent e' in R1, the sign in R2 (0 or
+// 0x80000000): the value M * 2^(e' - 156), rounded.  M is first shifted so
+// that its leading 1 is bit 29 (bits 5-0 are then below the 24-bit mantissa;
+// what a right shift drops is kept as a sticky bit 0), then right again while
+// the exponent is below 1 (the denormals); the carry of rounding up runs into
+// the exponent field, up to the infinity.
+const char* const kFpackRoutine[] = {
+    "FLOAT R0, R3",
+    "PUSHF R3",
+    "POP R3",
+    "ASH -24, R3",         // the leading 1's position
+    "SUBI 29, R3",
+    "ADDI R3, R1",
+    "CMPI 0, R3",
+    "BLE fpack_left",
+    "LDI 1, R4",
+    "LSH R3, R4",
+    "SUBI 1, R4",
+    "AND R0, R4",          // the bits shifted out
+    "NEGI R3, R5",
+    "LSH R5, R0",
+    "CMPI 0, R4",
+    "LDINE 1, R4",
+    "OR R4, R0",           // sticky
+    "BR fpack_sub",
+    "fpack_left: NEGI R3, R3",
+    "LSH R3, R0",
+    "fpack_sub: CMPI 1, R1",
+    "BGE fpack_round",
+    "LDI 1, R3",
+    "SUBI R1, R3",         // 1 - e' places to the denormal
+    "LDI 1, R1",
+    "CMPI 31, R3",
+    "LDIGT 31, R3",
+    "LDI 1, R4",
+    "LSH R3, R4",
+    "SUBI 1, R4",
+    "AND R0, R4",
+    "NEGI R3, R5",
+    "LSH R5, R0",
+    "CMPI 0, R4",
+    "LDINE 1, R4",
+    "OR R4, R0",
+    "fpack_round: AND3 63, R0, R4",
+    "LSH -6, R0",
+    "AND3 1, R0, R5",
+    "ADDI R5, R4",         // above half, or half with an odd mantissa
+    "ADDI3 1, R0, R5",
+    "CMPI 32, R4",
+    "LDIGT R5, R0",
+    "CMPI 255, R1",
+    "BGE finf",
+    "SUBI 1, R1",
+    "LSH 23, R1",
+    "ADDI R1, R0",         // the hidden bit carries into the exponent (254 and a carry: the infinity)
+    "OR R2, R0",
+    "RETSU",
+    // the shared endings of __fadd, __fmul, __fdiv
+    "finf: LDHI 07F80h, R0",
+    "OR R2, R0",
+    "RETSU",
+    "fzero: LDI R2, R0",
+    "RETSU",
+    "fdefault_nan: LDHI 0FFC0h, R0",
+    "RETSU",
+    "fnan_a: LDHI 040h, R3",
+    "OR R3, R0",
+    "RETSU",
+    "fnan_b: LDHI 040h, R3",
+    "OR3 R3, R1, R0",
+    "RETSU",
+};
+
+// R0 = a, R1 = b: the mantissas with their hidden bit (none, and exponent 1,
+// for a denormal) in R0 and R1, the exponents in R5 and R6
+#define LDC_C40_UNPACK                                                                              \
+    "LDHI 080h, R3", "CMPI 0, R5", "LDIEQ 0, R3", "LDIEQ 1, R5", "LSH 9, R0", "LSH -9, R0", "OR R3, R0", \
+    "LDHI 080h, R3", "CMPI 0, R6", "LDIEQ 0, R3", "LDIEQ 1, R6", "LSH 9, R1", "LSH -9, R1", "OR R3, R1"
+
+// __fsub: b's sign flipped (not a NaN's: it is returned as it is), then __fadd
+const char* const kFsubRoutine[] = {
+    "LSH3 1, R1, R3",
+    "LDHI 0FF00h, R4",
+    "CMPI R4, R3",
+    "BHI __fadd",
+    "LDHI 08000h, R3",
+    "XOR R3, R1",
+};
+
+// __fadd: the larger magnitude first (its sign is the result's), the other
+// aligned to it with a sticky bit, both with 6 bits below their mantissa
+// (exact for the shifts of 0 and 1 after which a subtraction cancels)
+const char* const kFaddRoutine[] = {
+    LDC_C40_NAN_CHECK("fadd"),
+    "LSH3 -23, R0, R5",
+    "AND 0FFh, R5",
+    "LSH3 -23, R1, R6",
+    "AND 0FFh, R6",
+    "CMPI 255, R5",
+    "BEQ fadd_ainf",
+    "CMPI 255, R6",
+    "BEQ fadd_retb",
+    "LSH3 1, R0, R3",
+    "BEQ fadd_azero",
+    "LSH3 1, R1, R4",
+    "BEQ fadd_reta",
+    "CMPI R4, R3",
+    "BHS fadd_ordered",
+    "LDI R0, R3",          // |a| < |b|: exchange
+    "LDI R1, R0",
+    "LDI R3, R1",
+    "LDI R5, R3",
+    "LDI R6, R5",
+    "LDI R3, R6",
+    "fadd_ordered: LDHI 08000h, R2",
+    "AND R0, R2",
+    "XOR3 R1, R0, R7",     // negative: the signs differ
+    LDC_C40_UNPACK,
+    "LSH 6, R0",
+    "LSH 6, R1",
+    "SUBI3 R6, R5, R3",    // the exponent difference
+    "CMPI 31, R3",
+    "LDIGT 31, R3",
+    "LDI 1, R4",
+    "LSH R3, R4",
+    "SUBI 1, R4",
+    "AND R1, R4",
+    "NEGI R3, R6",
+    "LSH R6, R1",
+    "CMPI 0, R4",
+    "LDINE 1, R4",
+    "OR R4, R1",
+    "CMPI 0, R7",
+    "BLT fadd_sub",
+    "ADDI R1, R0",
+    "BR fadd_pack",
+    "fadd_sub: SUBI R1, R0",
+    "BEQ fadd_zero",       // x - x = +0
+    "fadd_pack: LDI R5, R1",
+    "BR __fpack",
+    "fadd_zero: LDI 0, R0",
+    "RETSU",
+    "fadd_ainf: CMPI 255, R6",
+    "BNE fadd_reta",
+    "XOR3 R1, R0, R3",
+    "BGE fadd_reta",
+    "BR fdefault_nan",     // inf - inf
+    "fadd_azero: LSH3 1, R1, R4",
+    "BNE fadd_retb",
+    "AND R1, R0",          // -0 only if both are -0
+    "RETSU",
+    "fadd_retb: LDI R1, R0",
+    "fadd_reta: RETSU",
+};
+
+// __fmul: the 48-bit product of the mantissas from 12-bit halves (MPYI
+// multiplies 24 bits) in R6:R4, shifted so its leading 1 is bit 29 or below
+// (sticky), the exponent ea + eb - 144 + that shift
+const char* const kFmulRoutine[] = {
+    LDC_C40_NAN_CHECK("fmul"),
+    "XOR3 R1, R0, R2",
+    "LDHI 08000h, R3",
+    "AND R3, R2",          // the sign
+    "LSH3 -23, R0, R5",
+    "AND 0FFh, R5",
+    "LSH3 -23, R1, R6",
+    "AND 0FFh, R6",
+    "LSH3 1, R0, R3",
+    "LSH3 1, R1, R4",
+    "CMPI 255, R5",
+    "BEQ fmul_ainf",
+    "CMPI 255, R6",
+    "BEQ fmul_binf",
+    "CMPI 0, R3",
+    "BEQ fzero",
+    "CMPI 0, R4",
+    "BEQ fzero",
+    LDC_C40_UNPACK,
+    "ADDI R6, R5",         // ea + eb
+    "LSH3 -12, R0, R7",    // ah
+    "AND 0FFFh, R0",       // al
+    "LSH3 -12, R1, R3",    // bh
+    "AND 0FFFh, R1",       // bl
+    "MPYI3 R1, R0, R4",    // al bl
+    "MPYI3 R3, R7, R6",    // ah bh
+    "MPYI R1, R7",         // ah bl
+    "MPYI R0, R3",         // al bh
+    "ADDI R3, R7",         // the middle, < 2^25
+    "LSH3 12, R7, R3",
+    "ADDI R3, R4",         // C: carry
+    "LDI 0, R0",
+    "LDILO 1, R0",
+    "LSH3 24, R6, R3",
+    "ADDI R3, R4",
+    "LDI 0, R1",
+    "LDILO 1, R1",
+    "ADDI R1, R0",
+    "LSH3 -20, R7, R3",
+    "LSH -8, R6",
+    "ADDI R3, R6",
+    "ADDI R0, R6",         // the product: R6 high, R4 low
+    "CMPI 0, R6",
+    "BEQ fmul_lo",
+    "FLOAT R6, R3",
+    "PUSHF R3",
+    "POP R3",
+    "ASH -24, R3",
+    "ADDI 32, R3",
+    "BR fmul_k",
+    "fmul_lo: FLOAT R4, R3",
+    "PUSHF R3",
+    "POP R3",
+    "ASH -24, R3",
+    "LDI R4, R0",
+    "LDILT 31, R3",
+    "fmul_k: SUBI 29, R3", // k: the leading 1 to bit 29
+    "ADDI R3, R5",
+    "CMPI 0, R3",
+    "BGT fmul_right",
+    "NEGI R3, R3",
+    "LSH3 R3, R4, R0",
+    "BR fmul_pack",
+    "fmul_right: LDI 1, R0",
+    "LSH R3, R0",
+    "SUBI 1, R0",
+    "AND R4, R0",          // the bits shifted out
+    "NEGI R3, R1",
+    "LSH R1, R4",
+    "LDI 32, R1",
+    "SUBI R3, R1",
+    "LSH R1, R6",
+    "OR R6, R4",
+    "CMPI 0, R0",
+    "LDINE 1, R0",
+    "OR R4, R0",
+    "fmul_pack: SUBI 144, R5",
+    "LDI R5, R1",
+    "BR __fpack",
+    "fmul_ainf: CMPI 0, R4",
+    "BEQ fdefault_nan",    // inf * 0
+    "BR finf",
+    "fmul_binf: CMPI 0, R3",
+    "BEQ fdefault_nan",
+    "BR finf",
+};
+
+// __fdiv: denormal mantissas normalized, then 31 quotient bits by restoring
+// division (the quotient in [2^29, 2^31)), the remainder as the sticky bit,
+// the exponent ea - eb + 126
+const char* const kFdivRoutine[] = {
+    LDC_C40_NAN_CHECK("fdiv"),
+    "XOR3 R1, R0, R2",
+    "LDHI 08000h, R3",
+    "AND R3, R2",
+    "LSH3 -23, R0, R5",
+    "AND 0FFh, R5",
+    "LSH3 -23, R1, R6",
+    "AND 0FFh, R6",
+    "LSH3 1, R0, R3",
+    "LSH3 1, R1, R4",
+    "CMPI 255, R5",
+    "BEQ fdiv_ainf",
+    "CMPI 255, R6",
+    "BEQ fzero",           // finite / inf
+    "CMPI 0, R4",
+    "BEQ fdiv_by_zero",
+    "CMPI 0, R3",
+    "BEQ fzero",           // 0 / finite
+    LDC_C40_UNPACK,
+    "FLOAT R0, R3",
+    "PUSHF R3",
+    "POP R3",
+    "ASH -24, R3",
+    "LDI 23, R4",
+    "SUBI R3, R4",
+    "LSH R4, R0",
+    "SUBI R4, R5",         // a normalized
+    "FLOAT R1, R3",
+    "PUSHF R3",
+    "POP R3",
+    "ASH -24, R3",
+    "LDI 23, R4",
+    "SUBI R3, R4",
+    "LSH R4, R1",
+    "SUBI R4, R6",         // b normalized
+    "SUBI R6, R5",
+    "ADDI 126, R5",
+    "LDI 0, R3",
+    "LDI 30, AR0",
+    "fdiv_step: LSH 1, R3",
+    "SUBI3 R1, R0, R4",
+    "LDIHS R4, R0",
+    "LDI 0, R4",
+    "LDIHS 1, R4",
+    "OR R4, R3",
+    "LSH 1, R0",
+    "DBU AR0, fdiv_step",
+    "CMPI 0, R0",
+    "LDINE 1, R0",
+    "OR R3, R0",
+    "LDI R5, R1",
+    "BR __fpack",
+    "fdiv_ainf: CMPI 255, R6",
+    "BEQ fdefault_nan",    // inf / inf
+    "BR finf",
+    "fdiv_by_zero: CMPI 0, R3",
+    "BEQ fdefault_nan",    // 0 / 0
+    "BR finf",
+};
+#undef LDC_C40_NAN_CHECK
+#undef LDC_C40_UNPACK
+
 void add_routine(as::Block<Instruction>& b, const char* label, const char* note, std::span<const char* const> lines) {
   b.items.push_back(Item::note(note));
   b.items.push_back(Item::label_def(label, true));
@@ -1879,9 +2216,6 @@ std::string c40_typed_refusal(const Instr& in) {
     return "64-bit types (LINT ULINT LWORD LREAL TIME LTIME DATE TOD DT) do not fit its 32-bit word";
   if (!typed::is_real(in.ty)) return "";
   switch (in.op) {
-    case Op::TADD: case Op::TSUB: case Op::TMUL: case Op::TDIV:
-      return "its floating point is not IEEE binary32 (it truncates where IEEE rounds to nearest, and has no NaN, "
-             "infinity or denormal), so REAL arithmetic would not be bit-exact";
     case Op::TEXPT: case Op::TSQRT: case Op::TLN: case Op::TLOG: case Op::TEXP: case Op::TSIN: case Op::TCOS:
     case Op::TTAN: case Op::TASIN: case Op::TACOS: case Op::TATAN:
       return "the REAL functions are C's double functions rounded to REAL, which the C40 cannot reproduce bit for bit";
@@ -1899,7 +2233,8 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
   prog.globals.push_back(kExitLabel);
   prog.globals.push_back(kDivLabel);
   prog.globals.push_back(kDivfLabel);
-  for (const char* l : {kDivuLabel, kF2iLabel, kI2fLabel}) prog.globals.push_back(l);
+  for (const char* l : {kDivuLabel, kF2iLabel, kI2fLabel, kFpackLabel, kFaddLabel, kFsubLabel, kFmulLabel, kFdivLabel})
+    prog.globals.push_back(l);
   for (const Rung& r : p.rungs)
     for (const auto& l : r.labels) prog.globals.push_back(label_name(l));
   for (const auto& l : p.end_labels) prog.globals.push_back(label_name(l));
@@ -1979,6 +2314,14 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
   if (ts.divu) add_routine(epi, kDivuLabel, "__divu: R0 = R0 / R1, R1 = R0 % R1 (UDINT)", kDivuRoutine);
   if (ts.f2i) add_routine(epi, kF2iLabel, "__f2i: R0 = |integer of the IEEE bits R0| mod 2^32 (R1 = 1: truncated)", kF2iRoutine);
   if (ts.i2f) add_routine(epi, kI2fLabel, "__i2f: R0 = IEEE bits of the unsigned R0, to nearest", kI2fRoutine);
+  if (ts.fadd || ts.fmul || ts.fdiv)
+    add_routine(epi, kFpackLabel, "__fpack: R0 = IEEE bits of R0 * 2^(R1 - 156), sign R2, to nearest", kFpackRoutine);
+  if (ts.fadd) {
+    add_routine(epi, kFsubLabel, "__fsub: R0 = R0 - R1 (IEEE binary32 bits)", kFsubRoutine);
+    add_routine(epi, kFaddLabel, "__fadd: R0 = R0 + R1 (IEEE binary32 bits)", kFaddRoutine);
+  }
+  if (ts.fmul) add_routine(epi, kFmulLabel, "__fmul: R0 = R0 * R1 (IEEE binary32 bits)", kFmulRoutine);
+  if (ts.fdiv) add_routine(epi, kFdivLabel, "__fdiv: R0 = R0 / R1 (IEEE binary32 bits)", kFdivRoutine);
   prog.blocks.push_back(std::move(epi));
   return out;
 }
