@@ -34,6 +34,15 @@ namespace {
 
 using namespace ldc;
 
+// The scans of each run.  The sanitizer build (Debug + ASan + UBSan) runs the
+// simulator about 50 times slower, so there every run takes a fifth of its
+// scans (the programs are the same; the normal build runs them all).
+#ifdef LDC_SANITIZED
+constexpr int kScanDivisor = 5;
+#else
+constexpr int kScanDivisor = 1;
+#endif
+
 // The types that fit the C40's word (types.def: at most 32 bits).
 const Ty kFit[] = {Ty::BOOL, Ty::SINT, Ty::INT, Ty::DINT, Ty::USINT, Ty::UINT, Ty::UDINT,
                    Ty::BYTE, Ty::WORD, Ty::DWORD, Ty::REAL};
@@ -167,6 +176,7 @@ std::string where(const Layout& l, size_t off) {
 // image after every scan.  Returns the scans whose IDX faulted (the fault record set).
 template <class Input>
 int run_against_reference(const std::string& text, int scans, uint32_t seed, Input input) {
+  scans /= kScanDivisor;
   Program p = parse_il_text(text, "typed.il");
   BinaryIl bin = encode_il(p);
   EXPECT_EQ(validate_il(bin.code, p.layout()), "");
@@ -196,6 +206,7 @@ int run_against_reference(const std::string& text, int scans, uint32_t seed, Inp
       uint32_t kind;
       std::memcpy(&kind, a.data() + kSysFault, 4);
       faults += opt == 0 && kind == kFaultIndex;
+      if (std::memcmp(a.data(), b.data(), L.size) == 0) continue;
       for (size_t off = 0; off < L.size; off++) {
         if (a[off] == b[off]) continue;
         ADD_FAILURE() << "-O" << opt << " scan " << s << ": " << where(L, off) << " is " << int(b[off])
@@ -245,9 +256,10 @@ TEST(C40Typed, ArraysAndIndexFaultsAreBitExactWithTheReference) {
       return;
     }
   }
-  std::cout << faults << " of 320 scans ended by an index fault\n";
-  EXPECT_GT(faults, 30) << "the inputs should make some IDX fault";
-  EXPECT_LT(faults, 290) << "and many scans run to the end";  // of 8 x 40
+  const int scans = 8 * 40 / kScanDivisor;
+  std::cout << faults << " of " << scans << " scans ended by an index fault\n";
+  EXPECT_GT(faults, scans / 10) << "the inputs should make some IDX fault";
+  EXPECT_LT(faults, scans * 9 / 10) << "and many scans run to the end";
 }
 
 // REAL ADD SUB MUL DIV, which the C40 computes as IEEE binary32 in integer
