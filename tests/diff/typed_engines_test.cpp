@@ -16,8 +16,10 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <map>
+#include <sstream>
 
 #include "backend-c/backend_c.h"
 #include "backend-c/c_shared.h"
@@ -445,6 +447,22 @@ TEST(TypedEngines, FastInterpreterSpecializesTheCommonCases) {
   auto fast = make_fast(p);
   EXPECT_EQ(fast->specialized(), fast->il_instructions());
   EXPECT_EQ(compare(p, *fast, 5, 30), "");
+}
+
+// The typed benchmark of docs/runtime.md: the fast interpreter agrees, and
+// only its MIN / MAX clamps and conversions take the generic routine.
+TEST(TypedEngines, FastInterpreterMatchesOnTheTypedBenchmark) {
+  std::ifstream f(LDC_TYPED_BENCH);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  Program p = parse_il_text(ss.str(), "typed_bench.il");
+  auto fast = make_fast(p);
+  size_t generic = 0;
+  for (const Rung& r : p.rungs)
+    for (const Instr& in : r.code) generic += in.op == Op::TMIN || in.op == Op::TMAX || in.op == Op::TCONV;
+  EXPECT_GT(generic, 0u);
+  EXPECT_EQ(fast->il_instructions() - fast->specialized(), generic);
+  for (uint64_t seed : {1, 2}) EXPECT_EQ(compare(p, *fast, seed, 20), "") << "inputs " << seed;
 }
 
 TEST(TypedEngines, ChartCRefusesTypedInstructionsByName) {
