@@ -5,11 +5,13 @@
 #include "runtime/fastinterp.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include "ir/typed.h"
 
@@ -238,8 +240,8 @@ template <Op op>
 bool run_typed(uint8_t* m, const TGen& g, uint32_t& xr) {
   constexpr const OpInfo& oi = kOps[int(op)];
   const Ty t = g.t, u = g.u;
-  if constexpr (oi.push == 1) {
-    return false;  // compares go to typed_compare
+  if constexpr (oi.klass != OpClass::Typed || oi.push == 1) {
+    return false;  // compares go to typed_compare; untyped ops have handlers of their own
   } else if constexpr (op == Op::TIDX) {
     uint64_t i = tget(m, g.o[0], t);
     int32_t lo = int32_t(g.o[1].k), hi = int32_t(g.o[2].k);
@@ -270,21 +272,12 @@ bool run_typed(uint8_t* m, const TGen& g, uint32_t& xr) {
   return false;
 }
 using TypedRoutine = bool (*)(uint8_t*, const TGen&, uint32_t&);
-#define LDC_RUN_Typed(name) run_typed<Op::name>
-#define LDC_RUN_OTHER(name) nullptr
-#define LDC_RUN_Basic LDC_RUN_OTHER
-#define LDC_RUN_Compare LDC_RUN_OTHER
-#define LDC_RUN_Move LDC_RUN_OTHER
-#define LDC_RUN_Arith LDC_RUN_OTHER
-#define LDC_RUN_Logic LDC_RUN_OTHER
-#define LDC_RUN_Special LDC_RUN_OTHER
-#define LDC_RUN_Timer LDC_RUN_OTHER
-#define LDC_RUN_Counter LDC_RUN_OTHER
-#define LDC_RUN_Flow LDC_RUN_OTHER
-const TypedRoutine kTypedRoutines[kOpCount] = {
-#define OP(name, opds, push, pop, klass, rel, fn, typed, types) LDC_RUN_##klass(name),
-#include "ir/ops.def"
-};
+// The routine of every op, by opcode (nullptr for the untyped ones).
+template <size_t... I>
+constexpr std::array<TypedRoutine, kOpCount> typed_routines(std::index_sequence<I...>) {
+  return {{(kOps[I].klass == OpClass::Typed ? &run_typed<Op(I)> : nullptr)...}};
+}
+constexpr std::array<TypedRoutine, kOpCount> kTypedRoutines = typed_routines(std::make_index_sequence<kOpCount>());
 __attribute__((noinline)) bool typed_compare(const uint8_t* m, const TGen& g) {
   return typed::compare(op_info(g.op).rel, g.t, tget(m, g.o[0], g.t), tget(m, g.o[1], g.t));
 }
