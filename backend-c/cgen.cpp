@@ -114,7 +114,7 @@ class CGen {
 
   // The binary IL's instruction offsets, in program order (an IDX's fault
   // record names its offset); without them typed IDX is refused.
-  void set_il_offsets(const std::vector<uint32_t>* offsets) { offsets_ = offsets, typed_ok_ = true; }
+  void set_il_offsets(const std::vector<uint32_t>* offsets) { offsets_ = offsets; }
 
   void code(const std::vector<Instr>& c) {
     depth_ = 0;
@@ -141,7 +141,6 @@ class CGen {
   int depth_ = 0;
   const std::vector<uint32_t>* offsets_ = nullptr;
   size_t n_ = 0;  // instructions translated so far
-  bool typed_ok_ = false;  // generate_c emits the typed helpers; a chart's C (sfc_c.cpp) does not
 
   static std::string u(uint32_t v) { return std::to_string(v) + "u"; }
   std::string s(int d) const { return "s" + std::to_string(((d % 32) + 32) % 32); }
@@ -188,9 +187,6 @@ class CGen {
     out += ind_ + "/* " + instr_text(in) + " */\n";
     auto push = [&](const std::string& e) { line(s(depth_) + " = " + e + ";"); depth_++; };
     if (op_info(in.op).klass == OpClass::Typed) {
-      if (!typed_ok_)
-        throw CompileError(in.loc.line, in.loc.col, "the C route's chart form (paper 001's switch) cannot translate " +
-                                                        op_spelling(in) + ": typed instructions need generate_c's helpers");
       CTyped c = c_typed(in, L_, offsets_ && n_ < offsets_->size() ? int64_t((*offsets_)[n_]) : -1);
       return c.push ? push(c.text) : guarded(c.text);
     }

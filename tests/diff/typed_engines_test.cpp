@@ -23,6 +23,7 @@
 
 #include "backend-c/backend_c.h"
 #include "backend-c/c_shared.h"
+#include "frontend/frontend.h"
 #include "ir/typed.h"
 #include "runtime/fastinterp.h"
 #include "runtime/runtime.h"
@@ -465,15 +466,54 @@ TEST(TypedEngines, FastInterpreterMatchesOnTheTypedBenchmark) {
   for (uint64_t seed : {1, 2}) EXPECT_EQ(compare(p, *fast, seed, 20), "") << "inputs " << seed;
 }
 
-TEST(TypedEngines, ChartCRefusesTypedInstructionsByName) {
+// A chart's C (c_rungs, c_code: paper 001's switch form) has no binary IL
+// offsets: it translates typed instructions but refuses an IDX by name.
+TEST(TypedEngines, ChartCTranslatesTypedInstructionsButRefusesIdx) {
   Program p = parse_il_text(".rung line 1\n    TRUE\n    ADD.INT D0 1 D1\n.end\n", "t.il");
+  EXPECT_NE(c_rungs(p.rungs, {}, p.layout(), "  ").find("st_INT(m, "), std::string::npos);
+  Program q = parse_il_text(".rung line 1\n    TRUE\n    IDX.INT D0 1 5\n    LDX.INT D10 1 D1\n.end\n", "t.il");
   try {
-    c_rungs(p.rungs, {}, p.layout(), "  ");
-    ADD_FAILURE() << "the chart form took a typed instruction";
+    c_rungs(q.rungs, {}, q.layout(), "  ");
+    ADD_FAILURE() << "the chart form translated an IDX";
   } catch (const CompileError& e) {
-    EXPECT_NE(std::string(e.what()).find("ADD.INT"), std::string::npos) << e.what();
-    EXPECT_EQ(e.line, 3);
+    EXPECT_NE(std::string(e.what()).find("IDX.INT"), std::string::npos) << e.what();
   }
+}
+
+// A chart whose IL actions hold typed instructions: its C (paper 001's
+// switch form) against the reference interpreter on the lowered chart.
+const char kTypedChart[] = R"(# typed instructions in a chart's IL actions (the C route's chart form)
+flags M100
+initial step A
+  N il {
+  TRUE
+  ADD.INT D0 1000 D0
+  MUL.LREAL D2 1.5 D4
+  CONV.DINT.LREAL D4 D6
+  SHL.WORD.INT D0 3 D8
+  }
+transition X0
+step B
+  P il {
+  TRUE
+  MOVE.LREAL 2.5 D2
+  LT.INT D0 0
+  OUT Y0
+  }
+transition TRUE
+jump A
+)";
+
+TEST(TypedEngines, ChartCMatchesScanByScan) {
+  Chart chart = parse_sfc(kTypedChart, "typed.sfc");
+  Program p = lower_chart(chart);
+  std::string tmpl = (std::filesystem::temp_directory_path() / "ldc-typed-XXXXXX").string();
+  ASSERT_TRUE(mkdtemp(tmpl.data()));
+  {
+    auto c = make_shared_object_engine(build_c_text(generate_sfc_c(chart, p.layout()), tmpl), kCScanSymbol);
+    EXPECT_EQ(compare(p, *c, 9, 30), "");
+  }
+  std::filesystem::remove_all(tmpl);
 }
 
 }  // namespace
