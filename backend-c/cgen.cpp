@@ -317,7 +317,7 @@ void refuse_shared_stack(const Program& p) {
     }
 }
 
-bool has_typed(const Program& p) {
+static bool has_typed(const Program& p) {
   for (const Rung& r : p.rungs)
     for (const Instr& in : r.code)
       if (op_info(in.op).klass == OpClass::Typed) return true;

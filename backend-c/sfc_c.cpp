@@ -94,7 +94,7 @@ struct SfcC {
 }  // namespace
 
 // Does the chart hold a typed instruction (its C then needs their helpers)?
-bool chart_has_typed(const Chart& c) {
+static bool chart_has_typed(const Chart& c) {
   auto typed = [](const std::vector<Instr>& code) {
     for (const Instr& in : code)
       if (op_info(in.op).klass == OpClass::Typed) return true;

@@ -8,6 +8,10 @@
 // types at decode time ("quickening": an INT32 ADD of two words, of a word and a
 // constant, ...; constant compares and moves folded), so the run loop never
 // decodes a tag and never asks what type a value has on the common paths.
+// The typed instructions of issue 25 likewise: INT, DINT, 64-bit, REAL and
+// LREAL arithmetic, compares, moves, IDX/LDX/STX get handlers of their own;
+// the rest a routine of their op with resolved operands (docs/runtime.md,
+// "Typed instructions: the fast interpreter and the C route").
 // Dispatch is threaded: with GCC or Clang every handler ends in its own
 // indirect `goto *table[next->op]` (computed goto); other compilers get a
 // `switch` in a loop.  The bit stack stays in a local (a register).
