@@ -4,7 +4,9 @@
 # gen_cases.py from MatIEC's definitions).  The engines are those of
 # tests/frontend/check_trace.sh, which this mirrors: source and interp (the
 # reference interpreter, from the source or from an image written by ldc -O0),
-# fast, native, native-O1, native-O2, c (the C route), c40sim, c40interp.
+# native, native-O1, native-O2 and c40sim (an image by ldc), and fast, c (the C
+# route) and c40interp, which run the source's IL (so that they do not wait for
+# the x86-64 backend to compile it).
 # On a mismatch, explain.py names each differing case.
 set -eu
 bindir=$1 case=$2 engine=$3
@@ -16,11 +18,10 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 case "$engine" in
   source) "$bindir/ldrun" "$src" --engine=interp --trace "$base.csv" --watch "$watch" > "$tmp/out" ;;
-  c) "$bindir/ldrun" "$src" --engine=c --trace "$base.csv" --watch "$watch" > "$tmp/out" ;;
+  fast|c|c40interp) "$bindir/ldrun" "$src" --engine="$engine" --trace "$base.csv" --watch "$watch" > "$tmp/out" ;;
   *)
     case "$engine" in
       c40sim) flags=--target=c40 run=c40sim ;;
-      c40interp) flags=-O0 run=c40interp ;;
       native-O*) flags=-${engine#native-} run=native ;;
       *) flags=-O0 run=$engine ;;
     esac
