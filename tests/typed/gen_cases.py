@@ -172,7 +172,8 @@ def binop(fam, op, t, a, b, r, why, s0=None, const=True):
             f = p.flag()
             lines += ["LOAD S0", "OUT %s" % f]
             p.watch_bit(f, [s0])
-        p.rung("%s.%s %s %s = %s: %s" % (op, t, show(t, a), show(t, b), show(t, r), why), lines)
+        p.rung("%s.%s %s %s = %s: %s%s" % (op, t, show(t, a), show(t, b), show(t, r), why,
+                                           " (the second operand a constant)" if use_const else ""), lines)
         p.expect(t, dr, r)
 
 
