@@ -17,8 +17,8 @@ watch=$(head -n 1 "$base.expected" | cut -d, -f2-)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 case "$engine" in
-  source) "$bindir/ldrun" "$src" --engine=interp --trace "$base.csv" --watch "$watch" > "$tmp/out" ;;
-  fast|c|c40interp) "$bindir/ldrun" "$src" --engine="$engine" --trace "$base.csv" --watch "$watch" > "$tmp/out" ;;
+  source) "$bindir/ldrun" "$src" --engine=interp --trace "$base.csv" --watch "$watch" --fault=continue > "$tmp/out" ;;
+  fast|c|c40interp) "$bindir/ldrun" "$src" --engine="$engine" --trace "$base.csv" --watch "$watch" --fault=continue > "$tmp/out" ;;
   *)
     case "$engine" in
       c40sim) flags=--target=c40 run=c40sim ;;
@@ -26,7 +26,7 @@ case "$engine" in
       *) flags=-O0 run=$engine ;;
     esac
     "$bindir/ldc" "$src" $flags -o "$tmp/prog.bin"
-    "$bindir/ldrun" "$tmp/prog.bin" --engine="$run" --trace "$base.csv" --watch "$watch" > "$tmp/out" ;;
+    "$bindir/ldrun" "$tmp/prog.bin" --engine="$run" --trace "$base.csv" --watch "$watch" --fault=continue > "$tmp/out" ;;
 esac
 if ! cmp -s "$base.expected" "$tmp/out"; then
   python3 "$here/explain.py" "$src" "$base.expected" "$tmp/out" >&2 || true
