@@ -236,9 +236,9 @@ Ref Model::select_element(const Ref& r, const std::vector<std::pair<Operand, Ty>
   }
   for (size_t k = 0; k < idx.size(); k++) {
     const auto& [o, ty] = idx[k];
-    TyKind kind = ty_info(ty).kind;
-    if (ty == Ty::None || !(kind == TyKind::Signed || kind == TyKind::Unsigned || kind == TyKind::Bits))
-      fail(at, std::string("an array index must be an integer, this one is ") + (ty == Ty::None ? "untyped" : ty_info(ty).name));
+    TyKind kind = ty == Ty::None ? TyKind::Bool : ty_info(ty).kind;
+    if (!(kind == TyKind::Signed || kind == TyKind::Unsigned))  // ANY_INT, what IDX takes
+      fail(at, std::string("an array index must be an integer (SINT .. ULINT), this one is ") + (ty == Ty::None ? "untyped" : ty_info(ty).name));
     if (o.kind == OpdKind::ConstT) {
       uint64_t v = o.bits();
       if (!typed::index_ok(ty, v, t.dims[k].lo, t.dims[k].hi))
@@ -269,12 +269,15 @@ Place Model::place(Size s, SrcLoc at) {
 
 // ---------------------------------------------------------------- initial values
 
-void Model::initial_stores(TypeId id, Place p, const Init* init, std::vector<Store>& out) const {
+void Model::initial_stores(TypeId id, Place p, const Init* init, std::vector<Store>& out, bool zeros) const {
   const Type& t = type(id);
   if (!init || init->kind == Init::None) init = t.init.kind == Init::None ? nullptr : &t.init;
   SrcLoc loc = init ? init->loc : SrcLoc{};
   if (t.scalar()) {
-    if (!init) return;
+    if (!init) {
+      if (zeros) out.push_back({t.elem, p, 0});
+      return;
+    }
     if (init->kind != Init::Value) fail(loc, "a " + type_name(id) + " takes one value, not a list or structure");
     std::string why;
     auto v = literal_as(init->value, t.elem, why);
@@ -283,7 +286,7 @@ void Model::initial_stores(TypeId id, Place p, const Init* init, std::vector<Sto
       int64_t x = typed::is_signed(t.elem) ? int64_t(v->bits) : int64_t(v->bits);
       if (x < t.lo || x > t.hi) fail(loc, "initial value " + std::to_string(x) + " outside " + type_name(id));
     }
-    if (v->bits != 0) out.push_back({t.elem, p, v->bits});
+    if (v->bits != 0 || zeros) out.push_back({t.elem, p, v->bits});
     return;
   }
   if (t.kind == TypeKind::Array) {
@@ -296,9 +299,9 @@ void Model::initial_stores(TypeId id, Place p, const Init* init, std::vector<Sto
       for (const auto& [count, v] : init->list)
         for (uint32_t c = 0; c < count; c++, k++) {
           if (k >= n) fail(v.loc, "more initial values than the " + std::to_string(n) + " elements of " + type_name(id));
-          initial_stores(t.of, p + e * k, &v, out);
+          initial_stores(t.of, p + e * k, &v, out, zeros);
         }
-    for (; k < n; k++) initial_stores(t.of, p + e * k, nullptr, out);
+    for (; k < n; k++) initial_stores(t.of, p + e * k, nullptr, out, zeros);
     return;
   }
   // a structure or an instance: the members' own values, replaced by the given ones
@@ -314,21 +317,22 @@ void Model::initial_stores(TypeId id, Place p, const Init* init, std::vector<Sto
     if (init)
       for (const auto& [name, v] : init->fields)
         if (upper(name) == upper(m.name)) given = &v;
-    initial_stores(m.type, p + m.offset, given ? given : (m.init.kind == Init::None ? nullptr : &m.init), out);
+    initial_stores(m.type, p + m.offset, given ? given : (m.init.kind == Init::None ? nullptr : &m.init), out, zeros);
   }
 }
 
 // ---------------------------------------------------------------- lowering helpers
 
-Operand operand_at(Ty t, Place p) {
+Operand operand_at(Ty t, Place p, Area bits, Area cells) {
   Operand o;
   if (t == Ty::BOOL) {
-    o.kind = OpdKind::Bit, o.area = Area::M, o.index = p.bit;
+    o.kind = OpdKind::Bit, o.area = bits, o.index = p.bit;
   } else {
-    o.kind = OpdKind::Int, o.area = Area::D, o.index = p.cell;
+    o.kind = area_is_real(cells) ? OpdKind::Real : OpdKind::Int, o.area = cells, o.index = p.cell;
   }
   return o;
 }
+Operand operand_of(const Model& m, const Ref& r) { return operand_at(m.scalar_ty(r.type), r.at, r.bits, r.cells); }
 
 int32_t stride_of(Ty t, Size s) { return int32_t(t == Ty::BOOL ? s.bits : s.cells); }
 

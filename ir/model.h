@@ -158,6 +158,8 @@ struct Ref {
   Place at;
   std::vector<IndexStep> steps;
   bool writable = true;  // false: an input device, a CONSTANT
+  Area bits = Area::M;   // the areas of `at`: the variable area is M and D; a located
+  Area cells = Area::D;  // variable may be elsewhere (X Y for bits, WX WY F for cells)
   bool direct() const { return steps.empty(); }
 };
 
@@ -237,7 +239,9 @@ class Model {
   // stored (the image starts zeroed).  Throws ModelError for a value that
   // does not fit (a list longer than the array, an unknown member, a literal
   // of another type).
-  void initial_stores(TypeId t, Place p, const Init* init, std::vector<Store>& out) const;
+  // With `zeros`, every scalar is stored, 0 too (a FUNCTION's variables and
+  // VAR_TEMP start from their initial values at every call, as in MatIEC).
+  void initial_stores(TypeId t, Place p, const Init* init, std::vector<Store>& out, bool zeros = false) const;
 
  private:
   static int find_member_index(const Type& t, std::string_view name);  // -1 if none
@@ -247,9 +251,11 @@ class Model {
 };
 
 // ---------------------------------------------------------------- lowering helpers
-// The typed IL operand of a scalar of type t at place p: BOOL the M bit, else
-// the D cell.
-Operand operand_at(Ty t, Place p);
+// The typed IL operand of a scalar of type t at place p: BOOL the bit (of
+// area `bits`, M by default), else the cell (of area `cells`, D by default).
+Operand operand_at(Ty t, Place p, Area bits = Area::M, Area cells = Area::D);
+// The operand of a direct scalar Ref (r.steps empty).
+Operand operand_of(const Model& m, const Ref& r);
 // The stride of an LDX/STX for elements of type t stepping by `s`: bits for
 // BOOL, cells otherwise.
 int32_t stride_of(Ty t, Size s);
