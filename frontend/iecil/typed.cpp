@@ -28,7 +28,9 @@ using namespace model;
 // The declared types the classic reader holds (as INT32, REAL, ldc's timers).
 bool classic_type(const std::string& u) {
   static const std::set<std::string> k = {"BOOL", "INT", "DINT", "SINT", "UINT", "UDINT", "USINT", "WORD", "DWORD", "BYTE",
-                                          "TIME", "REAL", "TON", "TOF", "TP", "CTU", "CTD", "R_TRIG", "F_TRIG"};
+                                          "TIME", "REAL", "TON", "TOF", "TP", "CTU", "CTD", "R_TRIG", "F_TRIG",
+                                          // refused by both readers: the classic one names them
+                                          "STRING", "WSTRING"};
   return k.count(u) > 0;
 }
 
@@ -53,7 +55,7 @@ bool needs_typed_reader(const std::vector<Tok>& t) {
     if (k.kind == Tok::Punct && (k.text == "[" || k.text == "..")) return true;  // an element, a range
     std::string u = k.kind == Tok::Word ? upper(k.text) : "";
     // an operator of the typed reader only (INT_TO_REAL, LIMIT, a FUNCTION ...), after an optional label
-    bool labelled = line_start && k.kind == Tok::Word && i + 1 < t.size() && t[i + 1].kind == Tok::Punct && t[i + 1].text == ":";
+    bool labelled = !in_vars && line_start && k.kind == Tok::Word && i + 1 < t.size() && t[i + 1].kind == Tok::Punct && t[i + 1].text == ":";
     if (!in_vars && line_start && k.kind == Tok::Word && !labelled && !classic_operator(u)) return true;
     if (labelled) { i++; continue; }
     if (line_start && (u == "TYPE" || u == "FUNCTION_BLOCK" || u == "FUNCTION" || u == "VAR_IN_OUT" || u == "VAR_TEMP" ||
