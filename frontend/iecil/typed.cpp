@@ -76,7 +76,8 @@ bool needs_typed_reader(const std::vector<Tok>& t) {
 
 namespace {
 
-constexpr size_t kMaxInstructions = size_t(1) << 22;  // after inline expansion
+constexpr size_t kMaxInstructions = size_t(1) << 20;  // after inline expansion (48 bytes each)
+constexpr int kMaxNesting = 64;  // nested types, initial values, indices: hostile input cannot exhaust the stack
 constexpr int kMaxParens = 16;
 constexpr size_t kMaxAliasLeaves = 64;  // aliases per structured variable (--watch a[1], p.x)
 
@@ -310,8 +311,17 @@ class Reader {
     TypeId id = kNoType;
     Type fresh;
   };
+  int nesting_ = 0;
+  struct Nest {  // one level of nesting, refused beyond kMaxNesting
+    Nest(int& n, const Tok& at) : n_(n) {
+      if (++n_ > kMaxNesting) throw CompileError(at.line, at.col, "nested deeper than " + std::to_string(kMaxNesting) + " levels");
+    }
+    ~Nest() { n_--; }
+    int& n_;
+  };
   Spec type_spec() {
     skip_eols();
+    Nest nest(nesting_, peek());
     const Tok& k = next();
     Spec sp;
     Type& ty = sp.fresh;
@@ -407,6 +417,7 @@ class Reader {
   // item = init | count "(" init ")"
   Init init_value() {
     skip_eols();
+    Nest nest(nesting_, peek());
     const Tok& k = next();
     Init in;
     in.loc = loc(k);
@@ -856,6 +867,7 @@ class Reader {
     return v;
   }
   model::Ref path(const Tok& k, const std::string& key) {
+    Nest nest(nesting_, k);
     std::vector<std::string> parts;
     std::string text = k.text;
     size_t st = 0;
