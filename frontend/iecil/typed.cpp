@@ -295,6 +295,7 @@ class Reader {
       fail(at, "'" + at.text + "' is a " + (m_.pous[size_t(pou)].kind == PouKind::Function ? "FUNCTION" : "PROGRAM") +
                    ", not a type");
     }
+    if (TypeId b = bistable_type(u); b != kNoType) return b;
     static const std::set<std::string> std_fbs = {"TON", "TOF", "TP", "CTU", "CTD", "CTUD", "R_TRIG", "F_TRIG", "SR", "RS",
                                                   "RTC", "SEMA"};
     if (std_fbs.count(u) || u.rfind("CTU_", 0) == 0 || u.rfind("CTD_", 0) == 0 || u.rfind("CTUD_", 0) == 0)
@@ -302,6 +303,23 @@ class Reader {
                    " is not available in a program with typed declarations yet (docs/iec-il.md, \"Typed programs\")");
     if (u == "STRING" || u == "WSTRING") fail(at, "type " + at.text + " is not supported (docs/iec-il.md)");
     fail(at, "unknown type '" + at.text + "'");
+  }
+
+  // The standard blocks of pure logic, as MatIEC's structures: their
+  // variables, the inputs first; computed at each CAL (std_call).
+  std::map<TypeId, std::string> bistables_;
+  TypeId bistable_type(const std::string& u) {
+    static const std::map<std::string, std::vector<const char*>> kVars = {
+        {"R_TRIG", {"CLK", "Q", "M"}}, {"F_TRIG", {"CLK", "Q", "M"}}, {"SR", {"S1", "R", "Q1"}}, {"RS", {"S", "R1", "Q1"}}};
+    auto it = kVars.find(u);
+    if (it == kVars.end()) return kNoType;
+    Type t;
+    t.kind = TypeKind::Struct;
+    t.name = u;
+    for (const char* v : it->second) t.members.push_back({v, m_.elem(Ty::BOOL), {}, {}});
+    TypeId id = m_.add_type(t, {1, 1});
+    bistables_[id] = u;
+    return id;
   }
 
   // type_spec = NAME [ "(" lo ".." hi ")" ] | ARRAY "[" range { "," range } "]" OF type_spec
@@ -1435,7 +1453,8 @@ class Reader {
     const Tok& k = peek();
     if (k.kind != Tok::Word) fail(k, "'" + op.text + "' needs an instance" + found(k));
     Val iv = operand("cal");
-    if (iv.kind != Val::Ref_ || m_.type(iv.ref.type).kind != TypeKind::Block)
+    bool bistable = iv.kind == Val::Ref_ && bistables_.count(iv.ref.type);
+    if (iv.kind != Val::Ref_ || (m_.type(iv.ref.type).kind != TypeKind::Block && !bistable))
       fail(k, "'" + k.text + "' is not an instance of a FUNCTION_BLOCK");
     if (!iv.ref.direct())
       fail(k, "an instance chosen by a variable index cannot be expanded inline: call it with a constant index (ldc expands each call, docs/architecture.md)");
@@ -1454,7 +1473,8 @@ class Reader {
       next();
       args(in, out);
     }
-    expand(pou, iv.ref, in, out, op);
+    if (bistable) std_call(bistables_.at(iv.ref.type), iv.ref, in, out);
+    else expand(pou, iv.ref, in, out, op);
     if (!skip.empty()) label_here(skip);
     cr_ = Cr{};  // the CR is undefined after a call
   }
@@ -1599,6 +1619,54 @@ class Reader {
       copy_value(var.type, src, v.ref, k);
     }
   }
+  // R_TRIG F_TRIG SR RS as MatIEC computes them (lib/iec_std_FB.h):
+  //   R_TRIG  Q := CLK AND NOT M; M := CLK
+  //   F_TRIG  Q := NOT CLK AND NOT M; M := NOT CLK
+  //   SR      Q1 := S1 OR (NOT R AND Q1)
+  //   RS      Q1 := NOT R1 AND (S OR Q1)
+  void std_call(const std::string& kind, const model::Ref& inst, const std::vector<std::pair<Tok, Val>>& in,
+                const std::vector<std::pair<Tok, size_t>>& out) {
+    ensure_rung();
+    const size_t ninputs = kind == "R_TRIG" || kind == "F_TRIG" ? 1 : 2;
+    const Type& t = m_.type(inst.type);
+    auto mem = [&](const char* n) { return operand_of(m_, m_.select_member(inst, n, here_)); };
+    for (const auto& [n, v] : in) {
+      const Member* mb = m_.member(inst.type, n.text);
+      if (!mb || size_t(mb - t.members.data()) >= ninputs)
+        fail(n, kind + " has no input '" + n.text + "' (" + (ninputs == 1 ? t.members[0].name : t.members[0].name + ", " + t.members[1].name) + ")");
+      store(m_.select_member(inst, n.text, loc(n)), value_as(v, m_.elem(Ty::BOOL), n, "arg", "the input"), n);
+    }
+    Operand h = scratch("bist", Ty::BOOL), g = scratch("bist2", Ty::BOOL);
+    if (kind == "R_TRIG") {
+      typed(Op::TNOT, Ty::BOOL, mem("M"), h);
+      typed(Op::TAND, Ty::BOOL, mem("CLK"), h, mem("Q"));
+      typed(Op::TMOVE, Ty::BOOL, mem("CLK"), mem("M"));
+    } else if (kind == "F_TRIG") {
+      typed(Op::TOR, Ty::BOOL, mem("CLK"), mem("M"), h);
+      typed(Op::TNOT, Ty::BOOL, h, mem("Q"));
+      typed(Op::TNOT, Ty::BOOL, mem("CLK"), mem("M"));
+    } else if (kind == "SR") {
+      typed(Op::TNOT, Ty::BOOL, mem("R"), h);
+      typed(Op::TAND, Ty::BOOL, h, mem("Q1"), h);
+      typed(Op::TOR, Ty::BOOL, mem("S1"), h, mem("Q1"));
+    } else {
+      typed(Op::TOR, Ty::BOOL, mem("S"), mem("Q1"), h);
+      typed(Op::TNOT, Ty::BOOL, mem("R1"), g);
+      typed(Op::TAND, Ty::BOOL, g, h, mem("Q1"));
+    }
+    for (const auto& [n, at] : out) {
+      const Member* mb = m_.member(inst.type, n.text);
+      if (!mb || size_t(mb - t.members.data()) < ninputs || upper(n.text) == "M") fail(n, kind + " has no output '" + n.text + "'");
+      size_t save = pos_;
+      pos_ = at;
+      Tok k = peek();
+      Val v = operand("out");
+      pos_ = save;
+      if (v.kind != Val::Ref_) fail(k, "an output goes to a variable, '" + k.text + "' is not one");
+      copy_value(m_.elem(Ty::BOOL), m_.select_member(inst, n.text, loc(n)), v.ref, k);
+    }
+  }
+
   static int var_index(const Pou& p, const std::string& name) {
     std::string u = upper(name);
     for (size_t i = 0; i < p.vars.size(); i++)
@@ -1712,7 +1780,30 @@ class Reader {
       if (punct(peek(), ",")) next();
       else break;
     }
-    if (u == "MUX") fail(op, "MUX is not supported yet (docs/iec-il.md)");
+    if (u == "MUX") {  // MUX(K, IN0, ..): IN_K; K outside gives the type's initial value, 0 (MatIEC's __mux)
+      if (args.empty()) fail(op, "MUX takes K (the current result) and its inputs");
+      default_cr(op);
+      Ty kt = cr_ty();
+      if (kt == Ty::None || !(ty_info(kt).kind == TyKind::Signed || ty_info(kt).kind == TyKind::Unsigned))
+        fail(op, "MUX's K (the current result) is an integer, this one is " + a_type(cr_.type));
+      TypeId t = kNoType;
+      for (const auto& a : args)
+        if (t == kNoType) t = val_type(a.second);
+      if (t == kNoType) t = m_.elem(args[0].second.lit.untyped_real ? Ty::LREAL : Ty::DINT);
+      Ty st = ty_of(t);
+      if (st == Ty::None) fail(op, "MUX of " + a_type(t));
+      Operand k = scratch("muxk", kt), d = acc(st);
+      typed(Op::TMOVE, kt, cr_.o, k);
+      typed(Op::TMOVE, st, Operand::typed_const(0), d);
+      for (size_t i = 0; i < args.size(); i++) {
+        Operand in = value_as(args[i].second, t, args[i].first, "sel" + std::to_string(i), "MUX");
+        typed(Op::TEQ, kt, k, Operand::typed_const(uint64_t(i)));
+        typed(Op::TMOVE, st, in, d);
+        emit(Op::MPP);
+      }
+      set_cr(t, d);
+      return;
+    }
     if (u == "SEL") {  // SEL(G, IN0, IN1): G ? IN1 : IN0 (MatIEC)
       need_bool(op);
       if (args.size() != 2) fail(op, "SEL takes G (the current result), IN0 and IN1");
