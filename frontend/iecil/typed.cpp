@@ -309,14 +309,23 @@ class Reader {
   // variables, the inputs first; computed at each CAL (std_call).
   std::map<TypeId, std::string> bistables_;
   TypeId bistable_type(const std::string& u) {
-    static const std::map<std::string, std::vector<const char*>> kVars = {
-        {"R_TRIG", {"CLK", "Q", "M"}}, {"F_TRIG", {"CLK", "Q", "M"}}, {"SR", {"S1", "R", "Q1"}}, {"RS", {"S", "R1", "Q1"}}};
+    // name, its variables (inputs first) and their types
+    static const std::map<std::string, std::vector<std::pair<const char*, Ty>>> kVars = {
+        {"R_TRIG", {{"CLK", Ty::BOOL}, {"Q", Ty::BOOL}, {"M", Ty::BOOL}}},
+        {"F_TRIG", {{"CLK", Ty::BOOL}, {"Q", Ty::BOOL}, {"M", Ty::BOOL}}},
+        {"SR", {{"S1", Ty::BOOL}, {"R", Ty::BOOL}, {"Q1", Ty::BOOL}}},
+        {"RS", {{"S", Ty::BOOL}, {"R1", Ty::BOOL}, {"Q1", Ty::BOOL}}},
+        {"TON", {{"IN", Ty::BOOL}, {"PT", Ty::TIME}, {"Q", Ty::BOOL}, {"ET", Ty::TIME}}},
+        {"TOF", {{"IN", Ty::BOOL}, {"PT", Ty::TIME}, {"Q", Ty::BOOL}, {"ET", Ty::TIME}}},
+        {"TP", {{"IN", Ty::BOOL}, {"PT", Ty::TIME}, {"Q", Ty::BOOL}, {"ET", Ty::TIME}}},
+        {"CTU", {{"CU", Ty::BOOL}, {"R", Ty::BOOL}, {"PV", Ty::INT}, {"Q", Ty::BOOL}, {"CV", Ty::INT}}},
+        {"CTD", {{"CD", Ty::BOOL}, {"LD", Ty::BOOL}, {"PV", Ty::INT}, {"Q", Ty::BOOL}, {"CV", Ty::INT}}}};
     auto it = kVars.find(u);
     if (it == kVars.end()) return kNoType;
     Type t;
     t.kind = TypeKind::Struct;
     t.name = u;
-    for (const char* v : it->second) t.members.push_back({v, m_.elem(Ty::BOOL), {}, {}});
+    for (const auto& [v, ty] : it->second) t.members.push_back({v, m_.elem(ty), {}, {}});
     TypeId id = m_.add_type(t, {1, 1});
     bistables_[id] = u;
     return id;
@@ -1627,14 +1636,14 @@ class Reader {
   void std_call(const std::string& kind, const model::Ref& inst, const std::vector<std::pair<Tok, Val>>& in,
                 const std::vector<std::pair<Tok, size_t>>& out) {
     ensure_rung();
-    const size_t ninputs = kind == "R_TRIG" || kind == "F_TRIG" ? 1 : 2;
+    const size_t ninputs = kind == "R_TRIG" || kind == "F_TRIG" ? 1 : kind[0] == 'C' ? 3 : 2;
     const Type& t = m_.type(inst.type);
     auto mem = [&](const char* n) { return operand_of(m_, m_.select_member(inst, n, here_)); };
     for (const auto& [n, v] : in) {
       const Member* mb = m_.member(inst.type, n.text);
       if (!mb || size_t(mb - t.members.data()) >= ninputs)
-        fail(n, kind + " has no input '" + n.text + "' (" + (ninputs == 1 ? t.members[0].name : t.members[0].name + ", " + t.members[1].name) + ")");
-      store(m_.select_member(inst, n.text, loc(n)), value_as(v, m_.elem(Ty::BOOL), n, "arg", "the input"), n);
+        fail(n, kind + " has no input '" + n.text + "' (" + input_names(t, ninputs) + ")");
+      store(m_.select_member(inst, n.text, loc(n)), value_as(v, mb->type, n, "arg", "the input"), n);
     }
     Operand h = scratch("bist", Ty::BOOL), g = scratch("bist2", Ty::BOOL);
     if (kind == "R_TRIG") {
@@ -1649,22 +1658,72 @@ class Reader {
       typed(Op::TNOT, Ty::BOOL, mem("R"), h);
       typed(Op::TAND, Ty::BOOL, h, mem("Q1"), h);
       typed(Op::TOR, Ty::BOOL, mem("S1"), h, mem("Q1"));
-    } else {
+    } else if (kind == "RS") {
       typed(Op::TOR, Ty::BOOL, mem("S"), mem("Q1"), h);
       typed(Op::TNOT, Ty::BOOL, mem("R1"), g);
       typed(Op::TAND, Ty::BOOL, g, h, mem("Q1"));
+    } else {
+      timer_counter(kind, inst, mem);
     }
     for (const auto& [n, at] : out) {
       const Member* mb = m_.member(inst.type, n.text);
       if (!mb || size_t(mb - t.members.data()) < ninputs || upper(n.text) == "M") fail(n, kind + " has no output '" + n.text + "'");
+      TypeId mt = mb->type;
       size_t save = pos_;
       pos_ = at;
       Tok k = peek();
       Val v = operand("out");
       pos_ = save;
       if (v.kind != Val::Ref_) fail(k, "an output goes to a variable, '" + k.text + "' is not one");
-      copy_value(m_.elem(Ty::BOOL), m_.select_member(inst, n.text, loc(n)), v.ref, k);
+      if (!m_.same_type(v.ref.type, mt)) fail(k, "output " + n.text + " is " + a_type(mt) + ", '" + k.text + "' " + a_type(v.ref.type));
+      copy_value(mt, m_.select_member(inst, n.text, loc(n)), v.ref, k);
     }
+  }
+  static std::string input_names(const Type& t, size_t n) {
+    std::string s;
+    for (size_t i = 0; i < n; i++) s += (i ? ", " : "") + t.members[i].name;
+    return s;
+  }
+  // TON TOF TP CTU CTD on ldc's timers and counters (docs/il.md), one device
+  // per instance, as the classic reader maps them; the instance's Q, ET, CV
+  // are copied from the device after the call (ET: ms to TIME's ns).
+  std::map<uint64_t, uint32_t> devices_;  // (kind, instance place) -> T or C number
+  uint32_t next_timer_ = 0, next_counter_ = 0;
+  template <class Mem>
+  void timer_counter(const std::string& kind, const model::Ref& inst, Mem mem) {
+    bool timer = kind[0] == 'T';
+    uint64_t key = (uint64_t(timer) << 63) | (uint64_t(inst.at.bit) << 32) | inst.at.cell;
+    auto it = devices_.find(key);
+    if (it == devices_.end()) {
+      uint32_t& next = timer ? next_timer_ : next_counter_;
+      if (next >= device_count(timer ? Dev::T : Dev::C))
+        fail(here_, std::string("more than ") + std::to_string(device_count(Dev::T)) + (timer ? " timer" : " counter") + " instances");
+      it = devices_.emplace(key, next++).first;
+    }
+    uint32_t n = it->second;
+    if (timer) {
+      Operand ms = scratch("pt", Ty::DINT);
+      typed(Op::TCONV, Ty::DINT, mem("PT"), ms, {}, Ty::TIME);  // whole ms, toward zero
+      emit(Op::LOAD, mem("IN"));
+      emit(kind == "TON" ? Op::TON : kind == "TOF" ? Op::TOF : Op::TP, Operand{OpdKind::Timer, Area::Sys, n}, ms);
+      emit(Op::MPP);
+      typed(Op::TMOVE, Ty::BOOL, Operand{OpdKind::Bit, Area::TQ, n}, mem("Q"));
+      typed(Op::TCONV, Ty::TIME, Operand{OpdKind::Int, Area::TW, n}, mem("ET"), {}, Ty::DINT);
+      return;
+    }
+    Operand c{OpdKind::Counter, Area::Sys, n};
+    bool up = kind == "CTU";
+    Operand rst = mem(up ? "R" : "LD"), cnt = mem(up ? "CU" : "CD");
+    emit(Op::LOAD, rst);  // R resets (LD loads PV) before counting, as IEC's CTU/CTD
+    if (up) emit(Op::RSTC, c);
+    else emit(Op::MOV, mem("PV"), Operand{OpdKind::Int, Area::CW, n});
+    emit(Op::MPP);
+    emit(Op::LOADP, cnt, Operand{OpdKind::Edge});
+    emit(Op::ANDN, rst);
+    emit(up ? Op::CTU : Op::CTD, c, mem("PV"), Operand{OpdKind::Edge});
+    emit(Op::MPP);
+    typed(Op::TMOVE, Ty::BOOL, Operand{OpdKind::Bit, Area::CQ, n}, mem("Q"));
+    typed(Op::TMOVE, Ty::INT, Operand{OpdKind::Int, Area::CW, n}, mem("CV"));
   }
 
   static int var_index(const Pou& p, const std::string& name) {
