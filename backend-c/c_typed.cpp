@@ -27,18 +27,19 @@ static inline int64_t ldc_to_i64(double d) {
   if (!(d >= -9223372036854775808.0 && d < 9223372036854775808.0)) return INT64_MIN;
   return (int64_t)d;
 }
-/* REAL to an integer: nearest, ties to even; to an unsigned type a negative value or NaN is 0 */
-static inline int64_t ldc_r2s(double d) { return ldc_to_i64(nearbyint(d)); }
-static inline uint64_t ldc_r2u(double d) {
-  double r = nearbyint(d);
-  if (!(r > 0)) return 0;
-  if (r >= 18446744073709551616.0) return (uint64_t)1 << 63;
-  return r >= 9223372036854775808.0 ? (uint64_t)r : (uint64_t)(int64_t)r;
-}
-#define LDC_NS_DAY 86400000000000LL
-static inline int64_t ldc_day(int64_t ns) { return ns / LDC_NS_DAY - (ns % LDC_NS_DAY < 0 ? 1 : 0); }
-static inline int64_t ldc_dt_date(int64_t ns) { return (int64_t)((uint64_t)ldc_day(ns) * (uint64_t)LDC_NS_DAY); }
-static inline int64_t ldc_dt_tod(int64_t ns) { return (int64_t)((uint64_t)ns - (uint64_t)ldc_day(ns) * (uint64_t)LDC_NS_DAY); }
+/* MatIEC's __real_round: the nearest integer, an exact tie to even (IN + 0.5 rounded in double first) */
+static inline int64_t ldc_round(double x) { return fmod(x, 1.0) == 0 ? (ldc_to_i64(x) / 2) * 2 : ldc_to_i64(x); }
+/* REAL to an integer (__real_to_sint); to an unsigned type or a bit string (__real_to_uint) a negative value is 0 */
+static inline int64_t ldc_r2s(double d) { return d >= 0 ? ldc_round(d + 0.5) : ldc_round(d - 0.5); }
+static inline uint64_t ldc_r2u(double d) { return d >= 0 ? (uint64_t)ldc_round(d + 0.5) : 0; }
+/* TIME and the dates against numbers count seconds (MatIEC's timespec tv_sec); nanoseconds here */
+#define LDC_NS_S 1000000000LL
+#define LDC_S_DAY 86400LL
+static inline int64_t ldc_time_of(int64_t sec, int64_t nsec) { return (int64_t)((uint64_t)sec * (uint64_t)LDC_NS_S + (uint64_t)nsec); }
+static inline int64_t ldc_r2time(double d) { int64_t s = ldc_to_i64(d); return ldc_time_of(s, ldc_to_i64((d - (double)s) * 1e9)); }
+static inline double ldc_time2r(int64_t t) { return (double)(t / LDC_NS_S) + (double)(t % LDC_NS_S) / 1e9; }
+static inline int64_t ldc_dt_date(int64_t t) { int64_t s = t / LDC_NS_S; return ldc_time_of(s - s % LDC_S_DAY - (s < 0 ? LDC_S_DAY : 0), 0); }
+static inline int64_t ldc_dt_tod(int64_t t) { int64_t s = t / LDC_NS_S; return ldc_time_of(s % LDC_S_DAY + (s < 0 ? LDC_S_DAY : 0), t % LDC_NS_S); }
 static inline void ldc_idx_fault(u8 *m, uint32_t at, uint64_t i) {
   uint32_t one = 1;
   memcpy(m + 8, &one, 4);
@@ -99,7 +100,8 @@ class Typed {
         if (is_real(t_)) return body(st(1, "-" + val(0, t_)));
         return body(st(1, wrap("0 - (" + std::string(ut(t_)) + ")" + val(0, t_))));
       case Op::TABS:
-        if (is_real(t_)) return body(st(1, std::string(t_ == Ty::REAL ? "fabsf(" : "fabs(") + val(0, t_) + ")"));
+        if (is_real(t_))  // MatIEC's __abs_signed: ABS(-0.0) stays -0.0
+          return body("{ " + std::string(ct(t_)) + " a_ = " + val(0, t_) + "; " + st(1, "a_ < 0 ? -a_ : a_") + " }");
         if (!is_signed(t_)) return body(st(1, val(0, t_)));
         return body("{ " + std::string(ct(t_)) + " a_ = " + val(0, t_) + "; " +
                     st(1, "a_ < 0 ? " + wrap("0 - (" + std::string(ut(t_)) + ")a_") + " : a_") + " }");
@@ -225,21 +227,21 @@ class Typed {
     if (tk == TyKind::Bool) return "(uint8_t)(" + a + " != 0)";
     if (fk == TyKind::Real) {
       if (tk == TyKind::Real) return c + a;
-      if (tk == TyKind::Time || tk == TyKind::Date) return "ldc_to_i64(trunc((double)" + a + " * 1000000.0))";
+      if (tk == TyKind::Time || tk == TyKind::Date) return "ldc_r2time((double)" + a + ")";
       return c + (is_signed(to) ? "ldc_r2s" : "ldc_r2u") + "((double)" + a + ")";
     }
     if (fk == TyKind::Time || fk == TyKind::Date) {
-      if (tk == TyKind::Real) return c + "((double)" + a + " / 1000000.0)";
+      if (tk == TyKind::Real) return c + "ldc_time2r(" + a + ")";
       if (tk == TyKind::Time) return a;
       if (tk == TyKind::Date) {
         if (to == Ty::DATE && from == Ty::DT) return "ldc_dt_date(" + a + ")";
         if (to == Ty::TOD && from == Ty::DT) return "ldc_dt_tod(" + a + ")";
         return a;
       }
-      return c + "(" + a + " / 1000000)";
+      return c + "(" + a + " / LDC_NS_S)";
     }
     if (tk == TyKind::Real) return c + a;
-    if (tk == TyKind::Time || tk == TyKind::Date) return "(int64_t)((uint64_t)" + a + " * 1000000u)";
+    if (tk == TyKind::Time || tk == TyKind::Date) return "(int64_t)((uint64_t)" + a + " * 1000000000u)";
     return c + a;
   }
 };

@@ -410,8 +410,8 @@ TEST(TypedEngines, LimitsFollowTheRulesOnEveryEngine) {
     EXPECT_EQ(d(12), 0);               // so does a negative count
     EXPECT_EQ(d(13), 0xC0);            // ROL by -1 is ROR by 1: 1000_0001 -> 1100_0000
     EXPECT_EQ(d(14), -128);            // ABS of SINT -128 wraps
-    EXPECT_EQ(int64_t(uint32_t(d(16))) | (int64_t(d(17)) << 32), 1500000000);  // 1500 ms as ns
-    EXPECT_EQ(d(18), 1500);            // and back: whole ms
+    EXPECT_EQ(int64_t(uint32_t(d(16))) | (int64_t(d(17)) << 32), 1500000000000);  // 1500 s as ns (MatIEC __int_to_time: {IN, 0})
+    EXPECT_EQ(d(18), 1500);            // and back: whole seconds (__time_to_int: tv_sec)
     EXPECT_EQ(d(19), -2);              // TRUNC: toward zero
     EXPECT_EQ(d(20), 0xF0);            // NOT of a BYTE: its 8 bits
     EXPECT_EQ(d(21), 1);               // 65535 * 65535 mod 2^16
