@@ -16,6 +16,12 @@ case "$what" in
   *) src=$tmp/$what.il types=$what
      printf '; one %s move\n.rung line 1\n    TRUE\n    MOVE.%s D0 D2\n.end\n' "$what" "$what" > "$src" ;;
 esac
+# a case without a 64-bit type: the C40-hosted interpreter refuses every typed
+# instruction, and the C40 the REAL functions, each naming it (ADD.INT, EXPT.REAL)
+case "$engine:$what" in
+  c40sim:*_64.il) ;;
+  *.il) types="$types|BOOL|SINT|INT|DINT|USINT|UINT|UDINT|BYTE|WORD|DWORD|REAL" ;;
+esac
 if [ "$engine" = c40sim ]; then
   "$bindir/ldc" "$src" --target=c40 -o "$tmp/prog.bin" > "$tmp/out" 2>&1
   rc=$?
@@ -27,5 +33,5 @@ cat "$tmp/out"
 if [ $rc -eq 0 ]; then echo "FAIL: $engine accepted $src (a 64-bit type on the C40)"; exit 1; fi
 if [ $rc -ge 128 ]; then echo "FAIL: $engine died (exit $rc) on $src"; exit 1; fi
 if ! grep -q 'error' "$tmp/out" || ! grep -Eqw "$types" "$tmp/out"; then
-  echo "FAIL: $engine's refusal of $src does not name the 64-bit type ($types)"; exit 1
+  echo "FAIL: $engine's refusal of $src does not name the type ($types)"; exit 1
 fi
