@@ -5,8 +5,9 @@
 // several connections on one input are a wired OR).  We run it the way Beremiz
 // and OpenPLC (the tools that write these files) compile it to Structured Text:
 //   * one statement per coil, output variable and block, in their order:
-//     executionOrderId first, then coils and output variables by position
-//     (top to bottom, left to right), then the remaining blocks by position;
+//     executionOrderId first, then coils and output variables, then the
+//     remaining blocks, each in document order (Beremiz on Python 3) or by
+//     position (on Python 2; see saved_by_python2);
 //     a block feeding a statement is generated just before it;
 //   * a statement's condition is the power flow from the left rail through the
 //     contacts feeding it, which we reduce to a series/parallel tree (and refuse
@@ -17,6 +18,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <optional>
@@ -284,6 +286,10 @@ class Importer {
   void tasks(const Element* root);
   // SFC (section 1b): the chart of the POU being translated, at most one per program
   bool sfc_mode_ = false;
+  // Which generator's order of statements (docs/plcopen.md, section 3): Beremiz
+  // and OpenPLC Editor on Python 2 sorted coils and blocks by position; on
+  // Python 3 their sort leaves them in document order.
+  bool position_order_ = false;
   std::optional<Chart> chart_;
   std::vector<TreeRung> after_;  // the chart's actions, after its steps
   std::string chart_pou_;
@@ -1550,8 +1556,23 @@ void Importer::statement(const Node& n) {
   rung(Cond::yes(), std::move(mv), el);
 }
 
-// Beremiz's order of statements (PLCGenerator.ComputeProgram), positions
-// compared as its SortInstances does: rows within 10 units, left to right.
+// Was this project saved by Beremiz or OpenPLC Editor running on Python 2?
+// Their XML writer declares the namespaces of <project> in the order of a
+// Python dict: Python 2's hash order puts `xmlns:ns1` first and the default
+// `xmlns` after it, Python 3's insertion order puts `xmlns` first.  The same
+// program generated the project's ST, so this tells which order of statements
+// it has (docs/plcopen.md, section 3).
+bool saved_by_python2(const Element* project) {
+  size_t ns1 = SIZE_MAX, dflt = SIZE_MAX;
+  for (size_t i = 0; i < project->attrs.size(); i++) {
+    if (project->attrs[i].first == "xmlns:ns1" && ns1 == SIZE_MAX) ns1 = i;
+    if (project->attrs[i].first == "xmlns" && dflt == SIZE_MAX) dflt = i;
+  }
+  return ns1 == 0 && dflt != SIZE_MAX && dflt > ns1;
+}
+
+// Beremiz's order of statements under Python 2 (PLCGenerator.ComputeProgram),
+// positions compared as its SortInstances does: rows within 10 units, left to right.
 bool before(const Node* a, const Node* b) {
   if (std::abs(a->y - b->y) < 10) return a->x < b->x;
   return a->y < b->y;
@@ -1591,8 +1612,10 @@ void Importer::body(const Element* pou, const Element* ld) {
     for (size_t i = 1; i < v.size(); i++)
       for (size_t j = i; j > 0 && before(v[j], v[j - 1]); j--) std::swap(v[j], v[j - 1]);
   };
-  insertion(stmts);
-  insertion(blocks);
+  if (position_order_) {  // under Python 3, SortInstances returns operator.eq: never "less", no move
+    insertion(stmts);
+    insertion(blocks);
+  }
   size_t first = rungs_.size();
   pending_title_ = "POU " + *pou->attr("name");
   for (const Node* n : ordered) statement(*n);
@@ -1921,6 +1944,7 @@ void Importer::prepare() {
   const Element* root = doc_.root.get();
   if (root->local_name() != "project")
     fail_at(root, "expected a PLCopen TC6 <project>, found <" + root->name + ">");
+  position_order_ = saved_by_python2(root);
   // global variables of configurations and resources
   if (const Element* inst = root->child("instances"))
     if (const Element* cfgs = inst->child("configurations"))
