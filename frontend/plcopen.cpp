@@ -290,6 +290,12 @@ class Importer {
   // and OpenPLC Editor on Python 2 sorted coils and blocks by position; on
   // Python 3 their sort leaves them in document order.
   bool position_order_ = false;
+ public:
+  // A PLCopen TC6 XML 1.0 file (namespace http://www.plcopen.org/xml/tc6.xsd):
+  // read where it agrees with 2.01, its own spellings translated as Beremiz's
+  // LoadProjectXML does (docs/plcopen.md, "TC6 XML 1.0").
+  bool tc6_v1_ = false;
+ private:
   std::optional<Chart> chart_;
   std::vector<TreeRung> after_;  // the chart's actions, after its steps
   std::string chart_pou_;
@@ -1571,6 +1577,19 @@ bool saved_by_python2(const Element* project) {
   return ns1 == 0 && dflt != SIZE_MAX && dflt > ns1;
 }
 
+// The namespace an element's name is in, from the declarations on it (the
+// root: enough for <project>).
+constexpr const char* kTc6V1Namespace = "http://www.plcopen.org/xml/tc6.xsd";
+std::string namespace_of(const Element* e) {
+  size_t colon = e->name.find(':');
+  std::string decl = colon == std::string::npos ? "xmlns" : "xmlns:" + e->name.substr(0, colon);
+  const std::string* ns = e->attr(decl);
+  return ns ? trim(*ns) : "";
+}
+
+// A program instance's POU: `typeName` (TC6 2.01), `type` (TC6 1.0).
+const std::string* instance_type(const Element* pi) { return pi->attr("typeName") ? pi->attr("typeName") : pi->attr("type"); }
+
 // Beremiz's order of statements under Python 2 (PLCGenerator.ComputeProgram),
 // positions compared as its SortInstances does: rows within 10 units, left to right.
 bool before(const Node* a, const Node* b) {
@@ -1742,6 +1761,7 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
     const Element* cond = t->child("condition");
     if (!cond) fail_at(t, what + " has no condition (" + t->path() + ")");
     const Element* ci = cond->child("connectionPointIn");
+    if (!ci && cond->child("connection")) ci = cond;  // TC6 1.0: the connections directly in <condition>
     if (!ci) {
       auto inline_lang = [](const Element* in) {  // <inline><ST> (TC6 2.01), or <inline><body><ST>
         const Element* b = in->child("body") ? in->child("body") : in;
@@ -1852,6 +1872,27 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
   chart_pou_ = pname;
 }
 
+// TC6 1.0 gives a task's interval as an xsd:time, hh:mm:ss[.fraction], which
+// is a duration there (Beremiz converts it so): T#...  Anything else is kept.
+std::string xsd_time_as_iec(const std::string& v) {
+  std::string s = trim(v);
+  if (!s.empty() && s.back() == 'Z') s.pop_back();
+  auto digits = [&](size_t at, size_t n) {
+    if (at + n > s.size()) return false;
+    for (size_t i = at; i < at + n; i++)
+      if (!std::isdigit((unsigned char)s[i])) return false;
+    return true;
+  };
+  if (s.size() < 8 || !digits(0, 2) || s[2] != ':' || !digits(3, 2) || s[5] != ':' || !digits(6, 2)) return v;
+  std::string frac;
+  if (s.size() > 8) {
+    if (s[8] != '.' || s.size() == 9 || !digits(9, s.size() - 9)) return v;
+    frac = s.substr(9);
+  }
+  return "T#" + std::to_string(std::stoi(s.substr(0, 2))) + "h" + std::to_string(std::stoi(s.substr(3, 2))) + "m" +
+         std::to_string(std::stoi(s.substr(6, 2))) + (frac.empty() ? "" : "." + frac) + "s";
+}
+
 // A task's interval, T#20ms, T#0.1ms, TIME#1s500ms, in microseconds; nullopt
 // if malformed or not a whole number of microseconds.
 std::optional<uint64_t> interval_us(const std::string& s0) {
@@ -1895,7 +1936,7 @@ void Importer::tasks(const Element* root) {
     for (const Element* res : cfg->children_named("resource")) {
       std::string rn = res->attr("name") ? *res->attr("name") : "resource" + std::to_string(res_index);
       auto check = [&](const Element* pi, const std::string& task) {
-        const std::string* type = pi->attr("typeName");
+        const std::string* type = instance_type(pi);
         std::string name = pi->attr("name") ? *pi->attr("name") : "?";
         std::string where = "program instance '" + name + "'" + (task.empty() ? "" : " of task '" + task + "'");
         if (!type) fail_at(pi, where + " has no typeName (" + pi->path() + ")");
@@ -1917,7 +1958,7 @@ void Importer::tasks(const Element* root) {
           ct.instance_els.push_back(pi);
         }
         const std::string* iv = t->attr("interval");
-        if (iv) ct.interval = *iv;
+        if (iv) ct.interval = tc6_v1_ ? xsd_time_as_iec(*iv) : *iv;
         if (auto p = t->attr("priority")) ct.priority_text = *p;
         cfg_tasks_.push_back(std::move(ct));
       }
@@ -1945,6 +1986,7 @@ void Importer::prepare() {
   if (root->local_name() != "project")
     fail_at(root, "expected a PLCopen TC6 <project>, found <" + root->name + ">");
   position_order_ = saved_by_python2(root);
+  tc6_v1_ = namespace_of(root) == kTc6V1Namespace;
   // global variables of configurations and resources
   if (const Element* inst = root->child("instances"))
     if (const Element* cfgs = inst->child("configurations"))
@@ -2188,7 +2230,7 @@ PlcopenImport Importer::import() {
     for (size_t k = 0; k < ct.pous.size(); k++) {
       auto [it, fresh] = owner.emplace(ct.pous[k], ct.instances[k]);
       if (!fresh)
-        fail_at(ct.instance_els[k], "program instance '" + ct.instances[k] + "' runs POU '" + *ct.instance_els[k]->attr("typeName") +
+        fail_at(ct.instance_els[k], "program instance '" + ct.instances[k] + "' runs POU '" + *instance_type(ct.instance_els[k]) +
                                         "', as instance '" + it->second + "' does; ldc translates each POU once, so one instance per POU (" +
                                         ct.instance_els[k]->path() + ")");
     }
@@ -2208,10 +2250,27 @@ PlcopenImport Importer::import() {
   r.configuration = config_name_;
   return r;
 }
+
+// Runs an import; an error in a TC6 1.0 file says which format it is.
+template <class F>
+auto importing(std::string_view text, const std::string& filename, F run) {
+  Importer im(text, filename);
+  try {
+    return run(im);
+  } catch (const CompileError& e) {
+    if (!im.tc6_v1_) throw;
+    throw CompileError(e.line, e.col, std::string(e.what()) + " (this is a PLCopen TC6 XML 1.0 file, namespace " + kTc6V1Namespace +
+                                          "; ldc reads it where it agrees with TC6 XML 2.01)");
+  }
+}
 }  // namespace
 
-TreeProgram parse_plcopen(std::string_view text, const std::string& filename) { return Importer(text, filename).run(); }
+TreeProgram parse_plcopen(std::string_view text, const std::string& filename) {
+  return importing(text, filename, [](Importer& im) { return im.run(); });
+}
 
-PlcopenImport import_plcopen(std::string_view text, const std::string& filename) { return Importer(text, filename).import(); }
+PlcopenImport import_plcopen(std::string_view text, const std::string& filename) {
+  return importing(text, filename, [](Importer& im) { return im.import(); });
+}
 
 }  // namespace ldc
