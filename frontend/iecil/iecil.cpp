@@ -39,6 +39,15 @@ std::string upper(std::string_view s) {
 // ---------------------------------------------------------------- lexer
 
 
+// A direct address: %IX0.4, %QW2, %MD1 ...; without the size letter (%I0.4,
+// %Q0.0, %M1.2) it is a bit, as IEC 61131-3 (2.4.1.1) has it: %IX0.4.
+std::optional<DeviceRef> iec_address(const std::string& text, std::string& why) {
+  std::string a = text;
+  char region = a.size() >= 3 ? char(std::toupper((unsigned char)a[1])) : 0;
+  if ((region == 'I' || region == 'Q' || region == 'M') && std::isdigit((unsigned char)a[2])) a.insert(2, "X");
+  return parse_iec_address(a, why);
+}
+
 static bool word_start(char c) { return std::isalnum((unsigned char)c) || c == '_' || c == '%'; }
 static bool word_char(char c) { return std::isalnum((unsigned char)c) || c == '_' || c == '%' || c == '#' || c == '.'; }
 
@@ -367,7 +376,7 @@ struct Reader {
       at_tok = next();
       if (names.size() > 1) fail(at_tok, "one variable per AT location");
       std::string why;
-      if (at_tok.kind == Tok::Word) at = at_tok.text[0] == '%' ? parse_iec_address(at_tok.text, why) : parse_device(at_tok.text);
+      if (at_tok.kind == Tok::Word) at = at_tok.text[0] == '%' ? iecil::iec_address(at_tok.text, why) : parse_device(at_tok.text);
       if (!at) fail(at_tok, why.empty() ? "expected a location (%IX0.0, %QW2, %MD1 ... or an ldc device)" + found(at_tok) : why);
       if (at->index >= device_count(at->dev)) fail(at_tok, "location " + at_tok.text + " is outside ldc's devices");
     }
@@ -482,7 +491,7 @@ struct Reader {
     if (!why.empty()) fail(k, why);
     std::string u = upper(k.text);
     if (k.text[0] == '%') {
-      auto d = parse_iec_address(k.text, why);
+      auto d = iecil::iec_address(k.text, why);
       if (!d) fail(k, why.empty() ? "bad IEC address " + k.text : why);
       return device(k, *d);
     }

@@ -20,6 +20,9 @@ std::string upper(std::string_view s);
 // Words (names, numbers, literals, %addresses), punctuation ( ) [ ] : , ;
 // := => .., one Eol per line end, and End.  Throws CompileError.
 std::vector<Tok> lex(std::string_view s);
+// A direct address (%IX0.4, %QW2 ...); without the size letter (%I0.4, %Q0.0,
+// %M1.2) a bit, as IEC 61131-3 has it.  nullopt and `why` if it is none.
+std::optional<DeviceRef> iec_address(const std::string& text, std::string& why);
 
 // Does the program need the typed reader: a TYPE, FUNCTION_BLOCK or FUNCTION,
 // VAR_IN_OUT/VAR_TEMP/VAR_EXTERNAL, a CONSTANT or RETAIN block, or a declared

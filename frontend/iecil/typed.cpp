@@ -591,7 +591,7 @@ class Reader {
       if (names.size() > 1) fail(a, "one variable per AT location");
       if (p.kind != PouKind::Program) fail(a, "a located variable (AT) belongs to the program, not to " + p.name);
       std::string why;
-      if (a.kind == Tok::Word) at = a.text[0] == '%' ? parse_iec_address(a.text, why) : parse_device(a.text);
+      if (a.kind == Tok::Word) at = a.text[0] == '%' ? iec_address(a.text, why) : parse_device(a.text);
       if (!at) fail(a, why.empty() ? "expected a location (%IX0.0, %QW2, %MD1 ... or an ldc device)" + found(a) : why);
       if (at->index >= device_count(at->dev)) fail(a, "location " + a.text + " is outside ldc's devices");
       at_tok_ = a;
@@ -632,7 +632,7 @@ class Reader {
     for (const Tok& k : t_) {
       if (k.kind != Tok::Word) continue;
       std::string why;
-      std::optional<DeviceRef> r = k.text[0] == '%' ? parse_iec_address(k.text, why) : parse_device(k.text);
+      std::optional<DeviceRef> r = k.text[0] == '%' ? iec_address(k.text, why) : parse_device(k.text);
       if (!r || r->index >= device_count(r->dev)) continue;
       if (r->dev == Dev::M) m = std::max(m, r->index + 1);
       if (r->dev == Dev::D) d = std::max(d, r->index + 2);  // room for a 64-bit value located there
@@ -956,7 +956,7 @@ class Reader {
   }
   model::Ref device(const Tok& k) {
     std::string why;
-    std::optional<DeviceRef> d = k.text[0] == '%' ? parse_iec_address(k.text, why) : parse_device(k.text);
+    std::optional<DeviceRef> d = k.text[0] == '%' ? iec_address(k.text, why) : parse_device(k.text);
     if (!d) fail(k, why.empty() ? "unknown variable '" + k.text + "'" : why);
     if (d->index >= device_count(d->dev)) fail(k, "device index out of range: " + k.text);
     if (d->dev == Dev::T || d->dev == Dev::C) fail(k, "timers and counters are not available in a program with typed declarations yet");
