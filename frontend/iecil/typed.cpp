@@ -1702,13 +1702,19 @@ class Reader {
     }
     uint32_t n = it->second;
     if (timer) {
-      Operand ms = scratch("pt", Ty::DINT);
-      typed(Op::TCONV, Ty::DINT, mem("PT"), ms, {}, Ty::TIME);  // whole ms, toward zero
+      // PT in whole ms, rounded up: ldc's timers count whole ms of dt, and
+      // ET >= 3.5 ms holds exactly when ET >= 4 ms (TIME is ns; read as a LINT)
+      Operand ns = scratch("ptns", Ty::LINT), ms = scratch("pt", Ty::DINT);
+      typed(Op::TADD, Ty::LINT, mem("PT"), Operand::typed_const(999999), ns);
+      typed(Op::TDIV, Ty::LINT, ns, Operand::typed_const(1000000), ns);
+      typed(Op::TCONV, Ty::DINT, ns, ms, {}, Ty::LINT);
       emit(Op::LOAD, mem("IN"));
       emit(kind == "TON" ? Op::TON : kind == "TOF" ? Op::TOF : Op::TP, Operand{OpdKind::Timer, Area::Sys, n}, ms);
       emit(Op::MPP);
       typed(Op::TMOVE, Ty::BOOL, Operand{OpdKind::Bit, Area::TQ, n}, mem("Q"));
-      typed(Op::TCONV, Ty::TIME, Operand{OpdKind::Int, Area::TW, n}, mem("ET"), {}, Ty::DINT);
+      Operand et = scratch("etns", Ty::LINT);  // ET: the timer's ms as ns
+      typed(Op::TCONV, Ty::LINT, Operand{OpdKind::Int, Area::TW, n}, et, {}, Ty::DINT);
+      typed(Op::TMUL, Ty::LINT, et, Operand::typed_const(1000000), mem("ET"));
       return;
     }
     Operand c{OpdKind::Counter, Area::Sys, n};
