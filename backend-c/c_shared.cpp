@@ -58,12 +58,15 @@ int run_logged(const std::vector<std::string>& args, const std::string& log) {
 
 }  // namespace
 
-std::string build_c_text(const std::string& text, const std::string& dir) {
+std::string build_c_text(const std::string& text, const std::string& dir, const std::vector<std::string>& extra_flags) {
   std::string c = dir + "/prog.c", so = dir + "/prog.so", log = dir + "/cc.log";
   write_c_file(c, text);
   const char* cc_env = std::getenv("CC");
   std::string cc = cc_env && *cc_env ? cc_env : "cc";
-  int status = run_logged({cc, "-O2", "-shared", "-fPIC", "-ffp-contract=off", "-o", so, c, "-lm"}, log);
+  std::vector<std::string> args = {cc, "-O2", "-shared", "-fPIC", "-ffp-contract=off"};
+  args.insert(args.end(), extra_flags.begin(), extra_flags.end());
+  for (const char* a : {"-o", so.c_str(), c.c_str(), "-lm"}) args.push_back(a);
+  int status = run_logged(args, log);
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
     throw CBuildError("error: the C compiler failed on the generated C (" + c + "):\n" + compiler_output(log));
   return so;

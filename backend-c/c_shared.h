@@ -4,6 +4,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "ir/ir.h"
 
@@ -17,8 +18,10 @@ struct CBuildError : std::runtime_error {
 
 // Writes `text` (C from generate_c or generate_sfc_c) to DIR/prog.c and compiles
 // it with ${CC:-cc} -O2 -shared -fPIC -ffp-contract=off into DIR/prog.so, the
-// compiler's output in DIR/cc.log; returns the path of prog.so.
-std::string build_c_text(const std::string& text, const std::string& dir);
+// compiler's output in DIR/cc.log; returns the path of prog.so.  `extra_flags`
+// go after those (a test adds -fsanitize=undefined).
+std::string build_c_text(const std::string& text, const std::string& dir,
+                         const std::vector<std::string>& extra_flags = {});
 // ... of generate_c(p, p.layout()).
 std::string build_c_shared_object(const Program& p, const std::string& dir);
 

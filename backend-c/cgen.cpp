@@ -4,6 +4,8 @@
 // interpreter's 32-bit shift register).
 #include "backend-c/backend_c.h"
 
+#include "backend-c/c_typed.h"
+
 #include <cinttypes>
 #include <cstdio>
 #include <cstring>
@@ -110,9 +112,16 @@ class CGen {
   CGen(const Layout& l, std::string indent = "  ") : L_(l), ind_(std::move(indent)) {}
   std::string out;
 
+  // The binary IL's instruction offsets, in program order (an IDX's fault
+  // record names its offset); without them typed IDX is refused.
+  void set_il_offsets(const std::vector<uint32_t>* offsets) { offsets_ = offsets; }
+
   void code(const std::vector<Instr>& c) {
     depth_ = 0;
-    for (const Instr& in : c) instr(in);
+    for (const Instr& in : c) {
+      instr(in);
+      n_++;
+    }
   }
   // rungs with their labels and titles, then labels after the last rung
   void rungs(const std::vector<Rung>& rs, const std::vector<std::string>& end_labels) {
@@ -130,6 +139,8 @@ class CGen {
   const Layout& L_;
   std::string ind_;
   int depth_ = 0;
+  const std::vector<uint32_t>* offsets_ = nullptr;
+  size_t n_ = 0;  // instructions translated so far
 
   static std::string u(uint32_t v) { return std::to_string(v) + "u"; }
   std::string s(int d) const { return "s" + std::to_string(((d % 32) + 32) % 32); }
@@ -175,6 +186,10 @@ class CGen {
     const Operand *a = in.a;
     out += ind_ + "/* " + instr_text(in) + " */\n";
     auto push = [&](const std::string& e) { line(s(depth_) + " = " + e + ";"); depth_++; };
+    if (op_info(in.op).klass == OpClass::Typed) {
+      CTyped c = c_typed(in, L_, offsets_ && n_ < offsets_->size() ? int64_t((*offsets_)[n_]) : -1);
+      return c.push ? push(c.text) : guarded(c.text);
+    }
     bool real = a[0].is_real() || a[1].is_real();
     switch (in.op) {
       case Op::LOAD: return push(bit(a[0]));
@@ -260,6 +275,7 @@ class CGen {
       case Op::JMP: return line("if (" + top() + ") goto lbl_" + a[0].label.str() + ";");
       case Op::END: return line("if (" + top() + ") return;");
       case Op::Count: break;
+      default: break;  // the typed instructions, translated above
     }
     throw std::logic_error(std::string("C backend: no translation for ") + op_info(in.op).name);
   }
@@ -301,10 +317,24 @@ void refuse_shared_stack(const Program& p) {
     }
 }
 
+static bool has_typed(const Program& p) {
+  for (const Rung& r : p.rungs)
+    for (const Instr& in : r.code)
+      if (op_info(in.op).klass == OpClass::Typed) return true;
+  return false;
+}
+
 std::string generate_c(const Program& p, const Layout& layout) {
   refuse_shared_stack(p);
-  return std::string("/* ldc: ") + p.source + " as C (the C route). */\n" + kPrelude + "\n" + c_scan_head() +
-         c_rungs(p.rungs, p.end_labels, layout, "  ") + "  (void)s0;\n}\n";
+  const bool typed = has_typed(p);
+  std::vector<uint32_t> offsets;
+  if (typed) offsets = encode_il(p).instr_offset;
+  CGen g(layout, "  ");
+  g.set_il_offsets(typed ? &offsets : nullptr);
+  g.rungs(p.rungs, p.end_labels);
+  return std::string("/* ldc: ") + p.source + " as C (the C route). */\n" + kPrelude + (typed ? c_typed_prelude() : "") +
+         "\n" + c_scan_head() + (typed ? "  uint32_t xr = 0; /* the index register: IDX sets it */\n" : "") + g.out +
+         "  (void)s0;\n" + (typed ? "  (void)xr;\n" : "") + "}\n";
 }
 
 }  // namespace ldc

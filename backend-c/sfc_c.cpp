@@ -8,6 +8,7 @@
 #include <string>
 
 #include "backend-c/backend_c.h"
+#include "backend-c/c_typed.h"
 
 namespace ldc {
 namespace {
@@ -92,9 +93,32 @@ struct SfcC {
 
 }  // namespace
 
+// Does the chart hold a typed instruction (its C then needs their helpers)?
+static bool chart_has_typed(const Chart& c) {
+  auto typed = [](const std::vector<Instr>& code) {
+    for (const Instr& in : code)
+      if (op_info(in.op).klass == OpClass::Typed) return true;
+    return false;
+  };
+  auto body = [&](const SfcBody& b) {
+    for (const Rung& r : b.rungs)
+      if (typed(r.code)) return true;
+    return false;
+  };
+  for (const SfcStep& st : c.steps) {
+    if (typed(st.bits) || body(st.on_entry) || body(st.body)) return true;
+    for (const SfcTransition& t : st.out)
+      if (typed(t.cond)) return true;
+  }
+  return false;
+}
+
 std::string generate_sfc_c(const Chart& c, const Layout& layout) {
   SfcC g{c, layout, {}};
-  g.out = "/* ldc: " + c.source + ", a sequential function chart as C (paper 001). */\n" + c_prelude() + "\n" + c_scan_head();
+  const bool typed = chart_has_typed(c);
+  g.out = "/* ldc: " + c.source + ", a sequential function chart as C (paper 001). */\n" + c_prelude() +
+          (typed ? c_typed_prelude() : "") + "\n" + c_scan_head() +
+          (typed ? "  uint32_t xr = 0; /* the index register: IDX sets it */\n  (void)xr;\n" : "");
   const SfcStep& init = c.steps[c.initial];
   g.out += "  if (m[" + SfcC::u(layout.addr(Area::S, kBitFirstScan)) + "]) {  " + SfcC::comment("first scan") + "\n";
   g.enter("    ", c.initial);

@@ -612,21 +612,24 @@ std::string check_options(const GenOptions& o) {
 
 GenProgram generate_program(uint64_t seed, const GenOptions& opt) {
   if (std::string why = check_options(opt); !why.empty()) throw std::invalid_argument("ldgen: " + why);
+  if (opt.classes & kGenTyped) return generate_typed_program(seed, opt);
   return Gen(seed, opt).program(seed);
 }
 
 std::string render(const GenProgram& p) {
   std::string s = p.header + "\n";
   for (const auto& it : p.items) {
-    if (it.kind == GenItem::Kind::Label) s += "label " + it.text + "\n";
+    if (it.kind == GenItem::Kind::Label) s += (p.il ? ".label " : "label ") + it.text + "\n";
     else s += it.text + "\n";
   }
+  if (p.il) s += ".end\n";
   return s;
 }
 
 std::string generate_ld(uint64_t seed, const GenOptions& opt) { return render(generate_program(seed, opt)); }
 
 std::string generate_trace(uint64_t seed, int scans, const GenOptions& o) {
+  if (o.classes & kGenTyped) return generate_typed_trace(seed, scans, o);
   Rng r(seed * 0x9E3779B97F4A7C15ull + 0x7472616365ull);
   std::vector<std::string> head;
   for (int i = 0; i < o.x; i++) head.push_back("X" + std::to_string(i));
@@ -660,21 +663,27 @@ const std::pair<const char*, uint32_t> kClassNames[] = {
     {"contacts", kGenContacts}, {"edges", kGenEdges},   {"compares", kGenCompares}, {"coils", kGenCoils},
     {"setreset", kGenSetReset}, {"timers", kGenTimers}, {"counters", kGenCounters}, {"move", kGenMove},
     {"arith", kGenArith},       {"logic", kGenLogic},   {"realfn", kGenRealFn},     {"jumps", kGenJumps},
-    {"end", kGenEnd},           {"all", kGenAll}};
+    {"end", kGenEnd},           {"all", kGenAll},       {"tarith", kGenTArith},     {"tcompare", kGenTCompare},
+    {"tconv", kGenTConv},       {"tbits", kGenTBits},   {"tarray", kGenTArray},     {"t64", kGenT64},
+    {"typed", kGenTyped}};
 }  // namespace
 
 std::string gen_classes_text(uint32_t mask) {
-  if ((mask & kGenAll) == kGenAll) return "all";
-  std::string s;
-  for (const auto& [n, m] : kClassNames)
-    if (m != kGenAll && (mask & m)) s += (s.empty() ? "" : ",") + std::string(n);
+  std::string s = (mask & kGenAll) == kGenAll ? "all" : "";
+  if ((mask & kGenTyped) == kGenTyped) s += (s.empty() ? "" : ",") + std::string("typed");
+  for (const auto& [n, m] : kClassNames) {
+    if (m == kGenAll || m == kGenTyped || (m & kGenAll && (mask & kGenAll) == kGenAll) ||
+        (m & kGenTyped && (mask & kGenTyped) == kGenTyped))
+      continue;
+    if (mask & m) s += (s.empty() ? "" : ",") + std::string(n);
+  }
   return s;
 }
 
 std::string ldgen_args(uint64_t seed, const GenOptions& o) {
   std::string s = "--seed " + std::to_string(seed) + " --rungs " + std::to_string(o.rungs) + " --depth " +
                   std::to_string(o.max_depth);
-  if ((o.classes & kGenAll) != kGenAll) s += " --classes " + gen_classes_text(o.classes);
+  if (o.classes != kGenAll) s += " --classes " + gen_classes_text(o.classes);
   GenOptions d;
   const std::pair<const char*, int> r[] = {{"x", o.x}, {"y", o.y}, {"m", o.m},   {"k", o.k},   {"d", o.d},
                                            {"f", o.f}, {"t", o.t}, {"c", o.c},   {"wx", o.wx}, {"wy", o.wy}};
@@ -699,7 +708,8 @@ bool parse_gen_classes(std::string_view list, uint32_t& mask, std::string& err) 
         if (w == n) { mask |= m; found = true; }
       if (!found) {
         err = "unknown element class '" + std::string(w) +
-              "' (contacts edges compares coils setreset timers counters move arith logic realfn jumps end all)";
+              "' (contacts edges compares coils setreset timers counters move arith logic realfn jumps end all;"
+              " typed: tarith tcompare tconv tbits tarray t64 typed)";
         return false;
       }
     }
@@ -724,6 +734,7 @@ const char kUsage[] =
     "             [--range x=8,y=8,m=8,k=4,d=8,f=4,t=4,c=4,wx=4,wy=2]\n"
     "             [-o prog.ld] [--trace t.csv] [--scans N]\n"
     "  LIST: contacts edges compares coils setreset timers counters move arith logic realfn jumps end all\n"
+    "        typed classes (an ldc IL program): tarith tcompare tconv tbits tarray t64 typed\n"
     "  Without -o the program goes to stdout.  The same seed and options give the same files.\n";
 
 bool write(const std::string& path, const std::string& data) {

@@ -29,7 +29,18 @@ enum GenClass : uint32_t {
   kGenRealFn = 1u << 10,    // SIN COS TAN SQRT EXP LN ABS
   kGenJumps = 1u << 11,     // (JMP L) with a later `label L`
   kGenEnd = 1u << 12,       // a rare conditional (END)
-  kGenAll = (1u << 13) - 1,
+  kGenAll = (1u << 13) - 1,  // "all": the ladder classes
+  // Typed classes (ldgen_typed.cpp): with any of them on, the program is ldc IL
+  // text of typed rungs (the grid has no typed elements), and the ladder classes
+  // are not drawn.  `typed` names them all; an engine that cannot hold 64-bit
+  // types (the C40) runs them without t64.
+  kGenTArith = 1u << 13,    // MOVE ADD SUB MUL DIV MOD MIN MAX NEG ABS EXPT, the REAL functions
+  kGenTCompare = 1u << 14,  // EQ NE LT LE GT GE in the rungs' conditions
+  kGenTConv = 1u << 15,     // CONV TRUNC between the types
+  kGenTBits = 1u << 16,     // AND OR XOR NOT SHL SHR ROL ROR
+  kGenTArray = 1u << 17,    // IDX + LDX/STX over arrays (of structures too), indices in and out of range
+  kGenT64 = 1u << 18,       // the 64-bit types: LINT ULINT LWORD LREAL TIME LTIME DATE TOD DT
+  kGenTyped = kGenTArith | kGenTCompare | kGenTConv | kGenTBits | kGenTArray | kGenT64,
 };
 
 struct GenOptions {
@@ -79,6 +90,7 @@ std::vector<GenNode> rung_reductions(const GenNode& root);
 struct GenProgram {
   std::string header;  // comment lines, each ending in '\n'
   std::vector<GenItem> items;
+  bool il = false;     // ldc IL text (a typed program): labels are `.label`, the text ends with `.end`
   int rungs() const;
   int outputs() const;
   int inputs() const;
@@ -96,8 +108,15 @@ std::string generate_ld(uint64_t seed, const GenOptions& opt = {});  // render(g
 // empty cells, and a dt column of 0..60 ms.  Uses the options' device ranges.
 std::string generate_trace(uint64_t seed, int scans, const GenOptions& opt = {});
 
+// A typed program (opt.classes has typed classes; generate_program calls it):
+// ldc IL rungs with typed actions, and its trace (X bits, D words of every
+// pattern, index words, the arrays' words on the first row).
+GenProgram generate_typed_program(uint64_t seed, const GenOptions& opt);
+std::string generate_typed_trace(uint64_t seed, int scans, const GenOptions& opt);
+
 // "timers,arith" -> mask; false and `err` on an unknown name.  Names: contacts
-// edges compares coils setreset timers counters move arith logic realfn jumps end all.
+// edges compares coils setreset timers counters move arith logic realfn jumps end all,
+// and the typed ones: tarith tcompare tconv tbits tarray t64 typed.
 bool parse_gen_classes(std::string_view list, uint32_t& mask, std::string& err);
 std::string gen_classes_text(uint32_t mask);  // the inverse: "timers,arith"
 

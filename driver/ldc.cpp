@@ -106,11 +106,12 @@ static int ldc_main(int argc, char** argv) {
   } else if (emit == "c") {                                   // the C route
     text = c_source(c);
   } else if (emit == "asm") {                              // macro compiler
-    text = t->gnu_as(c.il, input, opt);
+    text = at_source([&] { return t->gnu_as(c.il, input, opt); });
   } else if (emit == "listing") {                          // + blockwise assembler
-    text = t->listing(c.il, input, opt);
+    text = at_source([&] { return t->listing(c.il, input, opt); });
   } else if (emit.empty() || emit == "hex") {              // + loader
-    Image image = target_image(*t, c.il, input, opt);
+    Image image;  // a backend's refusal (the C40's of a 64-bit type) at its place in the source
+    at_source([&] { image = target_image(*t, c.il, input, opt); return std::string(); });
     if (emit == "hex") text = write_intel_hex(write_image(image));
     else {
       if (output.empty()) throw UserError("ldc: error: an image needs -o FILE (or --emit=hex for text on stdout)");

@@ -48,7 +48,7 @@ std::string usage() {
   std::string engines;
   for (const std::string& e : all_engines()) engines += (engines.empty() ? "" : "|") + e;
   return
-    "usage: ldrun FILE [--engine=" + engines + "] [-O0|-O1|-O2] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms] [--cycles] [--sandbox]\n"
+    "usage: ldrun FILE [--engine=" + engines + "] [-O0|-O1|-O2] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms] [--cycles] [--sandbox] [--fault=stop|continue]\n"
     "       ldrun FILE|--project P.ldp --io=stdio|shm[:/NAME]|trace|none [--period 1ms|500us] [--clock=real|virtual]\n"
     "             [--free-run] [--rt] [--watchdog 200ms] [--retain FILE] [--retain-every 1s] [--cold] [--stop]\n"
     "             [--control=stdin|none] [--reload] [--load-budget 128M] [--stats] [--out FILE] [--block 16] [--scans N]\n"
@@ -794,22 +794,21 @@ int run_trace_mode(const TraceArgs& a, RunOptions opt) {
   Trace trace;
   if (!a.trace_file.empty()) trace = load_trace(a.trace_file, img.aliases);
   std::string out;
-  std::optional<ScanFault> fault;
+  std::vector<ScanFault> faults;
   if (a.cycles) {
     Recorder rec(*eng);
-    fault = run_trace(rec, layout, a.trace_file.empty() ? nullptr : &trace, a.trace_file, opt, out);
+    faults = run_trace(rec, layout, a.trace_file.empty() ? nullptr : &trace, a.trace_file, opt, out);
     out = with_cycles(out, rec.costs);
   } else {
-    fault = run_trace(*eng, layout, a.trace_file.empty() ? nullptr : &trace, a.trace_file, opt, out);
+    faults = run_trace(*eng, layout, a.trace_file.empty() ? nullptr : &trace, a.trace_file, opt, out);
   }
   std::fwrite(out.data(), 1, out.size(), stdout);
-  if (fault) {
-    std::fflush(stdout);
-    std::fprintf(stderr, "ldrun: scan %d: %s; the program stops (a PLC would drive its outputs to the safe state)\n",
-                 fault->scan, describe_scan_fault(*fault, &img).c_str());
-    return 1;
-  }
-  return 0;
+  std::fflush(stdout);
+  for (const ScanFault& f : faults)
+    std::fprintf(stderr, "ldrun: scan %d: %s; %s\n", f.scan, describe_scan_fault(f, &img).c_str(),
+                 opt.continue_after_fault ? "the next scan runs (--fault=continue)"
+                                          : "the program stops (a PLC would drive its outputs to the safe state)");
+  return faults.empty() || opt.continue_after_fault ? 0 : 1;
 }
 
 int ldrun_main(int argc, char** argv) {
@@ -858,6 +857,8 @@ int ldrun_main(int argc, char** argv) {
     } else if (a.rfind("--engine", 0) == 0) engine = value("--engine");
     else if (a.rfind("--task", 0) == 0) g_task = value("--task");
     else if (a == "--cycles") cycles = true;  // simulated engines: cycles and us per scan
+    else if (a == "--fault=continue") opt.continue_after_fault = true;  // trace mode: run on after a scan fault
+    else if (a == "--fault=stop") opt.continue_after_fault = false;
     else if (a == "-O0" || a == "-O1" || a == "-O2") opt_level = a[2] - '0';
     else if (a == "--sandbox") rta.sandbox = true;
     else if (a.rfind("--trace", 0) == 0) trace_file = value("--trace");

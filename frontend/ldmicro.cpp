@@ -562,14 +562,23 @@ void Importer::check_leaf(const Elem& e) {
   } else if (k == "PIECEWISE_LINEAR") {
     if (e.args.size() < 3) fail(e.line, e.col, "expected PIECEWISE_LINEAR destination index count points...");
   } else if (k == "READ_ADC") arity(1, 2, "READ_ADC name [refs]");
-  else if (k == "SET_PWM") arity(2, 4, "SET_PWM duty frequency [name [resolution]]");
+  // An older LDmicro saved the resolution as its dialog shows it, spaces and all
+  // ("0-100% (6.7 bits)"); LDmicro's reader takes the first word of it and
+  // drops the rest (loadsave.cpp, LoadLeafFromFile: sscanf "SET_PWM %s %s %s %s").
+  else if (k == "SET_PWM") {
+    if (e.args.size() < 2) arity(2, 4, "SET_PWM duty frequency [name [resolution]]");
+  }
   else if (k == "SET_BIT" || k == "CLEAR_BIT" || k == "IF_BIT_SET" || k == "IF_BIT_CLEAR") arity(2, 2, (k + " variable bit").c_str());
   else if (k == "UART_SEND" || k == "UART_RECV") arity(1, 3, (k + " variable [bytes wait]").c_str());
   else if (is_uart_flag(k)) arity(0, 0, k.c_str());
   else if (k == "PERSIST") arity(1, 1, "PERSIST variable");
   else if (k == "ROL" || k == "ROR" || k == "SHR" || k == "SR0") arity(3, 3, (k + " destination operand bits").c_str());
   else if (k == "BIN2BCD" || k == "BCD2BIN" || k == "SWAP" || k == "OPPOSITE") arity(2, 2, (k + " destination source").c_str());
-  else if (k == "TIME2COUNT" || k == "TIME2DELAY") arity(2, 2, (k + " variable delay").c_str());
+  // LDmicro saves TIME2COUNT as a timer, with its adjust field, but reads back
+  // only the name and the delay (sscanf "TIME2COUNT %s %s" == 2): the third
+  // field is written and never read.
+  else if (k == "TIME2COUNT") arity(2, 3, "TIME2COUNT variable delay [adjust]");
+  else if (k == "TIME2DELAY") arity(2, 2, "TIME2DELAY variable delay");
   else if (is_bus(k)) {
     arity(8, 8, (k + (k[0] == 'S' ? " name send receive mode modes size first bitrate" : " name send receive mode address register first bitrate")).c_str());
     if (k[0] == 'S' && e.args[5] != "8") fail(e.line, e.cols[5], "SPI transfers of " + e.args[5] + " bits are not supported: ldc's SPI model moves bytes");
@@ -742,6 +751,9 @@ void Importer::collect(const Elem& e) {
 
   } else if (k == "DELAY") {
     var(0);
+  } else if (k == "TIME2COUNT") {
+    var(0);
+    var(1);  // a third field is LDmicro's unread adjust (check_leaf)
   } else if (k == "GOTO" || k == "LABEL") {
     // labels, not variables
   } else if (k != "COMMENT" && !e.args.empty() && k != "OSR" && k != "OSF") {
@@ -762,7 +774,8 @@ uint32_t Importer::take(Dev d, int line, int col) {
 void Importer::allocate() {
   auto dev_of = [](const std::string& name, NK k) -> Dev {
     switch (k) {
-      case NK::Bit: return name[0] == 'X' ? Dev::X : name[0] == 'Y' ? Dev::Y : Dev::M;
+      // X and I (a Modbus contact) are inputs; R and M (a Modbus coil) memory bits
+      case NK::Bit: return name[0] == 'X' || name[0] == 'I' ? Dev::X : name[0] == 'Y' ? Dev::Y : Dev::M;
       case NK::Timer: return Dev::T;
       case NK::Counter: return Dev::C;
       case NK::Adc: return Dev::WX;
@@ -774,8 +787,9 @@ void Importer::allocate() {
   };
   for (const std::string& nm : order_) {
     Name& n = names_[nm];
-    if (n.kind == NK::Bit && nm[0] != 'X' && nm[0] != 'Y' && nm[0] != 'R')
-      fail(n.line, n.col, "bit '" + nm + "' must be named X... (input), Y... (output) or R... (internal relay)");
+    if (n.kind == NK::Bit && std::string_view("XYRIM").find(nm[0]) == std::string_view::npos)
+      fail(n.line, n.col, "bit '" + nm + "' must be named X... (input), Y... (output), R... (internal relay), "
+                          "I... (Modbus contact) or M... (Modbus coil)");
   }
   // names that already spell an ldc device of their kind keep it
   std::set<std::string> placed;
@@ -989,7 +1003,9 @@ int32_t Importer::timer_ms(const Elem& e, const Name&) {
   if (!is_number(e.args[1]))
     fail(e.line, e.cols[1], e.kw + " with a variable delay '" + e.args[1] + "' is not supported: LDmicro counts it in cycles");
   int64_t delay = number(e.args[1], e.line, e.cols[1]);
-  int64_t adjust = e.args.size() >= 3 ? number(e.args[2], e.line, e.cols[2]) : (v01_ ? -1 : 0);
+  // TIME2COUNT's adjust is always 0: LDmicro's reader leaves it at the zero of
+  // a fresh element, whatever the file's version or third field.
+  int64_t adjust = e.kw == "TIME2COUNT" ? 0 : e.args.size() >= 3 ? number(e.args[2], e.line, e.cols[2]) : (v01_ ? -1 : 0);
   if (delay <= 0) fail(e.line, e.cols[1], "timer delay must be positive (it is in microseconds)");
   __int128 p128 = (__int128(delay) + __int128(cycle_us_) * adjust) / cycle_us_;
   if (p128 > INT32_MAX) fail(e.line, e.cols[1], "timer delay too long (at most 2147483647 ms)");
@@ -1144,7 +1160,9 @@ void Importer::counter(const Elem& e) {
 
 void Importer::coil(const Elem& e) {
   Name& n = name_of(e, 0);
-  if (n.dev.dev == Dev::X) fail(e.line, e.cols[0], "'" + e.args[0] + "' is an input; a coil drives Y... outputs or R... relays");
+  if (n.dev.dev == Dev::X)
+    fail(e.line, e.cols[0], "'" + e.args[0] + "' is " + (e.args[0][0] == 'I' ? "a Modbus contact, an input" : "an input") +
+                                "; a coil drives Y... outputs, R... relays or M... Modbus coils");
   Area a = n.dev.dev == Dev::Y ? Area::Y : Area::M;
   int neg = number(e.args[1], e.line, e.cols[1]), set = number(e.args[2], e.line, e.cols[2]),
       reset = number(e.args[3], e.line, e.cols[3]);
@@ -2128,7 +2146,6 @@ TreeProgram Importer::run() {
     fail(1, 1, "not an LDmicro file: the first line should be LDmicro0.1, LDmicro0.2 or LDmicro");
   size_t prog = header();
   program(prog);
-  if (rungs_.empty()) fail(int(lines_.size()), 1, "no rungs in this program");
   for (const auto& [nm, line] : io_list_) {
     char c = nm.empty() ? 0 : nm[0];
     NK k = c == 'X' || c == 'Y' ? NK::Bit : c == 'A' ? NK::Adc : c == 'P' ? NK::Pwm : NK::Var;
@@ -2183,20 +2200,20 @@ TreeProgram Importer::run() {
   p.source = file_;
   p.aliases = aliases_;
   Elem top;
-  top.line = rungs_[0].line;
+  top.line = rungs_.empty() ? int(lines_.size()) : rungs_[0].line;
   top.col = 1;
   if (mcr_used_) {
     // LDmicro sets its master control relay at the start of every cycle
     mcr_ = temp_m(top);
     TreeRung tr;
-    tr.line = rungs_[0].line;
+    tr.line = top.line;
     tr.title = "master control relay on";
     tr.root = out_node(Op::OUT, {bit_opd(Area::M, mcr_)}, top);
     p.rungs.push_back(std::move(tr));
   }
   if (uart_used_) {
     TreeRung tr;
-    tr.line = rungs_[0].line;
+    tr.line = top.line;
     tr.title = "UART transmitter free at the start of the scan";
     tr.root = out_node(Op::OUTN, {bit_opd(Area::M, kUartBusy)}, top);
     p.rungs.push_back(std::move(tr));
@@ -2225,12 +2242,11 @@ TreeProgram Importer::run() {
   }
   if (!init_.empty()) {
     TreeRung tr;
-    tr.line = rungs_[0].line;
+    tr.line = top.line;
     tr.title = "initial values";
     tr.root = then_node(bit_leaf(Op::LOAD, Area::S, kBitFirstScan, top), fork_of(std::move(init_)), top.loc());
     p.rungs.insert(p.rungs.begin() + long(init_at), std::move(tr));
   }
-  if (p.rungs.empty()) fail(int(lines_.size()), 1, "this program has no outputs");
   p.end_labels = pending;
   for (size_t t : targets_)
     if (t >= rungs_.size()) p.end_labels.push_back("rung" + std::to_string(t + 1));

@@ -5,8 +5,9 @@
 // several connections on one input are a wired OR).  We run it the way Beremiz
 // and OpenPLC (the tools that write these files) compile it to Structured Text:
 //   * one statement per coil, output variable and block, in their order:
-//     executionOrderId first, then coils and output variables by position
-//     (top to bottom, left to right), then the remaining blocks by position;
+//     executionOrderId first, then coils and output variables, then the
+//     remaining blocks, each in document order (Beremiz on Python 3) or by
+//     position (on Python 2; see saved_by_python2);
 //     a block feeding a statement is generated just before it;
 //   * a statement's condition is the power flow from the left rail through the
 //     contacts feeding it, which we reduce to a series/parallel tree (and refuse
@@ -17,6 +18,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <optional>
@@ -284,6 +286,16 @@ class Importer {
   void tasks(const Element* root);
   // SFC (section 1b): the chart of the POU being translated, at most one per program
   bool sfc_mode_ = false;
+  // Which generator's order of statements (docs/plcopen.md, section 3): Beremiz
+  // and OpenPLC Editor on Python 2 sorted coils and blocks by position; on
+  // Python 3 their sort leaves them in document order.
+  bool position_order_ = false;
+ public:
+  // A PLCopen TC6 XML 1.0 file (namespace http://www.plcopen.org/xml/tc6.xsd):
+  // read where it agrees with 2.01, its own spellings translated as Beremiz's
+  // LoadProjectXML does (docs/plcopen.md, "TC6 XML 1.0").
+  bool tc6_v1_ = false;
+ private:
   std::optional<Chart> chart_;
   std::vector<TreeRung> after_;  // the chart's actions, after its steps
   std::string chart_pou_;
@@ -1550,8 +1562,36 @@ void Importer::statement(const Node& n) {
   rung(Cond::yes(), std::move(mv), el);
 }
 
-// Beremiz's order of statements (PLCGenerator.ComputeProgram), positions
-// compared as its SortInstances does: rows within 10 units, left to right.
+// Was this project saved by Beremiz or OpenPLC Editor running on Python 2?
+// Their XML writer declares the namespaces of <project> in the order of a
+// Python dict: Python 2's hash order puts `xmlns:ns1` first and the default
+// `xmlns` after it, Python 3's insertion order puts `xmlns` first.  The same
+// program generated the project's ST, so this tells which order of statements
+// it has (docs/plcopen.md, section 3).
+bool saved_by_python2(const Element* project) {
+  size_t ns1 = SIZE_MAX, dflt = SIZE_MAX;
+  for (size_t i = 0; i < project->attrs.size(); i++) {
+    if (project->attrs[i].first == "xmlns:ns1" && ns1 == SIZE_MAX) ns1 = i;
+    if (project->attrs[i].first == "xmlns" && dflt == SIZE_MAX) dflt = i;
+  }
+  return ns1 == 0 && dflt != SIZE_MAX && dflt > ns1;
+}
+
+// The namespace an element's name is in, from the declarations on it (the
+// root: enough for <project>).
+constexpr const char* kTc6V1Namespace = "http://www.plcopen.org/xml/tc6.xsd";
+std::string namespace_of(const Element* e) {
+  size_t colon = e->name.find(':');
+  std::string decl = colon == std::string::npos ? "xmlns" : "xmlns:" + e->name.substr(0, colon);
+  const std::string* ns = e->attr(decl);
+  return ns ? trim(*ns) : "";
+}
+
+// A program instance's POU: `typeName` (TC6 2.01), `type` (TC6 1.0).
+const std::string* instance_type(const Element* pi) { return pi->attr("typeName") ? pi->attr("typeName") : pi->attr("type"); }
+
+// Beremiz's order of statements under Python 2 (PLCGenerator.ComputeProgram),
+// positions compared as its SortInstances does: rows within 10 units, left to right.
 bool before(const Node* a, const Node* b) {
   if (std::abs(a->y - b->y) < 10) return a->x < b->x;
   return a->y < b->y;
@@ -1591,8 +1631,10 @@ void Importer::body(const Element* pou, const Element* ld) {
     for (size_t i = 1; i < v.size(); i++)
       for (size_t j = i; j > 0 && before(v[j], v[j - 1]); j--) std::swap(v[j], v[j - 1]);
   };
-  insertion(stmts);
-  insertion(blocks);
+  if (position_order_) {  // under Python 3, SortInstances returns operator.eq: never "less", no move
+    insertion(stmts);
+    insertion(blocks);
+  }
   size_t first = rungs_.size();
   pending_title_ = "POU " + *pou->attr("name");
   for (const Node* n : ordered) statement(*n);
@@ -1719,6 +1761,7 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
     const Element* cond = t->child("condition");
     if (!cond) fail_at(t, what + " has no condition (" + t->path() + ")");
     const Element* ci = cond->child("connectionPointIn");
+    if (!ci && cond->child("connection")) ci = cond;  // TC6 1.0: the connections directly in <condition>
     if (!ci) {
       auto inline_lang = [](const Element* in) {  // <inline><ST> (TC6 2.01), or <inline><body><ST>
         const Element* b = in->child("body") ? in->child("body") : in;
@@ -1829,6 +1872,27 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
   chart_pou_ = pname;
 }
 
+// TC6 1.0 gives a task's interval as an xsd:time, hh:mm:ss[.fraction], which
+// is a duration there (Beremiz converts it so): T#...  Anything else is kept.
+std::string xsd_time_as_iec(const std::string& v) {
+  std::string s = trim(v);
+  if (!s.empty() && s.back() == 'Z') s.pop_back();
+  auto digits = [&](size_t at, size_t n) {
+    if (at + n > s.size()) return false;
+    for (size_t i = at; i < at + n; i++)
+      if (!std::isdigit((unsigned char)s[i])) return false;
+    return true;
+  };
+  if (s.size() < 8 || !digits(0, 2) || s[2] != ':' || !digits(3, 2) || s[5] != ':' || !digits(6, 2)) return v;
+  std::string frac;
+  if (s.size() > 8) {
+    if (s[8] != '.' || s.size() == 9 || !digits(9, s.size() - 9)) return v;
+    frac = s.substr(9);
+  }
+  return "T#" + std::to_string(std::stoi(s.substr(0, 2))) + "h" + std::to_string(std::stoi(s.substr(3, 2))) + "m" +
+         std::to_string(std::stoi(s.substr(6, 2))) + (frac.empty() ? "" : "." + frac) + "s";
+}
+
 // A task's interval, T#20ms, T#0.1ms, TIME#1s500ms, in microseconds; nullopt
 // if malformed or not a whole number of microseconds.
 std::optional<uint64_t> interval_us(const std::string& s0) {
@@ -1872,7 +1936,7 @@ void Importer::tasks(const Element* root) {
     for (const Element* res : cfg->children_named("resource")) {
       std::string rn = res->attr("name") ? *res->attr("name") : "resource" + std::to_string(res_index);
       auto check = [&](const Element* pi, const std::string& task) {
-        const std::string* type = pi->attr("typeName");
+        const std::string* type = instance_type(pi);
         std::string name = pi->attr("name") ? *pi->attr("name") : "?";
         std::string where = "program instance '" + name + "'" + (task.empty() ? "" : " of task '" + task + "'");
         if (!type) fail_at(pi, where + " has no typeName (" + pi->path() + ")");
@@ -1894,7 +1958,7 @@ void Importer::tasks(const Element* root) {
           ct.instance_els.push_back(pi);
         }
         const std::string* iv = t->attr("interval");
-        if (iv) ct.interval = *iv;
+        if (iv) ct.interval = tc6_v1_ ? xsd_time_as_iec(*iv) : *iv;
         if (auto p = t->attr("priority")) ct.priority_text = *p;
         cfg_tasks_.push_back(std::move(ct));
       }
@@ -1921,6 +1985,8 @@ void Importer::prepare() {
   const Element* root = doc_.root.get();
   if (root->local_name() != "project")
     fail_at(root, "expected a PLCopen TC6 <project>, found <" + root->name + ">");
+  position_order_ = saved_by_python2(root);
+  tc6_v1_ = namespace_of(root) == kTc6V1Namespace;
   // global variables of configurations and resources
   if (const Element* inst = root->child("instances"))
     if (const Element* cfgs = inst->child("configurations"))
@@ -2164,7 +2230,7 @@ PlcopenImport Importer::import() {
     for (size_t k = 0; k < ct.pous.size(); k++) {
       auto [it, fresh] = owner.emplace(ct.pous[k], ct.instances[k]);
       if (!fresh)
-        fail_at(ct.instance_els[k], "program instance '" + ct.instances[k] + "' runs POU '" + *ct.instance_els[k]->attr("typeName") +
+        fail_at(ct.instance_els[k], "program instance '" + ct.instances[k] + "' runs POU '" + *instance_type(ct.instance_els[k]) +
                                         "', as instance '" + it->second + "' does; ldc translates each POU once, so one instance per POU (" +
                                         ct.instance_els[k]->path() + ")");
     }
@@ -2184,10 +2250,27 @@ PlcopenImport Importer::import() {
   r.configuration = config_name_;
   return r;
 }
+
+// Runs an import; an error in a TC6 1.0 file says which format it is.
+template <class F>
+auto importing(std::string_view text, const std::string& filename, F run) {
+  Importer im(text, filename);
+  try {
+    return run(im);
+  } catch (const CompileError& e) {
+    if (!im.tc6_v1_) throw;
+    throw CompileError(e.line, e.col, std::string(e.what()) + " (this is a PLCopen TC6 XML 1.0 file, namespace " + kTc6V1Namespace +
+                                          "; ldc reads it where it agrees with TC6 XML 2.01)");
+  }
+}
 }  // namespace
 
-TreeProgram parse_plcopen(std::string_view text, const std::string& filename) { return Importer(text, filename).run(); }
+TreeProgram parse_plcopen(std::string_view text, const std::string& filename) {
+  return importing(text, filename, [](Importer& im) { return im.run(); });
+}
 
-PlcopenImport import_plcopen(std::string_view text, const std::string& filename) { return Importer(text, filename).import(); }
+PlcopenImport import_plcopen(std::string_view text, const std::string& filename) {
+  return importing(text, filename, [](Importer& im) { return im.import(); });
+}
 
 }  // namespace ldc

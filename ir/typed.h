@@ -28,6 +28,7 @@
 namespace ldc::typed {
 
 constexpr int64_t kNsPerMs = 1000000;
+constexpr int64_t kNsPerS = 1000000000;  // MatIEC's conversions count seconds (tv_sec)
 constexpr int64_t kNsPerDay = 86400LL * 1000000000LL;
 
 inline bool is_int_kind(Ty t) {  // wraps at its width: the integers, bit strings, times and dates
@@ -166,7 +167,9 @@ inline uint64_t shift(Op op, Ty t, uint64_t a, Ty u, uint64_t n) {
   return norm(t, (a << k) | (a >> (w - k)));
 }
 
-// ---- one-operand functions (TNEG TABS TSQRT .. TATAN)
+// ---- one-operand functions (TNEG TABS TSQRT .. TATAN); ABS is MatIEC's
+// __abs_signed, `op < 0 ? -op : op`, for REAL too: ABS(-0.0) is -0.0 and a NaN
+// keeps its sign (fabs would clear it)
 inline uint64_t unary(Op op, Ty t, uint64_t a) {
   if (!is_real(t)) {
     if (op == Op::TNEG) return norm(t, 0 - a);
@@ -178,13 +181,13 @@ inline uint64_t unary(Op op, Ty t, uint64_t a) {
   if (ty_info(t).bits == 32) {
     float x = f32(a);
     if (op == Op::TNEG) return bits_of(-x);
-    if (op == Op::TABS) return bits_of(std::fabs(x));
+    if (op == Op::TABS) return bits_of(x < 0 ? -x : x);
     return bits_of(float(f64(unary(op, Ty::LREAL, bits_of(double(x))))));
   }
   double x = f64(a);
   switch (op) {
     case Op::TNEG: return bits_of(-x);
-    case Op::TABS: return bits_of(std::fabs(x));
+    case Op::TABS: return bits_of(x < 0 ? -x : x);
     case Op::TSQRT: return bits_of(std::sqrt(x));
     case Op::TLN: return bits_of(std::log(x));
     case Op::TLOG: return bits_of(std::log10(x));
@@ -208,18 +211,24 @@ inline int64_t to_i64(double d) {
   if (!(d >= -9223372036854775808.0 && d < 9223372036854775808.0)) return std::numeric_limits<int64_t>::min();
   return int64_t(d);
 }
-// REAL to an integer (MatIEC's __real_to_sint / __real_to_uint): the nearest
-// integer, an exact tie to even; to an unsigned type or a bit string a
-// negative value (or NaN) gives 0.
+// MatIEC's __real_round (iec_std_lib.h): `fmod(IN, 1) == 0 ? ((LINT)IN / 2) *
+// 2 : (LINT)IN`, called with IN + 0.5 (or IN - 0.5): the nearest integer, an
+// exact tie to even -- but IN + 0.5 is itself rounded in double, so an odd
+// integer between 2^52 and 2^53 goes to its even neighbour.
+inline int64_t real_round(double x) { return std::fmod(x, 1.0) == 0 ? (to_i64(x) / 2) * 2 : to_i64(x); }
+// REAL to an integer: __real_to_sint `IN >= 0 ? __real_round(IN + 0.5) :
+// __real_round(IN - 0.5)`; to an unsigned type or a bit string __real_to_uint /
+// __real_to_bit `IN >= 0 ? __real_round(IN + 0.5) : 0` -- a LINT in both, so a
+// value from 2^63 up gives INT64_MIN there too; then C's conversion to t.
 inline uint64_t real_to_int(Ty t, double d) {
-  double r = std::nearbyint(d);  // the default rounding mode: to nearest, ties to even
-  if (!is_signed(t)) {
-    if (!(r > 0)) return 0;
-    if (r >= 18446744073709551616.0) return norm(t, uint64_t(std::numeric_limits<int64_t>::min()));
-    return norm(t, r >= 9223372036854775808.0 ? uint64_t(r) : uint64_t(int64_t(r)));
-  }
-  return norm(t, uint64_t(to_i64(r)));
+  if (is_signed(t)) return norm(t, uint64_t(d >= 0 ? real_round(d + 0.5) : real_round(d - 0.5)));
+  return norm(t, uint64_t(d >= 0 ? real_round(d + 0.5) : 0));
 }
+// MatIEC's timespec of a TIME or date: {tv_sec, tv_nsec} of one sign
+// (__normalize_timespec), both toward zero.
+inline int64_t time_sec(int64_t ns) { return ns / kNsPerS; }
+inline int64_t time_nsec(int64_t ns) { return ns % kNsPerS; }
+inline uint64_t time_of(int64_t sec, int64_t nsec) { return uint64_t(sec) * uint64_t(kNsPerS) + uint64_t(nsec); }  // wraps
 inline uint64_t conv(Ty to, Ty from, uint64_t v) {
   const TyKind fk = ty_info(from).kind, tk = ty_info(to).kind;
   if (to == from) return v;
@@ -227,20 +236,23 @@ inline uint64_t conv(Ty to, Ty from, uint64_t v) {
   if (fk == TyKind::Real) {
     double d = real_value(from, v);
     if (tk == TyKind::Real) return real_bits(to, d);
-    if (tk == TyKind::Time || tk == TyKind::Date) return uint64_t(to_i64(std::trunc(d * double(kNsPerMs))));  // ms
+    if (tk == TyKind::Time || tk == TyKind::Date) {  // __real_to_time: {IN, (IN - (LINT)IN) * 1000000000}: seconds
+      int64_t sec = to_i64(d);
+      return time_of(sec, to_i64((d - double(sec)) * 1e9));
+    }
     return real_to_int(to, d);
   }
   if (fk == TyKind::Time || fk == TyKind::Date) {
-    int64_t ns = int64_t(v);
-    if (tk == TyKind::Real) return real_bits(to, double(ns) / double(kNsPerMs));  // ms
+    const int64_t sec = time_sec(int64_t(v)), nsec = time_nsec(int64_t(v));
+    if (tk == TyKind::Real) return real_bits(to, double(sec) + double(nsec) / 1e9);  // __time_to_real: seconds
     if (tk == TyKind::Time) return v;
-    if (tk == TyKind::Date) {
-      int64_t day = ns / kNsPerDay - (ns % kNsPerDay < 0 ? 1 : 0);  // floor
-      if (to == Ty::DATE && from == Ty::DT) return uint64_t(day * kNsPerDay);
-      if (to == Ty::TOD && from == Ty::DT) return uint64_t(ns - day * kNsPerDay);
+    if (tk == TyKind::Date) {  // __date_and_time_to_date / _time_of_day: C's % on tv_sec (before 1970 too)
+      constexpr int64_t kDay = kNsPerDay / kNsPerS;
+      if (to == Ty::DATE && from == Ty::DT) return time_of(sec - sec % kDay - (sec < 0 ? kDay : 0), 0);
+      if (to == Ty::TOD && from == Ty::DT) return time_of(sec % kDay + (sec < 0 ? kDay : 0), nsec);
       return v;
     }
-    return norm(to, uint64_t(ns / kNsPerMs));  // to an integer: whole ms, toward zero
+    return norm(to, uint64_t(sec));  // __time_to_int: tv_sec, whole seconds toward zero
   }
   // from BOOL, an integer or a bit string
   if (tk == TyKind::Real) {
@@ -248,7 +260,7 @@ inline uint64_t conv(Ty to, Ty from, uint64_t v) {
     if (ty_info(to).bits == 32) return bits_of(is_signed(from) ? float(int64_t(v)) : float(v));  // one rounding, as C
     return bits_of(d);
   }
-  if (tk == TyKind::Time || tk == TyKind::Date) return v * uint64_t(kNsPerMs);  // ms, wrapping
+  if (tk == TyKind::Time || tk == TyKind::Date) return v * uint64_t(kNsPerS);  // __int_to_time: {IN, 0}: seconds, wrapping
   return norm(to, v);
 }
 inline uint64_t trunc(Ty to, Ty from, uint64_t v) {

@@ -126,6 +126,7 @@ class C40Check {
     if (uint32_t pages = ((c40map::kDataBase + w_.words - 1) >> 16) - c40map::kDataPage + 1; pages > 0xFF - kDpFirstPage)
       throw Refusal{0, "the memory image spans " + std::to_string(pages) + " data pages, the check follows at most " +
                            std::to_string(0xFF - kDpFirstPage)};  // the loader's edge limit keeps it under 20
+    interior_.assign(n_, false);
     for (uint32_t i = 0; i < n_; i++) word_alone(i);
     flow();
   }
@@ -136,6 +137,7 @@ class C40Check {
   c40map::C40Layout w_;
   uint32_t last_delayed_ = UINT32_MAX;  // pass 1: the last delayed branch seen
   std::vector<uint8_t> dp_, stack_;     // pass 2: per word, before it runs
+  std::vector<bool> interior_;          // words 2..8 of a checked indexed access (checked_access)
 
   uint32_t word(uint32_t i) const {
     const uint8_t* p = code_.data() + 4 * size_t(i);
@@ -170,9 +172,13 @@ class C40Check {
     }
   }
 
-  void operands(uint32_t i, const Instruction& in) const {
+  void operands(uint32_t i, const Instruction& in) {
     for (unsigned k = 0; k < in.num_operands; k++) {
       const as::c40::Operand& o = in.ops[k];
+      if (o.kind == OperandKind::Ind && in.mnemonic != Mnemonic::Nop) {
+        checked_access(i, in);
+        continue;
+      }
       if (o.kind == OperandKind::Ind)
         throw Refusal{i, quote(in) + (in.mnemonic == Mnemonic::Nop ? "NOP with an address update"
                                                                     : "indirect memory operand (its address cannot be checked)")};
@@ -182,6 +188,53 @@ class C40Check {
       if (is_control(in.mnemonic) && in.mnemonic != Mnemonic::Dbc && in.mnemonic != Mnemonic::Dbcd)
         throw Refusal{i, quote(in) + "branch or call through a register"};
     }
+  }
+
+  // The one indirect operand the check accepts: the code generator's checked
+  // indexed access (the typed LDX / STX, docs/c40.md "Typed instructions"),
+  // the eight words in a row
+  //   LDHI limit_hi, R1; OR limit_lo, R1; CMPI R1, R0; LDIHI R1, R0
+  //   LDHI base_hi, AR0; OR base_lo, AR0; ADDI R0, AR0; LDI *AR0, Rn | STI Rn, *AR0
+  // in which R0 is clamped (unsigned) to limit before it is added to base, so
+  // the access is inside base..base + limit, which must lie in the memory
+  // image; and no path enters words 2..8 but from the word before (reach).
+  void checked_access(uint32_t i, const Instruction& in) {
+    auto refuse = [&](const std::string& why) {
+      throw Refusal{i, quote(in) + "indirect memory operand (its address cannot be checked): " + why};
+    };
+    const bool load = in.mnemonic == Mnemonic::Ldi && in.num_operands == 2 && in.ops[0].kind == OperandKind::Ind &&
+                      in.ops[1].kind == OperandKind::Reg;
+    const bool store = in.mnemonic == Mnemonic::Sti && in.num_operands == 2 && in.ops[1].kind == OperandKind::Ind;
+    if (!load && !store) refuse("only LDI *AR0, Rn and STI Rn, *AR0 may address the image indirectly");
+    const Ind& ind = in.ops[load ? 0 : 1].ind;
+    if (!(ind == as::c40::parse("LDI *AR0, R0").ops[0].ind)) refuse("only *AR0 without an update");
+    if (i < 7) refuse("not preceded by its bounds check");
+    uint32_t imm[4];
+    const Reg regs[4] = {Reg::R1, Reg::R1, ar(0), ar(0)};
+    const uint32_t at[4] = {i - 7, i - 6, i - 3, i - 2};
+    for (int k = 0; k < 4; k++) {
+      auto w = decode(at[k]);
+      Mnemonic m = k % 2 == 0 ? Mnemonic::Ldhi : Mnemonic::Or;
+      if (!w || w->mnemonic != m || w->num_operands != 2 || w->ops[0].kind != OperandKind::Imm ||
+          w->ops[1].kind != OperandKind::Reg || w->ops[1].reg != regs[k])
+        refuse("not preceded by its bounds check (word " + hex(at[k]) + ")");
+      imm[k] = uint32_t(w->ops[0].imm) & 0xFFFF;
+    }
+    const Instruction fixed[3] = {make(Mnemonic::Cmpi, {as::c40::Operand::r(Reg::R1), as::c40::Operand::r(Reg::R0)}),
+                                  make_cc(Mnemonic::Ldic, Cond::HI, {as::c40::Operand::r(Reg::R1), as::c40::Operand::r(Reg::R0)}),
+                                  make(Mnemonic::Addi, {as::c40::Operand::r(Reg::R0), as::c40::Operand::r(ar(0))})};
+    const uint32_t fixed_at[3] = {i - 5, i - 4, i - 1};
+    for (int k = 0; k < 3; k++)
+      if (word(fixed_at[k]) != encode_word(fixed[k]))
+        refuse("not preceded by its bounds check (word " + hex(fixed_at[k]) + ")");
+    uint64_t limit = uint64_t(imm[0]) << 16 | imm[1], base = uint64_t(imm[2]) << 16 | imm[3];
+    if (base < c40map::kDataBase || base + limit >= uint64_t(c40map::kDataBase) + w_.words)
+      refuse("its range " + hex(base) + ".." + hex(base + limit) + " is not inside the memory image " + image_range());
+    for (uint32_t k = i - 6; k <= i; k++) interior_[k] = true;
+  }
+  static uint32_t encode_word(const Instruction& x) {
+    auto e = as::c40::encode(x);
+    return uint32_t(e.bytes[0]) | uint32_t(e.bytes[1]) << 8 | uint32_t(e.bytes[2]) << 16 | uint32_t(e.bytes[3]) << 24;
   }
 
   // A target is an instruction of the code outside every delay slot, or (for
@@ -287,6 +340,9 @@ class C40Check {
   // byte `st`: a word's stack depth is the same on every path; DP classes
   // that differ meet in kDpUnknown; a word in a called routine stays one.
   void reach(uint32_t from, uint32_t to, uint8_t dp, uint8_t st, PendingWords& pending) {
+    if (interior_[to] && from + 1 != to)
+      throw Refusal{from, (from == to ? std::string("the entry point ") : quote(*decode(from))) + "enters word " + hex(to) +
+                              " inside a checked indexed access, past its bounds check"};
     uint8_t& d = dp_[to];
     uint8_t& s = stack_[to];
     if (d == kDpUnseen) {

@@ -32,6 +32,10 @@ constexpr uint32_t kSysWords = 16;
 constexpr uint32_t kSysDtWord = 0;       // INT32 dt (ms) of this scan
 constexpr uint32_t kSysScanWord = 1;     // scans completed
 constexpr uint32_t kSysScratchWord = 2;  // generated code builds REAL constants here
+// The fault record of docs/il.md ("Index faults"), bytes kSysFault.. of the byte image
+constexpr uint32_t kSysFaultWord = 3;       // kind (kFaultIndex)
+constexpr uint32_t kSysFaultAtWord = 4;     // the IL byte offset of the IDX
+constexpr uint32_t kSysFaultValueWord = 5;  // the index, INT64: low word, then high word (6)
 
 // Word offsets of the areas, in Layout::standard order, one word per element.
 struct C40Layout {

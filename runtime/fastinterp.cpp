@@ -5,10 +5,15 @@
 #include "runtime/fastinterp.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <stdexcept>
+#include <utility>
+
+#include "ir/typed.h"
 
 #if defined(__GNUC__) && !defined(LDC_FASTINTERP_SWITCH)
 #define LDC_FAST_GOTO 1
@@ -45,7 +50,27 @@ enum : unsigned { kDstInt = 0, kDstReal = 1 };
   X(SIN_F) X(COS_F) X(TAN_F) X(EXP_F) X(LN_F) X(SQRT_F) X(ABS_F) X(GEN)                                 \
   X(TON_K) X(TON_M) X(TOF_K) X(TOF_M) X(TP_K) X(TP_M) X(RSTT)                                           \
   X(MTON_K) X(MTON_M) X(MTOF_K) X(MTOF_M) X(MTP_K) X(MTP_M)                                             \
-  X(CTU_K) X(CTU_M) X(CTD_K) X(CTD_M) X(RSTC) X(JMP) X(END)
+  X(CTU_K) X(CTU_M) X(CTD_K) X(CTD_M) X(RSTC) X(JMP) X(END)                                           \
+  LDC_TYPED_OPS(X)
+
+// The typed handlers (docs/il.md, "Typed instructions").  A move class says how
+// a value goes from cell to cell: B a bit device; S8 U8 S16 U16 one cell, its
+// low 8 / 16 bits sign- or zero-extended; W32 one cell as it is (DINT UDINT
+// DWORD REAL); W64 two cells.  TGEN / TGCMP: any other typed instruction,
+// through a routine of its op (TypedGeneric).  Arithmetic of INT (S16), of the
+// one-cell 32-bit integers (W32) and of the 64-bit ones (W64), REAL (F32) and
+// LREAL (F64): _MM, _MK, _KM as above (a 64-bit constant's field is its index in
+// the constant pool).  Compares: signed 16, 32, 64 bits and the REALs, _MM and _MK.
+#define LDC_MCLASSES(X, N) X(N##_B) X(N##_S8) X(N##_U8) X(N##_S16) X(N##_U16) X(N##_W32) X(N##_W64)
+#define LDC_TARITH(X, C) LDC_INT3(X, TADD_##C) LDC_INT3(X, TSUB_##C) LDC_INT3(X, TMUL_##C)
+#define LDC_TCMP1(X, C, F) X(TEQ_##C##_##F) X(TNE_##C##_##F) X(TLT_##C##_##F) X(TLE_##C##_##F) X(TGT_##C##_##F) X(TGE_##C##_##F)
+#define LDC_TCMP(X, C) LDC_TCMP1(X, C, MM) LDC_TCMP1(X, C, MK)
+#define LDC_TYPED_OPS(X)                                                                                 \
+  X(TGEN) X(TGCMP) X(TMOVK32) X(TMOVK64) X(TMOVKB)                                                       \
+  LDC_MCLASSES(X, TMOV) LDC_MCLASSES(X, TLDX) LDC_MCLASSES(X, TSTX) X(TIDX_S16) X(TIDX_S32)              \
+  LDC_TARITH(X, S16) LDC_TARITH(X, W32) LDC_TARITH(X, W64)                                               \
+  LDC_TARITH(X, F32) LDC_INT3(X, TDIV_F32) LDC_TARITH(X, F64) LDC_INT3(X, TDIV_F64)                      \
+  LDC_TCMP(X, S16) LDC_TCMP(X, S32) LDC_TCMP(X, S64) LDC_TCMP(X, F32) LDC_TCMP(X, F64)
 
 enum FOp : uint16_t {
 #define LDC_ENUM(n) F_##n,
@@ -177,6 +202,86 @@ __attribute__((noinline)) bool compare_real(const uint8_t* m, const FastInterpre
   return rel_holds(Rel(in.x >> 4), x, y);
 }
 
+
+// ---- typed instructions (ir/typed.h defines each)
+inline uint32_t ld_u(const uint8_t* m, uint32_t off) { uint32_t v; std::memcpy(&v, m + off, 4); return v; }
+inline uint64_t ld_u64(const uint8_t* m, uint32_t off) { uint64_t v; std::memcpy(&v, m + off, 8); return v; }
+inline double ld_d(const uint8_t* m, uint32_t off) { double v; std::memcpy(&v, m + off, 8); return v; }
+inline void st_u(uint8_t* m, uint32_t off, uint32_t v) { std::memcpy(m + off, &v, 4); }
+inline void st_u64(uint8_t* m, uint32_t off, uint64_t v) { std::memcpy(m + off, &v, 8); }
+inline void st_d(uint8_t* m, uint32_t off, double v) { std::memcpy(m + off, &v, 8); }
+inline double bits_d(uint64_t u) { double d; std::memcpy(&d, &u, 8); return d; }
+// A cell's 32 bits made canonical for a one-cell move class (typed::load, then
+// the 32 bits typed::store writes).
+inline uint32_t n_S8(uint32_t v) { return uint32_t(int32_t(int8_t(uint8_t(v)))); }
+inline uint32_t n_U8(uint32_t v) { return v & 0xffu; }
+inline uint32_t n_S16(uint32_t v) { return uint32_t(int32_t(int16_t(uint16_t(v)))); }
+inline uint32_t n_U16(uint32_t v) { return v & 0xffffu; }
+inline uint32_t n_W32(uint32_t v) { return v; }
+template <uint32_t (*N)(uint32_t)>
+inline void move_cell(uint8_t* d, const uint8_t* p) { st_u(d, 0, N(ld_u(p, 0))); }
+
+// An IDX whose index is outside its bounds: the fault record (docs/il.md,
+// "Index faults"); the caller ends the scan.
+__attribute__((noinline)) void index_fault(uint8_t* m, uint32_t at, uint64_t index) {
+  uint32_t kind = kFaultIndex;
+  std::memcpy(m + kSysFault, &kind, 4);
+  std::memcpy(m + kSysFaultAt, &at, 4);
+  std::memcpy(m + kSysFaultValue, &index, 8);
+}
+
+using TGen = FastInterpreter::TypedGeneric;
+using TOpnd = FastInterpreter::TypedOperand;
+inline uint64_t tget(const uint8_t* m, const TOpnd& o, Ty t) { return o.konst ? o.k : typed::load(t, m + o.off); }
+
+// The routine of typed instruction `op` (not a compare), as the reference
+// interpreter's exec_typed: called with power on.
+template <Op op>
+bool run_typed(uint8_t* m, const TGen& g, uint32_t& xr) {
+  constexpr const OpInfo& oi = kOps[int(op)];
+  const Ty t = g.t, u = g.u;
+  if constexpr (oi.klass != OpClass::Typed || oi.push == 1) {
+    return false;  // compares go to typed_compare; untyped ops have handlers of their own
+  } else if constexpr (op == Op::TIDX) {
+    uint64_t i = tget(m, g.o[0], t);
+    int32_t lo = int32_t(g.o[1].k), hi = int32_t(g.o[2].k);
+    if (typed::index_ok(t, i, lo, hi)) { xr = uint32_t(int64_t(i) - lo); return false; }
+    index_fault(m, g.at, i);
+    return true;
+  } else if constexpr (op == Op::TLDX) {
+    typed::store(t, m + g.o[2].off, typed::load(t, m + g.o[0].off + size_t(xr) * g.o[1].k));
+  } else if constexpr (op == Op::TSTX) {
+    typed::store(t, m + g.o[1].off + size_t(xr) * g.o[2].k, tget(m, g.o[0], t));
+  } else if constexpr (oi.nopd == 2) {  // MOVE, NOT, the functions, CONV, TRUNC
+    uint64_t a = tget(m, g.o[0], u != Ty::None ? u : t);
+    uint64_t r = op == Op::TMOVE ? a
+               : op == Op::TNOT ? typed::logic(op, t, a, 0)
+               : op == Op::TCONV ? typed::conv(t, u, a)
+               : op == Op::TTRUNC ? typed::trunc(t, u, a)
+               : typed::unary(op, t, a);
+    typed::store(t, m + g.o[1].off, r);
+  } else {  // the two-operand ones
+    uint64_t a = tget(m, g.o[0], t), b = tget(m, g.o[1], u != Ty::None ? u : t);
+    bool error = false;
+    uint64_t r = (op == Op::TAND || op == Op::TOR || op == Op::TXOR) ? typed::logic(op, t, a, b)
+               : (op == Op::TSHL || op == Op::TSHR || op == Op::TROL || op == Op::TROR) ? typed::shift(op, t, a, u, b)
+               : typed::arith(op, t, a, b, error);
+    if (error) m[g.s0] = 1;
+    typed::store(t, m + g.o[2].off, r);
+  }
+  return false;
+}
+using TypedRoutine = bool (*)(uint8_t*, const TGen&, uint32_t&);
+// The routine of every op, by opcode (nullptr for the untyped ones).
+template <size_t... I>
+constexpr std::array<TypedRoutine, kOpCount> typed_routines(std::index_sequence<I...>) {
+  return {{(kOps[I].klass == OpClass::Typed ? &run_typed<Op(I)> : nullptr)...}};
+}
+constexpr std::array<TypedRoutine, kOpCount> kTypedRoutines = typed_routines(std::make_index_sequence<kOpCount>());
+__attribute__((noinline)) bool typed_compare(const uint8_t* m, const TGen& g) {
+  return typed::compare(op_info(g.op).rel, g.t, tget(m, g.o[0], g.t), tget(m, g.o[1], g.t));
+}
+
 }  // namespace
 
 // ------------------------------------------------------------------ decoding
@@ -193,7 +298,11 @@ Ins ins(FOp op, uint32_t a = 0, uint32_t b = 0, uint32_t c = 0, uint16_t x = 0) 
 struct Decoder {
   const Layout& L;
   const std::vector<uint32_t>& starts;  // instruction starts, so jump targets (byte offsets) become indices
+  std::vector<uint64_t>& k64;            // the 64-bit constant pool
+  std::vector<FastInterpreter::TypedGeneric>& generic;
+  uint32_t s0;                           // byte offset of S0
   bool special = true;
+  uint32_t at = 0;                       // the IL byte offset of the instruction being decoded
 
   uint32_t index_of(uint32_t target) const {  // target == il.size(): the HALT
     auto it = std::lower_bound(starts.begin(), starts.end(), target);
@@ -230,7 +339,135 @@ struct Decoder {
   Ins unary(const Instr& in);
   Ins timer(const Instr& in);
   Ins counter(const Instr& in);
+  Ins typed(const Instr& in);
+  Ins typed_generic(const Instr& in);
+  Ins typed_move(const Instr& in);
+  std::optional<Ins> typed_arith(const Instr& in);
+  Ins typed_compare(const Instr& in);
+  // A typed constant's field: its low 32 bits, or (wide) its index in the pool.
+  uint32_t konst(uint64_t v, bool wide) {
+    if (!wide) return uint32_t(v);
+    k64.push_back(v);
+    return uint32_t(k64.size() - 1);
+  }
 };
+
+// ---- typed instructions
+enum MoveClass : unsigned { kMB, kMS8, kMU8, kMS16, kMU16, kMW32, kMW64 };
+MoveClass move_class(Ty t) {
+  const TyInfo& ti = ty_info(t);
+  if (t == Ty::BOOL) return kMB;
+  if (ti.cells == 2) return kMW64;
+  if (ti.bits == 32) return kMW32;
+  bool sign = typed::is_signed(t);
+  if (ti.bits == 16) return sign ? kMS16 : kMU16;
+  return sign ? kMS8 : kMU8;
+}
+constexpr FOp kMove[] = {F_TMOV_B, F_TMOV_S8, F_TMOV_U8, F_TMOV_S16, F_TMOV_U16, F_TMOV_W32, F_TMOV_W64};
+constexpr FOp kLdx[] = {F_TLDX_B, F_TLDX_S8, F_TLDX_U8, F_TLDX_S16, F_TLDX_U16, F_TLDX_W32, F_TLDX_W64};
+constexpr FOp kStx[] = {F_TSTX_B, F_TSTX_S8, F_TSTX_U8, F_TSTX_S16, F_TSTX_U16, F_TSTX_W32, F_TSTX_W64};
+bool is_mem(const Operand& o) { return o.kind != OpdKind::ConstT && o.kind != OpdKind::ConstInt; }
+
+// Any typed instruction: its operands resolved, its op's routine.
+Ins Decoder::typed_generic(const Instr& in) {
+  special = false;
+  FastInterpreter::TypedGeneric g;
+  g.run = kTypedRoutines[int(in.op)];
+  g.op = in.op;
+  g.t = in.ty;
+  g.u = in.src;
+  g.s0 = s0;
+  g.at = at;
+  for (int i = 0; i < in.nopd(); i++) {
+    const Operand& o = in.a[i];
+    if (o.kind == OpdKind::ConstT) g.o[i].konst = true, g.o[i].k = o.bits();
+    else if (o.kind == OpdKind::ConstInt) g.o[i].konst = true, g.o[i].k = uint64_t(int64_t(o.ival));
+    else g.o[i].off = where(o);
+  }
+  if (in.op == Op::TLDX || in.op == Op::TSTX) {  // the stride in bytes
+    const int base = in.op == Op::TLDX ? 0 : 1;
+    g.o[base + 1].k = uint64_t(uint32_t(in.a[base + 1].ival)) * L.elem_size(in.a[base].area);
+  }
+  generic.push_back(g);
+  return ins(op_info(in.op).push ? F_TGCMP : F_TGEN, uint32_t(generic.size() - 1));
+}
+
+Ins Decoder::typed_move(const Instr& in) {
+  const Operand& a = in.a[0];
+  const uint32_t dst = where(in.a[1]);
+  if (is_mem(a)) return ins(kMove[move_class(in.ty)], where(a), dst);
+  const uint64_t v = a.bits();
+  if (in.ty == Ty::BOOL) return ins(F_TMOVKB, dst, uint32_t(v));
+  if (ty_info(in.ty).cells == 2) return ins(F_TMOVK64, dst, uint32_t(v), uint32_t(v >> 32));
+  return ins(F_TMOVK32, dst, uint32_t(v));
+}
+
+// ADD SUB MUL of INT, the 32-bit and 64-bit integers; ADD SUB MUL DIV of REAL
+// and LREAL.  nullopt: another type or op (the generic routine).
+std::optional<Ins> Decoder::typed_arith(const Instr& in) {
+  const Ty t = in.ty;
+  const TyInfo& ti = ty_info(t);
+  const unsigned k = in.op == Op::TADD ? 0 : in.op == Op::TSUB ? 1 : in.op == Op::TMUL ? 2 : 3;
+  static constexpr FOp kF32[] = {F_TADD_F32_MM, F_TSUB_F32_MM, F_TMUL_F32_MM, F_TDIV_F32_MM};
+  static constexpr FOp kF64[] = {F_TADD_F64_MM, F_TSUB_F64_MM, F_TMUL_F64_MM, F_TDIV_F64_MM};
+  static constexpr FOp kS16[] = {F_TADD_S16_MM, F_TSUB_S16_MM, F_TMUL_S16_MM};
+  static constexpr FOp kW32[] = {F_TADD_W32_MM, F_TSUB_W32_MM, F_TMUL_W32_MM};
+  static constexpr FOp kW64[] = {F_TADD_W64_MM, F_TSUB_W64_MM, F_TMUL_W64_MM};
+  FOp base;
+  if (t == Ty::REAL) base = kF32[k];
+  else if (t == Ty::LREAL) base = kF64[k];
+  else if (k == 3) return std::nullopt;  // integer DIV: the generic routine (S0, MIN / -1)
+  else if (t == Ty::INT) base = kS16[k];
+  else if (ti.cells == 1 && ti.bits == 32) base = kW32[k];
+  else if (ti.cells == 2) base = kW64[k];
+  else return std::nullopt;
+  const bool wide = ti.cells == 2;
+  const Operand &a = in.a[0], &b = in.a[1];
+  const uint32_t dst = where(in.a[2]);
+  if (is_mem(a) && is_mem(b)) return ins(base, where(a), where(b), dst);
+  if (is_mem(a)) return ins(FOp(base + 1), where(a), konst(b.bits(), wide), dst);
+  if (is_mem(b)) return ins(FOp(base + 2), konst(a.bits(), wide), where(b), dst);
+  return std::nullopt;  // two constants
+}
+
+// EQ..GE of INT, DINT, the signed 64-bit types, REAL and LREAL (a constant
+// first is the mirrored compare; two constants are folded).
+Ins Decoder::typed_compare(const Instr& in) {
+  const Operand &a = in.a[0], &b = in.a[1];
+  const Rel r = op_info(in.op).rel;
+  if (!is_mem(a) && !is_mem(b)) return ins(typed::compare(r, in.ty, a.bits(), b.bits()) ? F_TRUE : F_PUSH0);
+  const Ty t = in.ty;
+  FOp base = t == Ty::INT ? F_TEQ_S16_MM : t == Ty::DINT ? F_TEQ_S32_MM : t == Ty::REAL ? F_TEQ_F32_MM
+           : t == Ty::LREAL ? F_TEQ_F64_MM : (ty_info(t).cells == 2 && typed::is_signed(t)) ? F_TEQ_S64_MM : F_Count;
+  if (base == F_Count) return typed_generic(in);
+  const bool wide = ty_info(t).cells == 2;
+  if (is_mem(a) && is_mem(b)) return ins(FOp(base + unsigned(r)), where(a), where(b));
+  if (is_mem(a)) return ins(FOp(base + 6 + unsigned(r)), where(a), konst(b.bits(), wide));
+  return ins(FOp(base + 6 + unsigned(swap_operands(r))), where(b), konst(a.bits(), wide));
+}
+
+Ins Decoder::typed(const Instr& in) {
+  const Operand* o = in.a;
+  switch (in.op) {
+    case Op::TMOVE: return typed_move(in);
+    case Op::TADD: case Op::TSUB: case Op::TMUL: case Op::TDIV:
+      if (auto r = typed_arith(in)) return *r;
+      break;
+    case Op::TEQ: case Op::TNE: case Op::TLT: case Op::TLE: case Op::TGT: case Op::TGE: return typed_compare(in);
+    case Op::TIDX:
+      if ((in.ty == Ty::INT || in.ty == Ty::DINT) && is_mem(o[0]))
+        return ins(in.ty == Ty::INT ? F_TIDX_S16 : F_TIDX_S32, where(o[0]), uint32_t(o[1].ival), uint32_t(o[2].ival));
+      break;
+    case Op::TLDX:
+      return ins(kLdx[move_class(in.ty)], where(o[0]), uint32_t(o[1].ival) * L.elem_size(o[0].area), where(o[2]));
+    case Op::TSTX:
+      if (is_mem(o[0]))
+        return ins(kStx[move_class(in.ty)], where(o[0]), where(o[1]), uint32_t(o[2].ival) * L.elem_size(o[1].area));
+      break;
+    default: break;
+  }
+  return typed_generic(in);
+}
 
 // The bit instructions, and the rest that take no value operand.
 Ins Decoder::bit(const Instr& in) {
@@ -331,6 +568,7 @@ Ins Decoder::counter(const Instr& in) {
 
 Ins Decoder::decode(const Instr& in) {
   special = true;
+  if (op_info(in.op).klass == OpClass::Typed) return typed(in);
   switch (in.op) {
     case Op::LDEQ: case Op::LDNE: case Op::LDLT: case Op::LDLE: case Op::LDGT: case Op::LDGE: return compare(in);
     case Op::MOV: return mov(in);
@@ -361,13 +599,15 @@ FastInterpreter::FastInterpreter(std::span<const uint8_t> il, const Layout& L) {
     off = decode_instr(il, off, instrs.back());
   }
   il_count_ = instrs.size();
-  Decoder dec{L, starts};
+  Decoder dec{L, starts, k64_, generic_, s0_};
   code_.reserve(instrs.size() + 1);
-  for (const Instr& in : instrs) {
-    code_.push_back(dec.decode(in));
+  for (size_t i = 0; i < instrs.size(); i++) {
+    dec.at = starts[i];
+    code_.push_back(dec.decode(instrs[i]));
     specialized_ += dec.special;
   }
   code_.push_back(Ins{F_HALT, 0, 0, 0, 0});
+  il_offset_ = std::move(starts);
 }
 
 // ------------------------------------------------------------------ running
@@ -462,6 +702,9 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
   const Ins* ip = base;
   uint32_t st = 0;  // the bit stack, top = bit 0
   const uint32_t s0 = s0_, tw = tw_, tq = tq_, ti = ti_, cw = cw_, cq = cq_;
+  const uint64_t* const kp = k64_.data();          // 64-bit constants
+  const TypedGeneric* const tg = generic_.data();  // the typed instructions without a handler
+  uint32_t xr = 0;                                 // the index register (IDX sets it)
 
 #if LDC_FAST_GOTO
   static const void* const kLabels[F_Count] = {
@@ -604,6 +847,105 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
     }
     NEXT();
   }
+
+
+  // ---- typed instructions: only with power, but the compares
+  HANDLER(TGEN) {
+    if ((st & 1u) && tg[ip->a].run(m, tg[ip->a], xr)) return;  // an index fault ends the scan
+    NEXT();
+  }
+  HANDLER(TGCMP) { st = (st << 1) | uint32_t(typed_compare(m, tg[ip->a])); NEXT(); }
+  HANDLER(TMOVK32) { if (st & 1u) st_u(m, ip->a, ip->b); NEXT(); }
+  HANDLER(TMOVK64) { if (st & 1u) st_u64(m, ip->a, ip->b | uint64_t(ip->c) << 32); NEXT(); }
+  HANDLER(TMOVKB) { if (st & 1u) m[ip->a] = uint8_t(ip->b); NEXT(); }
+  // moves by class: a value from `src` to `dst` (byte pointers)
+#define LDC_MOVE_B(dst, src) *(dst) = uint8_t(*(src) != 0)
+#define LDC_MOVE_N(N) move_cell<N>
+#define LDC_MOVES(H, DST, SRC)                                                  \
+  HANDLER(H##_B) { if (st & 1u) LDC_MOVE_B(DST, SRC); NEXT(); }                  \
+  HANDLER(H##_S8) { if (st & 1u) LDC_MOVE_N(n_S8)(DST, SRC); NEXT(); }           \
+  HANDLER(H##_U8) { if (st & 1u) LDC_MOVE_N(n_U8)(DST, SRC); NEXT(); }           \
+  HANDLER(H##_S16) { if (st & 1u) LDC_MOVE_N(n_S16)(DST, SRC); NEXT(); }         \
+  HANDLER(H##_U16) { if (st & 1u) LDC_MOVE_N(n_U16)(DST, SRC); NEXT(); }         \
+  HANDLER(H##_W32) { if (st & 1u) std::memcpy(DST, SRC, 4); NEXT(); }            \
+  HANDLER(H##_W64) { if (st & 1u) std::memcpy(DST, SRC, 8); NEXT(); }
+  // MOVE: a = src, b = dst; LDX: a = base, b = stride (bytes), c = dst; STX: a = src, b = base, c = stride
+  LDC_MOVES(TMOV, m + ip->b, m + ip->a)
+  LDC_MOVES(TLDX, m + ip->c, m + ip->a + size_t(xr) * ip->b)
+  LDC_MOVES(TSTX, m + ip->b + size_t(xr) * ip->c, m + ip->a)
+#undef LDC_MOVES
+#undef LDC_MOVE_N
+#undef LDC_MOVE_B
+  // IDX of an INT / DINT word: a = the word, b = lo, c = hi
+#define LDC_TIDX(N, LOAD)                                                                   \
+  HANDLER(N) {                                                                              \
+    if (st & 1u) {                                                                          \
+      const int64_t i = LOAD, lo = int32_t(ip->b);                                          \
+      if (i < lo || i > int32_t(ip->c)) { index_fault(m, il_offset_[size_t(ip - base)], uint64_t(i)); return; } \
+      xr = uint32_t(i - lo);                                                                \
+    }                                                                                       \
+    NEXT();                                                                                 \
+  }
+  LDC_TIDX(TIDX_S16, int16_t(uint16_t(ld_u(m, ip->a))))
+  LDC_TIDX(TIDX_S32, ld_i(m, ip->a))
+#undef LDC_TIDX
+  // arithmetic: integers in their unsigned width, wrapped to the type by NORM
+#define LDC_TARITH3(N, LD, KONST, ST, NORM, FN)                                                  \
+  HANDLER(N##_MM) { if (st & 1u) ST(m, ip->c, NORM(FN(LD(m, ip->a), LD(m, ip->b)))); NEXT(); }    \
+  HANDLER(N##_MK) { if (st & 1u) ST(m, ip->c, NORM(FN(LD(m, ip->a), KONST(ip->b)))); NEXT(); }    \
+  HANDLER(N##_KM) { if (st & 1u) ST(m, ip->c, NORM(FN(KONST(ip->a), LD(m, ip->b)))); NEXT(); }
+#define LDC_PLUS(x, y) ((x) + (y))
+#define LDC_MINUS(x, y) ((x) - (y))
+#define LDC_TIMES(x, y) ((x) * (y))
+#define LDC_OVER(x, y) ((x) / (y))
+#define LDC_K32(v) (v)
+#define LDC_K64(v) kp[v]
+#define LDC_KF32(v) bits_f(v)
+#define LDC_KF64(v) bits_d(kp[v])
+#define LDC_SAME(v) (v)
+#define LDC_TINT(C, LD, K, ST, NORM) \
+  LDC_TARITH3(TADD_##C, LD, K, ST, NORM, LDC_PLUS) LDC_TARITH3(TSUB_##C, LD, K, ST, NORM, LDC_MINUS) \
+  LDC_TARITH3(TMUL_##C, LD, K, ST, NORM, LDC_TIMES)
+  LDC_TINT(S16, ld_u, LDC_K32, st_u, n_S16)
+  LDC_TINT(W32, ld_u, LDC_K32, st_u, n_W32)
+  LDC_TINT(W64, ld_u64, LDC_K64, st_u64, LDC_SAME)
+  LDC_TINT(F32, ld_f, LDC_KF32, st_f, LDC_SAME)
+  LDC_TARITH3(TDIV_F32, ld_f, LDC_KF32, st_f, LDC_SAME, LDC_OVER)
+  LDC_TINT(F64, ld_d, LDC_KF64, st_d, LDC_SAME)
+  LDC_TARITH3(TDIV_F64, ld_d, LDC_KF64, st_d, LDC_SAME, LDC_OVER)
+#undef LDC_TINT
+#undef LDC_TARITH3
+#undef LDC_PLUS
+#undef LDC_MINUS
+#undef LDC_TIMES
+#undef LDC_OVER
+  // compares: a the first operand's word, b the second's (MM) or the constant (MK)
+#define LDC_TCMP_ONE(N, REL, LD, K)                                                                           \
+  HANDLER(N##_MM) { st = (st << 1) | uint32_t(rel_holds(Rel::REL, LD(m, ip->a), LD(m, ip->b))); NEXT(); }     \
+  HANDLER(N##_MK) { st = (st << 1) | uint32_t(rel_holds(Rel::REL, LD(m, ip->a), K(ip->b))); NEXT(); }
+#define LDC_TCMPS(C, LD, K)                                                                                   \
+  LDC_TCMP_ONE(TEQ_##C, Eq, LD, K) LDC_TCMP_ONE(TNE_##C, Ne, LD, K) LDC_TCMP_ONE(TLT_##C, Lt, LD, K)          \
+  LDC_TCMP_ONE(TLE_##C, Le, LD, K) LDC_TCMP_ONE(TGT_##C, Gt, LD, K) LDC_TCMP_ONE(TGE_##C, Ge, LD, K)
+#define LDC_LD_S16(m, off) int16_t(uint16_t(ld_u(m, off)))
+#define LDC_K_S16(v) int16_t(uint16_t(v))
+#define LDC_LD_S64(m, off) int64_t(ld_u64(m, off))
+#define LDC_K_S64(v) int64_t(kp[v])
+  LDC_TCMPS(S16, LDC_LD_S16, LDC_K_S16)
+  LDC_TCMPS(S32, ld_i, int32_t)
+  LDC_TCMPS(S64, LDC_LD_S64, LDC_K_S64)
+  LDC_TCMPS(F32, ld_f, LDC_KF32)
+  LDC_TCMPS(F64, ld_d, LDC_KF64)
+#undef LDC_TCMP_ONE
+#undef LDC_TCMPS
+#undef LDC_LD_S16
+#undef LDC_K_S16
+#undef LDC_LD_S64
+#undef LDC_K_S64
+#undef LDC_K32
+#undef LDC_K64
+#undef LDC_KF32
+#undef LDC_KF64
+#undef LDC_SAME
 
   // ---- flow
   HANDLER(JMP) {

@@ -8,6 +8,10 @@
 // types at decode time ("quickening": an INT32 ADD of two words, of a word and a
 // constant, ...; constant compares and moves folded), so the run loop never
 // decodes a tag and never asks what type a value has on the common paths.
+// The typed instructions of issue 25 likewise: INT, DINT, 64-bit, REAL and
+// LREAL arithmetic, compares, moves, IDX/LDX/STX get handlers of their own;
+// the rest a routine of their op with resolved operands (docs/runtime.md,
+// "Typed instructions: the fast interpreter and the C route").
 // Dispatch is threaded: with GCC or Clang every handler ends in its own
 // indirect `goto *table[next->op]` (computed goto); other compilers get a
 // `switch` in a loop.  The bit stack stays in a local (a register).
@@ -36,6 +40,22 @@ class FastInterpreter : public Engine {
   };
   static_assert(sizeof(Ins) == 16);
 
+  // A typed instruction without a specialized handler (fastinterp.cpp): its
+  // operands resolved at load time, its routine chosen by its op.
+  struct TypedOperand {
+    uint32_t off = 0;     // byte offset of a device
+    bool konst = false;   // a constant: k
+    uint64_t k = 0;       // canonical bits (ir/typed.h); an LDX / STX stride in bytes
+  };
+  struct TypedGeneric {
+    bool (*run)(uint8_t* m, const TypedGeneric& g, uint32_t& xr) = nullptr;  // true: an index fault ended the scan
+    Op op{};
+    Ty t = Ty::None, u = Ty::None;
+    TypedOperand o[3];
+    uint32_t s0 = 0;  // byte offset of S0
+    uint32_t at = 0;  // the IL byte offset of the instruction (an IDX's fault record)
+  };
+
   // `il` must be valid for `layout` (validate_il), as for Interpreter.
   FastInterpreter(std::span<const uint8_t> il, const Layout& layout);
   void scan(ImageBytes& mem) override;
@@ -47,6 +67,9 @@ class FastInterpreter : public Engine {
 
  private:
   std::vector<Ins> code_;  // the program, then one HALT
+  std::vector<uint32_t> il_offset_;    // the IL byte offset of each record (an IDX fault names it)
+  std::vector<uint64_t> k64_;          // 64-bit constants of the typed handlers (a field holds the index)
+  std::vector<TypedGeneric> generic_;  // the typed instructions without a specialized handler
   size_t il_count_ = 0, specialized_ = 0;
   uint32_t s0_;                          // byte offset of S0 (the error flag)
   uint32_t tw_, tq_, ti_, cw_, cq_;      // offsets of the timer and counter areas

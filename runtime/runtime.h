@@ -109,6 +109,7 @@ struct RunOptions {
   int scans = -1;          // -1: as many as the trace has rows (1 without a trace)
   int32_t period_ms = 10;  // dt when the trace has no dt column
   std::vector<Probe> watch;
+  bool continue_after_fault = false;  // ldrun --fault=continue: a faulted scan's row is written and the scans go on
 };
 
 // A fault that ended a scan (an array index outside its bounds): the record
@@ -126,8 +127,9 @@ std::string describe_scan_fault(const ScanFault& f, const Image* img);
 
 // Runs the scans and writes the CSV of watched values to `out`.  Throws
 // std::runtime_error with a located message on a bad trace value.  A scan
-// that faults ends the run: its row is not written, and the fault is returned.
-std::optional<ScanFault> run_trace(Engine& engine, const Layout& layout, const Trace* trace, const std::string& trace_file,
+// that faults ends the run (its row is not written) unless
+// opt.continue_after_fault; the faults are returned.
+std::vector<ScanFault> run_trace(Engine& engine, const Layout& layout, const Trace* trace, const std::string& trace_file,
                                    const RunOptions& opt, std::string& out);
 
 // Value of a probe, formatted as ldrun prints it (bits 0/1, INT32 decimal, REAL %g).

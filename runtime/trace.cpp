@@ -157,8 +157,9 @@ std::string format_probe(const uint8_t* base, const Layout& layout, const Probe&
 
 std::string format_probe(const Memory& mem, const Probe& p) { return format_probe(mem.bytes.data(), mem.layout, p); }
 
-std::optional<ScanFault> run_trace(Engine& engine, const Layout& layout, const Trace* trace, const std::string&,
-                                   const RunOptions& opt, std::string& out) {
+std::vector<ScanFault> run_trace(Engine& engine, const Layout& layout, const Trace* trace, const std::string&,
+                                 const RunOptions& opt, std::string& out) {
+  std::vector<ScanFault> faults;
   Memory mem(layout);
   int scans = opt.scans >= 0 ? opt.scans : trace ? int(trace->rows.size()) : 1;
   out += "scan";
@@ -180,10 +181,12 @@ std::optional<ScanFault> run_trace(Engine& engine, const Layout& layout, const T
     }
     std::memcpy(mem.data() + kSysDt, &dt, 4);
     mem.set_bit(Area::S, kBitFirstScan, k == 1);
+    std::memset(mem.data() + kSysFault, 0, 4);
     engine.scan(mem.bytes);
     if (auto f = read_scan_fault(mem.data())) {
       f->scan = k;
-      return f;
+      faults.push_back(*f);
+      if (!opt.continue_after_fault) return faults;
     }
     uint32_t n = uint32_t(k);
     std::memcpy(mem.data() + kSysScan, &n, 4);
@@ -191,7 +194,7 @@ std::optional<ScanFault> run_trace(Engine& engine, const Layout& layout, const T
     for (const Probe& p : opt.watch) out += "," + format_probe(mem, p);
     out += "\n";
   }
-  return std::nullopt;
+  return faults;
 }
 
 }  // namespace ldc

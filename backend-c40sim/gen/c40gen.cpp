@@ -6,10 +6,12 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <span>
 #include <stdexcept>
 
 #include "ir/codegen.h"
 #include "ir/scanopt.h"
+#include "ir/typed.h"
 
 namespace ldc::c40gen {
 
@@ -168,11 +170,22 @@ constexpr int kNumSlots = 8;
 // ending it are computed in R0 instead of the shift register R10.
 enum class Fuse : uint8_t { None, Start, Contact, Push, Combine };
 
+// What the typed instructions share across rungs: the routines they call
+// (emitted after __divf only when used, so untyped programs keep their code),
+// the IL byte offsets (an index fault records its IDX's), and the bounds of
+// the last IDX, which the LDX or STX right after it uses.
+struct TypedState {
+  bool divu = false, f2i = false, i2f = false, fadd = false, fmul = false, fdiv = false;
+  std::vector<uint32_t> il_offset;  // encode_il's instr_offset, when the program has an IDX
+  size_t next = 0;                  // program-order index of the instruction being built
+  uint32_t span = 0;                // hi - lo of the last IDX
+};
+
 class Gen : public ClassGen<Gen> {
  public:
   // opt: the -O level; slots: this rung keeps its stack in kSlots (-O2)
-  Gen(const C40Layout& w, std::vector<Item>& items, int& next_label, int opt, bool slots)
-      : W_(w), items_(items), next_label_(next_label), opt_(opt), slots_(slots) {}
+  Gen(const C40Layout& w, std::vector<Item>& items, int& next_label, int opt, bool slots, TypedState& ts)
+      : W_(w), items_(items), next_label_(next_label), opt_(opt), slots_(slots), ts_(ts) {}
   void instr(const ldc::Instr& in, uint8_t facts = 0);  // facts: ScanFlag bits (ir/scanopt.h)
   void ldpk_main() { items_.push_back(Item::instr(make(M::Ldpk, {I(kDataPage)}))); }
   // -O1: which instructions of the rung run in R0 (before the first instr())
@@ -190,6 +203,7 @@ class Gen : public ClassGen<Gen> {
   int& next_label_;
   const int opt_;
   const bool slots_;
+  TypedState& ts_;
   uint32_t page_ = kDataPage;  // page of the direct operand of the instruction being built
   int depth_ = 0;              // stack positions in use before the current instruction (-O2)
   int z_of_ = -1;              // register whose value the Z flag reflects (-1: none)
@@ -209,6 +223,7 @@ class Gen : public ClassGen<Gen> {
   static bool guarded(Op op) {
     switch (op_info(op).klass) {
       case OpClass::Move: case OpClass::Arith: case OpClass::Logic: case OpClass::Special: return true;
+      case OpClass::Typed: return op_info(op).push == 0;  // the typed compares push
       default: return op == Op::RSTT || op == Op::RSTC;
     }
   }
@@ -468,6 +483,21 @@ class Gen : public ClassGen<Gen> {
   bool bit_fused(const ldc::Instr& in, Fuse f);
   void basic(const ldc::Instr& in);
   void flow(const ldc::Instr& in);
+  // typed instructions (class Typed): c40typed section below
+  void typed(const ldc::Instr& in);
+  void load_t(const ldc::Operand& o, Ty t, Reg r);
+  void norm_t(Ty t, Reg r);
+  void push_cc(Cond c);
+  void real_rel(Rel rel);
+  void typed_compare(const ldc::Instr& in);
+  void typed_divmod(const ldc::Instr& in);
+  void typed_minmax(const ldc::Instr& in);
+  void typed_shift(const ldc::Instr& in);
+  void typed_conv(const ldc::Instr& in);
+  void real_to_int(Ty t, bool trunc);
+  void typed_index(const ldc::Instr& in);
+  void typed_indexed(const ldc::Instr& in);
+  void checked_access(uint32_t limit, uint32_t base, Instruction access);
   template <class G>
   friend void ldc::gen_by_class(G& g, const ldc::Instr& in);
 };
@@ -722,7 +752,9 @@ void Gen::instr(const ldc::Instr& in, uint8_t facts) {
   on_ = opt_ >= 2 && guarded(in.op) && known_.on();  // -O2: a power on for certain needs no test
   int partner = at_ < defer_.size() ? defer_[at_] : -1;
   bool edge = in.op == Op::LOADP || in.op == Op::LOADF;
-  if (partner < 0 && ((facts & kDeadStore) || ((facts & kUnread) && !edge))) {
+  if (op_info(in.op).klass == OpClass::Typed) {
+    typed(in);
+  } else if (partner < 0 && ((facts & kDeadStore) || ((facts & kUnread) && !edge))) {
     // nothing
   } else if (partner >= 0) {  // -O2: a deferred contact pushes nothing; its block instruction applies it
     if (size_t(partner) < at_) bit_slots(combined_contact(contacts_[size_t(partner)], in));
@@ -735,6 +767,7 @@ void Gen::instr(const ldc::Instr& in, uint8_t facts) {
   if (opt_ >= 2) known_.step(in);
   if (partner < 0) depth_ += op_info(in.op).push - op_info(in.op).pop;
   at_++;
+  ts_.next++;
 }
 
 // -O1: where a LOAD or LOADN starts a run of contacts that pays to compute in
@@ -857,6 +890,378 @@ void Gen::basic(const ldc::Instr& in) {
       if (i.ops[k].kind == OperandKind::Direct) i.ops[k] = Dv(in.a[i.ops[k].imm]);
     emit(std::move(i));
   }
+}
+
+// ------------------------------------------------------------ typed instructions
+//
+// The typed instructions of issue 25 (ops.def class Typed, ir/typed.h) on the
+// types that fit the C40's 32-bit word (docs/c40.md, "Typed instructions"): a
+// value lives in a register as its canonical 32 bits (sign-extended for the
+// signed kinds, zero-extended otherwise, BOOL 0/1, REAL its IEEE bits), so
+// every result is what ir/typed.h computes, bit for bit.  REAL is handled as
+// IEEE bits in integer arithmetic (moves, compares, MIN MAX NEG ABS, the
+// conversions); what would need the C40's own float arithmetic, which is not
+// IEEE binary32, and the 64-bit types are refused by name (c40_typed_refusal).
+
+// R = the canonical 32 bits of operand o of type t (a device cell, made
+// canonical as typed::load does; or a typed constant)
+void Gen::load_t(const ldc::Operand& o, Ty t, Reg r) {
+  if (o.kind == OpdKind::ConstT) return load_imm32(int32_t(uint32_t(o.bits())), r);
+  if (o.kind == OpdKind::ConstInt) return load_imm32(o.ival, r);
+  op(M::Ldi, {Dv(o), R(r)});
+  norm_t(t, r);
+}
+
+// r wrapped to t's width and extended (typed::norm) for the 8- and 16-bit types
+void Gen::norm_t(Ty t, Reg r) {
+  const TyInfo& ti = ty_info(t);
+  if (ti.kind == TyKind::Bool || ti.kind == TyKind::Real || ti.bits >= 32) return;
+  if (typed::is_signed(t)) {
+    op(M::Lsh, {I(32 - ti.bits), R(r)});
+    op(M::Ash, {I(ti.bits - 32), R(r)});
+  } else {
+    op(M::And, {I((1 << ti.bits) - 1), R(r)});
+  }
+}
+
+void Gen::push_cc(Cond c) {
+  if (slots_) opc(M::Ldic, c, {I(1), R(slot(depth_))});
+  else opc(M::Ldic, c, {R(r2), R(r10)});
+}
+
+// R5 = (a rel b) for the IEEE binary32 bits a in R0 and b in R1, in integer
+// arithmetic: a NaN (|x| > 0x7F800000) makes every relation false but Ne;
+// otherwise the order of the keys |x| (x >= 0) and -|x| (x < 0), which also
+// makes -0 equal +0.  Uses R2-R6.
+void Gen::real_rel(Rel rel) {
+  op(M::Lsh3, {I(1), R(r0), R(r2)});
+  op(M::Lsh, {I(-1), R(r2)});            // |a|
+  op(M::Lsh3, {I(1), R(r1), R(Reg::R3)});
+  op(M::Lsh, {I(-1), R(Reg::R3)});       // |b|
+  op(M::Ldhi, {I(0x7F80), R(Reg::R6)});  // the bits of +infinity
+  op(M::Ldi, {I(0), R(r4)});
+  op(M::Cmpi, {R(Reg::R6), R(r2)});
+  opc(M::Ldic, Cond::HI, {I(1), R(r4)});
+  op(M::Cmpi, {R(Reg::R6), R(Reg::R3)});
+  opc(M::Ldic, Cond::HI, {I(1), R(r4)});  // R4: a NaN
+  op(M::Negi, {R(r2), R(Reg::R6)});
+  op(M::Cmpi, {I(0), R(r0)});
+  opc(M::Ldic, Cond::LT, {R(Reg::R6), R(r2)});
+  op(M::Negi, {R(Reg::R3), R(Reg::R6)});
+  op(M::Cmpi, {I(0), R(r1)});
+  opc(M::Ldic, Cond::LT, {R(Reg::R6), R(Reg::R3)});
+  op(M::Ldi, {I(0), R(Reg::R5)});
+  op(M::Cmpi, {R(Reg::R3), R(r2)});        // CMPI's N is the exact sign: right even on overflow
+  opc(M::Ldic, cond_of(rel), {I(1), R(Reg::R5)});
+  op(M::Cmpi, {I(0), R(r4)});
+  opc(M::Ldic, Cond::NE, {I(rel == Rel::Ne ? 1 : 0), R(Reg::R5)});
+}
+
+// The condition after CMPI b, a (a - b) for a relation of unsigned values
+constexpr Cond kUnsignedConds[] = {Cond::EQ, Cond::NE, Cond::LO, Cond::LS, Cond::HI, Cond::HS};
+static_assert(sizeof kUnsignedConds / sizeof kUnsignedConds[0] == size_t(Rel::None));
+
+void Gen::typed_compare(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const Rel rel = op_info(in.op).rel;
+  load_t(in.a[0], t, r0);
+  load_t(in.a[1], t, r1);
+  if (typed::is_real(t)) {
+    real_rel(rel);
+    prepare_push();
+    op(M::Cmpi, {I(0), R(Reg::R5)});
+    return push_cc(Cond::NE);
+  }
+  prepare_push();
+  op(M::Cmpi, {R(r1), R(r0)});
+  push_cc(typed::is_signed(t) ? cond_of(rel) : kUnsignedConds[int(rel)]);
+}
+
+// DIV MOD: a zero divisor gives 0 and sets S0; a signed one of -1 gives the
+// negation (wrapped) or 0; else __divi (signed, and the 8- and 16-bit unsigned
+// types, which it holds as positive INT32) or __divu (UDINT)
+void Gen::typed_divmod(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const bool mod = in.op == Op::TMOD, sgn = typed::is_signed(t);
+  load_t(in.a[0], t, r0);
+  load_t(in.a[1], t, r1);
+  std::string zero = fresh(), minus_one = fresh(), store = fresh();
+  op(M::Cmpi, {I(0), R(r1)});
+  branch(Cond::EQ, zero);
+  if (sgn) {
+    op(M::Cmpi, {I(-1), R(r1)});
+    branch(Cond::EQ, minus_one);
+  }
+  if (t == Ty::UDINT) ts_.divu = true;
+  op(M::Call, {L(t == Ty::UDINT ? kDivuLabel : kDivLabel)});  // R0 = quotient, R1 = remainder
+  if (mod) op(M::Ldi, {R(r1), R(r0)});
+  jump(store);
+  if (sgn) {
+    label(minus_one);
+    if (mod) op(M::Ldi, {I(0), R(r0)});
+    else op(M::Negi, {R(r0), R(r0)});
+    jump(store);
+  }
+  label(zero);
+  set_error();
+  op(M::Ldi, {I(0), R(r0)});
+  label(store);
+  norm_t(t, r0);
+  op(M::Sti, {R(r0), Dv(in.a[2])});
+}
+
+// MIN: b if b < a, else a; MAX: b if b > a (a NaN b never taken)
+void Gen::typed_minmax(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const bool min = in.op == Op::TMIN;
+  load_t(in.a[0], t, r0);
+  load_t(in.a[1], t, r1);
+  if (typed::is_real(t)) {
+    op(M::Ldi, {R(r0), R(Reg::R7)});  // real_rel compares R0 rel R1: b rel a
+    op(M::Ldi, {R(r1), R(r0)});
+    op(M::Ldi, {R(Reg::R7), R(r1)});
+    real_rel(min ? Rel::Lt : Rel::Gt);  // R0 = b, R1 = a
+    op(M::Cmpi, {I(0), R(Reg::R5)});
+    opc(M::Ldic, Cond::EQ, {R(r1), R(r0)});  // not taken: a
+  } else {
+    op(M::Cmpi, {R(r1), R(r0)});  // a - b
+    bool sgn = typed::is_signed(t);
+    opc(M::Ldic, min ? (sgn ? Cond::GT : Cond::HI) : (sgn ? Cond::LT : Cond::LO), {R(r1), R(r0)});
+  }
+  op(M::Sti, {R(r0), Dv(in.a[2])});
+}
+
+// SHL SHR: a count outside 0..w-1 (a negative one is huge unsigned) gives 0;
+// ROL ROR: the count modulo w (w a power of two: its low bits, negative counts too)
+void Gen::typed_shift(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const int w = ty_info(t).bits;
+  load_t(in.a[0], t, r0);
+  load_t(in.a[1], in.src, r1);
+  if (in.op == Op::TSHL || in.op == Op::TSHR) {
+    if (in.op == Op::TSHL) {
+      op(M::Lsh3, {R(r1), R(r0), R(r0)});
+    } else {
+      op(M::Negi, {R(r1), R(r2)});
+      op(M::Lsh3, {R(r2), R(r0), R(r0)});
+    }
+    op(M::Cmpi, {I(w - 1), R(r1)});
+    opc(M::Ldic, Cond::HI, {I(0), R(r0)});
+  } else {
+    op(M::And, {I(w - 1), R(r1)});  // k
+    if (in.op == Op::TROL) {
+      op(M::Lsh3, {R(r1), R(r0), R(r2)});          // a << k
+      op(M::Addi3, {I(-w), R(r1), R(Reg::R3)});
+      op(M::Lsh3, {R(Reg::R3), R(r0), R(Reg::R3)});  // a >> (w - k); 0 for k = 0
+    } else {
+      op(M::Negi, {R(r1), R(r2)});
+      op(M::Lsh3, {R(r2), R(r0), R(r2)});          // a >> k
+      op(M::Ldi, {I(w), R(Reg::R3)});
+      op(M::Subi, {R(r1), R(Reg::R3)});
+      op(M::Lsh3, {R(Reg::R3), R(r0), R(Reg::R3)});  // a << (w - k); masked below for k = 0
+    }
+    op(M::Or3, {R(Reg::R3), R(r2), R(r0)});
+  }
+  norm_t(t, r0);
+  op(M::Sti, {R(r0), Dv(in.a[2])});
+}
+
+// R0 (IEEE bits) -> the integer type t: __f2i gives the magnitude, rounded
+// (ties to even) or truncated, modulo 2^32 (which is 0 where typed.h's
+// result is INT64_MIN: NaN, infinities, |x| >= 2^63); R7 keeps the sign.
+// CONV to an unsigned type gives 0 for a negative value.
+void Gen::real_to_int(Ty t, bool trunc) {
+  ts_.f2i = true;
+  op(M::Ldi, {R(r0), R(Reg::R7)});
+  op(M::Ldi, {I(trunc ? 1 : 0), R(r1)});
+  op(M::Call, {L(kF2iLabel)});
+  if (!trunc && !typed::is_signed(t)) {
+    op(M::Cmpi, {I(0), R(Reg::R7)});
+    opc(M::Ldic, Cond::LT, {I(0), R(r0)});
+  } else {
+    op(M::Negi, {R(r0), R(r1)});
+    op(M::Cmpi, {I(0), R(Reg::R7)});
+    opc(M::Ldic, Cond::LT, {R(r1), R(r0)});
+  }
+  norm_t(t, r0);
+}
+
+// CONV.T.U (typed::conv) between the 32-bit-or-narrower types
+void Gen::typed_conv(const ldc::Instr& in) {
+  const Ty t = in.ty, u = in.src;
+  const TyKind tk = ty_info(t).kind, uk = ty_info(u).kind;
+  load_t(in.a[0], u, r0);
+  if (t == u) {
+    // the value as it is
+  } else if (tk == TyKind::Bool) {
+    if (uk == TyKind::Real) op(M::Lsh, {I(1), R(r0)});  // +-0 -> 0; everything else (NaN too) is not 0
+    else op(M::Cmpi, {I(0), R(r0)});
+    opc(M::Ldic, Cond::NE, {I(1), R(r0)});
+  } else if (tk == TyKind::Real) {  // from an integer: nearest, ties to even (as C's conversion)
+    ts_.i2f = true;
+    if (typed::is_signed(u)) {
+      op(M::Ldi, {R(r0), R(Reg::R7)});
+      op(M::Absi, {R(r0), R(r0)});  // INT32_MIN: 2^31 as unsigned
+      op(M::Call, {L(kI2fLabel)});
+      op(M::Ldhi, {I(0x8000), R(r1)});
+      op(M::Or, {R(r0), R(r1)});
+      op(M::Cmpi, {I(0), R(Reg::R7)});
+      opc(M::Ldic, Cond::LT, {R(r1), R(r0)});
+    } else {
+      op(M::Call, {L(kI2fLabel)});
+    }
+  } else if (uk == TyKind::Real) {
+    real_to_int(t, false);
+  } else {
+    norm_t(t, r0);
+  }
+  op(M::Sti, {R(r0), Dv(in.a[1])});
+}
+
+// IDX.T i lo hi: R7 = i - lo if lo <= i <= hi (one unsigned compare of
+// i - lo with hi - lo; a UDINT of 2^31 or more is outside every INT32 range);
+// else the fault record in Sys and the end of the scan (docs/il.md, "Index faults")
+void Gen::typed_index(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const int32_t lo = in.a[1].ival, hi = in.a[2].ival;
+  ts_.span = uint32_t(hi) - uint32_t(lo);
+  load_t(in.a[0], t, r0);
+  std::string fault = fresh(), ok = fresh();
+  if (!typed::is_signed(t)) {
+    op(M::Cmpi, {I(0), R(r0)});
+    branch(Cond::LT, fault);
+  }
+  load_imm32(lo, r1);
+  op(M::Subi3, {R(r1), R(r0), R(Reg::R7)});
+  load_imm32(int32_t(ts_.span), r1);
+  op(M::Cmpi, {R(r1), R(Reg::R7)});
+  branch(Cond::LS, ok);
+  label(fault);
+  const uint32_t sys = kDataBase + W_.offset[int(Area::Sys)];
+  op(M::Ldi, {I(kFaultIndex), R(r1)});
+  op(M::Sti, {R(r1), D(sys + kSysFaultWord)});
+  load_imm32(int32_t(ts_.il_offset.at(ts_.next)), r1);
+  op(M::Sti, {R(r1), D(sys + kSysFaultAtWord)});
+  op(M::Sti, {R(r0), D(sys + kSysFaultValueWord)});
+  if (typed::is_signed(t)) op(M::Ash3, {I(-31), R(r0), R(r1)});
+  else op(M::Ldi, {I(0), R(r1)});
+  op(M::Sti, {R(r1), D(sys + kSysFaultValueWord + 1)});
+  jump(kExitLabel);  // the scan ends here
+  label(ok);
+}
+
+// The one indirect access the loader's code check accepts (loader/c40_check.cpp):
+// the element offset in R0 clamped (unsigned) to `limit`, added to `base`, all
+// in eight words in a row.  After IDX the clamp never changes R0; it is what
+// lets the check prove that the access stays inside the memory image.
+void Gen::checked_access(uint32_t limit, uint32_t base, Instruction access) {
+  op(M::Ldhi, {I(limit >> 16), R(r1)});
+  op(M::Or, {I(limit & 0xFFFF), R(r1)});
+  op(M::Cmpi, {R(r1), R(r0)});
+  opc(M::Ldic, Cond::HI, {R(r1), R(r0)});
+  op(M::Ldhi, {I(base >> 16), R(ar(0))});
+  op(M::Or, {I(base & 0xFFFF), R(ar(0))});
+  op(M::Addi, {R(r0), R(ar(0))});
+  emit(std::move(access));
+}
+
+// LDX.T base stride r / STX.T s base stride: the element base + R7 * stride
+// (the register the IDX right before set), one word per element on the C40
+void Gen::typed_indexed(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  const bool store = in.op == Op::TSTX;
+  const ldc::Operand& base = in.a[store ? 1 : 0];
+  const int32_t stride = in.a[store ? 2 : 1].ival;
+  if (store) load_t(in.a[0], t, r2);
+  op(M::Ldi, {R(Reg::R7), R(r0)});
+  if (stride != 1) {
+    if (stride >= -32768 && stride <= 32767) {
+      op(M::Mpyi, {I(stride), R(r0)});
+    } else {
+      load_imm32(stride, r1);
+      op(M::Mpyi, {R(r1), R(r0)});
+    }
+  }
+  uint32_t limit = uint32_t(uint64_t(ts_.span) * uint32_t(stride));
+  checked_access(limit, addr(base), parse(store ? "STI R2, *AR0" : "LDI *AR0, R2"));
+  if (store) return;
+  norm_t(t, r2);
+  op(M::Sti, {R(r2), Dv(in.a[2])});
+}
+
+void Gen::typed(const ldc::Instr& in) {
+  if (std::string why = c40_typed_refusal(in); !why.empty())
+    throw CompileError(in.loc.line, in.loc.col, "the C40 cannot compile " + op_spelling(in) + ": " + why);
+  if (op_info(in.op).push) return typed_compare(in);
+  const Ty t = in.ty;
+  std::string skip = skip_unless_power();
+  switch (in.op) {
+    case Op::TIDX: typed_index(in); break;
+    case Op::TLDX: case Op::TSTX: typed_indexed(in); break;
+    case Op::TDIV: case Op::TMOD:
+      if (typed::is_real(t)) goto arith;  // IEEE: no S0
+      typed_divmod(in);
+      break;
+    case Op::TMIN: case Op::TMAX: typed_minmax(in); break;
+    case Op::TSHL: case Op::TSHR: case Op::TROL: case Op::TROR: typed_shift(in); break;
+    case Op::TCONV: typed_conv(in); break;
+    case Op::TTRUNC:
+      load_t(in.a[0], in.src, r0);
+      real_to_int(t, true);
+      op(M::Sti, {R(r0), Dv(in.a[1])});
+      break;
+    case Op::TMOVE:
+      load_t(in.a[0], t, r0);
+      op(M::Sti, {R(r0), Dv(in.a[1])});
+      break;
+    case Op::TNOT: case Op::TNEG: case Op::TABS: {
+      load_t(in.a[0], t, r0);
+      if (in.op == Op::TNOT) {
+        if (t == Ty::BOOL) op(M::Xor, {I(1), R(r0)});
+        else op(M::Not, {R(r0), R(r0)});
+      } else if (typed::is_real(t)) {  // the IEEE sign bit flipped or cleared
+        if (in.op == Op::TNEG) {
+          op(M::Ldhi, {I(0x8000), R(r1)});
+          op(M::Xor, {R(r1), R(r0)});
+        } else {
+          op(M::Lsh, {I(1), R(r0)});
+          op(M::Lsh, {I(-1), R(r0)});
+        }
+      } else if (in.op == Op::TNEG) {
+        op(M::Negi, {R(r0), R(r0)});
+      } else if (typed::is_signed(t)) {
+        op(M::Absi, {R(r0), R(r0)});  // the most negative value stays
+      }
+      norm_t(t, r0);
+      op(M::Sti, {R(r0), Dv(in.a[1])});
+      break;
+    }
+    arith:
+    default: {  // ADD SUB MUL on integers, AND OR XOR; ADD SUB MUL DIV on REAL
+      load_t(in.a[0], t, r0);
+      load_t(in.a[1], t, r1);
+      if (typed::is_real(t)) {
+        const char* routine = in.op == Op::TADD ? kFaddLabel : in.op == Op::TSUB ? kFsubLabel
+                            : in.op == Op::TMUL ? kFmulLabel : kFdivLabel;
+        (in.op == Op::TMUL ? ts_.fmul : in.op == Op::TDIV ? ts_.fdiv : ts_.fadd) = true;
+        op(M::Call, {L(routine)});
+        op(M::Sti, {R(r0), Dv(in.a[2])});
+        break;
+      }
+      switch (in.op) {
+        case Op::TADD: op(M::Addi, {R(r1), R(r0)}); break;
+        case Op::TSUB: op(M::Subi, {R(r1), R(r0)}); break;
+        case Op::TMUL: mul32(); break;
+        case Op::TAND: op(M::And, {R(r1), R(r0)}); break;
+        case Op::TOR: op(M::Or, {R(r1), R(r0)}); break;
+        case Op::TXOR: op(M::Xor, {R(r1), R(r0)}); break;
+        default: throw std::logic_error(std::string("c40 backend: no code for ") + op_spelling(in));
+      }
+      norm_t(t, r0);
+      op(M::Sti, {R(r0), Dv(in.a[2])});
+    }
+  }
+  label(skip);
 }
 
 void Gen::flow(const ldc::Instr& in) {
@@ -1362,6 +1767,463 @@ void drop_reloads(std::vector<Item>& items, std::vector<uint32_t>& starts, Held&
   as::remove_items(items, drop, starts);
 }
 
+
+// ---- the routines of the typed instructions (emitted only when used)
+
+// UDINT division: R0 = a, R1 = b (unsigned, b != 0); returns R0 = a / b,
+// R1 = a % b.  One restoring step per bit: the remainder:dividend pair is
+// shifted left and b subtracted where it fits (unsigned: SUBI3's borrow).
+// The remainder never needs a 33rd bit: before step j it is at most the j - 1
+// dividend bits shifted in so far, below 2^31 before the last step.  Uses R2-R4, AR0.
+const char* const kDivuRoutine[] = {
+    "LDI 0, R2",
+    "LDI 31, AR0",
+    "divu_step: LSH3 -31, R0, R3",
+    "LSH 1, R0",
+    "LSH 1, R2",
+    "OR R3, R2",           // remainder:dividend <<= 1
+    "SUBI3 R1, R2, R3",    // remainder - b, C = borrow
+    "LDIHS R3, R2",        // no borrow: subtract (LDI leaves C alone)
+    "LDI 0, R4",
+    "LDIHS 1, R4",
+    "OR R4, R0",           // the quotient bit
+    "DBU AR0, divu_step",
+    "LDI R2, R1",
+    "RETSU",
+};
+
+// IEEE binary32 bits in R0 -> the magnitude of the integer, modulo 2^32:
+// R1 = 0 rounds to nearest (ties to even, typed::real_to_int), 1 truncates.
+// Exponent E: the mantissa m (hidden bit set) shifted by E - 150; NaN, the
+// infinities and everything at or above 2^55 give 0.  Uses R2-R6.
+const char* const kF2iRoutine[] = {
+    "LSH3 -23, R0, R2",
+    "AND 0FFh, R2",        // E
+    "LSH3 9, R0, R3",
+    "LSH -9, R3",
+    "LDHI 080h, R4",
+    "OR R4, R3",           // m
+    "SUBI 150, R2",        // the shift E - 150
+    "BLT f2i_right",
+    "LSH3 R2, R3, R0",
+    "CMPI 31, R2",
+    "LDIGT 0, R0",
+    "RETSU",
+    "f2i_right: CMPI -25, R2",
+    "LDILT -25, R2",       // below 0.5: m >> 25 = 0, and m < half: no rounding up
+    "LSH3 R2, R3, R0",     // q = m >> s
+    "CMPI 0, R1",
+    "RETSNE",              // truncated
+    "NEGI R2, R5",
+    "SUBI 1, R5",
+    "LDI 1, R4",
+    "LSH R5, R4",          // half = 1 << (s - 1)
+    "LSH3 1, R4, R6",
+    "SUBI 1, R6",
+    "AND R3, R6",          // rem = m & (2^s - 1)
+    "AND3 1, R0, R5",
+    "ADDI R5, R6",         // rem + odd > half: above half, or a tie with q odd
+    "ADDI3 1, R0, R5",
+    "CMPI R4, R6",
+    "LDIGT R5, R0",
+    "RETSU",
+};
+
+// An unsigned 32-bit magnitude in R0 -> the IEEE binary32 bits of its
+// nearest value (ties to even), positive.  The bit length from FLOAT's exponent
+// (through the stack, as __divi); at most 24 bits are exact, more are rounded
+// and the carry of a rounding up runs into the exponent field.  Uses R2-R6.
+const char* const kI2fRoutine[] = {
+    "CMPI 0, R0",
+    "RETSEQ",
+    "FLOAT R0, R2",
+    "PUSHF R2",
+    "POP R2",
+    "ASH -24, R2",         // e = bit length - 1
+    "LDI R0, R3",
+    "LDILT 31, R2",        // 2^31 and above: FLOAT saw a negative number
+    "LDI 23, R3",
+    "SUBI R2, R3",         // 23 - e
+    "BLT i2f_round",
+    "LSH R3, R0",          // exact
+    "BR i2f_pack",
+    "i2f_round: NEGI R3, R5",
+    "SUBI 1, R5",
+    "LDI 1, R4",
+    "LSH R5, R4",          // half = 1 << (s - 1), s = e - 23
+    "LSH3 1, R4, R6",
+    "SUBI 1, R6",
+    "AND R0, R6",          // rem
+    "LSH R3, R0",          // q = m >> s
+    "AND3 1, R0, R5",
+    "ADDI R5, R6",
+    "ADDI3 1, R0, R5",
+    "CMPI R4, R6",
+    "LDIGT R5, R0",
+    "i2f_pack: ADDI 126, R2",
+    "LSH 23, R2",
+    "ADDI R2, R0",         // (e + 126) << 23 + the mantissa with its hidden bit
+    "RETSU",
+};
+
+// ---- REAL arithmetic as IEEE binary32 in integer code (ADD SUB MUL DIV .REAL):
+// the C40's own floating point truncates and has no NaN, infinity or
+// denormal, so these compute what x86-64's addss / subss / mulss / divss do,
+// bit for bit: round to nearest, ties to even; gradual underflow; a NaN
+// operand gives itself quieted (the first one if both are), an invalid
+// operation the default NaN 0xFFC00000.  R0 = a, R1 = b (IEEE bits); the
+// result in R0.  Use R2-R7, AR0 and two stack words.
+
+// R0 = a, R1 = b: a NaN (|x| > 0x7F800000) returns itself quieted
+#define LDC_C40_NAN_CHECK(p)                                                         \
+    p "_nan: LSH3 1, R0, R3", "LDHI 0FF00h, R4", "CMPI R4, R3", "BHI fnan_a",      \
+    "LSH3 1, R1, R3", "CMPI R4, R3", "BHI fnan_b"
+
+// M in R0 (0 < M < 2^31), the exponent e' in R1, the sign in R2 (0 or
+// 0x80000000): the value M * 2^(e' - 156), rounded.  M is first shifted so
+// that its leading 1 is bit 29 (bits 5-0 are then below the 24-bit mantissa;
+// what a right shift drops is kept as a sticky bit 0), then right again while
+// the exponent is below 1 (the denormals); the carry of rounding up runs into
+// the exponent field, up to the infinity.
+const char* const kFpackRoutine[] = {
+    "FLOAT R0, R3",
+    "PUSHF R3",
+    "POP R3",
+    "ASH -24, R3",         // the leading 1's position
+    "SUBI 29, R3",
+    "ADDI R3, R1",
+    "CMPI 0, R3",
+    "BLE fpack_left",
+    "LDI 1, R4",
+    "LSH R3, R4",
+    "SUBI 1, R4",
+    "AND R0, R4",          // the bits shifted out
+    "NEGI R3, R5",
+    "LSH R5, R0",
+    "CMPI 0, R4",
+    "LDINE 1, R4",
+    "OR R4, R0",           // sticky
+    "BR fpack_sub",
+    "fpack_left: NEGI R3, R3",
+    "LSH R3, R0",
+    "fpack_sub: CMPI 1, R1",
+    "BGE fpack_round",
+    "LDI 1, R3",
+    "SUBI R1, R3",         // 1 - e' places to the denormal
+    "LDI 1, R1",
+    "CMPI 31, R3",
+    "LDIGT 31, R3",
+    "LDI 1, R4",
+    "LSH R3, R4",
+    "SUBI 1, R4",
+    "AND R0, R4",
+    "NEGI R3, R5",
+    "LSH R5, R0",
+    "CMPI 0, R4",
+    "LDINE 1, R4",
+    "OR R4, R0",
+    "fpack_round: AND3 63, R0, R4",
+    "LSH -6, R0",
+    "AND3 1, R0, R5",
+    "ADDI R5, R4",         // above half, or half with an odd mantissa
+    "ADDI3 1, R0, R5",
+    "CMPI 32, R4",
+    "LDIGT R5, R0",
+    "CMPI 255, R1",
+    "BGE finf",
+    "SUBI 1, R1",
+    "LSH 23, R1",
+    "ADDI R1, R0",         // the hidden bit carries into the exponent (254 and a carry: the infinity)
+    "OR R2, R0",
+    "RETSU",
+    // the shared endings of __fadd, __fmul, __fdiv
+    "finf: LDHI 07F80h, R0",
+    "OR R2, R0",
+    "RETSU",
+    "fzero: LDI R2, R0",
+    "RETSU",
+    "fdefault_nan: LDHI 0FFC0h, R0",
+    "RETSU",
+    "fnan_a: LDHI 040h, R3",
+    "OR R3, R0",
+    "RETSU",
+    "fnan_b: LDHI 040h, R3",
+    "OR3 R3, R1, R0",
+    "RETSU",
+};
+
+// R0 = a, R1 = b: the mantissas with their hidden bit (none, and exponent 1,
+// for a denormal) in R0 and R1, the exponents in R5 and R6
+#define LDC_C40_UNPACK                                                                              \
+    "LDHI 080h, R3", "CMPI 0, R5", "LDIEQ 0, R3", "LDIEQ 1, R5", "LSH 9, R0", "LSH -9, R0", "OR R3, R0", \
+    "LDHI 080h, R3", "CMPI 0, R6", "LDIEQ 0, R3", "LDIEQ 1, R6", "LSH 9, R1", "LSH -9, R1", "OR R3, R1"
+
+// __fsub: b's sign flipped (not a NaN's: it is returned as it is), then __fadd
+const char* const kFsubRoutine[] = {
+    "LSH3 1, R1, R3",
+    "LDHI 0FF00h, R4",
+    "CMPI R4, R3",
+    "BHI __fadd",
+    "LDHI 08000h, R3",
+    "XOR R3, R1",
+};
+
+// __fadd: the larger magnitude first (its sign is the result's), the other
+// aligned to it with a sticky bit, both with 6 bits below their mantissa
+// (exact for the shifts of 0 and 1 after which a subtraction cancels)
+const char* const kFaddRoutine[] = {
+    LDC_C40_NAN_CHECK("fadd"),
+    "LSH3 -23, R0, R5",
+    "AND 0FFh, R5",
+    "LSH3 -23, R1, R6",
+    "AND 0FFh, R6",
+    "CMPI 255, R5",
+    "BEQ fadd_ainf",
+    "CMPI 255, R6",
+    "BEQ fadd_retb",
+    "LSH3 1, R0, R3",
+    "BEQ fadd_azero",
+    "LSH3 1, R1, R4",
+    "BEQ fadd_reta",
+    "CMPI R4, R3",
+    "BHS fadd_ordered",
+    "LDI R0, R3",          // |a| < |b|: exchange
+    "LDI R1, R0",
+    "LDI R3, R1",
+    "LDI R5, R3",
+    "LDI R6, R5",
+    "LDI R3, R6",
+    "fadd_ordered: LDHI 08000h, R2",
+    "AND R0, R2",
+    "XOR3 R1, R0, R7",     // negative: the signs differ
+    LDC_C40_UNPACK,
+    "LSH 6, R0",
+    "LSH 6, R1",
+    "SUBI3 R6, R5, R3",    // the exponent difference
+    "CMPI 31, R3",
+    "LDIGT 31, R3",
+    "LDI 1, R4",
+    "LSH R3, R4",
+    "SUBI 1, R4",
+    "AND R1, R4",
+    "NEGI R3, R6",
+    "LSH R6, R1",
+    "CMPI 0, R4",
+    "LDINE 1, R4",
+    "OR R4, R1",
+    "CMPI 0, R7",
+    "BLT fadd_sub",
+    "ADDI R1, R0",
+    "BR fadd_pack",
+    "fadd_sub: SUBI R1, R0",
+    "BEQ fadd_zero",       // x - x = +0
+    "fadd_pack: LDI R5, R1",
+    "BR __fpack",
+    "fadd_zero: LDI 0, R0",
+    "RETSU",
+    "fadd_ainf: CMPI 255, R6",
+    "BNE fadd_reta",
+    "XOR3 R1, R0, R3",
+    "BGE fadd_reta",
+    "BR fdefault_nan",     // inf - inf
+    "fadd_azero: LSH3 1, R1, R4",
+    "BNE fadd_retb",
+    "AND R1, R0",          // -0 only if both are -0
+    "RETSU",
+    "fadd_retb: LDI R1, R0",
+    "fadd_reta: RETSU",
+};
+
+// __fmul: the 48-bit product of the mantissas from 12-bit halves (MPYI
+// multiplies 24 bits) in R6:R4, shifted so its leading 1 is bit 29 or below
+// (sticky), the exponent ea + eb - 144 + that shift
+const char* const kFmulRoutine[] = {
+    LDC_C40_NAN_CHECK("fmul"),
+    "XOR3 R1, R0, R2",
+    "LDHI 08000h, R3",
+    "AND R3, R2",          // the sign
+    "LSH3 -23, R0, R5",
+    "AND 0FFh, R5",
+    "LSH3 -23, R1, R6",
+    "AND 0FFh, R6",
+    "LSH3 1, R0, R3",
+    "LSH3 1, R1, R4",
+    "CMPI 255, R5",
+    "BEQ fmul_ainf",
+    "CMPI 255, R6",
+    "BEQ fmul_binf",
+    "CMPI 0, R3",
+    "BEQ fzero",
+    "CMPI 0, R4",
+    "BEQ fzero",
+    LDC_C40_UNPACK,
+    "ADDI R6, R5",         // ea + eb
+    "LSH3 -12, R0, R7",    // ah
+    "AND 0FFFh, R0",       // al
+    "LSH3 -12, R1, R3",    // bh
+    "AND 0FFFh, R1",       // bl
+    "MPYI3 R1, R0, R4",    // al bl
+    "MPYI3 R3, R7, R6",    // ah bh
+    "MPYI R1, R7",         // ah bl
+    "MPYI R0, R3",         // al bh
+    "ADDI R3, R7",         // the middle, < 2^25
+    "LSH3 12, R7, R3",
+    "ADDI R3, R4",         // C: carry
+    "LDI 0, R0",
+    "LDILO 1, R0",
+    "LSH3 24, R6, R3",
+    "ADDI R3, R4",
+    "LDI 0, R1",
+    "LDILO 1, R1",
+    "ADDI R1, R0",
+    "LSH3 -20, R7, R3",
+    "LSH -8, R6",
+    "ADDI R3, R6",
+    "ADDI R0, R6",         // the product: R6 high, R4 low
+    "CMPI 0, R6",
+    "BEQ fmul_lo",
+    "FLOAT R6, R3",
+    "PUSHF R3",
+    "POP R3",
+    "ASH -24, R3",
+    "ADDI 32, R3",
+    "BR fmul_k",
+    "fmul_lo: FLOAT R4, R3",
+    "PUSHF R3",
+    "POP R3",
+    "ASH -24, R3",
+    "LDI R4, R0",
+    "LDILT 31, R3",
+    "fmul_k: SUBI 29, R3", // k: the leading 1 to bit 29
+    "ADDI R3, R5",
+    "CMPI 0, R3",
+    "BGT fmul_right",
+    "NEGI R3, R3",
+    "LSH3 R3, R4, R0",
+    "BR fmul_pack",
+    "fmul_right: LDI 1, R0",
+    "LSH R3, R0",
+    "SUBI 1, R0",
+    "AND R4, R0",          // the bits shifted out
+    "NEGI R3, R1",
+    "LSH R1, R4",
+    "LDI 32, R1",
+    "SUBI R3, R1",
+    "LSH R1, R6",
+    "OR R6, R4",
+    "CMPI 0, R0",
+    "LDINE 1, R0",
+    "OR R4, R0",
+    "fmul_pack: SUBI 144, R5",
+    "LDI R5, R1",
+    "BR __fpack",
+    "fmul_ainf: CMPI 0, R4",
+    "BEQ fdefault_nan",    // inf * 0
+    "BR finf",
+    "fmul_binf: CMPI 0, R3",
+    "BEQ fdefault_nan",
+    "BR finf",
+};
+
+// __fdiv: denormal mantissas normalized, then 31 quotient bits by restoring
+// division (the quotient in [2^29, 2^31)), the remainder as the sticky bit,
+// the exponent ea - eb + 126
+const char* const kFdivRoutine[] = {
+    LDC_C40_NAN_CHECK("fdiv"),
+    "XOR3 R1, R0, R2",
+    "LDHI 08000h, R3",
+    "AND R3, R2",
+    "LSH3 -23, R0, R5",
+    "AND 0FFh, R5",
+    "LSH3 -23, R1, R6",
+    "AND 0FFh, R6",
+    "LSH3 1, R0, R3",
+    "LSH3 1, R1, R4",
+    "CMPI 255, R5",
+    "BEQ fdiv_ainf",
+    "CMPI 255, R6",
+    "BEQ fzero",           // finite / inf
+    "CMPI 0, R4",
+    "BEQ fdiv_by_zero",
+    "CMPI 0, R3",
+    "BEQ fzero",           // 0 / finite
+    LDC_C40_UNPACK,
+    "FLOAT R0, R3",
+    "PUSHF R3",
+    "POP R3",
+    "ASH -24, R3",
+    "LDI 23, R4",
+    "SUBI R3, R4",
+    "LSH R4, R0",
+    "SUBI R4, R5",         // a normalized
+    "FLOAT R1, R3",
+    "PUSHF R3",
+    "POP R3",
+    "ASH -24, R3",
+    "LDI 23, R4",
+    "SUBI R3, R4",
+    "LSH R4, R1",
+    "SUBI R4, R6",         // b normalized
+    "SUBI R6, R5",
+    "ADDI 126, R5",
+    "LDI 0, R3",
+    "LDI 30, AR0",
+    "fdiv_step: LSH 1, R3",
+    "SUBI3 R1, R0, R4",
+    "LDIHS R4, R0",
+    "LDI 0, R4",
+    "LDIHS 1, R4",
+    "OR R4, R3",
+    "LSH 1, R0",
+    "DBU AR0, fdiv_step",
+    "CMPI 0, R0",
+    "LDINE 1, R0",
+    "OR R3, R0",
+    "LDI R5, R1",
+    "BR __fpack",
+    "fdiv_ainf: CMPI 255, R6",
+    "BEQ fdefault_nan",    // inf / inf
+    "BR finf",
+    "fdiv_by_zero: CMPI 0, R3",
+    "BEQ fdefault_nan",    // 0 / 0
+    "BR finf",
+};
+#undef LDC_C40_NAN_CHECK
+#undef LDC_C40_UNPACK
+
+void add_routine(as::Block<Instruction>& b, const char* label, const char* note, std::span<const char* const> lines) {
+  b.items.push_back(Item::note(note));
+  b.items.push_back(Item::label_def(label, true));
+  for (const char* t : lines) {
+    Line l = parse_line(t);
+    if (!l.label.empty()) b.items.push_back(Item::label_def(l.label));
+    b.items.push_back(Item::instr(*l.inst));
+  }
+}
+
+bool has_typed(const Program& p, Op only = Op(kOpCount)) {
+  for (const Rung& r : p.rungs)
+    for (const ldc::Instr& in : r.code)
+      if (op_info(in.op).klass == OpClass::Typed && (only == Op(kOpCount) || in.op == only)) return true;
+  return false;
+}
+
+}  // namespace
+
+std::string c40_typed_refusal(const Instr& in) {
+  auto wide = [](Ty t) { return t != Ty::None && ty_info(t).bits > 32; };
+  if (wide(in.ty) || wide(in.src))
+    return "64-bit types (LINT ULINT LWORD LREAL TIME LTIME DATE TOD DT) do not fit its 32-bit word";
+  if (!typed::is_real(in.ty)) return "";
+  switch (in.op) {
+    case Op::TEXPT: case Op::TSQRT: case Op::TLN: case Op::TLOG: case Op::TEXP: case Op::TSIN: case Op::TCOS:
+    case Op::TTAN: case Op::TASIN: case Op::TACOS: case Op::TATAN:
+      return "the REAL functions are C's double functions rounded to REAL, which the C40 cannot reproduce bit for bit";
+    default: return "";
+  }
+}
+
+namespace {
 }  // namespace
 
 C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
@@ -1371,6 +2233,8 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
   prog.globals.push_back(kExitLabel);
   prog.globals.push_back(kDivLabel);
   prog.globals.push_back(kDivfLabel);
+  for (const char* l : {kDivuLabel, kF2iLabel, kI2fLabel, kFpackLabel, kFaddLabel, kFsubLabel, kFmulLabel, kFdivLabel})
+    prog.globals.push_back(l);
   for (const Rung& r : p.rungs)
     for (const auto& l : r.labels) prog.globals.push_back(label_name(l));
   for (const auto& l : p.end_labels) prog.globals.push_back(label_name(l));
@@ -1393,7 +2257,12 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
   int next_label = 0;
   Held held;
   std::optional<ScanFacts> facts;  // -O2: what the scan cannot observe
-  if (opt_level >= 2) facts = scan_facts(p, layout, kNumSlots);
+  // (scan_facts does not know the typed instructions' reads and writes yet:
+  // a program with one gets none of its facts)
+  const bool typed_prog = has_typed(p);
+  if (opt_level >= 2 && !typed_prog) facts = scan_facts(p, layout, kNumSlots);
+  TypedState ts;
+  if (has_typed(p, Op::TIDX)) ts.il_offset = encode_il(p).instr_offset;
   for (const Rung& r : p.rungs) {
     as::Block<Instruction> b;
     b.source_line = r.line;
@@ -1401,7 +2270,7 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
     bool slots = slots_ok && stack_fits_slots(r.code, kNumSlots);
     b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title) +
                                  (slots ? " (stack in registers)" : "")));
-    Gen g(w, b.items, next_label, opt_level, slots);
+    Gen g(w, b.items, next_label, opt_level, slots, ts);
     g.plan_runs(r.code);
     std::vector<uint32_t> starts;
     uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into R10
@@ -1442,6 +2311,17 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level) {
   epi.items.push_back(Item::note("__divf: R0 = R0 / R1 (C40 floats)"));
   epi.items.push_back(Item::label_def(kDivfLabel, true));
   for (const char* t : kDivfRoutine) epi.items.push_back(Item::instr(parse(t)));
+  if (ts.divu) add_routine(epi, kDivuLabel, "__divu: R0 = R0 / R1, R1 = R0 % R1 (UDINT)", kDivuRoutine);
+  if (ts.f2i) add_routine(epi, kF2iLabel, "__f2i: R0 = |integer of the IEEE bits R0| mod 2^32 (R1 = 1: truncated)", kF2iRoutine);
+  if (ts.i2f) add_routine(epi, kI2fLabel, "__i2f: R0 = IEEE bits of the unsigned R0, to nearest", kI2fRoutine);
+  if (ts.fadd || ts.fmul || ts.fdiv)
+    add_routine(epi, kFpackLabel, "__fpack: R0 = IEEE bits of R0 * 2^(R1 - 156), sign R2, to nearest", kFpackRoutine);
+  if (ts.fadd) {
+    add_routine(epi, kFsubLabel, "__fsub: R0 = R0 - R1 (IEEE binary32 bits)", kFsubRoutine);
+    add_routine(epi, kFaddLabel, "__fadd: R0 = R0 + R1 (IEEE binary32 bits)", kFaddRoutine);
+  }
+  if (ts.fmul) add_routine(epi, kFmulLabel, "__fmul: R0 = R0 * R1 (IEEE binary32 bits)", kFmulRoutine);
+  if (ts.fdiv) add_routine(epi, kFdivLabel, "__fdiv: R0 = R0 / R1 (IEEE binary32 bits)", kFdivRoutine);
   prog.blocks.push_back(std::move(epi));
   return out;
 }

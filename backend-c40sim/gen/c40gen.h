@@ -48,6 +48,18 @@ C40Code generate_c40(const Program& p, const Layout& layout, int opt_level = 0);
 inline constexpr const char* kExitLabel = "scan_exit";
 inline constexpr const char* kDivLabel = "__divi";
 inline constexpr const char* kDivfLabel = "__divf";
+// the typed instructions' routines, in the last block when used (docs/c40.md, "Typed instructions")
+inline constexpr const char* kDivuLabel = "__divu";  // UDINT division
+inline constexpr const char* kF2iLabel = "__f2i";    // IEEE binary32 -> integer, to nearest or truncated
+inline constexpr const char* kI2fLabel = "__i2f";    // unsigned integer -> IEEE binary32, to nearest
+inline constexpr const char* kFpackLabel = "__fpack";  // IEEE binary32 arithmetic in integer code:
+inline constexpr const char* kFaddLabel = "__fadd";    // the rounding and packing; + - * /
+inline constexpr const char* kFsubLabel = "__fsub";
+inline constexpr const char* kFmulLabel = "__fmul";
+inline constexpr const char* kFdivLabel = "__fdiv";
+// Why the C40 code generator refuses a typed instruction, "" if it compiles
+// it (generate_c40 throws a CompileError "the C40 cannot compile ADD.LINT: ...")
+std::string c40_typed_refusal(const Instr& in);
 std::string label_name(const std::string& il_label);  // user label -> assembly label
 
 // ---------------------------------------------------------------- REAL on the C40

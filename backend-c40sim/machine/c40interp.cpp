@@ -36,9 +36,16 @@ const InterpProgram& interp_program() {
     p.text = assemble_text(p.source, kCodeBase, "interp.c40s", vars);
     p.words = p.text.words;
     p.entry = p.text.labels.at("interp");
-    // the dispatch table, checked against ops.def
+    // the dispatch table, checked against ops.def: one routine per untyped
+    // mnemonic (word_il refuses the typed ones, class Typed, at load)
     uint32_t table = p.text.labels.at("dispatch");
     for (int op = 0; op < kOpCount; op++) {
+      if (op_info(Op(op)).klass == OpClass::Typed) {
+        if (p.text.labels.count(std::string("op_") + op_info(Op(op)).name))
+          throw std::logic_error(std::string("interp.c40s: a routine for the typed ") + op_info(Op(op)).name +
+                                 " that word_il refuses");
+        continue;
+      }
       std::string name = std::string("op_") + op_info(Op(op)).name;
       auto it = p.text.labels.find(name);
       if (it == p.text.labels.end()) throw std::logic_error("interp.c40s: no routine " + name);
@@ -50,6 +57,21 @@ const InterpProgram& interp_program() {
   return prog;
 }
 
+// The C40-hosted interpreter has no routines for the typed instructions
+// (class Typed, issue 25): a program with one is refused by name when loaded
+// (native C40 code runs the typed instructions that fit a 32-bit word).
+static void refuse_typed(std::span<const uint8_t> il, uint32_t off) {
+  const OpInfo& oi = op_info(Op(il[off]));
+  if (oi.klass != OpClass::Typed) return;
+  Instr in;
+  in.op = Op(il[off]);
+  in.ty = Ty(il[off + 1]);
+  if (oi.typed == 2) in.src = Ty(il[off + 2]);
+  throw std::runtime_error("the C40-hosted interpreter (--engine=c40interp) cannot run " + op_spelling(in) +
+                           " (IL offset " + std::to_string(off) +
+                           "): it has no typed instructions; use --engine=c40sim (native C40 code) or another engine");
+}
+
 std::vector<uint32_t> word_il(std::span<const uint8_t> il, const Layout&, std::vector<uint32_t>* starts) {
   auto rd32 = [&](uint32_t p) {
     return uint32_t(il[p]) | uint32_t(il[p + 1]) << 8 | uint32_t(il[p + 2]) << 16 | uint32_t(il[p + 3]) << 24;
@@ -58,6 +80,7 @@ std::vector<uint32_t> word_il(std::span<const uint8_t> il, const Layout&, std::v
   std::map<uint32_t, uint32_t> word_at;
   uint32_t off = 0, words = 0;
   while (off < il.size()) {
+    refuse_typed(il, off);
     word_at[off] = words;
     if (starts) starts->push_back(words);
     const char* sig = op_info(Op(il[off])).operands;

@@ -9,6 +9,7 @@ void bytes_to_words(const Layout& l, const C40Layout& w, const uint8_t* bytes, u
   std::memset(words + w.offset[int(Area::Sys)], 0, kSysWords * 4);
   std::memcpy(words + kSysDtWord, bytes + kSysDt, 4);
   std::memcpy(words + kSysScanWord, bytes + kSysScan, 4);
+  std::memcpy(words + kSysFaultWord, bytes + kSysFault, 16);  // kind, at, the index's two words
   for (int i = 1; i < kAreaCount; i++) {
     Area a = Area(i);
     const uint8_t* src = bytes + l.offset[i];
@@ -24,6 +25,7 @@ void bytes_to_words(const Layout& l, const C40Layout& w, const uint8_t* bytes, u
 void words_to_bytes(const Layout& l, const C40Layout& w, const uint32_t* words, uint8_t* bytes) {
   std::memcpy(bytes + kSysDt, words + kSysDtWord, 4);
   std::memcpy(bytes + kSysScan, words + kSysScanWord, 4);
+  std::memcpy(bytes + kSysFault, words + kSysFaultWord, 16);
   for (int i = 1; i < kAreaCount; i++) {
     Area a = Area(i);
     const uint32_t* src = words + w.offset[i];

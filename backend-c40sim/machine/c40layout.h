@@ -25,7 +25,7 @@ namespace ldc::c40gen {
 using namespace c40map;
 
 // The byte image of docs/il.md <-> the C40 word image (words.size() ==
-// layout.words).  Sys: dt and the scan counter only (the x86 call table is
+// layout.words).  Sys: dt, the scan counter and the fault record (the x86 call table is
 // not part of the C40 image).  Bits: a byte b becomes the word b != 0; a bit
 // word other than 0/1 comes back as the byte 0xEE, so a differential test
 // sees it.  Words: the 4 little-endian bytes.

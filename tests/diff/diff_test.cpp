@@ -143,7 +143,7 @@ TEST(Generator, EveryProgramParsesWithTheDrawnElements) {
   }
 }
 
-// Across a few default programs every mnemonic of ops.def shows up.
+// Across a few default programs every untyped mnemonic of ops.def shows up.
 TEST(Generator, DrawsEveryMnemonic) {
   std::set<Op> seen;
   for (uint64_t seed = 1; seed <= 40; seed++) {
@@ -151,7 +151,10 @@ TEST(Generator, DrawsEveryMnemonic) {
     for (const Rung& r : p.rungs)
       for (const Instr& in : r.code) seen.insert(in.op);
   }
-  for (int i = 0; i < kOpCount; i++) EXPECT_TRUE(seen.count(Op(i))) << op_info(Op(i)).name << " never drawn";
+  for (int i = 0; i < kOpCount; i++) {
+    if (op_info(Op(i)).klass == OpClass::Typed) continue;  // no grid spelling: typed_diff_test.cpp draws them
+    EXPECT_TRUE(seen.count(Op(i))) << op_info(Op(i)).name << " never drawn";
+  }
 }
 
 // Every one-edit reduction the minimizer may try is a valid grid with the

@@ -15,9 +15,13 @@
 #include <fstream>
 #include <set>
 
+#include "backend-c/backend_c.h"
+#include "backend-c/c_shared.h"
 #include "driver/driver.h"
+#include "driver/targets.h"
 #include "driver/x86_target.h"
 #include "frontend/frontend.h"
+#include "runtime/fastinterp.h"
 
 namespace ldc::diff {
 
@@ -40,6 +44,47 @@ std::unique_ptr<Engine> make_native_o1(const Program& p) {
 std::unique_ptr<Engine> make_native_o2(const Program& p) {
   NativeBuild nb = build_x86(p, p.source, as::Mode::Blockwise, 2);
   return make_native_engine(map_checked_code(nb.asm_result.code, 0, p.layout()));
+}
+
+std::unique_ptr<Engine> make_fast_interp(const Program& p) {
+  BinaryIl bin = encode_il(p);
+  if (std::string why = validate_il(bin.code, p.layout()); !why.empty()) throw std::runtime_error("IL " + why);
+  return make_fast_interp_engine(bin.code, p.layout());
+}
+
+std::unique_ptr<Engine> make_c_route(const Program& p) {
+  std::string dir = (std::filesystem::temp_directory_path() / "ldc_diff_c_XXXXXX").string();
+  if (!mkdtemp(dir.data())) throw std::runtime_error("mkdtemp: " + std::string(std::strerror(errno)));
+  struct Rm {
+    std::string d;
+    ~Rm() { std::error_code ec; std::filesystem::remove_all(d, ec); }  // the loaded object stays mapped
+  } rm{dir};
+  return make_shared_object_engine(build_c_shared_object(p, dir), kCScanSymbol);
+}
+
+namespace {
+std::unique_ptr<Engine> c40_engine(const Program& p, const char* name, bool code) {
+  FoundEngine fe = find_engine(name);
+  if (!fe.engine) throw std::runtime_error(std::string("no engine ") + name);
+  Image img;
+  if (code) {
+    img = target_image(*fe.target, p, p.source, 0);
+  } else {
+    img.layout = p.layout();
+    img.il = encode_il(p).code;
+    img.aliases = p.aliases;
+    if (std::string why = validate_il(img.il, img.layout); !why.empty()) throw std::runtime_error("IL " + why);
+  }
+  return fe.engine->make(img);
+}
+}  // namespace
+
+std::unique_ptr<Engine> make_c40sim(const Program& p) { return c40_engine(p, "c40sim", true); }
+std::unique_ptr<Engine> make_c40interp(const Program& p) { return c40_engine(p, "c40interp", false); }
+
+Program compile_case(const std::string& text) {
+  if (looks_like_ldc_il(text)) return parse_il_text(text, "prog.il");
+  return lower_to_il(parse_ld(text, "prog.ld"));
 }
 
 // ------------------------------------------------------------------ naming bytes
@@ -134,11 +179,11 @@ Outcome compare_run(const std::string& ld, const std::string& csv, const EngineF
   Program prog;
   Trace trace;
   try {
-    prog = lower_to_il(parse_ld(ld, "prog.ld"));
+    prog = compile_case(ld);
     trace = read_trace(csv, "trace.csv", prog.aliases);
   } catch (CompileError& e) {
     o.kind = Outcome::Kind::FrontEndError;
-    o.message = format_error("prog.ld", ld, e.line, e.col, e.what());
+    o.message = format_error(looks_like_ldc_il(ld) ? "prog.il" : "prog.ld", ld, e.line, e.col, e.what());
     return o;
   } catch (std::exception& e) {
     o.kind = Outcome::Kind::FrontEndError;
@@ -418,6 +463,25 @@ void drop_unused_labels(GenProgram& p) {
   p.items = std::move(kept);
 }
 
+// An IL rung (a typed program's) without one of its instruction lines, for
+// each line; one that unbalances the stack is refused and so never kept.
+std::vector<std::string> il_line_reductions(const std::string& rung) {
+  std::vector<std::string> lines, out;
+  for (size_t at = 0; at < rung.size();) {
+    size_t nl = rung.find('\n', at);
+    nl = nl == std::string::npos ? rung.size() : nl + 1;
+    lines.push_back(rung.substr(at, nl - at));
+    at = nl;
+  }
+  for (size_t i = 1; i < lines.size(); i++) {
+    std::string t;
+    for (size_t j = 0; j < lines.size(); j++)
+      if (j != i) t += lines[j];
+    out.push_back(t);
+  }
+  return out;
+}
+
 }  // namespace
 
 Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& first, const Runner& run) {
@@ -452,9 +516,28 @@ Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& 
         }
       }
     }
-    // Inside each rung: leave out a group, a branch or a condition while it fails.
+    // Inside each rung: leave out a group, a branch or a condition while it
+    // fails (an IL rung: an instruction).
     for (size_t i = 0; i < r.prog.items.size(); i++) {
       if (r.prog.items[i].kind != GenItem::Kind::Rung) continue;
+      if (r.prog.il) {
+        for (bool again = true; again;) {
+          again = false;
+          for (std::string& t : il_line_reductions(r.prog.items[i].text)) {
+            GenProgram p = r.prog;
+            p.items[i].text = std::move(t);
+            Outcome o;
+            if (attempt(p, trace, o)) {
+              r.prog = std::move(p);
+              r.outcome = o;
+              cut(trace, o);
+              again = changed = true;
+              break;
+            }
+          }
+        }
+        continue;
+      }
       for (bool again = true; again;) {
         again = false;
         for (GenNode& c : rung_reductions(r.prog.items[i].root)) {
@@ -503,8 +586,8 @@ Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& 
     }
   }
   if (r.outcome.kind == Outcome::Kind::Differ) r.outcome.scans = r.outcome.scan;  // what the cut trace runs
-  r.prog.header = "# minimized reproducer (" + std::to_string(r.prog.rungs()) + " of " + std::to_string(prog.rungs()) +
-                  " rungs)\n" + prog.header;
+  r.prog.header = std::string(prog.il ? "; " : "# ") + "minimized reproducer (" + std::to_string(r.prog.rungs()) +
+                  " of " + std::to_string(prog.rungs()) + " rungs)\n" + prog.header;
   r.csv = trace.text();
   return r;
 }
@@ -525,7 +608,8 @@ std::string ldgen_command(uint64_t seed, const GenOptions& o, int scans) {
 #else
   std::string ldgen = "build/bench/ldgen";
 #endif
-  return ldgen + " " + ldgen_args(seed, o) + " -o prog.ld --trace trace.csv --scans " + std::to_string(scans);
+  return ldgen + " " + ldgen_args(seed, o) + " -o prog." + (o.classes & kGenTyped ? "il" : "ld") +
+         " --trace trace.csv --scans " + std::to_string(scans);
 }
 
 namespace {
@@ -534,7 +618,7 @@ namespace {
 std::vector<std::string> program_devices(const std::string& ld) {
   std::vector<std::string> out;
   try {
-    Program p = lower_to_il(parse_ld(ld, "prog.ld"));
+    Program p = compile_case(ld);
     std::set<std::string> seen;
     for (const Rung& r : p.rungs)
       for (const Instr& in : r.code)
@@ -566,10 +650,10 @@ bool write_text(const std::string& path, const std::string& text) {
 
 std::string reproducer(const std::string& title, const std::string& origin, const GenProgram& original,
                        const Reduced& r, const std::string& dir, const std::string& stem, const char* ref_name,
-                       const char* test_name) {
+                       const char* test_name, const std::string& test_engine) {
   const Outcome& o = r.outcome;
   std::string ld = render(r.prog);
-  std::string ld_path = dir + "/" + stem + ".ld", csv_path = dir + "/" + stem + ".csv";
+  std::string ld_path = dir + "/" + stem + (r.prog.il ? ".il" : ".ld"), csv_path = dir + "/" + stem + ".csv";
   bool wrote = write_text(ld_path, ld) && write_text(csv_path, r.csv);
   std::string s = "==== " + title + "\n";
   s += "original: " + origin + "\n";
@@ -603,7 +687,7 @@ std::string reproducer(const std::string& title, const std::string& origin, cons
 #else
   std::string ldrun = "build/driver/ldrun";
 #endif
-  for (const char* e : {"interp", "native"})
+  for (const std::string& e : {std::string("interp"), test_engine})
     s += ldrun + " " + ld_path + " --engine=" + e + " --trace " + csv_path + (w.empty() ? "" : " --watch " + w) + "\n";
   return s;
 }

@@ -21,6 +21,14 @@ std::unique_ptr<Engine> make_interp(const Program& p);  // encode_il + make_inte
 std::unique_ptr<Engine> make_native(const Program& p);     // build_x86 -O0 + make_native_engine
 std::unique_ptr<Engine> make_native_o1(const Program& p);  // the same at -O1
 std::unique_ptr<Engine> make_native_o2(const Program& p);  // the same at -O2
+std::unique_ptr<Engine> make_fast_interp(const Program& p); // the fast interpreter (runtime/fastinterp.h)
+std::unique_ptr<Engine> make_c_route(const Program& p);     // generate_c, the system cc -O2, dlopen
+std::unique_ptr<Engine> make_c40sim(const Program& p);      // C40 code on the simulated board
+std::unique_ptr<Engine> make_c40interp(const Program& p);   // the IL on the C40-hosted interpreter
+
+// The program of a case's text: ldc IL text (a typed program, looks_like_ldc_il)
+// or a .ld grid (parse_ld -> lower_to_il).  Throws CompileError.
+Program compile_case(const std::string& text);
 
 // A byte of the memory image, named for people.
 struct Place {
@@ -51,7 +59,7 @@ struct Outcome {
   bool failed() const { return kind == Kind::Differ || kind == Kind::TestError || kind == Kind::Crash; }
 };
 
-// Compiles `ld` (parse_ld -> lower_to_il), reads `csv` and runs one scan per
+// Compiles `ld` (compile_case: a grid, or IL text), reads `csv` and runs one scan per
 // trace row on both engines, each on its own Memory, writing the row, dt and S1
 // as ldrun's run_trace does; compares the images byte for byte after every scan.
 Outcome compare_run(const std::string& ld, const std::string& csv, const EngineFactory& ref,
@@ -85,7 +93,8 @@ std::string output_dir();
 // `origin` says how to make the original case again (an ldgen command line).
 std::string reproducer(const std::string& title, const std::string& origin, const GenProgram& original,
                        const Reduced& r, const std::string& dir, const std::string& stem,
-                       const char* ref_name = "interp", const char* test_name = "native");
+                       const char* ref_name = "interp", const char* test_name = "native",
+                       const std::string& test_engine = "native");
 
 // `ldgen ...` arguments that make this case again.
 std::string ldgen_command(uint64_t seed, const GenOptions& opt, int scans);

@@ -6,16 +6,19 @@
 # at those levels), c40sim a C40 image on the simulator, c40interp the IL on the
 # C40-hosted interpreter; "source" runs the file on the interpreter, "c" through
 # the C route (ldc --emit=c and the system cc).
+# LDC_TRACE_FLAGS: more ldrun options (--fault=continue for a trace that runs
+# on past an index fault).
 set -eu
 bindir=$1 src=$2 base=$3 engine=$4
+flags_run=${LDC_TRACE_FLAGS:-}
 expected=${5:-$base.expected}
 watch=$(head -n 1 "$expected" | cut -d, -f2-)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 if [ "$engine" = source ]; then
-  "$bindir/ldrun" "$src" --engine=interp --trace "$base.csv" --watch "$watch" > "$tmp/out"
+  "$bindir/ldrun" "$src" --engine=interp --trace "$base.csv" --watch "$watch" $flags_run > "$tmp/out"
 elif [ "$engine" = c ]; then
-  "$bindir/ldrun" "$src" --engine=c --trace "$base.csv" --watch "$watch" > "$tmp/out"
+  "$bindir/ldrun" "$src" --engine=c --trace "$base.csv" --watch "$watch" $flags_run > "$tmp/out"
 else
   case "$engine" in
     c40sim) flags=--target=c40 run=c40sim ;;
@@ -24,7 +27,7 @@ else
     *) flags=-O0 run=$engine ;;
   esac
   "$bindir/ldc" "$src" $flags -o "$tmp/prog.bin"
-  "$bindir/ldrun" "$tmp/prog.bin" --engine="$run" --trace "$base.csv" --watch "$watch" > "$tmp/out"
+  "$bindir/ldrun" "$tmp/prog.bin" --engine="$run" --trace "$base.csv" --watch "$watch" $flags_run > "$tmp/out"
 fi
 if ! diff -u "$expected" "$tmp/out"; then
   echo "FAIL: $src on $engine differs from $expected" >&2

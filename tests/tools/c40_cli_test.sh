@@ -84,4 +84,16 @@ expect_fail "damaged image" "checksum" "$bin/ldrun" "$tmp/bad.bin" --engine=c40s
 # the IL interpreter runs the x86 image's IL on the C40 too
 "$bin/ldrun" "$tmp/x86.bin" --engine=c40interp --trace "$src/examples/motor.csv" --watch "$(head -n 1 "$src/examples/motor.expected" | cut -d, -f2-)" > "$tmp/out"
 diff -u "$src/examples/motor.expected" "$tmp/out" || fail "c40interp on an x86 image"
+# typed instructions (docs/c40.md, "Typed instructions"): INT wraps at 16 bits on the C40 as in
+# the reference interpreter; a 64-bit type is refused at its line, the C40-hosted interpreter
+# refuses typed instructions by name
+printf '.rung line 1\nTRUE\nMOVE.INT 32767 D0\nADD.INT D0 1 D1\nDIV.REAL 1.0 3.0 D2\n.end\n' > "$tmp/t.il"
+"$bin/ldc" "$tmp/t.il" --target=c40 -o "$tmp/t.bin" || fail "ldc typed"
+"$bin/ldrun" "$tmp/t.bin" --engine=c40sim --scans 2 --watch D0,D1,D2 > "$tmp/out" || fail "ldrun typed"
+"$bin/ldrun" "$tmp/t.il" --engine=interp --scans 2 --watch D0,D1,D2 > "$tmp/ref" || fail "ldrun typed interp"
+diff -u "$tmp/ref" "$tmp/out" || fail "typed on c40sim differs from interp"
+grep -q "^1,32767,-32768,1051372203$" "$tmp/out" || fail "INT 32767 + 1 wraps to -32768, 1.0/3.0 is 0x3eaaaaab: $(cat "$tmp/out")"
+printf '.rung line 1\nTRUE\nADD.LINT D0 D2 D4\n.end\n' > "$tmp/l.il"
+expect_fail "64-bit type" "l.il:3:1: error: the C40 cannot compile ADD.LINT: 64-bit types" "$bin/ldc" "$tmp/l.il" --target=c40 -o "$tmp/l.bin"
+expect_fail "typed on c40interp" "cannot run MOVE.INT" "$bin/ldrun" "$tmp/t.il" --engine=c40interp --scans 1
 echo "c40 cli: ok"

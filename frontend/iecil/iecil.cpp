@@ -1,5 +1,7 @@
-// frontend/iecil.cpp -- IEC 61131-3 Instruction List (docs/iec-il.md): the
-// reader, which turns a program into ldc IL directly, and the writer of
+// frontend/iecil/iecil.cpp -- IEC 61131-3 Instruction List (docs/iec-il.md):
+// the lexer, the reader of the classic subset, which turns a program into
+// ldc's untyped IL directly (a program with typed declarations goes to
+// typed.cpp), and the writer of
 // `ldc --emit=iec-il`, which prints any ldc IL program as IEC IL that the
 // reader reads back to the same behaviour.
 //
@@ -22,12 +24,11 @@
 #include <set>
 
 #include "frontend/frontend.h"
+#include "frontend/iecil/iecil.h"
 
 namespace ldc {
-namespace {
+namespace iecil {
 
-constexpr uint32_t kVirtual = 0x40000000u;  // hidden devices before allocation
-constexpr int kMaxParens = 16;
 
 std::string upper(std::string_view s) {
   std::string u(s);
@@ -37,14 +38,18 @@ std::string upper(std::string_view s) {
 
 // ---------------------------------------------------------------- lexer
 
-struct Tok {
-  enum Kind { Word, Punct, Eol, End } kind = End;
-  std::string text;
-  int line = 0, col = 0;
-};
 
-bool word_start(char c) { return std::isalnum((unsigned char)c) || c == '_' || c == '%'; }
-bool word_char(char c) { return std::isalnum((unsigned char)c) || c == '_' || c == '%' || c == '#' || c == '.'; }
+// A direct address: %IX0.4, %QW2, %MD1 ...; without the size letter (%I0.4,
+// %Q0.0, %M1.2) it is a bit, as IEC 61131-3 (2.4.1.1) has it: %IX0.4.
+std::optional<DeviceRef> iec_address(const std::string& text, std::string& why) {
+  std::string a = text;
+  char region = a.size() >= 3 ? char(std::toupper((unsigned char)a[1])) : 0;
+  if ((region == 'I' || region == 'Q' || region == 'M') && std::isdigit((unsigned char)a[2])) a.insert(2, "X");
+  return parse_iec_address(a, why);
+}
+
+static bool word_start(char c) { return std::isalnum((unsigned char)c) || c == '_' || c == '%'; }
+static bool word_char(char c) { return std::isalnum((unsigned char)c) || c == '_' || c == '%' || c == '#' || c == '.'; }
 
 std::vector<Tok> lex(std::string_view s) {
   std::vector<Tok> out;
@@ -76,12 +81,19 @@ std::vector<Tok> lex(std::string_view s) {
     }
     size_t st = i;
     bool sign = (c == '-' || c == '+') && i + 1 < s.size() && (std::isdigit((unsigned char)s[i + 1]) || s[i + 1] == '.');
-    if (word_start(c) || sign) {
+    // a member after an index: a[2].x
+    bool member = c == '.' && i + 1 < s.size() && (std::isalpha((unsigned char)s[i + 1]) || s[i + 1] == '_');
+    if (word_start(c) || sign || member) {
       i++;
       bool numeric = sign || std::isdigit((unsigned char)c);
-      while (i < s.size() && (word_char(s[i]) || (numeric && (s[i] == '-' || s[i] == '+') &&
-                                                   (s[i - 1] == 'e' || s[i - 1] == 'E'))))
-        i++;
+      // a sign inside a word: 1.0E-3, LREAL#1e-9, T#-2ms; '..' ends it (1..10)
+      auto sign_inside = [&] {
+        if (s[i] != '-' && s[i] != '+') return false;
+        char before = s[i - 1];
+        bool typed = s.substr(st, i - st).find('#') != std::string_view::npos;
+        return before == '#' || ((numeric || typed) && (before == 'e' || before == 'E'));
+      };
+      while (i < s.size() && ((word_char(s[i]) && !(s[i] == '.' && i + 1 < s.size() && s[i + 1] == '.')) || sign_inside())) i++;
       out.push_back({Tok::Word, std::string(s.substr(st, i - st)), line, col(st)});
       continue;
     }
@@ -90,7 +102,12 @@ std::vector<Tok> lex(std::string_view s) {
       i += 2;
       continue;
     }
-    if (c == '(' || c == ')' || c == ':' || c == ',' || c == ';') {
+    if (c == '.' && i + 1 < s.size() && s[i + 1] == '.') {
+      out.push_back({Tok::Punct, "..", line, col(i)});
+      i += 2;
+      continue;
+    }
+    if (c == '(' || c == ')' || c == ':' || c == ',' || c == ';' || c == '[' || c == ']') {
       out.push_back({Tok::Punct, std::string(1, c), line, col(i)});
       i++;
       continue;
@@ -103,6 +120,16 @@ std::vector<Tok> lex(std::string_view s) {
   out.push_back({Tok::End, "", line, col(i)});
   return out;
 }
+
+}  // namespace iecil
+
+namespace {
+using iecil::Tok;
+using iecil::lex;
+using iecil::upper;
+
+constexpr uint32_t kVirtual = 0x40000000u;  // hidden devices before allocation
+constexpr int kMaxParens = 16;
 
 // ---------------------------------------------------------------- values
 
@@ -349,7 +376,7 @@ struct Reader {
       at_tok = next();
       if (names.size() > 1) fail(at_tok, "one variable per AT location");
       std::string why;
-      if (at_tok.kind == Tok::Word) at = at_tok.text[0] == '%' ? parse_iec_address(at_tok.text, why) : parse_device(at_tok.text);
+      if (at_tok.kind == Tok::Word) at = at_tok.text[0] == '%' ? iecil::iec_address(at_tok.text, why) : parse_device(at_tok.text);
       if (!at) fail(at_tok, why.empty() ? "expected a location (%IX0.0, %QW2, %MD1 ... or an ldc device)" + found(at_tok) : why);
       if (at->index >= device_count(at->dev)) fail(at_tok, "location " + at_tok.text + " is outside ldc's devices");
     }
@@ -464,7 +491,7 @@ struct Reader {
     if (!why.empty()) fail(k, why);
     std::string u = upper(k.text);
     if (k.text[0] == '%') {
-      auto d = parse_iec_address(k.text, why);
+      auto d = iecil::iec_address(k.text, why);
       if (!d) fail(k, why.empty() ? "bad IEC address " + k.text : why);
       return device(k, *d);
     }
@@ -1037,9 +1064,11 @@ bool looks_like_ldc_il(std::string_view text) {
 
 Program parse_iec_il(std::string_view text, const std::string& filename) {
   if (text.size() > kMaxSourceBytes) throw CompileError(1, 1, "source larger than " + std::to_string(kMaxSourceBytes >> 20) + " MiB");
+  std::vector<Tok> toks = lex(text);
+  if (iecil::needs_typed_reader(toks)) return iecil::parse_typed_il(toks, filename);
   Reader r;
   r.p.source = filename;
-  r.t = lex(text);
+  r.t = std::move(toks);
   r.program();
   return std::move(r.p);
 }

@@ -1,0 +1,274 @@
+// backend-c/c_typed.cpp -- typed instructions as C (c_typed.h).  Every value
+// is a C variable of its type's C type (types.def: int16_t for INT ...); the
+// arithmetic that C leaves undefined (signed overflow, a shift by the width or
+// more, division by zero, INT_MIN / -1, an out-of-range float to integer
+// conversion) is written so that it is defined and gives ir/typed.h's result:
+// wrapping arithmetic in the unsigned type of the width, explicit tests, and
+// the conversions through ldc_to_i64.  A narrowing conversion to a signed type
+// is implementation-defined in C (not undefined); every C compiler ldc runs
+// with (gcc, clang) wraps it modulo 2^width, which is typed.h's norm.
+#include "backend-c/c_typed.h"
+
+#include <cinttypes>
+#include <cstdio>
+#include <limits>
+
+#include "ir/typed.h"
+
+namespace ldc {
+namespace {
+
+const char kTypedPrelude[] = R"(/* typed instructions (ir/typed.h) */
+static inline double d_of(uint64_t u) { double d; memcpy(&d, &u, 8); return d; }
+/* a constant the C compiler must not fold into a libm call (its folding may round otherwise) */
+static inline double opq_d(double x) { volatile double v = x; return v; }
+/* NaN and values outside INT64 give INT64_MIN, as x86-64's cvttsd2si */
+static inline int64_t ldc_to_i64(double d) {
+  if (!(d >= -9223372036854775808.0 && d < 9223372036854775808.0)) return INT64_MIN;
+  return (int64_t)d;
+}
+/* MatIEC's __real_round: the nearest integer, an exact tie to even (IN + 0.5 rounded in double first) */
+static inline int64_t ldc_round(double x) { return fmod(x, 1.0) == 0 ? (ldc_to_i64(x) / 2) * 2 : ldc_to_i64(x); }
+/* REAL to an integer (__real_to_sint); to an unsigned type or a bit string (__real_to_uint) a negative value is 0 */
+static inline int64_t ldc_r2s(double d) { return d >= 0 ? ldc_round(d + 0.5) : ldc_round(d - 0.5); }
+static inline uint64_t ldc_r2u(double d) { return d >= 0 ? (uint64_t)ldc_round(d + 0.5) : 0; }
+/* TIME and the dates against numbers count seconds (MatIEC's timespec tv_sec); nanoseconds here */
+#define LDC_NS_S 1000000000LL
+#define LDC_S_DAY 86400LL
+static inline int64_t ldc_time_of(int64_t sec, int64_t nsec) { return (int64_t)((uint64_t)sec * (uint64_t)LDC_NS_S + (uint64_t)nsec); }
+static inline int64_t ldc_r2time(double d) { int64_t s = ldc_to_i64(d); return ldc_time_of(s, ldc_to_i64((d - (double)s) * 1e9)); }
+static inline double ldc_time2r(int64_t t) { return (double)(t / LDC_NS_S) + (double)(t % LDC_NS_S) / 1e9; }
+static inline int64_t ldc_dt_date(int64_t t) { int64_t s = t / LDC_NS_S; return ldc_time_of(s - s % LDC_S_DAY - (s < 0 ? LDC_S_DAY : 0), 0); }
+static inline int64_t ldc_dt_tod(int64_t t) { int64_t s = t / LDC_NS_S; return ldc_time_of(s % LDC_S_DAY + (s < 0 ? LDC_S_DAY : 0), t % LDC_NS_S); }
+static inline void ldc_idx_fault(u8 *m, uint32_t at, uint64_t i) {
+  uint32_t one = 1;
+  memcpy(m + 8, &one, 4);
+  memcpy(m + 12, &at, 4);
+  memcpy(m + 16, &i, 8);
+}
+)";
+
+const char* ct(Ty t) { return ty_info(t).c; }
+const char* ut(Ty t) { return ty_info(t).bits <= 32 ? "uint32_t" : "uint64_t"; }
+std::string tn(Ty t) { return ty_info(t).name; }
+std::string u32(uint64_t v) { return std::to_string(v) + "u"; }
+bool is_real(Ty t) { return typed::is_real(t); }
+bool is_signed(Ty t) { return typed::is_signed(t); }
+
+// Typed constant v (canonical bits) as a C expression of t's C type.
+std::string literal(Ty t, uint64_t v) {
+  char b[64];
+  if (t == Ty::BOOL) return v ? "((uint8_t)1)" : "((uint8_t)0)";
+  if (t == Ty::REAL) { std::snprintf(b, sizeof b, "f_of(0x%08" PRIx32 "u)", uint32_t(v)); return b; }
+  if (t == Ty::LREAL) { std::snprintf(b, sizeof b, "d_of(0x%016" PRIx64 "ull)", v); return b; }
+  if (is_signed(t)) {
+    int64_t x = int64_t(v);
+    if (x == std::numeric_limits<int64_t>::min()) return std::string("((") + ct(t) + ")INT64_MIN)";
+    std::snprintf(b, sizeof b, "((%s)%" PRId64 "LL)", ct(t), x);
+    return b;
+  }
+  std::snprintf(b, sizeof b, "((%s)%" PRIu64 "ull)", ct(t), v);
+  return b;
+}
+
+class Typed {
+ public:
+  Typed(const Instr& in, const Layout& L, int64_t at) : in_(in), L_(L), at_(at), t_(in.ty), u_(in.src) {}
+
+  CTyped run() {
+    const Op op = in_.op;
+    const OpInfo& oi = op_info(op);
+    if (oi.push) return {true, "(" + val(0, t_) + " " + rel_info(oi.rel).c + " " + val(1, t_) + ")"};
+    switch (op) {
+      case Op::TMOVE: return body(st(1, val(0, t_)));
+      case Op::TADD: case Op::TSUB: case Op::TMUL: return body(add_sub_mul());
+      case Op::TDIV: case Op::TMOD: return body(div_mod());
+      case Op::TMIN: case Op::TMAX:
+        return body("{ " + decl2() + " " + st(2, std::string("b_ ") + (op == Op::TMIN ? "<" : ">") + " a_ ? b_ : a_") + " }");
+      case Op::TEXPT:
+        if (t_ == Ty::REAL) return body(st(2, "(float)pow(" + dbl(0) + ", " + dbl(1) + ")"));
+        return body(st(2, "pow(" + dbl(0) + ", " + dbl(1) + ")"));
+      case Op::TAND: case Op::TOR: case Op::TXOR: {
+        const char* o = op == Op::TAND ? " & " : op == Op::TOR ? " | " : " ^ ";
+        return body(st(2, cast(t_) + "(" + val(0, t_) + o + val(1, t_) + ")"));
+      }
+      case Op::TNOT:
+        if (t_ == Ty::BOOL) return body(st(1, "(uint8_t)(" + val(0, t_) + " ^ 1)"));
+        return body(st(1, cast(t_) + "~(" + ut(t_) + ")" + val(0, t_)));
+      case Op::TSHL: case Op::TSHR: case Op::TROL: case Op::TROR: return body(shift());
+      case Op::TNEG:
+        if (is_real(t_)) return body(st(1, "-" + val(0, t_)));
+        return body(st(1, wrap("0 - (" + std::string(ut(t_)) + ")" + val(0, t_))));
+      case Op::TABS:
+        if (is_real(t_))  // MatIEC's __abs_signed: ABS(-0.0) stays -0.0
+          return body("{ " + std::string(ct(t_)) + " a_ = " + val(0, t_) + "; " + st(1, "a_ < 0 ? -a_ : a_") + " }");
+        if (!is_signed(t_)) return body(st(1, val(0, t_)));
+        return body("{ " + std::string(ct(t_)) + " a_ = " + val(0, t_) + "; " +
+                    st(1, "a_ < 0 ? " + wrap("0 - (" + std::string(ut(t_)) + ")a_") + " : a_") + " }");
+      case Op::TSQRT: case Op::TLN: case Op::TLOG: case Op::TEXP: case Op::TSIN: case Op::TCOS: case Op::TTAN:
+      case Op::TASIN: case Op::TACOS: case Op::TATAN: {
+        // MatIEC calls the C library's double function; REAL's result is rounded
+        std::string call = std::string(libm(op)) + "(" + dbl(0) + ")";
+        return body(st(1, t_ == Ty::REAL ? "(float)" + call : call));
+      }
+      case Op::TCONV: return body(st(1, conv(t_, u_, val(0, u_))));
+      case Op::TTRUNC: return body(st(1, cast(t_) + "ldc_to_i64(trunc((double)" + val(0, u_) + "))"));
+      case Op::TIDX: return body(idx());
+      case Op::TLDX: return body(st(2, "ld_" + tn(t_) + "(m, " + element(0, 1) + ")"));
+      case Op::TSTX: return body("st_" + tn(t_) + "(m, " + element(1, 2) + ", " + val(0, t_) + ");");
+      default: break;
+    }
+    throw CompileError(in_.loc.line, in_.loc.col, std::string("the C route has no translation for ") + op_spelling(in_));
+  }
+
+ private:
+  const Instr& in_;
+  const Layout& L_;
+  int64_t at_;
+  Ty t_, u_;
+
+  static CTyped body(std::string s) { return {false, std::move(s)}; }
+  uint32_t addr(const Operand& o) const { return L_.addr(o.area, o.index); }
+  static std::string cast(Ty t) { return std::string("(") + ct(t) + ")"; }
+  std::string wrap(const std::string& e) const { return cast(t_) + "(" + e + ")"; }
+  bool konst(int i) const { return in_.a[i].kind == OpdKind::ConstT; }
+  // operand i, of type t, as a C expression of t's C type
+  std::string val(int i, Ty t) const {
+    const Operand& o = in_.a[i];
+    if (o.kind == OpdKind::ConstT) return literal(t, o.bits());
+    if (o.kind == OpdKind::ConstInt) return "((int32_t)" + std::to_string(o.ival) + ")";
+    return "ld_" + tn(t) + "(m, " + u32(addr(o)) + ")";
+  }
+  // operand i as the double a libm function takes (a constant kept from folding)
+  std::string dbl(int i) const {
+    std::string d = "(double)" + val(i, t_);
+    return konst(i) ? "opq_d(" + d + ")" : d;
+  }
+  std::string st(int i, const std::string& e) const {
+    return "st_" + tn(t_) + "(m, " + u32(addr(in_.a[i])) + ", " + e + ");";
+  }
+  // the element an LDX / STX moves: base + xr * stride, in bytes
+  std::string element(int base, int stride) const {
+    const Operand& b = in_.a[base];
+    return u32(addr(b)) + " + xr * " + u32(uint64_t(uint32_t(in_.a[stride].ival)) * L_.elem_size(b.area));
+  }
+  std::string decl2() const {
+    return std::string(ct(t_)) + " a_ = " + val(0, t_) + ", b_ = " + val(1, t_) + ";";
+  }
+  std::string s0() const { return "m[" + u32(L_.addr(Area::S, kBitError)) + "]"; }
+
+  std::string add_sub_mul() const {
+    const char* o = in_.op == Op::TADD ? " + " : in_.op == Op::TSUB ? " - " : " * ";
+    if (is_real(t_)) return st(2, val(0, t_) + o + val(1, t_));
+    const std::string w = std::string("(") + ut(t_) + ")";
+    return st(2, wrap(w + val(0, t_) + o + w + val(1, t_)));
+  }
+  // integer division by 0: 0 and S0; MIN / -1 wraps, MIN % -1 is 0
+  std::string div_mod() const {
+    const bool div = in_.op == Op::TDIV;
+    if (is_real(t_)) return st(2, val(0, t_) + " / " + val(1, t_));
+    std::string q = div ? wrap("a_ / b_") : wrap("a_ % b_");
+    if (is_signed(t_)) q = "b_ == -1 ? " + (div ? wrap(std::string("0 - (") + ut(t_) + ")a_") : cast(t_) + "0") + " : " + q;
+    return "{ " + decl2() + " if (b_ == 0) { " + s0() + " = 1; " + st(2, cast(t_) + "0") + " } else " + st(2, q) + " }";
+  }
+  // shifts of T's bits by a count of type U: outside 0..width-1 everything
+  // goes; rotations take the count modulo the width
+  std::string shift() const {
+    const std::string w = std::to_string(ty_info(t_).bits) + "u";
+    const std::string neg = is_signed(u_) ? "n_ < 0" : "";
+    std::string s = "{ " + std::string(ct(t_)) + " a_ = " + val(0, t_) + ", r_; " + ct(u_) + " n_ = " + val(1, u_) + "; ";
+    if (in_.op == Op::TSHL || in_.op == Op::TSHR) {
+      s += "if (" + (neg.empty() ? "" : neg + " || ") + "(uint64_t)n_ >= " + w + ") r_ = 0; else r_ = " +
+           wrap(std::string("(") + ut(t_) + ")a_ " + (in_.op == Op::TSHL ? "<<" : ">>") + " n_") + "; ";
+    } else {
+      std::string k = "(uint64_t)n_ % " + w;
+      if (!neg.empty()) k = neg + " ? (" + w + " - (0 - (uint64_t)n_) % " + w + ") % " + w + " : " + k;
+      s += "uint64_t k_ = " + k + "; ";
+      if (in_.op == Op::TROR) s += "if (k_ != 0) k_ = " + w + " - k_; ";
+      s += "if (k_ == 0) r_ = a_; else r_ = " +
+           wrap(std::string("((") + ut(t_) + ")a_ << k_) | ((" + ut(t_) + ")a_ >> (" + w + " - k_))") + "; ";
+    }
+    return s + st(2, "r_") + " }";
+  }
+  std::string idx() const {
+    if (at_ < 0)
+      throw CompileError(in_.loc.line, in_.loc.col,
+                         "the C route cannot translate " + op_spelling(in_) +
+                             " here: its fault record names the IL offset, which this form of C (a chart's) does not have");
+    const std::string lo = std::to_string(in_.a[1].ival) + "LL", hi = std::to_string(in_.a[2].ival) + "LL";
+    std::string ok;
+    if (is_signed(t_)) ok = "i_ >= " + lo + " && i_ <= " + hi;
+    else {
+      ok = "(int64_t)i_ >= " + lo + " && (int64_t)i_ <= " + hi;
+      if (ty_info(t_).bits == 64) ok = "i_ <= (uint64_t)INT64_MAX && " + ok;
+    }
+    return "{ " + std::string(ct(t_)) + " i_ = " + val(0, t_) + "; if (" + ok + ") xr = (uint32_t)((int64_t)i_ - " + lo +
+           "); else { ldc_idx_fault(m, " + u32(uint64_t(at_)) + ", (uint64_t)i_); return; } }";
+  }
+  static const char* libm(Op op) {
+    switch (op) {
+      case Op::TSQRT: return "sqrt";
+      case Op::TLN: return "log";
+      case Op::TLOG: return "log10";
+      case Op::TEXP: return "exp";
+      case Op::TSIN: return "sin";
+      case Op::TCOS: return "cos";
+      case Op::TTAN: return "tan";
+      case Op::TASIN: return "asin";
+      case Op::TACOS: return "acos";
+      default: return "atan";
+    }
+  }
+  // MatIEC's U_TO_T (typed::conv) of a, an expression of U's C type
+  static std::string conv(Ty to, Ty from, const std::string& a) {
+    const TyKind fk = ty_info(from).kind, tk = ty_info(to).kind;
+    const std::string c = cast(to);
+    if (to == from) return a;
+    if (tk == TyKind::Bool) return "(uint8_t)(" + a + " != 0)";
+    if (fk == TyKind::Real) {
+      if (tk == TyKind::Real) return c + a;
+      if (tk == TyKind::Time || tk == TyKind::Date) return "ldc_r2time((double)" + a + ")";
+      return c + (is_signed(to) ? "ldc_r2s" : "ldc_r2u") + "((double)" + a + ")";
+    }
+    if (fk == TyKind::Time || fk == TyKind::Date) {
+      if (tk == TyKind::Real) return c + "ldc_time2r(" + a + ")";
+      if (tk == TyKind::Time) return a;
+      if (tk == TyKind::Date) {
+        if (to == Ty::DATE && from == Ty::DT) return "ldc_dt_date(" + a + ")";
+        if (to == Ty::TOD && from == Ty::DT) return "ldc_dt_tod(" + a + ")";
+        return a;
+      }
+      return c + "(" + a + " / LDC_NS_S)";
+    }
+    if (tk == TyKind::Real) return c + a;
+    if (tk == TyKind::Time || tk == TyKind::Date) return "(int64_t)((uint64_t)" + a + " * 1000000000u)";
+    return c + a;
+  }
+};
+
+// ld_T / st_T: a value of T from and to its cell (or bit): one cell holds a
+// narrow value extended to 32 bits, a 64-bit one takes two (docs/il.md).
+std::string load_store(Ty t) {
+  const TyInfo& ti = ty_info(t);
+  const std::string n = ti.name, c = ti.c;
+  if (t == Ty::BOOL)
+    return "static inline uint8_t ld_BOOL(const u8 *m, uint32_t a) { return m[a] != 0; }\n"
+           "static inline void st_BOOL(u8 *m, uint32_t a, uint8_t v) { m[a] = v ? 1 : 0; }\n";
+  std::string s = "static inline " + c + " ld_" + n + "(const u8 *m, uint32_t a) { " + c +
+                  " v; memcpy(&v, m + a, sizeof v); return v; }\n";
+  s += "static inline void st_" + n + "(u8 *m, uint32_t a, " + c + " v) { ";
+  if (ti.cells == 2 || ti.bits == 32) return s + "memcpy(m + a, &v, sizeof v); }\n";
+  return s + (is_signed(t) ? "int32_t" : "uint32_t") + " w = v; memcpy(m + a, &w, 4); }\n";
+}
+
+}  // namespace
+
+std::string c_typed_prelude() {
+  std::string s = kTypedPrelude;
+  for (int i = 0; i < kTyCount; i++) s += load_store(Ty(i));
+  return s;
+}
+
+CTyped c_typed(const Instr& in, const Layout& layout, int64_t il_offset) { return Typed(in, layout, il_offset).run(); }
+
+}  // namespace ldc

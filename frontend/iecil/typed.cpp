@@ -1,0 +1,1944 @@
+// frontend/iecil/typed.cpp -- the typed reader of IEC 61131-3 IL
+// (docs/iec-il.md, "Typed programs"): TYPE ... END_TYPE, FUNCTION_BLOCK and
+// FUNCTION POUs, variables at their own widths, arrays and structures, read
+// into the typed program model (ir/model.h) and lowered to typed IL.
+//
+// Every rung starts with TRUE: the typed instructions run while the top of
+// the bit stack is on, so a rung is straight-line typed code, and a jump or a
+// label starts a new one.  The current result (CR) is a typed operand: a
+// variable's cell or bit as loaded, or an accumulator of its type after an
+// operation.  Calls of the project's FBs and FUNCTIONs are their bodies
+// expanded inline over the instance's places (docs/architecture.md).
+#include <algorithm>
+#include <cctype>
+#include <functional>
+#include <map>
+#include <set>
+
+#include "frontend/frontend.h"
+#include "frontend/iecil/iecil.h"
+#include "ir/model.h"
+#include "ir/typed.h"
+
+namespace ldc::iecil {
+namespace {
+
+using namespace model;
+
+// The declared types the classic reader holds (as INT32, REAL, ldc's timers).
+bool classic_type(const std::string& u) {
+  static const std::set<std::string> k = {"BOOL", "INT", "DINT", "SINT", "UINT", "UDINT", "USINT", "WORD", "DWORD", "BYTE",
+                                          "TIME", "REAL", "TON", "TOF", "TP", "CTU", "CTD", "R_TRIG", "F_TRIG",
+                                          // refused by both readers: the classic one names them
+                                          "STRING", "WSTRING"};
+  return k.count(u) > 0;
+}
+
+}  // namespace
+
+// The operators the classic reader knows.
+bool classic_operator(const std::string& u) {
+  static const std::set<std::string> k = {"LD", "LDN", "ST", "STN", "S", "R", "AND", "ANDN", "OR", "ORN", "XOR", "XORN",
+                                          "ADD", "SUB", "MUL", "DIV", "MOD", "GT", "GE", "EQ", "NE", "LT", "LE", "JMP",
+                                          "JMPC", "JMPCN", "SHL", "SHR", "CAL", "NOT", "RET", "RETC", "RETCN", "SIN", "COS",
+                                          "TAN", "SQRT", "EXP", "LN", "ABS", "MOVE", "PROGRAM", "END_PROGRAM", "END_VAR",
+                                          // ldc's own mnemonics: the classic reader names them in its error
+                                          "LOAD", "LOADN", "OUT", "OUTN", "SET", "RST", "ANDBLK", "ORBLK", "MPS", "MRD", "MPP"};
+  return k.count(u) > 0 || u.rfind("VAR", 0) == 0;
+}
+
+bool needs_typed_reader(const std::vector<Tok>& t) {
+  bool in_vars = false, line_start = true;
+  for (size_t i = 0; i < t.size(); i++) {
+    const Tok& k = t[i];
+    if (k.kind == Tok::Eol) { line_start = true; continue; }
+    if (k.kind == Tok::Punct && (k.text == "[" || k.text == "..")) return true;  // an element, a range
+    std::string u = k.kind == Tok::Word ? upper(k.text) : "";
+    // an operator of the typed reader only (INT_TO_REAL, LIMIT, a FUNCTION ...), after an optional label
+    bool labelled = !in_vars && line_start && k.kind == Tok::Word && i + 1 < t.size() && t[i + 1].kind == Tok::Punct && t[i + 1].text == ":";
+    if (!in_vars && line_start && k.kind == Tok::Word && !labelled && !classic_operator(u)) return true;
+    if (labelled) { i++; continue; }
+    if (line_start && (u == "TYPE" || u == "FUNCTION_BLOCK" || u == "FUNCTION" || u == "VAR_IN_OUT" || u == "VAR_TEMP" ||
+                       u == "VAR_EXTERNAL"))
+      return true;
+    if (u.rfind("VAR", 0) == 0 && line_start) {
+      in_vars = true;
+      if (i + 1 < t.size() && (upper(t[i + 1].text) == "CONSTANT" || upper(t[i + 1].text) == "RETAIN")) return true;
+    }
+    if (u == "END_VAR") in_vars = false;
+    if (in_vars && k.kind == Tok::Punct && k.text == ":" && i + 1 < t.size() && t[i + 1].kind == Tok::Word &&
+        !classic_type(upper(t[i + 1].text)))
+      return true;
+    line_start = false;
+  }
+  return false;
+}
+
+namespace {
+
+constexpr size_t kMaxInstructions = size_t(1) << 20;  // after inline expansion (48 bytes each)
+constexpr int kMaxNesting = 64;  // nested types, initial values, indices: hostile input cannot exhaust the stack
+constexpr int kMaxParens = 16;
+constexpr size_t kMaxAliasLeaves = 64;  // aliases per structured variable (--watch a[1], p.x)
+
+struct PouSrc {           // where a POU is written
+  size_t head = 0;        // its keyword
+  size_t body = 0, end = 0;  // its body's tokens, its END_ keyword
+  int pou = -1;           // in the model, once declared
+  bool declaring = false;
+};
+
+// A name in a POU's scope.
+struct Scope {
+  int pou = -1;
+  std::map<std::string, Ref> names;  // upper-case
+  std::string prefix;                // of the labels of this copy
+  std::string end_label;             // RET jumps here ("" in the program: RET ends the scan)
+};
+
+// The current result: a typed operand (a variable's, an accumulator), or a
+// literal whose type is that of its first use.
+struct Cr {
+  bool defined = false;
+  TypeId type = kNoType;
+  Operand o;
+  std::optional<ParsedLit> lit;  // an untyped number, not yet typed
+};
+
+// An operand as written.
+struct Val {
+  enum Kind { Lit, Ref_, Device } kind = Lit;
+  ParsedLit lit;
+  TypeId lit_type = kNoType;  // an enumerator's type, or a typed literal's
+  model::Ref ref;             // Ref_ and Device (a device's Ref has its area)
+};
+
+class Reader {
+ public:
+  Reader(const std::vector<Tok>& toks, const std::string& file) : t_(toks) { p_.source = file; }
+
+  Program run() {
+    try {
+      scan_top();
+      declare_all();
+      lay_out();
+      lower_program();
+      finish();
+    } catch (const ModelError& e) {
+      throw CompileError(e.loc.line, e.loc.col, e.message);
+    }
+    return std::move(p_);
+  }
+
+ private:
+  const std::vector<Tok>& t_;
+  size_t pos_ = 0;
+  Model m_;
+  Program p_;
+  std::map<std::string, PouSrc> pou_src_;      // upper-case name
+  std::map<std::string, size_t> type_src_;     // a TYPE entry's name token
+  std::set<std::string> types_declaring_;
+  int program_ = -1;
+  std::map<std::string, model::Ref> globals_;  // the program's variables, for VAR_EXTERNAL
+  std::map<std::string, Place> scratch_;
+  uint32_t next_f_ = 0;
+
+  // ---- tokens
+  const Tok& peek(size_t k = 0) const { return t_[std::min(pos_ + k, t_.size() - 1)]; }
+  const Tok& next() { return t_[pos_ < t_.size() - 1 ? pos_++ : pos_]; }
+  [[noreturn]] static void fail(const Tok& k, const std::string& m) { throw CompileError(k.line, k.col, m); }
+  [[noreturn]] static void fail(SrcLoc l, const std::string& m) { throw CompileError(l.line, l.col, m); }
+  static SrcLoc loc(const Tok& k) { return {k.line, k.col}; }
+  static bool kw(const Tok& k, const char* w) { return k.kind == Tok::Word && upper(k.text) == w; }
+  static bool punct(const Tok& k, const char* p) { return k.kind == Tok::Punct && k.text == p; }
+  static std::string found(const Tok& k) {
+    if (k.kind == Tok::Eol) return " at the end of the line";
+    if (k.kind == Tok::End) return " at the end of the file";
+    return ", found '" + k.text + "'";
+  }
+  void skip_eols() {
+    while (peek().kind == Tok::Eol) next();
+  }
+  const Tok& expect(const char* p) {
+    skip_eols();
+    if (!punct(peek(), p)) fail(peek(), std::string("expected '") + p + "'" + found(peek()));
+    return next();
+  }
+  static bool ident(const std::string& s) {
+    if (s.empty() || !(std::isalpha((unsigned char)s[0]) || s[0] == '_')) return false;
+    return std::all_of(s.begin(), s.end(), [](char c) { return std::isalnum((unsigned char)c) || c == '_'; });
+  }
+  const Tok& name_tok(const char* what) {
+    skip_eols();
+    const Tok& n = next();
+    if (n.kind != Tok::Word || !ident(n.text)) fail(n, std::string("expected ") + what + found(n));
+    return n;
+  }
+  void end_line() {
+    if (peek().kind != Tok::Eol && peek().kind != Tok::End) fail(peek(), "unexpected '" + peek().text + "' at the end of the line");
+    if (peek().kind == Tok::Eol) next();
+  }
+
+  // ---------------------------------------------------------------- the file's parts
+
+  // Finds every TYPE entry and POU, so a name may be used before it is declared.
+  void scan_top() {
+    bool have_program = false;
+    for (;;) {
+      skip_eols();
+      const Tok& k = peek();
+      if (k.kind == Tok::End) break;
+      std::string u = upper(k.text);
+      if (u == "TYPE") {
+        next();
+        scan_types();
+      } else if (u == "FUNCTION_BLOCK" || u == "FUNCTION" || u == "PROGRAM") {
+        if (u == "PROGRAM" && have_program) fail(k, "a second PROGRAM: ldc reads one program per file");
+        have_program |= u == "PROGRAM";
+        scan_pou(u);
+      } else if (u.rfind("VAR", 0) == 0 && !have_program) {  // a program without its PROGRAM line
+        have_program = true;
+        scan_pou("");
+      } else if (u == "CONFIGURATION" || u == "RESOURCE") {
+        fail(k, "'" + k.text + "' is not read from IEC IL files: one program per file (docs/iec-il.md)");
+      } else {
+        fail(k, "expected TYPE, FUNCTION_BLOCK, FUNCTION or PROGRAM" + found(k));
+      }
+    }
+    if (!have_program) fail(t_.back(), "no PROGRAM in the file");
+  }
+  void scan_types() {
+    for (;;) {
+      skip_eols();
+      if (kw(peek(), "END_TYPE")) { next(); return; }
+      if (peek().kind == Tok::End) fail(peek(), "TYPE without END_TYPE");
+      const Tok& n = name_tok("a type name");
+      std::string u = upper(n.text);
+      if (type_src_.count(u) || pou_src_.count(u) || m_.find_type(u) != kNoType) fail(n, "a second type named '" + n.text + "'");
+      type_src_[u] = pos_ - 1;
+      int depth = 0;  // to the ';' that ends the entry
+      for (;;) {
+        const Tok& k = next();
+        if (k.kind == Tok::End) fail(n, "type '" + n.text + "' without its ';'");
+        if (kw(k, "STRUCT")) depth++;
+        else if (kw(k, "END_STRUCT")) depth--;
+        else if (punct(k, "(") || punct(k, "[")) depth++;
+        else if (punct(k, ")") || punct(k, "]")) depth--;
+        else if (punct(k, ";") && depth == 0) break;
+      }
+    }
+  }
+  void scan_pou(const std::string& kind) {
+    PouSrc s;
+    s.head = pos_;
+    std::string name = "main";
+    const char* end_kw = kind == "FUNCTION_BLOCK" ? "END_FUNCTION_BLOCK" : kind == "FUNCTION" ? "END_FUNCTION" : "END_PROGRAM";
+    if (!kind.empty()) {
+      next();
+      const Tok& n = name_tok(("the " + kind + "'s name").c_str());
+      name = n.text;
+      if (pou_src_.count(upper(name)) || type_src_.count(upper(name)) || m_.find_type(name) != kNoType)
+        fail(n, "a second POU or type named '" + name + "'");
+    }
+    size_t i = pos_;
+    while (t_[i].kind != Tok::End && !kw(t_[i], end_kw)) {
+      if (kw(t_[i], "FUNCTION_BLOCK") || kw(t_[i], "FUNCTION") || kw(t_[i], "PROGRAM") || kw(t_[i], "TYPE"))
+        fail(t_[i], std::string("'") + t_[i].text + "' inside " + (kind.empty() ? "the program" : name) + ": " + end_kw + " is missing");
+      i++;
+    }
+    if (t_[i].kind == Tok::End && !kind.empty()) fail(t_[s.head], kind + " " + name + " without " + end_kw);
+    s.end = i;
+    pos_ = t_[i].kind == Tok::End ? i : i + 1;
+    pou_src_[upper(kind.empty() ? "" : name)] = s;
+    if (kind == "PROGRAM" || kind.empty()) program_name_ = upper(kind.empty() ? "" : name);
+  }
+  std::string program_name_;
+
+  // ---------------------------------------------------------------- declarations
+
+  void declare_all() {
+    for (auto& [u, at] : type_src_) resolve_type_name(u, t_[at]);
+    for (auto& [u, s] : pou_src_) declare_pou(u);
+    program_ = pou_src_.at(program_name_).pou;
+  }
+
+  // A type by name, declaring it (or the FB) first if it is written later.
+  TypeId resolve_type_name(const std::string& u, const Tok& at) {
+    TypeId id = m_.find_type(u);
+    if (id != kNoType) return id;
+    if (auto it = type_src_.find(u); it != type_src_.end()) {
+      if (types_declaring_.count(u)) fail(at, "type '" + at.text + "' contains itself");
+      types_declaring_.insert(u);
+      size_t save = pos_;
+      pos_ = it->second;
+      const Tok& n = next();
+      expect(":");
+      skip_eols();
+      Spec sp = type_spec();
+      Type ty = sp.id == kNoType ? sp.fresh : m_.type(sp.id);  // a derived type: a copy of its base, named anew
+      if (sp.id != kNoType && ty.kind == TypeKind::Block) fail(n, "a TYPE of a FUNCTION_BLOCK: declare its instances directly");
+      ty.name = n.text;
+      TypeId id = m_.add_type(ty, loc(n));  // before its initial value, which may name its enumerators
+      skip_eols();
+      if (punct(peek(), ":=")) {
+        next();
+        m_.types[size_t(id)].init = init_value();
+      }
+      expect(";");
+      pos_ = save;
+      types_declaring_.erase(u);
+      return id;
+    }
+    if (auto it = pou_src_.find(u); it != pou_src_.end()) {
+      int pou = declare_pou(u);
+      if (m_.pous[size_t(pou)].kind == PouKind::FunctionBlock) return m_.pous[size_t(pou)].block;
+      fail(at, "'" + at.text + "' is a " + (m_.pous[size_t(pou)].kind == PouKind::Function ? "FUNCTION" : "PROGRAM") +
+                   ", not a type");
+    }
+    if (TypeId b = bistable_type(u); b != kNoType) return b;
+    static const std::set<std::string> std_fbs = {"TON", "TOF", "TP", "CTU", "CTD", "CTUD", "R_TRIG", "F_TRIG", "SR", "RS",
+                                                  "RTC", "SEMA"};
+    if (std_fbs.count(u) || u.rfind("CTU_", 0) == 0 || u.rfind("CTD_", 0) == 0 || u.rfind("CTUD_", 0) == 0)
+      fail(at, "the standard function block " + at.text +
+                   " is not available in a program with typed declarations yet (docs/iec-il.md, \"Typed programs\")");
+    if (u == "STRING" || u == "WSTRING") fail(at, "type " + at.text + " is not supported (docs/iec-il.md)");
+    fail(at, "unknown type '" + at.text + "'");
+  }
+
+  // The standard blocks of pure logic, as MatIEC's structures: their
+  // variables, the inputs first; computed at each CAL (std_call).
+  std::map<TypeId, std::string> bistables_;
+  TypeId bistable_type(const std::string& u) {
+    // name, its variables (inputs first) and their types
+    static const std::map<std::string, std::vector<std::pair<const char*, Ty>>> kVars = {
+        {"R_TRIG", {{"CLK", Ty::BOOL}, {"Q", Ty::BOOL}, {"M", Ty::BOOL}}},
+        {"F_TRIG", {{"CLK", Ty::BOOL}, {"Q", Ty::BOOL}, {"M", Ty::BOOL}}},
+        {"SR", {{"S1", Ty::BOOL}, {"R", Ty::BOOL}, {"Q1", Ty::BOOL}}},
+        {"RS", {{"S", Ty::BOOL}, {"R1", Ty::BOOL}, {"Q1", Ty::BOOL}}},
+        {"TON", {{"IN", Ty::BOOL}, {"PT", Ty::TIME}, {"Q", Ty::BOOL}, {"ET", Ty::TIME}}},
+        {"TOF", {{"IN", Ty::BOOL}, {"PT", Ty::TIME}, {"Q", Ty::BOOL}, {"ET", Ty::TIME}}},
+        {"TP", {{"IN", Ty::BOOL}, {"PT", Ty::TIME}, {"Q", Ty::BOOL}, {"ET", Ty::TIME}}},
+        {"CTU", {{"CU", Ty::BOOL}, {"R", Ty::BOOL}, {"PV", Ty::INT}, {"Q", Ty::BOOL}, {"CV", Ty::INT}}},
+        {"CTD", {{"CD", Ty::BOOL}, {"LD", Ty::BOOL}, {"PV", Ty::INT}, {"Q", Ty::BOOL}, {"CV", Ty::INT}}}};
+    auto it = kVars.find(u);
+    if (it == kVars.end()) return kNoType;
+    Type t;
+    t.kind = TypeKind::Struct;
+    t.name = u;
+    for (const auto& [v, ty] : it->second) t.members.push_back({v, m_.elem(ty), {}, {}});
+    TypeId id = m_.add_type(t, {1, 1});
+    bistables_[id] = u;
+    return id;
+  }
+
+  // type_spec = NAME [ "(" lo ".." hi ")" ] | ARRAY "[" range { "," range } "]" OF type_spec
+  //           | STRUCT { decl } END_STRUCT | "(" NAME { "," NAME } ")"
+  // A spec names a type (`id`) or describes a new one (`fresh`).
+  struct Spec {
+    TypeId id = kNoType;
+    Type fresh;
+  };
+  int nesting_ = 0;
+  struct Nest {  // one level of nesting, refused beyond kMaxNesting
+    Nest(int& n, const Tok& at) : n_(n) {
+      if (++n_ > kMaxNesting) throw CompileError(at.line, at.col, "nested deeper than " + std::to_string(kMaxNesting) + " levels");
+    }
+    ~Nest() { n_--; }
+    int& n_;
+  };
+  Spec type_spec() {
+    skip_eols();
+    Nest nest(nesting_, peek());
+    const Tok& k = next();
+    Spec sp;
+    Type& ty = sp.fresh;
+    if (punct(k, "(")) {  // an enumeration
+      ty.kind = TypeKind::Enum;
+      for (;;) {
+        const Tok& e = name_tok("an enumerator");
+        std::string u = upper(e.text);
+        if (std::find(ty.enumerators.begin(), ty.enumerators.end(), u) != ty.enumerators.end()) fail(e, "enumerator '" + e.text + "' twice");
+        ty.enumerators.push_back(u);
+        skip_eols();
+        if (punct(peek(), ",")) { next(); continue; }
+        expect(")");
+        break;
+      }
+      return sp;
+    }
+    if (kw(k, "ARRAY")) {
+      ty.kind = TypeKind::Array;
+      expect("[");
+      for (;;) {
+        Dim d;
+        skip_eols();
+        d.lo = int32_t(int_const(next()));
+        expect("..");
+        skip_eols();
+        d.hi = int32_t(int_const(next()));
+        ty.dims.push_back(d);
+        skip_eols();
+        if (punct(peek(), ",")) { next(); continue; }
+        expect("]");
+        break;
+      }
+      skip_eols();
+      if (!kw(peek(), "OF")) fail(peek(), "expected OF" + found(peek()));
+      next();
+      skip_eols();
+      const Tok& of = peek();
+      ty.of = use_type(type_spec(), of);
+      return sp;
+    }
+    if (kw(k, "STRUCT")) {
+      ty.kind = TypeKind::Struct;
+      for (;;) {
+        skip_eols();
+        if (kw(peek(), "END_STRUCT")) { next(); break; }
+        if (peek().kind == Tok::End) fail(k, "STRUCT without END_STRUCT");
+        std::vector<Tok> names{name_tok("a member name")};
+        while (punct(peek(), ",")) next(), names.push_back(name_tok("a member name"));
+        expect(":");
+        skip_eols();
+        const Tok& mt = peek();
+        TypeId mid = use_type(type_spec(), mt);
+        Init init;
+        skip_eols();
+        if (punct(peek(), ":=")) next(), init = init_value();
+        expect(";");
+        for (const Tok& n : names) ty.members.push_back({n.text, mid, {}, init});
+      }
+      return sp;
+    }
+    if (k.kind != Tok::Word || !ident(k.text)) fail(k, "expected a type" + found(k));
+    TypeId base = resolve_type_name(upper(k.text), k);
+    if (punct(peek(), "(")) {  // a subrange
+      next();
+      if (!m_.type(base).scalar() || !typed::is_int_kind(m_.scalar_ty(base))) fail(k, "a subrange of a non-integer type");
+      ty.kind = TypeKind::Subrange;
+      ty.elem = m_.scalar_ty(base);
+      skip_eols();
+      ty.lo = int_const(next());
+      expect("..");
+      skip_eols();
+      ty.hi = int_const(next());
+      expect(")");
+      return sp;
+    }
+    sp.id = base;
+    return sp;
+  }
+  TypeId use_type(const Spec& sp, const Tok& at) {
+    if (sp.id != kNoType) return sp.id;
+    return m_.add_type(sp.fresh, loc(at));
+  }
+  int64_t int_const(const Tok& k) {
+    std::string why;
+    auto p = parse_literal(k.text, why);
+    if (!p || !p->untyped_int || p->lit.ty == Ty::ULINT) fail(k, "expected an integer constant" + found(k));
+    if (p->ival < INT32_MIN || p->ival > INT32_MAX) fail(k, "bound outside DINT: " + k.text);
+    return p->ival;
+  }
+
+  // init = literal | NAME (an enumerator) | "[" item { "," item } "]" | "(" NAME ":=" init { "," ... } ")"
+  // item = init | count "(" init ")"
+  Init init_value() {
+    skip_eols();
+    Nest nest(nesting_, peek());
+    const Tok& k = next();
+    Init in;
+    in.loc = loc(k);
+    if (punct(k, "[")) {
+      in.kind = Init::List;
+      for (;;) {
+        skip_eols();
+        uint32_t count = 1;
+        if (peek().kind == Tok::Word && punct(peek(1), "(")) {
+          int64_t c = int_const(next());
+          if (c < 0) fail(peek(), "a negative repeat count");
+          count = uint32_t(c);
+          next();
+          in.list.push_back({count, init_value()});
+          expect(")");
+        } else {
+          in.list.push_back({count, init_value()});
+        }
+        skip_eols();
+        if (punct(peek(), ",")) { next(); continue; }
+        expect("]");
+        return in;
+      }
+    }
+    if (punct(k, "(")) {
+      in.kind = Init::Fields;
+      for (;;) {
+        const Tok& n = name_tok("a member name");
+        expect(":=");
+        in.fields.push_back({upper(n.text), init_value()});
+        skip_eols();
+        if (punct(peek(), ",")) { next(); continue; }
+        expect(")");
+        return in;
+      }
+    }
+    in.kind = Init::Value;
+    if (k.kind != Tok::Word) fail(k, "expected an initial value" + found(k));
+    std::string why;
+    auto p = parse_literal(k.text, why);
+    if (p) { in.value = *p; return in; }
+    if (!why.empty()) fail(k, why);
+    auto e = enumerator(k.text);
+    if (!e) fail(k, "expected a literal initial value" + found(k));
+    in.value.lit = {Ty::DINT, uint64_t(e->second)};
+    return in;
+  }
+  // An enumerator (NAME, or TYPE#NAME): its type and value.
+  std::optional<std::pair<TypeId, int64_t>> enumerator(const std::string& text) {
+    std::string u = upper(text), ty;
+    if (size_t h = u.find('#'); h != std::string::npos) ty = u.substr(0, h), u = u.substr(h + 1);
+    for (size_t i = 0; i < m_.types.size(); i++) {
+      const Type& t = m_.types[i];
+      if (t.kind != TypeKind::Enum || (!ty.empty() && upper(t.name) != ty)) continue;
+      auto it = std::find(t.enumerators.begin(), t.enumerators.end(), u);
+      if (it != t.enumerators.end()) return std::make_pair(TypeId(i), int64_t(it - t.enumerators.begin()));
+    }
+    return std::nullopt;
+  }
+
+  int declare_pou(const std::string& u) {
+    PouSrc& s = pou_src_.at(u);
+    if (s.pou >= 0) return s.pou;
+    if (s.declaring) fail(t_[s.head], "'" + t_[s.head + 1].text + "' contains an instance of itself");
+    s.declaring = true;
+    size_t save = pos_;
+    pos_ = s.head;
+    Pou p;
+    p.loc = loc(t_[s.head]);
+    std::string kind = upper(t_[s.head].text);
+    p.kind = kind == "FUNCTION_BLOCK" ? PouKind::FunctionBlock : kind == "FUNCTION" ? PouKind::Function : PouKind::Program;
+    if (kind == "FUNCTION_BLOCK" || kind == "FUNCTION" || kind == "PROGRAM") {
+      next();
+      p.name = next().text;
+      if (p.kind == PouKind::Function) {
+        expect(":");
+        skip_eols();
+        const Tok& rt = next();
+        p.result = resolve_type_name(upper(rt.text), rt);
+        if (!m_.type(p.result).scalar()) fail(rt, "a FUNCTION returns an elementary type here, not " + m_.type_name(p.result));
+      }
+      end_line();
+    } else {
+      p.name = "main";
+    }
+    skip_eols();
+    while (peek().kind == Tok::Word && upper(peek().text).rfind("VAR", 0) == 0) {
+      var_block(p);
+      skip_eols();
+    }
+    s.body = pos_;
+    if (p.kind != PouKind::Program) {  // IEC's implicit EN and ENO
+      auto has = [&](const char* n) {
+        return std::any_of(p.vars.begin(), p.vars.end(), [&](const Var& v) { return upper(v.name) == n; });
+      };
+      if (!has("EN")) {
+        Var en{"EN", m_.elem(Ty::BOOL), VarClass::Input, false, false, {}, {}, p.loc};
+        en.init.kind = Init::Value, en.init.value.lit = {Ty::BOOL, 1};
+        p.vars.push_back(en);
+      }
+      if (!has("ENO")) p.vars.push_back({"ENO", m_.elem(Ty::BOOL), VarClass::Output, false, false, {}, {}, p.loc});
+    }
+    pos_ = save;
+    s.pou = m_.add_pou(p);
+    m_.pous[size_t(s.pou)].body = int(s.body);
+    s.declaring = false;
+    return s.pou;
+  }
+
+  void var_block(Pou& p) {
+    const Tok& head = next();
+    std::string h = upper(head.text);
+    VarClass cls = h == "VAR_INPUT" ? VarClass::Input : h == "VAR_OUTPUT" ? VarClass::Output : h == "VAR_IN_OUT" ? VarClass::InOut
+                 : h == "VAR_TEMP" ? VarClass::Temp : h == "VAR_EXTERNAL" ? VarClass::External : h == "VAR_GLOBAL" ? VarClass::Global
+                 : h == "VAR" ? VarClass::Local : VarClass(255);
+    if (cls == VarClass(255)) fail(head, "unknown variable block '" + head.text + "'");
+    if ((cls == VarClass::InOut || cls == VarClass::External) && p.kind == PouKind::Program && cls == VarClass::InOut)
+      fail(head, "a PROGRAM has no VAR_IN_OUT here (ldc runs one program)");
+    if (cls == VarClass::Global && p.kind != PouKind::Program) fail(head, "VAR_GLOBAL belongs to the program");
+    bool constant = false, retain = false;
+    while (kw(peek(), "CONSTANT") || kw(peek(), "RETAIN") || kw(peek(), "NON_RETAIN")) {
+      constant |= kw(peek(), "CONSTANT");
+      retain |= kw(peek(), "RETAIN");
+      next();
+    }
+    end_line();
+    for (;;) {
+      skip_eols();
+      if (kw(peek(), "END_VAR")) { next(); end_line(); return; }
+      if (peek().kind == Tok::End) fail(head, "'" + head.text + "' block without END_VAR");
+      decl(p, cls, constant, retain);
+    }
+  }
+
+  // decl = NAME { "," NAME } [ "AT" location ] ":" type_spec [ ":=" init ] ";"
+  void decl(Pou& p, VarClass cls, bool constant, bool retain) {
+    std::vector<Tok> names{name_tok("a variable name")};
+    while (punct(peek(), ",")) next(), names.push_back(name_tok("a variable name"));
+    std::optional<DeviceRef> at;
+    skip_eols();
+    if (kw(peek(), "AT")) {
+      next();
+      const Tok& a = next();
+      if (names.size() > 1) fail(a, "one variable per AT location");
+      if (p.kind != PouKind::Program) fail(a, "a located variable (AT) belongs to the program, not to " + p.name);
+      std::string why;
+      if (a.kind == Tok::Word) at = a.text[0] == '%' ? iec_address(a.text, why) : parse_device(a.text);
+      if (!at) fail(a, why.empty() ? "expected a location (%IX0.0, %QW2, %MD1 ... or an ldc device)" + found(a) : why);
+      if (at->index >= device_count(at->dev)) fail(a, "location " + a.text + " is outside ldc's devices");
+      at_tok_ = a;
+    }
+    expect(":");
+    skip_eols();
+    const Tok& tt = peek();
+    TypeId id = use_type(type_spec(), tt);
+    Init init;
+    skip_eols();
+    if (punct(peek(), ":=")) {
+      next();
+      init = init_value();
+      if (cls == VarClass::InOut || cls == VarClass::External) fail(init.loc, std::string("a ") + var_class_name(cls) + " has no initial value");
+    }
+    expect(";");
+    if (at) check_location(*at, id);
+    for (const Tok& n : names)
+      p.vars.push_back({n.text, id, cls, constant, retain, init, at, loc(n)});
+  }
+  Tok at_tok_;
+  void check_location(DeviceRef d, TypeId id) {
+    Ty t = m_.scalar_ty(id);
+    if (t == Ty::None) fail(at_tok_, "a located variable is of an elementary type here, not " + m_.type_name(id));
+    bool bit = bit_area(d.dev) != Area::Count && d.dev != Dev::T && d.dev != Dev::C;
+    Area w = word_area(d.dev);
+    bool ok = t == Ty::BOOL ? bit
+                            : w != Area::Count && d.dev != Dev::T && d.dev != Dev::C && (w == Area::F) == (t == Ty::REAL) &&
+                                  d.index + uint32_t(ty_info(t).cells) <= device_count(d.dev);
+    if (!ok) fail(at_tok_, "location " + at_tok_.text + " does not fit type " + m_.type_name(id));
+  }
+
+  // ---------------------------------------------------------------- layout
+
+  // The variable area lies after every M, D and F the file names itself.
+  void lay_out() {
+    uint32_t m = 0, d = 0, f = 0;
+    for (const Tok& k : t_) {
+      if (k.kind != Tok::Word) continue;
+      std::string why;
+      std::optional<DeviceRef> r = k.text[0] == '%' ? iec_address(k.text, why) : parse_device(k.text);
+      if (!r || r->index >= device_count(r->dev)) continue;
+      if (r->dev == Dev::M) m = std::max(m, r->index + 1);
+      if (r->dev == Dev::D) d = std::max(d, r->index + 2);  // room for a 64-bit value located there
+      if (r->dev == Dev::F) f = std::max(f, r->index + 2);
+    }
+    m_.set_area(m, d);
+    next_f_ = f;
+    const Pou& prog = m_.pous[size_t(program_)];
+    for (const Var& v : prog.vars) {
+      model::Ref r;
+      r.type = v.type;
+      r.writable = !v.constant;
+      Ty st = m_.scalar_ty(v.type);
+      if (v.at) {
+        r.bits = bit_area(v.at->dev), r.cells = word_area(v.at->dev);
+        r.at = {v.at->index, v.at->index};
+        if (r.bits == Area::X || (st != Ty::BOOL && r.cells == Area::WX)) r.writable = false;
+      } else if (st == Ty::REAL && next_f_ < device_count(Dev::F)) {  // a REAL of the program in F: --watch shows it as REAL
+        r.cells = Area::F;
+        r.at = {0, next_f_++};
+      } else {
+        r.at = m_.place(m_.type(v.type).size, v.loc);
+      }
+      globals_[upper(v.name)] = r;
+      if (v.retain)
+        for (uint32_t c = 0; c < m_.type(v.type).size.cells && r.cells == Area::D; c++) p_.retain.push_back({Dev::D, r.at.cell + c});
+      aliases(v.name, r);
+    }
+  }
+  // --watch names: the variable, and the scalars of a structured one (p.x, a[1], a[1].on)
+  void aliases(const std::string& name, const model::Ref& r) {
+    size_t n = 0;
+    std::function<void(const std::string&, TypeId, Place)> walk = [&](const std::string& nm, TypeId id, Place at) {
+      if (n >= kMaxAliasLeaves) return;
+      const Type& t = m_.type(id);
+      if (t.scalar()) {
+        Operand o = operand_at(t.elem, at, r.bits, r.cells);
+        Dev d = o.area == Area::M ? Dev::M : o.area == Area::D ? Dev::D : o.area == Area::F ? Dev::F : o.area == Area::X ? Dev::X
+              : o.area == Area::Y ? Dev::Y : o.area == Area::K ? Dev::K : o.area == Area::WX ? Dev::WX : o.area == Area::WY ? Dev::WY : Dev::S;
+        if (parse_device(nm) || upper(nm) == "DT") return;  // names that spell a device
+        p_.aliases.push_back({nm, {d, o.index}});
+        n++;
+        return;
+      }
+      if (t.kind == TypeKind::Array) {
+        uint32_t count = 1;
+        for (const Dim& dm : t.dims) count *= dm.count();
+        Size e = m_.type(t.of).size;
+        for (uint32_t k = 0; k < count && n < kMaxAliasLeaves; k++) {
+          std::string idx;
+          uint32_t rest = k;
+          std::vector<int64_t> ix(t.dims.size());
+          for (size_t j = t.dims.size(); j-- > 0;) ix[j] = t.dims[j].lo + int64_t(rest % t.dims[j].count()), rest /= t.dims[j].count();
+          for (size_t j = 0; j < ix.size(); j++) idx += (j ? "," : "") + std::to_string(ix[j]);
+          walk(nm + "[" + idx + "]", t.of, at + e * k);
+        }
+        return;
+      }
+      for (const Member& mb : t.members)
+        if (mb.type != kNoType) walk(nm + "." + mb.name, mb.type, at + mb.offset);
+    };
+    walk(name, r.type, r.at);
+  }
+
+  Operand scratch(const std::string& key, Ty t) {
+    std::string k = key + "." + ty_info(t).name;
+    auto it = scratch_.find(k);
+    if (it == scratch_.end()) it = scratch_.emplace(k, m_.place(m_.type(m_.elem(t)).size, SrcLoc{1, 1})).first;
+    return operand_at(t, it->second);
+  }
+
+  // ---------------------------------------------------------------- code
+
+  Rung* rung_ = nullptr;
+  int depth_ = 0;
+  std::vector<std::string> pending_labels_;
+  struct Jump { std::string label; SrcLoc at; size_t rung; };
+  std::vector<Jump> jumps_;
+  std::set<std::string> labels_;
+  SrcLoc here_;
+  size_t instructions_ = 0;
+  int copies_ = 0;
+  std::vector<int> expanding_;  // POUs being expanded, outermost first
+  int paren_base_ = 0;          // parentheses open in the callers
+
+  void start_rung() {
+    if (p_.rungs.size() >= kMaxRungs) fail(here_, "more than " + std::to_string(kMaxRungs) + " rungs (after expanding the calls inline)");
+    Rung r;
+    r.line = here_.line;
+    r.labels = std::move(pending_labels_);
+    pending_labels_.clear();
+    p_.rungs.push_back(std::move(r));
+    rung_ = &p_.rungs.back();
+    depth_ = 0;
+    emit(Op::TRUE);
+  }
+  void ensure_rung() {
+    if (!rung_) start_rung();
+  }
+  void emit(Op op, Operand a = {}, Operand b = {}, Operand c = {}, Ty ty = Ty::None, Ty src = Ty::None) {
+    if (!rung_) start_rung();
+    Instr in;
+    in.op = op, in.ty = ty, in.src = src;
+    in.a[0] = a, in.a[1] = b, in.a[2] = c;
+    for (int i = 0; i < in.nopd(); i++)
+      if (op_info(op).operands[i] == 'e') in.a[i] = Operand{OpdKind::Edge, Area::Sys, p_.edge_slots++};
+    in.loc = here_;
+    depth_ += op_info(op).push - op_info(op).pop;
+    if (++instructions_ > kMaxInstructions)
+      fail(here_, "more than " + std::to_string(kMaxInstructions) + " IL instructions after expanding the calls inline");
+    rung_->code.push_back(in);
+  }
+  void typed(Op op, Ty t, Operand a, Operand b = {}, Operand c = {}, Ty u = Ty::None) {
+    if (!op_takes(op, t, u))
+      fail(here_, std::string(op_info(op).name + 1) + " does not take " + ty_info(t).name + (u != Ty::None ? std::string(" and ") + ty_info(u).name : ""));
+    emit(op, a, b, c, t, u);
+  }
+  void label_here(const std::string& l) {
+    rung_ = nullptr;
+    pending_labels_.push_back(l);
+  }
+  void jump_to(const std::string& l) {
+    Operand o{OpdKind::Label};
+    o.label = l;
+    jumps_.push_back({l, here_, 0});
+    emit(Op::JMP, o);
+    jumps_.back().rung = p_.rungs.size() - 1;
+  }
+
+  // ---- values at places
+
+  Ty ty_of(TypeId id) const { return m_.scalar_ty(id); }
+  std::string a_type(TypeId id) const {  // "an INT", "a DINT"
+    std::string n = m_.type_name(id);
+    return (std::string("AEIOUaeiou").find(n[0]) != std::string::npos ? "an " : "a ") + n;
+  }
+  // The index sequence of a Ref with variable indices; returns after the IDX
+  // that the LDX/STX must follow.  Its base is the Ref's place (every
+  // variable index at its lower bound) and its stride in the base's area.
+  std::pair<Operand, int32_t> index(const model::Ref& r) {
+    Ty t = ty_of(r.type);
+    Operand base = operand_at(t, r.at, r.bits, r.cells);
+    if (r.steps.size() == 1) {
+      const IndexStep& s = r.steps[0];
+      typed(Op::TIDX, s.index_ty, s.index, Operand::typed_const(uint64_t(int64_t(s.dim.lo))),
+            Operand::typed_const(uint64_t(int64_t(s.dim.hi))));
+      fix_k(rung_->code.back());
+      return {base, stride_of(t, s.stride)};
+    }
+    // several: each index checked by its own IDX (the fault names it), the
+    // element's offset summed in a DINT, then one IDX over the whole span
+    Operand off = scratch("xoff", Ty::DINT), tmp = scratch("xtmp", Ty::DINT);
+    typed(Op::TMOVE, Ty::DINT, Operand::typed_const(0), off);
+    int64_t span = 0;
+    for (const IndexStep& s : r.steps) {
+      typed(Op::TIDX, s.index_ty, s.index, Operand::typed_const(uint64_t(int64_t(s.dim.lo))), Operand::typed_const(uint64_t(int64_t(s.dim.hi))));
+      fix_k(rung_->code.back());
+      typed(Op::TLDX, Ty::DINT, tmp, k_const(0), tmp);  // the check alone: stride 0 reads tmp back
+      fix_k(rung_->code.back());
+      if (s.index_ty == Ty::DINT) typed(Op::TMOVE, Ty::DINT, s.index, tmp);
+      else typed(Op::TCONV, Ty::DINT, s.index, tmp, {}, s.index_ty);
+      int32_t st = stride_of(t, s.stride);
+      typed(Op::TSUB, Ty::DINT, tmp, Operand::typed_const(uint64_t(int64_t(s.dim.lo))), tmp);
+      typed(Op::TMUL, Ty::DINT, tmp, Operand::typed_const(uint64_t(int64_t(st))), tmp);
+      typed(Op::TADD, Ty::DINT, off, tmp, off);
+      span += int64_t(s.dim.hi - s.dim.lo) * st;
+    }
+    typed(Op::TIDX, Ty::DINT, off, Operand::typed_const(0), Operand::typed_const(uint64_t(span)));
+    fix_k(rung_->code.back());
+    return {base, 1};
+  }
+  static Operand k_const(int32_t v) {
+    Operand o{OpdKind::ConstInt};
+    o.ival = v;
+    return o;
+  }
+  // IDX's bounds and LDX/STX's stride are INT32 constants (k), not typed ones
+  static void fix_k(Instr& in) {
+    const char* sig = op_info(in.op).operands;
+    for (int i = 0; sig[i]; i++)
+      if (sig[i] == 'k' && in.a[i].kind == OpdKind::ConstT) in.a[i] = k_const(int32_t(uint32_t(in.a[i].bits())));
+  }
+  Operand load(const model::Ref& r, const std::string& key) {
+    Ty t = ty_of(r.type);
+    if (r.direct()) return operand_at(t, r.at, r.bits, r.cells);
+    auto [base, stride] = index(r);
+    Operand d = scratch(key, t);
+    typed(Op::TLDX, t, base, k_const(stride), d);
+    return d;
+  }
+  void store(const model::Ref& r, Operand v, const Tok& at) {
+    if (!r.writable) fail(at, "'" + at.text + "' cannot be written (an input, or a CONSTANT)");
+    Ty t = ty_of(r.type);
+    if (r.direct()) {
+      Operand d = operand_at(t, r.at, r.bits, r.cells);
+      if (t == Ty::BOOL ? !operand_area_ok('w', d.area, d.index) : !operand_area_ok('d', d.area, d.index))
+        fail(at, "'" + at.text + "' cannot be written (an input)");
+      if (!(d == v)) typed(Op::TMOVE, t, v, d);
+      return;
+    }
+    auto [base, stride] = index(r);
+    typed(Op::TSTX, t, v, base, k_const(stride));
+  }
+  // a whole structured value (block move, element by element)
+  void copy_value(TypeId id, const model::Ref& from, const model::Ref& to, const Tok& at) {
+    if (!from.direct() || !to.direct()) fail(at, "a structured value selected by a variable index cannot be copied whole");
+    const Type& t = m_.type(id);
+    if (t.scalar()) {
+      model::Ref f = from, d = to;
+      f.type = d.type = id;
+      store(d, load(f, "copy"), at);
+      return;
+    }
+    if (t.kind == TypeKind::Array) {
+      uint32_t n = 1;
+      for (const Dim& dm : t.dims) n *= dm.count();
+      Size e = m_.type(t.of).size;
+      for (uint32_t k = 0; k < n; k++) {
+        model::Ref f = from, d = to;
+        f.at = from.at + e * k, d.at = to.at + e * k;
+        copy_value(t.of, f, d, at);
+      }
+      return;
+    }
+    for (const Member& mb : t.members) {
+      if (mb.type == kNoType) continue;
+      model::Ref f = from, d = to;
+      f.at = from.at + mb.offset, d.at = to.at + mb.offset;
+      copy_value(mb.type, f, d, at);
+    }
+  }
+
+  // ---- names
+
+  Scope* scope_ = nullptr;
+
+  // An operand: a literal, an enumerator, a variable path (a.b[i, 2].c), a device.
+  Val operand(const std::string& key) {
+    skip_eols();
+    const Tok& k = next();
+    if (k.kind != Tok::Word) fail(k, "expected an operand" + found(k));
+    Val v;
+    std::string why;
+    if (auto p = parse_literal(k.text, why)) {
+      v.lit = *p;
+      v.lit_type = p->lit.ty == Ty::None || p->untyped_int || p->untyped_real ? kNoType : m_.elem(p->lit.ty);
+      return v;
+    }
+    if (!why.empty()) fail(k, why);
+    std::string head = upper(k.text.substr(0, k.text.find('.')));
+    if (!scope_->names.count(head))
+      if (auto e = enumerator(k.text)) {
+        v.lit.lit = {Ty::DINT, uint64_t(e->second)};
+        v.lit_type = e->first;
+        return v;
+      }
+    v.kind = Val::Ref_;
+    v.ref = path(k, key);
+    return v;
+  }
+  model::Ref path(const Tok& k, const std::string& key) {
+    Nest nest(nesting_, k);
+    std::vector<std::string> parts;
+    std::string text = k.text;
+    size_t st = 0;
+    for (size_t i = 0; i <= text.size(); i++)
+      if (i == text.size() || text[i] == '.') parts.push_back(text.substr(st, i - st)), st = i + 1;
+    model::Ref r;
+    std::string head = upper(parts[0]);
+    if (auto it = scope_->names.find(head); it != scope_->names.end()) {
+      r = it->second;
+    } else if (text[0] == '%' || (parse_device(text) && parts.size() == 1)) {
+      return device(k);
+    } else {
+      fail(k, "unknown variable '" + parts[0] + "'" + (scope_->pou == program_ ? "" : " in " + m_.pous[size_t(scope_->pou)].name));
+    }
+    SrcLoc at = loc(k);
+    for (size_t i = 1; i < parts.size(); i++) {
+      if (parts[i].empty()) fail(k, "an empty member name in '" + k.text + "'");
+      r = m_.select_member(r, parts[i], at);
+    }
+    while (punct(peek(), "[")) {
+      next();
+      std::vector<std::pair<Operand, Ty>> idx;
+      for (;;) {
+        const Tok& it = peek();
+        Val iv = operand(key + "i" + std::to_string(idx.size()));
+        idx.push_back(index_operand(iv, it, key + "i" + std::to_string(idx.size())));
+        if (punct(peek(), ",")) { next(); continue; }
+        if (!punct(peek(), "]")) fail(peek(), "expected ',' or ']'" + found(peek()));
+        next();
+        break;
+      }
+      r = m_.select_element(r, idx, at);
+      if (peek().kind == Tok::Word && peek().text[0] == '.') {  // a[1].x
+        const Tok& mk = next();
+        std::string rest = mk.text.substr(1);
+        size_t s2 = 0;
+        for (size_t i = 0; i <= rest.size(); i++)
+          if (i == rest.size() || rest[i] == '.') {
+            if (i == s2) fail(mk, "an empty member name");
+            r = m_.select_member(r, rest.substr(s2, i - s2), loc(mk));
+            s2 = i + 1;
+          }
+      }
+    }
+    return r;
+  }
+  std::pair<Operand, Ty> index_operand(const Val& v, const Tok& k, const std::string& key) {
+    if (v.kind == Val::Lit) {
+      if (!v.lit.untyped_int || v.lit.lit.ty == Ty::ULINT) {
+        if (v.lit_type != kNoType && typed::is_int_kind(v.lit.lit.ty) && ty_info(v.lit.lit.ty).kind != TyKind::Bits)
+          return {Operand::typed_const(v.lit.lit.bits), v.lit.lit.ty};
+        fail(k, "an array index must be an integer (SINT .. ULINT): '" + k.text + "' is not one");
+      }
+      return {Operand::typed_const(uint64_t(v.lit.ival)), Ty::LINT};
+    }
+    Ty t = ty_of(v.ref.type);
+    if (t == Ty::None) fail(k, "an array index must be an integer (SINT .. ULINT), '" + k.text + "' is " + a_type(v.ref.type));
+    return {load(v.ref, key), t};
+  }
+  model::Ref device(const Tok& k) {
+    std::string why;
+    std::optional<DeviceRef> d = k.text[0] == '%' ? iec_address(k.text, why) : parse_device(k.text);
+    if (!d) fail(k, why.empty() ? "unknown variable '" + k.text + "'" : why);
+    if (d->index >= device_count(d->dev)) fail(k, "device index out of range: " + k.text);
+    if (d->dev == Dev::T || d->dev == Dev::C) fail(k, "timers and counters are not available in a program with typed declarations yet");
+    model::Ref r;
+    r.bits = bit_area(d->dev), r.cells = word_area(d->dev);
+    r.at = {d->index, d->index};
+    r.type = m_.elem(r.bits != Area::Count ? Ty::BOOL : r.cells == Area::F ? Ty::REAL : Ty::DINT);
+    r.writable = d->dev != Dev::X && d->dev != Dev::WX && d->dev != Dev::K;
+    return r;
+  }
+
+  // ---- the current result
+
+  Cr cr_;
+  struct Paren { std::string op; Cr saved; SrcLoc at; Tok tok; };
+  std::vector<Paren> parens_;
+
+  void need_cr(const Tok& k) {
+    if (!cr_.defined)
+      fail(k, "'" + k.text + "' needs a current result: after a label, a jump, a call or at the start, begin with LD");
+  }
+  Ty cr_ty() const { return cr_.lit ? Ty::None : ty_of(cr_.type); }
+  // The BOOL CR as a bit device (a constant is put in an accumulator first).
+  Operand cr_bit() {
+    if (cr_.o.kind != OpdKind::ConstT) return cr_.o;
+    Operand d = acc(Ty::BOOL);
+    typed(Op::TMOVE, Ty::BOOL, cr_.o, d);
+    cr_.o = d;
+    return d;
+  }
+  // Skips a variable path (name, [indices], .members) without lowering it.
+  void skip_path() {
+    next();
+    while (punct(peek(), "[")) {
+      int depth = 0;
+      do {
+        if (punct(peek(), "[")) depth++;
+        if (punct(peek(), "]")) depth--;
+        if (peek().kind == Tok::Eol || peek().kind == Tok::End) fail(peek(), "expected ']'" + found(peek()));
+        next();
+      } while (depth > 0);
+      if (peek().kind == Tok::Word && peek().text[0] == '.') next();
+    }
+  }
+  void need_bool(const Tok& k) {
+    need_cr(k);
+    if (cr_.lit || cr_ty() != Ty::BOOL)
+      fail(k, "'" + k.text + "' needs a BOOL current result, this one is " + (cr_.lit ? std::string("a number") : m_.type_name(cr_.type)));
+  }
+  // The CR as an operand of type t (an untyped literal takes t).
+  void type_cr(TypeId t, const Tok& at) {
+    if (!cr_.lit) return;
+    std::string why;
+    Ty st = ty_of(t);
+    if (st == Ty::None) fail(at, "a number where " + a_type(t) + " is wanted");
+    auto v = literal_as(*cr_.lit, st, why);
+    if (!v) fail(at, why);
+    cr_.lit.reset();
+    cr_.type = t;
+    cr_.o = Operand::typed_const(v->bits);
+  }
+  // An untyped CR that meets another untyped number: DINT or LREAL (IEC's defaults)
+  void default_cr(const Tok& at) {
+    if (cr_.lit) type_cr(m_.elem(cr_.lit->untyped_real ? Ty::LREAL : Ty::DINT), at);
+  }
+  // v as a source operand of type t
+  Operand value_as(const Val& v, TypeId t, const Tok& k, const std::string& key, const char* what) {
+    Ty st = ty_of(t);
+    if (v.kind == Val::Lit) {
+      if (v.lit_type != kNoType && m_.type(v.lit_type).kind == TypeKind::Enum) {
+        if (!m_.same_type(v.lit_type, t) && v.lit_type != t) fail(k, "'" + k.text + "' is " + a_type(v.lit_type) + ", not " + a_type(t));
+        return Operand::typed_const(v.lit.lit.bits);
+      }
+      if (m_.type(t).kind == TypeKind::Enum) fail(k, "'" + k.text + "' is not " + a_type(t));
+      std::string why;
+      auto l = literal_as(v.lit, st, why);
+      if (!l) fail(k, why);
+      return Operand::typed_const(l->bits);
+    }
+    if (!m_.same_type(v.ref.type, t))
+      fail(k, std::string(what) + " of " + a_type(t) + " and '" + k.text + "', " + a_type(v.ref.type) +
+                  ": convert it first (" + m_.type_name(v.ref.type) + "_TO_" + m_.type_name(t) + ")");
+    return load(v.ref, key);
+  }
+  TypeId val_type(const Val& v) const {
+    if (v.kind == Val::Lit) return v.lit_type;
+    return v.ref.type;
+  }
+  void set_cr(TypeId t, Operand o) {
+    cr_ = Cr{};
+    cr_.defined = true, cr_.type = t, cr_.o = o;
+  }
+  Operand acc(Ty t) { return scratch("acc" + std::to_string(paren_base_ + int(parens_.size())), t); }
+
+  // ---------------------------------------------------------------- lowering
+
+  void lower_program() {
+    Scope s;
+    s.pou = program_;
+    s.names = globals_;
+    scope_ = &s;
+    here_ = {1, 1};
+    initial_values();
+    lower_body(program_);
+    scope_ = nullptr;
+  }
+
+  // Written on the first scan, before anything else (S1).
+  void initial_values() {
+    struct Init1 { Ty ty; Operand to; uint64_t bits; };
+    std::vector<Init1> stores;
+    for (const Var& v : m_.pous[size_t(program_)].vars) {
+      const model::Ref& r = globals_.at(upper(v.name));
+      if (v.at && v.init.kind != Init::None && (r.bits == Area::X || r.cells == Area::WX))
+        fail(v.init.loc, "an input (" + v.name + ") has no initial value: the I/O writes it");
+      std::vector<Model::Store> one;
+      m_.initial_stores(v.type, r.at, v.init.kind == Init::None ? nullptr : &v.init, one);
+      for (auto& st : one) stores.push_back({st.ty, operand_at(st.ty, st.at, r.bits, r.cells), st.bits});
+    }
+    if (stores.empty()) return;
+    start_rung();
+    emit(Op::LOAD, Operand{OpdKind::Bit, Area::S, kBitFirstScan});
+    for (const auto& st : stores) typed(Op::TMOVE, st.ty, Operand::typed_const(st.bits), st.to);
+    rung_ = nullptr;
+  }
+
+  // Lowers the body of POU `pou` in the current scope.
+  void lower_body(int pou) {
+    PouSrc& s = src_of(pou);
+    size_t save = pos_;
+    pos_ = s.body;
+    cr_ = Cr{};
+    rung_ = nullptr;
+    while (pos_ < s.end) {
+      if (peek().kind == Tok::Eol) { next(); continue; }
+      line();
+    }
+    if (!parens_.empty()) fail(parens_.back().at, "'(' is never closed");
+    pos_ = save;
+  }
+  PouSrc& src_of(int pou) {
+    for (auto& [u, s] : pou_src_)
+      if (s.pou == pou) return s;
+    throw std::logic_error("POU without source");
+  }
+
+  // line = [ NAME ":" ] [ instruction ] EOL
+  void line() {
+    const Tok& first = peek();
+    if (first.kind == Tok::Word && punct(peek(1), ":")) {
+      if (!ident(first.text)) fail(first, "bad label name '" + first.text + "'");
+      if (!parens_.empty()) fail(first, "a label inside parentheses");
+      std::string l = scope_->prefix + first.text;
+      if (!labels_.insert(l).second) fail(first, "duplicate label '" + first.text + "'");
+      label_here(l);
+      cr_ = Cr{};
+      pos_ += 2;
+      if (peek().kind == Tok::Eol || peek().kind == Tok::End) { end_line(); return; }
+    }
+    const Tok& op = next();
+    here_ = loc(op);
+    if (punct(op, ")")) {
+      close_paren(op);
+      end_line();
+      return;
+    }
+    if (op.kind != Tok::Word) fail(op, "expected an IL operator" + found(op));
+    instruction(op);
+    end_line();
+  }
+
+  void instruction(const Tok& op) {
+    std::string u = upper(op.text);
+    if (punct(peek(), "(") && u != "CAL" && u != "CALC" && u != "CALCN" && !is_function(u)) {
+      next();
+      return open_paren(op, u);
+    }
+    if (u == "LD" || u == "LDN") return load_op(op, u == "LDN");
+    if (u == "ST" || u == "STN") return store_op(op, u == "STN");
+    if (u == "S" || u == "R") return set_reset(op, u == "S");
+    if (u == "JMP" || u == "JMPC" || u == "JMPCN") return jump(op, u);
+    if (u == "RET" || u == "RETC" || u == "RETCN") return ret(op, u);
+    if (u == "CAL" || u == "CALC" || u == "CALCN") return call(op, u);
+    if (binary_op(u)) {
+      need_cr(op);
+      Tok k = peek();
+      Val v = operand("b");
+      return binary(op, u, v, k);
+    }
+    if (u == "MOVE") { need_cr(op); return; }
+    if (u == "NOT") return not_op(op);
+    if (unary_fn(u) || conversion(u) || u == "TRUNC") return function1(op, u);
+    if (u == "MIN" || u == "MAX" || u == "LIMIT" || u == "SEL" || u == "MUX") return selection(op, u);
+    if (is_function(u)) return user_function(op, u);
+    static const std::set<std::string> ldc_ops = {"LOAD", "LOADN", "OUT", "OUTN", "SET", "RST", "ANDBLK", "ORBLK", "MPS", "MRD", "MPP"};
+    fail(op, "unknown IL operator '" + op.text + "'" +
+                 (ldc_ops.count(u) ? std::string(" (this file is read as IEC IL; ldc's own IL starts with a '.rung' line)") : ""));
+  }
+  static bool binary_op(const std::string& u) {
+    static const std::set<std::string> k = {"AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ADD", "SUB", "MUL", "DIV", "MOD",
+                                            "GT", "GE", "EQ", "NE", "LT", "LE", "SHL", "SHR", "ROL", "ROR", "EXPT"};
+    return k.count(u) > 0;
+  }
+  static bool unary_fn(const std::string& u) {
+    static const std::set<std::string> k = {"ABS", "NEG", "SQRT", "LN", "LOG", "EXP", "SIN", "COS", "TAN", "ASIN", "ACOS", "ATAN"};
+    return k.count(u) > 0;
+  }
+  // A_TO_B, A and B elementary: (A, B)
+  static std::optional<std::pair<Ty, Ty>> conversion(const std::string& u) {
+    size_t p = u.find("_TO_");
+    if (p == std::string::npos) return std::nullopt;
+    auto a = ty_from_name(u.substr(0, p)), b = ty_from_name(u.substr(p + 4));
+    if (!a || !b) return std::nullopt;
+    return std::make_pair(*a, *b);
+  }
+  bool is_function(const std::string& u) const {
+    int p = m_.find_pou(u);
+    return p >= 0 && m_.pous[size_t(p)].kind == PouKind::Function;
+  }
+
+  // LD / LDN
+  void load_op(const Tok& op, bool neg) {
+    if (!parens_.empty() && cr_.defined) fail(op, "LD inside parentheses: write it after the opening operator (AND( x)");
+    Tok k = peek();
+    Val v = operand("ld");
+    load_val(op, neg, v, k);
+  }
+  void load_val(const Tok& op, bool neg, const Val& v, const Tok& k) {
+    ensure_rung();
+    if (v.kind == Val::Lit && v.lit_type == kNoType) {
+      if (neg) fail(op, "LDN of a number");
+      cr_ = Cr{};
+      cr_.defined = true;
+      cr_.lit = v.lit;
+      return;
+    }
+    TypeId t = val_type(v);
+    if (!m_.type(t).scalar()) {
+      if (neg) fail(op, "LDN of " + a_type(t));
+      cr_ = Cr{};
+      cr_.defined = true, cr_.type = t;
+      whole_ = v.ref;  // a structured value: only ST may follow
+      whole_tok_ = k;
+      return;
+    }
+    Operand o = v.kind == Val::Lit ? Operand::typed_const(v.lit.lit.bits) : load(v.ref, "ld");
+    set_cr(t, o);
+    if (neg) {
+      Ty st = ty_of(t);
+      if (st != Ty::BOOL && ty_info(st).kind != TyKind::Bits) fail(op, "LDN needs a BOOL or a bit string, '" + k.text + "' is " + a_type(t));
+      Operand d = acc(st);
+      typed(Op::TNOT, st, o, d);
+      cr_.o = d;
+    }
+  }
+  model::Ref whole_;
+  Tok whole_tok_;
+  bool cr_whole() const { return cr_.defined && !cr_.lit && !m_.type(cr_.type).scalar(); }
+
+  void store_op(const Tok& op, bool neg) {
+    need_cr(op);
+    Tok k = peek();
+    if (k.kind != Tok::Word) fail(k, "'" + op.text + "' needs an operand" + found(k));
+    Val v = operand("st");
+    if (v.kind == Val::Lit) fail(k, "'" + k.text + "' cannot be written (a constant)");
+    if (cr_whole()) {
+      if (neg) fail(op, "STN of " + a_type(cr_.type));
+      if (v.ref.type != cr_.type) fail(k, "ST of " + a_type(cr_.type) + " into '" + k.text + "', " + a_type(v.ref.type));
+      if (!v.ref.writable) fail(k, "'" + k.text + "' cannot be written (an input, or a CONSTANT)");
+      copy_value(cr_.type, whole_, v.ref, k);
+      return;
+    }
+    if (!m_.type(v.ref.type).scalar()) fail(k, "ST of a single value into '" + k.text + "', " + a_type(v.ref.type));
+    type_cr(v.ref.type, op);
+    if (!m_.same_type(cr_.type, v.ref.type) && !(m_.type(cr_.type).kind == TypeKind::Enum && cr_.type == v.ref.type))
+      fail(k, "ST of " + a_type(cr_.type) + " result into '" + k.text + "', " + a_type(v.ref.type) +
+                  ": convert it first (" + m_.type_name(cr_.type) + "_TO_" + m_.type_name(v.ref.type) + ")");
+    Operand val = cr_.o;
+    Ty t = ty_of(cr_.type);
+    if (neg) {
+      if (t != Ty::BOOL && ty_info(t).kind != TyKind::Bits) fail(op, "STN needs a BOOL or bit-string result");
+      val = scratch("stn", t);
+      typed(Op::TNOT, t, cr_.o, val);
+    }
+    // the operation that computed the CR writes the variable itself
+    Instr* last = rung_ && !rung_->code.empty() ? &rung_->code.back() : nullptr;
+    if (!neg && v.ref.direct() && v.ref.writable && last && last->ty == t && op_info(last->op).klass == OpClass::Typed &&
+        op_info(last->op).push == 0 && last->op != Op::TSTX && last->op != Op::TIDX && last->a[last->nopd() - 1] == cr_.o &&
+        is_acc(cr_.o)) {
+      Operand d = operand_at(t, v.ref.at, v.ref.bits, v.ref.cells);
+      if (t == Ty::BOOL ? operand_area_ok('w', d.area, d.index) : operand_area_ok('d', d.area, d.index)) {
+        last->a[last->nopd() - 1] = d;
+        cr_.o = d;
+        return;
+      }
+    }
+    store(v.ref, val, k);
+    if (v.ref.direct()) cr_.o = operand_at(t, v.ref.at, v.ref.bits, v.ref.cells);
+  }
+  bool is_acc(const Operand& o) const {
+    for (const auto& [k, p] : scratch_)
+      if (k.rfind("acc", 0) == 0 && (o.area == Area::D ? p.cell == o.index : o.area == Area::M && p.bit == o.index)) return true;
+    return false;
+  }
+
+  void set_reset(const Tok& op, bool set) {
+    need_bool(op);
+    Tok k = peek();
+    Val v = operand("sr");
+    if (v.kind == Val::Lit || ty_of(v.ref.type) != Ty::BOOL) fail(k, std::string(set ? "S" : "R") + " needs a BOOL variable, '" + k.text + "' is not one");
+    if (!v.ref.writable) fail(k, "'" + k.text + "' cannot be written (an input, or a CONSTANT)");
+    if (v.ref.direct()) {
+      Operand d = operand_at(Ty::BOOL, v.ref.at, v.ref.bits, v.ref.cells);
+      if (!operand_area_ok('w', d.area, d.index)) fail(k, "'" + k.text + "' cannot be written (an input)");
+      emit(Op::LOAD, cr_bit());
+      emit(set ? Op::SET : Op::RST, d);
+      emit(Op::MPP);
+      return;
+    }
+    // an element: x := x OR CR (S), x := x AND NOT CR (R)
+    Operand x = load(v.ref, "sr"), h = scratch("srh", Ty::BOOL);
+    if (set) typed(Op::TOR, Ty::BOOL, x, cr_.o, h);
+    else typed(Op::TNOT, Ty::BOOL, cr_.o, h), typed(Op::TAND, Ty::BOOL, x, h, h);
+    store(v.ref, h, k);
+  }
+
+  void not_op(const Tok& op) {
+    need_cr(op);
+    default_cr(op);
+    Ty t = cr_ty();
+    if (t != Ty::BOOL && ty_info(t).kind != TyKind::Bits) fail(op, "NOT needs a BOOL or bit-string result, this one is " + m_.type_name(cr_.type));
+    Operand d = acc(t);
+    typed(Op::TNOT, t, cr_.o, d);
+    cr_.o = d;
+  }
+
+  // The binary operators: CR := CR op v
+  void binary(const Tok& op, const std::string& u, const Val& v, const Tok& k) {
+    if (cr_whole()) fail(op, "'" + op.text + "' of " + a_type(cr_.type));
+    bool shift = u == "SHL" || u == "SHR" || u == "ROL" || u == "ROR";
+    if (cr_.lit) {
+      TypeId vt = val_type(v);
+      if (vt != kNoType && !shift && m_.type(vt).scalar()) type_cr(vt, op);
+      else default_cr(op);
+    }
+    TypeId t = cr_.type;
+    Ty st = ty_of(t);
+    if (shift) {
+      TypeId nt = val_type(v);
+      Ty nst = nt == kNoType ? Ty::INT : ty_of(nt);
+      Operand n = v.kind == Val::Lit && nt == kNoType ? value_as(v, m_.elem(Ty::INT), k, "b", op.text.c_str()) : value_as(v, nt, k, "b", op.text.c_str());
+      if (ty_info(st).kind != TyKind::Bits) fail(op, op.text + " works on bit strings (BYTE WORD DWORD LWORD), this result is " + m_.type_name(t));
+      if (!typed::is_int_kind(nst) || ty_info(nst).kind == TyKind::Time || ty_info(nst).kind == TyKind::Date)
+        fail(k, "a shift count is an integer, '" + k.text + "' is not one");
+      Op o = u == "SHL" ? Op::TSHL : u == "SHR" ? Op::TSHR : u == "ROL" ? Op::TROL : Op::TROR;
+      Operand d = acc(st);
+      typed(o, st, cr_.o, n, d, nst);
+      cr_.o = d;
+      return;
+    }
+    bool neg = u == "ANDN" || u == "ORN" || u == "XORN";
+    std::string base = neg ? u.substr(0, u.size() - 1) : u;
+    if (u == "EXPT" && v.kind == Val::Ref_ && typed::is_real(st) && ty_of(v.ref.type) != st && typed::is_int_kind(ty_of(v.ref.type))) {
+      // REAL ** ANY_INT (MatIEC's EXPT takes an integer exponent too): the exponent converted first
+      Operand e = scratch("expt", st);
+      typed(Op::TCONV, st, load(v.ref, "b"), e, {}, ty_of(v.ref.type));
+      Operand d = acc(st);
+      typed(Op::TEXPT, st, cr_.o, e, d);
+      cr_.o = d;
+      return;
+    }
+    Operand b = value_as(v, t, k, "b", op.text.c_str());
+    static const std::map<std::string, Op> ops = {
+        {"AND", Op::TAND}, {"OR", Op::TOR}, {"XOR", Op::TXOR}, {"ADD", Op::TADD}, {"SUB", Op::TSUB}, {"MUL", Op::TMUL},
+        {"DIV", Op::TDIV}, {"MOD", Op::TMOD}, {"EXPT", Op::TEXPT}, {"GT", Op::TGT}, {"GE", Op::TGE}, {"EQ", Op::TEQ},
+        {"NE", Op::TNE}, {"LT", Op::TLT}, {"LE", Op::TLE}};
+    Op o = ops.at(base);
+    apply(op, o, b, neg);
+  }
+  // CR := CR o b (b already an operand of the CR's type); a compare gives a BOOL
+  void apply(const Tok& op, Op o, Operand b, bool neg_b) {
+    Ty st = cr_ty();
+    if (!op_takes(o, st, Ty::None))
+      fail(op, "'" + op.text + "' does not take " + a_type(cr_.type) + (o == Op::TMOD ? " (MOD is for integers)" : ""));
+    if (neg_b) {
+      Operand nb = scratch("nb", st);
+      typed(Op::TNOT, st, b, nb);
+      b = nb;
+    }
+    if (op_info(o).push) {  // a compare pushes its result: keep it in a BOOL accumulator
+      Operand d = acc(Ty::BOOL);
+      typed(o, st, cr_.o, b);
+      emit(Op::OUT, d);
+      emit(Op::MPP);
+      set_cr(m_.elem(Ty::BOOL), d);
+      return;
+    }
+    Operand d = acc(st);
+    bool error = false;
+    (void)error;
+    typed(o, st, cr_.o, b, d);
+    cr_.o = d;
+  }
+
+  void open_paren(const Tok& op, const std::string& u) {
+    need_cr(op);
+    if (!binary_op(u) || u == "SHL" || u == "SHR" || u == "ROL" || u == "ROR")
+      fail(op, "'" + op.text + "(' is not supported: parentheses follow AND OR XOR (N), ADD SUB MUL DIV MOD EXPT and the compares");
+    if (int(parens_.size()) >= kMaxParens) fail(op, "parentheses nested deeper than " + std::to_string(kMaxParens));
+    if (cr_whole()) fail(op, "'" + op.text + "' of " + a_type(cr_.type));
+    Cr saved = cr_;
+    if (!saved.lit) {  // the CR is kept in a temporary of this depth: the group may overwrite what it names
+      Ty t = cr_ty();
+      Operand tmp = scratch("paren" + std::to_string(paren_base_ + int(parens_.size())), t);
+      typed(Op::TMOVE, t, cr_.o, tmp);
+      saved.o = tmp;
+    }
+    parens_.push_back({u, saved, here_, op});
+    cr_ = Cr{};
+    if (peek().kind == Tok::Word) {
+      Tok k = peek();
+      Val v = operand("p");
+      load_val(op, false, v, k);
+      if (!saved.lit && cr_.lit) type_cr(saved.type, k);
+    } else {  // "ADD(" alone: the next line is LD x
+      end_line();
+      skip_eols();
+      const Tok& ld = next();
+      if (!kw(ld, "LD") && !kw(ld, "LDN")) fail(ld, "after '" + op.text + "(' comes its first operand, or LD/LDN on the next line");
+      here_ = loc(ld);
+      Tok k = peek();
+      Val v = operand("p");
+      load_val(ld, kw(ld, "LDN"), v, k);
+    }
+  }
+  void close_paren(const Tok& k) {
+    if (parens_.empty()) fail(k, "')' without '('");
+    need_cr(k);
+    Paren pr = parens_.back();
+    parens_.pop_back();
+    Cr inner = cr_;
+    cr_ = pr.saved;
+    // the group's value as the right operand
+    Val v;
+    if (inner.lit) {
+      v.lit = *inner.lit;
+    } else {
+      if (!m_.type(inner.type).scalar()) fail(k, "a group of " + a_type(inner.type));
+      // move the inner value out of the accumulator of the outer depth, which apply writes
+      Operand tmp = scratch("rparen" + std::to_string(paren_base_ + int(parens_.size())), ty_of(inner.type));
+      typed(Op::TMOVE, ty_of(inner.type), inner.o, tmp);
+      v.kind = Val::Ref_;
+      v.ref.type = inner.type;
+      v.ref.at = {tmp.index, tmp.index};
+      v.ref.bits = tmp.area == Area::M ? Area::M : Area::M;
+      v.ref.cells = Area::D;
+    }
+    binary(pr.tok, pr.op, v, k);
+  }
+
+  void jump(const Tok& op, const std::string& u) {
+    const Tok& k = next();
+    if (k.kind != Tok::Word || !ident(k.text)) fail(k, "expected a label name" + found(k));
+    if (!parens_.empty()) fail(op, "a jump inside parentheses");
+    std::string target = scope_->prefix + k.text;
+    if (u == "JMP") {
+      ensure_rung();
+      jump_to(target);
+      rung_ = nullptr;
+      cr_ = Cr{};
+      return;
+    }
+    need_bool(op);
+    emit(u == "JMPC" ? Op::LOAD : Op::LOADN, cr_bit());
+    jump_to(target);
+    emit(Op::MPP);
+  }
+
+  void ret(const Tok& op, const std::string& u) {
+    if (!parens_.empty()) fail(op, "a return inside parentheses");
+    auto leave = [&] {
+      if (scope_->end_label.empty()) emit(Op::END);
+      else jump_to(scope_->end_label);
+    };
+    if (u == "RET") {
+      ensure_rung();
+      leave();
+      rung_ = nullptr;
+      cr_ = Cr{};
+      return;
+    }
+    need_bool(op);
+    emit(u == "RETC" ? Op::LOAD : Op::LOADN, cr_bit());
+    leave();
+    emit(Op::MPP);
+  }
+
+  // ---- calls of the project's POUs, expanded inline
+
+  // CAL inst [ "(" [ arg { "," arg } ] ")" ]; arg = NAME ":=" operand | NAME "=>" variable
+  void call(const Tok& op, const std::string& u) {
+    if (!parens_.empty()) fail(op, "CAL inside parentheses");
+    const Tok& k = peek();
+    if (k.kind != Tok::Word) fail(k, "'" + op.text + "' needs an instance" + found(k));
+    Val iv = operand("cal");
+    bool bistable = iv.kind == Val::Ref_ && bistables_.count(iv.ref.type);
+    if (iv.kind != Val::Ref_ || (m_.type(iv.ref.type).kind != TypeKind::Block && !bistable))
+      fail(k, "'" + k.text + "' is not an instance of a FUNCTION_BLOCK");
+    if (!iv.ref.direct())
+      fail(k, "an instance chosen by a variable index cannot be expanded inline: call it with a constant index (ldc expands each call, docs/architecture.md)");
+    std::string skip;
+    if (u != "CAL") {  // CALC / CALCN: the call runs only if the CR is (not) TRUE
+      need_bool(op);
+      skip = "_ldc_call" + std::to_string(copies_) + "_" + std::to_string(++skips_);
+      emit(u == "CALC" ? Op::LOADN : Op::LOAD, cr_bit());
+      jump_to(skip);
+      emit(Op::MPP);
+    }
+    int pou = m_.type(iv.ref.type).pou;
+    std::vector<std::pair<Tok, Val>> in;
+    std::vector<std::pair<Tok, size_t>> out;
+    if (punct(peek(), "(")) {
+      next();
+      args(in, out);
+    }
+    if (bistable) std_call(bistables_.at(iv.ref.type), iv.ref, in, out);
+    else expand(pou, iv.ref, in, out, op);
+    if (!skip.empty()) label_here(skip);
+    cr_ = Cr{};  // the CR is undefined after a call
+  }
+  int skips_ = 0;
+  void args(std::vector<std::pair<Tok, Val>>& in, std::vector<std::pair<Tok, size_t>>& out) {
+    skip_eols();
+    while (!punct(peek(), ")")) {
+      const Tok& n = name_tok("a parameter name");
+      skip_eols();
+      if (punct(peek(), ":=")) {
+        next();
+        Tok vk = peek();
+        in.push_back({n, operand("arg" + std::to_string(in.size()))});
+        (void)vk;
+      } else if (punct(peek(), "=>")) {
+        next();
+        skip_eols();
+        out.push_back({n, pos_});
+        skip_path();  // read in the caller's scope after the call
+      } else {
+        fail(peek(), "expected ':=' or '=>' after the parameter name" + found(peek()));
+      }
+      skip_eols();
+      if (punct(peek(), ",")) { next(); skip_eols(); continue; }
+      if (!punct(peek(), ")")) fail(peek(), "expected ',' or ')'" + found(peek()));
+    }
+    next();
+  }
+  // The token position of an output argument's variable, to read it again in the caller's scope.
+  void expand(int pou, const model::Ref& inst, const std::vector<std::pair<Tok, Val>>& in,
+              const std::vector<std::pair<Tok, size_t>>& out, const Tok& at) {
+    Model::expand_guard(m_, expanding_, pou, loc(at));
+    const Pou& p = m_.pous[size_t(pou)];
+    const Type& block = m_.type(p.block);
+    Scope s;
+    s.pou = pou;
+    s.prefix = "_ldc_" + std::to_string(++copies_) + "_";
+    s.end_label = s.prefix + "end";
+    // the instance's names: its variables at their places, externals the program's globals
+    for (size_t i = 0; i < p.vars.size(); i++) {
+      const Var& v = p.vars[i];
+      const Member& mb = block.members[i];
+      if (v.cls == VarClass::External) {
+        auto g = globals_.find(upper(v.name));
+        if (g == globals_.end()) fail(v.loc, "VAR_EXTERNAL '" + v.name + "' of " + p.name + " is not a VAR_GLOBAL of the program");
+        if (g->second.type != v.type && !m_.same_type(g->second.type, v.type))
+          fail(v.loc, "VAR_EXTERNAL '" + v.name + "' is " + a_type(v.type) + ", the global " + a_type(g->second.type));
+        s.names[upper(v.name)] = g->second;
+        continue;
+      }
+      if (v.cls == VarClass::InOut) continue;  // bound below
+      model::Ref r;
+      r.type = v.type;
+      r.at = inst.at + mb.offset;
+      r.writable = !v.constant;
+      s.names[upper(v.name)] = r;
+    }
+    if (p.kind == PouKind::Function) {
+      model::Ref r;
+      r.type = p.result;
+      r.at = inst.at + block.members.back().offset;
+      s.names[upper(p.name)] = r;
+    }
+    // inputs (in the caller's scope), in-outs bound to the caller's variables
+    ensure_rung();
+    // VAR_TEMP (and all of a FUNCTION's variables: an input left out too, EN
+    // TRUE) start from their initial values at every call, before the inputs
+    std::vector<Model::Store> stores;
+    for (size_t i = 0; i < p.vars.size(); i++) {
+      const Var& v = p.vars[i];
+      bool fresh = v.cls == VarClass::Temp ||
+                   (p.kind == PouKind::Function && v.cls != VarClass::InOut && v.cls != VarClass::External);
+      if (fresh) m_.initial_stores(v.type, inst.at + block.members[i].offset, v.init.kind == Init::None ? nullptr : &v.init, stores, true);
+    }
+    if (p.kind == PouKind::Function) m_.initial_stores(p.result, inst.at + block.members.back().offset, nullptr, stores, true);
+    for (const auto& st : stores) typed(Op::TMOVE, st.ty, Operand::typed_const(st.bits), operand_at(st.ty, st.at));
+    for (const auto& [n, v] : in) {
+      int i = var_index(p, n.text);
+      if (i < 0 || (p.vars[size_t(i)].cls != VarClass::Input && p.vars[size_t(i)].cls != VarClass::InOut))
+        fail(n, p.name + " has no input '" + n.text + "'" + inputs_of(p));
+      const Var& var = p.vars[size_t(i)];
+      if (var.cls == VarClass::InOut) {
+        if (v.kind != Val::Ref_ || !v.ref.direct()) fail(n, "VAR_IN_OUT " + n.text + " needs a variable (not a constant or an element at a variable index)");
+        if (v.ref.type != var.type && !m_.same_type(v.ref.type, var.type))
+          fail(n, "VAR_IN_OUT " + n.text + " is " + a_type(var.type) + ", the argument " + a_type(v.ref.type));
+        s.names[upper(var.name)] = v.ref;
+        continue;
+      }
+      model::Ref dst = s.names.at(upper(var.name));
+      if (!m_.type(var.type).scalar()) {
+        if (v.kind != Val::Ref_ || v.ref.type != var.type) fail(n, "input " + n.text + " is " + a_type(var.type));
+        copy_value(var.type, v.ref, dst, n);
+        continue;
+      }
+      dst.writable = true;
+      store(dst, value_as(v, var.type, n, "arg", "the input"), n);
+    }
+    for (const Var& v : p.vars)
+      if (v.cls == VarClass::InOut && !s.names.count(upper(v.name)))
+        fail(at, "the call of " + p.name + " needs VAR_IN_OUT " + v.name + " :=");
+    // EN and ENO (MatIEC: ENO := EN; without EN the body is skipped)
+    Operand en = operand_of(m_, s.names.at("EN")), eno = operand_of(m_, s.names.at("ENO"));
+    typed(Op::TMOVE, Ty::BOOL, en, eno);
+    emit(Op::LOADN, en);
+    jump_to(s.end_label);
+    emit(Op::MPP);
+    // the body
+    Scope* caller = scope_;
+    Cr caller_cr = cr_;
+    auto caller_parens = std::move(parens_);
+    parens_.clear();
+    int base = paren_base_;
+    paren_base_ += int(caller_parens.size()) + 1;
+    expanding_.push_back(pou);
+    scope_ = &s;
+    SrcLoc call_at = here_;
+    lower_body(pou);
+    expanding_.pop_back();
+    scope_ = caller;
+    paren_base_ = base;
+    parens_ = std::move(caller_parens);
+    cr_ = caller_cr;
+    here_ = call_at;
+    label_here(s.end_label);
+    labels_.insert(s.end_label);
+    // outputs, in the caller's scope
+    for (const auto& [n, vt] : out) {
+      int i = var_index(p, n.text);
+      if (i < 0 || p.vars[size_t(i)].cls != VarClass::Output) fail(n, p.name + " has no output '" + n.text + "'");
+      size_t save = pos_;
+      pos_ = vt;
+      Tok k = peek();
+      Val v = operand("out");
+      pos_ = save;
+      if (v.kind != Val::Ref_) fail(k, "an output goes to a variable, '" + k.text + "' is not one");
+      const Var& var = p.vars[size_t(i)];
+      model::Ref src;
+      src.type = var.type;
+      src.at = inst.at + block.members[size_t(i)].offset;
+      if (v.ref.type != var.type && !m_.same_type(v.ref.type, var.type))
+        fail(k, "output " + n.text + " is " + a_type(var.type) + ", '" + k.text + "' " + a_type(v.ref.type));
+      copy_value(var.type, src, v.ref, k);
+    }
+  }
+  // R_TRIG F_TRIG SR RS as MatIEC computes them (lib/iec_std_FB.h):
+  //   R_TRIG  Q := CLK AND NOT M; M := CLK
+  //   F_TRIG  Q := NOT CLK AND NOT M; M := NOT CLK
+  //   SR      Q1 := S1 OR (NOT R AND Q1)
+  //   RS      Q1 := NOT R1 AND (S OR Q1)
+  void std_call(const std::string& kind, const model::Ref& inst, const std::vector<std::pair<Tok, Val>>& in,
+                const std::vector<std::pair<Tok, size_t>>& out) {
+    ensure_rung();
+    const size_t ninputs = kind == "R_TRIG" || kind == "F_TRIG" ? 1 : kind[0] == 'C' ? 3 : 2;
+    const Type& t = m_.type(inst.type);
+    auto mem = [&](const char* n) { return operand_of(m_, m_.select_member(inst, n, here_)); };
+    for (const auto& [n, v] : in) {
+      const Member* mb = m_.member(inst.type, n.text);
+      if (!mb || size_t(mb - t.members.data()) >= ninputs)
+        fail(n, kind + " has no input '" + n.text + "' (" + input_names(t, ninputs) + ")");
+      store(m_.select_member(inst, n.text, loc(n)), value_as(v, mb->type, n, "arg", "the input"), n);
+    }
+    Operand h = scratch("bist", Ty::BOOL), g = scratch("bist2", Ty::BOOL);
+    if (kind == "R_TRIG") {
+      typed(Op::TNOT, Ty::BOOL, mem("M"), h);
+      typed(Op::TAND, Ty::BOOL, mem("CLK"), h, mem("Q"));
+      typed(Op::TMOVE, Ty::BOOL, mem("CLK"), mem("M"));
+    } else if (kind == "F_TRIG") {
+      typed(Op::TOR, Ty::BOOL, mem("CLK"), mem("M"), h);
+      typed(Op::TNOT, Ty::BOOL, h, mem("Q"));
+      typed(Op::TNOT, Ty::BOOL, mem("CLK"), mem("M"));
+    } else if (kind == "SR") {
+      typed(Op::TNOT, Ty::BOOL, mem("R"), h);
+      typed(Op::TAND, Ty::BOOL, h, mem("Q1"), h);
+      typed(Op::TOR, Ty::BOOL, mem("S1"), h, mem("Q1"));
+    } else if (kind == "RS") {
+      typed(Op::TOR, Ty::BOOL, mem("S"), mem("Q1"), h);
+      typed(Op::TNOT, Ty::BOOL, mem("R1"), g);
+      typed(Op::TAND, Ty::BOOL, g, h, mem("Q1"));
+    } else {
+      timer_counter(kind, inst, mem);
+    }
+    for (const auto& [n, at] : out) {
+      const Member* mb = m_.member(inst.type, n.text);
+      if (!mb || size_t(mb - t.members.data()) < ninputs || upper(n.text) == "M") fail(n, kind + " has no output '" + n.text + "'");
+      TypeId mt = mb->type;
+      size_t save = pos_;
+      pos_ = at;
+      Tok k = peek();
+      Val v = operand("out");
+      pos_ = save;
+      if (v.kind != Val::Ref_) fail(k, "an output goes to a variable, '" + k.text + "' is not one");
+      if (!m_.same_type(v.ref.type, mt)) fail(k, "output " + n.text + " is " + a_type(mt) + ", '" + k.text + "' " + a_type(v.ref.type));
+      copy_value(mt, m_.select_member(inst, n.text, loc(n)), v.ref, k);
+    }
+  }
+  static std::string input_names(const Type& t, size_t n) {
+    std::string s;
+    for (size_t i = 0; i < n; i++) s += (i ? ", " : "") + t.members[i].name;
+    return s;
+  }
+  // TON TOF TP CTU CTD on ldc's timers and counters (docs/il.md), one device
+  // per instance, as the classic reader maps them; the instance's Q, ET, CV
+  // are copied from the device after the call (ET: ms to TIME's ns).
+  std::map<uint64_t, uint32_t> devices_;  // (kind, instance place) -> T or C number
+  uint32_t next_timer_ = 0, next_counter_ = 0;
+  template <class Mem>
+  void timer_counter(const std::string& kind, const model::Ref& inst, Mem mem) {
+    bool timer = kind[0] == 'T';
+    uint64_t key = (uint64_t(timer) << 63) | (uint64_t(inst.at.bit) << 32) | inst.at.cell;
+    auto it = devices_.find(key);
+    if (it == devices_.end()) {
+      uint32_t& next = timer ? next_timer_ : next_counter_;
+      if (next >= device_count(timer ? Dev::T : Dev::C))
+        fail(here_, std::string("more than ") + std::to_string(device_count(Dev::T)) + (timer ? " timer" : " counter") + " instances");
+      it = devices_.emplace(key, next++).first;
+    }
+    uint32_t n = it->second;
+    if (timer) {
+      // PT in whole ms, rounded up: ldc's timers count whole ms of dt, and
+      // ET >= 3.5 ms holds exactly when ET >= 4 ms (TIME is ns; read as a LINT)
+      Operand ns = scratch("ptns", Ty::LINT), ms = scratch("pt", Ty::DINT);
+      typed(Op::TADD, Ty::LINT, mem("PT"), Operand::typed_const(999999), ns);
+      typed(Op::TDIV, Ty::LINT, ns, Operand::typed_const(1000000), ns);
+      typed(Op::TCONV, Ty::DINT, ns, ms, {}, Ty::LINT);
+      emit(Op::LOAD, mem("IN"));
+      emit(kind == "TON" ? Op::TON : kind == "TOF" ? Op::TOF : Op::TP, Operand{OpdKind::Timer, Area::Sys, n}, ms);
+      emit(Op::MPP);
+      typed(Op::TMOVE, Ty::BOOL, Operand{OpdKind::Bit, Area::TQ, n}, mem("Q"));
+      Operand et = scratch("etns", Ty::LINT);  // ET: the timer's ms as ns
+      typed(Op::TCONV, Ty::LINT, Operand{OpdKind::Int, Area::TW, n}, et, {}, Ty::DINT);
+      typed(Op::TMUL, Ty::LINT, et, Operand::typed_const(1000000), mem("ET"));
+      return;
+    }
+    Operand c{OpdKind::Counter, Area::Sys, n};
+    bool up = kind == "CTU";
+    Operand rst = mem(up ? "R" : "LD"), cnt = mem(up ? "CU" : "CD");
+    emit(Op::LOAD, rst);  // R resets (LD loads PV) before counting, as IEC's CTU/CTD
+    if (up) emit(Op::RSTC, c);
+    else emit(Op::MOV, mem("PV"), Operand{OpdKind::Int, Area::CW, n});
+    emit(Op::MPP);
+    emit(Op::LOADP, cnt, Operand{OpdKind::Edge});
+    emit(Op::ANDN, rst);
+    emit(up ? Op::CTU : Op::CTD, c, mem("PV"), Operand{OpdKind::Edge});
+    emit(Op::MPP);
+    typed(Op::TMOVE, Ty::BOOL, Operand{OpdKind::Bit, Area::CQ, n}, mem("Q"));
+    typed(Op::TMOVE, Ty::INT, Operand{OpdKind::Int, Area::CW, n}, mem("CV"));
+  }
+
+  static int var_index(const Pou& p, const std::string& name) {
+    std::string u = upper(name);
+    for (size_t i = 0; i < p.vars.size(); i++)
+      if (upper(p.vars[i].name) == u) return int(i);
+    return -1;
+  }
+  static std::string inputs_of(const Pou& p) {
+    std::string s;
+    for (const Var& v : p.vars)
+      if (v.cls == VarClass::Input || v.cls == VarClass::InOut) s += (s.empty() ? "" : ", ") + v.name;
+    return s.empty() ? "" : " (" + s + ")";
+  }
+
+  // A FUNCTION: `LD a  F b, c` (the CR is the first input) or `F(x := a, y := b)`.
+  std::map<int, Place> frames_;
+  void user_function(const Tok& op, const std::string& u) {
+    int pou = m_.find_pou(u);
+    const Pou& p = m_.pous[size_t(pou)];
+    if (!frames_.count(pou)) frames_[pou] = m_.place(m_.type(p.block).size, p.loc);  // one frame per FUNCTION
+    model::Ref frame;
+    frame.type = p.block;
+    frame.at = frames_[pou];
+    std::vector<std::pair<Tok, Val>> in;
+    std::vector<std::pair<Tok, size_t>> out;
+    if (punct(peek(), "(")) {
+      next();
+      args(in, out);
+    } else {
+      need_cr(op);
+      std::vector<const Var*> inputs;
+      for (const Var& v : p.vars)
+        if ((v.cls == VarClass::Input || v.cls == VarClass::InOut) && upper(v.name) != "EN") inputs.push_back(&v);
+      if (inputs.empty()) fail(op, p.name + " has no input for the current result");
+      // the CR is the first input
+      Val first;
+      if (cr_.lit) {
+        first.lit = *cr_.lit;
+      } else if (cr_whole()) {
+        first.kind = Val::Ref_, first.ref = whole_;
+      } else {
+        first.kind = Val::Ref_;
+        Operand tmp = scratch("farg", ty_of(cr_.type));
+        typed(Op::TMOVE, ty_of(cr_.type), cr_.o, tmp);
+        first.ref.type = cr_.type;
+        first.ref.at = {tmp.index, tmp.index};
+      }
+      Tok ft = op;
+      ft.text = inputs[0]->name;
+      in.push_back({ft, first});
+      size_t k = 1;
+      while (peek().kind == Tok::Word) {
+        if (k >= inputs.size()) fail(peek(), p.name + " takes " + std::to_string(inputs.size()) + " input(s)");
+        Tok n = peek();
+        n.text = inputs[k]->name;
+        in.push_back({n, operand("farg" + std::to_string(k))});
+        k++;
+        if (punct(peek(), ",")) next();
+        else break;
+      }
+    }
+    expand(pou, frame, in, out, op);
+    // the result is the CR (in an accumulator: the next call of F overwrites its frame)
+    ensure_rung();
+    Ty rt = ty_of(p.result);
+    Operand d = acc(rt);
+    typed(Op::TMOVE, rt, operand_at(rt, frame.at + m_.type(p.block).members.back().offset), d);
+    set_cr(p.result, d);
+  }
+
+  // ---- standard functions of one input: the CR
+  void function1(const Tok& op, const std::string& u) {
+    need_cr(op);
+    if (auto c = conversion(u)) {
+      auto [from, to] = *c;
+      if (cr_.lit) type_cr(m_.elem(from), op);
+      if (cr_ty() != from && !(cr_whole()))
+        fail(op, op.text + " converts a " + ty_info(from).name + ", this result is " + m_.type_name(cr_.type));
+      if (cr_whole()) fail(op, op.text + " of " + a_type(cr_.type));
+      Operand d = acc(to);
+      if (from == to) typed(Op::TMOVE, to, cr_.o, d);
+      else typed(Op::TCONV, to, cr_.o, d, {}, from);
+      set_cr(m_.elem(to), d);
+      return;
+    }
+    default_cr(op);
+    Ty t = cr_ty();
+    if (u == "TRUNC") {
+      if (!typed::is_real(t)) fail(op, "TRUNC takes a REAL or LREAL, this result is " + m_.type_name(cr_.type));
+      Operand d = acc(Ty::DINT);
+      typed(Op::TTRUNC, Ty::DINT, cr_.o, d, {}, t);
+      set_cr(m_.elem(Ty::DINT), d);
+      return;
+    }
+    static const std::map<std::string, Op> fns = {{"ABS", Op::TABS}, {"NEG", Op::TNEG}, {"SQRT", Op::TSQRT}, {"LN", Op::TLN},
+                                                  {"LOG", Op::TLOG}, {"EXP", Op::TEXP}, {"SIN", Op::TSIN}, {"COS", Op::TCOS},
+                                                  {"TAN", Op::TTAN}, {"ASIN", Op::TASIN}, {"ACOS", Op::TACOS}, {"ATAN", Op::TATAN}};
+    Op o = fns.at(u);
+    if (!op_takes(o, t, Ty::None)) fail(op, op.text + " does not take " + a_type(cr_.type));
+    Operand d = acc(t);
+    typed(o, t, cr_.o, d);
+    cr_.o = d;
+  }
+
+  // MIN MAX (extensible), LIMIT, SEL; the CR is the first input
+  void selection(const Tok& op, const std::string& u) {
+    need_cr(op);
+    std::vector<std::pair<Tok, Val>> args;
+    while (peek().kind == Tok::Word) {
+      Tok k = peek();
+      args.push_back({k, operand("sel" + std::to_string(args.size()))});
+      if (punct(peek(), ",")) next();
+      else break;
+    }
+    if (u == "MUX") {  // MUX(K, IN0, ..): IN_K; K outside gives the type's initial value, 0 (MatIEC's __mux)
+      if (args.empty()) fail(op, "MUX takes K (the current result) and its inputs");
+      default_cr(op);
+      Ty kt = cr_ty();
+      if (kt == Ty::None || !(ty_info(kt).kind == TyKind::Signed || ty_info(kt).kind == TyKind::Unsigned))
+        fail(op, "MUX's K (the current result) is an integer, this one is " + a_type(cr_.type));
+      TypeId t = kNoType;
+      for (const auto& a : args)
+        if (t == kNoType) t = val_type(a.second);
+      if (t == kNoType) t = m_.elem(args[0].second.lit.untyped_real ? Ty::LREAL : Ty::DINT);
+      Ty st = ty_of(t);
+      if (st == Ty::None) fail(op, "MUX of " + a_type(t));
+      Operand k = scratch("muxk", kt), d = acc(st);
+      typed(Op::TMOVE, kt, cr_.o, k);
+      typed(Op::TMOVE, st, Operand::typed_const(0), d);
+      for (size_t i = 0; i < args.size(); i++) {
+        Operand in = value_as(args[i].second, t, args[i].first, "sel" + std::to_string(i), "MUX");
+        typed(Op::TEQ, kt, k, Operand::typed_const(uint64_t(i)));
+        typed(Op::TMOVE, st, in, d);
+        emit(Op::MPP);
+      }
+      set_cr(t, d);
+      return;
+    }
+    if (u == "SEL") {  // SEL(G, IN0, IN1): G ? IN1 : IN0 (MatIEC)
+      need_bool(op);
+      if (args.size() != 2) fail(op, "SEL takes G (the current result), IN0 and IN1");
+      TypeId t = val_type(args[0].second);
+      if (t == kNoType) t = val_type(args[1].second);
+      if (t == kNoType) t = m_.elem(args[0].second.lit.untyped_real || args[1].second.lit.untyped_real ? Ty::LREAL : Ty::DINT);
+      Ty st = ty_of(t);
+      if (st == Ty::None) fail(op, "SEL of " + a_type(t));
+      Operand g = scratch("selg", Ty::BOOL), d = acc(st);
+      typed(Op::TMOVE, Ty::BOOL, cr_.o, g);
+      Operand in0 = value_as(args[0].second, t, args[0].first, "sel0", "SEL");
+      Operand in1 = value_as(args[1].second, t, args[1].first, "sel1", "SEL");
+      typed(Op::TMOVE, st, in0, d);
+      emit(Op::LOAD, g);
+      typed(Op::TMOVE, st, in1, d);
+      emit(Op::MPP);
+      set_cr(t, d);
+      return;
+    }
+    if (args.empty()) fail(op, op.text + " needs more inputs after the current result");
+    if (cr_.lit) {
+      TypeId vt = val_type(args[0].second);
+      if (vt != kNoType) type_cr(vt, op);
+      else default_cr(op);
+    }
+    TypeId t = cr_.type;
+    Ty st = ty_of(t);
+    if (u == "LIMIT") {  // LIMIT(MN, IN, MX) = IN > MN ? (IN < MX ? IN : MX) : MN (MatIEC)
+      if (args.size() != 2) fail(op, "LIMIT takes MN (the current result), IN and MX");
+      Operand mn = cr_.o, d = acc(st);
+      if (mn == d) mn = scratch("limmn", st), typed(Op::TMOVE, st, cr_.o, mn);
+      Operand in = value_as(args[0].second, t, args[0].first, "sel0", "LIMIT");
+      Operand mx = value_as(args[1].second, t, args[1].first, "sel1", "LIMIT");
+      typed(Op::TMOVE, st, mn, d);
+      typed(Op::TGT, st, in, mn);
+      typed(Op::TMIN, st, mx, in, d);  // MatIEC's MIN(MX, IN): IN < MX ? IN : MX
+      emit(Op::MPP);
+      cr_.o = d;
+      return;
+    }
+    Op o = u == "MIN" ? Op::TMIN : Op::TMAX;
+    for (size_t i = 0; i < args.size(); i++) {
+      Operand b = value_as(args[i].second, t, args[i].first, "sel" + std::to_string(i), op.text.c_str());
+      Operand d = acc(st);
+      typed(o, st, cr_.o, b, d);
+      cr_.o = d;
+    }
+  }
+
+  // ---------------------------------------------------------------- the end
+
+  void finish() {
+    p_.end_labels = std::move(pending_labels_);
+    std::map<std::string, size_t> where;
+    for (size_t r = 0; r < p_.rungs.size(); r++)
+      for (auto& l : p_.rungs[r].labels) where[l] = r;
+    for (auto& l : p_.end_labels) where[l] = p_.rungs.size();
+    for (const Jump& j : jumps_) {
+      auto w = where.find(j.label);
+      std::string shown = j.label.rfind("_ldc_", 0) == 0 ? j.label.substr(j.label.find('_', 5) + 1) : j.label;
+      if (w == where.end()) fail(j.at, "undefined label '" + shown + "'");
+      if (w->second <= j.rung)
+        fail(j.at, "backward jump to '" + shown + "': ldc runs every instruction at most once per scan (jumps go forward)");
+    }
+    if (p_.rungs.empty()) fail(t_.back(), "the program has no instructions");
+  }
+};
+
+}  // namespace
+
+Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename) { return Reader(t, filename).run(); }
+
+}  // namespace ldc::iecil

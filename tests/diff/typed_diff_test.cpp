@@ -1,0 +1,270 @@
+// tests/diff/typed_diff_test.cpp -- the differential test on typed programs:
+// ldgen's typed classes (ldc IL text with typed arithmetic, compares feeding
+// rungs, conversions, shifts, arrays with indices in and out of range, the
+// 64-bit types) on every engine against the reference interpreter, memory
+// images compared after every scan (docs/testing.md, "Typed programs").
+//
+//   LDC_DIFF_TYPED_SEEDS    programs per engine (default 12; the C route 4)
+//   LDC_DIFF_TYPED_SEED0    first seed (default 1)
+//   LDC_DIFF_TYPED_RUNGS    rungs per program (default 30)
+//   LDC_DIFF_TYPED_CLASSES  typed classes, as ldgen --classes (default typed;
+//                           the C40 engines always without t64)
+//   LDC_DIFF_OUT, LDC_DIFF_NOFORK as for the ladder programs
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <iterator>
+#include <set>
+
+#include "frontend/frontend.h"
+#include "tests/diff/harness.h"
+
+namespace {
+
+using namespace ldc;
+using namespace ldc::diff;
+
+long env_int(const char* name, long def) {
+  const char* v = std::getenv(name);
+  if (!v || !*v) return def;
+  char* end = nullptr;
+  long x = std::strtol(v, &end, 10);
+  return *end ? def : x;
+}
+
+GenOptions typed_options(uint64_t seed, bool narrow) {
+  GenOptions o;
+  o.rungs = int(env_int("LDC_DIFF_TYPED_RUNGS", 30));
+  o.max_depth = int(seed % 4);
+  o.classes = kGenTyped;
+  if (const char* c = std::getenv("LDC_DIFF_TYPED_CLASSES"); c && *c) {
+    std::string err;
+    if (!parse_gen_classes(c, o.classes, err)) throw std::invalid_argument("LDC_DIFF_TYPED_CLASSES: " + err);
+  }
+  if (narrow) o.classes &= ~kGenT64;  // a 32-bit machine: the 64-bit types are refused by name
+  if (!(o.classes & kGenTyped)) o.classes |= kGenTyped & ~kGenT64;
+  return o;
+}
+int typed_scans(uint64_t s) { return 20 + int(s % 21); }
+
+// ------------------------------------------------------------------ the generator
+
+// The typed class names read and print back; `all` stays the ladder classes.
+TEST(TypedGenerator, ClassNames) {
+  uint32_t m = 0;
+  std::string err;
+  ASSERT_TRUE(parse_gen_classes("typed", m, err)) << err;
+  EXPECT_EQ(m, uint32_t(kGenTyped));
+  EXPECT_EQ(gen_classes_text(m), "typed");
+  ASSERT_TRUE(parse_gen_classes("tarith,t64", m, err)) << err;
+  EXPECT_EQ(m, uint32_t(kGenTArith | kGenT64));
+  EXPECT_EQ(gen_classes_text(m), "tarith,t64");
+  ASSERT_TRUE(parse_gen_classes("all", m, err));
+  EXPECT_EQ(m & kGenTyped, 0u);
+  GenOptions o;
+  o.classes = kGenTArray;
+  EXPECT_NE(ldgen_args(3, o).find("--classes tarray"), std::string::npos) << ldgen_args(3, o);
+  EXPECT_FALSE(generate_program(3, GenOptions{}).il);
+}
+
+// Every typed program is IL text the reader accepts and the validator passes,
+// with the typed classes varied; its trace reads.
+TEST(TypedGenerator, EveryProgramValidates) {
+  const uint32_t subsets[] = {kGenTyped, kGenTArith, kGenTCompare | kGenTArith, kGenTConv | kGenT64, kGenTBits,
+                              kGenTArray | kGenT64, kGenTArray, kGenTyped & ~kGenT64, kGenT64};
+  for (uint64_t seed = 1; seed <= 180; seed++) {
+    GenOptions o;
+    o.rungs = 1 + int(seed * 7 % 40);
+    o.max_depth = int(seed % 5);
+    o.classes = subsets[seed % std::size(subsets)];
+    GenProgram gp = generate_program(seed, o);
+    ASSERT_TRUE(gp.il);
+    std::string text = render(gp);
+    EXPECT_EQ(text, render(generate_program(seed, o))) << "the same seed, the same program";
+    Program p;
+    try {
+      p = compile_case(text);
+    } catch (CompileError& e) {
+      ADD_FAILURE() << "seed " << seed << ": a generated typed program is refused:\n"
+                    << format_error("prog.il", text, e.line, e.col, e.what()) << "\n" << text;
+      continue;
+    }
+    EXPECT_EQ(int(p.rungs.size()), o.rungs);
+    EXPECT_EQ(validate_il(encode_il(p).code, p.layout()), "") << "seed " << seed << "\n" << text;
+    bool wide = false;
+    for (const Rung& r : p.rungs)
+      for (const Instr& in : r.code)
+        wide |= (in.ty != Ty::None && ty_info(in.ty).bits == 64) || (in.src != Ty::None && ty_info(in.src).bits == 64);
+    if (!(o.classes & kGenT64)) {
+      EXPECT_FALSE(wide) << "seed " << seed << ": a 64-bit type without t64\n" << text;
+    }
+    Trace t = read_trace(generate_trace(seed, 15, o), "trace.csv", p.aliases);
+    EXPECT_EQ(t.rows.size(), 15u);
+  }
+}
+
+// Over a few programs every typed instruction and every type is drawn.
+TEST(TypedGenerator, DrawsEveryTypedMnemonicAndType) {
+  std::set<Op> ops;
+  std::set<Ty> tys;
+  for (uint64_t seed = 1; seed <= 60; seed++) {
+    Program p = compile_case(render(generate_program(seed, typed_options(seed, false))));
+    for (const Rung& r : p.rungs)
+      for (const Instr& in : r.code) {
+        ops.insert(in.op);
+        if (in.ty != Ty::None) tys.insert(in.ty);
+      }
+  }
+  for (int i = 0; i < kOpCount; i++)
+    if (op_info(Op(i)).klass == OpClass::Typed) {
+      EXPECT_TRUE(ops.count(Op(i))) << op_info(Op(i)).name << " never drawn";
+    }
+  for (int i = 0; i < kTyCount; i++) EXPECT_TRUE(tys.count(Ty(i))) << ty_info(Ty(i)).name << " never drawn";
+}
+
+// Indices go outside their bounds sometimes, not always: some scans end at an
+// IDX and most do not (the interpreter's fault record says which).
+TEST(TypedGenerator, IndicesFaultSometimes) {
+  int scans = 0, faults = 0;
+  for (uint64_t seed = 1; seed <= 30; seed++) {
+    GenOptions o = typed_options(seed, false);
+    o.classes = kGenTArray | kGenTArith | kGenT64;
+    Program p = compile_case(render(generate_program(seed, o)));
+    Trace t = read_trace(generate_trace(seed, 20, o), "trace.csv", p.aliases);
+    auto e = make_interp(p);
+    Memory m(p.layout());
+    for (size_t k = 0; k < t.rows.size(); k++) {
+      for (size_t i = 0; i < t.rows[k].size(); i++)
+        if (!t.rows[k][i].empty() && int(i) != t.dt_column) put_trace_cell(m.data(), m.layout, t.columns[i], t.rows[k][i]);
+      std::memset(m.data() + kSysFault, 0, 4);
+      e->scan(m.bytes);
+      uint32_t kind;
+      std::memcpy(&kind, m.data() + kSysFault, 4);
+      scans++;
+      faults += kind == kFaultIndex;
+    }
+  }
+  std::printf("%d of %d scans ended at an index fault\n", faults, scans);
+  EXPECT_GT(faults, scans / 50) << faults << " of " << scans << " scans faulted";
+  EXPECT_LT(faults, scans / 2) << faults << " of " << scans << " scans faulted";
+}
+
+// ------------------------------------------------------------------ the harness on typed programs
+
+// An engine wrong on one typed instruction (the interpreter with every ADD.T
+// run as SUB.T) is caught, and the reproducer is a short IL program holding
+// the ADD.
+TEST(TypedHarness, CatchesAndShrinksAWrongTypedEngine) {
+  EngineFactory bad = [](const Program& p) {
+    Program q = p;
+    for (Rung& r : q.rungs)
+      for (Instr& in : r.code)
+        if (in.op == Op::TADD) in.op = Op::TSUB;
+    return make_interp(q);
+  };
+  int caught = 0;
+  for (uint64_t seed = 1; seed <= 12 && caught < 1; seed++) {
+    GenOptions o = typed_options(seed, false);
+    GenProgram gp = generate_program(seed, o);
+    std::string text = render(gp), csv = generate_trace(seed, typed_scans(seed), o);
+    EXPECT_EQ(compare_isolated(text, csv, make_interp, make_interp).kind, Outcome::Kind::Same) << "seed " << seed;
+    Outcome first = compare_isolated(text, csv, make_interp, bad);
+    if (!first.failed()) continue;
+    caught++;
+    ASSERT_EQ(first.kind, Outcome::Kind::Differ) << first.message;
+    Reduced r = minimize(gp, csv, first, [&](const std::string& l, const std::string& c) {
+      return compare_isolated(l, c, make_interp, bad);
+    });
+    std::string min = render(r.prog);
+    EXPECT_LE(r.prog.rungs(), 4) << min;
+    EXPECT_NE(min.find("ADD."), std::string::npos) << min;
+    EXPECT_EQ(compare_run(min, r.csv, make_interp, bad).kind, Outcome::Kind::Differ) << min;
+    EXPECT_EQ(compare_run(min, r.csv, make_interp, make_interp).kind, Outcome::Kind::Same) << min;
+    std::string dir = (std::filesystem::temp_directory_path() / "ldc_diff_minimizer").string();
+    std::filesystem::create_directories(dir);
+    std::string rep = reproducer("fake ADD engine, seed " + std::to_string(seed), ldgen_command(seed, o, typed_scans(seed)),
+                                 gp, r, dir, "typed_add_" + std::to_string(seed), "interp", "fake", "fast");
+    EXPECT_NE(rep.find(".il --engine=fast"), std::string::npos) << rep;
+    EXPECT_NE(rep.find("-o prog.il"), std::string::npos) << rep;
+    std::printf("%s", rep.c_str());
+  }
+  EXPECT_GT(caught, 0) << "no seed made the fake ADD engine differ";
+}
+
+// ------------------------------------------------------------------ every engine against the interpreter
+
+// `engine`: ldrun's spelling ("native -O1"), for the reproducer's commands.
+void run_typed(const EngineFactory& test, const std::string& what, const std::string& engine, bool narrow, long def) {
+  std::string stem = engine;  // a file name: "native_O1"
+  for (char& c : stem)
+    if (c == ' ' || c == '-') c = '_';
+  stem.erase(std::unique(stem.begin(), stem.end(), [](char a, char b) { return a == '_' && b == '_'; }), stem.end());
+  const long total = env_int("LDC_DIFF_TYPED_SEEDS", def), seed0 = env_int("LDC_DIFF_TYPED_SEED0", 1);
+  const std::string dir = output_dir();
+  long programs = 0, rungs = 0, scans = 0, failures = 0;
+  auto t0 = std::chrono::steady_clock::now();
+  for (long i = 0; i < total; i++) {
+    uint64_t seed = uint64_t(seed0 + i);
+    GenOptions o = typed_options(seed, narrow);
+    GenProgram gp = generate_program(seed, o);
+    std::string text = render(gp), csv = generate_trace(seed, typed_scans(seed), o);
+    Outcome out = compare_isolated(text, csv, make_interp, test);
+    programs++;
+    rungs += gp.rungs();
+    scans += out.scans;
+    if (out.kind == Outcome::Kind::FrontEndError) {
+      ADD_FAILURE() << "seed " << seed << ": the generated typed case is refused (a generator bug): " << out.message;
+      continue;
+    }
+    if (!out.failed()) continue;
+    Reduced r = minimize(gp, csv, out, [&](const std::string& l, const std::string& c) {
+      return compare_isolated(l, c, make_interp, test);
+    });
+    ADD_FAILURE() << reproducer(what + " differs from the interpreter on a typed program: ldgen seed " + std::to_string(seed),
+                                ldgen_command(seed, o, typed_scans(seed)), gp, r, dir,
+                                "typed_" + stem + "_seed" + std::to_string(seed), "interp", what.c_str(), engine);
+    if (++failures >= 3) {
+      ADD_FAILURE() << "stopping after 3 failing seeds";
+      break;
+    }
+  }
+  double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("typed, %s: %ld programs, %ld rungs, %ld scans compared in %.1f s\n", what.c_str(), programs, rungs, scans, secs);
+}
+
+// The reference against itself on the program printed as IL text and read
+// back (ldc --emit=il): typed mnemonics, types and constants survive the text
+// form, and every generated program runs on the reference (an index fault
+// included) the same way twice.  Runs today; the long run of docs/testing.md.
+std::unique_ptr<Engine> make_interp_from_text(const Program& p) {
+  return make_interp(parse_il_text(print_il_text(p), "printed.il"));
+}
+TEST(TypedDiff, ReferenceMatchesItsPrintedText) { run_typed(make_interp_from_text, "interp (printed IL)", "interp", false, 40); }
+
+TEST(TypedDiff, FastMatchesInterpreter) { run_typed(make_fast_interp, "fast", "fast", false, 12); }
+TEST(TypedDiff, NativeMatchesInterpreter) { run_typed(make_native, "native -O0", "native", false, 12); }
+TEST(TypedDiff, NativeO1MatchesInterpreter) { run_typed(make_native_o1, "native -O1", "native -O1", false, 12); }
+TEST(TypedDiff, NativeO2MatchesInterpreter) { run_typed(make_native_o2, "native -O2", "native -O2", false, 12); }
+TEST(TypedDiff, CRouteMatchesInterpreter) { run_typed(make_c_route, "the C route", "c", false, 4); }
+TEST(TypedDiff, C40SimMatchesInterpreter) { run_typed(make_c40sim, "c40sim", "c40sim", true, 6); }
+// The C40-hosted interpreter has no typed instructions: it refuses a typed
+// program by name when it loads it (docs/c40.md), never runs it wrongly.
+TEST(TypedDiff, C40InterpRefusesTypedPrograms) {
+  for (uint64_t seed = 1; seed <= 3; seed++) {
+    GenProgram gp = generate_program(seed, typed_options(seed, true));
+    Program p = parse_il_text(render(gp), "typed.il");
+    try {
+      make_c40interp(p);
+      ADD_FAILURE() << "seed " << seed << ": the C40-hosted interpreter took a typed program";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find("has no typed instructions"), std::string::npos) << e.what();
+    }
+  }
+}
+
+}  // namespace
