@@ -394,7 +394,7 @@ class Gen : public ClassGen<Gen> {
   void store_x(Ty t, Reg x, const ldc::Operand& d);
   void store_xd(Ty t, Reg x, const ldc::Operand& d);
   void double_const(Reg x, double d);
-  void real_to_unsigned();
+  void real_round_to_int(bool is_signed);
   void unsigned_to_real(Ty to);
   void guarded_div64(bool is_signed);
   void call_math(int slot);
@@ -1014,7 +1014,6 @@ int ty_bits(Ty t) { return ty_info(t).bits; }
 bool two_cells(Ty t) { return ty_info(t).cells == 2; }
 bool is_tconst(const ldc::Operand& o) { return o.kind == OpdKind::ConstT || o.kind == OpdKind::ConstInt; }
 uint64_t tconst(const ldc::Operand& o) { return o.kind == OpdKind::ConstT ? o.bits() : uint64_t(int64_t(o.ival)); }
-constexpr double kNsPerMsD = double(typed::kNsPerMs);
 constexpr uint64_t kSignBit64 = uint64_t(1) << 63;
 }  // namespace
 
@@ -1403,21 +1402,28 @@ void Gen::typed_shift(const ldc::Instr& in) {
 }
 
 // NEG ABS: integers wrap at the width (ABS of the most negative is itself);
-// REAL / LREAL flip or clear the sign bit (C's -x and fabs)
+// REAL / LREAL: C's -x, and MatIEC's __abs_signed x < 0 ? -x : x
 void Gen::typed_neg_abs(const ldc::Instr& in) {
   const Ty t = in.ty;
   const ldc::Operand &a = in.a[0], &d = in.a[1];
   const bool neg = in.op == Op::TNEG;
-  if (typed::is_real(t)) {
-    if (ty_bits(t) == 32) {
-      load_raw32(a, eax);
-      emit(neg ? M::Xor : M::And, {R(eax), I(neg ? int64_t(0x80000000u) : 0x7fffffff)});
-      return emit(M::Mov, {Dw(taddr(d)), R(eax)});
+  if (typed::is_real(t)) {  // NEG flips the sign bit (C's -x); ABS is x < 0 ? -x : x (-0.0 and NaN kept)
+    const bool single = ty_bits(t) == 32;
+    const Reg A = single ? eax : rax, C = single ? ecx : rcx;
+    if (single) load_raw32(a, eax);
+    else load64(t, a, rax);
+    if (single) emit(M::Mov, {R(ecx), I(int64_t(0x80000000u))});
+    else mov_imm(rcx, kSignBit64);
+    emit(M::Xor, {R(C), R(A)});  // -x
+    if (neg) {
+      emit(M::Mov, {R(A), R(C)});
+    } else {
+      emit(single ? M::Movd : M::Movq, {R(xmm0), R(A)});
+      emit(M::Xorps, {R(xmm1), R(xmm1)});
+      emit(single ? M::Ucomiss : M::Ucomisd, {R(xmm1), R(xmm0)});  // above: 0 > x, ordered
+      emit(make_cc(M::Cmovcc, Cond::A, {R(A), R(C)}));
     }
-    load64(t, a, rax);
-    if (neg) mov_imm(rcx, kSignBit64), emit(M::Xor, {R(rax), R(rcx)});
-    else emit(M::Shl, {R(rax), I(1)}), emit(M::Shr, {R(rax), I(1)});
-    return emit(M::Mov, {Q(taddr(d)), R(rax)});
+    return emit(M::Mov, {single ? Dw(taddr(d)) : Q(taddr(d)), R(A)});
   }
   const bool w64 = two_cells(t);
   const Reg A = w64 ? rax : eax, C = w64 ? rcx : ecx;
@@ -1464,35 +1470,39 @@ void Gen::typed_math(const ldc::Instr& in) {
   store_xd(t, xmm0, d);
 }
 
-// rax = xmm0 (a double) to an unsigned integer as typed::real_to_int: rounded
-// to nearest, ties to even (cvtsd2si under the default MXCSR); 0 for NaN or
-// anything not above 0; 2^63 .. 2^64 from xmm0 - 2^63; INT64_MIN's bits from
-// 2^64 on.  Clobbers rcx, xmm0, xmm1.
-void Gen::real_to_unsigned() {
-  std::string done = fresh(), special = fresh(), zero = fresh();
-  emit(M::Cvtsd2si, {R(rax), R(xmm0)});
-  emit(M::Test, {R(rax), R(rax)});
-  jcc(Cond::G, done);  // (0, 2^63): itself
-  mov_imm(rcx, kSignBit64);
-  emit(M::Cmp, {R(rax), R(rcx)});
-  jcc(Cond::E, special);
-  emit(M::Xor, {R(eax), R(eax)});  // rounded to 0 or below
-  jump(done);
-  label(special);  // NaN, or |xmm0| >= 2^63
-  mov_imm(rcx, typed::bits_of(9223372036854775808.0));
+// rax = xmm0 (a double) to an integer as typed::real_to_int, MatIEC's
+// __real_to_sint / __real_to_uint: y = x + 0.5 (x - 0.5 below 0; to an
+// unsigned type 0 there, NaN too), rounded in double, then __real_round(y):
+// (LINT) y, made even toward zero where y is an integer.  For a signed type
+// the ±0.5 is 0.5 with x's sign (x = -0.0 gives 0 either way, NaN INT64_MIN).
+// (LINT) y is cvttsd2si (INT64_MIN for NaN and out of range, as typed::to_i64);
+// y is an integer exactly where converting that back gives y.  Clobbers rcx,
+// rdx, xmm0..xmm2.
+void Gen::real_round_to_int(bool is_signed) {
+  emit(M::Movsd, {R(xmm2), R(xmm0)});  // x
+  emit(M::Mov, {R(rcx), I(int64_t(typed::bits_of(0.5)))});
+  if (is_signed) {
+    emit(M::Movq, {R(rdx), R(xmm0)});
+    mov_imm(rax, kSignBit64);
+    emit(M::And, {R(rdx), R(rax)});
+    emit(M::Or, {R(rcx), R(rdx)});  // copysign(0.5, x)
+  }
   emit(M::Movq, {R(xmm1), R(rcx)});
-  emit(M::Ucomisd, {R(xmm0), R(xmm1)});
-  jcc(Cond::B, zero);  // below 2^63, or NaN (unordered sets CF)
-  emit(M::Subsd, {R(xmm0), R(xmm1)});
-  emit(M::Cvtsd2si, {R(rax), R(xmm0)});  // 2^64 on: INT64_MIN, whose bits are the result
-  mov_imm(rcx, kSignBit64);
-  emit(M::Cmp, {R(rax), R(rcx)});
-  jcc(Cond::E, done);
-  emit(M::Xor, {R(rax), R(rcx)});
-  jump(done);
-  label(zero);
-  emit(M::Xor, {R(eax), R(eax)});
-  label(done);
+  emit(M::Addsd, {R(xmm0), R(xmm1)});  // y
+  emit(M::Cvttsd2si, {R(rax), R(xmm0)});
+  emit(M::Mov, {R(rdx), R(rax)});
+  emit(M::Shr, {R(rdx), I(63)});
+  emit(M::Add, {R(rdx), R(rax)});
+  emit(M::Sar, {R(rdx), I(1)});
+  emit(M::Add, {R(rdx), R(rdx)});  // (y / 2) * 2, C's division toward zero
+  emit(M::Cvtsi2sd, {R(xmm1), R(rax)});
+  emit(M::Ucomisd, {R(xmm1), R(xmm0)});
+  emit(make_cc(M::Cmovcc, Cond::E, {R(rax), R(rdx)}));  // y an integer (unordered: INT64_MIN either way)
+  if (is_signed) return;
+  emit(M::Xor, {R(ecx), R(ecx)});
+  emit(M::Xorps, {R(xmm1), R(xmm1)});
+  emit(M::Ucomisd, {R(xmm2), R(xmm1)});
+  emit(make_cc(M::Cmovcc, Cond::B, {R(rax), R(rcx)}));  // x < 0 or NaN: 0
 }
 
 // xmm0 = rax, an unsigned 64-bit value, as `to` (REAL or LREAL) with one
@@ -1569,41 +1579,58 @@ void Gen::typed_conv(const ldc::Instr& in) {
   if (fk == TyKind::Real) {
     load_xd(from, a, xmm0);
     if (tk == TyKind::Real) return store_xd(to, xmm0, d);
-    if (time_like(tk)) {  // ms to ns, toward zero
-      double_const(xmm1, kNsPerMsD);
-      emit(M::Mulsd, {R(xmm0), R(xmm1)});
+    if (time_like(tk)) {  // __real_to_time: seconds (LINT) x, then (x - seconds) * 1e9 ns, each toward zero
       emit(M::Cvttsd2si, {R(rax), R(xmm0)});
+      emit(M::Cvtsi2sd, {R(xmm1), R(rax)});
+      emit(M::Subsd, {R(xmm0), R(xmm1)});
+      double_const(xmm1, 1e9);
+      emit(M::Mulsd, {R(xmm0), R(xmm1)});
+      emit(M::Cvttsd2si, {R(rcx), R(xmm0)});
+      emit(M::Imul, {R(rax), R(rax), I(typed::kNsPerS)});  // wrapping
+      emit(M::Add, {R(rax), R(rcx)});
       return store_int_reg(to, AX, d);
     }
-    if (typed::is_signed(to)) emit(M::Cvtsd2si, {R(rax), R(xmm0)});  // nearest, ties to even; INT64_MIN outside
-    else real_to_unsigned();
+    real_round_to_int(typed::is_signed(to));
     return store_int_reg(to, AX, d);
   }
   load64(from, a, rax);
-  if (time_like(fk)) {
-    if (tk == TyKind::Real) {  // ns to ms
+  if (time_like(fk)) {  // MatIEC's timespec: seconds and nanoseconds, both toward zero
+    if (tk == TyKind::Time) return store_int_reg(to, AX, d);
+    const bool dt_split = from == Ty::DT && (to == Ty::DATE || to == Ty::TOD);
+    if (tk == TyKind::Date && !dt_split) return store_int_reg(to, AX, d);
+    mov_imm(rcx, uint64_t(typed::kNsPerS));
+    guarded_div64(true);  // rax = seconds, rdx = nanoseconds
+    if (tk == TyKind::Real) {  // __time_to_real: seconds + nanoseconds / 1e9
       emit(M::Cvtsi2sd, {R(xmm0), R(rax)});
-      double_const(xmm1, kNsPerMsD);
-      emit(M::Divsd, {R(xmm0), R(xmm1)});
+      emit(M::Cvtsi2sd, {R(xmm1), R(rdx)});
+      double_const(xmm2, 1e9);
+      emit(M::Divsd, {R(xmm1), R(xmm2)});
+      emit(M::Addsd, {R(xmm0), R(xmm1)});
       return store_xd(to, xmm0, d);
     }
-    if (tk == TyKind::Time || tk == TyKind::Date) {
-      if (from == Ty::DT && (to == Ty::DATE || to == Ty::TOD)) {  // the day, floored
-        emit(M::Mov, {R(r64(R8)), R(rax)});
-        mov_imm(rcx, uint64_t(typed::kNsPerDay));
-        guarded_div64(true);  // rax = ns / day, rdx = ns % day
-        emit(M::Mov, {R(rcx), R(rdx)});
-        emit(M::Sar, {R(rcx), I(63)});
-        emit(M::Add, {R(rax), R(rcx)});  // floor: one day less where the remainder is negative
-        mov_imm(rcx, uint64_t(typed::kNsPerDay));
-        emit(M::Imul, {R(rax), R(rcx)});  // the day's start
-        if (to == Ty::TOD) emit(M::Sub, {R(r64(R8)), R(rax)}), emit(M::Mov, {R(rax), R(r64(R8))});
+    if (dt_split) {  // __date_and_time_to_date / _time_of_day: C's % on the seconds, a day added below 1970
+      const Reg r8q = r64(R8), r9q = r64(R9);
+      constexpr int64_t kDay = typed::kNsPerDay / typed::kNsPerS;
+      emit(M::Mov, {R(r8q), R(rdx)});  // nanoseconds
+      emit(M::Mov, {R(r9q), R(rax)});  // seconds
+      mov_imm(rcx, uint64_t(kDay));
+      guarded_div64(true);  // rdx = seconds % day
+      emit(M::Mov, {R(r10), R(r9q)});
+      emit(M::Sar, {R(r10), I(63)});
+      emit(M::And, {R(r10), I(kDay)});  // seconds < 0 ? day : 0
+      if (to == Ty::DATE) {
+        emit(M::Mov, {R(rax), R(r9q)});
+        emit(M::Sub, {R(rax), R(rdx)});
+        emit(M::Sub, {R(rax), R(r10)});
+        emit(M::Imul, {R(rax), R(rax), I(typed::kNsPerS)});
+      } else {
+        emit(M::Mov, {R(rax), R(rdx)});
+        emit(M::Add, {R(rax), R(r10)});
+        emit(M::Imul, {R(rax), R(rax), I(typed::kNsPerS)});
+        emit(M::Add, {R(rax), R(r8q)});
       }
-      return store_int_reg(to, AX, d);
     }
-    mov_imm(rcx, uint64_t(typed::kNsPerMs));  // whole ms, toward zero
-    guarded_div64(true);
-    return store_int_reg(to, AX, d);
+    return store_int_reg(to, AX, d);  // __time_to_int: the seconds, cut
   }
   // from BOOL, an integer or a bit string: rax canonical
   if (tk == TyKind::Real) {
@@ -1611,7 +1638,7 @@ void Gen::typed_conv(const ldc::Instr& in) {
     else emit(ty_bits(to) == 32 ? M::Cvtsi2ss : M::Cvtsi2sd, {R(xmm0), R(rax)});
     return store_x(to, xmm0, d);
   }
-  if (time_like(tk)) emit(M::Imul, {R(rax), R(rax), I(int64_t(typed::kNsPerMs))});  // ms to ns, wrapping
+  if (time_like(tk)) emit(M::Imul, {R(rax), R(rax), I(typed::kNsPerS)});  // __int_to_time: seconds, wrapping
   store_int_reg(to, AX, d);
 }
 
