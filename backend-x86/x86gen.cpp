@@ -1681,7 +1681,12 @@ void Gen::typed_indexed(const ldc::Instr& in) {
   const bool ldx = in.op == Op::TLDX;
   const ldc::Operand& base = in.a[ldx ? 0 : 1];
   const int64_t stride = int32_t(tconst(in.a[ldx ? 1 : 2]));
-  if (idx_span_ < 0) throw std::logic_error("x86 backend: LDX / STX not right after an IDX");
+  // the IL validator puts an LDX / STX right after an IDX; native code keeps the
+  // index in r11 from one to the other, so both must be in one rung (with the
+  // same power): a rung that starts with the LDX is refused by name
+  if (idx_span_ < 0)
+    throw CompileError(in.loc.line, in.loc.col,
+                       "x86-64: " + op_spelling(in) + " must follow its IDX in the same rung (native code keeps the index in a register)");
   const int64_t span = idx_span_;
   const int64_t bytes = stride * int64_t(L_.elem_size(base.area));
   if (!ldx) {  // the value first

@@ -354,3 +354,23 @@ TEST(TypedNative, FaultRecordNamesTheIdx) {
 }
 
 }  // namespace
+
+namespace {
+
+// An LDX that the IL's validator accepts right after an IDX of the rung
+// before: native code keeps the index in a register within a rung, so it
+// refuses the program by name instead of reading another element.
+TEST(TypedNative, LdxInTheRungAfterItsIdxIsRefusedByName) {
+  Program p = parse_il_text(".rung line 1\nTRUE\nIDX.INT D9 1 10\n.rung line 2\nLDX.INT D20 1 D16\n.end\n", "split.il");
+  BinaryIl bin = encode_il(p);
+  EXPECT_EQ(validate_il(bin.code, p.layout()), "");
+  try {
+    build_x86(p, p.source, as::Mode::Blockwise, 0);
+    ADD_FAILURE() << "compiled";
+  } catch (const CompileError& e) {
+    EXPECT_EQ(e.line, 5);  // the LDX's line in the text
+    EXPECT_NE(std::string(e.what()).find("LDX.INT must follow its IDX in the same rung"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
