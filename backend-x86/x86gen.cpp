@@ -1924,9 +1924,15 @@ void to_o2_frame(std::vector<Item>& items) {
 // `cmp dword ptr [w], imm` becomes `cmp eax, imm`: no load, and shorter.
 // What eax holds carries over from one rung to the next (a rung that jumps
 // land on starts with its labels, which forget it).
+//
+// The same for xmm0 and the REAL / LREAL of the typed instructions: after
+// `movss dword ptr [w], xmm0` / `movsd qword ptr [w], xmm0` (or the load),
+// xmm0 holds w until something writes xmm0 or w, a call, or a label, and a
+// `movss` / `movsd xmm0, [w]` of the same size is dropped (a chain of LREAL
+// instructions, each reading what the one before stored).
 class WordInEax {
  public:
-  void forget() { word_ = -1; }
+  void forget() { word_ = -1, xword_ = -1; }
   void run(std::vector<Item>& items, std::vector<uint32_t>& starts) {
     drop_.assign(items.size(), 0);
     bool any = false;
@@ -1935,7 +1941,9 @@ class WordInEax {
       if (it.kind == as::ItemKind::Label) forget();
       if (it.kind != as::ItemKind::Instruction) continue;
       if (loads(it.inst) && held(it.inst.ops[1])) { drop_[i] = 1, any = true; continue; }
+      if (xloads(it.inst) && xheld(it.inst.ops[1])) { drop_[i] = 1, any = true; continue; }
       if (word_ >= 0) use_eax(it.inst);
+      xafter(it.inst);
       after(it.inst);
     }
     if (any) as::remove_items(items, drop_, starts);
@@ -1975,7 +1983,40 @@ class WordInEax {
     if (word_ >= 0 && (writes_reg(in, AX) || in.mnemonic == M::Call || hits(in))) forget();  // (held: else nothing to forget)
   }
 
+  // xmm0: movss / movsd between xmm0 and an image operand of their size
+  static bool xmm0(const Operand& o) { return o.kind == OperandKind::Reg && o.reg == xmm(0); }
+  static bool image_plain(const Operand& o) {
+    return o.kind == OperandKind::Mem && o.mem.base == kO2Image && !o.mem.index.valid() &&
+           (o.mem.size == Size::Dword || o.mem.size == Size::Qword);
+  }
+  static bool xmove(M m) { return m == M::Movss || m == M::Movsd; }
+  static bool xloads(const Instruction& in) {
+    return xmove(in.mnemonic) && in.num_operands == 2 && xmm0(in.ops[0]) && image_plain(in.ops[1]);
+  }
+  bool xheld(const Operand& o) const { return xword_ >= 0 && image_plain(o) && o.mem.disp == xword_ && o.mem.size == xsize_; }
+  // may `in` write xmm0's bytes (an xmm destination), or the word it holds?
+  bool xhits(const Instruction& in) const {
+    if (in.num_operands == 0) return in.mnemonic == M::Cdq || in.mnemonic == M::Cdqe || in.mnemonic == M::Cqo ||
+                                     in.mnemonic == M::Cwde ? false : true;
+    if (in.mnemonic == M::Ucomiss || in.mnemonic == M::Ucomisd || in.mnemonic == M::Cmp || in.mnemonic == M::Test) return false;
+    const Operand& o = in.ops[0];
+    if (o.kind == OperandKind::Reg) return o.reg.cls == RegClass::Xmm && o.reg.num == 0;
+    if (o.kind != OperandKind::Mem) return in.mnemonic == M::Call || in.mnemonic == M::Jmp || in.mnemonic == M::Jcc;
+    if (!(o.mem.base == kO2Image) || o.mem.index.valid()) return true;
+    return o.mem.disp < xword_ + 8 && xword_ < o.mem.disp + 8;
+  }
+  void xafter(const Instruction& in) {
+    if (xmove(in.mnemonic) && in.num_operands == 2 && image_plain(in.ops[0]) && xmm0(in.ops[1])) {
+      xword_ = in.ops[0].mem.disp, xsize_ = in.ops[0].mem.size;  // a store of xmm0
+      return;
+    }
+    if (xloads(in)) { xword_ = in.ops[1].mem.disp, xsize_ = in.ops[1].mem.size; return; }
+    if (xword_ >= 0 && (in.mnemonic == M::Call || xhits(in))) xword_ = -1;
+  }
+
   int64_t word_ = -1;  // the image offset of the word eax holds, or -1
+  int64_t xword_ = -1;  // the image offset of the REAL / LREAL xmm0 holds, or -1
+  Size xsize_ = Size::None;
   std::vector<char> drop_;  // run's, kept from rung to rung
 };
 
