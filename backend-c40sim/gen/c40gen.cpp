@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <optional>
 #include <set>
@@ -1223,9 +1224,17 @@ void Gen::typed(const ldc::Instr& in) {
         if (in.op == Op::TNEG) {
           op(M::Ldhi, {I(0x8000), R(r1)});
           op(M::Xor, {R(r1), R(r0)});
-        } else {
+        } else {  // MatIEC's `x < 0 ? -x : x`: -0.0 and a negative NaN keep their sign
+          std::string keep = fresh();
+          load_imm32(int32_t(0xFF800000u), r1);  // -inf: above it (as INT32) lie the positives and the negative NaNs
+          op(M::Cmpi, {R(r1), R(r0)});
+          branch(Cond::GT, keep);
+          load_imm32(std::numeric_limits<int32_t>::min(), r1);  // -0.0
+          op(M::Cmpi, {R(r1), R(r0)});
+          branch(Cond::EQ, keep);
           op(M::Lsh, {I(1), R(r0)});
           op(M::Lsh, {I(-1), R(r0)});
+          label(keep);
         }
       } else if (in.op == Op::TNEG) {
         op(M::Negi, {R(r0), R(r0)});
