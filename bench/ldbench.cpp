@@ -468,6 +468,8 @@ void measure_c40(Subject& s, const Options& o) {
     s.c40_bytes = s.c40_bytes_at[0];
     s.c40_cycles = s.c40_cycles_at[0];
     s.c40_interp_cycles = run(*find_engine("c40interp").engine->make(img));  // the image's IL
+  } catch (const CompileError& e) {  // what the C40 refuses by name (64-bit types, REAL functions)
+    s.c40_status = std::string("refused: ") + e.what();
   } catch (std::exception& e) {
     s.c40_status = std::string("failed: ") + e.what();
   }

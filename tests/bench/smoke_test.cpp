@@ -163,6 +163,7 @@ TEST(Ldbench, SmokeRunWritesCsvAndSvgThatParse) {
   int c40 = 0;
   for (size_t r = 1; r < t.size(); r++)
     if (t[r][col("engine")].rfind("c40", 0) == 0) {
+      if (t[r][col("status")].rfind("refused: ", 0) == 0) continue;  // the typed program's LREAL: refused by name
       c40++;
       EXPECT_TRUE(is_number(t[r][col("median_ns")])) << "row " << r << ": " << t[r][col("status")];
     }
