@@ -62,6 +62,13 @@ run() {  # run NAME LDC-FLAGS ENGINE
 }
 run interp -O0 interp
 if [ "$(wc -l < "$tmp/interp")" -ne 301 ]; then echo "FAIL: $src: expected 300 scans" >&2; exit 1; fi
+# Typed instructions (issue 25: a TIME or 64-bit variable of a PLCopen program)
+# run on the reference interpreter only until the other engines learn them;
+# the lead widens this as the engines land.
+if grep -q '^    [A-Z]*\.[A-Z]' "$tmp/il"; then
+  echo "note: $src has typed instructions; compared on the interpreter only" >&2
+  exit 0
+fi
 for v in "native-O0 -O0 native" "native-O1 -O1 native" "native-O2 -O2 native" "c40sim --target=c40 c40sim" \
          "c40interp -O0 c40interp"; do
   set -- $v
