@@ -25,9 +25,11 @@
 #include <set>
 
 #include "frontend/frontend.h"
+#include "frontend/iec_literal.h"
 #include "frontend/operands.h"
 #include "frontend/treebuild.h"
 #include "frontend/xml.h"
+#include "ir/typed.h"
 
 namespace ldc {
 namespace {
@@ -74,25 +76,64 @@ bool is_leaf(const Cond& c) { return c.k == Cond::Expr && c.n.kind == K::Leaf; }
 
 // ------------------------------------------------------------------ types
 
-enum class Ty { None, Bool, Int, Real };
+using IT = ::ldc::Ty;  // an IEC elementary type (ir/types.def)
 
-// Elementary types we hold: BOOL in a bit, the integers and TIME (ms) in an
-// INT32 word, REAL in a binary32 word.
-Ty elementary(const std::string& t) {
-  static const std::set<std::string> ints = {"SINT", "INT", "DINT", "USINT", "UINT", "UDINT", "BYTE", "WORD", "DWORD", "TIME"};
-  if (t == "BOOL") return Ty::Bool;
-  if (ints.count(t)) return Ty::Int;
-  if (t == "REAL") return Ty::Real;
-  return Ty::None;
+// How the translation holds a value of each IEC type:
+//   Bool  a bit device (M, X, Y)
+//   Int   an integer or bit string of up to 32 bits in an INT32 word (D, WX,
+//         WY, TW, CW), kept canonical for its type (ir/typed.h: sign- or
+//         zero-extended); the untyped instructions compute on it and a result
+//         narrower than 32 bits is wrapped to its type after (MatIEC computes
+//         in the type: INT 32767 + 1 is -32768)
+//   Real  REAL in a binary32 word (F)
+//   Wide  a 64-bit type (LINT ULINT LWORD LREAL TIME LTIME DATE TOD DT) in two
+//         D words, low word first, computed by typed instructions only
+enum class Ty { None, Bool, Int, Real, Wide };
+
+Ty kind_of(IT t) {
+  if (t == IT::None) return Ty::None;
+  if (t == IT::BOOL) return Ty::Bool;
+  if (t == IT::REAL) return Ty::Real;
+  if (ty_info(t).cells == 2) return Ty::Wide;
+  return Ty::Int;
 }
 
-const char* ty_name(Ty t) { return t == Ty::Bool ? "BOOL" : t == Ty::Int ? "integer" : t == Ty::Real ? "REAL" : "?"; }
+const char* ty_name(Ty t) {
+  return t == Ty::Bool ? "BOOL" : t == Ty::Int ? "integer" : t == Ty::Real ? "REAL" : t == Ty::Wide ? "a 64-bit value" : "?";
+}
 
-// A value: a device or a constant, with its type.
+// Integers, bit strings, times and dates: the types whose values wrap.
+bool is_int_type(IT t) { return t != IT::None && typed::is_int_kind(t); }
+// UDINT and DWORD: 32 bits unsigned, so an INT32 compare, division or
+// conversion to REAL would read them wrong; the typed instructions do them.
+bool unsigned32(IT t) { return t == IT::UDINT || t == IT::DWORD; }
+
+// A value: a device or a constant, with how it is held and its IEC type
+// (None: an untyped literal or a direct address, an INT32 as before).
 struct Val {
   Operand o;
   Ty ty = Ty::Int;
+  IT it = IT::None;
+  bool ms = false;                 // a TIME held as INT32 milliseconds (a timer's ET)
+  std::optional<IecLiteral> lit;   // a literal's exact value
 };
+
+// The type a value computes in: its own, or DINT / REAL / BOOL for untyped ones.
+IT type_of(const Val& v) {
+  if (v.ms) return IT::DINT;
+  if (v.it != IT::None) return v.it;
+  return v.ty == Ty::Real ? IT::REAL : v.ty == Ty::Bool ? IT::BOOL : v.ty == Ty::Wide ? IT::LINT : IT::DINT;
+}
+
+// A constant value's canonical bits in its own type (type_of).
+uint64_t const_bits(const Val& v) {
+  if (v.lit) return v.lit->bits;
+  IT t = type_of(v);
+  if (v.o.kind == OpdKind::ConstT) return v.o.bits();
+  if (v.o.kind == OpdKind::ConstReal) return typed::bits_of(v.o.fval);
+  return typed::norm(t, uint64_t(int64_t(v.o.ival)));
+}
+bool is_const(const Operand& o) { return o.kind == OpdKind::ConstInt || o.kind == OpdKind::ConstReal || o.kind == OpdKind::ConstT; }
 
 // ------------------------------------------------------------------ declarations
 
@@ -103,6 +144,7 @@ struct Var {
   std::string type;  // upper-case elementary type, or the derived type name as written
   bool derived = false;
   Ty ty = Ty::None;
+  IT it = IT::None;              // its IEC type, when elementary
   bool constant = false;
   Operand cval;                  // constant
   std::optional<DeviceRef> dev;  // data: the device; FB: T / C / M of its state
@@ -250,7 +292,10 @@ class Importer {
   void aliases(TreeProgram& p);
 
   // expressions
-  std::optional<Operand> literal(const std::string& s, Ty& ty, const Element* el);
+  std::optional<Val> literal(const std::string& s, const Element* el);
+  uint64_t const_as(const Val& v, IT t);
+  Val const_val(const Val& v, IT t);
+  Val var_val(const Var& v);
   Val value_of(const std::string& expr, const Element* el, bool write = false);
   Val read_of(const std::string& expr, const Element* el, bool write);
   Operand bit_of(const std::string& expr, const Element* el, bool write);
@@ -261,6 +306,18 @@ class Importer {
   TreeNode leaf(Op op, std::vector<Operand> a, const Element* el, std::string text = "");
   TreeNode out(Op op, std::vector<Operand> a, const Element* el, const std::string& text = "");
   Cond bit_leaf(Op op, Operand o, const Element* el) { return Cond::of(leaf(op, {o}, el)); }
+  // typed values
+  Operand temp_of(IT t, const Element* el);
+  std::string spell_typed(const Operand& o, IT t) const;
+  Instr typed_instr(Op op, IT t, IT u, std::vector<Operand> a, const Element* el, std::string& text) const;
+  TreeNode tout(Op op, IT t, IT u, std::vector<Operand> a, const Element* el);
+  Cond tcmp(Op op, IT t, Operand a, Operand b, const Element* el);
+  Operand as_type(const Val& v, IT t, const Element* el);
+  void wrap(Operand r, IT t, const Cond& en, const Element* el);
+  TreeNode assign_node(const Val& k, const Val& dst, const Element* el);
+  void assign(const Val& v, const Val& dst, const std::string& dst_text, const Element* el);
+  Operand preset_ms(const Val& v, const Element* el);
+  Val ns_of_ms(const Val& v, const Element* el);
   void rung(TreeNode root, const Element* el);
   void rung(Cond c, TreeNode action, const Element* el) { rung(then_node(std::move(c), std::move(action), {el->line, el->col}), el); }
   Cond materialize(Cond c, const Element* el);
@@ -344,6 +401,9 @@ class Importer {
   void fb_block(const Node& b, Var& inst);
   void fn_block(const Node& b);
   void real_to_int(Operand x, Operand res, const Cond& en, const Element* el);
+  Val typed_fn(const std::string& t, const std::string& time_op, const std::vector<Val>& v, const Pin* g, IT T, const Cond& en, Cond& eno,
+               const Element* el, const Node& b);
+  Val typed_conv(IT to, IT from, const Val& v, const Cond& en, bool trunc, const Element* el);
   void bit_shift(const std::string& t, const Pin& in_pin, Operand in, Operand n, Operand res, const Cond& en, const Element* el);
 };
 
@@ -377,7 +437,8 @@ void Importer::declare(const Element* list, const std::string& pou, bool global)
     } else {
       u->type = upper(te->local_name());
     }
-    u->ty = u->derived ? Ty::None : elementary(u->type);
+    u->it = u->derived ? IT::None : iec_type_named(u->type);
+    u->ty = kind_of(u->it);
     if (const Element* iv = v->child("initialValue"))
       if (const Element* sv = iv->child("simpleValue"))
         if (auto val = sv->attr("value")) u->init = *val;
@@ -410,6 +471,9 @@ std::optional<DeviceRef> Importer::location(const Var& v) {
   if (v.ty == Ty::Int && (bit || d->dev == Dev::F))
     fail_at(v.el, v.type + " variable '" + v.name + "' at " + v.address + ": integers are located at %IW, %QW or %MW");
   if (v.ty == Ty::Real && d->dev != Dev::F) fail_at(v.el, "REAL variable '" + v.name + "' at " + v.address + ": a REAL is located at %MD");
+  if (v.ty == Ty::Wide)
+    fail_at(v.el, v.type + " variable '" + v.name + "' at " + v.address + ": ldc locates BOOL, integers of up to 32 bits and REAL; a 64-bit " +
+                      "value takes two words, which no %I, %Q or %M address of ldc names");
   return d;
 }
 
@@ -434,6 +498,7 @@ void Importer::allocate() {
     }
     if (v->ty == Ty::Bool) v->dev = DeviceRef{Dev::M, take(Dev::M, v->el)};
     else if (v->ty == Ty::Int) v->dev = DeviceRef{Dev::D, take(Dev::D, v->el)};
+    else if (v->ty == Ty::Wide) v->dev = DeviceRef{Dev::D, take_run(Dev::D, 2, v->el)};
     else if (v->ty == Ty::Real) v->dev = DeviceRef{Dev::F, take(Dev::F, v->el)};
   }
 }
@@ -466,40 +531,63 @@ void Importer::aliases(TreeProgram& p) {
 
 // ------------------------------------------------------------------ expressions
 
-// TRUE FALSE 42 -7 16#FF 2#1010 8#17 1.5 T#1s500ms, typed (INT#5, REAL#2.5, BOOL#1).
-std::optional<Operand> Importer::literal(const std::string& s0, Ty& ty, const Element* el) {
-  std::string s = trim(s0), u = upper(s);
-  std::string prefix;
-  size_t hash = u.find('#');
-  if (hash != std::string::npos) {
-    std::string p = u.substr(0, hash);
-    if (p == "BOOL" || elementary(p) != Ty::None) {
-      prefix = p;
-      if (p != "T" && p != "TIME") {
-        s = s.substr(hash + 1);
-        u = u.substr(hash + 1);
-      }
-    }
-  }
-  if (u == "TRUE" || u == "FALSE" || (prefix == "BOOL" && (u == "1" || u == "0"))) {
-    ty = Ty::Bool;
-    return const_opd(u == "TRUE" || u == "1");
-  }
-  if (u.empty() || !(std::isdigit((unsigned char)u[0]) || u[0] == '-' || u[0] == '+' || u.rfind("T#", 0) == 0 || u.rfind("TIME#", 0) == 0))
-    return std::nullopt;
+// A literal as a value (iec_literal.h: TRUE, 42, 16#FF, 1.5, INT#5, T#1.5ms,
+// LREAL#1e-9, D#2024-01-31 ...).  Untyped integers that fit INT32 (and based
+// ones up to 32 bits, bit patterns: 16#FFFFFFFF is -1) and untyped reals stay
+// the INT32 and REAL constants they always were, and take the type of what
+// they meet; a typed literal has its type, held as that type is (kind_of).
+std::optional<Val> Importer::literal(const std::string& s0, const Element* el) {
   std::string why;
-  auto c = parse_constant(s, why);
-  if (!c) fail_at(el, why.empty() ? "malformed literal '" + s0 + "'" : why);
-  ty = c->kind == OpdKind::ConstReal ? Ty::Real : Ty::Int;
-  if (prefix == "REAL" && ty == Ty::Int) {
-    Operand r{OpdKind::ConstReal};
-    r.fval = float(c->ival);
-    ty = Ty::Real;
-    return r;
+  auto l = parse_iec_literal(trim(s0), why);
+  if (!l) {
+    if (!why.empty()) fail_at(el, why);
+    return std::nullopt;
   }
-  if ((prefix == "LREAL") || (elementary(prefix) == Ty::Int && ty == Ty::Real))
-    fail_at(el, "literal '" + s0 + "' does not fit its type");
-  return c;
+  Val v;
+  v.lit = *l;
+  if (l->type == IT::BOOL) {
+    v.ty = Ty::Bool, v.it = IT::BOOL, v.o = const_opd(int32_t(l->bits));
+    return v;
+  }
+  if (!l->typed && l->is_real()) {
+    v.ty = Ty::Real;
+    v.o = Operand{OpdKind::ConstReal};
+    v.o.fval = float(l->real());
+    return v;
+  }
+  int64_t x = l->integer();
+  bool int32 = x >= INT32_MIN && x <= INT32_MAX && l->type != IT::ULINT;
+  if (!l->typed && (int32 || (l->based && l->bits <= 0xFFFFFFFFull))) {
+    v.ty = Ty::Int, v.o = const_opd(int32_t(uint32_t(l->bits)));
+    return v;
+  }
+  v.it = l->type;
+  v.ty = kind_of(l->type);
+  if (v.ty == Ty::Int) v.o = const_opd(int32_t(uint32_t(l->bits)));
+  else if (v.ty == Ty::Real) v.o = Operand{OpdKind::ConstReal}, v.o.fval = typed::f32(l->bits);
+  else v.o = Operand::typed_const(l->bits);
+  return v;
+}
+
+// A constant of IEC type t (a constant's value converted as MatIEC's *_TO_*
+// converts it): the canonical bits.
+uint64_t Importer::const_as(const Val& v, IT t) {
+  if (v.lit && !v.lit->typed && v.lit->is_real()) return typed::conv(t, IT::LREAL, v.lit->bits);  // an untyped real, exactly
+  return typed::conv(t, type_of(v), const_bits(v));
+}
+
+// A constant held as type t is (the Val of a constant variable, an initial value).
+Val Importer::const_val(const Val& v, IT t) {
+  if (t == IT::None) return v;
+  uint64_t b = const_as(v, t);
+  Val r;
+  r.it = t;
+  r.ty = kind_of(t);
+  r.lit = IecLiteral{t, true, b};
+  if (r.ty == Ty::Bool || r.ty == Ty::Int) r.o = const_opd(int32_t(uint32_t(b)));
+  else if (r.ty == Ty::Real) r.o = Operand{OpdKind::ConstReal}, r.o.fval = typed::f32(b);
+  else r.o = Operand::typed_const(b);
+  return r;
 }
 
 // A variable reference: NAME, INSTANCE.OUTPUT (TON0.Q, CTU0.CV, SR0.Q1) or a
@@ -512,10 +600,9 @@ Val Importer::value_of(const std::string& expr, const Element* el, bool write) {
 // value_of without the inputs' relays for writes (reads see them).
 Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
   std::string e = trim(expr);
-  Ty ty;
-  if (auto c = literal(e, ty, el)) {
+  if (auto c = literal(e, el)) {
     if (write) fail_at(el, "'" + e + "' is a literal; it cannot be written (" + where(el) + ")");
-    return {*c, ty};
+    return *c;
   }
   if (!e.empty() && e[0] == '%') {
     std::string a = upper(e);
@@ -539,8 +626,8 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
     FbKind k = fb_kind(inst->type);
     uint32_t i = inst->dev->index;
     if (k == FbKind::Timer && m == "Q") return {bit_opd(Area::TQ, i), Ty::Bool};
-    if (k == FbKind::Timer && m == "ET") return {Operand{OpdKind::Int, Area::TW, i}, Ty::Int};
-    if (k == FbKind::Counter && m == "CV") return {Operand{OpdKind::Int, Area::CW, i}, Ty::Int};
+    if (k == FbKind::Timer && m == "ET") return {Operand{OpdKind::Int, Area::TW, i}, Ty::Int, IT::TIME, true};
+    if (k == FbKind::Counter && m == "CV") return {Operand{OpdKind::Int, Area::CW, i}, Ty::Int, IT::INT};
     if (k == FbKind::Counter && (m == "Q" || m == "QU") && inst->type != "CTUD") return {bit_opd(Area::CQ, i), Ty::Bool};
     if (inst->type == "CTUD" && m == "QU") return {bit_opd(Area::M, inst->aux), Ty::Bool};
     if (inst->type == "CTUD" && m == "QD") return {bit_opd(Area::M, inst->aux2), Ty::Bool};
@@ -551,16 +638,22 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
   if (!v) fail_at(el, "unknown variable '" + e + "' in " + where(el));
   if (v->constant) {
     if (write) fail_at(el, "'" + e + "' is a constant; it cannot be written (" + where(el) + ")");
-    Ty t;
-    auto c = literal(v->init, t, v->el);
+    auto c = literal(v->init, v->el);
     if (!c) fail_at(v->el, "constant '" + v->name + "' needs a literal initial value");
-    return {*c, v->ty == Ty::Real && t != Ty::Real ? Ty::Real : v->ty};
+    return v->it == IT::None ? *c : const_val(*c, v->it);
   }
   if (v->ty == Ty::None || !v->dev)
     fail_at(el, "variable '" + v->name + "' has type " + v->type + ", which ldc cannot hold (" + where(el) + ")");
-  if (v->ty == Ty::Bool) return {shadowed(bit_opd(bit_area(v->dev->dev), v->dev->index)), Ty::Bool};
-  Area w = word_area(v->dev->dev);
-  return {shadowed(Operand{v->ty == Ty::Real ? OpdKind::Real : OpdKind::Int, w, v->dev->index}), v->ty};
+  Val r = var_val(*v);
+  r.o = shadowed(r.o);
+  return r;
+}
+
+// A variable's device as a value.
+Val Importer::var_val(const Var& v) {
+  if (v.ty == Ty::Bool) return {bit_opd(bit_area(v.dev->dev), v.dev->index), Ty::Bool, IT::BOOL};
+  Area w = word_area(v.dev->dev);
+  return {Operand{v.ty == Ty::Real ? OpdKind::Real : OpdKind::Int, w, v.dev->index}, v.ty, v.it};
 }
 
 Operand Importer::bit_of(const std::string& expr, const Element* el, bool write) {
@@ -605,6 +698,150 @@ TreeNode Importer::out(Op op, std::vector<Operand> a, const Element* el, const s
   }
   n.text = t;
   return n;
+}
+
+// ------------------------------------------------------------------ typed values
+
+// A temporary of IEC type t, as kind_of holds it.
+Operand Importer::temp_of(IT t, const Element* el) {
+  switch (kind_of(t)) {
+    case Ty::Bool: return bit_opd(Area::M, temp_m(el));
+    case Ty::Real: return Operand{OpdKind::Real, Area::F, take(Dev::F, el)};
+    case Ty::Wide: return Operand{OpdKind::Int, Area::D, take_run(Dev::D, 2, el)};
+    default: return Operand{OpdKind::Int, Area::D, take(Dev::D, el)};
+  }
+}
+
+// An operand of a typed instruction of type t, as the IL text spells it.
+std::string Importer::spell_typed(const Operand& o, IT t) const {
+  if (o.kind == OpdKind::ConstT) return typed_const_text(t, o.bits());
+  return spell(o);
+}
+
+// A typed instruction (ops.def class Typed): T is t, the source type u.
+Instr Importer::typed_instr(Op op, IT t, IT u, std::vector<Operand> a, const Element* el, std::string& text) const {
+  Instr in;
+  in.op = op;
+  in.ty = t;
+  in.src = op_info(op).typed == 2 ? u : IT::None;
+  in.loc = {el->line, el->col};
+  text = std::string(op_info(op).name + 1) + "." + ty_info(t).name + (in.src != IT::None ? std::string(".") + ty_info(u).name : "");
+  for (size_t i = 0; i < a.size(); i++) {
+    in.a[i] = a[i];
+    char sig = op_info(op).operands[i];
+    text += " " + spell_typed(a[i], sig == 'x' ? u : t);
+  }
+  return in;
+}
+TreeNode Importer::tout(Op op, IT t, IT u, std::vector<Operand> a, const Element* el) {
+  TreeNode n;
+  n.kind = K::Output;
+  n.elem = typed_instr(op, t, u, std::move(a), el, n.text);
+  return n;
+}
+Cond Importer::tcmp(Op op, IT t, Operand a, Operand b, const Element* el) {
+  TreeNode n;
+  n.kind = K::Leaf;
+  n.elem = typed_instr(op, t, IT::None, {a, b}, el, n.text);
+  return Cond::of(std::move(n));
+}
+
+// v as an operand of type t: a constant of t; the device itself when a typed
+// load of it as t is the value (an INT32 word holds every integer type of up
+// to 32 bits canonically, so loading it as another such type is MatIEC's
+// conversion); else converted into a temporary first (CONV.t.u).
+Operand Importer::as_type(const Val& v, IT t, const Element* el) {
+  if (is_const(v.o)) return Operand::typed_const(const_as(v, t));
+  if (v.ms) return as_type(ns_of_ms(v, el), t, el);
+  IT u = type_of(v);
+  if (u == t && !v.ms) return v.o;
+  if (kind_of(t) == Ty::Int && v.ty == Ty::Int && !v.ms && ty_info(t).kind != TyKind::Time) return v.o;
+  Operand tmp = temp_of(t, el);
+  rung(Cond::yes(), tout(Op::TCONV, t, u, {v.o, tmp}, el), el);
+  return tmp;
+}
+
+// MatIEC computes in the type: a result narrower than 32 bits held in an
+// INT32 word is wrapped to it (INT: the low 16 bits, sign-extended), with the
+// untyped word instructions so that every engine runs it.
+void Importer::wrap(Operand r, IT t, const Cond& en, const Element* el) {
+  if (!is_int_type(t) || kind_of(t) != Ty::Int || ty_info(t).bits >= 32) return;
+  int bits = ty_info(t).bits;
+  uint32_t mask = (1u << bits) - 1, sign = 1u << (bits - 1);
+  std::vector<TreeNode> acts;
+  acts.push_back(out(Op::WAND, {r, const_opd(int32_t(mask)), r}, el));
+  if (typed::is_signed(t)) {  // ((r & mask) ^ sign) - sign sign-extends
+    acts.push_back(out(Op::WXOR, {r, const_opd(int32_t(sign)), r}, el));
+    acts.push_back(out(Op::SUB, {r, const_opd(int32_t(sign)), r}, el));
+  }
+  rung(en, fork_of(std::move(acts)), el);
+}
+
+// Does every value of integer type a fit in b, so that no wrap is needed?
+bool fits_in(IT a, IT b) {
+  if (a == b) return true;
+  if (kind_of(a) != Ty::Int || kind_of(b) != Ty::Int) return false;
+  int ab = ty_info(a).bits, bb = ty_info(b).bits;
+  bool as = typed::is_signed(a), bs = typed::is_signed(b);
+  if (as == bs) return ab <= bb;
+  return !as && bs && ab < bb;
+}
+
+// dst := a constant (folded to dst's type already).
+TreeNode Importer::assign_node(const Val& k, const Val& dst, const Element* el) {
+  if (dst.ty == Ty::Wide) return tout(Op::TMOVE, dst.it, IT::None, {k.o, dst.o}, el);
+  return out(Op::MOV, {k.o, dst.o}, el);
+}
+
+// dst := v, converted to dst's type as MatIEC converts it.
+void Importer::assign(const Val& v, const Val& dst, const std::string& dst_text, const Element* el) {
+  IT dt = type_of(dst);
+  if (is_const(v.o)) {
+    Val k = dst.it == IT::None ? v : const_val(v, dst.it);
+    if (dst.ty != Ty::Wide && k.ty == Ty::Wide) k = const_val(v, dt);
+    TreeNode mv = assign_node(k, dst, el);
+    if (dst.ty != Ty::Wide) mv.text = "MOV " + spell(k.o) + " " + dst_text;
+    return rung(Cond::yes(), std::move(mv), el);
+  }
+  if (v.ms && dst.ty == Ty::Wide) return assign(ns_of_ms(v, el), dst, dst_text, el);
+  IT st = type_of(v);
+  if (dst.ty == Ty::Wide || v.ty == Ty::Wide || (dst.ty == Ty::Real && unsigned32(v.it))) {
+    if (st == dt && !v.ms) return rung(Cond::yes(), tout(Op::TMOVE, dt, IT::None, {v.o, dst.o}, el), el);
+    return rung(Cond::yes(), tout(Op::TCONV, dt, st, {v.o, dst.o}, el), el);
+  }
+  TreeNode mv = out(Op::MOV, {v.o, dst.o}, el);
+  mv.text = "MOV " + spell(v.o) + " " + dst_text;
+  rung(Cond::yes(), std::move(mv), el);
+  if (dst.it != IT::None && !v.ms && v.ty == Ty::Int && !fits_in(st, dst.it)) wrap(dst.o, dst.it, Cond::yes(), el);
+}
+
+// A timer's preset in ms (ldc's timers count whole ms): a TIME of ns rounded
+// up, so that the timer is done at the scan where MatIEC's elapsed time,
+// which advances by whole ms here, reaches the preset.
+Operand Importer::preset_ms(const Val& v, const Element* el) {
+  if (v.ty == Ty::Int) return v.o;  // an untyped integer: ms, as before
+  if (type_of(v) != IT::TIME) fail_at(el, "a timer's PT must be a TIME, not " + std::string(ty_info(type_of(v)).name) + " (" + el->path() + ")");
+  if (is_const(v.o)) {
+    int64_t ns = int64_t(const_bits(v));
+    int64_t ms = ns <= 0 ? 0 : (ns + typed::kNsPerMs - 1) / typed::kNsPerMs;
+    if (ms > INT32_MAX) fail_at(el, "a timer's PT is at most 2147483647 ms (" + el->path() + ")");
+    return const_opd(int32_t(ms));
+  }
+  Operand up = temp_of(IT::TIME, el), ms{OpdKind::Int, Area::D, take(Dev::D, el)};
+  rung(Cond::yes(), tout(Op::TADD, IT::TIME, IT::None, {v.o, Operand::typed_const(uint64_t(typed::kNsPerMs - 1)), up}, el), el);
+  rung(Cond::yes(), tout(Op::TDIV, IT::LINT, IT::None, {up, Operand::typed_const(uint64_t(typed::kNsPerMs)), up}, el), el);
+  rung(Cond::yes(), tout(Op::TCONV, IT::DINT, IT::LINT, {up, ms}, el), el);
+  return ms;
+}
+
+// A timer's ET (INT32 ms) as a TIME of ns in a temporary: ms times 10^6, in
+// LINT instructions on the TIME's two words (TIME_TO_DINT and DINT_TO_TIME
+// are MatIEC's conversions, in seconds; this one is ldc's own unit change).
+Val Importer::ns_of_ms(const Val& v, const Element* el) {
+  Operand ns = temp_of(IT::TIME, el);
+  rung(Cond::yes(), tout(Op::TCONV, IT::LINT, IT::DINT, {v.o, ns}, el), el);
+  rung(Cond::yes(), tout(Op::TMUL, IT::LINT, IT::None, {ns, Operand::typed_const(uint64_t(typed::kNsPerMs)), ns}, el), el);
+  return Val{ns, Ty::Wide, IT::TIME};
 }
 
 void Importer::rung(TreeNode root, const Element* el) {
@@ -904,9 +1141,8 @@ Cond Importer::bool_expr(const std::vector<Conn>& conns, bool order, const Eleme
       Cond lab;
       if (n.kind == "inVariable" || n.kind == "inOutVariable") {
         Val v = value_of(n.text, n.el);
-        Ty lit_ty;
         bool untyped_01 = v.o.kind == OpdKind::ConstInt && (v.o.ival == 0 || v.o.ival == 1) &&
-                          upper(n.text).find('#') == std::string::npos && literal(n.text, lit_ty, n.el);
+                          upper(n.text).find('#') == std::string::npos && literal(n.text, n.el);
         if (untyped_01) v.ty = Ty::Bool;  // MatIEC reads the literals 0 and 1 as BOOL where a BOOL is wanted
         if (v.ty != Ty::Bool) fail_at(n.el, "'" + n.text + "' is " + ty_name(v.ty) + " but feeds the power flow of " + where(consumer));
         if (v.o.kind == OpdKind::ConstInt) lab = (v.o.ival != 0) != n.negated ? Cond::yes() : Cond::no();
@@ -1152,6 +1388,9 @@ void Importer::fb_block(const Node& b, Var& inst) {
     if (!p || p->conns.empty()) return {const_opd(0), Ty::Int};
     Val v = value_expr(p->conns, order, p->el);
     if (v.ty == Ty::Real) fail_at(p->el, n + " of " + t + " must be an integer or TIME, not REAL (" + p->el->path() + ")");
+    if (n == "PV" && v.ty == Ty::Wide)
+      fail_at(p->el, "PV of " + t + " is an INT, not " + ty_info(type_of(v)).name + " (" + t + "_" + ty_info(type_of(v)).name +
+                         " counts in that type) (" + p->el->path() + ")");
     return v;
   };
   // All inputs are evaluated first (their edge contacts and the blocks feeding
@@ -1163,7 +1402,8 @@ void Importer::fb_block(const Node& b, Var& inst) {
   std::map<std::string, Val> v;
   Cond en = Cond::yes();
   for (const Pin& p : b.inputs) {
-    if (p.name == "PT" || p.name == "PV") v[p.name] = value(p.name);
+    if (p.name == "PT") v[p.name] = Val{preset_ms(value(p.name), p.el)};
+    else if (p.name == "PV") v[p.name] = value(p.name);
     else if (p.name == "EN") en = materialize(cond("EN"), el);
     else c[p.name] = (k == FbKind::Latch || p.name == "R" || p.name == "LD") ? materialize(cond(p.name), el) : cond(p.name);
   }
@@ -1179,7 +1419,10 @@ void Importer::fb_block(const Node& b, Var& inst) {
     }
   }
   auto bool_out = [&](const std::string& pin, Operand o) { outs_[{b.id, pin}] = Out{true, bit_leaf(Op::LOAD, o, el), {}}; };
-  auto val_out = [&](const std::string& pin, Operand o) { outs_[{b.id, pin}] = Out{false, {}, Val{o, Ty::Int}}; };
+  // ET: TIME held in ms; CV: INT (MatIEC's CTU/CTD/CTUD)
+  auto val_out = [&](const std::string& pin, Operand o) {
+    outs_[{b.id, pin}] = Out{false, {}, pin == "ET" ? Val{o, Ty::Int, IT::TIME, true} : Val{o, Ty::Int, IT::INT}};
+  };
   Operand cw{OpdKind::Int, Area::CW, i};
   Operand cn{OpdKind::Counter};
   cn.index = i;
@@ -1299,25 +1542,150 @@ void Importer::bit_shift(const std::string& t, const Pin& in_pin, Operand in, Op
   if (width < 32) rung(en, out(Op::WAND, {res, const_opd(mask), res}, el), el);
 }
 
+// The type a function computes in (MatIEC: its inputs are of one type; an
+// untyped literal takes it): the first typed input's; a timer's ET alone is
+// TIME held in ms; None: untyped INT32 and REAL, as before.
+IT common_type(const std::vector<Val>& v) {
+  for (const Val& x : v)
+    if (x.it != IT::None && !x.ms) return x.it;
+  for (const Val& x : v)
+    if (x.ms) return IT::TIME;
+  return IT::None;
+}
+
+const std::set<std::string>& real_functions() {
+  static const std::set<std::string> f = {"SQRT", "LN", "LOG", "EXP", "SIN", "COS", "TAN", "ASIN", "ACOS", "ATAN", "EXPT"};
+  return f;
+}
+
+// A standard function in typed instructions, of type T: every input as a T
+// (as_type), the result a temporary of T, 0 when EN is off (as MatIEC's
+// functions return).  Used where a 64-bit value takes part, where UDINT and
+// DWORD need their unsigned order, for TIME arithmetic and for the REAL
+// functions (SQRT ... EXPT).  `eno` is set where the function has its own.
+Val Importer::typed_fn(const std::string& t, const std::string& time_op, const std::vector<Val>& v, const Pin* g, IT T, const Cond& en,
+                       Cond& eno, const Element* el, const Node& b) {
+  auto fail_type = [&](const std::string& what) {
+    fail_at(el, t + " localId " + std::to_string(b.id) + " " + what + " (" + el->path() + ")");
+  };
+  if (!time_op.empty()) {  // MatIEC: TIME times or by a number, in ns
+    Val tm = v.at(0), k = v.at(1);
+    if (type_of(tm) != IT::TIME) fail_type("needs a TIME on IN1, not " + std::string(ty_info(type_of(tm)).name));
+    Operand ns = as_type(tm, IT::TIME, el), res = temp_of(IT::TIME, el);
+    if (en.k != Cond::True) rung(negate(en, el), tout(Op::TMOVE, IT::TIME, IT::None, {Operand::typed_const(0), res}, el), el);
+    if (k.ty == Ty::Real || type_of(k) == IT::LREAL) {
+      // in floating point, as MatIEC's __time_mul / __time_div: ms as LREAL, then back to ns
+      Operand x = temp_of(IT::LREAL, el), y = as_type(k, IT::LREAL, el);
+      rung(en, tout(Op::TCONV, IT::LREAL, IT::TIME, {ns, x}, el), el);
+      rung(en, tout(time_op == "MUL_TIME" ? Op::TMUL : Op::TDIV, IT::LREAL, IT::None, {x, y, x}, el), el);
+      rung(en, tout(Op::TCONV, IT::TIME, IT::LREAL, {x, res}, el), el);
+    } else {
+      // the ns as a LINT (the same two words), times or by an integer; by 0: 0
+      Operand y = as_type(k, IT::LINT, el);
+      rung(en, tout(time_op == "MUL_TIME" ? Op::TMUL : Op::TDIV, IT::LINT, IT::None, {ns, y, res}, el), el);
+    }
+    return Val{res, Ty::Wide, IT::TIME};
+  }
+  if (T == IT::None) T = IT::DINT;
+  bool real_fn = real_functions().count(t) > 0;
+  if (real_fn && !typed::is_real(T)) fail_type("takes REAL or LREAL inputs, not " + std::string(ty_info(T).name));
+  Operand res = temp_of(T, el);
+  auto zero = [&] { return Operand::typed_const(typed::conv(T, IT::DINT, 0)); };
+  auto opd = [&](const Val& x) { return as_type(x, T, el); };
+  if (en.k != Cond::True && t != "SEL") rung(negate(en, el), tout(Op::TMOVE, T, IT::None, {zero(), res}, el), el);
+  auto need = [&](size_t n, bool exact) {
+    if (v.size() < n || (exact && v.size() != n)) fail_type("takes " + std::to_string(n) + (exact ? "" : " or more") + " inputs");
+  };
+  static const std::map<std::string, Op> chain = {{"ADD", Op::TADD}, {"MUL", Op::TMUL}, {"MIN", Op::TMIN}, {"MAX", Op::TMAX},
+                                                  {"AND", Op::TAND}, {"OR", Op::TOR},   {"XOR", Op::TXOR}};
+  static const std::map<std::string, Op> two = {{"SUB", Op::TSUB}, {"DIV", Op::TDIV}, {"MOD", Op::TMOD}, {"EXPT", Op::TEXPT}};
+  static const std::map<std::string, Op> one = {{"ABS", Op::TABS},   {"SQRT", Op::TSQRT}, {"LN", Op::TLN},     {"LOG", Op::TLOG},
+                                                {"EXP", Op::TEXP},   {"SIN", Op::TSIN},   {"COS", Op::TCOS},   {"TAN", Op::TTAN},
+                                                {"ASIN", Op::TASIN}, {"ACOS", Op::TACOS}, {"ATAN", Op::TATAN}, {"NOT", Op::TNOT},
+                                                {"MOVE", Op::TMOVE}};
+  static const std::map<std::string, Op> shifts = {{"SHL", Op::TSHL}, {"SHR", Op::TSHR}, {"ROL", Op::TROL}, {"ROR", Op::TROR}};
+  auto allowed = [&](Op op) {
+    if (!op_takes(op, T, op_info(op).typed == 2 ? IT::DINT : IT::None)) fail_type("is not defined on " + std::string(ty_info(T).name));
+  };
+  if (auto it = chain.find(t); it != chain.end()) {
+    need(2, false);
+    allowed(it->second);
+    rung(en, tout(it->second, T, IT::None, {opd(v[0]), opd(v[1]), res}, el), el);
+    for (size_t k = 2; k < v.size(); k++) rung(en, tout(it->second, T, IT::None, {res, opd(v[k]), res}, el), el);
+  } else if (auto it2 = two.find(t); it2 != two.end()) {
+    need(2, true);
+    allowed(it2->second);
+    Operand d = opd(v[1]);
+    rung(en, tout(it2->second, T, IT::None, {opd(v[0]), d, res}, el), el);
+    if (t == "DIV" && !typed::is_real(T)) eno = c_and(en, tcmp(Op::TNE, T, d, zero(), el));  // MatIEC: ENO FALSE by 0
+  } else if (auto it3 = one.find(t); it3 != one.end()) {
+    need(1, true);
+    allowed(it3->second);
+    rung(en, tout(it3->second, T, IT::None, {opd(v[0]), res}, el), el);
+  } else if (auto it4 = shifts.find(t); it4 != shifts.end()) {
+    need(2, true);
+    IT u = type_of(v[1]);
+    if (!op_takes(it4->second, T, u)) fail_type("shifts a bit string (BYTE WORD DWORD LWORD) by an integer, not " + std::string(ty_info(T).name));
+    rung(en, tout(it4->second, T, u, {opd(v[0]), is_const(v[1].o) ? Operand::typed_const(const_as(v[1], u)) : v[1].o, res}, el), el);
+  } else if (t == "SEL") {
+    if (!g || v.size() != 2) fail_type("needs G, IN0 and IN1");
+    if (en.k != Cond::True) rung(negate(en, el), tout(Op::TMOVE, T, IT::None, {zero(), res}, el), el);
+    Operand a = opd(v[0]), c = opd(v[1]);
+    Cond gc = materialize(bool_expr(g->conns, b.order > 0, g->el), el);
+    rung(c_and(en, negate(gc, el)), tout(Op::TMOVE, T, IT::None, {a, res}, el), el);
+    rung(c_and(en, gc), tout(Op::TMOVE, T, IT::None, {c, res}, el), el);
+  } else if (t == "LIMIT") {  // IN > MN ? (IN < MX ? IN : MX) : MN
+    need(3, true);
+    Operand mn = opd(v[0]), in = opd(v[1]), mx = opd(v[2]);
+    rung(c_and(en, tcmp(Op::TLE, T, in, mn, el)), tout(Op::TMOVE, T, IT::None, {mn, res}, el), el);
+    rung(c_and(c_and(en, tcmp(Op::TGT, T, in, mn, el)), tcmp(Op::TGE, T, in, mx, el)), tout(Op::TMOVE, T, IT::None, {mx, res}, el), el);
+    rung(c_and(c_and(en, tcmp(Op::TGT, T, in, mn, el)), tcmp(Op::TLT, T, in, mx, el)), tout(Op::TMOVE, T, IT::None, {in, res}, el), el);
+  } else if (t == "MUX") {  // K selects IN0, IN1 ...; out of range: 0 and ENO FALSE
+    if (v[0].ty != Ty::Int) fail_type("needs an integer K of up to 32 bits");
+    rung(en, tout(Op::TMOVE, T, IT::None, {zero(), res}, el), el);
+    Cond in_range = Cond::no();
+    for (size_t k = 1; k < v.size(); k++) {
+      Cond is_k = Cond::of(leaf(Op::LDEQ, {v[0].o, const_opd(int32_t(k - 1))}, el));
+      rung(c_and(en, is_k), tout(Op::TMOVE, T, IT::None, {opd(v[k]), res}, el), el);
+      in_range = c_or(std::move(in_range), std::move(is_k));
+    }
+    eno = c_and(en, std::move(in_range));
+  } else {
+    fail_type("is not defined on " + std::string(ty_info(T).name));
+  }
+  return Val{res, kind_of(T), T};
+}
+
+// X_TO_Y in typed instructions: MatIEC's conversion (ir/typed.h, CONV), and
+// TRUNC (toward zero, to DINT).
+Val Importer::typed_conv(IT to, IT from, const Val& v, const Cond& en, bool trunc, const Element* el) {
+  Operand x = as_type(v, from, el), res = temp_of(to, el);
+  if (en.k != Cond::True) rung(negate(en, el), tout(Op::TMOVE, to, IT::None, {Operand::typed_const(0), res}, el), el);
+  rung(en, tout(trunc ? Op::TTRUNC : Op::TCONV, to, from, {x, res}, el), el);
+  return Val{res, kind_of(to), to};
+}
+
 void Importer::fn_block(const Node& b) {
   std::string t = upper(b.type);
-  if (t == "ADD_TIME" || t == "SUB_TIME") t = t.substr(0, 3);  // TIME is INT32 ms: the same arithmetic
-  // TIME times or by an integer: MUL, DIV on ms (DIV truncates to the ms); a REAL factor is refused below
+  if (t == "ADD_TIME" || t == "SUB_TIME") t = t.substr(0, 3);  // ADD, SUB on TIME
+  // TIME times or by a number (MatIEC: in ns)
   std::string time_op = t == "MUL_TIME" || t == "DIV_TIME" ? t : "";
   if (!time_op.empty()) t = t.substr(0, 3);
+  bool trunc = t == "TRUNC";
   Pins pins{b};
   bool order = b.order > 0;
   const Element* el = b.el;
   static const std::set<std::string> cmp = {"GT", "GE", "EQ", "NE", "LE", "LT"};
   static const std::set<std::string> arith = {"ADD", "SUB", "MUL", "DIV", "MOD", "MAX", "MIN"};
   size_t to = t.find("_TO_");
-  bool conv = to != std::string::npos;
+  bool conv = to != std::string::npos || trunc;
   static const std::set<std::string> bits = {"SHL", "SHR", "ROL", "ROR"};
-  if (!cmp.count(t) && !arith.count(t) && !conv && !bits.count(t) && t != "MOVE" && t != "SEL" && t != "MUX" && t != "LIMIT" &&
-      t != "ABS" && t != "AND" && t != "OR" && t != "XOR" && t != "NOT")
+  if (!cmp.count(t) && !arith.count(t) && !conv && !bits.count(t) && !real_functions().count(t) && t != "MOVE" && t != "SEL" && t != "MUX" &&
+      t != "LIMIT" && t != "ABS" && t != "AND" && t != "OR" && t != "XOR" && t != "NOT")
     fail_at(el, "block '" + b.type + "' localId " + std::to_string(b.id) + " is not supported: ldc translates TON TOF TP CTU CTD CTUD SR RS R_TRIG F_TRIG, "
-                "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL MUX, ADD_TIME SUB_TIME MUL_TIME DIV_TIME, AND OR XOR NOT SHL SHR ROL ROR "
-                "and type conversions (" + el->path() + ")");
+                "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL MUX, "
+                "SQRT LN LOG EXP EXPT SIN COS TAN ASIN ACOS ATAN, ADD_TIME SUB_TIME MUL_TIME DIV_TIME, AND OR XOR NOT SHL SHR ROL ROR, "
+                "type conversions X_TO_Y and TRUNC (" + el->path() + ")");
   // inputs other than EN, in order
   std::vector<const Pin*> ins;
   for (const Pin& p : b.inputs)
@@ -1337,8 +1705,8 @@ void Importer::fn_block(const Node& b) {
   Cond eno = en;
   for (const Pin* p : ins)
     if (p->conns.empty()) fail_at(p->el, "input " + p->name + " of " + t + " localId " + std::to_string(b.id) + " is not connected (" + p->el->path() + ")");
-  size_t want = t == "SEL" || t == "LIMIT" ? 3 : (conv || t == "NOT" || t == "MOVE" || t == "ABS") ? 1
-                : (t == "SUB" || t == "DIV" || t == "MOD" || bits.count(t) || !time_op.empty()) ? 2 : 0;
+  size_t want = t == "SEL" || t == "LIMIT" ? 3 : (conv || t == "NOT" || t == "MOVE" || t == "ABS" || (real_functions().count(t) && t != "EXPT")) ? 1
+                : (t == "SUB" || t == "DIV" || t == "MOD" || t == "EXPT" || bits.count(t) || !time_op.empty()) ? 2 : 0;
   size_t n_in = ins.size();
   if ((want && n_in != want) || (!want && n_in < 2))
     fail_at(el, (time_op.empty() ? t : time_op) + " localId " + std::to_string(b.id) + " takes " + (want ? std::to_string(want) : std::string("two or more")) +
@@ -1359,10 +1727,9 @@ void Importer::fn_block(const Node& b) {
       // on BOOL when an input is BOOL; the untyped literals 0 and 1 go with either
       auto literal01 = [&](const Pin* p) {
         const Node& n = node(p->conns[0]);
-        Ty lt;
-        std::optional<Operand> k;
-        if (n.kind == "inVariable" && upper(n.text).find('#') == std::string::npos) k = literal(n.text, lt, n.el);
-        return k && k->kind == OpdKind::ConstInt && (k->ival == 0 || k->ival == 1);
+        std::optional<Val> k;
+        if (n.kind == "inVariable" && upper(n.text).find('#') == std::string::npos) k = literal(n.text, n.el);
+        return k && k->ty == Ty::Int && k->o.kind == OpdKind::ConstInt && (k->o.ival == 0 || k->o.ival == 1);
       };
       const Pin *a_bool = nullptr, *a_value = nullptr;
       for (const Pin* p : ins) {
@@ -1391,11 +1758,36 @@ void Importer::fn_block(const Node& b) {
       } else {
         std::vector<Val> v;
         for (const Pin* p : ins) v.push_back(val_of(p));
-        for (size_t k = 0; k + 1 < v.size(); k++) c = c_and(std::move(c), Cond::of(leaf(ops.at(t), {v[k].o, v[k + 1].o}, el)));
+        IT T = common_type(v);
+        bool typed = false;
+        for (Val& x : v) {
+          if (x.ty == Ty::Wide && is_const(x.o) && T == IT::TIME && x.it == IT::TIME) {
+            // a timer's ET (ms) against a TIME literal of whole ms: compared in ms, as before
+            int64_t ns = int64_t(const_bits(x));
+            if (ns % typed::kNsPerMs == 0 && ns / typed::kNsPerMs >= INT32_MIN && ns / typed::kNsPerMs <= INT32_MAX) {
+              x = Val{const_opd(int32_t(ns / typed::kNsPerMs)), Ty::Int, IT::TIME, true};
+              continue;
+            }
+          }
+          typed |= x.ty == Ty::Wide;
+        }
+        typed |= T != IT::None && unsigned32(T);
+        static const std::map<std::string, Op> tops = {{"GT", Op::TGT}, {"GE", Op::TGE}, {"EQ", Op::TEQ},
+                                                       {"NE", Op::TNE}, {"LE", Op::TLE}, {"LT", Op::TLT}};
+        for (size_t k = 0; k + 1 < v.size(); k++) {
+          Cond r = typed ? tcmp(tops.at(t), T, as_type(v[k], T, el), as_type(v[k + 1], T, el), el)
+                         : Cond::of(leaf(ops.at(t), {v[k].o, v[k + 1].o}, el));
+          c = c_and(std::move(c), std::move(r));
+        }
       }
     } else if (conv) {  // INT_TO_BOOL & co: the value is not zero
       Val v = val_of(ins.at(0));
-      c = c_and(en, Cond::of(leaf(Op::LDNE, {v.o, v.ty == Ty::Real ? [] { Operand z{OpdKind::ConstReal}; z.fval = 0; return z; }() : const_opd(0)}, el)));
+      if (v.ty == Ty::Wide) {
+        IT ft = type_of(v);
+        c = c_and(en, tcmp(Op::TNE, ft, as_type(v, ft, el), Operand::typed_const(0), el));
+      } else {
+        c = c_and(en, Cond::of(leaf(Op::LDNE, {v.o, v.ty == Ty::Real ? [] { Operand z{OpdKind::ConstReal}; z.fval = 0; return z; }() : const_opd(0)}, el)));
+      }
     } else if (t == "NOT") {
       c = c_and(en, negate(cond_of(ins.at(0)), el));
     } else if (t == "AND" || t == "OR") {
@@ -1436,20 +1828,43 @@ void Importer::fn_block(const Node& b) {
       if (t == "SEL" && p->name == "G") { g = p; continue; }
       if (!from_bool) v.push_back(val_of(p));
     }
-    bool real = false;
-    for (const Val& x : v) real |= x.ty == Ty::Real;
-    if (!time_op.empty() && real)
-      fail_at(el, time_op + " localId " + std::to_string(b.id) + " by a REAL is not supported: TIME is held in whole milliseconds (" +
-                      el->path() + ")");
-    std::string target = conv ? t.substr(to + 4) : "";
+    bool real = false, wide = false;
+    for (const Val& x : v) real |= x.ty == Ty::Real, wide |= x.ty == Ty::Wide;
+    IT T = common_type(v);
+    std::string target = conv && !trunc ? t.substr(to + 4) : "";
     bool round_real = false;  // REAL_TO_INT & co: IEC rounds to nearest, ties to even
+    IT ft = IT::None, tt = IT::None;
     if (conv) {
-      std::string from = t.substr(0, to);
-      Ty ft = from == "BOOL" ? Ty::Bool : elementary(from), tt = elementary(target);
-      round_real = ft == Ty::Real && tt == Ty::Int && target != "TIME";
-      if (ft == Ty::None || tt == Ty::None || tt == Ty::Bool || (ft == Ty::Real && tt != Ty::Real && !round_real))
-        fail_at(el, "conversion " + t + " is not supported (" + el->path() + ")");
-      real = tt == Ty::Real;
+      if (trunc) {
+        ft = v.empty() ? IT::None : type_of(v[0]), tt = IT::DINT;
+        if (!typed::is_real(ft)) fail_at(el, "TRUNC localId " + std::to_string(b.id) + " takes a REAL or LREAL (" + el->path() + ")");
+      } else {
+        ft = iec_type_named(t.substr(0, to)), tt = iec_type_named(target);
+        if (ft == IT::None || tt == IT::None || tt == IT::BOOL) fail_at(el, "conversion " + t + " is not supported (" + el->path() + ")");
+      }
+      // MatIEC's conversion in typed instructions where INT32 words cannot hold it
+      if (trunc || kind_of(ft) == Ty::Wide || kind_of(tt) == Ty::Wide || (unsigned32(ft) && tt == IT::REAL)) {
+        Val r;
+        if (from_bool) {
+          Cond in = materialize(cond_of(ins.at(0)), el);
+          Val bv = in.k == Cond::Expr ? Val{in.n.elem.a[0], Ty::Bool, IT::BOOL} : Val{const_opd(in.k == Cond::True), Ty::Bool, IT::BOOL};
+          if (in.k != Cond::Expr) bv.lit = IecLiteral{IT::BOOL, true, uint64_t(in.k == Cond::True)};
+          r = typed_conv(tt, IT::BOOL, bv, en, false, el);
+        } else {
+          r = typed_conv(tt, ft, v.at(0), en, trunc, el);
+        }
+        outs_[{b.id, outname}] = Out{false, {}, r};
+        if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, materialize(eno, el), {}};
+        return;
+      }
+      round_real = ft == IT::REAL && kind_of(tt) == Ty::Int;
+      real = tt == IT::REAL;
+    } else if (wide || real_functions().count(t) || !time_op.empty() ||
+               (T != IT::None && unsigned32(T) && (t == "DIV" || t == "MOD" || t == "MIN" || t == "MAX" || t == "LIMIT"))) {
+      Val r = typed_fn(t, time_op, v, g, T, en, eno, el, b);
+      outs_[{b.id, outname}] = Out{false, {}, r};
+      if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, materialize(eno, el), {}};
+      return;
     }
     Operand res = real ? Operand{OpdKind::Real, Area::F, take(Dev::F, el)} : Operand{OpdKind::Int, Area::D, take(Dev::D, el)};
     Operand zero = real ? [] { Operand z{OpdKind::ConstReal}; z.fval = 0; return z; }() : const_opd(0);
@@ -1524,7 +1939,20 @@ void Importer::fn_block(const Node& b) {
         for (size_t k = 2; k < v.size(); k++) rung(en, out(op, {res, v[k].o, res}, el), el);
       }
     }
-    outs_[{b.id, outname}] = Out{false, {}, Val{res, real ? Ty::Real : Ty::Int}};
+    // MatIEC computes in the type: a narrow result wraps
+    Val r{res, real ? Ty::Real : Ty::Int};
+    if (conv) {
+      IT src = from_bool ? IT::BOOL : v.at(0).it != IT::None ? v.at(0).it : ft;
+      if (round_real || (kind_of(tt) == Ty::Int && !fits_in(src, tt))) wrap(res, tt, en, el);
+      r.it = tt;
+    } else if (T != IT::None && (kind_of(T) == Ty::Int || kind_of(T) == Ty::Real)) {
+      static const std::set<std::string> arith_ops = {"ADD", "SUB", "MUL", "DIV", "MOD", "ABS", "NOT"};
+      if (arith_ops.count(t)) wrap(res, T, en, el);
+      r.it = real ? IT::REAL : T;
+    } else if (T == IT::TIME) {  // timers' ET: TIME in ms
+      r.it = IT::TIME, r.ms = true;
+    }
+    outs_[{b.id, outname}] = Out{false, {}, r};
   }
   if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, materialize(eno, el), {}};
 }
@@ -1557,9 +1985,7 @@ void Importer::statement(const Node& n) {
   }
   if (neg) fail_at(el, "a negated " + n.kind + " must be BOOL (" + el->path() + ")");
   Val v = value_expr(n.in, order, el);
-  TreeNode mv = out(Op::MOV, {v.o, dst.o}, el);
-  mv.text = "MOV " + spell(v.o) + " " + n.text;
-  rung(Cond::yes(), std::move(mv), el);
+  assign(v, dst, n.text, el);
 }
 
 // Was this project saved by Beremiz or OpenPLC Editor running on Python 2?
@@ -2059,7 +2485,8 @@ void Importer::prepare() {
           const Element* te = sec->children[0].get();
           u->derived = te->local_name() == "derived";
           u->type = u->derived ? (te->attr("name") ? *te->attr("name") : "") : upper(te->local_name());
-          u->ty = u->derived ? Ty::None : elementary(u->type);
+          u->it = u->derived ? IT::None : iec_type_named(u->type);
+    u->ty = kind_of(u->it);
           scope_[upper(name)] = u.get();
           vars_.push_back(std::move(u));
         } else if (s == "externalVars") {
@@ -2090,13 +2517,13 @@ void Importer::emit_init(const std::function<bool(const Var&)>& which, const Ele
   for (auto& v : vars_) {
     if (!v->dev || v->init.empty() || v->derived || v->constant || !which(*v)) continue;
     if (v->dev->dev == Dev::X || v->dev->dev == Dev::WX) continue;  // inputs belong to the I/O
-    Ty t;
-    auto c = literal(v->init, t, v->el);
+    auto c = literal(v->init, v->el);
     if (!c) fail_at(v->el, "initial value '" + v->init + "' of '" + v->name + "' is not a literal");
+    Val k = const_val(*c, v->it);
     if (v->ty == Ty::Bool) {
-      if (c->ival) init_.push_back(out(Op::SET, {bit_opd(bit_area(v->dev->dev), v->dev->index)}, v->el));
-    } else if (c->kind == OpdKind::ConstReal ? c->fval != 0 : c->ival != 0) {
-      init_.push_back(out(Op::MOV, {*c, Operand{v->ty == Ty::Real ? OpdKind::Real : OpdKind::Int, word_area(v->dev->dev), v->dev->index}}, v->el));
+      if (k.o.ival) init_.push_back(out(Op::SET, {bit_opd(bit_area(v->dev->dev), v->dev->index)}, v->el));
+    } else if (const_bits(k) != 0) {
+      init_.push_back(assign_node(k, var_val(*v), v->el));
     }
   }
   if (init_.empty()) return;
