@@ -142,7 +142,7 @@ class TypedGen {
     if (on(kGenTCompare) && r_.pct(55)) {
       static const Op kRels[] = {Op::TEQ, Op::TNE, Op::TLT, Op::TLE, Op::TGT, Op::TGE};
       Op op = kRels[r_.below(6)];
-      Ty t, u;
+      Ty t = Ty::None, u = Ty::None;
       pick_types(op, t, u);
       std::string a = r_.pct(85) ? (t == Ty::BOOL ? bit_src() : word(t)) : constant(t);
       emit(name(op, t) + " " + a + " " + src(t));
@@ -171,7 +171,7 @@ class TypedGen {
                               Op::TNEG,  Op::TABS, Op::TEXPT, Op::TSQRT, Op::TLN, Op::TLOG, Op::TEXP, Op::TSIN,
                               Op::TCOS, Op::TTAN, Op::TASIN, Op::TACOS, Op::TATAN, Op::TADD, Op::TDIV, Op::TMUL};
     Op op = kOps[r_.below(int(std::size(kOps)))];
-    Ty t, u;
+    Ty t = Ty::None, u = Ty::None;
     if (!pick_types(op, t, u)) return;
     std::string s = name(op, t) + " " + src(t);
     if (op_info(op).nopd == 3) {
@@ -182,14 +182,14 @@ class TypedGen {
   }
   void conv() {
     Op op = r_.pct(80) ? Op::TCONV : Op::TTRUNC;
-    Ty t, u;
+    Ty t = Ty::None, u = Ty::None;
     if (!pick_types(op, t, u)) return;
     emit(name(op, t, u) + " " + src(u) + " " + dst(t));
   }
   void bits() {
     static const Op kOps[] = {Op::TAND, Op::TOR, Op::TXOR, Op::TNOT, Op::TSHL, Op::TSHR, Op::TROL, Op::TROR};
     Op op = kOps[r_.below(8)];
-    Ty t, u;
+    Ty t = Ty::None, u = Ty::None;
     if (!pick_types(op, t, u)) return;
     if (op == Op::TNOT) return emit(name(op, t) + " " + src(t) + " " + dst(t));
     if (u == Ty::None) return emit(name(op, t) + " " + src(t) + " " + src(t) + " " + dst(t));

@@ -333,7 +333,7 @@ void Parser::declaration(int no) {
   }
 }
 
-// alias = "alias" NAME "=" device      ("alias a=X1" and "alias a = X1")
+// alias = "alias" NAME "=" device [":" TYPE]   ("alias a=X1", "alias a = X1", "alias n = D0 : LINT")
 void Parser::alias_declaration(int no, int col0) {
   std::string_view text = lines_[size_t(no - 1)];
   std::string rest = str(trim(text.substr(col0 - 1 + 5)));
@@ -350,10 +350,22 @@ void Parser::alias_declaration(int no, int col0) {
   if (aliases_.count(key)) fail(no, rest_col, "alias '" + name + "' is already defined");
   if (target.empty()) fail(no, rest_col + int(eq) + 1, "expected a device after '='");
   int tcol = int(text.rfind(target)) + 1;
+  Ty ty = Ty::None;  // "= D0 : LINT": the variable's type (docs/format.md)
+  if (size_t colon = target.find(':'); colon != std::string_view::npos) {
+    std::string_view tname = trim(target.substr(colon + 1));
+    int ncol = int(text.rfind(tname)) + 1;
+    auto t = ty_from_name(tname);
+    if (!t) fail(no, ncol, "unknown type '" + str(tname) + "' (an IEC elementary type: INT, LINT, UDINT, LREAL, TIME ...)");
+    ty = *t;
+    target = trim(target.substr(0, colon));
+    if (target.empty()) fail(no, tcol, "expected a device before ':'");
+  }
   try {
     aliases_[key] = device(Word{target, tcol});
   } catch (CompileError& e) { fail(no, e.col, e.what()); }
-  alias_list_.push_back({name, aliases_[key]});
+  Alias a{name, aliases_[key], ty};
+  if (std::string why = alias_type_problem(a); !why.empty()) fail(no, tcol, why);
+  alias_list_.push_back(std::move(a));
 }
 
 const DeviceRef* Parser::alias(std::string_view name) {

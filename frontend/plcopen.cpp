@@ -525,7 +525,9 @@ void Importer::aliases(TreeProgram& p) {
     std::string why, u = upper(name);
     if (!is_identifier(name) || u == "DT" || seen.count(u) || parse_device(name) || parse_iec_address(name, why)) continue;
     seen.insert(u);
-    p.aliases.push_back({name, *v->dev});
+    Alias a{name, *v->dev, v->it};  // typed: a watch shows it at its width (a BOOL is its bit either way)
+    if (a.ty == IT::BOOL || !alias_type_problem(a).empty()) a.ty = IT::None;  // an FB's state: as its device
+    p.aliases.push_back(std::move(a));
   }
 }
 

@@ -32,7 +32,8 @@ std::string print_il_text(const Program& p) {
   std::string out = "; ldc IL of " + p.source + "\n";
   if (p.edge_slots) out += ".edges " + std::to_string(p.edge_slots) + "\n";
   for (const Alias& a : p.aliases)
-    out += ".alias " + a.name + " " + dev_name(a.dev.dev) + std::to_string(a.dev.index) + "\n";
+    out += ".alias " + a.name + " " + dev_name(a.dev.dev) + std::to_string(a.dev.index) +
+           (a.ty == Ty::None ? "" : std::string(" ") + ty_info(a.ty).name) + "\n";
   for (const DeviceRef& d : p.retain) out += ".retain " + std::string(dev_name(d.dev)) + std::to_string(d.index) + "\n";
   for (const Rung& r : p.rungs) {
     for (const auto& l : r.labels) out += ".label " + l + "\n";
@@ -316,9 +317,17 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
       p.edge_slots = uint32_t(n.ival);
     } else if (head.text == ".alias") {
       std::optional<DeviceRef> d;
-      if (toks.size() != 3 || !is_name(toks[1].text) || !(d = parse_device(toks[2].text)) || d->index >= device_count(d->dev))
-        throw CompileError(lineno, head.col, ".alias needs a name and a device");
-      p.aliases.push_back({std::string(toks[1].text), *d});
+      if (toks.size() < 3 || toks.size() > 4 || !is_name(toks[1].text) || !(d = parse_device(toks[2].text)) ||
+          d->index >= device_count(d->dev))
+        throw CompileError(lineno, head.col, ".alias needs a name, a device and optionally a type");
+      Alias a{std::string(toks[1].text), *d};
+      if (toks.size() == 4) {
+        auto t = ty_from_name(toks[3].text);
+        if (!t) throw CompileError(lineno, toks[3].col, "unknown type '" + std::string(toks[3].text) + "'");
+        a.ty = *t;
+        if (std::string why = alias_type_problem(a); !why.empty()) throw CompileError(lineno, toks[3].col, why);
+      }
+      p.aliases.push_back(std::move(a));
     } else if (head.text == ".retain") {
       std::optional<DeviceRef> d;
       if (toks.size() != 2 || !(d = parse_device(toks[1].text)) || d->dev != Dev::D || d->index >= device_count(Dev::D))

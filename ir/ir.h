@@ -403,11 +403,18 @@ struct Rung {
 };
 
 // `alias NAME = DEVICE`: kept so traces, --watch and listings can use the names.
+// A typed front end also says the variable's type, so that a watch shows the
+// value at its width (a LINT's two cells, a UDINT unsigned, an LREAL).
 struct Alias {
   std::string name;
   DeviceRef dev;
+  Ty ty = Ty::None;
   bool operator==(const Alias&) const = default;
 };
+// Why a typed alias cannot name its device ("" if it can): a BOOL names a bit
+// device (T and C their done bit), every other type the first of its cells in
+// a word device (T and C their word), all of them inside the device's range.
+std::string alias_type_problem(const Alias& a);
 
 struct Program {
   std::string source;                   // file name, for messages

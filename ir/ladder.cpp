@@ -568,7 +568,9 @@ Ladder draw_ladder(const TreeProgram& p) {
 
 std::string print_ladder(const Ladder& l, const std::string& source_name) {
   std::string out = "# " + source_name + " as a ladder grid (ldc --emit=ld)\n";
-  for (const Alias& a : l.aliases) out += "alias " + a.name + " = " + dev_name(a.dev.dev) + std::to_string(a.dev.index) + "\n";
+  for (const Alias& a : l.aliases)
+    out += "alias " + a.name + " = " + dev_name(a.dev.dev) + std::to_string(a.dev.index) +
+           (a.ty == Ty::None ? "" : std::string(" : ") + ty_info(a.ty).name) + "\n";
   for (const DeviceRef& d : l.retain) out += "retain " + std::string(dev_name(d.dev)) + std::to_string(d.index) + "\n";
   for (const LadderRung& r : l.rungs) {
     out += "\n";

@@ -32,6 +32,18 @@ std::optional<Ty> ty_from_name(std::string_view name) {
   return std::nullopt;
 }
 
+std::string alias_type_problem(const Alias& a) {
+  if (a.ty == Ty::None) return "";
+  if (int(a.ty) > kTyCount) return "unknown type " + std::to_string(int(a.ty));
+  const TyInfo& t = ty_info(a.ty);
+  std::string what = std::string(t.name) + " alias '" + a.name + "' on " + dev_name(a.dev.dev) + std::to_string(a.dev.index);
+  if (t.cells == 0) return bit_area(a.dev.dev) == Area::Count ? what + ": a BOOL names a bit device" : "";
+  if (word_area(a.dev.dev) == Area::Count) return what + ": a " + t.name + " names a word device";
+  if (uint64_t(a.dev.index) + uint64_t(t.cells) > device_count(a.dev.dev))
+    return what + ": its " + std::to_string(t.cells) + " cells run past " + dev_name(a.dev.dev) + std::to_string(device_count(a.dev.dev) - 1);
+  return "";
+}
+
 std::optional<Op> typed_op_from_name(std::string_view spelling) {
   if (spelling.empty() || spelling.size() > 15) return std::nullopt;
   auto op = op_from_name("T" + std::string(spelling));

@@ -40,6 +40,7 @@ enum SectionId : uint32_t { kCode = 1, kIl, kLines, kStrings, kAliases, kRetenti
 constexpr const char* kSectionNames[] = {"?", "code", "il", "lines", "strings", "aliases", "retentive", "entry", "config"};
 
 constexpr uint32_t kLineEntrySize = 16;
+constexpr uint8_t kAliasTyped = 0x80;  // in an alias's device kind: a type byte follows its name
 constexpr uint32_t kRetentiveEntrySize = 12;
 constexpr uint32_t kConfigRowSize = 16;
 
@@ -280,7 +281,7 @@ static size_t image_size_hint(const Image& im) {
   size_t n = kOffSections + 8 * kSectionEntrySize + 8 * 3 + im.code.size() + im.il.size() + 16 * im.lines.size() +
              4 + im.source.size() + 4 + 12 * im.retentive.size() + 4 + 4 + 64;
   for (const std::string& t : im.rung_titles) n += 4 + t.size();
-  for (const Alias& a : im.aliases) n += 9 + a.name.size();
+  for (const Alias& a : im.aliases) n += 10 + a.name.size();
   if (im.config) n += 64 + 3 * 256 + 16 * im.config->rows.size();
   return n;
 }
@@ -344,7 +345,10 @@ static void put_section(Writer& w, const Image& im, uint32_t id) {
       break;
     case kAliases:
       w.u32(count32(im.aliases.size(), "aliases", kImageMaxAliases));
-      for (const Alias& a : im.aliases) w.u8(uint8_t(a.dev.dev)), w.u32(a.dev.index), w.str(a.name);
+      for (const Alias& a : im.aliases) {  // a typed alias: bit 7 of the kind, and its type after the name
+        w.u8(uint8_t(a.dev.dev) | (a.ty == Ty::None ? 0 : kAliasTyped)), w.u32(a.dev.index), w.str(a.name);
+        if (a.ty != Ty::None) w.u8(uint8_t(a.ty));
+      }
       break;
     case kRetentive:
       count32(im.retentive.size(), "retentive ranges");
@@ -685,17 +689,21 @@ class ImageReader {
       r.error = "alias count " + std::to_string(n) + " exceeds the limit " + std::to_string(kImageMaxAliases);
     for (uint32_t i = 0; i < n && r.error.empty(); i++) {
       size_t at = r.pos;
-      uint8_t dev = r.u8("alias");
+      uint8_t kind = r.u8("alias"), dev = kind & uint8_t(~kAliasTyped);
       uint32_t index = r.u32("alias");
       std::string nm = r.str("alias name");
+      uint8_t ty = kind & kAliasTyped ? r.u8("alias type") : uint8_t(Ty::None);
       if (!r.error.empty()) break;
       std::string where = "alias " + std::to_string(i) + " at file offset " + hex(uint64_t(s.offset) + at) + ": ";
-      if (dev > uint8_t(Dev::F)) throw sfail(s, where + "unknown device kind " + std::to_string(dev));
+      if (dev > uint8_t(Dev::F)) throw sfail(s, where + "unknown device kind " + std::to_string(kind));
       if (index >= device_count(Dev(dev)))
         throw sfail(s, where + "'" + nm + "' names " + dev_name(Dev(dev)) + std::to_string(index) + ", outside " +
                            dev_name(Dev(dev)) + "0.." + dev_name(Dev(dev)) + std::to_string(device_count(Dev(dev)) - 1));
       if (nm.empty()) throw sfail(s, where + "empty alias name");
-      im_.aliases.push_back(Alias{nm, DeviceRef{Dev(dev), index}});
+      if (ty >= uint8_t(Ty::None) && (kind & kAliasTyped)) throw sfail(s, where + "'" + nm + "': unknown type " + std::to_string(ty));
+      Alias a{nm, DeviceRef{Dev(dev), index}, Ty(ty)};
+      if (std::string why = alias_type_problem(a); !why.empty()) throw sfail(s, where + why);
+      im_.aliases.push_back(std::move(a));
     }
     finish(r, s);
   }

@@ -87,6 +87,7 @@ struct Probe {
   std::string name;  // as the user wrote it
   Area area;         // T and C name their word (elapsed ms, current value)
   uint32_t index;
+  Ty ty = Ty::None;  // a typed alias's type: read and written at it (docs/il.md)
 };
 // Resolves a device spelling, IEC address or alias; throws std::runtime_error.
 Probe resolve_probe(std::string_view name, const std::vector<Alias>& aliases);
@@ -104,6 +105,8 @@ Trace read_trace(std::string_view text, const std::string& file, const std::vect
 // non-empty cell written into the memory image at `base`.
 long long trace_cell_int(const std::string& v, char** end = nullptr);
 void put_trace_cell(uint8_t* base, const Layout& L, const Probe& p, const std::string& v);
+// Why a cell cannot be a typed column's value ("" if it can, or the column is untyped).
+std::string check_trace_cell(const Probe& p, const std::string& v);
 
 struct RunOptions {
   int scans = -1;          // -1: as many as the trace has rows (1 without a trace)

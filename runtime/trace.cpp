@@ -1,5 +1,7 @@
 // runtime/trace.cpp -- input traces, watched outputs and the scan loop.
 #include <cctype>
+#include <cerrno>
+#include <optional>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -43,8 +45,68 @@ long long trace_cell_int(const std::string& v, char** end) {
   return std::strtoll(v.c_str(), end, 10);
 }
 
+namespace {
+bool ty_is_real(Ty t) { return ty_info(t).kind == TyKind::Real; }
+bool ty_is_unsigned(Ty t) { return ty_info(t).kind == TyKind::Unsigned || ty_info(t).kind == TyKind::Bits; }
+
+// Decimal, or hex with 0x after the sign; never octal.
+int cell_base(const std::string& v) {
+  size_t at = !v.empty() && (v[0] == '-' || v[0] == '+') ? 1 : 0;
+  return v.size() > at + 2 && v[at] == '0' && (v[at + 1] == 'x' || v[at + 1] == 'X') ? 16 : 10;
+}
+
+// A cell of a typed column: its value at the type (integers in its range,
+// times and dates in ns); nullopt and `why` if it is not one.
+std::optional<uint64_t> typed_cell(Ty t, const std::string& v, std::string& why) {
+  const TyInfo& ti = ty_info(t);
+  char* end = nullptr;
+  errno = 0;
+  if (ty_is_real(t)) {
+    double d = std::strtod(v.c_str(), &end);
+    if (*end || end == v.c_str()) return why = "bad " + std::string(ti.name) + " '" + v + "'", std::nullopt;
+    if (t == Ty::REAL) {
+      float f = float(d);
+      uint32_t b;
+      std::memcpy(&b, &f, 4);
+      return b;
+    }
+    uint64_t b;
+    std::memcpy(&b, &d, 8);
+    return b;
+  }
+  bool neg = !v.empty() && v[0] == '-';
+  if (ty_is_unsigned(t) && !neg) {
+    unsigned long long x = std::strtoull(v.c_str(), &end, cell_base(v));
+    if (*end || end == v.c_str()) return why = "bad " + std::string(ti.name) + " '" + v + "'", std::nullopt;
+    if (errno == ERANGE || (ti.bits < 64 && x >> ti.bits))
+      return why = "value out of the " + std::string(ti.name) + " range: '" + v + "'", std::nullopt;
+    return uint64_t(x);
+  }
+  long long x = std::strtoll(v.c_str(), &end, cell_base(v));
+  if (*end || end == v.c_str()) return why = "bad " + std::string(ti.name) + " '" + v + "'", std::nullopt;
+  bool fits = errno != ERANGE && !ty_is_unsigned(t);
+  if (t == Ty::BOOL) fits = x == 0 || x == 1;
+  else if (fits && ti.bits < 64) fits = x >= -(1LL << (ti.bits - 1)) && x < (1LL << (ti.bits - 1));
+  if (!fits) return why = "value out of the " + std::string(ti.name) + " range: '" + v + "'", std::nullopt;
+  return uint64_t(x);
+}
+}  // namespace
+
+std::string check_trace_cell(const Probe& p, const std::string& v) {
+  std::string why;
+  if (p.ty != Ty::None && !typed_cell(p.ty, v, why)) return why;
+  return "";
+}
+
 void put_trace_cell(uint8_t* base, const Layout& L, const Probe& p, const std::string& v) {
   uint8_t* at = base + L.addr(p.area, p.index);
+  std::string why;
+  if (p.ty != Ty::None && !area_is_bit(p.area)) {  // held extended in one cell, or two cells low first
+    uint64_t b = typed_cell(p.ty, v, why).value_or(0);
+    if (ty_info(p.ty).cells == 1 && !ty_is_real(p.ty) && !ty_is_unsigned(p.ty)) b = uint64_t(int64_t(int32_t(uint32_t(b))));
+    std::memcpy(at, &b, size_t(ty_info(p.ty).cells) * 4);
+    return;
+  }
   if (p.area == Area::F) {
     float f = std::strtof(v.c_str(), nullptr);
     std::memcpy(at, &f, 4);
@@ -63,16 +125,17 @@ std::unique_ptr<Engine> make_interp_engine(std::vector<uint8_t> il, const Layout
 Probe resolve_probe(std::string_view name, const std::vector<Alias>& aliases) {
   std::string n = trim(name);
   std::optional<DeviceRef> d;
+  Ty ty = Ty::None;
   for (const Alias& a : aliases)
-    if (upper(a.name) == upper(n)) d = a.dev;
+    if (upper(a.name) == upper(n)) d = a.dev, ty = a.ty;
   if (!d) d = parse_device(n);
   std::string why;
   if (!d) d = parse_iec_address(n, why);
   if (!d) throw std::runtime_error("unknown device or alias '" + n + "'");
   if (d->index >= device_count(d->dev)) throw std::runtime_error("index out of range: '" + n + "'");
-  Area a = (d->dev == Dev::T || d->dev == Dev::C) ? word_area(d->dev) : bit_area(d->dev);
+  Area a = (d->dev == Dev::T || d->dev == Dev::C) && ty != Ty::BOOL ? word_area(d->dev) : bit_area(d->dev);
   if (a == Area::Count) a = word_area(d->dev);
-  return Probe{n, a, d->index};
+  return Probe{n, a, d->index, ty};
 }
 
 Trace read_trace(std::string_view text, const std::string& file, const std::vector<Alias>& aliases) {
@@ -118,8 +181,10 @@ Trace read_trace(std::string_view text, const std::string& file, const std::vect
     std::vector<std::string> row;
     for (size_t i = 0; i < cells.size(); i++) {
       const std::string& v = cells[i].first;
-      if (!v.empty()) {
-        const Probe& p = t.columns[i];
+      const Probe& p = t.columns[i];
+      if (!v.empty() && p.ty != Ty::None) {
+        if (std::string why = check_trace_cell(p, v); !why.empty()) fail(cells[i].second, why + " for " + p.name);
+      } else if (!v.empty()) {
         char* end = nullptr;
         if (p.area == Area::F) {
           std::strtof(v.c_str(), &end);
@@ -140,9 +205,37 @@ Trace read_trace(std::string_view text, const std::string& file, const std::vect
   return t;
 }
 
+// A typed alias's value at its type: integers in decimal (unsigned ones
+// unsigned), times and dates in ns, REAL as %g, LREAL in the fewest digits
+// that read back to it.
+static std::string format_typed(const uint8_t* at, Ty t) {
+  const TyInfo& ti = ty_info(t);
+  uint64_t b = 0;
+  std::memcpy(&b, at, size_t(ti.cells) * 4);
+  char buf[64];
+  if (t == Ty::REAL) {
+    float f;
+    std::memcpy(&f, at, 4);
+    std::snprintf(buf, sizeof buf, "%g", double(f));
+  } else if (t == Ty::LREAL) {
+    double d, back = 0;
+    std::memcpy(&d, &b, 8);
+    for (int prec = 15; prec <= 17; prec++) {
+      std::snprintf(buf, sizeof buf, "%.*g", prec, d);
+      if (std::sscanf(buf, "%lf", &back) == 1 && (back == d || d != d)) break;
+    }
+  } else if (ty_is_unsigned(t)) {
+    std::snprintf(buf, sizeof buf, "%llu", (unsigned long long)(ti.cells == 1 ? uint32_t(b) : b));
+  } else {
+    std::snprintf(buf, sizeof buf, "%lld", (long long)(ti.cells == 1 ? int64_t(int32_t(uint32_t(b))) : int64_t(b)));
+  }
+  return buf;
+}
+
 std::string format_probe(const uint8_t* base, const Layout& layout, const Probe& p) {
   const uint8_t* at = base + layout.addr(p.area, p.index);
   if (area_is_bit(p.area)) return *at ? "1" : "0";
+  if (p.ty != Ty::None) return format_typed(at, p.ty);
   if (p.area == Area::F) {
     float f;
     std::memcpy(&f, at, 4);

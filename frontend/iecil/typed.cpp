@@ -673,7 +673,9 @@ class Reader {
         Dev d = o.area == Area::M ? Dev::M : o.area == Area::D ? Dev::D : o.area == Area::F ? Dev::F : o.area == Area::X ? Dev::X
               : o.area == Area::Y ? Dev::Y : o.area == Area::K ? Dev::K : o.area == Area::WX ? Dev::WX : o.area == Area::WY ? Dev::WY : Dev::S;
         if (parse_device(nm) || upper(nm) == "DT") return;  // names that spell a device
-        p_.aliases.push_back({nm, {d, o.index}});
+        Alias a{nm, {d, o.index}, t.elem};  // typed: a watch shows it at its width
+        if (a.ty == Ty::BOOL || !alias_type_problem(a).empty()) a.ty = Ty::None;  // a BOOL is its bit either way
+        p_.aliases.push_back(std::move(a));
         n++;
         return;
       }

@@ -279,3 +279,27 @@ TEST(Lower, RefusesRungsDeeperThanTheBitStack) {
 }
 
 }  // namespace
+
+// `.alias NAME DEVICE TYPE` (docs/il.md): read, printed back, and refused
+// where the type cannot live at the device, naming why at the type's column.
+TEST(IlText, TypedAliases) {
+  Program p = parse_il_text(".alias big D0 LINT\n.alias on M3 bool\n.alias r F1 REAL\n.alias w D9\n.rung line 1\nLOAD X0\nOUT Y0\n.end\n", "t.il");
+  ASSERT_EQ(p.aliases.size(), 4u);
+  EXPECT_EQ(p.aliases[0].ty, Ty::LINT);
+  EXPECT_EQ(p.aliases[1].ty, Ty::BOOL);
+  EXPECT_EQ(p.aliases[3].ty, Ty::None);
+  EXPECT_EQ(parse_il_text(print_il_text(p), "t.il").aliases, p.aliases);
+  auto error = [](const std::string& alias) -> std::string {
+    try {
+      parse_il_text(alias + "\n.rung line 1\nLOAD X0\nOUT Y0\n.end\n", "t.il");
+    } catch (CompileError& e) {
+      return std::to_string(e.col) + ": " + e.what();
+    }
+    return "accepted";
+  };
+  EXPECT_EQ(error(".alias b D0 BOOL"), "13: BOOL alias 'b' on D0: a BOOL names a bit device");
+  EXPECT_EQ(error(".alias n M0 INT"), "13: INT alias 'n' on M0: a INT names a word device");
+  EXPECT_EQ(error(".alias n D8191 LREAL"), "16: LREAL alias 'n' on D8191: its 2 cells run past D8191");
+  EXPECT_EQ(error(".alias n D0 INT16"), "13: unknown type 'INT16'");
+  EXPECT_EQ(error(".alias n D0 INT x"), "1: .alias needs a name, a device and optionally a type");
+}

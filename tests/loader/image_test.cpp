@@ -543,6 +543,32 @@ TEST(Image, AliasOutOfRange) {
   EXPECT_REFUSED(refusal(im), "empty alias name");
 }
 
+// Typed aliases (docs/image-format.md): bit 7 of the kind and a type byte
+// after the name; they round-trip, and the reader holds them to the rules the
+// IL text's reader holds them to, whatever the file says.
+TEST(Image, TypedAliases) {
+  Image im = tiny_image();
+  im.aliases.push_back({"big", {Dev::D, 10}, Ty::LINT});
+  im.aliases.push_back({"on", {Dev::T, 3}, Ty::BOOL});
+  std::vector<uint8_t> file = write_image(im);
+  EXPECT_EQ(read_image(file, "t.bin").aliases, im.aliases);
+  im = tiny_image();
+  im.aliases.push_back({"b", {Dev::D, 0}, Ty::BOOL});
+  EXPECT_REFUSED(refusal(im), "section 'aliases'", "alias 3", "a BOOL names a bit device");
+  im = tiny_image();
+  im.aliases.push_back({"n", {Dev::D, 8191}, Ty::LREAL});
+  EXPECT_REFUSED(refusal(im), "alias 3", "its 2 cells run past D8191");
+  im = tiny_image();
+  im.aliases.push_back({"n", {Dev::Y, 0}, Ty::DINT});
+  EXPECT_REFUSED(refusal(im), "a DINT names a word device");
+  im = tiny_image();
+  im.aliases.push_back({"n", {Dev::D, 0}, Ty(200)});
+  EXPECT_REFUSED(refusal(im), "alias 3", "'n': unknown type 200");
+  im = tiny_image();
+  im.aliases.push_back({"n", {Dev::D, 0}, Ty::None});
+  EXPECT_EQ(refusal(im), "");
+}
+
 TEST(Image, RetentiveRangeOutsideItsArea) {
   Image im = tiny_image();
   im.retentive = {{Area::D, 8000, 193}};

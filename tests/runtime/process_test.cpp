@@ -692,5 +692,32 @@ TEST(NativeEngine, CodeOfEverySizeRunsWhole) {
   }
 }
 
+// A trace column of a typed alias takes values of its type only (docs/il.md):
+// an INT's range, an unsigned UDINT, a LINT past 32 bits, hex; never octal.
+TEST(TypedTrace, ColumnsTakeTheirTypesValues) {
+  std::vector<Alias> aliases = {{"small", {Dev::D, 0}, Ty::INT}, {"u", {Dev::D, 1}, Ty::UDINT}, {"big", {Dev::D, 2}, Ty::LINT}};
+  auto error = [&](const std::string& csv) -> std::string {
+    try {
+      read_trace(csv, "in.csv", aliases);
+    } catch (std::exception& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  EXPECT_EQ(error("small,u,big\n-32768,4294967295,-9223372036854775808\n0x7fff,0,9223372036854775807\n"), "accepted");
+  EXPECT_EQ(error("small,u,big\n32768,,\n"), "in.csv:2:1: error: value out of the INT range: '32768' for small");
+  EXPECT_EQ(error("small,u,big\n,-1,\n"), "in.csv:2:2: error: value out of the UDINT range: '-1' for u");
+  EXPECT_EQ(error("small,u,big\n,4294967296,\n"), "in.csv:2:2: error: value out of the UDINT range: '4294967296' for u");
+  EXPECT_EQ(error("small,u,big\n,,9223372036854775808\n"), "in.csv:2:3: error: value out of the LINT range: '9223372036854775808' for big");
+  EXPECT_EQ(error("small,u,big\n1x,,\n"), "in.csv:2:1: error: bad INT '1x' for small");
+  Trace t = read_trace("small,u,big\n010,0x10,-5000000000\n", "in.csv", aliases);
+  Layout L = Layout::standard(0);
+  std::vector<uint8_t> mem(L.size);
+  for (size_t i = 0; i < 3; i++) put_trace_cell(mem.data(), L, t.columns[i], t.rows[0][i]);
+  EXPECT_EQ(format_probe(mem.data(), L, t.columns[0]), "10");  // decimal, not octal
+  EXPECT_EQ(format_probe(mem.data(), L, t.columns[1]), "16");
+  EXPECT_EQ(format_probe(mem.data(), L, t.columns[2]), "-5000000000");
+}
+
 }  // namespace
 }  // namespace ldc

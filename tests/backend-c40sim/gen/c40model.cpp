@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 
@@ -458,6 +459,9 @@ void Run::run() {
       case Op::JMP: { uint32_t t = operand().index; if (top()) pc_ = t; break; }
       case Op::END: if (top()) end_ = true; break;
       case Op::Count: break;
+      default:  // the typed instructions: this model checks the untyped code generator only (tests/typed checks them)
+        std::fprintf(stderr, "c40model: %s is not modelled\n", op_info(op_).name);
+        std::abort();
     }
   }
 }
