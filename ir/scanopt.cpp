@@ -500,8 +500,13 @@ ScanFacts scan_facts(const Program& p, const Layout& layout, int slots) {
   for (size_t ri = 0; ri < p.rungs.size(); ri++) prop.rung(p.rungs[ri], f.first[ri]);
   Divisions divs(layout, on, f);
   for (size_t ri = 0; ri < p.rungs.size(); ri++) divs.rung(p.rungs[ri], f.first[ri]);
-  Held held(layout, on, f);
-  for (size_t ri = 0; ri < p.rungs.size(); ri++) held.rung(p.rungs[ri], f.first[ri]);
+  const bool typed = std::any_of(p.rungs.begin(), p.rungs.end(), [](const Rung& r) {
+    return std::any_of(r.code.begin(), r.code.end(), [](const Instr& in) { return is_typed(in.op); });
+  });
+  if (typed) {  // (its image-sized table only where it can find something)
+    Held held(layout, on, f);
+    for (size_t ri = 0; ri < p.rungs.size(); ri++) held.rung(p.rungs[ri], f.first[ri]);
+  }
   std::sort(f.early_quotient.begin(), f.early_quotient.end(),
             [](const auto& x, const auto& y) { return x.first < y.first; });
   f.fits.resize(p.rungs.size());
