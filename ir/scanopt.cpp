@@ -1,5 +1,5 @@
-// ir/scanopt.cpp -- dead stores, unread stack entries, folded constants and
-// repeated divisions of one scan (ir/scanopt.h).
+// ir/scanopt.cpp -- dead stores, unread stack entries, folded constants,
+// repeated divisions and typed results already held of one scan (ir/scanopt.h).
 #include "ir/scanopt.h"
 
 #include <algorithm>

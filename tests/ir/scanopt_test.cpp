@@ -1,5 +1,6 @@
 // ir/scanopt.h: the dead stores, unread stack entries, folded constants and
-// repeated divisions of one scan, rule by rule, with the cases that must stay live beside each.
+// repeated divisions of one scan, and the typed results already held, rule by rule, with the
+// cases that must stay live beside each.
 #include <gtest/gtest.h>
 
 #include <string>
