@@ -453,10 +453,13 @@ class Held {
       done_.clear();
       return;
     }
-    auto value = [](const Operand& o) { return o.kind == OpdKind::ConstT ? int64_t(o.bits()) : int64_t(o.ival); };
+    // (the bounds and the stride are 32-bit, as the interpreter reads them; anything odd forgets all)
+    auto value = [](const Operand& o) { return int64_t(int32_t(o.kind == OpdKind::ConstT ? uint32_t(o.bits()) : uint32_t(o.ival))); };
     const int64_t n = value(code[k - 1].a[2]) - value(code[k - 1].a[1]), stride = value(in.a[2]);
     const Operand& base = in.a[1];
-    if (n < 0 || stride < 0 || uint64_t(base.index) + uint64_t(n) * uint64_t(stride) >= l_.count[int(base.area)]) {
+    const uint64_t count = l_.count[int(base.area)];
+    if (n < 0 || stride < 0 || uint64_t(n) > count || uint64_t(stride) > count ||
+        uint64_t(base.index) + uint64_t(n) * uint64_t(stride) >= count) {
       done_.clear();
       return;
     }
