@@ -906,7 +906,8 @@ void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
 // neither gate nor test; timers and counters then take their inline code
 // without the power tests (gated_timer, gated_counter).
 //
-// A dead store needs no code, an unread stack entry none but an edge
+// A dead store needs no code, nor does a typed instruction whose destination
+// already holds its result, an unread stack entry none but an edge
 // contact's edge update (ir/scanopt.h); the stack is followed all the same.
 void Gen::instr(const ldc::Instr& in, uint8_t facts, const ldc::DivReuse* reuse, const ldc::Operand* quotient_to) {
   OpClass k = op_info(in.op).klass;
@@ -918,7 +919,7 @@ void Gen::instr(const ldc::Instr& in, uint8_t facts, const ldc::DivReuse* reuse,
   if ((facts & kUnread) && (in.op == Op::LOADP || in.op == Op::LOADF)) {
     emit(M::Movzx, {R(eax), B(addr(in.a[0]))});
     emit(M::Mov, {B(addr(in.a[1])), R(al)});
-  } else if (!(facts & (kDeadStore | kUnread))) {
+  } else if (!(facts & (kDeadStore | kUnread | kHeld))) {
     Ungated plain(gate_, on_);
     gen_by_class(*this, in);
   }

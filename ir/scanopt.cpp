@@ -1,5 +1,5 @@
-// ir/scanopt.cpp -- dead stores, unread stack entries, folded constants and
-// repeated divisions of one scan (ir/scanopt.h).
+// ir/scanopt.cpp -- dead stores, unread stack entries, folded constants,
+// repeated divisions and typed results already held of one scan (ir/scanopt.h).
 #include "ir/scanopt.h"
 
 #include <algorithm>
@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "ir/codegen.h"
+#include "ir/typed.h"
 
 namespace ldc {
 
@@ -365,6 +366,129 @@ class Divisions {
   uint32_t exit_ = kNone;
 };
 
+// Forward over the program (kHeld): the typed instructions done with power on
+// for certain, by destination, and for every byte of the image the last
+// instruction that may have written it.  A later identical instruction whose
+// sources nobody has written since the earlier one ran, and whose destination
+// only the earlier one has, would store the bits the destination holds: it
+// needs no code.  The result is a function of the sources' bits alone (no S0,
+// no C library), so identical sources give identical bits, NaNs included.
+// A rung that jumps land on forgets all (a jump may come from before the
+// earlier instruction ran).  JMP, END and a faulting IDX need nothing: they
+// leave the scan or jump over the later instruction too.
+class Held {
+ public:
+  Held(const Layout& l, const std::vector<char>& on, ScanFacts& f) : l_(l), on_(on), f_(f), last_(l.size, 0) {}
+  void rung(const Rung& r, uint32_t first) {
+    if (!r.labels.empty()) done_.clear();
+    for (size_t k = 0; k < r.code.size(); k++) instr(r.code, k, first + uint32_t(k));
+  }
+
+ private:
+  struct Span {
+    uint32_t at = 0, bytes = 0;
+  };
+  // the bytes typed operand k of `in` reads or writes
+  Span span(const Instr& in, int k) const {
+    const Operand& o = in.a[k];
+    const Ty t = operand_type(in, k);
+    return {l_.addr(o.area, o.index), t == Ty::BOOL ? 1u : 4u * uint32_t(ty_info(t).cells)};
+  }
+  // Does the result of `in` depend on its sources' bits alone, with no other effect?
+  static bool pure(const Instr& in) {
+    switch (in.op) {
+      case Op::TMOVE: case Op::TADD: case Op::TSUB: case Op::TMUL: case Op::TMIN: case Op::TMAX:
+      case Op::TAND: case Op::TOR: case Op::TXOR: case Op::TNOT: case Op::TSHL: case Op::TSHR:
+      case Op::TROL: case Op::TROR: case Op::TNEG: case Op::TABS: case Op::TSQRT: case Op::TCONV: case Op::TTRUNC:
+        return true;
+      case Op::TDIV: return typed::is_real(in.ty);  // an integer divisor of 0 sets S0
+      default: return false;  // compares push; IDX LDX STX; the C library's functions; MOD sets S0
+    }
+  }
+  bool written_after(Span s, uint32_t t) const {
+    for (uint32_t b = s.at; b < s.at + s.bytes && b < l_.size; b++)
+      if (last_[b] > t) return true;
+    return false;
+  }
+  bool only_by(Span s, uint32_t t) const {
+    for (uint32_t b = s.at; b < s.at + s.bytes && b < l_.size; b++)
+      if (last_[b] != t) return false;
+    return true;
+  }
+  void wrote(Span s, uint32_t t) {
+    for (uint32_t b = s.at; b < s.at + s.bytes && b < l_.size; b++) last_[b] = t;
+  }
+  // Is `in` (at stamp t) what an earlier instruction left in its destination?
+  bool held(const Instr& in) const {
+    const int d = in.nopd() - 1;
+    auto it = done_.find(span(in, d).at);
+    if (it == done_.end() || !(*it->second.in == in)) return false;
+    const uint32_t then = it->second.t;
+    for (int k = 0; k < d; k++)
+      if (is_device(in.a[k]) && written_after(span(in, k), then - 1)) return false;  // its own write counts
+    return only_by(span(in, d), then);
+  }
+  // What `in` may write, stamped t (untyped: the devices access() names, a word's bytes)
+  void writes(const std::vector<Instr>& code, size_t k, uint32_t t, uint32_t i) {
+    const Instr& in = code[k];
+    if (!is_typed(in.op)) {
+      const Access a = access(l_, in, on_[i]);
+      for (int w = 0; w < a.nw; w++) wrote({a.writes[w], 4}, t);
+      const OpClass c = op_info(in.op).klass;
+      if (c == OpClass::Timer || c == OpClass::Counter)  // the edge slot a counter keeps
+        for (int j = 1; j < in.nopd(); j++)
+          if (in.a[j].kind == OpdKind::Edge) wrote({l_.addr(Area::E, in.a[j].index), 1}, t);
+      return;
+    }
+    const char* sig = op_info(in.op).operands;
+    for (int j = 0; j < in.nopd(); j++)
+      if (sig[j] == 'r') wrote(span(in, j), t);
+    if ((in.op == Op::TDIV || in.op == Op::TMOD) && !typed::is_real(in.ty)) wrote({l_.addr(Area::S, kBitError), 1}, t);
+    if (in.op == Op::TSTX) stored_element(code, k, t);
+  }
+  // STX: any element of its array, base + (0..hi-lo) * stride, the IDX before it gives lo and hi
+  void stored_element(const std::vector<Instr>& code, size_t k, uint32_t t) {
+    const Instr& in = code[k];
+    if (k == 0 || code[k - 1].op != Op::TIDX) {  // (the validator refuses it; forget all the same)
+      done_.clear();
+      return;
+    }
+    // (the bounds and the stride are 32-bit, as the interpreter reads them; anything odd forgets all)
+    auto value = [](const Operand& o) { return int64_t(int32_t(o.kind == OpdKind::ConstT ? uint32_t(o.bits()) : uint32_t(o.ival))); };
+    const int64_t n = value(code[k - 1].a[2]) - value(code[k - 1].a[1]), stride = value(in.a[2]);
+    const Operand& base = in.a[1];
+    const uint64_t count = l_.count[int(base.area)];
+    if (n < 0 || stride < 0 || uint64_t(n) > count || uint64_t(stride) > count ||
+        uint64_t(base.index) + uint64_t(n) * uint64_t(stride) >= count) {
+      done_.clear();
+      return;
+    }
+    const uint32_t from = l_.addr(base.area, base.index);
+    const uint32_t to = l_.addr(base.area, base.index + uint32_t(n * stride)) + span(in, 1).bytes;
+    wrote({from, to - from}, t);
+  }
+  void instr(const std::vector<Instr>& code, size_t k, uint32_t i) {
+    const Instr& in = code[k];
+    const uint32_t t = i + 1;  // 0: not written in this scan
+    if (pure(in) && held(in)) {  // writes nothing new: the destination keeps the earlier stamp
+      f_.flags[i] |= kHeld;
+      return;
+    }
+    writes(code, k, t, i);
+    if (pure(in) && on_[i]) done_[span(in, in.nopd() - 1).at] = {&in, t};
+  }
+
+  struct Done {
+    const Instr* in;
+    uint32_t t;
+  };
+  const Layout& l_;
+  const std::vector<char>& on_;
+  ScanFacts& f_;
+  std::vector<uint32_t> last_;  // per image byte: the stamp (index + 1) of its last writer, 0 none
+  std::unordered_map<uint32_t, Done> done_;  // by destination address
+};
+
 }  // namespace
 
 ScanFacts scan_facts(const Program& p, const Layout& layout, int slots) {
@@ -379,6 +503,13 @@ ScanFacts scan_facts(const Program& p, const Layout& layout, int slots) {
   for (size_t ri = 0; ri < p.rungs.size(); ri++) prop.rung(p.rungs[ri], f.first[ri]);
   Divisions divs(layout, on, f);
   for (size_t ri = 0; ri < p.rungs.size(); ri++) divs.rung(p.rungs[ri], f.first[ri]);
+  const bool typed = std::any_of(p.rungs.begin(), p.rungs.end(), [](const Rung& r) {
+    return std::any_of(r.code.begin(), r.code.end(), [](const Instr& in) { return is_typed(in.op); });
+  });
+  if (typed) {  // (its image-sized table only where it can find something)
+    Held held(layout, on, f);
+    for (size_t ri = 0; ri < p.rungs.size(); ri++) held.rung(p.rungs[ri], f.first[ri]);
+  }
   std::sort(f.early_quotient.begin(), f.early_quotient.end(),
             [](const auto& x, const auto& y) { return x.first < y.first; });
   f.fits.resize(p.rungs.size());

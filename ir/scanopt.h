@@ -22,7 +22,12 @@
 //    destination keeps its value, and S0 is still set from the first); a DIV
 //    after a MOD of the pair takes no code where nothing has touched its
 //    destination since the MOD and no JMP or END lies between: the MOD
-//    stores the quotient there too (ScanFacts::early_quotient).
+//    stores the quotient there too (ScanFacts::early_quotient);
+//  * a typed instruction that computes exactly what an identical instruction
+//    earlier in the scan stored in the same destination, with power on for
+//    certain there, neither its sources nor that destination written since
+//    and no rung that jumps land on between, stores the bits the destination
+//    already holds (kHeld): it needs no code, with power or without.
 #pragma once
 
 #include <algorithm>
@@ -37,6 +42,7 @@ namespace ldc {
 enum ScanFlag : uint8_t {
   kDeadStore = 1,  // its only effect is a store the scan overwrites unread: no code
   kUnread = 2,     // the stack entry it writes is never read: no code but an edge update
+  kHeld = 4,       // a typed instruction whose destination already holds its result: no code
 };
 
 // What an INT32 DIV or MOD takes from an earlier one (docs/x86.md, "Words at

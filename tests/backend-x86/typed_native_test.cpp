@@ -19,6 +19,7 @@
 
 #include "driver/x86_target.h"
 #include "ir/ir.h"
+#include "ir/scanopt.h"
 #include "ir/typed.h"
 #include "runtime/runtime.h"
 
@@ -321,6 +322,45 @@ TEST(TypedNative, ArraysAndIndexFaults) {
   };
   for (int opt = 0; opt <= 2; opt++) {
     std::string why = compare(p, opt, 300, 11 + opt, 0.9, indices);
+    EXPECT_TRUE(why.empty()) << why;
+  }
+}
+
+// -O2 drops a typed instruction whose destination holds its result already
+// (ir/scanopt.h, kHeld): identical instructions again with power on and off,
+// and beside them every write that must keep one (a source or the
+// destination written, typed or not, gated or not, an STX that may reach
+// it, a jump landing between), IDXs that end one scan in five before or
+// between them (the fault record and the words left as the interpreter
+// leaves them).  ScanFacts.ATypedResultTheDestinationHoldsNeedsNoCode holds
+// which are dropped.
+TEST(TypedNative, InstructionsWhoseDestinationHoldsTheResult) {
+  Program p = parse_il_text(
+      ".rung line 1\nTRUE\nADD.INT D0 D2 D1000\nMUL.LREAL D4 D6 D1002\nCONV.DINT.LREAL D4 D1004\nMIN.LINT D8 D10 D1006\n"
+      "DIV.LREAL D4 D6 D1008\nSHL.WORD.INT D12 D14 D1010\nMOVE.BOOL M0 Y5\nDIV.INT D16 D18 D1012\n"
+      ".rung line 2\nLOAD M100\nADD.INT D0 D2 D1000\nMUL.LREAL D4 D6 D1002\nMOVE.BOOL M0 Y5\nDIV.INT D16 D18 D1012\n"
+      ".rung line 3\nTRUE\nIDX.INT D20 0 3\nSTX.LREAL D4 D1020 2\n"
+      ".rung line 4\nTRUE\nCONV.DINT.LREAL D4 D1004\nMIN.LINT D8 D10 D1006\nMOVE.LREAL D1022 D1030\n"
+      ".rung line 5\nLOAD M101\nMOVE.LINT D40 D8\nMOV 7 D2\n"
+      ".rung line 6\nTRUE\nADD.INT D0 D2 D1000\nMIN.LINT D8 D10 D1006\nDIV.LREAL D4 D6 D1008\nSHL.WORD.INT D12 D14 D1010\n"
+      ".rung line 7\nLOAD M102\nJMP L1\n"
+      ".rung line 8\nTRUE\nMOVE.INT D0 D1040\n"
+      ".rung line 9\nTRUE\nIDX.INT D22 0 3\nSTX.LREAL D6 D1020 2\nMOVE.LREAL D1022 D1030\nADD.INT D0 D2 D1000\n"
+      ".label L1\n.rung line 10\nTRUE\nMOVE.INT D0 D1040\nMUL.LREAL D4 D6 D1002\nMOVE.BOOL M0 Y5\n.end\n",
+      "held.il");
+  p.source = "typed_held";
+  const Layout l = p.layout();
+  ScanFacts f = scan_facts(p, l, 3);
+  ASSERT_GE(f.count(kHeld), 6u) << "the program must hold the case it tests";
+  auto indices = [&](ImageBytes& a, ImageBytes& b, std::mt19937_64& rng) {
+    for (uint32_t d : {20u, 22u}) {
+      const int32_t v = int32_t(rng() % 5);  // 4: outside 0..3, the scan ends there
+      std::memcpy(a.data() + l.addr(Area::D, d), &v, 4);
+      std::memcpy(b.data() + l.addr(Area::D, d), &v, 4);
+    }
+  };
+  for (int opt = 0; opt <= 2; opt++) {
+    std::string why = compare(p, opt, 400, 21 + opt, 0.5, indices);
     EXPECT_TRUE(why.empty()) << why;
   }
 }

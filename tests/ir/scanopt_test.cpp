@@ -1,5 +1,6 @@
 // ir/scanopt.h: the dead stores, unread stack entries, folded constants and
-// repeated divisions of one scan, rule by rule, with the cases that must stay live beside each.
+// repeated divisions of one scan, and the typed results already held, rule by rule, with the
+// cases that must stay live beside each.
 #include <gtest/gtest.h>
 
 #include <string>
@@ -181,6 +182,57 @@ TEST(ScanFacts, ARepeatedDivisionTakesTheEarlierResult) {
   Facts real(rung("TRUE|DIV WX0 WX1 F1|DIV WX0 WX1 D2|DIV WX0 WX1 F2"));
   EXPECT_EQ(real.reused(0, 2), "");  // F1 holds the quotient converted
   EXPECT_EQ(real.reused(0, 3), "");  // into a REAL: not taken
+}
+
+// kHeld: a typed instruction identical to one that ran with power on for
+// certain earlier in the scan, neither its sources nor that destination
+// written since, stores what the destination holds.
+TEST(ScanFacts, ATypedResultTheDestinationHoldsNeedsNoCode) {
+  auto held = [](const Facts& t, size_t r, size_t k) { return (t.at(r, k) & kHeld) != 0; };
+  Facts t(rung("TRUE|ADD.INT D0 D2 D4|MUL.LREAL D6 D8 D10|CONV.DINT.LREAL D6 D12") +
+          rung("LOAD X0|ADD.INT D0 D2 D4|MUL.LREAL D6 D8 D10|CONV.DINT.LREAL D6 D12|DIV.LREAL D6 D8 D14") +
+          rung("TRUE|DIV.LREAL D6 D8 D14|DIV.LREAL D6 D8 D14|DIV.INT D0 D2 D16|DIV.INT D0 D2 D16|MOD.DINT D0 D2 D17|MOD.DINT D0 D2 D17"));
+  EXPECT_TRUE(held(t, 1, 1));   // with power or without: the same bits
+  EXPECT_TRUE(held(t, 1, 2));   // an LREAL
+  EXPECT_TRUE(held(t, 1, 3));   // a conversion
+  EXPECT_FALSE(held(t, 1, 4));  // its first with power unknown: it may not have run
+  EXPECT_FALSE(held(t, 2, 1));  // the one before was gated
+  EXPECT_TRUE(held(t, 2, 2));   // a real DIV has no other effect
+  EXPECT_FALSE(held(t, 2, 4));  // an integer DIV or MOD may set S0
+  EXPECT_FALSE(held(t, 2, 6));
+  EXPECT_FALSE(held(t, 0, 1));  // the first of each
+  // what kills it: a source or the destination written (typed or not, one
+  // byte of a 64-bit value), the destination one of the sources, a label
+  struct Case {
+    const char* between;
+    bool int_held, real_held;  // ADD.INT D0 D2 D4, MUL.LREAL D6 D8 D10 (D6..D11)
+  };
+  for (const Case& c : {Case{"MOV 5 D2", false, true}, Case{"ADD.INT D0 1 D0", false, true}, Case{"MOV 5 D4", false, true},
+                        Case{"MOVE.SINT D20 D4", false, true}, Case{"MOVE.LINT D20 D1", false, true},  // D1..D2
+                        Case{"MOV 1 D9", true, false},            // D8's second cell
+                        Case{"MOVE.LINT D20 D7", true, false},    // D6's second cell
+                        Case{"MOV 1 D11", true, false},           // the destination's second cell
+                        Case{"MOVE.LINT D20 D12", true, true},    // next to both
+                        Case{"IDX.INT D30 0 3|STX.DINT D31 D0 1", false, true},  // any of D0..D3
+                        Case{"LOAD X1|END", true, true}}) {  // leaves before either: nothing to kill
+    Facts k(rung("TRUE|ADD.INT D0 D2 D4|MUL.LREAL D6 D8 D10") + rung(std::string("TRUE|") + c.between) +
+            rung("TRUE|ADD.INT D0 D2 D4|MUL.LREAL D6 D8 D10"));
+    EXPECT_EQ(held(k, 2, 1), c.int_held) << c.between;
+    EXPECT_EQ(held(k, 2, 2), c.real_held) << c.between;
+  }
+  Facts self(rung("TRUE|ADD.INT D5 1 D5|ADD.INT D5 1 D5"));
+  EXPECT_FALSE(held(self, 0, 2));  // the destination is a source: it changed
+  Facts label(rung("TRUE|ADD.INT D0 D2 D4") + rung("LOAD X2|JMP L") + rung("TRUE|ADD.INT D0 D2 D4", ".label L\n"));
+  EXPECT_FALSE(held(label, 2, 1));  // a jump lands here from before it ran
+  Facts other(rung("TRUE|ADD.INT D0 D2 D4|ADD.DINT D0 D2 D4|SUB.INT D0 D2 D6|SUB.INT D2 D0 D6"));
+  EXPECT_FALSE(held(other, 0, 2));  // not the same instruction: another type
+  EXPECT_FALSE(held(other, 0, 4));  // nor other operands
+  Facts array(rung("TRUE|MOVE.LREAL D40 D50|MOVE.LREAL D40 D60") + rung("TRUE|IDX.INT D30 0 3|STX.LREAL D20 D50 2") +
+              rung("TRUE|MOVE.LREAL D40 D50|MOVE.LREAL D40 D60"));
+  EXPECT_FALSE(held(array, 2, 1));  // STX may store into D50..D57
+  EXPECT_TRUE(held(array, 2, 2));   // not into D60
+  Facts cmp(rung("TRUE|LT.INT D0 5|OUT Y0|LT.INT D0 5|OUT Y1"));
+  EXPECT_EQ(cmp.at(0, 3) & kHeld, 0);  // a compare pushes: it keeps its code
 }
 
 }  // namespace
