@@ -137,7 +137,7 @@ bool is_const(const Operand& o) { return o.kind == OpdKind::ConstInt || o.kind =
 
 // ------------------------------------------------------------------ declarations
 
-enum class FbKind { None, Timer, Counter, Latch, Trig };
+enum class FbKind { None, Timer, Counter, Latch, Trig, Typed };
 
 struct Var {
   std::string name;  // as declared
@@ -155,7 +155,22 @@ struct Var {
   std::string pou;  // "" for globals
 };
 
+// MatIEC's counters of a width other than INT (lib/counter.txt): CTU_DINT,
+// CTD_LINT, CTUD_ULINT ...: their CV's and PV's type; None for other names.
+IT counter_width(const std::string& t) {
+  size_t u = t.find('_');
+  if (u == std::string::npos) return IT::None;
+  std::string kind = t.substr(0, u), w = t.substr(u + 1);
+  if (kind != "CTU" && kind != "CTD" && kind != "CTUD") return IT::None;
+  if (w == "DINT") return IT::DINT;
+  if (w == "LINT") return IT::LINT;
+  if (w == "UDINT") return IT::UDINT;
+  if (w == "ULINT") return IT::ULINT;
+  return IT::None;
+}
+
 FbKind fb_kind(const std::string& t) {
+  if (counter_width(t) != IT::None || t == "SEMA") return FbKind::Typed;
   if (t == "TON" || t == "TOF" || t == "TP") return FbKind::Timer;
   if (t == "CTU" || t == "CTD" || t == "CTUD") return FbKind::Counter;
   if (t == "SR" || t == "RS") return FbKind::Latch;
@@ -323,6 +338,8 @@ class Importer {
   Cond materialize(Cond c, const Element* el);
   Cond negate(Cond c, const Element* el);
   Cond trigger(Cond c, bool rising, const Element* el, std::optional<Operand> into = std::nullopt);
+  void typed_counter(const std::string& t, IT w, const Var& inst, const std::function<Cond(const std::string&)>& in,
+                     const Val& pv, const Element* el);
   std::string new_label();
 
   // the body
@@ -493,6 +510,9 @@ void Importer::allocate() {
       else if (k == FbKind::Counter) {
         v->dev = DeviceRef{Dev::C, take(Dev::C, v->el)};
         if (v->type == "CTUD") v->aux = take(Dev::M, v->el), v->aux2 = take(Dev::M, v->el);
+      } else if (k == FbKind::Typed && v->type != "SEMA") {  // CV's cells; Q (QU) and QD in M
+        v->dev = DeviceRef{Dev::D, take_run(Dev::D, ty_info(counter_width(v->type)).cells, v->el)};
+        v->aux = take(Dev::M, v->el), v->aux2 = take(Dev::M, v->el);
       } else if (k != FbKind::None) v->dev = DeviceRef{Dev::M, take(Dev::M, v->el)};
       continue;  // other derived types get nothing; using them is an error
     }
@@ -631,7 +651,14 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
     if (k == FbKind::Counter && (m == "Q" || m == "QU") && inst->type != "CTUD") return {bit_opd(Area::CQ, i), Ty::Bool};
     if (inst->type == "CTUD" && m == "QU") return {bit_opd(Area::M, inst->aux), Ty::Bool};
     if (inst->type == "CTUD" && m == "QD") return {bit_opd(Area::M, inst->aux2), Ty::Bool};
-    if ((k == FbKind::Latch && m == "Q1") || (k == FbKind::Trig && m == "Q")) return {bit_opd(Area::M, i), Ty::Bool};
+    if ((k == FbKind::Latch && m == "Q1") || (k == FbKind::Trig && m == "Q") || (inst->type == "SEMA" && m == "BUSY"))
+      return {bit_opd(Area::M, i), Ty::Bool};
+    if (IT w = counter_width(inst->type); w != IT::None) {
+      bool updown = inst->type.rfind("CTUD", 0) == 0;
+      if (m == "CV") return {Operand{OpdKind::Int, Area::D, i}, kind_of(w), w};
+      if (m == (updown ? "QU" : "Q")) return {bit_opd(Area::M, inst->aux), Ty::Bool};
+      if (updown && m == "QD") return {bit_opd(Area::M, inst->aux2), Ty::Bool};
+    }
     fail_at(el, "'" + e + "': " + inst->type + " has no output " + m);
   }
   Var* v = lookup(e);
@@ -1069,7 +1096,7 @@ bool Importer::out_is_bool(const Node& b, const std::string& pin, int depth) {
   std::string t = upper(b.type);
   if (fb_kind(t) == FbKind::None) refuse_user_pou(b);
   if (pin == "ENO") return true;
-  if (fb_kind(t) != FbKind::None) return !(pin == "ET" || pin == "CV");
+  if (fb_kind(t) != FbKind::None) return !(pin == "ET" || pin == "CV");  // (CTU_ULINT ... too)
   static const std::set<std::string> cmp = {"GT", "GE", "EQ", "NE", "LE", "LT"};
   if (cmp.count(t)) return true;
   size_t to = t.find("_TO_");
@@ -1370,9 +1397,12 @@ void Importer::fb_block(const Node& b, Var& inst) {
   static const std::map<std::string, std::vector<std::string>> known = {
       {"TON", {"EN", "IN", "PT"}}, {"TOF", {"EN", "IN", "PT"}}, {"TP", {"EN", "IN", "PT"}},
       {"CTU", {"EN", "CU", "R", "PV"}}, {"CTD", {"EN", "CD", "LD", "PV"}}, {"CTUD", {"EN", "CU", "CD", "R", "LD", "PV"}},
-      {"SR", {"EN", "S1", "R"}}, {"RS", {"EN", "S", "R1"}}, {"R_TRIG", {"EN", "CLK"}}, {"F_TRIG", {"EN", "CLK"}}};
+      {"SR", {"EN", "S1", "R"}}, {"RS", {"EN", "S", "R1"}}, {"R_TRIG", {"EN", "CLK"}}, {"F_TRIG", {"EN", "CLK"}},
+      {"SEMA", {"EN", "CLAIM", "RELEASE"}}};
+  IT width = counter_width(t);
+  const std::vector<std::string>& inputs = known.at(width == IT::None ? t : t.substr(0, t.find('_')));
   for (const Pin& p : b.inputs)
-    if (std::find(known.at(t).begin(), known.at(t).end(), p.name) == known.at(t).end())
+    if (std::find(inputs.begin(), inputs.end(), p.name) == inputs.end())
       fail_at(p.el, t + " has no input '" + p.name + "' (" + p.el->path() + ")");
   // input conditions, with the pins' own negation and edge modifiers
   auto cond = [&](const std::string& n) -> Cond {
@@ -1388,7 +1418,7 @@ void Importer::fb_block(const Node& b, Var& inst) {
     if (!p || p->conns.empty()) return {const_opd(0), Ty::Int};
     Val v = value_expr(p->conns, order, p->el);
     if (v.ty == Ty::Real) fail_at(p->el, n + " of " + t + " must be an integer or TIME, not REAL (" + p->el->path() + ")");
-    if (n == "PV" && v.ty == Ty::Wide)
+    if (n == "PV" && v.ty == Ty::Wide && width == IT::None)
       fail_at(p->el, "PV of " + t + " is an INT, not " + ty_info(type_of(v)).name + " (" + t + "_" + ty_info(type_of(v)).name +
                          " counts in that type) (" + p->el->path() + ")");
     return v;
@@ -1405,7 +1435,7 @@ void Importer::fb_block(const Node& b, Var& inst) {
     if (p.name == "PT") v[p.name] = Val{preset_ms(value(p.name), p.el)};
     else if (p.name == "PV") v[p.name] = value(p.name);
     else if (p.name == "EN") en = materialize(cond("EN"), el);
-    else c[p.name] = (k == FbKind::Latch || p.name == "R" || p.name == "LD") ? materialize(cond(p.name), el) : cond(p.name);
+    else c[p.name] = (k == FbKind::Latch || k == FbKind::Typed || p.name == "R" || p.name == "LD") ? materialize(cond(p.name), el) : cond(p.name);
   }
   auto in = [&](const std::string& n) { return c.count(n) ? c[n] : Cond::no(); };
   auto val = [&](const std::string& n) { return v.count(n) ? v[n] : Val{const_opd(0), Ty::Int}; };
@@ -1465,6 +1495,20 @@ void Importer::fb_block(const Node& b, Var& inst) {
     bool_out("QU", bit_opd(Area::M, inst.aux));
     bool_out("QD", bit_opd(Area::M, inst.aux2));
     val_out("CV", cw);
+  } else if (width != IT::None) {
+    typed_counter(t, width, inst, in, val("PV"), el);
+    Operand cv{OpdKind::Int, Area::D, i};
+    bool updown = t.rfind("CTUD", 0) == 0;
+    bool_out(updown ? "QU" : "Q", bit_opd(Area::M, inst.aux));
+    if (updown) bool_out("QD", bit_opd(Area::M, inst.aux2));
+    outs_[{b.id, "CV"}] = Out{false, {}, Val{cv, kind_of(width), width}};
+  } else if (t == "SEMA") {
+    // MatIEC's lib/sema.txt: Q_INTERNAL := CLAIM OR (Q_INTERNAL AND NOT RELEASE); BUSY := Q_INTERNAL
+    Operand q = bit_opd(Area::M, i);
+    Cond claim = in("CLAIM"), release = in("RELEASE");
+    if (release.k != Cond::False) rung(release, out(Op::RST, {q}, el), el);
+    if (claim.k != Cond::False) rung(claim, out(Op::SET, {q}, el), el);
+    bool_out("BUSY", q);
   } else if (k == FbKind::Latch) {
     // SR: Q1 := S1 OR (NOT R AND Q1)    RS: Q1 := NOT R1 AND (S OR Q1)
     // (both inputs were read into relays before Q1 changes)
@@ -1485,6 +1529,44 @@ void Importer::fb_block(const Node& b, Var& inst) {
   }
   if (!skip.empty()) pending_labels_.push_back(skip);
   if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, en, {}};
+}
+
+// MatIEC's counters of the other widths (lib/counter.txt), in typed
+// instructions of their type w on CV's cells:
+//   CTU   IF R THEN CV := 0 ELSIF (edge of CU) AND CV < PV THEN CV := CV + 1; Q := CV >= PV
+//   CTD   IF LD THEN CV := PV ELSIF (edge of CD) AND CV > 0 THEN CV := CV - 1; Q := CV <= 0
+//   CTUD  IF R THEN CV := 0 ELSIF LD THEN CV := PV ELSIF NOT (both edges) THEN
+//         (up while CV < PV, else down while CV > 0); QU := CV >= PV; QD := CV <= 0
+// CV stops at PV and at 0: it never wraps.  The edges are the counter's own
+// R_TRIGs, evaluated at every call.
+void Importer::typed_counter(const std::string& t, IT w, const Var& inst, const std::function<Cond(const std::string&)>& in,
+                             const Val& pv_val, const Element* el) {
+  Operand cv{OpdKind::Int, Area::D, inst.dev->index}, pv = as_type(pv_val, w, el);
+  Operand zero = Operand::typed_const(0), one = Operand::typed_const(1);
+  auto edge = [&](const char* n) { return materialize(trigger(in(n), true, el), el); };
+  auto up = [&](Cond c) { rung(c_and(std::move(c), tcmp(Op::TLT, w, cv, pv, el)), tout(Op::TADD, w, IT::None, {cv, one, cv}, el), el); };
+  auto down = [&](Cond c) { rung(c_and(std::move(c), tcmp(Op::TGT, w, cv, zero, el)), tout(Op::TSUB, w, IT::None, {cv, one, cv}, el), el); };
+  auto flag = [&](Op rel, Operand b, uint32_t m) { rung(tcmp(rel, w, cv, b, el), out(Op::OUT, {bit_opd(Area::M, m)}, el), el); };
+  if (t.rfind("CTUD", 0) == 0) {
+    Cond ed = edge("CD"), eu = edge("CU"), r = in("R"), ld = in("LD");
+    if (r.k != Cond::False) rung(r, tout(Op::TMOVE, w, IT::None, {zero, cv}, el), el);
+    if (ld.k != Cond::False) rung(c_and(negate(r, el), ld), tout(Op::TMOVE, w, IT::None, {pv, cv}, el), el);
+    Cond idle = c_and(negate(r, el), negate(ld, el));
+    up(c_and(idle, c_and(eu, negate(ed, el))));
+    down(c_and(idle, c_and(ed, negate(eu, el))));
+    flag(Op::TGE, pv, inst.aux);
+    flag(Op::TLE, zero, inst.aux2);
+  } else if (t.rfind("CTU", 0) == 0) {
+    Cond e = edge("CU"), r = in("R");
+    if (r.k != Cond::False) rung(r, tout(Op::TMOVE, w, IT::None, {zero, cv}, el), el);
+    up(c_and(e, negate(r, el)));
+    flag(Op::TGE, pv, inst.aux);
+  } else {
+    Cond e = edge("CD"), ld = in("LD");
+    if (ld.k != Cond::False) rung(ld, tout(Op::TMOVE, w, IT::None, {pv, cv}, el), el);
+    down(c_and(e, negate(ld, el)));
+    flag(Op::TLE, zero, inst.aux);
+  }
 }
 
 // res := x rounded to the nearest integer, ties to even (MatIEC's REAL_TO_INT:
