@@ -1172,6 +1172,7 @@ class Reader {
     if (u == "NOT") return not_op(op);
     if (unary_fn(u) || conversion(u) || u == "TRUNC") return function1(op, u);
     if (auto b = bcd_conversion(u)) return bcd(op, *b);
+    if (auto f = time_function(u)) return time_arith(op, *f);
     if (u == "MIN" || u == "MAX" || u == "LIMIT" || u == "SEL" || u == "MUX") return selection(op, u);
     if (is_function(u)) return user_function(op, u);
     static const std::set<std::string> ldc_ops = {"LOAD", "LOADN", "OUT", "OUTN", "SET", "RST", "ANDBLK", "ORBLK", "MPS", "MRD", "MPP"};
@@ -1235,6 +1236,34 @@ class Reader {
       return Bcd{false, *from, *to};
     }
     return std::nullopt;
+  }
+  // MatIEC's time and date arithmetic (lib/C/iec_std_functions.h): each is
+  // __time_add or __time_sub of two timespecs, here nanoseconds (IN1 the CR)
+  struct TimeFn {
+    Ty in1, in2, out;
+    bool add;
+  };
+  static std::optional<TimeFn> time_function(const std::string& u) {
+    static const std::map<std::string, TimeFn> k = {
+        {"ADD_TIME", {Ty::TIME, Ty::TIME, Ty::TIME, true}},      {"SUB_TIME", {Ty::TIME, Ty::TIME, Ty::TIME, false}},
+        {"ADD_TOD_TIME", {Ty::TOD, Ty::TIME, Ty::TOD, true}},    {"ADD_DT_TIME", {Ty::DT, Ty::TIME, Ty::DT, true}},
+        {"SUB_TOD_TIME", {Ty::TOD, Ty::TIME, Ty::TOD, false}},   {"SUB_DT_TIME", {Ty::DT, Ty::TIME, Ty::DT, false}},
+        {"SUB_DATE_DATE", {Ty::DATE, Ty::DATE, Ty::TIME, false}}, {"SUB_TOD_TOD", {Ty::TOD, Ty::TOD, Ty::TIME, false}},
+        {"SUB_DT_DT", {Ty::DT, Ty::DT, Ty::TIME, false}},         {"CONCAT_DATE_TOD", {Ty::DATE, Ty::TOD, Ty::DT, true}}};
+    auto it = k.find(u);
+    if (it == k.end()) return std::nullopt;
+    return it->second;
+  }
+  void time_arith(const Tok& op, const TimeFn& f) {
+    need_cr(op);
+    if (cr_.lit) type_cr(m_.elem(f.in1), op);
+    if (cr_ty() != f.in1) fail(op, op.text + " takes a " + ty_info(f.in1).name + " first, this result is " + m_.type_name(cr_.type));
+    Tok k = peek();
+    Val v = operand("b");
+    Operand b = value_as(v, m_.elem(f.in2), k, "b", op.text.c_str());
+    Operand d = acc(f.out);
+    typed(f.add ? Op::TADD : Op::TSUB, Ty::LINT, cr_.o, b, d);  // ns: LINT arithmetic on the cells
+    set_cr(m_.elem(f.out), d);
   }
   bool is_function(const std::string& u) const {
     int p = m_.find_pou(u);

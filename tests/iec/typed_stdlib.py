@@ -4,6 +4,8 @@ typed_stdlib.csv, transcribed from MatIEC (github.com/beremiz/matiec):
 
   lib/counter.txt      CTU CTD CTUD and their _DINT _LINT _UDINT _ULINT forms
   lib/sema.txt         SEMA
+  lib/bistable.txt     RS
+  ASIN ACOS ATAN LOG   the C library (MatIEC calls asin acos atan log10; Python's math is the same libm)
   lib/rtc.txt          RTC (CURRENT_TIME: ldrun's scan clock, docs/stdlib.md)
   lib/C/iec_std_lib.h  __uint_to_bcd, __bcd_to_uint, __test_bcd
   lib/C/iec_std_functions.h  X_TO_BCD_Y := (Y)__uint_to_bcd(IN);
@@ -13,7 +15,7 @@ Python integers with C's conversions (modulo 2^width); never an ldc engine.
   typed_stdlib.py          prints the expected trace
   typed_stdlib.py --check  fails if typed_stdlib.expected differs
 """
-import csv, os, sys
+import csv, math, os, sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 WIDTH = {"INT": 16, "DINT": 32, "LINT": 64, "UDINT": 32, "ULINT": 64, "USINT": 8, "UINT": 16,
@@ -101,6 +103,20 @@ class SEMA:  # lib/sema.txt
         return self.q_internal
 
 
+class RS:  # lib/bistable.txt: Q1 := NOT R1 AND (S OR Q1)
+    def __init__(self):
+        self.q1 = False
+
+    def __call__(self, s, r1):
+        self.q1 = not r1 and (s or self.q1)
+        return self.q1
+
+
+def c_round(v):
+    """MatIEC's LREAL_TO_DINT: __real_round, the nearest integer, ties to even."""
+    return round(v)
+
+
 class RTC:  # lib/rtc.txt, times in ns
     def __init__(self):
         self.prev_in, self.offset, self.cdt, self.q = False, 0, 0, False
@@ -156,6 +172,23 @@ ULINT_MAX, LINT_MAX, LINT_MIN, DINT_MAX = 2**64 - 1, 2**63 - 1, -2**63, 2**31 - 
 PDT_S = 1706702400  # DT#2024-01-31-12:00:00 in seconds since 1970-01-01 (UTC)
 
 
+MS, S, DAY = 10**6, 10**9, 86400 * 10**9
+
+
+def time_and_date():
+    """ADD_TIME ... CONCAT_DATE_TOD: __time_add / __time_sub (ns here); seen as
+    ms through __time_to_real (seconds) * 1000 rounded, or as seconds through
+    __time_to_int (tv_sec, toward zero)."""
+    ms = lambda ns: round(ns / MS)
+    sec = lambda ns: int(ns / S)  # toward zero, as a normalized timespec's tv_sec
+    t_a, t_b, t_c, one_d = 1500000, 2500000, S, DAY
+    tod_a, tod_b, tod_c = 86399 * S + 500 * MS, 2 * S, 43199 * S + 500 * MS
+    d_a, d_b, d_c = 1709251200 * S, 1706745600 * S, 1706659200 * S  # 2024-03-01, 2024-02-01, 2024-01-31
+    pdt = PDT_S * S
+    return [ms(t_a + t_b), ms(t_a - t_b), ms(tod_a + t_c), ms(tod_b - t_c), ms(tod_b - tod_a), ms(pdt - (d_c + tod_c)),
+            sec(d_a + tod_b), sec(d_a - d_b), sec(pdt + one_d), sec(pdt - one_d)]
+
+
 def lo_hi(v):
     v &= 2**64 - 1
     return [as_dint(v), as_dint(v >> 32)]
@@ -171,7 +204,7 @@ def run():
         "d_int": (CTD("INT"), 2), "d_dint": (CTD("DINT"), DINT_MAX),
         "ud_ulint": (CTUD("ULINT"), ULINT_MAX), "ud_int": (CTUD("INT"), 2), "ud_udint": (CTUD("UDINT"), 1),
         "ud_lint": (CTUD("LINT"), -3), "ud_dint": (CTUD("DINT"), 3)}
-    sem, rtc = SEMA(), RTC()
+    sem, rtc, rs = SEMA(), RTC(), RS()
     clock_ns = 0  # ldrun's scan clock: 0 on the first scan, then + dt (10 ms) each scan
     out = []
     for k, row in enumerate(rows):
@@ -207,6 +240,11 @@ def run():
         r += [c_cast(uint_to_bcd(c_cast(x, "USINT")), "BYTE"), c_cast(uint_to_bcd(c_cast(x, "UINT")), "WORD")]
         r += [as_dint(bcd_to(bb, "UDINT")), bcd_to(bb, "USINT"), bcd_to(bb & 0xFFFF, "UINT")]
         r += lo_hi(bcd_to(0x9999999999999999, "ULINT")) + lo_hi(uint_to_bcd(ULINT_MAX))
+        r += time_and_date()
+        rsq = rs(b("claim"), b("release"))
+        r += [rsq, 0x100F, c_round(math.asin(0.5) * 1e6), c_round(math.acos(0.5) * 1e6), c_round(math.atan(0.5) * 1e6),
+              c_round(math.log10(float(x) + 1000.0) * 1e6), c_cast(32768, "INT"), c_cast(32768, "INT"),
+              PDT_S - PDT_S % 86400, PDT_S % 86400]
         out.append(",".join(str(int(e)) for e in [k + 1] + r))
     return out
 
@@ -215,7 +253,8 @@ WATCH = ("u_ulint_lo,u_ulint_hi,u_ulint_q,u_int_cv,u_int_q,u_neg_cv,u_neg_q,u_ud
          "d_ulint_lo,d_ulint_hi,d_ulint_q,d_udint_cv,d_udint_q,d_lint_lo,d_lint_hi,d_lint_q,d_int_cv,d_int_q,d_dint_cv,"
          "d_dint_q,ud_ulint_lo,ud_ulint_hi,ud_ulint_qu,ud_ulint_qd,ud_int_cv,ud_int_qu,ud_int_qd,ud_udint_cv,ud_udint_qu,"
          "ud_udint_qd,ud_lint_lo,ud_lint_qu,ud_lint_qd,ud_dint_cv,ud_dint_qu,ud_dint_qd,busy,rq,cdt_s,cdt_ms,bx,bxl_lo,"
-         "bxl_hi,b8,bw,db,db8,dw,lw_lo,lw_hi,ul_lo,ul_hi")
+         "bxl_hi,b8,bw,db,db8,dw,lw_lo,lw_hi,ul_lo,ul_hi,r_addtime,r_subtime,r_addtod,r_subtod,r_subtodtod,r_subdtdt,"
+         "r_concat,r_subdate,r_adddt,r_subdt,rsq,rr,as_u,ac_u,at_u,lg_u,ng,ab,dd,dtod")
 
 if __name__ == "__main__":
     text = "scan," + WATCH + "\n" + "\n".join(run()) + "\n"
