@@ -421,6 +421,8 @@ class Importer {
   Val typed_fn(const std::string& t, const std::string& time_op, const std::vector<Val>& v, const Pin* g, IT T, const Cond& en, Cond& eno,
                const Element* el, const Node& b);
   Val typed_conv(IT to, IT from, const Val& v, const Cond& en, bool trunc, const Element* el);
+  Val date_fn(const std::string& t, const std::vector<Val>& v, const Cond& en, const Element* el, const Node& b);
+  Val bcd_fn(const std::string& t, const std::vector<Val>& v, const Cond& en, Cond& eno, const Element* el, const Node& b);
   void bit_shift(const std::string& t, const Pin& in_pin, Operand in, Operand n, Operand res, const Cond& en, const Element* el);
 };
 
@@ -1747,6 +1749,114 @@ Val Importer::typed_conv(IT to, IT from, const Val& v, const Cond& en, bool trun
   return Val{res, kind_of(to), to};
 }
 
+// MatIEC's BCD conversions (docs/stdlib.md): X_TO_BCD_Y, X_TO_BCD (the bit
+// string of X's width), X_BCD_TO_Y, BCD_TO_Y (X the input's type).
+struct BcdName {
+  bool to_bcd = false;
+  IT from = IT::None, to = IT::None;
+};
+std::optional<BcdName> bcd_parse(const std::string& t) {
+  auto of_kind = [](const std::string& n, TyKind k) {
+    IT x = iec_type_named(n);
+    return x != IT::None && ty_info(x).kind == k ? x : IT::None;
+  };
+  static const std::map<IT, IT> same_width = {{IT::USINT, IT::BYTE}, {IT::UINT, IT::WORD}, {IT::UDINT, IT::DWORD}, {IT::ULINT, IT::LWORD}};
+  if (size_t p = t.find("_TO_BCD"); p != std::string::npos && p > 0) {
+    IT from = of_kind(t.substr(0, p), TyKind::Unsigned);
+    std::string rest = t.substr(p + 7);
+    IT to = rest.empty() && from != IT::None ? same_width.at(from) : rest.size() > 1 && rest[0] == '_' ? of_kind(rest.substr(1), TyKind::Bits) : IT::None;
+    if (from == IT::None || to == IT::None) return std::nullopt;
+    return BcdName{true, from, to};
+  }
+  if (t.rfind("BCD_TO_", 0) == 0) {
+    IT to = of_kind(t.substr(7), TyKind::Unsigned);
+    if (to == IT::None) return std::nullopt;
+    return BcdName{false, IT::None, to};
+  }
+  if (size_t p = t.find("_BCD_TO_"); p != std::string::npos && p > 0) {
+    IT from = of_kind(t.substr(0, p), TyKind::Bits), to = of_kind(t.substr(p + 8), TyKind::Unsigned);
+    if (from == IT::None || to == IT::None) return std::nullopt;
+    return BcdName{false, from, to};
+  }
+  return std::nullopt;
+}
+bool bcd_name(const std::string& t) { return bcd_parse(t).has_value(); }
+
+// MatIEC's date arithmetic: __time_add / __time_sub of IN1 and IN2 (ns).
+struct DateFn {
+  IT in1, in2, out;
+  bool add;
+};
+const std::map<std::string, DateFn>& date_fns() {
+  static const std::map<std::string, DateFn> k = {
+      {"ADD_TOD_TIME", {IT::TOD, IT::TIME, IT::TOD, true}},    {"ADD_DT_TIME", {IT::DT, IT::TIME, IT::DT, true}},
+      {"SUB_TOD_TIME", {IT::TOD, IT::TIME, IT::TOD, false}},   {"SUB_DT_TIME", {IT::DT, IT::TIME, IT::DT, false}},
+      {"SUB_DATE_DATE", {IT::DATE, IT::DATE, IT::TIME, false}}, {"SUB_TOD_TOD", {IT::TOD, IT::TOD, IT::TIME, false}},
+      {"SUB_DT_DT", {IT::DT, IT::DT, IT::TIME, false}},         {"CONCAT_DATE_TOD", {IT::DATE, IT::TOD, IT::DT, true}}};
+  return k;
+}
+bool date_fn_name(const std::string& t) { return date_fns().count(t) > 0; }
+
+Val Importer::date_fn(const std::string& t, const std::vector<Val>& v, const Cond& en, const Element* el, const Node& b) {
+  const DateFn& f = date_fns().at(t);
+  if (v.size() != 2) fail_at(el, t + " localId " + std::to_string(b.id) + " takes 2 inputs (" + el->path() + ")");
+  for (size_t k = 0; k < 2; k++) {
+    IT want = k ? f.in2 : f.in1;
+    if ((v[k].it != IT::None || v[k].ms) && type_of(v[k]) != want)
+      fail_at(el, t + " localId " + std::to_string(b.id) + " takes " + ty_info(want).name + " on IN" + std::to_string(k + 1) + ", not " +
+                      ty_info(type_of(v[k])).name + " (" + el->path() + ")");
+  }
+  Operand a = as_type(v[0], f.in1, el), c = as_type(v[1], f.in2, el), res = temp_of(f.out, el);
+  if (en.k != Cond::True) rung(negate(en, el), tout(Op::TMOVE, f.out, IT::None, {Operand::typed_const(0), res}, el), el);
+  rung(en, tout(f.add ? Op::TADD : Op::TSUB, IT::LINT, IT::None, {a, c, res}, el), el);  // ns: LINT arithmetic on the words
+  return Val{res, Ty::Wide, f.out};
+}
+
+// __uint_to_bcd / __bcd_to_uint unrolled over the digits in 64-bit typed
+// instructions; an invalid digit gives 0 and ENO FALSE (TEST_EN_COND).
+Val Importer::bcd_fn(const std::string& t, const std::vector<Val>& v, const Cond& en, Cond& eno, const Element* el, const Node& b) {
+  BcdName n = *bcd_parse(t);
+  if (v.size() != 1) fail_at(el, t + " localId " + std::to_string(b.id) + " takes 1 input (" + el->path() + ")");
+  IT from = n.from != IT::None ? n.from : v[0].it != IT::None ? type_of(v[0]) : IT::LWORD;
+  if (ty_info(from).kind != (n.to_bcd ? TyKind::Unsigned : TyKind::Bits))
+    fail_at(el, t + " localId " + std::to_string(b.id) + " takes " + (n.to_bcd ? "an unsigned integer" : "a bit string") + ", not " +
+                    ty_info(from).name + " (" + el->path() + ")");
+  if (v[0].it != IT::None && type_of(v[0]) != from)
+    fail_at(el, t + " localId " + std::to_string(b.id) + " takes " + ty_info(from).name + ", not " + ty_info(type_of(v[0])).name + " (" + el->path() + ")");
+  Operand x = temp_of(IT::ULINT, el), res = temp_of(IT::ULINT, el), dig = temp_of(IT::ULINT, el), out_res = temp_of(n.to, el);
+  Operand in = as_type(v[0], from, el);
+  auto k = [](uint64_t c) { return Operand::typed_const(c); };
+  auto step = [&](Op op, IT ty, std::vector<Operand> a, IT u = IT::None) { rung(en, tout(op, ty, u, std::move(a), el), el); };
+  if (en.k != Cond::True) rung(negate(en, el), tout(Op::TMOVE, n.to, IT::None, {k(0), out_res}, el), el);
+  step(Op::TCONV, IT::ULINT, {in, x}, from);
+  step(Op::TMOVE, IT::ULINT, {k(0), res});
+  const int bits = ty_info(from).bits;
+  if (n.to_bcd) {
+    const int digits = bits == 8 ? 3 : bits == 16 ? 5 : bits == 32 ? 10 : 20;
+    for (int d = 0; d < digits; d++) {
+      step(Op::TMOD, IT::ULINT, {x, k(10), dig});
+      step(Op::TDIV, IT::ULINT, {x, k(10), x});
+      step(Op::TSHL, IT::LWORD, {dig, k(uint64_t(4 * d)), dig}, IT::USINT);  // a shift of 64 and more gives 0 (docs/stdlib.md)
+      step(Op::TOR, IT::LWORD, {res, dig, res});
+    }
+    step(Op::TCONV, n.to, {res, out_res}, IT::LWORD);
+    return Val{out_res, kind_of(n.to), n.to};
+  }
+  uint32_t bad = temp_m(el);
+  rung(Cond::yes(), out(Op::RST, {bit_opd(Area::M, bad)}, el), el);
+  for (int d = bits / 4 - 1; d >= 0; d--) {
+    step(Op::TSHR, IT::LWORD, {x, k(uint64_t(4 * d)), dig}, IT::USINT);
+    step(Op::TAND, IT::LWORD, {dig, k(15), dig});
+    rung(c_and(en, tcmp(Op::TGT, IT::ULINT, dig, k(9), el)), out(Op::SET, {bit_opd(Area::M, bad)}, el), el);
+    step(Op::TMUL, IT::ULINT, {res, k(10), res});
+    step(Op::TADD, IT::ULINT, {res, dig, res});
+  }
+  step(Op::TCONV, n.to, {res, out_res}, IT::ULINT);
+  rung(bit_leaf(Op::LOAD, bit_opd(Area::M, bad), el), tout(Op::TMOVE, n.to, IT::None, {k(0), out_res}, el), el);
+  eno = c_and(eno, bit_leaf(Op::LOADN, bit_opd(Area::M, bad), el));
+  return Val{out_res, kind_of(n.to), n.to};
+}
+
 void Importer::fn_block(const Node& b) {
   std::string t = upper(b.type);
   if (t == "ADD_TIME" || t == "SUB_TIME") t = t.substr(0, 3);  // ADD, SUB on TIME
@@ -1762,12 +1872,14 @@ void Importer::fn_block(const Node& b) {
   size_t to = t.find("_TO_");
   bool conv = to != std::string::npos || trunc;
   static const std::set<std::string> bits = {"SHL", "SHR", "ROL", "ROR"};
-  if (!cmp.count(t) && !arith.count(t) && !conv && !bits.count(t) && !real_functions().count(t) && t != "MOVE" && t != "SEL" && t != "MUX" &&
+  bool extra = bcd_name(t) || date_fn_name(t);  // docs/stdlib.md
+  if (extra) conv = false;
+  if (!extra && !cmp.count(t) && !arith.count(t) && !conv && !bits.count(t) && !real_functions().count(t) && t != "MOVE" && t != "SEL" && t != "MUX" &&
       t != "LIMIT" && t != "ABS" && t != "AND" && t != "OR" && t != "XOR" && t != "NOT")
-    fail_at(el, "block '" + b.type + "' localId " + std::to_string(b.id) + " is not supported: ldc translates TON TOF TP CTU CTD CTUD SR RS R_TRIG F_TRIG, "
+    fail_at(el, "block '" + b.type + "' localId " + std::to_string(b.id) + " is not supported: ldc translates TON TOF TP CTU CTD CTUD (and their _DINT _LINT _UDINT _ULINT forms) SR RS R_TRIG F_TRIG SEMA, "
                 "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL MUX, "
-                "SQRT LN LOG EXP EXPT SIN COS TAN ASIN ACOS ATAN, ADD_TIME SUB_TIME MUL_TIME DIV_TIME, AND OR XOR NOT SHL SHR ROL ROR, "
-                "type conversions X_TO_Y and TRUNC (" + el->path() + ")");
+                "SQRT LN LOG EXP EXPT SIN COS TAN ASIN ACOS ATAN, ADD_TIME SUB_TIME MUL_TIME DIV_TIME and the date arithmetic, AND OR XOR NOT SHL SHR ROL ROR, "
+                "type conversions X_TO_Y, BCD and TRUNC: docs/stdlib.md (" + el->path() + ")");
   // inputs other than EN, in order
   std::vector<const Pin*> ins;
   for (const Pin& p : b.inputs)
@@ -1787,6 +1899,17 @@ void Importer::fn_block(const Node& b) {
   Cond eno = en;
   for (const Pin* p : ins)
     if (p->conns.empty()) fail_at(p->el, "input " + p->name + " of " + t + " localId " + std::to_string(b.id) + " is not connected (" + p->el->path() + ")");
+  if (extra) {  // BCD conversions, date arithmetic: typed instructions
+    std::vector<Val> v;
+    for (const Pin* p : ins) v.push_back(val_of(p));
+    Val r = bcd_name(t) ? bcd_fn(t, v, en, eno, el, b) : date_fn(t, v, en, el, b);
+    std::string name = "OUT";
+    for (const Pin& p : b.outputs)
+      if (p.name != "ENO") name = p.name;
+    outs_[{b.id, name}] = Out{false, {}, r};
+    if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, materialize(eno, el), {}};
+    return;
+  }
   size_t want = t == "SEL" || t == "LIMIT" ? 3 : (conv || t == "NOT" || t == "MOVE" || t == "ABS" || (real_functions().count(t) && t != "EXPT")) ? 1
                 : (t == "SUB" || t == "DIV" || t == "MOD" || t == "EXPT" || bits.count(t) || !time_op.empty()) ? 2 : 0;
   size_t n_in = ins.size();
