@@ -137,7 +137,7 @@ bool is_const(const Operand& o) { return o.kind == OpdKind::ConstInt || o.kind =
 
 // ------------------------------------------------------------------ declarations
 
-enum class FbKind { None, Timer, Counter, Latch, Trig };
+enum class FbKind { None, Timer, Counter, Latch, Trig, Typed };
 
 struct Var {
   std::string name;  // as declared
@@ -155,7 +155,22 @@ struct Var {
   std::string pou;  // "" for globals
 };
 
+// MatIEC's counters of a width other than INT (lib/counter.txt): CTU_DINT,
+// CTD_LINT, CTUD_ULINT ...: their CV's and PV's type; None for other names.
+IT counter_width(const std::string& t) {
+  size_t u = t.find('_');
+  if (u == std::string::npos) return IT::None;
+  std::string kind = t.substr(0, u), w = t.substr(u + 1);
+  if (kind != "CTU" && kind != "CTD" && kind != "CTUD") return IT::None;
+  if (w == "DINT") return IT::DINT;
+  if (w == "LINT") return IT::LINT;
+  if (w == "UDINT") return IT::UDINT;
+  if (w == "ULINT") return IT::ULINT;
+  return IT::None;
+}
+
 FbKind fb_kind(const std::string& t) {
+  if (counter_width(t) != IT::None || t == "SEMA") return FbKind::Typed;
   if (t == "TON" || t == "TOF" || t == "TP") return FbKind::Timer;
   if (t == "CTU" || t == "CTD" || t == "CTUD") return FbKind::Counter;
   if (t == "SR" || t == "RS") return FbKind::Latch;
@@ -323,6 +338,8 @@ class Importer {
   Cond materialize(Cond c, const Element* el);
   Cond negate(Cond c, const Element* el);
   Cond trigger(Cond c, bool rising, const Element* el, std::optional<Operand> into = std::nullopt);
+  void typed_counter(const std::string& t, IT w, const Var& inst, const std::function<Cond(const std::string&)>& in,
+                     const Val& pv, const Element* el);
   std::string new_label();
 
   // the body
@@ -404,6 +421,8 @@ class Importer {
   Val typed_fn(const std::string& t, const std::string& time_op, const std::vector<Val>& v, const Pin* g, IT T, const Cond& en, Cond& eno,
                const Element* el, const Node& b);
   Val typed_conv(IT to, IT from, const Val& v, const Cond& en, bool trunc, const Element* el);
+  Val date_fn(const std::string& t, const std::vector<Val>& v, const Cond& en, const Element* el, const Node& b);
+  Val bcd_fn(const std::string& t, const std::vector<Val>& v, const Cond& en, Cond& eno, const Element* el, const Node& b);
   void bit_shift(const std::string& t, const Pin& in_pin, Operand in, Operand n, Operand res, const Cond& en, const Element* el);
 };
 
@@ -493,6 +512,9 @@ void Importer::allocate() {
       else if (k == FbKind::Counter) {
         v->dev = DeviceRef{Dev::C, take(Dev::C, v->el)};
         if (v->type == "CTUD") v->aux = take(Dev::M, v->el), v->aux2 = take(Dev::M, v->el);
+      } else if (k == FbKind::Typed && v->type != "SEMA") {  // CV's cells; Q (QU) and QD in M
+        v->dev = DeviceRef{Dev::D, take_run(Dev::D, ty_info(counter_width(v->type)).cells, v->el)};
+        v->aux = take(Dev::M, v->el), v->aux2 = take(Dev::M, v->el);
       } else if (k != FbKind::None) v->dev = DeviceRef{Dev::M, take(Dev::M, v->el)};
       continue;  // other derived types get nothing; using them is an error
     }
@@ -633,7 +655,14 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
     if (k == FbKind::Counter && (m == "Q" || m == "QU") && inst->type != "CTUD") return {bit_opd(Area::CQ, i), Ty::Bool};
     if (inst->type == "CTUD" && m == "QU") return {bit_opd(Area::M, inst->aux), Ty::Bool};
     if (inst->type == "CTUD" && m == "QD") return {bit_opd(Area::M, inst->aux2), Ty::Bool};
-    if ((k == FbKind::Latch && m == "Q1") || (k == FbKind::Trig && m == "Q")) return {bit_opd(Area::M, i), Ty::Bool};
+    if ((k == FbKind::Latch && m == "Q1") || (k == FbKind::Trig && m == "Q") || (inst->type == "SEMA" && m == "BUSY"))
+      return {bit_opd(Area::M, i), Ty::Bool};
+    if (IT w = counter_width(inst->type); w != IT::None) {
+      bool updown = inst->type.rfind("CTUD", 0) == 0;
+      if (m == "CV") return {Operand{OpdKind::Int, Area::D, i}, kind_of(w), w};
+      if (m == (updown ? "QU" : "Q")) return {bit_opd(Area::M, inst->aux), Ty::Bool};
+      if (updown && m == "QD") return {bit_opd(Area::M, inst->aux2), Ty::Bool};
+    }
     fail_at(el, "'" + e + "': " + inst->type + " has no output " + m);
   }
   Var* v = lookup(e);
@@ -1071,7 +1100,7 @@ bool Importer::out_is_bool(const Node& b, const std::string& pin, int depth) {
   std::string t = upper(b.type);
   if (fb_kind(t) == FbKind::None) refuse_user_pou(b);
   if (pin == "ENO") return true;
-  if (fb_kind(t) != FbKind::None) return !(pin == "ET" || pin == "CV");
+  if (fb_kind(t) != FbKind::None) return !(pin == "ET" || pin == "CV");  // (CTU_ULINT ... too)
   static const std::set<std::string> cmp = {"GT", "GE", "EQ", "NE", "LE", "LT"};
   if (cmp.count(t)) return true;
   size_t to = t.find("_TO_");
@@ -1372,9 +1401,12 @@ void Importer::fb_block(const Node& b, Var& inst) {
   static const std::map<std::string, std::vector<std::string>> known = {
       {"TON", {"EN", "IN", "PT"}}, {"TOF", {"EN", "IN", "PT"}}, {"TP", {"EN", "IN", "PT"}},
       {"CTU", {"EN", "CU", "R", "PV"}}, {"CTD", {"EN", "CD", "LD", "PV"}}, {"CTUD", {"EN", "CU", "CD", "R", "LD", "PV"}},
-      {"SR", {"EN", "S1", "R"}}, {"RS", {"EN", "S", "R1"}}, {"R_TRIG", {"EN", "CLK"}}, {"F_TRIG", {"EN", "CLK"}}};
+      {"SR", {"EN", "S1", "R"}}, {"RS", {"EN", "S", "R1"}}, {"R_TRIG", {"EN", "CLK"}}, {"F_TRIG", {"EN", "CLK"}},
+      {"SEMA", {"EN", "CLAIM", "RELEASE"}}};
+  IT width = counter_width(t);
+  const std::vector<std::string>& inputs = known.at(width == IT::None ? t : t.substr(0, t.find('_')));
   for (const Pin& p : b.inputs)
-    if (std::find(known.at(t).begin(), known.at(t).end(), p.name) == known.at(t).end())
+    if (std::find(inputs.begin(), inputs.end(), p.name) == inputs.end())
       fail_at(p.el, t + " has no input '" + p.name + "' (" + p.el->path() + ")");
   // input conditions, with the pins' own negation and edge modifiers
   auto cond = [&](const std::string& n) -> Cond {
@@ -1390,7 +1422,7 @@ void Importer::fb_block(const Node& b, Var& inst) {
     if (!p || p->conns.empty()) return {const_opd(0), Ty::Int};
     Val v = value_expr(p->conns, order, p->el);
     if (v.ty == Ty::Real) fail_at(p->el, n + " of " + t + " must be an integer or TIME, not REAL (" + p->el->path() + ")");
-    if (n == "PV" && v.ty == Ty::Wide)
+    if (n == "PV" && v.ty == Ty::Wide && width == IT::None)
       fail_at(p->el, "PV of " + t + " is an INT, not " + ty_info(type_of(v)).name + " (" + t + "_" + ty_info(type_of(v)).name +
                          " counts in that type) (" + p->el->path() + ")");
     return v;
@@ -1407,7 +1439,7 @@ void Importer::fb_block(const Node& b, Var& inst) {
     if (p.name == "PT") v[p.name] = Val{preset_ms(value(p.name), p.el)};
     else if (p.name == "PV") v[p.name] = value(p.name);
     else if (p.name == "EN") en = materialize(cond("EN"), el);
-    else c[p.name] = (k == FbKind::Latch || p.name == "R" || p.name == "LD") ? materialize(cond(p.name), el) : cond(p.name);
+    else c[p.name] = (k == FbKind::Latch || k == FbKind::Typed || p.name == "R" || p.name == "LD") ? materialize(cond(p.name), el) : cond(p.name);
   }
   auto in = [&](const std::string& n) { return c.count(n) ? c[n] : Cond::no(); };
   auto val = [&](const std::string& n) { return v.count(n) ? v[n] : Val{const_opd(0), Ty::Int}; };
@@ -1467,6 +1499,20 @@ void Importer::fb_block(const Node& b, Var& inst) {
     bool_out("QU", bit_opd(Area::M, inst.aux));
     bool_out("QD", bit_opd(Area::M, inst.aux2));
     val_out("CV", cw);
+  } else if (width != IT::None) {
+    typed_counter(t, width, inst, in, val("PV"), el);
+    Operand cv{OpdKind::Int, Area::D, i};
+    bool updown = t.rfind("CTUD", 0) == 0;
+    bool_out(updown ? "QU" : "Q", bit_opd(Area::M, inst.aux));
+    if (updown) bool_out("QD", bit_opd(Area::M, inst.aux2));
+    outs_[{b.id, "CV"}] = Out{false, {}, Val{cv, kind_of(width), width}};
+  } else if (t == "SEMA") {
+    // MatIEC's lib/sema.txt: Q_INTERNAL := CLAIM OR (Q_INTERNAL AND NOT RELEASE); BUSY := Q_INTERNAL
+    Operand q = bit_opd(Area::M, i);
+    Cond claim = in("CLAIM"), release = in("RELEASE");
+    if (release.k != Cond::False) rung(release, out(Op::RST, {q}, el), el);
+    if (claim.k != Cond::False) rung(claim, out(Op::SET, {q}, el), el);
+    bool_out("BUSY", q);
   } else if (k == FbKind::Latch) {
     // SR: Q1 := S1 OR (NOT R AND Q1)    RS: Q1 := NOT R1 AND (S OR Q1)
     // (both inputs were read into relays before Q1 changes)
@@ -1487,6 +1533,44 @@ void Importer::fb_block(const Node& b, Var& inst) {
   }
   if (!skip.empty()) pending_labels_.push_back(skip);
   if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, en, {}};
+}
+
+// MatIEC's counters of the other widths (lib/counter.txt), in typed
+// instructions of their type w on CV's cells:
+//   CTU   IF R THEN CV := 0 ELSIF (edge of CU) AND CV < PV THEN CV := CV + 1; Q := CV >= PV
+//   CTD   IF LD THEN CV := PV ELSIF (edge of CD) AND CV > 0 THEN CV := CV - 1; Q := CV <= 0
+//   CTUD  IF R THEN CV := 0 ELSIF LD THEN CV := PV ELSIF NOT (both edges) THEN
+//         (up while CV < PV, else down while CV > 0); QU := CV >= PV; QD := CV <= 0
+// CV stops at PV and at 0: it never wraps.  The edges are the counter's own
+// R_TRIGs, evaluated at every call.
+void Importer::typed_counter(const std::string& t, IT w, const Var& inst, const std::function<Cond(const std::string&)>& in,
+                             const Val& pv_val, const Element* el) {
+  Operand cv{OpdKind::Int, Area::D, inst.dev->index}, pv = as_type(pv_val, w, el);
+  Operand zero = Operand::typed_const(0), one = Operand::typed_const(1);
+  auto edge = [&](const char* n) { return materialize(trigger(in(n), true, el), el); };
+  auto up = [&](Cond c) { rung(c_and(std::move(c), tcmp(Op::TLT, w, cv, pv, el)), tout(Op::TADD, w, IT::None, {cv, one, cv}, el), el); };
+  auto down = [&](Cond c) { rung(c_and(std::move(c), tcmp(Op::TGT, w, cv, zero, el)), tout(Op::TSUB, w, IT::None, {cv, one, cv}, el), el); };
+  auto flag = [&](Op rel, Operand b, uint32_t m) { rung(tcmp(rel, w, cv, b, el), out(Op::OUT, {bit_opd(Area::M, m)}, el), el); };
+  if (t.rfind("CTUD", 0) == 0) {
+    Cond ed = edge("CD"), eu = edge("CU"), r = in("R"), ld = in("LD");
+    if (r.k != Cond::False) rung(r, tout(Op::TMOVE, w, IT::None, {zero, cv}, el), el);
+    if (ld.k != Cond::False) rung(c_and(negate(r, el), ld), tout(Op::TMOVE, w, IT::None, {pv, cv}, el), el);
+    Cond idle = c_and(negate(r, el), negate(ld, el));
+    up(c_and(idle, c_and(eu, negate(ed, el))));
+    down(c_and(idle, c_and(ed, negate(eu, el))));
+    flag(Op::TGE, pv, inst.aux);
+    flag(Op::TLE, zero, inst.aux2);
+  } else if (t.rfind("CTU", 0) == 0) {
+    Cond e = edge("CU"), r = in("R");
+    if (r.k != Cond::False) rung(r, tout(Op::TMOVE, w, IT::None, {zero, cv}, el), el);
+    up(c_and(e, negate(r, el)));
+    flag(Op::TGE, pv, inst.aux);
+  } else {
+    Cond e = edge("CD"), ld = in("LD");
+    if (ld.k != Cond::False) rung(ld, tout(Op::TMOVE, w, IT::None, {pv, cv}, el), el);
+    down(c_and(e, negate(ld, el)));
+    flag(Op::TLE, zero, inst.aux);
+  }
 }
 
 // res := x rounded to the nearest integer, ties to even (MatIEC's REAL_TO_INT:
@@ -1667,6 +1751,114 @@ Val Importer::typed_conv(IT to, IT from, const Val& v, const Cond& en, bool trun
   return Val{res, kind_of(to), to};
 }
 
+// MatIEC's BCD conversions (docs/stdlib.md): X_TO_BCD_Y, X_TO_BCD (the bit
+// string of X's width), X_BCD_TO_Y, BCD_TO_Y (X the input's type).
+struct BcdName {
+  bool to_bcd = false;
+  IT from = IT::None, to = IT::None;
+};
+std::optional<BcdName> bcd_parse(const std::string& t) {
+  auto of_kind = [](const std::string& n, TyKind k) {
+    IT x = iec_type_named(n);
+    return x != IT::None && ty_info(x).kind == k ? x : IT::None;
+  };
+  static const std::map<IT, IT> same_width = {{IT::USINT, IT::BYTE}, {IT::UINT, IT::WORD}, {IT::UDINT, IT::DWORD}, {IT::ULINT, IT::LWORD}};
+  if (size_t p = t.find("_TO_BCD"); p != std::string::npos && p > 0) {
+    IT from = of_kind(t.substr(0, p), TyKind::Unsigned);
+    std::string rest = t.substr(p + 7);
+    IT to = rest.empty() && from != IT::None ? same_width.at(from) : rest.size() > 1 && rest[0] == '_' ? of_kind(rest.substr(1), TyKind::Bits) : IT::None;
+    if (from == IT::None || to == IT::None) return std::nullopt;
+    return BcdName{true, from, to};
+  }
+  if (t.rfind("BCD_TO_", 0) == 0) {
+    IT to = of_kind(t.substr(7), TyKind::Unsigned);
+    if (to == IT::None) return std::nullopt;
+    return BcdName{false, IT::None, to};
+  }
+  if (size_t p = t.find("_BCD_TO_"); p != std::string::npos && p > 0) {
+    IT from = of_kind(t.substr(0, p), TyKind::Bits), to = of_kind(t.substr(p + 8), TyKind::Unsigned);
+    if (from == IT::None || to == IT::None) return std::nullopt;
+    return BcdName{false, from, to};
+  }
+  return std::nullopt;
+}
+bool bcd_name(const std::string& t) { return bcd_parse(t).has_value(); }
+
+// MatIEC's date arithmetic: __time_add / __time_sub of IN1 and IN2 (ns).
+struct DateFn {
+  IT in1, in2, out;
+  bool add;
+};
+const std::map<std::string, DateFn>& date_fns() {
+  static const std::map<std::string, DateFn> k = {
+      {"ADD_TOD_TIME", {IT::TOD, IT::TIME, IT::TOD, true}},    {"ADD_DT_TIME", {IT::DT, IT::TIME, IT::DT, true}},
+      {"SUB_TOD_TIME", {IT::TOD, IT::TIME, IT::TOD, false}},   {"SUB_DT_TIME", {IT::DT, IT::TIME, IT::DT, false}},
+      {"SUB_DATE_DATE", {IT::DATE, IT::DATE, IT::TIME, false}}, {"SUB_TOD_TOD", {IT::TOD, IT::TOD, IT::TIME, false}},
+      {"SUB_DT_DT", {IT::DT, IT::DT, IT::TIME, false}},         {"CONCAT_DATE_TOD", {IT::DATE, IT::TOD, IT::DT, true}}};
+  return k;
+}
+bool date_fn_name(const std::string& t) { return date_fns().count(t) > 0; }
+
+Val Importer::date_fn(const std::string& t, const std::vector<Val>& v, const Cond& en, const Element* el, const Node& b) {
+  const DateFn& f = date_fns().at(t);
+  if (v.size() != 2) fail_at(el, t + " localId " + std::to_string(b.id) + " takes 2 inputs (" + el->path() + ")");
+  for (size_t k = 0; k < 2; k++) {
+    IT want = k ? f.in2 : f.in1;
+    if ((v[k].it != IT::None || v[k].ms) && type_of(v[k]) != want)
+      fail_at(el, t + " localId " + std::to_string(b.id) + " takes " + ty_info(want).name + " on IN" + std::to_string(k + 1) + ", not " +
+                      ty_info(type_of(v[k])).name + " (" + el->path() + ")");
+  }
+  Operand a = as_type(v[0], f.in1, el), c = as_type(v[1], f.in2, el), res = temp_of(f.out, el);
+  if (en.k != Cond::True) rung(negate(en, el), tout(Op::TMOVE, f.out, IT::None, {Operand::typed_const(0), res}, el), el);
+  rung(en, tout(f.add ? Op::TADD : Op::TSUB, IT::LINT, IT::None, {a, c, res}, el), el);  // ns: LINT arithmetic on the words
+  return Val{res, Ty::Wide, f.out};
+}
+
+// __uint_to_bcd / __bcd_to_uint unrolled over the digits in 64-bit typed
+// instructions; an invalid digit gives 0 and ENO FALSE (TEST_EN_COND).
+Val Importer::bcd_fn(const std::string& t, const std::vector<Val>& v, const Cond& en, Cond& eno, const Element* el, const Node& b) {
+  BcdName n = *bcd_parse(t);
+  if (v.size() != 1) fail_at(el, t + " localId " + std::to_string(b.id) + " takes 1 input (" + el->path() + ")");
+  IT from = n.from != IT::None ? n.from : v[0].it != IT::None ? type_of(v[0]) : IT::LWORD;
+  if (ty_info(from).kind != (n.to_bcd ? TyKind::Unsigned : TyKind::Bits))
+    fail_at(el, t + " localId " + std::to_string(b.id) + " takes " + (n.to_bcd ? "an unsigned integer" : "a bit string") + ", not " +
+                    ty_info(from).name + " (" + el->path() + ")");
+  if (v[0].it != IT::None && type_of(v[0]) != from)
+    fail_at(el, t + " localId " + std::to_string(b.id) + " takes " + ty_info(from).name + ", not " + ty_info(type_of(v[0])).name + " (" + el->path() + ")");
+  Operand x = temp_of(IT::ULINT, el), res = temp_of(IT::ULINT, el), dig = temp_of(IT::ULINT, el), out_res = temp_of(n.to, el);
+  Operand in = as_type(v[0], from, el);
+  auto k = [](uint64_t c) { return Operand::typed_const(c); };
+  auto step = [&](Op op, IT ty, std::vector<Operand> a, IT u = IT::None) { rung(en, tout(op, ty, u, std::move(a), el), el); };
+  if (en.k != Cond::True) rung(negate(en, el), tout(Op::TMOVE, n.to, IT::None, {k(0), out_res}, el), el);
+  step(Op::TCONV, IT::ULINT, {in, x}, from);
+  step(Op::TMOVE, IT::ULINT, {k(0), res});
+  const int bits = ty_info(from).bits;
+  if (n.to_bcd) {
+    const int digits = bits == 8 ? 3 : bits == 16 ? 5 : bits == 32 ? 10 : 20;
+    for (int d = 0; d < digits; d++) {
+      step(Op::TMOD, IT::ULINT, {x, k(10), dig});
+      step(Op::TDIV, IT::ULINT, {x, k(10), x});
+      step(Op::TSHL, IT::LWORD, {dig, k(uint64_t(4 * d)), dig}, IT::USINT);  // a shift of 64 and more gives 0 (docs/stdlib.md)
+      step(Op::TOR, IT::LWORD, {res, dig, res});
+    }
+    step(Op::TCONV, n.to, {res, out_res}, IT::LWORD);
+    return Val{out_res, kind_of(n.to), n.to};
+  }
+  uint32_t bad = temp_m(el);
+  rung(Cond::yes(), out(Op::RST, {bit_opd(Area::M, bad)}, el), el);
+  for (int d = bits / 4 - 1; d >= 0; d--) {
+    step(Op::TSHR, IT::LWORD, {x, k(uint64_t(4 * d)), dig}, IT::USINT);
+    step(Op::TAND, IT::LWORD, {dig, k(15), dig});
+    rung(c_and(en, tcmp(Op::TGT, IT::ULINT, dig, k(9), el)), out(Op::SET, {bit_opd(Area::M, bad)}, el), el);
+    step(Op::TMUL, IT::ULINT, {res, k(10), res});
+    step(Op::TADD, IT::ULINT, {res, dig, res});
+  }
+  step(Op::TCONV, n.to, {res, out_res}, IT::ULINT);
+  rung(bit_leaf(Op::LOAD, bit_opd(Area::M, bad), el), tout(Op::TMOVE, n.to, IT::None, {k(0), out_res}, el), el);
+  eno = c_and(eno, bit_leaf(Op::LOADN, bit_opd(Area::M, bad), el));
+  return Val{out_res, kind_of(n.to), n.to};
+}
+
 void Importer::fn_block(const Node& b) {
   std::string t = upper(b.type);
   if (t == "ADD_TIME" || t == "SUB_TIME") t = t.substr(0, 3);  // ADD, SUB on TIME
@@ -1682,12 +1874,14 @@ void Importer::fn_block(const Node& b) {
   size_t to = t.find("_TO_");
   bool conv = to != std::string::npos || trunc;
   static const std::set<std::string> bits = {"SHL", "SHR", "ROL", "ROR"};
-  if (!cmp.count(t) && !arith.count(t) && !conv && !bits.count(t) && !real_functions().count(t) && t != "MOVE" && t != "SEL" && t != "MUX" &&
+  bool extra = bcd_name(t) || date_fn_name(t);  // docs/stdlib.md
+  if (extra) conv = false;
+  if (!extra && !cmp.count(t) && !arith.count(t) && !conv && !bits.count(t) && !real_functions().count(t) && t != "MOVE" && t != "SEL" && t != "MUX" &&
       t != "LIMIT" && t != "ABS" && t != "AND" && t != "OR" && t != "XOR" && t != "NOT")
-    fail_at(el, "block '" + b.type + "' localId " + std::to_string(b.id) + " is not supported: ldc translates TON TOF TP CTU CTD CTUD SR RS R_TRIG F_TRIG, "
+    fail_at(el, "block '" + b.type + "' localId " + std::to_string(b.id) + " is not supported: ldc translates TON TOF TP CTU CTD CTUD (and their _DINT _LINT _UDINT _ULINT forms) SR RS R_TRIG F_TRIG SEMA, "
                 "GT GE EQ NE LE LT, ADD SUB MUL DIV MOD MAX MIN LIMIT ABS MOVE SEL MUX, "
-                "SQRT LN LOG EXP EXPT SIN COS TAN ASIN ACOS ATAN, ADD_TIME SUB_TIME MUL_TIME DIV_TIME, AND OR XOR NOT SHL SHR ROL ROR, "
-                "type conversions X_TO_Y and TRUNC (" + el->path() + ")");
+                "SQRT LN LOG EXP EXPT SIN COS TAN ASIN ACOS ATAN, ADD_TIME SUB_TIME MUL_TIME DIV_TIME and the date arithmetic, AND OR XOR NOT SHL SHR ROL ROR, "
+                "type conversions X_TO_Y, BCD and TRUNC: docs/stdlib.md (" + el->path() + ")");
   // inputs other than EN, in order
   std::vector<const Pin*> ins;
   for (const Pin& p : b.inputs)
@@ -1707,6 +1901,17 @@ void Importer::fn_block(const Node& b) {
   Cond eno = en;
   for (const Pin* p : ins)
     if (p->conns.empty()) fail_at(p->el, "input " + p->name + " of " + t + " localId " + std::to_string(b.id) + " is not connected (" + p->el->path() + ")");
+  if (extra) {  // BCD conversions, date arithmetic: typed instructions
+    std::vector<Val> v;
+    for (const Pin* p : ins) v.push_back(val_of(p));
+    Val r = bcd_name(t) ? bcd_fn(t, v, en, eno, el, b) : date_fn(t, v, en, el, b);
+    std::string name = "OUT";
+    for (const Pin& p : b.outputs)
+      if (p.name != "ENO") name = p.name;
+    outs_[{b.id, name}] = Out{false, {}, r};
+    if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, materialize(eno, el), {}};
+    return;
+  }
   size_t want = t == "SEL" || t == "LIMIT" ? 3 : (conv || t == "NOT" || t == "MOVE" || t == "ABS" || (real_functions().count(t) && t != "EXPT")) ? 1
                 : (t == "SUB" || t == "DIV" || t == "MOD" || t == "EXPT" || bits.count(t) || !time_op.empty()) ? 2 : 0;
   size_t n_in = ins.size();

@@ -93,7 +93,18 @@ std::vector<Tok> lex(std::string_view s) {
         bool typed = s.substr(st, i - st).find('#') != std::string_view::npos;
         return before == '#' || ((numeric || typed) && (before == 'e' || before == 'E'));
       };
-      while (i < s.size() && ((word_char(s[i]) && !(s[i] == '.' && i + 1 < s.size() && s[i + 1] == '.')) || sign_inside())) i++;
+      // a date's '-' and a time of day's ':' before a digit: DATE#2024-01-31, TOD#12:30:00, DT#2024-01-31-12:30:00
+      auto date_inside = [&] {
+        if ((s[i] != '-' && s[i] != ':') || i + 1 >= s.size() || !std::isdigit((unsigned char)s[i + 1])) return false;
+        std::string head;
+        for (char h : s.substr(st, i - st)) head += char(std::toupper((unsigned char)h));
+        size_t hash = head.find('#');
+        if (hash == std::string::npos) return false;
+        std::string p = head.substr(0, hash);
+        return p == "D" || p == "DATE" || p == "DT" || p == "DATE_AND_TIME" || p == "TOD" || p == "TIME_OF_DAY" ||
+               p == "LDATE" || p == "LDT" || p == "LTOD";
+      };
+      while (i < s.size() && ((word_char(s[i]) && !(s[i] == '.' && i + 1 < s.size() && s[i + 1] == '.')) || sign_inside() || date_inside())) i++;
       out.push_back({Tok::Word, std::string(s.substr(st, i - st)), line, col(st)});
       continue;
     }
@@ -1324,7 +1335,9 @@ struct Writer {
         taken.insert(u);  // the instance is declared with this name, located at its device
         continue;
       }
-      if (taken.count(u) || a.dev.dev == Dev::T || a.dev.dev == Dev::C || a.dev.index >= device_count(a.dev.dev)) {
+      // a member's or an element's alias (p.x, v[2], of the typed reader) is no IEC name
+      bool ident = std::all_of(a.name.begin(), a.name.end(), [](char c) { return std::isalnum((unsigned char)c) || c == '_'; });
+      if (!ident || taken.count(u) || a.dev.dev == Dev::T || a.dev.dev == Dev::C || a.dev.index >= device_count(a.dev.dev)) {
         vars += "    (* " + a.name + " = " + dev_name(a.dev.dev) + std::to_string(a.dev.index) + ": no IEC declaration *)\n";
         continue;
       }

@@ -296,38 +296,59 @@ class Reader {
                    ", not a type");
     }
     if (TypeId b = bistable_type(u); b != kNoType) return b;
-    static const std::set<std::string> std_fbs = {"TON", "TOF", "TP", "CTU", "CTD", "CTUD", "R_TRIG", "F_TRIG", "SR", "RS",
-                                                  "RTC", "SEMA"};
-    if (std_fbs.count(u) || u.rfind("CTU_", 0) == 0 || u.rfind("CTD_", 0) == 0 || u.rfind("CTUD_", 0) == 0)
-      fail(at, "the standard function block " + at.text +
-                   " is not available in a program with typed declarations yet (docs/iec-il.md, \"Typed programs\")");
     if (u == "STRING" || u == "WSTRING") fail(at, "type " + at.text + " is not supported (docs/iec-il.md)");
+    if (u.rfind("CTU_", 0) == 0 || u.rfind("CTD_", 0) == 0 || u.rfind("CTUD_", 0) == 0)
+      fail(at, "unknown type '" + at.text + "': MatIEC's counters are " + u.substr(0, u.find('_')) + " (INT) and " +
+                   u.substr(0, u.find('_')) + "_DINT, _LINT, _UDINT, _ULINT (docs/stdlib.md)");
     fail(at, "unknown type '" + at.text + "'");
   }
 
-  // The standard blocks of pure logic, as MatIEC's structures: their
-  // variables, the inputs first; computed at each CAL (std_call).
+  // The standard function blocks, as MatIEC's structures (lib/*.txt,
+  // lib/C/iec_std_FB.h): their inputs, then their outputs, then the hidden
+  // variables (an R_TRIG's M, a counter's CU_T edge memory ...); computed at
+  // each CAL (std_call).
+  struct StdFb {
+    std::vector<std::pair<const char*, Ty>> vars;
+    size_t inputs = 0, outputs = 0;
+  };
+  static const std::map<std::string, StdFb>& std_fbs() {
+    static const std::map<std::string, StdFb> k = [] {
+      std::map<std::string, StdFb> m = {
+          {"R_TRIG", {{{"CLK", Ty::BOOL}, {"Q", Ty::BOOL}, {"M", Ty::BOOL}}, 1, 1}},
+          {"F_TRIG", {{{"CLK", Ty::BOOL}, {"Q", Ty::BOOL}, {"M", Ty::BOOL}}, 1, 1}},
+          {"SR", {{{"S1", Ty::BOOL}, {"R", Ty::BOOL}, {"Q1", Ty::BOOL}}, 2, 1}},
+          {"RS", {{{"S", Ty::BOOL}, {"R1", Ty::BOOL}, {"Q1", Ty::BOOL}}, 2, 1}},
+          {"SEMA", {{{"CLAIM", Ty::BOOL}, {"RELEASE", Ty::BOOL}, {"BUSY", Ty::BOOL}, {"Q_INTERNAL", Ty::BOOL}}, 2, 1}},
+          {"RTC", {{{"IN", Ty::BOOL}, {"PDT", Ty::DT}, {"Q", Ty::BOOL}, {"CDT", Ty::DT}, {"PREV_IN", Ty::BOOL},
+                    {"OFFSET", Ty::TIME}, {"CURRENT_TIME", Ty::DT}}, 2, 2}},
+          {"TON", {{{"IN", Ty::BOOL}, {"PT", Ty::TIME}, {"Q", Ty::BOOL}, {"ET", Ty::TIME}}, 2, 2}},
+          {"TOF", {{{"IN", Ty::BOOL}, {"PT", Ty::TIME}, {"Q", Ty::BOOL}, {"ET", Ty::TIME}}, 2, 2}},
+          {"TP", {{{"IN", Ty::BOOL}, {"PT", Ty::TIME}, {"Q", Ty::BOOL}, {"ET", Ty::TIME}}, 2, 2}}};
+      // the counters of every width MatIEC has (lib/counter.txt): CTU is INT
+      for (auto [suffix, t] : {std::pair<const char*, Ty>{"", Ty::INT}, {"_DINT", Ty::DINT}, {"_LINT", Ty::LINT},
+                               {"_UDINT", Ty::UDINT}, {"_ULINT", Ty::ULINT}}) {
+        std::string s = suffix;
+        m["CTU" + s] = {{{"CU", Ty::BOOL}, {"R", Ty::BOOL}, {"PV", t}, {"Q", Ty::BOOL}, {"CV", t}, {"CU_T", Ty::BOOL}}, 3, 2};
+        m["CTD" + s] = {{{"CD", Ty::BOOL}, {"LD", Ty::BOOL}, {"PV", t}, {"Q", Ty::BOOL}, {"CV", t}, {"CD_T", Ty::BOOL}}, 3, 2};
+        m["CTUD" + s] = {{{"CU", Ty::BOOL}, {"CD", Ty::BOOL}, {"R", Ty::BOOL}, {"LD", Ty::BOOL}, {"PV", t}, {"QU", Ty::BOOL},
+                          {"QD", Ty::BOOL}, {"CV", t}, {"CD_T", Ty::BOOL}, {"CU_T", Ty::BOOL}}, 5, 3};
+      }
+      return m;
+    }();
+    return k;
+  }
   std::map<TypeId, std::string> bistables_;
+  TypeId rtc_type_ = kNoType;
   TypeId bistable_type(const std::string& u) {
-    // name, its variables (inputs first) and their types
-    static const std::map<std::string, std::vector<std::pair<const char*, Ty>>> kVars = {
-        {"R_TRIG", {{"CLK", Ty::BOOL}, {"Q", Ty::BOOL}, {"M", Ty::BOOL}}},
-        {"F_TRIG", {{"CLK", Ty::BOOL}, {"Q", Ty::BOOL}, {"M", Ty::BOOL}}},
-        {"SR", {{"S1", Ty::BOOL}, {"R", Ty::BOOL}, {"Q1", Ty::BOOL}}},
-        {"RS", {{"S", Ty::BOOL}, {"R1", Ty::BOOL}, {"Q1", Ty::BOOL}}},
-        {"TON", {{"IN", Ty::BOOL}, {"PT", Ty::TIME}, {"Q", Ty::BOOL}, {"ET", Ty::TIME}}},
-        {"TOF", {{"IN", Ty::BOOL}, {"PT", Ty::TIME}, {"Q", Ty::BOOL}, {"ET", Ty::TIME}}},
-        {"TP", {{"IN", Ty::BOOL}, {"PT", Ty::TIME}, {"Q", Ty::BOOL}, {"ET", Ty::TIME}}},
-        {"CTU", {{"CU", Ty::BOOL}, {"R", Ty::BOOL}, {"PV", Ty::INT}, {"Q", Ty::BOOL}, {"CV", Ty::INT}}},
-        {"CTD", {{"CD", Ty::BOOL}, {"LD", Ty::BOOL}, {"PV", Ty::INT}, {"Q", Ty::BOOL}, {"CV", Ty::INT}}}};
-    auto it = kVars.find(u);
-    if (it == kVars.end()) return kNoType;
+    auto it = std_fbs().find(u);
+    if (it == std_fbs().end()) return kNoType;
     Type t;
     t.kind = TypeKind::Struct;
     t.name = u;
-    for (const auto& [v, ty] : it->second) t.members.push_back({v, m_.elem(ty), {}, {}});
+    for (const auto& [v, ty] : it->second.vars) t.members.push_back({v, m_.elem(ty), {}, {}});
     TypeId id = m_.add_type(t, {1, 1});
     bistables_[id] = u;
+    if (u == "RTC") rtc_type_ = id;
     return id;
   }
 
@@ -1062,6 +1083,7 @@ class Reader {
     scope_ = &s;
     here_ = {1, 1};
     initial_values();
+    if (rtc_type_ != kNoType) clock_rung();
     lower_body(program_);
     scope_ = nullptr;
   }
@@ -1151,6 +1173,8 @@ class Reader {
     if (u == "MOVE") { need_cr(op); return; }
     if (u == "NOT") return not_op(op);
     if (unary_fn(u) || conversion(u) || u == "TRUNC") return function1(op, u);
+    if (auto b = bcd_conversion(u)) return bcd(op, *b);
+    if (auto f = time_function(u)) return time_arith(op, *f);
     if (u == "MIN" || u == "MAX" || u == "LIMIT" || u == "SEL" || u == "MUX") return selection(op, u);
     if (is_function(u)) return user_function(op, u);
     static const std::set<std::string> ldc_ops = {"LOAD", "LOADN", "OUT", "OUTN", "SET", "RST", "ANDBLK", "ORBLK", "MPS", "MRD", "MPP"};
@@ -1173,6 +1197,75 @@ class Reader {
     auto a = ty_from_name(u.substr(0, p)), b = ty_from_name(u.substr(p + 4));
     if (!a || !b) return std::nullopt;
     return std::make_pair(*a, *b);
+  }
+  // MatIEC's BCD conversions (lib/standard_functions.txt): X_TO_BCD_Y and
+  // X_TO_BCD (X an unsigned integer, Y a bit string; X_TO_BCD gives the bit
+  // string of X's width), X_BCD_TO_Y and BCD_TO_Y (the CR's bit string).
+  struct Bcd {
+    bool to_bcd = false;
+    Ty from = Ty::None, to = Ty::None;  // from None: the CR's type
+  };
+  static std::optional<Bcd> bcd_conversion(const std::string& u) {
+    auto uint_ty = [](const std::string& n) -> std::optional<Ty> {
+      auto t = ty_from_name(n);
+      if (t && ty_info(*t).kind == TyKind::Unsigned) return t;
+      return std::nullopt;
+    };
+    auto bits_ty = [](const std::string& n) -> std::optional<Ty> {
+      auto t = ty_from_name(n);
+      if (t && ty_info(*t).kind == TyKind::Bits) return t;
+      return std::nullopt;
+    };
+    static const std::map<Ty, Ty> same_width = {{Ty::USINT, Ty::BYTE}, {Ty::UINT, Ty::WORD}, {Ty::UDINT, Ty::DWORD}, {Ty::ULINT, Ty::LWORD}};
+    if (size_t p = u.find("_TO_BCD"); p != std::string::npos && p > 0) {
+      auto from = uint_ty(u.substr(0, p));
+      std::string rest = u.substr(p + 7);
+      if (!from) return std::nullopt;
+      if (rest.empty()) return Bcd{true, *from, same_width.at(*from)};
+      if (rest[0] != '_') return std::nullopt;
+      auto to = bits_ty(rest.substr(1));
+      if (!to) return std::nullopt;
+      return Bcd{true, *from, *to};
+    }
+    if (u.rfind("BCD_TO_", 0) == 0) {
+      auto to = uint_ty(u.substr(7));
+      if (!to) return std::nullopt;
+      return Bcd{false, Ty::None, *to};
+    }
+    if (size_t p = u.find("_BCD_TO_"); p != std::string::npos && p > 0) {
+      auto from = bits_ty(u.substr(0, p)), to = uint_ty(u.substr(p + 8));
+      if (!from || !to) return std::nullopt;
+      return Bcd{false, *from, *to};
+    }
+    return std::nullopt;
+  }
+  // MatIEC's time and date arithmetic (lib/C/iec_std_functions.h): each is
+  // __time_add or __time_sub of two timespecs, here nanoseconds (IN1 the CR)
+  struct TimeFn {
+    Ty in1, in2, out;
+    bool add;
+  };
+  static std::optional<TimeFn> time_function(const std::string& u) {
+    static const std::map<std::string, TimeFn> k = {
+        {"ADD_TIME", {Ty::TIME, Ty::TIME, Ty::TIME, true}},      {"SUB_TIME", {Ty::TIME, Ty::TIME, Ty::TIME, false}},
+        {"ADD_TOD_TIME", {Ty::TOD, Ty::TIME, Ty::TOD, true}},    {"ADD_DT_TIME", {Ty::DT, Ty::TIME, Ty::DT, true}},
+        {"SUB_TOD_TIME", {Ty::TOD, Ty::TIME, Ty::TOD, false}},   {"SUB_DT_TIME", {Ty::DT, Ty::TIME, Ty::DT, false}},
+        {"SUB_DATE_DATE", {Ty::DATE, Ty::DATE, Ty::TIME, false}}, {"SUB_TOD_TOD", {Ty::TOD, Ty::TOD, Ty::TIME, false}},
+        {"SUB_DT_DT", {Ty::DT, Ty::DT, Ty::TIME, false}},         {"CONCAT_DATE_TOD", {Ty::DATE, Ty::TOD, Ty::DT, true}}};
+    auto it = k.find(u);
+    if (it == k.end()) return std::nullopt;
+    return it->second;
+  }
+  void time_arith(const Tok& op, const TimeFn& f) {
+    need_cr(op);
+    if (cr_.lit) type_cr(m_.elem(f.in1), op);
+    if (cr_ty() != f.in1) fail(op, op.text + " takes a " + ty_info(f.in1).name + " first, this result is " + m_.type_name(cr_.type));
+    Tok k = peek();
+    Val v = operand("b");
+    Operand b = value_as(v, m_.elem(f.in2), k, "b", op.text.c_str());
+    Operand d = acc(f.out);
+    typed(f.add ? Op::TADD : Op::TSUB, Ty::LINT, cr_.o, b, d);  // ns: LINT arithmetic on the cells
+    set_cr(m_.elem(f.out), d);
   }
   bool is_function(const std::string& u) const {
     int p = m_.find_pou(u);
@@ -1630,15 +1723,19 @@ class Reader {
       copy_value(var.type, src, v.ref, k);
     }
   }
-  // R_TRIG F_TRIG SR RS as MatIEC computes them (lib/iec_std_FB.h):
+  // The standard blocks as MatIEC computes them (lib/iec_std_FB.h, the C of
+  // lib/*.txt), in typed instructions:
   //   R_TRIG  Q := CLK AND NOT M; M := CLK
   //   F_TRIG  Q := NOT CLK AND NOT M; M := NOT CLK
   //   SR      Q1 := S1 OR (NOT R AND Q1)
   //   RS      Q1 := NOT R1 AND (S OR Q1)
+  //   SEMA    Q_INTERNAL := CLAIM OR (Q_INTERNAL AND NOT RELEASE); BUSY := Q_INTERNAL
+  //   RTC, CTU* CTD* CTUD*: rtc(), counter()
   void std_call(const std::string& kind, const model::Ref& inst, const std::vector<std::pair<Tok, Val>>& in,
                 const std::vector<std::pair<Tok, size_t>>& out) {
     ensure_rung();
-    const size_t ninputs = kind == "R_TRIG" || kind == "F_TRIG" ? 1 : kind[0] == 'C' ? 3 : 2;
+    const StdFb& fb = std_fbs().at(kind);
+    const size_t ninputs = fb.inputs;
     const Type& t = m_.type(inst.type);
     auto mem = [&](const char* n) { return operand_of(m_, m_.select_member(inst, n, here_)); };
     for (const auto& [n, v] : in) {
@@ -1664,12 +1761,22 @@ class Reader {
       typed(Op::TOR, Ty::BOOL, mem("S"), mem("Q1"), h);
       typed(Op::TNOT, Ty::BOOL, mem("R1"), g);
       typed(Op::TAND, Ty::BOOL, g, h, mem("Q1"));
+    } else if (kind == "SEMA") {
+      typed(Op::TNOT, Ty::BOOL, mem("RELEASE"), h);
+      typed(Op::TAND, Ty::BOOL, mem("Q_INTERNAL"), h, h);
+      typed(Op::TOR, Ty::BOOL, mem("CLAIM"), h, mem("Q_INTERNAL"));
+      typed(Op::TMOVE, Ty::BOOL, mem("Q_INTERNAL"), mem("BUSY"));
+    } else if (kind == "RTC") {
+      rtc(mem);
+    } else if (kind.rfind("CT", 0) == 0) {
+      counter(kind, fb.vars[ninputs - 1].second, mem);
     } else {
-      timer_counter(kind, inst, mem);
+      timer(kind, inst, mem);
     }
     for (const auto& [n, at] : out) {
       const Member* mb = m_.member(inst.type, n.text);
-      if (!mb || size_t(mb - t.members.data()) < ninputs || upper(n.text) == "M") fail(n, kind + " has no output '" + n.text + "'");
+      size_t i = mb ? size_t(mb - t.members.data()) : 0;
+      if (!mb || i < ninputs || i >= ninputs + fb.outputs) fail(n, kind + " has no output '" + n.text + "'");
       TypeId mt = mb->type;
       size_t save = pos_;
       pos_ = at;
@@ -1681,57 +1788,163 @@ class Reader {
       copy_value(mt, m_.select_member(inst, n.text, loc(n)), v.ref, k);
     }
   }
+  // `edge` := clk AND NOT mem; mem := clk (the R_TRIG a MatIEC counter calls first)
+  template <class Mem>
+  Operand rising(Mem mem, const char* clk, const char* memory, const char* key) {
+    Operand e = scratch(key, Ty::BOOL);
+    typed(Op::TNOT, Ty::BOOL, mem(memory), e);
+    typed(Op::TAND, Ty::BOOL, mem(clk), e, e);
+    typed(Op::TMOVE, Ty::BOOL, mem(clk), mem(memory));
+    return e;
+  }
+  // MatIEC's counters (lib/counter.txt), of CV's and PV's type t:
+  //   CTU   CU_T(CU); IF R THEN CV := 0 ELSIF CU_T.Q AND (CV < PV) THEN CV := CV+1 END_IF; Q := CV >= PV
+  //   CTD   CD_T(CD); IF LD THEN CV := PV ELSIF CD_T.Q AND (CV > 0) THEN CV := CV-1 END_IF; Q := CV <= 0
+  //   CTUD  CD_T(CD); CU_T(CU); IF R THEN CV := 0 ELSIF LD THEN CV := PV
+  //         ELSIF NOT (CU_T.Q AND CD_T.Q) THEN (IF CU_T.Q AND CV < PV THEN CV := CV+1
+  //         ELSIF CD_T.Q AND CV > 0 THEN CV := CV-1); QU := CV >= PV; QD := CV <= 0
+  // so CV stops at PV counting up and at 0 counting down: it never wraps.
+  template <class Mem>
+  void counter(const std::string& kind, Ty t, Mem mem) {
+    const Operand zero = Operand::typed_const(0), one = Operand::typed_const(1);
+    bool up = kind.rfind("CTUD", 0) != 0 && kind.rfind("CTU", 0) == 0, down = kind.rfind("CTD", 0) == 0;
+    if (up) {
+      Operand cu = rising(mem, "CU", "CU_T", "cu_t");
+      emit(Op::LOAD, mem("R"));
+      typed(Op::TMOVE, t, zero, mem("CV"));
+      emit(Op::MPP);
+      typed(Op::TLT, t, mem("CV"), mem("PV"));
+      emit(Op::AND, cu);
+      emit(Op::ANDN, mem("R"));
+      typed(Op::TADD, t, mem("CV"), one, mem("CV"));
+      emit(Op::MPP);
+      typed(Op::TGE, t, mem("CV"), mem("PV"));
+      emit(Op::OUT, mem("Q"));
+      emit(Op::MPP);
+      return;
+    }
+    if (down) {
+      Operand cd = rising(mem, "CD", "CD_T", "cd_t");
+      emit(Op::LOAD, mem("LD"));
+      typed(Op::TMOVE, t, mem("PV"), mem("CV"));
+      emit(Op::MPP);
+      typed(Op::TGT, t, mem("CV"), zero);
+      emit(Op::AND, cd);
+      emit(Op::ANDN, mem("LD"));
+      typed(Op::TSUB, t, mem("CV"), one, mem("CV"));
+      emit(Op::MPP);
+      typed(Op::TLE, t, mem("CV"), zero);
+      emit(Op::OUT, mem("Q"));
+      emit(Op::MPP);
+      return;
+    }
+    Operand cd = rising(mem, "CD", "CD_T", "cd_t"), cu = rising(mem, "CU", "CU_T", "cu_t");
+    emit(Op::LOAD, mem("R"));
+    typed(Op::TMOVE, t, zero, mem("CV"));
+    emit(Op::MPP);
+    emit(Op::LOAD, mem("LD"));
+    emit(Op::ANDN, mem("R"));
+    typed(Op::TMOVE, t, mem("PV"), mem("CV"));
+    emit(Op::MPP);
+    // the two branches exclude each other (CU_T.Q and not, CD_T.Q and not), so
+    // the second reads CV as the first found it
+    typed(Op::TLT, t, mem("CV"), mem("PV"));
+    emit(Op::AND, cu);
+    emit(Op::ANDN, cd);
+    emit(Op::ANDN, mem("R"));
+    emit(Op::ANDN, mem("LD"));
+    typed(Op::TADD, t, mem("CV"), one, mem("CV"));
+    emit(Op::MPP);
+    typed(Op::TGT, t, mem("CV"), zero);
+    emit(Op::AND, cd);
+    emit(Op::ANDN, cu);
+    emit(Op::ANDN, mem("R"));
+    emit(Op::ANDN, mem("LD"));
+    typed(Op::TSUB, t, mem("CV"), one, mem("CV"));
+    emit(Op::MPP);
+    typed(Op::TGE, t, mem("CV"), mem("PV"));
+    emit(Op::OUT, mem("QU"));
+    emit(Op::MPP);
+    typed(Op::TLE, t, mem("CV"), zero);
+    emit(Op::OUT, mem("QD"));
+    emit(Op::MPP);
+  }
+  // MatIEC's RTC (lib/rtc.txt): CURRENT_TIME := the clock;
+  //   IF IN THEN (IF NOT PREV_IN THEN OFFSET := PDT - CURRENT_TIME); CDT := CURRENT_TIME + OFFSET
+  //   ELSE CDT := CURRENT_TIME; Q := IN; PREV_IN := IN
+  // The clock is ldrun's scan clock (clock_rung): DT#1970-01-01-00:00:00 plus
+  // the simulated time since the first scan.  DT and TIME are both signed
+  // nanoseconds, so __time_sub and __time_add are LINT arithmetic on them.
+  template <class Mem>
+  void rtc(Mem mem) {
+    typed(Op::TMOVE, Ty::DT, clock_cell(), mem("CURRENT_TIME"));
+    Operand h = scratch("rtc_rise", Ty::BOOL);
+    typed(Op::TNOT, Ty::BOOL, mem("PREV_IN"), h);
+    typed(Op::TAND, Ty::BOOL, mem("IN"), h, h);
+    emit(Op::LOAD, h);
+    typed(Op::TSUB, Ty::LINT, mem("PDT"), mem("CURRENT_TIME"), mem("OFFSET"));
+    emit(Op::MPP);
+    emit(Op::LOAD, mem("IN"));
+    typed(Op::TADD, Ty::LINT, mem("CURRENT_TIME"), mem("OFFSET"), mem("CDT"));
+    emit(Op::MPP);
+    emit(Op::LOADN, mem("IN"));
+    typed(Op::TMOVE, Ty::DT, mem("CURRENT_TIME"), mem("CDT"));
+    emit(Op::MPP);
+    typed(Op::TMOVE, Ty::BOOL, mem("IN"), mem("Q"));
+    typed(Op::TMOVE, Ty::BOOL, mem("IN"), mem("PREV_IN"));
+  }
+  Operand clock_cell() { return scratch("rtc_clock", Ty::DT); }
+  // The scan clock of an RTC, first in the program: a hidden TON that runs
+  // every scan (IN always on, its preset the largest) gives this scan's dt in
+  // its ET, which is added to the clock (ns) and cleared.  Its first scan is
+  // the TON's rising one, ET 0: the clock is 0 on the first scan and then the
+  // sum of the dt of the scans after it.
+  void clock_rung() {
+    if (next_timer_ >= device_count(Dev::T)) fail(here_, "more than " + std::to_string(device_count(Dev::T)) + " timers (RTC's clock takes one)");
+    uint32_t n = next_timer_++;
+    start_rung();
+    Operand pt{OpdKind::ConstInt};
+    pt.ival = INT32_MAX;
+    emit(Op::TON, Operand{OpdKind::Timer, Area::Sys, n}, pt);
+    Operand et{OpdKind::Int, Area::TW, n}, ns = scratch("rtc_dt", Ty::LINT);
+    typed(Op::TCONV, Ty::LINT, et, ns, {}, Ty::DINT);
+    typed(Op::TMUL, Ty::LINT, ns, Operand::typed_const(1000000), ns);
+    typed(Op::TADD, Ty::LINT, clock_cell(), ns, clock_cell());
+    typed(Op::TMOVE, Ty::DINT, Operand::typed_const(0), et);
+    rung_ = nullptr;
+  }
   static std::string input_names(const Type& t, size_t n) {
     std::string s;
     for (size_t i = 0; i < n; i++) s += (i ? ", " : "") + t.members[i].name;
     return s;
   }
-  // TON TOF TP CTU CTD on ldc's timers and counters (docs/il.md), one device
-  // per instance, as the classic reader maps them; the instance's Q, ET, CV
-  // are copied from the device after the call (ET: ms to TIME's ns).
-  std::map<uint64_t, uint32_t> devices_;  // (kind, instance place) -> T or C number
-  uint32_t next_timer_ = 0, next_counter_ = 0;
+  // TON TOF TP on ldc's timers (docs/il.md), one device per instance, as the
+  // classic reader maps them; the instance's Q and ET are copied from the
+  // device after the call (ET: ms to TIME's ns).
+  std::map<uint64_t, uint32_t> devices_;  // instance place -> T number
+  uint32_t next_timer_ = 0;
   template <class Mem>
-  void timer_counter(const std::string& kind, const model::Ref& inst, Mem mem) {
-    bool timer = kind[0] == 'T';
-    uint64_t key = (uint64_t(timer) << 63) | (uint64_t(inst.at.bit) << 32) | inst.at.cell;
+  void timer(const std::string& kind, const model::Ref& inst, Mem mem) {
+    uint64_t key = (uint64_t(inst.at.bit) << 32) | inst.at.cell;
     auto it = devices_.find(key);
     if (it == devices_.end()) {
-      uint32_t& next = timer ? next_timer_ : next_counter_;
-      if (next >= device_count(timer ? Dev::T : Dev::C))
-        fail(here_, std::string("more than ") + std::to_string(device_count(Dev::T)) + (timer ? " timer" : " counter") + " instances");
-      it = devices_.emplace(key, next++).first;
+      if (next_timer_ >= device_count(Dev::T)) fail(here_, std::string("more than ") + std::to_string(device_count(Dev::T)) + " timer instances");
+      it = devices_.emplace(key, next_timer_++).first;
     }
     uint32_t n = it->second;
-    if (timer) {
-      // PT in whole ms, rounded up: ldc's timers count whole ms of dt, and
-      // ET >= 3.5 ms holds exactly when ET >= 4 ms (TIME is ns; read as a LINT)
-      Operand ns = scratch("ptns", Ty::LINT), ms = scratch("pt", Ty::DINT);
-      typed(Op::TADD, Ty::LINT, mem("PT"), Operand::typed_const(999999), ns);
-      typed(Op::TDIV, Ty::LINT, ns, Operand::typed_const(1000000), ns);
-      typed(Op::TCONV, Ty::DINT, ns, ms, {}, Ty::LINT);
-      emit(Op::LOAD, mem("IN"));
-      emit(kind == "TON" ? Op::TON : kind == "TOF" ? Op::TOF : Op::TP, Operand{OpdKind::Timer, Area::Sys, n}, ms);
-      emit(Op::MPP);
-      typed(Op::TMOVE, Ty::BOOL, Operand{OpdKind::Bit, Area::TQ, n}, mem("Q"));
-      Operand et = scratch("etns", Ty::LINT);  // ET: the timer's ms as ns
-      typed(Op::TCONV, Ty::LINT, Operand{OpdKind::Int, Area::TW, n}, et, {}, Ty::DINT);
-      typed(Op::TMUL, Ty::LINT, et, Operand::typed_const(1000000), mem("ET"));
-      return;
-    }
-    Operand c{OpdKind::Counter, Area::Sys, n};
-    bool up = kind == "CTU";
-    Operand rst = mem(up ? "R" : "LD"), cnt = mem(up ? "CU" : "CD");
-    emit(Op::LOAD, rst);  // R resets (LD loads PV) before counting, as IEC's CTU/CTD
-    if (up) emit(Op::RSTC, c);
-    else emit(Op::MOV, mem("PV"), Operand{OpdKind::Int, Area::CW, n});
+    // PT in whole ms, rounded up: ldc's timers count whole ms of dt, and
+    // ET >= 3.5 ms holds exactly when ET >= 4 ms (TIME is ns; read as a LINT)
+    Operand ns = scratch("ptns", Ty::LINT), ms = scratch("pt", Ty::DINT);
+    typed(Op::TADD, Ty::LINT, mem("PT"), Operand::typed_const(999999), ns);
+    typed(Op::TDIV, Ty::LINT, ns, Operand::typed_const(1000000), ns);
+    typed(Op::TCONV, Ty::DINT, ns, ms, {}, Ty::LINT);
+    emit(Op::LOAD, mem("IN"));
+    emit(kind == "TON" ? Op::TON : kind == "TOF" ? Op::TOF : Op::TP, Operand{OpdKind::Timer, Area::Sys, n}, ms);
     emit(Op::MPP);
-    emit(Op::LOADP, cnt, Operand{OpdKind::Edge});
-    emit(Op::ANDN, rst);
-    emit(up ? Op::CTU : Op::CTD, c, mem("PV"), Operand{OpdKind::Edge});
-    emit(Op::MPP);
-    typed(Op::TMOVE, Ty::BOOL, Operand{OpdKind::Bit, Area::CQ, n}, mem("Q"));
-    typed(Op::TMOVE, Ty::INT, Operand{OpdKind::Int, Area::CW, n}, mem("CV"));
+    typed(Op::TMOVE, Ty::BOOL, Operand{OpdKind::Bit, Area::TQ, n}, mem("Q"));
+    Operand et = scratch("etns", Ty::LINT);  // ET: the timer's ms as ns
+    typed(Op::TCONV, Ty::LINT, Operand{OpdKind::Int, Area::TW, n}, et, {}, Ty::DINT);
+    typed(Op::TMUL, Ty::LINT, et, Operand::typed_const(1000000), mem("ET"));
   }
 
   static int var_index(const Pou& p, const std::string& name) {
@@ -1835,6 +2048,65 @@ class Reader {
     Operand d = acc(t);
     typed(o, t, cr_.o, d);
     cr_.o = d;
+  }
+
+  // BCD conversions as MatIEC's __uint_to_bcd and __bcd_to_uint
+  // (lib/C/iec_std_lib.h), unrolled over the digits in 64 bits:
+  //   X_TO_BCD_Y  res := 0; for digit k: res := res OR ((IN MOD 10) SHL 4k); IN := IN / 10
+  //               then (Y)res: a digit beyond Y's width is cut off.  MatIEC
+  //               shifts a 17th..20th digit of a ULINT by 64 and more (C leaves
+  //               that undefined); ldc's SHL gives 0 there (docs/il.md), so they
+  //               are dropped.
+  //   X_BCD_TO_Y  a nibble above 9 (__test_bcd): 0, ENO FALSE (ldc: S0 set);
+  //               else sum(nibble_k * 10^k), then (Y): modulo Y's width
+  void bcd(const Tok& op, const Bcd& b) {
+    need_cr(op);
+    Ty from = b.from;
+    if (cr_.lit) type_cr(m_.elem(from != Ty::None ? from : Ty::LWORD), op);
+    if (from == Ty::None) {
+      from = cr_ty();
+      if (from == Ty::None || ty_info(from).kind != TyKind::Bits)
+        fail(op, op.text + " converts a bit string (BYTE .. LWORD), this result is " + m_.type_name(cr_.type));
+    }
+    if (cr_ty() != from) fail(op, op.text + " converts a " + ty_info(from).name + ", this result is " + m_.type_name(cr_.type));
+    const int bits = ty_info(from).bits;
+    Operand x = scratch("bcd_x", Ty::ULINT), res = scratch("bcd_r", Ty::ULINT), dig = scratch("bcd_d", Ty::ULINT);
+    typed(Op::TCONV, Ty::ULINT, cr_.o, x, {}, from);
+    typed(Op::TMOVE, Ty::ULINT, Operand::typed_const(0), res);
+    if (b.to_bcd) {
+      // the digits of the largest value of `from`: 3 5 10 20
+      const int digits = bits == 8 ? 3 : bits == 16 ? 5 : bits == 32 ? 10 : 20;
+      for (int k = 0; k < digits; k++) {
+        typed(Op::TMOD, Ty::ULINT, x, Operand::typed_const(10), dig);
+        typed(Op::TDIV, Ty::ULINT, x, Operand::typed_const(10), x);
+        typed(Op::TSHL, Ty::LWORD, dig, Operand::typed_const(uint64_t(4 * k)), dig, Ty::USINT);
+        typed(Op::TOR, Ty::LWORD, res, dig, res);
+      }
+      Operand d = acc(b.to);
+      typed(Op::TCONV, b.to, res, d, {}, Ty::LWORD);
+      set_cr(m_.elem(b.to), d);
+      return;
+    }
+    // Horner from the highest nibble: res := res * 10 + nibble; bad := nibble > 9
+    Operand bad = scratch("bcd_bad", Ty::BOOL);
+    typed(Op::TMOVE, Ty::BOOL, Operand::typed_const(0), bad);
+    for (int k = bits / 4 - 1; k >= 0; k--) {
+      typed(Op::TSHR, Ty::LWORD, x, Operand::typed_const(uint64_t(4 * k)), dig, Ty::USINT);
+      typed(Op::TAND, Ty::LWORD, dig, Operand::typed_const(15), dig);
+      typed(Op::TGT, Ty::ULINT, dig, Operand::typed_const(9));
+      emit(Op::OR, bad);
+      emit(Op::OUT, bad);
+      emit(Op::MPP);
+      typed(Op::TMUL, Ty::ULINT, res, Operand::typed_const(10), res);
+      typed(Op::TADD, Ty::ULINT, res, dig, res);
+    }
+    Operand d = acc(b.to);
+    typed(Op::TCONV, b.to, res, d, {}, Ty::ULINT);
+    emit(Op::LOAD, bad);
+    typed(Op::TMOVE, b.to, Operand::typed_const(0), d);
+    emit(Op::SET, Operand{OpdKind::Bit, Area::S, kBitError});
+    emit(Op::MPP);
+    set_cr(m_.elem(b.to), d);
   }
 
   // MIN MAX (extensible), LIMIT, SEL; the CR is the first input
