@@ -236,7 +236,7 @@ def run():
         r += [lo_hi(g("ud_lint").cv)[0], g("ud_lint").qu, g("ud_lint").qd]
         r += [g("ud_dint").cv, g("ud_dint").qu, g("ud_dint").qd]
         r += [busy, rtc.q, cdt_s, cdt_ms]
-        r += [as_dint(c_cast(uint_to_bcd(x), "DWORD"))] + lo_hi(bxl)
+        r += [c_cast(uint_to_bcd(x), "DWORD")] + lo_hi(bxl)  # a DWORD: watched unsigned
         r += [c_cast(uint_to_bcd(c_cast(x, "USINT")), "BYTE"), c_cast(uint_to_bcd(c_cast(x, "UINT")), "WORD")]
         r += [as_dint(bcd_to(bb, "UDINT")), bcd_to(bb, "USINT"), bcd_to(bb & 0xFFFF, "UINT")]
         r += lo_hi(bcd_to(0x9999999999999999, "ULINT")) + lo_hi(uint_to_bcd(ULINT_MAX))
