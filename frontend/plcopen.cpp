@@ -153,6 +153,14 @@ struct Var {
   std::string address;
   const Element* el = nullptr;
   std::string pou;  // "" for globals
+  // An instance of one of the project's FUNCTION_BLOCKs (or a FUNCTION call's
+  // frame): its own variables, each a Var named INSTANCE.MEMBER (upper member
+  // name -> member); its VAR_IN_OUT names, bound to the caller's variable at
+  // each call (by reference).
+  std::map<std::string, Var*> members;
+  std::set<std::string> inouts;
+  std::string section;   // the interface section it is declared in (inputVars ...)
+  bool frame = false;    // a member of a function call's frame: no alias
 };
 
 FbKind fb_kind(const std::string& t) {
@@ -195,6 +203,7 @@ struct Node {
   bool negated = false, negated_in = false;
   std::string edge, storage;
   std::string type, instance;  // block
+  std::vector<Pin> inouts;     // block: in-out parameters (VAR_IN_OUT of a user POU)
 };
 
 struct Out {  // a block output as its consumers see it
@@ -220,6 +229,9 @@ class Importer {
   std::map<std::string, Var*> globals_;  // upper-case name
   std::map<std::string, const Element*> pou_lang_el_;
   std::map<std::string, std::string> pou_lang_;  // upper POU name -> body language
+  std::map<std::string, const Element*> pou_el_;  // upper POU name -> <pou>
+  std::set<std::string> called_;                  // upper POU names some block calls
+  std::vector<std::string> call_stack_;           // POUs being expanded, outermost first (as written)
   std::set<std::pair<int, uint32_t>> used_;
   uint32_t next_[11] = {};
 
@@ -279,6 +291,12 @@ class Importer {
 
   // declarations
   void declare(const Element* list, const std::string& pou, bool global);
+  std::unique_ptr<Var> make_var(const Element* v, const std::string& name, const std::string& pou, bool constant);
+  void instantiate(Var& inst, const Element* fb, std::vector<std::string>& stack);
+  const Element* user_pou(const std::string& type) const;
+  std::string pou_type(const Element* pou) const { return pou->attr("pouType") ? *pou->attr("pouType") : "program"; }
+  void place(Var& v);
+  Var* member_path(const std::string& expr, const Element* el, std::string* last);
   void allocate();
   uint32_t take(Dev d, const Element* el);
   uint32_t temp_m(const Element* el) {
@@ -326,13 +344,17 @@ class Importer {
   std::string new_label();
 
   // the body
-  void body(const Element* pou, const Element* ld);
+  void body(const Element* ld, const std::string& title);
   void read_node(const Element* e);
   void read_conns(const Element* cpi, std::vector<Conn>& out);
   const Node& node(const Conn& c);
   bool is_bool_source(const Conn& c, int depth = 0);
   bool out_is_bool(const Node& b, const std::string& pin, int depth = 0);
   void refuse_user_pou(const Node& b);
+  void user_call(const Node& b, const Element* callee);
+  bool user_out_is_bool(const Node& b, const Element* callee, const std::string& pin);
+  const Element* callee_var(const Element* callee, const std::string& name, std::string* section);
+  const Element* callee_graph(const Node& b, const Element* callee);
   template <typename E>
   Cond node_values(std::vector<E*>& left, int nn, int sink, const Element* consumer);
   Cond bool_expr(const std::vector<Conn>& conns, bool order, const Element* consumer);
@@ -417,31 +439,125 @@ uint32_t Importer::take(Dev d, const Element* el) {
   return n++;
 }
 
+// A variable of an interface section (or a member of an instance): its type,
+// initial value and address as written.
+std::unique_ptr<Var> Importer::make_var(const Element* v, const std::string& name, const std::string& pou, bool constant) {
+  auto u = std::make_unique<Var>();
+  u->name = name;
+  u->el = v;
+  u->pou = pou;
+  u->constant = constant;
+  if (auto a = v->attr("address")) u->address = *a;
+  const Element* t = v->child("type");
+  if (!t || t->children.empty()) fail_at(v, "variable '" + name + "' has no type");
+  const Element* te = t->children[0].get();
+  if (te->local_name() == "derived") {
+    u->derived = true;
+    u->type = te->attr("name") ? *te->attr("name") : "";
+  } else {
+    u->type = upper(te->local_name());
+  }
+  u->it = u->derived ? IT::None : iec_type_named(u->type);
+  u->ty = kind_of(u->it);
+  if (const Element* iv = v->child("initialValue"))
+    if (const Element* sv = iv->child("simpleValue"))
+      if (auto val = sv->attr("value")) u->init = *val;
+  return u;
+}
+
+// The project's FUNCTION_BLOCK or FUNCTION named `type`, else nullptr.
+const Element* Importer::user_pou(const std::string& type) const {
+  auto it = pou_el_.find(upper(type));
+  if (it == pou_el_.end()) return nullptr;
+  std::string k = pou_type(it->second);
+  return k == "functionBlock" || k == "function" ? it->second : nullptr;
+}
+
+// The members of an instance of the project's FUNCTION_BLOCK `fb` (or of a
+// FUNCTION's frame): every variable of its interface, named INSTANCE.MEMBER,
+// nested instances too (`stack`: the FBs being instantiated, to refuse an FB
+// that contains itself).  VAR_IN_OUT members are bound at each call; a
+// VAR_EXTERNAL is the global of that name.
+void Importer::instantiate(Var& inst, const Element* fb, std::vector<std::string>& stack) {
+  std::string fname = *fb->attr("name");
+  if (std::find(stack.begin(), stack.end(), upper(fname)) != stack.end()) {
+    std::string cycle;
+    for (auto it = std::find(stack.begin(), stack.end(), upper(fname)); it != stack.end(); ++it) cycle += *pou_el_.at(*it)->attr("name") + " -> ";
+    fail_at(inst.el, "recursion: " + cycle + fname + " (function block '" + fname + "' contains an instance of itself, through '" + inst.name +
+                         "'; an instance's memory would be infinite)");
+  }
+  stack.push_back(upper(fname));
+  const Element* itf = fb->child("interface");
+  if (!itf) {
+    stack.pop_back();
+    return;
+  }
+  for (const auto& sec : itf->children) {
+    std::string s(sec->local_name());
+    bool constant = sec->attr("constant") && (*sec->attr("constant") == "true" || *sec->attr("constant") == "1");
+    if (s == "returnType") {
+      if (sec->children.empty()) continue;
+      auto u = std::make_unique<Var>();
+      u->name = inst.name + "." + fname;
+      u->el = sec.get();
+      u->pou = inst.pou;
+      const Element* te = sec->children[0].get();
+      u->derived = te->local_name() == "derived";
+      u->type = u->derived ? (te->attr("name") ? *te->attr("name") : "") : upper(te->local_name());
+      u->it = u->derived ? IT::None : iec_type_named(u->type);
+      u->ty = kind_of(u->it);
+      u->section = s;
+      u->frame = inst.frame;
+      inst.members[upper(fname)] = u.get();
+      vars_.push_back(std::move(u));
+      continue;
+    }
+    if (s != "inputVars" && s != "outputVars" && s != "inOutVars" && s != "localVars" && s != "tempVars" && s != "externalVars") {
+      if (s != "documentation" && s != "addData") fail_at(sec.get(), "unknown interface section <" + sec->name + "> (" + sec->path() + ")");
+      continue;
+    }
+    for (const Element* v : sec->children_named("variable")) {
+      const std::string* nm = v->attr("name");
+      if (!nm || nm->empty()) fail_at(v, "variable without a name (" + v->path() + ")");
+      std::string key = upper(*nm);
+      if (inst.members.count(key) || inst.inouts.count(key)) fail_at(v, "variable '" + *nm + "' is declared twice in POU '" + fname + "'");
+      if (s == "inOutVars") {
+        inst.inouts.insert(key);
+        continue;
+      }
+      if (s == "externalVars") {
+        auto g = globals_.find(key);
+        if (g == globals_.end()) fail_at(v, "external variable '" + *nm + "' of POU '" + fname + "' is not a global variable of the project");
+        inst.members[key] = g->second;
+        continue;
+      }
+      auto u = make_var(v, inst.name + "." + *nm, inst.pou, constant);
+      if (!u->address.empty())
+        fail_at(v, "variable '" + *nm + "' of " + pou_type(fb) + " '" + fname + "' is located at " + u->address +
+                       "; ldc locates the variables of programs and globals only");
+      u->section = s;
+      u->frame = inst.frame;
+      Var* raw = u.get();
+      vars_.push_back(std::move(u));
+      inst.members[key] = raw;
+      if (raw->derived)
+        if (const Element* sub = user_pou(raw->type)) {
+          if (pou_type(sub) != "functionBlock") fail_at(v, "variable '" + *nm + "' has the type of FUNCTION '" + raw->type + "'; only a FUNCTION_BLOCK has instances");
+          raw->frame = inst.frame;
+          instantiate(*raw, sub, stack);
+        }
+    }
+  }
+  stack.pop_back();
+}
+
 void Importer::declare(const Element* list, const std::string& pou, bool global) {
   bool constant = list->attr("constant") && (*list->attr("constant") == "true" || *list->attr("constant") == "1");
   for (const Element* v : list->children_named("variable")) {
-    auto u = std::make_unique<Var>();
     const std::string* nm = v->attr("name");
     if (!nm || nm->empty()) fail_at(v, "variable without a name (" + v->path() + ")");
-    u->name = *nm;
-    u->el = v;
-    u->pou = global ? "" : pou;
-    u->constant = constant;
-    if (auto a = v->attr("address")) u->address = *a;
-    const Element* t = v->child("type");
-    if (!t || t->children.empty()) fail_at(v, "variable '" + *nm + "' has no type");
-    const Element* te = t->children[0].get();
-    if (te->local_name() == "derived") {
-      u->derived = true;
-      u->type = te->attr("name") ? *te->attr("name") : "";
-    } else {
-      u->type = upper(te->local_name());
-    }
-    u->it = u->derived ? IT::None : iec_type_named(u->type);
-    u->ty = kind_of(u->it);
-    if (const Element* iv = v->child("initialValue"))
-      if (const Element* sv = iv->child("simpleValue"))
-        if (auto val = sv->attr("value")) u->init = *val;
+    auto u = make_var(v, *nm, global ? "" : pou, constant);
+    u->section = std::string(list->local_name());
     Var* raw = u.get();
     vars_.push_back(std::move(u));
     std::string key = upper(*nm);
@@ -452,6 +568,13 @@ void Importer::declare(const Element* list, const std::string& pou, bool global)
       if (scope_.count(key)) fail_at(v, "variable '" + *nm + "' is declared twice in POU '" + pou + "'");
       scope_[key] = raw;
     }
+    if (raw->derived)
+      if (const Element* fb = user_pou(raw->type)) {
+        if (pou_type(fb) != "functionBlock") fail_at(v, "variable '" + *nm + "' has the type of FUNCTION '" + raw->type + "'; only a FUNCTION_BLOCK has instances");
+        std::vector<std::string> stack;
+        if (!global) stack.push_back(upper(pou));
+        instantiate(*raw, fb, stack);
+      }
   }
 }
 
@@ -485,22 +608,25 @@ void Importer::allocate() {
     v->dev = location(*v);
     used_.insert({int(v->dev->dev), v->dev->index});
   }
-  for (auto& v : vars_) {
-    if (v->dev || v->constant) continue;
-    if (v->derived) {
-      FbKind k = fb_kind(v->type);
-      if (k == FbKind::Timer) v->dev = DeviceRef{Dev::T, take(Dev::T, v->el)};
-      else if (k == FbKind::Counter) {
-        v->dev = DeviceRef{Dev::C, take(Dev::C, v->el)};
-        if (v->type == "CTUD") v->aux = take(Dev::M, v->el), v->aux2 = take(Dev::M, v->el);
-      } else if (k != FbKind::None) v->dev = DeviceRef{Dev::M, take(Dev::M, v->el)};
-      continue;  // other derived types get nothing; using them is an error
-    }
-    if (v->ty == Ty::Bool) v->dev = DeviceRef{Dev::M, take(Dev::M, v->el)};
-    else if (v->ty == Ty::Int) v->dev = DeviceRef{Dev::D, take(Dev::D, v->el)};
-    else if (v->ty == Ty::Wide) v->dev = DeviceRef{Dev::D, take_run(Dev::D, 2, v->el)};
-    else if (v->ty == Ty::Real) v->dev = DeviceRef{Dev::F, take(Dev::F, v->el)};
+  for (auto& v : vars_) place(*v);
+}
+
+// An unlocated variable's devices (a standard FB instance: its T, C or M).
+void Importer::place(Var& v) {
+  if (v.dev || v.constant) return;
+  if (v.derived) {
+    FbKind k = fb_kind(v.type);
+    if (k == FbKind::Timer) v.dev = DeviceRef{Dev::T, take(Dev::T, v.el)};
+    else if (k == FbKind::Counter) {
+      v.dev = DeviceRef{Dev::C, take(Dev::C, v.el)};
+      if (v.type == "CTUD") v.aux = take(Dev::M, v.el), v.aux2 = take(Dev::M, v.el);
+    } else if (k != FbKind::None) v.dev = DeviceRef{Dev::M, take(Dev::M, v.el)};
+    return;  // other derived types get nothing (a user FB's instance: its members do); using them is an error
   }
+  if (v.ty == Ty::Bool) v.dev = DeviceRef{Dev::M, take(Dev::M, v.el)};
+  else if (v.ty == Ty::Int) v.dev = DeviceRef{Dev::D, take(Dev::D, v.el)};
+  else if (v.ty == Ty::Wide) v.dev = DeviceRef{Dev::D, take_run(Dev::D, 2, v.el)};
+  else if (v.ty == Ty::Real) v.dev = DeviceRef{Dev::F, take(Dev::F, v.el)};
 }
 
 Var* Importer::lookup(const std::string& name) {
@@ -517,13 +643,22 @@ Var* Importer::lookup(const std::string& name) {
 void Importer::aliases(TreeProgram& p) {
   std::map<std::string, int> count;
   for (auto& v : vars_)
-    if (v->dev) count[upper(v->name)]++;
+    if (v->dev && !v->frame) count[upper(v->name)]++;
   std::set<std::string> seen;
+  // a name, or an instance's member INSTANCE.MEMBER (each part a name)
+  auto dotted = [](const std::string& n) {
+    for (size_t a = 0;;) {
+      size_t d = n.find('.', a);
+      if (!is_identifier(n.substr(a, d == std::string::npos ? std::string::npos : d - a))) return false;
+      if (d == std::string::npos) return true;
+      a = d + 1;
+    }
+  };
   for (auto& v : vars_) {
-    if (!v->dev) continue;
+    if (!v->dev || v->frame) continue;
     std::string name = count[upper(v->name)] > 1 && !v->pou.empty() ? v->pou + "_" + v->name : v->name;
     std::string why, u = upper(name);
-    if (!is_identifier(name) || u == "DT" || seen.count(u) || parse_device(name) || parse_iec_address(name, why)) continue;
+    if (!dotted(name) || u == "DT" || seen.count(u) || parse_device(name) || parse_iec_address(name, why)) continue;
     seen.insert(u);
     p.aliases.push_back({name, *v->dev});
   }
@@ -617,9 +752,28 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
     return {shadowed(Operand{w == Area::F ? OpdKind::Real : OpdKind::Int, w, d->index}), w == Area::F ? Ty::Real : Ty::Int};
   }
   size_t dot = e.find('.');
+  Var* v = nullptr;
   if (dot != std::string::npos) {
-    Var* inst = lookup(e.substr(0, dot));
-    std::string m = upper(e.substr(dot + 1));
+    std::string last;
+    Var* inst = member_path(e, el, &last);
+    if (inst && user_pou(inst->type)) {  // a member of an instance of the project's own FB
+      auto it = inst->members.find(upper(last));
+      if (it == inst->members.end()) {
+        if (inst->inouts.count(upper(last)))
+          fail_at(el, "'" + e + "' is a VAR_IN_OUT of " + inst->type + ", bound to the caller's variable only during a call (" + where(el) + ")");
+        std::string known;
+        for (const auto& [k, mv] : inst->members) known += (known.empty() ? "" : ", ") + mv->name.substr(mv->name.rfind('.') + 1);
+        fail_at(el, "'" + e + "': " + inst->type + " has no variable '" + last + "' (it has " + known + ") in " + where(el));
+      }
+      v = it->second;
+      if (write && v->section == "outputVars")
+        fail_at(el, "'" + e + "' is an output of " + inst->type + "; only its body writes it (" + where(el) + ")");
+    }
+  }
+  if (!v && dot != std::string::npos) {
+    std::string m;
+    Var* inst = member_path(e, el, &m);
+    m = upper(m);
     if (!inst || !inst->derived || fb_kind(inst->type) == FbKind::None || !inst->dev)
       fail_at(el, "'" + e + "' is not a variable ldc knows (structures and arrays are not supported) in " + where(el));
     if (write) fail_at(el, "'" + e + "' is a function block output; it cannot be written (" + where(el) + ")");
@@ -634,7 +788,7 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
     if ((k == FbKind::Latch && m == "Q1") || (k == FbKind::Trig && m == "Q")) return {bit_opd(Area::M, i), Ty::Bool};
     fail_at(el, "'" + e + "': " + inst->type + " has no output " + m);
   }
-  Var* v = lookup(e);
+  if (!v) v = lookup(e);
   if (!v) fail_at(el, "unknown variable '" + e + "' in " + where(el));
   if (v->constant) {
     if (write) fail_at(el, "'" + e + "' is a constant; it cannot be written (" + where(el) + ")");
@@ -647,6 +801,29 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
   Val r = var_val(*v);
   r.o = shadowed(r.o);
   return r;
+}
+
+// The instance whose member `expr` (A.B.C) names, following the members of
+// the project's own FB instances: A.B, with *last = "C"; nullptr when A is no
+// variable.
+Var* Importer::member_path(const std::string& expr, const Element* el, std::string* last) {
+  size_t dot = expr.find('.');
+  Var* v = lookup(expr.substr(0, dot));
+  while (v) {
+    size_t next = expr.find('.', dot + 1);
+    if (next == std::string::npos) {
+      *last = expr.substr(dot + 1);
+      return v;
+    }
+    std::string seg = expr.substr(dot + 1, next - dot - 1);
+    auto it = v->members.find(upper(seg));
+    if (!user_pou(v->type) || it == v->members.end())
+      fail_at(el, "'" + expr + "': '" + v->name + "' has no member '" + seg + "' (" + where(el) + ")");
+    v = it->second;
+    dot = next;
+  }
+  *last = expr.substr(dot + 1);
+  return nullptr;
 }
 
 // A variable's device as a value.
@@ -1004,9 +1181,7 @@ void Importer::read_node(const Element* e) {
     };
     pins("inputVariables", n.inputs, true);
     pins("outputVariables", n.outputs, false);
-    if (const Element* io = e->child("inOutVariables"))
-      if (!io->children_named("variable").empty())
-        fail_at(io, "block " + n.type + " localId " + *id + " has in-out parameters, which ldc does not support (" + io->path() + ")");
+    pins("inOutVariables", n.inouts, true);
   } else {
     for (const Element* cpi : e->children_named("connectionPointIn")) read_conns(cpi, n.in);
   }
@@ -1023,6 +1198,8 @@ const Node& Importer::node(const Conn& c) {
 const Pin* Importer::out_pin(const Node& b, const Conn& c) {
   if (c.has_param) {
     for (const Pin& p : b.outputs)
+      if (p.name == c.param) return &p;
+    for (const Pin& p : b.inouts)
       if (p.name == c.param) return &p;
     if (c.param == "ENO") return nullptr;  // ENO need not be declared
     fail_at(c.el, "block " + b.type + " localId " + std::to_string(b.id) + " has no output '" + c.param + "' (" + c.el->path() + ")");
@@ -1067,8 +1244,9 @@ void Importer::refuse_user_pou(const Node& b) {
 
 bool Importer::out_is_bool(const Node& b, const std::string& pin, int depth) {
   std::string t = upper(b.type);
-  if (fb_kind(t) == FbKind::None) refuse_user_pou(b);
   if (pin == "ENO") return true;
+  if (const Element* callee = user_pou(t); callee && fb_kind(t) == FbKind::None) return user_out_is_bool(b, callee, pin);
+  if (fb_kind(t) == FbKind::None) refuse_user_pou(b);
   if (fb_kind(t) != FbKind::None) return !(pin == "ET" || pin == "CV");
   static const std::set<std::string> cmp = {"GT", "GE", "EQ", "NE", "LE", "LT"};
   if (cmp.count(t)) return true;
@@ -1303,6 +1481,16 @@ Out Importer::block_out(const Node& b, const Conn& c, bool order) {
   std::string name = p ? p->name : "ENO";
   auto it = outs_.find({b.id, name});
   bool in_loop = generating_.count(b.id) > 0;
+  const Element* callee = fb_kind(upper(b.type)) == FbKind::None ? user_pou(b.type) : nullptr;
+  if (it == outs_.end() && (!computed_.count(b.id) || in_loop) && callee && pou_type(callee) == "functionBlock" && name != "ENO") {
+    // the same for an instance of the project's own FB: its output variable
+    Var* inst = b.instance.empty() ? nullptr : lookup(b.instance);
+    if (inst && inst->members.count(upper(name)) && inst->members.at(upper(name))->dev) {
+      Val v = var_val(*inst->members.at(upper(name)));
+      outs_[{b.id, name}] = v.ty == Ty::Bool ? Out{true, bit_leaf(Op::LOAD, v.o, b.el), {}} : Out{false, {}, v};
+      it = outs_.find({b.id, name});
+    }
+  }
   if (it == outs_.end() && (!computed_.count(b.id) || in_loop) && fb_kind(upper(b.type)) != FbKind::None && name != "ENO") {
     // read before its execution order runs it, or where a loop of blocks closes
     // (Beremiz reads the instance's output there): a function block's outputs
@@ -1329,25 +1517,7 @@ Out Importer::block_out(const Node& b, const Conn& c, bool order) {
   return o;
 }
 
-void Importer::block(const Node& b) {
-  Nest leave{nest_ += kBlockNest, kBlockNest};
-  if (nest_ > kMaxNest)
-    fail_at(b.el, "blocks feed each other too deeply (more than " + std::to_string(kMaxNest / kBlockNest) + ", less with power flow between them) at " + where(b.el));
-  computed_.insert(b.id);
-  generating_.insert(b.id);
-  std::string t = upper(b.type);
-  if (fb_kind(t) != FbKind::None) {
-    Var* inst = b.instance.empty() ? nullptr : lookup(b.instance);
-    if (!inst) fail_at(b.el, t + " block localId " + std::to_string(b.id) + " needs an instance declared in the POU ('" + b.instance + "' is not) (" + b.el->path() + ")");
-    if (!inst->derived || upper(inst->type) != t)
-      fail_at(b.el, "instance '" + b.instance + "' is declared as " + inst->type + ", but block localId " + std::to_string(b.id) + " is a " + t);
-    fb_block(b, *inst);
-  } else {
-    refuse_user_pou(b);
-    fn_block(b);
-  }
-  generating_.erase(b.id);
-}
+// ------------------------------------------------------------------ calls of the project's own POUs
 
 // The pins of a block by name; absent pins have no connections.
 struct Pins {
@@ -1362,6 +1532,242 @@ struct Pins {
     return p && !p->conns.empty();
   }
 };
+
+
+// The declaration of variable `name` of POU `callee` (a FUNCTION's result:
+// its returnType), with its section; nullptr if it has none of that name.
+const Element* Importer::callee_var(const Element* callee, const std::string& name, std::string* section) {
+  const Element* itf = callee->child("interface");
+  if (!itf) return nullptr;
+  for (const auto& sec : itf->children) {
+    if (sec->local_name() == "returnType") {
+      if (upper(name) == "OUT" || upper(name) == upper(*callee->attr("name"))) {
+        *section = "returnType";
+        return sec.get();
+      }
+      continue;
+    }
+    for (const Element* v : sec->children_named("variable"))
+      if (v->attr("name") && upper(*v->attr("name")) == upper(name)) {
+        *section = std::string(sec->local_name());
+        return v;
+      }
+  }
+  return nullptr;
+}
+
+// The LD or FBD body of the project's POU that block b calls; another
+// language is refused, naming it.
+const Element* Importer::callee_graph(const Node& b, const Element* callee) {
+  const Element* body_el = callee->child("body");
+  const Element* graph = body_el ? (body_el->child("LD") ? body_el->child("LD") : body_el->child("FBD")) : nullptr;
+  if (!graph)
+    fail_at(b.el, "block '" + b.type + "' localId " + std::to_string(b.id) + (b.instance.empty() ? "" : " (instance " + b.instance + ")") + " calls " +
+                      (pou_type(callee) == "function" ? "function '" : "function block '") + *callee->attr("name") + "', written in " + pou_lang_[upper(*callee->attr("name"))] +
+                      "; ldc expands calls of the project's POUs written in LD or FBD (" + b.el->path() + ")");
+  return graph;
+}
+
+// Is output `pin` of a call of the project's POU `callee` BOOL?  (Its
+// declared type; an in-out's is the variable's it is bound to.)
+bool Importer::user_out_is_bool(const Node& b, const Element* callee, const std::string& pin) {
+  callee_graph(b, callee);  // a body ldc does not expand is refused first, by name
+  std::string section;
+  const Element* d = callee_var(callee, pin, &section);
+  if (!d) fail_at(b.el, "block " + b.type + " localId " + std::to_string(b.id) + ": POU '" + *callee->attr("name") + "' has no output '" + pin + "' (" + b.el->path() + ")");
+  const Element* t = section == "returnType" ? d : d->child("type");
+  return t && !t->children.empty() && t->children[0]->local_name() == "BOOL";
+}
+
+// A call of the project's own FUNCTION_BLOCK or FUNCTION, expanded inline as
+// MatIEC runs it (docs/plcopen.md, section 5b): the connected inputs are
+// copied into the instance (a FUNCTION's frame starts from its initial values
+// at every call), EN off skips the body (ENO FALSE; an FB keeps its outputs, a
+// FUNCTION returns its result's initial value), the body runs with the
+// instance's variables for its names and VAR_IN_OUT bound to the caller's
+// variables, and the outputs are the instance's variables after it.
+void Importer::user_call(const Node& b, const Element* callee) {
+  const Element* el = b.el;
+  std::string cname = *callee->attr("name");
+  std::string what = "block '" + b.type + "' localId " + std::to_string(b.id);
+  bool is_fb = pou_type(callee) == "functionBlock";
+  // recursion, by name (the bodies are expanded inline)
+  if (auto it = std::find_if(call_stack_.begin(), call_stack_.end(), [&](const std::string& n) { return upper(n) == upper(cname); });
+      it != call_stack_.end()) {
+    std::string cycle;
+    for (; it != call_stack_.end(); ++it) cycle += *it + " -> ";
+    fail_at(el, "recursion: " + cycle + cname + " (" + what + "; POUs are expanded inline at each call, so a POU cannot call itself, directly or through others) (" +
+                    el->path() + ")");
+  }
+  const Element* graph = callee_graph(b, callee);
+  // the instance, or a fresh frame for this call of a FUNCTION
+  Var* inst = nullptr;
+  if (is_fb) {
+    inst = b.instance.empty() ? nullptr : lookup(b.instance);
+    if (!inst) fail_at(el, what + " calls function block '" + cname + "' and needs an instance declared in the POU ('" + b.instance + "' is not) (" + el->path() + ")");
+    if (!inst->derived || upper(inst->type) != upper(cname))
+      fail_at(el, "instance '" + b.instance + "' is declared as " + inst->type + ", but " + what + " is a " + cname);
+  } else {
+    auto f = std::make_unique<Var>();
+    f->name = cname + "@" + std::to_string(b.id);
+    f->derived = true;
+    f->type = cname;
+    f->el = el;
+    f->pou = pou_;
+    f->frame = true;
+    inst = f.get();
+    vars_.push_back(std::move(f));
+    std::vector<std::string> stack;
+    instantiate(*inst, callee, stack);
+    for (auto& [k, m] : inst->members) place(*m);
+    // MatIEC: a FUNCTION's variables (its result too) start from their initial values at every call
+    for (auto& [key, m] : inst->members) {
+      if (!m->dev) continue;
+      Val zero{const_opd(0), Ty::Int};
+      auto c = m->init.empty() ? std::optional<Val>(zero) : literal(m->init, m->el);
+      if (!c) fail_at(m->el, "initial value '" + m->init + "' of '" + m->name + "' is not a literal");
+      Val k = const_val(*c, m->it);
+      if (m->ty == Ty::Bool) rung(Cond::yes(), out(k.o.ival ? Op::SET : Op::RST, {var_val(*m).o}, el), el);
+      else rung(Cond::yes(), assign_node(k, var_val(*m), el), el);
+    }
+  }
+  Pins pins{b};
+  bool order = b.order > 0;
+  Cond en = Cond::yes();
+  if (pins.has("EN")) {
+    const Pin* p = pins.get("EN");
+    Cond c = bool_expr(p->conns, order, p->el);
+    if (p->negated) c = negate(std::move(c), p->el);
+    en = materialize(std::move(c), el);
+  }
+  // the connected inputs, in the order of the pins
+  for (const Pin& p : b.inputs) {
+    if (p.name == "EN" || p.conns.empty()) continue;
+    auto it = inst->members.find(upper(p.name));
+    std::string section;
+    callee_var(callee, p.name, &section);
+    if (it == inst->members.end() || section != "inputVars")
+      fail_at(p.el, cname + " has no input '" + p.name + "' (" + p.el->path() + ")");
+    Var& m = *it->second;
+    if (!m.dev) fail_at(p.el, "input '" + p.name + "' of " + cname + " has type " + m.type + ", which ldc cannot hold (" + p.el->path() + ")");
+    Val dst = var_val(m);
+    if (m.ty == Ty::Bool) {
+      if (!is_bool_source(p.conns[0])) fail_at(p.el, "input '" + p.name + "' of " + cname + " is BOOL but a value feeds it (" + p.el->path() + ")");
+      Cond c = bool_expr(p.conns, order, p.el);
+      if (p.negated) c = negate(std::move(c), p.el);
+      else if (p.edge == "rising" || p.edge == "falling") c = trigger(std::move(c), p.edge == "rising", p.el);
+      rung(std::move(c), out(Op::OUT, {dst.o}, p.el, m.name), p.el);
+    } else {
+      if (p.negated) fail_at(p.el, "a negated input must be BOOL (" + p.el->path() + ")");
+      assign(value_expr(p.conns, order, p.el), dst, m.name, p.el);
+    }
+  }
+  // VAR_IN_OUT: the caller's variable itself
+  std::map<std::string, Var*> bound;
+  for (const Pin& p : b.inouts) {
+    if (!inst->inouts.count(upper(p.name))) fail_at(p.el, cname + " has no VAR_IN_OUT '" + p.name + "' (" + p.el->path() + ")");
+    if (p.conns.size() != 1) fail_at(p.el, "in-out '" + p.name + "' of " + what + " needs one connection, a variable (" + p.el->path() + ")");
+    const Node& src = node(p.conns[0]);
+    if (src.kind != "inVariable" && src.kind != "inOutVariable")
+      fail_at(p.el, "in-out '" + p.name + "' of " + what + " is passed by reference: connect a variable, not " + where(src.el));
+    std::string last;
+    Var* v = src.text.find('.') == std::string::npos ? lookup(src.text) : nullptr;
+    if (!v && src.text.find('.') != std::string::npos)
+      if (Var* c = member_path(src.text, src.el, &last); c && user_pou(c->type) && c->members.count(upper(last))) v = c->members.at(upper(last));
+    if (!v || v->constant || (!v->dev && v->members.empty()))
+      fail_at(p.el, "in-out '" + p.name + "' of " + what + " is passed by reference: '" + src.text + "' is not a variable ldc holds (" + p.el->path() + ")");
+    bound[upper(p.name)] = v;
+  }
+  for (const std::string& io : inst->inouts)
+    if (!bound.count(io)) fail_at(el, what + " leaves VAR_IN_OUT '" + io + "' of " + cname + " unconnected; MatIEC needs every in-out connected (" + el->path() + ")");
+  std::string skip;
+  if (en.k != Cond::True) {
+    skip = new_label();
+    Operand l{OpdKind::Label};
+    l.label = skip;
+    rung(negate(en, el), out(Op::JMP, {l}, el), el);
+  }
+  // the body, with the instance's variables for its names
+  {
+    Nest leave{nest_ += kBlockNest, kBlockNest};
+    if (nest_ > kMaxNest) fail_at(el, "calls nested too deeply at " + where(el));
+    auto nodes = std::move(nodes_);
+    auto connectors = std::move(connectors_);
+    auto computed = std::move(computed_);
+    auto outs = std::move(outs_);
+    auto consumed = std::move(consumed_);
+    auto generating = std::move(generating_);
+    auto scope = std::move(scope_);
+    std::string pou = pou_;
+    scope_.clear();
+    for (auto& [k, m] : inst->members) scope_[k] = m;
+    for (auto& [k, v] : bound) scope_[k] = v;
+    call_stack_.push_back(cname);
+    pou_ = cname;
+    bool sfc = sfc_mode_;
+    sfc_mode_ = false;
+    body(graph, "call of " + cname + (is_fb ? " " + inst->name : ""));
+    sfc_mode_ = sfc;
+    call_stack_.pop_back();
+    pou_ = pou;
+    nodes_ = std::move(nodes);
+    connectors_ = std::move(connectors);
+    computed_ = std::move(computed);
+    outs_ = std::move(outs);
+    consumed_ = std::move(consumed);
+    generating_ = std::move(generating);
+    scope_ = std::move(scope);
+  }
+  if (!skip.empty()) pending_labels_.push_back(skip);
+  // the outputs: the instance's variables after the call
+  for (const Pin& p : b.outputs) {
+    if (p.name == "ENO") continue;
+    std::string section;
+    callee_var(callee, p.name, &section);
+    auto it = inst->members.find(upper(section == "returnType" ? cname : p.name));
+    if (it == inst->members.end() || (section != "outputVars" && section != "returnType"))
+      fail_at(p.el, cname + " has no output '" + p.name + "' (" + p.el->path() + ")");
+    Var& m = *it->second;
+    if (!m.dev) fail_at(p.el, "output '" + p.name + "' of " + cname + " has type " + m.type + ", which ldc cannot hold (" + p.el->path() + ")");
+    Val v = var_val(m);
+    outs_[{b.id, p.name}] = v.ty == Ty::Bool ? Out{true, bit_leaf(Op::LOAD, v.o, el), {}} : Out{false, {}, v};
+  }
+  for (const Pin& p : b.inouts) {
+    Var* v = bound.at(upper(p.name));
+    if (!v->dev) continue;
+    Val r = var_val(*v);
+    outs_[{b.id, p.name}] = r.ty == Ty::Bool ? Out{true, bit_leaf(Op::LOAD, r.o, el), {}} : Out{false, {}, r};
+  }
+  if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, en, {}};
+}
+
+void Importer::block(const Node& b) {
+  Nest leave{nest_ += kBlockNest, kBlockNest};
+  if (nest_ > kMaxNest)
+    fail_at(b.el, "blocks feed each other too deeply (more than " + std::to_string(kMaxNest / kBlockNest) + ", less with power flow between them) at " + where(b.el));
+  computed_.insert(b.id);
+  generating_.insert(b.id);
+  std::string t = upper(b.type);
+  if (fb_kind(t) != FbKind::None) {
+    Var* inst = b.instance.empty() ? nullptr : lookup(b.instance);
+    if (!inst) fail_at(b.el, t + " block localId " + std::to_string(b.id) + " needs an instance declared in the POU ('" + b.instance + "' is not) (" + b.el->path() + ")");
+    if (!inst->derived || upper(inst->type) != t)
+      fail_at(b.el, "instance '" + b.instance + "' is declared as " + inst->type + ", but block localId " + std::to_string(b.id) + " is a " + t);
+    if (!b.inouts.empty())
+      fail_at(b.inouts[0].el, "block " + b.type + " localId " + std::to_string(b.id) + " has in-out parameters, which ldc takes for calls of the project's own POUs only (" +
+                                  b.inouts[0].el->path() + ")");
+    fb_block(b, *inst);
+  } else if (const Element* callee = user_pou(t)) {
+    user_call(b, callee);
+  } else {
+    if (!b.inouts.empty())
+      fail_at(b.inouts[0].el, "block " + b.type + " localId " + std::to_string(b.id) + " has in-out parameters, which ldc takes for calls of the project's own POUs only (" +
+                                  b.inouts[0].el->path() + ")");
+    refuse_user_pou(b);
+    fn_block(b);
+  }
+  generating_.erase(b.id);
+}
 
 void Importer::fb_block(const Node& b, Var& inst) {
   std::string t = upper(inst.type);
@@ -2023,7 +2429,7 @@ bool before(const Node* a, const Node* b) {
   return a->y < b->y;
 }
 
-void Importer::body(const Element* pou, const Element* ld) {
+void Importer::body(const Element* ld, const std::string& title) {
   nodes_.clear();
   connectors_.clear();
   computed_.clear();
@@ -2062,11 +2468,12 @@ void Importer::body(const Element* pou, const Element* ld) {
     insertion(blocks);
   }
   size_t first = rungs_.size();
-  pending_title_ = "POU " + *pou->attr("name");
+  std::string before_title = pending_title_;
+  pending_title_ = before_title.empty() ? title : before_title + "; " + title;
   for (const Node* n : ordered) statement(*n);
   for (const Node* n : stmts) statement(*n);
   for (const Node* n : blocks) statement(*n);
-  if (rungs_.size() == first) pending_title_.clear();
+  if (rungs_.size() == first) pending_title_ = before_title;
 }
 
 // ------------------------------------------------------------------ SFC bodies
@@ -2095,7 +2502,7 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
   if (chart_) fail_at(pou, "POU '" + pname + "' is a second SFC program in one task (after '" + chart_pou_ + "'); ldc runs one chart per program");
   // the LD/FBD elements: blocks and variables feeding the conditions
   sfc_mode_ = true;
-  body(pou, sfc);
+  body(sfc, "POU " + pname);
   sfc_mode_ = false;
   std::map<int, const Element*> el_of;
   for (const auto& c : sfc->children) {
@@ -2413,14 +2820,6 @@ void Importer::prepare() {
     fail_at(root, "expected a PLCopen TC6 <project>, found <" + root->name + ">");
   position_order_ = saved_by_python2(root);
   tc6_v1_ = namespace_of(root) == kTc6V1Namespace;
-  // global variables of configurations and resources
-  if (const Element* inst = root->child("instances"))
-    if (const Element* cfgs = inst->child("configurations"))
-      for (const Element* cfg : cfgs->children_named("configuration")) {
-        for (const Element* g : cfg->children_named("globalVars")) declare(g, "", true);
-        for (const Element* res : cfg->children_named("resource"))
-          for (const Element* g : res->children_named("globalVars")) declare(g, "", true);
-      }
   // POUs and their languages
   const Element* types = root->child("types");
   const Element* pous = types ? types->child("pous") : nullptr;
@@ -2451,9 +2850,29 @@ void Importer::prepare() {
         }
       }
       pou_lang_[upper(*p->attr("name"))] = lang;
+      pou_el_[upper(*p->attr("name"))] = p;
       all.push_back(p);
-      if (lang == "LD" || lang == "FBD") ld.push_back(p);  // FBD: the same block graph, without rails
     }
+  // the project's FUNCTION_BLOCKs and FUNCTIONs that a block calls are expanded
+  // at their calls, not compiled as programs of their own (section 5b)
+  for (const Element* p : all)
+    if (const Element* b = p->child("body"))
+      for (const auto& g : b->children)
+        for (const Element* blk : g->children_named("block"))
+          if (auto t = blk->attr("typeName")) called_.insert(upper(*t));
+  for (const Element* p : all) {
+    const std::string& lang = pou_lang_[upper(*p->attr("name"))];
+    bool callee = called_.count(upper(*p->attr("name"))) && user_pou(*p->attr("name"));
+    if ((lang == "LD" || lang == "FBD") && !callee) ld.push_back(p);  // FBD: the same block graph, without rails
+  }
+  // global variables of configurations and resources
+  if (const Element* inst = root->child("instances"))
+    if (const Element* cfgs = inst->child("configurations"))
+      for (const Element* cfg : cfgs->children_named("configuration")) {
+        for (const Element* g : cfg->children_named("globalVars")) declare(g, "", true);
+        for (const Element* res : cfg->children_named("resource"))
+          for (const Element* g : res->children_named("globalVars")) declare(g, "", true);
+      }
   tasks(root);
   // SFC programs that a task runs: their charts (section 1b)
   for (const Element* p : all)
@@ -2515,7 +2934,7 @@ void Importer::prepare() {
 void Importer::emit_init(const std::function<bool(const Var&)>& which, const Element* root) {
   init_.clear();
   for (auto& v : vars_) {
-    if (!v->dev || v->init.empty() || v->derived || v->constant || !which(*v)) continue;
+    if (!v->dev || v->init.empty() || v->derived || v->constant || v->frame || !which(*v)) continue;
     if (v->dev->dev == Dev::X || v->dev->dev == Dev::WX) continue;  // inputs belong to the I/O
     auto c = literal(v->init, v->el);
     if (!c) fail_at(v->el, "initial value '" + v->init + "' of '" + v->name + "' is not a literal");
@@ -2542,7 +2961,7 @@ void Importer::emit_bodies(const std::vector<const Element*>& pous) {
     scope_ = scopes_[pe];
     const Element* b = pe->child("body");
     if (const Element* sfc = b->child("SFC")) sfc_body(pe, sfc);
-    else body(pe, b->child("LD") ? b->child("LD") : b->child("FBD"));
+    else body(b->child("LD") ? b->child("LD") : b->child("FBD"), "POU " + pou_);
   }
 }
 

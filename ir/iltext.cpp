@@ -115,6 +115,17 @@ bool is_name(std::string_view s) {
   return true;
 }
 
+// An alias: a name, or an instance's member INSTANCE.MEMBER of names (the
+// PLCopen importer's aliases of the project's own FB instances, docs/plcopen.md).
+bool is_alias_name(std::string_view s) {
+  for (size_t a = 0;;) {
+    size_t d = s.find('.', a);
+    if (!is_name(s.substr(a, d == std::string_view::npos ? std::string_view::npos : d - a))) return false;
+    if (d == std::string_view::npos) return true;
+    a = d + 1;
+  }
+}
+
 // The common case of parse_number, in one pass: an optional '-' and 1 to 9
 // decimal digits (never outside INT32).  False for anything else, which the
 // general path then reads.
@@ -316,7 +327,7 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
       p.edge_slots = uint32_t(n.ival);
     } else if (head.text == ".alias") {
       std::optional<DeviceRef> d;
-      if (toks.size() != 3 || !is_name(toks[1].text) || !(d = parse_device(toks[2].text)) || d->index >= device_count(d->dev))
+      if (toks.size() != 3 || !is_alias_name(toks[1].text) || !(d = parse_device(toks[2].text)) || d->index >= device_count(d->dev))
         throw CompileError(lineno, head.col, ".alias needs a name and a device");
       p.aliases.push_back({std::string(toks[1].text), *d});
     } else if (head.text == ".retain") {
