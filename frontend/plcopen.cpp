@@ -161,6 +161,9 @@ struct Var {
   std::set<std::string> inouts;
   std::string section;   // the interface section it is declared in (inputVars ...)
   bool frame = false;    // a member of a function call's frame: no alias
+  const Element* init_el = nullptr;    // <initialValue> (or a structValue's <value>)
+  const Element* struct_el = nullptr;  // a structure's <struct> (its type in <dataTypes>)
+  bool container() const { return struct_el || !members.empty() || !inouts.empty(); }
 };
 
 FbKind fb_kind(const std::string& t) {
@@ -293,6 +296,10 @@ class Importer {
   void declare(const Element* list, const std::string& pou, bool global);
   std::unique_ptr<Var> make_var(const Element* v, const std::string& name, const std::string& pou, bool constant);
   void instantiate(Var& inst, const Element* fb, std::vector<std::string>& stack);
+  void type_of_var(Var& u, const Element* te, int depth);
+  void struct_members(Var& s, std::vector<std::string>& stack);
+  void expand(Var& v, std::vector<std::string>& stack);
+  std::map<std::string, const Element*> data_types_;  // upper name -> <dataType>
   const Element* user_pou(const std::string& type) const;
   std::string pou_type(const Element* pou) const { return pou->attr("pouType") ? *pou->attr("pouType") : "program"; }
   void place(Var& v);
@@ -450,19 +457,101 @@ std::unique_ptr<Var> Importer::make_var(const Element* v, const std::string& nam
   if (auto a = v->attr("address")) u->address = *a;
   const Element* t = v->child("type");
   if (!t || t->children.empty()) fail_at(v, "variable '" + name + "' has no type");
-  const Element* te = t->children[0].get();
-  if (te->local_name() == "derived") {
-    u->derived = true;
-    u->type = te->attr("name") ? *te->attr("name") : "";
-  } else {
-    u->type = upper(te->local_name());
-  }
-  u->it = u->derived ? IT::None : iec_type_named(u->type);
-  u->ty = kind_of(u->it);
-  if (const Element* iv = v->child("initialValue"))
-    if (const Element* sv = iv->child("simpleValue"))
+  u->init_el = v->child("initialValue");
+  if (u->init_el)
+    if (const Element* sv = u->init_el->child("simpleValue"))
       if (auto val = sv->attr("value")) u->init = *val;
+  type_of_var(*u, t->children[0].get(), 0);
   return u;
+}
+
+// A variable's type: elementary, a standard or user FB, or one of the
+// project's <dataTypes>: a derived type or subrange is its base type (with the
+// derived type's initial value when the variable has none; a subrange's
+// bounds are not checked, as MatIEC), a structure gets members (expand).
+void Importer::type_of_var(Var& u, const Element* te, int depth) {
+  std::string k(te->local_name());
+  if (depth > 32) fail_at(te, "data type '" + u.type + "' is defined through itself (" + te->path() + ")");
+  if (k == "derived") {
+    std::string name = te->attr("name") ? *te->attr("name") : "";
+    auto dt = data_types_.find(upper(name));
+    if (dt == data_types_.end()) {
+      u.derived = true;
+      u.type = name;
+      u.it = IT::None;
+      u.ty = Ty::None;
+      return;
+    }
+    const Element* base = dt->second->child("baseType");
+    if (!base || base->children.empty()) fail_at(dt->second, "data type '" + name + "' has no baseType (" + dt->second->path() + ")");
+    if (!u.init_el)
+      if (const Element* iv = dt->second->child("initialValue")) {
+        u.init_el = iv;
+        if (const Element* sv = iv->child("simpleValue"))
+          if (auto val = sv->attr("value")) u.init = *val;
+      }
+    const Element* b = base->children[0].get();
+    if (b->local_name() == "struct") {
+      u.derived = true;
+      u.type = name;
+      u.struct_el = b;
+      return;
+    }
+    return type_of_var(u, b, depth + 1);
+  }
+  if (k == "subrangeSigned" || k == "subrangeUnsigned") {
+    const Element* base = te->child("baseType");
+    if (!base || base->children.empty()) fail_at(te, "subrange without a baseType (" + te->path() + ")");
+    return type_of_var(u, base->children[0].get(), depth + 1);
+  }
+  if (k == "struct") fail_at(te, "variable '" + u.name + "' has a structure written in its declaration; ldc takes structures declared in <dataTypes> (" + te->path() + ")");
+  if (k == "enum" || k == "array" || k == "string" || k == "wstring" || k == "pointer")
+    u.derived = true, u.type = k == "enum" ? "an enumeration" : k == "array" ? "an array" : upper(k);
+  else
+    u.type = upper(k), u.it = iec_type_named(u.type);
+  u.ty = kind_of(u.it);
+}
+
+// The members of a structure variable: each a variable STRUCT.MEMBER (nested
+// structures too), their initial values the structure's <structValue>, else
+// the members' own.
+void Importer::struct_members(Var& s, std::vector<std::string>& stack) {
+  if (std::find(stack.begin(), stack.end(), "TYPE " + upper(s.type)) != stack.end())
+    fail_at(s.el, "structure '" + s.type + "' contains itself (through '" + s.name + "')");
+  stack.push_back("TYPE " + upper(s.type));
+  const Element* sv = s.init_el ? s.init_el->child("structValue") : nullptr;
+  for (const Element* v : s.struct_el->children_named("variable")) {
+    const std::string* nm = v->attr("name");
+    if (!nm || nm->empty()) fail_at(v, "structure member without a name (" + v->path() + ")");
+    std::string key = upper(*nm);
+    if (s.members.count(key)) fail_at(v, "member '" + *nm + "' is declared twice in structure '" + s.type + "'");
+    auto u = make_var(v, s.name + "." + *nm, s.pou, s.constant);
+    u->section = "struct";
+    u->frame = s.frame;
+    if (sv)
+      for (const Element* mv : sv->children_named("value"))
+        if (mv->attr("member") && upper(*mv->attr("member")) == key) {
+          u->init_el = mv;
+          u->init.clear();
+          if (const Element* simple = mv->child("simpleValue"))
+            if (auto val = simple->attr("value")) u->init = *val;
+        }
+    Var* raw = u.get();
+    vars_.push_back(std::move(u));
+    s.members[key] = raw;
+    expand(*raw, stack);
+  }
+  stack.pop_back();
+}
+
+// A variable with members: a structure's, or an instance's of the project's FB.
+void Importer::expand(Var& v, std::vector<std::string>& stack) {
+  if (v.struct_el) return struct_members(v, stack);
+  if (!v.derived) return;
+  if (const Element* fb = user_pou(v.type)) {
+    if (pou_type(fb) != "functionBlock") fail_at(v.el, "variable '" + v.name + "' has the type of FUNCTION '" + v.type + "'; only a FUNCTION_BLOCK has instances");
+    instantiate(v, fb, stack);
+  }
 }
 
 // The project's FUNCTION_BLOCK or FUNCTION named `type`, else nullptr.
@@ -540,12 +629,7 @@ void Importer::instantiate(Var& inst, const Element* fb, std::vector<std::string
       Var* raw = u.get();
       vars_.push_back(std::move(u));
       inst.members[key] = raw;
-      if (raw->derived)
-        if (const Element* sub = user_pou(raw->type)) {
-          if (pou_type(sub) != "functionBlock") fail_at(v, "variable '" + *nm + "' has the type of FUNCTION '" + raw->type + "'; only a FUNCTION_BLOCK has instances");
-          raw->frame = inst.frame;
-          instantiate(*raw, sub, stack);
-        }
+      expand(*raw, stack);
     }
   }
   stack.pop_back();
@@ -568,13 +652,9 @@ void Importer::declare(const Element* list, const std::string& pou, bool global)
       if (scope_.count(key)) fail_at(v, "variable '" + *nm + "' is declared twice in POU '" + pou + "'");
       scope_[key] = raw;
     }
-    if (raw->derived)
-      if (const Element* fb = user_pou(raw->type)) {
-        if (pou_type(fb) != "functionBlock") fail_at(v, "variable '" + *nm + "' has the type of FUNCTION '" + raw->type + "'; only a FUNCTION_BLOCK has instances");
-        std::vector<std::string> stack;
-        if (!global) stack.push_back(upper(pou));
-        instantiate(*raw, fb, stack);
-      }
+    std::vector<std::string> stack;
+    if (!global) stack.push_back(upper(pou));
+    expand(*raw, stack);
   }
 }
 
@@ -756,7 +836,7 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
   if (dot != std::string::npos) {
     std::string last;
     Var* inst = member_path(e, el, &last);
-    if (inst && user_pou(inst->type)) {  // a member of an instance of the project's own FB
+    if (inst && inst->container()) {  // a member of a structure or of an instance of the project's own FB
       auto it = inst->members.find(upper(last));
       if (it == inst->members.end()) {
         if (inst->inouts.count(upper(last)))
@@ -817,7 +897,7 @@ Var* Importer::member_path(const std::string& expr, const Element* el, std::stri
     }
     std::string seg = expr.substr(dot + 1, next - dot - 1);
     auto it = v->members.find(upper(seg));
-    if (!user_pou(v->type) || it == v->members.end())
+    if (!v->container() || it == v->members.end())
       fail_at(el, "'" + expr + "': '" + v->name + "' has no member '" + seg + "' (" + where(el) + ")");
     v = it->second;
     dot = next;
@@ -1619,10 +1699,16 @@ void Importer::user_call(const Node& b, const Element* callee) {
     vars_.push_back(std::move(f));
     std::vector<std::string> stack;
     instantiate(*inst, callee, stack);
-    for (auto& [k, m] : inst->members) place(*m);
+    std::vector<Var*> all;
+    std::function<void(Var&)> walk = [&](Var& c) {
+      for (auto& [k, m] : c.members)
+        if (m->frame) all.push_back(m), walk(*m);  // not the globals its VAR_EXTERNAL names
+    };
+    walk(*inst);
+    for (Var* m : all) place(*m);
     // MatIEC: a FUNCTION's variables (its result too) start from their initial values at every call
-    for (auto& [key, m] : inst->members) {
-      if (!m->dev) continue;
+    for (Var* m : all) {
+      if (!m->dev || m->constant) continue;
       Val zero{const_opd(0), Ty::Int};
       auto c = m->init.empty() ? std::optional<Val>(zero) : literal(m->init, m->el);
       if (!c) fail_at(m->el, "initial value '" + m->init + "' of '" + m->name + "' is not a literal");
@@ -2822,6 +2908,11 @@ void Importer::prepare() {
   tc6_v1_ = namespace_of(root) == kTc6V1Namespace;
   // POUs and their languages
   const Element* types = root->child("types");
+  if (const Element* dts = types ? types->child("dataTypes") : nullptr)
+    for (const Element* dt : dts->children_named("dataType")) {
+      if (!dt->attr("name")) fail_at(dt, "data type without a name (" + dt->path() + ")");
+      if (!data_types_.emplace(upper(*dt->attr("name")), dt).second) fail_at(dt, "data type '" + *dt->attr("name") + "' is declared twice");
+    }
   const Element* pous = types ? types->child("pous") : nullptr;
   std::vector<const Element*> all;
   std::vector<const Element*>& ld = ld_pous_;
