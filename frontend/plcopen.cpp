@@ -164,6 +164,11 @@ struct Var {
   const Element* init_el = nullptr;    // <initialValue> (or a structValue's <value>)
   const Element* struct_el = nullptr;  // a structure's <struct> (its type in <dataTypes>)
   bool container() const { return struct_el || !members.empty() || !inouts.empty(); }
+  // An array of an elementary type: its elements VAR[i] (VAR[i,j]) in a row of
+  // devices (the last index varies fastest), so that IDX + LDX reach element i.
+  const Element* array_el = nullptr;
+  std::vector<std::pair<int32_t, int32_t>> dims;
+  std::vector<Var*> elems;
 };
 
 FbKind fb_kind(const std::string& t) {
@@ -299,6 +304,8 @@ class Importer {
   void type_of_var(Var& u, const Element* te, int depth);
   void struct_members(Var& s, std::vector<std::string>& stack);
   void expand(Var& v, std::vector<std::string>& stack);
+  void array_elements(Var& a);
+  Val element(Var& a, const std::string& idx, const Element* el, bool write);
   std::map<std::string, const Element*> data_types_;  // upper name -> <dataType>
   const Element* user_pou(const std::string& type) const;
   std::string pou_type(const Element* pou) const { return pou->attr("pouType") ? *pou->attr("pouType") : "program"; }
@@ -505,7 +512,16 @@ void Importer::type_of_var(Var& u, const Element* te, int depth) {
     return type_of_var(u, base->children[0].get(), depth + 1);
   }
   if (k == "struct") fail_at(te, "variable '" + u.name + "' has a structure written in its declaration; ldc takes structures declared in <dataTypes> (" + te->path() + ")");
-  if (k == "enum" || k == "array" || k == "string" || k == "wstring" || k == "pointer")
+  if (k == "array") {
+    const Element* base = te->child("baseType");
+    if (!base || base->children.empty()) fail_at(te, "array without a baseType (" + te->path() + ")");
+    u.derived = true;
+    u.array_el = te;
+    u.type = "an array";
+    u.ty = Ty::None;
+    return;
+  }
+  if (k == "enum" || k == "string" || k == "wstring" || k == "pointer")
     u.derived = true, u.type = k == "enum" ? "an enumeration" : k == "array" ? "an array" : upper(k);
   else
     u.type = upper(k), u.it = iec_type_named(u.type);
@@ -544,9 +560,120 @@ void Importer::struct_members(Var& s, std::vector<std::string>& stack) {
   stack.pop_back();
 }
 
+// The elements of an array of an elementary type, a[lo] .. a[hi] (a[i,j] for
+// several dimensions), with the initial values of its <arrayValue> (a value
+// with repetitionValue="n" counts n times) in order.
+void Importer::array_elements(Var& a) {
+  uint64_t count = 1;
+  for (const Element* d : a.array_el->children_named("dimension")) {
+    auto num = [&](const char* at) -> int32_t {
+      const std::string* t = d->attr(at);
+      char* end = nullptr;
+      long long x = t ? std::strtoll(t->c_str(), &end, 10) : 0;
+      if (!t || t->empty() || *end || x < INT32_MIN || x > INT32_MAX) fail_at(d, "array dimension needs integer bounds lower and upper (" + d->path() + ")");
+      return int32_t(x);
+    };
+    int32_t lo = num("lower"), hi = num("upper");
+    if (hi < lo) fail_at(d, "array dimension " + std::to_string(lo) + ".." + std::to_string(hi) + " is empty (" + d->path() + ")");
+    a.dims.push_back({lo, hi});
+    count *= uint64_t(int64_t(hi) - lo + 1);
+    if (count > 8192) fail_at(d, "array '" + a.name + "' has more than 8192 elements; ldc's devices hold 8192 words");
+  }
+  if (a.dims.empty()) fail_at(a.array_el, "array without a dimension (" + a.array_el->path() + ")");
+  const Element* bt = a.array_el->child("baseType")->children[0].get();
+  std::vector<std::string> inits;
+  if (const Element* av = a.init_el ? a.init_el->child("arrayValue") : nullptr)
+    for (const Element* v : av->children_named("value")) {
+      long long rep = v->attr("repetitionValue") ? std::atoll(v->attr("repetitionValue")->c_str()) : 1;
+      const Element* sv = v->child("simpleValue");
+      if (!sv || !sv->attr("value") || rep < 1) fail_at(v, "ldc takes arrayValue elements that are simple values (" + v->path() + ")");
+      for (long long r = 0; r < rep && inits.size() < count; r++) inits.push_back(*sv->attr("value"));
+      if (inits.size() >= count && rep > 0) break;
+    }
+  for (uint64_t k = 0; k < count; k++) {
+    std::string idx;
+    uint64_t rest = k;
+    std::vector<int64_t> ix(a.dims.size());
+    for (size_t j = a.dims.size(); j-- > 0;) {
+      uint64_t n = uint64_t(int64_t(a.dims[j].second) - a.dims[j].first + 1);
+      ix[j] = a.dims[j].first + int64_t(rest % n), rest /= n;
+    }
+    for (size_t j = 0; j < ix.size(); j++) idx += (j ? "," : "") + std::to_string(ix[j]);
+    auto e = std::make_unique<Var>();
+    e->name = a.name + "[" + idx + "]";
+    e->el = a.el;
+    e->pou = a.pou;
+    e->constant = false;
+    e->frame = a.frame;
+    e->section = "array";
+    type_of_var(*e, bt, 0);
+    if (e->ty == Ty::None || e->derived)
+      fail_at(a.array_el, "array '" + a.name + "' of " + e->type + ": ldc takes arrays of elementary types (" + a.array_el->path() + ")");
+    if (k < inits.size()) e->init = inits[k];
+    a.elems.push_back(e.get());
+    vars_.push_back(std::move(e));
+  }
+}
+
+// Element `idx` ("3", "i", "1,2") of array a: a constant index is checked
+// here and names its element; a variable one (one dimension) is checked at
+// run time by IDX (a scan fault naming the POU, the line and the index, every
+// engine alike; docs/faults.md) and read by LDX into a temporary.
+Val Importer::element(Var& a, const std::string& idx, const Element* el, bool write) {
+  std::vector<std::string> parts;
+  for (size_t p = 0;;) {
+    size_t c = idx.find(',', p);
+    parts.push_back(trim(idx.substr(p, c == std::string::npos ? std::string::npos : c - p)));
+    if (c == std::string::npos) break;
+    p = c + 1;
+  }
+  if (parts.size() != a.dims.size())
+    fail_at(el, "'" + a.name + "[" + idx + "]': the array has " + std::to_string(a.dims.size()) + " dimension" + (a.dims.size() == 1 ? "" : "s") + " (" + where(el) + ")");
+  uint64_t k = 0;
+  bool constant = true;
+  std::vector<Val> vals;
+  for (size_t j = 0; j < parts.size(); j++) {
+    Val v = read_of(parts[j], el, false);
+    vals.push_back(v);
+    if (v.ty != Ty::Int || !is_int_type(type_of(v)) || ty_info(type_of(v)).kind == TyKind::Time)
+      fail_at(el, "index '" + parts[j] + "' of '" + a.name + "' is not an integer (" + where(el) + ")");
+    if (!is_const(v.o)) {
+      constant = false;
+      continue;
+    }
+    int64_t i = int64_t(const_bits(v));
+    auto [lo, hi] = a.dims[j];
+    if (i < lo || i > hi)
+      fail_at(el, "index " + std::to_string(i) + " is outside " + std::to_string(lo) + ".." + std::to_string(hi) + " of array '" + a.name + "' (" + where(el) + ")");
+    k = k * uint64_t(int64_t(hi) - lo + 1) + uint64_t(i - lo);
+  }
+  if (constant) {
+    Var& e = *a.elems[k];
+    if (!e.dev) fail_at(el, "array '" + a.name + "' has no devices");
+    Val r = var_val(e);
+    return r;
+  }
+  if (write) fail_at(el, "'" + a.name + "[" + idx + "]': ldc writes array elements at constant indices only (" + where(el) + ")");
+  if (a.dims.size() != 1) fail_at(el, "'" + a.name + "[" + idx + "]': ldc reads elements at a variable index of one-dimensional arrays only (" + where(el) + ")");
+  Var& first = *a.elems[0];
+  IT t = first.it;
+  Operand base = var_val(first).o;
+  uint32_t stride = first.ty == Ty::Wide ? 2 : 1;
+  Operand r = temp_of(t, el);
+  IT it = type_of(vals[0]);
+  std::vector<TreeNode> acts;
+  Operand at = is_const(vals[0].o) ? Operand::typed_const(const_bits(vals[0])) : vals[0].o;
+  acts.push_back(tout(Op::TIDX, it, IT::None, {at, const_opd(a.dims[0].first), const_opd(a.dims[0].second)}, el));
+  acts.push_back(tout(Op::TLDX, t, IT::None, {base, const_opd(int32_t(stride)), r}, el));
+  // the power first, then both: nothing may come between an IDX and its LDX
+  rung(Cond::of(leaf(Op::TRUE, {}, el, "TRUE")), fork_of(std::move(acts)), el);
+  return Val{r, first.ty, t};
+}
+
 // A variable with members: a structure's, or an instance's of the project's FB.
 void Importer::expand(Var& v, std::vector<std::string>& stack) {
   if (v.struct_el) return struct_members(v, stack);
+  if (v.array_el) return array_elements(v);
   if (!v.derived) return;
   if (const Element* fb = user_pou(v.type)) {
     if (pou_type(fb) != "functionBlock") fail_at(v.el, "variable '" + v.name + "' has the type of FUNCTION '" + v.type + "'; only a FUNCTION_BLOCK has instances");
@@ -693,6 +820,14 @@ void Importer::allocate() {
 
 // An unlocated variable's devices (a standard FB instance: its T, C or M).
 void Importer::place(Var& v) {
+  if (!v.elems.empty() && !v.elems[0]->dev) {  // an array: its elements in a row
+    Var& e0 = *v.elems[0];
+    uint32_t n = uint32_t(v.elems.size()), w = e0.ty == Ty::Wide ? 2 : 1;
+    Dev d = e0.ty == Ty::Bool ? Dev::M : e0.ty == Ty::Real ? Dev::F : Dev::D;
+    uint32_t at = take_run(d, n * w, v.el);
+    for (uint32_t k = 0; k < n; k++) v.elems[k]->dev = DeviceRef{d, at + k * w};
+    return;
+  }
   if (v.dev || v.constant) return;
   if (v.derived) {
     FbKind k = fb_kind(v.type);
@@ -726,10 +861,17 @@ void Importer::aliases(TreeProgram& p) {
     if (v->dev && !v->frame) count[upper(v->name)]++;
   std::set<std::string> seen;
   // a name, or an instance's member INSTANCE.MEMBER (each part a name)
+  // (an array's element a[3], a[1,-2] too)
   auto dotted = [](const std::string& n) {
     for (size_t a = 0;;) {
       size_t d = n.find('.', a);
-      if (!is_identifier(n.substr(a, d == std::string::npos ? std::string::npos : d - a))) return false;
+      std::string seg = n.substr(a, d == std::string::npos ? std::string::npos : d - a);
+      size_t lb = seg.find('[');
+      if (lb != std::string::npos) {
+        if (seg.back() != ']' || seg.find_first_not_of("0123456789,-", lb + 1) != seg.size() - 1) return false;
+        seg = seg.substr(0, lb);
+      }
+      if (!is_identifier(seg)) return false;
       if (d == std::string::npos) return true;
       a = d + 1;
     }
@@ -830,6 +972,19 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
     if (ar != Area::Count) return {shadowed(bit_opd(ar, d->index)), Ty::Bool};
     Area w = word_area(d->dev);
     return {shadowed(Operand{w == Area::F ? OpdKind::Real : OpdKind::Int, w, d->index}), w == Area::F ? Ty::Real : Ty::Int};
+  }
+  if (size_t lb = e.find('['); lb != std::string::npos && !e.empty() && e.back() == ']') {  // an array element
+    std::string base = trim(e.substr(0, lb));
+    Var* a = nullptr;
+    if (base.find('.') == std::string::npos) a = lookup(base);
+    else {
+      std::string last;
+      Var* c = member_path(base, el, &last);
+      if (c && c->container() && c->members.count(upper(last))) a = c->members.at(upper(last));
+    }
+    if (!a) fail_at(el, "unknown variable '" + base + "' in " + where(el));
+    if (a->elems.empty()) fail_at(el, "'" + base + "' is not an array; '" + e + "' indexes it (" + where(el) + ")");
+    return element(*a, e.substr(lb + 1, e.size() - lb - 2), el, write);
   }
   size_t dot = e.find('.');
   Var* v = nullptr;
