@@ -25,10 +25,10 @@
 #include <set>
 
 #include "frontend/frontend.h"
-#include "frontend/iec_literal.h"
 #include "frontend/operands.h"
 #include "frontend/treebuild.h"
 #include "frontend/xml.h"
+#include "ir/model.h"
 #include "ir/typed.h"
 
 namespace ldc {
@@ -107,6 +107,49 @@ bool is_int_type(IT t) { return t != IT::None && typed::is_int_kind(t); }
 // UDINT and DWORD: 32 bits unsigned, so an INT32 compare, division or
 // conversion to REAL would read them wrong; the typed instructions do them.
 bool unsigned32(IT t) { return t == IT::UDINT || t == IT::DWORD; }
+
+// An IEC literal as the importer holds it: its type and canonical bits
+// (ir/typed.h), read by the typed model's parser (ir/model.h parse_literal,
+// MatIEC's meaning: TIME in ns, T#3.5ms exact).
+struct IecLiteral {
+  IT type = IT::None;  // the type it is written in; an untyped integer is LINT (ULINT above INT64_MAX), an untyped real LREAL
+  bool typed = false;  // written with its type (INT#5, T#1s, D#2024-01-01, TRUE)
+  uint64_t bits = 0;   // canonical bits of `type`
+  bool based = false;  // an untyped integer written in base 2, 8 or 16 (a bit pattern)
+  bool is_real() const { return type == IT::REAL || type == IT::LREAL; }
+  double real() const { return typed::real_value(type, bits); }
+  int64_t integer() const { return int64_t(bits); }
+};
+
+std::optional<IecLiteral> parse_iec_literal(std::string_view text, std::string& why) {
+  auto p = model::parse_literal(text, why);
+  if (!p) {
+    std::string tail = ": " + std::string(text);  // the model's message ends with the text
+    if (why.size() > tail.size() && why.compare(why.size() - tail.size(), tail.size(), tail) == 0) why.resize(why.size() - tail.size());
+    if (!why.empty()) why = "malformed literal '" + std::string(text) + "': " + why;
+    return std::nullopt;
+  }
+  IecLiteral l;
+  if (p->untyped_int) {
+    bool big = p->lit.ty == IT::ULINT;
+    l.type = big ? IT::ULINT : IT::LINT;
+    l.bits = big ? p->lit.bits : uint64_t(p->ival);
+    std::string u = upper(text);
+    size_t h = u.find('#');
+    l.based = h != std::string::npos && (u.compare(0, h, "2") == 0 || u.compare(0, h, "8") == 0 || u.compare(0, h, "16") == 0);
+  } else if (p->untyped_real) {
+    l.type = IT::LREAL;
+    l.bits = typed::real_bits(IT::LREAL, p->rval);
+  } else {
+    l.type = p->lit.ty;
+    l.typed = true;
+    l.bits = p->lit.bits;
+  }
+  return l;
+}
+
+// The IEC elementary type named `name` (TIME_OF_DAY is TOD ...); IT::None if none.
+IT iec_type_named(std::string_view name) { return ty_from_name(name).value_or(IT::None); }
 
 // A value: a device or a constant, with how it is held and its IEC type
 // (None: an untyped literal or a direct address, an INT32 as before).
@@ -888,7 +931,7 @@ void Importer::aliases(TreeProgram& p) {
 
 // ------------------------------------------------------------------ expressions
 
-// A literal as a value (iec_literal.h: TRUE, 42, 16#FF, 1.5, INT#5, T#1.5ms,
+// A literal as a value (parse_iec_literal: TRUE, 42, 16#FF, 1.5, INT#5, T#1.5ms,
 // LREAL#1e-9, D#2024-01-31 ...).  Untyped integers that fit INT32 (and based
 // ones up to 32 bits, bit patterns: 16#FFFFFFFF is -1) and untyped reals stay
 // the INT32 and REAL constants they always were, and take the type of what
