@@ -342,6 +342,16 @@ class Importer {
 
   // declarations
   void declare(const Element* list, const std::string& pou, bool global);
+  // Every variable, instance member, structure member and array element is a
+  // Var: nested instances multiply them, so their number is bounded (a
+  // hostile file must not exhaust memory before the devices run out).
+  static constexpr size_t kMaxVars = 65536;
+  void keep(std::unique_ptr<Var> u) {
+    if (vars_.size() >= kMaxVars)
+      fail_at(u->el, "more than " + std::to_string(kMaxVars) + " variables, counting every member of every instance, structure and array ('" +
+                         u->name + "' is one too many); ldc's devices hold fewer");
+    vars_.push_back(std::move(u));
+  }
   std::unique_ptr<Var> make_var(const Element* v, const std::string& name, const std::string& pou, bool constant);
   void instantiate(Var& inst, const Element* fb, std::vector<std::string>& stack);
   void type_of_var(Var& u, const Element* te, int depth);
@@ -349,6 +359,8 @@ class Importer {
   void expand(Var& v, std::vector<std::string>& stack);
   void array_elements(Var& a);
   Val element(Var& a, const std::string& idx, const Element* el, bool write);
+  std::function<void()> pending_store_;  // a write at a variable index: the statement's last rung
+  void statement_of(const Node& n);
   std::map<std::string, const Element*> data_types_;  // upper name -> <dataType>
   const Element* user_pou(const std::string& type) const;
   std::string pou_type(const Element* pou) const { return pou->attr("pouType") ? *pou->attr("pouType") : "program"; }
@@ -596,7 +608,7 @@ void Importer::struct_members(Var& s, std::vector<std::string>& stack) {
             if (auto val = simple->attr("value")) u->init = *val;
         }
     Var* raw = u.get();
-    vars_.push_back(std::move(u));
+    keep(std::move(u));
     s.members[key] = raw;
     expand(*raw, stack);
   }
@@ -654,7 +666,7 @@ void Importer::array_elements(Var& a) {
       fail_at(a.array_el, "array '" + a.name + "' of " + e->type + ": ldc takes arrays of elementary types (" + a.array_el->path() + ")");
     if (k < inits.size()) e->init = inits[k];
     a.elems.push_back(e.get());
-    vars_.push_back(std::move(e));
+    keep(std::move(e));
   }
 }
 
@@ -696,8 +708,9 @@ Val Importer::element(Var& a, const std::string& idx, const Element* el, bool wr
     Val r = var_val(e);
     return r;
   }
-  if (write) fail_at(el, "'" + a.name + "[" + idx + "]': ldc writes array elements at constant indices only (" + where(el) + ")");
-  if (a.dims.size() != 1) fail_at(el, "'" + a.name + "[" + idx + "]': ldc reads elements at a variable index of one-dimensional arrays only (" + where(el) + ")");
+  if (a.dims.size() != 1)
+    fail_at(el, "'" + a.name + "[" + idx + "]': ldc takes a variable index into one-dimensional arrays only (" + where(el) + ")");
+  if (write && pending_store_) fail_at(el, "'" + a.name + "[" + idx + "]': one element at a variable index per statement (" + where(el) + ")");
   Var& first = *a.elems[0];
   IT t = first.it;
   Operand base = var_val(first).o;
@@ -710,6 +723,14 @@ Val Importer::element(Var& a, const std::string& idx, const Element* el, bool wr
   acts.push_back(tout(Op::TLDX, t, IT::None, {base, const_opd(int32_t(stride)), r}, el));
   // the power first, then both: nothing may come between an IDX and its LDX
   rung(Cond::of(leaf(Op::TRUE, {}, el, "TRUE")), fork_of(std::move(acts)), el);
+  // a write: the statement writes the copy (a set or reset coil keeps the rest
+  // of its value), and store() puts it back, through IDX + STX again
+  if (write) pending_store_ = [this, at, it, lo = a.dims[0].first, hi = a.dims[0].second, t, base, stride, r, el] {
+    std::vector<TreeNode> st;
+    st.push_back(tout(Op::TIDX, it, IT::None, {at, const_opd(lo), const_opd(hi)}, el));
+    st.push_back(tout(Op::TSTX, t, IT::None, {r, base, const_opd(int32_t(stride))}, el));
+    rung(Cond::of(leaf(Op::TRUE, {}, el, "TRUE")), fork_of(std::move(st)), el);
+  };
   return Val{r, first.ty, t};
 }
 
@@ -768,7 +789,7 @@ void Importer::instantiate(Var& inst, const Element* fb, std::vector<std::string
       u->section = s;
       u->frame = inst.frame;
       inst.members[upper(fname)] = u.get();
-      vars_.push_back(std::move(u));
+      keep(std::move(u));
       continue;
     }
     if (s != "inputVars" && s != "outputVars" && s != "inOutVars" && s != "localVars" && s != "tempVars" && s != "externalVars") {
@@ -797,7 +818,7 @@ void Importer::instantiate(Var& inst, const Element* fb, std::vector<std::string
       u->section = s;
       u->frame = inst.frame;
       Var* raw = u.get();
-      vars_.push_back(std::move(u));
+      keep(std::move(u));
       inst.members[key] = raw;
       expand(*raw, stack);
     }
@@ -813,7 +834,7 @@ void Importer::declare(const Element* list, const std::string& pou, bool global)
     auto u = make_var(v, *nm, global ? "" : pou, constant);
     u->section = std::string(list->local_name());
     Var* raw = u.get();
-    vars_.push_back(std::move(u));
+    keep(std::move(u));
     std::string key = upper(*nm);
     if (global) {
       if (globals_.count(key)) fail_at(v, "global variable '" + *nm + "' is declared twice");
@@ -1300,6 +1321,8 @@ Val Importer::ns_of_ms(const Val& v, const Element* el) {
 }
 
 void Importer::rung(TreeNode root, const Element* el) {
+  if (rungs_.size() >= kMaxRungs)  // calls expanded inline can multiply them
+    fail_at(el, "the program needs more than " + std::to_string(kMaxRungs) + " rungs (calls of the project's POUs are expanded at each call) at " + where(el));
   TreeRung r;
   r.line = el->line;
   r.labels = std::move(pending_labels_);
@@ -1894,7 +1917,7 @@ void Importer::user_call(const Node& b, const Element* callee) {
     f->pou = pou_;
     f->frame = true;
     inst = f.get();
-    vars_.push_back(std::move(f));
+    keep(std::move(f));
     std::vector<std::string> stack;
     instantiate(*inst, callee, stack);
     std::vector<Var*> all;
@@ -2647,7 +2670,20 @@ void Importer::fn_block(const Node& b) {
   if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, materialize(eno, el), {}};
 }
 
+// A statement, then the store of an array element it wrote at a variable index.
 void Importer::statement(const Node& n) {
+  auto outer = std::move(pending_store_);  // a statement of a callee's body, expanded inside another statement
+  pending_store_ = nullptr;
+  statement_of(n);
+  if (pending_store_) {
+    auto store = std::move(pending_store_);
+    pending_store_ = nullptr;
+    store();
+  }
+  pending_store_ = std::move(outer);
+}
+
+void Importer::statement_of(const Node& n) {
   const Element* el = n.el;
   if (n.kind == "block") {
     if (!computed_.count(n.id)) block(n);
@@ -3196,7 +3232,7 @@ void Importer::prepare() {
           u->it = u->derived ? IT::None : iec_type_named(u->type);
     u->ty = kind_of(u->it);
           scope_[upper(name)] = u.get();
-          vars_.push_back(std::move(u));
+          keep(std::move(u));
         } else if (s == "externalVars") {
           for (const Element* v : sec->children_named("variable")) {
             const std::string* nm = v->attr("name");
