@@ -25,10 +25,10 @@
 #include <set>
 
 #include "frontend/frontend.h"
-#include "frontend/iec_literal.h"
 #include "frontend/operands.h"
 #include "frontend/treebuild.h"
 #include "frontend/xml.h"
+#include "ir/model.h"
 #include "ir/typed.h"
 
 namespace ldc {
@@ -108,6 +108,49 @@ bool is_int_type(IT t) { return t != IT::None && typed::is_int_kind(t); }
 // conversion to REAL would read them wrong; the typed instructions do them.
 bool unsigned32(IT t) { return t == IT::UDINT || t == IT::DWORD; }
 
+// An IEC literal as the importer holds it: its type and canonical bits
+// (ir/typed.h), read by the typed model's parser (ir/model.h parse_literal,
+// MatIEC's meaning: TIME in ns, T#3.5ms exact).
+struct IecLiteral {
+  IT type = IT::None;  // the type it is written in; an untyped integer is LINT (ULINT above INT64_MAX), an untyped real LREAL
+  bool typed = false;  // written with its type (INT#5, T#1s, D#2024-01-01, TRUE)
+  uint64_t bits = 0;   // canonical bits of `type`
+  bool based = false;  // an untyped integer written in base 2, 8 or 16 (a bit pattern)
+  bool is_real() const { return type == IT::REAL || type == IT::LREAL; }
+  double real() const { return typed::real_value(type, bits); }
+  int64_t integer() const { return int64_t(bits); }
+};
+
+std::optional<IecLiteral> parse_iec_literal(std::string_view text, std::string& why) {
+  auto p = model::parse_literal(text, why);
+  if (!p) {
+    std::string tail = ": " + std::string(text);  // the model's message ends with the text
+    if (why.size() > tail.size() && why.compare(why.size() - tail.size(), tail.size(), tail) == 0) why.resize(why.size() - tail.size());
+    if (!why.empty()) why = "malformed literal '" + std::string(text) + "': " + why;
+    return std::nullopt;
+  }
+  IecLiteral l;
+  if (p->untyped_int) {
+    bool big = p->lit.ty == IT::ULINT;
+    l.type = big ? IT::ULINT : IT::LINT;
+    l.bits = big ? p->lit.bits : uint64_t(p->ival);
+    std::string u = upper(text);
+    size_t h = u.find('#');
+    l.based = h != std::string::npos && (u.compare(0, h, "2") == 0 || u.compare(0, h, "8") == 0 || u.compare(0, h, "16") == 0);
+  } else if (p->untyped_real) {
+    l.type = IT::LREAL;
+    l.bits = typed::real_bits(IT::LREAL, p->rval);
+  } else {
+    l.type = p->lit.ty;
+    l.typed = true;
+    l.bits = p->lit.bits;
+  }
+  return l;
+}
+
+// The IEC elementary type named `name` (TIME_OF_DAY is TOD ...); IT::None if none.
+IT iec_type_named(std::string_view name) { return ty_from_name(name).value_or(IT::None); }
+
 // A value: a device or a constant, with how it is held and its IEC type
 // (None: an untyped literal or a direct address, an INT32 as before).
 struct Val {
@@ -153,6 +196,22 @@ struct Var {
   std::string address;
   const Element* el = nullptr;
   std::string pou;  // "" for globals
+  // An instance of one of the project's FUNCTION_BLOCKs (or a FUNCTION call's
+  // frame): its own variables, each a Var named INSTANCE.MEMBER (upper member
+  // name -> member); its VAR_IN_OUT names, bound to the caller's variable at
+  // each call (by reference).
+  std::map<std::string, Var*> members;
+  std::set<std::string> inouts;
+  std::string section;   // the interface section it is declared in (inputVars ...)
+  bool frame = false;    // a member of a function call's frame: no alias
+  const Element* init_el = nullptr;    // <initialValue> (or a structValue's <value>)
+  const Element* struct_el = nullptr;  // a structure's <struct> (its type in <dataTypes>)
+  bool container() const { return struct_el || !members.empty() || !inouts.empty(); }
+  // An array of an elementary type: its elements VAR[i] (VAR[i,j]) in a row of
+  // devices (the last index varies fastest), so that IDX + LDX reach element i.
+  const Element* array_el = nullptr;
+  std::vector<std::pair<int32_t, int32_t>> dims;
+  std::vector<Var*> elems;
 };
 
 // MatIEC's counters of a width other than INT (lib/counter.txt): CTU_DINT,
@@ -210,6 +269,7 @@ struct Node {
   bool negated = false, negated_in = false;
   std::string edge, storage;
   std::string type, instance;  // block
+  std::vector<Pin> inouts;     // block: in-out parameters (VAR_IN_OUT of a user POU)
 };
 
 struct Out {  // a block output as its consumers see it
@@ -235,6 +295,9 @@ class Importer {
   std::map<std::string, Var*> globals_;  // upper-case name
   std::map<std::string, const Element*> pou_lang_el_;
   std::map<std::string, std::string> pou_lang_;  // upper POU name -> body language
+  std::map<std::string, const Element*> pou_el_;  // upper POU name -> <pou>
+  std::set<std::string> called_;                  // upper POU names some block calls
+  std::vector<std::string> call_stack_;           // POUs being expanded, outermost first (as written)
   std::set<std::pair<int, uint32_t>> used_;
   uint32_t next_[11] = {};
 
@@ -294,6 +357,30 @@ class Importer {
 
   // declarations
   void declare(const Element* list, const std::string& pou, bool global);
+  // Every variable, instance member, structure member and array element is a
+  // Var: nested instances multiply them, so their number is bounded (a
+  // hostile file must not exhaust memory before the devices run out).
+  static constexpr size_t kMaxVars = 65536;
+  void keep(std::unique_ptr<Var> u) {
+    if (vars_.size() >= kMaxVars)
+      fail_at(u->el, "more than " + std::to_string(kMaxVars) + " variables, counting every member of every instance, structure and array ('" +
+                         u->name + "' is one too many); ldc's devices hold fewer");
+    vars_.push_back(std::move(u));
+  }
+  std::unique_ptr<Var> make_var(const Element* v, const std::string& name, const std::string& pou, bool constant);
+  void instantiate(Var& inst, const Element* fb, std::vector<std::string>& stack);
+  void type_of_var(Var& u, const Element* te, int depth);
+  void struct_members(Var& s, std::vector<std::string>& stack);
+  void expand(Var& v, std::vector<std::string>& stack);
+  void array_elements(Var& a);
+  Val element(Var& a, const std::string& idx, const Element* el, bool write);
+  std::function<void()> pending_store_;  // a write at a variable index: the statement's last rung
+  void statement_of(const Node& n);
+  std::map<std::string, const Element*> data_types_;  // upper name -> <dataType>
+  const Element* user_pou(const std::string& type) const;
+  std::string pou_type(const Element* pou) const { return pou->attr("pouType") ? *pou->attr("pouType") : "program"; }
+  void place(Var& v);
+  Var* member_path(const std::string& expr, const Element* el, std::string* last);
   void allocate();
   uint32_t take(Dev d, const Element* el);
   uint32_t temp_m(const Element* el) {
@@ -343,13 +430,17 @@ class Importer {
   std::string new_label();
 
   // the body
-  void body(const Element* pou, const Element* ld);
+  void body(const Element* ld, const std::string& title);
   void read_node(const Element* e);
   void read_conns(const Element* cpi, std::vector<Conn>& out);
   const Node& node(const Conn& c);
   bool is_bool_source(const Conn& c, int depth = 0);
   bool out_is_bool(const Node& b, const std::string& pin, int depth = 0);
   void refuse_user_pou(const Node& b);
+  void user_call(const Node& b, const Element* callee);
+  bool user_out_is_bool(const Node& b, const Element* callee, const std::string& pin);
+  const Element* callee_var(const Element* callee, const std::string& name, std::string* section);
+  const Element* callee_graph(const Node& b, const Element* callee);
   template <typename E>
   Cond node_values(std::vector<E*>& left, int nn, int sink, const Element* consumer);
   Cond bool_expr(const std::vector<Conn>& conns, bool order, const Element* consumer);
@@ -436,33 +527,333 @@ uint32_t Importer::take(Dev d, const Element* el) {
   return n++;
 }
 
+// A variable of an interface section (or a member of an instance): its type,
+// initial value and address as written.
+std::unique_ptr<Var> Importer::make_var(const Element* v, const std::string& name, const std::string& pou, bool constant) {
+  auto u = std::make_unique<Var>();
+  u->name = name;
+  u->el = v;
+  u->pou = pou;
+  u->constant = constant;
+  if (auto a = v->attr("address")) u->address = *a;
+  const Element* t = v->child("type");
+  if (!t || t->children.empty()) fail_at(v, "variable '" + name + "' has no type");
+  u->init_el = v->child("initialValue");
+  if (u->init_el)
+    if (const Element* sv = u->init_el->child("simpleValue"))
+      if (auto val = sv->attr("value")) u->init = *val;
+  type_of_var(*u, t->children[0].get(), 0);
+  return u;
+}
+
+// A variable's type: elementary, a standard or user FB, or one of the
+// project's <dataTypes>: a derived type or subrange is its base type (with the
+// derived type's initial value when the variable has none; a subrange's
+// bounds are not checked, as MatIEC), a structure gets members (expand).
+void Importer::type_of_var(Var& u, const Element* te, int depth) {
+  std::string k(te->local_name());
+  if (depth > 32) fail_at(te, "data type '" + u.type + "' is defined through itself (" + te->path() + ")");
+  if (k == "derived") {
+    std::string name = te->attr("name") ? *te->attr("name") : "";
+    auto dt = data_types_.find(upper(name));
+    if (dt == data_types_.end()) {
+      u.derived = true;
+      u.type = name;
+      u.it = IT::None;
+      u.ty = Ty::None;
+      return;
+    }
+    const Element* base = dt->second->child("baseType");
+    if (!base || base->children.empty()) fail_at(dt->second, "data type '" + name + "' has no baseType (" + dt->second->path() + ")");
+    if (!u.init_el)
+      if (const Element* iv = dt->second->child("initialValue")) {
+        u.init_el = iv;
+        if (const Element* sv = iv->child("simpleValue"))
+          if (auto val = sv->attr("value")) u.init = *val;
+      }
+    const Element* b = base->children[0].get();
+    if (b->local_name() == "struct") {
+      u.derived = true;
+      u.type = name;
+      u.struct_el = b;
+      return;
+    }
+    return type_of_var(u, b, depth + 1);
+  }
+  if (k == "subrangeSigned" || k == "subrangeUnsigned") {
+    const Element* base = te->child("baseType");
+    if (!base || base->children.empty()) fail_at(te, "subrange without a baseType (" + te->path() + ")");
+    return type_of_var(u, base->children[0].get(), depth + 1);
+  }
+  if (k == "struct") fail_at(te, "variable '" + u.name + "' has a structure written in its declaration; ldc takes structures declared in <dataTypes> (" + te->path() + ")");
+  if (k == "array") {
+    const Element* base = te->child("baseType");
+    if (!base || base->children.empty()) fail_at(te, "array without a baseType (" + te->path() + ")");
+    u.derived = true;
+    u.array_el = te;
+    u.type = "an array";
+    u.ty = Ty::None;
+    return;
+  }
+  if (k == "enum" || k == "string" || k == "wstring" || k == "pointer")
+    u.derived = true, u.type = k == "enum" ? "an enumeration" : k == "array" ? "an array" : upper(k);
+  else
+    u.type = upper(k), u.it = iec_type_named(u.type);
+  u.ty = kind_of(u.it);
+}
+
+// The members of a structure variable: each a variable STRUCT.MEMBER (nested
+// structures too), their initial values the structure's <structValue>, else
+// the members' own.
+void Importer::struct_members(Var& s, std::vector<std::string>& stack) {
+  if (std::find(stack.begin(), stack.end(), "TYPE " + upper(s.type)) != stack.end())
+    fail_at(s.el, "structure '" + s.type + "' contains itself (through '" + s.name + "')");
+  stack.push_back("TYPE " + upper(s.type));
+  const Element* sv = s.init_el ? s.init_el->child("structValue") : nullptr;
+  for (const Element* v : s.struct_el->children_named("variable")) {
+    const std::string* nm = v->attr("name");
+    if (!nm || nm->empty()) fail_at(v, "structure member without a name (" + v->path() + ")");
+    std::string key = upper(*nm);
+    if (s.members.count(key)) fail_at(v, "member '" + *nm + "' is declared twice in structure '" + s.type + "'");
+    auto u = make_var(v, s.name + "." + *nm, s.pou, s.constant);
+    u->section = "struct";
+    u->frame = s.frame;
+    if (sv)
+      for (const Element* mv : sv->children_named("value"))
+        if (mv->attr("member") && upper(*mv->attr("member")) == key) {
+          u->init_el = mv;
+          u->init.clear();
+          if (const Element* simple = mv->child("simpleValue"))
+            if (auto val = simple->attr("value")) u->init = *val;
+        }
+    Var* raw = u.get();
+    keep(std::move(u));
+    s.members[key] = raw;
+    expand(*raw, stack);
+  }
+  stack.pop_back();
+}
+
+// The elements of an array of an elementary type, a[lo] .. a[hi] (a[i,j] for
+// several dimensions), with the initial values of its <arrayValue> (a value
+// with repetitionValue="n" counts n times) in order.
+void Importer::array_elements(Var& a) {
+  uint64_t count = 1;
+  for (const Element* d : a.array_el->children_named("dimension")) {
+    auto num = [&](const char* at) -> int32_t {
+      const std::string* t = d->attr(at);
+      char* end = nullptr;
+      long long x = t ? std::strtoll(t->c_str(), &end, 10) : 0;
+      if (!t || t->empty() || *end || x < INT32_MIN || x > INT32_MAX) fail_at(d, "array dimension needs integer bounds lower and upper (" + d->path() + ")");
+      return int32_t(x);
+    };
+    int32_t lo = num("lower"), hi = num("upper");
+    if (hi < lo) fail_at(d, "array dimension " + std::to_string(lo) + ".." + std::to_string(hi) + " is empty (" + d->path() + ")");
+    a.dims.push_back({lo, hi});
+    count *= uint64_t(int64_t(hi) - lo + 1);
+    if (count > 8192) fail_at(d, "array '" + a.name + "' has more than 8192 elements; ldc's devices hold 8192 words");
+  }
+  if (a.dims.empty()) fail_at(a.array_el, "array without a dimension (" + a.array_el->path() + ")");
+  const Element* bt = a.array_el->child("baseType")->children[0].get();
+  std::vector<std::string> inits;
+  if (const Element* av = a.init_el ? a.init_el->child("arrayValue") : nullptr)
+    for (const Element* v : av->children_named("value")) {
+      long long rep = v->attr("repetitionValue") ? std::atoll(v->attr("repetitionValue")->c_str()) : 1;
+      const Element* sv = v->child("simpleValue");
+      if (!sv || !sv->attr("value") || rep < 1) fail_at(v, "ldc takes arrayValue elements that are simple values (" + v->path() + ")");
+      for (long long r = 0; r < rep && inits.size() < count; r++) inits.push_back(*sv->attr("value"));
+      if (inits.size() >= count && rep > 0) break;
+    }
+  for (uint64_t k = 0; k < count; k++) {
+    std::string idx;
+    uint64_t rest = k;
+    std::vector<int64_t> ix(a.dims.size());
+    for (size_t j = a.dims.size(); j-- > 0;) {
+      uint64_t n = uint64_t(int64_t(a.dims[j].second) - a.dims[j].first + 1);
+      ix[j] = a.dims[j].first + int64_t(rest % n), rest /= n;
+    }
+    for (size_t j = 0; j < ix.size(); j++) idx += (j ? "," : "") + std::to_string(ix[j]);
+    auto e = std::make_unique<Var>();
+    e->name = a.name + "[" + idx + "]";
+    e->el = a.el;
+    e->pou = a.pou;
+    e->constant = false;
+    e->frame = a.frame;
+    e->section = "array";
+    type_of_var(*e, bt, 0);
+    if (e->ty == Ty::None || e->derived)
+      fail_at(a.array_el, "array '" + a.name + "' of " + e->type + ": ldc takes arrays of elementary types (" + a.array_el->path() + ")");
+    if (k < inits.size()) e->init = inits[k];
+    a.elems.push_back(e.get());
+    keep(std::move(e));
+  }
+}
+
+// Element `idx` ("3", "i", "1,2") of array a: a constant index is checked
+// here and names its element; a variable one (one dimension) is checked at
+// run time by IDX (a scan fault naming the POU, the line and the index, every
+// engine alike; docs/faults.md) and read by LDX into a temporary.
+Val Importer::element(Var& a, const std::string& idx, const Element* el, bool write) {
+  std::vector<std::string> parts;
+  for (size_t p = 0;;) {
+    size_t c = idx.find(',', p);
+    parts.push_back(trim(idx.substr(p, c == std::string::npos ? std::string::npos : c - p)));
+    if (c == std::string::npos) break;
+    p = c + 1;
+  }
+  if (parts.size() != a.dims.size())
+    fail_at(el, "'" + a.name + "[" + idx + "]': the array has " + std::to_string(a.dims.size()) + " dimension" + (a.dims.size() == 1 ? "" : "s") + " (" + where(el) + ")");
+  uint64_t k = 0;
+  bool constant = true;
+  std::vector<Val> vals;
+  for (size_t j = 0; j < parts.size(); j++) {
+    Val v = read_of(parts[j], el, false);
+    vals.push_back(v);
+    if (v.ty != Ty::Int || !is_int_type(type_of(v)) || ty_info(type_of(v)).kind == TyKind::Time)
+      fail_at(el, "index '" + parts[j] + "' of '" + a.name + "' is not an integer (" + where(el) + ")");
+    if (!is_const(v.o)) {
+      constant = false;
+      continue;
+    }
+    int64_t i = int64_t(const_bits(v));
+    auto [lo, hi] = a.dims[j];
+    if (i < lo || i > hi)
+      fail_at(el, "index " + std::to_string(i) + " is outside " + std::to_string(lo) + ".." + std::to_string(hi) + " of array '" + a.name + "' (" + where(el) + ")");
+    k = k * uint64_t(int64_t(hi) - lo + 1) + uint64_t(i - lo);
+  }
+  if (constant) {
+    Var& e = *a.elems[k];
+    if (!e.dev) fail_at(el, "array '" + a.name + "' has no devices");
+    Val r = var_val(e);
+    return r;
+  }
+  if (a.dims.size() != 1)
+    fail_at(el, "'" + a.name + "[" + idx + "]': ldc takes a variable index into one-dimensional arrays only (" + where(el) + ")");
+  if (write && pending_store_) fail_at(el, "'" + a.name + "[" + idx + "]': one element at a variable index per statement (" + where(el) + ")");
+  Var& first = *a.elems[0];
+  IT t = first.it;
+  Operand base = var_val(first).o;
+  uint32_t stride = first.ty == Ty::Wide ? 2 : 1;
+  Operand r = temp_of(t, el);
+  IT it = type_of(vals[0]);
+  std::vector<TreeNode> acts;
+  Operand at = is_const(vals[0].o) ? Operand::typed_const(const_bits(vals[0])) : vals[0].o;
+  acts.push_back(tout(Op::TIDX, it, IT::None, {at, const_opd(a.dims[0].first), const_opd(a.dims[0].second)}, el));
+  acts.push_back(tout(Op::TLDX, t, IT::None, {base, const_opd(int32_t(stride)), r}, el));
+  // the power first, then both: nothing may come between an IDX and its LDX
+  rung(Cond::of(leaf(Op::TRUE, {}, el, "TRUE")), fork_of(std::move(acts)), el);
+  // a write: the statement writes the copy (a set or reset coil keeps the rest
+  // of its value), and store() puts it back, through IDX + STX again
+  if (write) pending_store_ = [this, at, it, lo = a.dims[0].first, hi = a.dims[0].second, t, base, stride, r, el] {
+    std::vector<TreeNode> st;
+    st.push_back(tout(Op::TIDX, it, IT::None, {at, const_opd(lo), const_opd(hi)}, el));
+    st.push_back(tout(Op::TSTX, t, IT::None, {r, base, const_opd(int32_t(stride))}, el));
+    rung(Cond::of(leaf(Op::TRUE, {}, el, "TRUE")), fork_of(std::move(st)), el);
+  };
+  return Val{r, first.ty, t};
+}
+
+// A variable with members: a structure's, or an instance's of the project's FB.
+void Importer::expand(Var& v, std::vector<std::string>& stack) {
+  if (v.struct_el) return struct_members(v, stack);
+  if (v.array_el) return array_elements(v);
+  if (!v.derived) return;
+  if (const Element* fb = user_pou(v.type)) {
+    if (pou_type(fb) != "functionBlock") fail_at(v.el, "variable '" + v.name + "' has the type of FUNCTION '" + v.type + "'; only a FUNCTION_BLOCK has instances");
+    instantiate(v, fb, stack);
+  }
+}
+
+// The project's FUNCTION_BLOCK or FUNCTION named `type`, else nullptr.
+const Element* Importer::user_pou(const std::string& type) const {
+  auto it = pou_el_.find(upper(type));
+  if (it == pou_el_.end()) return nullptr;
+  std::string k = pou_type(it->second);
+  return k == "functionBlock" || k == "function" ? it->second : nullptr;
+}
+
+// The members of an instance of the project's FUNCTION_BLOCK `fb` (or of a
+// FUNCTION's frame): every variable of its interface, named INSTANCE.MEMBER,
+// nested instances too (`stack`: the FBs being instantiated, to refuse an FB
+// that contains itself).  VAR_IN_OUT members are bound at each call; a
+// VAR_EXTERNAL is the global of that name.
+void Importer::instantiate(Var& inst, const Element* fb, std::vector<std::string>& stack) {
+  std::string fname = *fb->attr("name");
+  if (std::find(stack.begin(), stack.end(), upper(fname)) != stack.end()) {
+    std::string cycle;
+    for (auto it = std::find(stack.begin(), stack.end(), upper(fname)); it != stack.end(); ++it) cycle += *pou_el_.at(*it)->attr("name") + " -> ";
+    fail_at(inst.el, "recursion: " + cycle + fname + " (function block '" + fname + "' contains an instance of itself, through '" + inst.name +
+                         "'; an instance's memory would be infinite)");
+  }
+  stack.push_back(upper(fname));
+  const Element* itf = fb->child("interface");
+  if (!itf) {
+    stack.pop_back();
+    return;
+  }
+  for (const auto& sec : itf->children) {
+    std::string s(sec->local_name());
+    bool constant = sec->attr("constant") && (*sec->attr("constant") == "true" || *sec->attr("constant") == "1");
+    if (s == "returnType") {
+      if (sec->children.empty()) continue;
+      auto u = std::make_unique<Var>();
+      u->name = inst.name + "." + fname;
+      u->el = sec.get();
+      u->pou = inst.pou;
+      const Element* te = sec->children[0].get();
+      u->derived = te->local_name() == "derived";
+      u->type = u->derived ? (te->attr("name") ? *te->attr("name") : "") : upper(te->local_name());
+      u->it = u->derived ? IT::None : iec_type_named(u->type);
+      u->ty = kind_of(u->it);
+      u->section = s;
+      u->frame = inst.frame;
+      inst.members[upper(fname)] = u.get();
+      keep(std::move(u));
+      continue;
+    }
+    if (s != "inputVars" && s != "outputVars" && s != "inOutVars" && s != "localVars" && s != "tempVars" && s != "externalVars") {
+      if (s != "documentation" && s != "addData") fail_at(sec.get(), "unknown interface section <" + sec->name + "> (" + sec->path() + ")");
+      continue;
+    }
+    for (const Element* v : sec->children_named("variable")) {
+      const std::string* nm = v->attr("name");
+      if (!nm || nm->empty()) fail_at(v, "variable without a name (" + v->path() + ")");
+      std::string key = upper(*nm);
+      if (inst.members.count(key) || inst.inouts.count(key)) fail_at(v, "variable '" + *nm + "' is declared twice in POU '" + fname + "'");
+      if (s == "inOutVars") {
+        inst.inouts.insert(key);
+        continue;
+      }
+      if (s == "externalVars") {
+        auto g = globals_.find(key);
+        if (g == globals_.end()) fail_at(v, "external variable '" + *nm + "' of POU '" + fname + "' is not a global variable of the project");
+        inst.members[key] = g->second;
+        continue;
+      }
+      auto u = make_var(v, inst.name + "." + *nm, inst.pou, constant);
+      if (!u->address.empty())
+        fail_at(v, "variable '" + *nm + "' of " + pou_type(fb) + " '" + fname + "' is located at " + u->address +
+                       "; ldc locates the variables of programs and globals only");
+      u->section = s;
+      u->frame = inst.frame;
+      Var* raw = u.get();
+      keep(std::move(u));
+      inst.members[key] = raw;
+      expand(*raw, stack);
+    }
+  }
+  stack.pop_back();
+}
+
 void Importer::declare(const Element* list, const std::string& pou, bool global) {
   bool constant = list->attr("constant") && (*list->attr("constant") == "true" || *list->attr("constant") == "1");
   for (const Element* v : list->children_named("variable")) {
-    auto u = std::make_unique<Var>();
     const std::string* nm = v->attr("name");
     if (!nm || nm->empty()) fail_at(v, "variable without a name (" + v->path() + ")");
-    u->name = *nm;
-    u->el = v;
-    u->pou = global ? "" : pou;
-    u->constant = constant;
-    if (auto a = v->attr("address")) u->address = *a;
-    const Element* t = v->child("type");
-    if (!t || t->children.empty()) fail_at(v, "variable '" + *nm + "' has no type");
-    const Element* te = t->children[0].get();
-    if (te->local_name() == "derived") {
-      u->derived = true;
-      u->type = te->attr("name") ? *te->attr("name") : "";
-    } else {
-      u->type = upper(te->local_name());
-    }
-    u->it = u->derived ? IT::None : iec_type_named(u->type);
-    u->ty = kind_of(u->it);
-    if (const Element* iv = v->child("initialValue"))
-      if (const Element* sv = iv->child("simpleValue"))
-        if (auto val = sv->attr("value")) u->init = *val;
+    auto u = make_var(v, *nm, global ? "" : pou, constant);
+    u->section = std::string(list->local_name());
     Var* raw = u.get();
-    vars_.push_back(std::move(u));
+    keep(std::move(u));
     std::string key = upper(*nm);
     if (global) {
       if (globals_.count(key)) fail_at(v, "global variable '" + *nm + "' is declared twice");
@@ -471,6 +862,9 @@ void Importer::declare(const Element* list, const std::string& pou, bool global)
       if (scope_.count(key)) fail_at(v, "variable '" + *nm + "' is declared twice in POU '" + pou + "'");
       scope_[key] = raw;
     }
+    std::vector<std::string> stack;
+    if (!global) stack.push_back(upper(pou));
+    expand(*raw, stack);
   }
 }
 
@@ -504,25 +898,36 @@ void Importer::allocate() {
     v->dev = location(*v);
     used_.insert({int(v->dev->dev), v->dev->index});
   }
-  for (auto& v : vars_) {
-    if (v->dev || v->constant) continue;
-    if (v->derived) {
-      FbKind k = fb_kind(v->type);
-      if (k == FbKind::Timer) v->dev = DeviceRef{Dev::T, take(Dev::T, v->el)};
-      else if (k == FbKind::Counter) {
-        v->dev = DeviceRef{Dev::C, take(Dev::C, v->el)};
-        if (v->type == "CTUD") v->aux = take(Dev::M, v->el), v->aux2 = take(Dev::M, v->el);
-      } else if (k == FbKind::Typed && v->type != "SEMA") {  // CV's cells; Q (QU) and QD in M
-        v->dev = DeviceRef{Dev::D, take_run(Dev::D, ty_info(counter_width(v->type)).cells, v->el)};
-        v->aux = take(Dev::M, v->el), v->aux2 = take(Dev::M, v->el);
-      } else if (k != FbKind::None) v->dev = DeviceRef{Dev::M, take(Dev::M, v->el)};
-      continue;  // other derived types get nothing; using them is an error
-    }
-    if (v->ty == Ty::Bool) v->dev = DeviceRef{Dev::M, take(Dev::M, v->el)};
-    else if (v->ty == Ty::Int) v->dev = DeviceRef{Dev::D, take(Dev::D, v->el)};
-    else if (v->ty == Ty::Wide) v->dev = DeviceRef{Dev::D, take_run(Dev::D, 2, v->el)};
-    else if (v->ty == Ty::Real) v->dev = DeviceRef{Dev::F, take(Dev::F, v->el)};
+  for (auto& v : vars_) place(*v);
+}
+
+// An unlocated variable's devices (a standard FB instance: its T, C or M).
+void Importer::place(Var& v) {
+  if (!v.elems.empty() && !v.elems[0]->dev) {  // an array: its elements in a row
+    Var& e0 = *v.elems[0];
+    uint32_t n = uint32_t(v.elems.size()), w = e0.ty == Ty::Wide ? 2 : 1;
+    Dev d = e0.ty == Ty::Bool ? Dev::M : e0.ty == Ty::Real ? Dev::F : Dev::D;
+    uint32_t at = take_run(d, n * w, v.el);
+    for (uint32_t k = 0; k < n; k++) v.elems[k]->dev = DeviceRef{d, at + k * w};
+    return;
   }
+  if (v.dev || v.constant) return;
+  if (v.derived) {
+    FbKind k = fb_kind(v.type);
+    if (k == FbKind::Timer) v.dev = DeviceRef{Dev::T, take(Dev::T, v.el)};
+    else if (k == FbKind::Counter) {
+      v.dev = DeviceRef{Dev::C, take(Dev::C, v.el)};
+      if (v.type == "CTUD") v.aux = take(Dev::M, v.el), v.aux2 = take(Dev::M, v.el);
+    } else if (k == FbKind::Typed && v.type != "SEMA") {  // CV's cells; Q (QU) and QD in M
+      v.dev = DeviceRef{Dev::D, take_run(Dev::D, ty_info(counter_width(v.type)).cells, v.el)};
+      v.aux = take(Dev::M, v.el), v.aux2 = take(Dev::M, v.el);
+    } else if (k != FbKind::None) v.dev = DeviceRef{Dev::M, take(Dev::M, v.el)};
+    return;  // other derived types get nothing (a user FB's instance: its members do); using them is an error
+  }
+  if (v.ty == Ty::Bool) v.dev = DeviceRef{Dev::M, take(Dev::M, v.el)};
+  else if (v.ty == Ty::Int) v.dev = DeviceRef{Dev::D, take(Dev::D, v.el)};
+  else if (v.ty == Ty::Wide) v.dev = DeviceRef{Dev::D, take_run(Dev::D, 2, v.el)};
+  else if (v.ty == Ty::Real) v.dev = DeviceRef{Dev::F, take(Dev::F, v.el)};
 }
 
 Var* Importer::lookup(const std::string& name) {
@@ -539,13 +944,29 @@ Var* Importer::lookup(const std::string& name) {
 void Importer::aliases(TreeProgram& p) {
   std::map<std::string, int> count;
   for (auto& v : vars_)
-    if (v->dev) count[upper(v->name)]++;
+    if (v->dev && !v->frame) count[upper(v->name)]++;
   std::set<std::string> seen;
+  // a name, or an instance's member INSTANCE.MEMBER (each part a name)
+  // (an array's element a[3], a[1,-2] too)
+  auto dotted = [](const std::string& n) {
+    for (size_t a = 0;;) {
+      size_t d = n.find('.', a);
+      std::string seg = n.substr(a, d == std::string::npos ? std::string::npos : d - a);
+      size_t lb = seg.find('[');
+      if (lb != std::string::npos) {
+        if (seg.back() != ']' || seg.find_first_not_of("0123456789,-", lb + 1) != seg.size() - 1) return false;
+        seg = seg.substr(0, lb);
+      }
+      if (!is_identifier(seg)) return false;
+      if (d == std::string::npos) return true;
+      a = d + 1;
+    }
+  };
   for (auto& v : vars_) {
-    if (!v->dev) continue;
+    if (!v->dev || v->frame) continue;
     std::string name = count[upper(v->name)] > 1 && !v->pou.empty() ? v->pou + "_" + v->name : v->name;
     std::string why, u = upper(name);
-    if (!is_identifier(name) || u == "DT" || seen.count(u) || parse_device(name) || parse_iec_address(name, why)) continue;
+    if (!dotted(name) || u == "DT" || seen.count(u) || parse_device(name) || parse_iec_address(name, why)) continue;
     seen.insert(u);
     Alias a{name, *v->dev, v->it};  // typed: a watch shows it at its width (a BOOL is its bit either way)
     if (a.ty == IT::BOOL || !alias_type_problem(a).empty()) a.ty = IT::None;  // an FB's state: as its device
@@ -555,7 +976,7 @@ void Importer::aliases(TreeProgram& p) {
 
 // ------------------------------------------------------------------ expressions
 
-// A literal as a value (iec_literal.h: TRUE, 42, 16#FF, 1.5, INT#5, T#1.5ms,
+// A literal as a value (parse_iec_literal: TRUE, 42, 16#FF, 1.5, INT#5, T#1.5ms,
 // LREAL#1e-9, D#2024-01-31 ...).  Untyped integers that fit INT32 (and based
 // ones up to 32 bits, bit patterns: 16#FFFFFFFF is -1) and untyped reals stay
 // the INT32 and REAL constants they always were, and take the type of what
@@ -640,10 +1061,42 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
     Area w = word_area(d->dev);
     return {shadowed(Operand{w == Area::F ? OpdKind::Real : OpdKind::Int, w, d->index}), w == Area::F ? Ty::Real : Ty::Int};
   }
+  if (size_t lb = e.find('['); lb != std::string::npos && !e.empty() && e.back() == ']') {  // an array element
+    std::string base = trim(e.substr(0, lb));
+    Var* a = nullptr;
+    if (base.find('.') == std::string::npos) a = lookup(base);
+    else {
+      std::string last;
+      Var* c = member_path(base, el, &last);
+      if (c && c->container() && c->members.count(upper(last))) a = c->members.at(upper(last));
+    }
+    if (!a) fail_at(el, "unknown variable '" + base + "' in " + where(el));
+    if (a->elems.empty()) fail_at(el, "'" + base + "' is not an array; '" + e + "' indexes it (" + where(el) + ")");
+    return element(*a, e.substr(lb + 1, e.size() - lb - 2), el, write);
+  }
   size_t dot = e.find('.');
+  Var* v = nullptr;
   if (dot != std::string::npos) {
-    Var* inst = lookup(e.substr(0, dot));
-    std::string m = upper(e.substr(dot + 1));
+    std::string last;
+    Var* inst = member_path(e, el, &last);
+    if (inst && inst->container()) {  // a member of a structure or of an instance of the project's own FB
+      auto it = inst->members.find(upper(last));
+      if (it == inst->members.end()) {
+        if (inst->inouts.count(upper(last)))
+          fail_at(el, "'" + e + "' is a VAR_IN_OUT of " + inst->type + ", bound to the caller's variable only during a call (" + where(el) + ")");
+        std::string known;
+        for (const auto& [k, mv] : inst->members) known += (known.empty() ? "" : ", ") + mv->name.substr(mv->name.rfind('.') + 1);
+        fail_at(el, "'" + e + "': " + inst->type + " has no variable '" + last + "' (it has " + known + ") in " + where(el));
+      }
+      v = it->second;
+      if (write && v->section == "outputVars")
+        fail_at(el, "'" + e + "' is an output of " + inst->type + "; only its body writes it (" + where(el) + ")");
+    }
+  }
+  if (!v && dot != std::string::npos) {
+    std::string m;
+    Var* inst = member_path(e, el, &m);
+    m = upper(m);
     if (!inst || !inst->derived || fb_kind(inst->type) == FbKind::None || !inst->dev)
       fail_at(el, "'" + e + "' is not a variable ldc knows (structures and arrays are not supported) in " + where(el));
     if (write) fail_at(el, "'" + e + "' is a function block output; it cannot be written (" + where(el) + ")");
@@ -665,7 +1118,7 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
     }
     fail_at(el, "'" + e + "': " + inst->type + " has no output " + m);
   }
-  Var* v = lookup(e);
+  if (!v) v = lookup(e);
   if (!v) fail_at(el, "unknown variable '" + e + "' in " + where(el));
   if (v->constant) {
     if (write) fail_at(el, "'" + e + "' is a constant; it cannot be written (" + where(el) + ")");
@@ -678,6 +1131,29 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
   Val r = var_val(*v);
   r.o = shadowed(r.o);
   return r;
+}
+
+// The instance whose member `expr` (A.B.C) names, following the members of
+// the project's own FB instances: A.B, with *last = "C"; nullptr when A is no
+// variable.
+Var* Importer::member_path(const std::string& expr, const Element* el, std::string* last) {
+  size_t dot = expr.find('.');
+  Var* v = lookup(expr.substr(0, dot));
+  while (v) {
+    size_t next = expr.find('.', dot + 1);
+    if (next == std::string::npos) {
+      *last = expr.substr(dot + 1);
+      return v;
+    }
+    std::string seg = expr.substr(dot + 1, next - dot - 1);
+    auto it = v->members.find(upper(seg));
+    if (!v->container() || it == v->members.end())
+      fail_at(el, "'" + expr + "': '" + v->name + "' has no member '" + seg + "' (" + where(el) + ")");
+    v = it->second;
+    dot = next;
+  }
+  *last = expr.substr(dot + 1);
+  return nullptr;
 }
 
 // A variable's device as a value.
@@ -876,6 +1352,8 @@ Val Importer::ns_of_ms(const Val& v, const Element* el) {
 }
 
 void Importer::rung(TreeNode root, const Element* el) {
+  if (rungs_.size() >= kMaxRungs)  // calls expanded inline can multiply them
+    fail_at(el, "the program needs more than " + std::to_string(kMaxRungs) + " rungs (calls of the project's POUs are expanded at each call) at " + where(el));
   TreeRung r;
   r.line = el->line;
   r.labels = std::move(pending_labels_);
@@ -1035,9 +1513,7 @@ void Importer::read_node(const Element* e) {
     };
     pins("inputVariables", n.inputs, true);
     pins("outputVariables", n.outputs, false);
-    if (const Element* io = e->child("inOutVariables"))
-      if (!io->children_named("variable").empty())
-        fail_at(io, "block " + n.type + " localId " + *id + " has in-out parameters, which ldc does not support (" + io->path() + ")");
+    pins("inOutVariables", n.inouts, true);
   } else {
     for (const Element* cpi : e->children_named("connectionPointIn")) read_conns(cpi, n.in);
   }
@@ -1054,6 +1530,8 @@ const Node& Importer::node(const Conn& c) {
 const Pin* Importer::out_pin(const Node& b, const Conn& c) {
   if (c.has_param) {
     for (const Pin& p : b.outputs)
+      if (p.name == c.param) return &p;
+    for (const Pin& p : b.inouts)
       if (p.name == c.param) return &p;
     if (c.param == "ENO") return nullptr;  // ENO need not be declared
     fail_at(c.el, "block " + b.type + " localId " + std::to_string(b.id) + " has no output '" + c.param + "' (" + c.el->path() + ")");
@@ -1098,8 +1576,9 @@ void Importer::refuse_user_pou(const Node& b) {
 
 bool Importer::out_is_bool(const Node& b, const std::string& pin, int depth) {
   std::string t = upper(b.type);
-  if (fb_kind(t) == FbKind::None) refuse_user_pou(b);
   if (pin == "ENO") return true;
+  if (const Element* callee = user_pou(t); callee && fb_kind(t) == FbKind::None) return user_out_is_bool(b, callee, pin);
+  if (fb_kind(t) == FbKind::None) refuse_user_pou(b);
   if (fb_kind(t) != FbKind::None) return !(pin == "ET" || pin == "CV");  // (CTU_ULINT ... too)
   static const std::set<std::string> cmp = {"GT", "GE", "EQ", "NE", "LE", "LT"};
   if (cmp.count(t)) return true;
@@ -1334,6 +1813,16 @@ Out Importer::block_out(const Node& b, const Conn& c, bool order) {
   std::string name = p ? p->name : "ENO";
   auto it = outs_.find({b.id, name});
   bool in_loop = generating_.count(b.id) > 0;
+  const Element* callee = fb_kind(upper(b.type)) == FbKind::None ? user_pou(b.type) : nullptr;
+  if (it == outs_.end() && (!computed_.count(b.id) || in_loop) && callee && pou_type(callee) == "functionBlock" && name != "ENO") {
+    // the same for an instance of the project's own FB: its output variable
+    Var* inst = b.instance.empty() ? nullptr : lookup(b.instance);
+    if (inst && inst->members.count(upper(name)) && inst->members.at(upper(name))->dev) {
+      Val v = var_val(*inst->members.at(upper(name)));
+      outs_[{b.id, name}] = v.ty == Ty::Bool ? Out{true, bit_leaf(Op::LOAD, v.o, b.el), {}} : Out{false, {}, v};
+      it = outs_.find({b.id, name});
+    }
+  }
   if (it == outs_.end() && (!computed_.count(b.id) || in_loop) && fb_kind(upper(b.type)) != FbKind::None && name != "ENO") {
     // read before its execution order runs it, or where a loop of blocks closes
     // (Beremiz reads the instance's output there): a function block's outputs
@@ -1360,25 +1849,7 @@ Out Importer::block_out(const Node& b, const Conn& c, bool order) {
   return o;
 }
 
-void Importer::block(const Node& b) {
-  Nest leave{nest_ += kBlockNest, kBlockNest};
-  if (nest_ > kMaxNest)
-    fail_at(b.el, "blocks feed each other too deeply (more than " + std::to_string(kMaxNest / kBlockNest) + ", less with power flow between them) at " + where(b.el));
-  computed_.insert(b.id);
-  generating_.insert(b.id);
-  std::string t = upper(b.type);
-  if (fb_kind(t) != FbKind::None) {
-    Var* inst = b.instance.empty() ? nullptr : lookup(b.instance);
-    if (!inst) fail_at(b.el, t + " block localId " + std::to_string(b.id) + " needs an instance declared in the POU ('" + b.instance + "' is not) (" + b.el->path() + ")");
-    if (!inst->derived || upper(inst->type) != t)
-      fail_at(b.el, "instance '" + b.instance + "' is declared as " + inst->type + ", but block localId " + std::to_string(b.id) + " is a " + t);
-    fb_block(b, *inst);
-  } else {
-    refuse_user_pou(b);
-    fn_block(b);
-  }
-  generating_.erase(b.id);
-}
+// ------------------------------------------------------------------ calls of the project's own POUs
 
 // The pins of a block by name; absent pins have no connections.
 struct Pins {
@@ -1393,6 +1864,248 @@ struct Pins {
     return p && !p->conns.empty();
   }
 };
+
+
+// The declaration of variable `name` of POU `callee` (a FUNCTION's result:
+// its returnType), with its section; nullptr if it has none of that name.
+const Element* Importer::callee_var(const Element* callee, const std::string& name, std::string* section) {
+  const Element* itf = callee->child("interface");
+  if (!itf) return nullptr;
+  for (const auto& sec : itf->children) {
+    if (sec->local_name() == "returnType") {
+      if (upper(name) == "OUT" || upper(name) == upper(*callee->attr("name"))) {
+        *section = "returnType";
+        return sec.get();
+      }
+      continue;
+    }
+    for (const Element* v : sec->children_named("variable"))
+      if (v->attr("name") && upper(*v->attr("name")) == upper(name)) {
+        *section = std::string(sec->local_name());
+        return v;
+      }
+  }
+  return nullptr;
+}
+
+// The LD or FBD body of the project's POU that block b calls; another
+// language is refused, naming it.
+const Element* Importer::callee_graph(const Node& b, const Element* callee) {
+  const Element* body_el = callee->child("body");
+  const Element* graph = body_el ? (body_el->child("LD") ? body_el->child("LD") : body_el->child("FBD")) : nullptr;
+  if (!graph)
+    fail_at(b.el, "block '" + b.type + "' localId " + std::to_string(b.id) + (b.instance.empty() ? "" : " (instance " + b.instance + ")") + " calls " +
+                      (pou_type(callee) == "function" ? "function '" : "function block '") + *callee->attr("name") + "', written in " + pou_lang_[upper(*callee->attr("name"))] +
+                      "; ldc expands calls of the project's POUs written in LD or FBD (" + b.el->path() + ")");
+  return graph;
+}
+
+// Is output `pin` of a call of the project's POU `callee` BOOL?  (Its
+// declared type; an in-out's is the variable's it is bound to.)
+bool Importer::user_out_is_bool(const Node& b, const Element* callee, const std::string& pin) {
+  callee_graph(b, callee);  // a body ldc does not expand is refused first, by name
+  std::string section;
+  const Element* d = callee_var(callee, pin, &section);
+  if (!d) fail_at(b.el, "block " + b.type + " localId " + std::to_string(b.id) + ": POU '" + *callee->attr("name") + "' has no output '" + pin + "' (" + b.el->path() + ")");
+  const Element* t = section == "returnType" ? d : d->child("type");
+  return t && !t->children.empty() && t->children[0]->local_name() == "BOOL";
+}
+
+// A call of the project's own FUNCTION_BLOCK or FUNCTION, expanded inline as
+// MatIEC runs it (docs/plcopen.md, section 5b): the connected inputs are
+// copied into the instance (a FUNCTION's frame starts from its initial values
+// at every call), EN off skips the body (ENO FALSE; an FB keeps its outputs, a
+// FUNCTION returns its result's initial value), the body runs with the
+// instance's variables for its names and VAR_IN_OUT bound to the caller's
+// variables, and the outputs are the instance's variables after it.
+void Importer::user_call(const Node& b, const Element* callee) {
+  const Element* el = b.el;
+  std::string cname = *callee->attr("name");
+  std::string what = "block '" + b.type + "' localId " + std::to_string(b.id);
+  bool is_fb = pou_type(callee) == "functionBlock";
+  // recursion, by name (the bodies are expanded inline)
+  if (auto it = std::find_if(call_stack_.begin(), call_stack_.end(), [&](const std::string& n) { return upper(n) == upper(cname); });
+      it != call_stack_.end()) {
+    std::string cycle;
+    for (; it != call_stack_.end(); ++it) cycle += *it + " -> ";
+    fail_at(el, "recursion: " + cycle + cname + " (" + what + "; POUs are expanded inline at each call, so a POU cannot call itself, directly or through others) (" +
+                    el->path() + ")");
+  }
+  const Element* graph = callee_graph(b, callee);
+  // the instance, or a fresh frame for this call of a FUNCTION
+  Var* inst = nullptr;
+  if (is_fb) {
+    inst = b.instance.empty() ? nullptr : lookup(b.instance);
+    if (!inst) fail_at(el, what + " calls function block '" + cname + "' and needs an instance declared in the POU ('" + b.instance + "' is not) (" + el->path() + ")");
+    if (!inst->derived || upper(inst->type) != upper(cname))
+      fail_at(el, "instance '" + b.instance + "' is declared as " + inst->type + ", but " + what + " is a " + cname);
+  } else {
+    auto f = std::make_unique<Var>();
+    f->name = cname + "@" + std::to_string(b.id);
+    f->derived = true;
+    f->type = cname;
+    f->el = el;
+    f->pou = pou_;
+    f->frame = true;
+    inst = f.get();
+    keep(std::move(f));
+    std::vector<std::string> stack;
+    instantiate(*inst, callee, stack);
+    std::vector<Var*> all;
+    std::function<void(Var&)> walk = [&](Var& c) {
+      for (auto& [k, m] : c.members)
+        if (m->frame) all.push_back(m), walk(*m);  // not the globals its VAR_EXTERNAL names
+    };
+    walk(*inst);
+    for (Var* m : all) place(*m);
+    // MatIEC: a FUNCTION's variables (its result too) start from their initial values at every call
+    for (Var* m : all) {
+      if (!m->dev || m->constant) continue;
+      Val zero{const_opd(0), Ty::Int};
+      auto c = m->init.empty() ? std::optional<Val>(zero) : literal(m->init, m->el);
+      if (!c) fail_at(m->el, "initial value '" + m->init + "' of '" + m->name + "' is not a literal");
+      Val k = const_val(*c, m->it);
+      if (m->ty == Ty::Bool) rung(Cond::yes(), out(k.o.ival ? Op::SET : Op::RST, {var_val(*m).o}, el), el);
+      else rung(Cond::yes(), assign_node(k, var_val(*m), el), el);
+    }
+  }
+  Pins pins{b};
+  bool order = b.order > 0;
+  Cond en = Cond::yes();
+  if (pins.has("EN")) {
+    const Pin* p = pins.get("EN");
+    Cond c = bool_expr(p->conns, order, p->el);
+    if (p->negated) c = negate(std::move(c), p->el);
+    en = materialize(std::move(c), el);
+  }
+  // the connected inputs, in the order of the pins
+  for (const Pin& p : b.inputs) {
+    if (p.name == "EN" || p.conns.empty()) continue;
+    auto it = inst->members.find(upper(p.name));
+    std::string section;
+    callee_var(callee, p.name, &section);
+    if (it == inst->members.end() || section != "inputVars")
+      fail_at(p.el, cname + " has no input '" + p.name + "' (" + p.el->path() + ")");
+    Var& m = *it->second;
+    if (!m.dev) fail_at(p.el, "input '" + p.name + "' of " + cname + " has type " + m.type + ", which ldc cannot hold (" + p.el->path() + ")");
+    Val dst = var_val(m);
+    if (m.ty == Ty::Bool) {
+      if (!is_bool_source(p.conns[0])) fail_at(p.el, "input '" + p.name + "' of " + cname + " is BOOL but a value feeds it (" + p.el->path() + ")");
+      Cond c = bool_expr(p.conns, order, p.el);
+      if (p.negated) c = negate(std::move(c), p.el);
+      else if (p.edge == "rising" || p.edge == "falling") c = trigger(std::move(c), p.edge == "rising", p.el);
+      rung(std::move(c), out(Op::OUT, {dst.o}, p.el, m.name), p.el);
+    } else {
+      if (p.negated) fail_at(p.el, "a negated input must be BOOL (" + p.el->path() + ")");
+      assign(value_expr(p.conns, order, p.el), dst, m.name, p.el);
+    }
+  }
+  // VAR_IN_OUT: the caller's variable itself
+  std::map<std::string, Var*> bound;
+  for (const Pin& p : b.inouts) {
+    if (!inst->inouts.count(upper(p.name))) fail_at(p.el, cname + " has no VAR_IN_OUT '" + p.name + "' (" + p.el->path() + ")");
+    if (p.conns.size() != 1) fail_at(p.el, "in-out '" + p.name + "' of " + what + " needs one connection, a variable (" + p.el->path() + ")");
+    const Node& src = node(p.conns[0]);
+    if (src.kind != "inVariable" && src.kind != "inOutVariable")
+      fail_at(p.el, "in-out '" + p.name + "' of " + what + " is passed by reference: connect a variable, not " + where(src.el));
+    std::string last;
+    Var* v = src.text.find('.') == std::string::npos ? lookup(src.text) : nullptr;
+    if (!v && src.text.find('.') != std::string::npos)
+      if (Var* c = member_path(src.text, src.el, &last); c && user_pou(c->type) && c->members.count(upper(last))) v = c->members.at(upper(last));
+    if (!v || v->constant || (!v->dev && v->members.empty()))
+      fail_at(p.el, "in-out '" + p.name + "' of " + what + " is passed by reference: '" + src.text + "' is not a variable ldc holds (" + p.el->path() + ")");
+    bound[upper(p.name)] = v;
+  }
+  for (const std::string& io : inst->inouts)
+    if (!bound.count(io)) fail_at(el, what + " leaves VAR_IN_OUT '" + io + "' of " + cname + " unconnected; MatIEC needs every in-out connected (" + el->path() + ")");
+  std::string skip;
+  if (en.k != Cond::True) {
+    skip = new_label();
+    Operand l{OpdKind::Label};
+    l.label = skip;
+    rung(negate(en, el), out(Op::JMP, {l}, el), el);
+  }
+  // the body, with the instance's variables for its names
+  {
+    Nest leave{nest_ += kBlockNest, kBlockNest};
+    if (nest_ > kMaxNest) fail_at(el, "calls nested too deeply at " + where(el));
+    auto nodes = std::move(nodes_);
+    auto connectors = std::move(connectors_);
+    auto computed = std::move(computed_);
+    auto outs = std::move(outs_);
+    auto consumed = std::move(consumed_);
+    auto generating = std::move(generating_);
+    auto scope = std::move(scope_);
+    std::string pou = pou_;
+    scope_.clear();
+    for (auto& [k, m] : inst->members) scope_[k] = m;
+    for (auto& [k, v] : bound) scope_[k] = v;
+    call_stack_.push_back(cname);
+    pou_ = cname;
+    bool sfc = sfc_mode_;
+    sfc_mode_ = false;
+    body(graph, "call of " + cname + (is_fb ? " " + inst->name : ""));
+    sfc_mode_ = sfc;
+    call_stack_.pop_back();
+    pou_ = pou;
+    nodes_ = std::move(nodes);
+    connectors_ = std::move(connectors);
+    computed_ = std::move(computed);
+    outs_ = std::move(outs);
+    consumed_ = std::move(consumed);
+    generating_ = std::move(generating);
+    scope_ = std::move(scope);
+  }
+  if (!skip.empty()) pending_labels_.push_back(skip);
+  // the outputs: the instance's variables after the call
+  for (const Pin& p : b.outputs) {
+    if (p.name == "ENO") continue;
+    std::string section;
+    callee_var(callee, p.name, &section);
+    auto it = inst->members.find(upper(section == "returnType" ? cname : p.name));
+    if (it == inst->members.end() || (section != "outputVars" && section != "returnType"))
+      fail_at(p.el, cname + " has no output '" + p.name + "' (" + p.el->path() + ")");
+    Var& m = *it->second;
+    if (!m.dev) fail_at(p.el, "output '" + p.name + "' of " + cname + " has type " + m.type + ", which ldc cannot hold (" + p.el->path() + ")");
+    Val v = var_val(m);
+    outs_[{b.id, p.name}] = v.ty == Ty::Bool ? Out{true, bit_leaf(Op::LOAD, v.o, el), {}} : Out{false, {}, v};
+  }
+  for (const Pin& p : b.inouts) {
+    Var* v = bound.at(upper(p.name));
+    if (!v->dev) continue;
+    Val r = var_val(*v);
+    outs_[{b.id, p.name}] = r.ty == Ty::Bool ? Out{true, bit_leaf(Op::LOAD, r.o, el), {}} : Out{false, {}, r};
+  }
+  if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, en, {}};
+}
+
+void Importer::block(const Node& b) {
+  Nest leave{nest_ += kBlockNest, kBlockNest};
+  if (nest_ > kMaxNest)
+    fail_at(b.el, "blocks feed each other too deeply (more than " + std::to_string(kMaxNest / kBlockNest) + ", less with power flow between them) at " + where(b.el));
+  computed_.insert(b.id);
+  generating_.insert(b.id);
+  std::string t = upper(b.type);
+  if (fb_kind(t) != FbKind::None) {
+    Var* inst = b.instance.empty() ? nullptr : lookup(b.instance);
+    if (!inst) fail_at(b.el, t + " block localId " + std::to_string(b.id) + " needs an instance declared in the POU ('" + b.instance + "' is not) (" + b.el->path() + ")");
+    if (!inst->derived || upper(inst->type) != t)
+      fail_at(b.el, "instance '" + b.instance + "' is declared as " + inst->type + ", but block localId " + std::to_string(b.id) + " is a " + t);
+    if (!b.inouts.empty())
+      fail_at(b.inouts[0].el, "block " + b.type + " localId " + std::to_string(b.id) + " has in-out parameters, which ldc takes for calls of the project's own POUs only (" +
+                                  b.inouts[0].el->path() + ")");
+    fb_block(b, *inst);
+  } else if (const Element* callee = user_pou(t)) {
+    user_call(b, callee);
+  } else {
+    if (!b.inouts.empty())
+      fail_at(b.inouts[0].el, "block " + b.type + " localId " + std::to_string(b.id) + " has in-out parameters, which ldc takes for calls of the project's own POUs only (" +
+                                  b.inouts[0].el->path() + ")");
+    refuse_user_pou(b);
+    fn_block(b);
+  }
+  generating_.erase(b.id);
+}
 
 void Importer::fb_block(const Node& b, Var& inst) {
   std::string t = upper(inst.type);
@@ -2164,7 +2877,20 @@ void Importer::fn_block(const Node& b) {
   if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, materialize(eno, el), {}};
 }
 
+// A statement, then the store of an array element it wrote at a variable index.
 void Importer::statement(const Node& n) {
+  auto outer = std::move(pending_store_);  // a statement of a callee's body, expanded inside another statement
+  pending_store_ = nullptr;
+  statement_of(n);
+  if (pending_store_) {
+    auto store = std::move(pending_store_);
+    pending_store_ = nullptr;
+    store();
+  }
+  pending_store_ = std::move(outer);
+}
+
+void Importer::statement_of(const Node& n) {
   const Element* el = n.el;
   if (n.kind == "block") {
     if (!computed_.count(n.id)) block(n);
@@ -2230,7 +2956,7 @@ bool before(const Node* a, const Node* b) {
   return a->y < b->y;
 }
 
-void Importer::body(const Element* pou, const Element* ld) {
+void Importer::body(const Element* ld, const std::string& title) {
   nodes_.clear();
   connectors_.clear();
   computed_.clear();
@@ -2269,11 +2995,12 @@ void Importer::body(const Element* pou, const Element* ld) {
     insertion(blocks);
   }
   size_t first = rungs_.size();
-  pending_title_ = "POU " + *pou->attr("name");
+  std::string before_title = pending_title_;
+  pending_title_ = before_title.empty() ? title : before_title + "; " + title;
   for (const Node* n : ordered) statement(*n);
   for (const Node* n : stmts) statement(*n);
   for (const Node* n : blocks) statement(*n);
-  if (rungs_.size() == first) pending_title_.clear();
+  if (rungs_.size() == first) pending_title_ = before_title;
 }
 
 // ------------------------------------------------------------------ SFC bodies
@@ -2302,7 +3029,7 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
   if (chart_) fail_at(pou, "POU '" + pname + "' is a second SFC program in one task (after '" + chart_pou_ + "'); ldc runs one chart per program");
   // the LD/FBD elements: blocks and variables feeding the conditions
   sfc_mode_ = true;
-  body(pou, sfc);
+  body(sfc, "POU " + pname);
   sfc_mode_ = false;
   std::map<int, const Element*> el_of;
   for (const auto& c : sfc->children) {
@@ -2620,16 +3347,13 @@ void Importer::prepare() {
     fail_at(root, "expected a PLCopen TC6 <project>, found <" + root->name + ">");
   position_order_ = saved_by_python2(root);
   tc6_v1_ = namespace_of(root) == kTc6V1Namespace;
-  // global variables of configurations and resources
-  if (const Element* inst = root->child("instances"))
-    if (const Element* cfgs = inst->child("configurations"))
-      for (const Element* cfg : cfgs->children_named("configuration")) {
-        for (const Element* g : cfg->children_named("globalVars")) declare(g, "", true);
-        for (const Element* res : cfg->children_named("resource"))
-          for (const Element* g : res->children_named("globalVars")) declare(g, "", true);
-      }
   // POUs and their languages
   const Element* types = root->child("types");
+  if (const Element* dts = types ? types->child("dataTypes") : nullptr)
+    for (const Element* dt : dts->children_named("dataType")) {
+      if (!dt->attr("name")) fail_at(dt, "data type without a name (" + dt->path() + ")");
+      if (!data_types_.emplace(upper(*dt->attr("name")), dt).second) fail_at(dt, "data type '" + *dt->attr("name") + "' is declared twice");
+    }
   const Element* pous = types ? types->child("pous") : nullptr;
   std::vector<const Element*> all;
   std::vector<const Element*>& ld = ld_pous_;
@@ -2658,9 +3382,29 @@ void Importer::prepare() {
         }
       }
       pou_lang_[upper(*p->attr("name"))] = lang;
+      pou_el_[upper(*p->attr("name"))] = p;
       all.push_back(p);
-      if (lang == "LD" || lang == "FBD") ld.push_back(p);  // FBD: the same block graph, without rails
     }
+  // the project's FUNCTION_BLOCKs and FUNCTIONs that a block calls are expanded
+  // at their calls, not compiled as programs of their own (section 5b)
+  for (const Element* p : all)
+    if (const Element* b = p->child("body"))
+      for (const auto& g : b->children)
+        for (const Element* blk : g->children_named("block"))
+          if (auto t = blk->attr("typeName")) called_.insert(upper(*t));
+  for (const Element* p : all) {
+    const std::string& lang = pou_lang_[upper(*p->attr("name"))];
+    bool callee = called_.count(upper(*p->attr("name"))) && user_pou(*p->attr("name"));
+    if ((lang == "LD" || lang == "FBD") && !callee) ld.push_back(p);  // FBD: the same block graph, without rails
+  }
+  // global variables of configurations and resources
+  if (const Element* inst = root->child("instances"))
+    if (const Element* cfgs = inst->child("configurations"))
+      for (const Element* cfg : cfgs->children_named("configuration")) {
+        for (const Element* g : cfg->children_named("globalVars")) declare(g, "", true);
+        for (const Element* res : cfg->children_named("resource"))
+          for (const Element* g : res->children_named("globalVars")) declare(g, "", true);
+      }
   tasks(root);
   // SFC programs that a task runs: their charts (section 1b)
   for (const Element* p : all)
@@ -2695,7 +3439,7 @@ void Importer::prepare() {
           u->it = u->derived ? IT::None : iec_type_named(u->type);
     u->ty = kind_of(u->it);
           scope_[upper(name)] = u.get();
-          vars_.push_back(std::move(u));
+          keep(std::move(u));
         } else if (s == "externalVars") {
           for (const Element* v : sec->children_named("variable")) {
             const std::string* nm = v->attr("name");
@@ -2722,7 +3466,7 @@ void Importer::prepare() {
 void Importer::emit_init(const std::function<bool(const Var&)>& which, const Element* root) {
   init_.clear();
   for (auto& v : vars_) {
-    if (!v->dev || v->init.empty() || v->derived || v->constant || !which(*v)) continue;
+    if (!v->dev || v->init.empty() || v->derived || v->constant || v->frame || !which(*v)) continue;
     if (v->dev->dev == Dev::X || v->dev->dev == Dev::WX) continue;  // inputs belong to the I/O
     auto c = literal(v->init, v->el);
     if (!c) fail_at(v->el, "initial value '" + v->init + "' of '" + v->name + "' is not a literal");
@@ -2749,7 +3493,7 @@ void Importer::emit_bodies(const std::vector<const Element*>& pous) {
     scope_ = scopes_[pe];
     const Element* b = pe->child("body");
     if (const Element* sfc = b->child("SFC")) sfc_body(pe, sfc);
-    else body(pe, b->child("LD") ? b->child("LD") : b->child("FBD"));
+    else body(b->child("LD") ? b->child("LD") : b->child("FBD"), "POU " + pou_);
   }
 }
 

@@ -116,6 +116,23 @@ bool is_name(std::string_view s) {
   return true;
 }
 
+// An alias: a name, or an instance's or structure's member INSTANCE.MEMBER of
+// names, and array elements NAME[3] (the PLCopen importer's aliases, docs/plcopen.md).
+bool is_alias_name(std::string_view s) {
+  for (size_t a = 0;;) {
+    size_t d = s.find('.', a);
+    std::string_view seg = s.substr(a, d == std::string_view::npos ? std::string_view::npos : d - a);
+    size_t lb = seg.find('[');  // an array's element a[3], a[1,-2]
+    if (lb != std::string_view::npos) {
+      if (seg.back() != ']' || seg.find_first_not_of("0123456789,-", lb + 1) != seg.size() - 1) return false;
+      seg = seg.substr(0, lb);
+    }
+    if (!is_name(seg)) return false;
+    if (d == std::string_view::npos) return true;
+    a = d + 1;
+  }
+}
+
 // The common case of parse_number, in one pass: an optional '-' and 1 to 9
 // decimal digits (never outside INT32).  False for anything else, which the
 // general path then reads.
@@ -317,7 +334,7 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
       p.edge_slots = uint32_t(n.ival);
     } else if (head.text == ".alias") {
       std::optional<DeviceRef> d;
-      if (toks.size() < 3 || toks.size() > 4 || !is_name(toks[1].text) || !(d = parse_device(toks[2].text)) ||
+      if (toks.size() < 3 || toks.size() > 4 || !is_alias_name(toks[1].text) || !(d = parse_device(toks[2].text)) ||
           d->index >= device_count(d->dev))
         throw CompileError(lineno, head.col, ".alias needs a name, a device and optionally a type");
       Alias a{std::string(toks[1].text), *d};
