@@ -115,6 +115,18 @@ bool is_name(std::string_view s) {
   return true;
 }
 
+// An alias's name: a name, or the path of a structured variable's scalar that a
+// typed front end names (s.inner.m0, sa[-1].flag, grid[1,0]: docs/iec-il.md).
+bool is_alias_name(std::string_view s) {
+  size_t n = s.find_first_of(".[");
+  if (!is_name(s.substr(0, n))) return false;
+  for (size_t i = n; i < s.size(); i++) {
+    char c = s[i];
+    if (!std::isalnum((unsigned char)c) && c != '_' && c != '.' && c != '[' && c != ']' && c != ',' && c != '-') return false;
+  }
+  return true;
+}
+
 // The common case of parse_number, in one pass: an optional '-' and 1 to 9
 // decimal digits (never outside INT32).  False for anything else, which the
 // general path then reads.
@@ -316,7 +328,7 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
       p.edge_slots = uint32_t(n.ival);
     } else if (head.text == ".alias") {
       std::optional<DeviceRef> d;
-      if (toks.size() != 3 || !is_name(toks[1].text) || !(d = parse_device(toks[2].text)) || d->index >= device_count(d->dev))
+      if (toks.size() != 3 || !is_alias_name(toks[1].text) || !(d = parse_device(toks[2].text)) || d->index >= device_count(d->dev))
         throw CompileError(lineno, head.col, ".alias needs a name and a device");
       p.aliases.push_back({std::string(toks[1].text), *d});
     } else if (head.text == ".retain") {

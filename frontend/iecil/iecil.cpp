@@ -93,7 +93,17 @@ std::vector<Tok> lex(std::string_view s) {
         bool typed = s.substr(st, i - st).find('#') != std::string_view::npos;
         return before == '#' || ((numeric || typed) && (before == 'e' || before == 'E'));
       };
-      while (i < s.size() && ((word_char(s[i]) && !(s[i] == '.' && i + 1 < s.size() && s[i + 1] == '.')) || sign_inside())) i++;
+      // a date or a time of day goes on over '-' and ':': DATE#2024-01-31, TOD#12:30:00.5, DT#2024-01-31-12:30:00
+      auto date_inside = [&] {
+        if (s[i] != '-' && s[i] != ':') return false;
+        size_t h = s.substr(st, i - st).find('#');
+        if (h == std::string_view::npos || i == st + h + 1) return false;
+        static const std::set<std::string> kDates = {"D", "DATE", "TOD", "TIME_OF_DAY", "DT", "DATE_AND_TIME"};
+        return kDates.count(upper(s.substr(st, h))) > 0 && i + 1 < s.size() && std::isdigit((unsigned char)s[i + 1]);
+      };
+      while (i < s.size() && ((word_char(s[i]) && !(s[i] == '.' && i + 1 < s.size() && s[i + 1] == '.')) || sign_inside() ||
+                              date_inside()))
+        i++;
       out.push_back({Tok::Word, std::string(s.substr(st, i - st)), line, col(st)});
       continue;
     }
