@@ -489,6 +489,25 @@ std::vector<std::string> il_line_reductions(const std::string& rung) {
   return out;
 }
 
+// The smaller rungs one edit makes: an IL rung (a typed program's) without one
+// of its lines, a grid rung without a group, a branch or a condition.
+std::vector<GenItem> rung_item_reductions(const GenItem& rung, bool text) {
+  std::vector<GenItem> out;
+  if (text) {
+    for (std::string& t : il_line_reductions(rung.text)) {
+      out.push_back(rung);
+      out.back().text = std::move(t);
+    }
+    return out;
+  }
+  for (GenNode& c : rung_reductions(rung.root)) {
+    out.push_back(rung);
+    out.back().root = std::move(c);
+    update_rung(out.back());
+  }
+  return out;
+}
+
 }  // namespace
 
 Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& first, const Runner& run) {
@@ -499,10 +518,15 @@ Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& 
   auto cut = [&](Csv& t, const Outcome& o) {
     if (o.kind == Outcome::Kind::Differ && o.scan > 0 && size_t(o.scan) < t.rows.size()) t.rows.resize(size_t(o.scan));
   };
-  auto attempt = [&](const GenProgram& p, const Csv& t, Outcome& o) {
+  // Runs a smaller program; keeps it if it still fails the same way.
+  auto try_program = [&](GenProgram& p) {
     r.runs++;
-    o = run(render(p), t.text());
-    return o.failed() && o.kind == first.kind;
+    Outcome o = run(render(p), trace.text());
+    if (!o.failed() || o.kind != first.kind) return false;
+    r.prog = std::move(p);
+    r.outcome = o;
+    cut(trace, o);
+    return true;
   };
   cut(trace, r.outcome);
   for (bool changed = true; changed;) {
@@ -514,48 +538,19 @@ Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& 
         if (r.prog.items[i].kind != GenItem::Kind::Rung || r.prog.rungs() <= 1) continue;
         GenProgram p = r.prog;
         p.items.erase(p.items.begin() + long(i));
-        Outcome o;
-        if (attempt(p, trace, o)) {
-          r.prog = std::move(p);
-          r.outcome = o;
-          cut(trace, o);
-          again = changed = true;
-        }
+        if (try_program(p)) again = changed = true;
       }
     }
-    // Inside each rung: leave out a group, a branch or a condition while it
-    // fails (an IL rung: an instruction).
+    // Inside each rung: leave out a group, a branch or a condition (an IL
+    // rung: an instruction line) while it fails.
     for (size_t i = 0; i < r.prog.items.size(); i++) {
       if (r.prog.items[i].kind != GenItem::Kind::Rung) continue;
-      if (r.prog.il || r.prog.iec) {
-        for (bool again = true; again;) {
-          again = false;
-          for (std::string& t : il_line_reductions(r.prog.items[i].text)) {
-            GenProgram p = r.prog;
-            p.items[i].text = std::move(t);
-            Outcome o;
-            if (attempt(p, trace, o)) {
-              r.prog = std::move(p);
-              r.outcome = o;
-              cut(trace, o);
-              again = changed = true;
-              break;
-            }
-          }
-        }
-        continue;
-      }
       for (bool again = true; again;) {
         again = false;
-        for (GenNode& c : rung_reductions(r.prog.items[i].root)) {
+        for (GenItem& smaller : rung_item_reductions(r.prog.items[i], r.prog.il || r.prog.iec)) {
           GenProgram p = r.prog;
-          p.items[i].root = std::move(c);
-          update_rung(p.items[i]);
-          Outcome o;
-          if (attempt(p, trace, o)) {
-            r.prog = std::move(p);
-            r.outcome = o;
-            cut(trace, o);
+          p.items[i] = std::move(smaller);
+          if (try_program(p)) {
             again = changed = true;
             break;
           }
@@ -566,18 +561,20 @@ Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& 
   {
     GenProgram p = r.prog;
     drop_unused_labels(p);
-    Outcome o;
-    if (attempt(p, trace, o)) {
-      r.prog = std::move(p);
-      r.outcome = o;
-    }
+    try_program(p);
   }
+  // The trace: runs it with the program as it now is.
+  auto attempt = [&](const Csv& t, Outcome& o) {
+    r.runs++;
+    o = run(render(r.prog), t.text());
+    return o.failed() && o.kind == first.kind;
+  };
   // Trailing scans: one at a time from the end while it still fails.
   while (trace.rows.size() > 1) {
     Csv t = trace;
     t.rows.pop_back();
     Outcome o;
-    if (!attempt(r.prog, t, o)) break;
+    if (!attempt(t, o)) break;
     trace = std::move(t);
     r.outcome = o;
   }
@@ -586,7 +583,7 @@ Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& 
     Csv t;
     if (!drop_column(trace, col, t)) continue;
     Outcome o;
-    if (attempt(r.prog, t, o)) {
+    if (attempt(t, o)) {
       trace = std::move(t);
       r.outcome = o;
       cut(trace, o);
