@@ -612,6 +612,7 @@ std::string check_options(const GenOptions& o) {
 
 GenProgram generate_program(uint64_t seed, const GenOptions& opt) {
   if (std::string why = check_options(opt); !why.empty()) throw std::invalid_argument("ldgen: " + why);
+  if (opt.classes & kGenTPou) return generate_iec_program(seed, opt);
   if (opt.classes & kGenTyped) return generate_typed_program(seed, opt);
   return Gen(seed, opt).program(seed);
 }
@@ -623,12 +624,13 @@ std::string render(const GenProgram& p) {
     else s += it.text + "\n";
   }
   if (p.il) s += ".end\n";
-  return s;
+  return s + p.footer;
 }
 
 std::string generate_ld(uint64_t seed, const GenOptions& opt) { return render(generate_program(seed, opt)); }
 
 std::string generate_trace(uint64_t seed, int scans, const GenOptions& o) {
+  if (o.classes & kGenTPou) return generate_iec_trace(seed, scans, o);
   if (o.classes & kGenTyped) return generate_typed_trace(seed, scans, o);
   Rng r(seed * 0x9E3779B97F4A7C15ull + 0x7472616365ull);
   std::vector<std::string> head;
@@ -665,7 +667,7 @@ const std::pair<const char*, uint32_t> kClassNames[] = {
     {"arith", kGenArith},       {"logic", kGenLogic},   {"realfn", kGenRealFn},     {"jumps", kGenJumps},
     {"end", kGenEnd},           {"all", kGenAll},       {"tarith", kGenTArith},     {"tcompare", kGenTCompare},
     {"tconv", kGenTConv},       {"tbits", kGenTBits},   {"tarray", kGenTArray},     {"t64", kGenT64},
-    {"typed", kGenTyped}};
+    {"typed", kGenTyped},       {"tpou", kGenTPou}};
 }  // namespace
 
 std::string gen_classes_text(uint32_t mask) {
@@ -709,7 +711,7 @@ bool parse_gen_classes(std::string_view list, uint32_t& mask, std::string& err) 
       if (!found) {
         err = "unknown element class '" + std::string(w) +
               "' (contacts edges compares coils setreset timers counters move arith logic realfn jumps end all;"
-              " typed: tarith tcompare tconv tbits tarray t64 typed)";
+              " typed: tarith tcompare tconv tbits tarray t64 typed; tpou)";
         return false;
       }
     }
@@ -735,6 +737,7 @@ const char kUsage[] =
     "             [-o prog.ld] [--trace t.csv] [--scans N]\n"
     "  LIST: contacts edges compares coils setreset timers counters move arith logic realfn jumps end all\n"
     "        typed classes (an ldc IL program): tarith tcompare tconv tbits tarray t64 typed\n"
+    "        tpou (an IEC IL program with FBs, FUNCTIONs, arrays, structures; with t64 the 64-bit types)\n"
     "  Without -o the program goes to stdout.  The same seed and options give the same files.\n";
 
 bool write(const std::string& path, const std::string& data) {

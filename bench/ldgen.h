@@ -41,6 +41,11 @@ enum GenClass : uint32_t {
   kGenTArray = 1u << 17,    // IDX + LDX/STX over arrays (of structures too), indices in and out of range
   kGenT64 = 1u << 18,       // the 64-bit types: LINT ULINT LWORD LREAL TIME LTIME DATE TOD DT
   kGenTyped = kGenTArith | kGenTCompare | kGenTConv | kGenTBits | kGenTArray | kGenT64,
+  // IEC IL text (ldgen_iec.cpp) with the project's own FUNCTION_BLOCKs and
+  // FUNCTIONs, nested instances, instances in arrays and structures, arrays
+  // and nested structures, read by the typed IEC IL reader; with t64 the
+  // 64-bit types too.  Not part of `typed` (which is ldc IL text).
+  kGenTPou = 1u << 19,
 };
 
 struct GenOptions {
@@ -91,6 +96,9 @@ struct GenProgram {
   std::string header;  // comment lines, each ending in '\n'
   std::vector<GenItem> items;
   bool il = false;     // ldc IL text (a typed program): labels are `.label`, the text ends with `.end`
+  bool iec = false;    // IEC IL text (class tpou): the header declares the POUs, the items are the
+                       // PROGRAM body's statements, the footer ends it
+  std::string footer;
   int rungs() const;
   int outputs() const;
   int inputs() const;
@@ -114,9 +122,14 @@ std::string generate_trace(uint64_t seed, int scans, const GenOptions& opt = {})
 GenProgram generate_typed_program(uint64_t seed, const GenOptions& opt);
 std::string generate_typed_trace(uint64_t seed, int scans, const GenOptions& opt);
 
+// A typed IEC IL program with POUs, arrays and structures (class tpou), and its
+// trace (bit inputs, index inputs mostly inside their bounds, word inputs).
+GenProgram generate_iec_program(uint64_t seed, const GenOptions& opt);
+std::string generate_iec_trace(uint64_t seed, int scans, const GenOptions& opt);
+
 // "timers,arith" -> mask; false and `err` on an unknown name.  Names: contacts
 // edges compares coils setreset timers counters move arith logic realfn jumps end all,
-// and the typed ones: tarith tcompare tconv tbits tarray t64 typed.
+// and the typed ones: tarith tcompare tconv tbits tarray t64 typed, and tpou.
 bool parse_gen_classes(std::string_view list, uint32_t& mask, std::string& err);
 std::string gen_classes_text(uint32_t mask);  // the inverse: "timers,arith"
 

@@ -1888,6 +1888,15 @@ const char* const kI2fRoutine[] = {
     p "_nan: LSH3 1, R0, R3", "LDHI 0FF00h, R4", "CMPI R4, R3", "BHI fnan_a",      \
     "LSH3 1, R1, R3", "CMPI R4, R3", "BHI fnan_b"
 
+// __fmul and __fdiv begin alike: the NaN check, then the sign of the result
+// in R2, the biased exponents in R5 (a) and R6 (b), |a| and |b| shifted left
+// by one in R3 and R4; a = inf goes to p_ainf, and the flags are left of
+// CMPI 255, R6 (b = inf: BEQ) for the routine's own branch.
+#define LDC_C40_MULDIV_PROLOGUE(p)                                                   \
+    LDC_C40_NAN_CHECK(p), "XOR3 R1, R0, R2", "LDHI 08000h, R3", "AND R3, R2",      \
+    "LSH3 -23, R0, R5", "AND 0FFh, R5", "LSH3 -23, R1, R6", "AND 0FFh, R6",         \
+    "LSH3 1, R0, R3", "LSH3 1, R1, R4", "CMPI 255, R5", "BEQ " p "_ainf", "CMPI 255, R6"
+
 // M in R0 (0 < M < 2^31), the exponent e' in R1, the sign in R2 (0 or
 // 0x80000000): the value M * 2^(e' - 156), rounded.  M is first shifted so
 // that its leading 1 is bit 29 (bits 5-0 are then below the 24-bit mantissa;
@@ -2047,19 +2056,7 @@ const char* const kFaddRoutine[] = {
 // multiplies 24 bits) in R6:R4, shifted so its leading 1 is bit 29 or below
 // (sticky), the exponent ea + eb - 144 + that shift
 const char* const kFmulRoutine[] = {
-    LDC_C40_NAN_CHECK("fmul"),
-    "XOR3 R1, R0, R2",
-    "LDHI 08000h, R3",
-    "AND R3, R2",          // the sign
-    "LSH3 -23, R0, R5",
-    "AND 0FFh, R5",
-    "LSH3 -23, R1, R6",
-    "AND 0FFh, R6",
-    "LSH3 1, R0, R3",
-    "LSH3 1, R1, R4",
-    "CMPI 255, R5",
-    "BEQ fmul_ainf",
-    "CMPI 255, R6",
+    LDC_C40_MULDIV_PROLOGUE("fmul"),
     "BEQ fmul_binf",
     "CMPI 0, R3",
     "BEQ fzero",
@@ -2138,19 +2135,7 @@ const char* const kFmulRoutine[] = {
 // division (the quotient in [2^29, 2^31)), the remainder as the sticky bit,
 // the exponent ea - eb + 126
 const char* const kFdivRoutine[] = {
-    LDC_C40_NAN_CHECK("fdiv"),
-    "XOR3 R1, R0, R2",
-    "LDHI 08000h, R3",
-    "AND R3, R2",
-    "LSH3 -23, R0, R5",
-    "AND 0FFh, R5",
-    "LSH3 -23, R1, R6",
-    "AND 0FFh, R6",
-    "LSH3 1, R0, R3",
-    "LSH3 1, R1, R4",
-    "CMPI 255, R5",
-    "BEQ fdiv_ainf",
-    "CMPI 255, R6",
+    LDC_C40_MULDIV_PROLOGUE("fdiv"),
     "BEQ fzero",           // finite / inf
     "CMPI 0, R4",
     "BEQ fdiv_by_zero",

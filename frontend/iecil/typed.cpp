@@ -417,17 +417,9 @@ class Reader {
         skip_eols();
         if (kw(peek(), "END_STRUCT")) { next(); break; }
         if (peek().kind == Tok::End) fail(k, "STRUCT without END_STRUCT");
-        std::vector<Tok> names{name_tok("a member name")};
-        while (punct(peek(), ",")) next(), names.push_back(name_tok("a member name"));
-        expect(":");
-        skip_eols();
-        const Tok& mt = peek();
-        TypeId mid = use_type(type_spec(), mt);
-        Init init;
-        skip_eols();
-        if (punct(peek(), ":=")) next(), init = init_value();
-        expect(";");
-        for (const Tok& n : names) ty.members.push_back({n.text, mid, {}, init});
+        std::vector<Tok> names = name_list("a member name");
+        Declared d = type_and_init();
+        for (const Tok& n : names) ty.members.push_back({n.text, d.type, {}, d.init});
       }
       return sp;
     }
@@ -602,8 +594,7 @@ class Reader {
 
   // decl = NAME { "," NAME } [ "AT" location ] ":" type_spec [ ":=" init ] ";"
   void decl(Pou& p, VarClass cls, bool constant, bool retain) {
-    std::vector<Tok> names{name_tok("a variable name")};
-    while (punct(peek(), ",")) next(), names.push_back(name_tok("a variable name"));
+    std::vector<Tok> names = name_list("a variable name");
     std::optional<DeviceRef> at;
     skip_eols();
     if (kw(peek(), "AT")) {
@@ -617,21 +608,38 @@ class Reader {
       if (at->index >= device_count(at->dev)) fail(a, "location " + a.text + " is outside ldc's devices");
       at_tok_ = a;
     }
+    bool no_init = cls == VarClass::InOut || cls == VarClass::External;
+    Declared d = type_and_init(no_init ? std::string("a ") + var_class_name(cls) : "");
+    if (at) check_location(*at, d.type);
+    for (const Tok& n : names)
+      p.vars.push_back({n.text, d.type, cls, constant, retain, d.init, at, loc(n)});
+  }
+  // NAME {"," NAME}: the names one declaration (or structure member) declares.
+  std::vector<Tok> name_list(const char* what) {
+    std::vector<Tok> names{name_tok(what)};
+    while (punct(peek(), ",")) next(), names.push_back(name_tok(what));
+    return names;
+  }
+  // ':' spec [':=' init] ';' after the names: the type and the initial value of
+  // a variable or a structure member.  `init_refused` names a section whose
+  // variables have none ("a VAR_IN_OUT"); "" if they may.
+  struct Declared {
+    TypeId type;
+    Init init;
+  };
+  Declared type_and_init(const std::string& init_refused = "") {
     expect(":");
     skip_eols();
     const Tok& tt = peek();
-    TypeId id = use_type(type_spec(), tt);
-    Init init;
+    Declared d{use_type(type_spec(), tt), {}};
     skip_eols();
     if (punct(peek(), ":=")) {
       next();
-      init = init_value();
-      if (cls == VarClass::InOut || cls == VarClass::External) fail(init.loc, std::string("a ") + var_class_name(cls) + " has no initial value");
+      d.init = init_value();
+      if (!init_refused.empty()) fail(d.init.loc, init_refused + " has no initial value");
     }
     expect(";");
-    if (at) check_location(*at, id);
-    for (const Tok& n : names)
-      p.vars.push_back({n.text, id, cls, constant, retain, init, at, loc(n)});
+    return d;
   }
   Tok at_tok_;
   void check_location(DeviceRef d, TypeId id) {

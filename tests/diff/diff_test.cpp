@@ -339,37 +339,20 @@ class DiffShard : public ::testing::TestWithParam<int> {};
 
 // One shard of the seeds: `test` against the interpreter after every scan.
 void run_shard(int shard, EngineFactory test, const std::string& what) {
-  const long total = env_int("LDC_DIFF_SEEDS", kDefaultPrograms), seed0 = env_int("LDC_DIFF_SEED0", 1);
-  const std::string dir = output_dir();
-  long programs = 0, rungs = 0, scans = 0, failures = 0;
-  auto t0 = std::chrono::steady_clock::now();
-  for (long i = shard; i < total; i += kShards) {
-    uint64_t seed = uint64_t(seed0 + i);
-    GenOptions o = options_for(seed);
-    GenProgram gp = generate_program(seed, o);
-    std::string ld = render(gp), csv = generate_trace(seed, scans_for(seed), o);
-    Outcome out = compare_isolated(ld, csv, make_interp, test);
-    programs++;
-    rungs += gp.rungs();
-    scans += out.scans;
-    if (out.kind == Outcome::Kind::FrontEndError) {
-      ADD_FAILURE() << "seed " << seed << ": the generated case is refused (a generator bug): " << out.message;
-      continue;
-    }
-    if (!out.failed()) continue;
-    Runner run = [&](const std::string& l, const std::string& c) { return compare_isolated(l, c, make_interp, test); };
-    Reduced r = minimize(gp, csv, out, run);
-    std::string rep = reproducer(what + " differs from the interpreter: ldgen seed " + std::to_string(seed),
-                                 ldgen_command(seed, o, scans_for(seed)), gp, r, dir, "diff_seed" + std::to_string(seed));
-    ADD_FAILURE() << rep;
-    if (++failures >= 3) {
-      ADD_FAILURE() << "stopping this shard after 3 failing seeds";
-      break;
-    }
-  }
-  double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("%s shard %d: %ld programs, %ld rungs, %ld scans compared in %.1f s\n", what.c_str(), shard, programs,
-              rungs, scans, secs);
+  SeedRun run;
+  run.seed0 = env_int("LDC_DIFF_SEED0", 1);
+  run.first = shard;
+  run.step = kShards;
+  run.count = env_int("LDC_DIFF_SEEDS", kDefaultPrograms);
+  run.options = options_for;
+  run.scans = scans_for;
+  run.test = std::move(test);
+  run.what = what;
+  run.engine = what;  // "native -O1": ldrun's --engine=native and its -O level
+  run.stem = "diff_seed";
+  SeedTotals t = run_seeds(run, [](const std::string& m) { ADD_FAILURE() << m; });
+  std::printf("%s shard %d: %ld programs, %ld rungs, %ld scans compared in %.1f s\n", what.c_str(), shard, t.programs,
+              t.rungs, t.scans, t.secs);
 }
 
 TEST_P(DiffShard, NativeMatchesInterpreter) { run_shard(GetParam(), make_native, "native -O0"); }

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <climits>
 #include <cstdio>
 #include <cstdlib>
@@ -82,8 +83,14 @@ std::unique_ptr<Engine> c40_engine(const Program& p, const char* name, bool code
 std::unique_ptr<Engine> make_c40sim(const Program& p) { return c40_engine(p, "c40sim", true); }
 std::unique_ptr<Engine> make_c40interp(const Program& p) { return c40_engine(p, "c40interp", false); }
 
+bool looks_like_iec_il(const std::string& text) {
+  size_t a = text.find_first_not_of(" \t\r\n");
+  return a != std::string::npos && text.compare(a, 2, "(*") == 0;
+}
+
 Program compile_case(const std::string& text) {
   if (looks_like_ldc_il(text)) return parse_il_text(text, "prog.il");
+  if (looks_like_iec_il(text)) return parse_iec_il(text, "prog.il");
   return lower_to_il(parse_ld(text, "prog.ld"));
 }
 
@@ -183,7 +190,7 @@ Outcome compare_run(const std::string& ld, const std::string& csv, const EngineF
     trace = read_trace(csv, "trace.csv", prog.aliases);
   } catch (CompileError& e) {
     o.kind = Outcome::Kind::FrontEndError;
-    o.message = format_error(looks_like_ldc_il(ld) ? "prog.il" : "prog.ld", ld, e.line, e.col, e.what());
+    o.message = format_error(looks_like_ldc_il(ld) || looks_like_iec_il(ld) ? "prog.il" : "prog.ld", ld, e.line, e.col, e.what());
     return o;
   } catch (std::exception& e) {
     o.kind = Outcome::Kind::FrontEndError;
@@ -482,6 +489,25 @@ std::vector<std::string> il_line_reductions(const std::string& rung) {
   return out;
 }
 
+// The smaller rungs one edit makes: an IL rung (a typed program's) without one
+// of its lines, a grid rung without a group, a branch or a condition.
+std::vector<GenItem> rung_item_reductions(const GenItem& rung, bool text) {
+  std::vector<GenItem> out;
+  if (text) {
+    for (std::string& t : il_line_reductions(rung.text)) {
+      out.push_back(rung);
+      out.back().text = std::move(t);
+    }
+    return out;
+  }
+  for (GenNode& c : rung_reductions(rung.root)) {
+    out.push_back(rung);
+    out.back().root = std::move(c);
+    update_rung(out.back());
+  }
+  return out;
+}
+
 }  // namespace
 
 Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& first, const Runner& run) {
@@ -492,10 +518,15 @@ Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& 
   auto cut = [&](Csv& t, const Outcome& o) {
     if (o.kind == Outcome::Kind::Differ && o.scan > 0 && size_t(o.scan) < t.rows.size()) t.rows.resize(size_t(o.scan));
   };
-  auto attempt = [&](const GenProgram& p, const Csv& t, Outcome& o) {
+  // Runs a smaller program; keeps it if it still fails the same way.
+  auto try_program = [&](GenProgram& p) {
     r.runs++;
-    o = run(render(p), t.text());
-    return o.failed() && o.kind == first.kind;
+    Outcome o = run(render(p), trace.text());
+    if (!o.failed() || o.kind != first.kind) return false;
+    r.prog = std::move(p);
+    r.outcome = o;
+    cut(trace, o);
+    return true;
   };
   cut(trace, r.outcome);
   for (bool changed = true; changed;) {
@@ -507,48 +538,19 @@ Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& 
         if (r.prog.items[i].kind != GenItem::Kind::Rung || r.prog.rungs() <= 1) continue;
         GenProgram p = r.prog;
         p.items.erase(p.items.begin() + long(i));
-        Outcome o;
-        if (attempt(p, trace, o)) {
-          r.prog = std::move(p);
-          r.outcome = o;
-          cut(trace, o);
-          again = changed = true;
-        }
+        if (try_program(p)) again = changed = true;
       }
     }
-    // Inside each rung: leave out a group, a branch or a condition while it
-    // fails (an IL rung: an instruction).
+    // Inside each rung: leave out a group, a branch or a condition (an IL
+    // rung: an instruction line) while it fails.
     for (size_t i = 0; i < r.prog.items.size(); i++) {
       if (r.prog.items[i].kind != GenItem::Kind::Rung) continue;
-      if (r.prog.il) {
-        for (bool again = true; again;) {
-          again = false;
-          for (std::string& t : il_line_reductions(r.prog.items[i].text)) {
-            GenProgram p = r.prog;
-            p.items[i].text = std::move(t);
-            Outcome o;
-            if (attempt(p, trace, o)) {
-              r.prog = std::move(p);
-              r.outcome = o;
-              cut(trace, o);
-              again = changed = true;
-              break;
-            }
-          }
-        }
-        continue;
-      }
       for (bool again = true; again;) {
         again = false;
-        for (GenNode& c : rung_reductions(r.prog.items[i].root)) {
+        for (GenItem& smaller : rung_item_reductions(r.prog.items[i], r.prog.il || r.prog.iec)) {
           GenProgram p = r.prog;
-          p.items[i].root = std::move(c);
-          update_rung(p.items[i]);
-          Outcome o;
-          if (attempt(p, trace, o)) {
-            r.prog = std::move(p);
-            r.outcome = o;
-            cut(trace, o);
+          p.items[i] = std::move(smaller);
+          if (try_program(p)) {
             again = changed = true;
             break;
           }
@@ -559,18 +561,20 @@ Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& 
   {
     GenProgram p = r.prog;
     drop_unused_labels(p);
-    Outcome o;
-    if (attempt(p, trace, o)) {
-      r.prog = std::move(p);
-      r.outcome = o;
-    }
+    try_program(p);
   }
+  // The trace: runs it with the program as it now is.
+  auto attempt = [&](const Csv& t, Outcome& o) {
+    r.runs++;
+    o = run(render(r.prog), t.text());
+    return o.failed() && o.kind == first.kind;
+  };
   // Trailing scans: one at a time from the end while it still fails.
   while (trace.rows.size() > 1) {
     Csv t = trace;
     t.rows.pop_back();
     Outcome o;
-    if (!attempt(r.prog, t, o)) break;
+    if (!attempt(t, o)) break;
     trace = std::move(t);
     r.outcome = o;
   }
@@ -579,17 +583,58 @@ Reduced minimize(const GenProgram& prog, const std::string& csv, const Outcome& 
     Csv t;
     if (!drop_column(trace, col, t)) continue;
     Outcome o;
-    if (attempt(r.prog, t, o)) {
+    if (attempt(t, o)) {
       trace = std::move(t);
       r.outcome = o;
       cut(trace, o);
     }
   }
   if (r.outcome.kind == Outcome::Kind::Differ) r.outcome.scans = r.outcome.scan;  // what the cut trace runs
-  r.prog.header = std::string(prog.il ? "; " : "# ") + "minimized reproducer (" + std::to_string(r.prog.rungs()) +
-                  " of " + std::to_string(prog.rungs()) + " rungs)\n" + prog.header;
+  std::string note = "minimized reproducer (" + std::to_string(r.prog.rungs()) + " of " + std::to_string(prog.rungs()) + " rungs)";
+  r.prog.header = (prog.iec ? "(* " + note + " *)\n" : std::string(prog.il ? "; " : "# ") + note + "\n") + prog.header;
   r.csv = trace.text();
   return r;
+}
+
+// ------------------------------------------------------------------ a run over seeds
+
+SeedTotals run_seeds(const SeedRun& run, const std::function<void(const std::string&)>& fail) {
+  const std::string dir = output_dir();
+  SeedTotals t;
+  auto t0 = std::chrono::steady_clock::now();
+  for (long i = run.first; i < run.count; i += run.step) {
+    uint64_t seed = uint64_t(run.seed0 + i);
+    GenOptions o = run.options(seed);
+    GenProgram gp = generate_program(seed, o);
+    const int scans = run.scans(seed);
+    std::string text = render(gp), csv = generate_trace(seed, scans, o);
+    Outcome out = compare_isolated(text, csv, make_interp, run.test);
+    t.programs++;
+    t.rungs += gp.rungs();
+    t.scans += out.scans;
+    if (t.programs % 1000 == 0) {  // a long run says how far it is
+      std::printf("%s: %ld programs, %ld failures, %.0f s\n", run.what.c_str(), t.programs, t.failures,
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      std::fflush(stdout);
+    }
+    if (out.kind == Outcome::Kind::FrontEndError) {
+      fail("seed " + std::to_string(seed) + ": the generated case is refused (a generator bug): " + out.message);
+      continue;
+    }
+    if (!out.failed()) continue;
+    Reduced r = minimize(gp, csv, out, [&](const std::string& l, const std::string& c) {
+      return compare_isolated(l, c, make_interp, run.test);
+    });
+    fail(reproducer(run.what + " differs from the interpreter: ldgen seed " + std::to_string(seed),
+                    ldgen_command(seed, o, scans), gp, r, dir, run.stem + std::to_string(seed), "interp",
+                    run.what.c_str(), run.engine));
+    if (++t.failures >= run.max_failures) {
+      fail("stopping after " + std::to_string(run.max_failures) + " failing seeds");
+      break;
+    }
+  }
+  t.secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return t;
 }
 
 // ------------------------------------------------------------------ reproducers
@@ -608,7 +653,7 @@ std::string ldgen_command(uint64_t seed, const GenOptions& o, int scans) {
 #else
   std::string ldgen = "build/bench/ldgen";
 #endif
-  return ldgen + " " + ldgen_args(seed, o) + " -o prog." + (o.classes & kGenTyped ? "il" : "ld") +
+  return ldgen + " " + ldgen_args(seed, o) + " -o prog." + (o.classes & (kGenTyped | kGenTPou) ? "il" : "ld") +
          " --trace trace.csv --scans " + std::to_string(scans);
 }
 
@@ -653,7 +698,7 @@ std::string reproducer(const std::string& title, const std::string& origin, cons
                        const char* test_name, const std::string& test_engine) {
   const Outcome& o = r.outcome;
   std::string ld = render(r.prog);
-  std::string ld_path = dir + "/" + stem + (r.prog.il ? ".il" : ".ld"), csv_path = dir + "/" + stem + ".csv";
+  std::string ld_path = dir + "/" + stem + (r.prog.il || r.prog.iec ? ".il" : ".ld"), csv_path = dir + "/" + stem + ".csv";
   bool wrote = write_text(ld_path, ld) && write_text(csv_path, r.csv);
   std::string s = "==== " + title + "\n";
   s += "original: " + origin + "\n";

@@ -26,9 +26,11 @@ std::unique_ptr<Engine> make_c_route(const Program& p);     // generate_c, the s
 std::unique_ptr<Engine> make_c40sim(const Program& p);      // C40 code on the simulated board
 std::unique_ptr<Engine> make_c40interp(const Program& p);   // the IL on the C40-hosted interpreter
 
-// The program of a case's text: ldc IL text (a typed program, looks_like_ldc_il)
+// The program of a case's text: ldc IL text (a typed program, looks_like_ldc_il),
+// IEC IL text (ldgen's tpou programs: it starts with a "(*" comment, parse_iec_il)
 // or a .ld grid (parse_ld -> lower_to_il).  Throws CompileError.
 Program compile_case(const std::string& text);
+bool looks_like_iec_il(const std::string& text);
 
 // A byte of the memory image, named for people.
 struct Place {
@@ -95,6 +97,28 @@ std::string reproducer(const std::string& title, const std::string& origin, cons
                        const Reduced& r, const std::string& dir, const std::string& stem,
                        const char* ref_name = "interp", const char* test_name = "native",
                        const std::string& test_engine = "native");
+
+// A run over seeds: seeds seed0 + i for i = first, first + step, ... < count,
+// each program on the reference interpreter and the engine under test; a
+// failing case is minimized and reported (through `fail`) as a reproducer
+// <stem><seed>.il/.ld; the run stops after `max_failures` of them.  The
+// ladder shards and the typed runs share it.
+struct SeedRun {
+  long seed0 = 1, first = 0, step = 1, count = 0;
+  std::function<GenOptions(uint64_t)> options;
+  std::function<int(uint64_t)> scans;
+  EngineFactory test;
+  std::string what;    // "native -O1", in the reports
+  std::string engine;  // ldrun's --engine spelling, for the reproducer's commands
+  std::string stem;    // "diff_seed": the reproducer is <dir>/<stem><seed>.ld
+  int max_failures = 3;
+};
+struct SeedTotals {
+  long programs = 0, rungs = 0, scans = 0, failures = 0;
+  double secs = 0;
+};
+// `fail` gets each failure's text (a generator bug, a reproducer, the stop).
+SeedTotals run_seeds(const SeedRun& run, const std::function<void(const std::string&)>& fail);
 
 // `ldgen ...` arguments that make this case again.
 std::string ldgen_command(uint64_t seed, const GenOptions& opt, int scans);

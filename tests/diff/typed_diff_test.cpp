@@ -200,42 +200,25 @@ TEST(TypedHarness, CatchesAndShrinksAWrongTypedEngine) {
 // ------------------------------------------------------------------ every engine against the interpreter
 
 // `engine`: ldrun's spelling ("native -O1"), for the reproducer's commands.
-void run_typed(const EngineFactory& test, const std::string& what, const std::string& engine, bool narrow, long def) {
+// `options`: the programs' options by seed (typed_options or pou_options).
+void run_typed(const EngineFactory& test, const std::string& what, const std::string& engine, bool narrow, long def,
+               GenOptions (*options)(uint64_t, bool) = typed_options, const char* kind = "typed") {
   std::string stem = engine;  // a file name: "native_O1"
   for (char& c : stem)
     if (c == ' ' || c == '-') c = '_';
   stem.erase(std::unique(stem.begin(), stem.end(), [](char a, char b) { return a == '_' && b == '_'; }), stem.end());
-  const long total = env_int("LDC_DIFF_TYPED_SEEDS", def), seed0 = env_int("LDC_DIFF_TYPED_SEED0", 1);
-  const std::string dir = output_dir();
-  long programs = 0, rungs = 0, scans = 0, failures = 0;
-  auto t0 = std::chrono::steady_clock::now();
-  for (long i = 0; i < total; i++) {
-    uint64_t seed = uint64_t(seed0 + i);
-    GenOptions o = typed_options(seed, narrow);
-    GenProgram gp = generate_program(seed, o);
-    std::string text = render(gp), csv = generate_trace(seed, typed_scans(seed), o);
-    Outcome out = compare_isolated(text, csv, make_interp, test);
-    programs++;
-    rungs += gp.rungs();
-    scans += out.scans;
-    if (out.kind == Outcome::Kind::FrontEndError) {
-      ADD_FAILURE() << "seed " << seed << ": the generated typed case is refused (a generator bug): " << out.message;
-      continue;
-    }
-    if (!out.failed()) continue;
-    Reduced r = minimize(gp, csv, out, [&](const std::string& l, const std::string& c) {
-      return compare_isolated(l, c, make_interp, test);
-    });
-    ADD_FAILURE() << reproducer(what + " differs from the interpreter on a typed program: ldgen seed " + std::to_string(seed),
-                                ldgen_command(seed, o, typed_scans(seed)), gp, r, dir,
-                                "typed_" + stem + "_seed" + std::to_string(seed), "interp", what.c_str(), engine);
-    if (++failures >= 3) {
-      ADD_FAILURE() << "stopping after 3 failing seeds";
-      break;
-    }
-  }
-  double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("typed, %s: %ld programs, %ld rungs, %ld scans compared in %.1f s\n", what.c_str(), programs, rungs, scans, secs);
+  SeedRun run;
+  run.seed0 = env_int("LDC_DIFF_TYPED_SEED0", 1);
+  run.count = env_int("LDC_DIFF_TYPED_SEEDS", def);
+  run.options = [=](uint64_t seed) { return options(seed, narrow); };
+  run.scans = typed_scans;
+  run.test = test;
+  run.what = what;
+  run.engine = engine;
+  run.stem = std::string(kind) + "_" + stem + "_seed";
+  SeedTotals t = run_seeds(run, [](const std::string& m) { ADD_FAILURE() << m; });
+  std::printf("%s, %s: %ld programs, %ld rungs, %ld scans compared in %.1f s\n", kind, what.c_str(), t.programs, t.rungs,
+              t.scans, t.secs);
 }
 
 // The reference against itself on the program printed as IL text and read
@@ -297,5 +280,127 @@ TEST(TypedDiff, C40InterpRefusesTypedPrograms) {
     }
   }
 }
+
+}  // namespace
+
+// ------------------------------------------------------------------ typed programs with POUs (class tpou)
+
+namespace {
+
+// IEC IL with the project's own FBs and FUNCTIONs, arrays and structures
+// (bench/ldgen_iec.cpp); LDC_DIFF_TYPED_RUNGS statements; the C40 without t64.
+GenOptions pou_options(uint64_t, bool narrow) {
+  GenOptions o;
+  o.rungs = int(env_int("LDC_DIFF_TYPED_RUNGS", 30));
+  o.max_depth = 0;
+  o.classes = kGenTPou | (narrow ? 0u : uint32_t(kGenT64));
+  return o;
+}
+
+bool has_wide(const Program& p) {
+  for (const Rung& r : p.rungs)
+    for (const Instr& in : r.code)
+      if ((in.ty != Ty::None && ty_info(in.ty).bits == 64) || (in.src != Ty::None && ty_info(in.src).bits == 64)) return true;
+  return false;
+}
+
+// Every POU program is IEC IL the typed reader takes and the validator
+// passes; without t64 no 64-bit type appears; each body item stands alone
+// (the minimizer drops any of them); the trace reads.
+TEST(TypedPouGenerator, EveryProgramCompiles) {
+  for (uint64_t seed = 1; seed <= 120; seed++) {
+    GenOptions o = pou_options(seed, seed % 3 == 0);
+    o.rungs = 1 + int(seed * 7 % 40);
+    GenProgram gp = generate_program(seed, o);
+    ASSERT_TRUE(gp.iec);
+    std::string text = render(gp);
+    EXPECT_EQ(text, render(generate_program(seed, o))) << "the same seed, the same program";
+    Program p;
+    try {
+      p = compile_case(text);
+    } catch (CompileError& e) {
+      ADD_FAILURE() << "seed " << seed << ": a generated POU program is refused:\n"
+                    << format_error("prog.il", text, e.line, e.col, e.what()) << "\n" << text;
+      continue;
+    }
+    EXPECT_EQ(validate_il(encode_il(p).code, p.layout()), "") << "seed " << seed << "\n" << text;
+    if (!(o.classes & kGenT64)) {
+      EXPECT_FALSE(has_wide(p)) << "seed " << seed << ": a 64-bit type without t64\n" << text;
+    }
+    Trace t = read_trace(generate_trace(seed, 15, o), "trace.csv", p.aliases);
+    EXPECT_EQ(t.rows.size(), 15u);
+    if (seed % 10 == 0)
+      for (const GenItem& it : gp.items) {
+        GenProgram one = gp;
+        one.items = {it};
+        EXPECT_NO_THROW(compile_case(render(one))) << "seed " << seed << ": item alone\n" << it.text;
+      }
+  }
+}
+
+// Over a few programs every elementary type is computed with, and every
+// construct the issue names is drawn: FB instances alone, nested, in arrays
+// and in structures, FUNCTIONs called both ways, VAR_IN_OUT, VAR_EXTERNAL,
+// EN/ENO, CALC, variable indices (in the program and inside an FB), nested
+// structures copied whole.
+TEST(TypedPouGenerator, DrawsEveryTypeAndConstruct) {
+  std::set<Ty> tys;
+  std::string all;
+  for (uint64_t seed = 1; seed <= 60; seed++) {
+    GenOptions o = pou_options(seed, false);
+    std::string text = render(generate_program(seed, o));
+    all += text;
+    Program p = compile_case(text);
+    for (const Rung& r : p.rungs)
+      for (const Instr& in : r.code)
+        if (in.ty != Ty::None) tys.insert(in.ty);
+  }
+  for (int i = 0; i < kTyCount; i++) EXPECT_TRUE(tys.count(Ty(i))) << ty_info(Ty(i)).name << " never drawn";
+  for (const char* c : {"CAL fa(", "CAL fb(", "CAL fbs[", "CAL s.fa(", "CAL subs[", "CAL a(", "CAL fc(", "VAR_IN_OUT",
+                        "VAR_EXTERNAL", "ENO =>", "CALC ", "CALCN ", "hist[i]", "[k0", "[k1]", "[k2]", "inner : S0",
+                        "F0(x :=", "F1 ", "LD s\n", "RETCN", "JMPCN", "_TO_", "SHL", "ROR", ".inner.m3"})
+    EXPECT_NE(all.find(c), std::string::npos) << "'" << c << "' never drawn";
+  for (const char* c : {"SQRT", "LTIME#", "DT#", "TOD#", "DATE#", "LREAL#", "ULINT#", "LWORD#16#"})
+    EXPECT_NE(all.find(c), std::string::npos) << "'" << c << "' never drawn";
+}
+
+// Indices go outside their bounds sometimes, not always, in the program and
+// inside the FB's body.
+TEST(TypedPouGenerator, IndicesFaultSometimes) {
+  int scans = 0, faults = 0;
+  for (uint64_t seed = 1; seed <= 30; seed++) {
+    GenOptions o = pou_options(seed, false);
+    Program p = compile_case(render(generate_program(seed, o)));
+    Trace t = read_trace(generate_trace(seed, 20, o), "trace.csv", p.aliases);
+    auto e = make_interp(p);
+    Memory m(p.layout());
+    for (size_t k = 0; k < t.rows.size(); k++) {
+      for (size_t i = 0; i < t.rows[k].size(); i++)
+        if (!t.rows[k][i].empty() && int(i) != t.dt_column) put_trace_cell(m.data(), m.layout, t.columns[i], t.rows[k][i]);
+      std::memset(m.data() + kSysFault, 0, 4);
+      m.set_bit(Area::S, kBitFirstScan, k == 0);
+      e->scan(m.bytes);
+      uint32_t kind;
+      std::memcpy(&kind, m.data() + kSysFault, 4);
+      scans++;
+      faults += kind == kFaultIndex;
+    }
+  }
+  std::printf("%d of %d scans ended at an index fault\n", faults, scans);
+  EXPECT_GT(faults, scans / 50) << faults << " of " << scans << " scans faulted";
+  EXPECT_LT(faults, scans / 2) << faults << " of " << scans << " scans faulted";
+}
+
+void run_pou(const EngineFactory& test, const std::string& what, const std::string& engine, bool narrow, long def) {
+  run_typed(test, what, engine, narrow, def, pou_options, "pou");
+}
+
+TEST(PouDiff, ReferenceMatchesItsPrintedText) { run_pou(make_interp_from_text, "interp (printed IL)", "interp", false, 10); }
+TEST(PouDiff, FastMatchesInterpreter) { run_pou(make_fast_interp, "fast", "fast", false, 6); }
+TEST(PouDiff, NativeMatchesInterpreter) { run_pou(make_native, "native -O0", "native", false, 6); }
+TEST(PouDiff, NativeO1MatchesInterpreter) { run_pou(make_native_o1, "native -O1", "native -O1", false, 6); }
+TEST(PouDiff, NativeO2MatchesInterpreter) { run_pou(make_native_o2, "native -O2", "native -O2", false, 6); }
+TEST(PouDiff, CRouteMatchesInterpreter) { run_pou(make_c_route, "the C route", "c", false, 2); }
+TEST(PouDiff, C40SimMatchesInterpreter) { run_pou(make_c40sim, "c40sim", "c40sim", true, 4); }
 
 }  // namespace

@@ -222,6 +222,26 @@ TEST(IlText, RetainRoundTripsAndRefusesNonDWords) {
   }
 }
 
+// The typed IEC IL reader names the scalars of structured variables
+// (docs/iec-il.md "Where values live"); `ldc --emit=il` prints them as
+// aliases, and the text reads back (found by tests/diff's POU programs).
+TEST(IlText, AliasesOfStructuredVariablesRoundTrip) {
+  const char* text = ".alias s.inner.m0 D14\n.alias sa[-1].flag M3\n.alias grid[1,0] D20\n.alias go X0\n"
+                     ".rung line 1\nTRUE\nOUT Y0\n.end\n";
+  Program p = parse_il_text(text, "a.il");
+  ASSERT_EQ(p.aliases.size(), 4u);
+  EXPECT_EQ(p.aliases[1].name, "sa[-1].flag");
+  EXPECT_EQ(parse_il_text(print_il_text(p), "a.il").aliases, p.aliases);
+  for (const char* bad : {".alias 1x D0\n", ".alias .m D0\n", ".alias a+b D0\n", ".alias [1] D0\n"}) {
+    try {
+      parse_il_text(std::string(bad) + ".rung line 1\nTRUE\nOUT Y0\n.end\n", "a.il");
+      ADD_FAILURE() << bad;
+    } catch (CompileError& e) {
+      EXPECT_EQ(e.line, 1) << bad;
+    }
+  }
+}
+
 TEST(BinaryIl, ValidatorRefusesBadCode) {
   Program p = parse_il_text(".edges 1\n.rung line 1\nLOAD X0\nJMP a\n.rung line 2\nLOADP X1 E0\nOUT Y0\n.label a\n.end\n", "c.il");
   BinaryIl b = encode_il(p);
