@@ -5,6 +5,7 @@
 #include "backend-c/backend_c.h"
 
 #include "backend-c/c_typed.h"
+#include "ir/typed.h"
 
 #include <cinttypes>
 #include <cstdio>
@@ -324,8 +325,20 @@ static bool has_typed(const Program& p) {
   return false;
 }
 
+// STRING and its functions (ir/typed.h, "strings") run on the interpreters;
+// the C route has no C for them yet: refused by name.
+static void refuse_strings(const Program& p) {
+  for (const Rung& r : p.rungs)
+    for (const Instr& in : r.code)
+      if (op_info(in.op).typed && typed::is_string_instr(in.op, in.ty, in.src))
+        throw CompileError(in.loc.line, in.loc.col,
+                           "the C route cannot compile " + op_spelling(in) +
+                               ": STRING and the string functions run on the interpreters (--engine=interp or fast)");
+}
+
 std::string generate_c(const Program& p, const Layout& layout) {
   refuse_shared_stack(p);
+  refuse_strings(p);
   const bool typed = has_typed(p);
   std::vector<uint32_t> offsets;
   if (typed) offsets = encode_il(p).instr_offset;
