@@ -265,7 +265,8 @@ std::string load_store(Ty t) {
 
 std::string c_typed_prelude() {
   std::string s = kTypedPrelude;
-  for (int i = 0; i < kTyCount; i++) s += load_store(Ty(i));
+  for (int i = 0; i < kTyCount; i++)
+    if (Ty(i) != Ty::STRING) s += load_store(Ty(i));  // STRING: refused by the C route (cgen.cpp refuse_strings)
   return s;
 }
 
