@@ -5,7 +5,6 @@
 #include "backend-c/backend_c.h"
 
 #include "backend-c/c_typed.h"
-#include "ir/typed.h"
 
 #include <cinttypes>
 #include <cstdio>
@@ -325,20 +324,8 @@ static bool has_typed(const Program& p) {
   return false;
 }
 
-// STRING and its functions (ir/typed.h, "strings") run on the interpreters;
-// the C route has no C for them yet: refused by name.
-static void refuse_strings(const Program& p) {
-  for (const Rung& r : p.rungs)
-    for (const Instr& in : r.code)
-      if (op_info(in.op).typed && typed::is_string_instr(in.op, in.ty, in.src))
-        throw CompileError(in.loc.line, in.loc.col,
-                           "the C route cannot compile " + op_spelling(in) +
-                               ": STRING and the string functions run on the interpreters (--engine=interp or fast)");
-}
-
 std::string generate_c(const Program& p, const Layout& layout) {
   refuse_shared_stack(p);
-  refuse_strings(p);
   const bool typed = has_typed(p);
   std::vector<uint32_t> offsets;
   if (typed) offsets = encode_il(p).instr_offset;
@@ -346,8 +333,10 @@ std::string generate_c(const Program& p, const Layout& layout) {
   g.set_il_offsets(typed ? &offsets : nullptr);
   g.rungs(p.rungs, p.end_labels);
   return std::string("/* ldc: ") + p.source + " as C (the C route). */\n" + kPrelude + (typed ? c_typed_prelude() : "") +
-         "\n" + c_scan_head() + (typed ? "  uint32_t xr = 0; /* the index register: IDX sets it */\n" : "") + g.out +
-         "  (void)s0;\n" + (typed ? "  (void)xr;\n" : "") + "}\n";
+         "\n" + c_scan_head() +
+         (typed ? "  uint32_t xr = 0; /* the index register: IDX sets it */\n"
+                  "  int64_t sl_ = 0, sp_ = 0; /* the string-argument registers: ARGS sets them */\n" : "") + g.out +
+         "  (void)s0;\n" + (typed ? "  (void)xr; (void)sl_; (void)sp_;\n" : "") + "}\n";
 }
 
 }  // namespace ldc

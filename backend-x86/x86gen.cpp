@@ -2515,7 +2515,7 @@ static void refuse_strings(const Program& p) {
       if (op_info(in.op).typed && typed::is_string_instr(in.op, in.ty, in.src))
         throw CompileError(in.loc.line, in.loc.col,
                            "x86-64: " + op_spelling(in) +
-                               ": STRING and the string functions run on the interpreters (--engine=interp or fast), "
+                               ": STRING and the string functions run on the interpreters and the C route (--engine=interp, fast or c), "
                                "not in native code");
 }
 

@@ -1,7 +1,7 @@
 #!/bin/sh
 # check_string_refuses.sh BINDIR ENGINE CASE -- the engines that do not run
-# STRING (docs/il.md, "Strings": native x86-64 at every -O level, the C route,
-# the C40 and the C40-hosted interpreter) refuse tests/typed/cases/CASE.il by
+# STRING (docs/il.md, "Strings": native x86-64 at every -O level, the C40 and
+# the C40-hosted interpreter) refuse tests/typed/cases/CASE.il by
 # name: a non-zero exit below 128 (no signal) and an `error:` message that
 # names STRING or the string-argument instruction ARGS (the C40-hosted
 # interpreter names the first typed instruction it meets, which may be an
