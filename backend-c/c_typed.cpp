@@ -48,6 +48,162 @@ static inline void ldc_idx_fault(u8 *m, uint32_t at, uint64_t i) {
 }
 )";
 
+const char kStringPrelude[] = R"(/* STRING (ir/typed.h "strings", docs/il.md "Strings"): 33 cells, the length
+   read as a UINT32 clamped to 126; a result built whole, stored with zeros after it */
+#include <stdio.h>
+#include <stdlib.h>
+typedef struct { uint32_t len; uint8_t b[126]; } ldc_str;
+static inline ldc_str ldc_sld(const u8 *m, uint32_t a) {
+  ldc_str s; uint32_t n; memcpy(&n, m + a, 4); s.len = n > 126 ? 126 : n; memcpy(s.b, m + a + 4, s.len); return s;
+}
+static inline void ldc_sst(u8 *m, uint32_t a, const ldc_str *s) {
+  uint32_t n = s->len > 126 ? 126 : s->len; memcpy(m + a, &n, 4); memcpy(m + a + 4, s->b, n); memset(m + a + 4 + n, 0, 128 - n);
+}
+static inline void ldc_sapp(ldc_str *r, const uint8_t *b, int64_t n) {
+  int64_t room = 126 - (int64_t)r->len;
+  if (n <= 0) return;
+  if (n > room) n = room;
+  memcpy(r->b + r->len, b, (size_t)n); r->len += (uint32_t)n;
+}
+static inline int ldc_scmp(const u8 *m, uint32_t a, uint32_t b) {
+  ldc_str x = ldc_sld(m, a), y = ldc_sld(m, b);
+  int c = memcmp(x.b, y.b, x.len < y.len ? x.len : y.len);
+  if (c) return c < 0 ? -1 : 1;
+  return x.len > y.len ? 1 : x.len < y.len ? -1 : 0;
+}
+static inline void ldc_smove(u8 *m, uint32_t d, uint32_t a) { ldc_str s = ldc_sld(m, a); ldc_sst(m, d, &s); }
+static inline void ldc_sleft(u8 *m, uint32_t d, uint32_t a, int64_t l, int right, u8 *s0) {
+  ldc_str s = ldc_sld(m, a), r = {0};
+  if (l < 0) { *s0 = 1; ldc_sst(m, d, &r); return; }
+  if (l > (int64_t)s.len) l = s.len;
+  ldc_sapp(&r, right ? s.b + (s.len - (uint32_t)l) : s.b, l);
+  ldc_sst(m, d, &r);
+}
+static inline void ldc_smid(u8 *m, uint32_t d, uint32_t a, int64_t l, int64_t p, u8 *s0) {
+  ldc_str s = ldc_sld(m, a), r = {0};
+  int64_t i;
+  if (l < 0 || p < 0) { *s0 = 1; ldc_sst(m, d, &r); return; }
+  if (p <= (int64_t)s.len) {
+    p -= 1;
+    if (l > (int64_t)s.len - p) l = (int64_t)s.len - p;
+    if (l > 126) l = 126;
+    for (i = 0; i < l; i++) r.b[i] = p + i < 0 ? (uint8_t)s.len : s.b[p + i];
+    r.len = (uint32_t)l;
+  }
+  ldc_sst(m, d, &r);
+}
+static inline void ldc_sconcat(u8 *m, uint32_t d, uint32_t a, uint32_t b) {
+  ldc_str x = ldc_sld(m, a), y = ldc_sld(m, b);
+  ldc_sapp(&x, y.b, y.len); ldc_sst(m, d, &x);
+}
+static inline uint32_t ldc_shead(uint32_t p8, uint32_t len) { return p8 > len ? len : p8 == 0 ? 0 : p8 - 1; }
+static inline void ldc_sinsert(u8 *m, uint32_t d, uint32_t a, uint32_t b, int64_t p, u8 *s0) {
+  ldc_str x = ldc_sld(m, a), y = ldc_sld(m, b), r = {0};
+  uint32_t head;
+  if (p < 0) { *s0 = 1; ldc_sst(m, d, &r); return; }
+  head = (uint8_t)p > x.len ? x.len : (uint8_t)p;
+  ldc_sapp(&r, x.b, head); ldc_sapp(&r, y.b, y.len); ldc_sapp(&r, x.b + head, x.len - head);
+  ldc_sst(m, d, &r);
+}
+static inline void ldc_sdelete(u8 *m, uint32_t d, uint32_t a, int64_t l, int64_t p, u8 *s0) {
+  ldc_str s = ldc_sld(m, a), r = {0};
+  uint32_t l8, head;
+  if (l < 0 || p < 0) { *s0 = 1; ldc_sst(m, d, &r); return; }
+  l8 = (uint8_t)l; head = ldc_shead((uint8_t)p, s.len);
+  ldc_sapp(&r, s.b, head);
+  if (s.len > head + l8) ldc_sapp(&r, s.b + head + l8, s.len - head - l8);
+  ldc_sst(m, d, &r);
+}
+static inline void ldc_sreplace(u8 *m, uint32_t d, uint32_t a, uint32_t b, int64_t l, int64_t p, u8 *s0) {
+  ldc_str x = ldc_sld(m, a), y = ldc_sld(m, b), r = {0};
+  uint32_t l8, head, from;
+  if (l < 0 || p < 0) { *s0 = 1; ldc_sst(m, d, &r); return; }
+  l8 = (uint8_t)l; head = ldc_shead((uint8_t)p, x.len);
+  ldc_sapp(&r, x.b, head);
+  ldc_sapp(&r, y.b, y.len < l8 ? y.len : l8);
+  from = (uint8_t)(head + l8);
+  if (r.len < 126 && from < x.len) ldc_sapp(&r, x.b + from, x.len - from);
+  ldc_sst(m, d, &r);
+}
+static inline uint64_t ldc_sfind(const u8 *m, uint32_t a, uint32_t b) {
+  ldc_str x = ldc_sld(m, a), y = ldc_sld(m, b);
+  uint32_t c1 = 0, c2 = 0;
+  if (!(y.len > 0 && x.len >= y.len)) return 0;
+  while (c1 + c2 < x.len && c2 < y.len) {
+    if (x.b[c1 + c2] != y.b[c2]) c1 += c2 + 1, c2 = 0;
+    else c2++;
+  }
+  return c2 == y.len ? c1 + 1 : 0;
+}
+/* snprintf(body, STR_MAX_LEN, ...), len cut at 126, as MatIEC's __*_to_string */
+static inline void ldc_sdone(u8 *m, uint32_t d, const char *buf, int n) {
+  ldc_str r = {0};
+  r.len = n < 0 ? 0 : n > 126 ? 126 : (uint32_t)n;
+  memcpy(r.b, buf, r.len);
+  ldc_sst(m, d, &r);
+}
+#define LDC_SPRINTF(m, d, ...) do { char buf_[127] = {0}; int n_ = snprintf(buf_, 126, __VA_ARGS__); ldc_sdone(m, d, buf_, n_); } while (0)
+static inline void ldc_time_str(u8 *m, uint32_t d, int64_t ns) {
+  int32_t sec = (int32_t)(uint32_t)(uint64_t)(ns / LDC_NS_S);
+  int64_t nsec = ns % LDC_NS_S;
+  int days = sec / 86400, drem = sec % 86400, hours = drem / 3600, hrem = drem % 3600, mins = hrem / 60, mrem = hrem % 60;
+  if (!drem && nsec == 0) LDC_SPRINTF(m, d, "T#%dd", days);
+  else if (!hrem && nsec == 0) LDC_SPRINTF(m, d, "T#%dd%dh", days, hours);
+  else if (!mrem && nsec == 0) LDC_SPRINTF(m, d, "T#%dd%dh%dm", days, hours, mins);
+  else if (nsec == 0) LDC_SPRINTF(m, d, "T#%dd%dh%dm%ds", days, hours, mins, mrem);
+  else LDC_SPRINTF(m, d, "T#%dd%dh%dm%ds%gms", days, hours, mins, mrem, (double)nsec / 1000000);
+}
+/* __pstring_to_sint with x86-64's C (ir/typed.h str_to_lint) */
+static inline uint64_t ldc_s2lint(const ldc_str *s) {
+  const uint8_t *b = s->b;
+  uint32_t n = s->len, l;
+  uint64_t res = 0, sign, fac;
+  unsigned shift = 0;
+  if (n < 1) return 0;
+  if (n > 1 && (b[0] == '2' || b[0] == '8') && b[1] == '#') {
+    unsigned bits = b[0] == '2' ? 1 : 3;
+    uint8_t top = b[0] == '2' ? '1' : '7';
+    for (l = n - 1; l >= 2 && shift < 64; l--)
+      if (b[l] >= '0' && b[l] <= top) { res |= (uint64_t)(int64_t)(int32_t)((uint32_t)(b[l] - '0') << (shift & 31)); shift += bits; }
+    return res;
+  }
+  if (n > 2 && b[0] == '1' && b[1] == '6' && b[2] == '#') {
+    for (l = n - 1; l >= 3 && shift < 64; l--) {
+      uint8_t c = b[l];
+      int dg = c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+      if (dg >= 0) { res |= (uint64_t)dg << shift; shift += 4; }
+    }
+    return res;
+  }
+  sign = b[0] == '-' ? ~(uint64_t)0 : 1;
+  fac = sign;
+  for (l = n; l > 0 && shift < 20; l--) {
+    uint8_t c = b[l - 1];
+    if (c >= '0' && c <= '9') { res += (uint64_t)(c - '0') * fac; fac *= 10; shift++; }
+    else if (c >= '.') { res = 0; fac = sign; shift = 0; }
+  }
+  return res;
+}
+static inline int ldc_sdot(const ldc_str *s) { uint32_t l = s->len; while (l > 0 && s->b[--l] != '.') {} return l != 0; }
+static inline double ldc_s2real(const ldc_str *s) {
+  char buf[127] = {0};
+  if (!ldc_sdot(s)) return (double)(int64_t)ldc_s2lint(s);
+  memcpy(buf, s->b, s->len);
+  return strtod(buf, 0);
+}
+static inline uint8_t ldc_s2bool(const ldc_str *s) {
+  int i;
+  if (s->len == 1) return s->b[0] == '1';
+  if (s->len != 4) return 0;
+  for (i = 0; i < 4; i++) if ((s->b[i] >= 'a' && s->b[i] <= 'z' ? s->b[i] - 32 : s->b[i]) != "TRUE"[i]) return 0;
+  return 1;
+}
+static inline int64_t ldc_s2time(const ldc_str *s) {
+  if (!ldc_sdot(s)) return ldc_time_of((int64_t)ldc_s2lint(s), 0);
+  return ldc_time_of(ldc_to_i64(ldc_s2real(s)), 0);
+}
+)";
+
 const char* ct(Ty t) { return ty_info(t).c; }
 const char* ut(Ty t) { return ty_info(t).bits <= 32 ? "uint32_t" : "uint64_t"; }
 std::string tn(Ty t) { return ty_info(t).name; }
@@ -78,6 +234,7 @@ class Typed {
   CTyped run() {
     const Op op = in_.op;
     const OpInfo& oi = op_info(op);
+    if (typed::is_string_instr(op, t_, u_)) return string();
     if (oi.push) return {true, "(" + val(0, t_) + " " + rel_info(oi.rel).c + " " + val(1, t_) + ")"};
     switch (op) {
       case Op::TMOVE: return body(st(1, val(0, t_)));
@@ -128,6 +285,55 @@ class Typed {
   Ty t_, u_;
 
   static CTyped body(std::string s) { return {false, std::move(s)}; }
+  std::string a(int i) const { return u32(addr(in_.a[i])); }
+  // an integer operand as int64_t (a length, a position)
+  std::string i64(int i, Ty t) const { return "(int64_t)" + val(i, t); }
+  // The string section (ir/typed.h "strings"): the prelude's ldc_s* routines.
+  CTyped string() const {
+    const std::string m = "m", e = "&" + s0();
+    switch (in_.op) {
+      case Op::TEQ: case Op::TNE: case Op::TLT: case Op::TLE: case Op::TGT: case Op::TGE:
+        return {true, "(ldc_scmp(m, " + a(0) + ", " + a(1) + ") " + rel_info(op_info(in_.op).rel).c + " 0)"};
+      case Op::TARGS: return body("sl_ = " + i64(0, t_) + "; sp_ = " + i64(1, t_) + ";");
+      case Op::TMOVE: return body("ldc_smove(m, " + a(1) + ", " + a(0) + ");");
+      case Op::TLEN: return body(st(1, cast(t_) + "ldc_sld(m, " + a(0) + ").len"));
+      case Op::TFIND: return body(st(2, cast(t_) + "ldc_sfind(m, " + a(0) + ", " + a(1) + ")"));
+      case Op::TLEFT: case Op::TRIGHT:
+        return body("ldc_sleft(m, " + a(2) + ", " + a(0) + ", " + i64(1, u_) + ", " + (in_.op == Op::TRIGHT ? "1" : "0") + ", " + e + ");");
+      case Op::TCONCAT: return body("ldc_sconcat(m, " + a(2) + ", " + a(0) + ", " + a(1) + ");");
+      case Op::TMID: return body("ldc_smid(m, " + a(1) + ", " + a(0) + ", sl_, sp_, " + e + ");");
+      case Op::TDELETE: return body("ldc_sdelete(m, " + a(1) + ", " + a(0) + ", sl_, sp_, " + e + ");");
+      case Op::TINSERT: return body("ldc_sinsert(m, " + a(2) + ", " + a(0) + ", " + a(1) + ", sp_, " + e + ");");
+      case Op::TREPLACE: return body("ldc_sreplace(m, " + a(2) + ", " + a(0) + ", " + a(1) + ", sl_, sp_, " + e + ");");
+      case Op::TCONV: return body(t_ == Ty::STRING ? to_string() : from_string());
+      default: break;
+    }
+    throw CompileError(in_.loc.line, in_.loc.col, std::string("the C route has no translation for ") + op_spelling(in_));
+  }
+  // CONV.STRING.U: MatIEC's U_TO_STRING formats
+  std::string to_string() const {
+    const std::string d = a(1), v = val(0, u_);
+    switch (ty_info(u_).kind) {
+      case TyKind::Bool: return "if (" + v + ") LDC_SPRINTF(m, " + d + ", \"TRUE\"); else LDC_SPRINTF(m, " + d + ", \"FALSE\");";
+      case TyKind::Bits: return "LDC_SPRINTF(m, " + d + ", \"16#%llx\", (unsigned long long)" + v + ");";
+      case TyKind::Signed: return "LDC_SPRINTF(m, " + d + ", \"%lld\", (long long)" + v + ");";
+      case TyKind::Unsigned: return "LDC_SPRINTF(m, " + d + ", \"%llu\", (unsigned long long)" + v + ");";
+      case TyKind::Real: return "LDC_SPRINTF(m, " + d + ", \"%.10g\", (double)" + v + ");";
+      case TyKind::Time: return "ldc_time_str(m, " + d + ", " + v + ");";
+      default: break;
+    }
+    throw CompileError(in_.loc.line, in_.loc.col, std::string("the C route has no translation for ") + op_spelling(in_));
+  }
+  // CONV.T.STRING: MatIEC's STRING_TO_T
+  std::string from_string() const {
+    const std::string s = "{ ldc_str s_ = ldc_sld(m, " + a(0) + "); ";
+    switch (ty_info(t_).kind) {
+      case TyKind::Bool: return s + st(1, "ldc_s2bool(&s_)") + " }";
+      case TyKind::Real: return s + st(1, cast(t_) + "ldc_s2real(&s_)") + " }";
+      case TyKind::Time: return s + st(1, "ldc_s2time(&s_)") + " }";
+      default: return s + st(1, cast(t_) + "ldc_s2lint(&s_)") + " }";
+    }
+  }
   uint32_t addr(const Operand& o) const { return L_.addr(o.area, o.index); }
   static std::string cast(Ty t) { return std::string("(") + ct(t) + ")"; }
   std::string wrap(const std::string& e) const { return cast(t_) + "(" + e + ")"; }
@@ -265,8 +471,9 @@ std::string load_store(Ty t) {
 
 std::string c_typed_prelude() {
   std::string s = kTypedPrelude;
-  for (int i = 0; i < kTyCount; i++) s += load_store(Ty(i));
-  return s;
+  for (int i = 0; i < kTyCount; i++)
+    if (Ty(i) != Ty::STRING) s += load_store(Ty(i));  // STRING: ldc_sld / ldc_sst
+  return s + kStringPrelude;
 }
 
 CTyped c_typed(const Instr& in, const Layout& layout, int64_t il_offset) { return Typed(in, layout, il_offset).run(); }

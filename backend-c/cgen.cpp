@@ -333,8 +333,10 @@ std::string generate_c(const Program& p, const Layout& layout) {
   g.set_il_offsets(typed ? &offsets : nullptr);
   g.rungs(p.rungs, p.end_labels);
   return std::string("/* ldc: ") + p.source + " as C (the C route). */\n" + kPrelude + (typed ? c_typed_prelude() : "") +
-         "\n" + c_scan_head() + (typed ? "  uint32_t xr = 0; /* the index register: IDX sets it */\n" : "") + g.out +
-         "  (void)s0;\n" + (typed ? "  (void)xr;\n" : "") + "}\n";
+         "\n" + c_scan_head() +
+         (typed ? "  uint32_t xr = 0; /* the index register: IDX sets it */\n"
+                  "  int64_t sl_ = 0, sp_ = 0; /* the string-argument registers: ARGS sets them */\n" : "") + g.out +
+         "  (void)s0;\n" + (typed ? "  (void)xr; (void)sl_; (void)sp_;\n" : "") + "}\n";
 }
 
 }  // namespace ldc

@@ -118,7 +118,8 @@ std::string generate_sfc_c(const Chart& c, const Layout& layout) {
   const bool typed = chart_has_typed(c);
   g.out = "/* ldc: " + c.source + ", a sequential function chart as C (paper 001). */\n" + c_prelude() +
           (typed ? c_typed_prelude() : "") + "\n" + c_scan_head() +
-          (typed ? "  uint32_t xr = 0; /* the index register: IDX sets it */\n  (void)xr;\n" : "");
+          (typed ? "  uint32_t xr = 0; /* the index register: IDX sets it */\n  (void)xr;\n"
+                   "  int64_t sl_ = 0, sp_ = 0; /* the string-argument registers: ARGS sets them */\n  (void)sl_; (void)sp_;\n" : "");
   const SfcStep& init = c.steps[c.initial];
   g.out += "  if (m[" + SfcC::u(layout.addr(Area::S, kBitFirstScan)) + "]) {  " + SfcC::comment("first scan") + "\n";
   g.enter("    ", c.initial);

@@ -2507,8 +2507,22 @@ std::vector<std::string> x86_globals(const Program& p) {
   return g;
 }
 
+// STRING and its functions (ir/typed.h, "strings") are run by the
+// interpreters; native code would call checked routines for them through the
+// read-only call table, which the validator does not yet know: refused by name.
+static void refuse_strings(const Program& p) {
+  for (const Rung& r : p.rungs)
+    for (const ldc::Instr& in : r.code)
+      if (op_info(in.op).typed && typed::is_string_instr(in.op, in.ty, in.src))
+        throw CompileError(in.loc.line, in.loc.col,
+                           "x86-64: " + op_spelling(in) +
+                               ": STRING and the string functions run on the interpreters and the C route (--engine=interp, fast or c), "
+                               "not in native code");
+}
+
 void generate_x86_blocks(const Program& p, const Layout& layout, int opt_level, bool notes, const X86BlockSink& sink,
                          std::vector<std::vector<uint32_t>>& il_items) {
+  refuse_strings(p);
   Blocks(p, layout, opt_level, notes).run(il_items, sink);
 }
 

@@ -50,7 +50,7 @@ class IecGen {
   IecGen(uint64_t seed, const GenOptions& o) : r_(seed * 0x2545F4914F6CDD1Dull + 0x6965632dull), o_(o) {
     wide_ = o.classes & kGenT64;
     for (int i = 1; i < kTyCount; i++)  // BOOL is always there; the palette is of the others
-      if (wide_ || ty_info(Ty(i)).bits < 64) all_.push_back(Ty(i));
+      if (Ty(i) != Ty::STRING && (wide_ || ty_info(Ty(i)).bits < 64)) all_.push_back(Ty(i));  // STRING: not on native code
     for (Ty t : all_)
       if (is_int(t)) ints_.push_back(t);
     // the palette: five types, shuffled from all; the FBs and FUNCTIONs work on its first ones

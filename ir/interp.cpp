@@ -26,6 +26,7 @@ struct Ctx {
   uint32_t stack;  // the bit stack: top = bit 0
   bool end;
   uint32_t xr = 0;   // the index register: set by IDX, used by the LDX / STX right after it
+  typed::StrArgs args;  // the string-argument registers: set by ARGS, used by the MID .. REPLACE right after it
   uint32_t start = 0;  // the offset of the instruction being run
 };
 
@@ -363,11 +364,26 @@ void exec_typed(Ctx& c) {
   constexpr const OpInfo& oi = kOps[int(op)];
   const Ty t = Ty(c.code[c.pc++]);
   const Ty u = oi.typed == 2 ? Ty(c.code[c.pc++]) : Ty::None;
+  if (t == Ty::STRING && oi.push == 1) {
+    uint8_t* a = toperand(c, Ty::None).addr;
+    uint8_t* b = toperand(c, Ty::None).addr;
+    return push(c, typed::str_compare(oi.rel, typed::str_load(a), typed::str_load(b)));
+  }
   if constexpr (oi.push == 1) {
     uint64_t a = toperand(c, t).v, b = toperand(c, t).v;
     return push(c, typed::compare(oi.rel, t, a, b));
   }
   if (!top(c)) return skip_typed(c, oi.nopd);
+  if (typed::is_string_instr(op, t, u)) {
+    uint8_t* o[3] = {};
+    uint64_t k[3] = {};
+    for (int i = 0; i < oi.nopd; i++) {
+      TOpd d = toperand(c, Ty::None);
+      o[i] = d.addr, k[i] = d.v;
+    }
+    if (typed::str_exec(op, t, u, o, k, c.args)) set_error(c);
+    return;
+  }
   if constexpr (op == Op::TIDX) {
     uint64_t i = toperand(c, t).v;
     int32_t lo = int32_t(toperand(c, Ty::None).v), hi = int32_t(toperand(c, Ty::None).v);

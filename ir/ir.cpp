@@ -362,6 +362,7 @@ static std::string check_typed_operand(char sig, Ty t, const uint8_t* p, size_t 
     if (avail < 9) return "truncated constant";
     len = 9;
     if (sig != 's' && sig != 'x') return "constant where a device is required";
+    if (t == Ty::STRING) return "a STRING operand is a device (33 cells); a literal is moved into one (docs/il.md, \"Strings\")";
     uint64_t v = get32(p + 1) | (uint64_t(get32(p + 5)) << 32);
     if (typed::norm(t, v) != v) return std::string("constant not a canonical ") + ty_info(t).name;
     return "";
@@ -379,7 +380,11 @@ static std::string check_typed_operand(char sig, Ty t, const uint8_t* p, size_t 
 // operands.  An LDX / STX must come right after an IDX (`idx_span`: that IDX's
 // hi - lo, or -1 if the instruction before was none), and its base plus the
 // span times its stride must stay inside the base's area.
-static std::string check_typed(Op op, std::span<const uint8_t> code, size_t& p, const Layout& L, int64_t& idx_span) {
+// Likewise a MID / DELETE / INSERT / REPLACE must come right after an ARGS
+// (`args`: the instruction before was one).
+static bool reads_args(Op op) { return op == Op::TMID || op == Op::TDELETE || op == Op::TINSERT || op == Op::TREPLACE; }
+static std::string check_typed(Op op, std::span<const uint8_t> code, size_t& p, const Layout& L, int64_t& idx_span,
+                               bool& args) {
   const OpInfo& oi = op_info(op);
   if (code.size() - p < size_t(oi.typed)) return "truncated type";
   Ty t = Ty(code[p]), u = oi.typed == 2 ? Ty(code[p + 1]) : Ty::None;
@@ -397,6 +402,9 @@ static std::string check_typed(Op op, std::span<const uint8_t> code, size_t& p, 
   }
   const int64_t span = idx_span;
   idx_span = -1;
+  const bool had_args = args;
+  args = op == Op::TARGS;
+  if (reads_args(op) && !had_args) return std::string(oi.name + 1) + " not right after an ARGS";
   if (op == Op::TIDX) {
     if (o[1].value > o[2].value) return "IDX bounds " + std::to_string(o[1].value) + ".." + std::to_string(o[2].value) + " are empty";
     idx_span = o[2].value - o[1].value;
@@ -424,20 +432,22 @@ std::string validate_il(std::span<const uint8_t> code, const Layout& layout) {
   auto walk = [&](auto&& jump) -> std::string {
     size_t off = 0;
     int64_t idx_span = -1;
+    bool args = false;
     while (off < code.size()) {
       uint8_t opb = code[off];
       if (opb >= kOpCount) return "offset " + std::to_string(off) + ": unknown opcode " + std::to_string(opb);
       const OpInfo& oi = op_info(Op(opb));
       size_t p = off + 1;
       if (oi.typed) {
-        if (std::string e = check_typed(Op(opb), code, p, layout, idx_span); !e.empty())
+        if (std::string e = check_typed(Op(opb), code, p, layout, idx_span, args); !e.empty())
           return "offset " + std::to_string(off) + ": " + op_info(Op(opb)).name + ": " + e;
-        indexed[off] = Op(opb) == Op::TLDX || Op(opb) == Op::TSTX;
+        indexed[off] = Op(opb) == Op::TLDX || Op(opb) == Op::TSTX || reads_args(Op(opb));
         starts[off] = true;
         off = p;
         continue;
       }
       idx_span = -1;
+      args = false;
       for (const char* s = oi.operands; *s; s++) {
         size_t len = 0;
         uint32_t target = UINT32_MAX;
@@ -456,7 +466,7 @@ std::string validate_il(std::span<const uint8_t> code, const Layout& layout) {
   return walk([&](uint32_t from, uint32_t to) -> std::string {
     bool at_boundary = to == code.size() || (to < code.size() && starts[to]);
     if (!at_boundary) return "offset " + std::to_string(from) + ": jump target " + std::to_string(to) + " is not an instruction boundary";
-    if (to < code.size() && indexed[to]) return "offset " + std::to_string(from) + ": jump to an LDX / STX past its IDX";
+    if (to < code.size() && indexed[to]) return "offset " + std::to_string(from) + ": jump to an LDX / STX past its IDX, or a string function past its ARGS";
     if (to <= from) return "offset " + std::to_string(from) + ": backward jump";
     return "";
   });

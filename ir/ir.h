@@ -182,7 +182,7 @@ enum class Ty : uint8_t {
   None
 };
 constexpr int kTyCount = static_cast<int>(Ty::None);
-enum class TyKind : uint8_t { Bool, Signed, Unsigned, Bits, Real, Time, Date };
+enum class TyKind : uint8_t { Bool, Signed, Unsigned, Bits, Real, Time, Date, String };
 struct TyInfo {
   const char* name;  // "INT"
   int bits;          // 16
@@ -204,6 +204,7 @@ constexpr char ty_letter(Ty t) {
     case TyKind::Real: return 'f';
     case TyKind::Time: return 't';
     case TyKind::Date: return 'd';
+    case TyKind::String: return 's';
   }
   return '?';
 }

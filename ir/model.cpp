@@ -273,6 +273,19 @@ void Model::initial_stores(TypeId id, Place p, const Init* init, std::vector<Sto
   const Type& t = type(id);
   if (!init || init->kind == Init::None) init = t.init.kind == Init::None ? nullptr : &t.init;
   SrcLoc loc = init ? init->loc : SrcLoc{};
+  if (t.scalar() && t.elem == Ty::STRING) {  // its cells: the length and the bytes (DINT and DWORD stores)
+    std::string bytes;
+    if (init) {
+      if (init->kind != Init::Value) fail(loc, "a STRING takes one string literal, not a list or structure");
+      std::string why;
+      if (!literal_as(init->value, Ty::STRING, why)) fail(loc, why);
+      bytes = init->value.str;
+    }
+    std::vector<uint32_t> cells = string_cells(bytes);
+    for (uint32_t k = 0; k < cells.size(); k++)
+      if (cells[k] != 0 || zeros) out.push_back({k == 0 ? Ty::DINT : Ty::DWORD, p + Size{0, k}, cells[k]});
+    return;
+  }
   if (t.scalar()) {
     if (!init) {
       if (zeros) out.push_back({t.elem, p, 0});
@@ -426,9 +439,52 @@ bool tod_ns(std::string_view s, int64_t& ns) {  // HH:MM:SS[.frac]
 
 }  // namespace
 
+std::optional<std::string> string_literal_bytes(std::string_view text, std::string& why) {
+  why.clear();
+  if (text.size() < 2 || text.front() != '\'' || text.back() != '\'') return why = "a string literal is written 'text'", std::nullopt;
+  std::string out;
+  auto hex = [](char c) { return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1; };
+  for (size_t i = 1; i + 1 < text.size(); i++) {
+    char c = text[i];
+    if (c == '\'') return why = "a quote inside a string literal is written $'", std::nullopt;
+    if (c != '$') { out += c; continue; }
+    if (i + 2 >= text.size()) return why = "a '$' at the end of a string literal (write $$)", std::nullopt;
+    char e = text[++i];
+    switch (e) {  // MatIEC's generate_c_base.cc: $L and $N are both LF
+      case '$': case '\'': out += e; continue;
+      case 'L': case 'l': case 'N': case 'n': out += '\n'; continue;
+      case 'P': case 'p': out += '\f'; continue;
+      case 'R': case 'r': out += '\r'; continue;
+      case 'T': case 't': out += '\t'; continue;
+      default: break;
+    }
+    if (hex(e) < 0 || i + 2 >= text.size() || hex(text[i + 1]) < 0)
+      return why = std::string("unknown escape '$") + e + "' in a string literal ($$ $' $L $N $P $R $T $hh)", std::nullopt;
+    out += char(hex(e) * 16 + hex(text[++i]));
+  }
+  if (out.size() > typed::kStrMax)
+    return why = "a string literal of " + std::to_string(out.size()) + " bytes: a STRING holds 126 (MatIEC's STR_MAX_LEN)", std::nullopt;
+  return out;
+}
+
+std::vector<uint32_t> string_cells(const std::string& bytes) {
+  std::vector<uint32_t> c(typed::kStrBytes / 4, 0);
+  c[0] = uint32_t(bytes.size());
+  for (size_t i = 0; i < bytes.size() && i < typed::kStrMax; i++) c[1 + i / 4] |= uint32_t(uint8_t(bytes[i])) << (8 * (i % 4));
+  return c;
+}
+
 std::optional<ParsedLit> parse_literal(std::string_view text, std::string& why) {
   why.clear();
   if (text.empty()) return std::nullopt;
+  if (text[0] == '\'' || (text.size() > 8 && upper(text.substr(0, 8)) == "STRING#'")) {
+    auto b = string_literal_bytes(text[0] == '\'' ? text : text.substr(7), why);
+    if (!b) return why += ": " + std::string(text), std::nullopt;
+    ParsedLit p;
+    p.lit = {Ty::STRING, 0};
+    p.str = *b;
+    return p;
+  }
   std::string u = upper(text);
   ParsedLit p;
   if (u == "TRUE" || u == "FALSE") {
@@ -539,6 +595,10 @@ std::optional<ParsedLit> parse_literal(std::string_view text, std::string& why) 
 
 std::optional<Lit> literal_as(const ParsedLit& p, Ty t, std::string& why) {
   const char* tn = ty_info(t).name;
+  if ((p.lit.ty == Ty::STRING) != (t == Ty::STRING))  // a STRING's bytes are p.str: its cells come from string_cells
+    return why = p.lit.ty == Ty::STRING ? std::string("a string literal is not a ") + tn : "a STRING takes a string literal 'text'",
+           std::nullopt;
+  if (t == Ty::STRING) return Lit{t, 0};
   if (p.untyped_real) {
     if (!typed::is_real(t)) return why = std::string("a real number is not a ") + tn, std::nullopt;
     return Lit{t, typed::real_bits(t, p.rval)};

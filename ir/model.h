@@ -60,13 +60,21 @@ struct Lit {
 // An untyped integer is LINT-valued with ty None and `untyped_int` set (it takes the
 // type of its use), an untyped real LREAL with ty None and `untyped_real` set.
 struct ParsedLit {
-  Lit lit;              // lit.ty is None for an untyped number
+  Lit lit;              // lit.ty is None for an untyped number; STRING for a string literal
+  std::string str;      // a string literal's bytes ('a$Nb' is "a\nb"), lit.ty STRING
   bool untyped_int = false, untyped_real = false;
   int64_t ival = 0;     // an untyped integer's value
   double rval = 0;      // an untyped real's value
 };
 // nullopt with `why` empty: not a literal; with `why` set: a malformed one.
+// A string literal 'text' (STRING#'text' too) has MatIEC's escapes: $$ $' $L $N
+// (both LF) $P $R $T and $hh, in either case; more than 126 bytes is an error.
 std::optional<ParsedLit> parse_literal(std::string_view text, std::string& why);
+// The bytes of string literal 'text' (quotes included); nullopt and `why` if malformed.
+std::optional<std::string> string_literal_bytes(std::string_view text, std::string& why);
+// The 33 cells of a STRING holding `bytes` (at most 126): the length, then the
+// bytes four to a cell, first byte lowest (docs/il.md, "Strings").
+std::vector<uint32_t> string_cells(const std::string& bytes);
 // A parsed literal as a value of type t (untyped ones take t; nullopt and
 // `why` if it does not fit or is of another type).
 std::optional<Lit> literal_as(const ParsedLit& p, Ty t, std::string& why);

@@ -59,7 +59,8 @@ bool op_takes(Op op, Ty t, Ty u) {
   if (ts.find(ty_letter(t)) == std::string_view::npos) return false;
   if (oi.typed == 1) return u == Ty::None;
   if (u == Ty::None || int(u) >= kTyCount || !bar) return false;
-  return std::strchr(bar + 1, ty_letter(u)) != nullptr;
+  if (std::strchr(bar + 1, ty_letter(u)) == nullptr) return false;
+  return op != Op::TCONV || (t != Ty::STRING && u != Ty::STRING) || typed::conv_string_ok(t, u);
 }
 
 std::string op_spelling(const Instr& in) {
@@ -98,6 +99,7 @@ std::string typed_const_text(Ty t, uint64_t v) {
 
 std::optional<uint64_t> parse_typed_const(Ty t, std::string_view s, std::string& why) {
   if (s.empty()) return why = "empty constant", std::nullopt;
+  if (t == Ty::STRING) return why = "a STRING operand is a device; a literal is moved into its cells", std::nullopt;
   if (typed::is_real(t)) {
     std::string z(s);
     char* end = nullptr;

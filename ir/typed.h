@@ -20,6 +20,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 
@@ -65,6 +67,7 @@ inline uint64_t real_bits(Ty t, double d) { return ty_info(t).bits == 32 ? bits_
 // ---- memory
 inline uint64_t load(Ty t, const uint8_t* p) {
   if (t == Ty::BOOL) return p[0] != 0;
+  if (t == Ty::STRING) return 0;  // a string is not a 64-bit value: the string routines below read it
   if (ty_info(t).cells == 1) {
     uint32_t u;
     std::memcpy(&u, p, 4);
@@ -76,6 +79,7 @@ inline uint64_t load(Ty t, const uint8_t* p) {
 }
 inline void store(Ty t, uint8_t* p, uint64_t v) {
   if (t == Ty::BOOL) { p[0] = v ? 1 : 0; return; }
+  if (t == Ty::STRING) return;
   if (ty_info(t).cells == 1) {
     uint32_t u = uint32_t(v);
     std::memcpy(p, &u, 4);
@@ -272,6 +276,304 @@ inline uint64_t trunc(Ty to, Ty from, uint64_t v) {
 inline bool index_ok(Ty t, uint64_t v, int32_t lo, int32_t hi) {
   if (!is_signed(t) && v > uint64_t(std::numeric_limits<int64_t>::max())) return false;
   return int64_t(v) >= lo && int64_t(v) <= hi;
+}
+
+// ---- strings (STRING, types.def): MatIEC's IEC_STRING, {uint8_t len; uint8_t
+// body[STR_MAX_LEN]} with STR_MAX_LEN 126 (lib/C/iec_types.h), and its
+// functions of Table 29 (lib/C/iec_std_functions.h) and conversions
+// (lib/C/iec_std_lib.h, __*_to_string, __string_to_*).  In memory a STRING
+// takes 33 cells: cell 0 the length, cells 1..32 the bytes (126 used, 2 spare).
+// A length cell is read as a UINT32 clamped to 126, whatever wrote it (an
+// untrusted image may hold 0x7fffffff or -1 there), so no routine here reads
+// or writes outside the string's 132 bytes.  A result is built whole and then
+// stored with its unused bytes zero (MatIEC's __INIT_STRING), so a destination
+// may also be an operand.  Where MatIEC's C writes outside its 126 bytes or
+// reads outside its struct, these routines clamp (docs/il.md, "Strings").
+constexpr uint32_t kStrMax = 126;   // MatIEC's STR_MAX_LEN
+constexpr uint32_t kStrBytes = 132; // 33 cells
+struct Str {
+  uint32_t len = 0;
+  uint8_t body[kStrMax] = {};
+};
+inline Str str_load(const uint8_t* p) {
+  Str s;
+  uint32_t n;
+  std::memcpy(&n, p, 4);
+  s.len = n > kStrMax ? kStrMax : n;
+  std::memcpy(s.body, p + 4, s.len);
+  return s;
+}
+inline void str_store(uint8_t* p, const Str& s) {
+  const uint32_t n = s.len > kStrMax ? kStrMax : s.len;
+  std::memcpy(p, &n, 4);
+  std::memcpy(p + 4, s.body, n);
+  std::memset(p + 4 + n, 0, kStrBytes - 4 - n);
+}
+// Appends up to n bytes (as many as fit).
+inline void str_append(Str& r, const uint8_t* b, int64_t n) {
+  if (n <= 0) return;
+  const int64_t room = int64_t(kStrMax) - int64_t(r.len);
+  if (n > room) n = room;
+  std::memcpy(r.body + r.len, b, size_t(n));
+  r.len += uint32_t(n);
+}
+// MatIEC's __str_cmp: memcmp of the common length, then the longer is greater.
+inline int str_cmp(const Str& a, const Str& b) {
+  int c = std::memcmp(a.body, b.body, a.len < b.len ? a.len : b.len);
+  if (c) return c < 0 ? -1 : 1;
+  return a.len > b.len ? 1 : a.len < b.len ? -1 : 0;
+}
+inline bool str_compare(Rel r, const Str& a, const Str& b) { return rel_holds(r, str_cmp(a, b), 0); }
+
+// LEFT / RIGHT (L < 0: ENO FALSE, the empty string): min(L, len) bytes.
+inline Str str_left(const Str& s, int64_t l, bool& error) {
+  Str r;
+  if (l < 0) { error = true; return r; }
+  str_append(r, s.body, l < int64_t(s.len) ? l : int64_t(s.len));
+  return r;
+}
+inline Str str_right(const Str& s, int64_t l, bool& error) {
+  Str r;
+  if (l < 0) { error = true; return r; }
+  if (l > int64_t(s.len)) l = s.len;
+  str_append(r, s.body + (s.len - uint32_t(l)), l);
+  return r;
+}
+// MID: `if (P <= len) { P -= 1; L = L + P <= len ? L : len - P; memcpy(res.body,
+// &IN.body[P], L); }`.  P = 0 makes MatIEC start at body[-1], the length byte of
+// its struct: so here too (MID('abc', 2, 0) is '\x03a'); a result of 127 bytes
+// (P = 0 on a full string) is cut to 126 where MatIEC overruns.
+inline Str str_mid(const Str& s, int64_t l, int64_t p, bool& error) {
+  Str r;
+  if (l < 0 || p < 0) { error = true; return r; }
+  if (p > int64_t(s.len)) return r;
+  p -= 1;
+  if (l > int64_t(s.len) - p) l = int64_t(s.len) - p;
+  if (l > int64_t(kStrMax)) l = kStrMax;
+  for (int64_t i = 0; i < l; i++) r.body[i] = p + i < 0 ? uint8_t(s.len) : s.body[p + i];
+  r.len = uint32_t(l);
+  return r;
+}
+// CONCAT: as many bytes of each as fit in 126.
+inline Str str_concat(const Str& a, const Str& b) {
+  Str r = a;
+  str_append(r, b.body, b.len);
+  return r;
+}
+// INSERT (__insert, P cast to __strlen_t, uint8_t): IN1's first min(P, len1)
+// bytes, IN2, the rest of IN1, cut at 126.
+inline Str str_insert(const Str& a, const Str& b, int64_t p, bool& error) {
+  Str r;
+  if (p < 0) { error = true; return r; }
+  const uint32_t p8 = uint8_t(p);
+  const uint32_t head = p8 > a.len ? a.len : p8;
+  str_append(r, a.body, head);
+  str_append(r, b.body, b.len);
+  str_append(r, a.body + head, a.len - head);
+  return r;
+}
+// The first bytes DELETE and REPLACE keep: `P > len ? len : P - 1` in
+// __strlen_t.  P = 0 gives 255 there and MatIEC copies 255 bytes into its
+// 126 (a buffer overrun); here it keeps none, as P = 1.
+inline uint32_t str_head(uint32_t p8, uint32_t len) { return p8 > len ? len : p8 == 0 ? 0 : p8 - 1; }
+inline Str str_delete(const Str& s, int64_t l, int64_t p, bool& error) {
+  Str r;
+  if (l < 0 || p < 0) { error = true; return r; }
+  const uint32_t l8 = uint8_t(l), head = str_head(uint8_t(p), s.len);
+  str_append(r, s.body, head);
+  if (s.len > head + l8) str_append(r, s.body + head + l8, s.len - head - l8);
+  return r;
+}
+// REPLACE (__replace): IN1's head, min(len2, L) bytes of IN2, then IN1 from
+// P + L (that sum in __strlen_t: modulo 256); MatIEC does not cut the last
+// copy at 126 (an overrun), here it is cut.
+inline Str str_replace(const Str& a, const Str& b, int64_t l, int64_t p, bool& error) {
+  Str r;
+  if (l < 0 || p < 0) { error = true; return r; }
+  const uint32_t l8 = uint8_t(l), head = str_head(uint8_t(p), a.len);
+  str_append(r, a.body, head);
+  str_append(r, b.body, b.len < l8 ? b.len : l8);
+  const uint32_t from = uint8_t(head + l8);
+  if (r.len < kStrMax && from < a.len) str_append(r, a.body + from, a.len - from);
+  return r;
+}
+// FIND (__pfind): the 1-based position of IN2's first occurrence in IN1, 0 if
+// none or IN2 is empty.  After a partial match of c2 bytes at c1 MatIEC goes on
+// at c1 + c2 + 1, past bytes where a match could start: FIND('aaab', 'aab') is 0.
+inline uint64_t str_find(const Str& a, const Str& b) {
+  if (!(b.len > 0 && a.len >= b.len)) return 0;
+  uint32_t c1 = 0, c2 = 0;
+  while (c1 + c2 < a.len && c2 < b.len) {
+    if (a.body[c1 + c2] != b.body[c2]) c1 += c2 + 1, c2 = 0;
+    else c2++;
+  }
+  return c2 == b.len ? c1 + 1 : 0;
+}
+
+// ---- conversions to and from STRING (CONV.STRING.U, CONV.T.STRING)
+// snprintf(body, STR_MAX_LEN, ...) with len = its result cut at 126, as
+// MatIEC's __*_to_string.
+template <typename... A>
+inline Str str_printf(const char* fmt, A... a) {
+  Str r;
+  char buf[kStrMax + 1] = {};
+  int n = std::snprintf(buf, kStrMax, fmt, a...);
+  r.len = n < 0 ? 0 : uint32_t(n) > kStrMax ? kStrMax : uint32_t(n);
+  std::memcpy(r.body, buf, r.len);
+  return r;
+}
+// __time_to_string: T#<d>d, then h, m, s and `%g`ms as far as needed; the days
+// and the rest come from div(tv_sec, 86400) with tv_sec passed as an int.
+inline Str time_to_string(int64_t ns) {
+  const int32_t sec = int32_t(uint32_t(uint64_t(time_sec(ns))));
+  const int64_t nsec = time_nsec(ns);
+  const int days = sec / 86400, drem = sec % 86400;
+  if (!drem && nsec == 0) return str_printf("T#%dd", days);
+  const int hours = drem / 3600, hrem = drem % 3600;
+  if (!hrem && nsec == 0) return str_printf("T#%dd%dh", days, hours);
+  const int mins = hrem / 60, mrem = hrem % 60;
+  if (!mrem && nsec == 0) return str_printf("T#%dd%dh%dm", days, hours, mins);
+  if (nsec == 0) return str_printf("T#%dd%dh%dm%ds", days, hours, mins, mrem);
+  return str_printf("T#%dd%dh%dm%ds%gms", days, hours, mins, mrem, double(nsec) / 1000000);
+}
+// U_TO_STRING: __bool_to_string 'TRUE' / 'FALSE'; __bit_to_string "16#%llx";
+// __sint_to_string "%lld"; __uint_to_string "%llu"; __real_to_string "%.10g"
+// of the LREAL value; __time_to_string.  (The dates are not converted here.)
+inline Str to_string(Ty u, uint64_t v) {
+  switch (ty_info(u).kind) {
+    case TyKind::Bool: return v ? str_printf("TRUE") : str_printf("FALSE");
+    case TyKind::Bits: return str_printf("16#%llx", (unsigned long long)v);
+    case TyKind::Signed: return str_printf("%lld", (long long)int64_t(v));
+    case TyKind::Unsigned: return str_printf("%llu", (unsigned long long)v);
+    case TyKind::Real: return str_printf("%.10g", real_value(u, v));
+    case TyKind::Time: return time_to_string(int64_t(v));
+    default: return Str{};
+  }
+}
+// __pstring_to_sint, with C's arithmetic on x86-64 where MatIEC's is
+// undefined: `(c - '0') << shift` in 2# and 8# is an int shift, whose count
+// x86 takes modulo 32, sign-extended into the LINT; the decimal digits
+// accumulate in wrapping 64-bit arithmetic.  A decimal string is read from its
+// end: digits count, a byte below '.' ('-', '+', ' ') is skipped, any other
+// resets the value (so '1.5' gives 1, 'a7' gives 7); at most 20 digits count.
+inline uint64_t str_to_lint(const Str& s) {
+  const uint8_t* b = s.body;
+  const uint32_t n = s.len;
+  uint64_t res = 0;
+  unsigned shift = 0;
+  if (n < 1) return 0;
+  if (n > 1 && (b[0] == '2' || b[0] == '8') && b[1] == '#') {
+    const unsigned bits = b[0] == '2' ? 1 : 3;
+    const uint8_t top = b[0] == '2' ? '1' : '7';
+    for (uint32_t l = n - 1; l >= 2 && shift < 64; l--) {
+      uint8_t c = b[l];
+      if (c >= '0' && c <= top) {
+        res |= uint64_t(int64_t(int32_t(uint32_t(c - '0') << (shift & 31))));
+        shift += bits;
+      }
+    }
+    return res;
+  }
+  if (n > 2 && b[0] == '1' && b[1] == '6' && b[2] == '#') {
+    for (uint32_t l = n - 1; l >= 3 && shift < 64; l--) {
+      uint8_t c = b[l];
+      int d = c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+      if (d >= 0) res |= uint64_t(d) << shift, shift += 4;
+    }
+    return res;
+  }
+  const uint64_t sign = b[0] == '-' ? ~uint64_t(0) : 1;
+  uint64_t fac = sign;
+  for (uint32_t l = n; l > 0 && shift < 20; l--) {
+    uint8_t c = b[l - 1];
+    if (c >= '0' && c <= '9') {
+      res += uint64_t(c - '0') * fac;
+      fac *= 10;
+      shift++;
+    } else if (c >= '.') {
+      res = 0, fac = sign, shift = 0;
+    }
+  }
+  return res;
+}
+// __string_to_real: atof of the bytes if a '.' is at an index above 0, else
+// __pstring_to_sint (so '.5' is 0: its '.' resets the 5; '1e3' is 1).
+inline double str_to_real(const Str& s) {
+  uint32_t l = s.len;
+  while (l > 0 && s.body[--l] != '.') {}
+  if (l == 0) return double(int64_t(str_to_lint(s)));
+  char buf[kStrMax + 1] = {};
+  std::memcpy(buf, s.body, s.len);
+  return std::strtod(buf, nullptr);  // atof: the C locale
+}
+// STRING_TO_T: __string_to_bool (len 1: '1'; len 4: 'TRUE' in any case),
+// __string_to_sint / _uint / _bit then C's conversion to T, __string_to_real,
+// __string_to_time: `{(long)IN_val, (long)(IN_val - (LINT)IN_val)*1000000000}`
+// -- the cast binds before the product, so the fraction is always 0: whole
+// seconds; without a '.', the integer's seconds.
+inline uint64_t from_string(Ty t, const Str& s) {
+  switch (ty_info(t).kind) {
+    case TyKind::Bool: {
+      if (s.len == 1) return s.body[0] == '1';
+      if (s.len != 4) return 0;
+      const char* w = "TRUE";
+      for (int i = 0; i < 4; i++)
+        if ((s.body[i] >= 'a' && s.body[i] <= 'z' ? s.body[i] - 32 : s.body[i]) != w[i]) return 0;
+      return 1;
+    }
+    case TyKind::Real: return real_bits(t, str_to_real(s));
+    case TyKind::Time: {
+      uint32_t l = s.len;
+      while (l > 0 && s.body[--l] != '.') {}
+      if (l == 0) return time_of(int64_t(str_to_lint(s)), 0);
+      return time_of(to_i64(str_to_real(s)), 0);
+    }
+    default: return norm(t, str_to_lint(s));
+  }
+}
+// Does CONV take T and U when one is a STRING?  Every elementary type but the
+// dates, to and from; not STRING to STRING (that is MOVE).
+inline bool conv_string_ok(Ty t, Ty u) {
+  if (t == Ty::STRING && u == Ty::STRING) return false;
+  Ty other = t == Ty::STRING ? u : t;
+  return ty_info(other).kind != TyKind::Date;
+}
+
+
+// ---- running a string instruction (every engine that runs them calls this)
+// Is this an instruction of the string section: a STRING operand, or ARGS?
+inline bool is_string_instr(Op op, Ty t, Ty u) { return t == Ty::STRING || u == Ty::STRING || op == Op::TARGS; }
+// The string-argument registers (L, P) that ARGS sets.
+struct StrArgs {
+  int64_t l = 0, p = 0;
+};
+// Runs string instruction `op` (not a compare) with power on.  o[i] is the
+// address of device operand i (a STRING's first cell, an integer's cell), or
+// nullptr for a constant, whose canonical bits are k[i].  Returns true for
+// MatIEC's ENO FALSE (a negative length or position), which sets S0.
+inline bool str_exec(Op op, Ty t, Ty u, uint8_t* const o[], const uint64_t k[], StrArgs& args) {
+  auto num = [&](int i, Ty ty) { return int64_t(o[i] ? load(ty, o[i]) : k[i]); };
+  auto sv = [&](int i) { return str_load(o[i]); };
+  bool error = false;
+  switch (op) {
+    case Op::TARGS: args.l = num(0, t), args.p = num(1, t); return false;
+    case Op::TMOVE: str_store(o[1], sv(0)); return false;
+    case Op::TLEN: store(t, o[1], norm(t, str_load(o[0]).len)); return false;
+    case Op::TFIND: store(t, o[2], norm(t, str_find(sv(0), sv(1)))); return false;
+    case Op::TCONV:
+      if (t == Ty::STRING) str_store(o[1], to_string(u, o[0] ? load(u, o[0]) : k[0]));
+      else store(t, o[1], from_string(t, sv(0)));
+      return false;
+    case Op::TLEFT: str_store(o[2], str_left(sv(0), num(1, u), error)); break;
+    case Op::TRIGHT: str_store(o[2], str_right(sv(0), num(1, u), error)); break;
+    case Op::TCONCAT: str_store(o[2], str_concat(sv(0), sv(1))); break;
+    case Op::TMID: str_store(o[1], str_mid(sv(0), args.l, args.p, error)); break;
+    case Op::TDELETE: str_store(o[1], str_delete(sv(0), args.l, args.p, error)); break;
+    case Op::TINSERT: str_store(o[2], str_insert(sv(0), sv(1), args.p, error)); break;
+    case Op::TREPLACE: str_store(o[2], str_replace(sv(0), sv(1), args.l, args.p, error)); break;
+    default: break;
+  }
+  return error;
 }
 
 }  // namespace ldc::typed

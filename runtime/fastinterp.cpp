@@ -237,9 +237,16 @@ inline uint64_t tget(const uint8_t* m, const TOpnd& o, Ty t) { return o.konst ? 
 // The routine of typed instruction `op` (not a compare), as the reference
 // interpreter's exec_typed: called with power on.
 template <Op op>
-bool run_typed(uint8_t* m, const TGen& g, uint32_t& xr) {
+bool run_typed(uint8_t* m, const TGen& g, uint32_t& xr, typed::StrArgs& args) {
   constexpr const OpInfo& oi = kOps[int(op)];
   const Ty t = g.t, u = g.u;
+  if (typed::is_string_instr(op, t, u)) {  // the string section: ir/typed.h runs it
+    uint8_t* o[3] = {};
+    uint64_t k[3] = {};
+    for (int i = 0; i < oi.nopd; i++) o[i] = g.o[i].konst ? nullptr : m + g.o[i].off, k[i] = g.o[i].k;
+    if (typed::str_exec(op, t, u, o, k, args)) m[g.s0] = 1;
+    return false;
+  }
   if constexpr (oi.klass != OpClass::Typed || oi.push == 1) {
     return false;  // compares go to typed_compare; untyped ops have handlers of their own
   } else if constexpr (op == Op::TIDX) {
@@ -271,7 +278,7 @@ bool run_typed(uint8_t* m, const TGen& g, uint32_t& xr) {
   }
   return false;
 }
-using TypedRoutine = bool (*)(uint8_t*, const TGen&, uint32_t&);
+using TypedRoutine = bool (*)(uint8_t*, const TGen&, uint32_t&, typed::StrArgs&);
 // The routine of every op, by opcode (nullptr for the untyped ones).
 template <size_t... I>
 constexpr std::array<TypedRoutine, kOpCount> typed_routines(std::index_sequence<I...>) {
@@ -279,6 +286,7 @@ constexpr std::array<TypedRoutine, kOpCount> typed_routines(std::index_sequence<
 }
 constexpr std::array<TypedRoutine, kOpCount> kTypedRoutines = typed_routines(std::make_index_sequence<kOpCount>());
 __attribute__((noinline)) bool typed_compare(const uint8_t* m, const TGen& g) {
+  if (g.t == Ty::STRING) return typed::str_compare(op_info(g.op).rel, typed::str_load(m + g.o[0].off), typed::str_load(m + g.o[1].off));
   return typed::compare(op_info(g.op).rel, g.t, tget(m, g.o[0], g.t), tget(m, g.o[1], g.t));
 }
 
@@ -448,6 +456,7 @@ Ins Decoder::typed_compare(const Instr& in) {
 
 Ins Decoder::typed(const Instr& in) {
   const Operand* o = in.a;
+  if (typed::is_string_instr(in.op, in.ty, in.src)) return typed_generic(in);
   switch (in.op) {
     case Op::TMOVE: return typed_move(in);
     case Op::TADD: case Op::TSUB: case Op::TMUL: case Op::TDIV:
@@ -705,6 +714,7 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
   const uint64_t* const kp = k64_.data();          // 64-bit constants
   const TypedGeneric* const tg = generic_.data();  // the typed instructions without a handler
   uint32_t xr = 0;                                 // the index register (IDX sets it)
+  typed::StrArgs args;                             // the string-argument registers (ARGS sets them)
 
 #if LDC_FAST_GOTO
   static const void* const kLabels[F_Count] = {
@@ -851,7 +861,7 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
 
   // ---- typed instructions: only with power, but the compares
   HANDLER(TGEN) {
-    if ((st & 1u) && tg[ip->a].run(m, tg[ip->a], xr)) return;  // an index fault ends the scan
+    if ((st & 1u) && tg[ip->a].run(m, tg[ip->a], xr, args)) return;  // an index fault ends the scan
     NEXT();
   }
   HANDLER(TGCMP) { st = (st << 1) | uint32_t(typed_compare(m, tg[ip->a])); NEXT(); }

@@ -26,6 +26,7 @@
 #include <span>
 #include <vector>
 
+#include "ir/typed.h"
 #include "runtime/runtime.h"
 
 namespace ldc {
@@ -48,7 +49,7 @@ class FastInterpreter : public Engine {
     uint64_t k = 0;       // canonical bits (ir/typed.h); an LDX / STX stride in bytes
   };
   struct TypedGeneric {
-    bool (*run)(uint8_t* m, const TypedGeneric& g, uint32_t& xr) = nullptr;  // true: an index fault ended the scan
+    bool (*run)(uint8_t* m, const TypedGeneric& g, uint32_t& xr, typed::StrArgs& args) = nullptr;  // true: an index fault ended the scan
     Op op{};
     Ty t = Ty::None, u = Ty::None;
     TypedOperand o[3];

@@ -1,4 +1,5 @@
 // runtime/trace.cpp -- input traces, watched outputs and the scan loop.
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <optional>
@@ -61,6 +62,7 @@ std::optional<uint64_t> typed_cell(Ty t, const std::string& v, std::string& why)
   const TyInfo& ti = ty_info(t);
   char* end = nullptr;
   errno = 0;
+  if (t == Ty::STRING) return why = "a trace cannot write a STRING", std::nullopt;
   if (ty_is_real(t)) {
     double d = std::strtod(v.c_str(), &end);
     if (*end || end == v.c_str()) return why = "bad " + std::string(ti.name) + " '" + v + "'", std::nullopt;
@@ -102,6 +104,7 @@ void put_trace_cell(uint8_t* base, const Layout& L, const Probe& p, const std::s
   uint8_t* at = base + L.addr(p.area, p.index);
   std::string why;
   if (p.ty != Ty::None && !area_is_bit(p.area)) {  // held extended in one cell, or two cells low first
+    if (ty_info(p.ty).cells > 2) throw std::runtime_error("'" + p.name + "': a trace cannot write a " + ty_info(p.ty).name);
     uint64_t b = typed_cell(p.ty, v, why).value_or(0);
     if (ty_info(p.ty).cells == 1 && !ty_is_real(p.ty) && !ty_is_unsigned(p.ty)) b = uint64_t(int64_t(int32_t(uint32_t(b))));
     std::memcpy(at, &b, size_t(ty_info(p.ty).cells) * 4);
@@ -210,6 +213,18 @@ Trace read_trace(std::string_view text, const std::string& file, const std::vect
 // that read back to it.
 static std::string format_typed(const uint8_t* at, Ty t) {
   const TyInfo& ti = ty_info(t);
+  if (t == Ty::STRING) {  // 'text' with $-escapes ($2C for a comma: a CSV cell); the length clamped to 126
+    uint32_t n;
+    std::memcpy(&n, at, 4);
+    std::string s = "'";
+    for (uint32_t i = 0; i < std::min<uint32_t>(n, 126); i++) {
+      unsigned char c = at[4 + i];
+      char hex[4];
+      std::snprintf(hex, sizeof hex, "$%02X", c);
+      s += c == '$' ? std::string("$$") : c == '\'' ? std::string("$'") : (c < 32 || c > 126 || c == ',') ? std::string(hex) : std::string(1, char(c));
+    }
+    return s + "'";
+  }
   uint64_t b = 0;
   std::memcpy(&b, at, size_t(ti.cells) * 4);
   char buf[64];

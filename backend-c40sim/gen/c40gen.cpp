@@ -2205,6 +2205,8 @@ bool has_typed(const Program& p, Op only = Op(kOpCount)) {
 }  // namespace
 
 std::string c40_typed_refusal(const Instr& in) {
+  if (typed::is_string_instr(in.op, in.ty, in.src))
+    return "STRING (MatIEC's strings of up to 126 bytes) and the string functions are not in its instruction set";
   auto wide = [](Ty t) { return t != Ty::None && ty_info(t).bits > 32; };
   if (wide(in.ty) || wide(in.src))
     return "64-bit types (LINT ULINT LWORD LREAL TIME LTIME DATE TOD DT) do not fit its 32-bit word";

@@ -79,6 +79,14 @@ std::vector<Tok> lex(std::string_view s) {
       while (i < s.size() && s[i] != '\n') i++;
       continue;
     }
+    if (c == '\'') {  // a string literal, $-escapes kept for parse_literal (ir/model.h)
+      size_t j = i + 1;
+      while (j < s.size() && s[j] != '\'' && s[j] != '\n') j += s[j] == '$' && j + 1 < s.size() && s[j + 1] != '\n' ? 2 : 1;
+      if (j >= s.size() || s[j] != '\'') throw CompileError(line, col(i), "unterminated string literal (a quote inside one is $')");
+      out.push_back({Tok::Word, std::string(s.substr(i, j + 1 - i)), line, col(i)});
+      i = j + 1;
+      continue;
+    }
     size_t st = i;
     bool sign = (c == '-' || c == '+') && i + 1 < s.size() && (std::isdigit((unsigned char)s[i + 1]) || s[i + 1] == '.');
     // a member after an index: a[2].x

@@ -29,8 +29,8 @@ using namespace model;
 bool classic_type(const std::string& u) {
   static const std::set<std::string> k = {"BOOL", "INT", "DINT", "SINT", "UINT", "UDINT", "USINT", "WORD", "DWORD", "BYTE",
                                           "TIME", "REAL", "TON", "TOF", "TP", "CTU", "CTD", "R_TRIG", "F_TRIG",
-                                          // refused by both readers: the classic one names them
-                                          "STRING", "WSTRING"};
+                                          // refused by both readers: the classic one names it
+                                          "WSTRING"};
   return k.count(u) > 0;
 }
 
@@ -296,7 +296,7 @@ class Reader {
                    ", not a type");
     }
     if (TypeId b = bistable_type(u); b != kNoType) return b;
-    if (u == "STRING" || u == "WSTRING") fail(at, "type " + at.text + " is not supported (docs/iec-il.md)");
+    if (u == "WSTRING") fail(at, "type " + at.text + " is not supported (docs/iec-il.md)");
     if (u.rfind("CTU_", 0) == 0 || u.rfind("CTD_", 0) == 0 || u.rfind("CTUD_", 0) == 0)
       fail(at, "unknown type '" + at.text + "': MatIEC's counters are " + u.substr(0, u.find('_')) + " (INT) and " +
                    u.substr(0, u.find('_')) + "_DINT, _LINT, _UDINT, _ULINT (docs/stdlib.md)");
@@ -425,6 +425,15 @@ class Reader {
     }
     if (k.kind != Tok::Word || !ident(k.text)) fail(k, "expected a type" + found(k));
     TypeId base = resolve_type_name(upper(k.text), k);
+    if (m_.type(base).scalar() && m_.scalar_ty(base) == Ty::STRING && punct(peek(), "[")) {
+      // STRING[n]: MatIEC's C generator ignores n (no visitor for it): a STRING of 126 bytes (docs/iec-il.md)
+      next();
+      const Tok& n = next();
+      if (int_const(n) < 1) fail(n, "a STRING's length is at least 1");
+      expect("]");
+      sp.id = base;
+      return sp;
+    }
     if (punct(peek(), "(")) {  // a subrange
       next();
       if (!m_.type(base).scalar() || !typed::is_int_kind(m_.scalar_ty(base))) fail(k, "a subrange of a non-integer type");
@@ -733,6 +742,20 @@ class Reader {
     auto it = scratch_.find(k);
     if (it == scratch_.end()) it = scratch_.emplace(k, m_.place(m_.type(m_.elem(t)).size, SrcLoc{1, 1})).first;
     return operand_at(t, it->second);
+  }
+
+  // A string literal's cells, written by moves into a scratch STRING of its
+  // own (docs/il.md, "Strings": the IL has no STRING constants).
+  Operand string_literal(const std::string& bytes, const std::string& key) {
+    Operand o = scratch("str." + key, Ty::STRING);
+    std::vector<uint32_t> cells = string_cells(bytes);
+    Operand c = o;
+    typed(Op::TMOVE, Ty::DINT, Operand::typed_const(cells[0]), c);
+    for (size_t k = 1; k <= (bytes.size() + 3) / 4; k++) {
+      c.index = o.index + uint32_t(k);
+      typed(Op::TMOVE, Ty::DWORD, Operand::typed_const(cells[k]), c);
+    }
+    return o;
   }
 
   // ---------------------------------------------------------------- code
@@ -1065,6 +1088,7 @@ class Reader {
       std::string why;
       auto l = literal_as(v.lit, st, why);
       if (!l) fail(k, why);
+      if (st == Ty::STRING) return string_literal(v.lit.str, key);
       return Operand::typed_const(l->bits);
     }
     if (!m_.same_type(v.ref.type, t))
@@ -1180,6 +1204,7 @@ class Reader {
     }
     if (u == "MOVE") { need_cr(op); return; }
     if (u == "NOT") return not_op(op);
+    if (string_fn(u)) return string_function(op, u);
     if (unary_fn(u) || conversion(u) || u == "TRUNC") return function1(op, u);
     if (auto b = bcd_conversion(u)) return bcd(op, *b);
     if (auto f = time_function(u)) return time_arith(op, *f);
@@ -1305,7 +1330,8 @@ class Reader {
       whole_tok_ = k;
       return;
     }
-    Operand o = v.kind == Val::Lit ? Operand::typed_const(v.lit.lit.bits) : load(v.ref, "ld");
+    Operand o = v.kind != Val::Lit ? load(v.ref, "ld")
+              : v.lit.lit.ty == Ty::STRING ? string_literal(v.lit.str, "ld") : Operand::typed_const(v.lit.lit.bits);
     set_cr(t, o);
     if (neg) {
       Ty st = ty_of(t);
@@ -2115,6 +2141,92 @@ class Reader {
     emit(Op::SET, Operand{OpdKind::Bit, Area::S, kBitError});
     emit(Op::MPP);
     set_cr(m_.elem(b.to), d);
+  }
+
+  // The character-string functions (MatIEC's Table 29; docs/il.md "Strings"):
+  // the CR, a STRING, is the first input; the others follow, separated by
+  // commas: LEN, LEFT L, RIGHT L, MID L, P, CONCAT s {, s}, INSERT s, P,
+  // DELETE L, P, REPLACE s, L, P, FIND s.  LEN and FIND give an INT.
+  static bool string_fn(const std::string& u) {
+    static const std::set<std::string> k = {"LEN", "LEFT", "RIGHT", "MID", "CONCAT", "INSERT", "DELETE", "REPLACE", "FIND"};
+    return k.count(u) > 0;
+  }
+  void string_function(const Tok& op, const std::string& u) {
+    need_cr(op);
+    if (cr_.lit || cr_whole() || cr_ty() != Ty::STRING)
+      fail(op, op.text + " takes a STRING as its first input (the current result), this one is " +
+                   (cr_.lit ? std::string("a number") : a_type(cr_.type)));
+    std::vector<std::pair<Tok, Val>> args;
+    while (peek().kind == Tok::Word) {
+      Tok k = peek();
+      args.push_back({k, operand("s" + std::to_string(args.size()))});
+      if (punct(peek(), ",")) next();
+      else break;
+    }
+    static const std::map<std::string, std::string> kArgs = {  // s: a STRING, n: an integer
+        {"LEN", ""}, {"LEFT", "n"}, {"RIGHT", "n"}, {"MID", "nn"}, {"CONCAT", "s"}, {"INSERT", "sn"},
+        {"DELETE", "nn"}, {"REPLACE", "snn"}, {"FIND", "s"}};
+    const std::string& want = kArgs.at(u);
+    if (args.size() != want.size() && !(u == "CONCAT" && args.size() > 1))
+      fail(op, op.text + " takes " + std::to_string(want.size() + 1) + " inputs: the current result and " +
+                   std::to_string(want.size()) + " after it, separated by commas");
+    const TypeId str = m_.elem(Ty::STRING);
+    auto sarg = [&](size_t i) { return value_as(args[i].second, str, args[i].first, "s" + std::to_string(i), op.text.c_str()); };
+    auto narg = [&](size_t i, Ty& ty) {  // an integer; an untyped number is a DINT
+      TypeId vt = val_type(args[i].second);
+      ty = vt == kNoType ? Ty::DINT : ty_of(vt);
+      TyKind kd = ty == Ty::None ? TyKind::Real : ty_info(ty).kind;
+      if (kd != TyKind::Signed && kd != TyKind::Unsigned)
+        fail(args[i].first, op.text + "'s length and position are integers, '" + args[i].first.text + "' is not one");
+      return value_as(args[i].second, m_.elem(ty), args[i].first, "n" + std::to_string(i), op.text.c_str());
+    };
+    // ARGS L P: both of one type (LINT if they differ)
+    auto set_args = [&](size_t li, size_t pi) {
+      Ty lt = Ty::DINT, pt = Ty::DINT;
+      Operand l = li < args.size() ? narg(li, lt) : Operand::typed_const(0);
+      Operand p = narg(pi, pt);
+      if (li >= args.size()) lt = pt;
+      Ty t = lt == pt ? lt : Ty::LINT;
+      auto widen = [&](Operand o, Ty from, const char* key) {
+        if (from == t) return o;
+        if (o.kind == OpdKind::ConstT) return Operand::typed_const(typed::conv(t, from, o.bits()));
+        Operand w = scratch(key, t);
+        typed(Op::TCONV, t, o, w, {}, from);
+        return w;
+      };
+      typed(Op::TARGS, t, widen(l, lt, "argl"), widen(p, pt, "argp"));
+    };
+    Operand in = cr_.o;
+    if (u == "LEN" || u == "FIND") {
+      Operand d = acc(Ty::INT);
+      if (u == "LEN") typed(Op::TLEN, Ty::INT, in, d, {}, Ty::STRING);
+      else typed(Op::TFIND, Ty::INT, in, sarg(0), d, Ty::STRING);
+      set_cr(m_.elem(Ty::INT), d);
+      return;
+    }
+    Operand d = acc(Ty::STRING);
+    if (u == "LEFT" || u == "RIGHT") {
+      Ty lt;
+      Operand l = narg(0, lt);
+      typed(u == "LEFT" ? Op::TLEFT : Op::TRIGHT, Ty::STRING, in, l, d, lt);
+    } else if (u == "CONCAT") {  // MatIEC's CONCAT of n inputs: each cut at 126 in turn, as a chain of two
+      for (size_t i = 0; i < args.size(); i++) {
+        typed(Op::TCONCAT, Ty::STRING, in, sarg(i), d);
+        in = d;
+      }
+    } else if (u == "MID" || u == "DELETE") {
+      set_args(0, 1);
+      typed(u == "MID" ? Op::TMID : Op::TDELETE, Ty::STRING, in, d);
+    } else if (u == "INSERT") {
+      Operand s2 = sarg(0);
+      set_args(99, 1);
+      typed(Op::TINSERT, Ty::STRING, in, s2, d);
+    } else {  // REPLACE
+      Operand s2 = sarg(0);
+      set_args(1, 2);
+      typed(Op::TREPLACE, Ty::STRING, in, s2, d);
+    }
+    set_cr(str, d);
   }
 
   // MIN MAX (extensible), LIMIT, SEL; the CR is the first input

@@ -23,6 +23,7 @@
 
 #include "frontend/frontend.h"
 #include "ir/scanopt.h"
+#include "ir/typed.h"
 #include "tests/diff/harness.h"
 
 namespace {
@@ -109,6 +110,17 @@ TEST(TypedGenerator, EveryProgramValidates) {
   }
 }
 
+// Does op take some type pair without STRING (the string functions do not)?
+static bool op_takes_non_string(Op op) {
+  for (int t = 0; t < kTyCount; t++)
+    for (int u = 0; u <= kTyCount; u++) {
+      Ty uu = op_info(op).typed == 2 ? Ty(u) : Ty::None;
+      if ((op_info(op).typed == 2) == (u == kTyCount)) continue;
+      if (op_takes(op, Ty(t), uu) && !typed::is_string_instr(op, Ty(t), uu)) return true;
+    }
+  return false;
+}
+
 // Over a few programs every typed instruction and every type is drawn.
 TEST(TypedGenerator, DrawsEveryTypedMnemonicAndType) {
   std::set<Op> ops;
@@ -122,10 +134,11 @@ TEST(TypedGenerator, DrawsEveryTypedMnemonicAndType) {
       }
   }
   for (int i = 0; i < kOpCount; i++)
-    if (op_info(Op(i)).klass == OpClass::Typed) {
+    if (op_info(Op(i)).klass == OpClass::Typed && op_takes_non_string(Op(i))) {
       EXPECT_TRUE(ops.count(Op(i))) << op_info(Op(i)).name << " never drawn";
     }
-  for (int i = 0; i < kTyCount; i++) EXPECT_TRUE(tys.count(Ty(i))) << ty_info(Ty(i)).name << " never drawn";
+  for (int i = 0; i < kTyCount; i++)  // STRING runs on the interpreters only: never drawn for every engine
+    if (Ty(i) != Ty::STRING) EXPECT_TRUE(tys.count(Ty(i))) << ty_info(Ty(i)).name << " never drawn";
 }
 
 // Indices go outside their bounds sometimes, not always: some scans end at an
@@ -355,7 +368,8 @@ TEST(TypedPouGenerator, DrawsEveryTypeAndConstruct) {
       for (const Instr& in : r.code)
         if (in.ty != Ty::None) tys.insert(in.ty);
   }
-  for (int i = 0; i < kTyCount; i++) EXPECT_TRUE(tys.count(Ty(i))) << ty_info(Ty(i)).name << " never drawn";
+  for (int i = 0; i < kTyCount; i++)  // STRING runs on the interpreters and the C route only: not drawn
+    if (Ty(i) != Ty::STRING) EXPECT_TRUE(tys.count(Ty(i))) << ty_info(Ty(i)).name << " never drawn";
   for (const char* c : {"CAL fa(", "CAL fb(", "CAL fbs[", "CAL s.fa(", "CAL subs[", "CAL a(", "CAL fc(", "VAR_IN_OUT",
                         "VAR_EXTERNAL", "ENO =>", "CALC ", "CALCN ", "hist[i]", "[k0", "[k1]", "[k2]", "inner : S0",
                         "F0(x :=", "F1 ", "LD s\n", "RETCN", "JMPCN", "_TO_", "SHL", "ROR", ".inner.m3"})

@@ -28,7 +28,11 @@ const char* kAll =
     "COS.REAL F0 F14\nTAN.REAL F0 F15\nASIN.REAL F0 F16\nACOS.REAL F0 F17\nATAN.LREAL D26 D50\n"
     "CONV.DINT.REAL F0 D52\nTRUNC.INT.LREAL D26 D53\nEQ.INT D20 -5\nNE.BOOL M0 X1\nLT.ULINT D22 18446744073709551615\n"
     "LE.DT D22 D24\nGT.TOD D22 0\nGE.USINT D20 200\nIDX.DINT D21 1 10\nLDX.INT D100 2 D54\nIDX.UINT D20 0 3\n"
-    "STX.BOOL M3 M10 1\n";
+    "STX.BOOL M3 M10 1\n"
+    "LEN.INT.STRING D300 D60\nLEFT.STRING.INT D300 3 D340\nRIGHT.STRING.DINT D300 D21 D340\n"
+    "CONCAT.STRING D300 D340 D380\nFIND.UINT.STRING D300 D340 D61\nARGS.DINT 1 2\nMID.STRING D300 D380\n"
+    "ARGS.INT 1 D62\nDELETE.STRING D300 D380\nARGS.DINT 0 2\nINSERT.STRING D300 D340 D380\n"
+    "ARGS.LINT 1 2\nREPLACE.STRING D300 D340 D380\n";
 
 // A label operand's name is interned: equal text, equal (4-byte) names, and
 // the text comes back, from several threads at once.
@@ -88,7 +92,8 @@ TEST(IlText, EveryMnemonicRoundTrips) {
   text.replace(text.find("CTD C1 D3"), 9, "CTD C1 D3 E2");
   text += "RSTC C1\nJMP out\nEND\n.label out\n.end\n";
   Program p = parse_il_text(text, "a.il");
-  EXPECT_EQ(p.rungs[0].code.size(), size_t(kOpCount) + 1);  // IDX twice: before LDX and before STX
+  // IDX twice: before LDX and before STX; ARGS four times: before MID, DELETE, INSERT, REPLACE
+  EXPECT_EQ(p.rungs[0].code.size(), size_t(kOpCount) + 1 + 3);
   std::string printed = print_il_text(p);
   Program q = parse_il_text(printed, "a.il");
   EXPECT_EQ(print_il_text(q), printed);

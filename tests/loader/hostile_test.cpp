@@ -18,6 +18,7 @@
 #include "assembler/x86_forms.h"
 #include "ir/mathfn.h"
 #include "loader/loader.h"
+#include "runtime/fastinterp.h"
 #include "runtime/runtime.h"
 #include "runtime/sandbox.h"
 
@@ -423,6 +424,143 @@ TEST(Hostile, TypedArraysInTheIlSection) {
     EXPECT_NE(why.find("offset " + std::to_string(bin.instr_offset[c.at]) + ": "), std::string::npos)
         << why << " (want the IL offset " << bin.instr_offset[c.at] << ")";
     EXPECT_NE(why.find(c.reason), std::string::npos) << why;
+  }
+}
+
+// STRING operands in the IL section (docs/il.md, "Strings"): a string whose 33
+// cells leave their area, a STRING constant, a MID not right after its ARGS or
+// jumped to, a CONV between STRING and a date: each refused at its offset.
+TEST(Hostile, StringsInTheIlSection) {
+  auto dev = [](Area a, uint32_t i) {
+    Operand o;
+    o.area = a, o.index = i, o.kind = area_is_bit(a) ? OpdKind::Bit : OpdKind::Int;
+    return o;
+  };
+  auto typed = [](Op op, Ty t, Ty u, Operand a, Operand b, Operand c = {}) {
+    Instr in;
+    in.op = op, in.ty = t, in.src = u, in.a[0] = a, in.a[1] = b, in.a[2] = c;
+    return in;
+  };
+  Instr truth, load_x0, jmp;
+  truth.op = Op::TRUE;
+  load_x0.op = Op::LOAD, load_x0.a[0] = dev(Area::X, 0);
+  jmp.op = Op::JMP, jmp.a[0].kind = OpdKind::Label, jmp.a[0].label = "l";
+  const uint32_t d_count = Layout::standard(0).count[int(Area::D)];
+  const Instr args = typed(Op::TARGS, Ty::DINT, Ty::None, Operand::typed_const(1), Operand::typed_const(2));
+  const Instr mid = typed(Op::TMID, Ty::STRING, Ty::None, dev(Area::D, 0), dev(Area::D, 100));
+  const Instr past_end = typed(Op::TMOVE, Ty::STRING, Ty::None, dev(Area::D, 0), dev(Area::D, d_count - 32));
+  const Instr konst = typed(Op::TMOVE, Ty::STRING, Ty::None, Operand::typed_const(3), dev(Area::D, 100));
+  const Instr to_date = typed(Op::TCONV, Ty::DATE, Ty::STRING, dev(Area::D, 0), dev(Area::D, 100));
+  const Instr twice = typed(Op::TCONV, Ty::STRING, Ty::STRING, dev(Area::D, 0), dev(Area::D, 100));
+  struct IlCase {
+    const char* what;
+    std::vector<std::vector<Instr>> rungs;
+    size_t at;
+    const char* reason;
+  };
+  const std::vector<IlCase> cases = {
+      {"a STRING whose last cell is past D", {{truth, past_end}}, 1, "cannot hold this STRING operand"},
+      {"a STRING constant", {{truth, konst}}, 1, "a STRING operand is a device"},
+      {"a MID not after an ARGS", {{truth, mid}}, 1, "MID not right after an ARGS"},
+      {"a jump onto a MID", {{load_x0, jmp}, {truth, args}, {mid}}, 1, "past its ARGS"},
+      {"CONV between STRING and a date", {{truth, to_date}}, 1, "does not take type DATE.STRING"},
+      {"CONV from STRING to STRING", {{truth, twice}}, 1, "does not take type STRING.STRING"},
+  };
+  for (const IlCase& c : cases) {
+    SCOPED_TRACE(c.what);
+    Program p;
+    p.source = "hostile.il";
+    for (size_t r = 0; r < c.rungs.size(); r++) {
+      Rung rung;
+      rung.line = int(r) + 1;
+      rung.code = c.rungs[r];
+      if (r == 2) rung.labels.push_back("l");
+      p.rungs.push_back(rung);
+    }
+    Image im = image_around({});
+    std::vector<uint32_t> at;
+    im.code = scan_function({"nop"}, at);
+    BinaryIl bin = encode_il(p);
+    im.il = bin.code;
+    std::string why = refusal(im);
+    EXPECT_NE(why.find("offset " + std::to_string(bin.instr_offset[c.at]) + ": "), std::string::npos)
+        << why << " (want the IL offset " << bin.instr_offset[c.at] << ")";
+    EXPECT_NE(why.find(c.reason), std::string::npos) << why;
+  }
+}
+
+// What an image's memory holds in a length cell is untrusted: 0x7fffffff,
+// -1, 127, lengths and positions of INT64's extremes.  Every string
+// instruction on the last string that fits in D, run by both interpreters,
+// changes no byte outside its destination's 132 bytes and S0, and reads a
+// length of 126 (its watched results are MatIEC's for 126 bytes).
+TEST(Hostile, StringLengthCellsAreClamped) {
+  const Layout L = Layout::standard(0);
+  const uint32_t last = L.count[int(Area::D)] - 33;  // the last STRING that fits in D
+  auto d = [](uint32_t i) {
+    Operand o;
+    o.area = Area::D, o.index = i, o.kind = OpdKind::Int;
+    return o;
+  };
+  auto k = [](int64_t v) { return Operand::typed_const(uint64_t(v)); };
+  auto typed = [](Op op, Ty t, Ty u, Operand a, Operand b, Operand c = {}) {
+    Instr in;
+    in.op = op, in.ty = t, in.src = u, in.a[0] = a, in.a[1] = b, in.a[2] = c;
+    return in;
+  };
+  Instr truth;
+  truth.op = Op::TRUE;
+  const int64_t big = INT64_MAX, small = INT64_MIN;
+  // each rung writes the string at `last` (or a LINT at D0), reading it too
+  const std::vector<std::vector<Instr>> rungs = {
+      {truth, typed(Op::TLEN, Ty::LINT, Ty::STRING, d(last), d(0))},
+      {truth, typed(Op::TCONCAT, Ty::STRING, Ty::None, d(last), d(last), d(last))},
+      {truth, typed(Op::TARGS, Ty::LINT, Ty::None, k(big), k(0)), typed(Op::TMID, Ty::STRING, Ty::None, d(last), d(last))},
+      {truth, typed(Op::TARGS, Ty::LINT, Ty::None, k(big), k(big)), typed(Op::TINSERT, Ty::STRING, Ty::None, d(last), d(last), d(last))},
+      {truth, typed(Op::TARGS, Ty::LINT, Ty::None, k(big), k(big)), typed(Op::TREPLACE, Ty::STRING, Ty::None, d(last), d(last), d(last))},
+      {truth, typed(Op::TARGS, Ty::LINT, Ty::None, k(small), k(1)), typed(Op::TDELETE, Ty::STRING, Ty::None, d(last), d(last))},
+      {truth, typed(Op::TLEFT, Ty::STRING, Ty::LINT, d(last), k(big), d(last))},
+      {truth, typed(Op::TRIGHT, Ty::STRING, Ty::LINT, d(last), k(big), d(last))},
+      {truth, typed(Op::TFIND, Ty::LINT, Ty::STRING, d(last), d(last), d(2))},
+      {truth, typed(Op::TCONV, Ty::LREAL, Ty::STRING, d(last), d(4))},
+      {truth, typed(Op::TCONV, Ty::STRING, Ty::LREAL, d(4), d(last))},
+  };
+  for (int32_t length : {INT32_MAX, -1, 127, INT32_MIN}) {
+    for (size_t r = 0; r < rungs.size(); r++)
+      for (int engine = 0; engine < 2; engine++) {
+        SCOPED_TRACE("length cell " + std::to_string(length) + ", rung " + std::to_string(r) + (engine ? ", fast" : ", interp"));
+        Program p;
+        p.source = "hostile.il";
+        Rung rung;
+        rung.line = 1;
+        rung.code = rungs[r];
+        p.rungs.push_back(rung);
+        BinaryIl bin = encode_il(p);
+        ASSERT_EQ(validate_il(bin.code, L), "");
+        ImageBytes mem(L.size);
+        std::memset(mem.data(), 0xA5, L.size);  // '.'-free bytes everywhere, the string's body too
+        const uint32_t at = L.addr(Area::D, last);
+        std::memcpy(mem.data() + at, &length, 4);
+        std::vector<uint8_t> before(mem.data(), mem.data() + L.size);
+        if (engine == 0) Interpreter(bin.code, L).scan(mem.data());
+        else FastInterpreter(bin.code, L).scan(mem);
+        const uint32_t s0 = L.addr(Area::S, kBitError), d0 = L.addr(Area::D, 0);
+        for (uint32_t b = 0; b < L.size; b++) {
+          const bool dest = (b >= at && b < at + 132) || b == s0 || (b >= d0 && b < d0 + 24);
+          if (!dest && mem.data()[b] != before[b]) {
+            ADD_FAILURE() << "byte " << b << " outside the destination changed";
+            break;
+          }
+        }
+        uint32_t len;
+        std::memcpy(&len, mem.data() + at, 4);
+        if (r != 0 && r != 8 && r != 9) EXPECT_LE(len, 126u);  // a string result (the others only read it)
+        if (r == 0) {
+          int64_t n;
+          std::memcpy(&n, mem.data() + d0, 8);
+          EXPECT_EQ(n, 126);  // LEN of any length cell outside 0..126 is 126
+        }
+      }
   }
 }
 

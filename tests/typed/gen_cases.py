@@ -508,6 +508,9 @@ def all_files():
     import arrays  # the array cases are hand-derived (docs/il.md "Index faults")
     for p in arrays.programs(Program):
         files.update(p.files())
+    import strings  # STRING: MatIEC's Table 29 and conversions, transcribed in strings.py
+    for p in strings.programs(Program):
+        files.update(p.files())
     return files
 
 

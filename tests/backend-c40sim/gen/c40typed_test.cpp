@@ -102,6 +102,7 @@ std::string all_ops_program(std::mt19937& rng, int copies, std::vector<std::stri
         if (oi.typed == 1 && u != Ty::BOOL) continue;  // once
         Ty src = oi.typed == 2 ? u : Ty::None;
         if (!op_takes(Op(op), t, src)) continue;
+        if (typed::is_string_instr(Op(op), t, src)) continue;  // ARGS: a string instruction, refused by name
         Instr probe;
         probe.op = Op(op), probe.ty = t, probe.src = src;
         if (!c40gen::c40_typed_refusal(probe).empty()) {
