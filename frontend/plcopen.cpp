@@ -946,27 +946,11 @@ void Importer::aliases(TreeProgram& p) {
   for (auto& v : vars_)
     if (v->dev && !v->frame) count[upper(v->name)]++;
   std::set<std::string> seen;
-  // a name, or an instance's member INSTANCE.MEMBER (each part a name)
-  // (an array's element a[3], a[1,-2] too)
-  auto dotted = [](const std::string& n) {
-    for (size_t a = 0;;) {
-      size_t d = n.find('.', a);
-      std::string seg = n.substr(a, d == std::string::npos ? std::string::npos : d - a);
-      size_t lb = seg.find('[');
-      if (lb != std::string::npos) {
-        if (seg.back() != ']' || seg.find_first_not_of("0123456789,-", lb + 1) != seg.size() - 1) return false;
-        seg = seg.substr(0, lb);
-      }
-      if (!is_identifier(seg)) return false;
-      if (d == std::string::npos) return true;
-      a = d + 1;
-    }
-  };
   for (auto& v : vars_) {
     if (!v->dev || v->frame) continue;
     std::string name = count[upper(v->name)] > 1 && !v->pou.empty() ? v->pou + "_" + v->name : v->name;
     std::string why, u = upper(name);
-    if (!dotted(name) || u == "DT" || seen.count(u) || parse_device(name) || parse_iec_address(name, why)) continue;
+    if (!is_alias_name(name) || u == "DT" || seen.count(u) || parse_device(name) || parse_iec_address(name, why)) continue;
     seen.insert(u);
     Alias a{name, *v->dev, v->it};  // typed: a watch shows it at its width (a BOOL is its bit either way)
     if (a.ty == IT::BOOL || !alias_type_problem(a).empty()) a.ty = IT::None;  // an FB's state: as its device

@@ -116,23 +116,6 @@ bool is_name(std::string_view s) {
   return true;
 }
 
-// An alias: a name, or an instance's or structure's member INSTANCE.MEMBER of
-// names, and array elements NAME[3] (the PLCopen importer's aliases, docs/plcopen.md).
-bool is_alias_name(std::string_view s) {
-  for (size_t a = 0;;) {
-    size_t d = s.find('.', a);
-    std::string_view seg = s.substr(a, d == std::string_view::npos ? std::string_view::npos : d - a);
-    size_t lb = seg.find('[');  // an array's element a[3], a[1,-2]
-    if (lb != std::string_view::npos) {
-      if (seg.back() != ']' || seg.find_first_not_of("0123456789,-", lb + 1) != seg.size() - 1) return false;
-      seg = seg.substr(0, lb);
-    }
-    if (!is_name(seg)) return false;
-    if (d == std::string_view::npos) return true;
-    a = d + 1;
-  }
-}
-
 // The common case of parse_number, in one pass: an optional '-' and 1 to 9
 // decimal digits (never outside INT32).  False for anything else, which the
 // general path then reads.
@@ -264,6 +247,24 @@ Operand parse_typed_operand(char sig, Ty t, const Tok& tok, int lineno) {
 }
 
 }  // namespace
+
+// An alias: a name, or an instance's or structure's member INSTANCE.MEMBER of
+// names, and array elements NAME[3] (the PLCopen importer's aliases, docs/plcopen.md).
+bool is_alias_name(std::string_view s) {
+  for (size_t a = 0;;) {
+    size_t d = s.find('.', a);
+    std::string_view seg = s.substr(a, d == std::string_view::npos ? std::string_view::npos : d - a);
+    size_t lb = seg.find('[');  // an array's element a[3], a[1,-2]
+    if (lb != std::string_view::npos) {
+      if (seg.back() != ']' || seg.find_first_not_of("0123456789,-", lb + 1) != seg.size() - 1) return false;
+      seg = seg.substr(0, lb);
+    }
+    if (!is_name(seg)) return false;
+    if (d == std::string_view::npos) return true;
+    a = d + 1;
+  }
+}
+
 
 // Room for the rungs up front (each `.rung` counted, a few in comments or
 // titles too many): the rungs are not moved each time their vector doubles.

@@ -575,6 +575,8 @@ std::string real_text(float f);           // %.9g, with ".0" added when needed
 std::string print_il_text(const Program& p);
 
 Program parse_il_text(std::string_view text, const std::string& filename);  // throws CompileError
+// An alias's name: a name, or a member path INSTANCE.MEMBER, a[3], grid[1,-2].
+bool is_alias_name(std::string_view s);
 
 // ---- binary form (the image's IL section, run by the interpreter)
 // Each instruction: op byte, then per operand a tag byte and its payload (docs/il.md).

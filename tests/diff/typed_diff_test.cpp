@@ -10,6 +10,7 @@
 //   LDC_DIFF_TYPED_CLASSES  typed classes, as ldgen --classes (default typed;
 //                           the C40 engines always without t64)
 //   LDC_DIFF_OUT, LDC_DIFF_NOFORK as for the ladder programs
+#include <optional>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -57,6 +58,20 @@ int typed_scans(uint64_t s) { return 20 + int(s % 21); }
 // ------------------------------------------------------------------ the generator
 
 // The typed class names read and print back; `all` stays the ladder classes.
+
+// A generated program's text compiled: the same seed gives the same text, and
+// a refusal is a failure that shows the error at its place (nullopt then).
+std::optional<Program> compile_generated(uint64_t seed, const GenOptions& o, const std::string& text, const char* what) {
+  EXPECT_EQ(text, render(generate_program(seed, o))) << "the same seed, the same program";
+  try {
+    return compile_case(text);
+  } catch (CompileError& e) {
+    ADD_FAILURE() << "seed " << seed << ": a generated " << what << " program is refused:\n"
+                  << format_error("prog.il", text, e.line, e.col, e.what()) << "\n" << text;
+    return std::nullopt;
+  }
+}
+
 TEST(TypedGenerator, ClassNames) {
   uint32_t m = 0;
   std::string err;
@@ -87,15 +102,9 @@ TEST(TypedGenerator, EveryProgramValidates) {
     GenProgram gp = generate_program(seed, o);
     ASSERT_TRUE(gp.il);
     std::string text = render(gp);
-    EXPECT_EQ(text, render(generate_program(seed, o))) << "the same seed, the same program";
-    Program p;
-    try {
-      p = compile_case(text);
-    } catch (CompileError& e) {
-      ADD_FAILURE() << "seed " << seed << ": a generated typed program is refused:\n"
-                    << format_error("prog.il", text, e.line, e.col, e.what()) << "\n" << text;
-      continue;
-    }
+    std::optional<Program> compiled = compile_generated(seed, o, text, "typed");
+    if (!compiled) continue;
+    Program& p = *compiled;
     EXPECT_EQ(int(p.rungs.size()), o.rungs);
     EXPECT_EQ(validate_il(encode_il(p).code, p.layout()), "") << "seed " << seed << "\n" << text;
     bool wide = false;
@@ -327,15 +336,9 @@ TEST(TypedPouGenerator, EveryProgramCompiles) {
     GenProgram gp = generate_program(seed, o);
     ASSERT_TRUE(gp.iec);
     std::string text = render(gp);
-    EXPECT_EQ(text, render(generate_program(seed, o))) << "the same seed, the same program";
-    Program p;
-    try {
-      p = compile_case(text);
-    } catch (CompileError& e) {
-      ADD_FAILURE() << "seed " << seed << ": a generated POU program is refused:\n"
-                    << format_error("prog.il", text, e.line, e.col, e.what()) << "\n" << text;
-      continue;
-    }
+    std::optional<Program> compiled = compile_generated(seed, o, text, "POU");
+    if (!compiled) continue;
+    Program& p = *compiled;
     EXPECT_EQ(validate_il(encode_il(p).code, p.layout()), "") << "seed " << seed << "\n" << text;
     if (!(o.classes & kGenT64)) {
       EXPECT_FALSE(has_wide(p)) << "seed " << seed << ": a 64-bit type without t64\n" << text;

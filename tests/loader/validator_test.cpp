@@ -2,6 +2,7 @@
 
 #include <sys/mman.h>
 #include <sys/wait.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <cstring>
@@ -39,7 +40,12 @@ std::string run_guarded(const Image& img, uint64_t seed) {
   pid_t pid = fork();
   if (pid < 0) return "fork failed";
   if (pid == 0) {
-    alarm(10);  // an accepted image always ends its scan; a hang is a failure
+    // An accepted image always ends its scan; a hang is a failure.  Bounded in
+    // CPU time (SIGXCPU), which a loaded machine does not use up as it does the
+    // wall clock; the alarm is only a backstop for a child that waits.
+    struct rlimit cpu {10, 11};
+    setrlimit(RLIMIT_CPU, &cpu);
+    alarm(300);
     Memory m(img.layout);  // between guard pages, the call table below it
     uint8_t* mem = m.data();
     auto eng = make_native_engine(map_checked_code(img.code, img.entry, img.layout));
