@@ -213,7 +213,7 @@ Trace read_trace(std::string_view text, const std::string& file, const std::vect
 // that read back to it.
 static std::string format_typed(const uint8_t* at, Ty t) {
   const TyInfo& ti = ty_info(t);
-  if (t == Ty::STRING) {  // 'text' with $-escapes ($2C for a comma: a CSV cell); the length clamped to 126
+  if (t == Ty::STRING) {  // 'text' with $-escapes ($2C for a comma, $22 and $5C for " and \\: a CSV cell, a JSON string); the length clamped to 126
     uint32_t n;
     std::memcpy(&n, at, 4);
     std::string s = "'";
@@ -221,7 +221,7 @@ static std::string format_typed(const uint8_t* at, Ty t) {
       unsigned char c = at[4 + i];
       char hex[4];
       std::snprintf(hex, sizeof hex, "$%02X", c);
-      s += c == '$' ? std::string("$$") : c == '\'' ? std::string("$'") : (c < 32 || c > 126 || c == ',') ? std::string(hex) : std::string(1, char(c));
+      s += c == '$' ? std::string("$$") : c == '\'' ? std::string("$'") : (c < 32 || c > 126 || c == ',' || c == '"' || c == '\\') ? std::string(hex) : std::string(1, char(c));
     }
     return s + "'";
   }
