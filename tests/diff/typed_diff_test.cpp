@@ -150,6 +150,27 @@ TEST(TypedGenerator, DrawsEveryTypedMnemonicAndType) {
     if (Ty(i) != Ty::STRING) EXPECT_TRUE(tys.count(Ty(i))) << ty_info(Ty(i)).name << " never drawn";
 }
 
+// Runs seed's program on the reference interpreter over its 20-scan trace and
+// counts the scans and those that ended at an index fault (Sys+8), the first-
+// scan bit S1 set on the first scan when `first_scan` says so.
+void count_index_faults(uint64_t seed, const GenOptions& o, bool first_scan, int& scans, int& faults) {
+  Program p = compile_case(render(generate_program(seed, o)));
+  Trace t = read_trace(generate_trace(seed, 20, o), "trace.csv", p.aliases);
+  auto e = make_interp(p);
+  Memory m(p.layout());
+  for (size_t k = 0; k < t.rows.size(); k++) {
+    for (size_t i = 0; i < t.rows[k].size(); i++)
+      if (!t.rows[k][i].empty() && int(i) != t.dt_column) put_trace_cell(m.data(), m.layout, t.columns[i], t.rows[k][i]);
+    std::memset(m.data() + kSysFault, 0, 4);
+    if (first_scan) m.set_bit(Area::S, kBitFirstScan, k == 0);
+    e->scan(m.bytes);
+    uint32_t kind;
+    std::memcpy(&kind, m.data() + kSysFault, 4);
+    scans++;
+    faults += kind == kFaultIndex;
+  }
+}
+
 // Indices go outside their bounds sometimes, not always: some scans end at an
 // IDX and most do not (the interpreter's fault record says which).
 TEST(TypedGenerator, IndicesFaultSometimes) {
@@ -157,20 +178,7 @@ TEST(TypedGenerator, IndicesFaultSometimes) {
   for (uint64_t seed = 1; seed <= 30; seed++) {
     GenOptions o = typed_options(seed, false);
     o.classes = kGenTArray | kGenTArith | kGenT64;
-    Program p = compile_case(render(generate_program(seed, o)));
-    Trace t = read_trace(generate_trace(seed, 20, o), "trace.csv", p.aliases);
-    auto e = make_interp(p);
-    Memory m(p.layout());
-    for (size_t k = 0; k < t.rows.size(); k++) {
-      for (size_t i = 0; i < t.rows[k].size(); i++)
-        if (!t.rows[k][i].empty() && int(i) != t.dt_column) put_trace_cell(m.data(), m.layout, t.columns[i], t.rows[k][i]);
-      std::memset(m.data() + kSysFault, 0, 4);
-      e->scan(m.bytes);
-      uint32_t kind;
-      std::memcpy(&kind, m.data() + kSysFault, 4);
-      scans++;
-      faults += kind == kFaultIndex;
-    }
+    count_index_faults(seed, o, false, scans, faults);
   }
   std::printf("%d of %d scans ended at an index fault\n", faults, scans);
   EXPECT_GT(faults, scans / 50) << faults << " of " << scans << " scans faulted";
@@ -387,21 +395,7 @@ TEST(TypedPouGenerator, IndicesFaultSometimes) {
   int scans = 0, faults = 0;
   for (uint64_t seed = 1; seed <= 30; seed++) {
     GenOptions o = pou_options(seed, false);
-    Program p = compile_case(render(generate_program(seed, o)));
-    Trace t = read_trace(generate_trace(seed, 20, o), "trace.csv", p.aliases);
-    auto e = make_interp(p);
-    Memory m(p.layout());
-    for (size_t k = 0; k < t.rows.size(); k++) {
-      for (size_t i = 0; i < t.rows[k].size(); i++)
-        if (!t.rows[k][i].empty() && int(i) != t.dt_column) put_trace_cell(m.data(), m.layout, t.columns[i], t.rows[k][i]);
-      std::memset(m.data() + kSysFault, 0, 4);
-      m.set_bit(Area::S, kBitFirstScan, k == 0);
-      e->scan(m.bytes);
-      uint32_t kind;
-      std::memcpy(&kind, m.data() + kSysFault, 4);
-      scans++;
-      faults += kind == kFaultIndex;
-    }
+    count_index_faults(seed, o, true, scans, faults);
   }
   std::printf("%d of %d scans ended at an index fault\n", faults, scans);
   EXPECT_GT(faults, scans / 50) << faults << " of " << scans << " scans faulted";
