@@ -363,130 +363,107 @@ TEST(Hostile, EveryClassOfEscapeIsRefusedAtItsOffset) {
   EXPECT_GE(n, 80);
 }
 
+// Hand-made IL for the IL-section attacks below: a device operand, an integer
+// constant, a typed instruction, and the rung heads TRUE, LOAD X0, JMP l.
+Operand il_dev(Area a, uint32_t i) {
+  Operand o;
+  o.area = a, o.index = i, o.kind = area_is_bit(a) ? OpdKind::Bit : OpdKind::Int;
+  return o;
+}
+Operand il_int(int32_t v) {
+  Operand o;
+  o.kind = OpdKind::ConstInt, o.ival = v;
+  return o;
+}
+Instr il_typed(Op op, Ty t, Ty u, Operand a, Operand b, Operand c = {}) {
+  Instr in;
+  in.op = op, in.ty = t, in.src = u, in.a[0] = a, in.a[1] = b, in.a[2] = c;
+  return in;
+}
+Instr il_op(Op op, Operand a = {}) {
+  Instr in;
+  in.op = op, in.a[0] = a;
+  return in;
+}
+Instr il_jmp_l() {
+  Instr in;
+  in.op = Op::JMP, in.a[0].kind = OpdKind::Label, in.a[0].label = "l";
+  return in;
+}
+
+struct IlCase {
+  const char* what;
+  std::vector<std::vector<Instr>> rungs;  // the last rung's first instruction after a label "l" if jumped to
+  size_t at;                              // the refused instruction: its index in the program
+  const char* reason;
+};
+
+// The case's rungs as an image's IL section: refused at the IL offset of its
+// instruction `at`, for its reason.
+void expect_il_refused(const IlCase& c) {
+  SCOPED_TRACE(c.what);
+  Program p;
+  p.source = "hostile.il";
+  for (size_t r = 0; r < c.rungs.size(); r++) {
+    Rung rung;
+    rung.line = int(r) + 1;
+    rung.code = c.rungs[r];
+    if (r == 2) rung.labels.push_back("l");
+    p.rungs.push_back(rung);
+  }
+  Image im = image_around({});
+  std::vector<uint32_t> at;
+  im.code = scan_function({"nop"}, at);
+  BinaryIl bin = encode_il(p);
+  im.il = bin.code;
+  std::string why = refusal(im);
+  EXPECT_NE(why.find("hostile.bin: section 'il' at offset "), std::string::npos) << why;
+  EXPECT_NE(why.find("offset " + std::to_string(bin.instr_offset[c.at]) + ": "), std::string::npos)
+      << why << " (want the IL offset " << bin.instr_offset[c.at] << ")";
+  EXPECT_NE(why.find(c.reason), std::string::npos) << why;
+}
+
 // The typed IL's arrays (docs/il.md, "Index faults"): the image's IL section
 // is refused, naming the section and the instruction's offset, for an LDX not
 // right after an IDX, an array whose last element leaves its area, and a
 // jump onto an LDX past its IDX.  Programs built directly (the IL text reader
 // refuses them before).
 TEST(Hostile, TypedArraysInTheIlSection) {
-  auto dev = [](Area a, uint32_t i) {
-    Operand o;
-    o.area = a, o.index = i, o.kind = area_is_bit(a) ? OpdKind::Bit : OpdKind::Int;
-    return o;
-  };
-  auto k = [](int32_t v) {
-    Operand o;
-    o.kind = OpdKind::ConstInt, o.ival = v;
-    return o;
-  };
-  auto typed = [](Op op, Ty t, Operand a, Operand b, Operand c) {
-    Instr in;
-    in.op = op, in.ty = t, in.a[0] = a, in.a[1] = b, in.a[2] = c;
-    return in;
-  };
-  Instr truth, load_x0, jmp;
-  truth.op = Op::TRUE;
-  load_x0.op = Op::LOAD, load_x0.a[0] = dev(Area::X, 0);
-  jmp.op = Op::JMP, jmp.a[0].kind = OpdKind::Label, jmp.a[0].label = "l";
-  const Instr idx = typed(Op::TIDX, Ty::INT, dev(Area::D, 9), k(1), k(10));
-  const Instr ldx = typed(Op::TLDX, Ty::DINT, dev(Area::D, 20), k(1), dev(Area::D, 16));
-  const Instr move = typed(Op::TMOVE, Ty::INT, Operand::typed_const(1), dev(Area::D, 0), Operand{});
-  struct IlCase {
-    const char* what;
-    std::vector<std::vector<Instr>> rungs;  // the last rung's first instruction after a label "l" if jumped to
-    size_t at;                              // the refused instruction: its index in the program
-    const char* reason;
-  };
-  const Instr far_ldx = typed(Op::TLDX, Ty::LINT, dev(Area::D, 8185), k(1), dev(Area::D, 16));  // 8185 + 9 + 1 > 8191
-  const std::vector<IlCase> cases = {
-      {"an LDX not after an IDX", {{truth, move, ldx}}, 2, "LDX not right after an IDX"},
-      {"an LDX whose array leaves its area", {{truth, idx, far_ldx}}, 2, "extends past its area"},
-      {"a jump onto an LDX", {{load_x0, jmp}, {truth, idx}, {ldx}}, 1, "jump to an LDX / STX past its IDX"},
-  };
-  for (const IlCase& c : cases) {
-    SCOPED_TRACE(c.what);
-    Program p;
-    p.source = "hostile.il";
-    for (size_t r = 0; r < c.rungs.size(); r++) {
-      Rung rung;
-      rung.line = int(r) + 1;
-      rung.code = c.rungs[r];
-      if (r == 2) rung.labels.push_back("l");
-      p.rungs.push_back(rung);
-    }
-    Image im = image_around({});
-    std::vector<uint32_t> at;
-    im.code = scan_function({"nop"}, at);
-    BinaryIl bin = encode_il(p);
-    im.il = bin.code;
-    std::string why = refusal(im);
-    EXPECT_NE(why.find("hostile.bin: section 'il' at offset "), std::string::npos) << why;
-    EXPECT_NE(why.find("offset " + std::to_string(bin.instr_offset[c.at]) + ": "), std::string::npos)
-        << why << " (want the IL offset " << bin.instr_offset[c.at] << ")";
-    EXPECT_NE(why.find(c.reason), std::string::npos) << why;
-  }
+  const Instr truth = il_op(Op::TRUE), load_x0 = il_op(Op::LOAD, il_dev(Area::X, 0)), jmp = il_jmp_l();
+  const Instr idx = il_typed(Op::TIDX, Ty::INT, Ty::None, il_dev(Area::D, 9), il_int(1), il_int(10));
+  const Instr ldx = il_typed(Op::TLDX, Ty::DINT, Ty::None, il_dev(Area::D, 20), il_int(1), il_dev(Area::D, 16));
+  const Instr move = il_typed(Op::TMOVE, Ty::INT, Ty::None, Operand::typed_const(1), il_dev(Area::D, 0));
+  // 8185 + 9 + 1 > 8191
+  const Instr far_ldx = il_typed(Op::TLDX, Ty::LINT, Ty::None, il_dev(Area::D, 8185), il_int(1), il_dev(Area::D, 16));
+  for (const IlCase& c : std::vector<IlCase>{
+           {"an LDX not after an IDX", {{truth, move, ldx}}, 2, "LDX not right after an IDX"},
+           {"an LDX whose array leaves its area", {{truth, idx, far_ldx}}, 2, "extends past its area"},
+           {"a jump onto an LDX", {{load_x0, jmp}, {truth, idx}, {ldx}}, 1, "jump to an LDX / STX past its IDX"},
+       })
+    expect_il_refused(c);
 }
 
 // STRING operands in the IL section (docs/il.md, "Strings"): a string whose 33
 // cells leave their area, a STRING constant, a MID not right after its ARGS or
 // jumped to, a CONV between STRING and a date: each refused at its offset.
 TEST(Hostile, StringsInTheIlSection) {
-  auto dev = [](Area a, uint32_t i) {
-    Operand o;
-    o.area = a, o.index = i, o.kind = area_is_bit(a) ? OpdKind::Bit : OpdKind::Int;
-    return o;
-  };
-  auto typed = [](Op op, Ty t, Ty u, Operand a, Operand b, Operand c = {}) {
-    Instr in;
-    in.op = op, in.ty = t, in.src = u, in.a[0] = a, in.a[1] = b, in.a[2] = c;
-    return in;
-  };
-  Instr truth, load_x0, jmp;
-  truth.op = Op::TRUE;
-  load_x0.op = Op::LOAD, load_x0.a[0] = dev(Area::X, 0);
-  jmp.op = Op::JMP, jmp.a[0].kind = OpdKind::Label, jmp.a[0].label = "l";
+  const Instr truth = il_op(Op::TRUE), load_x0 = il_op(Op::LOAD, il_dev(Area::X, 0)), jmp = il_jmp_l();
   const uint32_t d_count = Layout::standard(0).count[int(Area::D)];
-  const Instr args = typed(Op::TARGS, Ty::DINT, Ty::None, Operand::typed_const(1), Operand::typed_const(2));
-  const Instr mid = typed(Op::TMID, Ty::STRING, Ty::None, dev(Area::D, 0), dev(Area::D, 100));
-  const Instr past_end = typed(Op::TMOVE, Ty::STRING, Ty::None, dev(Area::D, 0), dev(Area::D, d_count - 32));
-  const Instr konst = typed(Op::TMOVE, Ty::STRING, Ty::None, Operand::typed_const(3), dev(Area::D, 100));
-  const Instr to_date = typed(Op::TCONV, Ty::DATE, Ty::STRING, dev(Area::D, 0), dev(Area::D, 100));
-  const Instr twice = typed(Op::TCONV, Ty::STRING, Ty::STRING, dev(Area::D, 0), dev(Area::D, 100));
-  struct IlCase {
-    const char* what;
-    std::vector<std::vector<Instr>> rungs;
-    size_t at;
-    const char* reason;
-  };
-  const std::vector<IlCase> cases = {
-      {"a STRING whose last cell is past D", {{truth, past_end}}, 1, "cannot hold this STRING operand"},
-      {"a STRING constant", {{truth, konst}}, 1, "a STRING operand is a device"},
-      {"a MID not after an ARGS", {{truth, mid}}, 1, "MID not right after an ARGS"},
-      {"a jump onto a MID", {{load_x0, jmp}, {truth, args}, {mid}}, 1, "past its ARGS"},
-      {"CONV between STRING and a date", {{truth, to_date}}, 1, "does not take type DATE.STRING"},
-      {"CONV from STRING to STRING", {{truth, twice}}, 1, "does not take type STRING.STRING"},
-  };
-  for (const IlCase& c : cases) {
-    SCOPED_TRACE(c.what);
-    Program p;
-    p.source = "hostile.il";
-    for (size_t r = 0; r < c.rungs.size(); r++) {
-      Rung rung;
-      rung.line = int(r) + 1;
-      rung.code = c.rungs[r];
-      if (r == 2) rung.labels.push_back("l");
-      p.rungs.push_back(rung);
-    }
-    Image im = image_around({});
-    std::vector<uint32_t> at;
-    im.code = scan_function({"nop"}, at);
-    BinaryIl bin = encode_il(p);
-    im.il = bin.code;
-    std::string why = refusal(im);
-    EXPECT_NE(why.find("offset " + std::to_string(bin.instr_offset[c.at]) + ": "), std::string::npos)
-        << why << " (want the IL offset " << bin.instr_offset[c.at] << ")";
-    EXPECT_NE(why.find(c.reason), std::string::npos) << why;
-  }
+  const Instr args = il_typed(Op::TARGS, Ty::DINT, Ty::None, Operand::typed_const(1), Operand::typed_const(2));
+  const Instr mid = il_typed(Op::TMID, Ty::STRING, Ty::None, il_dev(Area::D, 0), il_dev(Area::D, 100));
+  const Instr past_end = il_typed(Op::TMOVE, Ty::STRING, Ty::None, il_dev(Area::D, 0), il_dev(Area::D, d_count - 32));
+  const Instr konst = il_typed(Op::TMOVE, Ty::STRING, Ty::None, Operand::typed_const(3), il_dev(Area::D, 100));
+  const Instr to_date = il_typed(Op::TCONV, Ty::DATE, Ty::STRING, il_dev(Area::D, 0), il_dev(Area::D, 100));
+  const Instr twice = il_typed(Op::TCONV, Ty::STRING, Ty::STRING, il_dev(Area::D, 0), il_dev(Area::D, 100));
+  for (const IlCase& c : std::vector<IlCase>{
+           {"a STRING whose last cell is past D", {{truth, past_end}}, 1, "cannot hold this STRING operand"},
+           {"a STRING constant", {{truth, konst}}, 1, "a STRING operand is a device"},
+           {"a MID not after an ARGS", {{truth, mid}}, 1, "MID not right after an ARGS"},
+           {"a jump onto a MID", {{load_x0, jmp}, {truth, args}, {mid}}, 1, "past its ARGS"},
+           {"CONV between STRING and a date", {{truth, to_date}}, 1, "does not take type DATE.STRING"},
+           {"CONV from STRING to STRING", {{truth, twice}}, 1, "does not take type STRING.STRING"},
+       })
+    expect_il_refused(c);
 }
 
 // What an image's memory holds in a length cell is untrusted: 0x7fffffff,
