@@ -518,14 +518,18 @@ class SoftPlcRun {
       std::string m = e.what();
       throw UserError(m.find("error:") == std::string::npos ? "ldrun: error: " + m : m);
     }
-    if (monitor_) start_monitor();
+    std::string banner = monitor_ ? start_monitor() : "";
     rt_->start();
     sig_thread_ = std::thread([this] { serve_signals(); });
     if (control_) ctl_thread_ = std::thread([this] { serve_control(); });
     if (a_.reload) reload_thread_ = std::thread([this] { serve_reload(); });
+    // Announced once every thread runs: a client (or a test lowering the
+    // descriptor limit) that acts on the banner meets a started ldrun.
+    if (!banner.empty()) std::fprintf(stderr, "%s\n", banner.c_str());
   }
 
-  void start_monitor() {
+  // Starts the monitor's server; returns its banner line.
+  std::string start_monitor() {
     monitor_->attach(rt_.get());
     try {
       monitor_->start();
@@ -536,7 +540,7 @@ class SoftPlcRun {
                        : monitor_token_.empty() ? " (writes allowed)"
                        : print_token_           ? " (writes allowed with the token: open " + url + "?token=" + monitor_token_ + " once)"
                                                 : " (writes allowed with the token of --monitor-token: open " + url + "?token=TOKEN once)";
-    std::fprintf(stderr, "ldrun: monitor on %s%s\n", url.c_str(), note.c_str());
+    return "ldrun: monitor on " + url + note;
   }
 
   void serve_signals() {

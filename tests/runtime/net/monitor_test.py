@@ -823,6 +823,9 @@ def case_fd_exhaustion():
     # the caps (1000 connections) and would refuse to start under 32.
     import resource
 
+    if SANITIZED:  # docs/faults.md: UBSan's vptr probe needs a descriptor itself
+        print("skipped under ASan+UBSan: out of descriptors, UBSan's vptr check misreports valid objects")
+        sys.exit(77)
     m = Ldrun(["examples/eq1.ld", "--io=none", "--period", "10ms", "--monitor", "127.0.0.1:0",
                "--monitor-connections", "1000", "--monitor-per-address", "1000"])
     resource.prlimit(m.p.pid, resource.RLIMIT_NOFILE, (32, 32))
