@@ -153,6 +153,8 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
   try {
     if (ends_with(path, ".il")) {
       c.il = looks_like_ldc_il(text) ? parse_il_text(text, path) : parse_iec_il(text, path);
+    } else if (ends_with(path, ".st")) {
+      c.il = parse_st(text, path);
     } else if (ends_with(path, ".sfc")) {
       c.chart = parse_sfc(text, path);
       c.il = lower_chart(*c.chart);

@@ -21,7 +21,7 @@ static std::string usage() {
   std::string targets;
   for (const Target& t : ldc::targets()) targets += (targets.empty() ? "" : "|") + std::string(t.name);
   return "usage: ldc FILE [-o OUT] [--emit=tree|il|iec-il|ld|asm|listing|hex|c] [--target=" + targets + "] [-O0|-O1|-O2]\n"
-         "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .xml (PLCopen TC6), .rtsp (paper 000), .sfc (SFC chart)\n"
+         "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .st (Structured Text), .xml (PLCopen TC6), .rtsp (paper 000), .sfc (SFC chart)\n"
          "       -O0 templates (paper 003), -O1 peephole, -O2 bit stack in registers; for every target\n"
          "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n"
          "       ldc FILE.xml [-o DIR]   (a PLCopen configuration of several tasks is a project, the same way)\n"

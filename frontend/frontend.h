@@ -76,6 +76,10 @@ Program parse_iec_il(std::string_view text, const std::string& filename);
 // and the instruction when the program has no IEC IL form.
 std::string print_iec_il(const Program& p);
 
+// Reads IEC 61131-3 Structured Text (docs/st.md) through the typed IEC IL
+// reader.  Throws CompileError.
+Program parse_st(std::string_view text, const std::string& filename);
+
 // The RTSP language of paper 000 (`.rtsp`, docs/rtsp.md): its preprocessor,
 // statements and data groups, as rung trees over ldc devices.
 // Throws CompileError (line, col, message).

@@ -29,7 +29,9 @@ std::optional<DeviceRef> iec_address(const std::string& text, std::string& why);
 // type outside the classic subset (docs/iec-il.md, "Two readers")?
 bool needs_typed_reader(const std::vector<Tok>& t);
 // The typed reader: the program through the typed program model (ir/model.h)
-// to typed IL.  Throws CompileError.
-Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename);
+// to typed IL.  `from_st`: the tokens are Structured Text written as IL
+// (frontend/st), whose temporaries __Tn/__Sn take the type of the value
+// stored into them.  Throws CompileError.
+Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename, bool from_st = false);
 
 }  // namespace ldc::iecil

@@ -115,7 +115,7 @@ struct Val {
 
 class Reader {
  public:
-  Reader(const std::vector<Tok>& toks, const std::string& file) : t_(toks) { p_.source = file; }
+  Reader(const std::vector<Tok>& toks, const std::string& file, bool from_st) : t_(toks), from_st_(from_st) { p_.source = file; }
 
   Program run() {
     try {
@@ -132,6 +132,7 @@ class Reader {
 
  private:
   const std::vector<Tok>& t_;
+  bool from_st_ = false;
   size_t pos_ = 0;
   Model m_;
   Program p_;
@@ -928,6 +929,7 @@ class Reader {
     skip_eols();
     const Tok& k = next();
     if (k.kind != Tok::Word) fail(k, "expected an operand" + found(k));
+    if (st_temp(k.text)) return temp_val(k);
     Val v;
     std::string why;
     if (auto p = parse_literal(k.text, why)) {
@@ -1349,6 +1351,7 @@ class Reader {
     need_cr(op);
     Tok k = peek();
     if (k.kind != Tok::Word) fail(k, "'" + op.text + "' needs an operand" + found(k));
+    if (st_temp(k.text)) return store_temp(k);
     Val v = operand("st");
     if (v.kind == Val::Lit) fail(k, "'" + k.text + "' cannot be written (a constant)");
     if (cr_whole()) {
@@ -1361,8 +1364,9 @@ class Reader {
     if (!m_.type(v.ref.type).scalar()) fail(k, "ST of a single value into '" + k.text + "', " + a_type(v.ref.type));
     type_cr(v.ref.type, op);
     if (!m_.same_type(cr_.type, v.ref.type) && !(m_.type(cr_.type).kind == TypeKind::Enum && cr_.type == v.ref.type))
-      fail(k, "ST of " + a_type(cr_.type) + " result into '" + k.text + "', " + a_type(v.ref.type) +
-                  ": convert it first (" + m_.type_name(cr_.type) + "_TO_" + m_.type_name(v.ref.type) + ")");
+      fail(k, (from_st_ ? "assignment of " + a_type(cr_.type) + " value to '" : "ST of " + a_type(cr_.type) + " result into '") +
+                  k.text + "', " + a_type(v.ref.type) + ": convert it first (" + m_.type_name(cr_.type) + "_TO_" +
+                  m_.type_name(v.ref.type) + ")");
     Operand val = cr_.o;
     Ty t = ty_of(cr_.type);
     if (neg) {
@@ -1385,6 +1389,33 @@ class Reader {
     store(v.ref, val, k);
     if (v.ref.direct()) cr_.o = operand_at(t, v.ref.at, v.ref.bits, v.ref.cells);
   }
+  // ---- the temporaries of ST (frontend/st): __T1, __S1 ... take the type
+  // of the value stored into them; one place per name, type and inline copy.
+  struct Temp { TypeId type; Operand o; };
+  std::map<std::string, Temp> temps_;
+  bool st_temp(const std::string& name) const { return from_st_ && name.rfind("__", 0) == 0; }
+  void store_temp(const Tok& k) {
+    next();
+    default_cr(k);
+    if (cr_whole()) fail(k, "a structured value in an expression: assign it to a variable of its type");
+    Ty t = ty_of(cr_.type);
+    Operand d = scratch("st" + scope_->prefix + k.text, t);
+    typed(Op::TMOVE, t, cr_.o, d);
+    temps_[scope_->prefix + k.text] = {cr_.type, d};
+    cr_.o = d;
+  }
+  Val temp_val(const Tok& k) const {
+    auto it = temps_.find(scope_->prefix + k.text);
+    if (it == temps_.end()) throw std::logic_error("ST temporary read before it is written: " + k.text);
+    Val v;
+    v.kind = Val::Ref_;
+    v.ref.type = it->second.type;
+    v.ref.at = {it->second.o.index, it->second.o.index};
+    v.ref.bits = Area::M;
+    v.ref.cells = Area::D;
+    return v;
+  }
+
   bool is_acc(const Operand& o) const {
     for (const auto& [k, p] : scratch_)
       if (k.rfind("acc", 0) == 0 && (o.area == Area::D ? p.cell == o.index : o.area == Area::M && p.bit == o.index)) return true;
@@ -1509,7 +1540,9 @@ class Reader {
       Tok k = peek();
       Val v = operand("p");
       load_val(op, false, v, k);
-      if (!saved.lit && cr_.lit) type_cr(saved.type, k);
+      // a number in the group takes the outer type (ADD( 5 ...), but not
+      // in a BOOL group, where it is compared first (AND( 5 GT x ))
+      if (!saved.lit && cr_.lit && ty_of(saved.type) != Ty::BOOL) type_cr(saved.type, k);
     } else {  // "ADD(" alone: the next line is LD x
       end_line();
       skip_eols();
@@ -2333,6 +2366,8 @@ class Reader {
 
 }  // namespace
 
-Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename) { return Reader(t, filename).run(); }
+Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename, bool from_st) {
+  return Reader(t, filename, from_st).run();
+}
 
 }  // namespace ldc::iecil
