@@ -143,6 +143,15 @@ class CGen {
   size_t n_ = 0;  // instructions translated so far
 
   static std::string u(uint32_t v) { return std::to_string(v) + "u"; }
+  // LOOP (docs/il.md "Loops"): a back edge counted in Sys kSysLoops; the
+  // budget's last one writes the loop fault and ends the scan
+  std::string loop(const std::string& label) const {
+    if (!offsets_) throw std::logic_error("C backend: LOOP without the IL offsets of its fault record");
+    return "if (" + top() + ") { uint32_t n_ = (uint32_t)rd_i(m, " + u(kSysLoops) + ") + 1u; if (n_ >= " + u(kLoopBudget) +
+           ") { uint32_t k_ = " + u(kFaultLoop) + ", a_ = " + u((*offsets_)[n_]) + "; uint64_t v_ = " + u(kLoopBudget) +
+           "; memcpy(m + " + u(kSysFault) + ", &k_, 4); memcpy(m + " + u(kSysFaultAt) + ", &a_, 4); memcpy(m + " +
+           u(kSysFaultValue) + ", &v_, 8); return; } wr_i(m, " + u(kSysLoops) + ", (int32_t)n_); goto lbl_" + label + "; }";
+  }
   std::string s(int d) const { return "s" + std::to_string(((d % 32) + 32) % 32); }
   std::string top() const { return s(depth_ - 1); }
 
@@ -274,6 +283,7 @@ class CGen {
       }
       case Op::JMP: return line("if (" + top() + ") goto lbl_" + a[0].label.str() + ";");
       case Op::END: return line("if (" + top() + ") return;");
+      case Op::LOOP: return line(loop(a[0].label.str()));
       case Op::Count: break;
       default: break;  // the typed instructions, translated above
     }
@@ -326,14 +336,14 @@ static bool has_typed(const Program& p) {
 
 std::string generate_c(const Program& p, const Layout& layout) {
   refuse_shared_stack(p);
-  const bool typed = has_typed(p);
+  const bool typed = has_typed(p), loops = has_loop(p);
   std::vector<uint32_t> offsets;
-  if (typed) offsets = encode_il(p).instr_offset;
+  if (typed || loops) offsets = encode_il(p).instr_offset;
   CGen g(layout, "  ");
-  g.set_il_offsets(typed ? &offsets : nullptr);
+  g.set_il_offsets(typed || loops ? &offsets : nullptr);
   g.rungs(p.rungs, p.end_labels);
   return std::string("/* ldc: ") + p.source + " as C (the C route). */\n" + kPrelude + (typed ? c_typed_prelude() : "") +
-         "\n" + c_scan_head() +
+         "\n" + c_scan_head() + (loops ? "  wr_i(m, " + std::to_string(kSysLoops) + "u, 0); /* no loop taken yet */\n" : "") +
          (typed ? "  uint32_t xr = 0; /* the index register: IDX sets it */\n"
                   "  int64_t sl_ = 0, sp_ = 0; /* the string-argument registers: ARGS sets them */\n" : "") + g.out +
          "  (void)s0;\n" + (typed ? "  (void)xr; (void)sl_; (void)sp_;\n" : "") + "}\n";

@@ -285,6 +285,7 @@ class Gen : public ClassGen<Gen> {
 
   void basic(const ldc::Instr& in);
   void flow(const ldc::Instr& in);
+  void loop(const ldc::Instr& in);
 
   // ClassGen's primitives
   friend class ClassGen<Gen>;
@@ -990,10 +991,37 @@ void Gen::basic(const ldc::Instr& in) {
 }
 
 void Gen::flow(const ldc::Instr& in) {
+  if (in.op == Op::LOOP) return loop(in);
   test_top();
   Instruction j = make_cc(M::Jcc, Cond::NE, {L(in.op == Op::JMP ? x86_label_name(in.a[0].label) : kX86ExitLabel)});
   j.long_branch = true;
   emit(std::move(j));
+}
+
+// LOOP (docs/il.md "Loops"): with power, the back edge counted in Sys
+// kSysLoops and taken below the budget, else the loop fault; the shape the
+// loader's code check admits as the one backward branch (docs/image-format.md):
+//   add dword [rbx+kSysLoops], 1; cmp dword [rbx+kSysLoops], kLoopBudget; jae fault; jmp head
+void Gen::loop(const ldc::Instr& in) {
+  std::string skip = fresh(), fault = fresh();
+  test_top();
+  jcc(Cond::E, skip);
+  emit(M::Add, {Dw(kSysLoops), I(1)});
+  emit(M::Cmp, {Dw(kSysLoops), I(kLoopBudget)});
+  Instruction f = make_cc(M::Jcc, Cond::AE, {L(fault)});
+  f.long_branch = true;
+  emit(std::move(f));
+  Instruction back = make(M::Jmp, {L(x86_label_name(in.a[0].label))});
+  back.long_branch = true;
+  emit(std::move(back));
+  label(fault);
+  emit(M::Mov, {Dw(kSysFault), I(kFaultLoop)});
+  emit(M::Mov, {Dw(kSysFaultAt), I(int64_t(il_offset_))});
+  emit(M::Mov, {Operand::m(mem_at(Size::Qword, kSysFaultValue)), I(kLoopBudget)});
+  Instruction j = make(M::Jmp, {L(kX86ExitLabel)});
+  j.long_branch = true;
+  emit(std::move(j));
+  label(skip);
 }
 
 // ------------------------------------------------------------ typed instructions
@@ -2370,8 +2398,12 @@ class Regions {
 // epilogue, the shared routines if any are called), each handed to `sink`.
 class Blocks {
  public:
+  // A program with a LOOP is compiled at -O1 when -O2 is asked: the -O2
+  // facts and base-register plans assume that every jump goes forward
+  // (docs/x86.md, "Loops").
   Blocks(const Program& p, const Layout& layout, int opt_level, bool notes)
-      : p_(p), layout_(layout), opt_(opt_level), o2_(opt_level >= 2), notes_(notes) {
+      : p_(p), layout_(layout), loops_(has_loop(p)), opt_(loops_ ? std::min(opt_level, 1) : opt_level), o2_(opt_ >= 2),
+        notes_(notes) {
     if (o2_) facts_ = scan_facts(p_, layout_, kNumSlots);
     shared_ = facts_ ? facts_->shared : shares_stack(p);
   }
@@ -2383,6 +2415,7 @@ class Blocks {
     pro.items.push_back(Item::note(o2_ ? "scan(image): rbp = image+" + std::to_string(kImageBias) + ", bit stack in bl r12b r13b (or ebx), bases rdi r15 r14 (-O2)"
                                          : "scan(image): rbx = image, ebp = bit stack"));
     for (const Instruction& i : scan_prologue(o2_)) pro.items.push_back(Item::instr(i));
+    if (loops_) pro.items.push_back(Item::instr(make(M::Mov, {Dw(kSysLoops), I(0)})));  // no loop taken yet
     if (o2_)
       for (RegNum r : as::x86::kBaseRegs) pro.items.push_back(Item::instr(as::x86::base_lea(r, 0)));  // K: Regions::flush
     return pro;
@@ -2403,7 +2436,7 @@ class Blocks {
     uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into ebp
     for (size_t k = 0; k < r.code.size(); k++) {
       const ldc::Instr& in = r.code[k];
-      if (in.op == ldc::Op::TIDX) g.set_il_offset(il_offset(ri, k));
+      if (in.op == ldc::Op::TIDX || in.op == ldc::Op::LOOP) g.set_il_offset(il_offset(ri, k));
       starts.push_back(uint32_t(b.items.size()));
       if (notes_) b.items.push_back(Item::note(instr_text(in)));
       if (!facts_) { g.instr(in); continue; }
@@ -2485,6 +2518,7 @@ class Blocks {
   const Layout& layout_;
   std::vector<uint32_t> il_offsets_;
   std::vector<size_t> rung_first_;
+  bool loops_;
   int opt_;
   bool o2_, notes_;
   bool shared_;  // shares_stack(p): the stack lives in ebp from rung to rung

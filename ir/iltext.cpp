@@ -379,7 +379,7 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
   }
   if (!ended) throw CompileError(lineno, 1, "missing .end");
   p.end_labels = std::move(pending_labels);
-  // Every jump goes forward to a defined label.
+  // Every jump goes forward to a defined label; a LOOP back to one.
   for (size_t r = 0; r < p.rungs.size(); r++)
     for (const Instr& in : p.rungs[r].code)
       for (int i = 0; i < in.nopd(); i++)
@@ -387,7 +387,10 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
           const std::string& name = in.a[i].label;
           auto it = label_rung.find(name);
           if (it == label_rung.end()) throw CompileError(in.loc.line, in.loc.col, "undefined label '" + name + "'");
-          if (it->second <= r) throw CompileError(in.loc.line, in.loc.col, "backward jump to '" + name + "'");
+          if (in.op == Op::LOOP && it->second > r)
+            throw CompileError(in.loc.line, in.loc.col, "LOOP to '" + name + "', which does not come before it");
+          if (in.op != Op::LOOP && it->second <= r)
+            throw CompileError(in.loc.line, in.loc.col, "backward jump to '" + name + "' (only a LOOP goes back)");
         }
   return p;
 }

@@ -332,6 +332,23 @@ void exec_JMP(Ctx& c) {
   if (top(c)) c.pc = target;
 }
 void exec_END(Ctx& c) { if (top(c)) c.end = true; }
+void exec_LOOP(Ctx& c) {
+  uint32_t target = operand(c).index;
+  if (!top(c)) return;
+  uint32_t n;
+  std::memcpy(&n, c.mem + kSysLoops, 4);
+  if (++n < kLoopBudget) {
+    std::memcpy(c.mem + kSysLoops, &n, 4);
+    c.pc = target;
+    return;
+  }
+  uint32_t kind = kFaultLoop, at = c.start;
+  uint64_t budget = kLoopBudget;
+  std::memcpy(c.mem + kSysFault, &kind, 4);
+  std::memcpy(c.mem + kSysFaultAt, &at, 4);
+  std::memcpy(c.mem + kSysFaultValue, &budget, 8);
+  c.end = true;
+}
 
 
 // ---- typed instructions (ir/typed.h defines each)
@@ -446,10 +463,14 @@ const Routine kRoutines[kOpCount] = {
 
 }  // namespace
 
-Interpreter::Interpreter(std::span<const uint8_t> code, const Layout& layout) : code_(code), layout_(layout) {}
+Interpreter::Interpreter(std::span<const uint8_t> code, const Layout& layout) : code_(code), layout_(layout) {
+  Instr in;
+  for (uint32_t off = 0; off < code.size() && !loops_; off = decode_instr(code, off, in)) loops_ = Op(code[off]) == Op::LOOP;
+}
 
 void Interpreter::scan(uint8_t* mem) const {
   Ctx c{code_.data(), uint32_t(code_.size()), 0, mem, &layout_, 0, false};
+  if (loops_) std::memset(mem + kSysLoops, 0, 4);  // no loop taken yet
   while (c.pc < c.size && !c.end) {
     c.start = c.pc;
     uint8_t op = c.code[c.pc++];

@@ -454,7 +454,7 @@ std::string validate_il(std::span<const uint8_t> code, const Layout& layout) {
         std::string e = check_operand(*s, code.data() + p, code.size() - p, layout, len, target);
         if (!e.empty()) return "offset " + std::to_string(p) + ": " + oi.name + ": " + e;
         if (target != UINT32_MAX)
-          if (std::string why = jump(uint32_t(off), target); !why.empty()) return why;
+          if (std::string why = jump(uint32_t(off), target, Op(opb) == Op::LOOP); !why.empty()) return why;
         p += len;
       }
       starts[off] = true;
@@ -462,14 +462,22 @@ std::string validate_il(std::span<const uint8_t> code, const Layout& layout) {
     }
     return "";
   };
-  if (std::string why = walk([](uint32_t, uint32_t) { return std::string(); }); !why.empty()) return why;
-  return walk([&](uint32_t from, uint32_t to) -> std::string {
+  if (std::string why = walk([](uint32_t, uint32_t, bool) { return std::string(); }); !why.empty()) return why;
+  return walk([&](uint32_t from, uint32_t to, bool loop) -> std::string {
     bool at_boundary = to == code.size() || (to < code.size() && starts[to]);
     if (!at_boundary) return "offset " + std::to_string(from) + ": jump target " + std::to_string(to) + " is not an instruction boundary";
     if (to < code.size() && indexed[to]) return "offset " + std::to_string(from) + ": jump to an LDX / STX past its IDX, or a string function past its ARGS";
-    if (to <= from) return "offset " + std::to_string(from) + ": backward jump";
+    if (loop && to >= from) return "offset " + std::to_string(from) + ": LOOP to a label that does not come before it";
+    if (!loop && to <= from) return "offset " + std::to_string(from) + ": backward jump (only a LOOP goes back)";
     return "";
   });
+}
+
+bool has_loop(const Program& p) {
+  for (const Rung& r : p.rungs)
+    for (const Instr& in : r.code)
+      if (in.op == Op::LOOP) return true;
+  return false;
 }
 
 uint32_t decode_instr(std::span<const uint8_t> code, uint32_t off, Instr& out) {

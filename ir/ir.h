@@ -84,7 +84,7 @@ struct Layout {
 // Fixed addresses inside the Sys area.
 constexpr uint32_t kSysDt = 0;      // INT32: ms elapsed before this scan
 constexpr uint32_t kSysScan = 4;    // UINT32: scans completed
-constexpr uint32_t kSysSize = 64;   // bytes 8..23: the fault record (kSysFault, below); 24..63 reserved (0)
+constexpr uint32_t kSysSize = 64;   // bytes 8..23: the fault record (kSysFault, below); 24..27 kSysLoops; 28..63 reserved (0)
 
 // Native code calls the REAL functions that have no instruction (float f(float))
 // through a table of 8-byte pointers that lies OUTSIDE the memory image, in the
@@ -368,10 +368,17 @@ static_assert(sizeof(Operand) == 12, "an IL instruction holds three: keep it sma
 // array index out of its bounds, docs/il.md "Index faults"): every engine
 // writes the same record and ends the scan there; the runtime then stops the
 // PLC with outputs off.
-constexpr uint32_t kSysFault = 8;        // UINT32: 0 none, 1 index out of range
-constexpr uint32_t kSysFaultAt = 12;     // UINT32: the IL byte offset of the IDX instruction
-constexpr uint32_t kSysFaultValue = 16;  // INT64: the index
-enum : uint32_t { kFaultNone = 0, kFaultIndex = 1 };
+constexpr uint32_t kSysFault = 8;        // UINT32: 0 none, 1 index out of range, 2 loop budget spent
+constexpr uint32_t kSysFaultAt = 12;     // UINT32: the IL byte offset of the IDX (LOOP) instruction
+constexpr uint32_t kSysFaultValue = 16;  // INT64: the index (the budget)
+enum : uint32_t { kFaultNone = 0, kFaultIndex = 1, kFaultLoop = 2 };
+// The loops of a scan (LOOP, docs/il.md "Loops"): every engine sets the
+// counter to 0 as a scan of a program with a LOOP starts, and each LOOP that
+// jumps back adds 1; the one that would make it kLoopBudget ends the scan with
+// the fault kFaultLoop instead, so a scan takes at most kLoopBudget - 1 back
+// edges, whatever the program.
+constexpr uint32_t kSysLoops = 24;       // UINT32: back edges taken in this scan
+constexpr uint32_t kLoopBudget = 100000;
 
 struct SrcLoc {
   int line = 0, col = 0;
@@ -426,6 +433,8 @@ struct Program {
   std::vector<DeviceRef> retain;        // D words kept across restarts (.retain, docs/il.md)
   Layout layout() const { return Layout::standard(edge_slots); }
 };
+// Does the program have a LOOP (a backward jump, docs/il.md "Loops")?
+bool has_loop(const Program& p);
 
 // ---------------------------------------------------------------- the rung tree
 // The series/parallel tree of one rung (paper 003, Fig. 5), built by a front end
@@ -602,6 +611,7 @@ class Interpreter {
  private:
   std::span<const uint8_t> code_;
   Layout layout_;
+  bool loops_ = false;  // a LOOP: each scan starts with the loop counter at 0
 };
 
 // ---- runtime helpers shared by every engine (the semantics of docs/il.md)

@@ -117,7 +117,7 @@ void dead_stores(const Program& p, const Layout& l, const std::vector<char>& on,
     for (size_t k = code.size(); k-- > 0;) {
       const Instr& in = code[k];
       uint32_t i = f.first[ri] + uint32_t(k);
-      if (in.op == Op::JMP || in.op == Op::END || is_typed(in.op)) { gen++; continue; }
+      if (in.op == Op::JMP || in.op == Op::END || in.op == Op::LOOP || is_typed(in.op)) { gen++; continue; }
       Access a = access(l, in, on[i]);
       bool dead = a.removable && a.nw > 0;
       for (int w = 0; w < a.nw; w++) dead = dead && stamp[a.writes[w]] == gen;
@@ -272,7 +272,7 @@ class Divisions {
         forget();
         continue;
       }
-      if (pairs_.empty() && !is_divmod(op) && op != Op::JMP && op != Op::END) continue;  // nothing kept to forget
+      if (pairs_.empty() && !is_divmod(op) && op != Op::JMP && op != Op::END && op != Op::LOOP) continue;  // nothing kept to forget
       uint32_t i = first + uint32_t(k);
       const Instr* alt = entry_at(f_.replaced, i);
       instr(alt ? *alt : r.code[k], i);
@@ -295,7 +295,7 @@ class Divisions {
     std::optional<Done> now = division(in, i);
     bool mod = in.op == Op::MOD;
     if (now && reuse(*now, mod, i)) now->at = kNone;
-    if (in.op == Op::JMP || in.op == Op::END) exit_ = i;
+    if (in.op == Op::JMP || in.op == Op::END || in.op == Op::LOOP) exit_ = i;
     if (!pairs_.empty() || now) accessed(in, i);  // a division's own accesses count for a DIV it may serve
     if (!now || now->d == now->a || now->d == now->b) return;
     Pair& p = pairs_[key(now->a, now->b)];

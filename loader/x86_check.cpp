@@ -496,16 +496,87 @@ class BodyRules {
       return here() +
              "a direct call not to the entry of one of the code's routines (generated code calls only those and "
              "the REAL function table)";
-    // branches go forward, inside the body or to the epilogue, so a scan always ends
+    if (std::string why = loop_counter_write(di); !why.empty()) return here() + why;
+    // branches go forward, inside the body or to the epilogue, so a scan always
+    // ends; the one backward branch is a loop's counted back edge (back_edge)
     if ((in.mnemonic == M::Jmp || in.mnemonic == M::Jcc) && in.num_operands && in.ops[0].kind == x86::OperandKind::Address) {
       int64_t t = in.ops[0].imm;
-      if (t <= int64_t(di.offset)) return here() + "backward branch (a scan runs straight through)";
+      if (t <= int64_t(di.offset))
+        if (std::string why = back_edge(di, t); !why.empty()) return here() + why;
       if (t < int64_t(f_.body) || t > int64_t(f_.exit)) return here() + "branch target " + hex(uint64_t(t)) + " outside the scan body";
     }
     return "";
   }
 
  private:
+  // The loop counter, Sys kSysLoops (docs/image-format.md, "Loops"): inside a
+  // loop (from a back edge's target to the back edge) the only writes of its
+  // bytes are `add dword [img+kSysLoops], n` with n >= 1; any other write (the
+  // reset `mov dword [img+kSysLoops], 0` before the loops, or anything else)
+  // is recorded and refused there by back_edge.
+  bool counter_mem(const x86::Mem& m) const {
+    return m.base == f_.img && !m.index.valid() && int64_t(m.disp) + f_.bias == int64_t(kSysLoops) && m.size == x86::Size::Dword;
+  }
+  std::string loop_counter_write(const x86::Decoded& di) {
+    const x86::Instruction& in = di.inst;
+    for (unsigned i = 0; i < in.num_operands && i < in.ops.size(); i++) {
+      const x86::Operand& o = in.ops[i];
+      if (o.kind != x86::OperandKind::Mem || (di.effects.ops[i] != x86::Use::W && di.effects.ops[i] != x86::Use::RW)) continue;
+      const x86::Mem& m = o.mem;
+      if (m.base != f_.img) continue;  // a base register's write: no loop in the -O2 frame (back_edge)
+      int64_t first = int64_t(m.disp) + f_.bias, end = first + width(m.size);
+      if (m.index.valid()) continue;   // an indexed access: its extent is checked against the counter in indexed()
+      if (end <= int64_t(kSysLoops) || first >= int64_t(kSysLoops) + 4) continue;
+      const bool imm = in.num_operands == 2 && in.ops[1].kind == x86::OperandKind::Imm;
+      if (counter_mem(m) && in.mnemonic == x86::Mnemonic::Add && imm && in.ops[1].imm >= 1) return "";
+      return lowers_counter(di.offset);
+    }
+    return "";
+  }
+  // A write that may lower the loop counter (its reset, or any other write of
+  // its bytes): none may lie inside a loop (back_edge).
+  std::string lowers_counter(uint32_t at) {
+    if (resets_.size() >= kMaxResets) return "more than " + std::to_string(kMaxResets) + " writes of the loop counter";
+    resets_.push_back(at);
+    return "";
+  }
+  // A backward branch: `add dword [img+kSysLoops], 1; cmp dword [img+kSysLoops],
+  // B; jae <forward>; jmp <back>` with 1 <= B <= kLoopBudget, no branch landing
+  // on the cmp, the jae or the jmp (guarded), and no reset of the counter in
+  // the loop it closes: every back edge of a scan counts, and at most
+  // kLoopBudget - 1 of them are taken between resets.
+  std::string back_edge(const x86::Decoded& di, int64_t target) {
+    using M = x86::Mnemonic;
+    const std::string want = "backward branch: only a loop's counted back edge goes back ('add dword [" + img_name_ + "+" +
+                             std::to_string(kSysLoops) + "], 1; cmp dword [" + img_name_ + "+" + std::to_string(kSysLoops) +
+                             "], B; jae; jmp', docs/image-format.md)";
+    if (di.inst.mnemonic != M::Jmp || f_.bases.set) return want;
+    const std::span<const x86::Instruction> w = window_.insts();
+    if (w.size() < 4) return want;
+    const x86::Instruction &add = w[w.size() - 4], &cmp = w[w.size() - 3], &jae = w[w.size() - 2];
+    auto on_counter = [&](const x86::Instruction& i) {
+      return i.num_operands == 2 && i.ops[0].kind == x86::OperandKind::Mem && counter_mem(i.ops[0].mem) &&
+             i.ops[1].kind == x86::OperandKind::Imm;
+    };
+    const bool shape = add.mnemonic == M::Add && on_counter(add) && add.ops[1].imm == 1 && cmp.mnemonic == M::Cmp &&
+                       on_counter(cmp) && cmp.ops[1].imm >= 1 && cmp.ops[1].imm <= int64_t(kLoopBudget) &&
+                       jae.mnemonic == M::Jcc && jae.cond == x86::Cond::AE && jae.num_operands &&
+                       jae.ops[0].kind == x86::OperandKind::Address && jae.ops[0].imm > int64_t(window_.offset(1));
+    if (!shape) return want;
+    for (uint32_t r : resets_)
+      if (int64_t(r) >= target && r <= di.offset) return "a write of the loop counter at " + hex(r) + " inside the loop it closes";
+    for (size_t back = 0; back < 3; back++) guarded_.add(window_.offset(back));  // the cmp, the jae, the jmp
+    return "";
+  }
+  static bool writes_mem(const x86::Decoded& di) {
+    for (unsigned i = 0; i < di.inst.num_operands && i < di.inst.ops.size(); i++)
+      if (di.inst.ops[i].kind == x86::OperandKind::Mem && (di.effects.ops[i] == x86::Use::W || di.effects.ops[i] == x86::Use::RW))
+        return true;
+    return false;
+  }
+  static constexpr size_t kMaxResets = 64;
+  std::vector<uint32_t> resets_;  // offsets of the loop counter's resets so far
+
   // What the callee of a call may write: a direct call goes to one of the
   // routines (or is refused below), which write what their bodies' forms write;
   // a call through memory goes to a REAL function (or is refused with its
@@ -548,6 +619,8 @@ class BodyRules {
     if (first < 0 || last > int64_t(layout_.size))
       return "indexed memory operand: its bounds check lets it reach image offsets [" + std::to_string(first) + ", " +
              std::to_string(last) + "), outside the memory image [0, " + hex(layout_.size) + ")";
+    if (first < int64_t(kSysLoops) + 4 && last > int64_t(kSysLoops) && writes_mem(di))
+      if (std::string why = lowers_counter(di.offset); !why.empty()) return why;
     guarded_.add(window_.offset(1));  // the ja
     guarded_.add(window_.offset(0));  // the access
     return "";

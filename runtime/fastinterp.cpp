@@ -50,7 +50,7 @@ enum : unsigned { kDstInt = 0, kDstReal = 1 };
   X(SIN_F) X(COS_F) X(TAN_F) X(EXP_F) X(LN_F) X(SQRT_F) X(ABS_F) X(GEN)                                 \
   X(TON_K) X(TON_M) X(TOF_K) X(TOF_M) X(TP_K) X(TP_M) X(RSTT)                                           \
   X(MTON_K) X(MTON_M) X(MTOF_K) X(MTOF_M) X(MTP_K) X(MTP_M)                                             \
-  X(CTU_K) X(CTU_M) X(CTD_K) X(CTD_M) X(RSTC) X(JMP) X(END)                                           \
+  X(CTU_K) X(CTU_M) X(CTD_K) X(CTD_M) X(RSTC) X(JMP) X(END) X(LOOP)                                           \
   LDC_TYPED_OPS(X)
 
 // The typed handlers (docs/il.md, "Typed instructions").  A move class says how
@@ -228,6 +228,15 @@ __attribute__((noinline)) void index_fault(uint8_t* m, uint32_t at, uint64_t ind
   std::memcpy(m + kSysFault, &kind, 4);
   std::memcpy(m + kSysFaultAt, &at, 4);
   std::memcpy(m + kSysFaultValue, &index, 8);
+}
+
+// A LOOP that would take the budget's last back edge (docs/il.md, "Loops").
+__attribute__((noinline)) void loop_fault(uint8_t* m, uint32_t at) {
+  uint32_t kind = kFaultLoop;
+  uint64_t budget = kLoopBudget;
+  std::memcpy(m + kSysFault, &kind, 4);
+  std::memcpy(m + kSysFaultAt, &at, 4);
+  std::memcpy(m + kSysFaultValue, &budget, 8);
 }
 
 using TGen = FastInterpreter::TypedGeneric;
@@ -504,6 +513,7 @@ Ins Decoder::bit(const Instr& in) {
     case Op::RSTC: return ins(F_RSTC, 0, 0, 0, uint16_t(o[0].index));
     case Op::JMP: return ins(F_JMP, index_of(o[0].index));
     case Op::END: return ins(F_END);
+    case Op::LOOP: return ins(F_LOOP, index_of(o[0].index));
     default: throw std::invalid_argument("fast interpreter: bad opcode");
   }
 }
@@ -613,6 +623,7 @@ FastInterpreter::FastInterpreter(std::span<const uint8_t> il, const Layout& L) {
   for (size_t i = 0; i < instrs.size(); i++) {
     dec.at = starts[i];
     code_.push_back(dec.decode(instrs[i]));
+    loops_ |= instrs[i].op == Op::LOOP;
     specialized_ += dec.special;
   }
   code_.push_back(Ins{F_HALT, 0, 0, 0, 0});
@@ -715,6 +726,7 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
   const TypedGeneric* const tg = generic_.data();  // the typed instructions without a handler
   uint32_t xr = 0;                                 // the index register (IDX sets it)
   typed::StrArgs args;                             // the string-argument registers (ARGS sets them)
+  if (loops_) std::memset(m + kSysLoops, 0, 4);    // no loop taken yet (docs/il.md, "Loops")
 
 #if LDC_FAST_GOTO
   static const void* const kLabels[F_Count] = {
@@ -964,6 +976,16 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
   }
   HANDLER(END) {
     if (st & 1u) return;
+    NEXT();
+  }
+  HANDLER(LOOP) {  // docs/il.md "Loops": a back edge counted, the budget's last one a fault
+    if (st & 1u) {
+      uint32_t n = ld_u(m, kSysLoops) + 1;
+      if (n >= kLoopBudget) { loop_fault(m, il_offset_[size_t(ip - base)]); return; }
+      st_u(m, kSysLoops, n);
+      ip = base + ip->a;
+      DISPATCH();
+    }
     NEXT();
   }
 

@@ -68,6 +68,7 @@ class FastInterpreter : public Engine {
 
  private:
   std::vector<Ins> code_;  // the program, then one HALT
+  bool loops_ = false;                 // a LOOP: each scan starts with the loop counter at 0
   std::vector<uint32_t> il_offset_;    // the IL byte offset of each record (an IDX fault names it)
   std::vector<uint64_t> k64_;          // 64-bit constants of the typed handlers (a field holds the index)
   std::vector<TypedGeneric> generic_;  // the typed instructions without a specialized handler

@@ -1274,6 +1274,10 @@ void Gen::typed(const ldc::Instr& in) {
 }
 
 void Gen::flow(const ldc::Instr& in) {
+  if (in.op == Op::LOOP)
+    throw CompileError(in.loc.line, in.loc.col,
+                       "the C40 cannot compile LOOP (a loop that goes back): its code check admits forward branches "
+                       "only (docs/c40.md); run the program on another engine");
   test_top();
   if (in.op == Op::END) return opc(M::Retsc, Cond::NE, {});
   std::string skip = fresh();

@@ -62,6 +62,9 @@ const InterpProgram& interp_program() {
 // (native C40 code runs the typed instructions that fit a 32-bit word).
 static void refuse_typed(std::span<const uint8_t> il, uint32_t off) {
   const OpInfo& oi = op_info(Op(il[off]));
+  if (Op(il[off]) == Op::LOOP)
+    throw std::runtime_error("the C40-hosted interpreter (--engine=c40interp) cannot run LOOP (IL offset " + std::to_string(off) +
+                             "): its word IL has no backward jump; use another engine");
   if (oi.klass != OpClass::Typed) return;
   Instr in;
   in.op = Op(il[off]);

@@ -1196,6 +1196,7 @@ class Reader {
     if (u == "ST" || u == "STN") return store_op(op, u == "STN");
     if (u == "S" || u == "R") return set_reset(op, u == "S");
     if (u == "JMP" || u == "JMPC" || u == "JMPCN") return jump(op, u);
+    if (u == "LOOP" && from_st_) return loop(op);
     if (u == "RET" || u == "RETC" || u == "RETCN") return ret(op, u);
     if (u == "CAL" || u == "CALC" || u == "CALCN") return call(op, u);
     if (binary_op(u)) {
@@ -1595,6 +1596,20 @@ class Reader {
     emit(u == "JMPC" ? Op::LOAD : Op::LOADN, cr_bit());
     jump_to(target);
     emit(Op::MPP);
+  }
+
+  // LOOP label (ST's loops only, frontend/st): the back edge to a label
+  // already placed (docs/il.md "Loops"), taken always
+  void loop(const Tok& op) {
+    const Tok& k = next();
+    std::string target = scope_->prefix + k.text;
+    if (!labels_.count(target)) fail(op, "LOOP to a label not placed before it");
+    ensure_rung();
+    Operand o{OpdKind::Label};
+    o.label = target;
+    emit(Op::LOOP, o);
+    rung_ = nullptr;
+    cr_ = Cr{};
   }
 
   void ret(const Tok& op, const std::string& u) {

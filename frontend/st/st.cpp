@@ -28,7 +28,7 @@ namespace {
 
 constexpr int kMaxNesting = 200;          // expressions and statements: hostile input cannot exhaust the stack
 constexpr int kMaxParenDepth = 12;        // the typed reader takes 16
-constexpr int64_t kMaxUnrolled = 10000;   // iterations of one FOR loop
+constexpr int64_t kMaxUnrolled = 16;      // iterations of a FOR loop written out instead of looped
 
 // ---------------------------------------------------------------- syntax tree
 
@@ -473,11 +473,8 @@ class Writer {
       case Stmt::If: return if_stmt(s);
       case Stmt::Case: return case_stmt(s);
       case Stmt::For: return for_stmt(s);
-      case Stmt::While:
-      case Stmt::Repeat:
-        fail(s.tok, std::string("a ") + (s.kind == Stmt::While ? "WHILE" : "REPEAT") +
-                        " loop is not compiled: ldc compiles FOR loops with constant bounds (unrolled) and has no "
-                        "loop whose end it cannot prove yet (docs/st.md, \"Loops\")");
+      case Stmt::While: return while_stmt(s);
+      case Stmt::Repeat: return repeat_stmt(s);
       case Stmt::Exit:
       case Stmt::Continue:
         if (loops_.empty()) fail(s.tok, s.tok.text + " outside a loop");
@@ -578,29 +575,93 @@ class Writer {
     return *cond;
   }
 
-  // FOR with constant bounds, unrolled: i := v; body; ... then i := the value
-  // after the last step, as MatIEC's C for loop leaves it; EXIT skips that.
+  // The loops (docs/st.md, "Loops"): a head label, the body, the LOOP back to
+  // the head (docs/il.md: each back edge counts against the scan's budget).
+  // EXIT jumps to the end, CONTINUE to the LOOP (a JMP goes forward only).
+  void loop_body(const Stmt& s, const Loop& l) {
+    loops_.push_back(l);
+    body(s.blocks[0]);
+    loops_.pop_back();
+    label(s.tok, l.next);
+  }
+  void back(const Tok& at, const std::string& head) { line(at, "LOOP", {word(at, head)}); }
+  void condition(const Expr& c) {
+    temp_.clear();
+    temps_ = 0;
+    prepare(c);
+    value(c);
+  }
+  // WHILE c DO body END_WHILE: head: c; JMPCN end; body; next: LOOP head; end:
+  void while_stmt(const Stmt& s) {
+    std::string head = new_label();
+    Loop l{new_label(), new_label()};
+    label(s.tok, head);
+    condition(s.conds[0]);
+    line(s.conds[0].tok, "JMPCN", {word(s.tok, l.exit)});
+    loop_body(s, l);
+    back(s.tok, head);
+    label(s.tok, l.exit);
+  }
+  // REPEAT body UNTIL c END_REPEAT: head: body; next: c; JMPC end; LOOP head; end:
+  void repeat_stmt(const Stmt& s) {
+    std::string head = new_label();
+    Loop l{new_label(), new_label()};
+    label(s.tok, head);
+    loop_body(s, l);
+    condition(s.conds[0]);
+    line(s.conds[0].tok, "JMPC", {word(s.tok, l.exit)});
+    back(s.tok, head);
+    label(s.tok, l.exit);
+  }
+  static Expr literal(const Tok& at, int64_t v) {
+    Expr e;
+    e.kind = Expr::Lit;
+    e.tok = word(at, std::to_string(v));
+    return e;
+  }
+  // FOR i := a TO b BY c as MatIEC's C has it: for (i = a; c > 0 ? i <= b :
+  // i >= b; i += c), b and c evaluated at every test.  A loop of constant
+  // bounds and at most kMaxUnrolled iterations whose body does not write i is
+  // unrolled instead.
   void for_stmt(const Stmt& s) {
     auto from = const_int(s.from), to = const_int(s.to), by = s.has_by ? const_int(s.by) : std::optional<int64_t>(1);
-    const Tok& bad = !from ? s.from.tok : !to ? s.to.tok : s.by.tok;
-    if (!from || !to || !by)
-      fail(bad, "a FOR bound that is not a constant: ldc compiles FOR loops with constant bounds (unrolled) and has no "
-                "loop whose end it cannot prove yet (docs/st.md, \"Loops\")");
-    if (*by == 0) fail(s.by.tok, "FOR ... BY 0 never ends");
-    if (writes(s.blocks[0], s.target.tok.text))
-      fail(s.target.tok, "the FOR loop's body writes its control variable '" + s.target.tok.text + "' (ldc unrolls the loop; docs/st.md)");
-    int64_t n = *by > 0 ? (*to >= *from ? (*to - *from) / *by + 1 : 0) : (*to <= *from ? (*from - *to) / -*by + 1 : 0);
-    if (n > kMaxUnrolled) fail(s.tok, "a FOR loop of " + std::to_string(n) + " iterations: ldc unrolls FOR loops of up to " + std::to_string(kMaxUnrolled));
+    if (by && *by == 0) fail(s.by.tok, "FOR ... BY 0 never ends");
+    if (from && to && by) {
+      int64_t n = *by > 0 ? (*to >= *from ? (*to - *from) / *by + 1 : 0) : (*to <= *from ? (*from - *to) / -*by + 1 : 0);
+      if (n <= kMaxUnrolled && !writes(s.blocks[0], s.target.tok.text)) return unrolled_for(s, *from, *by, n);
+    }
+    temp_.clear();
+    temps_ = 0;
+    prepare(s.from);
+    value(s.from);
+    line(s.target.tok, "ST", operand(s.target));
+    std::string head = new_label();
+    Loop l{new_label(), new_label()};
+    label(s.tok, head);
+    Expr step = s.has_by ? s.by : literal(s.tok, 1);
+    Expr up = binary(s.to.tok, "LE", s.target, s.to), down = binary(s.to.tok, "GE", s.target, s.to);
+    Expr test = by ? (*by > 0 ? up : down)
+                   : binary(s.tok, "OR", binary(s.tok, "AND", binary(s.by.tok, "GT", step, literal(s.tok, 0)), up),
+                            binary(s.tok, "AND", binary(s.by.tok, "LE", step, literal(s.tok, 0)), down));
+    condition(test);
+    line(s.tok, "JMPCN", {word(s.tok, l.exit)});
+    loop_body(s, l);
+    Expr next = binary(s.tok, "ADD", s.target, step);
+    condition(next);
+    line(s.target.tok, "ST", operand(s.target));
+    back(s.tok, head);
+    label(s.tok, l.exit);
+  }
+  // i := v; body; ... then i := the value after the last step, as MatIEC's C
+  // for loop leaves it; EXIT skips that.
+  void unrolled_for(const Stmt& s, int64_t from, int64_t by, int64_t n) {
     Loop l{new_label(), ""};
     for (int64_t k = 0; k < n; k++) {
       l.next = new_label();
-      loops_.push_back(l);
-      store_const(s.target, *from + k * *by);
-      body(s.blocks[0]);
-      loops_.pop_back();
-      label(s.tok, l.next);
+      store_const(s.target, from + k * by);
+      loop_body(s, l);
     }
-    store_const(s.target, *from + n * *by);
+    store_const(s.target, from + n * by);
     label(s.tok, l.exit);
   }
   void store_const(const Expr& var, int64_t v) {

@@ -571,6 +571,47 @@ TEST(Hostile, HarmlessTwinsAreAccepted) {
   EXPECT_EQ(refusal(image_around(scan_function({"mov r12, rax", "setne r13b", "xor r13d, r13d"}, at, true))), "");
 }
 
+// Loops (docs/image-format.md, "Loops"): the one backward branch is a loop's
+// counted back edge, `add dword [rbx+0x18], 1; cmp dword [rbx+0x18], B; jae
+// <forward>; jmp <back>` with B <= the budget (100,000 = 0x186a0), and nothing
+// but such adds writes the counter inside the loop.  Each attack is the
+// accepted loop with one thing changed; the validator names the piece.
+TEST(Hostile, LoopsTakeOnlyCountedBackEdges) {
+  const std::string reset = "mov dword ptr [rbx+0x18], 0x0", add = "add dword ptr [rbx+0x18], 0x1",
+                    cmp = "cmp dword ptr [rbx+0x18], 0x186a0";
+  std::vector<uint32_t> at;
+  EXPECT_EQ(refusal(image_around(scan_function({reset, "nop", add, cmp, "jae @6", "jmp @1", "nop"}, at))), "");
+  EXPECT_EQ(refusal(image_around(scan_function({reset, "nop", add, "cmp dword ptr [rbx+0x18], 0x3", "jae @6", "jmp @1", "nop"}, at))), "")
+      << "a smaller budget";
+  const std::vector<Case> attacks = {
+      {"no add before the compare", {reset, "nop", cmp, "jae @5", "jmp @1", "nop"}, 4, "backward branch"},
+      {"the add of 2 bytes further", {reset, "nop", "add dword ptr [rbx+0x1a], 0x1", cmp, "jae @6", "jmp @1", "nop"}, 5, "backward branch"},
+      {"a budget above 100,000", {reset, "nop", add, "cmp dword ptr [rbx+0x18], 0x186a1", "jae @6", "jmp @1", "nop"}, 5, "backward branch"},
+      {"jb instead of jae", {reset, "nop", add, cmp, "jb @6", "jmp @1", "nop"}, 5, "backward branch"},
+      {"a conditional back edge", {reset, "nop", add, cmp, "jae @6", "jne @1", "nop"}, 5, "backward branch"},
+      {"the reset inside the loop", {"nop", reset, add, cmp, "jae @6", "jmp @0", "nop"}, 5, "a write of the loop counter"},
+      {"a sub inside the loop", {reset, "nop", "sub dword ptr [rbx+0x18], 0x5", add, cmp, "jae @7", "jmp @1", "nop"}, 6,
+       "a write of the loop counter"},
+      {"a byte of the counter cleared", {reset, "nop", "mov byte ptr [rbx+0x1b], 0x0", add, cmp, "jae @7", "jmp @1", "nop"}, 6,
+       "a write of the loop counter"},
+      {"an indexed write that reaches the counter",
+       {reset, "nop", "cmp r11, 0x10", "ja @9", "mov dword ptr [rbx+r11*4+0x0], eax", add, cmp, "jae @9", "jmp @1", "nop"}, 8,
+       "a write of the loop counter"},
+  };
+  for (const Case& c : attacks) {
+    SCOPED_TRACE(c.klass);
+    std::string why = refusal(image_around(scan_function(c.body, at)));
+    EXPECT_NE(why.find(": at code offset " + hex(at[c.hostile]) + ": "), std::string::npos) << why;
+    EXPECT_NE(why.find(c.reason), std::string::npos) << why;
+  }
+  // a branch onto the compare skips the add: refused as a landing inside the guard
+  std::string why = refusal(image_around(scan_function({reset, "jmp @3", add, cmp, "jae @6", "jmp @2", "nop"}, at)));
+  EXPECT_NE(why.find("guard"), std::string::npos) << why;
+  // the -O2 frame has no loops (a program with one is compiled at -O1)
+  why = refusal(image_around(scan_function({"nop", add, cmp, "jae @5", "jmp @0", "nop"}, at, true)));
+  EXPECT_NE(why.find("backward branch"), std::string::npos) << why;
+}
+
 // The -O2 frame's base registers (docs/x86.md, "Compact addressing"): the
 // prologue sets rdi, r15 and r14 to rbx+K, and so may `lea reg, [rbx+K]`
 // anywhere in the body, any K in [128, size-135]; the body addresses
