@@ -147,10 +147,11 @@ class CGen {
   // budget's last one writes the loop fault and ends the scan
   std::string loop(const std::string& label) const {
     if (!offsets_) throw std::logic_error("C backend: LOOP without the IL offsets of its fault record");
-    return "if (" + top() + ") { uint32_t n_ = (uint32_t)rd_i(m, " + u(kSysLoops) + ") + 1u; if (n_ >= " + u(kLoopBudget) +
+    return "if (" + top() + ") { uint32_t n_ = (uint32_t)rd_i(m, " + u(kSysLoops) + ") + 1u; wr_i(m, " + u(kSysLoops) +
+           ", (int32_t)n_); if (n_ >= " + u(kLoopBudget) +
            ") { uint32_t k_ = " + u(kFaultLoop) + ", a_ = " + u((*offsets_)[n_]) + "; uint64_t v_ = " + u(kLoopBudget) +
            "; memcpy(m + " + u(kSysFault) + ", &k_, 4); memcpy(m + " + u(kSysFaultAt) + ", &a_, 4); memcpy(m + " +
-           u(kSysFaultValue) + ", &v_, 8); return; } wr_i(m, " + u(kSysLoops) + ", (int32_t)n_); goto lbl_" + label + "; }";
+           u(kSysFaultValue) + ", &v_, 8); return; } goto lbl_" + label + "; }";
   }
   std::string s(int d) const { return "s" + std::to_string(((d % 32) + 32) % 32); }
   std::string top() const { return s(depth_ - 1); }

@@ -337,8 +337,8 @@ void exec_LOOP(Ctx& c) {
   if (!top(c)) return;
   uint32_t n;
   std::memcpy(&n, c.mem + kSysLoops, 4);
-  if (++n < kLoopBudget) {
-    std::memcpy(c.mem + kSysLoops, &n, 4);
+  std::memcpy(c.mem + kSysLoops, &++n, 4);  // counted first: at the fault it holds the budget
+  if (n < kLoopBudget) {
     c.pc = target;
     return;
   }

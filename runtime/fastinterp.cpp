@@ -981,8 +981,8 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
   HANDLER(LOOP) {  // docs/il.md "Loops": a back edge counted, the budget's last one a fault
     if (st & 1u) {
       uint32_t n = ld_u(m, kSysLoops) + 1;
+      st_u(m, kSysLoops, n);  // counted first: at the fault it holds the budget
       if (n >= kLoopBudget) { loop_fault(m, il_offset_[size_t(ip - base)]); return; }
-      st_u(m, kSysLoops, n);
       ip = base + ip->a;
       DISPATCH();
     }

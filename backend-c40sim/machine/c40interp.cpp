@@ -37,10 +37,10 @@ const InterpProgram& interp_program() {
     p.words = p.text.words;
     p.entry = p.text.labels.at("interp");
     // the dispatch table, checked against ops.def: one routine per untyped
-    // mnemonic (word_il refuses the typed ones, class Typed, at load)
+    // mnemonic (word_il refuses the typed ones, class Typed, and LOOP at load)
     uint32_t table = p.text.labels.at("dispatch");
     for (int op = 0; op < kOpCount; op++) {
-      if (op_info(Op(op)).klass == OpClass::Typed) {
+      if (op_info(Op(op)).klass == OpClass::Typed || Op(op) == Op::LOOP) {
         if (p.text.labels.count(std::string("op_") + op_info(Op(op)).name))
           throw std::logic_error(std::string("interp.c40s: a routine for the typed ") + op_info(Op(op)).name +
                                  " that word_il refuses");

@@ -119,6 +119,7 @@ class Reader {
 
   Program run() {
     try {
+      find_en_calls();
       scan_top();
       declare_all();
       lay_out();
@@ -178,6 +179,17 @@ class Reader {
   void end_line() {
     if (peek().kind != Tok::Eol && peek().kind != Tok::End) fail(peek(), "unexpected '" + peek().text + "' at the end of the line");
     if (peek().kind == Tok::Eol) next();
+  }
+
+  // The instances some CAL gives an EN (CAL x(EN := ...)): their calls check
+  // it (std_call), by name, in whichever POU.
+  std::set<std::string> en_called_;
+  void find_en_calls() {
+    for (size_t i = 0; i + 2 < t_.size(); i++) {
+      if (!(kw(t_[i], "CAL") || kw(t_[i], "CALC") || kw(t_[i], "CALCN")) || t_[i + 1].kind != Tok::Word || !punct(t_[i + 2], "(")) continue;
+      for (size_t j = i + 3; j + 1 < t_.size() && !punct(t_[j], ")") && t_[j].kind != Tok::End; j++)
+        if (kw(t_[j], "EN") && punct(t_[j + 1], ":=")) en_called_.insert(upper(t_[i + 1].text));
+    }
   }
 
   // ---------------------------------------------------------------- the file's parts
@@ -347,6 +359,10 @@ class Reader {
     t.kind = TypeKind::Struct;
     t.name = u;
     for (const auto& [v, ty] : it->second.vars) t.members.push_back({v, m_.elem(ty), {}, {}});
+    Init on;  // MatIEC's EN and ENO of every block, both TRUE at first (std_call)
+    on.kind = Init::Value, on.value.lit = {Ty::BOOL, 1};
+    t.members.push_back({"EN", m_.elem(Ty::BOOL), {}, on});
+    t.members.push_back({"ENO", m_.elem(Ty::BOOL), {}, on});
     TypeId id = m_.add_type(t, {1, 1});
     bistables_[id] = u;
     if (u == "RTC") rtc_type_ = id;
@@ -1128,8 +1144,10 @@ class Reader {
     std::vector<Init1> stores;
     for (const Var& v : m_.pous[size_t(program_)].vars) {
       const model::Ref& r = globals_.at(upper(v.name));
-      if (v.at && v.init.kind != Init::None && (r.bits == Area::X || r.cells == Area::WX))
+      const bool input = v.at && (r.bits == Area::X || r.cells == Area::WX);
+      if (input && v.init.kind != Init::None && !from_st_)
         fail(v.init.loc, "an input (" + v.name + ") has no initial value: the I/O writes it");
+      if (input) continue;  // ST as OpenPLC Editor writes it gives inputs one (:= 0): the I/O overwrites it before the first scan
       std::vector<Model::Store> one;
       m_.initial_stores(v.type, r.at, v.init.kind == Init::None ? nullptr : &v.init, one);
       for (auto& st : one) stores.push_back({st.ty, operand_at(st.ty, st.at, r.bits, r.cells), st.bits});
@@ -1311,6 +1329,7 @@ class Reader {
   // LD / LDN
   void load_op(const Tok& op, bool neg) {
     if (!parens_.empty() && cr_.defined) fail(op, "LD inside parentheses: write it after the opening operator (AND( x)");
+    if (from_st_ && peek().text == "__ZERO") return zero_temp(op);
     Tok k = peek();
     Val v = operand("ld");
     load_val(op, neg, v, k);
@@ -1404,6 +1423,24 @@ class Reader {
     typed(Op::TMOVE, t, cr_.o, d);
     temps_[scope_->prefix + k.text] = {cr_.type, d};
     cr_.o = d;
+  }
+  // LD __ZERO / ST x (ST's EN, frontend/st): x, a temporary already typed
+  // by the value it holds otherwise or a variable, set to its type's initial
+  // value
+  void zero_temp(const Tok& op) {
+    next();
+    end_line();
+    skip_eols();
+    const Tok& st = next();
+    if (!kw(st, "ST")) fail(op, "__ZERO outside its ST form");
+    Tok k = peek();
+    Val v = operand("zero");
+    if (v.kind != Val::Ref_ || !m_.type(v.ref.type).scalar()) fail(k, "EN of a call whose value is not elementary");
+    Ty t = ty_of(v.ref.type);
+    if (t == Ty::STRING) fail(op, "a STRING function called with EN: not compiled (docs/st.md)");
+    ensure_rung();
+    store(v.ref, Operand::typed_const(0), k);
+    cr_ = Cr{};
   }
   Val temp_val(const Tok& k) const {
     auto it = temps_.find(scope_->prefix + k.text);
@@ -1659,7 +1696,7 @@ class Reader {
       next();
       args(in, out);
     }
-    if (bistable) std_call(bistables_.at(iv.ref.type), iv.ref, in, out);
+    if (bistable) std_call(bistables_.at(iv.ref.type), iv.ref, in, out, en_called_.count(upper(k.text)) > 0);
     else expand(pou, iv.ref, in, out, op);
     if (!skip.empty()) label_here(skip);
     cr_ = Cr{};  // the CR is undefined after a call
@@ -1814,17 +1851,34 @@ class Reader {
   //   SEMA    Q_INTERNAL := CLAIM OR (Q_INTERNAL AND NOT RELEASE); BUSY := Q_INTERNAL
   //   RTC, CTU* CTD* CTUD*: rtc(), counter()
   void std_call(const std::string& kind, const model::Ref& inst, const std::vector<std::pair<Tok, Val>>& in,
-                const std::vector<std::pair<Tok, size_t>>& out) {
+                const std::vector<std::pair<Tok, size_t>>& out, bool en_checked) {
     ensure_rung();
     const StdFb& fb = std_fbs().at(kind);
     const size_t ninputs = fb.inputs;
     const Type& t = m_.type(inst.type);
     auto mem = [&](const char* n) { return operand_of(m_, m_.select_member(inst, n, here_)); };
+    // EN and ENO, members of every block as MatIEC has them (TRUE at first):
+    // with EN FALSE the inputs are set, ENO goes FALSE and the body does not
+    // run.  The check is made at the calls of an instance that some call
+    // gives an EN (`en_checked`); elsewhere EN stays TRUE and ENO with it.
     for (const auto& [n, v] : in) {
+      if (upper(n.text) != "EN") continue;
+      store(m_.select_member(inst, "EN", loc(n)), value_as(v, m_.elem(Ty::BOOL), n, "arg", "EN"), n);
+    }
+    for (const auto& [n, v] : in) {
+      if (upper(n.text) == "EN") continue;
       const Member* mb = m_.member(inst.type, n.text);
       if (!mb || size_t(mb - t.members.data()) >= ninputs)
         fail(n, kind + " has no input '" + n.text + "' (" + input_names(t, ninputs) + ")");
       store(m_.select_member(inst, n.text, loc(n)), value_as(v, mb->type, n, "arg", "the input"), n);
+    }
+    std::string skip;
+    if (en_checked) {
+      skip = "_ldc_en" + std::to_string(copies_) + "_" + std::to_string(++skips_);
+      typed(Op::TMOVE, Ty::BOOL, mem("EN"), mem("ENO"));
+      emit(Op::LOADN, mem("EN"));
+      jump_to(skip);
+      emit(Op::MPP);
     }
     Operand h = scratch("bist", Ty::BOOL), g = scratch("bist2", Ty::BOOL);
     if (kind == "R_TRIG") {
@@ -1855,10 +1909,12 @@ class Reader {
     } else {
       timer(kind, inst, mem);
     }
+    if (en_checked) label_here(skip);
     for (const auto& [n, at] : out) {
       const Member* mb = m_.member(inst.type, n.text);
       size_t i = mb ? size_t(mb - t.members.data()) : 0;
-      if (!mb || i < ninputs || i >= ninputs + fb.outputs) fail(n, kind + " has no output '" + n.text + "'");
+      if (!mb || ((i < ninputs || i >= ninputs + fb.outputs) && upper(n.text) != "ENO"))
+        fail(n, kind + " has no output '" + n.text + "'");
       TypeId mt = mb->type;
       size_t save = pos_;
       pos_ = at;

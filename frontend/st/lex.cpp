@@ -77,7 +77,21 @@ struct Lexer {
              p == "LDATE" || p == "LDT" || p == "LTOD";
     };
     while (i < s.size() && ((word_char(s[i]) && !(s[i] == '.' && at(i + 1) == '.')) || sign_inside() || date_inside())) i++;
-    out.push_back({Tok::Word, std::string(s.substr(st, i - st)), line, col(st)});
+    std::string text(s.substr(st, i - st));
+    // "T# 30000ms": blanks after a literal's '#', as OpenPLC Editor writes a
+    // duration, are dropped (MatIEC reads them so)
+    if (text.back() == '#' && text.size() > 1 && (s[i] == ' ' || s[i] == '\t')) {
+      size_t j = i;
+      while (j < s.size() && (s[j] == ' ' || s[j] == '\t')) j++;
+      if (j < s.size() && (std::isalnum((unsigned char)s[j]) || s[j] == '-')) {
+        i = j;
+        size_t rest = i;
+        if (s[i] == '-') i++;
+        while (i < s.size() && ((word_char(s[i]) && !(s[i] == '.' && at(i + 1) == '.')) || sign_inside() || date_inside())) i++;
+        text += std::string(s.substr(rest, i - rest));
+      }
+    }
+    out.push_back({Tok::Word, text, line, col(st)});
   }
   void punct(size_t n) {
     out.push_back({Tok::Punct, std::string(s.substr(i, n)), line, col(i)});

@@ -68,10 +68,13 @@ class Parser {
   size_t pos() const { return pos_; }
 
   // statement_list = { statement } up to one of the words `ends`
-  std::vector<Stmt> statement_list(std::initializer_list<const char*> ends) {
+  // `to_eof`: the end of the file ends the list too (a POU's body, as CODESYS
+  // exports it without its END_ line)
+  std::vector<Stmt> statement_list(std::initializer_list<const char*> ends, bool to_eof = false) {
     std::vector<Stmt> out;
     for (;;) {
       const Tok& k = peek();
+      if (k.kind == Tok::End && to_eof) return out;
       if (k.kind == Tok::End) fail(k, std::string("expected ") + *ends.begin() + " at the end of the file");
       for (const char* e : ends)
         if (kw(k, e)) return out;
@@ -114,6 +117,11 @@ class Parser {
   void semicolon(const Tok& stmt) {
     if (!punct(peek(), ";")) fail(peek(), "expected ';' after the statement that starts at " + std::to_string(stmt.line) + ":" + std::to_string(stmt.col) + found(peek()));
     next();
+  }
+  // after END_IF, END_CASE, END_FOR, END_WHILE, END_REPEAT the ';' may be
+  // left out, as CODESYS and RuSTy read it (nothing else can follow there)
+  void end_semicolon() {
+    if (punct(peek(), ";")) next();
   }
   static bool is_name(const Tok& k) {
     if (k.kind != Tok::Word || k.text.empty()) return false;
@@ -178,7 +186,7 @@ class Parser {
       s.has_else = true;
     }
     expect_kw("END_IF");
-    semicolon(s.tok);
+    end_semicolon();
     return s;
   }
 
@@ -211,7 +219,7 @@ class Parser {
       s.has_else = true;
     }
     expect_kw("END_CASE");
-    semicolon(s.tok);
+    end_semicolon();
     return s;
   }
   // the statements of one CASE branch: up to the next label (an expression then ':' or '..' or ',')
@@ -253,7 +261,7 @@ class Parser {
     expect_kw("DO");
     s.blocks.push_back(statement_list({"END_FOR"}));
     next();
-    semicolon(s.tok);
+    end_semicolon();
     return s;
   }
   // while = WHILE expr DO stmts END_WHILE ";"    repeat = REPEAT stmts UNTIL expr END_REPEAT ";"
@@ -272,7 +280,7 @@ class Parser {
       s.conds.push_back(expression());
       expect_kw("END_REPEAT");
     }
-    semicolon(s.tok);
+    end_semicolon();
     return s;
   }
 
@@ -428,7 +436,7 @@ bool comparison(const std::string& u) {
 
 class Writer {
  public:
-  explicit Writer(std::vector<Tok>& out) : out_(out) {}
+  Writer(std::vector<Tok>& out, const std::set<std::string>& functions) : out_(out), functions_(functions) {}
 
   void body(const std::vector<Stmt>& stmts) {
     for (const Stmt& s : stmts) statement(s);
@@ -436,6 +444,7 @@ class Writer {
 
  private:
   std::vector<Tok>& out_;
+  const std::set<std::string>& functions_;  // the file's FUNCTIONs (upper-case); any other call is standard
   int labels_ = 0, selectors_ = 0, temps_ = 0;
   std::map<const Expr*, std::string> temp_;  // hoisted values of the current statement
   struct Loop { std::string exit, next; };
@@ -484,6 +493,7 @@ class Writer {
   }
 
   void assign(const Stmt& s) {
+    if (s.value.kind == Expr::Call && std_en_eno(s.value)) return en_call(s.value, &s.target);
     prepare_var(s.target);
     prepare(s.value);
     value(s.value);
@@ -806,6 +816,7 @@ class Writer {
         return prepare(r);
       }
       case Expr::Call: {
+        if (std_en_eno(e)) return en_call(e);
         std::vector<const Expr*> in = inputs(e);
         bool formal = formal_user_call(e);
         for (size_t i = 0; i < in.size(); i++) {
@@ -825,12 +836,61 @@ class Writer {
     }
     ~Nest() { d--; }
   };
+  // A standard function called with EN or ENO (as Beremiz writes a block
+  // whose EN is wired): MatIEC's generated C returns the type's initial value
+  // and sets ENO FALSE when EN is FALSE, else computes and sets ENO TRUE.
+  // The value goes to a temporary, computed only with EN:
+  //   LD en; JMPCN skip; <f(inputs)>; ST __Tr; JMP end; skip: LD __ZERO; ST __Tr; end: LD en; ST eno
+  bool std_en_eno(const Expr& c) const {
+    if (formal_user_call(c) || c.names.empty() || c.names[0].kind == Tok::End) return false;
+    for (const Tok& n : c.names)
+      if (upper(n.text) == "EN" || upper(n.text) == "ENO") return true;
+    return false;
+  }
+  // `to`: the assignment's target, written directly (so that a literal
+  // input, MOVE(EN := c, IN := 1), takes the target's type)
+  void en_call(const Expr& c, const Expr* to = nullptr) {
+    Expr plain = c;
+    plain.kids.clear(), plain.names.clear(), plain.outs.clear();
+    const Expr *en = nullptr, *eno = nullptr;
+    for (size_t i = 0; i < c.kids.size(); i++) {
+      std::string u = upper(c.names[i].text);
+      if (u == "EN" && !c.outs[i]) en = &c.kids[i];
+      else if (u == "ENO" && c.outs[i]) eno = &c.kids[i];
+      else plain.kids.push_back(c.kids[i]), plain.names.push_back(c.names[i]), plain.outs.push_back(c.outs[i]);
+    }
+    std::string end = new_label(), skip = new_label(), r = "__T" + std::to_string(++temps_);
+    if (to) prepare_var(*to);
+    std::vector<Tok> dest = to ? operand(*to) : std::vector<Tok>{word(c.tok, r)};
+    if (en) hoist_unless_simple(*en);
+    std::vector<Tok> en_opd = en ? operand(*en) : std::vector<Tok>{word(c.tok, "TRUE")};
+    if (en) {
+      line(c.tok, "LD", en_opd);
+      line(c.tok, "JMPCN", {word(c.tok, skip)});
+    }
+    prepare(plain);
+    value(plain);
+    line(c.tok, "ST", dest);
+    if (en) {
+      line(c.tok, "JMP", {word(c.tok, end)});
+      label(c.tok, skip);
+      line(c.tok, "LD", {word(c.tok, "__ZERO")});
+      line(c.tok, "ST", dest);
+      label(c.tok, end);
+    }
+    if (eno) {
+      prepare_var(*eno);
+      line(c.tok, "LD", en_opd);
+      line(c.tok, "ST", operand(*eno));
+    }
+    if (!to) temp_[&c] = r;
+  }
+
   // A call of a function that is not standard, with formal arguments: passed
   // to the typed reader as F(A := x, B := y), which binds them by name.
   bool formal_user_call(const Expr& c) const {
-    std::string u = upper(c.tok.text);
     bool named = !c.names.empty() && c.names[0].kind != Tok::End;
-    return (named || c.kids.empty()) && !std_inputs(u) && !extensible(u) && !comparison(u) && !one_input_std(u);
+    return (named || c.kids.empty()) && functions_.count(upper(c.tok.text));
   }
   static bool one_input_std(const std::string& u) {
     static const std::set<std::string> k = {"ABS", "NEG", "SQRT", "LN", "LOG", "EXP", "SIN", "COS", "TAN", "ASIN", "ACOS",
@@ -1067,10 +1127,13 @@ class File {
     std::swap(out_, globals_);
     size_t from = out_.size();
     var_block();
-    for (size_t i = from; i + 1 < out_.size(); i++)  // the names declared: a word before ':' or ','
-      if (out_[i].kind == Tok::Word && (i == from + 1 || out_[i - 1].kind == Tok::Eol || (out_[i - 1].kind == Tok::Punct && out_[i - 1].text == ",")) &&
-          out_[i + 1].kind == Tok::Punct && (out_[i + 1].text == ":" || out_[i + 1].text == "," || upper(out_[i + 1].text) == "AT"))
-        global_names_[upper(out_[i].text)] = out_[i];
+    // the names declared: a word after a line end or a ',', before ':', ',' or AT
+    for (size_t i = from + 1; i + 1 < out_.size(); i++) {
+      const Tok &before = out_[i - 1], &after = out_[i + 1];
+      bool starts = before.kind == Tok::Eol || (before.kind == Tok::Punct && before.text == ",");
+      bool ends = (after.kind == Tok::Punct && (after.text == ":" || after.text == ",")) || kw(after, "AT");
+      if (out_[i].kind == Tok::Word && starts && ends) global_names_[upper(out_[i].text)] = out_[i];
+    }
     std::swap(out_, globals_);
   }
 
@@ -1087,10 +1150,17 @@ class File {
 
   // Declaration tokens up to `end` (a keyword), copied: a line end after each
   // ';' and a sign joined to the number after it (the IL reader reads -5 as one word).
-  void copy_until(const char* end, const Tok& opener) {
+  // `types`: a TYPE block, whose END_STRUCT may lack its ';' (CODESYS)
+  void copy_until(const char* end, const Tok& opener, bool types = false) {
     while (!kw(peek(), end)) {
       const Tok& k = next();
       if (k.kind == Tok::End) fail(opener, "'" + opener.text + "' without " + end);
+      if (types && kw(k, "END_STRUCT") && !(peek().kind == Tok::Punct && peek().text == ";")) {
+        out_.push_back(k);
+        out_.push_back({Tok::Punct, ";", k.line, k.col});
+        eol();
+        continue;
+      }
       if (k.kind == Tok::Punct && (k.text == "-" || k.text == "+") && peek().kind == Tok::Word && signable(peek().text)) {
         Tok n = next();
         if (k.text == "-") n.text = signed_text(n.text);
@@ -1114,7 +1184,7 @@ class File {
     const Tok& k = next();
     out_.push_back(k);
     eol();
-    copy_until("END_TYPE", k);
+    copy_until("END_TYPE", k, true);
     out_.push_back(next());
     eol();
   }
@@ -1140,10 +1210,11 @@ class File {
     }
     std::string end = "END_" + kind;
     Parser p(t_, pos_, functions_);
-    std::vector<Stmt> body = p.statement_list({end.c_str()});
+    std::vector<Stmt> body = p.statement_list({end.c_str()}, true);
     pos_ = p.pos();
-    Writer(out_).body(body);
-    out_.push_back(next());  // END_...
+    Writer(out_, functions_).body(body);
+    if (peek().kind == Tok::End) out_.push_back({Tok::Word, end, peek().line, peek().col});  // END_... left out at the end
+    else out_.push_back(next());
     eol();
   }
   // VAR_EXTERNAL of the program a CONFIGURATION runs: its globals are the

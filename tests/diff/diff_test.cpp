@@ -153,6 +153,7 @@ TEST(Generator, DrawsEveryMnemonic) {
   }
   for (int i = 0; i < kOpCount; i++) {
     if (op_info(Op(i)).klass == OpClass::Typed) continue;  // no grid spelling: typed_diff_test.cpp draws them
+    if (Op(i) == Op::LOOP) continue;  // no grid spelling: ST's loops (tests/frontend/st, StLoops in typed_diff_test.cpp)
     EXPECT_TRUE(seen.count(Op(i))) << op_info(Op(i)).name << " never drawn";
   }
 }

@@ -69,7 +69,7 @@ typed=no
 if grep -q '^    [A-Z]*\.[A-Z]' "$tmp/il"; then typed=yes; fi
 c40_refused() {  # c40_refused NAME: ran, or refused by name (then 0 and nothing to compare)
   [ "$typed" = yes ] || return 1
-  if grep -Eq 'error: .*(LINT|ULINT|LWORD|LREAL|TIME|LTIME|DATE|TOD|DT|[A-Z]+\.[A-Z]+)' "$tmp/$1.err"; then
+  if grep -Eq 'error: .*(LINT|ULINT|LWORD|LREAL|TIME|LTIME|DATE|TOD|DT|LOOP|[A-Z]+\.[A-Z]+)' "$tmp/$1.err"; then
     echo "note: $src: $1 refuses it by name: $(grep -m1 'error:' "$tmp/$1.err")" >&2
     return 0
   fi

@@ -213,7 +213,7 @@ TEST(C40Interp, DispatchTableFollowsOpsDef) {
   uint32_t table = ip.text.labels.at("dispatch");
   for (int op = 0; op < kOpCount; op++) {
     std::string name = std::string("op_") + op_info(Op(op)).name;
-    if (op_info(Op(op)).klass == OpClass::Typed) {  // refused when the word IL is built (c40typed_tests)
+    if (op_info(Op(op)).klass == OpClass::Typed || Op(op) == Op::LOOP) {  // refused when the word IL is built (c40typed_tests)
       EXPECT_EQ(ip.text.labels.count(name), 0u) << name;
       continue;
     }
