@@ -907,7 +907,6 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
 #define LDC_PLUS(x, y) ((x) + (y))
 #define LDC_MINUS(x, y) ((x) - (y))
 #define LDC_TIMES(x, y) ((x) * (y))
-#define LDC_OVER(x, y) ((x) / (y))
 #define LDC_K32(v) (v)
 #define LDC_K64(v) kp[v]
 #define LDC_KF32(v) bits_f(v)
@@ -919,16 +918,18 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
   LDC_TINT(S16, ld_u, LDC_K32, st_u, n_S16)
   LDC_TINT(W32, ld_u, LDC_K32, st_u, n_W32)
   LDC_TINT(W64, ld_u64, LDC_K64, st_u64, LDC_SAME)
-  LDC_TINT(F32, ld_f, LDC_KF32, st_f, LDC_SAME)
-  LDC_TARITH3(TDIV_F32, ld_f, LDC_KF32, st_f, LDC_SAME, LDC_OVER)
-  LDC_TINT(F64, ld_d, LDC_KF64, st_d, LDC_SAME)
-  LDC_TARITH3(TDIV_F64, ld_d, LDC_KF64, st_d, LDC_SAME, LDC_OVER)
+  // REAL and LREAL: a NaN result by typed::nan_rule (docs/il.md, "NaN results")
+#define LDC_TREAL(C, LD, K, ST)                                                                                  \
+  LDC_TARITH3(TADD_##C, LD, K, ST, LDC_SAME, typed::real_add) LDC_TARITH3(TSUB_##C, LD, K, ST, LDC_SAME, typed::real_sub) \
+  LDC_TARITH3(TMUL_##C, LD, K, ST, LDC_SAME, typed::real_mul) LDC_TARITH3(TDIV_##C, LD, K, ST, LDC_SAME, typed::real_div)
+  LDC_TREAL(F32, ld_f, LDC_KF32, st_f)
+  LDC_TREAL(F64, ld_d, LDC_KF64, st_d)
+#undef LDC_TREAL
 #undef LDC_TINT
 #undef LDC_TARITH3
 #undef LDC_PLUS
 #undef LDC_MINUS
 #undef LDC_TIMES
-#undef LDC_OVER
   // compares: a the first operand's word, b the second's (MM) or the constant (MK)
 #define LDC_TCMP_ONE(N, REL, LD, K)                                                                           \
   HANDLER(N##_MM) { st = (st << 1) | uint32_t(rel_holds(Rel::REL, LD(m, ip->a), LD(m, ip->b))); NEXT(); }     \
