@@ -20,16 +20,7 @@ namespace {
 
 const char kTypedPrelude[] = R"(/* typed instructions (ir/typed.h) */
 static inline double d_of(uint64_t u) { double d; memcpy(&d, &u, 8); return d; }
-/* a NaN result r of x op y (a function: y = x): the first NaN operand quieted, else the
-   default NaN (docs/il.md "NaN results", typed::nan_rule); the C compiler may swap x and y */
-static inline float ldc_nanf(float r, float x, float y) {
-  uint32_t u;
-  if (r == r) return r;
-  if (x == x) x = y;
-  if (x == x) u = 0xffc00000u; else { memcpy(&u, &x, 4); u |= 0x00400000u; }
-  memcpy(&r, &u, 4);
-  return r;
-}
+/* a NaN result r of x op y (a function: y = x), as ldc_nanf (the common prelude) in double */
 static inline double ldc_nand(double r, double x, double y) {
   uint64_t u;
   if (r == r) return r;

@@ -155,7 +155,7 @@ __attribute__((noinline)) void generic(uint8_t* m, const FastInterpreter::Ins& i
     case Op::ADD: case Op::SUB: case Op::MUL:
       if (real) {
         float x = get_f(m, ka, in.a), y = get_f(m, kb, in.b);
-        store_real(m, kd, in.c, op == Op::ADD ? x + y : op == Op::SUB ? x - y : x * y);
+        store_real(m, kd, in.c, op == Op::ADD ? typed::real_add(x, y) : op == Op::SUB ? typed::real_sub(x, y) : typed::real_mul(x, y));
       } else {
         int32_t x = get_i(m, ka, in.a), y = get_i(m, kb, in.b);
         store_int(m, kd, in.c, op == Op::ADD ? i_add(x, y) : op == Op::SUB ? i_sub(x, y) : i_mul(x, y));
@@ -165,7 +165,7 @@ __attribute__((noinline)) void generic(uint8_t* m, const FastInterpreter::Ins& i
       if (real) {
         float y = get_f(m, kb, in.b);
         if (y == 0.0f) { m[s0] = 1; return; }
-        store_real(m, kd, in.c, get_f(m, ka, in.a) / y);
+        store_real(m, kd, in.c, typed::real_div(get_f(m, ka, in.a), y));
       } else {
         int32_t y = get_i(m, kb, in.b);
         if (y == 0) { m[s0] = 1; return; }
@@ -793,11 +793,12 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
 #undef LDC_AND
 #undef LDC_OR
 #undef LDC_XOR
-  HANDLER(ADD_F) { if (st & 1u) st_f(m, ip->c, ld_f(m, ip->a) + ld_f(m, ip->b)); NEXT(); }
-  HANDLER(SUB_F) { if (st & 1u) st_f(m, ip->c, ld_f(m, ip->a) - ld_f(m, ip->b)); NEXT(); }
-  HANDLER(MUL_F) { if (st & 1u) st_f(m, ip->c, ld_f(m, ip->a) * ld_f(m, ip->b)); NEXT(); }
+  // REAL: a NaN result by typed::nan_rule (docs/il.md, "NaN results")
+  HANDLER(ADD_F) { if (st & 1u) st_f(m, ip->c, typed::real_add(ld_f(m, ip->a), ld_f(m, ip->b))); NEXT(); }
+  HANDLER(SUB_F) { if (st & 1u) st_f(m, ip->c, typed::real_sub(ld_f(m, ip->a), ld_f(m, ip->b))); NEXT(); }
+  HANDLER(MUL_F) { if (st & 1u) st_f(m, ip->c, typed::real_mul(ld_f(m, ip->a), ld_f(m, ip->b))); NEXT(); }
   HANDLER(DIV_F) {
-    if (st & 1u) { float y = ld_f(m, ip->b); if (y == 0.0f) m[s0] = 1; else st_f(m, ip->c, ld_f(m, ip->a) / y); }
+    if (st & 1u) { float y = ld_f(m, ip->b); if (y == 0.0f) m[s0] = 1; else st_f(m, ip->c, typed::real_div(ld_f(m, ip->a), y)); }
     NEXT();
   }
   HANDLER(WNOT_M) { if (st & 1u) st_i(m, ip->b, ~ld_i(m, ip->a)); NEXT(); }

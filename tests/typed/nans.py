@@ -178,6 +178,29 @@ def functions(Program, t, name):
     return c.p
 
 
+def untyped(Program):
+    """The untyped REAL instructions of F words (paper 003's ADD SUB MUL DIV)
+    follow the same rule; typed MOVEs carry the bits between D and F words."""
+    c = Cases(Program, "nan_untyped", "which NaN the untyped ADD SUB MUL DIV store in F words (REAL)")
+    p, R = c.p, PAT["REAL"]
+    qp, sn = p.inp("REAL", R["qp"]), p.inp("REAL", R["sn"])
+    p.rung("F2 = inf - inf: the default NaN 16#FFC00000; F3 = ABS F2 (fabsf): 16#7FC00000; F4, F5 = +qNaN, -sNaN "
+           "moved from D words (MOVE.REAL: the bits as they are)",
+           ["TRUE", "MOV 3.0e38 F0", "MUL F0 F0 F1", "SUB F1 F1 F2", "ABS F2 F3",
+            "MOVE.REAL %s F4" % qp, "MOVE.REAL %s F5" % sn])
+    cases = [("ADD", "F3", "F2", 0x7FC00000), ("ADD", "F2", "F3", R["default"]), ("SUB", "F3", "F2", 0x7FC00000),
+             ("MUL", "F2", "F3", R["default"]), ("DIV", "F3", "F2", 0x7FC00000), ("DIV", "F2", "F3", R["default"]),
+             ("ADD", "F4", "F5", R["qp"]), ("ADD", "F5", "F4", R["sn"] | R["quiet"]), ("SUB", "F0", "F5", R["sn"] | R["quiet"]),
+             ("MUL", "F5", "F1", R["sn"] | R["quiet"])]
+    for k, (op, a, b, r) in enumerate(cases):
+        f, d = "F%d" % (10 + k), p.out("REAL")
+        p.rung("%s %s %s = %s: the first NaN operand quieted, else the default NaN (docs/il.md)" % (op, a, b, show("REAL", r)),
+               ["TRUE", "%s %s %s %s" % (op, a, b, f), "MOVE.REAL %s %s" % (f, d)])
+        c.exact("REAL", d, r)
+    return p
+
+
 def programs(Program):
     return [arithmetic(Program, "REAL", "nan"), arithmetic(Program, "LREAL", "nan_64"), conversions(Program),
+            untyped(Program),
             functions(Program, "REAL", "nan_fn"), functions(Program, "LREAL", "nan_fn_64")]
