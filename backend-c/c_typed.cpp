@@ -20,6 +20,15 @@ namespace {
 
 const char kTypedPrelude[] = R"(/* typed instructions (ir/typed.h) */
 static inline double d_of(uint64_t u) { double d; memcpy(&d, &u, 8); return d; }
+/* a NaN result r of x op y (a function: y = x), as ldc_nanf (the common prelude) in double */
+static inline double ldc_nand(double r, double x, double y) {
+  uint64_t u;
+  if (r == r) return r;
+  if (x == x) x = y;
+  if (x == x) u = 0xfff8000000000000ull; else { memcpy(&u, &x, 8); u |= 0x0008000000000000ull; }
+  memcpy(&r, &u, 8);
+  return r;
+}
 /* a constant the C compiler must not fold into a libm call (its folding may round otherwise) */
 static inline double opq_d(double x) { volatile double v = x; return v; }
 /* NaN and values outside INT64 give INT64_MIN, as x86-64's cvttsd2si */
@@ -242,9 +251,10 @@ class Typed {
       case Op::TDIV: case Op::TMOD: return body(div_mod());
       case Op::TMIN: case Op::TMAX:
         return body("{ " + decl2() + " " + st(2, std::string("b_ ") + (op == Op::TMIN ? "<" : ">") + " a_ ? b_ : a_") + " }");
-      case Op::TEXPT:
-        if (t_ == Ty::REAL) return body(st(2, "(float)pow(" + dbl(0) + ", " + dbl(1) + ")"));
-        return body(st(2, "pow(" + dbl(0) + ", " + dbl(1) + ")"));
+      case Op::TEXPT: {  // pow in double, a NaN by the rule, then REAL's rounding
+        const std::string call = "{ double x_ = " + dbl(0) + ", y_ = " + dbl(1) + "; ";
+        return body(call + st(2, std::string(t_ == Ty::REAL ? "(float)" : "") + "ldc_nand(pow(x_, y_), x_, y_)") + " }");
+      }
       case Op::TAND: case Op::TOR: case Op::TXOR: {
         const char* o = op == Op::TAND ? " & " : op == Op::TOR ? " | " : " ^ ";
         return body(st(2, cast(t_) + "(" + val(0, t_) + o + val(1, t_) + ")"));
@@ -265,8 +275,9 @@ class Typed {
       case Op::TSQRT: case Op::TLN: case Op::TLOG: case Op::TEXP: case Op::TSIN: case Op::TCOS: case Op::TTAN:
       case Op::TASIN: case Op::TACOS: case Op::TATAN: {
         // MatIEC calls the C library's double function; REAL's result is rounded
-        std::string call = std::string(libm(op)) + "(" + dbl(0) + ")";
-        return body(st(1, t_ == Ty::REAL ? "(float)" + call : call));
+        // (a NaN by the rule, in double: the same bits as in REAL once rounded)
+        const std::string call = "ldc_nand(" + std::string(libm(op)) + "(x_), x_, x_)";
+        return body("{ double x_ = " + dbl(0) + "; " + st(1, t_ == Ty::REAL ? "(float)" + call : call) + " }");
       }
       case Op::TCONV: return body(st(1, conv(t_, u_, val(0, u_))));
       case Op::TTRUNC: return body(st(1, cast(t_) + "ldc_to_i64(trunc((double)" + val(0, u_) + "))"));
@@ -365,14 +376,19 @@ class Typed {
 
   std::string add_sub_mul() const {
     const char* o = in_.op == Op::TADD ? " + " : in_.op == Op::TSUB ? " - " : " * ";
-    if (is_real(t_)) return st(2, val(0, t_) + o + val(1, t_));
+    if (is_real(t_)) return real_arith(o);
     const std::string w = std::string("(") + ut(t_) + ")";
     return st(2, wrap(w + val(0, t_) + o + w + val(1, t_)));
   }
+  // REAL / LREAL a o b, a NaN result by the rule (ldc_nanf, ldc_nand)
+  std::string real_arith(const char* o) const {
+    return "{ " + decl2() + " " + st(2, nan_fn() + "(a_" + o + "b_, a_, b_)") + " }";
+  }
+  std::string nan_fn() const { return t_ == Ty::REAL ? "ldc_nanf" : "ldc_nand"; }
   // integer division by 0: 0 and S0; MIN / -1 wraps, MIN % -1 is 0
   std::string div_mod() const {
     const bool div = in_.op == Op::TDIV;
-    if (is_real(t_)) return st(2, val(0, t_) + " / " + val(1, t_));
+    if (is_real(t_)) return real_arith(" / ");
     std::string q = div ? wrap("a_ / b_") : wrap("a_ % b_");
     if (is_signed(t_)) q = "b_ == -1 ? " + (div ? wrap(std::string("0 - (") + ut(t_) + ")a_") : cast(t_) + "0") + " : " + q;
     return "{ " + decl2() + " if (b_ == 0) { " + s0() + " = 1; " + st(2, cast(t_) + "0") + " } else " + st(2, q) + " }";

@@ -25,6 +25,16 @@ static inline float rd_f(const u8 *m, uint32_t a) { float v; memcpy(&v, m + a, 4
 static inline void wr_i(u8 *m, uint32_t a, int32_t v) { memcpy(m + a, &v, 4); }
 static inline void wr_f(u8 *m, uint32_t a, float v) { memcpy(m + a, &v, 4); }
 static inline float f_of(uint32_t u) { float f; memcpy(&f, &u, 4); return f; }
+/* a NaN result r of x op y (a function: y = x): the first NaN operand quieted, else the
+   default NaN (docs/il.md "NaN results", typed::nan_rule); the C compiler may swap x and y */
+static inline float ldc_nanf(float r, float x, float y) {
+  uint32_t u;
+  if (r == r) return r;
+  if (x == x) x = y;
+  if (x == x) u = 0xffc00000u; else { memcpy(&u, &x, 4); u |= 0x00400000u; }
+  memcpy(&r, &u, 4);
+  return r;
+}
 static inline int32_t r2i(float f) {
   if (f != f) return 0;
   if (f >= 2147483648.0f) return INT32_MAX;
@@ -229,15 +239,16 @@ class CGen {
       case Op::ADD: case Op::SUB: case Op::MUL: {
         if (real) {
           const char* op = in.op == Op::ADD ? " + " : in.op == Op::SUB ? " - " : " * ";
-          return guarded(store(a[2], val(a[0], true) + op + val(a[1], true), true));
+          return guarded("float a_ = " + val(a[0], true) + ", b_ = " + val(a[1], true) + "; " +
+                         store(a[2], std::string("ldc_nanf(a_") + op + "b_, a_, b_)", true));
         }
         const char* fn = in.op == Op::ADD ? "i_add(" : in.op == Op::SUB ? "i_sub(" : "i_mul(";
         return guarded(store(a[2], fn + val(a[0], false) + ", " + val(a[1], false) + ")", false));
       }
       case Op::DIV:
         if (real)
-          return guarded("float b_ = " + val(a[1], true) + "; if (b_ == 0.0f) m[" + u(L_.addr(Area::S, kBitError)) +
-                         "] = 1; else " + store(a[2], val(a[0], true) + " / b_", true));
+          return guarded("float a_ = " + val(a[0], true) + ", b_ = " + val(a[1], true) + "; if (b_ == 0.0f) m[" +
+                         u(L_.addr(Area::S, kBitError)) + "] = 1; else " + store(a[2], "ldc_nanf(a_ / b_, a_, b_)", true));
         return guarded("int32_t a_ = " + val(a[0], false) + ", b_ = " + val(a[1], false) + "; if (b_ == 0) m[" +
                        u(L_.addr(Area::S, kBitError)) + "] = 1; else " +
                        store(a[2], "(b_ == -1 ? i_sub(0, a_) : a_ / b_)", false));

@@ -9,6 +9,7 @@
 
 #include "ir/ir.h"
 #include "ir/mathfn.h"
+#include "ir/typed.h"
 
 namespace ldc {
 namespace {
@@ -17,17 +18,19 @@ namespace {
 #define FN(name, libm, called, ints) float fn_##name(float x) { return ::libm(x); }
 #include "ir/ops.def"
 
-// The typed instructions' double functions (ir.h, MathFn), as ir/typed.h calls them.
-double m_log(double x) { return std::log(x); }
-double m_log10(double x) { return std::log10(x); }
-double m_exp(double x) { return std::exp(x); }
-double m_sin(double x) { return std::sin(x); }
-double m_cos(double x) { return std::cos(x); }
-double m_tan(double x) { return std::tan(x); }
-double m_asin(double x) { return std::asin(x); }
-double m_acos(double x) { return std::acos(x); }
-double m_atan(double x) { return std::atan(x); }
-double m_pow(double x, double y) { return std::pow(x, y); }
+// The typed instructions' double functions (ir.h, MathFn), as ir/typed.h
+// calls them: a NaN result by typed::nan_rule (docs/il.md, "NaN results"), so
+// native code stores the reference's bits whatever the C library's NaN is.
+double m_log(double x) { return typed::nan_rule(std::log(x), x, x); }
+double m_log10(double x) { return typed::nan_rule(std::log10(x), x, x); }
+double m_exp(double x) { return typed::nan_rule(std::exp(x), x, x); }
+double m_sin(double x) { return typed::nan_rule(std::sin(x), x, x); }
+double m_cos(double x) { return typed::nan_rule(std::cos(x), x, x); }
+double m_tan(double x) { return typed::nan_rule(std::tan(x), x, x); }
+double m_asin(double x) { return typed::nan_rule(std::asin(x), x, x); }
+double m_acos(double x) { return typed::nan_rule(std::acos(x), x, x); }
+double m_atan(double x) { return typed::nan_rule(std::atan(x), x, x); }
+double m_pow(double x, double y) { return typed::nan_rule(std::pow(x, y), x, y); }
 
 size_t page_size() {
   static const size_t page = size_t(sysconf(_SC_PAGESIZE));

@@ -136,16 +136,16 @@ void arith(Ctx& c, IntOp iop, RealOp rop) {
   else store_int(d, iop(a.i, b.i));
 }
 int32_t wrap(uint32_t u) { return int32_t(u); }
-void exec_ADD(Ctx& c) { arith(c, [](int32_t x, int32_t y) { return wrap(uint32_t(x) + uint32_t(y)); }, [](float x, float y) { return x + y; }); }
-void exec_SUB(Ctx& c) { arith(c, [](int32_t x, int32_t y) { return wrap(uint32_t(x) - uint32_t(y)); }, [](float x, float y) { return x - y; }); }
-void exec_MUL(Ctx& c) { arith(c, [](int32_t x, int32_t y) { return wrap(uint32_t(x) * uint32_t(y)); }, [](float x, float y) { return x * y; }); }
+void exec_ADD(Ctx& c) { arith(c, [](int32_t x, int32_t y) { return wrap(uint32_t(x) + uint32_t(y)); }, typed::real_add<float>); }
+void exec_SUB(Ctx& c) { arith(c, [](int32_t x, int32_t y) { return wrap(uint32_t(x) - uint32_t(y)); }, typed::real_sub<float>); }
+void exec_MUL(Ctx& c) { arith(c, [](int32_t x, int32_t y) { return wrap(uint32_t(x) * uint32_t(y)); }, typed::real_mul<float>); }
 void exec_DIV(Ctx& c) {
   if (!top(c)) return skip_operands(c, 3);
   Val a = operand(c), b = operand(c), d = operand(c);
   if (a.real || b.real) {
     float y = as_real(b);
     if (y == 0.0f) return set_error(c);
-    store_real(d, as_real(a) / y);
+    store_real(d, typed::real_div(as_real(a), y));  // a NaN: typed::nan_rule (docs/il.md)
   } else {
     if (b.i == 0) return set_error(c);
     store_int(d, (a.i == kMin && b.i == -1) ? kMin : a.i / b.i);

@@ -64,6 +64,37 @@ inline double real_value(Ty t, uint64_t v) { return ty_info(t).bits == 32 ? doub
 // A double as t's bits (REAL rounds to binary32).
 inline uint64_t real_bits(Ty t, double d) { return ty_info(t).bits == 32 ? bits_of(float(d)) : bits_of(d); }
 
+// ---- NaN results (docs/il.md, "NaN results").  IEEE 754 says an operation
+// with a NaN result returns a quiet NaN, ideally one of its NaN operands, but
+// not which one nor which bits an invalid operation makes; hardware and C
+// compilers differ (a C compiler may swap a commutative operation's operands,
+// and the C library's asin(2) is +NaN where 0/0 is -NaN).  ldc's rule is
+// x86-64 SSE's, written out: a NaN result is the first NaN operand (a before
+// b) with its quiet bit set, sign and payload kept; with no NaN operand it is
+// the default NaN, sign set, quiet bit, payload 0.  Each engine computes the
+// result as it likes and, only when it is a NaN, stores nan_result's.
+constexpr uint32_t kQuietBit32 = 0x00400000u;
+constexpr uint64_t kQuietBit64 = 0x0008000000000000ull;
+constexpr uint32_t kDefaultNaN32 = 0xffc00000u;
+constexpr uint64_t kDefaultNaN64 = 0xfff8000000000000ull;
+inline float nan_result(float x, float y) {
+  if (x != x) return f32(bits_of(x) | kQuietBit32);
+  if (y != y) return f32(bits_of(y) | kQuietBit32);
+  return f32(kDefaultNaN32);
+}
+inline double nan_result(double x, double y) {
+  if (x != x) return f64(bits_of(x) | kQuietBit64);
+  if (y != y) return f64(bits_of(y) | kQuietBit64);
+  return f64(kDefaultNaN64);
+}
+// r, computed from x and y (a one-operand function: y = x), by the rule
+template <class F>
+inline F nan_rule(F r, F x, F y) { return r == r ? r : nan_result(x, y); }
+template <class F> inline F real_add(F x, F y) { return nan_rule(x + y, x, y); }
+template <class F> inline F real_sub(F x, F y) { return nan_rule(x - y, x, y); }
+template <class F> inline F real_mul(F x, F y) { return nan_rule(x * y, x, y); }
+template <class F> inline F real_div(F x, F y) { return nan_rule(x / y, x, y); }
+
 // ---- memory
 inline uint64_t load(Ty t, const uint8_t* p) {
   if (t == Ty::BOOL) return p[0] != 0;
@@ -108,21 +139,21 @@ inline uint64_t arith(Op op, Ty t, uint64_t a, uint64_t b, bool& error) {
     if (ty_info(t).bits == 32) {
       float x = f32(a), y = f32(b);
       switch (op) {
-        case Op::TADD: return bits_of(x + y);
-        case Op::TSUB: return bits_of(x - y);
-        case Op::TMUL: return bits_of(x * y);
-        case Op::TDIV: return bits_of(x / y);
-        case Op::TEXPT: return bits_of(float(std::pow(double(x), double(y))));  // C's pow, as MatIEC calls it
+        case Op::TADD: return bits_of(real_add(x, y));
+        case Op::TSUB: return bits_of(real_sub(x, y));
+        case Op::TMUL: return bits_of(real_mul(x, y));
+        case Op::TDIV: return bits_of(real_div(x, y));
+        case Op::TEXPT: return bits_of(float(f64(arith(op, Ty::LREAL, bits_of(double(x)), bits_of(double(y)), error))));
         default: break;
       }
     } else {
       double x = f64(a), y = f64(b);
       switch (op) {
-        case Op::TADD: return bits_of(x + y);
-        case Op::TSUB: return bits_of(x - y);
-        case Op::TMUL: return bits_of(x * y);
-        case Op::TDIV: return bits_of(x / y);
-        case Op::TEXPT: return bits_of(std::pow(x, y));
+        case Op::TADD: return bits_of(real_add(x, y));
+        case Op::TSUB: return bits_of(real_sub(x, y));
+        case Op::TMUL: return bits_of(real_mul(x, y));
+        case Op::TDIV: return bits_of(real_div(x, y));
+        case Op::TEXPT: return bits_of(nan_rule(std::pow(x, y), x, y));  // C's pow, as MatIEC calls it
         default: break;
       }
     }
@@ -192,16 +223,16 @@ inline uint64_t unary(Op op, Ty t, uint64_t a) {
   switch (op) {
     case Op::TNEG: return bits_of(-x);
     case Op::TABS: return bits_of(x < 0 ? -x : x);
-    case Op::TSQRT: return bits_of(std::sqrt(x));
-    case Op::TLN: return bits_of(std::log(x));
-    case Op::TLOG: return bits_of(std::log10(x));
-    case Op::TEXP: return bits_of(std::exp(x));
-    case Op::TSIN: return bits_of(std::sin(x));
-    case Op::TCOS: return bits_of(std::cos(x));
-    case Op::TTAN: return bits_of(std::tan(x));
-    case Op::TASIN: return bits_of(std::asin(x));
-    case Op::TACOS: return bits_of(std::acos(x));
-    case Op::TATAN: return bits_of(std::atan(x));
+    case Op::TSQRT: return bits_of(nan_rule(std::sqrt(x), x, x));
+    case Op::TLN: return bits_of(nan_rule(std::log(x), x, x));
+    case Op::TLOG: return bits_of(nan_rule(std::log10(x), x, x));
+    case Op::TEXP: return bits_of(nan_rule(std::exp(x), x, x));
+    case Op::TSIN: return bits_of(nan_rule(std::sin(x), x, x));
+    case Op::TCOS: return bits_of(nan_rule(std::cos(x), x, x));
+    case Op::TTAN: return bits_of(nan_rule(std::tan(x), x, x));
+    case Op::TASIN: return bits_of(nan_rule(std::asin(x), x, x));
+    case Op::TACOS: return bits_of(nan_rule(std::acos(x), x, x));
+    case Op::TATAN: return bits_of(nan_rule(std::atan(x), x, x));
     default: break;
   }
   return a;

@@ -155,7 +155,7 @@ __attribute__((noinline)) void generic(uint8_t* m, const FastInterpreter::Ins& i
     case Op::ADD: case Op::SUB: case Op::MUL:
       if (real) {
         float x = get_f(m, ka, in.a), y = get_f(m, kb, in.b);
-        store_real(m, kd, in.c, op == Op::ADD ? x + y : op == Op::SUB ? x - y : x * y);
+        store_real(m, kd, in.c, op == Op::ADD ? typed::real_add(x, y) : op == Op::SUB ? typed::real_sub(x, y) : typed::real_mul(x, y));
       } else {
         int32_t x = get_i(m, ka, in.a), y = get_i(m, kb, in.b);
         store_int(m, kd, in.c, op == Op::ADD ? i_add(x, y) : op == Op::SUB ? i_sub(x, y) : i_mul(x, y));
@@ -165,7 +165,7 @@ __attribute__((noinline)) void generic(uint8_t* m, const FastInterpreter::Ins& i
       if (real) {
         float y = get_f(m, kb, in.b);
         if (y == 0.0f) { m[s0] = 1; return; }
-        store_real(m, kd, in.c, get_f(m, ka, in.a) / y);
+        store_real(m, kd, in.c, typed::real_div(get_f(m, ka, in.a), y));
       } else {
         int32_t y = get_i(m, kb, in.b);
         if (y == 0) { m[s0] = 1; return; }
@@ -805,11 +805,12 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
 #undef LDC_AND
 #undef LDC_OR
 #undef LDC_XOR
-  HANDLER(ADD_F) { if (st & 1u) st_f(m, ip->c, ld_f(m, ip->a) + ld_f(m, ip->b)); NEXT(); }
-  HANDLER(SUB_F) { if (st & 1u) st_f(m, ip->c, ld_f(m, ip->a) - ld_f(m, ip->b)); NEXT(); }
-  HANDLER(MUL_F) { if (st & 1u) st_f(m, ip->c, ld_f(m, ip->a) * ld_f(m, ip->b)); NEXT(); }
+  // REAL: a NaN result by typed::nan_rule (docs/il.md, "NaN results")
+  HANDLER(ADD_F) { if (st & 1u) st_f(m, ip->c, typed::real_add(ld_f(m, ip->a), ld_f(m, ip->b))); NEXT(); }
+  HANDLER(SUB_F) { if (st & 1u) st_f(m, ip->c, typed::real_sub(ld_f(m, ip->a), ld_f(m, ip->b))); NEXT(); }
+  HANDLER(MUL_F) { if (st & 1u) st_f(m, ip->c, typed::real_mul(ld_f(m, ip->a), ld_f(m, ip->b))); NEXT(); }
   HANDLER(DIV_F) {
-    if (st & 1u) { float y = ld_f(m, ip->b); if (y == 0.0f) m[s0] = 1; else st_f(m, ip->c, ld_f(m, ip->a) / y); }
+    if (st & 1u) { float y = ld_f(m, ip->b); if (y == 0.0f) m[s0] = 1; else st_f(m, ip->c, typed::real_div(ld_f(m, ip->a), y)); }
     NEXT();
   }
   HANDLER(WNOT_M) { if (st & 1u) st_i(m, ip->b, ~ld_i(m, ip->a)); NEXT(); }
@@ -919,7 +920,6 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
 #define LDC_PLUS(x, y) ((x) + (y))
 #define LDC_MINUS(x, y) ((x) - (y))
 #define LDC_TIMES(x, y) ((x) * (y))
-#define LDC_OVER(x, y) ((x) / (y))
 #define LDC_K32(v) (v)
 #define LDC_K64(v) kp[v]
 #define LDC_KF32(v) bits_f(v)
@@ -931,16 +931,18 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
   LDC_TINT(S16, ld_u, LDC_K32, st_u, n_S16)
   LDC_TINT(W32, ld_u, LDC_K32, st_u, n_W32)
   LDC_TINT(W64, ld_u64, LDC_K64, st_u64, LDC_SAME)
-  LDC_TINT(F32, ld_f, LDC_KF32, st_f, LDC_SAME)
-  LDC_TARITH3(TDIV_F32, ld_f, LDC_KF32, st_f, LDC_SAME, LDC_OVER)
-  LDC_TINT(F64, ld_d, LDC_KF64, st_d, LDC_SAME)
-  LDC_TARITH3(TDIV_F64, ld_d, LDC_KF64, st_d, LDC_SAME, LDC_OVER)
+  // REAL and LREAL: a NaN result by typed::nan_rule (docs/il.md, "NaN results")
+#define LDC_TREAL(C, LD, K, ST)                                                                                  \
+  LDC_TARITH3(TADD_##C, LD, K, ST, LDC_SAME, typed::real_add) LDC_TARITH3(TSUB_##C, LD, K, ST, LDC_SAME, typed::real_sub) \
+  LDC_TARITH3(TMUL_##C, LD, K, ST, LDC_SAME, typed::real_mul) LDC_TARITH3(TDIV_##C, LD, K, ST, LDC_SAME, typed::real_div)
+  LDC_TREAL(F32, ld_f, LDC_KF32, st_f)
+  LDC_TREAL(F64, ld_d, LDC_KF64, st_d)
+#undef LDC_TREAL
 #undef LDC_TINT
 #undef LDC_TARITH3
 #undef LDC_PLUS
 #undef LDC_MINUS
 #undef LDC_TIMES
-#undef LDC_OVER
   // compares: a the first operand's word, b the second's (MM) or the constant (MK)
 #define LDC_TCMP_ONE(N, REL, LD, K)                                                                           \
   HANDLER(N##_MM) { st = (st << 1) | uint32_t(rel_holds(Rel::REL, LD(m, ip->a), LD(m, ip->b))); NEXT(); }     \

@@ -9,6 +9,16 @@ static inline float rd_f(const u8 *m, uint32_t a) { float v; memcpy(&v, m + a, 4
 static inline void wr_i(u8 *m, uint32_t a, int32_t v) { memcpy(m + a, &v, 4); }
 static inline void wr_f(u8 *m, uint32_t a, float v) { memcpy(m + a, &v, 4); }
 static inline float f_of(uint32_t u) { float f; memcpy(&f, &u, 4); return f; }
+/* a NaN result r of x op y (a function: y = x): the first NaN operand quieted, else the
+   default NaN (docs/il.md "NaN results", typed::nan_rule); the C compiler may swap x and y */
+static inline float ldc_nanf(float r, float x, float y) {
+  uint32_t u;
+  if (r == r) return r;
+  if (x == x) x = y;
+  if (x == x) u = 0xffc00000u; else { memcpy(&u, &x, 4); u |= 0x00400000u; }
+  memcpy(&r, &u, 4);
+  return r;
+}
 static inline int32_t r2i(float f) {
   if (f != f) return 0;
   if (f >= 2147483648.0f) return INT32_MAX;

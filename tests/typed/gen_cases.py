@@ -38,6 +38,7 @@ class Program:
         self.d_in, self.d_out, self.m_in, self.m_out = IN_D, OUT_D, IN_M, OUT_M
         self.sentinel = scans == 1           # results prefilled by the trace (single-scan programs)
         self.init = []                       # (device, value) written before the scan
+        self.source = "matiec.py"            # where the expected values come from (the header says)
 
     def _cells(self, t, out):
         n = max(1, m.bits(t) // 32) if t != "BOOL" else 1
@@ -102,7 +103,7 @@ class Program:
         self.rungs.append((comment, lines))
 
     def files(self):
-        il = ["; %s" % self.title, "; written by tests/typed/gen_cases.py; expected values from matiec.py"]
+        il = ["; %s" % self.title, "; written by tests/typed/gen_cases.py; expected values from " + self.source]
         for k, (comment, lines) in enumerate(self.rungs, 1):
             il.append(".rung line %d" % k)
             il.append("    ; " + comment)
@@ -507,6 +508,9 @@ def all_files():
             files.update(p.files())
     import arrays  # the array cases are hand-derived (docs/il.md "Index faults")
     for p in arrays.programs(Program):
+        files.update(p.files())
+    import nans  # which NaN an operation stores: by hand from IEEE 754 and docs/il.md's rule
+    for p in nans.programs(Program):
         files.update(p.files())
     import strings  # STRING: MatIEC's Table 29 and conversions, transcribed in strings.py
     for p in strings.programs(Program):
