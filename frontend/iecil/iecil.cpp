@@ -48,6 +48,14 @@ std::optional<DeviceRef> iec_address(const std::string& text, std::string& why) 
   return parse_iec_address(a, why);
 }
 
+bool date_literal_head(std::string_view head) {
+  size_t hash = head.find('#');
+  if (hash == std::string_view::npos) return false;
+  std::string p = upper(head.substr(0, hash));
+  return p == "D" || p == "DATE" || p == "DT" || p == "DATE_AND_TIME" || p == "TOD" || p == "TIME_OF_DAY" ||
+         p == "LDATE" || p == "LDT" || p == "LTOD";
+}
+
 static bool word_start(char c) { return std::isalnum((unsigned char)c) || c == '_' || c == '%'; }
 static bool word_char(char c) { return std::isalnum((unsigned char)c) || c == '_' || c == '%' || c == '#' || c == '.'; }
 
@@ -104,13 +112,7 @@ std::vector<Tok> lex(std::string_view s) {
       // a date's '-' and a time of day's ':' before a digit: DATE#2024-01-31, TOD#12:30:00, DT#2024-01-31-12:30:00
       auto date_inside = [&] {
         if ((s[i] != '-' && s[i] != ':') || i + 1 >= s.size() || !std::isdigit((unsigned char)s[i + 1])) return false;
-        std::string head;
-        for (char h : s.substr(st, i - st)) head += char(std::toupper((unsigned char)h));
-        size_t hash = head.find('#');
-        if (hash == std::string::npos) return false;
-        std::string p = head.substr(0, hash);
-        return p == "D" || p == "DATE" || p == "DT" || p == "DATE_AND_TIME" || p == "TOD" || p == "TIME_OF_DAY" ||
-               p == "LDATE" || p == "LDT" || p == "LTOD";
+        return date_literal_head(s.substr(st, i - st));
       };
       while (i < s.size() && ((word_char(s[i]) && !(s[i] == '.' && i + 1 < s.size() && s[i + 1] == '.')) || sign_inside() || date_inside())) i++;
       out.push_back({Tok::Word, std::string(s.substr(st, i - st)), line, col(st)});

@@ -20,6 +20,9 @@ std::string upper(std::string_view s);
 // Words (names, numbers, literals, %addresses), punctuation ( ) [ ] : , ;
 // := => .., one Eol per line end, and End.  Throws CompileError.
 std::vector<Tok> lex(std::string_view s);
+// Is `head` (a word up to its '#', e.g. "DT#2024") a date literal's, whose '-'
+// and ':' before a digit belong to the word (DATE#2024-01-31, TOD#12:30:00)?
+bool date_literal_head(std::string_view head);
 // A direct address (%IX0.4, %QW2 ...); without the size letter (%I0.4, %Q0.0,
 // %M1.2) a bit, as IEC 61131-3 has it.  nullopt and `why` if it is none.
 std::optional<DeviceRef> iec_address(const std::string& text, std::string& why);

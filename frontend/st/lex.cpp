@@ -68,25 +68,19 @@ struct Lexer {
     };
     auto date_inside = [&] {  // DATE#2024-01-31, TOD#12:30:00, DT#2024-01-31-12:30:00
       if ((s[i] != '-' && s[i] != ':') || !std::isdigit((unsigned char)at(i + 1))) return false;
-      std::string head;
-      for (char h : s.substr(st, i - st)) head += char(std::toupper((unsigned char)h));
-      size_t hash = head.find('#');
-      if (hash == std::string::npos) return false;
-      std::string p = head.substr(0, hash);
-      return p == "D" || p == "DATE" || p == "DT" || p == "DATE_AND_TIME" || p == "TOD" || p == "TIME_OF_DAY" ||
-             p == "LDATE" || p == "LDT" || p == "LTOD";
+      return iecil::date_literal_head(s.substr(st, i - st));
     };
     while (i < s.size() && ((word_char(s[i]) && !(s[i] == '.' && at(i + 1) == '.')) || sign_inside() || date_inside())) i++;
     std::string text(s.substr(st, i - st));
     // "T# 30000ms": blanks after a literal's '#', as OpenPLC Editor writes a
     // duration, are dropped (MatIEC reads them so)
-    if (text.back() == '#' && text.size() > 1 && (s[i] == ' ' || s[i] == '\t')) {
+    if (text.back() == '#' && text.size() > 1 && (at(i) == ' ' || at(i) == '\t')) {
       size_t j = i;
-      while (j < s.size() && (s[j] == ' ' || s[j] == '\t')) j++;
-      if (j < s.size() && (std::isalnum((unsigned char)s[j]) || s[j] == '-')) {
+      while (at(j) == ' ' || at(j) == '\t') j++;
+      if (std::isalnum((unsigned char)at(j)) || at(j) == '-') {
         i = j;
         size_t rest = i;
-        if (s[i] == '-') i++;
+        if (at(i) == '-') i++;
         while (i < s.size() && ((word_char(s[i]) && !(s[i] == '.' && at(i + 1) == '.')) || sign_inside() || date_inside())) i++;
         text += std::string(s.substr(rest, i - rest));
       }

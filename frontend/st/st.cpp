@@ -161,6 +161,13 @@ class Parser {
       return s;
     }
     s.target = variable(next());
+    if (punct(peek(), "(")) {  // an instance in an array: fbs[2](IN := x)
+      s.value = call(s.target.tok);
+      s.value.sels = s.target.sels;
+      s.kind = Stmt::CallFb;
+      semicolon(s.tok);
+      return s;
+    }
     if (punct(peek(), "=")) fail(peek(), "'=' compares; an assignment is ':='");
     expect(":=");
     s.value = expression();
@@ -523,7 +530,15 @@ class Writer {
     opd.push_back(punct(c.tok, ")"));
     line(s.tok, "CAL", opd);
   }
-  std::vector<Tok> operand_var_name(const Expr& c) { return {word(c.tok, c.tok.text)}; }
+  // the instance of an FB call: a name, a member path, or an element (fbs[2])
+  std::vector<Tok> operand_var_name(const Expr& c) {
+    Expr inst;
+    inst.kind = Expr::Var;
+    inst.tok = c.tok;
+    inst.sels = c.sels;
+    prepare_var(inst);
+    return operand(inst);
+  }
 
   // IF: each condition jumps past its block when FALSE
   void if_stmt(const Stmt& s) {

@@ -17,6 +17,7 @@
 #include <cstring>
 #include <string>
 
+#include "bench/rng.h"
 #include "frontend/frontend.h"
 #include "tests/diff/harness.h"
 
@@ -30,22 +31,9 @@ long env_long(const char* name, long def) {
   return v && *v ? std::strtol(v, nullptr, 10) : def;
 }
 
-// splitmix64, as ldgen draws (the same seed, the same program everywhere)
-struct Rng {
-  uint64_t s;
-  uint64_t next() {
-    uint64_t z = (s += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-  }
-  int below(int n) { return int(next() % uint64_t(n)); }
-  bool chance(int percent) { return below(100) < percent; }
-};
-
 class StGen {
  public:
-  explicit StGen(uint64_t seed) : r_{seed * 0x2545F4914F6CDD1DULL + 7} {}
+  explicit StGen(uint64_t seed) : r_(seed * 0x2545F4914F6CDD1DULL + 7) {}
 
   std::string program() {
     std::string body;
@@ -76,18 +64,18 @@ class StGen {
   }
   // mostly inside 0..15; sometimes outside (the index fault)
   std::string index() {
-    if (r_.chance(90)) return "(" + var() + " MOD 16 + 16) MOD 16";
+    if (r_.pct(90)) return "(" + var() + " MOD 16 + 16) MOD 16";
     return var() + " MOD 20";
   }
   std::string expr(int depth = 0) {
-    if (depth > 2 || r_.chance(35)) return operand();
+    if (depth > 2 || r_.pct(35)) return operand();
     static const char* ops[] = {" + ", " - ", " * ", " / ", " MOD "};
     return "(" + expr(depth + 1) + ops[r_.below(5)] + expr(depth + 1) + ")";
   }
   std::string cond() {
     static const char* rel[] = {" < ", " > ", " <= ", " >= ", " = ", " <> "};
     std::string c = expr(1) + rel[r_.below(6)] + expr(1);
-    if (r_.chance(25)) c = "(" + c + ") AND (" + var() + rel[r_.below(6)] + operand() + ")";
+    if (r_.pct(25)) c = "(" + c + ") AND (" + var() + rel[r_.below(6)] + operand() + ")";
     return c;
   }
   std::string block(int depth, const std::string& ind) {
@@ -102,8 +90,8 @@ class StGen {
       case 0:
       case 1: return ind + target() + " := " + expr() + ";\n";
       case 2:
-        if (loops_ > 0 && r_.chance(30))
-          return ind + "IF " + cond() + " THEN " + (r_.chance(50) ? "EXIT" : "CONTINUE") + "; END_IF;\n";
+        if (loops_ > 0 && r_.pct(30))
+          return ind + "IF " + cond() + " THEN " + (r_.pct(50) ? "EXIT" : "CONTINUE") + "; END_IF;\n";
         return ind + "a[" + index() + "] := " + expr() + ";\n";
       case 3: return ind + "IF " + cond() + " THEN\n" + block(depth, ind) + ind + "ELSE\n" + block(depth, ind) + ind + "END_IF;\n";
       case 4: case 5: return for_loop(depth, ind);
@@ -127,14 +115,14 @@ class StGen {
       default: from = std::to_string(r_.below(20)), to = "-3", by = " BY -" + std::to_string(r_.below(3) + 1); break;
     }
     std::string b = in_loop(depth, ind);
-    if (r_.chance(15)) b += ind + "  " + v + " := " + v + " + 1;\n";  // the body writes the control variable
+    if (r_.pct(15)) b += ind + "  " + v + " := " + v + " + 1;\n";  // the body writes the control variable
     return ind + "FOR " + v + " := " + from + " TO " + to + by + " DO\n" + b + ind + "END_FOR;\n";
   }
   // a counter that moves toward its bound, or (rarely) one that never gets
   // there: the loop runs to the budget
   std::string while_loop(int depth, const std::string& ind) {
     std::string c = "w" + std::to_string(depth);
-    bool endless = r_.chance(4);
+    bool endless = r_.pct(4);
     std::string init = ind + c + " := 0;\n";
     std::string step = ind + "  " + c + " := " + c + (endless ? " * 1;\n" : " + 1;\n");
     return init + ind + "WHILE " + c + " < " + std::to_string(1 + r_.below(12)) + " DO\n" + step + in_loop(depth, ind) + ind +
