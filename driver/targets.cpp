@@ -97,15 +97,43 @@ void throw_assembly_errors(const as::Result& r, const std::string& source_name) 
   throw UserError(msg);
 }
 
+// The lines of the image's source file, if it can be read from here (as
+// objdump -S shows what it finds); none otherwise.
+static std::vector<std::string> source_lines(const Image& img) {
+  std::vector<std::string> lines;
+  std::string text;
+  try {
+    text = read_file(img.source);
+  } catch (const std::exception&) {
+    return lines;
+  }
+  size_t at = 0;
+  while (at <= text.size() && lines.size() < (1u << 22)) {
+    size_t nl = text.find('\n', at);
+    std::string l = text.substr(at, nl == std::string::npos ? std::string::npos : nl - at);
+    if (!l.empty() && l.back() == '\r') l.pop_back();
+    lines.push_back(std::move(l));
+    if (nl == std::string::npos) break;
+    at = nl + 1;
+  }
+  return lines;
+}
+
 std::multimap<uint32_t, std::string> line_notes(const Image& img, uint32_t unit) {
   std::multimap<uint32_t, std::string> notes;
+  const std::vector<std::string> src = source_lines(img);
   uint32_t last_rung = UINT32_MAX;
+  int32_t last_line = -1;
   for (const LineEntry& e : img.lines) {
     if (e.rung != last_rung) {
       std::string t = "; rung " + std::to_string(e.rung + 1) + ", line " + std::to_string(e.line);
       if (e.rung < img.rung_titles.size() && !img.rung_titles[e.rung].empty()) t += " \"" + img.rung_titles[e.rung] + "\"";
       notes.emplace(e.code_offset / unit, t);
       last_rung = e.rung;
+    }
+    if (e.line != last_line && e.line >= 1 && size_t(e.line) <= src.size()) {  // the source line, when it changes
+      notes.emplace(e.code_offset / unit, "; " + std::to_string(e.line) + ": " + src[size_t(e.line) - 1]);
+      last_line = e.line;
     }
     Instr in;
     decode_instr(img.il, e.il_offset, in);

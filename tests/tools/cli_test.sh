@@ -46,6 +46,9 @@ expect_fail "-O on an interpreter" "is for a source compiled to native code (.*)
 "$bin/ldobjdump" "$tmp/t.bin" > "$tmp/dump" && ok || bad "ldobjdump"
 grep -q '; rung 1, line' "$tmp/dump" && grep -q ';   TON T' "$tmp/dump" && ok || bad "ldobjdump lacks rung/IL lines"
 grep -Eq '^; [0-9]+ bytes, [0-9]+ instructions, [0-9]+ IL; branch sites: [0-9]+ jcc, [0-9]+ jmp, [0-9]+ call$' "$tmp/dump" && ok || bad "ldobjdump lacks the branch-site count"
+# ... and, where it can read the source, the source line of the code that follows (objdump -S)
+"$bin/ldc" "$src/tests/frontend/st/st_loops.st" -o "$tmp/st.bin" && "$bin/ldobjdump" "$tmp/st.bin" > "$tmp/stdump" && ok || bad "ldobjdump of ST"
+grep -q '^; 22:     a\[i\] := i \* i;$' "$tmp/stdump" && grep -q '^;   LOOP @' "$tmp/stdump" && ok || bad "ldobjdump lacks the ST source lines or the LOOP"
 
 # bad images are refused before anything runs
 printf 'garbage' > "$tmp/g.bin"
