@@ -889,26 +889,31 @@ struct Reader {
     if (!is_ident(k.text)) fail(k, "expected a label name, found '" + k.text + "'");
     if (!parens.empty()) fail(op, "a jump inside parentheses");
     auto target = [&] { Operand l{OpdKind::Label}; l.label = k.text; return l; };
+    // to a label already seen: a loop, the IL's LOOP (docs/il.md "Loops": each
+    // back edge counts against the scan's budget)
+    const bool back = std::find(labels_seen.begin(), labels_seen.end(), k.text) != labels_seen.end();
+    const Op jop = back ? Op::LOOP : Op::JMP;
     jumps.push_back({k.text, here, 0});
     if (u == "JMP") {
       start_rung(here);
       emit(Op::TRUE);
-      emit(Op::JMP, target());
+      emit(jop, target());
       rung = nullptr;
       cr = Ty::None;  // undefined after an unconditional jump
     } else {
       need_cr(op, Ty::Bool);
       if (u == "JMPC") {
-        emit(Op::JMP, target());
+        emit(jop, target());
       } else {
         Operand h = hidden_bit(0);
         emit(Op::OUTN, h);
         emit(Op::LOAD, h);
-        emit(Op::JMP, target());
+        emit(jop, target());
         emit(Op::MPP);
       }
     }
     jumps.back().rung = p.rungs.size() - 1;
+    if (back) jumps.pop_back();  // checked: its label comes before it
   }
 
   // CAL inst(IN := x, PT := y)  /  CAL inst(CU := x, R := y, PV := z)  /  CAL inst(CD := x, LD := y, PV := z)
@@ -1037,8 +1042,8 @@ struct Reader {
     for (const Jump& j : jumps) {
       auto w = where.find(j.label);
       if (w == where.end()) fail(j.loc, "undefined label '" + j.label + "'");
-      if (w->second <= j.rung)
-        fail(j.loc, "backward jump to '" + j.label + "': ldc runs every instruction at most once per scan (jumps go forward)");
+      if (w->second <= j.rung)  // cannot be: a jump to a label seen before it is a LOOP
+        fail(j.loc, "backward jump to '" + j.label + "'");
     }
     if (p.rungs.empty()) {
       const Tok* last = &t.front();
@@ -1256,7 +1261,7 @@ struct Writer {
         case Op::SET: need(1); line("S " + opd(in.a[0])); break;
         case Op::RST: need(1); line("R " + opd(in.a[0])); break;
         case Op::RSTT: case Op::RSTC: need(1); line("R " + opd(in.a[0])); break;
-        case Op::JMP: need(1); line("JMPC " + in.a[0].label.str()); break;
+        case Op::JMP: case Op::LOOP: need(1); line("JMPC " + in.a[0].label.str()); break;  // back to a label before: a LOOP again
         case Op::END: need(1); line("RETC"); break;
         case Op::TON: case Op::TOF: case Op::TP: {
           need(1);

@@ -1622,16 +1622,23 @@ class Reader {
     if (k.kind != Tok::Word || !ident(k.text)) fail(k, "expected a label name" + found(k));
     if (!parens_.empty()) fail(op, "a jump inside parentheses");
     std::string target = scope_->prefix + k.text;
+    // to a label already placed: a loop, the IL's LOOP (docs/il.md "Loops")
+    auto go = [&] {
+      if (!labels_.count(target)) return jump_to(target);
+      Operand o{OpdKind::Label};
+      o.label = target;
+      emit(Op::LOOP, o);
+    };
     if (u == "JMP") {
       ensure_rung();
-      jump_to(target);
+      go();
       rung_ = nullptr;
       cr_ = Cr{};
       return;
     }
     need_bool(op);
     emit(u == "JMPC" ? Op::LOAD : Op::LOADN, cr_bit());
-    jump_to(target);
+    go();
     emit(Op::MPP);
   }
 
