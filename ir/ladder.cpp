@@ -63,6 +63,8 @@ struct Raiser {
 
   Raiser(const Rung& r, size_t no) : rung(r), rung_no(no), code(r.code) {
     int d = 0;
+    for (size_t i = 0; i < code.size(); i++)  // the grid has no loop (docs/format.md)
+      if (code[i].op == Op::LOOP) refuse(i, "a LOOP (a jump back) cannot be drawn");
     for (const Instr& in : code) {
       depth.push_back(d);
       d += op_info(in.op).push - op_info(in.op).pop;

@@ -972,21 +972,17 @@ struct Reader {
       if (keep) emit(Op::MPP);
       else rung = nullptr;
     };
-    if (in.trig()) {  // R_TRIG: Q := CLK AND NOT M, M := CLK; F_TRIG the same of NOT CLK (IEC)
+    // R_TRIG: Q := CLK AND NOT M, M := CLK (M FALSE at first): LOADP CLK.
+    // F_TRIG: Q := NOT CLK AND NOT M, M := NOT CLK with M TRUE at first, as
+    // the library OpenPLC ships has it (no pulse on the first scan): LOADF
+    // CLK, whose memory holds CLK (NOT M), FALSE at first.
+    if (in.trig()) {
       auto clk = bit_arg("CLK");
       if (!clk) fail(k, "CAL of " + in.type + " '" + in.name + "' needs CLK :=");
       if (clk->kind == Val::BoolLit) fail(args["CLK"].second, "CLK needs a BOOL variable");
       if (!keep) start_rung(here);
       Operand q{OpdKind::Bit, Area::M, in.index};
-      Operand in_bit = clk->o;
-      if (in.type == "F_TRIG") {  // h := NOT CLK, then its rising edge
-        in_bit = hidden_bit(0);
-        emit(Op::LOADN, clk->o);
-        emit(Op::OUT, in_bit);
-        if (keep) emit(Op::MPP);
-        else start_rung(here);
-      }
-      emit(Op::LOADP, in_bit, Operand{OpdKind::Edge});
+      emit(in.type == "F_TRIG" ? Op::LOADF : Op::LOADP, clk->o, Operand{OpdKind::Edge});
       emit(Op::OUT, q);
       done();
       return;

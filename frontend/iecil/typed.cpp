@@ -361,6 +361,9 @@ class Reader {
     for (const auto& [v, ty] : it->second.vars) t.members.push_back({v, m_.elem(ty), {}, {}});
     Init on;  // MatIEC's EN and ENO of every block, both TRUE at first (std_call)
     on.kind = Init::Value, on.value.lit = {Ty::BOOL, 1};
+    // F_TRIG's M starts TRUE in the library OpenPLC ships (no pulse on the
+    // first scan; upstream MatIEC starts it FALSE), as the PLCopen reader has it
+    if (u == "F_TRIG") t.members[2].init = on;
     t.members.push_back({"EN", m_.elem(Ty::BOOL), {}, on});
     t.members.push_back({"ENO", m_.elem(Ty::BOOL), {}, on});
     TypeId id = m_.add_type(t, {1, 1});
