@@ -162,6 +162,28 @@ static inline void ldc_time_str(u8 *m, uint32_t d, int64_t ns) {
   else if (nsec == 0) LDC_SPRINTF(m, d, "T#%dd%dh%dm%ds", days, hours, mins, mrem);
   else LDC_SPRINTF(m, d, "T#%dd%dh%dm%ds%gms", days, hours, mins, mrem, (double)nsec / 1000000);
 }
+/* MatIEC's convert_seconds_to_date_and_time and __date/_tod/_dt_to_string (ir/typed.h) */
+static inline int ldc_leap(int y) { return y % 4 == 0 && (y % 100 != 0 || y % 400 == 0); }
+static inline void ldc_date_str(u8 *m, uint32_t d, int64_t ns, int kind) { /* 0 DATE, 1 TOD, 2 DT */
+  static const unsigned short yd[2][13] = {{0, 31, 59, 90, 120, 151, 181, 212, 243, 273, 304, 334, 365},
+                                           {0, 31, 60, 91, 121, 152, 182, 213, 244, 274, 305, 335, 366}};
+  int64_t sec = ns / LDC_NS_S, nsec = ns % LDC_NS_S, days = sec / 86400, rem = sec % 86400;
+  int hour, min, s, year = 1970, mon = 1, day;
+  double frac;
+  if (rem < 0) { rem += 86400; days--; }
+  hour = (int)(rem / 3600); rem %= 3600; min = (int)(rem / 60); s = (int)(rem % 60);
+  while (days >= (rem = ldc_leap(year) ? 366 : 365)) { year++; days -= rem; }
+  while (days < 0) { year--; days += ldc_leap(year) ? 366 : 365; }
+  while (days >= yd[ldc_leap(year)][mon]) mon += 1;
+  day = (int)(days - yd[ldc_leap(year)][mon - 1] + 1);
+  frac = (double)s + (double)nsec / 1e9;
+  if (kind == 0) LDC_SPRINTF(m, d, "D#%d-%2.2d-%2.2d", year, mon, day);
+  else if (kind == 1 && sec >= 86400) LDC_SPRINTF(m, d, "TOD#ERROR");
+  else if (kind == 1 && nsec == 0) LDC_SPRINTF(m, d, "TOD#%2.2d:%2.2d:%2.2d", hour, min, s);
+  else if (kind == 1) LDC_SPRINTF(m, d, "TOD#%2.2d:%2.2d:%09.6f", hour, min, frac);
+  else if (nsec == 0) LDC_SPRINTF(m, d, "DT#%d-%2.2d-%2.2d-%2.2d:%2.2d:%2.2d", year, mon, day, hour, min, s);
+  else LDC_SPRINTF(m, d, "DT#%d-%2.2d-%2.2d-%2.2d:%2.2d:%09.6f", year, mon, day, hour, min, frac);
+}
 /* __pstring_to_sint with x86-64's C (ir/typed.h str_to_lint) */
 static inline uint64_t ldc_s2lint(const ldc_str *s) {
   const uint8_t *b = s->b;
@@ -331,6 +353,8 @@ class Typed {
       case TyKind::Unsigned: return "LDC_SPRINTF(m, " + d + ", \"%llu\", (unsigned long long)" + v + ");";
       case TyKind::Real: return "LDC_SPRINTF(m, " + d + ", \"%.10g\", (double)" + v + ");";
       case TyKind::Time: return "ldc_time_str(m, " + d + ", " + v + ");";
+      case TyKind::Date:
+        return "ldc_date_str(m, " + d + ", " + v + ", " + (u_ == Ty::DATE ? "0" : u_ == Ty::TOD ? "1" : "2") + ");";
       default: break;
     }
     throw CompileError(in_.loc.line, in_.loc.col, std::string("the C route has no translation for ") + op_spelling(in_));
@@ -341,7 +365,7 @@ class Typed {
     switch (ty_info(t_).kind) {
       case TyKind::Bool: return s + st(1, "ldc_s2bool(&s_)") + " }";
       case TyKind::Real: return s + st(1, cast(t_) + "ldc_s2real(&s_)") + " }";
-      case TyKind::Time: return s + st(1, "ldc_s2time(&s_)") + " }";
+      case TyKind::Time: case TyKind::Date: return s + st(1, "ldc_s2time(&s_)") + " }";
       default: return s + st(1, cast(t_) + "ldc_s2lint(&s_)") + " }";
     }
   }

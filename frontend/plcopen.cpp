@@ -229,7 +229,7 @@ IT counter_width(const std::string& t) {
 }
 
 FbKind fb_kind(const std::string& t) {
-  if (counter_width(t) != IT::None || t == "SEMA") return FbKind::Typed;
+  if (counter_width(t) != IT::None || t == "SEMA" || t == "RTC") return FbKind::Typed;
   if (t == "TON" || t == "TOF" || t == "TP") return FbKind::Timer;
   if (t == "CTU" || t == "CTD" || t == "CTUD") return FbKind::Counter;
   if (t == "SR" || t == "RS") return FbKind::Latch;
@@ -427,6 +427,13 @@ class Importer {
   Cond trigger(Cond c, bool rising, const Element* el, std::optional<Operand> into = std::nullopt);
   void typed_counter(const std::string& t, IT w, const Var& inst, const std::function<Cond(const std::string&)>& in,
                      const Val& pv, const Element* el);
+  // RTC's clock (docs/stdlib.md): a hidden timer and the DT it sums, in a rung
+  // first in the program (finish)
+  std::optional<std::pair<uint32_t, uint32_t>> clock_;  // timer, first D word
+  Operand scan_clock(const Element* el) {
+    if (!clock_) clock_ = {take(Dev::T, el), take_run(Dev::D, 4, el)};  // the clock and a LINT temporary
+    return Operand{OpdKind::Int, Area::D, clock_->second};
+  }
   std::string new_label();
 
   // the body
@@ -918,8 +925,9 @@ void Importer::place(Var& v) {
     else if (k == FbKind::Counter) {
       v.dev = DeviceRef{Dev::C, take(Dev::C, v.el)};
       if (v.type == "CTUD") v.aux = take(Dev::M, v.el), v.aux2 = take(Dev::M, v.el);
-    } else if (k == FbKind::Typed && v.type != "SEMA") {  // CV's cells; Q (QU) and QD in M
-      v.dev = DeviceRef{Dev::D, take_run(Dev::D, ty_info(counter_width(v.type)).cells, v.el)};
+    } else if (k == FbKind::Typed && v.type != "SEMA") {  // CV's cells (RTC: CDT, OFFSET); Q (QU) and QD (PREV_IN) in M
+      uint32_t cells = v.type == "RTC" ? 4 : ty_info(counter_width(v.type)).cells;
+      v.dev = DeviceRef{Dev::D, take_run(Dev::D, cells, v.el)};
       v.aux = take(Dev::M, v.el), v.aux2 = take(Dev::M, v.el);
     } else if (k != FbKind::None) v.dev = DeviceRef{Dev::M, take(Dev::M, v.el)};
     return;  // other derived types get nothing (a user FB's instance: its members do); using them is an error
@@ -1094,6 +1102,8 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
     if (inst->type == "CTUD" && m == "QD") return {bit_opd(Area::M, inst->aux2), Ty::Bool};
     if ((k == FbKind::Latch && m == "Q1") || (k == FbKind::Trig && m == "Q") || (inst->type == "SEMA" && m == "BUSY"))
       return {bit_opd(Area::M, i), Ty::Bool};
+    if (inst->type == "RTC" && m == "Q") return {bit_opd(Area::M, inst->aux), Ty::Bool};
+    if (inst->type == "RTC" && m == "CDT") return {Operand{OpdKind::Int, Area::D, i}, Ty::Wide, IT::DT};
     if (IT w = counter_width(inst->type); w != IT::None) {
       bool updown = inst->type.rfind("CTUD", 0) == 0;
       if (m == "CV") return {Operand{OpdKind::Int, Area::D, i}, kind_of(w), w};
@@ -2099,7 +2109,7 @@ void Importer::fb_block(const Node& b, Var& inst) {
       {"TON", {"EN", "IN", "PT"}}, {"TOF", {"EN", "IN", "PT"}}, {"TP", {"EN", "IN", "PT"}},
       {"CTU", {"EN", "CU", "R", "PV"}}, {"CTD", {"EN", "CD", "LD", "PV"}}, {"CTUD", {"EN", "CU", "CD", "R", "LD", "PV"}},
       {"SR", {"EN", "S1", "R"}}, {"RS", {"EN", "S", "R1"}}, {"R_TRIG", {"EN", "CLK"}}, {"F_TRIG", {"EN", "CLK"}},
-      {"SEMA", {"EN", "CLAIM", "RELEASE"}}};
+      {"SEMA", {"EN", "CLAIM", "RELEASE"}}, {"RTC", {"EN", "IN", "PDT"}}};
   IT width = counter_width(t);
   const std::vector<std::string>& inputs = known.at(width == IT::None ? t : t.substr(0, t.find('_')));
   for (const Pin& p : b.inputs)
@@ -2134,7 +2144,7 @@ void Importer::fb_block(const Node& b, Var& inst) {
   Cond en = Cond::yes();
   for (const Pin& p : b.inputs) {
     if (p.name == "PT") v[p.name] = Val{preset_ms(value(p.name), p.el)};
-    else if (p.name == "PV") v[p.name] = value(p.name);
+    else if (p.name == "PV" || p.name == "PDT") v[p.name] = value(p.name);
     else if (p.name == "EN") en = materialize(cond("EN"), el);
     else c[p.name] = (k == FbKind::Latch || k == FbKind::Typed || p.name == "R" || p.name == "LD") ? materialize(cond(p.name), el) : cond(p.name);
   }
@@ -2203,6 +2213,23 @@ void Importer::fb_block(const Node& b, Var& inst) {
     bool_out(updown ? "QU" : "Q", bit_opd(Area::M, inst.aux));
     if (updown) bool_out("QD", bit_opd(Area::M, inst.aux2));
     outs_[{b.id, "CV"}] = Out{false, {}, Val{cv, kind_of(width), width}};
+  } else if (t == "RTC") {
+    // MatIEC's lib/rtc.txt, CURRENT_TIME the scan clock (docs/stdlib.md, "RTC"):
+    // IF IN THEN (IF NOT PREV_IN THEN OFFSET := PDT - CURRENT_TIME); CDT := CURRENT_TIME + OFFSET
+    // ELSE CDT := CURRENT_TIME; Q := IN; PREV_IN := IN  (DT and TIME in ns: LINT arithmetic)
+    Operand cdt{OpdKind::Int, Area::D, i}, offset{OpdKind::Int, Area::D, i + 2}, clock = scan_clock(el);
+    // PDT is a DT (MatIEC's type check refuses any other); unconnected, DT#1970-01-01-00:00:00
+    if (const Pin* p = pins.get("PDT"); p && !p->conns.empty() && type_of(val("PDT")) != IT::DT)
+      fail_at(p->el, "PDT of RTC must be a DT, not " + std::string(ty_info(type_of(val("PDT"))).name) + " (" + p->el->path() + ")");
+    Operand q = bit_opd(Area::M, inst.aux), prev = bit_opd(Area::M, inst.aux2), pdt = as_type(val("PDT"), IT::DT, el);
+    Cond on = in("IN");
+    rung(c_and(on, bit_leaf(Op::LOADN, prev, el)), tout(Op::TSUB, IT::LINT, IT::None, {pdt, clock, offset}, el), el);
+    rung(on, tout(Op::TADD, IT::LINT, IT::None, {clock, offset, cdt}, el), el);
+    rung(negate(on, el), tout(Op::TMOVE, IT::DT, IT::None, {clock, cdt}, el), el);
+    rung(on, out(Op::OUT, {q}, el), el);
+    rung(on, out(Op::OUT, {prev}, el), el);
+    bool_out("Q", q);
+    outs_[{b.id, "CDT"}] = Out{false, {}, Val{cdt, Ty::Wide, IT::DT}};
   } else if (t == "SEMA") {
     // MatIEC's lib/sema.txt: Q_INTERNAL := CLAIM OR (Q_INTERNAL AND NOT RELEASE); BUSY := Q_INTERNAL
     Operand q = bit_opd(Area::M, i);
@@ -3495,6 +3522,23 @@ void Importer::finish(TreeProgram& p, const Element* root) {
     copy(then_node(bit_leaf(Op::LOAD, bit_opd(Area::X, x), root), out(Op::OUT, {bit_opd(Area::M, m)}, root), {rungs_[0].line, 1}));
   for (auto [x, d] : shadow_w_)
     copy(out(Op::MOV, {Operand{OpdKind::Int, Area::WX, x}, Operand{OpdKind::Int, Area::D, d}}, root));
+  if (clock_) {  // a TON always on gives this scan's dt in its ET (ms): clock += dt in ns; ET := 0
+    Operand tm{OpdKind::Timer}, pt = const_opd(INT32_MAX), et{OpdKind::Int, Area::TW, clock_->first};
+    tm.index = clock_->first;
+    Operand clock{OpdKind::Int, Area::D, clock_->second}, ns{OpdKind::Int, Area::D, clock_->second + 2};
+    std::vector<TreeNode> acts;
+    acts.push_back(out(Op::TON, {tm, pt}, root));
+    acts.push_back(tout(Op::TCONV, IT::LINT, IT::DINT, {et, ns}, root));
+    acts.push_back(tout(Op::TMUL, IT::LINT, IT::None, {ns, Operand::typed_const(1000000), ns}, root));
+    acts.push_back(tout(Op::TADD, IT::LINT, IT::None, {clock, ns, clock}, root));
+    acts.push_back(tout(Op::TMOVE, IT::DINT, IT::None, {Operand::typed_const(0), et}, root));
+    TreeRung r;
+    r.line = rungs_[0].line;
+    r.title = "RTC's scan clock";
+    r.root = then_node(Cond::yes(), fork_of(std::move(acts)), {r.line, 1});
+    copies.insert(copies.begin(), std::move(r));
+    clock_.reset();
+  }
   rungs_.insert(rungs_.begin(), std::make_move_iterator(copies.begin()), std::make_move_iterator(copies.end()));
   p.source = file_;
   p.rungs = std::move(rungs_);

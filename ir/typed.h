@@ -467,9 +467,50 @@ inline Str time_to_string(int64_t ns) {
   if (nsec == 0) return str_printf("T#%dd%dh%dm%ds", days, hours, mins, mrem);
   return str_printf("T#%dd%dh%dm%ds%gms", days, hours, mins, mrem, double(nsec) / 1000000);
 }
+// MatIEC's convert_seconds_to_date_and_time (iec_std_lib.h): the day and the
+// time of day by C's / and % (a negative rest moved into the day before),
+// then whole years from 1970 and the month by __mon_yday.
+struct Tm {
+  int sec, min, hour, day, mon, year;
+};
+inline Tm seconds_to_date(int64_t seconds) {
+  static const unsigned short mon_yday[2][13] = {{0, 31, 59, 90, 120, 151, 181, 212, 243, 273, 304, 334, 365},
+                                                 {0, 31, 60, 91, 121, 152, 182, 213, 244, 274, 305, 335, 366}};
+  auto leap = [](int y) { return y % 4 == 0 && (y % 100 != 0 || y % 400 == 0); };
+  Tm t{};
+  int64_t days = seconds / 86400, rem = seconds % 86400;
+  if (rem < 0) rem += 86400, days--;
+  t.hour = int(rem / 3600);
+  rem %= 3600;
+  t.min = int(rem / 60);
+  t.sec = int(rem % 60);
+  t.year = 1970;
+  while (days >= (rem = leap(t.year) ? 366 : 365)) t.year++, days -= rem;
+  while (days < 0) t.year--, days += leap(t.year) ? 366 : 365;
+  t.mon = 1;
+  while (days >= mon_yday[leap(t.year)][t.mon]) t.mon += 1;
+  t.day = int(days - mon_yday[leap(t.year)][t.mon - 1] + 1);
+  return t;
+}
+// __date_to_string "D#%d-%2.2d-%2.2d"; __tod_to_string "TOD#%2.2d:%2.2d:%2.2d" (with
+// a fraction "%09.6f" seconds; from 86400 s on 'TOD#ERROR'); __dt_to_string
+// "DT#%d-%2.2d-%2.2d-%2.2d:%2.2d:%2.2d" (or "%09.6f" seconds).
+inline Str date_to_string(Ty u, int64_t ns) {
+  const int64_t sec = time_sec(ns), nsec = time_nsec(ns);
+  const Tm t = seconds_to_date(sec);
+  const double frac = double(t.sec) + double(nsec) / 1e9;
+  if (u == Ty::DATE) return str_printf("D#%d-%2.2d-%2.2d", t.year, t.mon, t.day);
+  if (u == Ty::TOD) {
+    if (sec >= 86400) return str_printf("TOD#ERROR");
+    if (nsec == 0) return str_printf("TOD#%2.2d:%2.2d:%2.2d", t.hour, t.min, t.sec);
+    return str_printf("TOD#%2.2d:%2.2d:%09.6f", t.hour, t.min, frac);
+  }
+  if (nsec == 0) return str_printf("DT#%d-%2.2d-%2.2d-%2.2d:%2.2d:%2.2d", t.year, t.mon, t.day, t.hour, t.min, t.sec);
+  return str_printf("DT#%d-%2.2d-%2.2d-%2.2d:%2.2d:%09.6f", t.year, t.mon, t.day, t.hour, t.min, frac);
+}
 // U_TO_STRING: __bool_to_string 'TRUE' / 'FALSE'; __bit_to_string "16#%llx";
 // __sint_to_string "%lld"; __uint_to_string "%llu"; __real_to_string "%.10g"
-// of the LREAL value; __time_to_string.  (The dates are not converted here.)
+// of the LREAL value; __time_to_string; the dates above.
 inline Str to_string(Ty u, uint64_t v) {
   switch (ty_info(u).kind) {
     case TyKind::Bool: return v ? str_printf("TRUE") : str_printf("FALSE");
@@ -478,6 +519,7 @@ inline Str to_string(Ty u, uint64_t v) {
     case TyKind::Unsigned: return str_printf("%llu", (unsigned long long)v);
     case TyKind::Real: return str_printf("%.10g", real_value(u, v));
     case TyKind::Time: return time_to_string(int64_t(v));
+    case TyKind::Date: return date_to_string(u, int64_t(v));
     default: return Str{};
   }
 }
@@ -553,7 +595,7 @@ inline uint64_t from_string(Ty t, const Str& s) {
       return 1;
     }
     case TyKind::Real: return real_bits(t, str_to_real(s));
-    case TyKind::Time: {
+    case TyKind::Time: case TyKind::Date: {  // STRING_TO_[ANY_DATE] is __string_to_time too
       uint32_t l = s.len;
       while (l > 0 && s.body[--l] != '.') {}
       if (l == 0) return time_of(int64_t(str_to_lint(s)), 0);
@@ -562,14 +604,9 @@ inline uint64_t from_string(Ty t, const Str& s) {
     default: return norm(t, str_to_lint(s));
   }
 }
-// Does CONV take T and U when one is a STRING?  Every elementary type but the
-// dates, to and from; not STRING to STRING (that is MOVE).
-inline bool conv_string_ok(Ty t, Ty u) {
-  if (t == Ty::STRING && u == Ty::STRING) return false;
-  Ty other = t == Ty::STRING ? u : t;
-  return ty_info(other).kind != TyKind::Date;
-}
-
+// Does CONV take T and U when one is a STRING?  Every elementary type, to and
+// from; not STRING to STRING (that is MOVE).
+inline bool conv_string_ok(Ty t, Ty u) { return !(t == Ty::STRING && u == Ty::STRING); }
 
 // ---- running a string instruction (every engine that runs them calls this)
 // Is this an instruction of the string section: a STRING operand, or ARGS?

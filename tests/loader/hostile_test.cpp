@@ -445,7 +445,7 @@ TEST(Hostile, TypedArraysInTheIlSection) {
 
 // STRING operands in the IL section (docs/il.md, "Strings"): a string whose 33
 // cells leave their area, a STRING constant, a MID not right after its ARGS or
-// jumped to, a CONV between STRING and a date: each refused at its offset.
+// jumped to, a CONV from STRING to STRING: each refused at its offset.
 TEST(Hostile, StringsInTheIlSection) {
   const Instr truth = il_op(Op::TRUE), load_x0 = il_op(Op::LOAD, il_dev(Area::X, 0)), jmp = il_jmp_l();
   const uint32_t d_count = Layout::standard(0).count[int(Area::D)];
@@ -453,14 +453,12 @@ TEST(Hostile, StringsInTheIlSection) {
   const Instr mid = il_typed(Op::TMID, Ty::STRING, Ty::None, il_dev(Area::D, 0), il_dev(Area::D, 100));
   const Instr past_end = il_typed(Op::TMOVE, Ty::STRING, Ty::None, il_dev(Area::D, 0), il_dev(Area::D, d_count - 32));
   const Instr konst = il_typed(Op::TMOVE, Ty::STRING, Ty::None, Operand::typed_const(3), il_dev(Area::D, 100));
-  const Instr to_date = il_typed(Op::TCONV, Ty::DATE, Ty::STRING, il_dev(Area::D, 0), il_dev(Area::D, 100));
   const Instr twice = il_typed(Op::TCONV, Ty::STRING, Ty::STRING, il_dev(Area::D, 0), il_dev(Area::D, 100));
   for (const IlCase& c : std::vector<IlCase>{
            {"a STRING whose last cell is past D", {{truth, past_end}}, 1, "cannot hold this STRING operand"},
            {"a STRING constant", {{truth, konst}}, 1, "a STRING operand is a device"},
            {"a MID not after an ARGS", {{truth, mid}}, 1, "MID not right after an ARGS"},
            {"a jump onto a MID", {{load_x0, jmp}, {truth, args}, {mid}}, 1, "past its ARGS"},
-           {"CONV between STRING and a date", {{truth, to_date}}, 1, "does not take type DATE.STRING"},
            {"CONV from STRING to STRING", {{truth, twice}}, 1, "does not take type STRING.STRING"},
        })
     expect_il_refused(c);

@@ -152,6 +152,119 @@ def time_to_string(ns):  # __time_to_string; div(IN.tv_sec, ...) with tv_sec pas
     return _snprintf("T#%dd%dh%dm%ds%gms" % (days, hours, mins, mrem, nsec / 1000000))
 
 
+_MON_YDAY = [[0, 31, 59, 90, 120, 151, 181, 212, 243, 273, 304, 334, 365],
+             [0, 31, 60, 91, 121, 152, 182, 213, 244, 274, 305, 335, 366]]
+
+
+def _leap(y):
+    return int(y % 4 == 0 and (y % 100 != 0 or y % 400 == 0))
+
+
+def seconds_to_date(seconds):  # convert_seconds_to_date_and_time (long arithmetic: C's / and %)
+    days, rem = _cdiv(seconds, 86400)
+    if rem < 0:
+        rem += 86400
+        days -= 1
+    hour, rem = _cdiv(rem, 3600)
+    mn, sec = _cdiv(rem, 60)
+    year = 1970
+    while days >= (366 if _leap(year) else 365):
+        days -= 366 if _leap(year) else 365
+        year += 1
+    while days < 0:
+        year -= 1
+        days += 366 if _leap(year) else 365
+    mon = 1
+    while days >= _MON_YDAY[_leap(year)][mon]:
+        mon += 1
+    return year, mon, days - _MON_YDAY[_leap(year)][mon - 1] + 1, hour, mn, sec
+
+
+def date_to_string(t, ns):  # __date_to_string, __tod_to_string, __dt_to_string
+    sec, nsec = _cdiv(ns, 10**9)  # tv_sec and tv_nsec: ldc's time_sec / time_nsec (C's / and %)
+    y, mo, d, h, mi, s = seconds_to_date(sec)
+    frac = s + nsec / 1e9
+    if t == "DATE":
+        return _snprintf("D#%d-%02d-%02d" % (y, mo, d))
+    if t == "TOD":
+        if sec >= 86400:
+            return _snprintf("TOD#ERROR")
+        return _snprintf("TOD#%02d:%02d:%02d" % (h, mi, s) if nsec == 0 else "TOD#%02d:%02d:%09.6f" % (h, mi, frac))
+    if nsec == 0:
+        return _snprintf("DT#%d-%02d-%02d-%02d:%02d:%02d" % (y, mo, d, h, mi, s))
+    return _snprintf("DT#%d-%02d-%02d-%02d:%02d:%09.6f" % (y, mo, d, h, mi, frac))
+
+
+# TIME, LTIME to STRING, derived by hand from __time_to_string (thiagoralves/matiec cb9937a8,
+# lib/C/iec_std_lib.h): days = div(IN.tv_sec, 86400) (tv_sec, a long, passed as div's int);
+# "T#%dd" if days.rem and tv_nsec are 0, else hours = div(days.rem, 3600): "T#%dd%dh" if
+# hours.rem and tv_nsec are 0, else minuts = div(hours.rem, 60): "T#%dd%dh%dm", "T#%dd%dh%dm%ds",
+# or with tv_nsec "T#%dd%dh%dm%ds%gms" of tv_nsec / 1000000.
+TIMES_BY_HAND = [
+    ("TIME", 0, b"T#0d", "div(0, 86400) = {0, 0}, tv_nsec 0"),
+    ("TIME", 2 * 3600 * 10**9, b"T#0d2h", "div(7200, 86400) = {0, 7200}; div(7200, 3600) = {2, 0}"),
+    ("TIME", 90 * 10**9, b"T#0d0h1m30s", "{0, 90}; {0, 90}; div(90, 60) = {1, 30}"),
+    ("TIME", (86400 + 3723) * 10**9 + 5500000, b"T#1d1h2m3s5.5ms", "{1, 3723}; {1, 123}; {2, 3}; %g of 5.5"),
+    ("TIME", 3500000, b"T#0d0h0m0s3.5ms", "tv_sec 0 but tv_nsec 3500000: every field, %g of 3.5"),
+    ("TIME", -1500 * 10**6, b"T#0d0h0m-1s-500ms", "tv_sec -1, tv_nsec -5e8: div(-1, ...) = {0, -1} each time; %g of -500"),
+    ("TIME", 2**31 * 10**9, b"T#-24855d-3h-14m-8s",
+     "tv_sec 2^31 as an int is -2147483648: div by 86400 = {-24855, -11648}; by 3600 {-3, -848}; by 60 {-14, -8}"),
+    ("LTIME", 3 * 86400 * 10**9, b"T#3d", "div(259200, 86400) = {3, 0}"),
+]
+
+# DATE, TOD, DT to STRING.  Each string is derived by hand from OpenPLC's MatIEC
+# (github.com/thiagoralves/matiec cb9937a8, lib/C/iec_std_lib.h): __date_to_string
+# "D#%d-%2.2d-%2.2d", __tod_to_string (tv_sec >= SECONDS_PER_DAY: 'TOD#ERROR'; else
+# "TOD#%2.2d:%2.2d:%2.2d", or with tv_nsec "TOD#%2.2d:%2.2d:%09.6f" of tm_sec + tv_nsec / 1e9),
+# __dt_to_string "DT#%d-%2.2d-%2.2d-%2.2d:%2.2d:%2.2d" (or "%09.6f"), the fields from
+# convert_seconds_to_date_and_time(tv_sec): days = s / 86400, rem = s % 86400 (C's), a
+# negative rem + 86400 with days - 1; whole years from 1970 (366 if __isleap); then
+# tm_mon from 1 while days >= __mon_yday[leap][tm_mon], tm_day = days - __mon_yday[leap][tm_mon - 1] + 1.
+# ldc's value is ns; tv_sec = ns / 10^9 and tv_nsec = ns % 10^9 (C's, both of ns's sign, as
+# __normalize_timespec leaves a negative time).  beremiz/matiec 0dff6e04 has the same code but
+# for __tod_to_string's `uint64_t seconds`, which makes a negative TOD 'TOD#ERROR'; OpenPLC's
+# `time_t` is taken (docs/il.md).
+NS_PER_S = 10**9
+DATES_BY_HAND = [
+    ("DATE", 0, b"D#1970-01-01", "days 0 < __mon_yday[0][1] = 31: month 1, day 0 - 0 + 1"),
+    ("DATE", 31 * 86400 * NS_PER_S, b"D#1970-02-01", "days 31 >= __mon_yday[0][1] = 31: month 2, day 31 - 31 + 1"),
+    ("DATE", (86400 + 3600) * NS_PER_S, b"D#1970-01-02", "the time of day is dropped: days 1, day 2"),
+    ("DATE", 19753 * 86400 * NS_PER_S, b"D#2024-01-31",
+     "1970..2023 are 54 * 365 + 13 leap days = 19723 days; 19753 - 19723 = 30 < 31: month 1, day 31"),
+    ("DATE", -86400 * NS_PER_S, b"D#1969-12-31",
+     "days -1 < 0: year 1969 (365), days 364 >= __mon_yday[0][11] = 334, < 365: month 12, day 364 - 334 + 1"),
+    ("DATE", 11016 * 86400 * NS_PER_S, b"D#2000-02-29",
+     "1970..1999: 30 * 365 + 7 = 10957; days 59 in leap 2000 (2000 % 400 == 0): 59 >= 31, < 60: month 2, day 29"),
+    ("DATE", 47541 * 86400 * NS_PER_S, b"D#2100-03-01",
+     "1970..2099: 130 * 365 + 32 = 47482; days 59 in 2100, not leap (2100 % 100 == 0): 59 >= __mon_yday[0][2] = 59: month 3, day 1"),
+    ("TOD", (12 * 3600 + 30 * 60 + 15) * NS_PER_S + 500000000, b"TOD#12:30:15.500000",
+     "tv_sec 45015: 12 h 30 min 15 s; tv_nsec 5e8: %09.6f of 15.5"),
+    ("TOD", 5 * NS_PER_S + 250000000, b"TOD#00:00:05.250000", "%09.6f pads 5.25 to nine characters"),
+    ("TOD", 59 * NS_PER_S + 999999900, b"TOD#00:00:60.000000", "%09.6f rounds 59.9999999 up to 60.000000"),
+    ("TOD", 1, b"TOD#00:00:00.000000", "tv_nsec 1 is not 0, so the %09.6f form, of 1e-9"),
+    ("TOD", 86399 * NS_PER_S, b"TOD#23:59:59", "tv_sec 86399: 23 h 59 min 59 s, tv_nsec 0"),
+    ("TOD", 86400 * NS_PER_S, b"TOD#ERROR", "tv_sec 86400 >= SECONDS_PER_DAY"),
+    ("TOD", -1 * NS_PER_S, b"TOD#23:59:59", "tv_sec -1 (time_t) < 86400; rem -1 + 86400 = 86399"),
+    ("DT", (951782400 + 45296) * NS_PER_S, b"DT#2000-02-29-12:34:56",
+     "951782400 s = 11016 days (2000-02-29 above); 45296 s = 12 h 34 min 56 s"),
+    ("DT", -1 * NS_PER_S, b"DT#1969-12-31-23:59:59", "days 0, rem -1: rem 86399, days -1: 1969-12-31 (above)"),
+    ("DT", -1500000000, b"DT#1969-12-31-23:59:58.500000",
+     "tv_sec -1, tv_nsec -5e8: 1969-12-31-23:59:59 and %09.6f of 59 - 0.5"),
+    ("DT", -500000000, b"DT#1970-01-01-00:00:-0.500000", "tv_sec 0, tv_nsec -5e8: %09.6f of 0 - 0.5"),
+    ("DT", 1700000000 * NS_PER_S + 250000000, b"DT#2023-11-14-22:13:20.250000",
+     "1700000000 s = 19675 days + 80000 s (22 h 13 min 20 s); 2023 starts at day 19358, 317 >= 304, < 334: month 11, day 14"),
+]
+# STRING to DATE, TOD, DT: __string_to_time, derived by hand (as TIME: whole seconds).
+DATES_FROM_STRING_BY_HAND = [
+    ("DATE", b"86400", 86400 * NS_PER_S, "no dot: __pstring_to_sint 86400, {86400, 0}"),
+    ("DT", b"1.9", 1 * NS_PER_S, "a dot at 1: atof 1.9, {(long)1.9, (long)(0.9) * 1000000000} = {1, 0}"),
+    ("DT", b"-3", -3 * NS_PER_S, "no dot: __pstring_to_sint -3"),
+    ("DATE", b"1.5e9", 1500000000 * NS_PER_S, "a dot: atof 1.5e9, whole"),
+    ("TOD", b"12:30", 12 * NS_PER_S, "read from the end: 30, ':' >= '.' resets, then 12"),
+    ("TOD", b"D#2024-01-31", 0, "read from the end: '-' and '#' are skipped, the 'D' resets the 20240131 read so far"),
+]
+
+
 def to_string(t, v):
     if t == "BOOL":
         return b"TRUE" if v else b"FALSE"  # __bool_to_string
@@ -163,6 +276,8 @@ def to_string(t, v):
         return _snprintf("%.10g" % m.rval(t, v))  # __real_to_string "%.10g" of the LREAL
     if t in m.TIMES:
         return time_to_string(v)
+    if t in m.DATES:
+        return date_to_string(t, v)
     raise ValueError(t)
 
 
@@ -228,7 +343,7 @@ def from_string(t, s):
         return int(len(s) == 4 and s.upper() == b"TRUE")
     if t in m.REALS:
         return m.rbits(t, string_to_real(s))
-    if t in m.TIMES:  # {(long)IN_val, (long)(IN_val - (LINT)IN_val)*1000000000}: whole seconds
+    if t in m.TIMES or t in m.DATES:  # __string_to_time: {(long)IN_val, (long)(IN_val - (LINT)IN_val)*1000000000}: whole seconds
         if _dot(s):
             return m.wrap(t, m.cvtt64(string_to_real(s)) * 10**9)
         v = pstring_to_sint(s)
@@ -419,16 +534,22 @@ def programs(Program):
     for t, v in [("INT", -5), ("INT", 32767), ("DINT", -2147483648), ("LINT", -(2**63)), ("UDINT", 4294967295),
                  ("ULINT", 2**64 - 1), ("BOOL", 1), ("BOOL", 0), ("BYTE", 255), ("WORD", 0xABC), ("LWORD", 2**64 - 1),
                  ("REAL", m.bits32(1.5)), ("REAL", m.bits32(0.1)), ("LREAL", m.bits64(0.1)), ("LREAL", m.bits64(1e300)),
-                 ("LREAL", m.bits64(-2.5e-7)), ("REAL", m.bits32(float("inf"))),
-                 ("TIME", 0), ("TIME", 2 * 3600 * 10**9), ("TIME", 90 * 10**9), ("TIME", (86400 + 3723) * 10**9 + 5500000),
-                 ("TIME", -1500 * 10**6), ("LTIME", 3 * 86400 * 10**9)]:
+                 ("LREAL", m.bits64(-2.5e-7)), ("REAL", m.bits32(float("inf")))]:
         a = p.inp(t, v)
         exp = to_string(t, v)
         str_res("CONV.STRING.%s" % t, m_show(t, v), lambda r, a=a, t=t: ["CONV.STRING.%s %s %s" % (t, a, r)], exp,
                 "%s_TO_STRING: %s" % (t, {"BOOL": "__bool_to_string", "REAL": '__real_to_string "%.10g"',
                                           "LREAL": '__real_to_string "%.10g"', "TIME": "__time_to_string",
-                                          "LTIME": "__time_to_string"}.get(t, "__bit_to_string \"16#%llx\"" if t in m.BITS
+                                          "LTIME": "__time_to_string", "DATE": "__date_to_string",
+                                          "TOD": "__tod_to_string (from 86400 s: TOD#ERROR)",
+                                          "DT": "__dt_to_string"}.get(t, "__bit_to_string \"16#%llx\"" if t in m.BITS
                                                                           else "__sint/__uint_to_string")))
+    # TIME and the dates to STRING: the model above must give the strings derived by hand
+    for t, v, exp, why in TIMES_BY_HAND + DATES_BY_HAND:
+        assert to_string(t, v) == exp, (t, v, to_string(t, v), exp)
+        a = p.inp(t, v)
+        str_res("CONV.STRING.%s" % t, m_show(t, v), lambda r, a=a, t=t: ["CONV.STRING.%s %s %s" % (t, a, r)], exp,
+                "%s_TO_STRING: %s" % (t, why))
     # conversions from STRING
     for t, s in [("INT", b"123"), ("INT", b"-5"), ("INT", b"70000"), ("DINT", b"2#1010"), ("DINT", b"8#17"),
                  ("DWORD", b"16#fF"), ("INT", b"1.5"), ("INT", b"abc"), ("INT", b""), ("INT", b"a7"), ("DINT", b" - 42"),
@@ -441,8 +562,17 @@ def programs(Program):
         v = from_string(t, s)
         p.rung("CONV.%s.STRING %s = %s: STRING_TO_%s (%s)" % (t, show(s), m_show(t, v), t,
                                                            "__string_to_bool" if t == "BOOL" else "__string_to_real" if t in m.REALS
-                                                           else "__string_to_time: whole seconds" if t in m.TIMES
+                                                           else "__string_to_time: whole seconds" if t in m.TIMES or t in m.DATES
                                                            else "__pstring_to_sint, then C's conversion"),
+               ["TRUE", "CONV.%s.STRING %s %s" % (t, a, r)])
+        p.expect(t, r, v)
+    # STRING to the dates (__string_to_time, as for TIME): the model above must give the values derived by hand
+    for t, s, exp, why in DATES_FROM_STRING_BY_HAND:
+        v = from_string(t, s)
+        assert v == exp, (t, s, v, exp)
+        a = c.sin(s)
+        r = p.out(t)
+        p.rung("CONV.%s.STRING %s = %s: STRING_TO_%s (__string_to_time: %s)" % (t, show(s), m_show(t, v), t, why),
                ["TRUE", "CONV.%s.STRING %s %s" % (t, a, r)])
         p.expect(t, r, v)
     return progs
