@@ -35,21 +35,7 @@ fi
 "$bindir/ldc" "$src" $task --emit=il > "$tmp/il"
 watch=$(sed -n 's/^\.alias \([^ ]*\) .*/\1/p' "$tmp/il" | paste -sd, -)
 inputs=$(sed -n 's/^\.alias \([^ ]*\) \(W\{0,1\}X[0-9]*\)$/\1 \2/p' "$tmp/il")
-echo "$inputs" | awk 'BEGIN { s = 12345; n = 0 }
-  NF == 2 { name[n] = $1; word[n] = ($2 ~ /^WX/); n++ }
-  END {
-    if (n == 0) { print "dt"; for (r = 0; r < 300; r++) print 10; exit }
-    h = "dt"; for (i = 0; i < n; i++) h = h "," name[i]; print h
-    for (r = 0; r < 300; r++) {
-      line = 10
-      for (i = 0; i < n; i++) {
-        s = (s * 69069 + 1) % 4294967296  # exact in doubles
-        v = word[i] ? int(s / 65536) % 200 - 100 : (int(s / 65536) % 4 == 0)
-        line = line "," v
-      }
-      print line
-    }
-  }' > "$tmp/trace.csv"
+echo "$inputs" | awk -f "$(dirname "$0")/random_trace.awk" > "$tmp/trace.csv"
 # The interpreter defines the meaning; native code at every level and the C40
 # simulator must give the same values scan by scan.
 run() {  # run NAME LDC-FLAGS ENGINE

@@ -3,7 +3,7 @@
 # two ways (docs/st.md): its PLCopen XML and the ST that OpenPLC Editor
 # generated from it must give the same values, scan by scan, for every
 # variable both name, over 300 scans of a pseudo-random trace of the inputs
-# (a fixed LCG, as check_corpus.sh draws), on the reference interpreter.
+# (../random_trace.awk, as check_corpus.sh draws it), on the reference interpreter.
 set -eu
 bindir=$1 xml=$2 st=$3
 tmp=$(mktemp -d)
@@ -16,21 +16,7 @@ aliases "$tmp/st.il" > "$tmp/st.al"
 join "$tmp/xml.al" "$tmp/st.al" > "$tmp/common"   # NAME XML-DEVICE ST-DEVICE
 [ -s "$tmp/common" ] || { echo "FAIL: no variable named in both" >&2; exit 1; }
 watch=$(cut -d' ' -f1 "$tmp/common" | paste -sd, -)
-awk '$2 ~ /^W?X[0-9]+$/ { print $1, ($2 ~ /^WX/) }' "$tmp/common" | awk 'BEGIN { s = 12345; n = 0 }
-  { name[n] = $1; word[n] = $2; n++ }
-  END {
-    if (n == 0) { print "dt"; for (r = 0; r < 300; r++) print 10; exit }
-    h = "dt"; for (i = 0; i < n; i++) h = h "," name[i]; print h
-    for (r = 0; r < 300; r++) {
-      line = 10
-      for (i = 0; i < n; i++) {
-        s = (s * 69069 + 1) % 4294967296
-        v = word[i] ? int(s / 65536) % 200 - 100 : (int(s / 65536) % 4 == 0)
-        line = line "," v
-      }
-      print line
-    }
-  }' > "$tmp/trace.csv"
+awk '$2 ~ /^W?X[0-9]+$/ { print $1, $2 }' "$tmp/common" | awk -f "$(dirname "$0")/../random_trace.awk" > "$tmp/trace.csv"
 "$bindir/ldrun" "$xml" --engine=interp --trace "$tmp/trace.csv" --watch "$watch" > "$tmp/xml.out"
 "$bindir/ldrun" "$st" --engine=interp --trace "$tmp/trace.csv" --watch "$watch" > "$tmp/st.out"
 if ! diff -u "$tmp/xml.out" "$tmp/st.out" > "$tmp/diff"; then
