@@ -342,11 +342,7 @@ void exec_LOOP(Ctx& c) {
     c.pc = target;
     return;
   }
-  uint32_t kind = kFaultLoop, at = c.start;
-  uint64_t budget = kLoopBudget;
-  std::memcpy(c.mem + kSysFault, &kind, 4);
-  std::memcpy(c.mem + kSysFaultAt, &at, 4);
-  std::memcpy(c.mem + kSysFaultValue, &budget, 8);
+  write_scan_fault(c.mem, kFaultLoop, c.start, kLoopBudget);
   c.end = true;
 }
 
@@ -405,10 +401,7 @@ void exec_typed(Ctx& c) {
     uint64_t i = toperand(c, t).v;
     int32_t lo = int32_t(toperand(c, Ty::None).v), hi = int32_t(toperand(c, Ty::None).v);
     if (typed::index_ok(t, i, lo, hi)) { c.xr = uint32_t(int64_t(i) - lo); return; }
-    uint32_t kind = kFaultIndex, at = c.start;
-    std::memcpy(c.mem + kSysFault, &kind, 4);
-    std::memcpy(c.mem + kSysFaultAt, &at, 4);
-    std::memcpy(c.mem + kSysFaultValue, &i, 8);
+    write_scan_fault(c.mem, kFaultIndex, c.start, i);
     c.end = true;
   } else if constexpr (op == Op::TLDX) {
     TOpd base = toperand(c, Ty::None);

@@ -473,6 +473,12 @@ std::string validate_il(std::span<const uint8_t> code, const Layout& layout) {
   });
 }
 
+void write_scan_fault(uint8_t* mem, uint32_t kind, uint32_t il_offset, uint64_t value) {
+  std::memcpy(mem + kSysFault, &kind, 4);
+  std::memcpy(mem + kSysFaultAt, &il_offset, 4);
+  std::memcpy(mem + kSysFaultValue, &value, 8);
+}
+
 bool has_loop(const Program& p) {
   for (const Rung& r : p.rungs)
     for (const Instr& in : r.code)

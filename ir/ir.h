@@ -372,6 +372,9 @@ constexpr uint32_t kSysFault = 8;        // UINT32: 0 none, 1 index out of range
 constexpr uint32_t kSysFaultAt = 12;     // UINT32: the IL byte offset of the IDX (LOOP) instruction
 constexpr uint32_t kSysFaultValue = 16;  // INT64: the index (the budget)
 enum : uint32_t { kFaultNone = 0, kFaultIndex = 1, kFaultLoop = 2 };
+// Writes the fault record (kind, the faulting instruction's IL offset, its
+// value) that ends a scan; the interpreters' one writer of it.
+void write_scan_fault(uint8_t* mem, uint32_t kind, uint32_t il_offset, uint64_t value);
 // The loops of a scan (LOOP, docs/il.md "Loops"): every engine sets the
 // counter to 0 as a scan of a program with a LOOP starts, and each LOOP that
 // jumps back adds 1; the one that would make it kLoopBudget ends the scan with

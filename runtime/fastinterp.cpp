@@ -221,24 +221,6 @@ inline uint32_t n_W32(uint32_t v) { return v; }
 template <uint32_t (*N)(uint32_t)>
 inline void move_cell(uint8_t* d, const uint8_t* p) { st_u(d, 0, N(ld_u(p, 0))); }
 
-// An IDX whose index is outside its bounds: the fault record (docs/il.md,
-// "Index faults"); the caller ends the scan.
-__attribute__((noinline)) void index_fault(uint8_t* m, uint32_t at, uint64_t index) {
-  uint32_t kind = kFaultIndex;
-  std::memcpy(m + kSysFault, &kind, 4);
-  std::memcpy(m + kSysFaultAt, &at, 4);
-  std::memcpy(m + kSysFaultValue, &index, 8);
-}
-
-// A LOOP that would take the budget's last back edge (docs/il.md, "Loops").
-__attribute__((noinline)) void loop_fault(uint8_t* m, uint32_t at) {
-  uint32_t kind = kFaultLoop;
-  uint64_t budget = kLoopBudget;
-  std::memcpy(m + kSysFault, &kind, 4);
-  std::memcpy(m + kSysFaultAt, &at, 4);
-  std::memcpy(m + kSysFaultValue, &budget, 8);
-}
-
 using TGen = FastInterpreter::TypedGeneric;
 using TOpnd = FastInterpreter::TypedOperand;
 inline uint64_t tget(const uint8_t* m, const TOpnd& o, Ty t) { return o.konst ? o.k : typed::load(t, m + o.off); }
@@ -262,7 +244,7 @@ bool run_typed(uint8_t* m, const TGen& g, uint32_t& xr, typed::StrArgs& args) {
     uint64_t i = tget(m, g.o[0], t);
     int32_t lo = int32_t(g.o[1].k), hi = int32_t(g.o[2].k);
     if (typed::index_ok(t, i, lo, hi)) { xr = uint32_t(int64_t(i) - lo); return false; }
-    index_fault(m, g.at, i);
+    write_scan_fault(m, kFaultIndex, g.at, i);
     return true;
   } else if constexpr (op == Op::TLDX) {
     typed::store(t, m + g.o[2].off, typed::load(t, m + g.o[0].off + size_t(xr) * g.o[1].k));
@@ -904,7 +886,7 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
   HANDLER(N) {                                                                              \
     if (st & 1u) {                                                                          \
       const int64_t i = LOAD, lo = int32_t(ip->b);                                          \
-      if (i < lo || i > int32_t(ip->c)) { index_fault(m, il_offset_[size_t(ip - base)], uint64_t(i)); return; } \
+      if (i < lo || i > int32_t(ip->c)) { write_scan_fault(m, kFaultIndex, il_offset_[size_t(ip - base)], uint64_t(i)); return; } \
       xr = uint32_t(i - lo);                                                                \
     }                                                                                       \
     NEXT();                                                                                 \
@@ -984,7 +966,7 @@ void FastInterpreter::scan(ImageBytes& mem_bytes) {
     if (st & 1u) {
       uint32_t n = ld_u(m, kSysLoops) + 1;
       st_u(m, kSysLoops, n);  // counted first: at the fault it holds the budget
-      if (n >= kLoopBudget) { loop_fault(m, il_offset_[size_t(ip - base)]); return; }
+      if (n >= kLoopBudget) { write_scan_fault(m, kFaultLoop, il_offset_[size_t(ip - base)], kLoopBudget); return; }
       ip = base + ip->a;
       DISPATCH();
     }

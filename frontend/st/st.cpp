@@ -30,6 +30,16 @@ constexpr int kMaxNesting = 200;          // expressions and statements: hostile
 constexpr int kMaxParenDepth = 12;        // the typed reader takes 16
 constexpr int64_t kMaxUnrolled = 16;      // iterations of a FOR loop written out instead of looped
 
+// One level of nesting of the parser or the writer, refused beyond
+// kMaxNesting (hostile input cannot exhaust the stack).
+struct Nest {
+  int& d;
+  Nest(int& depth, const Tok& at) : d(depth) {
+    if (++d > kMaxNesting) throw CompileError(at.line, at.col, "nested deeper than " + std::to_string(kMaxNesting));
+  }
+  ~Nest() { d--; }
+};
+
 // ---------------------------------------------------------------- syntax tree
 
 struct Expr;
@@ -91,14 +101,6 @@ class Parser {
   size_t pos_;
   std::set<std::string> functions_;
   int depth_ = 0;
-
-  struct Nest {
-    int& d;
-    Nest(int& depth, const Tok& at) : d(depth) {
-      if (++d > kMaxNesting) throw CompileError(at.line, at.col, "nested deeper than " + std::to_string(kMaxNesting));
-    }
-    ~Nest() { d--; }
-  };
 
   const Tok& peek(size_t k = 0) const { return t_[std::min(pos_ + k, t_.size() - 1)]; }
   const Tok& next() { return t_[pos_ < t_.size() - 1 ? pos_++ : pos_]; }
@@ -844,13 +846,6 @@ class Writer {
       }
     }
   }
-  struct Nest {
-    int& d;
-    Nest(int& depth, const Tok& at) : d(depth) {
-      if (++d > kMaxNesting) throw CompileError(at.line, at.col, "nested deeper than " + std::to_string(kMaxNesting));
-    }
-    ~Nest() { d--; }
-  };
   // A standard function called with EN or ENO (as Beremiz writes a block
   // whose EN is wired): MatIEC's generated C returns the type's initial value
   // and sets ENO FALSE when EN is FALSE, else computes and sets ENO TRUE.
