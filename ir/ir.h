@@ -459,6 +459,10 @@ struct TreeRung {
   std::string title;
   int line = 0;
   TreeNode root;  // an action
+  // Or, when not empty, the rung as IL already (a POU body another reader
+  // compiled: the PLCopen reader's ST and IL POUs): lowered as it is, its edge
+  // slots numbered from the program's next one.
+  std::vector<Instr> raw;
 };
 struct TreeProgram {
   std::string source;

@@ -154,13 +154,29 @@ std::string print_tree(const TreeProgram& p) {
     out += "rung " + std::to_string(++i) + " (line " + std::to_string(r.line) + ")";
     if (!r.title.empty()) out += " \"" + r.title + "\"";
     out += "\n";
-    print_node(r.root, 1, out);
+    if (r.raw.empty()) print_node(r.root, 1, out);
+    for (const Instr& in : r.raw) out += "  IL " + instr_text(in) + "\n";
   }
   for (const auto& l : p.end_labels) out += "label " + l + "\n";
   return out;
 }
 
+// A rung given as IL: its edge slots k become the program's next ones.
+static void lower_raw(const TreeRung& tr, Program& p) {
+  Rung& r = p.rungs.emplace_back();
+  r.labels = tr.labels;
+  r.title = tr.title;
+  r.line = tr.line;
+  r.code = tr.raw;
+  uint32_t slots = 0;
+  for (Instr& in : r.code)
+    for (Operand& o : in.a)
+      if (o.kind == OpdKind::Edge) slots = std::max(slots, o.index + 1), o.index += p.edge_slots;
+  p.edge_slots += slots;
+}
+
 void lower_rung(const TreeRung& tr, Program& p) {
+  if (!tr.raw.empty()) return lower_raw(tr, p);
   Lowering low;
   low.edges = p.edge_slots;
   std::vector<Instr> code;

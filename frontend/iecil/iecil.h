@@ -3,6 +3,7 @@
 // with typed declarations (typed.cpp).
 #pragma once
 
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -36,5 +37,21 @@ bool needs_typed_reader(const std::vector<Tok>& t);
 // (frontend/st), whose temporaries __Tn/__Sn take the type of the value
 // stored into them.  Throws CompileError.
 Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename, bool from_st = false);
+
+// A POU body compiled for another reader (the PLCopen reader's calls of ST and
+// IL POUs, docs/plcopen.md "ST and IL POUs"): a program whose variable area
+// and timers start at `base` (the caller keeps the devices below), whose REAL
+// variables lie in D cells like every other word, and whose located variables
+// named in `callers` get no initial value (they are the caller's).
+struct UnitBase {
+  uint32_t m = 0, d = 0, t = 0;  // the first M bit, D cell and timer it may take
+  std::set<std::string> callers;  // upper-case names of located variables that are the caller's: no initial value here
+};
+struct Unit {
+  Program prog;           // rungs [0, init_rungs) run once per scan, first; the others at the call
+  size_t init_rungs = 0;  // the initial values (first scan) and RTC's clock
+  UnitBase end;           // the first M, D and T after what it took
+};
+Unit parse_typed_unit(const std::vector<Tok>& t, const std::string& filename, UnitBase base);
 
 }  // namespace ldc::iecil

@@ -115,7 +115,10 @@ struct Val {
 
 class Reader {
  public:
-  Reader(const std::vector<Tok>& toks, const std::string& file, bool from_st) : t_(toks), from_st_(from_st) { p_.source = file; }
+  Reader(const std::vector<Tok>& toks, const std::string& file, bool from_st, std::optional<UnitBase> unit = std::nullopt)
+      : t_(toks), from_st_(from_st), unit_(unit) {
+    p_.source = file;
+  }
 
   Program run() {
     try {
@@ -130,10 +133,18 @@ class Reader {
     }
     return std::move(p_);
   }
+  // After run(), in unit mode: what the caller needs besides the program.
+  void unit_facts(Unit& u) const {
+    u.init_rungs = init_rungs_;
+    Place end = m_.area_base() + m_.used();
+    u.end = {end.bit, end.cell, next_timer_};
+  }
 
  private:
   const std::vector<Tok>& t_;
   bool from_st_ = false;
+  std::optional<UnitBase> unit_;
+  size_t init_rungs_ = 0;
   size_t pos_ = 0;
   Model m_;
   Program p_;
@@ -696,6 +707,11 @@ class Reader {
       if (r->dev == Dev::D) d = std::max(d, r->index + 2);  // room for a 64-bit value located there
       if (r->dev == Dev::F) f = std::max(f, r->index + 2);
     }
+    if (unit_) {
+      m = std::max(m, unit_->m), d = std::max(d, unit_->d);
+      f = device_count(Dev::F);  // every REAL in D: the caller's F devices stay its own
+      next_timer_ = unit_->t;
+    }
     m_.set_area(m, d);
     next_f_ = f;
     const Pou& prog = m_.pous[size_t(program_)];
@@ -1137,6 +1153,8 @@ class Reader {
     here_ = {1, 1};
     initial_values();
     if (rtc_type_ != kNoType) clock_rung();
+    init_rungs_ = p_.rungs.size();
+    rung_ = nullptr;
     lower_body(program_);
     scope_ = nullptr;
   }
@@ -1148,6 +1166,7 @@ class Reader {
     for (const Var& v : m_.pous[size_t(program_)].vars) {
       const model::Ref& r = globals_.at(upper(v.name));
       const bool input = v.at && (r.bits == Area::X || r.cells == Area::WX);
+      if (unit_ && v.at && unit_->callers.count(upper(v.name))) continue;  // the caller initialises it
       if (input && v.init.kind != Init::None && !from_st_)
         fail(v.init.loc, "an input (" + v.name + ") has no initial value: the I/O writes it");
       if (input) continue;  // ST as OpenPLC Editor writes it gives inputs one (:= 0): the I/O overwrites it before the first scan
@@ -2449,6 +2468,14 @@ class Reader {
 
 Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename, bool from_st) {
   return Reader(t, filename, from_st).run();
+}
+
+Unit parse_typed_unit(const std::vector<Tok>& t, const std::string& filename, UnitBase base) {
+  Reader r(t, filename, true, base);
+  Unit u;
+  u.prog = r.run();
+  r.unit_facts(u);
+  return u;
 }
 
 }  // namespace ldc::iecil

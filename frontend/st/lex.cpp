@@ -40,9 +40,10 @@ struct Lexer {
       }
     } while (depth > 0);
   }
-  // {pragma}: ignored, as MatIEC ignores what it does not know
+  // {pragma}: one "{" token (st.cpp's pragmas() decides what it means)
   void pragma() {
     int l0 = line, c0 = col(i);
+    out.push_back({Tok::Punct, "{", l0, c0});
     while (i < s.size() && s[i] != '}') {
       if (s[i] == '\n') newline();
       i++;

@@ -1255,7 +1255,44 @@ class File {
 
 }  // namespace
 
-std::vector<Tok> to_il_tokens(const std::vector<Tok>& st) { return File(st).run(); }
+// Pragmas { ... }: MatIEC copies one among a POU's statements into the C it
+// generates, as C code (Beremiz's way of calling C from ST); ldc runs no C, so
+// such a program is refused by name.  Elsewhere (declarations, around the
+// POUs) a pragma says nothing to the program and is dropped.
+std::vector<Tok> pragmas(const std::vector<Tok>& t) {
+  std::vector<Tok> out;
+  out.reserve(t.size());
+  bool in_pou = false, in_var = false, in_body = false;
+  for (size_t i = 0; i < t.size(); i++) {
+    const Tok& k = t[i];
+    if (k.kind == Tok::Punct && k.text == "{") {
+      if (in_body)
+        throw CompileError(k.line, k.col, "a pragma { ... } among the statements: MatIEC copies it into the C it generates, as C code; ldc runs no C (docs/st.md)");
+      continue;
+    }
+    out.push_back(k);
+    std::string u = k.kind == Tok::Word ? upper(k.text) : "";
+    if (u == "PROGRAM" || u == "FUNCTION_BLOCK" || u == "FUNCTION") {
+      in_pou = true, in_body = false;
+      for (i++; i < t.size() && t[i].kind != Tok::End; i++) {  // the name, and a FUNCTION's ": TYPE"
+        out.push_back(t[i]);
+        if (!(i + 1 < t.size() && t[i + 1].kind == Tok::Punct && t[i + 1].text == ":")) break;
+        out.push_back(t[++i]);
+      }
+    } else if (u.rfind("END_PROGRAM", 0) == 0 || u == "END_FUNCTION_BLOCK" || u == "END_FUNCTION") {
+      in_pou = in_body = false;
+    } else if (u.rfind("VAR", 0) == 0 && !in_body) {
+      in_var = true;
+    } else if (u == "END_VAR") {
+      in_var = false;
+    } else if (in_pou && !in_var) {
+      in_body = true;
+    }
+  }
+  return out;
+}
+
+std::vector<Tok> to_il_tokens(const std::vector<Tok>& st) { return File(pragmas(st)).run(); }
 
 }  // namespace ldc::st
 

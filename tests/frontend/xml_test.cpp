@@ -2,7 +2,7 @@
 // reports what it refuses.
 #include <gtest/gtest.h>
 
-#include "frontend/xml.h"
+#include "frontend/plcopen/xml.h"
 #include "ir/ir.h"
 
 using namespace ldc;

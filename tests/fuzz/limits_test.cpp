@@ -12,7 +12,7 @@
 #include <string>
 
 #include "frontend/frontend.h"
-#include "frontend/xml.h"
+#include "frontend/plcopen/xml.h"
 
 static int failures = 0;
 

@@ -1,9 +1,9 @@
-// frontend/xml.cpp -- the XML reader of xml.h: a single pass over the text with
+// frontend/plcopen/xml.cpp -- the XML reader of xml.h: a single pass over the text with
 // an explicit element stack (so nesting depth costs no native stack), exact
 // well-formedness checks where a mistake would change the meaning (unclosed
 // or mismatched tags, bad references, duplicate attributes, '<' in values),
 // and every error at the line and column where it was found.
-#include "frontend/xml.h"
+#include "frontend/plcopen/xml.h"
 
 #include <algorithm>
 #include <cctype>
@@ -255,6 +255,7 @@ Document Reader::document() {
         size_t end = t_.find("]]>", p_ + 9);
         if (end == std::string_view::npos) fail_at(start, "CDATA section is not closed with ']]>'");
         std::string_view data = t_.substr(p_ + 9, end - p_ - 9);
+        stack.back()->text_at.emplace_back(uint32_t(stack.back()->text.size()), uint32_t(p_ + 9));
         for (size_t i = 0; i < data.size(); i++) {
           if (data[i] == '\r') {
             stack.back()->text += '\n';
@@ -321,6 +322,7 @@ Document Reader::document() {
     }
     // character data
     Element* cur = stack.back();
+    cur->text_at.emplace_back(uint32_t(cur->text.size()), uint32_t(p_));
     while (!eof() && t_[p_] != '<') {
       char ch = t_[p_++];
       if (ch == '&') reference(cur->text);

@@ -1,4 +1,4 @@
-// frontend/plcopen.cpp -- the PLCopen TC6 XML importer (docs/plcopen.md).
+// frontend/plcopen/plcopen.cpp -- the PLCopen TC6 XML importer (docs/plcopen.md).
 //
 // A PLCopen <LD> body is a graph: every element has a localId, and every input
 // names the outputs that feed it (<connection refLocalId=.. formalParameter=..>;
@@ -27,7 +27,9 @@
 #include "frontend/frontend.h"
 #include "frontend/operands.h"
 #include "frontend/treebuild.h"
-#include "frontend/xml.h"
+#include "frontend/iecil/iecil.h"
+#include "frontend/plcopen/st_text.h"
+#include "frontend/plcopen/xml.h"
 #include "ir/model.h"
 #include "ir/typed.h"
 
@@ -448,6 +450,26 @@ class Importer {
   bool user_out_is_bool(const Node& b, const Element* callee, const std::string& pin);
   const Element* callee_var(const Element* callee, const std::string& name, std::string* section);
   const Element* callee_graph(const Node& b, const Element* callee);
+  // The project's ST and IL POUs (docs/plcopen.md, "ST and IL POUs"): compiled
+  // by the typed reader as a unit of their own, behind a small ST program that
+  // copies the call's values between the instance and its pins here.
+  bool st_pou(const std::string& name) const {
+    auto it = pou_lang_.find(upper(name));
+    return it != pou_lang_.end() && (it->second == "ST" || it->second == "IL");
+  }
+  void st_program(const Element* pou);
+  void st_call(const Node& b, const Element* callee, Var& inst, const std::map<std::string, Var*>& bound);
+  iecil::Unit st_unit(const std::vector<std::string>& lines, const Element* at, const Element* program = nullptr);
+  void splice(const iecil::Unit& u, const Element* at);
+  void unit_init(const iecil::Unit& u, const std::string& whose, const Element* at);
+  uint32_t first_free(Dev d) const;
+  void globals_for_units(std::vector<std::string>& decl, const char* section) const;
+  // an FB instance's, compiled at its first call, with the variables its in-outs are bound to
+  std::map<const Var*, std::pair<std::string, iecil::Unit>> units_;
+  std::vector<TreeRung> unit_init_;          // the units' first-scan rungs, first in the program
+  int splices_ = 0;
+  std::vector<Alias> unit_aliases_;  // inst.member of an ST or IL instance (the unit's ldc__i.member)
+  const Element* data_types_el_ = nullptr;
   template <typename E>
   Cond node_values(std::vector<E*>& left, int nn, int sink, const Element* consumer);
   Cond bool_expr(const std::vector<Conn>& conns, bool order, const Element* consumer);
@@ -822,6 +844,7 @@ void Importer::instantiate(Var& inst, const Element* fb, std::vector<std::string
       if (s != "documentation" && s != "addData") fail_at(sec.get(), "unknown interface section <" + sec->name + "> (" + sec->path() + ")");
       continue;
     }
+    if (st_pou(fname) && s != "inputVars" && s != "outputVars" && s != "inOutVars") continue;  // the rest lives in the ST unit
     for (const Element* v : sec->children_named("variable")) {
       const std::string* nm = v->attr("name");
       if (!nm || nm->empty()) fail_at(v, "variable without a name (" + v->path() + ")");
@@ -964,6 +987,9 @@ void Importer::aliases(TreeProgram& p) {
     if (a.ty == IT::BOOL || !alias_type_problem(a).empty()) a.ty = IT::None;  // an FB's state: as its device
     p.aliases.push_back(std::move(a));
   }
+  for (Alias& a : unit_aliases_)  // the members of ST and IL instances that have no variable here
+    if (seen.insert(upper(a.name)).second) p.aliases.push_back(std::move(a));
+  unit_aliases_.clear();
 }
 
 // ------------------------------------------------------------------ expressions
@@ -1885,12 +1911,13 @@ const Element* Importer::callee_var(const Element* callee, const std::string& na
 // The LD or FBD body of the project's POU that block b calls; another
 // language is refused, naming it.
 const Element* Importer::callee_graph(const Node& b, const Element* callee) {
+  if (st_pou(*callee->attr("name"))) return nullptr;  // compiled by the ST reader (st_call)
   const Element* body_el = callee->child("body");
   const Element* graph = body_el ? (body_el->child("LD") ? body_el->child("LD") : body_el->child("FBD")) : nullptr;
   if (!graph)
     fail_at(b.el, "block '" + b.type + "' localId " + std::to_string(b.id) + (b.instance.empty() ? "" : " (instance " + b.instance + ")") + " calls " +
                       (pou_type(callee) == "function" ? "function '" : "function block '") + *callee->attr("name") + "', written in " + pou_lang_[upper(*callee->attr("name"))] +
-                      "; ldc expands calls of the project's POUs written in LD or FBD (" + b.el->path() + ")");
+                      "; ldc expands calls of the project's POUs written in LD, FBD, ST or IL (" + b.el->path() + ")");
   return graph;
 }
 
@@ -2038,7 +2065,8 @@ void Importer::user_call(const Node& b, const Element* callee) {
     pou_ = cname;
     bool sfc = sfc_mode_;
     sfc_mode_ = false;
-    body(graph, "call of " + cname + (is_fb ? " " + inst->name : ""));
+    if (graph) body(graph, "call of " + cname + (is_fb ? " " + inst->name : ""));
+    else st_call(b, callee, *inst, bound);
     sfc_mode_ = sfc;
     call_stack_.pop_back();
     pou_ = pou;
@@ -2071,6 +2099,165 @@ void Importer::user_call(const Node& b, const Element* callee) {
     outs_[{b.id, p.name}] = r.ty == Ty::Bool ? Out{true, bit_leaf(Op::LOAD, r.o, el), {}} : Out{false, {}, r};
   }
   if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, en, {}};
+}
+
+// A call of an ST or IL POU: its unit (compiled once per FB instance, once
+// per call of a FUNCTION) spliced here.  The unit's program copies each pin
+// (the instance's interface variable as this reader holds it) into the
+// instance, calls it, and copies the inputs and outputs back, so an input the
+// body changes keeps its value, as in MatIEC's instance.
+void Importer::st_call(const Node& b, const Element* callee, Var& inst, const std::map<std::string, Var*>& bound) {
+  bool is_fb = pou_type(callee) == "functionBlock";
+  const std::string& cname = *callee->attr("name");
+  std::vector<std::string> decl{"PROGRAM ldc__call", "VAR"}, in, out;
+  if (is_fb) decl.push_back("ldc__i : " + cname + ";");
+  std::string args, result, binding;
+  int k = 0;
+  // VAR_IN_OUT: the caller's variable, at its device
+  for (const auto& [key, v] : bound) {
+    std::string section;
+    const Element* d = callee_var(callee, key, &section);
+    if (!v->dev || !d || !d->child("type") || d->child("type")->children.empty())
+      fail_at(b.el, "in-out '" + key + "' of " + cname + " is bound to '" + v->name + "', which is not a variable of an elementary type; ldc passes such variables to ST and IL POUs (" + b.el->path() + ")");
+    std::string pin = "ldc__v" + std::to_string(k++);
+    decl.push_back(pin + " AT " + dev_name(v->dev->dev) + std::to_string(v->dev->index) + " : " + plcopen::StText(text_).type(d->child("type")->children[0].get()) + ";");
+    args += (args.empty() ? "" : ", ") + *d->attr("name") + " := " + pin;
+    binding += v->name + ",";
+  }
+  if (is_fb) {
+    auto it = units_.find(&inst);
+    if (it != units_.end() && it->second.first != binding)
+      fail_at(b.el, "instance '" + inst.name + "' of " + cname + " is called again with other variables for its in-outs; ldc compiles an ST or IL function block's instance once, so its in-outs must be bound to the same variables at every call (" + b.el->path() + ")");
+    if (it != units_.end()) return splice(it->second.second, b.el);
+  }
+  for (const auto& [key, m] : inst.members) {
+    if (!m->dev) continue;  // a type this reader does not hold: never connected (user_call refuses it)
+    const Element* te = m->section == "returnType" ? m->el : m->el->child("type");
+    std::string pin = "ldc__p" + std::to_string(k++);
+    decl.push_back(pin + " AT " + dev_name(m->dev->dev) + std::to_string(m->dev->index) + " : " + plcopen::StText(text_).type(te->children[0].get()) + ";");
+    std::string member = m->name.substr(m->name.rfind('.') + 1);
+    if (m->section == "returnType") result = pin;
+    else if (!is_fb) args += (args.empty() ? "" : ", ") + member + (m->section == "inputVars" ? " := " : " => ") + pin;
+    else if (m->section == "inputVars") in.push_back("ldc__i." + member + " := " + pin + ";"), out.push_back(pin + " := ldc__i." + member + ";");
+    else out.push_back(pin + " := ldc__i." + member + ";");
+  }
+  decl.push_back("END_VAR");
+  globals_for_units(decl, "VAR");
+  std::vector<std::string> lines = decl;
+  lines.insert(lines.end(), in.begin(), in.end());
+  if (is_fb) lines.push_back("ldc__i(" + args + ");");
+  else lines.push_back((result.empty() ? "" : result + " := ") + cname + "(" + args + ");");
+  lines.insert(lines.end(), out.begin(), out.end());
+  lines.push_back("END_PROGRAM");
+  iecil::Unit u = st_unit(lines, b.el);
+  unit_init(u, inst.name, b.el);
+  for (const Alias& a : u.prog.aliases)
+    if (is_fb && a.name.rfind("ldc__i.", 0) == 0) unit_aliases_.push_back({inst.name + a.name.substr(6), a.dev, a.ty});
+  splice(u, b.el);
+  if (is_fb) units_.emplace(&inst, std::make_pair(binding, std::move(u)));
+}
+
+// The globals that the ST and IL POUs name in VAR_EXTERNAL, declared in the
+// unit's program at this reader's devices (constants with their values), so
+// that both readers use one variable.
+void Importer::globals_for_units(std::vector<std::string>& decl, const char* section) const {
+  std::set<std::string> named;
+  for (const auto& [u, pe] : pou_el_)
+    if (st_pou(u))
+      if (const Element* itf = pe->child("interface"))
+        for (const Element* sec : itf->children_named("externalVars"))
+          for (const Element* v : sec->children_named("variable"))
+            if (v->attr("name")) named.insert(upper(*v->attr("name")));
+  std::vector<std::string> vars, constants;
+  for (const std::string& n : named) {
+    auto g = globals_.find(n);
+    if (g == globals_.end()) continue;  // the typed reader says which is missing
+    const Var& v = *g->second;
+    const Element* te = v.el->child("type");
+    if (!te || te->children.empty()) continue;
+    std::string ty = plcopen::StText(text_).type(te->children[0].get());
+    if (v.constant && !v.init.empty()) constants.push_back(v.name + " : " + ty + " := " + v.init + ";");
+    else if (v.dev) vars.push_back(v.name + " AT " + dev_name(v.dev->dev) + std::to_string(v.dev->index) + " : " + ty + ";");
+  }
+  if (!vars.empty()) decl.push_back(section), decl.insert(decl.end(), vars.begin(), vars.end()), decl.push_back("END_VAR");
+  if (!constants.empty())
+    decl.push_back(section + std::string(" CONSTANT")), decl.insert(decl.end(), constants.begin(), constants.end()), decl.push_back("END_VAR");
+}
+
+// An ST or IL program that a task runs: its unit, in a configuration of ours
+// that gives it the project's globals it names, at this reader's devices.
+void Importer::st_program(const Element* pou) {
+  std::vector<std::string> lines{"CONFIGURATION ldc__config"};
+  globals_for_units(lines, "VAR_GLOBAL");
+  lines.push_back("RESOURCE ldc__resource ON PLC");
+  lines.push_back("PROGRAM ldc__main : " + *pou->attr("name") + ";");
+  lines.push_back("END_RESOURCE");
+  lines.push_back("END_CONFIGURATION");
+  iecil::Unit u = st_unit(lines, pou, pou);
+  unit_init(u, *pou->attr("name"), pou);
+  for (const Alias& a : u.prog.aliases) unit_aliases_.push_back(a);
+  pending_title_ = "POU " + *pou->attr("name");
+  splice(u, pou);
+}
+
+// The first device of area d above every one this reader has taken.
+uint32_t Importer::first_free(Dev d) const {
+  auto it = used_.lower_bound({int(d) + 1, 0});
+  if (it == used_.begin() || std::prev(it)->first != int(d)) return 0;
+  return std::prev(it)->second + 1;
+}
+
+// The project's ST and IL FUNCTION_BLOCKs and FUNCTIONs, its data types, and
+// `lines` (a program of ours, placed at `at`), compiled by the typed reader
+// over devices above this reader's, which are then this reader's too.
+iecil::Unit Importer::st_unit(const std::vector<std::string>& lines, const Element* at, const Element* program) {
+  plcopen::StText st(text_);
+  st.data_types(data_types_el_);
+  for (const auto& [u, pe] : pou_el_)
+    if (st_pou(u) && (pou_type(pe) != "program" || pe == program)) st.pou(pe);
+  iecil::UnitBase base{first_free(Dev::M), first_free(Dev::D), first_free(Dev::T), {}};
+  for (const std::string& l : lines) {
+    st.line(l, at);
+    if (l.find(" AT ") != std::string::npos) base.callers.insert(upper(l.substr(0, l.find(' '))));  // ours: a pin or a global
+  }
+  iecil::Unit u = iecil::parse_typed_unit(st.tokens(), file_, base);
+  for (uint32_t x = base.m; x < u.end.m; x++) used_.insert({int(Dev::M), x});
+  for (uint32_t x = base.d; x < u.end.d; x++) used_.insert({int(Dev::D), x});
+  for (uint32_t x = base.t; x < u.end.t; x++) used_.insert({int(Dev::T), x});
+  return u;
+}
+
+// The unit's first rungs (initial values, RTC's clock), for the program's start.
+void Importer::unit_init(const iecil::Unit& u, const std::string& whose, const Element* at) {
+  for (size_t i = 0; i < u.init_rungs; i++) {
+    TreeRung r;
+    r.line = at->line;
+    r.title = "initial values of " + whose;
+    r.raw = u.prog.rungs[i].code;
+    unit_init_.push_back(std::move(r));
+  }
+}
+
+// The unit's call rungs here, its labels made this splice's own.
+void Importer::splice(const iecil::Unit& u, const Element* at) {
+  std::string pre = "_ldc_st" + std::to_string(++splices_) + "_";
+  for (size_t i = u.init_rungs; i < u.prog.rungs.size(); i++) {
+    if (rungs_.size() >= kMaxRungs) fail_at(at, "the program needs more than " + std::to_string(kMaxRungs) + " rungs (calls are expanded at each call) at " + where(at));
+    const Rung& r = u.prog.rungs[i];
+    TreeRung tr;
+    tr.line = r.line;
+    tr.labels = std::move(pending_labels_);
+    pending_labels_.clear();
+    for (const std::string& l : r.labels) tr.labels.push_back(pre + l);
+    tr.title = std::move(pending_title_);
+    pending_title_.clear();
+    tr.raw = r.code;
+    for (Instr& in : tr.raw)
+      for (Operand& o : in.a)
+        if (o.kind == OpdKind::Label) o.label = pre + o.label.str();
+    rungs_.push_back(std::move(tr));
+  }
+  for (const std::string& l : u.prog.end_labels) pending_labels_.push_back(pre + l);
 }
 
 void Importer::block(const Node& b) {
@@ -3313,8 +3500,8 @@ void Importer::tasks(const Element* root) {
         if (!type) fail_at(pi, where + " has no typeName (" + pi->path() + ")");
         auto lang = pou_lang_.find(upper(*type));
         if (lang == pou_lang_.end()) fail_at(pi, where + " runs '" + *type + "', which is not a POU of this project (" + pi->path() + ")");
-        if (lang->second != "LD" && lang->second != "FBD" && lang->second != "SFC")
-          fail_at(pi, where + " runs POU '" + *type + "', written in " + lang->second + "; ldc compiles LD, FBD and SFC bodies only (" + pi->path() + ")");
+        if (lang->second != "LD" && lang->second != "FBD" && lang->second != "SFC" && !st_pou(*type))
+          fail_at(pi, where + " runs POU '" + *type + "', written in " + lang->second + "; ldc compiles LD, FBD, SFC, ST and IL bodies only (" + pi->path() + ")");
         return upper(*type);
       };
       for (const Element* t : res->children_named("task")) {
@@ -3360,7 +3547,8 @@ void Importer::prepare() {
   tc6_v1_ = namespace_of(root) == kTc6V1Namespace;
   // POUs and their languages
   const Element* types = root->child("types");
-  if (const Element* dts = types ? types->child("dataTypes") : nullptr)
+  data_types_el_ = types ? types->child("dataTypes") : nullptr;
+  if (const Element* dts = data_types_el_)
     for (const Element* dt : dts->children_named("dataType")) {
       if (!dt->attr("name")) fail_at(dt, "data type without a name (" + dt->path() + ")");
       if (!data_types_.emplace(upper(*dt->attr("name")), dt).second) fail_at(dt, "data type '" + *dt->attr("name") + "' is declared twice");
@@ -3403,11 +3591,6 @@ void Importer::prepare() {
       for (const auto& g : b->children)
         for (const Element* blk : g->children_named("block"))
           if (auto t = blk->attr("typeName")) called_.insert(upper(*t));
-  for (const Element* p : all) {
-    const std::string& lang = pou_lang_[upper(*p->attr("name"))];
-    bool callee = called_.count(upper(*p->attr("name"))) && user_pou(*p->attr("name"));
-    if ((lang == "LD" || lang == "FBD") && !callee) ld.push_back(p);  // FBD: the same block graph, without rails
-  }
   // global variables of configurations and resources
   if (const Element* inst = root->child("instances"))
     if (const Element* cfgs = inst->child("configurations"))
@@ -3417,24 +3600,34 @@ void Importer::prepare() {
           for (const Element* g : res->children_named("globalVars")) declare(g, "", true);
       }
   tasks(root);
+  auto run_by_task = [&](const Element* p) {
+    for (const CfgTask& ct : cfg_tasks_)
+      for (const std::string& u : ct.pous)
+        if (u == upper(*p->attr("name"))) return true;
+    return false;
+  };
+  // LD and FBD POUs (FBD: the same block graph, without rails); ST and IL
+  // programs that a task runs (or every one, without a configuration)
+  for (const Element* p : all) {
+    const std::string& lang = pou_lang_[upper(*p->attr("name"))];
+    bool callee = called_.count(upper(*p->attr("name"))) && user_pou(*p->attr("name"));
+    if ((lang == "LD" || lang == "FBD") && !callee) ld.push_back(p);
+    else if (st_pou(*p->attr("name")) && pou_type(p) == "program" && (cfg_tasks_.empty() || run_by_task(p))) ld.push_back(p);
+  }
   // SFC programs that a task runs: their charts (section 1b)
   for (const Element* p : all)
-    if (pou_lang_[upper(*p->attr("name"))] == "SFC") {
-      bool run = false;
-      for (const CfgTask& ct : cfg_tasks_)
-        for (const std::string& u : ct.pous) run |= u == upper(*p->attr("name"));
-      if (run) ld.push_back(p);
-    }
+    if (pou_lang_[upper(*p->attr("name"))] == "SFC" && run_by_task(p)) ld.push_back(p);
   if (ld.empty()) {
     std::string list;
     for (const Element* p : all) list += std::string(list.empty() ? "" : ", ") + "'" + *p->attr("name") + "' is " + pou_lang_[upper(*p->attr("name"))];
-    fail_at(pous ? pous : root, all.empty() ? "the project has no POU" : "no POU of this project has an LD or FBD body (" + list +
-                                                                               "); ldc imports LD and FBD bodies only");
+    fail_at(pous ? pous : root, all.empty() ? "the project has no POU" : "no POU of this project has an LD or FBD body, nor an ST or IL program (" + list +
+                                                                               "); ldc imports LD and FBD bodies, and ST and IL programs and the POUs they call");
   }
   // declarations of the LD POUs, then devices for all of them
     for (const Element* p : ld_pous_) {
     scope_.clear();
     std::string name = *p->attr("name");
+    if (st_pou(name)) continue;  // its variables are its unit's (st_program)
     if (const Element* itf = p->child("interface")) {
       for (const auto& sec : itf->children) {
         std::string s(sec->local_name());
@@ -3504,6 +3697,7 @@ void Importer::emit_bodies(const std::vector<const Element*>& pous) {
     scope_ = scopes_[pe];
     const Element* b = pe->child("body");
     if (const Element* sfc = b->child("SFC")) sfc_body(pe, sfc);
+    else if (st_pou(pou_)) st_program(pe);
     else body(b->child("LD") ? b->child("LD") : b->child("FBD"), "POU " + pou_);
   }
 }
@@ -3539,6 +3733,8 @@ void Importer::finish(TreeProgram& p, const Element* root) {
     copies.insert(copies.begin(), std::move(r));
     clock_.reset();
   }
+  for (auto& r : unit_init_) copies.push_back(std::move(r));
+  unit_init_.clear();
   rungs_.insert(rungs_.begin(), std::make_move_iterator(copies.begin()), std::make_move_iterator(copies.end()));
   p.source = file_;
   p.rungs = std::move(rungs_);

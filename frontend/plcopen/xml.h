@@ -1,4 +1,4 @@
-// frontend/xml.h -- a small XML reader for the PLCopen importer: elements,
+// frontend/plcopen/xml.h -- a small XML reader for the PLCopen importer: elements,
 // attributes, character data, comments, CDATA sections, entity and character
 // references, the <?xml ...?> prolog and other processing instructions.
 // Namespaces are not resolved: a name keeps its prefix ("xhtml:p").
@@ -18,6 +18,10 @@ struct Element {
   std::vector<std::pair<std::string, std::string>> attrs;  // in document order, values decoded
   std::vector<std::unique_ptr<Element>> children;          // child elements in order
   std::string text;  // all character data directly inside (CDATA included), decoded
+  // Where the runs of `text` begin: {offset in text, byte offset in the file},
+  // one per run of character data or CDATA section (a body's ST or IL text is
+  // read with its own positions: docs/plcopen.md "ST and IL POUs").
+  std::vector<std::pair<uint32_t, uint32_t>> text_at;
   int line = 0, col = 0;  // of the '<' that opens the element
   const Element* parent = nullptr;
 
