@@ -378,6 +378,8 @@ class Importer {
   Val element(Var& a, const std::string& idx, const Element* el, bool write);
   std::function<void()> pending_store_;  // a write at a variable index: the statement's last rung
   void statement_of(const Node& n);
+  bool eno_gated(const Node& n);
+  std::string eno_skip(const Node& n);
   std::map<std::string, const Element*> data_types_;  // upper name -> <dataType>
   const Element* user_pou(const std::string& type) const;
   std::string pou_type(const Element* pou) const { return pou->attr("pouType") ? *pou->attr("pouType") : "program"; }
@@ -3112,11 +3114,41 @@ void Importer::statement_of(const Node& n) {
     if (!is_bool_source(n.in[0])) fail_at(el, "'" + n.text + "' is BOOL but a value feeds " + where(el));
     if (dst.o.area != Area::Y && dst.o.area != Area::M) fail_at(el, "'" + n.text + "' cannot be written (" + where(el) + ")");
     Cond c = bool_expr(n.in, order, el);
-    return rung(std::move(c), out(neg ? Op::OUTN : Op::OUT, {dst.o}, el, n.text), el);
+    std::string skip = eno_skip(n);
+    rung(std::move(c), out(neg ? Op::OUTN : Op::OUT, {dst.o}, el, n.text), el);
+    if (!skip.empty()) pending_labels_.push_back(skip);
+    return;
   }
   if (neg) fail_at(el, "a negated " + n.kind + " must be BOOL (" + el->path() + ")");
   Val v = value_expr(n.in, order, el);
+  std::string skip = eno_skip(n);
   assign(v, dst, n.text, el);
+  if (!skip.empty()) pending_labels_.push_back(skip);
+}
+
+// Beremiz assigns a variable fed directly by a block whose EN is connected
+// only while the block's ENO is TRUE (PLCGenerator's GetUsedEno:
+// `IF inst.ENO THEN var := inst.OUT; END_IF;`), so it keeps its value while
+// EN is off (docs/plcopen.md, section 6).
+bool Importer::eno_gated(const Node& n) {
+  if ((n.kind != "outVariable" && n.kind != "inOutVariable") || n.in.size() != 1) return false;
+  auto it = nodes_.find(n.in[0].ref);
+  if (it == nodes_.end() || it->second.kind != "block") return false;
+  for (const Pin& p : it->second.inputs)
+    if (p.name == "EN" && !p.conns.empty()) return true;
+  return false;
+}
+// After the block ran: a jump over the assignment while its ENO is FALSE
+// (the label for after it), or "".
+std::string Importer::eno_skip(const Node& n) {
+  if (!eno_gated(n)) return "";
+  auto it = outs_.find({n.in[0].ref, "ENO"});
+  if (it == outs_.end()) return "";
+  std::string skip = new_label();
+  Operand l{OpdKind::Label};
+  l.label = skip;
+  rung(negate(it->second.cond, n.el), out(Op::JMP, {l}, n.el), n.el);
+  return skip;
 }
 
 // Was this project saved by Beremiz or OpenPLC Editor running on Python 2?
@@ -3166,6 +3198,7 @@ void Importer::body(const Element* ld, const std::string& title) {
     for (const Conn& c : n.in) consumed_.insert({c.ref, c.param});
     for (const Pin& p : n.inputs)
       for (const Conn& c : p.conns) consumed_.insert({c.ref, c.param});
+    if (eno_gated(n)) consumed_.insert({n.in[0].ref, "ENO"});
   }
   std::vector<const Node*> ordered, stmts, blocks;
   for (const auto& [id, n] : nodes_) {
