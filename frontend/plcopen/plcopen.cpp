@@ -461,7 +461,11 @@ class Importer {
   }
   void st_program(const Element* pou);
   void st_call(const Node& b, const Element* callee, Var& inst, const std::map<std::string, Var*>& bound);
-  iecil::Unit st_unit(const std::vector<std::string>& lines, const Element* at, const Element* program = nullptr);
+  // `lines` of ST placed at `at`; a line kInlineText is the text of `text`.
+  iecil::Unit st_unit(const std::vector<std::string>& lines, const Element* at, const Element* program = nullptr, const Element* text = nullptr);
+  static constexpr const char* kInlineText = "\x01";
+  bool inline_st(const Element* cond);
+  void st_condition(const Element* in, uint32_t m);
   void splice(const iecil::Unit& u, const Element* at);
   void unit_init(const iecil::Unit& u, const std::string& whose, const Element* at);
   uint32_t first_free(Dev d) const;
@@ -2202,6 +2206,36 @@ void Importer::st_program(const Element* pou) {
   splice(u, pou);
 }
 
+// An inline ST condition of an SFC transition (<inline><ST>).
+bool Importer::inline_st(const Element* cond) {
+  const Element* in = cond->child("inline");
+  if (!in) return false;
+  const Element* b = in->child("body") ? in->child("body") : in;
+  return b->child("ST") != nullptr;
+}
+
+// An inline ST condition computed into relay m by a unit of its own, whose
+// names are the POU's variables, located where this reader holds them.
+void Importer::st_condition(const Element* in, uint32_t m) {
+  const Element* b = in->child("body") ? in->child("body") : in;
+  std::vector<std::string> lines{"PROGRAM ldc__call", "VAR"};
+  for (const auto& [key, v] : scope_) {
+    if (!v->dev || v->derived || v->frame || !v->el) continue;
+    const Element* te = v->section == "returnType" ? v->el : v->el->child("type");
+    if (!te || te->children.empty()) continue;
+    lines.push_back(v->name.substr(v->name.rfind('.') + 1) + " AT " + dev_name(v->dev->dev) + std::to_string(v->dev->index) + " : " +
+                    plcopen::StText(text_).type(te->children[0].get()) + ";");
+  }
+  lines.push_back("ldc__c AT M" + std::to_string(m) + " : BOOL;");
+  lines.push_back("END_VAR");
+  lines.push_back("ldc__c :=");
+  lines.push_back(kInlineText);
+  lines.push_back(";");
+  lines.push_back("END_PROGRAM");
+  iecil::Unit u = st_unit(lines, in, nullptr, plcopen::body_text(b->child("ST")));
+  splice(u, in);
+}
+
 // The first device of area d above every one this reader has taken.
 uint32_t Importer::first_free(Dev d) const {
   auto it = used_.lower_bound({int(d) + 1, 0});
@@ -2212,13 +2246,17 @@ uint32_t Importer::first_free(Dev d) const {
 // The project's ST and IL FUNCTION_BLOCKs and FUNCTIONs, its data types, and
 // `lines` (a program of ours, placed at `at`), compiled by the typed reader
 // over devices above this reader's, which are then this reader's too.
-iecil::Unit Importer::st_unit(const std::vector<std::string>& lines, const Element* at, const Element* program) {
+iecil::Unit Importer::st_unit(const std::vector<std::string>& lines, const Element* at, const Element* program, const Element* text) {
   plcopen::StText st(text_);
   st.data_types(data_types_el_);
   for (const auto& [u, pe] : pou_el_)
     if (st_pou(u) && (pou_type(pe) != "program" || pe == program)) st.pou(pe);
   iecil::UnitBase base{first_free(Dev::M), first_free(Dev::D), first_free(Dev::T), {}};
   for (const std::string& l : lines) {
+    if (l == kInlineText) {
+      st.text(text);
+      continue;
+    }
     st.line(l, at);
     if (l.find(" AT ") != std::string::npos) base.callers.insert(upper(l.substr(0, l.find(' '))));  // ours: a pin or a global
   }
@@ -3353,7 +3391,7 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
     if (!cond) fail_at(t, what + " has no condition (" + t->path() + ")");
     const Element* ci = cond->child("connectionPointIn");
     if (!ci && cond->child("connection")) ci = cond;  // TC6 1.0: the connections directly in <condition>
-    if (!ci) {
+    if (!ci && !inline_st(cond)) {
       auto inline_lang = [](const Element* in) {  // <inline><ST> (TC6 2.01), or <inline><body><ST>
         const Element* b = in->child("body") ? in->child("body") : in;
         for (const auto& ch : b->children)
@@ -3365,12 +3403,15 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
                                                    : "this form of condition";
       fail_at(cond, what + " has " + how + "; ldc translates conditions drawn in the chart's LD/FBD graph (" + cond->path() + ")");
     }
-    std::vector<Conn> conns;
-    read_conns(ci, conns);
-    Cond cc = bool_expr(conns, false, cond);
     uint32_t m = take(Dev::M, t);
-    if (rungs_.empty() || pending_title_.empty()) {}
-    rung(std::move(cc), out(Op::OUT, {bit_opd(Area::M, m)}, t), t);
+    if (ci) {
+      std::vector<Conn> conns;
+      read_conns(ci, conns);
+      Cond cc = bool_expr(conns, false, cond);
+      rung(std::move(cc), out(Op::OUT, {bit_opd(Area::M, m)}, t), t);
+    } else {
+      st_condition(cond->child("inline"), m);
+    }
     Tr tr;
     tr.from = source_step(t);
     tr.x = 0;

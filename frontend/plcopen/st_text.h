@@ -25,6 +25,8 @@ class StText {
   void pou(const xml::Element* pou);
   // A line of ST of our own, its tokens placed at `at`.
   void line(const std::string& text, const xml::Element* at);
+  // The text of an element (an inline ST condition), at its place in the file.
+  void text(const xml::Element* text_el) { add_body(st_, text_el); }
   // Everything, read: the ST as IL tokens (st::to_il_tokens), then the IL
   // POUs.  Throws CompileError at the XML file's position.
   std::vector<iecil::Tok> tokens() const;
