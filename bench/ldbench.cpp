@@ -1337,6 +1337,7 @@ struct Report {
     md += md_head({"program", "N_exe", "-O0", "-O1", "-O2", "C -O2", "C/-O2", "-O0/-O2", "-O2 ns/IL",
                    "bytes/IL -O0 · -O1 · -O2", "build ms -O0 · -O1 · -O2", "cc -O2 build"});
     std::vector<Subject*> lv = headline_subjects();
+    for (Subject* s : R.of("files")) lv.push_back(s);  // `ldbench FILE...`: their code sizes per level
     for (Subject* s : R.of("classes"))
       if (s->powered) lv.push_back(s);
     for (Subject* s : lv) {
