@@ -144,17 +144,49 @@ std::shared_ptr<Project> plcopen_project(PlcopenImport& im, const std::string& p
   return p;
 }
 
+// A configuration of several tasks (PLCopen or ST): the project, or with
+// --task one task's program.
+void configuration(Compiled& c, PlcopenImport& im, const std::string& path, const std::string& text, bool allow_project, const std::string& task) {
+  if (!task.empty()) {
+    auto p = plcopen_project(im, path, text);
+    std::string names;
+    for (size_t i = 0; i < p->tasks.size(); i++) {
+      names += (i ? ", " : "") + p->tasks[i].name;
+      if (same_name(p->tasks[i].name, task)) {
+        c.tree = std::move(im.tasks[i].tree);
+        c.il = *p->tasks[i].il;
+        return;
+      }
+    }
+    throw UserError(path + ": error: no task '" + task + "' in the configuration (" + names + ")");
+  }
+  if (allow_project) {
+    c.project = plcopen_project(im, path, text);
+    return;
+  }
+  std::string names;
+  for (const PlcopenTask& t : im.tasks) names += (names.empty() ? "" : ", ") + t.name;
+  throw CompileError(im.tasks[0].line, im.tasks[0].col,
+                     "the configuration has " + std::to_string(im.tasks.size()) + " tasks (" + names +
+                         "), one program each: `ldc FILE -o DIR` writes their images and project, `ldrun FILE --io=...` runs them, "
+                         "`ldc FILE --task NAME` compiles one");
+}
+
 }  // namespace
 
 Compiled compile_source(const std::string& path, bool allow_project, const std::string& task, bool keep_tree) {
-  if (!task.empty() && !ends_with(path, ".xml")) throw UserError(path + ": error: --task is for a PLCopen configuration of several tasks");
+  if (!task.empty() && !ends_with(path, ".xml") && !ends_with(path, ".st"))
+    throw UserError(path + ": error: --task is for a configuration of several tasks (PLCopen XML or ST)");
   std::string text = read_file(path);
   Compiled c;
   try {
     if (ends_with(path, ".il")) {
       c.il = looks_like_ldc_il(text) ? parse_il_text(text, path) : parse_iec_il(text, path);
     } else if (ends_with(path, ".st")) {
-      c.il = parse_st(text, path);
+      PlcopenImport im = import_st(text, path);
+      if (im.tasks.empty() && !task.empty()) throw UserError(path + ": error: --task " + task + ": the file has one program, not a configuration of several tasks");
+      if (im.tasks.empty()) c.il = lower_to_il(im.single);
+      else configuration(c, im, path, text, allow_project, task);
     } else if (ends_with(path, ".sfc")) {
       c.chart = parse_sfc(text, path);
       c.il = lower_chart(*c.chart);
@@ -169,31 +201,12 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
     } else if (ends_with(path, ".xml")) {
       c.from_ld = true;
       PlcopenImport im = import_plcopen(text, path);
-      if (!task.empty()) {
-        if (im.tasks.empty()) throw UserError(path + ": error: --task " + task + ": the file has one program, not a configuration of several tasks");
-        auto p = plcopen_project(im, path, text);
-        std::string names;
-        for (size_t i = 0; i < p->tasks.size(); i++) {
-          names += (i ? ", " : "") + p->tasks[i].name;
-          if (same_name(p->tasks[i].name, task)) {
-            c.tree = std::move(im.tasks[i].tree);
-            c.il = *p->tasks[i].il;
-            return c;
-          }
-        }
-        throw UserError(path + ": error: no task '" + task + "' in the configuration (" + names + ")");
-      } else if (im.tasks.empty()) {
+      if (im.tasks.empty() && !task.empty()) throw UserError(path + ": error: --task " + task + ": the file has one program, not a configuration of several tasks");
+      if (im.tasks.empty()) {
         c.tree = std::move(im.single);
         c.il = plcopen_il(c.tree, im.single_chart);
-      } else if (allow_project) {
-        c.project = plcopen_project(im, path, text);
       } else {
-        std::string names;
-        for (const PlcopenTask& t : im.tasks) names += (names.empty() ? "" : ", ") + t.name;
-        throw CompileError(im.tasks[0].line, im.tasks[0].col,
-                           "the configuration has " + std::to_string(im.tasks.size()) + " tasks (" + names +
-                               "), one program each: `ldc FILE -o DIR` writes their images and project, `ldrun FILE --io=...` runs them, "
-                               "`ldc FILE --task NAME` compiles one");
+        configuration(c, im, path, text, allow_project, task);
       }
     } else {
       c.from_ld = true;

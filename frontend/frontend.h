@@ -64,6 +64,11 @@ struct PlcopenImport {
 // (then the actions' rungs).  At most one task: `single` is parse_plcopen's program.  Several tasks: one
 // program per task.  Throws CompileError.
 PlcopenImport import_plcopen(std::string_view text, const std::string& filename);
+// A Structured Text file (docs/st.md) as a PLCopen import is: one program
+// (`single`, as raw rungs), or a CONFIGURATION of several tasks, one program
+// instance each, compiled one by one over the same layout of the globals.
+// Throws CompileError.
+PlcopenImport import_st(std::string_view text, const std::string& filename);
 
 // IEC 61131-3 Instruction List (docs/iec-il.md).  A `.il` file is ldc's own IL
 // text when its first character other than blanks and `;` comment lines is

@@ -21,7 +21,8 @@ std::vector<IoAccess> io_accesses(std::span<const uint8_t> il) {
       const Operand& o = in.a[i];
       if (o.kind != OpdKind::Bit && o.kind != OpdKind::Int && o.kind != OpdKind::Real) continue;
       if (!area_is_shared(o.area)) continue;
-      bool write = sig[i] == 'w' || sig[i] == 'd';
+      // w d r: a destination (r a typed one); a: an indexed store's array (its first element)
+      bool write = sig[i] == 'w' || sig[i] == 'd' || sig[i] == 'r' || (sig[i] == 'a' && in.op == Op::TSTX);
       out.push_back(IoAccess{o.area, o.index, write, off});
     }
     off = next;

@@ -12,12 +12,16 @@
 // What IL cannot take as an operand -- an index or argument that is an
 // expression, a call on the right of an operator -- is computed first into a
 // temporary (__Tn), which the typed reader gives the type of the value stored.
+#include <algorithm>
 #include <cctype>
 #include <map>
 #include <optional>
 #include <set>
 
 #include "frontend/st/st.h"
+
+#include "frontend/frontend.h"
+#include "ir/model.h"
 
 namespace ldc::st {
 
@@ -140,6 +144,8 @@ class Parser {
       if (u == "CASE") return case_stmt();
       if (u == "FOR") return for_stmt();
       if (u == "WHILE" || u == "REPEAT") return loop_stmt(u);
+      if ((u == "INITIAL_STEP" || u == "STEP" || u == "TRANSITION") && peek(1).kind == Tok::Word)
+        fail(k, "'" + k.text + "': a sequential function chart written as text (IEC 61131-3 SFC in ST); ldc reads SFC from PLCopen XML and .sfc files, not from ST (docs/st.md)");
       if (u == "EXIT" || u == "CONTINUE" || u == "RETURN") {
         Stmt s;
         s.kind = u == "EXIT" ? Stmt::Exit : u == "CONTINUE" ? Stmt::Continue : Stmt::Return;
@@ -1038,7 +1044,15 @@ class Writer {
 
 class File {
  public:
-  explicit File(const std::vector<Tok>& t) : t_(t) {}
+  // instance: which program instance of a CONFIGURATION of several to write (-1: it must have one)
+  explicit File(const std::vector<Tok>& t, int instance = -1) : t_(t), instance_(instance) {}
+  const Configuration& config() const { return config_; }
+  // Only the CONFIGURATION: its tasks and program instances.
+  void read_configuration() {
+    instance_ = kJustRead;
+    find_configuration();
+  }
+  static constexpr int kJustRead = -2;
 
   std::vector<Tok> run() {
     collect_functions();
@@ -1061,6 +1075,9 @@ class File {
 
  private:
   const std::vector<Tok>& t_;
+  int instance_ = -1;
+  Configuration config_;
+  std::string resource_ = "resource";  // the RESOURCE being read
   size_t pos_ = 0;
   std::vector<Tok> out_;
   std::set<std::string> functions_;
@@ -1090,7 +1107,7 @@ class File {
     while (peek().kind != Tok::End && !kw(peek(), "CONFIGURATION")) next();
     if (peek().kind == Tok::End) { pos_ = save; return; }
     const Tok& conf = next();
-    next();  // its name
+    config_.name = next().text;
     std::vector<std::pair<Tok, Tok>> instances;  // instance name, program type
     int tasks = 0;
     while (!kw(peek(), "END_CONFIGURATION")) {
@@ -1098,16 +1115,19 @@ class File {
       std::string u = upper(k.text);
       if (k.kind == Tok::End) fail(conf, "CONFIGURATION without END_CONFIGURATION");
       if (u == "VAR_GLOBAL") global_block();
-      else if (u == "RESOURCE") { next(), next(); if (kw(peek(), "ON")) next(), next(); }
+      else if (u == "RESOURCE") { next(), resource_ = next().text; if (kw(peek(), "ON")) next(), next(); }
       else if (u == "END_RESOURCE") next();
-      else if (u == "TASK") { tasks++; skip_past(";"); }
+      else if (u == "TASK") { tasks++; task(); }
       else if (u == "PROGRAM") {
         next();
         Tok inst = next();
-        if (kw(peek(), "WITH")) next(), next();
+        ConfigInstance ci{inst.text, "", "", inst.line, inst.col};
+        if (kw(peek(), "WITH")) next(), ci.task = next().text;
         if (!(peek().kind == Tok::Punct && peek().text == ":")) fail(peek(), "expected ':' and the program's type after PROGRAM " + inst.text);
         next();
         instances.push_back({inst, next()});
+        ci.program = instances.back().second.text;
+        config_.instances.push_back(ci);
         skip_past(";");
       } else if (u == "VAR_ACCESS" || u == "VAR_CONFIG") {
         fail(k, "'" + k.text + "' in a CONFIGURATION is not read (docs/st.md)");
@@ -1116,13 +1136,33 @@ class File {
       }
     }
     if (instances.empty()) fail(conf, "the CONFIGURATION runs no PROGRAM");
-    if (instances.size() > 1 || tasks > 1)
+    bool several = instances.size() > 1 || tasks > 1;
+    for (const auto& [g, tok] : global_names_) config_.globals.push_back(g);
+    if (several && instance_ == kJustRead) return;  // import_st compiles each instance
+    if (several && instance_ < 0)
       fail(instances.size() > 1 ? instances[1].first : conf,
            "a CONFIGURATION of " + std::to_string(instances.size()) + " program instances and " + std::to_string(tasks) +
-               " tasks: ldc compiles one program per ST file (docs/st.md)");
-    run_tok_ = instances[0].second;
+               " tasks is a project: `ldc FILE -o DIR` writes the images of its programs (docs/st.md)");
+    if (several && size_t(instance_) >= instances.size()) throw std::logic_error("no such program instance");
+    run_tok_ = instances[several ? size_t(instance_) : 0].second;
     run_ = upper(run_tok_.text);
     pos_ = save;
+  }
+  // TASK NAME "(" [INTERVAL ":=" literal] ["," PRIORITY ":=" number] ... ")" ";"
+  void task() {
+    next();
+    const Tok& n = next();
+    ConfigTask t{n.text, resource_, "", "", n.line, n.col};
+    while (!(peek().kind == Tok::Punct && peek().text == ";")) {
+      if (peek().kind == Tok::End) fail(n, "TASK " + n.text + " without its ';'");
+      std::string u = upper(next().text);
+      if ((u == "INTERVAL" || u == "PRIORITY") && peek().kind == Tok::Punct && peek().text == ":=") {
+        next();
+        (u == "INTERVAL" ? t.interval : t.priority) = next().text;
+      }
+    }
+    next();
+    config_.tasks.push_back(t);
   }
   void skip_past(const char* p) {
     const Tok& k = peek();
@@ -1292,7 +1332,13 @@ std::vector<Tok> pragmas(const std::vector<Tok>& t) {
   return out;
 }
 
-std::vector<Tok> to_il_tokens(const std::vector<Tok>& st) { return File(pragmas(st)).run(); }
+std::vector<Tok> to_il_tokens(const std::vector<Tok>& st, int instance) { return File(pragmas(st), instance).run(); }
+
+Configuration configuration(const std::vector<Tok>& st) {
+  File f(st);
+  f.read_configuration();
+  return f.config();
+}
 
 }  // namespace ldc::st
 
@@ -1300,6 +1346,112 @@ namespace ldc {
 
 Program parse_st(std::string_view text, const std::string& filename) {
   return iecil::parse_typed_il(st::to_il_tokens(st::lex(text)), filename, true);
+}
+
+namespace {
+
+// A program of the typed reader as raw rungs (TreeRung::raw), for the
+// configuration's tasks (driver: a project, as a PLCopen configuration's).
+TreeProgram raw_tree(Program p) {
+  TreeProgram t;
+  t.source = p.source, t.aliases = std::move(p.aliases), t.end_labels = std::move(p.end_labels), t.retain = std::move(p.retain);
+  for (Rung& r : p.rungs) {
+    TreeRung tr;
+    tr.labels = std::move(r.labels), tr.title = std::move(r.title), tr.line = r.line;
+    tr.raw = std::move(r.code);
+    t.rungs.push_back(std::move(tr));
+  }
+  return t;
+}
+
+// A task's interval, an IEC TIME literal, in whole microseconds.
+uint32_t period_us(const st::ConfigTask& t) {
+  std::string why;
+  auto lit = model::parse_literal(t.interval, why);
+  if (!lit || lit->lit.ty != Ty::TIME || int64_t(lit->lit.bits) % 1000 != 0 || int64_t(lit->lit.bits) < 50000 || int64_t(lit->lit.bits) > 10000000000LL)
+    throw CompileError(t.line, t.col, "task '" + t.name + "': interval '" + t.interval + "' is not a period ldc can run (a TIME literal, a whole number of microseconds, 50us..10s)");
+  return uint32_t(int64_t(lit->lit.bits) / 1000);
+}
+
+// The words of POU `name` (its PROGRAM ... END_PROGRAM), and of every
+// FUNCTION_BLOCK and FUNCTION (they may name globals as VAR_EXTERNAL), upper-case.
+std::set<std::string> words_of(const std::vector<iecil::Tok>& t, const std::string& name) {
+  std::set<std::string> w;
+  bool in = false;
+  for (size_t i = 0; i < t.size(); i++) {
+    std::string u = t[i].kind == iecil::Tok::Word ? iecil::upper(t[i].text) : "";
+    if ((u == "PROGRAM" && i + 1 < t.size() && iecil::upper(t[i + 1].text) == iecil::upper(name)) || u == "FUNCTION_BLOCK" || u == "FUNCTION") in = true;
+    else if (u == "END_PROGRAM" || u == "END_FUNCTION_BLOCK" || u == "END_FUNCTION") in = false;
+    else if (in && !u.empty()) w.insert(u);
+  }
+  return w;
+}
+
+// A global that the programs of two tasks name must be one both see: a BOOL
+// (a relay, M) or a variable at an input or output (docs/st.md, as
+// docs/plcopen.md "Configurations of several tasks"); the others live in each
+// program's private memory.  Every program lays the globals out first, from
+// the same base, so a shared one is at the same device in each (checked).
+void check_shared_globals(const std::vector<iecil::Tok>& toks, const st::Configuration& cfg, const std::vector<Program>& progs,
+                          const PlcopenImport& im) {
+  std::vector<std::set<std::string>> words;
+  for (const st::ConfigInstance& ci : cfg.instances) words.push_back(words_of(toks, ci.program));
+  for (const std::string& g : cfg.globals) {
+    std::vector<size_t> users;
+    for (size_t k = 0; k < words.size(); k++)
+      if (words[k].count(g)) users.push_back(k);
+    if (users.size() < 2) continue;
+    const Alias* first = nullptr;
+    for (size_t k : users)
+      for (const Alias& a : progs[k].aliases)
+        if (iecil::upper(a.name) == g) {
+          if (!first) first = &a;
+          Dev d = a.dev.dev;
+          if (d != Dev::M && d != Dev::X && d != Dev::Y && d != Dev::WX && d != Dev::WY)
+            throw CompileError(im.tasks[users[0]].line, im.tasks[users[0]].col,
+                               "global variable '" + a.name + "' is used by the programs of tasks '" + im.tasks[users[0]].name + "' and '" +
+                                   im.tasks[users[1]].name + "'; ldc keeps it in a program's private memory (" + dev_name(d) +
+                                   "), so tasks share only BOOL globals (relays, M) and variables located at inputs and outputs (%I, %Q)");
+          if (!(a.dev == first->dev)) throw std::logic_error("global " + a.name + " placed differently in two tasks' programs");
+        }
+  }
+}
+
+}  // namespace
+
+PlcopenImport import_st(std::string_view text, const std::string& filename) {
+  std::vector<iecil::Tok> toks = st::lex(text);
+  st::Configuration cfg = st::configuration(toks);
+  PlcopenImport im;
+  im.configuration = cfg.name;
+  if (cfg.instances.size() <= 1 && cfg.tasks.size() <= 1) {
+    im.single = raw_tree(iecil::parse_typed_il(st::to_il_tokens(toks), filename, true));
+    return im;
+  }
+  std::vector<Program> progs;
+  for (size_t k = 0; k < cfg.instances.size(); k++) progs.push_back(iecil::parse_typed_il(st::to_il_tokens(toks, int(k)), filename, true));
+  for (size_t k = 0; k < cfg.instances.size(); k++) {
+    const st::ConfigInstance& ci = cfg.instances[k];
+    auto t = std::find_if(cfg.tasks.begin(), cfg.tasks.end(), [&](const st::ConfigTask& x) { return iecil::upper(x.name) == iecil::upper(ci.task); });
+    if (ci.task.empty() || t == cfg.tasks.end())
+      throw CompileError(ci.line, ci.col, "program instance '" + ci.name + "' has no task (PROGRAM " + ci.name + " WITH TASK : TYPE); ldc runs each program of a configuration in its task");
+    for (size_t j = 0; j < k; j++)
+      if (iecil::upper(cfg.instances[j].task) == iecil::upper(ci.task))
+        throw CompileError(ci.line, ci.col, "task '" + ci.task + "' runs a second program ('" + ci.name + "' after '" + cfg.instances[j].name + "'); ldc runs one program per task of an ST configuration");
+    PlcopenTask pt;
+    pt.name = t->name, pt.resource = t->resource, pt.program = ci.name;
+    pt.line = t->line, pt.col = t->col;
+    pt.period_us = period_us(*t);
+    if (!t->priority.empty()) {
+      if (t->priority.find_first_not_of("0123456789") != std::string::npos || t->priority.size() > 2)
+        throw CompileError(t->line, t->col, "task '" + t->name + "': priority '" + t->priority + "' is not one ldc has (0, the highest, .. 99)");
+      pt.priority = uint32_t(std::stoul(t->priority));
+    }
+    im.tasks.push_back(std::move(pt));
+  }
+  check_shared_globals(toks, cfg, progs, im);
+  for (size_t k = 0; k < progs.size(); k++) im.tasks[k].tree = raw_tree(std::move(progs[k]));
+  return im;
 }
 
 }  // namespace ldc

@@ -18,7 +18,27 @@ std::vector<iecil::Tok> lex(std::string_view s);
 
 // The whole file: declarations passed on, every POU body's statements written
 // as IEC IL instructions located at their ST source, read by the typed IL
-// reader.  Throws CompileError.
-std::vector<iecil::Tok> to_il_tokens(const std::vector<iecil::Tok>& st);
+// reader.  A CONFIGURATION of several program instances is written for one
+// of them, `instance` (its index in the configuration); with -1 it must run
+// one.  Throws CompileError.
+std::vector<iecil::Tok> to_il_tokens(const std::vector<iecil::Tok>& st, int instance = -1);
+
+// The file's CONFIGURATION: its tasks and program instances, as written
+// (instances empty: none).
+struct ConfigTask {
+  std::string name, resource, interval, priority;  // interval, priority: literals as written ("" if not given)
+  int line = 0, col = 0;
+};
+struct ConfigInstance {
+  std::string name, task, program;  // task "" without WITH
+  int line = 0, col = 0;
+};
+struct Configuration {
+  std::string name;
+  std::vector<std::string> globals;  // VAR_GLOBAL names, upper-case
+  std::vector<ConfigTask> tasks;
+  std::vector<ConfigInstance> instances;
+};
+Configuration configuration(const std::vector<iecil::Tok>& st);
 
 }  // namespace ldc::st

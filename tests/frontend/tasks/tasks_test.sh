@@ -1,7 +1,7 @@
 #!/bin/sh
-# tasks_test.sh BINDIR -- PLCopen configurations of several tasks
-# (docs/plcopen.md, "Configurations of several tasks"), from this directory:
-# NAME.xml with NAME.out is accepted and `ldc NAME.xml` prints that
+# tasks_test.sh BINDIR -- PLCopen and ST configurations of several tasks
+# (docs/plcopen.md, "Configurations of several tasks"; docs/st.md), from this directory:
+# NAME.xml or NAME.st with NAME.out is accepted and `ldc NAME.xml` prints that
 # configuration table; NAME.xml with NAME.err is refused with exactly that
 # message and no output.  plcopen_tasks.xml also: `ldc -o DIR` writes an image
 # per task and a project that checks the same; `ldrun FILE --io=stdio` runs the
@@ -16,8 +16,8 @@ trap 'rm -rf "$tmp"' EXIT
 cd "$here" || exit 1
 fails=0
 fail() { echo "FAIL: $*" >&2; fails=$((fails + 1)); }
-for x in *.xml; do
-  n=${x%.xml}
+for x in *.xml *.st; do
+  n=${x%.*}
   "$bin/ldc" "$x" > "$tmp/out" 2> "$tmp/err"; rc=$?
   if [ "${UPDATE:-}" = 1 ]; then
     if [ $rc -eq 0 ]; then cp "$tmp/out" "$n.out"; else cp "$tmp/err" "$n.err"; fi
@@ -46,6 +46,13 @@ fi
   { fail "ldrun plcopen_tasks.xml --io=stdio"; cat "$tmp/err" >&2; }
 if [ "${UPDATE:-}" = 1 ]; then cp "$tmp/replies" plcopen_tasks.expected; fi
 diff -u plcopen_tasks.expected "$tmp/replies" || fail "ldrun's replies differ from plcopen_tasks.expected"
+# the same project in ST (st_tasks.st): the same replies, its LAMP and DONE named with their task
+"$bin/ldrun" st_tasks.st --io=stdio --clock=virtual < st_tasks.cmds > "$tmp/st_replies" 2> "$tmp/err" ||
+  { fail "ldrun st_tasks.st --io=stdio"; cat "$tmp/err" >&2; }
+diff -u st_tasks.expected "$tmp/st_replies" || fail "ldrun's replies to st_tasks.st differ from st_tasks.expected"
+for t in fast slow; do
+  TASK=$t sh ../check_corpus.sh "$bin" "$here/st_tasks.st" || fail "st_tasks.st task $t on the engines"
+done
 # one program alone is refused without --task, and each task's program runs alike on every engine
 "$bin/ldrun" plcopen_tasks.xml --scans 3 > /dev/null 2>&1 && fail "ldrun ran one program of several tasks without --task"
 for t in fast slow; do
