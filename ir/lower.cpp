@@ -161,18 +161,23 @@ std::string print_tree(const TreeProgram& p) {
   return out;
 }
 
-// A rung given as IL: its edge slots k become the program's next ones.
+// A rung given as IL: its edge slots, numbered in a row from whatever its own
+// program numbered them, become the program's next ones.
 static void lower_raw(const TreeRung& tr, Program& p) {
   Rung& r = p.rungs.emplace_back();
   r.labels = tr.labels;
   r.title = tr.title;
   r.line = tr.line;
   r.code = tr.raw;
-  uint32_t slots = 0;
+  uint32_t lo = UINT32_MAX, hi = 0;
+  for (const Instr& in : r.code)
+    for (const Operand& o : in.a)
+      if (o.kind == OpdKind::Edge) lo = std::min(lo, o.index), hi = std::max(hi, o.index);
+  if (lo == UINT32_MAX) return;
   for (Instr& in : r.code)
     for (Operand& o : in.a)
-      if (o.kind == OpdKind::Edge) slots = std::max(slots, o.index + 1), o.index += p.edge_slots;
-  p.edge_slots += slots;
+      if (o.kind == OpdKind::Edge) o.index = o.index - lo + p.edge_slots;
+  p.edge_slots += hi - lo + 1;
 }
 
 void lower_rung(const TreeRung& tr, Program& p) {

@@ -84,12 +84,25 @@ std::optional<Lit> literal_as(const ParsedLit& p, Ty t, std::string& why);
 //   List    an array's elements: [1, 2, 3(0)] is {{1, 1}, {1, 2}, {3, 0}}
 //           (a repeat count and the value; missing elements keep their default)
 //   Fields  a structure's members: (x := 1, y := 2)
+// (Item and Field are declared inside and defined after it: a std::pair of
+// the incomplete Init is refused by clang's libstdc++ checks, a vector of an
+// incomplete type is allowed.)
 struct Init {
+  struct Item;
+  struct Field;
   enum Kind : uint8_t { None, Value, List, Fields } kind = None;
   ParsedLit value;
-  std::vector<std::pair<uint32_t, Init>> list;
-  std::vector<std::pair<std::string, Init>> fields;  // upper-case member names
+  std::vector<Item> list;
+  std::vector<Field> fields;
   SrcLoc loc;
+};
+struct Init::Item {
+  uint32_t count = 1;
+  Init value;
+};
+struct Init::Field {
+  std::string name;  // upper-case
+  Init value;
 };
 
 // ---------------------------------------------------------------- types
