@@ -1314,11 +1314,10 @@ std::vector<Tok> pragmas(const std::vector<Tok>& t) {
     std::string u = k.kind == Tok::Word ? upper(k.text) : "";
     if (u == "PROGRAM" || u == "FUNCTION_BLOCK" || u == "FUNCTION") {
       in_pou = true, in_body = false;
-      for (i++; i < t.size() && t[i].kind != Tok::End; i++) {  // the name, and a FUNCTION's ": TYPE"
-        out.push_back(t[i]);
-        if (!(i + 1 < t.size() && t[i + 1].kind == Tok::Punct && t[i + 1].text == ":")) break;
-        out.push_back(t[++i]);
-      }
+      auto word = [&](size_t j) { return j < t.size() && t[j].kind == Tok::Word; };
+      if (word(i + 1)) out.push_back(t[++i]);  // the name
+      if (word(i + 2) && t[i + 1].kind == Tok::Punct && t[i + 1].text == ":")  // a FUNCTION's ": TYPE"
+        out.push_back(t[i + 1]), out.push_back(t[i + 2]), i += 2;
     } else if (u.rfind("END_PROGRAM", 0) == 0 || u == "END_FUNCTION_BLOCK" || u == "END_FUNCTION") {
       in_pou = in_body = false;
     } else if (u.rfind("VAR", 0) == 0 && !in_body) {
