@@ -15,6 +15,9 @@
 //   * standard function blocks keep their state in our devices (timers, counters,
 //     relays), functions compute into temporary devices; edges on contacts and
 //     coils are R_TRIG / F_TRIG instances of their own, as Beremiz makes them.
+// POUs written in ST or IL are compiled by the ST and IEC IL readers as units
+// of their own (st_call, st_program, st_condition; frontend/plcopen/st_text.h),
+// whose IL is spliced in as raw rungs.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
