@@ -55,6 +55,7 @@ std::string usage() {
     "             [--modbus [HOST:]PORT] [--modbus-connections 16]   a Modbus TCP server (127.0.0.1 unless HOST is given; also with --trace)\n"
     "             [--modbus-per-address 8] [--modbus-frame-timeout 2s] [--modbus-idle-timeout 60s]\n"
     "             [--modbus-write-timeout 1s] [--modbus-pending-writes 8192]   its limits (docs/faults.md)\n"
+    "             [--modbus-map FILE]          named variables at coils and holding registers of their own\n"
     "             [--monitor HOST:PORT [--monitor-write] [--monitor-remote]]  (the live ladder view, docs/runtime.md)\n"
     "             [--monitor-host NAME[,NAME]] [--monitor-token TOKEN]  (names it is reached by; the write token)\n"
     "             [--monitor-connections 64] [--monitor-per-address 32] [--monitor-streams 32]  (docs/faults.md)\n"
@@ -70,6 +71,7 @@ struct RtArgs {
   std::string project, io, control, clock, period, watchdog, retain, retain_every, out, block;
   std::string modbus, modbus_connections;  // --modbus [HOST:]PORT, --modbus-connections N
   std::string modbus_per_address, modbus_frame_timeout, modbus_idle_timeout, modbus_write_timeout, modbus_pending_writes;
+  std::string modbus_map;  // --modbus-map FILE: named variables' coils and registers
   std::string load_budget;                 // --load-budget SIZE: the memory an online load may take
   bool free_run = false, rt = false, cold = false, stop = false, stats = false, reload = false;
   bool sandbox = false;  // also in trace mode: it does not select the runtime
@@ -376,7 +378,8 @@ class SoftPlcRun {
     std::pair<const char*, const std::string*> limits[] = {
         {"--modbus-connections", &a_.modbus_connections},     {"--modbus-per-address", &a_.modbus_per_address},
         {"--modbus-frame-timeout", &a_.modbus_frame_timeout}, {"--modbus-idle-timeout", &a_.modbus_idle_timeout},
-        {"--modbus-write-timeout", &a_.modbus_write_timeout}, {"--modbus-pending-writes", &a_.modbus_pending_writes}};
+        {"--modbus-write-timeout", &a_.modbus_write_timeout}, {"--modbus-pending-writes", &a_.modbus_pending_writes},
+        {"--modbus-map", &a_.modbus_map}};
     if (a_.modbus.empty()) {
       for (auto& [name, v] : limits)
         if (!v->empty()) throw UserError("ldrun: error: " + std::string(name) + " needs --modbus");
@@ -398,6 +401,11 @@ class SoftPlcRun {
     // one request writes 1968 coils at most; the map has 34,816 writable elements
     if (!a_.modbus_pending_writes.empty())
       mo.pending_writes = count_arg(a_.modbus_pending_writes, "--modbus-pending-writes", 1968, 34816);
+    if (!a_.modbus_map.empty()) {  // names of the first task's program (units 0, 1, 255)
+      try {
+        mo.named = modbus::read_map(read_file(a_.modbus_map), a_.modbus_map, specs_[0].image.aliases);
+      } catch (UserError&) { throw; } catch (std::exception& e) { throw UserError(e.what()); }
+    }
     return mo;
   }
 
@@ -844,6 +852,7 @@ int ldrun_main(int argc, char** argv) {
         opt_value("--io", rta.io) || opt_value("--control", rta.control) || opt_value("--clock", rta.clock) ||
         opt_value("--watchdog", rta.watchdog) || opt_value("--retain-every", rta.retain_every) ||
         opt_value("--retain", rta.retain) || opt_value("--out", rta.out) || opt_value("--block", rta.block) ||
+        opt_value("--modbus-map", rta.modbus_map) ||
         opt_value("--modbus-connections", rta.modbus_connections) || opt_value("--modbus", rta.modbus) ||
         opt_value("--modbus-per-address", rta.modbus_per_address) ||
         opt_value("--modbus-frame-timeout", rta.modbus_frame_timeout) ||

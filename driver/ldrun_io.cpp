@@ -25,15 +25,11 @@ Image il_image(const Program& p) {
 
 std::vector<Probe> parse_watch(const std::string& watch, const std::vector<Alias>& aliases) {
   std::vector<Probe> probes;
-  size_t s = 0;
-  while (!watch.empty() && s <= watch.size()) {
-    size_t e = watch.find(',', s);
-    std::string name = watch.substr(s, e == std::string::npos ? std::string::npos : e - s);
+  if (watch.empty()) return probes;
+  for (const std::string& name : split_names(watch)) {  // a[1,2] is one name
     try {
       probes.push_back(resolve_probe(name, aliases));
     } catch (std::exception& ex) { throw UserError("ldrun: error: --watch: " + std::string(ex.what())); }
-    if (e == std::string::npos) break;
-    s = e + 1;
   }
   return probes;
 }

@@ -401,7 +401,7 @@ bool duration_ns(std::string_view b, int64_t& ns, std::string& why) {
       if (scale < __int128(1000000000000000000LL)) fv = fv * 10 + (c - '0'), scale *= 10;
     }
     total += fv * mul / scale;
-    if (total > __int128(INT64_MAX)) return why = "duration beyond the range of TIME (about 292 years)", false;
+    if (total > __int128(INT64_MAX) + neg) return why = "duration beyond the range of TIME (about 292 years)", false;  // -2^63 is one
   }
   ns = int64_t(neg ? -total : total);
   return true;

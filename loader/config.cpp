@@ -21,9 +21,13 @@ std::vector<IoAccess> io_accesses(std::span<const uint8_t> il) {
       const Operand& o = in.a[i];
       if (o.kind != OpdKind::Bit && o.kind != OpdKind::Int && o.kind != OpdKind::Real) continue;
       if (!area_is_shared(o.area)) continue;
-      // w d r: a destination (r a typed one); a: an indexed store's array (its first element)
+      // a typed destination (r, and STX's array a) is a write too, and a
+      // typed value takes all its cells (a LINT in WY: two points)
       bool write = sig[i] == 'w' || sig[i] == 'd' || sig[i] == 'r' || (sig[i] == 'a' && in.op == Op::TSTX);
-      out.push_back(IoAccess{o.area, o.index, write, off});
+      Ty t = operand_type(in, i);
+      uint32_t cells = t == Ty::None || ty_info(t).cells == 0 ? 1 : ty_info(t).cells;
+      uint32_t n = Layout::standard(0).count[int(o.area)];
+      for (uint32_t c = 0; c < cells && o.index + c < n; c++) out.push_back(IoAccess{o.area, o.index + c, write, off});
     }
     off = next;
   }

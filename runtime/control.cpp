@@ -21,13 +21,25 @@ std::vector<std::string> words(const std::string& line) {
   return w;
 }
 
+// The line from its n-th word (0-based) on, trailing blanks dropped.
+std::string rest_of_line(const std::string& line, size_t n) {
+  size_t i = 0;
+  for (size_t k = 0;; k++) {
+    while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) i++;
+    if (k == n) break;
+    while (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i]))) i++;
+  }
+  size_t e = line.find_last_not_of(" \t\r");
+  return e == std::string::npos || e < i ? std::string() : line.substr(i, e + 1 - i);
+}
+
 std::string lower(std::string s) {
   for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
   return s;
 }
 
 constexpr const char* kHelp =
-    "commands: set DEV VALUE | get [TASK.]DEV | run | stop | status | stats | load [TASK] FILE | wait N | save | quit";
+    "commands: set [TASK.]NAME VALUE | get [TASK.]NAME | run | stop | status | stats | load [TASK] FILE | wait N | save | quit";
 
 }  // namespace
 
@@ -39,13 +51,13 @@ std::string Control::execute(const std::string& line, bool& quit) {
     if (w.size() - 1 < lo || w.size() - 1 > hi) throw std::runtime_error(std::string("usage: ") + form);
   };
   try {
-    if (cmd == "set") {
-      args(2, 2, "set DEV VALUE");
-      rt.set(w[1], w[2]);
+    if (cmd == "set") {  // the value is the rest of the line: a STRING 'a b' may hold blanks
+      if (w.size() < 3) throw std::runtime_error("usage: set NAME VALUE");
+      rt.set(w[1], rest_of_line(line, 2));
       return "ok";
     }
     if (cmd == "get") {
-      args(1, 1, "get [TASK.]DEV");
+      args(1, 1, "get [TASK.]NAME");
       return w[1] + " = " + rt.get(w[1]);
     }
     if (cmd == "run") {

@@ -39,7 +39,7 @@ class TraceDriver : public IoDriver {
   void attach(uint8_t*, const Layout& layout, uint32_t) override {
     layout_ = layout;
     std::string h = "scan";
-    for (const Probe& p : watch_) h += "," + p.name;
+    for (const Probe& p : watch_) h += "," + csv_name(p.name);
     emit(h + "\n");
   }
   void read_inputs(uint8_t* global, const ScanContext& c) override {

@@ -508,11 +508,17 @@ struct Runtime::Impl {
       }
       if (!opt.free_run) sleep_until(t.release);
       const int64_t start = now_ns();
+      // A pending warm restart first, so that what the requests write (a set
+      // of a task's variable) is what the scan starts from, not cleared by it.
+      auto restart_if_due = [&] {
+        const uint64_t ep = epoch.load();
+        if (ep != t.epoch) warm_restart(t), t.epoch = ep;
+        if (t.restart.exchange(false)) warm_restart(t);
+      };
+      if (state.load() == State::Run && !stopping.load()) restart_if_due();
       service(t);  // online download, probes: at the scan boundary, never mid-scan
       if (state.load() != State::Run || stopping.load()) continue;
-      const uint64_t ep = epoch.load();
-      if (ep != t.epoch) warm_restart(t), t.epoch = ep;
-      if (t.restart.exchange(false)) warm_restart(t);
+      restart_if_due();
       Prog& p = *t.prog;
       uint8_t* mem = t.mem.data();
       const int64_t begin = now_ns();
@@ -1211,23 +1217,40 @@ namespace {
 
 }  // namespace
 
+// "TASK.NAME" names the task when TASK is one of the project's tasks; else the
+// whole text is a name of the first task's program (`tank.level`, `c[2].v`).
+std::pair<size_t, std::string> Runtime::split_task(const std::string& device) const {
+  if (size_t dot = device.find('.'); dot != std::string::npos && device[0] != '%') {
+    size_t ti = find_task(device.substr(0, dot));
+    if (ti != SIZE_MAX) return {ti, device.substr(dot + 1)};
+  }
+  return {0, device};
+}
+
+// The task and the probe of a get/set operand; "no task named" when a
+// TASK.NAME names neither a task nor a variable of the first task.
+static Probe resolve_in(const std::string& device, const std::string& dev, const std::vector<Alias>& aliases) {
+  try {
+    return resolve_probe(dev, aliases);
+  } catch (std::runtime_error&) {
+    size_t dot = device.find('.');
+    if (dev == device && dot != std::string::npos && device[0] != '%' && device.find('[') > dot)
+      throw std::runtime_error("no task named '" + device.substr(0, dot) + "' and no variable '" + device + "'");
+    throw;
+  }
+}
+
 std::string Runtime::get(const std::string& device, int64_t timeout_ms) {
   Impl& m = *impl_;
   std::lock_guard<std::mutex> cl(m.ctl_mu);
-  std::string dev = device;
-  size_t ti = 0;
-  if (size_t dot = device.find('.'); dot != std::string::npos && device[0] != '%') {
-    ti = find_task(device.substr(0, dot));
-    if (ti == SIZE_MAX) throw std::runtime_error("no task named '" + device.substr(0, dot) + "'");
-    dev = device.substr(dot + 1);
-  }
+  auto [ti, dev] = split_task(device);
   Task& t = *m.tasks[ti];
-  Probe p = resolve_probe(dev, t.ctl_aliases);
+  Probe p = resolve_in(device, dev, t.ctl_aliases);
   if (area_is_shared(p.area)) {
     std::lock_guard<ImageLock> g(m.glock);
     return format_probe(m.global.data(), m.glayout, p);
   }
-  if (m.tasks.size() > 1 && device.find('.') == std::string::npos)
+  if (m.tasks.size() > 1 && dev == device)
     throw std::runtime_error("'" + dev + "' is private to each task: name one, e.g. " + t.spec.name + "." + dev);
   std::string out;
   if (!m.at_boundary(t, [&] { out = format_probe(t.mem.data(), t.prog->image.layout, p); }, timeout_ms))
@@ -1235,27 +1258,26 @@ std::string Runtime::get(const std::string& device, int64_t timeout_ms) {
   return out;
 }
 
-void Runtime::set(const std::string& device, const std::string& value) {
+void Runtime::set(const std::string& device, const std::string& value, int64_t timeout_ms) {
   Impl& m = *impl_;
   std::lock_guard<std::mutex> cl(m.ctl_mu);
-  Probe p = resolve_probe(device, m.tasks[0]->ctl_aliases);
-  if (p.area != Area::X && p.area != Area::WX && p.area != Area::M && p.area != Area::K)
-    throw std::runtime_error("'" + device + "' cannot be set: set writes inputs (X, WX) and global relays (M, K)");
-  char* end = nullptr;
-  errno = 0;
-  long long v = value.size() > 2 && value[0] == '0' && (value[1] == 'x' || value[1] == 'X')
-                    ? std::strtoll(value.c_str() + 2, &end, 16)
-                    : std::strtoll(value.c_str(), &end, 10);
-  if (value.empty() || *end || errno) throw std::runtime_error("bad value '" + value + "'");
-  if (area_is_bit(p.area) && v != 0 && v != 1) throw std::runtime_error("a bit is 0 or 1, not '" + value + "'");
-  if (v < INT32_MIN || v > INT32_MAX) throw std::runtime_error("value out of the INT32 range: '" + value + "'");
-  std::lock_guard<ImageLock> g(m.glock);
-  uint8_t* at = m.global.data() + m.glayout.addr(p.area, p.index);
-  if (area_is_bit(p.area)) *at = uint8_t(v);
-  else {
-    int32_t w = int32_t(v);
-    std::memcpy(at, &w, 4);
+  auto [ti, dev] = split_task(device);
+  Task& t = *m.tasks[ti];
+  Probe p = resolve_in(device, dev, t.ctl_aliases);
+  bool shared = p.area == Area::X || p.area == Area::WX || p.area == Area::M || p.area == Area::K;
+  if (!shared && p.area != Area::D && p.area != Area::F)
+    throw std::runtime_error("'" + device + "' cannot be set: set writes inputs (X, WX), global relays (M, K) and a task's variables (D, F)");
+  if (value.empty()) throw std::runtime_error("bad value ''");
+  if (std::string why = trace_cell_problem(p, value); !why.empty()) throw std::runtime_error(why);
+  if (shared) {
+    std::lock_guard<ImageLock> g(m.glock);
+    put_trace_cell(m.global.data(), m.glayout, p, value);
+    return;
   }
+  if (m.tasks.size() > 1 && dev == device)
+    throw std::runtime_error("'" + dev + "' is private to each task: name one, e.g. " + t.spec.name + "." + dev);
+  if (!m.at_boundary(t, [&] { put_trace_cell(t.mem.data(), t.prog->image.layout, p, value); }, timeout_ms))
+    throw std::runtime_error("task '" + t.spec.name + "' did not reach a scan boundary in time");
 }
 
 std::string Runtime::status() const {

@@ -165,15 +165,20 @@ class Runtime {
   // std::runtime_error with the reason if refused.
   SwapReport replace(const std::string& task, Image img, const std::string& file, int64_t timeout_ms = 5000);
 
-  // Reads a device: shared ones from the global image, private ones from
-  // the task's memory at its next scan boundary.  "T.D5" names the task.
+  // Reads a device or a variable by name: shared ones from the global image,
+  // private ones from the task's memory at its next scan boundary.  "T.D5"
+  // names the task; values as ldrun --watch prints them (docs/format.md).
   std::string get(const std::string& device, int64_t timeout_ms = 2000);
-  // Writes an input (X, WX) or a global relay (M, K) in the global image.
-  void set(const std::string& device, const std::string& value);
+  // Writes an input (X, WX) or a global relay (M, K) in the global image, or
+  // a task's variable (D, F: at its next scan boundary); the value as a trace
+  // cell of it (INT32, a typed variable's type, IEC literals: T#1s, 'text').
+  void set(const std::string& device, const std::string& value, int64_t timeout_ms = 2000);
 
   size_t task_count() const;
   const std::string& task_name(size_t i) const;
   size_t find_task(const std::string& name) const;  // SIZE_MAX if none
+  // "TASK.NAME" -> the task and NAME when TASK is a task; else {0, the whole}.
+  std::pair<size_t, std::string> split_task(const std::string& device) const;
   std::string status() const;                 // one line
   std::vector<TaskStats> stats() const;       // (after shutdown: exact; while running: approximate)
   static std::string format_stats(const std::vector<TaskStats>& s);

@@ -89,8 +89,19 @@ struct Probe {
   uint32_t index;
   Ty ty = Ty::None;  // a typed alias's type: read and written at it (docs/il.md)
 };
-// Resolves a device spelling, IEC address or alias; throws std::runtime_error.
+// Resolves a variable's name (an alias: `motor`, `tank.level`, `c[2].v`,
+// `a[1, 2]`; blanks, case and enclosing double quotes do not matter), else a
+// device spelling or IEC address; throws std::runtime_error.  A program's name
+// wins over a device of the same spelling.
 Probe resolve_probe(std::string_view name, const std::vector<Alias>& aliases);
+// A CSV line's cells, trimmed, each with its 1-based column: commas inside
+// [...] (an element a[1,2]) and inside quotes ('text', "name") do not split.
+std::vector<std::pair<std::string, int>> split_cells(std::string_view line);
+// A name as an output header cell: in double quotes if it holds a comma
+// ("a[1,2]"), which split_cells and resolve_probe read back.
+std::string csv_name(const std::string& name);
+// A --watch list's names, split as a CSV line.
+std::vector<std::string> split_names(std::string_view list);
 
 struct Trace {
   std::vector<Probe> columns;
@@ -107,6 +118,9 @@ long long trace_cell_int(const std::string& v, char** end = nullptr);
 void put_trace_cell(uint8_t* base, const Layout& L, const Probe& p, const std::string& v);
 // Why a cell cannot be a typed column's value ("" if it can, or the column is untyped).
 std::string check_trace_cell(const Probe& p, const std::string& v);
+// Why a non-empty cell cannot be written to p ("" if it can): a typed
+// column's value, else a bit 0/1, an INT32, a REAL (F).
+std::string trace_cell_problem(const Probe& p, const std::string& v);
 
 struct RunOptions {
   int scans = -1;          // -1: as many as the trace has rows (1 without a trace)

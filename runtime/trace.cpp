@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <charconv>
 #include <optional>
 #include <cmath>
 #include <cstdio>
@@ -9,6 +10,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "ir/model.h"
+#include "ir/typed.h"
 #include "runtime/runtime.h"
 
 namespace ldc {
@@ -56,13 +59,48 @@ int cell_base(const std::string& v) {
   return v.size() > at + 2 && v[at] == '0' && (v[at + 1] == 'x' || v[at + 1] == 'X') ? 16 : 10;
 }
 
+// A cell written as an IEC literal (T#1s500ms, TOD#12:00:00, 16#FF, TRUE,
+// 'text'): its value at type t, through the literal reader of the typed
+// programs (ir/model.h), so a trace takes what the program's source takes.
+// A TIME column takes a T# literal and an LTIME column either kind; a DATE
+// column a DT# too, the form a DATE not at midnight is shown in.
+std::optional<model::Lit> literal_cell(Ty t, const std::string& v, std::string& why) {
+  std::string lwhy;
+  std::optional<model::ParsedLit> p = model::parse_literal(v, lwhy);
+  if (!p) {  // the reader's reason ends with the text, already given here
+    if (lwhy.size() > v.size() + 2 && lwhy.ends_with(": " + v)) lwhy.resize(lwhy.size() - v.size() - 2);
+    return why = "bad " + std::string(ty_info(t).name) + " '" + v + "'" + (lwhy.empty() ? "" : ": " + lwhy), std::nullopt;
+  }
+  bool typed = !p->untyped_int && !p->untyped_real;
+  if (typed && ty_info(t).kind == TyKind::Time && ty_info(p->lit.ty).kind == TyKind::Time) return model::Lit{t, p->lit.bits};
+  if (typed && t == Ty::DATE && p->lit.ty == Ty::DT) return model::Lit{t, p->lit.bits};  // a DATE not at midnight shows as DT#
+  std::optional<model::Lit> l = model::literal_as(*p, t, lwhy);
+  if (!l) return why = lwhy + ": '" + v + "'", std::nullopt;
+  return l;
+}
+
+// Is the cell a plain number (sign, digits, 0x hex, a C real), read by strto*?
+bool plain_number(const std::string& v) {
+  size_t at = !v.empty() && (v[0] == '-' || v[0] == '+') ? 1 : 0;
+  return at < v.size() && (std::isdigit((unsigned char)v[at]) || v[at] == '.') && v.find('#') == std::string::npos;
+}
+
 // A cell of a typed column: its value at the type (integers in its range,
-// times and dates in ns); nullopt and `why` if it is not one.
+// times and dates in ns); nullopt and `why` if it is not one.  A plain
+// number is read as before (decimal or 0x hex, times and dates in ns, reals
+// in C notation); anything else must be an IEC literal of the type.
 std::optional<uint64_t> typed_cell(Ty t, const std::string& v, std::string& why) {
   const TyInfo& ti = ty_info(t);
   char* end = nullptr;
   errno = 0;
-  if (t == Ty::STRING) return why = "a trace cannot write a STRING", std::nullopt;
+  if (ty_is_real(t) && !v.empty()) {  // C notation, inf and nan as shown
+    double d = std::strtod(v.c_str(), &end);
+    if (!*end && end != v.c_str()) return t == Ty::REAL ? uint64_t(typed::bits_of(float(d))) : typed::bits_of(d);
+  }
+  if (t == Ty::STRING || !plain_number(v)) {
+    std::optional<model::Lit> l = literal_cell(t, v, why);
+    return l ? std::optional<uint64_t>(l->bits) : std::nullopt;
+  }
   if (ty_is_real(t)) {
     double d = std::strtod(v.c_str(), &end);
     if (*end || end == v.c_str()) return why = "bad " + std::string(ti.name) + " '" + v + "'", std::nullopt;
@@ -100,11 +138,34 @@ std::string check_trace_cell(const Probe& p, const std::string& v) {
   return "";
 }
 
+std::string trace_cell_problem(const Probe& p, const std::string& v) {
+  if (p.ty != Ty::None) {
+    std::string why = check_trace_cell(p, v);
+    return why.empty() ? why : why + " for " + p.name;
+  }
+  char* end = nullptr;
+  if (p.area == Area::F) {
+    std::strtof(v.c_str(), &end);
+  } else {
+    long long x = trace_cell_int(v, &end);
+    if (!*end && area_is_bit(p.area) && p.area != Area::Sys && x != 0 && x != 1) return "a bit is 0 or 1, not '" + v + "'";
+    if (!*end && (x < INT32_MIN || x > INT32_MAX)) return "value out of the INT32 range: '" + v + "'";
+    if (!*end && p.area == Area::Sys && x < 0) return "dt cannot be negative";
+  }
+  if (*end || end == v.c_str()) return "bad value '" + v + "' for " + p.name;
+  return "";
+}
+
 void put_trace_cell(uint8_t* base, const Layout& L, const Probe& p, const std::string& v) {
   uint8_t* at = base + L.addr(p.area, p.index);
   std::string why;
   if (p.ty != Ty::None && !area_is_bit(p.area)) {  // held extended in one cell, or two cells low first
-    if (ty_info(p.ty).cells > 2) throw std::runtime_error("'" + p.name + "': a trace cannot write a " + ty_info(p.ty).name);
+    if (p.ty == Ty::STRING) {  // the length cell and the bytes (docs/il.md, "Strings")
+      std::string bytes = model::string_literal_bytes(v, why).value_or("");
+      std::vector<uint32_t> cells = model::string_cells(bytes);
+      std::memcpy(at, cells.data(), cells.size() * 4);
+      return;
+    }
     uint64_t b = typed_cell(p.ty, v, why).value_or(0);
     if (ty_info(p.ty).cells == 1 && !ty_is_real(p.ty) && !ty_is_unsigned(p.ty)) b = uint64_t(int64_t(int32_t(uint32_t(b))));
     std::memcpy(at, &b, size_t(ty_info(p.ty).cells) * 4);
@@ -125,12 +186,62 @@ std::unique_ptr<Engine> make_interp_engine(std::vector<uint8_t> il, const Layout
   return std::make_unique<InterpEngine>(std::move(il), layout);
 }
 
+std::vector<std::pair<std::string, int>> split_cells(std::string_view line) {
+  std::vector<std::pair<std::string, int>> cells;
+  size_t s = 0;
+  int depth = 0;
+  char quote = 0;
+  for (size_t i = 0;; i++) {
+    if (i == line.size() || (line[i] == ',' && depth == 0 && !quote)) {
+      cells.emplace_back(trim(line.substr(s, i - s)), int(s) + 1);
+      if (i == line.size()) break;
+      s = i + 1;
+    } else if (quote) {
+      if (line[i] == '$' && quote == '\'' && i + 1 < line.size()) i++;  // $' inside a STRING
+      else if (line[i] == quote) quote = 0;
+    } else if (line[i] == '\'' || line[i] == '"') {
+      quote = line[i];
+    } else if (line[i] == '[') {
+      depth++;
+    } else if (line[i] == ']' && depth > 0) {
+      depth--;
+    }
+  }
+  return cells;
+}
+
+std::string csv_name(const std::string& name) {
+  return name.find(',') != std::string::npos && name.front() != '"' ? '"' + name + '"' : name;
+}
+
+std::vector<std::string> split_names(std::string_view list) {
+  std::vector<std::string> names;
+  for (auto& c : split_cells(list)) names.push_back(std::move(c.first));
+  return names;
+}
+
+// A name as it is compared: without blanks and double quotes (a header cell
+// "a[1,2]"), upper case (IEC names are case-insensitive).
+static std::string name_key(std::string_view name) {
+  std::string k;
+  for (char c : name)
+    if (!std::isspace((unsigned char)c) && c != '"') k += char(std::toupper((unsigned char)c));
+  return k;
+}
+
+// A program's name wins over a device spelling: a variable `s2` is the
+// variable, not the system bit S2 (docs/format.md, "Traces").
 Probe resolve_probe(std::string_view name, const std::vector<Alias>& aliases) {
   std::string n = trim(name);
+  if (n.size() >= 2 && n.front() == '"' && n.back() == '"') n = trim(n.substr(1, n.size() - 2));
+  std::string key = name_key(n);
   std::optional<DeviceRef> d;
   Ty ty = Ty::None;
   for (const Alias& a : aliases)
-    if (upper(a.name) == upper(n)) d = a.dev, ty = a.ty;
+    if (name_key(a.name) == key) {
+      d = a.dev, ty = a.ty;
+      break;  // the first of a name, as the program's own operands are spelled
+    }
   if (!d) d = parse_device(n);
   std::string why;
   if (!d) d = parse_iec_address(n, why);
@@ -156,14 +267,7 @@ Trace read_trace(std::string_view text, const std::string& file, const std::vect
     line++;
     std::string tl = trim(l);
     if (tl.empty() || tl[0] == '#') continue;
-    std::vector<std::pair<std::string, int>> cells;
-    size_t s = 0;
-    while (true) {
-      size_t c = l.find(',', s);
-      cells.emplace_back(trim(l.substr(s, c == std::string_view::npos ? std::string_view::npos : c - s)), int(s) + 1);
-      if (c == std::string_view::npos) break;
-      s = c + 1;
-    }
+    std::vector<std::pair<std::string, int>> cells = split_cells(l);
     if (!header) {
       header = true;
       for (size_t i = 0; i < cells.size(); i++) {
@@ -185,20 +289,8 @@ Trace read_trace(std::string_view text, const std::string& file, const std::vect
     for (size_t i = 0; i < cells.size(); i++) {
       const std::string& v = cells[i].first;
       const Probe& p = t.columns[i];
-      if (!v.empty() && p.ty != Ty::None) {
-        if (std::string why = check_trace_cell(p, v); !why.empty()) fail(cells[i].second, why + " for " + p.name);
-      } else if (!v.empty()) {
-        char* end = nullptr;
-        if (p.area == Area::F) {
-          std::strtof(v.c_str(), &end);
-        } else {
-          long long x = trace_cell_int(v, &end);
-          if (!*end && area_is_bit(p.area) && p.area != Area::Sys && x != 0 && x != 1) fail(cells[i].second, "a bit is 0 or 1, not '" + v + "'");
-          if (!*end && (x < INT32_MIN || x > INT32_MAX)) fail(cells[i].second, "value out of the INT32 range: '" + v + "'");
-          if (!*end && p.area == Area::Sys && x < 0) fail(cells[i].second, "dt cannot be negative");
-        }
-        if (*end) fail(cells[i].second, "bad value '" + v + "' for " + p.name);
-      }
+      if (!v.empty())
+        if (std::string why = trace_cell_problem(p, v); !why.empty()) fail(cells[i].second, why);
       row.push_back(v);
     }
     t.rows.push_back(std::move(row));
@@ -208,9 +300,60 @@ Trace read_trace(std::string_view text, const std::string& file, const std::vect
   return t;
 }
 
-// A typed alias's value at its type: integers in decimal (unsigned ones
-// unsigned), times and dates in ns, REAL as %g, LREAL in the fewest digits
-// that read back to it.
+// REAL and LREAL in the fewest digits that read back to the same value
+// (std::to_chars' shortest round trip: 0.1, 14.142136, 1e+20); inf, -inf, nan.
+template <typename F>
+static std::string shortest(F x) {
+  char buf[64];
+  auto r = std::to_chars(buf, buf + sizeof buf, x);
+  return std::string(buf, r.ptr);
+}
+
+// A duration as an IEC literal: the non-zero parts d h m s ms us ns, largest
+// first (T#1h2m3s500ms, T#-1d12h, T#0s); exact, and the literal reader reads
+// it back to the same nanoseconds.
+static std::string iec_duration(int64_t ns, const char* prefix) {
+  std::string s = prefix;
+  if (ns == 0) return s + "0s";
+  if (ns < 0) s += '-';
+  uint64_t u = ns < 0 ? uint64_t(0) - uint64_t(ns) : uint64_t(ns);
+  static const struct { uint64_t ns; const char* unit; } kUnits[] = {
+      {86400000000000ULL, "d"}, {3600000000000ULL, "h"}, {60000000000ULL, "m"}, {1000000000ULL, "s"},
+      {1000000ULL, "ms"}, {1000ULL, "us"}, {1ULL, "ns"}};
+  for (const auto& k : kUnits)
+    if (uint64_t q = u / k.ns) s += std::to_string(q) + k.unit, u %= k.ns;
+  return s;
+}
+
+// A point in time as an IEC literal: D#2024-01-31, TOD#12:30:00.5,
+// DT#2024-01-31-12:30:00.25 (the fraction of a second exact, its trailing
+// zeros dropped), by MatIEC's calendar (ir/typed.h).  A TIME_OF_DAY outside
+// one day has no literal: it prints as its nanoseconds, which a trace reads back.
+static std::string iec_date(Ty t, int64_t ns) {
+  int64_t sec = ns / 1000000000, frac = ns % 1000000000;
+  if (frac < 0) frac += 1000000000, sec--;
+  if (t == Ty::TOD && (ns < 0 || sec >= 86400)) return std::to_string(ns);
+  typed::Tm tm = typed::seconds_to_date(sec);
+  char buf[96];
+  if (t == Ty::DATE && sec % 86400 == 0 && frac == 0) {
+    std::snprintf(buf, sizeof buf, "D#%d-%02d-%02d", tm.year, tm.mon, tm.day);
+    return buf;
+  }
+  if (t == Ty::TOD) std::snprintf(buf, sizeof buf, "TOD#%02d:%02d:%02d", tm.hour, tm.min, tm.sec);
+  else std::snprintf(buf, sizeof buf, "DT#%d-%02d-%02d-%02d:%02d:%02d", tm.year, tm.mon, tm.day, tm.hour, tm.min, tm.sec);
+  std::string s = buf;
+  if (frac) {
+    std::snprintf(buf, sizeof buf, ".%09lld", (long long)frac);
+    std::string f = buf;
+    while (f.back() == '0') f.pop_back();
+    s += f;
+  }
+  return s;
+}
+
+// A typed alias's value at its type (docs/format.md, "Traces"): integers in
+// decimal (unsigned ones unsigned), REAL and LREAL shortest, TIME and the
+// dates as IEC literals, STRING quoted.
 static std::string format_typed(const uint8_t* at, Ty t) {
   const TyInfo& ti = ty_info(t);
   if (t == Ty::STRING) {  // 'text' with $-escapes ($2C for a comma, $22 and $5C for " and \\: a CSV cell, a JSON string); the length clamped to 126
@@ -227,31 +370,27 @@ static std::string format_typed(const uint8_t* at, Ty t) {
   }
   uint64_t b = 0;
   std::memcpy(&b, at, size_t(ti.cells) * 4);
-  char buf[64];
   if (t == Ty::REAL) {
     float f;
     std::memcpy(&f, at, 4);
-    std::snprintf(buf, sizeof buf, "%g", double(f));
-  } else if (t == Ty::LREAL) {
-    double d, back = 0;
-    std::memcpy(&d, &b, 8);
-    for (int prec = 15; prec <= 17; prec++) {
-      std::snprintf(buf, sizeof buf, "%.*g", prec, d);
-      if (std::sscanf(buf, "%lf", &back) == 1 && (back == d || d != d)) break;
-    }
-  } else if (ty_is_unsigned(t)) {
-    std::snprintf(buf, sizeof buf, "%llu", (unsigned long long)(ti.cells == 1 ? uint32_t(b) : b));
-  } else {
-    std::snprintf(buf, sizeof buf, "%lld", (long long)(ti.cells == 1 ? int64_t(int32_t(uint32_t(b))) : int64_t(b)));
+    return shortest(f);
   }
-  return buf;
+  if (t == Ty::LREAL) {
+    double d;
+    std::memcpy(&d, &b, 8);
+    return shortest(d);
+  }
+  if (ti.kind == TyKind::Time) return iec_duration(int64_t(b), t == Ty::LTIME ? "LTIME#" : "T#");
+  if (ti.kind == TyKind::Date) return iec_date(t, int64_t(b));
+  if (ty_is_unsigned(t)) return std::to_string(ti.cells == 1 ? uint64_t(uint32_t(b)) : b);
+  return std::to_string(ti.cells == 1 ? int64_t(int32_t(uint32_t(b))) : int64_t(b));
 }
 
 std::string format_probe(const uint8_t* base, const Layout& layout, const Probe& p) {
   const uint8_t* at = base + layout.addr(p.area, p.index);
   if (area_is_bit(p.area)) return *at ? "1" : "0";
   if (p.ty != Ty::None) return format_typed(at, p.ty);
-  if (p.area == Area::F) {
+  if (p.area == Area::F) {  // a device, not a variable: %g as always (a typed REAL prints exactly)
     float f;
     std::memcpy(&f, at, 4);
     char buf[64];
@@ -271,7 +410,7 @@ std::vector<ScanFault> run_trace(Engine& engine, const Layout& layout, const Tra
   Memory mem(layout);
   int scans = opt.scans >= 0 ? opt.scans : trace ? int(trace->rows.size()) : 1;
   out += "scan";
-  for (const Probe& p : opt.watch) out += "," + p.name;
+  for (const Probe& p : opt.watch) out += "," + csv_name(p.name);
   out += "\n";
   // A cell is written before its scan; an empty cell writes nothing, so the
   // device keeps its value.  dt keeps its last value too (the period at first).

@@ -3,7 +3,12 @@
 // function of the request bytes and a read-only view of the memory.
 #include "runtime/net/modbus.h"
 
+#include <cctype>
 #include <cstring>
+#include <stdexcept>
+
+#include "ir/typed.h"
+#include "runtime/runtime.h"
 
 namespace ldc::modbus {
 
@@ -31,6 +36,46 @@ struct Req {
   Outcome out;
 };
 
+// The named point at coil or register `a` (task 0's units only), or null.
+const NamedPoint* named_at(const Req& r, bool coil, uint32_t a) {
+  if (!r.v.named || r.out.task != 0) return nullptr;
+  for (const NamedPoint& p : *r.v.named)
+    if (p.coil == coil && a >= p.address && a < p.address + (coil ? 1 : registers_of(p.ty))) return &p;
+  return nullptr;
+}
+bool coil_ok(const Req& r, uint32_t a) { return a < kCoilEnd || named_at(r, true, a); }
+bool holding_ok(const Req& r, uint32_t a) { return a < kHoldEnd || named_at(r, false, a); }
+bool all_ok(const Req& r, bool coil, uint32_t start, uint32_t count) {
+  for (uint32_t i = 0; i < count; i++)
+    if (!(coil ? coil_ok(r, start + i) : holding_ok(r, start + i))) return false;
+  return true;
+}
+
+// A named value's register k (0 = the most significant 16 bits).
+uint16_t named_register(const Req& r, const NamedPoint& p, uint32_t k) {
+  const Layout& l = *r.v.layout;
+  uint32_t n = registers_of(p.ty);
+  uint64_t v = word_at(r.task, l, p.area, p.index);
+  if (ty_info(p.ty).cells == 2) v |= uint64_t(word_at(r.task, l, p.area, p.index + 1)) << 32;
+  return uint16_t(v >> (16 * (n - 1 - k)));
+}
+
+// Register k of a named value written: a 16-bit type takes the register
+// wrapped to its width (sign-extended for the signed ones), as its cell
+// holds it; a 32-bit one the half of its cell, a 64-bit one the half of the
+// cell holding those bits.
+Write named_write(const NamedPoint& p, uint32_t k, uint16_t value) {
+  uint32_t n = registers_of(p.ty);
+  if (n == 1) {
+    uint64_t x = typed::is_signed(p.ty) ? uint64_t(int64_t(int16_t(value))) : uint64_t(value);
+    return {p.area, p.index, uint32_t(typed::norm(p.ty, x)), 0xFFFFFFFFu};
+  }
+  uint32_t from_low = n - 1 - k;  // registers below this one
+  uint32_t cell = p.index + from_low / 2;
+  if (from_low % 2) return {p.area, cell, uint32_t(value) << 16, 0xFFFF0000u};
+  return {p.area, cell, value, 0x0000FFFFu};
+}
+
 // The reply frame for PDU bytes `pdu`.
 void reply(Req& r, const std::vector<uint8_t>& pdu) {
   auto& o = r.out.reply;
@@ -50,12 +95,20 @@ void exception(Req& r, uint8_t code) {
 
 uint8_t coil_at(const Req& r, uint32_t a) {
   const Layout& l = *r.v.layout;
+  if (a >= kCoilEnd) {
+    const NamedPoint* p = named_at(r, true, a);
+    return r.task[l.addr(p->area, p->index)];  // its M bit (task 0's snapshot holds M too)
+  }
   if (a < kCoilM) return r.v.global[l.addr(Area::Y, a - kCoilY)];
   if (a < kCoilK) return r.v.global[l.addr(Area::M, a - kCoilM)];
   return r.v.global[l.addr(Area::K, a - kCoilK)];
 }
 
-Write coil_write(uint32_t a, bool on) {
+Write coil_write(const Req& r, uint32_t a, bool on) {
+  if (a >= kCoilEnd) {
+    const NamedPoint* p = named_at(r, true, a);
+    return {p->area, p->index, on, 1};
+  }
   if (a < kCoilM) return {Area::Y, a - kCoilY, on, 1};
   if (a < kCoilK) return {Area::M, a - kCoilM, on, 1};
   return {Area::K, a - kCoilK, on, 1};
@@ -67,7 +120,7 @@ void read_bits(Req& r) {
   uint32_t start = be16(r.pdu + 1), count = be16(r.pdu + 3);
   bool coils = r.pdu[0] == kReadCoils;
   if (count < 1 || count > 2000) return exception(r, kIllegalDataValue);
-  if (start + count > (coils ? kCoilEnd : kDiscreteEnd)) return exception(r, kIllegalDataAddress);
+  if (coils ? !all_ok(r, true, start, count) : start + count > kDiscreteEnd) return exception(r, kIllegalDataAddress);
   std::vector<uint8_t> p{r.pdu[0], uint8_t((count + 7) / 8)};
   p.resize(2 + (count + 7) / 8);
   for (uint32_t i = 0; i < count; i++) {
@@ -82,8 +135,8 @@ void write_coil(Req& r) {
   if (r.n != 5) return exception(r, kIllegalDataValue);
   uint32_t a = be16(r.pdu + 1), value = be16(r.pdu + 3);
   if (value != 0xFF00 && value != 0) return exception(r, kIllegalDataValue);
-  if (a >= kCoilEnd) return exception(r, kIllegalDataAddress);
-  r.out.writes.push_back(coil_write(a, value != 0));
+  if (!coil_ok(r, a)) return exception(r, kIllegalDataAddress);
+  r.out.writes.push_back(coil_write(r, a, value != 0));
   reply(r, std::vector<uint8_t>(r.pdu, r.pdu + 5));
 }
 
@@ -92,8 +145,8 @@ void write_coils(Req& r) {
   if (r.n < 6) return exception(r, kIllegalDataValue);
   uint32_t start = be16(r.pdu + 1), count = be16(r.pdu + 3), bytes = r.pdu[5];
   if (count < 1 || count > 1968 || bytes != (count + 7) / 8 || r.n != 6 + bytes) return exception(r, kIllegalDataValue);
-  if (start + count > kCoilEnd) return exception(r, kIllegalDataAddress);
-  for (uint32_t i = 0; i < count; i++) r.out.writes.push_back(coil_write(start + i, (r.pdu[6 + i / 8] >> (i % 8)) & 1));
+  if (!all_ok(r, true, start, count)) return exception(r, kIllegalDataAddress);
+  for (uint32_t i = 0; i < count; i++) r.out.writes.push_back(coil_write(r, start + i, (r.pdu[6 + i / 8] >> (i % 8)) & 1));
   reply(r, std::vector<uint8_t>(r.pdu, r.pdu + 5));
 }
 
@@ -102,6 +155,10 @@ void write_coils(Req& r) {
 // Holding register `a`: WY's low half; D and F high half at even addresses.
 uint16_t holding_at(const Req& r, uint32_t a) {
   const Layout& l = *r.v.layout;
+  if (a >= kHoldEnd) {
+    const NamedPoint* p = named_at(r, false, a);
+    return named_register(r, *p, a - p->address);
+  }
   if (a < kHoldD) return uint16_t(word_at(r.v.global, l, Area::WY, a - kHoldWY));
   Area area = a < kHoldF ? Area::D : Area::F;
   uint32_t k = a - (a < kHoldF ? kHoldD : kHoldF);
@@ -110,7 +167,11 @@ uint16_t holding_at(const Req& r, uint32_t a) {
 }
 
 // A register written: WY sign-extended; a half of D or F.
-Write holding_write(uint32_t a, uint16_t value) {
+Write holding_write(const Req& r, uint32_t a, uint16_t value) {
+  if (a >= kHoldEnd) {
+    const NamedPoint* p = named_at(r, false, a);
+    return named_write(*p, a - p->address, value);
+  }
   if (a < kHoldD) return {Area::WY, a - kHoldWY, uint32_t(int32_t(int16_t(value))), 0xFFFFFFFFu};
   Area area = a < kHoldF ? Area::D : Area::F;
   uint32_t k = a - (a < kHoldF ? kHoldD : kHoldF);
@@ -124,7 +185,7 @@ void read_registers(Req& r) {
   uint32_t start = be16(r.pdu + 1), count = be16(r.pdu + 3);
   bool holding = r.pdu[0] == kReadHoldingRegisters;
   if (count < 1 || count > 125) return exception(r, kIllegalDataValue);
-  if (start + count > (holding ? kHoldEnd : kInputEnd)) return exception(r, kIllegalDataAddress);
+  if (holding ? !all_ok(r, false, start, count) : start + count > kInputEnd) return exception(r, kIllegalDataAddress);
   std::vector<uint8_t> p{r.pdu[0], uint8_t(2 * count)};
   for (uint32_t i = 0; i < count; i++)
     put16(p, holding ? holding_at(r, start + i) : uint16_t(word_at(r.v.global, *r.v.layout, Area::WX, start + i)));
@@ -135,8 +196,8 @@ void read_registers(Req& r) {
 void write_register(Req& r) {
   if (r.n != 5) return exception(r, kIllegalDataValue);
   uint32_t a = be16(r.pdu + 1);
-  if (a >= kHoldEnd) return exception(r, kIllegalDataAddress);
-  r.out.writes.push_back(holding_write(a, be16(r.pdu + 3)));
+  if (!holding_ok(r, a)) return exception(r, kIllegalDataAddress);
+  r.out.writes.push_back(holding_write(r, a, be16(r.pdu + 3)));
   reply(r, std::vector<uint8_t>(r.pdu, r.pdu + 5));
 }
 
@@ -145,12 +206,66 @@ void write_registers(Req& r) {
   if (r.n < 6) return exception(r, kIllegalDataValue);
   uint32_t start = be16(r.pdu + 1), count = be16(r.pdu + 3), bytes = r.pdu[5];
   if (count < 1 || count > 123 || bytes != 2 * count || r.n != 6 + bytes) return exception(r, kIllegalDataValue);
-  if (start + count > kHoldEnd) return exception(r, kIllegalDataAddress);
-  for (uint32_t i = 0; i < count; i++) r.out.writes.push_back(holding_write(start + i, be16(r.pdu + 6 + 2 * i)));
+  if (!all_ok(r, false, start, count)) return exception(r, kIllegalDataAddress);
+  for (uint32_t i = 0; i < count; i++) r.out.writes.push_back(holding_write(r, start + i, be16(r.pdu + 6 + 2 * i)));
   reply(r, std::vector<uint8_t>(r.pdu, r.pdu + 5));
 }
 
 }  // namespace
+
+uint32_t registers_of(Ty t) { return ty_info(t).bits <= 16 ? 1 : ty_info(t).bits <= 32 ? 2 : 4; }
+
+std::vector<NamedPoint> read_map(std::string_view text, const std::string& file, const std::vector<Alias>& aliases) {
+  std::vector<NamedPoint> out;
+  int line = 0;
+  for (size_t pos = 0; pos < text.size();) {
+    size_t nl = text.find('\n', pos);
+    std::string_view l = text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
+    pos = nl == std::string_view::npos ? text.size() : nl + 1;
+    line++;
+    std::vector<std::pair<std::string, int>> w;  // the words and their columns
+    for (size_t i = 0; i < l.size();) {
+      if (std::isspace((unsigned char)l[i])) { i++; continue; }
+      if (l[i] == '#') break;
+      size_t s = i;
+      while (i < l.size() && !std::isspace((unsigned char)l[i]) && l[i] != '#') i++;
+      w.emplace_back(std::string(l.substr(s, i - s)), int(s) + 1);
+    }
+    auto fail = [&](int col, const std::string& m) {
+      throw std::runtime_error(file + ":" + std::to_string(line) + ":" + std::to_string(col) + ": error: " + m);
+    };
+    if (w.empty()) continue;
+    if (w.size() != 3 || (w[1].first != "coil" && w[1].first != "holding"))
+      fail(w[0].second, "expected NAME coil|holding ADDRESS");
+    NamedPoint p;
+    p.name = w[0].first;
+    p.coil = w[1].first == "coil";
+    Probe pr;
+    try {
+      pr = resolve_probe(p.name, aliases);
+    } catch (std::exception& e) { fail(w[0].second, e.what()); }
+    if (pr.area != Area::M && pr.area != Area::D && pr.area != Area::F)
+      fail(w[0].second, "'" + p.name + "' is located (" + std::string(area_name(pr.area)) + std::to_string(pr.index) +
+                            "): it is already at that device's address in the map");
+    p.area = pr.area, p.index = pr.index;
+    p.ty = pr.ty != Ty::None ? pr.ty : pr.area == Area::M ? Ty::BOOL : pr.area == Area::F ? Ty::REAL : Ty::DINT;
+    if (p.coil != (p.ty == Ty::BOOL)) fail(w[1].second, p.coil ? "a coil is a BOOL; '" + p.name + "' is a " + ty_info(p.ty).name
+                                                               : "'" + p.name + "' is a BOOL: map it to a coil");
+    if (p.ty == Ty::STRING) fail(w[0].second, "a STRING has no Modbus form");
+    const std::string& as = w[2].first;
+    if (as.empty() || as.size() > 5 || as.find_first_not_of("0123456789") != std::string::npos) fail(w[2].second, "bad address '" + as + "'");
+    p.address = uint32_t(std::stoul(as));
+    uint32_t lo = p.coil ? kCoilEnd : kHoldEnd, n = p.coil ? 1 : registers_of(p.ty);
+    if (p.address < lo || p.address + n > 65536)
+      fail(w[2].second, std::string(p.coil ? "coils" : "holding registers") + " of named variables are " + std::to_string(lo) +
+                            "..65535 (below is the device map); '" + p.name + "' takes " + std::to_string(n));
+    for (const NamedPoint& q : out)
+      if (q.coil == p.coil && p.address < q.address + (q.coil ? 1 : registers_of(q.ty)) && q.address < p.address + n)
+        fail(w[2].second, "'" + p.name + "' overlaps '" + q.name + "'");
+    out.push_back(std::move(p));
+  }
+  return out;
+}
 
 Outcome serve(std::span<const uint8_t> buf, const View& v) {
   Outcome none;

@@ -34,6 +34,27 @@ constexpr uint32_t kDiscreteEnd = 8192;
 constexpr uint32_t kInputEnd = 1024;
 constexpr uint32_t kHoldWY = 0, kHoldD = 1024, kHoldF = kHoldD + 2 * 8192, kHoldEnd = kHoldF + 2 * 1024;
 
+// Named variables (--modbus-map FILE, docs/runtime.md "Modbus TCP"): an
+// unlocated variable of the first task's program at an address the file
+// gives, past the device map so that it never hides a device: a BOOL is a
+// coil from kCoilEnd on, any other elementary type but STRING holding
+// registers from kHoldEnd on, one register up to 16 bits, two for 32, four
+// for 64, the most significant first.
+struct NamedPoint {
+  std::string name;
+  bool coil = false;
+  uint32_t address = 0;  // its first register, or its coil
+  Area area = Area::D;   // where it lives: M for a BOOL, D or F
+  uint32_t index = 0;
+  Ty ty = Ty::None;
+};
+uint32_t registers_of(Ty t);  // 1, 2 or 4
+// Reads a map file: `NAME coil ADDRESS` or `NAME holding ADDRESS` a line, `#`
+// comments; NAME resolved in `aliases`.  Throws std::runtime_error
+// "file:line:col: error: ..." for a bad line, an unknown or located name, an
+// address inside the device map, past 65535, or overlapping another.
+std::vector<NamedPoint> read_map(std::string_view text, const std::string& file, const std::vector<Alias>& aliases);
+
 // Function codes and exception codes (Modbus Application Protocol V1.1b3).
 enum Function : uint8_t {
   kReadCoils = 1, kReadDiscreteInputs = 2, kReadHoldingRegisters = 3, kReadInputRegisters = 4,
@@ -52,6 +73,7 @@ struct View {
   const Layout* layout = nullptr;
   const uint8_t* global = nullptr;
   std::vector<const uint8_t*> tasks;  // at least one
+  const std::vector<NamedPoint>* named = nullptr;  // --modbus-map, served for task 0's units
 };
 
 // One element changed by a write request: element = (element & ~mask) |
@@ -98,6 +120,7 @@ struct ServerOptions {
   int log_window_ms = 10000;
   int accept_backoff_ms = 250;   // the listener rests that long after accept fails (EMFILE)
   std::function<void(const std::string&)> log;
+  std::vector<NamedPoint> named;  // --modbus-map
 };
 
 // Open files the server holds at most: its connections, one newcomer being

@@ -193,6 +193,7 @@ class ModbusDriver : public IoDriver {
     for (size_t t = 0; t < o_.tasks; t++) fill(snaps_[t], global, nullptr), snaps_[t].publish();
     view_.layout = &layout_;
     view_.tasks.assign(o_.tasks, nullptr);
+    view_.named = &o_.named;
     thread_ = std::thread([this] { serve_loop(); });
   }
 

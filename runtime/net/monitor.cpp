@@ -124,6 +124,7 @@ struct Dev {
   std::string name, alias;
   Area area;
   uint32_t index;
+  Ty ty = Ty::None;  // its alias's type: shown as --watch shows it (docs/format.md)
 };
 
 // Forced inputs as one consumer (the shared image's, or one task's) last
@@ -172,7 +173,11 @@ void collect_devices(TaskView& t, const Program& p) {
     if (a == Area::TQ || a == Area::CQ) d.name += ".Q";
     for (const Alias& al : t.aliases) {
       Area want_bit = bit_area(al.dev.dev), want_word = word_area(al.dev.dev);
-      if (al.dev.index == i && (want_bit == a || want_word == a)) { d.alias = al.name; break; }
+      if (al.dev.index == i && (want_bit == a || want_word == a)) {
+        d.alias = al.name;
+        if (al.ty != Ty::None && al.ty != Ty::BOOL && !area_is_bit(a)) d.ty = al.ty;
+        break;
+      }
     }
     t.devs.push_back(d);
   };
@@ -230,6 +235,11 @@ struct View {  // a task's snapshot
       return b;
     }
     return std::to_string(word(a, i));
+  }
+  // A device of the table: a typed variable at its type (T#1s, 4294967295, 'text')
+  std::string dev_text(const Dev& d) const {
+    if (d.ty == Ty::None) return text(d.area, d.index);
+    return format_probe(base(d.area), L, Probe{d.alias, d.area, d.index, d.ty});
   }
   std::string opd_text(const Operand& o) const {
     switch (o.kind) {
@@ -502,7 +512,7 @@ struct Monitor::Impl {
       s += ",\"rungs\":[";
       for (size_t r = 0; r < t.rungs.size(); r++) s += (r ? "," : "") + rung_state(t.rungs[r], v);
       s += "],\"dev\":[";
-      for (size_t d = 0; d < t.devs.size(); d++) s += (d ? "," : "") + jstr(v.text(t.devs[d].area, t.devs[d].index));
+      for (size_t d = 0; d < t.devs.size(); d++) s += (d ? "," : "") + jstr(v.dev_text(t.devs[d]));
       s += "]}";
     }
     std::lock_guard<std::mutex> l(fmu);
@@ -659,6 +669,7 @@ struct Monitor::Impl {
     if (force && !release && !hold) return text(400, "force= is 1 (hold) or 0 (release)");
     if ((hold || release) && p.area != Area::X && p.area != Area::WX)
       return text(400, "only inputs (X, WX) are forced; write other devices once");
+    if (p.ty != Ty::None && !hold && !release) return write_typed(ti, p, value.value_or(""));
     uint32_t bits = 0;
     if (!release) {
       if (!value) return text(400, "missing value=");
@@ -686,6 +697,29 @@ struct Monitor::Impl {
     const ElementWrite w{p.area, p.index, bits, ~0u};
     WriteShadow& shadow = is_shared(p.area) ? *shared_writes : *tasks[ti]->writes;
     if (shadow.post(std::span<const ElementWrite>(&w, 1)) == 0)
+      return text(503, "busy: " + std::to_string(shadow.capacity()) +
+                           " devices are written and wait for a scan to take them (is the PLC in STOP?); "
+                           "write them again once it runs, or write devices already waiting");
+    return text(200, "queued for the next scan");
+  }
+
+  // A typed variable written by name, as a trace cell of its type (T#1s500ms,
+  // 'text', 18446744073709551615): all its cells in one post, so the scan
+  // that takes them sees the whole value.
+  http::Response write_typed(size_t ti, const Probe& p, const std::string& v) {
+    if (v.empty()) return text(400, "missing value=");
+    if (std::string why = trace_cell_problem(p, v); !why.empty()) return text(400, why);
+    const Layout& L = tasks[ti]->layout;
+    Memory scratch(L);
+    put_trace_cell(scratch.data(), L, p, v);
+    std::vector<ElementWrite> ws;
+    for (uint32_t c = 0; c < uint32_t(ty_info(p.ty).cells); c++) {
+      uint32_t cell;
+      std::memcpy(&cell, scratch.data() + L.addr(p.area, p.index + c), 4);
+      ws.push_back(ElementWrite{p.area, p.index + c, cell, ~0u});
+    }
+    WriteShadow& shadow = is_shared(p.area) ? *shared_writes : *tasks[ti]->writes;
+    if (shadow.post(std::span<const ElementWrite>(ws)) == 0)
       return text(503, "busy: " + std::to_string(shadow.capacity()) +
                            " devices are written and wait for a scan to take them (is the PLC in STOP?); "
                            "write them again once it runs, or write devices already waiting");

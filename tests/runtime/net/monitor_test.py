@@ -333,6 +333,38 @@ def case_write_and_force():
     m.stop()
 
 
+def case_typed_names():
+    # tests/runtime/names.st: variables written by name (a member, an array
+    # element, a TIME as an IEC literal, all cells of it in one post) and shown
+    # at their types, as ldrun --watch shows them (docs/format.md, "Traces").
+    # By hand (names.st): tt = t + t = T#2h4m7s; c[3] = c[2] - 1 = 0 - 1 in
+    # UDINT = 4294967295; motor = start AND tank.level > 10 = 1; twice = -14.
+    m = Ldrun(["tests/runtime/names.st", "--io=none", "--period", "10ms", "--monitor", "127.0.0.1:0", "--monitor-write"])
+    p = m.port
+    prog = get_json(p, "/api/program")
+    aliases = [d[1] for d in prog["tasks"][0]["devices"]]
+
+    def by_name(name):
+        return get_json(p, "/api/state")["tasks"][0]["dev"][aliases.index(name)]
+    for body in ("device=t&value=T%231h2m3s500ms", "device=tank.level&value=11", "device=c%5B2%5D&value=0",
+                 "device=a%5B2%2C1%5D&value=-7", "device=start&value=1"):
+        code, _, text = post(p, "/api/write", body)
+        if code != 200:
+            fail("%s: %d %s" % (body, code, text))
+    for body, why in (("device=t&value=5s", "bad TIME '5s' for t"),
+                      ("device=tank.level&value=40000", "value out of the INT range: '40000' for tank.level")):
+        code, _, text = post(p, "/api/write", body)
+        if code != 400 or why not in text:
+            fail("%s: expected 400 and %r, got %d %s" % (body, why, code, text))
+    time.sleep(0.3)
+    for name, want in (("tt", "T#2h4m7s"), ("t", "T#1h2m3s500ms"), ("c[3]", "4294967295"), ("twice", "-14"),
+                       ("motor", "1"), ("tank.level", "11"), ("s", "''")):
+        got = by_name(name)
+        if got != want:
+            fail("%s shown as %r, expected %r" % (name, got, want))
+    m.stop()
+
+
 def case_load():
     # 20 pages' event streams at once on a 1 ms task: every client is served
     # at >= 10 updates/s, nothing crashes, the task keeps scanning.
@@ -921,5 +953,5 @@ if __name__ == "__main__":
      "connection_caps": case_connection_caps, "pipelined_flood": case_pipelined_flood, "rebinding": case_rebinding,
      "token": case_token, "state_flood_stop": case_state_flood_stop, "write_backlog": case_write_backlog,
      "minor_http": case_minor_http, "fd_exhaustion": case_fd_exhaustion,
-     "stop_not_blocking": case_stop_not_blocking}[CASE]()
+     "stop_not_blocking": case_stop_not_blocking, "typed_names": case_typed_names}[CASE]()
     print("ok")
