@@ -746,7 +746,7 @@ class Reader {
         Operand o = operand_at(t.elem, at, r.bits, r.cells);
         Dev d = o.area == Area::M ? Dev::M : o.area == Area::D ? Dev::D : o.area == Area::F ? Dev::F : o.area == Area::X ? Dev::X
               : o.area == Area::Y ? Dev::Y : o.area == Area::K ? Dev::K : o.area == Area::WX ? Dev::WX : o.area == Area::WY ? Dev::WY : Dev::S;
-        if (parse_device(nm) || upper(nm) == "DT") return;  // names that spell a device
+        if (upper(nm) == "DT") return;  // a program's name wins over a device spelling (docs/format.md); DT is a type
         Alias a{nm, {d, o.index}, t.elem};  // typed: a watch shows it at its width
         if (a.ty == Ty::BOOL || !alias_type_problem(a).empty()) a.ty = Ty::None;  // a BOOL is its bit either way
         p_.aliases.push_back(std::move(a));
