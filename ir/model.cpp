@@ -420,7 +420,9 @@ bool date_ns(std::string_view s, int64_t& ns) {  // YYYY-MM-DD
   int y = 0;
   unsigned m = 0, d = 0;
   if (std::sscanf(std::string(s).c_str(), "%d-%u-%u", &y, &m, &d) != 3 || m < 1 || m > 12 || d < 1 || d > 31) return false;
-  ns = days_from_civil(y, m, d) * typed::kNsPerDay;
+  int64_t days = days_from_civil(y, m, d);
+  if (days > INT64_MAX / typed::kNsPerDay || days < INT64_MIN / typed::kNsPerDay) return false;  // beyond DATE's ns (years 1678..2262)
+  ns = days * typed::kNsPerDay;
   return true;
 }
 bool tod_ns(std::string_view s, int64_t& ns) {  // HH:MM:SS[.frac]
@@ -504,7 +506,7 @@ std::optional<ParsedLit> parse_literal(std::string_view text, std::string& why) 
   }
   if (type == "D" || type == "DATE" || type == "LDATE" || type == "LD") {
     int64_t ns = 0;
-    if (!date_ns(body, ns)) return bad("bad date (DATE#2024-01-31)");
+    if (!date_ns(body, ns)) return bad("bad date (DATE#2024-01-31, years 1678..2262)");
     p.lit = {Ty::DATE, uint64_t(ns)};
     return p;
   }
@@ -519,6 +521,7 @@ std::optional<ParsedLit> parse_literal(std::string_view text, std::string& why) 
     size_t dash = body.size() > 10 ? 10 : std::string::npos;  // YYYY-MM-DD-HH:MM:SS
     if (dash == std::string::npos || body[dash] != '-' || !date_ns(body.substr(0, dash), d) || !tod_ns(body.substr(dash + 1), t))
       return bad("bad date and time (DT#2024-01-31-12:30:00)");
+    if (d > INT64_MAX - t) return bad("date and time beyond the range of DT (years 1678..2262)");
     p.lit = {Ty::DT, uint64_t(d + t)};
     return p;
   }
