@@ -2263,7 +2263,19 @@ iecil::Unit Importer::st_unit(const std::vector<std::string>& lines, const Eleme
     st.line(l, at);
     if (l.find(" AT ") != std::string::npos) base.callers.insert(upper(l.substr(0, l.find(' '))));  // ours: a pin or a global
   }
-  iecil::Unit u = iecil::parse_typed_unit(st.tokens(), file_, base);
+  iecil::Unit u;
+  try {
+    u = iecil::parse_typed_unit(st.tokens(), file_, base);
+  } catch (const CompileError& e) {  // a name the ST side does not know: a graphical POU of the project?
+    std::string m = e.what();
+    if (m.rfind("unknown", 0) == 0)
+      for (const auto& [un, pe] : pou_el_)
+        if (!st_pou(un) && (m.find("'" + upper(*pe->attr("name")) + "'") != std::string::npos ||
+                            m.find("'" + *pe->attr("name") + "'") != std::string::npos))
+          throw CompileError(e.line, e.col, m + ": '" + *pe->attr("name") + "' is the project's POU written in " + pou_lang_[un] +
+                                                ", which ldc does not call from ST or IL (it expands LD and FBD POUs where LD or FBD calls them)");
+    throw;
+  }
   for (uint32_t x = base.m; x < u.end.m; x++) used_.insert({int(Dev::M), x});
   for (uint32_t x = base.d; x < u.end.d; x++) used_.insert({int(Dev::D), x});
   for (uint32_t x = base.t; x < u.end.t; x++) used_.insert({int(Dev::T), x});
