@@ -1708,8 +1708,8 @@ class Reader {
     bool bistable = iv.kind == Val::Ref_ && bistables_.count(iv.ref.type);
     if (iv.kind != Val::Ref_ || (m_.type(iv.ref.type).kind != TypeKind::Block && !bistable))
       fail(k, "'" + k.text + "' is not an instance of a FUNCTION_BLOCK");
-    if (!iv.ref.direct())
-      fail(k, "an instance chosen by a variable index cannot be expanded inline: call it with a constant index (ldc expands each call, docs/architecture.md)");
+    if (!iv.ref.direct() && iv.ref.steps.size() > 1)
+      fail(k, "an instance chosen by more than one variable index (fbs[i, j], fbs[i].inner[j]): ldc calls instances chosen by one (docs/iec-il.md)");
     std::string skip;
     if (u != "CAL") {  // CALC / CALCN: the call runs only if the CR is (not) TRUE
       need_bool(op);
@@ -1725,10 +1725,44 @@ class Reader {
       next();
       args(in, out);
     }
-    if (bistable) std_call(bistables_.at(iv.ref.type), iv.ref, in, out, en_called_.count(upper(k.text)) > 0);
-    else expand(pou, iv.ref, in, out, op);
+    auto one = [&](const model::Ref& r) {
+      if (bistable) std_call(bistables_.at(iv.ref.type), r, in, out, en_called_.count(upper(k.text)) > 0);
+      else expand(pou, r, in, out, op);
+    };
+    if (iv.ref.direct()) one(iv.ref);
+    else dispatch(iv.ref, k, one);
     if (!skip.empty()) label_here(skip);
     cr_ = Cr{};  // the CR is undefined after a call
+  }
+  // An instance chosen by a variable index (fbs[i](...)): the index checked as
+  // any index is (its fault names it), then the call expanded once per
+  // element, each run when the index is that element's (docs/iec-il.md).
+  static constexpr uint32_t kMaxDispatch = 256;
+  template <class Call>
+  void dispatch(const model::Ref& r, const Tok& at, const Call& one) {
+    const IndexStep& s = r.steps[0];
+    if (s.dim.count() > kMaxDispatch)
+      fail(at, "a call of one of " + std::to_string(s.dim.count()) + " instances chosen by a variable index: ldc expands the call once per instance, at most " +
+                   std::to_string(kMaxDispatch));
+    ensure_rung();
+    Operand idx = scratch("calidx" + std::to_string(++skips_), s.index_ty), tmp = scratch("xtmp", Ty::DINT);
+    typed(Op::TMOVE, s.index_ty, s.index, idx);  // the body may change the variable: the index as it was
+    typed(Op::TIDX, s.index_ty, idx, Operand::typed_const(uint64_t(int64_t(s.dim.lo))), Operand::typed_const(uint64_t(int64_t(s.dim.hi))));
+    fix_k(rung_->code.back());
+    typed(Op::TLDX, Ty::DINT, tmp, k_const(0), tmp);  // the check alone: stride 0 reads tmp back
+    fix_k(rung_->code.back());
+    for (uint32_t e = 0; e < s.dim.count(); e++) {
+      std::string next_el = "_ldc_cal" + std::to_string(copies_) + "_" + std::to_string(++skips_);
+      ensure_rung();
+      typed(Op::TNE, s.index_ty, idx, Operand::typed_const(uint64_t(int64_t(s.dim.lo) + e)));
+      jump_to(next_el);
+      emit(Op::MPP);
+      model::Ref el = r;
+      el.steps.clear();
+      el.at = r.at + s.stride * e;
+      one(el);
+      label_here(next_el);
+    }
   }
   int skips_ = 0;
   void args(std::vector<std::pair<Tok, Val>>& in, std::vector<std::pair<Tok, size_t>>& out) {
