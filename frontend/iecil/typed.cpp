@@ -1466,7 +1466,7 @@ class Reader {
   }
   Val temp_val(const Tok& k) const {
     auto it = temps_.find(scope_->prefix + k.text);
-    if (it == temps_.end()) throw std::logic_error("ST temporary read before it is written: " + k.text);
+    if (it == temps_.end()) fail(k, "'" + k.text + "' is read before it is written (a name beginning with two underscores is an ST temporary of ldc's)");
     Val v;
     v.kind = Val::Ref_;
     v.ref.type = it->second.type;

@@ -60,6 +60,8 @@ struct Lexer {
   }
   void word() {
     size_t st = i++;
+    if (s[st] == '_' && at(st + 1) == '_')  // IEC 61131-3 forbids it, and ldc's ST temporaries are named so
+      fail(st, "a name may not begin with two underscores (IEC 61131-3; ldc names its own temporaries so)");
     bool numeric = std::isdigit((unsigned char)s[st]);
     auto typed = [&] { return s.substr(st, i - st).find('#') != std::string_view::npos; };
     auto sign_inside = [&] {  // 1.0E-3, LREAL#1e-9, INT#-5, T#-2ms
