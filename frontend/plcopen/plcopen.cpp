@@ -472,7 +472,7 @@ class Importer {
   void splice(const iecil::Unit& u, const Element* at);
   void unit_init(const iecil::Unit& u, const std::string& whose, const Element* at);
   uint32_t first_free(Dev d) const;
-  void globals_for_units(std::vector<std::string>& decl, const char* section) const;
+  void globals_for_units(std::vector<std::string>& decl, const char* section);
   // an FB instance's, compiled at its first call, with the variables its in-outs are bound to
   std::map<const Var*, std::pair<std::string, iecil::Unit>> units_;
   std::vector<TreeRung> unit_init_;          // the units' first-scan rungs, first in the program
@@ -2169,7 +2169,7 @@ void Importer::st_call(const Node& b, const Element* callee, Var& inst, const st
 // The globals that the ST and IL POUs name in VAR_EXTERNAL, declared in the
 // unit's program at this reader's devices (constants with their values), so
 // that both readers use one variable.
-void Importer::globals_for_units(std::vector<std::string>& decl, const char* section) const {
+void Importer::globals_for_units(std::vector<std::string>& decl, const char* section) {
   std::set<std::string> named;
   for (const auto& [u, pe] : pou_el_)
     if (st_pou(u))
@@ -2182,6 +2182,7 @@ void Importer::globals_for_units(std::vector<std::string>& decl, const char* sec
     auto g = globals_.find(n);
     if (g == globals_.end()) continue;  // the typed reader says which is missing
     const Var& v = *g->second;
+    if (task_ >= 0) global_users_[g->second].insert(task_);  // for the check of globals shared by tasks (import)
     const Element* te = v.el->child("type");
     if (!te || te->children.empty()) continue;
     std::string ty = plcopen::StText(text_).type(te->children[0].get());
