@@ -131,7 +131,7 @@ class Parser {
   }
   static bool is_name(const Tok& k) {
     if (k.kind != Tok::Word || k.text.empty()) return false;
-    return std::isalpha((unsigned char)k.text[0]) || k.text[0] == '_';
+    return std::isalpha((unsigned char)k.text[0]) || k.text[0] == '_' || k.text[0] == '%';  // %QX0.0: a direct address
   }
 
   // statement = assignment | call | if | case | for | while | repeat | EXIT ";" | CONTINUE ";" | RETURN ";"
