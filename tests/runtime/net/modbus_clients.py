@@ -32,14 +32,7 @@ if not shutil.which("mbpoll"):
 
 LDRUN, SRC = sys.argv[1], sys.argv[2]
 ECHO = os.path.join(SRC, "tests/runtime/net/modbus/echo.ld")
-failures = []
-
-
-def check(what, got, want):
-    ok = got == want
-    print(("ok   " if ok else "FAIL ") + what + ": " + repr(got) + ("" if ok else " (want " + repr(want) + ")"))
-    if not ok:
-        failures.append(what)
+from checks import check, failures, finish  # noqa: E402 (beside this file)
 
 
 def start(args):
@@ -308,5 +301,4 @@ check("port in use", refused(["--modbus", str(taken)]),
       (1, "ldrun: error: modbus: cannot listen on 127.0.0.1:%d: Address already in use" % taken))
 busy.close()
 
-print("%d failures" % len(failures) + (": " + ", ".join(failures) if failures else ""))
-sys.exit(1 if failures else 0)
+finish()

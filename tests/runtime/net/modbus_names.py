@@ -28,14 +28,7 @@ if not shutil.which("mbpoll"):
 LDRUN, SRC = sys.argv[1], sys.argv[2]
 NAMES = os.path.join(SRC, "tests/runtime/names.st")
 MAP = os.path.join(SRC, "tests/runtime/names.map")
-failures = []
-
-
-def check(what, got, want):
-    ok = got == want
-    print(("ok   " if ok else "FAIL ") + what + ": " + repr(got) + ("" if ok else " (want " + repr(want) + ")"))
-    if not ok:
-        failures.append(what)
+from checks import check, failures, finish  # noqa: E402 (beside this file)
 
 
 def mbpoll(port, *args):
@@ -100,5 +93,4 @@ for text, want in (("motor coil 24576\n", "bad.map:1:1: error: 'motor' is locate
         print(r.stderr)
     os.unlink(path)
 
-print("%d failed" % len(failures))
-sys.exit(1 if failures else 0)
+finish()
