@@ -24,7 +24,7 @@ static std::string usage() {
          "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .st (Structured Text), .xml (PLCopen TC6), .rtsp (paper 000), .sfc (SFC chart)\n"
          "       -O0 templates (paper 003), -O1 peephole, -O2 bit stack in registers; for every target\n"
          "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n"
-         "       ldc FILE.xml [-o DIR]   (a PLCopen configuration of several tasks is a project, the same way)\n"
+         "       ldc FILE.xml|FILE.st [-o DIR]   (a configuration of several tasks, PLCopen or ST, is a project, the same way)\n"
          "       ldc FILE.xml --task NAME ...   (one task's program of such a configuration)\n";
 }
 

@@ -61,7 +61,7 @@ std::string usage() {
     "             [--monitor-connections 64] [--monitor-per-address 32] [--monitor-streams 32]  (docs/faults.md)\n"
     "       FILE: an image (.bin, .hex) or a source ldc reads (.ld, .il, .st, .xml, .rtsp, .sfc), compiled in memory\n"
     "             (native code at -O0 unless -O1 or -O2 is given; --engine=fast is the fast interpreter)\n"
-    "       FILE.xml: a PLCopen configuration of several tasks runs as a project (--io); --task NAME picks one task's program\n"
+    "       FILE.xml, FILE.st: a configuration of several tasks (PLCopen or ST) runs as a project (--io); --task NAME picks one task's program\n"
     "       --sandbox: run the scans in a child process that seccomp confines to its socket (native, interp, c)\n";
 }
 
