@@ -738,6 +738,7 @@ const char kUsage[] =
     "  LIST: contacts edges compares coils setreset timers counters move arith logic realfn jumps end all\n"
     "        typed classes (an ldc IL program): tarith tcompare tconv tbits tarray t64 typed\n"
     "        tpou (an IEC IL program with FBs, FUNCTIONs, arrays, structures; with t64 the 64-bit types)\n"
+    "       ldgen --st [--seed N] [-o prog.st]   a Structured Text program: loops, arrays, calls (no inputs)\n"
     "  Without -o the program goes to stdout.  The same seed and options give the same files.\n";
 
 bool write(const std::string& path, const std::string& data) {
@@ -768,6 +769,7 @@ int main(int argc, char** argv) {
   uint64_t seed = 1;
   long long scans = 40;
   std::string out, trace;
+  bool st = false;
   auto fail = [](const std::string& m) {
     std::fprintf(stderr, "ldgen: error: %s\n%s", m.c_str(), kUsage);
     return 1;
@@ -787,6 +789,10 @@ int main(int argc, char** argv) {
     std::string err;
     if (name == "-h" || name == "--help") { std::fputs(kUsage, stdout); return 0; }
     if (name == "--version") return print_version("ldgen");
+    if (name == "--st") {
+      st = true;
+      continue;
+    }
     if (name != "--seed" && name != "--rungs" && name != "--depth" && name != "--classes" && name != "--without" &&
         name != "--range" && name != "-o" && name != "--trace" && name != "--scans")
       return fail("unknown option '" + a + "'");
@@ -832,7 +838,8 @@ int main(int argc, char** argv) {
     }
   }
   if (std::string why = check_options(opt); !why.empty()) return fail(why);
-  std::string prog = generate_ld(seed, opt);
+  if (st && !trace.empty()) return fail("--st programs have no inputs: no --trace");
+  std::string prog = st ? generate_st(seed) : generate_ld(seed, opt);
   if (out.empty() || out == "-") std::fwrite(prog.data(), 1, prog.size(), stdout);
   else if (!write(out, prog)) return 1;
   if (!trace.empty() && !write(trace, generate_trace(seed, int(scans), opt))) return 1;

@@ -127,6 +127,12 @@ std::string generate_typed_trace(uint64_t seed, int scans, const GenOptions& opt
 GenProgram generate_iec_program(uint64_t seed, const GenOptions& opt);
 std::string generate_iec_trace(uint64_t seed, int scans, const GenOptions& opt);
 
+// A Structured Text program (bench/ldgen_st.cpp, `ldgen --st`): loops of every
+// form with EXIT and CONTINUE, an array indexed by expressions, calls of a
+// FUNCTION_BLOCK's instances (one chosen by a variable index) and of a
+// FUNCTION; index and loop-budget faults happen.  No inputs.
+std::string generate_st(uint64_t seed);
+
 // "timers,arith" -> mask; false and `err` on an unknown name.  Names: contacts
 // edges compares coils setreset timers counters move arith logic realfn jumps end all,
 // and the typed ones: tarith tcompare tconv tbits tarray t64 typed, and tpou.
