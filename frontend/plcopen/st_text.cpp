@@ -49,7 +49,10 @@ StText::StText(std::string_view file_text) : file_(file_text) {
 }
 
 void StText::add(Part& p, const std::string& text, const Element* at) const {
-  p.text += text + "\n";
+  std::string one = text;  // one line, whatever an attribute held
+  std::replace(one.begin(), one.end(), '\n', ' ');
+  std::replace(one.begin(), one.end(), '\r', ' ');
+  p.text += one + "\n";
   p.origin.push_back({at->line, at->col, 0, false});
 }
 
