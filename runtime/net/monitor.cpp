@@ -18,6 +18,7 @@
 #include <set>
 #include <stdexcept>
 #include <thread>
+#include <tuple>
 
 #include "ir/ladder.h"
 #include "runtime/net/http.h"
@@ -231,23 +232,22 @@ std::vector<Target> line_targets(const std::string& s, int& depth) {
   return out;
 }
 
-// Does the alias `name` (lower case) denote the designator `key`: the same,
-// or a member of an instance (a function block's body names its own variables)?
-bool names_target(const std::string& name, const std::string& key) {
-  return name == key || (name.size() > key.size() && name.compare(name.size() - key.size(), key.size(), key) == 0 &&
-                         name[name.size() - key.size() - 1] == '.');
-}
-
-// The devices each line writes, by line: a destination operand (ops.def
-// letters w, d, r) of a fixed device the aliases name.
-std::map<int32_t, std::vector<SourceWatch>> written_by_line(const Program& p, const std::vector<Alias>& aliases) {
+// The devices each line writes: a destination operand (ops.def letters w,
+// d, r) of a fixed device the aliases name, once per line.  By line, then by
+// each designator that names it: the alias itself (lower case) and, for a
+// member of an instance, the member's own name (a function block's body
+// writes `total` of each instance: acc.total, acc2.total) -- a lookup each,
+// however long the line.
+using Written = std::map<int32_t, std::multimap<std::string, SourceWatch>>;
+Written written_by_line(const Program& p, const std::vector<Alias>& aliases) {
   std::map<std::pair<int, uint32_t>, const Alias*> named;
   for (const Alias& al : aliases) {
     Area b = bit_area(al.dev.dev), w = word_area(al.dev.dev);
     if (b != Area::Count) named.emplace(std::make_pair(int(b), al.dev.index), &al);
     if (w != Area::Count) named.emplace(std::make_pair(int(w), al.dev.index), &al);
   }
-  std::map<int32_t, std::vector<SourceWatch>> out;
+  Written out;
+  std::set<std::tuple<int32_t, int, uint32_t>> seen;  // line, device
   for (const Rung& r : p.rungs)
     for (const Instr& in : r.code) {
       const char* sig = op_info(in.op).operands;
@@ -255,15 +255,15 @@ std::map<int32_t, std::vector<SourceWatch>> written_by_line(const Program& p, co
         const Operand& o = in.a[k];
         if (!std::strchr("wdr", sig[k]) || (o.kind != OpdKind::Bit && o.kind != OpdKind::Int && o.kind != OpdKind::Real)) continue;
         auto it = named.find({int(o.area), o.index});
-        if (it == named.end()) continue;
-        std::vector<SourceWatch>& v = out[in.loc.line];
+        if (it == named.end() || !seen.emplace(in.loc.line, int(o.area), o.index).second) continue;
         const Alias& al = *it->second;
-        bool seen = false;
-        for (const SourceWatch& w : v) seen |= w.dev.area == o.area && w.dev.index == o.index;
-        if (seen) continue;
         Dev d{al.name, al.name, o.area, o.index};
         if (al.ty != Ty::None && al.ty != Ty::BOOL && !area_is_bit(o.area)) d.ty = al.ty;
-        v.push_back({al.name, d});
+        std::multimap<std::string, SourceWatch>& line = out[in.loc.line];
+        const std::string key = lowered(al.name);
+        line.emplace(key, SourceWatch{al.name, d});
+        for (size_t dot = key.find('.'); dot != std::string::npos; dot = key.find('.', dot + 1))
+          line.emplace(key.substr(dot + 1), SourceWatch{al.name, d});
       }
     }
   return out;
@@ -290,8 +290,8 @@ SourceView source_view(const std::string& text, const Program& p, const std::vec
     for (const Target& t : line_targets(s, depth)) {
       if (w == written.end()) break;
       std::vector<uint32_t> marks;
-      for (const SourceWatch& sw : w->second) {
-        if (!names_target(lowered(sw.name), t.key)) continue;
+      for (auto [m, end] = w->second.equal_range(t.key); m != end; ++m) {
+        const SourceWatch& sw = m->second;
         auto [it, fresh] = watch_of.emplace(std::make_pair(int(sw.dev.area), sw.dev.index), uint32_t(sv.watches.size()));
         if (fresh) sv.watches.push_back(sw);
         marks.push_back(it->second);
