@@ -425,10 +425,10 @@ class SoftPlcRun {
   }
 
   // The source text the monitor shows for an ST or IL program
-  // (docs/runtime.md, "The monitor"): the file the image names, read here and
-  // shown only if it still compiles to the image's IL and line map (a source
-  // edited since would put values on the wrong lines); else `note` says why
-  // and the rungs are drawn.
+  // (docs/runtime.md, "The monitor"): the file the image names, read here --
+  // a source this ldrun compiled as it is, an image's source only if it still
+  // compiles to the image's IL and line map (a source edited since would put
+  // values on the wrong lines); else `note` says why and the rungs are drawn.
   void monitor_source(const TaskSpec& s, std::string& text, std::string& note) {
     const std::string& path = s.image.source;
     auto ends = [&](const char* e) { size_t n = std::strlen(e); return path.size() >= n && path.compare(path.size() - n, n, e) == 0; };
@@ -445,6 +445,10 @@ class SoftPlcRun {
     }
     try {
       std::string t = read_file(path);
+      if (s.file == path && !is_image_file(path)) {  // compiled from it just now, in this process
+        text = std::move(t);
+        return;
+      }
       Compiled c;
       try {
         c = compile_source(path, false, g_task);
