@@ -165,7 +165,7 @@ std::string lowered(std::string s) {
 bool ident_start(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
 bool ident_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
 
-// A designator the line writes: [begin, end) of its text, and its spelling
+// A designator the line writes: where it ends in the line, and its spelling
 // lower-cased without blanks ("tank.level", "c[3]").
 struct Target {
   size_t end;
@@ -257,7 +257,7 @@ Written written_by_line(const Program& p, const std::vector<Alias>& aliases) {
         auto it = named.find({int(o.area), o.index});
         if (it == named.end() || !seen.emplace(in.loc.line, int(o.area), o.index).second) continue;
         const Alias& al = *it->second;
-        Dev d{al.name, al.name, o.area, o.index};
+        Dev d{device_prefix_of(o.area) + std::to_string(o.index), al.name, o.area, o.index};
         if (al.ty != Ty::None && al.ty != Ty::BOOL && !area_is_bit(o.area)) d.ty = al.ty;
         std::multimap<std::string, SourceWatch>& line = out[in.loc.line];
         const std::string key = lowered(al.name);
