@@ -424,6 +424,57 @@ class SoftPlcRun {
     return std::stoul(v);
   }
 
+  // The source text the monitor shows for an ST or IL program
+  // (docs/runtime.md, "The monitor"): the file the image names, read here --
+  // a source this ldrun compiled as it is, an image's source only if it still
+  // compiles to the image's IL and line map (a source edited since would put
+  // values on the wrong lines); else `note` says why and the rungs are drawn.
+  void monitor_source(const TaskSpec& s, std::string& text, std::string& note) {
+    const std::string& path = s.image.source;
+    auto ends = [&](const char* e) { size_t n = std::strlen(e); return path.size() >= n && path.compare(path.size() - n, n, e) == 0; };
+    if (!ends(".st") && !ends(".il")) return;
+    constexpr off_t kMax = off_t(4) << 20;  // as the monitor's bound (runtime/net/monitor.cpp)
+    struct stat st;
+    if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
+      note = "the source " + path + " is not available here: the rungs of its code are shown instead";
+      return;
+    }
+    if (st.st_size > kMax) {
+      note = "the source " + path + " is larger than 4 MiB: the rungs of its code are shown instead";
+      return;
+    }
+    try {
+      std::string t = read_file(path);
+      if (s.file == path && !is_image_file(path)) {  // compiled from it just now, in this process
+        text = std::move(t);
+        return;
+      }
+      Compiled c;
+      try {
+        c = compile_source(path, false, g_task);
+      } catch (const UserError&) {  // one task of a configuration
+        c = compile_source(path, false, s.name);
+      }
+      if (!same_code(c.il, s.image)) {
+        note = "the source " + path + " has changed since this program was compiled: the rungs of its code are shown instead";
+        return;
+      }
+      text = std::move(t);
+    } catch (const std::exception&) {
+      note = "the source " + path + " does not compile as it did: the rungs of its code are shown instead";
+    }
+  }
+  // Does `p` encode to the image's IL, each instruction on the same line?
+  static bool same_code(const Program& p, const Image& img) {
+    BinaryIl b = encode_il(p);
+    if (b.code != img.il || b.instr_offset.size() != img.lines.size()) return false;
+    size_t k = 0;
+    for (const Rung& r : p.rungs)
+      for (const Instr& in : r.code)
+        if (img.lines[k++].line != (in.loc.line ? in.loc.line : r.line)) return false;
+    return true;
+  }
+
   // The monitor wraps the driver: snapshots after scans, writes before them.
   void add_monitor() {
     if (a_.monitor.empty()) {
@@ -453,7 +504,10 @@ class SoftPlcRun {
     monitor_host_ = mo.host;
     monitor_token_ = mo.token;
     std::vector<MonitorTask> mts;
-    for (const TaskSpec& s : specs_) mts.push_back({s.name, s.period_us, s.image});
+    for (const TaskSpec& s : specs_) {
+      mts.push_back({s.name, s.period_us, s.image, "", ""});
+      monitor_source(s, mts.back().source_text, mts.back().source_note);
+    }
     monitor_ = std::make_unique<Monitor>(std::move(mts), mo);
     driver_ = monitor_->wrap(std::move(driver_));
   }

@@ -18,6 +18,7 @@
 #include <set>
 #include <stdexcept>
 #include <thread>
+#include <tuple>
 
 #include "ir/ladder.h"
 #include "runtime/net/http.h"
@@ -127,6 +128,187 @@ struct Dev {
   Ty ty = Ty::None;  // its alias's type: shown as --watch shows it (docs/format.md)
 };
 
+// ---------------------------------------------------------------- source view
+//
+// An ST or IEC IL program is shown as its source text, and beside each place
+// a line assigns a variable (`x :=`, `=> x`, IL `ST x`) that variable's live
+// value.  What a line assigns comes from the code: the destinations of the
+// instructions the line map puts on that line, named by the program's
+// aliases; where the text names one of them as a target, its value goes
+// right after the name.  Temporaries (no alias) and indexed stores (c[i] :=)
+// have no fixed name and show nothing.
+
+constexpr size_t kMaxSourceBytes = size_t(4) << 20;  // larger sources are not shown (docs/runtime.md)
+constexpr size_t kMaxSourceLines = 200000;
+
+struct SourceWatch {
+  std::string name;  // the alias
+  Dev dev;
+};
+
+struct SourceLine {
+  // text pieces, and after piece k (k < marks.size()) the watches marks[k]
+  std::vector<std::string> text;
+  std::vector<std::vector<uint32_t>> marks;
+};
+
+struct SourceView {
+  std::string note;  // not shown: why ("" when shown)
+  std::vector<SourceLine> lines;
+  std::vector<SourceWatch> watches;
+};
+
+std::string lowered(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+bool ident_start(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
+bool ident_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
+
+// A designator the line writes: where it ends in the line, and its spelling
+// lower-cased without blanks ("tank.level", "c[3]").
+struct Target {
+  size_t end;
+  std::string key;
+};
+
+// The targets of one line: designators followed by `:=`, preceded by `=>`,
+// or after an IEC IL store (ST, STN, S, R) at the start of the line.
+// Comments (* *) (nested, across lines, `depth` carries them), // comments,
+// pragmas { } and strings are skipped.
+std::vector<Target> line_targets(const std::string& s, int& depth) {
+  std::vector<Target> out;
+  size_t i = 0, n = s.size();
+  bool after_arrow = false;  // the last token was =>
+  bool il_store = false;     // the line so far is an IL store operator
+  bool first_token = true;
+  while (i < n) {
+    if (depth > 0) {
+      if (s.compare(i, 2, "(*") == 0) depth++, i += 2;
+      else if (s.compare(i, 2, "*)") == 0) depth--, i += 2;
+      else i++;
+      continue;
+    }
+    char c = s[i];
+    if (c == ' ' || c == '\t' || c == '\r') { i++; continue; }
+    if (s.compare(i, 2, "(*") == 0) { depth++, i += 2; continue; }
+    if (s.compare(i, 2, "//") == 0) break;
+    if (c == '{') {  // a pragma: to its end on this line
+      size_t e = s.find('}', i);
+      i = e == std::string::npos ? n : e + 1;
+      continue;
+    }
+    if (c == '\'' || c == '"') {
+      size_t j = i + 1;
+      while (j < n && s[j] != c) j += s[j] == '$' ? 2 : 1;
+      i = j + 1, after_arrow = false, first_token = false;
+      continue;
+    }
+    if (s.compare(i, 2, "=>") == 0) { after_arrow = true, i += 2, first_token = false; continue; }
+    if (!ident_start(c)) { after_arrow = false, il_store = false, first_token = false, i++; continue; }
+    // a designator: ident ( . ident | [ ... ] )*
+    std::string key;
+    auto word = [&] {
+      while (i < n && ident_char(s[i])) key += char(std::tolower(static_cast<unsigned char>(s[i]))), i++;
+    };
+    word();
+    while (i < n) {
+      if (s[i] == '.' && i + 1 < n && ident_start(s[i + 1])) key += '.', i++, word();
+      else if (s[i] == '[') {
+        size_t e = s.find(']', i);
+        if (e == std::string::npos) break;
+        for (size_t k = i; k <= e; k++)
+          if (s[k] != ' ' && s[k] != '\t') key += char(std::tolower(static_cast<unsigned char>(s[k])));
+        i = e + 1;
+      } else break;
+    }
+    size_t end = i, j = i;
+    while (j < n && (s[j] == ' ' || s[j] == '\t')) j++;
+    if (s.compare(j, 2, ":=") == 0 || after_arrow || il_store) out.push_back({end, key});
+    il_store = first_token && (key == "st" || key == "stn" || key == "s" || key == "r");
+    after_arrow = false;
+    first_token = false;
+  }
+  return out;
+}
+
+// The devices each line writes: a destination operand (ops.def letters w,
+// d, r) of a fixed device the aliases name, once per line.  By line, then by
+// each designator that names it: the alias itself (lower case) and, for a
+// member of an instance, the member's own name (a function block's body
+// writes `total` of each instance: acc.total, acc2.total) -- a lookup each,
+// however long the line.
+using Written = std::map<int32_t, std::multimap<std::string, SourceWatch>>;
+Written written_by_line(const Program& p, const std::vector<Alias>& aliases) {
+  std::map<std::pair<int, uint32_t>, const Alias*> named;
+  for (const Alias& al : aliases) {
+    Area b = bit_area(al.dev.dev), w = word_area(al.dev.dev);
+    if (b != Area::Count) named.emplace(std::make_pair(int(b), al.dev.index), &al);
+    if (w != Area::Count) named.emplace(std::make_pair(int(w), al.dev.index), &al);
+  }
+  Written out;
+  std::set<std::tuple<int32_t, int, uint32_t>> seen;  // line, device
+  for (const Rung& r : p.rungs)
+    for (const Instr& in : r.code) {
+      const char* sig = op_info(in.op).operands;
+      for (int k = 0; k < in.nopd() && sig[k]; k++) {
+        const Operand& o = in.a[k];
+        if (!std::strchr("wdr", sig[k]) || (o.kind != OpdKind::Bit && o.kind != OpdKind::Int && o.kind != OpdKind::Real)) continue;
+        auto it = named.find({int(o.area), o.index});
+        if (it == named.end() || !seen.emplace(in.loc.line, int(o.area), o.index).second) continue;
+        const Alias& al = *it->second;
+        Dev d{device_prefix_of(o.area) + std::to_string(o.index), al.name, o.area, o.index};
+        if (al.ty != Ty::None && al.ty != Ty::BOOL && !area_is_bit(o.area)) d.ty = al.ty;
+        std::multimap<std::string, SourceWatch>& line = out[in.loc.line];
+        const std::string key = lowered(al.name);
+        line.emplace(key, SourceWatch{al.name, d});
+        for (size_t dot = key.find('.'); dot != std::string::npos; dot = key.find('.', dot + 1))
+          line.emplace(key.substr(dot + 1), SourceWatch{al.name, d});
+      }
+    }
+  return out;
+}
+
+SourceView source_view(const std::string& text, const Program& p, const std::vector<Alias>& aliases) {
+  SourceView sv;
+  if (text.size() > kMaxSourceBytes || size_t(std::count(text.begin(), text.end(), '\n')) >= kMaxSourceLines) {
+    sv.note = "the source is larger than " + std::to_string(kMaxSourceBytes >> 20) + " MiB or " +
+              std::to_string(kMaxSourceLines) + " lines: the rungs of its code are shown instead";
+    return sv;
+  }
+  auto written = written_by_line(p, aliases);
+  std::map<std::pair<int, uint32_t>, uint32_t> watch_of;  // device -> index in sv.watches
+  int depth = 0;
+  size_t at = 0;
+  for (int32_t line = 1; at <= text.size(); line++) {
+    size_t nl = text.find('\n', at);
+    std::string s = text.substr(at, nl == std::string::npos ? std::string::npos : nl - at);
+    if (!s.empty() && s.back() == '\r') s.pop_back();
+    SourceLine sl;
+    size_t from = 0;
+    auto w = written.find(line);
+    for (const Target& t : line_targets(s, depth)) {
+      if (w == written.end()) break;
+      std::vector<uint32_t> marks;
+      for (auto [m, end] = w->second.equal_range(t.key); m != end; ++m) {
+        const SourceWatch& sw = m->second;
+        auto [it, fresh] = watch_of.emplace(std::make_pair(int(sw.dev.area), sw.dev.index), uint32_t(sv.watches.size()));
+        if (fresh) sv.watches.push_back(sw);
+        marks.push_back(it->second);
+      }
+      if (marks.empty()) continue;
+      sl.text.push_back(s.substr(from, t.end - from));
+      sl.marks.push_back(std::move(marks));
+      from = t.end;
+    }
+    sl.text.push_back(s.substr(from));
+    sv.lines.push_back(std::move(sl));
+    if (nl == std::string::npos) break;
+    at = nl + 1;
+  }
+  return sv;
+}
+
 // Forced inputs as one consumer (the shared image's, or one task's) last
 // copied them: refreshed when the server changed them and the lock is free,
 // so a scan never waits for the server and always has a complete list.
@@ -151,6 +333,9 @@ struct TaskView {
   std::vector<Alias> aliases;
   std::vector<RungView> rungs;
   std::vector<Dev> devs;
+  std::string source_note;  // an ST or IL program whose source is not shown: why
+  std::vector<SourceLine> source;    // its source, when shown (then no rungs are drawn)
+  std::vector<Dev> source_watches;   // the variables shown in it
 
   // the snapshot of its memory, written by the task thread at its scan boundary
   std::mutex snap_mu;
@@ -511,6 +696,10 @@ struct Monitor::Impl {
       }
       s += ",\"rungs\":[";
       for (size_t r = 0; r < t.rungs.size(); r++) s += (r ? "," : "") + rung_state(t.rungs[r], v);
+      if (!t.source.empty()) {
+        s += "],\"src\":[";
+        for (size_t d = 0; d < t.source_watches.size(); d++) s += (d ? "," : "") + jstr(v.dev_text(t.source_watches[d]));
+      }
       s += "],\"dev\":[";
       for (size_t d = 0; d < t.devs.size(); d++) s += (d ? "," : "") + jstr(v.dev_text(t.devs[d]));
       s += "]}";
@@ -525,12 +714,36 @@ struct Monitor::Impl {
     return s + "]}";
   }
 
+  // "source": one array a line, its text pieces and between them the
+  // indexes (in "watch") of the values shown there: ["  n",[0]," := n + 1;"]
+  static std::string source_json(const TaskView& t) {
+    std::string s = ",\"watch\":[";
+    for (size_t k = 0; k < t.source_watches.size(); k++) s += (k ? "," : "") + jstr(t.source_watches[k].alias);
+    s += "],\"source\":[";
+    for (size_t l = 0; l < t.source.size(); l++) {
+      const SourceLine& sl = t.source[l];
+      s += l ? ",[" : "[";
+      for (size_t k = 0; k < sl.text.size(); k++) {
+        s += (k ? "," : "") + jstr(sl.text[k]);
+        if (k >= sl.marks.size()) continue;
+        s += ",[";
+        for (size_t m = 0; m < sl.marks[k].size(); m++) s += (m ? "," : "") + std::to_string(sl.marks[k][m]);
+        s += "]";
+      }
+      s += "]";
+    }
+    return s + "]";
+  }
+
   std::string build_program_json() const {
     std::string s = "{\"write\":" + std::string(opt.write ? "true" : "false") +
                     ",\"token\":" + std::string(opt.token.empty() ? "false" : "true") + ",\"tasks\":[";
     for (size_t ti = 0; ti < tasks.size(); ti++) {
       const TaskView& t = *tasks[ti];
-      s += std::string(ti ? "," : "") + "{\"name\":" + jstr(t.name) + ",\"period_us\":" + std::to_string(t.period_us) + ",\"rungs\":[";
+      s += std::string(ti ? "," : "") + "{\"name\":" + jstr(t.name) + ",\"period_us\":" + std::to_string(t.period_us);
+      if (!t.source_note.empty()) s += ",\"source_note\":" + jstr(t.source_note);
+      if (!t.source.empty()) s += source_json(t);
+      s += ",\"rungs\":[";
       for (size_t r = 0; r < t.rungs.size(); r++) {
         const RungView& rv = t.rungs[r];
         s += std::string(r ? "," : "") + "{\"title\":" + jstr(rv.title) + ",\"line\":" + std::to_string(rv.line);
@@ -942,7 +1155,15 @@ Monitor::Monitor(std::vector<MonitorTask> tasks, MonitorOptions opt) : impl_(std
     t->writes = std::make_unique<WriteShadow>(impl_->opt.write_backlog);
     Program p = program_of(mt.image);
     collect_devices(*t, p);
-    for (const Rung& r : p.rungs) {
+    t->source_note = mt.source_note;
+    if (!mt.source_text.empty()) {
+      SourceView sv = source_view(mt.source_text, p, t->aliases);
+      t->source_note = sv.note;
+      t->source = std::move(sv.lines);
+      for (SourceWatch& w : sv.watches) t->source_watches.push_back(std::move(w.dev));
+    }
+    const std::vector<Rung> none;  // a program shown as its source draws no rungs
+    for (const Rung& r : t->source.empty() ? p.rungs : none) {
       RungView rv;
       rv.line = r.line;
       rv.title = r.title;

@@ -23,6 +23,10 @@ struct MonitorTask {
   std::string name;
   uint32_t period_us = 0;
   Image image;  // its IL, line map, titles and aliases are drawn (the code is not needed)
+  // An ST or IL program: its source text, shown line by line with the live
+  // value of each variable a line assigns beside its name (instead of rungs);
+  // or, when the text is not at hand, why (said on the page, rungs drawn).
+  std::string source_text, source_note;
 };
 
 // The write path's guards and the server's bounds: docs/faults.md, "The

@@ -1,4 +1,5 @@
-// The ldrun monitor page: draws every rung from /api/program, then follows
+// The ldrun monitor page: draws every rung (or an ST or IL program's source)
+// from /api/program, then follows
 // /api/events (Server-Sent Events) to highlight powered wires, closed contacts
 // and energized outputs, show values, a device table and trends.
 'use strict';
@@ -50,6 +51,29 @@ function drawRung(task, ti, rung, ri, parent) {
   return parts;
 }
 
+// An ST or IL program: its source as written, line by line, and after each
+// assigned variable a box with its live value.  Text goes in as textContent
+// only (the source is never parsed as HTML).
+function drawSource(t, ti, parent) {
+  const box = h('div', null, parent, 'source');
+  box.id = 'source-' + ti;
+  const els = [];
+  t.source.forEach((pieces, li) => {
+    const line = h('div', null, box, 'sl');
+    h('span', String(li + 1), line, 'ln');
+    for (const p of pieces) {
+      if (typeof p === 'string') { h('span', p, line); continue; }
+      for (const w of p) {
+        const v = h('span', '', line, 'stv');
+        v.title = t.watch[w];
+        v.dataset.watch = w;
+        els.push([v, w]);
+      }
+    }
+  });
+  return els;
+}
+
 function render() {
   const root = document.getElementById('tasks');
   root.textContent = '';
@@ -62,6 +86,8 @@ function render() {
       h('button', 'RUN', head).addEventListener('click', () => post('/api/run', 'task=' + task));
       h('button', 'STOP', head).addEventListener('click', () => post('/api/stop', 'task=' + task));
     }
+    if (t.source_note) h('p', t.source_note, sec, 'note');
+    t.srcEls = t.source ? drawSource(t, ti, sec) : [];
     t.view = t.rungs.map((r, ri) => drawRung(t, ti, r, ri, sec));
   });
   if (program.write) {
@@ -159,6 +185,7 @@ function update(state) {
         val.textContent = rs.v[k] !== undefined ? rs.v[k] : '';
       });
     });
+    if (ts.src) for (const [v, w] of t.srcEls) if (v.textContent !== ts.src[w]) v.textContent = ts.src[w];
     ts.dev.forEach((d, di) => {
       const td = t.rowsEl[di];
       if (td.textContent !== d) td.textContent = d;

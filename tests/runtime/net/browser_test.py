@@ -10,8 +10,11 @@ form forces X1 and writes X3, X4 (filling the inputs, clicking the buttons):
 the coil Y1 must light in the DOM, and go dark when X1 is forced to 0.  Then
 with --monitor-remote --monitor-write the page opened at the address ldrun
 printed (/?token=...) keeps the write token and writes with it; without it
-a write is refused 403 and the page says a token is needed.  A
-screenshot of the traffic light goes to OUT_DIR/monitor.png.
+a write is refused 403 and the page says a token is needed.  Last an ST
+program (tests/runtime/net/monitor/online.st): its source drawn as written,
+markup in it as text, the values beside its targets those of one scan.
+Screenshots of the traffic light and of the ST program go to
+OUT_DIR/monitor.png and OUT_DIR/monitor-st.png.
 Exit 77 (skipped) when chromium is not installed.
 """
 import base64
@@ -91,13 +94,13 @@ class Browser:
             mt.fail("page script: %s" % r["exceptionDetails"])
         return r["result"].get("value")
 
-    def open(self, url):
+    def open(self, url, drawn="svg.ladder"):
         self.call("Page.navigate", {"url": url})
         for _ in range(100):
             time.sleep(0.1)
-            if self.js("document.querySelectorAll('svg.ladder').length") or 0:
+            if self.js("document.querySelectorAll('%s').length" % drawn) or 0:
                 return
-        mt.fail("the page drew no rung")
+        mt.fail("the page drew no " + drawn)
 
     def dom(self):
         return self.js("document.documentElement.outerHTML")
@@ -225,6 +228,29 @@ try:
         mt.fail("a write without the token: %r" % reply)
     if mt.get_json(m.port, "/api/state")["forced"]:
         mt.fail("a write without the token forced an input")
+    m.stop()
+
+    # 4. an ST program: its source as written, line by line, markup in it shown
+    # as text, and the values beside the targets those of one scan count N
+    # (tests/runtime/net/monitor/online.st says how each follows from N)
+    m = mt.Ldrun([mt.ONLINE, "--io=none", "--period", "10ms", "--monitor", "127.0.0.1:0"])
+    b.open("http://127.0.0.1:%d/" % m.port, "div.source")
+    lines = open(os.path.join(ROOT, mt.ONLINE)).read().split("\n")
+    shown = b.js("[...document.querySelectorAll('div.source .sl')].map(l => [...l.childNodes].slice(1)"
+                 ".filter(n => !n.classList.contains('stv')).map(n => n.textContent).join(''))")
+    if shown != lines:
+        mt.fail("the page shows the source as %r" % shown[:40])
+    if b.js("document.querySelectorAll('script').length") != 1 or b.js("document.querySelectorAll('svg.ladder').length"):
+        mt.fail("markup in the source became elements, or rungs were drawn beside the source")
+    for _ in range(3):
+        time.sleep(0.3)
+        vals = b.js("Object.fromEntries([...document.querySelectorAll('div.source .stv')].map(v => [v.title, v.textContent]))")
+        want = {k: str(v) for k, v in mt.online_expected(int(vals.get("n", "0"))).items()}
+        if vals != want or int(vals["n"]) < 1:
+            mt.fail("the page shows %s, expected %s" % (vals, want))
+    png = base64.b64decode(b.call("Page.captureScreenshot", {"format": "png"})["data"])
+    with open(os.path.join(OUT, "monitor-st.png"), "wb") as f:
+        f.write(png)
     m.stop()
 finally:
     b.close()

@@ -365,6 +365,101 @@ def case_typed_names():
     m.stop()
 
 
+def iec_time(ms):
+    """An IEC TIME literal as --watch prints it (docs/format.md): T#1s750ms, T#46s, units that are 0 left out."""
+    out = ""
+    for unit, size in (("h", 3600000), ("m", 60000), ("s", 1000), ("ms", 1)):
+        if ms >= size:
+            out += "%d%s" % (ms // size, unit)
+            ms %= size
+    return "T#" + (out or "0s")
+
+
+ONLINE = "tests/runtime/net/monitor/online.st"
+
+
+def online_expected(n):
+    """The values of tests/runtime/net/monitor/online.st after n scans, by hand (its comment says how)."""
+    return {"n": n, "sq": n * n, "evens": n // 2, "w": 100 * n % 256, "t": iec_time(250 * n), "i": 4, "acc.inc": 3,
+            "got": 3 * n, "acc.total": 3 * n, "big": int(n > 10)}
+
+
+def check_online_source(port, src_path):
+    """The program's source as the page draws it: every line as written, and the
+    values after the targets of the lines that assign them."""
+    task = get_json(port, "/api/program")["tasks"][0]
+    if "source" not in task:
+        fail("no source view: %s" % task.get("source_note"))
+    if task["rungs"]:
+        fail("rungs drawn beside the source view")
+    lines = open(os.path.join(ROOT, src_path)).read().split("\n")
+    got = ["".join(p for p in l if isinstance(p, str)) for l in task["source"]]
+    if got != lines:
+        fail("the source lines differ from the file")
+    # where each value stands: after the target's name, on its own line (by hand from the file)
+    marks = {}
+    for l in task["source"]:
+        text = ""
+        for p in l:
+            if isinstance(p, str):
+                text += p
+            else:
+                marks[text.strip()] = [task["watch"][w] for w in p]
+    want = {"total": ["acc.total"], "n": ["n"], "sq": ["sq"], "IF n MOD 2 = 0 THEN evens": ["evens"], "w": ["w"],
+            "t": ["t"], "FOR i": ["i"], "acc(inc": ["acc.inc"], "acc(inc := 3, total => got": ["got"], "big": ["big"]}
+    if marks != want:
+        fail("values placed at %s, expected %s" % (marks, want))
+    return task["watch"]
+
+
+def check_online_values(port, watch, times=3):
+    """The live values, each snapshot against online_expected of its own scan count."""
+    for _ in range(times):
+        ts = get_json(port, "/api/state")["tasks"][0]
+        shown = dict(zip(watch, ts["src"]))
+        want = {k: str(v) for k, v in online_expected(ts["scan"]).items()}
+        if ts["scan"] < 1 or shown != want:
+            fail("after %d scans the source view shows %s, expected %s" % (ts["scan"], shown, want))
+        time.sleep(0.15)
+
+
+def case_st_source():
+    # ldrun prog.st: the source compiled here is shown with live values
+    m = Ldrun([ONLINE, "--io=none", "--period", "5ms", "--monitor", "127.0.0.1:0"])
+    watch = check_online_source(m.port, ONLINE)
+    check_online_values(m.port, watch)
+    m.stop()
+    tmp = os.path.join(os.environ.get("TMPDIR", "/tmp"), "ldc_monitor_st_%d" % os.getpid())
+    os.makedirs(tmp, exist_ok=True)
+    try:
+        # an image (native, -O2): the source it names, read and found to compile to its IL
+        img = os.path.join(tmp, "online.bin")
+        subprocess.run([os.path.join(LDC_DIR, "ldc"), "-O2", ONLINE, "-o", img], cwd=ROOT, check=True)
+        m = Ldrun([img, "--period", "5ms", "--io=none", "--monitor", "127.0.0.1:0"])
+        check_online_values(m.port, check_online_source(m.port, ONLINE), 2)
+        m.stop()
+        # a copy compiled, then edited (a line added: the line map no longer fits), then removed
+        copy = os.path.join(tmp, "copy.st")
+        text = open(os.path.join(ROOT, ONLINE)).read()
+        open(copy, "w").write(text)
+        subprocess.run([os.path.join(LDC_DIR, "ldc"), copy, "-o", img], cwd=ROOT, check=True)
+        for edit, why in (("(* a comment added *)\n" + text, "has changed since this program was compiled"),
+                          (None, "is not available here")):
+            if edit is None:
+                os.unlink(copy)
+            else:
+                open(copy, "w").write(edit)
+            m = Ldrun([img, "--engine=interp", "--io=none", "--monitor", "127.0.0.1:0"])
+            task = get_json(m.port, "/api/program")["tasks"][0]
+            if "source" in task or why not in task.get("source_note", "") or not task["rungs"]:
+                fail("image of an edited or missing source: %s" % {k: task.get(k) for k in ("source_note", "rungs")})
+            m.stop()
+    finally:
+        for f in os.listdir(tmp):
+            os.unlink(os.path.join(tmp, f))
+        os.rmdir(tmp)
+
+
 def case_load():
     # 20 pages' event streams at once on a 1 ms task: every client is served
     # at >= 10 updates/s, nothing crashes, the task keeps scanning.
@@ -953,5 +1048,6 @@ if __name__ == "__main__":
      "connection_caps": case_connection_caps, "pipelined_flood": case_pipelined_flood, "rebinding": case_rebinding,
      "token": case_token, "state_flood_stop": case_state_flood_stop, "write_backlog": case_write_backlog,
      "minor_http": case_minor_http, "fd_exhaustion": case_fd_exhaustion,
-     "stop_not_blocking": case_stop_not_blocking, "typed_names": case_typed_names}[CASE]()
+     "stop_not_blocking": case_stop_not_blocking, "typed_names": case_typed_names,
+     "st_source": case_st_source}[CASE]()
     print("ok")
