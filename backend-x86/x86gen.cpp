@@ -379,6 +379,7 @@ class Gen : public ClassGen<Gen> {
   void typed_shift(const ldc::Instr& in);
   void typed_neg_abs(const ldc::Instr& in);
   void typed_math(const ldc::Instr& in);
+  void typed_string(const ldc::Instr& in);
   void typed_conv(const ldc::Instr& in);
   void typed_idx(const ldc::Instr& in);
   void typed_indexed(const ldc::Instr& in);
@@ -398,7 +399,7 @@ class Gen : public ClassGen<Gen> {
   void real_round_to_int(bool is_signed);
   void unsigned_to_real(Ty to);
   void guarded_div64(bool is_signed);
-  void call_math(int slot);
+  void call_table(int32_t disp);
 };
 
 // The x86 forms of each relation, in the order of ops.def's REL table.
@@ -1156,6 +1157,7 @@ void Gen::store_xd(Ty t, Reg x, const ldc::Operand& d) {
 // is placed when an instruction of another kind comes, or the rung ends:
 // close_typed_run).
 void Gen::typed(const ldc::Instr& in) {
+  if (typed::is_string_instr(in.op, in.ty, in.src)) return typed_string(in);
   if (op_info(in.op).push) return typed_compare(in);
   if (typed_skip_.empty() && !(bases_ && known_.on())) {
     typed_skip_ = fresh();
@@ -1474,13 +1476,39 @@ void Gen::typed_neg_abs(const ldc::Instr& in) {
 }
 
 // xmm0 = f(xmm0) (and xmm1 for pow) through the math table below the image
-void Gen::call_math(int slot) {
-  emit(M::Call, {Operand::m(mem_at(Size::Qword, uint32_t(kMathTableDisp + 8 * slot)))});
+// (or, given kStrSlotDisp, the STRING routine)
+void Gen::call_table(int32_t disp) {
+  emit(M::Call, {Operand::m(mem_at(Size::Qword, uint32_t(disp)))});
   // the callee may clobber the caller-saved base registers (rdi): point them
   // back, as real_fn does
   if (bases_)
     for (RegNum r : as::x86::kBaseRegs)
       if (as::x86::caller_saved(r)) emit(M::Lea, {R(r64(r)), Operand::m(mem_at(Size::None, 0))});
+}
+
+// A STRING instruction: a call of native_string through its slot below the
+// math table (ir/mathfn.h, kStrSlotDisp) with the instruction packed in esi and its operands
+// in rdx, rcx, r8 (an image offset, or a constant's canonical bits; rdi, a
+// base register at -O2, is left alone and not read); eax
+// comes back as a compare's result, pushed, or else 1 where S0 is to be set.
+// The other typed instructions of a run share its power test (Gen::typed).
+void Gen::typed_string(const ldc::Instr& in) {
+  const OpInfo& oi = op_info(in.op);
+  if (!oi.push && typed_skip_.empty() && !(bases_ && known_.on())) {
+    typed_skip_ = fresh();
+    test_top();
+    jcc(Cond::E, typed_skip_);
+  }
+  static constexpr RegNum kArg[] = {DX, CX, R8};
+  unsigned konst = 0;
+  for (int k = 0; k < oi.nopd; k++) {
+    if (is_tconst(in.a[k])) konst |= 1u << k, mov_imm(r64(kArg[k]), tconst(in.a[k]));
+    else emit(M::Mov, {R(r32(kArg[k])), I(int64_t(taddr(in.a[k])))});
+  }
+  emit(M::Mov, {R(esi), I(int64_t(native_string_desc(in.op, in.ty, in.src, konst)))});
+  call_table(kStrSlotDisp);
+  if (oi.push) return push_al();
+  emit(M::Or, {B(L_.addr(Area::S, kBitError)), R(al)});
 }
 
 // SQRT inline (sqrtsd: exact); the others call the C library's double function
@@ -1494,7 +1522,7 @@ void Gen::typed_math(const ldc::Instr& in) {
     emit(M::Sqrtsd, {R(xmm0), R(xmm0)});
   } else {
     if (in.op == Op::TEXPT) load_xd(t, in.a[1], xmm1);
-    call_math(int(math_fn(in.op)));
+    call_table(math_slot_disp(math_fn(in.op)));
   }
   store_xd(t, xmm0, d);
 }
@@ -2541,22 +2569,8 @@ std::vector<std::string> x86_globals(const Program& p) {
   return g;
 }
 
-// STRING and its functions (ir/typed.h, "strings") are run by the
-// interpreters; native code would call checked routines for them through the
-// read-only call table, which the validator does not yet know: refused by name.
-static void refuse_strings(const Program& p) {
-  for (const Rung& r : p.rungs)
-    for (const ldc::Instr& in : r.code)
-      if (op_info(in.op).typed && typed::is_string_instr(in.op, in.ty, in.src))
-        throw CompileError(in.loc.line, in.loc.col,
-                           "x86-64: " + op_spelling(in) +
-                               ": STRING and the string functions run on the interpreters and the C route (--engine=interp, fast or c), "
-                               "not in native code");
-}
-
 void generate_x86_blocks(const Program& p, const Layout& layout, int opt_level, bool notes, const X86BlockSink& sink,
                          std::vector<std::vector<uint32_t>>& il_items) {
-  refuse_strings(p);
   Blocks(p, layout, opt_level, notes).run(il_items, sink);
 }
 

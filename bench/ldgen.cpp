@@ -666,7 +666,7 @@ const std::pair<const char*, uint32_t> kClassNames[] = {
     {"setreset", kGenSetReset}, {"timers", kGenTimers}, {"counters", kGenCounters}, {"move", kGenMove},
     {"arith", kGenArith},       {"logic", kGenLogic},   {"realfn", kGenRealFn},     {"jumps", kGenJumps},
     {"end", kGenEnd},           {"all", kGenAll},       {"tarith", kGenTArith},     {"tcompare", kGenTCompare},
-    {"tconv", kGenTConv},       {"tbits", kGenTBits},   {"tarray", kGenTArray},     {"t64", kGenT64},
+    {"tconv", kGenTConv},       {"tbits", kGenTBits},   {"tarray", kGenTArray},     {"t64", kGenT64},  {"tstring", kGenTString},
     {"typed", kGenTyped},       {"tpou", kGenTPou}};
 }  // namespace
 
@@ -711,7 +711,7 @@ bool parse_gen_classes(std::string_view list, uint32_t& mask, std::string& err) 
       if (!found) {
         err = "unknown element class '" + std::string(w) +
               "' (contacts edges compares coils setreset timers counters move arith logic realfn jumps end all;"
-              " typed: tarith tcompare tconv tbits tarray t64 typed; tpou)";
+              " typed: tarith tcompare tconv tbits tarray t64 tstring typed; tpou)";
         return false;
       }
     }
@@ -736,7 +736,7 @@ const char kUsage[] =
     "             [--range x=8,y=8,m=8,k=4,d=8,f=4,t=4,c=4,wx=4,wy=2]\n"
     "             [-o prog.ld] [--trace t.csv] [--scans N]\n"
     "  LIST: contacts edges compares coils setreset timers counters move arith logic realfn jumps end all\n"
-    "        typed classes (an ldc IL program): tarith tcompare tconv tbits tarray t64 typed\n"
+    "        typed classes (an ldc IL program): tarith tcompare tconv tbits tarray t64 tstring typed\n"
     "        tpou (an IEC IL program with FBs, FUNCTIONs, arrays, structures; with t64 the 64-bit types)\n"
     "       ldgen --st [--seed N] [-o prog.st]   a Structured Text program: loops, arrays, calls (no inputs)\n"
     "  Without -o the program goes to stdout.  The same seed and options give the same files.\n";

@@ -40,7 +40,11 @@ enum GenClass : uint32_t {
   kGenTBits = 1u << 16,     // AND OR XOR NOT SHL SHR ROL ROR
   kGenTArray = 1u << 17,    // IDX + LDX/STX over arrays (of structures too), indices in and out of range
   kGenT64 = 1u << 18,       // the 64-bit types: LINT ULINT LWORD LREAL TIME LTIME DATE TOD DT
-  kGenTyped = kGenTArith | kGenTCompare | kGenTConv | kGenTBits | kGenTArray | kGenT64,
+  // STRING and its functions (MOVE, CONV both ways, LEN LEFT RIGHT CONCAT FIND,
+  // ARGS + MID DELETE INSERT REPLACE, compares); drawn only with t64 (the C40,
+  // which runs typed programs without t64, has neither)
+  kGenTString = 1u << 20,
+  kGenTyped = kGenTArith | kGenTCompare | kGenTConv | kGenTBits | kGenTArray | kGenT64 | kGenTString,
   // IEC IL text (ldgen_iec.cpp) with the project's own FUNCTION_BLOCKs and
   // FUNCTIONs, nested instances, instances in arrays and structures, arrays
   // and nested structures, read by the typed IEC IL reader; with t64 the

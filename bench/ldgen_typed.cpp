@@ -30,6 +30,7 @@ constexpr int kScalarD = 48;            // D0..D47: scalars of every type (cells
 constexpr int kIndexD = 48, kIndexN = 8;
 constexpr int kArrayD = 64, kArrayEnd = 192;  // D64..D191: arrays (the trace fills them on its first row)
 constexpr int kBoolM = 16, kArrayM = 64;     // M0..M15 bits; M64.. BOOL arrays
+constexpr int kStrD = 200, kStrN = 4;        // D200..D331: four STRINGs of 33 cells (tstring)
 
 struct Array {
   Ty t;
@@ -42,9 +43,10 @@ class TypedGen {
     uint32_t c = o.classes & kGenTyped;
     wide_ = c & kGenT64;
     c &= ~kGenT64;
-    cls_ = c ? c : (kGenTyped & ~kGenT64);
+    if (!wide_) c &= ~kGenTString;  // (STRING with the 64-bit types: what the C40 lacks)
+    cls_ = c ? c : (kGenTyped & ~(kGenT64 | kGenTString));
     for (int i = 0; i < kTyCount; i++)
-      // STRING: only the interpreters run it (docs/il.md, "Strings"); these programs go to every engine
+      // STRING: by the string actions alone (strings()), in its own cells
       if ((wide_ || ty_info(Ty(i)).bits < 64) && Ty(i) != Ty::STRING) types_.push_back(Ty(i));
     make_arrays();
   }
@@ -141,6 +143,10 @@ class TypedGen {
 
   // ---- conditions: push exactly one value
   void leaf() {
+    if (on(kGenTString) && r_.pct(10)) {
+      static const Op kRels[] = {Op::TEQ, Op::TNE, Op::TLT, Op::TLE, Op::TGT, Op::TGE};
+      return emit(name(kRels[r_.below(6)], Ty::STRING) + " " + str() + " " + str());
+    }
     if (on(kGenTCompare) && r_.pct(55)) {
       static const Op kRels[] = {Op::TEQ, Op::TNE, Op::TLT, Op::TLE, Op::TGT, Op::TGE};
       Op op = kRels[r_.below(6)];
@@ -247,12 +253,85 @@ class TypedGen {
     if (r_.pct(50)) emit(name(Op::TLDX, a.t) + " " + base + " " + stride + " " + dst(a.t));
     else emit(name(Op::TSTX, a.t) + " " + src(a.t) + " " + base + " " + stride);
   }
+  // ---- strings: four in their own cells, sometimes one over the scalars
+  // (whose words make untrusted length cells); filled by literals moved into
+  // their cells and by conversions of the scalars
+  std::string str() {
+    if (r_.pct(10)) return "D" + std::to_string(r_.below(16));
+    return "D" + std::to_string(kStrD + 33 * r_.below(kStrN));
+  }
+  // A type other than STRING for U (an integer type where `op` needs one).
+  Ty other(Op op, bool t_is_string) {
+    for (int tries = 0; tries < 40; tries++) {
+      Ty u = types_[size_t(r_.below(int(types_.size())))];
+      if (t_is_string ? op_takes(op, Ty::STRING, u) : op_takes(op, u, Ty::STRING)) return u;
+    }
+    return Ty::DINT;
+  }
+  std::string num(Ty u) {  // a length or position: around the edges of 0..126 often
+    static const int kNums[] = {-1, 0, 1, 2, 3, 5, 126, 127, 200, 255, 256};
+    std::string why;
+    if (r_.pct(60))
+      if (std::string v = std::to_string(kNums[r_.below(int(std::size(kNums)))]); parse_typed_const(u, v, why)) return v;
+    return src(u);
+  }
+  void literal() {  // a short text of digits, signs, '.', '#', letters and blanks into a string's cells
+    static const char kChars[] = "0123456789-+.# TtRrUuEeSsHhMmDdxa16";
+    std::string s;
+    for (int n = r_.range(0, 9); n > 0; n--) s += kChars[r_.below(int(sizeof kChars - 1))];
+    std::string d = str();
+    const int base = std::stoi(d.substr(1));
+    emit("MOVE.DINT " + std::to_string(s.size()) + " " + d);
+    for (size_t i = 0; i < s.size(); i += 4) {
+      uint32_t w = 0;
+      for (size_t j = 0; j < 4 && i + j < s.size(); j++) w |= uint32_t(uint8_t(s[i + j])) << (8 * j);
+      emit("MOVE.DWORD " + std::to_string(w) + " D" + std::to_string(base + 1 + int(i / 4)));
+    }
+  }
+  void strings() {
+    switch (r_.below(10)) {
+      case 0: return literal();
+      case 1: return emit(name(Op::TMOVE, Ty::STRING) + " " + str() + " " + str());
+      case 2: {
+        Ty u = other(Op::TCONV, true);
+        return emit(name(Op::TCONV, Ty::STRING, u) + " " + src(u) + " " + str());
+      }
+      case 3: {
+        Ty t = other(Op::TCONV, false);
+        return emit(name(Op::TCONV, t, Ty::STRING) + " " + str() + " " + dst(t));
+      }
+      case 4: {
+        Ty u = other(Op::TLEN, false);
+        return emit(name(Op::TLEN, u, Ty::STRING) + " " + str() + " " + dst(u));
+      }
+      case 5: {
+        Op op = r_.pct(50) ? Op::TLEFT : Op::TRIGHT;
+        Ty u = other(op, true);
+        return emit(name(op, Ty::STRING, u) + " " + str() + " " + num(u) + " " + str());
+      }
+      case 6: return emit(name(Op::TCONCAT, Ty::STRING) + " " + str() + " " + str() + " " + str());
+      case 7: {
+        Ty u = other(Op::TFIND, false);
+        return emit(name(Op::TFIND, u, Ty::STRING) + " " + str() + " " + str() + " " + dst(u));
+      }
+      default: {  // ARGS, then the function that reads it
+        Ty u = Ty::DINT;
+        for (int tries = 0; tries < 40 && !op_takes(Op::TARGS, u, Ty::None); tries++) u = types_[size_t(r_.below(int(types_.size())))];
+        emit(name(Op::TARGS, u) + " " + num(u) + " " + num(u));
+        static const Op kFns[] = {Op::TMID, Op::TDELETE, Op::TINSERT, Op::TREPLACE};
+        Op op = kFns[r_.below(4)];
+        if (op_info(op).nopd == 2) return emit(name(op, Ty::STRING) + " " + str() + " " + str());
+        return emit(name(op, Ty::STRING) + " " + str() + " " + str() + " " + str());
+      }
+    }
+  }
   void action() {
     std::vector<void (TypedGen::*)()> kinds;
     if (on(kGenTArith)) kinds.insert(kinds.end(), 3, &TypedGen::arith);
     if (on(kGenTConv)) kinds.insert(kinds.end(), 2, &TypedGen::conv);
     if (on(kGenTBits)) kinds.insert(kinds.end(), 2, &TypedGen::bits);
     if (on(kGenTArray)) kinds.insert(kinds.end(), 2, &TypedGen::array);
+    if (on(kGenTString)) kinds.insert(kinds.end(), 2, &TypedGen::strings);
     if (kinds.empty() || r_.pct(12)) {  // a bit for later rungs' conditions
       static const char* const kCoils[] = {"OUT", "OUT", "SET", "RST", "OUTN"};
       return emit(std::string(r_.of(kCoils)) + " " + bit_dst());

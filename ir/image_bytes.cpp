@@ -60,6 +60,7 @@ const void* math_fn_address(MathFn f) {
 
 static_assert(kCallTableDisp + 8 * kCallSlots <= 0, "the call table lies below the image");
 static_assert(kMathTableDisp + 8 * kMathSlots == kCallTableDisp, "the typed math table lies right below the REAL one");
+static_assert(kStrSlotDisp + 8 == kMathTableDisp, "the STRING routine's slot lies right below the math table");
 
 void ImageBytes::map(size_t size, Sharing sharing) {
   const size_t page = page_size();
@@ -87,6 +88,8 @@ void ImageBytes::map(size_t size, Sharing sharing) {
     const void* f = math_fn_address(MathFn(k));
     std::memcpy(image_ + kMathTableDisp + 8 * k, &f, sizeof f);
   }
+  const void* str = reinterpret_cast<const void*>(native_string);
+  std::memcpy(image_ + kStrSlotDisp, &str, sizeof str);
   std::memset(image_ + size, kSlackByte, pages * page - size);
   if (mprotect(table, page, PROT_READ) != 0) {
     unmap();

@@ -674,9 +674,10 @@ std::string check_operands(const x86::Decoded& di, uint32_t code_size, const Off
         // functions below the image (ir.h, kCallTableDisp)
         const x86::Mem& m = o.mem;
         const int64_t off = int64_t(m.disp) + f.bias;  // from the image's start
-        // (and the typed instructions' math table right below it, kMathTableDisp)
-        bool table = m.base == f.img && !m.index.valid() && m.size == x86::Size::Qword && off >= kMathTableDisp &&
-                     off < kCallTableDisp + 8 * kCallSlots && (off - kMathTableDisp) % 8 == 0;
+        // (and the typed instructions' math table right below it, kMathTableDisp,
+        // and the STRING routine's slot below that, kStrSlotDisp)
+        bool table = m.base == f.img && !m.index.valid() && m.size == x86::Size::Qword && off >= kStrSlotDisp &&
+                     off < kCallTableDisp + 8 * kCallSlots && (off - kStrSlotDisp) % 8 == 0;
         if (!table) return at(di.offset) + text_of(in) + ": indirect call not through the REAL function table";
         continue;
       }

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "ir/mathfn.h"
 #include "loader/loader.h"
 #include "runtime/runtime.h"
 
@@ -81,7 +82,10 @@ class NativeEngine : public Engine {
  public:
   explicit NativeEngine(CheckedCode code)
       : code_(std::move(code)), fn_(reinterpret_cast<void (*)(uint8_t*)>(static_cast<uint8_t*>(code_.base_) + code_.entry_)) {}
-  void scan(ImageBytes& mem) override { fn_(mem.data()); }
+  void scan(ImageBytes& mem) override {
+    ScanImageScope strings(mem.data(), mem.size());  // the image its STRING instructions work in (ir/mathfn.h)
+    fn_(mem.data());
+  }
 
  private:
   CheckedCode code_;

@@ -214,18 +214,8 @@ TEST(StPrograms, ParseBytes) {
 
 TEST(StPrograms, ParseString) {
   StRun r("parse_string.st");
-  std::string why = r.compare(120, {{"fast", make_fast_interp}, {"the C route", make_c_route}},
-                              [&](int k, const ImageBytes& img) { check_parsed(r, k, img); });
+  std::string why = r.compare(120, kEvery, [&](int k, const ImageBytes& img) { check_parsed(r, k, img); });
   EXPECT_EQ(why, "");
-  // Native code refuses the string functions by name (docs/il.md, "Strings").
-  try {
-    make_native_o2(r.prog);
-    ADD_FAILURE() << "native code took a STRING program";
-  } catch (const std::exception& e) {
-    EXPECT_NE(std::string(e.what()).find("STRING and the string functions run on the interpreters and the C route"),
-              std::string::npos)
-        << e.what();
-  }
 }
 
 TEST(StPrograms, Sequence) {

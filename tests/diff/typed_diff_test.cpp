@@ -49,8 +49,8 @@ GenOptions typed_options(uint64_t seed, bool narrow) {
     std::string err;
     if (!parse_gen_classes(c, o.classes, err)) throw std::invalid_argument("LDC_DIFF_TYPED_CLASSES: " + err);
   }
-  if (narrow) o.classes &= ~kGenT64;  // a 32-bit machine: the 64-bit types are refused by name
-  if (!(o.classes & kGenTyped)) o.classes |= kGenTyped & ~kGenT64;
+  if (narrow) o.classes &= ~(kGenT64 | kGenTString);  // a 32-bit machine: the 64-bit types and STRING are refused by name
+  if (!(o.classes & kGenTyped)) o.classes |= kGenTyped & ~(kGenT64 | kGenTString);
   return o;
 }
 int typed_scans(uint64_t s) { return 20 + int(s % 21); }

@@ -199,7 +199,7 @@ const std::vector<Case>& cases() {
       {"indirect branch: jmp mem", {"jmp qword ptr [rbx-0x40]"}, 0, "indirect branch through memory"},
       {"indirect branch: call through the image", {"call qword ptr [rbx+0x40]"}, 0, "indirect call not through the REAL function table"},
       {"indirect branch: call inside a slot", {"call qword ptr [rbx-0x3c]"}, 0, "indirect call not through the REAL function table"},
-      {"indirect branch: call below the tables", {"call qword ptr [rbx-0x98]"}, 0, "indirect call not through the REAL function table"},
+      {"indirect branch: call below the tables", {"call qword ptr [rbx-0xa0]"}, 0, "indirect call not through the REAL function table"},
       {"indirect branch: call inside a math slot", {"call qword ptr [rbx-0x8c]"}, 0, "indirect call not through the REAL function table"},
       {"indirect branch: call past the table", {"call qword ptr [rbx-0x18]"}, 0, "indirect call not through the REAL function table"},
       {"indirect branch: indexed call into the table", {"call qword ptr [rbx+rcx*8-0x40]"}, 0, "indirect call not through the REAL function table"},
@@ -1065,7 +1065,11 @@ TEST(Guard, TheTableSitsReadOnlyRightBelowTheImage) {
     std::memcpy(&slot, b.data() + kMathTableDisp + 8 * f, 8);
     EXPECT_EQ(slot, uint64_t(reinterpret_cast<uintptr_t>(math_fn_address(MathFn(f))))) << f;
   }
+  uint64_t str;  // the STRING routine's, right below
+  std::memcpy(&str, b.data() + kStrSlotDisp, 8);
+  EXPECT_EQ(str, uint64_t(reinterpret_cast<uintptr_t>(&native_string)));
   EXPECT_DEATH(touch(b.data() + kMathTableDisp, true), "");
+  EXPECT_DEATH(touch(b.data() + kStrSlotDisp, true), "");
   EXPECT_TRUE(b.slack_intact());
   EXPECT_DEATH(touch(b.data() + kCallTableDisp, true), "");  // the table is not writable
   EXPECT_DEATH(touch(b.data() - 1, true), "");
@@ -1161,6 +1165,59 @@ TEST(Sandbox, NativeCodeWithItsCallTableRunsAsInProcess) {
     EXPECT_EQ(a.get_real(1), ::sinf(x));
     EXPECT_TRUE(a.bytes == b.bytes);
   }
+}
+
+// The STRING routine (ir/mathfn.h, native_string) is reached through the
+// math table's Str slot with its arguments in registers, which crafted code
+// sets as it likes: whatever they say, it works only inside the image being
+// scanned.  Each scan below is crafted code the loader accepts (a call through
+// the table is all it needs); the expected effects are the routine's rules.
+TEST(Hostile, TheStringRoutineStaysInTheImage) {
+  Layout L = Layout::standard(0);
+  const uint32_t d0 = L.addr(Area::D, 0), d40 = L.addr(Area::D, 40), size = L.size;
+  const std::string str_slot = "call qword ptr [rbx-" + hex(uint32_t(-kStrSlotDisp)) + "]";
+  auto run = [&](uint32_t desc, uint64_t a0, uint64_t a1, Memory& m) {
+    std::vector<uint32_t> at;
+    std::vector<uint8_t> code = scan_function({"mov esi, " + hex(desc), "mov rdx, " + hex(a0), "mov rcx, " + hex(a1),
+                                               "xor r8d, r8d", str_slot, "mov dword ptr [rbx+" + hex(L.addr(Area::D, 100)) + "], eax"},
+                                              at);
+    ASSERT_EQ(refusal(image_around(code)), "");
+    make_native_engine(map_checked_code(code, 0, L))->scan(m.bytes);
+  };
+  const uint32_t move = native_string_desc(Op::TMOVE, Ty::STRING, Ty::None, 0);
+  Memory m(L);
+  m.set_int(Area::D, 0, 3), m.set_int(Area::D, 1, 0x636261);  // 'abc' in D0..D32
+  run(move, d0, d40, m);                       // a real MOVE.STRING D0 D40: it runs
+  EXPECT_EQ(m.get_int(Area::D, 40), 3);
+  EXPECT_EQ(m.get_int(Area::D, 41), 0x636261);
+  // then every argument hostile: nothing changes but the result cell (0)
+  struct Case {
+    const char* what;
+    uint32_t desc;
+    uint64_t a0, a1;
+  } cases[] = {
+      {"a destination past the image", move, d0, size - 4},
+      {"a destination whose 33 cells end past the image", move, d0, size - 131},
+      {"a destination at 2^32 - 1", move, d0, 0xffffffffu},
+      {"a 64-bit destination", move, d0, 0x100000000ull + d40},
+      {"a source past the image", move, size, d40},
+      {"a constant STRING source", native_string_desc(Op::TMOVE, Ty::STRING, Ty::None, 1), 0x4141, d40},
+      {"an op that is no string instruction", native_string_desc(Op::TADD, Ty::DINT, Ty::None, 0), d0, d40},
+      {"a type the op does not take", native_string_desc(Op::TMOVE, Ty::None, Ty::None, 0) | 0x70u << 8, d0, d40},
+      {"an op past the table", 0xff | 0xc00u << 8, d0, d40},
+      {"bits above the constant mask", move | 1u << 27, d0, d40},
+  };
+  for (const Case& c : cases) {
+    m.set_int(Area::D, 100, 77);
+    Memory before = m;
+    run(c.desc, c.a0, c.a1, m);
+    EXPECT_EQ(m.get_int(Area::D, 100), 0) << c.what;
+    m.set_int(Area::D, 100, 77);
+    EXPECT_TRUE(m.bytes == before.bytes) << c.what;
+    EXPECT_TRUE(m.bytes.slack_intact()) << c.what;
+  }
+  // outside a native scan (no ScanImageScope) the routine has no image: it does nothing
+  EXPECT_EQ(native_string(0, move, d0, d40, 0), 0u);
 }
 
 TEST(Sandbox, ASystemCallIsStoppedAndNamed) {

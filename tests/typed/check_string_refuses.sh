@@ -1,7 +1,6 @@
 #!/bin/sh
 # check_string_refuses.sh BINDIR ENGINE CASE -- the engines that do not run
-# STRING (docs/il.md, "Strings": native x86-64 at every -O level, the C40 and
-# the C40-hosted interpreter) refuse tests/typed/cases/CASE.il by
+# STRING (docs/il.md, "Strings": the C40 and the C40-hosted interpreter) refuse tests/typed/cases/CASE.il by
 # name: a non-zero exit below 128 (no signal) and an `error:` message that
 # names STRING or the string-argument instruction ARGS (the C40-hosted
 # interpreter names the first typed instruction it meets, which may be an
@@ -12,7 +11,6 @@ src=$(cd "$(dirname "$0")" && pwd)/cases/$case.il
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 case "$engine" in
-  native-O*) "$bindir/ldc" "$src" -${engine#native-} -o "$tmp/prog.bin" > "$tmp/out" 2>&1 ;;
   c40sim) "$bindir/ldc" "$src" --target=c40 -o "$tmp/prog.bin" > "$tmp/out" 2>&1 ;;
   *) "$bindir/ldrun" "$src" --engine="$engine" --scans 1 > "$tmp/out" 2>&1 ;;
 esac
