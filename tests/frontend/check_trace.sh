@@ -6,7 +6,7 @@
 # at those levels), c40sim a C40 image on the simulator, c40interp the IL on the
 # C40-hosted interpreter; "source" runs the file on the interpreter, "c" through
 # the C route (ldc --emit=c and the system cc), "fast-source" the file on the fast
-# interpreter (no image: STRING programs, which native code refuses).
+# interpreter (no image).
 # LDC_TRACE_FLAGS: more ldrun options (--fault=continue for a trace that runs
 # on past an index fault).
 set -eu
@@ -24,7 +24,7 @@ if [ "$engine" = source ]; then
   "$bindir/ldrun" "$src" --engine=interp --trace "$base.csv" --watch "$watch" $flags_run > "$tmp/out"
 elif [ "$engine" = c ]; then
   "$bindir/ldrun" "$src" --engine=c --trace "$base.csv" --watch "$watch" $flags_run > "$tmp/out"
-elif [ "$engine" = fast-source ]; then  # the source on the fast interpreter, no image (STRING: docs/il.md)
+elif [ "$engine" = fast-source ]; then  # the source on the fast interpreter, no image
   "$bindir/ldrun" "$src" --engine=fast --trace "$base.csv" --watch "$watch" $flags_run > "$tmp/out"
 else
   case "$engine" in
