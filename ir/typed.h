@@ -324,7 +324,7 @@ constexpr uint32_t kStrMax = 126;   // MatIEC's STR_MAX_LEN
 constexpr uint32_t kStrBytes = 132; // 33 cells
 struct Str {
   uint32_t len = 0;
-  uint8_t body[kStrMax] = {};
+  uint8_t body[kStrMax];  // the first len bytes hold it; nothing reads past them (not cleared: a scan makes many)
 };
 inline Str str_load(const uint8_t* p) {
   Str s;
@@ -381,8 +381,10 @@ inline Str str_mid(const Str& s, int64_t l, int64_t p, bool& error) {
   p -= 1;
   if (l > int64_t(s.len) - p) l = int64_t(s.len) - p;
   if (l > int64_t(kStrMax)) l = kStrMax;
-  for (int64_t i = 0; i < l; i++) r.body[i] = p + i < 0 ? uint8_t(s.len) : s.body[p + i];
-  r.len = uint32_t(l);
+  if (l <= 0) return r;
+  if (p < 0) r.body[0] = uint8_t(s.len), p = 0, r.len = 1, l--;  // body[-1]: the length byte
+  std::memcpy(r.body + r.len, s.body + p, size_t(l));
+  r.len += uint32_t(l);
   return r;
 }
 // CONCAT: as many bytes of each as fit in 126.
@@ -626,7 +628,12 @@ inline bool str_exec(Op op, Ty t, Ty u, uint8_t* const o[], const uint64_t k[], 
   switch (op) {
     case Op::TARGS: args.l = num(0, t), args.p = num(1, t); return false;
     case Op::TMOVE: str_store(o[1], sv(0)); return false;
-    case Op::TLEN: store(t, o[1], norm(t, str_load(o[0]).len)); return false;
+    case Op::TLEN: {  // the length cell alone, clamped as str_load reads it
+      uint32_t n;
+      std::memcpy(&n, o[0], 4);
+      store(t, o[1], norm(t, n > kStrMax ? kStrMax : n));
+      return false;
+    }
     case Op::TFIND: store(t, o[2], norm(t, str_find(sv(0), sv(1)))); return false;
     case Op::TCONV:
       if (t == Ty::STRING) str_store(o[1], to_string(u, o[0] ? load(u, o[0]) : k[0]));
