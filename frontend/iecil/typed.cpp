@@ -1659,9 +1659,39 @@ class Reader {
       return;
     }
     need_bool(op);
+    if (fuse_compare(u == "JMPC")) {
+      go();
+      emit(Op::MPP);
+      return;
+    }
     emit(u == "JMPC" ? Op::LOAD : Op::LOADN, cr_bit());
     go();
     emit(Op::MPP);
+  }
+  // A conditional jump or return right after the compare that made the CR
+  // (`GT.DINT a b  OUT acc  MPP`, apply): the compare's push is the jump's
+  // condition, negated for JMPCN / RETCN (exact but on REAL and LREAL, where
+  // NOT (a <= b) also holds for a NaN: those keep the accumulator), and the
+  // accumulator is not written.  Where the jump is not taken the CR is known
+  // -- FALSE after JMPC, TRUE after JMPCN -- and so it becomes that constant.
+  // Leaves the compare's push for the jump (true), or changes nothing.
+  bool fuse_compare(bool when_true) {
+    if (!rung_ || rung_->code.size() < 3) return false;
+    std::vector<Instr>& c = rung_->code;
+    Instr& cmp = c[c.size() - 3];
+    const Instr &out = c[c.size() - 2], &mpp = c.back();
+    const OpInfo& oi = op_info(cmp.op);
+    if (!(oi.klass == OpClass::Typed && oi.push == 1) || out.op != Op::OUT || mpp.op != Op::MPP || !(out.a[0] == cr_.o))
+      return false;
+    if (!when_true) {
+      if (typed::is_real(cmp.ty)) return false;
+      static const Op kByRel[] = {Op::TEQ, Op::TNE, Op::TLT, Op::TLE, Op::TGT, Op::TGE};  // ops.def's REL order
+      cmp.op = kByRel[int(negate(oi.rel))];
+    }
+    c.pop_back(), c.pop_back();
+    depth_ += 1;  // the OUT left the stack alone; the MPP's pop is undone
+    cr_.o = Operand::typed_const(when_true ? 0 : 1);
+    return true;
   }
 
   // LOOP label (ST's loops only, frontend/st): the back edge to a label
@@ -1692,7 +1722,7 @@ class Reader {
       return;
     }
     need_bool(op);
-    emit(u == "RETC" ? Op::LOAD : Op::LOADN, cr_bit());
+    if (!fuse_compare(u == "RETC")) emit(u == "RETC" ? Op::LOAD : Op::LOADN, cr_bit());
     leave();
     emit(Op::MPP);
   }
