@@ -1000,7 +1000,19 @@ class Writer {
       for (size_t i = 1; i < in.size(); i++) line(c.tok, u, operand(*in[i]));
       return;
     }
-    if (comparison(u)) fail(c.tok, c.tok.text + " of more than two inputs is not compiled; write the compares joined by AND");
+    if (comparison(u)) {  // IEC 61131-3's extensible compare: GT(a, b, c) = a > b AND b > c (MatIEC's too)
+      line(c.tok, u, operand(*in[1]));
+      for (size_t i = 2; i < in.size(); i++) {
+        out_.push_back(word(c.tok, "AND"));
+        out_.push_back(punct(c.tok, "("));
+        append(out_, operand(*in[i - 1]));
+        eol(c.tok);
+        line(c.tok, u, operand(*in[i]));
+        out_.push_back(punct(c.tok, ")"));
+        eol(c.tok);
+      }
+      return;
+    }
     std::vector<Tok> opd;
     for (size_t i = 1; i < in.size(); i++) {
       if (i > 1) opd.push_back(punct(c.tok, ","));
