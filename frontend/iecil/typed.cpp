@@ -18,6 +18,7 @@
 #include "frontend/frontend.h"
 #include "frontend/iecil/iecil.h"
 #include "ir/model.h"
+#include "ir/time_scale.h"
 #include "ir/typed.h"
 
 namespace ldc::iecil {
@@ -1251,6 +1252,12 @@ class Reader {
     if (unary_fn(u) || conversion(u) || u == "TRUNC") return function1(op, u);
     if (auto b = bcd_conversion(u)) return bcd(op, *b);
     if (auto f = time_function(u)) return time_arith(op, *f);
+    if (auto f = time_scaling(u)) {
+      need_cr(op);
+      Tok k = peek();
+      Val v = operand("b");
+      return time_scale(op, f->mul, f->in2, v, k);
+    }
     if (u == "MIN" || u == "MAX" || u == "LIMIT" || u == "SEL" || u == "MUX") return selection(op, u);
     if (is_function(u)) return user_function(op, u);
     static const std::set<std::string> ldc_ops = {"LOAD", "LOADN", "OUT", "OUTN", "SET", "RST", "ANDBLK", "ORBLK", "MPS", "MRD", "MPP"};
@@ -1342,6 +1349,45 @@ class Reader {
     Operand d = acc(f.out);
     typed(f.add ? Op::TADD : Op::TSUB, Ty::LINT, cr_.o, b, d);  // ns: LINT arithmetic on the cells
     set_cr(m_.elem(f.out), d);
+  }
+  // MatIEC's MULTIME / DIVTIME (lib/standard_functions.txt; MUL_TIME / DIV_TIME
+  // as IEC 61131-3's 2nd edition names them), overloaded on IN2's ANY_NUM or
+  // typed (MULTIME_INT ...); in2 None: the operand's type.
+  struct TimeScale {
+    bool mul;
+    Ty in2;
+  };
+  static std::optional<TimeScale> time_scaling(const std::string& u) {
+    for (const char* base : {"MULTIME", "MUL_TIME", "DIVTIME", "DIV_TIME"}) {
+      const std::string b = base;
+      if (u.rfind(b, 0) != 0) continue;
+      const bool mul = b[0] == 'M';
+      if (u.size() == b.size()) return TimeScale{mul, Ty::None};
+      auto t = u[b.size()] == '_' ? ty_from_name(u.substr(b.size() + 1)) : std::nullopt;
+      if (t && any_num(*t)) return TimeScale{mul, *t};
+    }
+    return std::nullopt;
+  }
+  static bool any_num(Ty t) {
+    const TyKind k = ty_info(t).kind;
+    return k == TyKind::Signed || k == TyKind::Unsigned || k == TyKind::Real;
+  }
+  // CR := CR * IN2 or CR / IN2, a TIME by a number (ANY_NUM, as an LREAL), as
+  // MatIEC's __time_mul and __time_div compute it (ir/time_scale.h).
+  void time_scale(const Tok& op, bool mul, Ty in2, const Val& v, const Tok& k) {
+    if (cr_.lit) type_cr(m_.elem(Ty::TIME), op);
+    if (cr_ty() != Ty::TIME) fail(op, op.text + " takes a TIME first, this result is " + m_.type_name(cr_.type));
+    TypeId vt = in2 != Ty::None ? m_.elem(in2) : val_type(v);
+    if (vt == kNoType) vt = m_.elem(Ty::LREAL);  // an untyped number: its value as an LREAL
+    const Ty u = ty_of(vt);
+    if (u == Ty::None || !any_num(u)) fail(k, op.text + " takes a number second (ANY_NUM), '" + k.text + "' is " + a_type(vt));
+    Operand b = value_as(v, vt, k, "b", op.text.c_str());
+    Operand x = scratch("tm.x", Ty::LREAL), d = acc(Ty::TIME);
+    if (u == Ty::LREAL) typed(Op::TMOVE, Ty::LREAL, b, x);
+    else typed(Op::TCONV, Ty::LREAL, b, x, {}, u);
+    auto temp = [&](const char* n, Ty t) { return scratch(std::string("tm.") + n, t); };
+    for (const TypedStep& st : time_scale_steps(mul, cr_.o, x, d, temp)) typed(st.op, st.t, st.a, st.b, st.c, st.u);
+    set_cr(m_.elem(Ty::TIME), d);
   }
   bool is_function(const std::string& u) const {
     int p = m_.find_pou(u);
@@ -1536,6 +1582,10 @@ class Reader {
       typed(o, st, cr_.o, n, d, nst);
       cr_.o = d;
       return;
+    }
+    if ((u == "MUL" || u == "DIV") && st == Ty::TIME) {  // MatIEC's MUL / DIV of (TIME, ANY_NUM)
+      const TypeId vt = val_type(v);
+      if (vt == kNoType || (m_.type(vt).scalar() && any_num(ty_of(vt)))) return time_scale(op, u == "MUL", Ty::None, v, k);
     }
     bool neg = u == "ANDN" || u == "ORN" || u == "XORN";
     std::string base = neg ? u.substr(0, u.size() - 1) : u;

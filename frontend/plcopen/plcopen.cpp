@@ -34,6 +34,7 @@
 #include "frontend/plcopen/st_text.h"
 #include "frontend/plcopen/xml.h"
 #include "ir/model.h"
+#include "ir/time_scale.h"
 #include "ir/typed.h"
 
 namespace ldc {
@@ -2626,17 +2627,11 @@ Val Importer::typed_fn(const std::string& t, const std::string& time_op, const s
     if (type_of(tm) != IT::TIME) fail_type("needs a TIME on IN1, not " + std::string(ty_info(type_of(tm)).name));
     Operand ns = as_type(tm, IT::TIME, el), res = temp_of(IT::TIME, el);
     if (en.k != Cond::True) rung(negate(en, el), tout(Op::TMOVE, IT::TIME, IT::None, {Operand::typed_const(0), res}, el), el);
-    if (k.ty == Ty::Real || type_of(k) == IT::LREAL) {
-      // in floating point, as MatIEC's __time_mul / __time_div: ms as LREAL, then back to ns
-      Operand x = temp_of(IT::LREAL, el), y = as_type(k, IT::LREAL, el);
-      rung(en, tout(Op::TCONV, IT::LREAL, IT::TIME, {ns, x}, el), el);
-      rung(en, tout(time_op == "MUL_TIME" ? Op::TMUL : Op::TDIV, IT::LREAL, IT::None, {x, y, x}, el), el);
-      rung(en, tout(Op::TCONV, IT::TIME, IT::LREAL, {x, res}, el), el);
-    } else {
-      // the ns as a LINT (the same two words), times or by an integer; by 0: 0
-      Operand y = as_type(k, IT::LINT, el);
-      rung(en, tout(time_op == "MUL_TIME" ? Op::TMUL : Op::TDIV, IT::LINT, IT::None, {ns, y, res}, el), el);
-    }
+    // MatIEC's __time_mul / __time_div, IN2 as an LREAL (ir/time_scale.h)
+    Operand y = as_type(k, IT::LREAL, el);
+    auto temp = [&](const char*, IT ty) { return temp_of(ty, el); };
+    for (const TypedStep& st : time_scale_steps(time_op == "MUL_TIME", ns, y, res, temp))
+      rung(en, tout(st.op, st.t, st.u, {st.a, st.b, st.c}, el), el);
     return Val{res, Ty::Wide, IT::TIME};
   }
   if (T == IT::None) T = IT::DINT;
