@@ -87,6 +87,7 @@ struct PouSrc {           // where a POU is written
   size_t body = 0, end = 0;  // its body's tokens, its END_ keyword
   int pou = -1;           // in the model, once declared
   bool declaring = false;
+  std::string kind, name;  // "FUNCTION_BLOCK", as written
 };
 
 // A name in a POU's scope.
@@ -230,7 +231,20 @@ class Reader {
         fail(k, "expected TYPE, FUNCTION_BLOCK, FUNCTION or PROGRAM" + found(k));
       }
     }
-    if (!have_program) fail(t_.back(), "no PROGRAM in the file");
+    if (!have_program) fail(t_.back(), "no PROGRAM in the file" + library_note());
+  }
+  // A file of FUNCTION_BLOCKs, FUNCTIONs and TYPEs alone (a library, as
+  // CODESYS exports one POU per file): what it declares, and what ldc needs.
+  std::string library_note() const {
+    std::vector<const PouSrc*> pous;
+    for (const auto& [key, src] : pou_src_) pous.push_back(&src);
+    std::sort(pous.begin(), pous.end(), [](const PouSrc* a, const PouSrc* b) { return a->head < b->head; });
+    std::string names;
+    for (size_t k = 0; k < pous.size() && k < 3; k++) names += std::string(k ? ", " : "") + pous[k]->kind + " " + pous[k]->name;
+    if (pous.size() > 3) names += " and " + std::to_string(pous.size() - 3) + " more";
+    if (names.empty())
+      return type_src_.empty() ? "" : ": it declares only TYPEs (" + std::to_string(type_src_.size()) + "), which a PROGRAM in the same file would use";
+    return ": it declares " + names + ", which only a PROGRAM in the same file can call (ldc compiles a PROGRAM, or a CONFIGURATION of programs)";
   }
   void scan_types() {
     for (;;) {
@@ -273,6 +287,7 @@ class Reader {
     }
     if (t_[i].kind == Tok::End && !kind.empty()) fail(t_[s.head], kind + " " + name + " without " + end_kw);
     s.end = i;
+    s.kind = kind, s.name = name;
     pos_ = t_[i].kind == Tok::End ? i : i + 1;
     pou_src_[upper(kind.empty() ? "" : name)] = s;
     if (kind == "PROGRAM" || kind.empty()) program_name_ = upper(kind.empty() ? "" : name);
