@@ -207,6 +207,7 @@ struct Var {
   // name -> member); its VAR_IN_OUT names, bound to the caller's variable at
   // each call (by reference).
   std::map<std::string, Var*> members;
+  std::vector<Var*> member_order;  // a structure's members as declared
   std::set<std::string> inouts;
   std::string section;   // the interface section it is declared in (inputVars ...)
   bool frame = false;    // a member of a function call's frame: no alias
@@ -378,8 +379,10 @@ class Importer {
   void type_of_var(Var& u, const Element* te, int depth);
   void struct_members(Var& s, std::vector<std::string>& stack);
   void expand(Var& v, std::vector<std::string>& stack);
-  void array_elements(Var& a);
-  Val element(Var& a, const std::string& idx, const Element* el, bool write);
+  void array_elements(Var& a, std::vector<std::string>& stack);
+  void place_struct_elements(Var& a);
+  Val element(Var& a, const std::string& idx, const std::string& member, const Element* el, bool write);
+  Var& element_member(Var& e, const std::string& member, const std::string& expr, const Element* el);
   std::function<void()> pending_store_;  // a write at a variable index: the statement's last rung
   void statement_of(const Node& n);
   bool eno_gated(const Node& n);
@@ -668,15 +671,17 @@ void Importer::struct_members(Var& s, std::vector<std::string>& stack) {
     Var* raw = u.get();
     keep(std::move(u));
     s.members[key] = raw;
+    s.member_order.push_back(raw);
     expand(*raw, stack);
   }
   stack.pop_back();
 }
 
-// The elements of an array of an elementary type, a[lo] .. a[hi] (a[i,j] for
-// several dimensions), with the initial values of its <arrayValue> (a value
-// with repetitionValue="n" counts n times) in order.
-void Importer::array_elements(Var& a) {
+// The elements of an array of an elementary type or of a structure, a[lo] ..
+// a[hi] (a[i,j] for several dimensions; a structure's members a[i].m), with
+// the initial values of its <arrayValue> (a value with repetitionValue="n"
+// counts n times; a structure's a <structValue>) in order.
+void Importer::array_elements(Var& a, std::vector<std::string>& stack) {
   uint64_t count = 1;
   for (const Element* d : a.array_el->children_named("dimension")) {
     auto num = [&](const char* at) -> int32_t {
@@ -695,12 +700,15 @@ void Importer::array_elements(Var& a) {
   if (a.dims.empty()) fail_at(a.array_el, "array without a dimension (" + a.array_el->path() + ")");
   const Element* bt = a.array_el->child("baseType")->children[0].get();
   std::vector<std::string> inits;
+  std::vector<const Element*> struct_inits;  // an element's <value> holding its <structValue>
   if (const Element* av = a.init_el ? a.init_el->child("arrayValue") : nullptr)
     for (const Element* v : av->children_named("value")) {
       long long rep = v->attr("repetitionValue") ? std::atoll(v->attr("repetitionValue")->c_str()) : 1;
       const Element* sv = v->child("simpleValue");
-      if (!sv || !sv->attr("value") || rep < 1) fail_at(v, "ldc takes arrayValue elements that are simple values (" + v->path() + ")");
-      for (long long r = 0; r < rep && inits.size() < count; r++) inits.push_back(*sv->attr("value"));
+      const bool st = v->child("structValue") != nullptr;
+      if ((!st && (!sv || !sv->attr("value"))) || rep < 1)
+        fail_at(v, "ldc takes arrayValue elements that are simple values or structValues (" + v->path() + ")");
+      for (long long r = 0; r < rep && inits.size() < count; r++) inits.push_back(st ? "" : *sv->attr("value")), struct_inits.push_back(st ? v : nullptr);
       if (inits.size() >= count && rep > 0) break;
     }
   for (uint64_t k = 0; k < count; k++) {
@@ -720,8 +728,16 @@ void Importer::array_elements(Var& a) {
     e->frame = a.frame;
     e->section = "array";
     type_of_var(*e, bt, 0);
+    if (e->struct_el) {  // an array of structures: each element's members, a[k].m
+      if (k < struct_inits.size() && struct_inits[k]) e->init_el = struct_inits[k];
+      Var* raw = e.get();
+      a.elems.push_back(raw);
+      keep(std::move(e));
+      expand(*raw, stack);
+      continue;
+    }
     if (e->ty == Ty::None || e->derived)
-      fail_at(a.array_el, "array '" + a.name + "' of " + e->type + ": ldc takes arrays of elementary types (" + a.array_el->path() + ")");
+      fail_at(a.array_el, "array '" + a.name + "' of " + e->type + ": ldc takes arrays of elementary types and of structures (" + a.array_el->path() + ")");
     if (k < inits.size()) e->init = inits[k];
     a.elems.push_back(e.get());
     keep(std::move(e));
@@ -732,7 +748,33 @@ void Importer::array_elements(Var& a) {
 // here and names its element; a variable one (one dimension) is checked at
 // run time by IDX (a scan fault naming the POU, the line and the index, every
 // engine alike; docs/faults.md) and read by LDX into a temporary.
-Val Importer::element(Var& a, const std::string& idx, const Element* el, bool write) {
+// Member `member` (".m.n", or "") of array element e, as `expr` names it.
+Var& Importer::element_member(Var& e, const std::string& member, const std::string& expr, const Element* el) {
+  Var* v = &e;
+  for (size_t at = 0; at < member.size();) {
+    size_t next = member.find('.', at + 1);
+    std::string seg = trim(member.substr(at + 1, next == std::string::npos ? std::string::npos : next - at - 1));
+    auto it = v->members.find(upper(seg));
+    if (!v->struct_el || it == v->members.end()) {
+      std::string known;
+      for (const auto& [k, mv] : v->members) known += (known.empty() ? "" : ", ") + mv->name.substr(mv->name.rfind('.') + 1);
+      fail_at(el, "'" + expr + "': " + (v->struct_el ? v->type + " has no variable '" + seg + "' (it has " + known + ")"
+                                                     : "'" + v->name + "' is " + v->type + ", not a structure") +
+                      " in " + where(el));
+    }
+    v = it->second;
+    at = next == std::string::npos ? member.size() : next;
+  }
+  if (v->struct_el) fail_at(el, "'" + expr + "' is a whole structure; name one of its members (" + where(el) + ")");
+  return *v;
+}
+
+Val Importer::element(Var& a, const std::string& idx, const std::string& member, const Element* el, bool write) {
+  const std::string expr = a.name + "[" + idx + "]" + member;
+  if (member.empty() && !a.elems.empty() && a.elems[0]->struct_el)
+    fail_at(el, "'" + expr + "' is a whole structure; name one of its members (" + where(el) + ")");
+  if (!member.empty() && !a.elems.empty() && !a.elems[0]->struct_el)
+    fail_at(el, "'" + expr + "': the elements of '" + a.name + "' are " + a.elems[0]->type + ", not structures (" + where(el) + ")");
   std::vector<std::string> parts;
   for (size_t p = 0;;) {
     size_t c = idx.find(',', p);
@@ -761,7 +803,7 @@ Val Importer::element(Var& a, const std::string& idx, const Element* el, bool wr
     k = k * uint64_t(int64_t(hi) - lo + 1) + uint64_t(i - lo);
   }
   if (constant) {
-    Var& e = *a.elems[k];
+    Var& e = element_member(*a.elems[k], member, expr, el);
     if (!e.dev) fail_at(el, "array '" + a.name + "' has no devices");
     Val r = var_val(e);
     return r;
@@ -769,10 +811,19 @@ Val Importer::element(Var& a, const std::string& idx, const Element* el, bool wr
   if (a.dims.size() != 1)
     fail_at(el, "'" + a.name + "[" + idx + "]': ldc takes a variable index into one-dimensional arrays only (" + where(el) + ")");
   if (write && pending_store_) fail_at(el, "'" + a.name + "[" + idx + "]': one element at a variable index per statement (" + where(el) + ")");
-  Var& first = *a.elems[0];
+  Var& first = element_member(*a.elems[0], member, expr, el);
   IT t = first.it;
   Operand base = var_val(first).o;
   uint32_t stride = first.ty == Ty::Wide ? 2 : 1;
+  if (!member.empty() && a.elems.size() > 1) {  // the member of every element, a stride apart
+    stride = element_member(*a.elems[1], member, expr, el).dev->index - first.dev->index;
+    for (size_t j = 0; j < a.elems.size(); j++) {
+      const Var& m = element_member(*a.elems[j], member, expr, el);
+      if (!m.dev || m.dev->dev != first.dev->dev || m.dev->index != first.dev->index + uint32_t(j) * stride)
+        fail_at(el, "'" + expr + "': member " + member.substr(1) + " of its elements does not lie a fixed stride apart, as a variable index needs (" +
+                        where(el) + ")");
+    }
+  }
   Operand r = temp_of(t, el);
   IT it = type_of(vals[0]);
   std::vector<TreeNode> acts;
@@ -795,7 +846,7 @@ Val Importer::element(Var& a, const std::string& idx, const Element* el, bool wr
 // A variable with members: a structure's, or an instance's of the project's FB.
 void Importer::expand(Var& v, std::vector<std::string>& stack) {
   if (v.struct_el) return struct_members(v, stack);
-  if (v.array_el) return array_elements(v);
+  if (v.array_el) return array_elements(v, stack);
   if (!v.derived) return;
   if (const Element* fb = user_pou(v.type)) {
     if (pou_type(fb) != "functionBlock") fail_at(v.el, "variable '" + v.name + "' has the type of FUNCTION '" + v.type + "'; only a FUNCTION_BLOCK has instances");
@@ -943,6 +994,7 @@ void Importer::allocate() {
 
 // An unlocated variable's devices (a standard FB instance: its T, C or M).
 void Importer::place(Var& v) {
+  if (!v.elems.empty() && v.elems[0]->struct_el) return place_struct_elements(v);
   if (!v.elems.empty() && !v.elems[0]->dev) {  // an array: its elements in a row
     Var& e0 = *v.elems[0];
     uint32_t n = uint32_t(v.elems.size()), w = e0.ty == Ty::Wide ? 2 : 1;
@@ -969,6 +1021,34 @@ void Importer::place(Var& v) {
   else if (v.ty == Ty::Int) v.dev = DeviceRef{Dev::D, take(Dev::D, v.el)};
   else if (v.ty == Ty::Wide) v.dev = DeviceRef{Dev::D, take_run(Dev::D, 2, v.el)};
   else if (v.ty == Ty::Real) v.dev = DeviceRef{Dev::F, take(Dev::F, v.el)};
+}
+
+// The scalars of a structure (or an array in one), in declaration order.
+static void scalars(Var& v, std::vector<Var*>& out) {
+  if (v.struct_el) {
+    for (Var* m : v.member_order) scalars(*m, out);
+  } else if (!v.elems.empty()) {
+    for (Var* e : v.elems) scalars(*e, out);
+  } else {
+    out.push_back(&v);
+  }
+}
+
+// An array of structures: each scalar member of every element in a row, one
+// run per member (a[1].m, a[2].m ... a stride of one or two cells apart), so
+// that an IDX + LDX at a variable index reaches the member of any element.
+void Importer::place_struct_elements(Var& a) {
+  std::vector<std::vector<Var*>> of(a.elems.size());
+  for (size_t k = 0; k < a.elems.size(); k++) scalars(*a.elems[k], of[k]);
+  const uint32_t n = uint32_t(a.elems.size());
+  for (size_t j = 0; j < of[0].size(); j++) {
+    const Var& m0 = *of[0][j];
+    if (m0.dev || m0.constant || m0.ty == Ty::None || m0.derived) continue;  // (a standard FB in a structure: placed alone)
+    const uint32_t w = m0.ty == Ty::Wide ? 2 : 1;
+    const Dev d = m0.ty == Ty::Bool ? Dev::M : m0.ty == Ty::Real ? Dev::F : Dev::D;
+    const uint32_t at = take_run(d, n * w, a.el);
+    for (uint32_t k = 0; k < n; k++) of[k][j]->dev = DeviceRef{d, at + k * w};
+  }
 }
 
 Var* Importer::lookup(const std::string& name) {
@@ -1089,7 +1169,8 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
     Area w = word_area(d->dev);
     return {shadowed(Operand{w == Area::F ? OpdKind::Real : OpdKind::Int, w, d->index}), w == Area::F ? Ty::Real : Ty::Int};
   }
-  if (size_t lb = e.find('['); lb != std::string::npos && !e.empty() && e.back() == ']') {  // an array element
+  if (size_t lb = e.find('['), rb = e.find(']'); lb != std::string::npos && rb != std::string::npos && rb > lb &&
+                                                 (rb + 1 == e.size() || e[rb + 1] == '.')) {  // an array element (a[i], a[i].m)
     std::string base = trim(e.substr(0, lb));
     Var* a = nullptr;
     if (base.find('.') == std::string::npos) a = lookup(base);
@@ -1100,7 +1181,7 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
     }
     if (!a) fail_at(el, "unknown variable '" + base + "' in " + where(el));
     if (a->elems.empty()) fail_at(el, "'" + base + "' is not an array; '" + e + "' indexes it (" + where(el) + ")");
-    return element(*a, e.substr(lb + 1, e.size() - lb - 2), el, write);
+    return element(*a, e.substr(lb + 1, rb - lb - 1), e.substr(rb + 1), el, write);
   }
   size_t dot = e.find('.');
   Var* v = nullptr;
