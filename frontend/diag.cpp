@@ -102,7 +102,10 @@ std::string format_diagnostic(const std::string& file, std::string_view text, in
 
 void Diagnostics::emit(Severity s, const std::string& file, int line, int col, const std::string& msg) {
   auto it = texts_.find(file);
-  out_ += format_diagnostic(file, it == texts_.end() ? std::string_view() : it->second, line, col, s, msg);
+  if (it == texts_.end())  // a file whose text is not known: the first line only
+    out_ += file + ":" + std::to_string(line) + ":" + std::to_string(col) + ": " + kind_name(s) + ": " + msg + "\n";
+  else
+    out_ += format_diagnostic(file, it->second, line, col, s, msg);
 }
 
 // Before an error is reported: one past the limit stops the run (so the
