@@ -191,6 +191,11 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
   Diagnostics local(quiet);
   Diagnostics& d = diag ? *diag : local;
   d.source(path, text);
+  struct Forget {  // `text` dies with this call: d must not quote it later
+    Diagnostics& d;
+    const std::string& path;
+    ~Forget() { d.forget(path); }
+  } forget{d, path};
   size_t from = d.text().size();
   int errors0 = d.errors();
   bool ladder = false;  // a ladder program: the ladder warnings apply

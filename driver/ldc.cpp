@@ -38,8 +38,10 @@ static std::string usage() {
 // ldc --project: compile every program of the project, run the configuration
 // system of paper 002 (refusing write conflicts) and, with -o DIR, write one
 // image per task with its 'config' section and the project file that runs them.
-static int write_project(const Project& p, const std::string& outdir) {
-  std::vector<BuiltTask> built = build_project(p);
+static int write_project(const Project& p, const std::string& outdir, Diagnostics& diag, bool syntax_only) {
+  std::vector<BuiltTask> built = build_project(p, &diag);
+  std::fputs(diag.text().c_str(), stderr);  // the warnings (errors were thrown)
+  if (syntax_only) return 0;
   if (outdir.empty()) {
     std::string t = print_configuration(p, built);
     std::fwrite(t.data(), 1, t.size(), stdout);
@@ -57,10 +59,10 @@ static int write_project(const Project& p, const std::string& outdir) {
   return 0;
 }
 
-static int build_project_main(const std::string& project, const std::string& outdir, bool syntax_only) {
-  Project p = parse_project(project);
-  if (syntax_only) return (void)build_project(p), 0;
-  return write_project(p, outdir);
+static int build_project_main(const std::string& project, const std::string& outdir, const DiagOptions& dopt,
+                              bool syntax_only) {
+  Diagnostics diag(dopt);
+  return write_project(parse_project(project), outdir, diag, syntax_only);
 }
 
 static int ldc_main(int argc, char** argv) {
@@ -91,16 +93,20 @@ static int ldc_main(int argc, char** argv) {
   }
   if (!project.empty()) {
     if (!input.empty() || !emit.empty() || !task.empty()) { std::fprintf(stderr, "ldc: error: --project takes no input file, --emit or --task\n%s", usage().c_str()); return 1; }
-    return build_project_main(project, output, syntax_only);
+    return build_project_main(project, output, dopt, syntax_only);
   }
   if (input.empty()) { std::fprintf(stderr, "ldc: error: no input file\n%s", usage().c_str()); return 1; }
   const Target* t = find_target(target);
   if (!t) throw UserError("ldc: error: unknown target '" + target + "' (" + target_names() + ")");
   Diagnostics diag(dopt);
   Compiled c = compile_source(input, emit.empty() && t->host, task, emit == "tree", &diag);  // parse + lower
+  if (c.project) {  // a PLCopen configuration of several tasks
+    Diagnostics pdiag(dopt);  // the reader's warnings are printed with the project's
+    std::fputs(diag.text().c_str(), stderr);
+    return write_project(*c.project, output, pdiag, syntax_only);
+  }
   std::fputs(diag.text().c_str(), stderr);  // the warnings (errors were thrown)
-  if (syntax_only) return c.project ? ((void)build_project(*c.project), 0) : 0;
-  if (c.project) return write_project(*c.project, output);  // a PLCopen configuration of several tasks
+  if (syntax_only) return 0;
   if (emit.empty() || emit == "hex") c.tree = {};  // an image needs only the IL: free the tree before code generation
   std::string text;
   // a CompileError of a stage after the reader, shown at its place in the source

@@ -70,6 +70,8 @@ class Diagnostics {
   const DiagOptions& options() const { return opt_; }
   // The text of `file` that its diagnostics quote (kept by the caller).
   void source(const std::string& file, std::string_view text) { texts_[file] = text; }
+  // ... no longer kept (its diagnostics from here on quote no source line).
+  void forget(const std::string& file) { texts_.erase(file); }
 
   // An error; throws ErrorsReported when it is the -fmax-errors'th.
   void error(const std::string& file, int line, int col, const std::string& msg);
