@@ -267,7 +267,7 @@ class Parser {
   void declarations();
   void declaration(int no);
   void alias_declaration(int no, int col0);
-  size_t rung_end(size_t i, int rail);
+  size_t rung_end(size_t i, int rail, int& misplaced);
   TreeRung rung(size_t first, size_t last, int rail);
   void grid(size_t first, size_t last, int rail);
   void grid_rows(size_t first, int rail);
@@ -341,6 +341,11 @@ void Parser::declaration(int no) {
 // alias = "alias" NAME "=" device [":" TYPE]   ("alias a=X1", "alias a = X1", "alias n = D0 : LINT")
 void Parser::alias_declaration(int no, int col0) {
   std::string_view text = lines_[size_t(no - 1)];
+  // the name as far as it can be read: should the declaration be refused, its uses say nothing more
+  if (words_.size() > 1) {
+    std::string_view first = words_[1].text.substr(0, words_[1].text.find('='));
+    if (is_identifier(first) && !aliases_.count(upper(first))) poisoned_.insert(upper(first));
+  }
   std::string rest = str(trim(text.substr(col0 - 1 + 5)));
   size_t eq = rest.find('=');
   int rest_col = int(text.find(rest, col0 - 1 + 5)) + 1;
@@ -1063,14 +1068,16 @@ TreeRung Parser::rung(size_t first, size_t last, int rail) {
 }
 
 // The rows of the rung starting at line index i: up to the first line whose
-// first non-blank character is not '|'; every row's rail in column `rail`.
-size_t Parser::rung_end(size_t i, int rail) {
+// first non-blank character is not '|'.  Every row's rail must be in column
+// `rail`: the first row whose rail is not is `misplaced` (-1: none), refused
+// when the rung is read.
+size_t Parser::rung_end(size_t i, int rail, int& misplaced) {
   size_t j = i;
+  misplaced = -1;
   while (j < lines_.size()) {
     std::string_view u = trim(lines_[j]);
     if (u.empty() || u[0] != '|') break;
-    int c = indent(lines_[j]);
-    if (c != rail) fail(int(j) + 1, c + 1, "left rail out of line: this rung's rail is in column " + std::to_string(rail + 1));
+    if (indent(lines_[j]) != rail && misplaced < 0) misplaced = int(j);
     j++;
   }
   return j;
@@ -1105,9 +1112,13 @@ TreeProgram Parser::program(const std::function<void(TreeRung&&)>& sink) {
     }
     if (t.empty() || is_comment(t)) { i++; continue; }
     if (t[0] == '|') {
-      size_t j = rung_end(i, col0 - 1);
+      int misplaced;
+      size_t j = rung_end(i, col0 - 1, misplaced);
       if (rungs >= kMaxRungs) fail(no, col0, "too many rungs (at most " + std::to_string(kMaxRungs) + ")");
       recover([&] {  // an error: on to the next rung
+        if (misplaced >= 0)
+          fail(misplaced + 1, indent(lines_[size_t(misplaced)]) + 1,
+               "left rail out of line: this rung's rail is in column " + std::to_string(col0));
         TreeRung r = rung(i, j, col0 - 1);
         r.labels = std::move(labels);
         r.title = std::move(title);
