@@ -10,7 +10,7 @@ const std::vector<WarningInfo>& warning_table() {
   static const std::vector<WarningInfo> table = {
       {"double-coil", true, "one bit driven by the coils of two rungs (or twice in one rung): the last one wins"},
       {"shared-timer", true, "one timer driven by two timer elements, or one counter by two of the same direction"},
-      {"undriven", true, "a timer's or counter's done bit or value read, but no element drives it"},
+      {"undriven", true, "a timer's or counter's done bit read, but no timer or counter element drives it"},
       {"unreachable", true, "rungs that an unconditional (JMP) or (END) always skips"},
       {"shared-output", true, "an output or relay written by two programs of a project that run on one processor"},
       {"unused", false, "an alias that no rung, declaration or label uses"},
