@@ -174,10 +174,32 @@ void configuration(Compiled& c, PlcopenImport& im, const std::string& path, cons
 
 }  // namespace
 
-Compiled compile_source(const std::string& path, bool allow_project, const std::string& task, bool keep_tree) {
+// Everything `d` reported since `from` (its text), as the UserError the tools print.
+static UserError reported(const Diagnostics& d, size_t from) {
+  std::string msg = d.text().substr(from);
+  if (!msg.empty() && msg.back() == '\n') msg.pop_back();
+  return UserError(msg);
+}
+
+Compiled compile_source(const std::string& path, bool allow_project, const std::string& task, bool keep_tree,
+                        Diagnostics* diag) {
   if (!task.empty() && !ends_with(path, ".xml") && !ends_with(path, ".st"))
     throw UserError(path + ": error: --task is for a configuration of several tasks (PLCopen XML or ST)");
   std::string text = read_file(path);
+  DiagOptions quiet;
+  quiet.silent = true;
+  Diagnostics local(quiet);
+  Diagnostics& d = diag ? *diag : local;
+  d.source(path, text);
+  struct Forget {  // `text` dies with this call: d must not quote it later
+    Diagnostics& d;
+    const std::string& path;
+    ~Forget() { d.forget(path); }
+  } forget{d, path};
+  size_t from = d.text().size();
+  int errors0 = d.errors();
+  bool ladder = false;  // a ladder program: the ladder warnings apply
+  bool ldmicro = false;
   Compiled c;
   try {
     if (ends_with(path, ".il")) {
@@ -191,7 +213,7 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
       c.chart = parse_sfc(text, path);
       c.il = lower_chart(*c.chart);
     } else if (text.compare(text.compare(0, 3, "\xEF\xBB\xBF") ? 0 : 3, 7, "LDmicro") == 0) {
-      c.from_ld = true;
+      c.from_ld = ladder = ldmicro = true;
       c.tree = parse_ldmicro(text, path);
       c.il = lower_to_il(c.tree);
     } else if (ends_with(path, ".rtsp")) {
@@ -209,19 +231,25 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
         configuration(c, im, path, text, allow_project, task);
       }
     } else {
-      c.from_ld = true;
+      c.from_ld = ladder = true;
       if (keep_tree) {
-        c.tree = parse_ld(text, path);
+        c.tree = parse_ld(text, path, d);
         c.il = lower_to_il(c.tree);
       } else {
-        c.il = parse_ld_to_il(text, path);
+        c.il = parse_ld_to_il(text, path, d);
       }
     }
+    if (ladder && !c.project) warn_ladder(c.il, d, ldmicro);
   } catch (CompileError& e) {
-    std::string msg = format_error(path, text, e.line, e.col, e.what());
-    if (!msg.empty() && msg.back() == '\n') msg.pop_back();
-    throw UserError(msg);
+    try {
+      d.error(path, e);
+    } catch (ErrorsReported&) {  // -fmax-errors reached
+    }
+    throw reported(d, from);
+  } catch (ErrorsReported&) {
+    throw reported(d, from);
   }
+  if (d.errors() > errors0) throw reported(d, from);  // a warning made an error by -Werror
   return c;
 }
 

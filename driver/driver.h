@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "frontend/diag.h"
 #include "ir/ir.h"
 #include "loader/loader.h"
 
@@ -46,8 +47,13 @@ struct Compiled {
 // `task` picks one task's program of such a configuration (`--task NAME`).
 // Without `keep_tree`, a .ld grid is lowered rung by rung as it is read
 // (parse_ld_to_il) and `tree` stays empty: the whole tree never lives at once.
+// With `diag`, the .ld reader reports every independent error (up to
+// -fmax-errors) and a ladder program gets its warnings (docs/diagnostics.md):
+// they stay in diag.text() for the caller to print; errors are thrown as a
+// UserError holding everything reported.  Without, errors are reported the
+// same way and no warnings are made.
 Compiled compile_source(const std::string& path, bool allow_project = false, const std::string& task = "",
-                        bool keep_tree = false);
+                        bool keep_tree = false, Diagnostics* diag = nullptr);
 
 // read_image_file (loader.h) with its errors as UserError.
 Image load_image_file(const std::string& path);

@@ -20,19 +20,28 @@ using namespace ldc;
 static std::string usage() {
   std::string targets;
   for (const Target& t : ldc::targets()) targets += (targets.empty() ? "" : "|") + std::string(t.name);
+  std::string warnings;
+  for (const WarningInfo& w : warning_table())
+    warnings += std::string("         -W") + w.name + (w.by_default ? " (on)" : " (-Wall)") + ": " + w.about + "\n";
   return "usage: ldc FILE [-o OUT] [--emit=tree|il|iec-il|ld|asm|listing|hex|c] [--target=" + targets + "] [-O0|-O1|-O2]\n"
          "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .st (Structured Text), .xml (PLCopen TC6), .rtsp (paper 000), .sfc (SFC chart)\n"
          "       -O0 templates (paper 003), -O1 peephole, -O2 bit stack in registers; for every target\n"
          "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n"
          "       ldc FILE.xml|FILE.st [-o DIR]   (a configuration of several tasks, PLCopen or ST, is a project, the same way)\n"
-         "       ldc FILE.xml --task NAME ...   (one task's program of such a configuration)\n";
+         "       ldc FILE.xml --task NAME ...   (one task's program of such a configuration)\n"
+         "       ldc FILE   (no -o, no --emit: compile and check only; nothing is written, nothing said on success)\n"
+         "       -fsyntax-only   read and check the source (errors and warnings), no code generated, nothing written\n"
+         "       -Wall -Wname -Wno-name -Werror -Werror=name -w   warnings (docs/diagnostics.md):\n" + warnings +
+         "       -fmax-errors=N   stop after N errors (default 20, 0: no limit)\n";
 }
 
 // ldc --project: compile every program of the project, run the configuration
 // system of paper 002 (refusing write conflicts) and, with -o DIR, write one
 // image per task with its 'config' section and the project file that runs them.
-static int write_project(const Project& p, const std::string& outdir) {
-  std::vector<BuiltTask> built = build_project(p);
+static int write_project(const Project& p, const std::string& outdir, Diagnostics& diag, bool syntax_only) {
+  std::vector<BuiltTask> built = build_project(p, &diag);
+  std::fputs(diag.text().c_str(), stderr);  // the warnings (errors were thrown)
+  if (syntax_only) return 0;
   if (outdir.empty()) {
     std::string t = print_configuration(p, built);
     std::fwrite(t.data(), 1, t.size(), stdout);
@@ -50,16 +59,25 @@ static int write_project(const Project& p, const std::string& outdir) {
   return 0;
 }
 
-static int build_project_main(const std::string& project, const std::string& outdir) {
-  return write_project(parse_project(project), outdir);
+static int build_project_main(const std::string& project, const std::string& outdir, const DiagOptions& dopt,
+                              bool syntax_only) {
+  Diagnostics diag(dopt);
+  return write_project(parse_project(project), outdir, diag, syntax_only);
 }
 
 static int ldc_main(int argc, char** argv) {
   std::string input, output, emit, target(targets().front().name), project, task;
   int opt = 0;
+  bool syntax_only = false;
+  DiagOptions dopt;
   for (int i = 1; i < argc; i++) {
     std::string a = argv[i];
-    if (a == "-o" && i + 1 < argc) output = argv[++i];
+    if (auto why = dopt.parse(a)) {
+      if (!why->empty()) { std::fprintf(stderr, "ldc: error: %s\n", why->c_str()); return 1; }
+      continue;
+    }
+    if (a == "-fsyntax-only") syntax_only = true;
+    else if (a == "-o" && i + 1 < argc) output = argv[++i];
     else if (a.rfind("--emit=", 0) == 0) emit = a.substr(7);
     else if (a.rfind("--target=", 0) == 0) target = a.substr(9);
     else if (a == "--project" && i + 1 < argc) project = argv[++i];
@@ -75,13 +93,20 @@ static int ldc_main(int argc, char** argv) {
   }
   if (!project.empty()) {
     if (!input.empty() || !emit.empty() || !task.empty()) { std::fprintf(stderr, "ldc: error: --project takes no input file, --emit or --task\n%s", usage().c_str()); return 1; }
-    return build_project_main(project, output);
+    return build_project_main(project, output, dopt, syntax_only);
   }
   if (input.empty()) { std::fprintf(stderr, "ldc: error: no input file\n%s", usage().c_str()); return 1; }
   const Target* t = find_target(target);
   if (!t) throw UserError("ldc: error: unknown target '" + target + "' (" + target_names() + ")");
-  Compiled c = compile_source(input, emit.empty() && t->host, task, emit == "tree");  // parse + lower
-  if (c.project) return write_project(*c.project, output);  // a PLCopen configuration of several tasks
+  Diagnostics diag(dopt);
+  Compiled c = compile_source(input, emit.empty() && t->host, task, emit == "tree", &diag);  // parse + lower
+  if (c.project) {  // a PLCopen configuration of several tasks
+    Diagnostics pdiag(dopt);  // the reader's warnings are printed with the project's
+    std::fputs(diag.text().c_str(), stderr);
+    return write_project(*c.project, output, pdiag, syntax_only);
+  }
+  std::fputs(diag.text().c_str(), stderr);  // the warnings (errors were thrown)
+  if (syntax_only) return 0;
   if (emit.empty() || emit == "hex") c.tree = {};  // an image needs only the IL: free the tree before code generation
   std::string text;
   // a CompileError of a stage after the reader, shown at its place in the source
@@ -114,7 +139,7 @@ static int ldc_main(int argc, char** argv) {
     at_source([&] { image = target_image(*t, c.il, input, opt); return std::string(); });
     if (emit == "hex") text = write_intel_hex(write_image(image));
     else {
-      if (output.empty()) throw UserError("ldc: error: an image needs -o FILE (or --emit=hex for text on stdout)");
+      if (output.empty()) return 0;  // `ldc FILE`: compiled and checked, nothing written (docs/diagnostics.md)
       // straight into the file: no copy of the image in memory
       write_file_atomic(output, [&](std::FILE* f) { return write_image_file(image, f) != 0; });
       return 0;

@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 
 #include "driver/driver.h"
 #include "driver/targets.h"
@@ -283,14 +284,17 @@ struct ProgramSource {
       return file + ": error: " + msg + " (IL offset " + std::to_string(il_offset) +
              (line ? ", source line " + std::to_string(line) : std::string()) + ")\n";
     }
-    auto it = std::lower_bound(instr_offset.begin(), instr_offset.end(), il_offset);
-    SrcLoc loc = it != instr_offset.end() && *it == il_offset ? instr_loc[it - instr_offset.begin()] : SrcLoc{};
+    SrcLoc loc = where(il_offset);
     return format_error(file, text, loc.line, loc.col ? loc.col : 1, msg);
+  }
+  SrcLoc where(uint32_t il_offset) const {
+    auto it = std::lower_bound(instr_offset.begin(), instr_offset.end(), il_offset);
+    return it != instr_offset.end() && *it == il_offset ? instr_loc[it - instr_offset.begin()] : SrcLoc{};
   }
 };
 
 // A task's image (compiled, loaded or PLCopen's) and where its IL comes from.
-BuiltTask build_task(const Project& p, const ProjectTask& t, ProgramSource& ps) {
+BuiltTask build_task(const Project& p, const ProjectTask& t, ProgramSource& ps, Diagnostics* diag) {
   const Target& host = host_target();  // the soft PLC runs the tasks on this machine
   BuiltTask b{t, {}};
   ps.file = t.path;
@@ -311,7 +315,7 @@ BuiltTask build_task(const Project& p, const ProjectTask& t, ProgramSource& ps) 
     ps.image = true;
     ps.lines = b.image.lines;
   } else {
-    Compiled c = compile_source(t.path);
+    Compiled c = compile_source(t.path, false, "", false, diag);  // with diag: each program's own warnings
     b.image = target_image(host, c.il, t.path, 0);
     source_of(c.il, read_file(t.path));
   }
@@ -354,15 +358,52 @@ std::string conflict_text(const Project& p, const WriteConflict& c, const std::v
   return msg;
 }
 
+// -Wshared-output: a point of the shared image (Y M K WY) written by two
+// programs of one processor.  The write-conflict check of paper 002 allows
+// it (one processor writes the block), but the task that runs last in a
+// cycle decides the point, so one program's write is lost.  At most
+// kMaxListed points per pair of programs.
+void warn_shared_outputs(const Project& p, const std::vector<ConfigTask>& cts, const std::vector<ProgramSource>& srcs,
+                         Diagnostics& d) {
+  constexpr int kMaxListed = 8;
+  if (!d.wants("shared-output")) return;
+  for (size_t i = 0; i < cts.size(); i++) {
+    std::map<std::pair<Area, uint32_t>, uint32_t> first;  // point -> its first write's IL offset in task i
+    for (const IoAccess& a : cts[i].accesses)
+      if (a.write) first.emplace(std::make_pair(a.area, a.index), a.il_offset);
+    for (size_t j = i + 1; j < cts.size(); j++) {
+      if (cts[j].processor != cts[i].processor || srcs[i].image || srcs[j].image) continue;
+      std::map<std::pair<Area, uint32_t>, bool> told;
+      int listed = 0;
+      for (const IoAccess& a : cts[j].accesses) {
+        auto it = first.find({a.area, a.index});
+        if (!a.write || it == first.end() || told[it->first] || listed >= kMaxListed) continue;
+        told[it->first] = true;
+        listed++;
+        const ProjectTask &ta = p.tasks[i], &tb = p.tasks[j];
+        SrcLoc at = srcs[j].where(a.il_offset), before = srcs[i].where(it->second);
+        d.source(srcs[j].file, srcs[j].text);
+        d.source(srcs[i].file, srcs[i].text);
+        if (d.warning("shared-output", srcs[j].file, at.line, at.col ? at.col : 1,
+                      "'" + tb.program + "' (task " + tb.name + ") writes " + point_name(a.area, a.index) + ", which '" +
+                          ta.program + "' (task " + ta.name + ") writes too, on the same processor " +
+                          std::to_string(ta.processor) + ": the task that runs last decides it"))
+          d.note(srcs[i].file, before.line, before.col ? before.col : 1, "'" + ta.program + "' writes it here");
+      }
+    }
+  }
+  for (const ProgramSource& ps : srcs) d.forget(ps.file);
+}
+
 }  // namespace
 
-std::vector<BuiltTask> build_project(const Project& p) {
+std::vector<BuiltTask> build_project(const Project& p, Diagnostics* diag) {
   std::vector<BuiltTask> built;
   std::vector<ProgramSource> srcs;
   std::vector<ConfigTask> cts;
   for (const ProjectTask& t : p.tasks) {
     ProgramSource ps;
-    built.push_back(build_task(p, t, ps));
+    built.push_back(build_task(p, t, ps, diag));
     cts.push_back(config_task(t, built.back().image));
     srcs.push_back(std::move(ps));
   }
@@ -373,6 +414,10 @@ std::vector<BuiltTask> build_project(const Project& p) {
     msg += p.path + ": error: " + std::to_string(sc.conflicts.size()) + " I/O write conflict" +
            (sc.conflicts.size() == 1 ? "" : "s") + "; the project is refused";
     throw UserError(msg);
+  }
+  if (diag) {
+    warn_shared_outputs(p, cts, srcs, *diag);
+    if (diag->errors()) throw UserError(diag->text().substr(0, diag->text().size() - 1));  // -Werror
   }
   for (size_t i = 0; i < built.size(); i++) built[i].image.config = sc.per_task[i];
   return built;

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "frontend/diag.h"
 #include "ir/ir.h"
 #include "loader/loader.h"
 
@@ -60,7 +61,9 @@ struct BuiltTask {
 // system of paper 002 and attaches each image's 'config' section.  A write
 // conflict is a UserError listing every conflict: the project line, then every
 // writing element as "file:line:col: error: ..." with its source line and a caret.
-std::vector<BuiltTask> build_project(const Project& p);
+// With `diag`, the project's warnings (-Wshared-output, docs/diagnostics.md)
+// go there; one made an error by -Werror is thrown as a UserError with them.
+std::vector<BuiltTask> build_project(const Project& p, Diagnostics* diag = nullptr);
 // The system-level table as text (ldc --project without -o).
 std::string print_configuration(const Project& p, const std::vector<BuiltTask>& built);
 

@@ -10,6 +10,8 @@
 
 namespace ldc {
 
+class Diagnostics;
+
 // Parses a ladder source file into one series/parallel tree per rung, with every
 // device resolved and type-checked.  Throws CompileError (line, col, message).
 TreeProgram parse_ld(std::string_view text, const std::string& filename);
@@ -17,6 +19,17 @@ TreeProgram parse_ld(std::string_view text, const std::string& filename);
 // is read and its tree freed, so the whole tree never lives at once (what an
 // image needs; the IL is the same).
 Program parse_ld_to_il(std::string_view text, const std::string& filename);
+// The same with error recovery: every error goes to `diag` (with -Wunused's
+// warnings), the reader goes on with the next declaration or rung, and a
+// program with errors ends with ErrorsReported (frontend/diag.h).
+TreeProgram parse_ld(std::string_view text, const std::string& filename, Diagnostics& diag);
+Program parse_ld_to_il(std::string_view text, const std::string& filename, Diagnostics& diag);
+// The warnings of a ladder program's IL (-Wdouble-coil, -Wshared-timer,
+// -Wundriven, -Wunreachable; docs/diagnostics.md), at the places its
+// instructions came from in `p.source`.  `named_only`: a double coil only of
+// a device the program names (an importer's own relays, such as LDmicro's
+// master control relay, are driven in several places by design).
+void warn_ladder(const Program& p, Diagnostics& diag, bool named_only = false);
 // ... with names known beforehand (an SFC's aliases and steps); the file may
 // not redefine them.
 TreeProgram parse_ld(std::string_view text, const std::string& filename, const std::vector<Alias>& predefined);

@@ -77,7 +77,8 @@ bool is_identifier(std::string_view s) {
 
 // duration = ["T#" | "TIME#"] { NUMBER unit } | NUMBER unit     unit = d h m s ms
 // Returns milliseconds; sets why and returns false on a malformed duration.
-static bool parse_duration(std::string_view text, int64_t& ms, std::string& why) {
+// `shown` is the constant as the source wrote it (for the messages).
+static bool parse_duration(std::string_view text, std::string_view shown, int64_t& ms, std::string& why) {
   std::string u = upper(text);
   size_t i = 0;
   if (u.rfind("T#", 0) == 0) i = 2;
@@ -88,7 +89,7 @@ static bool parse_duration(std::string_view text, int64_t& ms, std::string& why)
     if (u[i] == '_') { i++; continue; }
     size_t start = i;
     while (i < u.size() && (std::isdigit((unsigned char)u[i]) || u[i] == '.')) i++;
-    if (start == i) { why = "malformed duration '" + std::string(text) + "'"; return false; }
+    if (start == i) { why = "malformed duration '" + std::string(shown) + "'"; return false; }
     double v = std::strtod(u.substr(start, i - start).c_str(), nullptr);
     double scale;
     if (u.compare(i, 2, "MS") == 0) { scale = 1; i += 2; }
@@ -96,13 +97,20 @@ static bool parse_duration(std::string_view text, int64_t& ms, std::string& why)
     else if (i < u.size() && u[i] == 'H') { scale = 3600000; i++; }
     else if (i < u.size() && u[i] == 'M') { scale = 60000; i++; }
     else if (i < u.size() && u[i] == 'S') { scale = 1000; i++; }
-    else { why = "duration '" + std::string(text) + "' needs a unit (ms, s, m, h, d)"; return false; }
+    else if (i == u.size() || u[i] == '_') { why = "duration '" + std::string(shown) + "' needs a unit (ms, s, m, h, d)"; return false; }
+    else {
+      size_t e = i;
+      while (e < u.size() && std::isalpha((unsigned char)u[e])) e++;
+      std::string unit(text.substr(i, std::max<size_t>(e - i, 1)));
+      why = "unknown unit '" + unit + "' in duration '" + std::string(shown) + "' (the units are ms, s, m, h, d)";
+      return false;
+    }
     total += v * scale;
     parts++;
   }
   if (parts == 0) { why = "empty duration"; return false; }
-  if (total != std::floor(total)) { why = "duration '" + std::string(text) + "' is not a whole number of ms"; return false; }
-  if (total > 2147483647.0) { why = "duration '" + std::string(text) + "' is too long (at most 2147483647 ms)"; return false; }
+  if (total != std::floor(total)) { why = "duration '" + std::string(shown) + "' is not a whole number of ms"; return false; }
+  if (total > 2147483647.0) { why = "duration '" + std::string(shown) + "' is too long (at most 2147483647 ms)"; return false; }
   ms = int64_t(total);
   return true;
 }
@@ -117,7 +125,8 @@ std::optional<Operand> parse_constant(std::string_view text, std::string& why) {
   std::string u = upper(s);
   bool neg = false;
   std::string body = u;
-  if (body[0] == '-' || body[0] == '+') { neg = body[0] == '-'; body = body.substr(1); }
+  std::string_view written = s;  // the body as written (the case kept), for durations' messages
+  if (body[0] == '-' || body[0] == '+') { neg = body[0] == '-'; body = body.substr(1); written.remove_prefix(1); }
   if (body.empty()) return std::nullopt;
   auto with_base = [&](const std::string& digits, int base) -> std::optional<Operand> {
     if (digits.empty()) { why = "missing digits in '" + std::string(text) + "'"; return std::nullopt; }
@@ -147,7 +156,7 @@ std::optional<Operand> parse_constant(std::string_view text, std::string& why) {
   if (body.rfind("T#", 0) == 0 || body.rfind("TIME#", 0) == 0) {
     int64_t ms;
     if (neg) { why = "a duration cannot be negative"; return std::nullopt; }
-    if (!parse_duration(body, ms, why)) return std::nullopt;
+    if (!parse_duration(written, text, ms, why)) return std::nullopt;
     Operand o{OpdKind::ConstInt};
     o.ival = int32_t(ms);
     return o;
@@ -172,7 +181,7 @@ std::optional<Operand> parse_constant(std::string_view text, std::string& why) {
   // number with a unit: 500ms, 2s, 1m30s
   int64_t ms;
   std::string dwhy;
-  if (!neg && parse_duration(body, ms, dwhy)) {
+  if (!neg && parse_duration(written, text, ms, dwhy)) {
     Operand o{OpdKind::ConstInt};
     o.ival = int32_t(ms);
     return o;

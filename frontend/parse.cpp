@@ -17,29 +17,16 @@
 #include <functional>
 #include <map>
 #include <numeric>
+#include <set>
 
+#include "frontend/diag.h"
 #include "frontend/frontend.h"
 #include "frontend/operands.h"
 
 namespace ldc {
 
 std::string format_error(const std::string& file, std::string_view text, int line, int col, const std::string& msg) {
-  std::string out = file + ":" + std::to_string(line) + ":" + std::to_string(col) + ": error: " + msg + "\n";
-  // find the line
-  size_t pos = 0;
-  for (int l = 1; l < line && pos != std::string_view::npos; l++) {
-    pos = text.find('\n', pos);
-    if (pos != std::string_view::npos) pos++;
-  }
-  if (pos == std::string_view::npos || pos > text.size()) return out;
-  size_t end = text.find('\n', pos);
-  std::string src(text.substr(pos, end == std::string_view::npos ? std::string_view::npos : end - pos));
-  if (!src.empty() && src.back() == '\r') src.pop_back();
-  out += src + "\n";
-  std::string caret;
-  for (int i = 0; i + 1 < col && i < int(src.size()); i++) caret += src[i] == '\t' ? '\t' : ' ';
-  out += caret + "^\n";
-  return out;
+  return format_diagnostic(file, text, line, col, Severity::Error, msg);
 }
 
 namespace {
@@ -223,10 +210,14 @@ struct Edge {
 
 class Parser {
  public:
-  Parser(std::string_view text, std::string file) : text_(text), file_(std::move(file)) {}
+  // With `diag`, an error is reported there and the reader goes on with the
+  // next declaration or rung (the program then ends with ErrorsReported);
+  // without, the first error is thrown as it is.
+  Parser(std::string_view text, std::string file, Diagnostics* diag = nullptr)
+      : text_(text), file_(std::move(file)), diag_(diag) {}
   // names the file may use without declaring them (not listed in its aliases)
   void predefine(const std::vector<Alias>& names) {
-    for (const Alias& a : names) aliases_[upper(a.name)] = a.dev;
+    for (const Alias& a : names) aliases_[upper(a.name)] = AliasEntry{a.dev, a.name, 0, 0, true};
   }
   // The program; each rung's tree goes to `sink` as it is read (the returned
   // program then has no rungs), or, without a sink, into the program.
@@ -235,13 +226,23 @@ class Parser {
  private:
   struct LabelDef {
     std::string name;
-    int line;
+    int line, col = 1;
+    bool used = false;
+  };
+  struct AliasEntry {
+    DeviceRef dev;
+    std::string name;   // as declared
+    int line, col;      // of its declaration (0: predefined)
+    bool used = false;  // for -Wunused
   };
 
   std::string_view text_;
   std::string file_;
+  Diagnostics* diag_;
+  bool quiet_ = false;  // the error at hand follows from one reported already: not reported
+  std::set<std::string> poisoned_;            // aliases whose declaration had an error (upper case)
   std::vector<std::string_view> lines_;       // line n is lines_[n - 1]
-  std::map<std::string, DeviceRef> aliases_;  // key: upper-case name
+  std::map<std::string, AliasEntry> aliases_;  // key: upper-case name
   std::vector<LabelDef> labels_;
   std::vector<Alias> alias_list_;  // in source order
   std::vector<DeviceRef> retain_;  // `retain Dn` lines, in source order
@@ -266,7 +267,7 @@ class Parser {
   void declarations();
   void declaration(int no);
   void alias_declaration(int no, int col0);
-  size_t rung_end(size_t i, int rail);
+  size_t rung_end(size_t i, int rail, int& misplaced);
   TreeRung rung(size_t first, size_t last, int rail);
   void grid(size_t first, size_t last, int rail);
   void grid_rows(size_t first, int rail);
@@ -287,6 +288,10 @@ class Parser {
   TreeNode output_element(std::string_view inner, int line, int col, int rung_line);
 
   const DeviceRef* alias(std::string_view name);
+  [[noreturn]] void unknown_name(const Word& w);
+  bool recover(const std::function<void()>& read);
+  void report(int line, int col, const std::string& msg);
+  void warn_unused();
   DeviceRef device(const Word& w);
   Operand bit(const Word& w, char sig);
   Operand value(const Word& w, char sig);
@@ -305,7 +310,7 @@ void Parser::declarations() {
     rung_count_ += row && !in_rung;
     in_rung = row;
     if (t.empty() || is_comment(t) || row || is_title(t)) continue;
-    declaration(int(i) + 1);
+    recover([&] { declaration(int(i) + 1); });
   }
 }
 
@@ -320,8 +325,8 @@ void Parser::declaration(int no) {
     if (w.size() != 2 || !is_identifier(w[1].text)) fail(no, col0, "expected: label NAME");
     for (auto& d : labels_)
       if (iequals(d.name, w[1].text))
-        fail(no, w[1].col, "duplicate label '" + str(w[1].text) + "' (first defined on line " + std::to_string(d.line) + ")");
-    labels_.push_back({str(w[1].text), no});
+        throw NotedError(no, w[1].col, "duplicate label '" + str(w[1].text) + "'", {{d.line, d.col, "first defined here"}});
+    labels_.push_back({str(w[1].text), no, w[1].col});
   } else if (iequals(w[0].text, "RETAIN")) {
     // retain = "retain" D-word : the word keeps its value across restarts (docs/il.md, .retain)
     if (w.size() != 2) fail(no, col0, "expected: retain Dn");
@@ -336,6 +341,11 @@ void Parser::declaration(int no) {
 // alias = "alias" NAME "=" device [":" TYPE]   ("alias a=X1", "alias a = X1", "alias n = D0 : LINT")
 void Parser::alias_declaration(int no, int col0) {
   std::string_view text = lines_[size_t(no - 1)];
+  // the name as far as it can be read: should the declaration be refused, its uses say nothing more
+  if (words_.size() > 1) {
+    std::string_view first = words_[1].text.substr(0, words_[1].text.find('='));
+    if (is_identifier(first) && !aliases_.count(upper(first))) poisoned_.insert(upper(first));
+  }
   std::string rest = str(trim(text.substr(col0 - 1 + 5)));
   size_t eq = rest.find('=');
   int rest_col = int(text.find(rest, col0 - 1 + 5)) + 1;
@@ -347,7 +357,11 @@ void Parser::alias_declaration(int no, int col0) {
   if (parse_device(name) || parse_iec_address(name, why) || is_keyword(name))
     fail(no, rest_col, "'" + name + "' cannot be an alias name: it is a device or a keyword");
   std::string key = upper(name);
-  if (aliases_.count(key)) fail(no, rest_col, "alias '" + name + "' is already defined");
+  if (auto it = aliases_.find(key); it != aliases_.end())
+    throw NotedError(no, rest_col, "alias '" + name + "' is already defined",
+                     it->second.line ? std::vector<DiagNote>{{it->second.line, it->second.col, "first defined here"}}
+                                     : std::vector<DiagNote>{});
+  poisoned_.insert(key);  // until the declaration is read: its uses then say nothing more
   if (target.empty()) fail(no, rest_col + int(eq) + 1, "expected a device after '='");
   int tcol = int(text.rfind(target)) + 1;
   Ty ty = Ty::None;  // "= D0 : LINT": the variable's type (docs/format.md)
@@ -360,11 +374,17 @@ void Parser::alias_declaration(int no, int col0) {
     target = trim(target.substr(0, colon));
     if (target.empty()) fail(no, tcol, "expected a device before ':'");
   }
+  DeviceRef dev;
   try {
-    aliases_[key] = device(Word{target, tcol});
-  } catch (CompileError& e) { fail(no, e.col, e.what()); }
-  Alias a{name, aliases_[key], ty};
+    dev = device(Word{target, tcol});
+  } catch (CompileError& e) {
+    e.line = no;
+    throw;
+  }
+  Alias a{name, dev, ty};
   if (std::string why = alias_type_problem(a); !why.empty()) fail(no, tcol, why);
+  aliases_[key] = AliasEntry{dev, name, no, rest_col};
+  poisoned_.erase(key);
   alias_list_.push_back(std::move(a));
 }
 
@@ -373,15 +393,65 @@ const DeviceRef* Parser::alias(std::string_view name) {
   key_.assign(name);
   for (char& c : key_) c = upper_ascii(c);
   auto it = aliases_.find(key_);
-  return it == aliases_.end() ? nullptr : &it->second;
+  if (it == aliases_.end()) return nullptr;
+  it->second.used = true;
+  return &it->second.dev;
+}
+
+std::string spell(DeviceRef d) { return std::string(dev_name(d.dev)) + std::to_string(d.index); }
+
+// "; did you mean '%IX0.1' (X1)?" for `I0.1`: the IEC direct address a
+// name written without its '%' (or without the X of a bit) looks like; `Q7`
+// (another PLC's output 7) is ldc's Y7.
+std::string iec_hint(std::string_view text) {
+  std::vector<std::string> tries = {"%" + str(text)};
+  char c0 = text.empty() ? 0 : upper_ascii(text[0]);
+  if ((c0 == 'I' || c0 == 'Q' || c0 == 'M') && text.size() > 1 && text[1] >= '0' && text[1] <= '9' &&
+      text.find('.') != std::string_view::npos)
+    tries.push_back("%" + std::string(1, c0) + "X" + str(text.substr(1)));
+  for (const std::string& t : tries) {
+    std::string why;
+    auto d = parse_iec_address(t, why);
+    if (d && d->index < device_count(d->dev)) return "; did you mean '" + upper(t) + "' (" + spell(*d) + ")?";
+  }
+  // I5 and Q5 in other PLCs' spelling are ldc's X5 and Y5
+  if ((c0 == 'I' || c0 == 'Q') && text.size() > 1 && text.find_first_not_of("0123456789", 1) == std::string_view::npos) {
+    auto d = parse_device(std::string(c0 == 'I' ? "X" : "Y") + str(text.substr(1)));
+    if (d && d->index < device_count(d->dev))
+      return "; did you mean '" + spell(*d) + "' (" + (c0 == 'I' ? "inputs" : "outputs") + " are " + dev_name(d->dev) + " devices)?";
+  }
+  return "";
+}
+
+// An unknown name: the alias it is a typo of (within an edit distance of
+// 2), or the IEC address it looks like.  A name whose alias declaration had
+// an error says nothing more (the error is reported already).
+void Parser::unknown_name(const Word& w) {
+  std::string msg = "unknown device or alias '" + str(w.text) + "'";
+  if (poisoned_.count(upper(w.text))) {
+    quiet_ = true;
+    fail(0, w.col, msg);
+  }
+  std::vector<std::string> names;
+  for (const auto& [key, a] : aliases_) names.push_back(a.name);
+  if (std::string near = closest_name(w.text, names); !near.empty()) {
+    const AliasEntry& a = aliases_.at(upper(near));
+    std::vector<DiagNote> notes;
+    if (a.line) notes.push_back({a.line, a.col, "'" + a.name + "' declared here"});
+    throw NotedError(0, w.col, msg + "; did you mean '" + near + "'?", notes);
+  }
+  fail(0, w.col, msg + iec_hint(w.text));
 }
 
 DeviceRef Parser::device(const Word& w) {
   if (const DeviceRef* d = alias(w.text)) return *d;
-  return resolve_device_spelling(w.text, w.col, "device or alias");
+  try {
+    return resolve_device_spelling(w.text, w.col, "device or alias");
+  } catch (CompileError& e) {
+    if (std::string_view(e.what()).starts_with("unknown device or alias")) unknown_name(w);
+    throw;
+  }
 }
-
-std::string spell(DeviceRef d) { return std::string(dev_name(d.dev)) + std::to_string(d.index); }
 
 // A bit operand: 'b' readable, 'w' writable.
 Operand Parser::bit(const Word& w, char sig) {
@@ -408,7 +478,8 @@ Operand Parser::value(const Word& w, char sig) {
   bool named = al || spelled || w.text[0] == '%';
   if (!named) {
     auto c = parse_constant(w.text, why);
-    if (!c) fail(0, w.col, why.empty() ? "unknown device or alias '" + str(w.text) + "'" : why);
+    if (!c && why.empty()) unknown_name(w);
+    if (!c) fail(0, w.col, why);
     if (sig == 'd') fail(0, w.col, "a constant cannot be a destination");
     if (sig == 'i' && c->kind == OpdKind::ConstReal) fail(0, w.col, "INT32 needed here, not the REAL constant " + str(w.text));
     return *c;
@@ -470,7 +541,10 @@ TreeNode Parser::input_element(std::string_view inner, int line, int col) {
     try {
       n.elem.a[0] = value(lhs[0], 'v');
       n.elem.a[1] = value(rhs[0], 'v');
-    } catch (CompileError& e) { fail(line, e.col, e.what()); }
+    } catch (CompileError& e) {
+      e.line = line;
+      throw;
+    }
     n.text.reserve(lhs[0].text.size() + len + rhs[0].text.size() + 2);
     n.text.append(lhs[0].text).append(" ").append(inner.substr(opos, len)).append(" ").append(rhs[0].text);
     return n;
@@ -500,7 +574,10 @@ TreeNode Parser::input_element(std::string_view inner, int line, int col) {
     } else {
       fail(0, col, "cannot read contact [" + str(inner) + "]; expected [X1], [/X1], [P X1], [N X1] or a compare like [D0 > 100]");
     }
-  } catch (CompileError& e) { fail(line, e.col, e.what()); }
+  } catch (CompileError& e) {
+    e.line = line;
+    throw;
+  }
   return n;
 }
 
@@ -567,10 +644,19 @@ TreeNode Parser::output_element(std::string_view inner, int line, int col, int r
     } else if (kw == "JMP") {
       want(2, "JMP label");
       in.op = Op::JMP;
-      const LabelDef* def = nullptr;
+      LabelDef* def = nullptr;
       for (auto& d : labels_)
         if (iequals(d.name, w[1].text)) def = &d;
-      if (!def) fail(0, w[1].col, "undefined label '" + str(w[1].text) + "'");
+      if (!def) {
+        std::vector<std::string> names;
+        for (auto& d : labels_) names.push_back(d.name);
+        std::string near = closest_name(w[1].text, names);
+        std::vector<DiagNote> notes;
+        for (auto& d : labels_)
+          if (d.name == near) notes.push_back({d.line, d.col, "'" + near + "' defined here"});
+        throw NotedError(0, w[1].col, "undefined label '" + str(w[1].text) + "'" + (near.empty() ? "" : "; did you mean '" + near + "'?"), notes);
+      }
+      def->used = true;
       if (def->line < rung_line) fail(0, w[1].col, "backward jump to label '" + str(w[1].text) + "' (line " + std::to_string(def->line) + "); jumps go forward only");
       in.a[0].kind = OpdKind::Label;
       in.a[0].label = def->name;
@@ -604,7 +690,10 @@ TreeNode Parser::output_element(std::string_view inner, int line, int col, int r
     } else {
       fail(0, col, "unknown output element (" + str(inner) + ")");
     }
-  } catch (CompileError& e) { fail(line, e.col, e.what()); }
+  } catch (CompileError& e) {
+    e.line = line;
+    throw;
+  }
   return n;
 }
 
@@ -723,6 +812,22 @@ void Parser::grid_right_rails(size_t first) {
   }
 }
 
+// A dangling '+' or '|' at (r, c): most often the '+' or '|' it should join
+// is drawn a column or two off in the row above or below; the note points at it.
+[[noreturn]] void fail_near_link(const Grid& g, int line0, int r, int c, const std::string& msg) {
+  for (int dr : {-1, 1})
+    for (int dc : {-1, 1, -2, 2}) {
+      int rr = r + dr, cc = c + dc;
+      if (rr < 0 || rr >= g.rows || cc <= g.rail || !g.vertical(rr, cc) || g.vertical(r, cc)) continue;
+      const char* what = g.at(rr, cc) == Cell::Junction ? "'+'" : "'|'";
+      throw NotedError(line0 + r, c + 1, msg,
+                       {{line0 + rr, cc + 1, std::string("the ") + what + (dr < 0 ? " above" : " below") + " is in column " +
+                                                 std::to_string(cc + 1) + ", not " + std::to_string(c + 1) +
+                                                 "; a vertical link joins '+' and '|' of the same column"}});
+    }
+  fail(line0 + r, c + 1, msg);
+}
+
 // Every wire end, junction and vertical link must connect to something.
 void Parser::check_cells(const Grid& g, int line0) {
   auto left_ok = [&](int r, int c) {  // something on the left of column c feeds it
@@ -746,10 +851,10 @@ void Parser::check_cells(const Grid& g, int line0) {
       } else if (k == Cell::Junction) {
         int links = (c > g.rail + 1 && left_ok(r, c)) + right_ok(r, c) + g.vertical(r - 1, c) + g.vertical(r + 1, c);
         if (g.out_ends(r, c - 1)) fail(no, c + 1, "a branch cannot start after an output");
-        if (links < 2) fail(no, c + 1, "dangling junction: '+' must join at least two wires");
+        if (links < 2) fail_near_link(g, line0, r, c, "dangling junction: '+' must join at least two wires");
       } else if (k == Cell::Vert) {
         if (!g.vertical(r - 1, c) || !g.vertical(r + 1, c))
-          fail(no, c + 1, "dangling vertical link: '|' must connect '+' or '|' above and below");
+          fail_near_link(g, line0, r, c, "dangling vertical link: '|' must connect '+' or '|' above and below");
       } else if (g.token_starts(r, c)) {
         const Token& t = g.token(r, c);
         if (g.out_ends(r, c - 1)) fail(no, c + 1, t.output ? "outputs cannot be in series" : "an element cannot follow an output");
@@ -963,14 +1068,16 @@ TreeRung Parser::rung(size_t first, size_t last, int rail) {
 }
 
 // The rows of the rung starting at line index i: up to the first line whose
-// first non-blank character is not '|'; every row's rail in column `rail`.
-size_t Parser::rung_end(size_t i, int rail) {
+// first non-blank character is not '|'.  Every row's rail must be in column
+// `rail`: the first row whose rail is not is `misplaced` (-1: none), refused
+// when the rung is read.
+size_t Parser::rung_end(size_t i, int rail, int& misplaced) {
   size_t j = i;
+  misplaced = -1;
   while (j < lines_.size()) {
     std::string_view u = trim(lines_[j]);
     if (u.empty() || u[0] != '|') break;
-    int c = indent(lines_[j]);
-    if (c != rail) fail(int(j) + 1, c + 1, "left rail out of line: this rung's rail is in column " + std::to_string(rail + 1));
+    if (indent(lines_[j]) != rail && misplaced < 0) misplaced = int(j);
     j++;
   }
   return j;
@@ -980,6 +1087,8 @@ size_t Parser::rung_end(size_t i, int rail) {
 // title   = "rung" STRING         (directly above its rung)
 // rung    = row { row }           (first non-blank character '|', all in one column)
 TreeProgram Parser::program(const std::function<void(TreeRung&&)>& sink) {
+  int errors0 = diag_ ? diag_->errors() : 0;
+  if (diag_) diag_->source(file_, text_);
   read_lines();
   declarations();
   TreeProgram p;
@@ -996,21 +1105,30 @@ TreeProgram Parser::program(const std::function<void(TreeRung&&)>& sink) {
     int no = int(i) + 1;
     std::string_view t = trim(text);
     int col0 = indent(text) + 1;
-    if (title_line && (t.empty() || t[0] != '|'))
-      fail(title_line, 1, "a rung title must be directly above its rung");
+    if (title_line && (t.empty() || t[0] != '|')) {
+      report(title_line, 1, "a rung title must be directly above its rung");
+      title_line = 0;
+      title.clear();
+    }
     if (t.empty() || is_comment(t)) { i++; continue; }
     if (t[0] == '|') {
-      size_t j = rung_end(i, col0 - 1);
+      int misplaced;
+      size_t j = rung_end(i, col0 - 1, misplaced);
       if (rungs >= kMaxRungs) fail(no, col0, "too many rungs (at most " + std::to_string(kMaxRungs) + ")");
-      TreeRung r = rung(i, j, col0 - 1);
-      r.labels = std::move(labels);
+      recover([&] {  // an error: on to the next rung
+        if (misplaced >= 0)
+          fail(misplaced + 1, indent(lines_[size_t(misplaced)]) + 1,
+               "left rail out of line: this rung's rail is in column " + std::to_string(col0));
+        TreeRung r = rung(i, j, col0 - 1);
+        r.labels = std::move(labels);
+        r.title = std::move(title);
+        if (sink) sink(std::move(r));
+        else p.rungs.push_back(std::move(r));
+      });
       labels.clear();
-      r.title = std::move(title);
       title.clear();
       title_line = 0;
       rungs++;
-      if (sink) sink(std::move(r));
-      else p.rungs.push_back(std::move(r));
       i = j;
       continue;
     }
@@ -1019,22 +1137,74 @@ TreeProgram Parser::program(const std::function<void(TreeRung&&)>& sink) {
     else if (iequals(words_[0].text, "RUNG")) {
       size_t q1 = text.find('"'), q2 = text.rfind('"');
       if (q1 == std::string_view::npos || q2 == q1 || !trim(text.substr(q2 + 1)).empty() ||
-          !iequals(trim(text.substr(0, q1)), "RUNG"))
-        fail(no, col0, "expected: rung \"title\"");
-      title = str(text.substr(q1 + 1, q2 - q1 - 1));
-      title_line = no;
+          !iequals(trim(text.substr(0, q1)), "RUNG")) {
+        report(no, col0, "expected: rung \"title\"");
+      } else {
+        title = str(text.substr(q1 + 1, q2 - q1 - 1));
+        title_line = no;
+      }
     }
     i++;
   }
-  if (title_line) fail(title_line, 1, "a rung title must be directly above its rung");
+  if (title_line) report(title_line, 1, "a rung title must be directly above its rung");
   p.end_labels = std::move(labels);
-  if (rungs == 0) fail(std::max(1, int(lines_.size())), 1, "no rungs in this program");
+  if (rungs == 0) report(std::max(1, int(lines_.size())), 1, "no rungs in this program");
+  if (diag_ && diag_->errors() > errors0) throw ErrorsReported();
+  warn_unused();
   return p;
+}
+
+// Reads one declaration or rung; an error is thrown (no diagnostics) or
+// reported, and the caller goes on after what `read` covers.
+bool Parser::recover(const std::function<void()>& read) {
+  if (!diag_) {
+    read();
+    return true;
+  }
+  try {
+    read();
+    return true;
+  } catch (CompileError& e) {
+    if (!quiet_) diag_->error(file_, e);
+    quiet_ = false;
+    return false;
+  }
+}
+
+void Parser::report(int line, int col, const std::string& msg) {
+  recover([&] { fail(line, col, msg); });
+}
+
+// -Wunused, -Wunused-label: names the program declares and never uses.
+void Parser::warn_unused() {
+  if (!diag_) return;
+  if (diag_->wants("unused"))
+    for (const Alias& a : alias_list_) {
+      const AliasEntry& e = aliases_.at(upper(a.name));
+      if (!e.used) diag_->warning("unused", file_, e.line, e.col, "alias '" + e.name + "' is never used");
+    }
+  if (diag_->wants("unused-label"))
+    for (const LabelDef& l : labels_)
+      if (!l.used) diag_->warning("unused-label", file_, l.line, l.col, "label '" + l.name + "' is never jumped to");
 }
 
 }  // namespace
 
 TreeProgram parse_ld(std::string_view text, const std::string& filename) { return Parser(text, filename).program(); }
+
+TreeProgram parse_ld(std::string_view text, const std::string& filename, Diagnostics& diag) {
+  return Parser(text, filename, &diag).program();
+}
+
+Program parse_ld_to_il(std::string_view text, const std::string& filename, Diagnostics& diag) {
+  Program il;
+  TreeProgram head = Parser(text, filename, &diag).program([&](TreeRung&& r) { lower_rung(r, il); });
+  il.source = std::move(head.source);
+  il.aliases = std::move(head.aliases);
+  il.end_labels = std::move(head.end_labels);
+  il.retain = std::move(head.retain);
+  return il;
+}
 
 Program parse_ld_to_il(std::string_view text, const std::string& filename) {
   Program il;

@@ -15,6 +15,7 @@
 #include <map>
 #include <set>
 
+#include "frontend/diag.h"
 #include "frontend/frontend.h"
 #include "frontend/iecil/iecil.h"
 #include "ir/model.h"
@@ -1000,6 +1001,24 @@ class Reader {
     v.ref = path(k, key);
     return v;
   }
+  // "unknown variable 'strat'; did you mean 'start'?" with a note at the
+  // declaration of the variable of the scope the name is a typo of
+  // (docs/diagnostics.md); the compiler's own temporaries (__...) are not offered.
+  [[noreturn]] void unknown_variable(const Tok& k, const std::string& name) {
+    std::string msg = "unknown variable '" + name + "'" + (scope_->pou == program_ ? "" : " in " + m_.pous[size_t(scope_->pou)].name);
+    std::vector<std::string> names;
+    for (const auto& [n, r] : scope_->names)
+      if (!n.starts_with("__")) names.push_back(n);
+    std::string near = closest_name(name, names);
+    if (near.empty()) fail(k, msg);
+    std::vector<DiagNote> notes;
+    for (const Var& v : m_.pous[size_t(scope_->pou)].vars)
+      if (upper(v.name) == near) {
+        near = v.name;  // as declared
+        if (v.loc.line > 0) notes.push_back({v.loc.line, v.loc.col, "'" + v.name + "' declared here"});
+      }
+    throw NotedError(k.line, k.col, msg + "; did you mean '" + near + "'?", notes);
+  }
   model::Ref path(const Tok& k, const std::string& key) {
     Nest nest(nesting_, k);
     std::vector<std::string> parts;
@@ -1014,7 +1033,7 @@ class Reader {
     } else if (text[0] == '%' || (parse_device(text) && parts.size() == 1)) {
       return device(k);
     } else {
-      fail(k, "unknown variable '" + parts[0] + "'" + (scope_->pou == program_ ? "" : " in " + m_.pous[size_t(scope_->pou)].name));
+      unknown_variable(k, parts[0]);
     }
     SrcLoc at = loc(k);
     for (size_t i = 1; i < parts.size(); i++) {

@@ -1,14 +1,58 @@
-// Fuzz the .ld grid reader: parse_ld, print_tree, lower_to_il, print_il_text.
+// Fuzz the .ld grid reader: parse_ld, print_tree, lower_to_il, print_il_text;
+// then the reader with error recovery (docs/diagnostics.md) and the ladder
+// warnings on what it accepts.  With recovery, an input is either accepted
+// (no error reported) or ends in ErrorsReported with 1..-fmax-errors errors
+// reported, each a located "error:" line; anything else aborts.
+#include <cstdlib>
+#include <string>
+
+#include "frontend/diag.h"
 #include "frontend/frontend.h"
 #include "tests/fuzz/fuzz_common.h"
 
+namespace {
+
+constexpr int kMaxErrors = 5;
+
+// Every "error:" line of the report is one counted error (the cascade stays
+// within the limit: at most kMaxErrors, then the fatal line).
+void check_report(const ldc::Diagnostics& d) {
+  const std::string& t = d.text();
+  int lines = 0;
+  for (size_t p = t.find(": error: "); p != std::string::npos; p = t.find(": error: ", p + 1)) lines++;
+  bool fatal = t.ends_with("fatal error: too many errors emitted, stopping now [-fmax-errors=" + std::to_string(kMaxErrors) + "]\n");
+  if (d.errors() < 1 || d.errors() > kMaxErrors || lines < d.errors() || (fatal && d.errors() != kMaxErrors)) std::abort();
+}
+
+}  // namespace
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  std::string_view text = LDC_FUZZ_TEXT(data, size);
+  bool first_error = false;
   try {
-    ldc::TreeProgram t = ldc::parse_ld(LDC_FUZZ_TEXT(data, size), "fuzz.ld");
+    ldc::TreeProgram t = ldc::parse_ld(text, "fuzz.ld");
     (void)ldc::print_tree(t);
     ldc::Program p = ldc::lower_to_il(t);
     (void)ldc::print_il_text(p);
   } catch (const ldc::CompileError&) {
+    first_error = true;
+  }
+  ldc::DiagOptions o;
+  o.all = true;
+  o.max_errors = kMaxErrors;
+  ldc::Diagnostics d(o);
+  try {
+    ldc::Program p = ldc::parse_ld_to_il(text, "fuzz.ld", d);
+    ldc::warn_ladder(p, d);
+    // accepted with recovery exactly when accepted without it (bar the lowering's own
+    // refusal of a rung too deeply nested, which both report)
+    if (first_error || d.errors() != 0) std::abort();
+  } catch (const ldc::ErrorsReported&) {
+    if (!first_error) std::abort();
+    check_report(d);
+  } catch (const ldc::CompileError&) {
+    // lower_rung's refusal, thrown from the sink (the reader reports it as an error too)
+    if (!first_error) std::abort();
   }
   return 0;
 }

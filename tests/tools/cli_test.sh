@@ -88,6 +88,20 @@ if [ -e "$tmp/shared.c" ]; then bad "C output left behind after an error"; else 
 expect_fail "ldrun C route, shared stack" "shared.il:6:5: error: the C route cannot compile ORBLK" "$bin/ldrun" "$tmp/shared.il" --engine=c
 "$bin/ldrun" "$tmp/shared.il" -O2 --scans 1 > /dev/null && ok || bad "native -O2 on a shared stack"
 
+# diagnostics options (docs/diagnostics.md; the cases themselves are tests/frontend/diagnostics)
+expect_fail "unknown -W name" "ldc: error: unknown warning option '-Wdouble-coils'; did you mean '-Wdouble-coil'?" \
+  "$bin/ldc" "$src/examples/motor.ld" -Wdouble-coils
+expect_fail "bad -fmax-errors" "bad -fmax-errors value 'many'" "$bin/ldc" "$src/examples/motor.ld" -fmax-errors=many
+# `ldc FILE` with neither -o nor --emit: compiled and checked, nothing written, nothing said
+mkdir "$tmp/quiet"
+(cd "$tmp/quiet" && "$bin/ldc" "$src/examples/motor.ld" > "$tmp/quiet.out" 2>&1) && [ ! -s "$tmp/quiet.out" ] && [ -z "$(ls "$tmp/quiet")" ] \
+  && ok || bad "ldc FILE without -o is not a silent check"
+(cd "$tmp/quiet" && "$bin/ldc" "$tmp/bad.ld" > "$tmp/quiet.out" 2>&1); [ $? -eq 1 ] && grep -q "bad.ld:1:16: error:" "$tmp/quiet.out" \
+  && ok || bad "ldc FILE without -o does not report the error"
+# -fsyntax-only with a project writes no directory
+"$bin/ldc" -fsyntax-only --project "$src/tests/runtime/projects/shared.ldp" -o "$tmp/proj" > "$tmp/proj.out" 2>&1 && [ ! -e "$tmp/proj" ] \
+  && ok || bad "ldc -fsyntax-only --project wrote something or failed"
+
 echo "$checks checks, $fails failed"
 echo "$((checks - fails)) passed, $fails failed"
 [ $fails -eq 0 ]
