@@ -858,8 +858,19 @@ class Reader {
     emit(op, a, b, c, t, u);
   }
   void label_here(const std::string& l) {
+    drop_jump_to_next(l);
     rung_ = nullptr;
     pending_labels_.push_back(l);
+  }
+  // A rung that ends with a jump to the label placed right after it (ST's
+  // `JMP end` of an IF's last branch, with only labels between): taken or
+  // not, the scan goes on at that label, so the jump is dropped (no code for
+  // it in any engine).
+  void drop_jump_to_next(const std::string& l) {
+    if (!rung_ && p_.rungs.empty()) return;
+    Rung& r = rung_ ? *rung_ : p_.rungs.back();  // (without a rung open, no code came since the last one ended)
+    if (r.code.size() < 2 || r.code.back().op != Op::JMP || r.code.back().a[0].label.str() != l) return;
+    r.code.pop_back();
   }
   void jump_to(const std::string& l) {
     Operand o{OpdKind::Label};
