@@ -2261,9 +2261,14 @@ class Reader {
     // PT in whole ms, rounded up: ldc's timers count whole ms of dt, and
     // ET >= 3.5 ms holds exactly when ET >= 4 ms (TIME is ns; read as a LINT)
     Operand ns = scratch("ptns", Ty::LINT), ms = scratch("pt", Ty::DINT);
-    typed(Op::TADD, Ty::LINT, mem("PT"), Operand::typed_const(999999), ns);
-    typed(Op::TDIV, Ty::LINT, ns, Operand::typed_const(1000000), ns);
-    typed(Op::TCONV, Ty::DINT, ns, ms, {}, Ty::LINT);
+    if (auto pt = constant_in(mem("PT"))) {  // PT := T#30s right before: the ms known now (the same C arithmetic)
+      ms = Operand{OpdKind::ConstInt};
+      ms.ival = int32_t(uint32_t(uint64_t((int64_t(*pt) + 999999) / 1000000)));
+    } else {
+      typed(Op::TADD, Ty::LINT, mem("PT"), Operand::typed_const(999999), ns);
+      typed(Op::TDIV, Ty::LINT, ns, Operand::typed_const(1000000), ns);
+      typed(Op::TCONV, Ty::DINT, ns, ms, {}, Ty::LINT);
+    }
     emit(Op::LOAD, mem("IN"));
     emit(kind == "TON" ? Op::TON : kind == "TOF" ? Op::TOF : Op::TP, Operand{OpdKind::Timer, Area::Sys, n}, ms);
     emit(Op::MPP);
@@ -2273,6 +2278,53 @@ class Reader {
     typed(Op::TMUL, Ty::LINT, et, Operand::typed_const(1000000), mem("ET"));
   }
 
+  // The constant the open rung surely moved into `cell` (a typed MOVE of a
+  // constant, run with the power known on: the rung's TRUE, however many
+  // conditions were pushed and popped since), if nothing may have written it
+  // since; else nullopt.  The rung is straight-line code (labels only start
+  // rungs), so a walk over it from its start decides.
+  std::optional<uint64_t> constant_in(const Operand& cell) const {
+    if (!rung_) return std::nullopt;
+    std::vector<char> on;  // the stack: 1 where the value is surely 1
+    std::optional<uint64_t> v;
+    for (const Instr& in : rung_->code) {
+      const OpInfo& oi = op_info(in.op);
+      if (oi.klass == OpClass::Typed) {
+        if (oi.push) { on.push_back(0); continue; }
+        const int d = in.nopd() - 1;
+        const Ty dt = operand_type(in, d);
+        const uint32_t cells = dt == Ty::STRING ? 33 : std::max(1, int(ty_info(dt == Ty::None ? Ty::DINT : dt).cells));
+        const bool stx = in.op == Op::TSTX, to_cell = !stx && oi.operands[d] == 'r' && in.a[d].area == cell.area &&
+                                                       in.a[d].index < cell.index + 2 && in.a[d].index + cells > cell.index;
+        if (stx && in.a[1].area == cell.area) v.reset();
+        if (!to_cell) continue;
+        v.reset();
+        if (in.op == Op::TMOVE && in.a[d].index == cell.index && in.a[0].kind == OpdKind::ConstT && !on.empty() && on.back())
+          v = in.a[0].bits();
+        continue;
+      }
+      switch (in.op) {
+        case Op::TRUE: on.push_back(1); break;
+        case Op::LOAD: case Op::LOADN: case Op::LOADP: case Op::LOADF: on.push_back(0); break;
+        case Op::AND: case Op::ANDN: if (!on.empty()) on.back() = 0; break;
+        case Op::OR: case Op::ORN: break;  // 1 OR x is 1; an unknown top stays unknown
+        case Op::MPS: if (on.empty()) return std::nullopt; on.push_back(on.back()); break;
+        case Op::MRD: if (on.size() < 2) return std::nullopt; on.back() = on[on.size() - 2]; break;
+        case Op::MPP: if (on.empty()) return std::nullopt; on.pop_back(); break;
+        case Op::ANDBLK: case Op::ORBLK: {
+          if (on.size() < 2) return std::nullopt;
+          const char a = on.back();
+          on.pop_back();
+          on.back() = in.op == Op::ORBLK ? char(on.back() || a) : char(on.back() && a);
+          break;
+        }
+        case Op::OUT: case Op::OUTN: case Op::SET: case Op::RST: break;  // bits: not a typed cell
+        case Op::TON: case Op::TOF: case Op::TP: break;  // the top is their input; they write their T cells only
+        default: return std::nullopt;
+      }
+    }
+    return v;
+  }
   static int var_index(const Pou& p, const std::string& name) {
     std::string u = upper(name);
     for (size_t i = 0; i < p.vars.size(); i++)
