@@ -115,8 +115,9 @@ struct Ungated {
 class Gen : public ClassGen<Gen> {
  public:
   // known: the rung's (empty), storage the caller keeps from rung to rung
-  Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used, KnownStack& known)
-      : L_(l), items_(items), slots_(slots), gate_(gate), bases_(gate), known_(known), used_(used) {}
+  // o1: -O1 (its typed runs skip the power test where the power is on for certain)
+  Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used, KnownStack& known, bool o1 = false)
+      : L_(l), items_(items), slots_(slots), gate_(gate), bases_(gate), known_(known), o1_(o1), used_(used) {}
 
   // facts: ScanFlag bits (ir/scanopt.h); reuse: the earlier division it takes,
   // quotient_to: where a MOD also stores its quotient (ScanFacts), if any
@@ -131,6 +132,11 @@ class Gen : public ClassGen<Gen> {
   bool gate_;      // -O2: branch-free power gating (cmov) instead of `je skip`
   bool bases_;     // -O2: the frame sets the base registers (rdi is reloaded after a REAL call)
   KnownStack& known_;  // -O2: the stack's values known at compile time
+  // -O1: the same for its typed runs alone (-O2's known_ also folds timers, gates ...)
+  KnownStack power_;
+  bool o1_ = false;
+  // a typed run needs no power test: the power is on for certain
+  bool power_known_on() const { return (bases_ && known_.on()) || (o1_ && power_.on()); }
   bool on_ = false;   // -O2: this instruction's power is on for certain (no gate, no test)
   const ldc::DivReuse* reuse_ = nullptr;  // -O2: this division's earlier result (ScanFacts::reused)
   const ldc::Operand* quotient_to_ = nullptr;  // -O2: this MOD's quotient goes there too (ScanFacts::early_quotient)
@@ -929,6 +935,7 @@ void Gen::instr(const ldc::Instr& in, uint8_t facts, const ldc::DivReuse* reuse,
   reuse_ = nullptr;
   quotient_to_ = nullptr;
   if (bases_) known_.step(in);
+  if (o1_) power_.step(in);
   depth_ += op_info(in.op).push - op_info(in.op).pop;
 }
 
@@ -1159,7 +1166,7 @@ void Gen::store_xd(Ty t, Reg x, const ldc::Operand& d) {
 void Gen::typed(const ldc::Instr& in) {
   if (typed::is_string_instr(in.op, in.ty, in.src)) return typed_string(in);
   if (op_info(in.op).push) return typed_compare(in);
-  if (typed_skip_.empty() && !(bases_ && known_.on())) {
+  if (typed_skip_.empty() && !power_known_on()) {
     typed_skip_ = fresh();
     test_top();
     jcc(Cond::E, typed_skip_);
@@ -1494,7 +1501,7 @@ void Gen::call_table(int32_t disp) {
 // The other typed instructions of a run share its power test (Gen::typed).
 void Gen::typed_string(const ldc::Instr& in) {
   const OpInfo& oi = op_info(in.op);
-  if (!oi.push && typed_skip_.empty() && !(bases_ && known_.on())) {
+  if (!oi.push && typed_skip_.empty() && !power_known_on()) {
     typed_skip_ = fresh();
     test_top();
     jcc(Cond::E, typed_skip_);
@@ -2460,7 +2467,7 @@ class Blocks {
     if (notes_) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
     bool slots = o2_ && facts_->fits[ri];  // the rung's stack in the slot registers (none where shared_)
     known_.reset();
-    Gen g(layout_, b.items, slots, o2_, &used_, known_);
+    Gen g(layout_, b.items, slots, o2_, &used_, known_, opt_ == 1);
     uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into ebp
     for (size_t k = 0; k < r.code.size(); k++) {
       const ldc::Instr& in = r.code[k];
