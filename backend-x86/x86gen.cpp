@@ -2004,7 +2004,14 @@ class WordInEax {
       Item& it = items[i];
       if (it.kind == as::ItemKind::Label) forget();
       if (it.kind != as::ItemKind::Instruction) continue;
-      if (loads(it.inst) && held(it.inst.ops[1])) { drop_[i] = 1, any = true; continue; }
+      if (loads(it.inst) && held(it.inst.ops[1])) {
+        // eax holds w, but after a store of eax the upper half of rax may not
+        // be zero as the load's would leave it (a 64-bit result stored cut to
+        // its low word): then `mov eax, eax` stands for the load
+        if (upper_zero_) drop_[i] = 1, any = true;
+        else it.inst = as::x86::make(M::Mov, {Operand::r(r32(AX)), Operand::r(r32(AX))}), upper_zero_ = true;
+        continue;
+      }
       if (xloads(it.inst) && xheld(it.inst.ops[1])) { drop_[i] = 1, any = true; continue; }
       if (word_ >= 0) use_eax(it.inst);
       xafter(it.inst);
@@ -2042,8 +2049,8 @@ class WordInEax {
     return m.disp < word_ + 4 && word_ < m.disp + 8;
   }
   void after(const Instruction& in) {
-    if (in.mnemonic == M::Mov && image_dword(in.ops[0]) && eax32(in.ops[1])) { word_ = in.ops[0].mem.disp; return; }
-    if (loads(in)) { word_ = in.ops[1].mem.disp; return; }
+    if (in.mnemonic == M::Mov && image_dword(in.ops[0]) && eax32(in.ops[1])) { word_ = in.ops[0].mem.disp, upper_zero_ = false; return; }
+    if (loads(in)) { word_ = in.ops[1].mem.disp, upper_zero_ = true; return; }
     if (word_ >= 0 && (writes_reg(in, AX) || in.mnemonic == M::Call || hits(in))) forget();  // (held: else nothing to forget)
   }
 
@@ -2079,6 +2086,7 @@ class WordInEax {
   }
 
   int64_t word_ = -1;  // the image offset of the word eax holds, or -1
+  bool upper_zero_ = false;  // and the upper half of rax is zero (eax was loaded, not stored)
   int64_t xword_ = -1;  // the image offset of the REAL / LREAL xmm0 holds, or -1
   Size xsize_ = Size::None;
   std::vector<char> drop_;  // run's, kept from rung to rung
