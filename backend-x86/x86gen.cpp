@@ -2049,9 +2049,17 @@ class WordInEax {
     return m.disp < word_ + 4 && word_ < m.disp + 8;
   }
   void after(const Instruction& in) {
-    if (in.mnemonic == M::Mov && image_dword(in.ops[0]) && eax32(in.ops[1])) { word_ = in.ops[0].mem.disp, upper_zero_ = false; return; }
+    if (in.mnemonic == M::Mov && image_dword(in.ops[0]) && eax32(in.ops[1])) { word_ = in.ops[0].mem.disp; return; }
     if (loads(in)) { word_ = in.ops[1].mem.disp, upper_zero_ = true; return; }
+    if (writes_reg(in, AX) || in.mnemonic == M::Call) upper_zero_ = zero_extends(in);
     if (word_ >= 0 && (writes_reg(in, AX) || in.mnemonic == M::Call || hits(in))) forget();  // (held: else nothing to forget)
+  }
+  // Does `in`, which writes rax, leave its upper half zero?  Every write of
+  // the 32-bit eax does (and cwde); 8- and 16-bit writes keep it, 64-bit
+  // ones and calls may set it: unknown.
+  static bool zero_extends(const Instruction& in) {
+    if (in.mnemonic == M::Cwde) return true;
+    return in.mnemonic != M::Call && in.num_operands > 0 && eax32(in.ops[0]);
   }
 
   // xmm0: movss / movsd between xmm0 and an image operand of their size
@@ -2086,7 +2094,7 @@ class WordInEax {
   }
 
   int64_t word_ = -1;  // the image offset of the word eax holds, or -1
-  bool upper_zero_ = false;  // and the upper half of rax is zero (eax was loaded, not stored)
+  bool upper_zero_ = false;  // the upper half of rax is zero (its last writer wrote eax, or loaded it)
   int64_t xword_ = -1;  // the image offset of the REAL / LREAL xmm0 holds, or -1
   Size xsize_ = Size::None;
   std::vector<char> drop_;  // run's, kept from rung to rung
