@@ -171,9 +171,9 @@ using namespace ldc::plc;
 
 // "--period 10ms" and the like: microseconds, at least `min`.
 int64_t duration_arg(const std::string& v, const char* what, int64_t min) {
-  auto d = parse_duration_us(v);
-  if (!d || *d < min) throw UserError(std::string("ldrun: error: bad ") + what + " '" + v + "' (e.g. 500us, 10ms, 1s)");
-  return *d;
+  std::string why = duration_problem(v, min);
+  if (!why.empty()) throw UserError(std::string("ldrun: error: bad ") + what + ": " + why);
+  return *parse_duration_us(v);
 }
 
 // interp, or the engine of the code of a target that runs here (native)
@@ -949,7 +949,13 @@ int ldrun_main(int argc, char** argv) {
   }
   if (!period_text.empty()) {
     auto p = parse_period(period_text);
-    if (!p) throw UserError("ldrun: error: bad --period '" + period_text + "' (e.g. 10ms, 1s)");
+    if (!p) {  // the trace runner's dt is whole milliseconds (docs/format.md, "Traces")
+      std::string why = duration_problem(period_text, 0);
+      throw UserError("ldrun: error: bad --period: " +
+                      (why.empty() ? "'" + period_text + "' is not whole milliseconds: the trace runner's dt is (e.g. 1ms, 10ms, 1s); "
+                                     "the runtime (--io, --project) takes periods from 50us"
+                                   : why));
+    }
     opt.period_ms = *p;
   }
   if (input.empty()) throw UserError("ldrun: error: no program\n" + usage());

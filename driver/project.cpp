@@ -25,6 +25,19 @@ std::optional<int64_t> parse_duration_us(const std::string& s) {
   return int64_t(v) * mul;
 }
 
+std::string duration_text(int64_t us) {
+  if (us % 1000000 == 0 && us) return std::to_string(us / 1000000) + "s";
+  if (us % 1000 == 0) return std::to_string(us / 1000) + "ms";
+  return std::to_string(us) + "us";
+}
+
+std::string duration_problem(const std::string& s, int64_t min_us) {
+  auto d = parse_duration_us(s);
+  if (!d) return "'" + s + "' is not a duration (e.g. 500us, 10ms, 1s)";
+  if (*d < min_us) return "'" + s + "' is below the minimum of " + duration_text(min_us);
+  return "";
+}
+
 bool is_project_name(const std::string& s) {
   if (s.empty() || std::isdigit(static_cast<unsigned char>(s[0]))) return false;
   for (char c : s)
@@ -65,11 +78,7 @@ std::vector<Token> split_words(std::string_view line) {
   return t;
 }
 
-std::string us_text(int64_t us) {
-  if (us % 1000000 == 0 && us) return std::to_string(us / 1000000) + "s";
-  if (us % 1000 == 0) return std::to_string(us / 1000) + "ms";
-  return std::to_string(us) + "us";
-}
+std::string us_text(int64_t us) { return duration_text(us); }
 
 // Reads a project file line by line: one member function per keyword, each
 // reading the words `w` of the current line into the project `p`.
@@ -108,9 +117,9 @@ struct ProjectReader {
     return uint32_t(std::stoul(s));
   }
   int64_t duration_at(size_t i, const char* what, int64_t min) const {
-    auto d = parse_duration_us(w[i].text);
-    if (!d || *d < min) throw fail(w[i].col, std::string("bad ") + what + " '" + w[i].text + "' (e.g. 500us, 10ms, 1s)");
-    return *d;
+    std::string why = duration_problem(w[i].text, min);
+    if (!why.empty()) throw fail(w[i].col, std::string("bad ") + what + ": " + why);
+    return *parse_duration_us(w[i].text);
   }
   void end_task() {
     if (in_task && !task_has_program) {

@@ -18,6 +18,11 @@ namespace ldc {
 // "500us", "10ms", "10" (ms), "2s" -> microseconds; nullopt if malformed
 // or above 2^31 us.
 std::optional<int64_t> parse_duration_us(const std::string& s);
+// A duration as it is best written: "50us", "10ms", "2s".
+std::string duration_text(int64_t us);
+// Why `s` is not a duration of at least `min_us`, or "" if it is one: "'10us'
+// is below the minimum of 50us", or "'5q' is not a duration (e.g. 500us, 10ms, 1s)".
+std::string duration_problem(const std::string& s, int64_t min_us);
 
 // Names of configurations, resources, tasks and programs: letters, digits and
 // _, not starting with a digit; compared without case (same_name).

@@ -1,0 +1,35 @@
+#!/bin/sh
+# cli_test.sh BINDIR SRCDIR -- the command line's smaller cases (issue 27):
+# each check runs a tool the way a user would and compares its exit status
+# and the words of its message with what docs/ says it prints.
+set -u
+bin=$1 src=$2
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fails=0 checks=0
+fail() { echo "FAIL: $*" >&2; fails=$((fails + 1)); }
+# expect STATUS 'TEXT' CMD...: CMD exits with STATUS and prints TEXT (fixed string) on stderr.
+expect() {
+  want=$1 text=$2
+  shift 2
+  checks=$((checks + 1))
+  "$@" > "$tmp/out" 2> "$tmp/err" < /dev/null
+  rc=$?
+  if [ $rc -ne "$want" ]; then fail "$*: exit $rc, expected $want"; cat "$tmp/err" >&2; return; fi
+  grep -qF -- "$text" "$tmp/err" || { fail "$*: stderr lacks '$text'"; cat "$tmp/err" >&2; }
+}
+
+# --period below the runtime's 50 us minimum names the minimum and the value given
+# (docs/runtime.md, "Running"); the trace runner's dt is whole milliseconds.
+expect 1 "bad --period: '10us' is below the minimum of 50us" "$bin/ldrun" "$src/examples/motor.ld" --io=none --period 10us
+expect 1 "bad --period: '5q' is not a duration (e.g. 500us, 10ms, 1s)" "$bin/ldrun" "$src/examples/motor.ld" --io=none --period 5q
+expect 1 "bad --period: '10us' is not whole milliseconds" "$bin/ldrun" "$src/examples/motor.ld" --trace "$src/examples/motor.csv" --period 10us
+cat > "$tmp/fast.ldp" <<P
+resource cpu0 processor 0
+  task t period 20us
+    program p $src/examples/motor.ld
+P
+expect 1 "fast.ldp:2:17: error: bad period: '20us' is below the minimum of 50us" "$bin/ldc" --project "$tmp/fast.ldp"
+
+echo "$((checks - fails)) passed, $fails failed"
+[ $fails -eq 0 ]
