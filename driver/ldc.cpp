@@ -31,7 +31,8 @@ static std::string usage() {
 // ldc --project: compile every program of the project, run the configuration
 // system of paper 002 (refusing write conflicts) and, with -o DIR, write one
 // image per task with its 'config' section and the project file that runs them.
-static int write_project(const Project& p, const std::string& outdir) {
+static int write_project(const Project& p, const std::string& outdir, bool task_option) {
+  if (!outdir.empty()) check_project_output(p, outdir, task_option);  // before any compiling
   std::vector<BuiltTask> built = build_project(p);
   if (outdir.empty()) {
     std::string t = print_configuration(p, built);
@@ -51,7 +52,7 @@ static int write_project(const Project& p, const std::string& outdir) {
 }
 
 static int build_project_main(const std::string& project, const std::string& outdir) {
-  return write_project(parse_project(project), outdir);
+  return write_project(parse_project(project), outdir, false);
 }
 
 static int ldc_main(int argc, char** argv) {
@@ -81,7 +82,7 @@ static int ldc_main(int argc, char** argv) {
   const Target* t = find_target(target);
   if (!t) throw UserError("ldc: error: unknown target '" + target + "' (" + target_names() + ")");
   Compiled c = compile_source(input, emit.empty() && t->host, task, emit == "tree");  // parse + lower
-  if (c.project) return write_project(*c.project, output);  // a PLCopen configuration of several tasks
+  if (c.project) return write_project(*c.project, output, true);  // a PLCopen configuration of several tasks
   if (emit.empty() || emit == "hex") c.tree = {};  // an image needs only the IL: free the tree before code generation
   std::string text;
   // a CompileError of a stage after the reader, shown at its place in the source

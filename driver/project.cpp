@@ -6,6 +6,8 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <sys/stat.h>
 
 #include "driver/driver.h"
 #include "driver/targets.h"
@@ -385,6 +387,21 @@ std::vector<BuiltTask> build_project(const Project& p) {
   }
   for (size_t i = 0; i < built.size(); i++) built[i].image.config = sc.per_task[i];
   return built;
+}
+
+void check_project_output(const Project& p, const std::string& outdir, bool task_option) {
+  auto ends = [&](const char* e) {
+    size_t n = std::strlen(e);
+    return outdir.size() >= n && same_name(outdir.substr(outdir.size() - n), e);
+  };
+  struct stat st;
+  bool not_folder = ::stat(outdir.c_str(), &st) == 0 && !S_ISDIR(st.st_mode);
+  if (!ends(".bin") && !ends(".hex") && !not_folder) return;
+  std::string tasks = std::to_string(p.tasks.size()) + " task" + (p.tasks.size() == 1 ? "" : "s");
+  throw UserError("ldc: error: -o " + outdir + (not_folder ? " is a file" : " names an image") + ", but " + p.path +
+                  " is a project of " + tasks + ", written as a folder (DIR/TASK.bin for each task and DIR/" + p.name +
+                  ".ldp): give -o a folder (-o build/" + p.name + ")" +
+                  (task_option ? ", or --task NAME -o " + outdir + " for one task's image" : ""));
 }
 
 std::string print_configuration(const Project& p, const std::vector<BuiltTask>& built) {

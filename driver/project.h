@@ -66,6 +66,11 @@ struct BuiltTask {
 // conflict is a UserError listing every conflict: the project line, then every
 // writing element as "file:line:col: error: ..." with its source line and a caret.
 std::vector<BuiltTask> build_project(const Project& p);
+// `ldc ... -o DIR` for a project writes a folder: DIR/TASK.bin per task and
+// DIR/NAME.ldp.  A DIR that names an image (ends in .bin or .hex) or an existing
+// file that is not a folder is refused with a UserError saying what -o takes
+// (and, with `task_option`, that --task NAME compiles one task's image).
+void check_project_output(const Project& p, const std::string& outdir, bool task_option);
 // The system-level table as text (ldc --project without -o).
 std::string print_configuration(const Project& p, const std::vector<BuiltTask>& built);
 

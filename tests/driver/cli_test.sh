@@ -16,7 +16,7 @@ expect() {
   "$@" > "$tmp/out" 2> "$tmp/err" < /dev/null
   rc=$?
   if [ $rc -ne "$want" ]; then fail "$*: exit $rc, expected $want"; cat "$tmp/err" >&2; return; fi
-  grep -qF -- "$text" "$tmp/err" || { fail "$*: stderr lacks '$text'"; cat "$tmp/err" >&2; }
+  [ -z "$text" ] || grep -qF -- "$text" "$tmp/err" || { fail "$*: stderr lacks '$text'"; cat "$tmp/err" >&2; }
 }
 
 # --period below the runtime's 50 us minimum names the minimum and the value given
@@ -30,6 +30,18 @@ resource cpu0 processor 0
     program p $src/examples/motor.ld
 P
 expect 1 "fast.ldp:2:17: error: bad period: '20us' is below the minimum of 50us" "$bin/ldc" --project "$tmp/fast.ldp"
+
+# A project writes a folder: -o naming an image, or an existing file, is refused
+# before anything is written (docs/runtime.md, "The project file").
+expect 1 "-o $tmp/x.bin names an image, but $src/tests/runtime/projects/shared.ldp is a project of 3 tasks" \
+  "$bin/ldc" --project "$src/tests/runtime/projects/shared.ldp" -o "$tmp/x.bin"
+[ -e "$tmp/x.bin" ] && fail "ldc --project -o x.bin created x.bin"
+expect 1 "or --task NAME -o $tmp/y.hex for one task's image" "$bin/ldc" "$src/tests/frontend/tasks/st_tasks.st" -o "$tmp/y.hex"
+[ -e "$tmp/y.hex" ] && fail "ldc st_tasks.st -o y.hex created y.hex"
+: > "$tmp/plainfile"
+expect 1 "-o $tmp/plainfile is a file, but" "$bin/ldc" --project "$src/tests/runtime/projects/shared.ldp" -o "$tmp/plainfile"
+expect 0 "" "$bin/ldc" "$src/tests/frontend/tasks/st_tasks.st" -o "$tmp/tasks"
+[ -f "$tmp/tasks/plant.ldp" ] || [ -n "$(ls "$tmp/tasks"/*.ldp 2>/dev/null)" ] || fail "ldc st_tasks.st -o DIR wrote no project file"
 
 echo "$((checks - fails)) passed, $fails failed"
 [ $fails -eq 0 ]
