@@ -43,5 +43,20 @@ expect 1 "-o $tmp/plainfile is a file, but" "$bin/ldc" --project "$src/tests/run
 expect 0 "" "$bin/ldc" "$src/tests/frontend/tasks/st_tasks.st" -o "$tmp/tasks"
 [ -f "$tmp/tasks/plant.ldp" ] || [ -n "$(ls "$tmp/tasks"/*.ldp 2>/dev/null)" ] || fail "ldc st_tasks.st -o DIR wrote no project file"
 
+# ldobjdump takes a source as ldrun does: compiled in memory, the listing that of
+# the image ldc writes (but the header line, which says where the code came from).
+checks=$((checks + 1))
+"$bin/ldc" "$src/examples/motor.ld" -O1 -o "$tmp/motor.bin" && "$bin/ldobjdump" "$tmp/motor.bin" > "$tmp/dump.bin" &&
+  "$bin/ldobjdump" "$src/examples/motor.ld" -O1 > "$tmp/dump.src" 2> "$tmp/err" ||
+  { fail "ldobjdump motor.ld"; cat "$tmp/err" >&2; }
+grep -qF "file format ldc-x86-64 (compiled in memory from $src/examples/motor.ld at -O1)" "$tmp/dump.src" ||
+  fail "ldobjdump motor.ld: header"
+sed 1,2d "$tmp/dump.bin" > "$tmp/a" && sed 1,2d "$tmp/dump.src" > "$tmp/b" && cmp -s "$tmp/a" "$tmp/b" ||
+  fail "ldobjdump motor.ld differs from ldobjdump of ldc's image"
+expect 0 "" "$bin/ldobjdump" "$src/examples/motor.ld" --target=c40 -O2
+grep -qF "file format ldc-c40" "$tmp/out" || fail "ldobjdump --target=c40: header"
+expect 1 "is an image, already compiled: --target, -O and --task are for a source" "$bin/ldobjdump" "$tmp/motor.bin" -O2
+expect 1 "nothere.ld: error: cannot open" "$bin/ldobjdump" "$tmp/nothere.ld"
+
 echo "$((checks - fails)) passed, $fails failed"
 [ $fails -eq 0 ]
