@@ -47,7 +47,7 @@ static int write_project(const Project& p, const std::string& outdir, bool task_
     files.push_back(b.spec.name + ".bin");
     write_file_atomic(outdir + "/" + files.back(), std::string_view(reinterpret_cast<const char*>(bin.data()), bin.size()));
   }
-  write_file_atomic(outdir + "/" + p.name + ".ldp", print_project(p, files));
+  write_file_atomic(outdir + "/" + p.name + ".ldp", print_project(p, files, outdir));
   return 0;
 }
 

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <sys/stat.h>
 
 #include "driver/driver.h"
@@ -260,11 +261,34 @@ Project parse_project(const std::string& path) {
   return p;
 }
 
-std::string print_project(const Project& p, const std::vector<std::string>& files) {
+namespace {
+
+// The project's retentive file as a path from `outdir`: the same file the
+// project's own `retain` line names (relative to the project's folder).
+std::string retain_path_from(const Project& p, const std::string& outdir) {
+  namespace fs = std::filesystem;
+  const std::string& written = p.retain_file_as_written;
+  if (written.empty() || written[0] == '/') return written;
+  fs::path file = fs::absolute(p.retain_file).lexically_normal();
+  fs::path rel = file.lexically_relative(fs::absolute(outdir.empty() ? "." : outdir).lexically_normal());
+  std::string r = rel.empty() ? file.string() : rel.string();
+  if (r.find_first_of(" \t#") != std::string::npos)
+    throw UserError(p.path + ": error: the retentive file " + written + ", named from the output folder " + outdir + ", is " +
+                    r + ", which a project line cannot hold (blanks or '#'); give 'retain' an absolute path without them");
+  return r;
+}
+
+}  // namespace
+
+std::string print_project(const Project& p, const std::vector<std::string>& files, const std::string& outdir) {
   std::string s = "# " + p.name + ": written by ldc --project from " + p.path + "\nconfiguration " + p.name + "\nblock " +
                   std::to_string(p.block_size) + "\n";
-  if (!p.retain_file_as_written.empty())
-    s += "retain " + p.retain_file_as_written + " every " + us_text(p.retain_every_us) + "\n";
+  if (!p.retain_file_as_written.empty()) {
+    std::string r = retain_path_from(p, outdir);
+    if (r != p.retain_file_as_written)
+      s += "# the retentive file of " + p.path + " ('retain " + p.retain_file_as_written + "'), named from this folder\n";
+    s += "retain " + r + " every " + us_text(p.retain_every_us) + "\n";
+  }
   std::string res;
   for (size_t i = 0; i < p.tasks.size(); i++) {
     const ProjectTask& t = p.tasks[i];

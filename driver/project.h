@@ -54,8 +54,11 @@ struct Project {
 };
 // Reads a project file; errors are UserError "file:line:col: error: ..." with a caret.
 Project parse_project(const std::string& path);
-// The project file text for a project (canonical form; programs as given in `files`, one per task).
-std::string print_project(const Project& p, const std::vector<std::string>& files);
+// The project file text for a project (canonical form; programs as given in `files`, one per task),
+// to be written into the folder `outdir` ("" = the current one): its `retain` line names the
+// project's retentive file as seen from there, so the written project keeps the same retentive
+// memory (an absolute path stays as written).
+std::string print_project(const Project& p, const std::vector<std::string>& files, const std::string& outdir = "");
 
 struct BuiltTask {
   ProjectTask spec;

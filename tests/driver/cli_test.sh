@@ -58,5 +58,27 @@ grep -qF "file format ldc-c40" "$tmp/out" || fail "ldobjdump --target=c40: heade
 expect 1 "is an image, already compiled: --target, -O and --task are for a source" "$bin/ldobjdump" "$tmp/motor.bin" -O2
 expect 1 "nothere.ld: error: cannot open" "$bin/ldobjdump" "$tmp/nothere.ld"
 
+# ldc --project -o DIR keeps the project's retentive file: the written project names
+# the same file from DIR, so running it continues with the memory the source project
+# saved (docs/runtime.md, "The project file").
+mkdir -p "$tmp/src/sub" "$tmp/built"
+printf '|--[X0]--(Y0)\n' > "$tmp/src/sub/p.ld"
+cat > "$tmp/src/plant.ldp" <<P
+retain plant.ret every 1s
+resource cpu0 processor 0
+  task main period 1ms
+    program p sub/p.ld
+P
+checks=$((checks + 1))
+printf 'set K3 1\nsave\nquit\n' | "$bin/ldrun" --project "$tmp/src/plant.ldp" --io=stdio > "$tmp/out" 2> "$tmp/err" &&
+  [ -f "$tmp/src/plant.ret" ] || { fail "the source project saved no retentive file"; cat "$tmp/out" "$tmp/err" >&2; }
+"$bin/ldc" --project "$tmp/src/plant.ldp" -o "$tmp/built/plant" 2> "$tmp/err" || { fail "ldc --project -o"; cat "$tmp/err" >&2; }
+grep -qx "retain ../../src/plant.ret every 1s" "$tmp/built/plant/plant.ldp" || { fail "built retain line"; cat "$tmp/built/plant/plant.ldp" >&2; }
+printf 'get K3\nquit\n' | "$bin/ldrun" --project "$tmp/built/plant/plant.ldp" --io=stdio > "$tmp/out" 2> "$tmp/err"
+grep -qx "K3 = 1" "$tmp/out" || { fail "the built project did not start from the saved retentive memory"; cat "$tmp/out" "$tmp/err" >&2; }
+[ -e "$tmp/built/plant/plant.ret" ] && fail "the built project made a retentive file of its own"
+(cd "$tmp/src" && "$bin/ldc" --project plant.ldp -o out 2> "$tmp/err") || fail "ldc --project -o out"
+grep -qx "retain ../plant.ret every 1s" "$tmp/src/out/plant.ldp" || fail "ldc --project -o out: retain line"
+
 echo "$((checks - fails)) passed, $fails failed"
 [ $fails -eq 0 ]
