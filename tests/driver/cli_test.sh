@@ -80,5 +80,23 @@ grep -qx "K3 = 1" "$tmp/out" || { fail "the built project did not start from the
 (cd "$tmp/src" && "$bin/ldc" --project plant.ldp -o out 2> "$tmp/err") || fail "ldc --project -o out"
 grep -qx "retain ../plant.ret every 1s" "$tmp/src/out/plant.ldp" || fail "ldc --project -o out: retain line"
 
+# The line protocol writes what Modbus and the monitor write: a task's alias of an
+# output by TASK.NAME, D0 of the first task unnamed (docs/runtime.md, "The line protocol").
+mkdir -p "$tmp/lp"
+printf '|--[X0]--(Y0)\n' > "$tmp/lp/fast.ld"
+printf 'alias fault = Y5\n|--[fault]--(Y6)\n' > "$tmp/lp/slow.ld"
+cat > "$tmp/lp/p.ldp" <<P
+resource cpu0 processor 0
+  task fast period 1ms
+    program f fast.ld
+  task slow period 2ms
+    program s slow.ld
+P
+checks=$((checks + 1))
+printf 'set slow.fault 1\nwait 3\nget Y6\nset D0 5\nget fast.D0\nquit\n' |
+  "$bin/ldrun" --project "$tmp/lp/p.ldp" --io=stdio > "$tmp/out" 2> "$tmp/err"
+printf 'ok\nok\nY6 = 1\nok\nfast.D0 = 5\nok bye\n' | diff - "$tmp/out" > /dev/null ||
+  { fail "set slow.fault / set D0 in a project"; cat "$tmp/out" "$tmp/err" >&2; }
+
 echo "$((checks - fails)) passed, $fails failed"
 [ $fails -eq 0 ]
