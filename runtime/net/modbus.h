@@ -120,6 +120,7 @@ struct ServerOptions {
   int log_window_ms = 10000;
   int accept_backoff_ms = 250;   // the listener rests that long after accept fails (EMFILE)
   std::function<void(const std::string&)> log;
+  std::function<void(const std::string&)> listening;  // told the address bound, "127.0.0.1:5020" (ldrun's banner)
   std::vector<NamedPoint> named;  // --modbus-map
 };
 

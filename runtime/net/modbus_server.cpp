@@ -321,6 +321,7 @@ class ModbusDriver : public IoDriver {
     sockaddr_storage ss{};
     socklen_t len = sizeof ss;
     getsockname(fd, reinterpret_cast<sockaddr*>(&ss), &len);
+    if (o_.listening) o_.listening(name_of(ss, true));
     log("ldrun: modbus: listening on " + name_of(ss, true) + " (" + std::to_string(o_.max_connections) +
         " connections at most, " + std::to_string(o_.max_per_address) +
         " per address; Modbus has no authentication)");

@@ -98,5 +98,29 @@ printf 'set slow.fault 1\nwait 3\nget Y6\nset D0 5\nget fast.D0\nquit\n' |
 printf 'ok\nok\nY6 = 1\nok\nfast.D0 = 5\nok bye\n' | diff - "$tmp/out" > /dev/null ||
   { fail "set slow.fault / set D0 in a project"; cat "$tmp/out" "$tmp/err" >&2; }
 
+# A runtime that runs until stopped says on stderr what runs and how to stop it
+# (docs/runtime.md, "Running"); stdout stays the line protocol's.
+checks=$((checks + 1))
+"$bin/ldrun" --project "$tmp/lp/p.ldp" --io=none --modbus 0 > "$tmp/bout" 2> "$tmp/berr" &
+pid=$!
+i=0
+while [ $i -lt 100 ] && ! grep -q "Ctrl-C to stop" "$tmp/berr"; do sleep 0.1; i=$((i + 1)); done
+kill -INT $pid
+wait $pid || fail "ldrun ended with status $? after SIGINT"
+for line in "ldrun: running $tmp/lp/p.ldp: 2 tasks, native code, I/O none" \
+            "ldrun:   task fast: program f ($tmp/lp/fast.ld), period 1ms, priority 0, processor 0" \
+            "ldrun:   task slow: program s ($tmp/lp/slow.ld), period 2ms, priority 0, processor 0" \
+            "ldrun: Ctrl-C to stop"; do
+  grep -qxF "$line" "$tmp/berr" || { fail "banner lacks '$line'"; cat "$tmp/berr" >&2; }
+done
+port=$(sed -n 's/^ldrun: modbus: listening on 127.0.0.1:\([0-9]*\) .*/\1/p' "$tmp/berr")
+grep -qxF "ldrun: Modbus TCP on 127.0.0.1:$port" "$tmp/berr" || { fail "banner lacks the Modbus port"; cat "$tmp/berr" >&2; }
+[ -s "$tmp/bout" ] && fail "ldrun wrote on stdout: $(cat "$tmp/bout")"
+# a run of so many scans, and the trace driver's, end by themselves: no banner
+expect 0 "" "$bin/ldrun" "$src/examples/motor.ld" --io=none --scans 3
+grep -q "Ctrl-C" "$tmp/err" && fail "banner with --scans"
+expect 0 "" "$bin/ldrun" "$src/examples/motor.ld" --io=trace --trace "$src/examples/motor.csv" --watch Y0 --clock=virtual --free-run
+grep -q "Ctrl-C" "$tmp/err" && fail "banner in trace mode"
+
 echo "$((checks - fails)) passed, $fails failed"
 [ $fails -eq 0 ]
