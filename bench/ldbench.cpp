@@ -595,7 +595,7 @@ void measure(Subject& s, const Options& o) {
 // overhead, which is subtracted, that is said (a median of 0 would read as free).
 std::string progress_ns(const Timing& t) {
   if (!t.ok || !std::isfinite(t.median)) return "-";
-  if (t.median <= 0) return "≈0 (within the loop overhead)";
+  if (t.median <= 0) return "~0 (within the loop overhead)";
   return human_ns(t.median);
 }
 // Simulated cycles, or "-" when the C40 was not run (--no-c40, or refused).
