@@ -590,6 +590,22 @@ void measure(Subject& s, const Options& o) {
   }
 }
 
+// The progress line's time of an engine: "-" when it was not timed (skipped
+// or refused); when the scan took no longer than the timing loop's own
+// overhead, which is subtracted, that is said (a median of 0 would read as free).
+std::string progress_ns(const Timing& t) {
+  if (!t.ok || !std::isfinite(t.median)) return "-";
+  if (t.median <= 0) return "~0 (within the loop overhead)";
+  return human_ns(t.median);
+}
+// Simulated cycles, or "-" when the C40 was not run (--no-c40, or refused).
+std::string progress_cycles(double c) {
+  if (!std::isfinite(c)) return "-";
+  char b[32];
+  std::snprintf(b, sizeof b, "%.0f", c);
+  return b;
+}
+
 // ------------------------------------------------------------------ the run
 
 struct Run {
@@ -609,11 +625,10 @@ struct Run {
     auto tc = Clock::now();
     measure_c40(*s, o);
     double c40_s = secs_since(tc);
-    say("  timed %.1fs: classic %s, fast %s, native %s / %s / %s, C %s; C40 %.0f / %.0f cycles (%.1fs)\n",
-        secs_since(t0), human_ns(s->t[kClassic].median).c_str(), human_ns(s->t[kFast].median).c_str(),
-        human_ns(s->t[kNative].median).c_str(), human_ns(s->t[kNativeO1].median).c_str(),
-        human_ns(s->t[kNativeO2].median).c_str(), human_ns(s->t[kC].median).c_str(), s->c40_interp_cycles,
-        s->c40_cycles, c40_s);
+    auto t = [&](int e) { return progress_ns(s->t[e]); };
+    say("  timed %.1fs: classic %s, fast %s, native %s / %s / %s, C %s; C40 %s / %s cycles (%.1fs)\n", secs_since(t0),
+        t(kClassic).c_str(), t(kFast).c_str(), t(kNative).c_str(), t(kNativeO1).c_str(), t(kNativeO2).c_str(),
+        t(kC).c_str(), progress_cycles(s->c40_interp_cycles).c_str(), progress_cycles(s->c40_cycles).c_str(), c40_s);
     if (!s->c40_status.empty() && o.c40) say("  C40: %s\n", s->c40_status.c_str());
     for (int e = 0; e < kEngines; e++) {
       const Timing& t = s->t[e];

@@ -38,7 +38,8 @@ static std::string usage() {
 // ldc --project: compile every program of the project, run the configuration
 // system of paper 002 (refusing write conflicts) and, with -o DIR, write one
 // image per task with its 'config' section and the project file that runs them.
-static int write_project(const Project& p, const std::string& outdir, Diagnostics& diag, bool syntax_only) {
+static int write_project(const Project& p, const std::string& outdir, Diagnostics& diag, bool syntax_only, bool task_option) {
+  if (!outdir.empty() && !syntax_only) check_project_output(p, outdir, task_option);  // before any compiling
   std::vector<BuiltTask> built = build_project(p, &diag);
   std::fputs(diag.text().c_str(), stderr);  // the warnings (errors were thrown)
   if (syntax_only) return 0;
@@ -55,14 +56,14 @@ static int write_project(const Project& p, const std::string& outdir, Diagnostic
     files.push_back(b.spec.name + ".bin");
     write_file_atomic(outdir + "/" + files.back(), std::string_view(reinterpret_cast<const char*>(bin.data()), bin.size()));
   }
-  write_file_atomic(outdir + "/" + p.name + ".ldp", print_project(p, files));
+  write_file_atomic(outdir + "/" + p.name + ".ldp", print_project(p, files, outdir));
   return 0;
 }
 
 static int build_project_main(const std::string& project, const std::string& outdir, const DiagOptions& dopt,
                               bool syntax_only) {
   Diagnostics diag(dopt);
-  return write_project(parse_project(project), outdir, diag, syntax_only);
+  return write_project(parse_project(project), outdir, diag, syntax_only, false);
 }
 
 static int ldc_main(int argc, char** argv) {
@@ -103,7 +104,7 @@ static int ldc_main(int argc, char** argv) {
   if (c.project) {  // a PLCopen configuration of several tasks
     Diagnostics pdiag(dopt);  // the reader's warnings are printed with the project's
     std::fputs(diag.text().c_str(), stderr);
-    return write_project(*c.project, output, pdiag, syntax_only);
+    return write_project(*c.project, output, pdiag, syntax_only, true);
   }
   std::fputs(diag.text().c_str(), stderr);  // the warnings (errors were thrown)
   if (syntax_only) return 0;

@@ -171,9 +171,9 @@ using namespace ldc::plc;
 
 // "--period 10ms" and the like: microseconds, at least `min`.
 int64_t duration_arg(const std::string& v, const char* what, int64_t min) {
-  auto d = parse_duration_us(v);
-  if (!d || *d < min) throw UserError(std::string("ldrun: error: bad ") + what + " '" + v + "' (e.g. 500us, 10ms, 1s)");
-  return *d;
+  std::string why = duration_problem(v, min);
+  if (!why.empty()) throw UserError(std::string("ldrun: error: bad ") + what + ": " + why);
+  return *parse_duration_us(v);
 }
 
 // interp, or the engine of the code of a target that runs here (native)
@@ -249,6 +249,9 @@ class SoftPlcRun {
   std::unique_ptr<Monitor> monitor_;
   std::string monitor_host_, monitor_token_;
   bool print_token_ = false;  // a token ldrun made: the user learns it here
+  std::string io_name_;         // the --io driver, for the banner
+  std::string task_lines_;      // the tasks, for the banner
+  std::string modbus_address_;  // where the Modbus server listens, for the banner
   uint64_t load_budget_ = kDefaultLoadBudget;  // --load-budget
   std::string load_budget_text_ = "128M";
   sigset_t sigs_;
@@ -333,6 +336,7 @@ class SoftPlcRun {
   // The I/O driver (--io), and whether the line protocol reads stdin (--control).
   void open_io() {
     std::string io = a_.io.empty() ? (trace_file_.empty() ? "none" : "trace") : a_.io;
+    io_name_ = io;
     control_ = a_.control.empty() ? io == "stdio" : a_.control == "stdin";
     if (!a_.control.empty() && a_.control != "stdin" && a_.control != "none")
       throw UserError("ldrun: error: --control is stdin or none, not '" + a_.control + "'");
@@ -388,6 +392,7 @@ class SoftPlcRun {
     modbus::ServerOptions mo;
     mo.tasks = specs_.size();
     mo.log = opt_.log;
+    mo.listening = [this](const std::string& address) { modbus_address_ = address; };
     if (!a_.modbus_connections.empty()) mo.max_connections = count_arg(a_.modbus_connections, "--modbus-connections", 1, 1000);
     if (!a_.modbus_per_address.empty()) mo.max_per_address = count_arg(a_.modbus_per_address, "--modbus-per-address", 1, 1000);
     mo.max_per_address = std::min(mo.max_per_address, mo.max_connections);
@@ -574,6 +579,10 @@ class SoftPlcRun {
     sigaddset(&sigs_, SIGINT);
     sigaddset(&sigs_, SIGTERM);
     pthread_sigmask(SIG_BLOCK, &sigs_, nullptr);
+    for (const TaskSpec& t : specs_)
+      task_lines_ += "ldrun:   task " + t.name + ": program " + t.program + " (" + t.file + "), period " +
+                     duration_text(t.period_us) + ", priority " + std::to_string(t.priority) + ", processor " +
+                     std::to_string(t.processor) + "\n";
     try {
       rt_ = std::make_unique<Runtime>(std::move(specs_), opt_, engines(), std::move(driver_));
     } catch (UserError&) { throw; } catch (std::exception& e) {
@@ -587,7 +596,27 @@ class SoftPlcRun {
     if (a_.reload) reload_thread_ = std::thread([this] { serve_reload(); });
     // Announced once every thread runs: a client (or a test lowering the
     // descriptor limit) that acts on the banner meets a started ldrun.
+    if (runs_until_stopped()) banner = startup_banner(banner);
     if (!banner.empty()) std::fprintf(stderr, "%s\n", banner.c_str());
+  }
+
+  // Runs until SIGINT, SIGTERM or quit: no --scans, and not the trace driver
+  // (a trace run ends with its rows; its CSV is the output a user reads).
+  bool runs_until_stopped() const { return opt_.scans < 0 && io_name_ != "trace"; }
+
+  // What runs, its tasks, the servers and how to stop (stderr; stdout is the
+  // line protocol's). `monitor_line` is the monitor's own line, or "".
+  std::string startup_banner(const std::string& monitor_line) const {
+    const size_t n = rt_->task_count();
+    std::string what = !a_.project.empty() ? a_.project : input_;
+    std::string engine = code_.engine ? "native code" : "the reference interpreter";
+    std::string b = "ldrun: running " + what + ": " + std::to_string(n) + " task" + (n == 1 ? "" : "s") + ", " + engine +
+                    ", I/O " + io_name_ + (a_.stop ? ", started in STOP" : "") + "\n";
+    b += task_lines_;
+    if (!modbus_address_.empty()) b += "ldrun: Modbus TCP on " + modbus_address_ + "\n";
+    if (!monitor_line.empty()) b += monitor_line + "\n";
+    if (!opt_.retain_file.empty()) b += "ldrun: retentive memory in " + opt_.retain_file + "\n";
+    return b + "ldrun: Ctrl-C to stop" + (control_ ? " (or quit on stdin)" : "");
   }
 
   // Starts the monitor's server; returns its banner line.
@@ -949,7 +978,13 @@ int ldrun_main(int argc, char** argv) {
   }
   if (!period_text.empty()) {
     auto p = parse_period(period_text);
-    if (!p) throw UserError("ldrun: error: bad --period '" + period_text + "' (e.g. 10ms, 1s)");
+    if (!p) {  // the trace runner's dt is whole milliseconds (docs/format.md, "Traces")
+      std::string why = duration_problem(period_text, 0);
+      throw UserError("ldrun: error: bad --period: " +
+                      (why.empty() ? "'" + period_text + "' is not whole milliseconds: the trace runner's dt is (e.g. 1ms, 10ms, 1s); "
+                                     "the runtime (--io, --project) takes periods from 50us"
+                                   : why));
+    }
     opt.period_ms = *p;
   }
   if (input.empty()) throw UserError("ldrun: error: no program\n" + usage());

@@ -7,6 +7,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <map>
+#include <cstring>
+#include <filesystem>
+#include <sys/stat.h>
 
 #include "driver/driver.h"
 #include "driver/targets.h"
@@ -24,6 +27,19 @@ std::optional<int64_t> parse_duration_us(const std::string& s) {
   long long mul = unit.empty() || unit == "ms" ? 1000 : unit == "us" ? 1 : unit == "s" ? 1000000 : -1;
   if (mul < 0 || v > (int64_t(1) << 31) / mul) return std::nullopt;
   return int64_t(v) * mul;
+}
+
+std::string duration_text(int64_t us) {
+  if (us % 1000000 == 0 && us) return std::to_string(us / 1000000) + "s";
+  if (us % 1000 == 0) return std::to_string(us / 1000) + "ms";
+  return std::to_string(us) + "us";
+}
+
+std::string duration_problem(const std::string& s, int64_t min_us) {
+  auto d = parse_duration_us(s);
+  if (!d) return "'" + s + "' is not a duration (e.g. 500us, 10ms, 1s)";
+  if (*d < min_us) return "'" + s + "' is below the minimum of " + duration_text(min_us);
+  return "";
 }
 
 bool is_project_name(const std::string& s) {
@@ -66,11 +82,7 @@ std::vector<Token> split_words(std::string_view line) {
   return t;
 }
 
-std::string us_text(int64_t us) {
-  if (us % 1000000 == 0 && us) return std::to_string(us / 1000000) + "s";
-  if (us % 1000 == 0) return std::to_string(us / 1000) + "ms";
-  return std::to_string(us) + "us";
-}
+std::string us_text(int64_t us) { return duration_text(us); }
 
 // Reads a project file line by line: one member function per keyword, each
 // reading the words `w` of the current line into the project `p`.
@@ -109,9 +121,9 @@ struct ProjectReader {
     return uint32_t(std::stoul(s));
   }
   int64_t duration_at(size_t i, const char* what, int64_t min) const {
-    auto d = parse_duration_us(w[i].text);
-    if (!d || *d < min) throw fail(w[i].col, std::string("bad ") + what + " '" + w[i].text + "' (e.g. 500us, 10ms, 1s)");
-    return *d;
+    std::string why = duration_problem(w[i].text, min);
+    if (!why.empty()) throw fail(w[i].col, std::string("bad ") + what + ": " + why);
+    return *parse_duration_us(w[i].text);
   }
   void end_task() {
     if (in_task && !task_has_program) {
@@ -250,11 +262,34 @@ Project parse_project(const std::string& path) {
   return p;
 }
 
-std::string print_project(const Project& p, const std::vector<std::string>& files) {
+namespace {
+
+// The project's retentive file as a path from `outdir`: the same file the
+// project's own `retain` line names (relative to the project's folder).
+std::string retain_path_from(const Project& p, const std::string& outdir) {
+  namespace fs = std::filesystem;
+  const std::string& written = p.retain_file_as_written;
+  if (written.empty() || written[0] == '/') return written;
+  fs::path file = fs::absolute(p.retain_file).lexically_normal();
+  fs::path rel = file.lexically_relative(fs::absolute(outdir.empty() ? "." : outdir).lexically_normal());
+  std::string r = rel.empty() ? file.string() : rel.string();
+  if (r.find_first_of(" \t#") != std::string::npos)
+    throw UserError(p.path + ": error: the retentive file " + written + ", named from the output folder " + outdir + ", is " +
+                    r + ", which a project line cannot hold (blanks or '#'); give 'retain' an absolute path without them");
+  return r;
+}
+
+}  // namespace
+
+std::string print_project(const Project& p, const std::vector<std::string>& files, const std::string& outdir) {
   std::string s = "# " + p.name + ": written by ldc --project from " + p.path + "\nconfiguration " + p.name + "\nblock " +
                   std::to_string(p.block_size) + "\n";
-  if (!p.retain_file_as_written.empty())
-    s += "retain " + p.retain_file_as_written + " every " + us_text(p.retain_every_us) + "\n";
+  if (!p.retain_file_as_written.empty()) {
+    std::string r = retain_path_from(p, outdir);
+    if (r != p.retain_file_as_written)
+      s += "# the retentive file of " + p.path + " ('retain " + p.retain_file_as_written + "'), named from this folder\n";
+    s += "retain " + r + " every " + us_text(p.retain_every_us) + "\n";
+  }
   std::string res;
   for (size_t i = 0; i < p.tasks.size(); i++) {
     const ProjectTask& t = p.tasks[i];
@@ -421,6 +456,21 @@ std::vector<BuiltTask> build_project(const Project& p, Diagnostics* diag) {
   }
   for (size_t i = 0; i < built.size(); i++) built[i].image.config = sc.per_task[i];
   return built;
+}
+
+void check_project_output(const Project& p, const std::string& outdir, bool task_option) {
+  auto ends = [&](const char* e) {
+    size_t n = std::strlen(e);
+    return outdir.size() >= n && same_name(outdir.substr(outdir.size() - n), e);
+  };
+  struct stat st;
+  bool not_folder = ::stat(outdir.c_str(), &st) == 0 && !S_ISDIR(st.st_mode);
+  if (!ends(".bin") && !ends(".hex") && !not_folder) return;
+  std::string tasks = std::to_string(p.tasks.size()) + " task" + (p.tasks.size() == 1 ? "" : "s");
+  throw UserError("ldc: error: -o " + outdir + (not_folder ? " is a file" : " names an image") + ", but " + p.path +
+                  " is a project of " + tasks + ", written as a folder (DIR/TASK.bin for each task and DIR/" + p.name +
+                  ".ldp): give -o a folder (-o build/" + p.name + ")" +
+                  (task_option ? ", or --task NAME -o " + outdir + " for one task's image" : ""));
 }
 
 std::string print_configuration(const Project& p, const std::vector<BuiltTask>& built) {

@@ -19,6 +19,11 @@ namespace ldc {
 // "500us", "10ms", "10" (ms), "2s" -> microseconds; nullopt if malformed
 // or above 2^31 us.
 std::optional<int64_t> parse_duration_us(const std::string& s);
+// A duration as it is best written: "50us", "10ms", "2s".
+std::string duration_text(int64_t us);
+// Why `s` is not a duration of at least `min_us`, or "" if it is one: "'10us'
+// is below the minimum of 50us", or "'5q' is not a duration (e.g. 500us, 10ms, 1s)".
+std::string duration_problem(const std::string& s, int64_t min_us);
 
 // Names of configurations, resources, tasks and programs: letters, digits and
 // _, not starting with a digit; compared without case (same_name).
@@ -50,8 +55,11 @@ struct Project {
 };
 // Reads a project file; errors are UserError "file:line:col: error: ..." with a caret.
 Project parse_project(const std::string& path);
-// The project file text for a project (canonical form; programs as given in `files`, one per task).
-std::string print_project(const Project& p, const std::vector<std::string>& files);
+// The project file text for a project (canonical form; programs as given in `files`, one per task),
+// to be written into the folder `outdir` ("" = the current one): its `retain` line names the
+// project's retentive file as seen from there, so the written project keeps the same retentive
+// memory (an absolute path stays as written).
+std::string print_project(const Project& p, const std::vector<std::string>& files, const std::string& outdir = "");
 
 struct BuiltTask {
   ProjectTask spec;
@@ -64,6 +72,11 @@ struct BuiltTask {
 // With `diag`, the project's warnings (-Wshared-output, docs/diagnostics.md)
 // go there; one made an error by -Werror is thrown as a UserError with them.
 std::vector<BuiltTask> build_project(const Project& p, Diagnostics* diag = nullptr);
+// `ldc ... -o DIR` for a project writes a folder: DIR/TASK.bin per task and
+// DIR/NAME.ldp.  A DIR that names an image (ends in .bin or .hex) or an existing
+// file that is not a folder is refused with a UserError saying what -o takes
+// (and, with `task_option`, that --task NAME compiles one task's image).
+void check_project_output(const Project& p, const std::string& outdir, bool task_option);
 // The system-level table as text (ldc --project without -o).
 std::string print_configuration(const Project& p, const std::vector<BuiltTask>& built);
 

@@ -1250,32 +1250,38 @@ std::string Runtime::get(const std::string& device, int64_t timeout_ms) {
     std::lock_guard<ImageLock> g(m.glock);
     return format_probe(m.global.data(), m.glayout, p);
   }
-  if (m.tasks.size() > 1 && dev == device)
-    throw std::runtime_error("'" + dev + "' is private to each task: name one, e.g. " + t.spec.name + "." + dev);
   std::string out;
   if (!m.at_boundary(t, [&] { out = format_probe(t.mem.data(), t.prog->image.layout, p); }, timeout_ms))
     throw std::runtime_error("task '" + t.spec.name + "' did not reach a scan boundary in time");
   return out;
 }
 
+// What `set` writes: what Modbus and the monitor write (docs/runtime.md, "The
+// line protocol"): inputs and relays at once in the global image, outputs
+// only while the PLC runs (else they stay in the safe state), and a task's
+// words, timer and counter values and S0 at its next scan boundary.
 void Runtime::set(const std::string& device, const std::string& value, int64_t timeout_ms) {
   Impl& m = *impl_;
   std::lock_guard<std::mutex> cl(m.ctl_mu);
   auto [ti, dev] = split_task(device);
   Task& t = *m.tasks[ti];
   Probe p = resolve_in(device, dev, t.ctl_aliases);
-  bool shared = p.area == Area::X || p.area == Area::WX || p.area == Area::M || p.area == Area::K;
-  if (!shared && p.area != Area::D && p.area != Area::F)
-    throw std::runtime_error("'" + device + "' cannot be set: set writes inputs (X, WX), global relays (M, K) and a task's variables (D, F)");
+  bool shared = area_is_shared(p.area);  // X Y M K WX WY
+  bool output = p.area == Area::Y || p.area == Area::WY;
+  bool word = p.area == Area::D || p.area == Area::F || p.area == Area::TW || p.area == Area::CW;
+  if (!shared && !word && !(p.area == Area::S && p.index == kBitError))
+    throw std::runtime_error("'" + device + "' cannot be set: set writes inputs (X, WX), outputs (Y, WY), relays (M, K), " +
+                             "a task's words (D, F), timer and counter values (T, C) and S0; not done bits or system bits");
   if (value.empty()) throw std::runtime_error("bad value ''");
   if (std::string why = trace_cell_problem(p, value); !why.empty()) throw std::runtime_error(why);
   if (shared) {
     std::lock_guard<ImageLock> g(m.glock);
+    if (output && m.state.load() != State::Run)
+      throw std::runtime_error("'" + device + "' is an output: outputs are set only while the PLC runs (state " +
+                               state_name(m.state.load()) + ": they stay in the safe state; 'run' first)");
     put_trace_cell(m.global.data(), m.glayout, p, value);
     return;
   }
-  if (m.tasks.size() > 1 && dev == device)
-    throw std::runtime_error("'" + dev + "' is private to each task: name one, e.g. " + t.spec.name + "." + dev);
   if (!m.at_boundary(t, [&] { put_trace_cell(t.mem.data(), t.prog->image.layout, p, value); }, timeout_ms))
     throw std::runtime_error("task '" + t.spec.name + "' did not reach a scan boundary in time");
 }

@@ -74,8 +74,9 @@ bool snapshot(shm::Header* h, const std::vector<Point>& pts, std::vector<int32_t
   return true;
 }
 
+const char kUsage[] = "usage: shm_client [--name /ldc] set DEV VALUE... | get DEV... | wait DEV VALUE [MS] | status\n";
 int usage() {
-  std::fputs("usage: shm_client [--name /ldc] set DEV VALUE... | get DEV... | wait DEV VALUE [MS] | status\n", stderr);
+  std::fputs(kUsage, stderr);
   return 2;
 }
 
@@ -84,6 +85,10 @@ int usage() {
 int main(int argc, char** argv) {
   std::string name = "/ldc";
   int i = 1;
+  if (argc == 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+    std::fputs(kUsage, stdout);  // installed beside ldrun: a --help as the other tools have
+    return 0;
+  }
   if (i + 1 < argc && std::string(argv[i]) == "--name") name = argv[i + 1], i += 2;
   if (i >= argc) return usage();
   std::string cmd = argv[i++];

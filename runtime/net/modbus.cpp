@@ -114,6 +114,14 @@ Write coil_write(const Req& r, uint32_t a, bool on) {
   return {Area::K, a - kCoilK, on, 1};
 }
 
+// Discrete input `a`: X, then the done bits of the unit's task's timers and counters.
+uint8_t discrete_at(const Req& r, uint32_t a) {
+  const Layout& l = *r.v.layout;
+  if (a < kDiscreteT) return r.v.global[l.addr(Area::X, a - kDiscreteX)];
+  if (a < kDiscreteC) return r.task[l.addr(Area::TQ, a - kDiscreteT)];
+  return r.task[l.addr(Area::CQ, a - kDiscreteC)];
+}
+
 // FC 1 and 2: quantity 1..2000, packed LSB first.
 void read_bits(Req& r) {
   if (r.n != 5) return exception(r, kIllegalDataValue);
@@ -124,7 +132,7 @@ void read_bits(Req& r) {
   std::vector<uint8_t> p{r.pdu[0], uint8_t((count + 7) / 8)};
   p.resize(2 + (count + 7) / 8);
   for (uint32_t i = 0; i < count; i++) {
-    uint8_t b = coils ? coil_at(r, start + i) : r.v.global[r.v.layout->addr(Area::X, start + i)];
+    uint8_t b = coils ? coil_at(r, start + i) : discrete_at(r, start + i);
     if (b) p[2 + i / 8] |= uint8_t(1u << (i % 8));
   }
   reply(r, p);
@@ -179,6 +187,17 @@ Write holding_write(const Req& r, uint32_t a, uint16_t value) {
   return {area, k / 2, uint32_t(value) << 16, 0xFFFF0000u};
 }
 
+// Input register `a`: WX's low half; a timer's elapsed ms or a counter's
+// value, the high half at even addresses (as D).
+uint16_t input_at(const Req& r, uint32_t a) {
+  const Layout& l = *r.v.layout;
+  if (a < kInputT) return uint16_t(word_at(r.v.global, l, Area::WX, a - kInputWX));
+  Area area = a < kInputC ? Area::TW : Area::CW;
+  uint32_t k = a - (a < kInputC ? kInputT : kInputC);
+  uint32_t w = word_at(r.task, l, area, k / 2);
+  return uint16_t(k % 2 ? w : w >> 16);
+}
+
 // FC 3 and 4: quantity 1..125.
 void read_registers(Req& r) {
   if (r.n != 5) return exception(r, kIllegalDataValue);
@@ -188,7 +207,7 @@ void read_registers(Req& r) {
   if (holding ? !all_ok(r, false, start, count) : start + count > kInputEnd) return exception(r, kIllegalDataAddress);
   std::vector<uint8_t> p{r.pdu[0], uint8_t(2 * count)};
   for (uint32_t i = 0; i < count; i++)
-    put16(p, holding ? holding_at(r, start + i) : uint16_t(word_at(r.v.global, *r.v.layout, Area::WX, start + i)));
+    put16(p, holding ? holding_at(r, start + i) : input_at(r, start + i));
   reply(r, p);
 }
 

@@ -25,13 +25,15 @@
 namespace ldc::modbus {
 
 // ---------------------------------------------------------------- the map
-// Coils (FC 1, 5, 15): Y, then M, then K.  Discrete inputs (FC 2): X.
-// Input registers (FC 4): WX, one register per word.  Holding registers
-// (FC 3, 6, 16): WY one register per word, then D and F two registers per
-// word, the high half first.
+// Coils (FC 1, 5, 15): Y, then M, then K.  Discrete inputs (FC 2): X, then
+// the timers' and counters' done bits.  Input registers (FC 4): WX, one
+// register per word, then the timers' elapsed ms and the counters' values,
+// two registers per word, the high half first.  Holding registers (FC 3, 6,
+// 16): WY one register per word, then D and F two registers per word, the
+// high half first.  Timers and counters are the unit's task's, read-only.
 constexpr uint32_t kCoilY = 0, kCoilM = 8192, kCoilK = 16384, kCoilEnd = 24576;
-constexpr uint32_t kDiscreteEnd = 8192;
-constexpr uint32_t kInputEnd = 1024;
+constexpr uint32_t kDiscreteX = 0, kDiscreteT = 8192, kDiscreteC = kDiscreteT + 256, kDiscreteEnd = kDiscreteC + 256;
+constexpr uint32_t kInputWX = 0, kInputT = 1024, kInputC = kInputT + 2 * 256, kInputEnd = kInputC + 2 * 256;
 constexpr uint32_t kHoldWY = 0, kHoldD = 1024, kHoldF = kHoldD + 2 * 8192, kHoldEnd = kHoldF + 2 * 1024;
 
 // Named variables (--modbus-map FILE, docs/runtime.md "Modbus TCP"): an
@@ -68,7 +70,8 @@ constexpr size_t kMaxPdu = 253;
 constexpr size_t kMaxAdu = kMbapSize - 1 + 1 + kMaxPdu;  // 260
 
 // What reads see: the shared areas (X Y M K WX WY) in `global`, the private
-// ones (D F) in each task's memory, all at the standard layout's offsets.
+// ones (D F, the timers' and counters' TQ CQ TW CW) in each task's memory,
+// all at the standard layout's offsets.
 struct View {
   const Layout* layout = nullptr;
   const uint8_t* global = nullptr;
@@ -120,6 +123,7 @@ struct ServerOptions {
   int log_window_ms = 10000;
   int accept_backoff_ms = 250;   // the listener rests that long after accept fails (EMFILE)
   std::function<void(const std::string&)> log;
+  std::function<void(const std::string&)> listening;  // told the address bound, "127.0.0.1:5020" (ldrun's banner)
   std::vector<NamedPoint> named;  // --modbus-map
 };
 

@@ -274,7 +274,8 @@ class ModbusDriver : public IoDriver {
   }
 
   // The back buffer: X Y M K and WX WY (two contiguous ranges of the standard
-  // layout) from the global image, D and F from the task's memory.
+  // layout) from the global image; the done bits TQ CQ and D F TW CW from the
+  // task's memory.
   void fill(Triple& t, const uint8_t* global, const uint8_t* mem) {
     uint8_t* b = t.buf[t.back].data();
     auto copy = [&](const uint8_t* from_mem, Area first, Area last) {
@@ -283,7 +284,8 @@ class ModbusDriver : public IoDriver {
     };
     copy(global, Area::X, Area::K);
     copy(global, Area::WX, Area::WY);
-    copy(mem, Area::D, Area::F);
+    copy(mem, Area::TQ, Area::CQ);
+    copy(mem, Area::D, Area::CW);
     t.safe_gen[t.back] = safe_gen_.load();
   }
   void wake() {
@@ -321,6 +323,7 @@ class ModbusDriver : public IoDriver {
     sockaddr_storage ss{};
     socklen_t len = sizeof ss;
     getsockname(fd, reinterpret_cast<sockaddr*>(&ss), &len);
+    if (o_.listening) o_.listening(name_of(ss, true));
     log("ldrun: modbus: listening on " + name_of(ss, true) + " (" + std::to_string(o_.max_connections) +
         " connections at most, " + std::to_string(o_.max_per_address) +
         " per address; Modbus has no authentication)");

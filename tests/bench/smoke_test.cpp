@@ -4,6 +4,7 @@
 // No timing is asserted.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
 
@@ -106,14 +107,20 @@ std::string check_svg(const std::string& s) {
   return elements > 5 ? "" : "almost empty";
 }
 
-// Runs ldbench with `args`; its exit status.
-int run_ldbench(std::vector<std::string> args) {
+// Runs ldbench with `args`; its exit status.  With `log`, its stderr (the
+// progress lines) goes to that file.
+int run_ldbench(std::vector<std::string> args, const std::string& log = "") {
   args.insert(args.begin(), LDC_LDBENCH_PATH);
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   pid_t pid;
-  if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) return -1;
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  if (!log.empty()) posix_spawn_file_actions_addopen(&fa, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  int spawned = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (spawned != 0) return -1;
   int status = 0;
   while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -195,7 +202,15 @@ TEST(Ldbench, StFilesTimedAndStringRefusedOnNative) {
   fs::path dir = fs::temp_directory_path() / ("ldbench_st_" + std::to_string(getpid()));
   fs::remove_all(dir);
   const std::string st = LDC_BENCH_ST_DIR;
-  ASSERT_EQ(run_ldbench({"--smoke", "--no-c", "--no-c40", "--out", dir.string(), st + "/sort.st", st + "/parse_string.st"}), 0);
+  fs::create_directories(dir);
+  const std::string log = (dir / "progress.txt").string();
+  ASSERT_EQ(run_ldbench({"--smoke", "--no-c", "--no-c40", "--out", dir.string(), st + "/sort.st", st + "/parse_string.st"}, log), 0);
+  // The progress lines (issue 27): an engine not run is "-", never "nan", and no
+  // time is printed as "0 ns" (a scan under the loop overhead is said to be).
+  std::string progress = read(log);
+  EXPECT_NE(progress.find(", C -; C40 - / - cycles"), std::string::npos) << progress;
+  EXPECT_EQ(progress.find("nan"), std::string::npos) << progress;
+  EXPECT_EQ(progress.find(" 0 ns"), std::string::npos) << progress;
   std::vector<std::vector<std::string>> t;
   ASSERT_TRUE(parse_csv(read(dir / "timings.csv"), t));
   auto col = [&](const std::string& c) { return size_t(std::find(t[0].begin(), t[0].end(), c) - t[0].begin()); };

@@ -35,6 +35,16 @@ for name in ldc ldrun ldobjdump ldbench ldgen; do
   fi
 done
 PATH="$tmp/prefix/bin:$PATH" ldc "$src/examples/motor.ld" -o "$tmp/motor.bin" && ok || bad "ldc from the PATH"
+# shm_client, which docs/runtime.md and ldrun(1) show, is installed and runs
+PATH="$tmp/prefix/bin:/usr/bin:/bin" shm_client --help | grep -q "^usage: shm_client" && ok || bad "shm_client from the prefix's bin"
+# every document a page cites is installed where its FILES section says, and no page
+# points into the source tree's docs/
+for name in ldc ldrun ldobjdump ldbench ldgen; do
+  grep -q 'docs/[A-Za-z0-9_-]*\.md' "$src/docs/man/$name.1.md" && bad "$name.1.md cites docs/*.md of the source tree"
+  for doc in $(grep -o '[A-Za-z0-9_-]*\.md' "$src/docs/man/$name.1.md" | grep -v '^FILE\.md$' | sort -u); do
+    [ -f "$tmp/prefix/share/doc/ldc/$doc" ] && ok || bad "$name.1 cites $doc, not installed in share/doc/ldc"
+  done
+done
 
 # md2man refuses what it does not understand, located, and writes nothing
 printf '# bad(1) -- a page\n### three hashes\n' > "$tmp/bad.1.md"

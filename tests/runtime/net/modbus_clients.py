@@ -178,11 +178,11 @@ try:
     check("pymodbus read coil 24576: exception 02", getattr(r, "exception_code", None), 2)
     r = c.read_holding_registers(19455, 2, slave=1)
     check("pymodbus read holding 19455..19456: exception 02", getattr(r, "exception_code", None), 2)
-    r = c.read_input_registers(1024, 1, slave=1)
-    check("pymodbus read input register 1024: exception 02", getattr(r, "exception_code", None), 2)
+    r = c.read_input_registers(2048, 1, slave=1)  # past the counters' values (1536..2047)
+    check("pymodbus read input register 2048: exception 02", getattr(r, "exception_code", None), 2)
     r = c.read_holding_registers(1024, 2, slave=7)
     check("pymodbus unit 7 (no such task): exception 0x0B", getattr(r, "exception_code", None), 0x0B)
-    check("mbpoll read discrete input 8192", mbpoll(port, "-t", "1", "-r", "8192", "127.0.0.1"),
+    check("mbpoll read discrete input 8704", mbpoll(port, "-t", "1", "-r", "8704", "127.0.0.1"),
           "Read discrete input failed: Illegal data address")
     c.close()
     # raw frames: exceptions and what closes the connection

@@ -76,8 +76,35 @@ TEST(ModbusPdu, ReadDiscreteInputsAreX) {
   m.global[m.l.addr(Area::X, 8191)] = 1;
   EXPECT_EQ(pdu_of(m.serve({2, 0, 0, 0, 9}).reply), (Bytes{2, 2, 0x08, 0x00}));
   EXPECT_EQ(pdu_of(m.serve({2, 0x1F, 0xFF, 0, 1}).reply), (Bytes{2, 1, 0x01}));
-  EXPECT_EQ(pdu_of(m.serve({2, 0x1F, 0xFF, 0, 2}).reply), exc(2, 2));
+  EXPECT_EQ(pdu_of(m.serve({2, 0x1F, 0xFF, 0, 2}).reply), (Bytes{2, 1, 0x01}));  // X8191, then [T0] (off)
   EXPECT_EQ(pdu_of(m.serve({2, 0, 0, 0x07, 0xD1}).reply), exc(2, 3));
+}
+
+// Timers and counters (issue 27; docs/runtime.md, "The map"): done bits as
+// discrete inputs 8192 + n ([Tn]) and 8448 + n ([Cn]), elapsed ms and
+// counter values as input registers 1024 + 2n and 1536 + 2n, the high half
+// first, from the unit's task; read-only.
+TEST(ModbusPdu, TimersAndCountersAreReadOnlyInputs) {
+  Memory m;
+  m.t0[m.l.addr(Area::TQ, 0)] = 1;
+  m.t0[m.l.addr(Area::TQ, 255)] = 1;
+  m.t0[m.l.addr(Area::CQ, 3)] = 1;
+  m.t1[m.l.addr(Area::CQ, 255)] = 1;
+  m.word(m.t0, Area::TW, 0, 70000);             // 0x00011170
+  m.word(m.t0, Area::TW, 255, 500);
+  m.word(m.t0, Area::CW, 4, uint32_t(-2));      // 0xFFFFFFFE
+  m.word(m.t1, Area::CW, 255, 0x12345678);
+  EXPECT_EQ(pdu_of(m.serve({2, 0x20, 0x00, 0, 1}).reply), (Bytes{2, 1, 0x01}));         // [T0] = 8192
+  EXPECT_EQ(pdu_of(m.serve({2, 0x20, 0xFF, 0, 5}).reply), (Bytes{2, 1, 0x11}));         // [T255], [C0..C3]
+  EXPECT_EQ(pdu_of(m.serve({2, 0x21, 0xFF, 0, 1}).reply), (Bytes{2, 1, 0x00}));         // [C255] of task 0
+  EXPECT_EQ(pdu_of(m.serve({2, 0x21, 0xFF, 0, 1}, 2).reply), (Bytes{2, 1, 0x01}));      // ... of task 1
+  EXPECT_EQ(pdu_of(m.serve({2, 0x21, 0xFF, 0, 2}).reply), exc(2, 2));                   // 8704
+  EXPECT_EQ(pdu_of(m.serve({4, 0x04, 0x00, 0, 2}).reply), (Bytes{4, 4, 0x00, 0x01, 0x11, 0x70}));  // T0 at 1024
+  EXPECT_EQ(pdu_of(m.serve({4, 0x05, 0xFE, 0, 2}).reply), (Bytes{4, 4, 0x00, 0x00, 0x01, 0xF4}));  // T255 at 1534
+  EXPECT_EQ(pdu_of(m.serve({4, 0x06, 0x08, 0, 2}).reply), (Bytes{4, 4, 0xFF, 0xFF, 0xFF, 0xFE}));  // C4 at 1544
+  EXPECT_EQ(pdu_of(m.serve({4, 0x07, 0xFE, 0, 2}, 2).reply), (Bytes{4, 4, 0x12, 0x34, 0x56, 0x78}));  // C255, task 1
+  EXPECT_EQ(pdu_of(m.serve({4, 0x07, 0xFF, 0, 2}).reply), exc(4, 2));                   // 2048
+  EXPECT_EQ(pdu_of(m.serve({3, 0x04, 0x00, 0, 2}).reply), (Bytes{3, 4, 0, 0, 0, 0}));   // holding 1024 is still D0
 }
 
 TEST(ModbusPdu, ReadHoldingRegistersWyThenDAndFHighHalfFirst) {
@@ -112,7 +139,7 @@ TEST(ModbusPdu, ReadInputRegistersAreWxLowHalf) {
   m.word(m.global, Area::WX, 1023, uint32_t(-300));
   EXPECT_EQ(pdu_of(m.serve({4, 0, 5, 0, 1}).reply), (Bytes{4, 2, 0x7F, 0xFF}));
   EXPECT_EQ(pdu_of(m.serve({4, 0x03, 0xFF, 0, 1}).reply), (Bytes{4, 2, 0xFE, 0xD4}));
-  EXPECT_EQ(pdu_of(m.serve({4, 0x03, 0xFF, 0, 2}).reply), exc(4, 2));
+  EXPECT_EQ(pdu_of(m.serve({4, 0x07, 0xFF, 0, 2}).reply), exc(4, 2));  // past the counters (2048)
   EXPECT_EQ(pdu_of(m.serve({4, 0, 0, 0, 126}).reply), exc(4, 3));
 }
 
