@@ -1,6 +1,10 @@
 """What the Modbus client tests share: a named check that records its failure,
 and the end of the run (exit 1 with the failures listed, else 0)."""
+import re
+import select
+import subprocess
 import sys
+import time
 
 failures = []
 
@@ -15,3 +19,22 @@ def check(what, got, want):
 def finish():
     print("%d failures" % len(failures) + (": " + ", ".join(failures) if failures else ""))
     sys.exit(1 if failures else 0)
+
+
+def start_modbus(argv):
+    """Starts ldrun (argv) with --modbus 127.0.0.1:0 among its arguments;
+    returns the process and the port it says it listens on (exits if none)."""
+    p = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    port, line, deadline = None, "", time.time() + 20
+    while port is None and time.time() < deadline:
+        if select.select([p.stderr], [], [], 0.5)[0]:
+            line = p.stderr.readline()
+            m = re.search(r"listening on 127\.0\.0\.1:(\d+)", line)
+            if m:
+                port = int(m.group(1))
+            elif not line:
+                break
+    if port is None:
+        p.kill()
+        sys.exit("ldrun did not listen: " + line + p.stderr.read())
+    return p, port

@@ -15,7 +15,6 @@ naming a located variable, or an address inside the device map, is refused.
 """
 import os
 import re
-import select
 import shutil
 import subprocess
 import sys
@@ -28,7 +27,7 @@ if not shutil.which("mbpoll"):
 LDRUN, SRC = sys.argv[1], sys.argv[2]
 NAMES = os.path.join(SRC, "tests/runtime/names.st")
 MAP = os.path.join(SRC, "tests/runtime/names.map")
-from checks import check, failures, finish  # noqa: E402 (beside this file)
+from checks import check, failures, finish, start_modbus  # noqa: E402 (beside this file)
 
 
 def mbpoll(port, *args):
@@ -45,20 +44,7 @@ def mbpoll(port, *args):
 
 assert 3723500000000 == (866 << 32) + (61925 << 16) + 4864
 assert 2 * 3723500000000 == (1733 << 32) + (58314 << 16) + 9728
-p = subprocess.Popen([LDRUN, NAMES, "--io=none", "--period", "10ms", "--modbus", "127.0.0.1:0", "--modbus-map", MAP],
-                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-port, line, deadline = None, "", time.time() + 20
-while port is None and time.time() < deadline:
-    if select.select([p.stderr], [], [], 0.5)[0]:
-        line = p.stderr.readline()
-        m = re.search(r"listening on 127\.0\.0\.1:(\d+)", line)
-        if m:
-            port = int(m.group(1))
-        elif not line:
-            break
-if port is None:
-    p.kill()
-    sys.exit("ldrun did not listen: " + line + p.stderr.read())
+p, port = start_modbus([LDRUN, NAMES, "--io=none", "--period", "10ms", "--modbus", "127.0.0.1:0", "--modbus-map", MAP])
 try:
     H = ["-t", "4"]
     check("write tank.level", mbpoll(port, *H, "-r", "20000", "127.0.0.1", "11"), "written")

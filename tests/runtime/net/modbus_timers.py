@@ -13,7 +13,6 @@ they are read-only; holding register 1026 stays D1 (0), and 2048 is exception 02
 """
 import os
 import re
-import select
 import shutil
 import subprocess
 import sys
@@ -26,7 +25,7 @@ if not shutil.which("mbpoll"):
 LDRUN, SRC = sys.argv[1], sys.argv[2]
 PROG = os.path.join(SRC, "tests/runtime/net/modbus/timers.ld")
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from checks import check, finish  # noqa: E402 (beside this file)
+from checks import check, finish, start_modbus  # noqa: E402 (beside this file)
 
 
 def mbpoll(port, *args):
@@ -41,20 +40,7 @@ def mbpoll(port, *args):
     return text.splitlines()[-1] if text else "?"
 
 
-p = subprocess.Popen([LDRUN, PROG, "--io=none", "--period", "1ms", "--clock=virtual", "--modbus", "127.0.0.1:0"],
-                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-port, line, deadline = None, "", time.time() + 20
-while port is None and time.time() < deadline:
-    if select.select([p.stderr], [], [], 0.5)[0]:
-        line = p.stderr.readline()
-        m = re.search(r"listening on 127\.0\.0\.1:(\d+)", line)
-        if m:
-            port = int(m.group(1))
-        elif not line:
-            break
-if port is None:
-    p.kill()
-    sys.exit("ldrun did not listen: " + line + p.stderr.read())
+p, port = start_modbus([LDRUN, PROG, "--io=none", "--period", "1ms", "--clock=virtual", "--modbus", "127.0.0.1:0"])
 try:
     check("C2 before", mbpoll(port, "-t", "3", "-r", "1540", "-c", "2", "127.0.0.1"), [0, 0])
     for k in range(3):
