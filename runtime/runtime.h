@@ -37,6 +37,11 @@ class Engine {
   // The cost of the last scan on a simulated processor; nullopt for an engine
   // that runs on this machine (its time is measured, not counted).
   virtual std::optional<ScanCost> last_cost() const { return std::nullopt; }
+  // Bytes [off, off + len) of the image were written between scans by
+  // someone else (a trace row, a client, forcing).  Every host that writes
+  // the image says so: the change-driven engine (runtime/change_driven.h)
+  // runs what depends on them; the others need not know.
+  virtual void written(uint32_t off, uint32_t len) { (void)off, (void)len; }
 };
 
 // The reference interpreter over an image's binary IL.
@@ -116,6 +121,8 @@ Trace read_trace(std::string_view text, const std::string& file, const std::vect
 // non-empty cell written into the memory image at `base`.
 long long trace_cell_int(const std::string& v, char** end = nullptr);
 void put_trace_cell(uint8_t* base, const Layout& L, const Probe& p, const std::string& v);
+// How many bytes from L.addr(p.area, p.index) a cell of p writes.
+uint32_t probe_width(const Probe& p, const Layout& L);
 // Why a cell cannot be a typed column's value ("" if it can, or the column is untyped).
 std::string check_trace_cell(const Probe& p, const std::string& v);
 // Why a non-empty cell cannot be written to p ("" if it can): a typed

@@ -182,6 +182,11 @@ void put_trace_cell(uint8_t* base, const Layout& L, const Probe& p, const std::s
   }
 }
 
+uint32_t probe_width(const Probe& p, const Layout& L) {
+  if (p.ty != Ty::None && !area_is_bit(p.area)) return 4 * uint32_t(std::max(1, ty_info(p.ty).cells));
+  return L.elem_size(p.area);
+}
+
 std::unique_ptr<Engine> make_interp_engine(std::vector<uint8_t> il, const Layout& layout) {
   return std::make_unique<InterpEngine>(std::move(il), layout);
 }
@@ -423,7 +428,7 @@ std::vector<ScanFault> run_trace(Engine& engine, const Layout& layout, const Tra
         if (v.empty()) continue;
         const Probe& p = trace->columns[i];
         if (int(i) == trace->dt_column) dt = int32_t(trace_cell_int(v));
-        else put_trace_cell(mem.data(), layout, p, v);
+        else put_trace_cell(mem.data(), layout, p, v), engine.written(layout.addr(p.area, p.index), probe_width(p, layout));
       }
     }
     std::memcpy(mem.data() + kSysDt, &dt, 4);

@@ -22,6 +22,7 @@
 #include "driver/targets.h"
 #include "driver/x86_target.h"
 #include "frontend/frontend.h"
+#include "runtime/change_driven.h"
 #include "runtime/fastinterp.h"
 
 namespace ldc::diff {
@@ -82,6 +83,14 @@ std::unique_ptr<Engine> c40_engine(const Program& p, const char* name, bool code
 
 std::unique_ptr<Engine> make_c40sim(const Program& p) { return c40_engine(p, "c40sim", true); }
 std::unique_ptr<Engine> make_c40interp(const Program& p) { return c40_engine(p, "c40interp", false); }
+
+std::unique_ptr<Engine> make_change_driven(const Program& p, const EngineFactory& part, uint32_t max_rungs) {
+  const Layout L = p.layout();
+  RegionPlan plan = plan_regions(p, L, max_rungs);
+  std::vector<std::unique_ptr<Engine>> parts;
+  for (const Region& r : plan.regions) parts.push_back(part(region_program(p, r)));
+  return std::make_unique<ChangeDrivenEngine>(plan, L, std::move(parts));
+}
 
 bool looks_like_iec_il(const std::string& text) {
   size_t a = text.find_first_not_of(" \t\r\n");
@@ -166,7 +175,7 @@ long long cell_int(const std::string& v) {
 }
 
 // Writes trace row k (0-based) as run_trace does; dt keeps its last value.
-void apply_row(const Trace& t, size_t k, Memory& mem, int32_t& dt) {
+void apply_row(const Trace& t, size_t k, Memory& mem, int32_t& dt, Engine* e = nullptr) {
   const auto& row = t.rows[k];
   for (size_t i = 0; i < row.size(); i++) {
     const std::string& v = row[i];
@@ -176,6 +185,7 @@ void apply_row(const Trace& t, size_t k, Memory& mem, int32_t& dt) {
     else if (p.area == Area::F) mem.set_real(p.index, std::strtof(v.c_str(), nullptr));
     else if (area_is_bit(p.area)) mem.set_bit(p.area, p.index, cell_int(v) != 0);
     else mem.set_int(p.area, p.index, int32_t(cell_int(v)));
+    if (e && int(i) != t.dt_column) e->written(mem.layout.addr(p.area, p.index), mem.layout.elem_size(p.area));
   }
 }
 
@@ -219,7 +229,7 @@ Outcome compare_run(const std::string& ld, const std::string& csv, const EngineF
   o.scans = scans;
   for (int k = 1; k <= scans; k++) {
     apply_row(trace, size_t(k - 1), ma, dt_a);
-    apply_row(trace, size_t(k - 1), mb, dt_b);
+    apply_row(trace, size_t(k - 1), mb, dt_b, b.get());
     for (Memory* m : {&ma, &mb}) {
       std::memcpy(m->data() + kSysDt, m == &ma ? &dt_a : &dt_b, 4);
       m->set_bit(Area::S, kBitFirstScan, k == 1);
@@ -608,6 +618,7 @@ SeedTotals run_seeds(const SeedRun& run, const std::function<void(const std::str
     GenProgram gp = generate_program(seed, o);
     const int scans = run.scans(seed);
     std::string text = render(gp), csv = generate_trace(seed, scans, o);
+    if (run.trace_filter) csv = run.trace_filter(seed, csv);
     Outcome out = compare_isolated(text, csv, make_interp, run.test);
     t.programs++;
     t.rungs += gp.rungs();

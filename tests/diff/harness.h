@@ -25,6 +25,9 @@ std::unique_ptr<Engine> make_fast_interp(const Program& p); // the fast interpre
 std::unique_ptr<Engine> make_c_route(const Program& p);     // generate_c, the system cc -O2, dlopen
 std::unique_ptr<Engine> make_c40sim(const Program& p);      // C40 code on the simulated board
 std::unique_ptr<Engine> make_c40interp(const Program& p);   // the IL on the C40-hosted interpreter
+// The change-driven scan (runtime/change_driven.h), each region (ir/regions.h,
+// up to max_rungs rungs) on its own engine from `part`.
+std::unique_ptr<Engine> make_change_driven(const Program& p, const EngineFactory& part, uint32_t max_rungs = 1);
 
 // The program of a case's text: ldc IL text (a typed program, looks_like_ldc_il),
 // IEC IL text (ldgen's tpou programs: it starts with a "(*" comment, parse_iec_il)
@@ -108,6 +111,9 @@ struct SeedRun {
   std::function<GenOptions(uint64_t)> options;
   std::function<int(uint64_t)> scans;
   EngineFactory test;
+  // if set, makes each seed's trace from generate_trace's (the change-driven
+  // runs thin it to an input activity)
+  std::function<std::string(uint64_t, const std::string&)> trace_filter;
   std::string what;    // "native -O1", in the reports
   std::string engine;  // ldrun's --engine spelling, for the reproducer's commands
   std::string stem;    // "diff_seed": the reproducer is <dir>/<stem><seed>.ld

@@ -1,0 +1,143 @@
+// runtime/change_driven.cpp -- the change-driven scan (runtime/change_driven.h).
+#include "runtime/change_driven.h"
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+#include <stdexcept>
+
+namespace ldc {
+
+namespace {
+
+constexpr uint32_t kReads = 0x80000000u;
+
+}  // namespace
+
+ChangeDrivenEngine::ChangeDrivenEngine(const RegionPlan& plan, const Layout& layout, std::vector<std::unique_ptr<Engine>> parts) {
+  if (parts.size() != plan.regions.size()) throw std::invalid_argument("change-driven scan: one engine per region");
+  const size_t n = parts.size(), size = layout.size;
+  // per byte: who reads it, who writes it (counted, then placed)
+  std::vector<uint32_t> count(size + 1, 0);
+  std::vector<uint8_t> written_by_any(size, 0), read_by_any(size, 0);
+  size_t snap = 0;
+  for (size_t r = 0; r < n; r++) {
+    const Region& g = plan.regions[r];
+    for (const Span& s : g.reads)
+      for (uint32_t b = s.off; b < s.off + s.len && b < size; b++) count[b]++, read_by_any[b] = 1;
+    for (const Span& s : g.writes) {
+      for (uint32_t b = s.off; b < s.off + s.len && b < size; b++) count[b]++, written_by_any[b] = 1;
+      snap += s.len;
+    }
+    snap_.resize(std::max(snap_.size(), snap));
+    snap = 0;
+  }
+  touch_at_.assign(size + 1, 0);
+  for (size_t b = 0; b < size; b++) touch_at_[b + 1] = touch_at_[b] + count[b];
+  touch_.resize(touch_at_[size]);
+  std::vector<uint32_t> fill(touch_at_.begin(), touch_at_.end() - 1);
+  for (size_t r = 0; r < n; r++) {
+    const Region& g = plan.regions[r];
+    for (const Span& s : g.reads)
+      for (uint32_t b = s.off; b < s.off + s.len && b < size; b++) touch_[fill[b]++] = uint32_t(r) | kReads;
+    for (const Span& s : g.writes)
+      for (uint32_t b = s.off; b < s.off + s.len && b < size; b++) touch_[fill[b]++] = uint32_t(r);
+  }
+  for (uint32_t b = 0; b < size; b++) {
+    if (!read_by_any[b] || written_by_any[b]) continue;
+    if (!external_.empty() && external_.back().off + external_.back().len == b) external_.back().len++;
+    else external_.push_back({b, 1});
+  }
+  size_t ext = 0;
+  for (const Span& s : external_) ext += s.len;
+  shadow_.resize(ext);
+  for (size_t r = 0; r < n; r++) parts_.push_back(Part{std::move(parts[r]), plan.regions[r].writes, plan.regions[r].uses_time, plan.regions[r].time_always, plan.regions[r].il_offset});
+  dirty_.assign((n + 63) / 64, 0);
+}
+
+void ChangeDrivenEngine::written(uint32_t off, uint32_t len) {
+  for (uint32_t b = off; b < off + len && b + 1 < touch_at_.size(); b++) mark_byte(b, SIZE_MAX);
+}
+
+void ChangeDrivenEngine::mark_all() { all_ = true; }
+
+void ChangeDrivenEngine::mark_byte(uint32_t b, size_t self) {
+  for (uint32_t k = touch_at_[b]; k < touch_at_[b + 1]; k++) {
+    const uint32_t t = touch_[k];
+    const size_t r = t & ~kReads;
+    if (r != self || (t & kReads)) set(r);
+  }
+}
+
+size_t ChangeDrivenEngine::next_dirty(size_t pos) const {
+  for (size_t w = pos >> 6; w < dirty_.size(); w++) {
+    uint64_t bits = dirty_[w];
+    if (w == pos >> 6) bits &= ~uint64_t(0) << (pos & 63);
+    if (bits) return w * 64 + size_t(std::countr_zero(bits));
+  }
+  return SIZE_MAX;
+}
+
+void ChangeDrivenEngine::run(size_t r, uint8_t* m) {
+  Part& p = parts_[r];
+  size_t k = 0;
+  for (const Span& s : p.writes) std::memcpy(snap_.data() + k, m + s.off, s.len), k += s.len;
+  ran_++;
+  p.engine->scan(*image_);
+  k = 0;
+  for (const Span& s : p.writes) {
+    if (std::memcmp(snap_.data() + k, m + s.off, s.len) != 0)
+      for (uint32_t i = 0; i < s.len; i++)
+        if (snap_[k + i] != m[s.off + i]) mark_byte(s.off + i, r);
+    k += s.len;
+  }
+}
+
+void ChangeDrivenEngine::scan(ImageBytes& mem) {
+  uint8_t* m = mem.data();
+  image_ = &mem;
+  size_t k = 0;
+  if (all_) {
+    std::fill(dirty_.begin(), dirty_.end(), ~uint64_t(0));
+    if (parts_.size() % 64) dirty_.back() = (uint64_t(1) << (parts_.size() % 64)) - 1;
+    for (const Span& s : external_) std::memcpy(shadow_.data() + k, m + s.off, s.len), k += s.len;
+    all_ = false;
+  } else {
+    for (const Span& s : external_) {
+      if (std::memcmp(shadow_.data() + k, m + s.off, s.len) != 0)
+        for (uint32_t i = 0; i < s.len; i++)
+          if (shadow_[k + i] != m[s.off + i]) shadow_[k + i] = m[s.off + i], mark_byte(s.off + i, SIZE_MAX);
+      k += s.len;
+    }
+  }
+  int32_t dt;
+  std::memcpy(&dt, m + kSysDt, 4);
+  ran_ = 0;
+  for (size_t pos = 0;;) {
+    const size_t r = next_dirty(pos);
+    if (r == SIZE_MAX) break;
+    dirty_[r >> 6] &= ~(uint64_t(1) << (r & 63));
+    // a fault kind left from before this region (a host that did not clear
+    // it) is not this region's: it is put back unless the region faults
+    uint32_t before = 0, fault = 0;
+    std::memcpy(&before, m + kSysFault, 4);
+    std::memset(m + kSysFault, 0, 4);
+    run(r, m);
+    if (parts_[r].time_always || (parts_[r].uses_time && dt == 0)) set(r);
+    std::memcpy(&fault, m + kSysFault, 4);
+    if (fault == kFaultNone) {
+      std::memcpy(m + kSysFault, &before, 4);
+      pos = r + 1;
+      continue;
+    }
+    uint32_t at;
+    std::memcpy(&at, m + kSysFaultAt, 4);
+    at += parts_[r].il_offset;
+    std::memcpy(m + kSysFaultAt, &at, 4);
+    set(r);  // it did not finish: it runs again
+    break;
+  }
+  image_ = nullptr;
+}
+
+}  // namespace ldc

@@ -1,0 +1,69 @@
+// runtime/change_driven.h -- the change-driven scan (issue 28,
+// docs/change-driven.md): a program cut into regions (ir/regions.h), each run
+// only when something it reads or writes changed since it last ran.
+//
+// The record it keeps: a dirty bit per region.  Every region runs on the
+// first scan.  After a region runs, each byte of its writes that changed
+// marks every region that reads or writes that byte (not the region itself
+// for a byte it only writes): a later one runs in this scan, an earlier one
+// (or itself) in the next.  Before each scan the bytes that regions read and
+// none writes (inputs, S1) are compared with their values at the last scan,
+// and a change marks their readers; whoever else writes the image between
+// scans (a client, forcing, a download) says so with `written` or
+// `mark_all`.  A region that reads dt runs again in the next scan if dt was
+// 0 in this one (a timer that is timing changes its elapsed word with every
+// dt > 0, which marks it; with dt = 0 nothing would), and after every scan
+// it ran in if one of its timers has a second writer in it (time_always).  A region that ends
+// the scan with a fault (Sys kSysFault) stays dirty and the walk stops, as
+// the full scan stops there.
+//
+// The result of every scan is the full scan's; the regions' own engines (the
+// reference interpreter's, or checked native code's) do the work.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "ir/regions.h"
+#include "runtime/runtime.h"
+
+namespace ldc {
+
+class ChangeDrivenEngine : public Engine {
+ public:
+  // parts[i] runs plan.regions[i] (region_program) over the whole image.
+  ChangeDrivenEngine(const RegionPlan& plan, const Layout& layout, std::vector<std::unique_ptr<Engine>> parts);
+  void scan(ImageBytes& mem) override;
+  // Bytes [off, off + len) changed between scans by someone else.
+  void written(uint32_t off, uint32_t len) override;
+  // Every region runs in the next scan (a download, a restart, forcing).
+  void mark_all();
+  size_t regions() const { return parts_.size(); }
+  size_t ran_last_scan() const { return ran_; }
+
+ private:
+  void mark_byte(uint32_t b, size_t self);
+  void set(size_t r) { dirty_[r >> 6] |= uint64_t(1) << (r & 63); }
+  size_t next_dirty(size_t pos) const;
+  void run(size_t r, uint8_t* m);
+
+  struct Part {
+    std::unique_ptr<Engine> engine;
+    std::vector<Span> writes;
+    bool uses_time = false, time_always = false;
+    uint32_t il_offset = 0;  // its IL's place in the program's: a fault record names the program's offset
+  };
+  std::vector<Part> parts_;
+  std::vector<uint64_t> dirty_;
+  // per image byte: [touch_at_[b], touch_at_[b + 1]) in touch_, each a region
+  // that reads (top bit set) or only writes the byte
+  std::vector<uint32_t> touch_at_, touch_;
+  std::vector<Span> external_;        // read by a region, written by none
+  std::vector<uint8_t> shadow_, snap_;
+  ImageBytes* image_ = nullptr;  // during scan()
+  bool all_ = true;
+  size_t ran_ = 0;
+};
+
+}  // namespace ldc
