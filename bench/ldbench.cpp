@@ -77,11 +77,17 @@ using Clock = std::chrono::steady_clock;
 
 // native is ldc's -O0 (paper 003's pure macro expansion); native-O1 and
 // native-O2 the optimizing levels of docs/x86.md.
-enum EngineKind { kClassic, kFast, kNative, kNativeO1, kNativeO2, kC, kEngines };
-const char* const kEngineName[] = {"classic", "fast", "native", "native-O1", "native-O2", "c"};
+// native-cd is the change-driven scan (issue 28, docs/change-driven.md):
+// regions of up to kChangeRungs rungs compiled at -O2, each run only when
+// what it reads or writes changed (8 ran faster than 1 on every program of
+// the first measurement, docs/BENCHMARKS.md "Issue 28").
+enum EngineKind { kClassic, kFast, kNative, kNativeO1, kNativeO2, kC, kChange, kEngines };
+const char* const kEngineName[] = {"classic", "fast", "native", "native-O1", "native-O2", "c", "native-cd"};
 const char* const kEngineTitle[] = {"classic interpreter", "fast interpreter", "native x86-64 -O0",
-                                    "native x86-64 -O1",   "native x86-64 -O2", "C route (cc -O2)"};
+                                    "native x86-64 -O1",   "native x86-64 -O2", "C route (cc -O2)",
+                                    "native x86-64 change-driven"};
 constexpr int kLevels = 3;
+constexpr uint32_t kChangeRungs = 8;
 constexpr EngineKind kNativeAt[kLevels] = {kNative, kNativeO1, kNativeO2};
 
 struct Options {
@@ -223,6 +229,15 @@ struct RawTrace {
   }
   void apply(uint8_t* mem, size_t row) const {
     for (const Write& w : rows[row]) std::memcpy(mem + w.off, pool.data() + w.pos, w.len);
+  }
+  // The same for an engine that is told what changed (Engine::written): a
+  // write that changes nothing is not announced, as an I/O driver does.
+  void apply(uint8_t* mem, size_t row, Engine& e) const {
+    for (const Write& w : rows[row])
+      if (std::memcmp(mem + w.off, pool.data() + w.pos, w.len) != 0) {
+        std::memcpy(mem + w.off, pool.data() + w.pos, w.len);
+        e.written(w.off, w.len);
+      }
   }
   size_t size() const { return rows.size(); }
 };
@@ -416,6 +431,11 @@ void prepare(Subject& s, const Options& o) {
   }
   s.native_build_s = s.native_build_at[0];
   s.native_bytes = s.native_bytes_at[0];
+  try {
+    s.eng[kChange] = make_change_driven_native(s.prog, 2, kChangeRungs);
+  } catch (const std::exception& e) {
+    s.status[kChange] = std::string("refused: ") + e.what();
+  }
   if (!o.c_route) {
     s.status[kC] = "off (--no-c)";
   } else if (s.n > o.c_max_il) {
@@ -503,7 +523,8 @@ void check_agreement(Subject& s, int scans) {
   for (int k = 1; k <= scans; k++) {
     for (int e = 0; e < kEngines; e++) {
       if (!s.eng[e] || !s.status[e].empty()) continue;
-      s.trace.apply(mem[e].data(), size_t(k - 1) % s.trace.size());
+      if (e == kChange) s.trace.apply(mem[e].data(), size_t(k - 1) % s.trace.size(), *s.eng[e]);
+      else s.trace.apply(mem[e].data(), size_t(k - 1) % s.trace.size());
       mem[e].set_bit(Area::S, kBitFirstScan, k == 1);
       s.eng[e]->scan(mem[e].bytes);
       uint32_t n = uint32_t(k);
@@ -540,10 +561,18 @@ void measure(Subject& s, const Options& o) {
     uint8_t* m = mem[i].data();
     size_t r = row[i], rows = s.trace.size();
     auto t0 = Clock::now();
-    for (int k = 0; k < scans; k++) {
-      s.trace.apply(m, r);
-      if (++r == rows) r = 0;
-      e->scan(mem[i].bytes);
+    if (which[i] == kChange) {
+      for (int k = 0; k < scans; k++) {
+        s.trace.apply(m, r, *e);
+        if (++r == rows) r = 0;
+        e->scan(mem[i].bytes);
+      }
+    } else {
+      for (int k = 0; k < scans; k++) {
+        s.trace.apply(m, r);
+        if (++r == rows) r = 0;
+        e->scan(mem[i].bytes);
+      }
     }
     auto t1 = Clock::now();
     row[i] = r;
@@ -626,9 +655,9 @@ struct Run {
     measure_c40(*s, o);
     double c40_s = secs_since(tc);
     auto t = [&](int e) { return progress_ns(s->t[e]); };
-    say("  timed %.1fs: classic %s, fast %s, native %s / %s / %s, C %s; C40 %s / %s cycles (%.1fs)\n", secs_since(t0),
+    say("  timed %.1fs: classic %s, fast %s, native %s / %s / %s / cd %s, C %s; C40 %s / %s cycles (%.1fs)\n", secs_since(t0),
         t(kClassic).c_str(), t(kFast).c_str(), t(kNative).c_str(), t(kNativeO1).c_str(), t(kNativeO2).c_str(),
-        t(kC).c_str(), progress_cycles(s->c40_interp_cycles).c_str(), progress_cycles(s->c40_cycles).c_str(), c40_s);
+        t(kChange).c_str(), t(kC).c_str(), progress_cycles(s->c40_interp_cycles).c_str(), progress_cycles(s->c40_cycles).c_str(), c40_s);
     if (!s->c40_status.empty() && o.c40) say("  C40: %s\n", s->c40_status.c_str());
     for (int e = 0; e < kEngines; e++) {
       const Timing& t = s->t[e];
@@ -777,6 +806,14 @@ void run_scaling(Run& R) {
   bool c = R.o.c_route;
   if (R.o.smoke) R.o.c_route = false;
   for (int n : ns) R.add(synth_subject("scaling", n, synth::kTypicalPBasic, uint64_t(n) + 77));
+  // issue 28: the same programs from 3,000 instructions on, inputs 2% a scan
+  for (int n : ns) {
+    if (n <= (R.o.smoke ? 300 : 3000)) continue;  // 3,000's row is below
+    auto s = synth_subject("inputs", n, synth::kTypicalPBasic, uint64_t(n) + 77);
+    s->name += " (inputs 2% a scan)";
+    s->trace = synth_trace(s->prog.layout(), 1024, uint64_t(n) + 77, 20);
+    R.add(std::move(s));
+  }
   // The same program as the scaling one of 3000 instructions, its inputs
   // changing 10 times less often, and never: data-dependent branches become
   // predictable.
@@ -856,8 +893,15 @@ void run_large(Run& R) {
     Rng rng(12345);
     for (size_t i = sh->prog.rungs.size(); i > 1; i--) std::swap(sh->prog.rungs[i - 1], sh->prog.rungs[size_t(rng.below(int(i)))]);
     sh->trace = s->trace;
+    // the same plant with its inputs changing 10 times less often (issue 28)
+    auto slow = std::make_unique<Subject>();
+    slow->experiment = "large";
+    slow->name = s->name + " (inputs 2% a scan)";
+    slow->prog = s->prog;
+    slow->trace = synth_trace(slow->prog.layout(), 1024, 5, 20);
     R.add(std::move(s), 16);
     R.add(std::move(sh), 16);
+    R.add(std::move(slow), 16);
   }
   {
     auto s = std::make_unique<Subject>();

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "driver/targets.h"
+#include "runtime/change_driven.h"
 
 namespace ldc {
 
@@ -135,6 +136,29 @@ const Target& x86_64_target() {
       .engines = kEngines,
   };
   return t;
+}
+
+}  // namespace ldc
+
+namespace ldc {
+
+RegionCode build_x86_regions(const Program& p, const RegionPlan& plan, int opt_level) {
+  RegionCode rc;
+  for (const Region& r : plan.regions) {
+    NativeBuild nb = build_x86(region_program(p, r), p.source, as::Mode::Blockwise, opt_level, /*notes=*/false);
+    rc.start.push_back(uint32_t(rc.code.size()));
+    rc.size.push_back(uint32_t(nb.asm_result.code.size()));
+    rc.code.insert(rc.code.end(), nb.asm_result.code.begin(), nb.asm_result.code.end());
+  }
+  return rc;
+}
+
+std::unique_ptr<Engine> make_change_driven_native(const Program& p, int opt_level, uint32_t max_rungs) {
+  const Layout L = p.layout();
+  RegionPlan plan = plan_regions(p, L, max_rungs);
+  RegionCode rc = build_x86_regions(p, plan, opt_level);
+  auto code = std::make_shared<const CheckedRegions>(map_checked_regions(rc.code, rc.start, rc.size, L));
+  return std::make_unique<ChangeDrivenEngine>(plan, L, make_native_region_engines(code));
 }
 
 }  // namespace ldc

@@ -7,7 +7,9 @@
 
 #include "backend-x86/backend_x86.h"
 #include "ir/ir.h"
+#include "ir/regions.h"
 #include "loader/loader.h"
+#include "runtime/runtime.h"
 
 namespace ldc {
 
@@ -24,6 +26,18 @@ struct NativeBuild {
 };
 NativeBuild build_x86(const Program& p, const std::string& source_name, as::Mode mode = as::Mode::Blockwise,
                       int opt_level = 0, bool notes = true);
+
+// The change-driven scan's native code (issue 28, docs/change-driven.md):
+// each region of `plan` (ir/regions.h) compiled at `opt_level` as a scan
+// function of its own (region_program), one right after another.
+struct RegionCode {
+  std::vector<uint8_t> code;
+  std::vector<uint32_t> start, size;
+};
+RegionCode build_x86_regions(const Program& p, const RegionPlan& plan, int opt_level);
+// The change-driven engine (runtime/change_driven.h) on that code, checked
+// region by region (map_checked_regions).
+std::unique_ptr<Engine> make_change_driven_native(const Program& p, int opt_level, uint32_t max_rungs = 1);
 
 // The image ldc writes for the x86-64 target: code, binary IL, line map, names.
 Image make_x86_image(const Program& p, const NativeBuild& nb);

@@ -11,6 +11,7 @@ namespace ldc {
 namespace {
 
 constexpr uint32_t kReads = 0x80000000u;
+constexpr uint32_t kNoUnit = 0xffffffffu;
 
 }  // namespace
 
@@ -32,16 +33,31 @@ ChangeDrivenEngine::ChangeDrivenEngine(const RegionPlan& plan, const Layout& lay
     snap_.resize(std::max(snap_.size(), snap));
     snap = 0;
   }
-  touch_at_.assign(size + 1, 0);
-  for (size_t b = 0; b < size; b++) touch_at_[b + 1] = touch_at_[b] + count[b];
-  touch_.resize(touch_at_[size]);
-  std::vector<uint32_t> fill(touch_at_.begin(), touch_at_.end() - 1);
+  // per byte, then bytes in a row with the same list made one unit (a word's
+  // four bytes, an array), so a changed word marks its regions once
+  std::vector<uint32_t> at(size + 1, 0), list;
+  for (size_t b = 0; b < size; b++) at[b + 1] = at[b] + count[b];
+  list.resize(at[size]);
+  std::vector<uint32_t> fill(at.begin(), at.end() - 1);
   for (size_t r = 0; r < n; r++) {
     const Region& g = plan.regions[r];
     for (const Span& s : g.reads)
-      for (uint32_t b = s.off; b < s.off + s.len && b < size; b++) touch_[fill[b]++] = uint32_t(r) | kReads;
+      for (uint32_t b = s.off; b < s.off + s.len && b < size; b++) list[fill[b]++] = uint32_t(r) | kReads;
     for (const Span& s : g.writes)
-      for (uint32_t b = s.off; b < s.off + s.len && b < size; b++) touch_[fill[b]++] = uint32_t(r);
+      for (uint32_t b = s.off; b < s.off + s.len && b < size; b++) list[fill[b]++] = uint32_t(r);
+  }
+  auto same = [&](size_t a, size_t b) {
+    return at[a + 1] - at[a] == at[b + 1] - at[b] && std::equal(list.begin() + at[a], list.begin() + at[a + 1], list.begin() + at[b]);
+  };
+  unit_of_.assign(size, kNoUnit);
+  touch_at_.push_back(0);
+  for (size_t b = 0; b < size; b++) {
+    if (at[b + 1] == at[b]) continue;
+    if (b == 0 || unit_of_[b - 1] == kNoUnit || !same(b - 1, b)) {
+      touch_.insert(touch_.end(), list.begin() + at[b], list.begin() + at[b + 1]);
+      touch_at_.push_back(uint32_t(touch_.size()));
+    }
+    unit_of_[b] = uint32_t(touch_at_.size() - 2);
   }
   for (uint32_t b = 0; b < size; b++) {
     if (!read_by_any[b] || written_by_any[b]) continue;
@@ -56,13 +72,17 @@ ChangeDrivenEngine::ChangeDrivenEngine(const RegionPlan& plan, const Layout& lay
 }
 
 void ChangeDrivenEngine::written(uint32_t off, uint32_t len) {
-  for (uint32_t b = off; b < off + len && b + 1 < touch_at_.size(); b++) mark_byte(b, SIZE_MAX);
+  last_unit_ = kNoUnit;
+  for (uint64_t b = off; b < uint64_t(off) + len && b < unit_of_.size(); b++) mark_byte(uint32_t(b), SIZE_MAX);
 }
 
 void ChangeDrivenEngine::mark_all() { all_ = true; }
 
 void ChangeDrivenEngine::mark_byte(uint32_t b, size_t self) {
-  for (uint32_t k = touch_at_[b]; k < touch_at_[b + 1]; k++) {
+  const uint32_t u = unit_of_[b];
+  if (u == kNoUnit || u == last_unit_) return;
+  last_unit_ = u;
+  for (uint32_t k = touch_at_[u]; k < touch_at_[u + 1]; k++) {
     const uint32_t t = touch_[k];
     const size_t r = t & ~kReads;
     if (r != self || (t & kReads)) set(r);
@@ -85,6 +105,7 @@ void ChangeDrivenEngine::run(size_t r, uint8_t* m) {
   ran_++;
   p.engine->scan(*image_);
   k = 0;
+  last_unit_ = kNoUnit;
   for (const Span& s : p.writes) {
     if (std::memcmp(snap_.data() + k, m + s.off, s.len) != 0)
       for (uint32_t i = 0; i < s.len; i++)
@@ -103,6 +124,7 @@ void ChangeDrivenEngine::scan(ImageBytes& mem) {
     for (const Span& s : external_) std::memcpy(shadow_.data() + k, m + s.off, s.len), k += s.len;
     all_ = false;
   } else {
+    last_unit_ = kNoUnit;
     for (const Span& s : external_) {
       if (std::memcmp(shadow_.data() + k, m + s.off, s.len) != 0)
         for (uint32_t i = 0; i < s.len; i++)

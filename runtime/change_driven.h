@@ -56,9 +56,11 @@ class ChangeDrivenEngine : public Engine {
   };
   std::vector<Part> parts_;
   std::vector<uint64_t> dirty_;
-  // per image byte: [touch_at_[b], touch_at_[b + 1]) in touch_, each a region
-  // that reads (top bit set) or only writes the byte
-  std::vector<uint32_t> touch_at_, touch_;
+  // per image byte its unit (bytes in a row that the same regions touch),
+  // or ~0; per unit u: [touch_at_[u], touch_at_[u + 1]) in touch_, each a
+  // region that reads (top bit set) or only writes it
+  std::vector<uint32_t> unit_of_, touch_at_, touch_;
+  uint32_t last_unit_ = ~0u;  // the unit marked last (a span's bytes mark it once)
   std::vector<Span> external_;        // read by a region, written by none
   std::vector<uint8_t> shadow_, snap_;
   ImageBytes* image_ = nullptr;  // during scan()

@@ -58,6 +58,7 @@ std::unique_ptr<Engine> make_fast_interp_engine(std::span<const uint8_t> il, con
 // map_checked_code is the one function that makes one, so the native engine,
 // which takes nothing else, never runs bytes the check has not seen (a plain
 // vector does not convert: tests/runtime/native_type_test.cpp).
+class CheckedRegions;
 class CheckedCode {
  public:
   CheckedCode(CheckedCode&& o) noexcept;
@@ -70,7 +71,10 @@ class CheckedCode {
 
  private:
   friend CheckedCode map_checked_code(std::span<const uint8_t> code, uint32_t entry, const Layout& layout);
+  friend CheckedRegions map_checked_regions(std::span<const uint8_t> code, std::span<const uint32_t> start,
+                                            std::span<const uint32_t> size, const Layout& layout);
   friend class NativeEngine;
+  friend class NativeRegionEngine;
   CheckedCode(void* base, size_t mapped, size_t size, uint32_t entry) : base_(base), mapped_(mapped), size_(size), entry_(entry) {}
   void* base_ = nullptr;  // read+execute
   size_t mapped_ = 0, size_ = 0;
@@ -79,6 +83,30 @@ class CheckedCode {
 // Throws std::runtime_error ("native code refused: at code offset 0x..: why")
 // if the check refuses the code, or if it cannot be mapped.
 CheckedCode map_checked_code(std::span<const uint8_t> code, uint32_t entry, const Layout& layout);
+
+// The native code of a change-driven scan (runtime/change_driven.h): one
+// scan function per region, region i's bytes [start[i], start[i] + size[i])
+// of `code` with its entry at start[i], in ascending order without overlap
+// (the bytes between are never run).  Each passes the code check on its own
+// bytes, so no branch leaves its region; the mapping is made executable only
+// then.  Throws std::runtime_error ("native code refused: region N: ...").
+class CheckedRegions {
+ public:
+  size_t regions() const { return start_.size(); }
+  const CheckedCode& code() const { return code_; }
+
+ private:
+  friend CheckedRegions map_checked_regions(std::span<const uint8_t> code, std::span<const uint32_t> start,
+                                            std::span<const uint32_t> size, const Layout& layout);
+  friend class NativeRegionEngine;
+  CheckedRegions(CheckedCode c, std::vector<uint32_t> s) : code_(std::move(c)), start_(std::move(s)) {}
+  CheckedCode code_;
+  std::vector<uint32_t> start_;
+};
+CheckedRegions map_checked_regions(std::span<const uint8_t> code, std::span<const uint32_t> start,
+                                   std::span<const uint32_t> size, const Layout& layout);
+// One engine per region, each calling its scan function in the shared mapping.
+std::vector<std::unique_ptr<Engine>> make_native_region_engines(std::shared_ptr<const CheckedRegions> code);
 
 // Native x86-64 scan code, called as void scan(uint8_t* image).  The image must
 // live in ImageBytes (ir.h): the code calls the REAL functions through the

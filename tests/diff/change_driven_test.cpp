@@ -10,11 +10,13 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <sstream>
 
 #include "bench/rng.h"
 #include "ir/regions.h"
 #include "runtime/change_driven.h"
+#include "driver/x86_target.h"
 #include "tests/diff/harness.h"
 
 namespace {
@@ -91,6 +93,121 @@ void run(const char* what, EngineFactory test, long count_default) {
   std::printf("%s: %ld programs, %ld rungs, %ld scans compared in %.1f s\n", what, t.programs, t.rungs, t.scans, t.secs);
 }
 
+// ------------------------------------------------------------------ by hand
+
+// Rungs 0-5; the regions and what runs, derived from the rules of
+// ir/regions.h and runtime/change_driven.h by hand.
+const char* kPlanIl = R"(.rung line 1
+    LOAD X0
+    OUT Y0
+.rung line 2
+    LOAD X1
+    JMP skip
+.rung line 3
+    LOAD X2
+    OUT Y1
+.label skip
+.rung line 4
+    LOAD Y0
+    OUT Y2
+.rung line 5
+    LOAD X3
+    TON T0 100
+.rung line 6
+    LOAD T0
+    OUT Y3
+.end
+)";
+
+TEST(ChangeDriven, RegionsAreTheRungsAJumpDoesNotJoin) {
+  Program p = parse_il_text(kPlanIl, "plan.il");
+  const Layout L = p.layout();
+  RegionPlan plan = plan_regions(p, L);
+  EXPECT_EQ(plan.whole, "");
+  ASSERT_EQ(plan.regions.size(), 5u);  // the JMP (rung 1) joins the rung it skips (2)
+  EXPECT_EQ(plan.regions[1].first, 1u);
+  EXPECT_EQ(plan.regions[1].end, 3u);
+  EXPECT_EQ(plan.regions[0].reads, (std::vector<Span>{{L.addr(Area::X, 0), 1}}));
+  EXPECT_EQ(plan.regions[0].writes, (std::vector<Span>{{L.addr(Area::Y, 0), 1}}));
+  EXPECT_TRUE(plan.regions[3].uses_time);   // TON T0
+  EXPECT_FALSE(plan.regions[3].time_always);
+  EXPECT_FALSE(plan.regions[4].uses_time);  // a contact on T0's done bit reads no dt
+}
+
+TEST(ChangeDriven, AnIdleScanRunsNothingAndAChangeRunsItsReaders) {
+  Program p = parse_il_text(kPlanIl, "plan.il");
+  const Layout L = p.layout();
+  ChangeDrivenEngine e(plan_regions(p, L), L, [&] {
+    std::vector<std::unique_ptr<Engine>> v;
+    for (const Region& r : plan_regions(p, L).regions) v.push_back(make_interp(region_program(p, r)));
+    return v;
+  }());
+  Memory m(L);
+  auto scan = [&](int32_t dt) {
+    std::memcpy(m.data() + kSysDt, &dt, 4);
+    e.scan(m.bytes);
+    return e.ran_last_scan();
+  };
+  EXPECT_EQ(scan(10), 5u);  // the first scan runs every region
+  EXPECT_EQ(scan(10), 0u);  // nothing changed: nothing runs
+  m.set_bit(Area::X, 0, true);
+  // X0 -> region 0 writes Y0 (0 -> 1) -> region 2 (reads Y0) writes Y2
+  EXPECT_EQ(scan(10), 2u);
+  EXPECT_EQ(m.bytes[L.addr(Area::Y, 2)], 1);
+  EXPECT_EQ(scan(10), 0u);
+  m.set_bit(Area::X, 3, true);
+  // T0 times 100 ms (ir/interp.cpp exec_TON): the scan IN comes on, elapsed
+  // 0 and its input memory 0 -> 1; then 10, 20, ... 100 ms, each a change
+  // that runs the TON's region again; at 100 the done bit comes on, which
+  // runs region 4 too; one more run finds 100 kept (advance), then nothing
+  for (int k = 1; k <= 10; k++) EXPECT_EQ(scan(10), 1u) << "scan " << k;
+  EXPECT_EQ(scan(10), 2u);
+  EXPECT_EQ(m.bytes[L.addr(Area::Y, 3)], 1);
+  EXPECT_EQ(scan(10), 1u);
+  EXPECT_EQ(scan(10), 0u);
+  // a write by someone else to a device a region writes runs that region again
+  m.set_bit(Area::Y, 0, false);
+  e.written(L.addr(Area::Y, 0), 1);
+  EXPECT_EQ(scan(10), 2u);  // region 0 puts Y0 back (1): region 2 runs, Y2 stays 1
+  EXPECT_EQ(m.bytes[L.addr(Area::Y, 0)], 1);
+}
+
+// The checked mapping of region code refuses a table that lets a region's
+// bytes overlap another's, leave the code, or cut an instruction, and code
+// that is fine as a whole but not region by region.
+TEST(ChangeDriven, TheRegionTableIsChecked) {
+  Program p = parse_il_text(kPlanIl, "plan.il");
+  const Layout L = p.layout();
+  RegionCode rc = build_x86_regions(p, plan_regions(p, L), 1);
+  ASSERT_EQ(rc.start.size(), 5u);
+  EXPECT_NO_THROW(map_checked_regions(rc.code, rc.start, rc.size, L));
+  auto refused = [&](std::vector<uint32_t> start, std::vector<uint32_t> size, const std::string& want) {
+    try {
+      map_checked_regions(rc.code, start, size, L);
+      ADD_FAILURE() << "accepted; wanted: " << want;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(want), std::string::npos) << e.what();
+    }
+  };
+  auto start = rc.start, size = rc.size;
+  start[2] = rc.start[1] + 1;
+  refused(start, rc.size, "region 2 starts at");  // inside region 1
+  size = rc.size;
+  size[4] += 1;
+  refused(rc.start, size, "region 4 [");  // past the code's end
+  size = rc.size;
+  size[0] -= 1;
+  refused(rc.start, size, "region 0 (its bytes");  // its last instruction cut: no epilogue
+  size = rc.size;
+  size[0] = 0;
+  refused(rc.start, size, "is empty");
+  refused({}, {}, "no regions");
+  // two regions as one: the slice holds two functions, the second's prologue
+  // inside the first's body
+  start = {rc.start[0]}, size = {rc.start[1] + rc.size[1] - rc.start[0]};
+  refused(start, size, "region 0 (its bytes");
+}
+
 TEST(ChangeDriven, RegionsOnTheInterpreterMatchTheFullScan) {
   run("change-driven (interp regions)", [](const Program& p) { return make_change_driven(p, make_interp); }, 120);
 }
@@ -100,7 +217,11 @@ TEST(ChangeDriven, RegionsOfSeveralRungsMatchTheFullScan) {
 }
 
 TEST(ChangeDriven, NativeRegionsMatchTheFullScan) {
-  run("change-driven (native -O1 regions)", [](const Program& p) { return make_change_driven(p, make_native_o1); }, 60);
+  run("change-driven (native -O1 regions)", [](const Program& p) { return make_change_driven_native(p, 1); }, 60);
+}
+
+TEST(ChangeDriven, NativeO2RegionsOfSeveralRungsMatchTheFullScan) {
+  run("change-driven (native -O2 regions of 8 rungs)", [](const Program& p) { return make_change_driven_native(p, 2, 8); }, 40);
 }
 
 }  // namespace
