@@ -230,14 +230,14 @@ struct RawTrace {
   void apply(uint8_t* mem, size_t row) const {
     for (const Write& w : rows[row]) std::memcpy(mem + w.off, pool.data() + w.pos, w.len);
   }
-  // The same for an engine that is told what changed (Engine::written): a
-  // write that changes nothing is not announced, as an I/O driver does.
+  // The same, each write announced to the engine (Engine::written: the
+  // change-driven scan compares the inputs it reads itself and runs what
+  // reads or writes any other cell written).
   void apply(uint8_t* mem, size_t row, Engine& e) const {
-    for (const Write& w : rows[row])
-      if (std::memcmp(mem + w.off, pool.data() + w.pos, w.len) != 0) {
-        std::memcpy(mem + w.off, pool.data() + w.pos, w.len);
-        e.written(w.off, w.len);
-      }
+    for (const Write& w : rows[row]) {
+      std::memcpy(mem + w.off, pool.data() + w.pos, w.len);
+      e.written(w.off, w.len);
+    }
   }
   size_t size() const { return rows.size(); }
 };

@@ -153,12 +153,14 @@ RegionCode build_x86_regions(const Program& p, const RegionPlan& plan, int opt_l
   return rc;
 }
 
-std::unique_ptr<Engine> make_change_driven_native(const Program& p, int opt_level, uint32_t max_rungs) {
+std::unique_ptr<Engine> make_change_driven_native(const Program& p, int opt_level, uint32_t max_rungs, bool adaptive) {
   const Layout L = p.layout();
   RegionPlan plan = plan_regions(p, L, max_rungs);
   RegionCode rc = build_x86_regions(p, plan, opt_level);
   auto code = std::make_shared<const CheckedRegions>(map_checked_regions(rc.code, rc.start, rc.size, L));
-  return std::make_unique<ChangeDrivenEngine>(plan, L, make_native_region_engines(code));
+  std::unique_ptr<Engine> full;
+  if (adaptive) full = make_native_engine(map_checked_code(build_x86(p, p.source, as::Mode::Blockwise, opt_level, false).asm_result.code, 0, L));
+  return std::make_unique<ChangeDrivenEngine>(plan, L, make_native_region_engines(code), std::move(full));
 }
 
 }  // namespace ldc

@@ -36,8 +36,9 @@ struct RegionCode {
 };
 RegionCode build_x86_regions(const Program& p, const RegionPlan& plan, int opt_level);
 // The change-driven engine (runtime/change_driven.h) on that code, checked
-// region by region (map_checked_regions).
-std::unique_ptr<Engine> make_change_driven_native(const Program& p, int opt_level, uint32_t max_rungs = 1);
+// region by region (map_checked_regions); adaptive, with the program's full
+// scan at the same level, unless `adaptive` is false.
+std::unique_ptr<Engine> make_change_driven_native(const Program& p, int opt_level, uint32_t max_rungs = 1, bool adaptive = true);
 
 // The image ldc writes for the x86-64 target: code, binary IL, line map, names.
 Image make_x86_image(const Program& p, const NativeBuild& nb);

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <chrono>
 #include <cstring>
 #include <stdexcept>
 
@@ -12,10 +13,15 @@ namespace {
 
 constexpr uint32_t kReads = 0x80000000u;
 constexpr uint32_t kNoUnit = 0xffffffffu;
+// the adaptive choice: scans a probe settles, then measures; full scans
+// before the next probe, doubled by each probe the regions lose
+constexpr uint64_t kSettle = 3, kProbe = 12, kMinWait = 64, kMaxWait = 16384;
 
 }  // namespace
 
-ChangeDrivenEngine::ChangeDrivenEngine(const RegionPlan& plan, const Layout& layout, std::vector<std::unique_ptr<Engine>> parts) {
+ChangeDrivenEngine::ChangeDrivenEngine(const RegionPlan& plan, const Layout& layout, std::vector<std::unique_ptr<Engine>> parts,
+                                       std::unique_ptr<Engine> full)
+    : full_(std::move(full)) {
   if (parts.size() != plan.regions.size()) throw std::invalid_argument("change-driven scan: one engine per region");
   const size_t n = parts.size(), size = layout.size;
   // per byte: who reads it, who writes it (counted, then placed)
@@ -59,8 +65,10 @@ ChangeDrivenEngine::ChangeDrivenEngine(const RegionPlan& plan, const Layout& lay
     }
     unit_of_[b] = uint32_t(touch_at_.size() - 2);
   }
+  external_byte_.assign(size, 0);
   for (uint32_t b = 0; b < size; b++) {
     if (!read_by_any[b] || written_by_any[b]) continue;
+    external_byte_[b] = 1;
     if (!external_.empty() && external_.back().off + external_.back().len == b) external_.back().len++;
     else external_.push_back({b, 1});
   }
@@ -72,8 +80,10 @@ ChangeDrivenEngine::ChangeDrivenEngine(const RegionPlan& plan, const Layout& lay
 }
 
 void ChangeDrivenEngine::written(uint32_t off, uint32_t len) {
+  if (full_ && in_full_) return;  // a probe marks every region
   last_unit_ = kNoUnit;
-  for (uint64_t b = off; b < uint64_t(off) + len && b < unit_of_.size(); b++) mark_byte(uint32_t(b), SIZE_MAX);
+  for (uint64_t b = off; b < uint64_t(off) + len && b < unit_of_.size(); b++)
+    if (!external_byte_[b]) mark_byte(uint32_t(b), SIZE_MAX);  // the external bytes: compared before the scan
 }
 
 void ChangeDrivenEngine::mark_all() { all_ = true; }
@@ -115,6 +125,59 @@ void ChangeDrivenEngine::run(size_t r, uint8_t* m) {
 }
 
 void ChangeDrivenEngine::scan(ImageBytes& mem) {
+  if (!full_) return walk(mem);
+  // every 8th scan is timed, and every scan of a probe's first kProbe
+  const bool timed = scans_++ % 8 == 0 || (!in_full_ && since_ < kProbe);
+  const auto t0 = timed ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point();
+  if (in_full_) {
+    full_->scan(mem);
+    ran_ = SIZE_MAX;
+  } else {
+    walk(mem);
+  }
+  since_++;
+  if (timed) choose(double(std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count()));
+  else choose(-1);
+}
+
+// After a timed scan (ns), or an untimed one (ns < 0).
+void ChangeDrivenEngine::choose(double ns) {
+  if (fixed_full_ || fixed_walk_) {
+    if (since_ < (in_full_ ? fixed_full_ : fixed_walk_)) return;
+    in_full_ = !in_full_, since_ = 0;
+    if (!in_full_) all_ = true;
+    return;
+  }
+  // a mode's first timed scan after a switch (cold code, the probe's marked
+  // regions) is left out of its mean
+  auto add = [&](double x) {
+    if (sum_n_++ > 0) sum_ += x;
+  };
+  auto mean = [&] { return sum_n_ > 1 ? sum_ / double(sum_n_ - 1) : 0.0; };
+  if (in_full_) {
+    if (ns >= 0) add(ns);
+    if (since_ < wait_ || sum_n_ < 3) return;
+    full_ns_ = mean();
+    in_full_ = false, since_ = 0, sum_ = 0, sum_n_ = 0;
+    all_ = true;  // nothing is known of the regions after full scans
+    return;
+  }
+  if (ns < 0 || since_ <= kSettle) return;
+  add(ns);
+  const double walk = mean();
+  if (walk == 0) return;
+  const bool losing = walk > full_ns_, clearly = walk > 2 * full_ns_;
+  if (since_ < kProbe && !clearly) return;
+  if (since_ >= kProbe) sum_ = 0, sum_n_ = 0;  // the next decision on fresh scans
+  if (losing) {
+    in_full_ = true, since_ = 0, sum_ = 0, sum_n_ = 0;
+    wait_ = std::min<uint64_t>(wait_ * 2, kMaxWait);
+  } else {
+    wait_ = kMinWait;
+  }
+}
+
+void ChangeDrivenEngine::walk(ImageBytes& mem) {
   uint8_t* m = mem.data();
   image_ = &mem;
   size_t k = 0;

@@ -19,6 +19,16 @@
 //
 // The result of every scan is the full scan's; the regions' own engines (the
 // reference interpreter's, or checked native code's) do the work.
+//
+// Adaptive (`full` given): when most regions run anyway, walking them costs
+// more than the full scan's code.  The engine then runs `full` instead, and
+// every `probe` scans tries the regions again: a scan with every region
+// marked (nothing is known after full scans), two more to settle, then
+// scans that measure (8, fewer if the regions are clearly slower).  It keeps
+// whichever measured faster (the mean of a phase's timed scans: every 8th,
+// and every scan of a probe); each probe that loses doubles the wait for the next (64
+// up to 16384 full scans).
+// Either way the scan's result is the full scan's.
 #pragma once
 
 #include <cstdint>
@@ -33,20 +43,27 @@ namespace ldc {
 class ChangeDrivenEngine : public Engine {
  public:
   // parts[i] runs plan.regions[i] (region_program) over the whole image.
-  ChangeDrivenEngine(const RegionPlan& plan, const Layout& layout, std::vector<std::unique_ptr<Engine>> parts);
+  ChangeDrivenEngine(const RegionPlan& plan, const Layout& layout, std::vector<std::unique_ptr<Engine>> parts,
+                     std::unique_ptr<Engine> full = nullptr);
   void scan(ImageBytes& mem) override;
   // Bytes [off, off + len) changed between scans by someone else.
   void written(uint32_t off, uint32_t len) override;
   // Every region runs in the next scan (a download, a restart, forcing).
   void mark_all();
   size_t regions() const { return parts_.size(); }
-  size_t ran_last_scan() const { return ran_; }
+  size_t ran_last_scan() const { return ran_; }  // SIZE_MAX: the last scan ran `full`
+  bool walking() const { return !full_ || !in_full_; }  // the next scan walks the regions
+  // Tests: instead of measuring, alternate `full_scans` full scans and
+  // `walk_scans` walking ones (the switches are what is tested).
+  void alternate(uint64_t full_scans, uint64_t walk_scans) { fixed_full_ = full_scans, fixed_walk_ = walk_scans; }
 
  private:
   void mark_byte(uint32_t b, size_t self);
   void set(size_t r) { dirty_[r >> 6] |= uint64_t(1) << (r & 63); }
   size_t next_dirty(size_t pos) const;
   void run(size_t r, uint8_t* m);
+  void walk(ImageBytes& mem);
+  void choose(double ns);
 
   struct Part {
     std::unique_ptr<Engine> engine;
@@ -62,8 +79,18 @@ class ChangeDrivenEngine : public Engine {
   std::vector<uint32_t> unit_of_, touch_at_, touch_;
   uint32_t last_unit_ = ~0u;  // the unit marked last (a span's bytes mark it once)
   std::vector<Span> external_;        // read by a region, written by none
+  std::vector<uint8_t> external_byte_;  // per image byte: in external_
   std::vector<uint8_t> shadow_, snap_;
   ImageBytes* image_ = nullptr;  // during scan()
+  // the adaptive choice (above)
+  std::unique_ptr<Engine> full_;
+  bool in_full_ = true;             // the first scans run `full`, measured
+  uint64_t scans_ = 0, since_ = 0;  // scans, and scans since the last switch
+  uint64_t wait_ = 64;              // full scans before the next probe (kMinWait)
+  double full_ns_ = 0;     // the last full phase's mean scan time
+  double sum_ = 0;          // this phase's timed scans
+  uint64_t sum_n_ = 0;
+  uint64_t fixed_full_ = 0, fixed_walk_ = 0;  // alternate(): 0 = measure
   bool all_ = true;
   size_t ran_ = 0;
 };

@@ -217,11 +217,22 @@ TEST(ChangeDriven, RegionsOfSeveralRungsMatchTheFullScan) {
 }
 
 TEST(ChangeDriven, NativeRegionsMatchTheFullScan) {
-  run("change-driven (native -O1 regions)", [](const Program& p) { return make_change_driven_native(p, 1); }, 60);
+  run("change-driven (native -O1 regions)", [](const Program& p) { return make_change_driven_native(p, 1, 1, false); }, 60);
 }
 
 TEST(ChangeDriven, NativeO2RegionsOfSeveralRungsMatchTheFullScan) {
-  run("change-driven (native -O2 regions of 8 rungs)", [](const Program& p) { return make_change_driven_native(p, 2, 8); }, 40);
+  run("change-driven (native -O2 regions of 8 rungs)", [](const Program& p) { return make_change_driven_native(p, 2, 8, false); }, 40);
+}
+
+// The adaptive engine switching between its full scan and its regions on a
+// fixed schedule (seed-drawn), so every kind of switch is compared.
+TEST(ChangeDriven, SwitchesBetweenTheFullScanAndTheRegionsMatchTheFullScan) {
+  run("change-driven (adaptive, native -O2, switching)", [](const Program& p) {
+    std::unique_ptr<Engine> e = make_change_driven_native(p, 2, 1, true);
+    const uint64_t h = std::hash<std::string>()(print_il_text(p));
+    static_cast<ChangeDrivenEngine&>(*e).alternate(1 + h % 5, 1 + (h >> 8) % 7);
+    return e;
+  }, 60);
 }
 
 }  // namespace
