@@ -48,8 +48,10 @@ class ChangeDrivenEngine : public Engine {
   void scan(ImageBytes& mem) override;
   // Bytes [off, off + len) changed between scans by someone else.
   void written(uint32_t off, uint32_t len) override;
-  // Every region runs in the next scan (a download, a restart, forcing).
+  // Every region runs in the next scan (a download, a restart).
   void mark_all();
+  void written_all() override { mark_all(); }
+  bool tracks_writes() const override { return true; }
   size_t regions() const { return parts_.size(); }
   size_t ran_last_scan() const { return ran_; }  // SIZE_MAX: the last scan ran `full`
   bool walking() const { return !full_ || !in_full_; }  // the next scan walks the regions

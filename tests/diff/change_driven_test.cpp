@@ -16,7 +16,9 @@
 #include "bench/rng.h"
 #include "ir/regions.h"
 #include "runtime/change_driven.h"
+#include "driver/targets.h"
 #include "driver/x86_target.h"
+#include "loader/loader.h"
 #include "tests/diff/harness.h"
 
 namespace {
@@ -206,6 +208,59 @@ TEST(ChangeDriven, TheRegionTableIsChecked) {
   // inside the first's body
   start = {rc.start[0]}, size = {rc.start[1] + rc.size[1] - rc.start[0]};
   refused(start, size, "region 0 (its bytes");
+}
+
+// The image's 'regions' section (docs/image-format.md): written and read back,
+// and each broken promise refused by the loader or, for a table that is not
+// the program's plan, by the runtime making the engine.
+TEST(ChangeDriven, TheImageRegionTableIsCheckedWhereItIsRead) {
+  Program p = parse_il_text(kPlanIl, "plan.il");
+  const Target& x86 = *find_target("x86-64");
+  Image img = target_image(x86, p, "plan.il", 1);
+  img.regions = x86_region_table(p, 1, 1);
+  ASSERT_EQ(img.regions->first, (std::vector<uint32_t>{0, 1, 3, 4, 5}));
+  EXPECT_EQ(read_image(write_image(img), "plan.bin"), img);
+  EXPECT_NO_THROW(find_engine("native").engine->make(img));
+  auto refused = [&](Image bad, const std::string& want) {
+    try {
+      Image back = read_image(write_image(bad), "plan.bin");
+      find_engine("native").engine->make(back);
+      ADD_FAILURE() << "accepted; wanted: " << want;
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(want), std::string::npos) << e.what();
+    }
+  };
+  Image bad = img;
+  bad.regions->first[0] = 1;
+  refused(bad, "section 'regions' at offset");
+  bad = img;
+  std::swap(bad.regions->first[1], bad.regions->first[2]);
+  refused(bad, "is not after the region before");
+  bad = img;
+  bad.regions->first[4] = 9;
+  refused(bad, "past the program's 6 rungs");
+  bad = img;
+  bad.regions->start[2] = bad.regions->start[1];
+  refused(bad, "overlaps the region before");
+  bad = img;
+  bad.regions->size[4] += 1;
+  refused(bad, "outside the region code");
+  bad = img;
+  bad.regions->size[1] -= 1;  // the last byte (a ret) cut off
+  refused(bad, "region 1: its code");
+  bad = img;
+  bad.regions->max_rungs = 0;
+  refused(bad, "region size 0");
+  bad = img;
+  bad.lines.clear();
+  refused(bad, "needs the 'lines' section with an entry for each");
+  bad = img;
+  bad.regions->max_rungs = 2;  // the runtime's plan: other regions
+  refused(bad, "is not the program's");
+  bad = img;  // a region that joins rungs the plan keeps apart
+  bad.regions->first = {0, 3, 4, 5};
+  bad.regions->start.erase(bad.regions->start.begin() + 1), bad.regions->size.erase(bad.regions->size.begin() + 1);
+  refused(bad, "is not the program's");
 }
 
 TEST(ChangeDriven, RegionsOnTheInterpreterMatchTheFullScan) {
