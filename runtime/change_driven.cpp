@@ -15,7 +15,8 @@ constexpr uint32_t kReads = 0x80000000u;
 constexpr uint32_t kNoUnit = 0xffffffffu;
 // the adaptive choice: scans a probe settles, then measures; full scans
 // before the next probe, doubled by each probe the regions lose
-constexpr uint64_t kSettle = 3, kProbe = 12, kMinWait = 64, kMaxWait = 16384;
+constexpr uint64_t kSettle = 3, kProbe = 12, kMinWait = 256, kMaxWait = 16384;
+constexpr double kKeep = 0.9;
 
 }  // namespace
 
@@ -149,28 +150,38 @@ void ChangeDrivenEngine::choose(double ns) {
     return;
   }
   // a mode's first timed scan after a switch (cold code, the probe's marked
-  // regions) is left out of its mean
+  // regions) is left out; a phase is judged by the median of its timed scans
+  // (a scan interrupted by the system does not decide)
   auto add = [&](double x) {
-    if (sum_n_++ > 0) sum_ += x;
+    if (timed_seen_++ > 0 && times_.size() < 64) times_.push_back(x);
   };
-  auto mean = [&] { return sum_n_ > 1 ? sum_ / double(sum_n_ - 1) : 0.0; };
+  auto median = [&] {
+    if (times_.empty()) return 0.0;
+    std::vector<double> v = times_;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  auto next_phase = [&] { times_.clear(), timed_seen_ = 0; };
   if (in_full_) {
     if (ns >= 0) add(ns);
-    if (since_ < wait_ || sum_n_ < 3) return;
-    full_ns_ = mean();
-    in_full_ = false, since_ = 0, sum_ = 0, sum_n_ = 0;
+    if (since_ < wait_ || times_.size() < 2) return;
+    full_ns_ = median();
+    in_full_ = false, since_ = 0;
+    next_phase();
     all_ = true;  // nothing is known of the regions after full scans
     return;
   }
   if (ns < 0 || since_ <= kSettle) return;
   add(ns);
-  const double walk = mean();
+  const double walk = median();
   if (walk == 0) return;
-  const bool losing = walk > full_ns_, clearly = walk > 2 * full_ns_;
+  // walking must win by a margin (kKeep) to be kept: the two are measured
+  // at different times
+  const bool losing = walk > kKeep * full_ns_, clearly = walk > 2 * full_ns_ && times_.size() >= 3;
   if (since_ < kProbe && !clearly) return;
-  if (since_ >= kProbe) sum_ = 0, sum_n_ = 0;  // the next decision on fresh scans
+  next_phase();
   if (losing) {
-    in_full_ = true, since_ = 0, sum_ = 0, sum_n_ = 0;
+    in_full_ = true, since_ = 0;
     wait_ = std::min<uint64_t>(wait_ * 2, kMaxWait);
   } else {
     wait_ = kMinWait;
