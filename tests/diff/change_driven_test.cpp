@@ -26,14 +26,6 @@ namespace {
 using namespace ldc;
 using namespace ldc::diff;
 
-long env_long(const char* name, long def) {
-  const char* v = std::getenv(name);
-  if (!v || !*v) return def;
-  char* end = nullptr;
-  long x = std::strtol(v, &end, 10);
-  return *end ? def : x;
-}
-
 // The share of input cells that change from one scan to the next, per seed:
 // 0%, 2%, 10%, 50% or every cell written again (100%).
 int activity_permille(uint64_t seed) {
