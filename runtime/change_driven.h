@@ -25,9 +25,10 @@
 // and after `wait_` full scans probes the regions: a scan with every region
 // marked (nothing is known after full scans), two more to settle, then scans
 // that measure (8, fewer if the regions are clearly slower).  It keeps the
-// regions only if their median timed scan is under 0.9 times the full scan's
-// (timed: every 8th scan, and every scan of a probe); each probe that loses
-// doubles the wait for the next (256 up to 16384 full scans).
+// regions while the median of their last 16 timed scans stays under 0.9
+// times the full scan's (timed: every 8th scan, and every scan of a probe);
+// each probe that loses doubles the wait for the next (256 up to 16384 full
+// scans).
 // Either way the scan's result is the full scan's.
 #pragma once
 
@@ -90,7 +91,7 @@ class ChangeDrivenEngine : public Engine {
   uint64_t scans_ = 0, since_ = 0;  // scans, and scans since the last switch
   uint64_t wait_ = 256;             // full scans before the next probe (kMinWait)
   double full_ns_ = 0;         // the last full phase's median scan time
-  std::vector<double> times_;  // this phase's timed scans (but its first)
+  std::vector<double> times_;  // this mode's last 16 timed scans (not its first)
   uint64_t timed_seen_ = 0;
   uint64_t fixed_full_ = 0, fixed_walk_ = 0;  // alternate(): 0 = measure
   bool all_ = true;
