@@ -34,7 +34,9 @@ int activity_permille(uint64_t seed) {
 }
 
 // The trace with each cell after the first row left empty (the device keeps
-// its value) unless a draw of `permille` says it changes; dt is kept.
+// its value) unless a draw of `permille` says it changes; dt is kept.  Two
+// columns more, Y1 and M1, written on one row in ten: a client or the
+// monitor forcing cells the rungs drive (the reference gets the same writes).
 std::string thin_trace(uint64_t seed, const std::string& csv, int permille) {
   std::istringstream in(csv);
   std::string line, out;
@@ -55,12 +57,32 @@ std::string thin_trace(uint64_t seed, const std::string& csv, int permille) {
     if (row >= 2)
       for (size_t i = 0; i < cells.size(); i++)
         if (int(i) != dt_col && rng.below(1000) >= permille) cells[i].clear();
+    if (row == 0) cells.push_back("Y1"), cells.push_back("M1");
+    else
+      for (int k = 0; k < 2; k++) cells.push_back(rng.below(10) == 0 ? std::to_string(rng.below(2)) : "");
     for (size_t i = 0; i < cells.size(); i++) out += (i ? "," : "") + cells[i];
     out += "\n";
     row++;
   }
   return out;
 }
+
+// The engine under test told, every 7th scan, that the whole image may have
+// changed (as after an online download or a restart that keeps memory): it
+// runs every region, and the result stays the full scan's.
+class Redownloaded : public Engine {
+ public:
+  explicit Redownloaded(std::unique_ptr<Engine> e) : e_(std::move(e)) {}
+  void scan(ImageBytes& mem) override {
+    if (++n_ % 7 == 0) e_->written_all();
+    e_->scan(mem);
+  }
+  void written(uint32_t off, uint32_t len) override { e_->written(off, len); }
+
+ private:
+  std::unique_ptr<Engine> e_;
+  int n_ = 0;
+};
 
 GenOptions options_for(uint64_t s) {
   GenOptions o;
@@ -265,6 +287,12 @@ TEST(ChangeDriven, RegionsOfSeveralRungsMatchTheFullScan) {
 
 TEST(ChangeDriven, NativeRegionsMatchTheFullScan) {
   run("change-driven (native -O1 regions)", [](const Program& p) { return make_change_driven_native(p, 1, 1, false); }, 60);
+}
+
+TEST(ChangeDriven, EveryRegionMarkedNowAndThenMatchesTheFullScan) {
+  run("change-driven (interp regions, all marked every 7th scan)", [](const Program& p) {
+    return std::make_unique<Redownloaded>(make_change_driven(p, make_interp));
+  }, 60);
 }
 
 TEST(ChangeDriven, NativeO2RegionsOfSeveralRungsMatchTheFullScan) {
