@@ -29,7 +29,6 @@ ChangeDrivenEngine::ChangeDrivenEngine(const RegionPlan& plan, const Layout& lay
   // per byte: who reads it, who writes it (counted, then placed)
   std::vector<uint32_t> count(size + 1, 0);
   std::vector<uint8_t> written_by_any(size, 0), read_by_any(size, 0);
-  size_t snap = 0;
   for (size_t r = 0; r < n; r++) {
     const Region& g = plan.regions[r];
     for (const std::vector<Span>* v : {&g.reads, &g.writes})
@@ -38,12 +37,8 @@ ChangeDrivenEngine::ChangeDrivenEngine(const RegionPlan& plan, const Layout& lay
           throw std::invalid_argument("change-driven scan: region " + std::to_string(r) + "'s memory reaches past the image");
     for (const Span& s : g.reads)
       for (uint32_t b = s.off; b < s.off + s.len && b < size; b++) count[b]++, read_by_any[b] = 1;
-    for (const Span& s : g.writes) {
+    for (const Span& s : g.writes)
       for (uint32_t b = s.off; b < s.off + s.len && b < size; b++) count[b]++, written_by_any[b] = 1;
-      snap += s.len;
-    }
-    snap_.resize(std::max(snap_.size(), snap));
-    snap = 0;
   }
   // per byte, then bytes in a row with the same list made one unit (a word's
   // four bytes, an array), so a changed word marks its regions once
@@ -81,9 +76,56 @@ ChangeDrivenEngine::ChangeDrivenEngine(const RegionPlan& plan, const Layout& lay
   size_t ext = 0;
   for (const Span& s : external_) ext += s.len;
   shadow_.resize(ext);
-  for (size_t r = 0; r < n; r++) parts_.push_back(Part{std::move(parts[r]), plan.regions[r].writes, plan.regions[r].uses_time, plan.regions[r].time_always, plan.regions[r].il_offset});
+  for (size_t r = 0; r < n; r++)
+    parts_.push_back(Part{std::move(parts[r]), observed_writes(plan.regions[r].writes, r), plan.regions[r].uses_time,
+                          plan.regions[r].time_always, plan.regions[r].il_offset});
+  size_t most = 0;
+  for (const Part& p : parts_) {
+    size_t k = 0;
+    for (const Span& s : p.writes) k += s.len;
+    most = std::max(most, k);
+  }
+  snap_.assign(most, 0);
   dirty_.assign((n + 63) / 64, 0);
 }
+
+// The bytes of region r's writes whose change marks some region: read by
+// any region (r too), or written by another.  A change of the others (a
+// coil nothing in the program reads) marks nothing, so it is not looked for.
+std::vector<Span> ChangeDrivenEngine::observed_writes(const std::vector<Span>& writes, size_t r) const {
+  std::vector<Span> out;
+  for (const Span& s : writes)
+    for (uint32_t b = s.off; b < s.off + s.len; b++) {
+      const uint32_t u = unit_of_[b];
+      bool seen = false;
+      for (uint32_t k = touch_at_[u]; k < touch_at_[u + 1] && !seen; k++) seen = (touch_[k] & ~kReads) != r || (touch_[k] & kReads);
+      if (!seen) continue;
+      if (!out.empty() && out.back().off + out.back().len == b) out.back().len++;
+      else out.push_back({b, 1});
+    }
+  return out;
+}
+
+// Copies and compares of the few bytes a region writes: a call to memcpy
+// or memcmp costs more than the bytes.
+namespace {
+void copy_small(uint8_t* to, const uint8_t* from, uint32_t n) {
+  switch (n) {
+    case 1: *to = *from; return;
+    case 4: std::memcpy(to, from, 4); return;
+    case 8: std::memcpy(to, from, 8); return;
+    default: std::memcpy(to, from, n);
+  }
+}
+bool same_small(const uint8_t* a, const uint8_t* b, uint32_t n) {
+  switch (n) {
+    case 1: return *a == *b;
+    case 4: { uint32_t x, y; std::memcpy(&x, a, 4), std::memcpy(&y, b, 4); return x == y; }
+    case 8: { uint64_t x, y; std::memcpy(&x, a, 8), std::memcpy(&y, b, 8); return x == y; }
+    default: return std::memcmp(a, b, n) == 0;
+  }
+}
+}  // namespace
 
 void ChangeDrivenEngine::written(uint32_t off, uint32_t len) {
   if (full_ && in_full_) return;  // a probe marks every region
@@ -117,13 +159,13 @@ size_t ChangeDrivenEngine::next_dirty(size_t pos) const {
 void ChangeDrivenEngine::run(size_t r, uint8_t* m) {
   Part& p = parts_[r];
   size_t k = 0;
-  for (const Span& s : p.writes) std::memcpy(snap_.data() + k, m + s.off, s.len), k += s.len;
+  for (const Span& s : p.writes) copy_small(snap_.data() + k, m + s.off, s.len), k += s.len;
   ran_++;
   p.engine->scan(*image_);
   k = 0;
   last_unit_ = kNoUnit;
   for (const Span& s : p.writes) {
-    if (std::memcmp(snap_.data() + k, m + s.off, s.len) != 0)
+    if (!same_small(snap_.data() + k, m + s.off, s.len))
       for (uint32_t i = 0; i < s.len; i++)
         if (snap_[k + i] != m[s.off + i]) mark_byte(s.off + i, r);
     k += s.len;

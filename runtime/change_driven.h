@@ -66,11 +66,12 @@ class ChangeDrivenEngine : public Engine {
   size_t next_dirty(size_t pos) const;
   void run(size_t r, uint8_t* m);
   void walk(ImageBytes& mem);
+  std::vector<Span> observed_writes(const std::vector<Span>& writes, size_t r) const;
   void choose(double ns);
 
   struct Part {
     std::unique_ptr<Engine> engine;
-    std::vector<Span> writes;
+    std::vector<Span> writes;  // the bytes whose change marks some region (observed_writes)
     bool uses_time = false, time_always = false;
     uint32_t il_offset = 0;  // its IL's place in the program's: a fault record names the program's offset
   };
