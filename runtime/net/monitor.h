@@ -44,6 +44,9 @@ struct MonitorOptions {
   size_t max_forced = 256;      // inputs forced at once
   int tick_ms = 50;             // event stream period (20 updates/s)
   std::function<void(const std::string&)> log;  // throttled server messages (stderr in ldrun)
+  // After an online download: the source text of task `task`'s new image
+  // (as MonitorTask::source_text / source_note), or nothing.
+  std::function<void(size_t task, const Image& image, std::string& text, std::string& note)> source_of;
 };
 
 // --monitor-host NAME[,NAME...]: host names (or IP literals) with an
