@@ -53,12 +53,14 @@ function needWidth(e) {
   }
   return Math.max(48, ((e.d || '').length + 1) * FONT_W + 8);
 }
-function needHeight(e) {
+// Room above a row's wire (labels, a box's instance and function) and below it.
+function needAbove(e) { return isBox(e) ? 42 : 30; }
+function needBelow(e) {
   if (isBox(e)) {
     const [l, r] = boxSides(e);
-    return 30 + Math.max(l.length, r.length) * BOX_PIN + 14;
+    return (Math.max(l.length, r.length) - 1) * BOX_PIN + 18;
   }
-  return e.k === 'true' ? 30 : 46;
+  return 30;
 }
 function layout(rung) {
   const ncols = Math.max(...rung.rows.map(r => r.length)) + 2;
@@ -70,11 +72,14 @@ function layout(rung) {
   }
   const xs = [0];
   for (let c = 0; c < ncols; c++) xs.push(xs[c] + CW + extra[c]);
-  const heights = rung.rows.map(() => 40);
-  for (const e of rung.elems) heights[e.r] = Math.max(heights[e.r], needHeight(e));
+  const above = rung.rows.map(() => 24), below = rung.rows.map(() => 16);
+  for (const e of rung.elems) {
+    above[e.r] = Math.max(above[e.r], needAbove(e));
+    below[e.r] = Math.max(below[e.r], needBelow(e));
+  }
   const ys = [];  // the wire of row r runs at ys[r]
-  let top = 8;
-  for (const hgt of heights) { ys.push(top + 26); top += hgt; }
+  let top = 4;
+  rung.rows.forEach((_, r) => { ys.push(top + above[r]); top += above[r] + below[r]; });
   return {X: c => xs[Math.max(0, Math.min(c, ncols))] + 6, Y: r => ys[r], width: xs[ncols] + 40, height: top + 6};
 }
 
@@ -146,9 +151,10 @@ function drawElem(svg, e, k, L) {
     svgText(g, x0 + 10, y + 4, e.k === 'jmp' ? '>> ' + e.d : e.t.slice(1, -1), 'fn');
   }
   if (!isBox(e)) val = svgText(g, (x0 + x1) / 2, y + 24, '', 'val', 'middle');
-  const mark = el('g', {class: 'forcemark hidden'}, g);
-  el('rect', {x: x0 + 2, y: y - 30, width: 30, height: 13, rx: 2}, mark);
-  const mt = svgText(mark, x0 + 5, y - 20, 'F', '');
+  const mark = el('g', {class: 'forcemark hidden'}, g);  // under the contact: forced, and to what
+  const mx = (x0 + x1) / 2;
+  el('rect', {x: mx - 16, y: y + 14, width: 32, height: 13, rx: 2}, mark);
+  const mt = svgText(mark, mx, y + 24, 'F', '', 'middle');
   if (e.dv) {
     g.dataset.device = e.dv;
     g.addEventListener('click', () => clickContact(e, g));
@@ -289,8 +295,8 @@ function buildTable() {
   const tb = document.querySelector('#devices tbody');
   tb.textContent = '';
   const several = program.tasks.length > 1, rows = {};
+  const was = new Set(chosen.map(c => c.key));  // ticked before a redraw: ticked again, history kept
   chosen = [];
-  history = {};
   program.tasks.forEach((t, ti) => {
     t.rowsEl = t.devices.map(([name, alias], di) => {
       const shared = SHARED.test(name);
@@ -307,12 +313,16 @@ function buildTable() {
       tr.dataset.search = ((shared ? '' : t.name + ' ') + name + ' ' + alias).toLowerCase();
       const cb = h('input', null, h('td', null, tr));
       cb.type = 'checkbox';
-      const label = alias || name;
+      const label = alias || name, key = t.name + ':' + name;
+      const choose = () => {
+        chosen.push({key, ti, di, label, bit: null});
+        if (!history[key]) history[key] = [];
+      };
       cb.addEventListener('change', () => {
-        const key = ti + ':' + di;
-        if (cb.checked) { chosen.push({key, ti, di, label, bit: null}); history[key] = []; }
+        if (cb.checked) choose();
         else chosen = chosen.filter(c => c.key !== key);
       });
+      if (was.has(key)) { cb.checked = true; choose(); }
       h('td', several && !shared ? t.name + '.' + name : name, tr);
       const aliasTd = h('td', alias, tr);
       tr.dataset.device = name;
