@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """A real browser on `ldrun --monitor` (docs/runtime.md, "The monitor").
 
-browser_test.py LDRUN_DIR SOURCE_ROOT OUT_DIR
+browser_test.py LDRUN_DIR SOURCE_ROOT OUT_DIR [page|iec]
 Headless Debian chromium (--no-sandbox) is driven over the DevTools protocol
 on a pipe (--remote-debugging-pipe; standard library only).  One page of the
 monitor stays open while examples/traffic.csv runs: the lit elements in its
@@ -15,6 +15,11 @@ program (tests/runtime/net/monitor/online.st): its source drawn as written,
 markup in it as text, the values beside its targets those of one scan.
 Screenshots of the traffic light and of the ST program go to
 OUT_DIR/monitor.png and OUT_DIR/monitor-st.png.
+Part `iec` (monitor/browser_iec): tests/runtime/net/monitor/iec.ld drawn with
+the IEC symbols, clicking a contact with and without --monitor-write, the
+forced marker, the trends' lanes and time axis, an online download redrawn by
+the open page and drawn by a page opened after it (OUT_DIR/monitor-iec.png, the
+picture of docs/runtime.md), and a project's shared devices listed once.
 Exit 77 (skipped) when chromium is not installed.
 """
 import base64
@@ -384,6 +389,31 @@ def sections_iec(b):
         mt.fail("a page opened after the download does not draw the new rungs")
     m.p.stdin.write("quit\n")
     m.p.stdin.flush()
+    m.stop()
+
+    # 4. a project: a shared device (X Y M K WX WY) listed once in the table, with every
+    # task's alias of it; each task's own devices as TASK.NAME
+    m = mt.Ldrun(["--project", "tests/runtime/projects/shared.ldp", "--io=none", "--monitor", "127.0.0.1:0"])
+    b.open("http://127.0.0.1:%d/" % m.port)
+    tasks = mt.get_json(m.port, "/api/program")["tasks"]
+    shared_re = re.compile(r"^(X|Y|M|K|WX|WY)\d+$")
+    shared, own = {}, []
+    for t in tasks:
+        for name, alias in t["devices"]:
+            if shared_re.match(name):
+                shared.setdefault(name, [])
+                if alias and alias not in shared[name]:
+                    shared[name].append(alias)
+            else:
+                own.append(t["name"] + "." + name)
+    if sum(len(t["devices"]) for t in tasks) == len(shared) + len(own):
+        mt.fail("shared.ldp's tasks share no device: the check would check nothing")
+    rows = b.js("[...document.querySelectorAll('#devices tbody tr')].map(tr => [tr.children[1].textContent, "
+                "tr.children[2].textContent])")
+    want = sorted([[n, ", ".join(a)] for n, a in shared.items()] + [[n, a] for t in tasks for n, a in
+                  [(t["name"] + "." + d, al) for d, al in t["devices"] if not shared_re.match(d)]])
+    if sorted(rows) != want:
+        mt.fail("the project's device table:\n%s\nexpected\n%s" % (sorted(rows), want))
     m.stop()
 
 
