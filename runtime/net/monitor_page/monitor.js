@@ -450,11 +450,15 @@ function paintRung(v, rs) {
 
 function update(state) {
   if (refetching) return;
-  // values of another program than the one drawn: dropped, the program fetched again
-  if (state.tasks.some((ts, ti) => program.tasks[ti] && ts.gen !== program.tasks[ti].gen)) {
+  // values of another program than the one drawn are dropped: of a newer one
+  // (a download), the program is fetched again; of an older one (an event
+  // sent before the program was fetched), nothing more
+  const drawn = ti => program.tasks[ti] ? program.tasks[ti].gen : 0;
+  if (state.tasks.some((ts, ti) => ts.gen > drawn(ti))) {
     refetchProgram();
     return;
   }
+  if (state.tasks.some((ts, ti) => ts.gen < drawn(ti))) return;
   const s = document.getElementById('state');
   s.textContent = state.state;
   s.className = 'state ' + state.state;

@@ -375,6 +375,20 @@ def sections_iec(b):
         mt.fail("no banner after the download: %r" % banner)
     wait_for(b, "document.querySelectorAll('#rung-0-7 g.elem[data-kind=\"coil\"][data-device=\"Y3\"]').length === 1",
              "the appended rung is not drawn")
+    # values of the old program never paint over the new one: a state of
+    # generation 0 with every element lit is dropped; the same state of the
+    # current generation (the control) lights every element; one of a newer
+    # generation makes the page fetch the program again
+    lit_after = b.js("""(async () => {
+        const s = await (await fetch('/api/state')).json();
+        for (const t of s.tasks) for (const r of t.rungs) if (r.e) r.e = r.e.replace(/0/g, '1');
+        const all = document.querySelectorAll('g.elem').length, lit = () => document.querySelectorAll('g.elem.on').length;
+        s.tasks[0].gen = 0; update(s); const old = lit();
+        s.tasks[0].gen = 1; update(s); const cur = lit();
+        s.tasks[0].gen = 2; update(s); const refetch = refetching;
+        return [all, old, cur, refetch]; })()""")
+    if lit_after[1] >= lit_after[0] or lit_after[2] != lit_after[0] or not lit_after[3]:
+        mt.fail("[elements, lit by an old state, lit by a current one, refetching on a newer one]: %s" % lit_after)
     # the trends ticked before go on across the redraw; the picture: the banner, the
     # new program with its forced contact marked, the trends
     time.sleep(1.0)
