@@ -1162,6 +1162,21 @@ std::string first_line_of(const std::string& cmd) {
   return s;
 }
 
+// CPU 0's caches from sysfs, as "L1d 48K, L1i 64K, L2 2048K, L3 ..." (the
+// sizes that decide when code falls out of a cache, issue 28), or "unknown".
+std::string cache_sizes() {
+  std::string out;
+  for (int i = 0; i < 8; i++) {
+    const std::string dir = "/sys/devices/system/cpu/cpu0/cache/index" + std::to_string(i) + "/";
+    std::ifstream lv(dir + "level"), ty(dir + "type"), sz(dir + "size");
+    std::string level, type, size;
+    if (!std::getline(lv, level) || !std::getline(ty, type) || !std::getline(sz, size)) break;
+    const char* kind = type == "Data" ? "d" : type == "Instruction" ? "i" : "";
+    out += (out.empty() ? "" : ", ") + std::string("L") + level + kind + " " + size;
+  }
+  return out.empty() ? "unknown" : out;
+}
+
 std::map<std::string, std::string> machine_info() {
   std::map<std::string, std::string> m;
   std::ifstream cpu("/proc/cpuinfo");
@@ -1173,6 +1188,7 @@ std::map<std::string, std::string> machine_info() {
     if (l.rfind("cache size", 0) == 0 && !m.count("cache")) m["cache"] = l.substr(l.find(':') + 2);
   }
   m["logical_cpus"] = std::to_string(procs);
+  m["caches"] = cache_sizes();
   m["online_cpus"] = std::to_string(sysconf(_SC_NPROCESSORS_ONLN));
   utsname u{};
   if (uname(&u) == 0) m["kernel"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
@@ -2075,7 +2091,8 @@ int main(int argc, char** argv) {
     struct stat st;
     if (stat(o.out.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) throw std::runtime_error("cannot create " + o.out);
     auto machine = machine_info();
-    say("ldbench: %s, %s cpus, %s\n", machine["cpu"].c_str(), machine["logical_cpus"].c_str(), machine["date"].c_str());
+    say("ldbench: %s, %s cpus, %s; caches per core: %s\n", machine["cpu"].c_str(), machine["logical_cpus"].c_str(),
+        machine["date"].c_str(), machine["caches"].c_str());
     auto t0 = Clock::now();
     // the one-class programs first: eq. (2) needs them
     if (!o.files.empty()) {  // only the given programs

@@ -36,8 +36,8 @@ constexpr uint32_t kOffSections = kOffLayout + kLayoutSize;
 constexpr uint32_t kSectionEntrySize = 12;
 constexpr uint32_t kMaxSections = 64;
 
-enum SectionId : uint32_t { kCode = 1, kIl, kLines, kStrings, kAliases, kRetentive, kEntry, kConfig, kSectionIdEnd };
-constexpr const char* kSectionNames[] = {"?", "code", "il", "lines", "strings", "aliases", "retentive", "entry", "config"};
+enum SectionId : uint32_t { kCode = 1, kIl, kLines, kStrings, kAliases, kRetentive, kEntry, kConfig, kRegions, kSectionIdEnd };
+constexpr const char* kSectionNames[] = {"?", "code", "il", "lines", "strings", "aliases", "retentive", "entry", "config", "regions"};
 
 constexpr uint32_t kLineEntrySize = 16;
 constexpr uint8_t kAliasTyped = 0x80;  // in an alias's device kind: a type byte follows its name
@@ -283,12 +283,21 @@ static size_t image_size_hint(const Image& im) {
   for (const std::string& t : im.rung_titles) n += 4 + t.size();
   for (const Alias& a : im.aliases) n += 10 + a.name.size();
   if (im.config) n += 64 + 3 * 256 + 16 * im.config->rows.size();
+  if (im.regions) n += 16 + 12 * im.regions->first.size() + im.regions->code.size();
   return n;
 }
 
 // Sections 1..7 always; 'config' only when the image has a configuration
-// table, so images without one are byte for byte what they always were.
-static uint32_t section_count(const Image& im) { return im.config ? kConfig : kConfig - 1; }
+// table and 'regions' only when it has a region table, so images without
+// them are byte for byte what they always were.
+static std::vector<uint32_t> section_ids(const Image& im) {
+  std::vector<uint32_t> ids;
+  for (uint32_t id = 1; id < kConfig; id++) ids.push_back(id);
+  if (im.config) ids.push_back(kConfig);
+  if (im.regions) ids.push_back(kRegions);
+  return ids;
+}
+static uint32_t section_count(const Image& im) { return uint32_t(section_ids(im).size()); }
 
 // The header and the section table: each section's offset and size from
 // `table` (two per section), or 0 to be patched (write_image); the checksum 0.
@@ -307,8 +316,9 @@ static void put_header(Writer& w, const Image& im, std::span<const uint32_t> tab
   for (uint32_t c : im.layout.count) w.u32(c);
   for (uint32_t o : im.layout.offset) w.u32(o);
   w.u32(im.layout.size);
+  const std::vector<uint32_t> ids = section_ids(im);
   for (uint32_t i = 1; i <= nsections; i++)
-    w.u32(i), w.u32(table.empty() ? 0 : table[2 * (i - 1)]), w.u32(table.empty() ? 0 : table[2 * i - 1]);
+    w.u32(ids[i - 1]), w.u32(table.empty() ? 0 : table[2 * (i - 1)]), w.u32(table.empty() ? 0 : table[2 * i - 1]);
 }
 
 // The line map, packed a batch of entries at a time: one entry per IL
@@ -366,6 +376,15 @@ static void put_section(Writer& w, const Image& im, uint32_t id) {
       }
       break;
     }
+    case kRegions: {
+      const RegionTable& t = *im.regions;
+      w.u32(t.max_rungs);
+      w.u32(count32(t.first.size(), "regions"));
+      for (size_t i = 0; i < t.first.size(); i++) w.u32(t.first[i]), w.u32(t.start[i]), w.u32(t.size[i]);
+      w.u32(count32(t.code.size(), "region code bytes"));
+      w.bytes(t.code);
+      break;
+    }
     case kSectionIdEnd: break;
   }
 }
@@ -378,7 +397,7 @@ static void check_size(const Writer& w) {
 // after the last; returns each section's offset and size (two per section).
 static std::vector<uint32_t> put_sections(Writer& w, const Image& im) {
   std::vector<uint32_t> table;
-  for (uint32_t id = 1; id <= section_count(im); id++) {
+  for (uint32_t id : section_ids(im)) {
     w.align4();
     size_t start = w.size();
     put_section(w, im, id);
@@ -608,6 +627,7 @@ class ImageReader {
     im_.il.assign(i.begin(), i.end());
     if (const SectionEntry* s = by_id_[kEntry]) entry(*s);
     if (const SectionEntry* s = by_id_[kConfig]) config(*s);
+    if (const SectionEntry* s = by_id_[kRegions]) regions(*s);
     if (const SectionEntry* s = by_id_[kLines]) lines(*s);
     if (const SectionEntry* s = by_id_[kStrings]) strings(*s);
     if (const SectionEntry* s = by_id_[kAliases]) aliases(*s);
@@ -648,6 +668,26 @@ class ImageReader {
     }
     finish(r, s);
     im_.config = std::move(c);
+  }
+
+  void regions(const SectionEntry& s) {
+    SectionReader r = reader(s);
+    RegionTable t;
+    t.max_rungs = r.u32("region size");
+    const uint32_t n = r.u32("region count");
+    if (r.error.empty() && (n == 0 || n > (r.data.size() - r.pos) / 12))
+      r.error = "region count " + std::to_string(n) + " is 0 or does not fit in the section";
+    for (uint32_t i = 0; i < n && r.error.empty(); i++) {
+      t.first.push_back(r.u32("region"));
+      t.start.push_back(r.u32("region"));
+      t.size.push_back(r.u32("region"));
+    }
+    const uint32_t bytes = r.u32("region code size");
+    if (r.error.empty() && bytes > r.data.size() - r.pos)
+      r.error = "region code of " + std::to_string(bytes) + " bytes does not fit in the section";
+    if (r.error.empty()) t.code.assign(r.data.begin() + r.pos, r.data.begin() + r.pos + bytes), r.pos += bytes;
+    finish(r, s);
+    im_.regions = std::move(t);
   }
 
   void lines(const SectionEntry& s) {
@@ -751,6 +791,42 @@ class ImageReader {
         throw sfail(entry ? *entry : code, std::string(kind_->name) + " entry point " + hex(im_.entry) + " is not word-aligned");
     }
     if (std::string why = kind_->check(im_.code, im_.entry, im_.layout, &code_starts_); !why.empty()) throw sfail(code, why);
+    if (im_.regions) check_regions(*by_id_[kRegions]);
+  }
+
+  // The region table (docs/change-driven.md, docs/image-format.md): x86-64
+  // only, with the line map (the rungs), regions starting at rung 0 in
+  // ascending rung order, their code in ascending order without overlap,
+  // each region's bytes a scan function that passes the code check alone.
+  void check_regions(const SectionEntry& s) {
+    const RegionTable& t = *im_.regions;
+    if (im_.target != ImageTarget::X86_64) throw sfail(s, std::string("a region table on a ") + kind_->name + " image (x86-64 only)");
+    size_t instrs = 0;
+    for (uint32_t off = 0; off < im_.il.size(); instrs++) {
+      Instr in;
+      off = decode_instr(im_.il, off, in);
+    }
+    if (!by_id_[kLines] || im_.lines.size() != instrs)
+      throw sfail(s, "a region table needs the 'lines' section with an entry for each of the IL's " + std::to_string(instrs) +
+                         " instructions (their rungs); it has " + std::to_string(im_.lines.size()));
+    if (t.max_rungs == 0) throw sfail(s, "region size 0");
+    const uint64_t rungs = im_.lines.empty() ? 0 : uint64_t(im_.lines.back().rung) + 1;
+    if (t.first.back() >= rungs && rungs)
+      throw sfail(s, "region " + std::to_string(t.first.size() - 1) + " starts at rung " + std::to_string(t.first.back()) +
+                         ", past the program's " + std::to_string(rungs) + " rungs");
+    uint64_t code_end = 0;
+    for (size_t i = 0; i < t.first.size(); i++) {
+      const std::string at = "region " + std::to_string(i) + ": ";
+      if (i == 0 ? t.first[0] != 0 : t.first[i] <= t.first[i - 1])
+        throw sfail(s, at + "first rung " + std::to_string(t.first[i]) + (i == 0 ? " (the first region starts at rung 0)" : " is not after the region before's"));
+      if (t.start[i] < code_end || t.size[i] == 0 || uint64_t(t.start[i]) + t.size[i] > t.code.size())
+        throw sfail(s, at + "code [" + std::to_string(t.start[i]) + ", +" + std::to_string(t.size[i]) +
+                           ") is empty, overlaps the region before, or lies outside the region code (" + std::to_string(t.code.size()) + " bytes)");
+      code_end = uint64_t(t.start[i]) + t.size[i];
+      const std::span<const uint8_t> bytes(t.code.data() + t.start[i], t.size[i]);
+      if (std::string why = kind_->check(bytes, 0, im_.layout, nullptr); !why.empty())
+        throw sfail(s, at + "its code (region code offset " + std::to_string(t.start[i]) + "): " + why);
+    }
   }
 
   bool code_boundary(uint32_t off) const { return code_starts_.has(off); }

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstring>
 #include <stdexcept>
+#include <string>
 
 namespace ldc {
 
@@ -15,7 +16,8 @@ constexpr uint32_t kReads = 0x80000000u;
 constexpr uint32_t kNoUnit = 0xffffffffu;
 // the adaptive choice: scans a probe settles, then measures; full scans
 // before the next probe, doubled by each probe the regions lose
-constexpr uint64_t kSettle = 3, kProbe = 12, kMinWait = 64, kMaxWait = 16384;
+constexpr uint64_t kSettle = 3, kProbe = 12, kMinWait = 256, kMaxWait = 16384;
+constexpr double kKeep = 0.9;
 
 }  // namespace
 
@@ -30,6 +32,10 @@ ChangeDrivenEngine::ChangeDrivenEngine(const RegionPlan& plan, const Layout& lay
   size_t snap = 0;
   for (size_t r = 0; r < n; r++) {
     const Region& g = plan.regions[r];
+    for (const std::vector<Span>* v : {&g.reads, &g.writes})
+      for (const Span& s : *v)
+        if (uint64_t(s.off) + s.len > size)
+          throw std::invalid_argument("change-driven scan: region " + std::to_string(r) + "'s memory reaches past the image");
     for (const Span& s : g.reads)
       for (uint32_t b = s.off; b < s.off + s.len && b < size; b++) count[b]++, read_by_any[b] = 1;
     for (const Span& s : g.writes) {
@@ -149,31 +155,42 @@ void ChangeDrivenEngine::choose(double ns) {
     return;
   }
   // a mode's first timed scan after a switch (cold code, the probe's marked
-  // regions) is left out of its mean
+  // regions) is left out; a mode is judged by the median of its last 16
+  // timed scans (a scan the system interrupted does not decide)
   auto add = [&](double x) {
-    if (sum_n_++ > 0) sum_ += x;
+    if (timed_seen_++ == 0) return;
+    times_.push_back(x);
+    if (times_.size() > 16) times_.erase(times_.begin());
   };
-  auto mean = [&] { return sum_n_ > 1 ? sum_ / double(sum_n_ - 1) : 0.0; };
+  auto median = [&] {
+    std::vector<double> v = times_;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  auto switch_to = [&](bool full) {
+    in_full_ = full, since_ = 0;
+    times_.clear(), timed_seen_ = 0;
+  };
   if (in_full_) {
     if (ns >= 0) add(ns);
-    if (since_ < wait_ || sum_n_ < 3) return;
-    full_ns_ = mean();
-    in_full_ = false, since_ = 0, sum_ = 0, sum_n_ = 0;
+    if (since_ < wait_ || times_.size() < 2) return;
+    full_ns_ = median();
+    switch_to(false);
     all_ = true;  // nothing is known of the regions after full scans
     return;
   }
   if (ns < 0 || since_ <= kSettle) return;
   add(ns);
-  const double walk = mean();
-  if (walk == 0) return;
-  const bool losing = walk > full_ns_, clearly = walk > 2 * full_ns_;
-  if (since_ < kProbe && !clearly) return;
-  if (since_ >= kProbe) sum_ = 0, sum_n_ = 0;  // the next decision on fresh scans
-  if (losing) {
-    in_full_ = true, since_ = 0, sum_ = 0, sum_n_ = 0;
+  if (times_.size() < 3) return;
+  const double walk = median();
+  // walking must win by a margin (kKeep) to be kept: the two are measured
+  // at different times; a probe decides after kProbe scans, or at once if the
+  // walk is clearly slower
+  if (walk > 2 * full_ns_ || (since_ >= kProbe && walk > kKeep * full_ns_)) {
+    switch_to(true);
     wait_ = std::min<uint64_t>(wait_ * 2, kMaxWait);
-  } else {
-    wait_ = kMinWait;
+  } else if (since_ >= kProbe) {
+    wait_ = kMinWait;  // the next time the regions lose, a probe comes soon again
   }
 }
 

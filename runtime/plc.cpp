@@ -537,13 +537,22 @@ struct Runtime::Impl {
         std::lock_guard<ImageLock> g(glock);
         if (state.load() == State::Run && epoch.load() == t.epoch && !t.held.load()) {
           io->read_inputs(global.data(), ScanContext{ti, scan_no, p.input_runs});
-          for (const Run& r : p.in_runs) std::memcpy(mem + r.offset, global.data() + r.offset, r.size);
+          if (!p.engine->tracks_writes()) {
+            for (const Run& r : p.in_runs) std::memcpy(mem + r.offset, global.data() + r.offset, r.size);
+          } else {  // a change-driven engine hears of each byte that a client's write or another task changed
+            for (const Run& r : p.in_runs)
+              for (uint32_t b = r.offset; b < r.offset + r.size; b++)
+                if (mem[b] != global[b]) mem[b] = global[b], p.engine->written(b, 1);
+          }
         }
       }
       size_t k = 0;
       for (const Run& r : p.out_runs) std::memcpy(t.snapshot.data() + k, mem + r.offset, r.size), k += r.size;
       std::optional<int32_t> dt;
-      io->before_scan(ScanContext{ti, scan_no, {}}, mem, dt);
+      // what a driver writes into the task's memory it announces
+      // (ScanContext::written), for a change-driven engine
+      if (t.first) p.engine->written_all();  // a (re)start: memory cleared, retentive memory put back
+      io->before_scan(ScanContext{ti, scan_no, {}, p.engine.get()}, mem, dt);
       int32_t dtv = dt ? *dt : int32_t(dt_ms);
       std::memcpy(mem + kSysDt, &dtv, 4);
       mem[t.prog->image.layout.addr(Area::S, kBitFirstScan)] = t.first ? 1 : 0;
@@ -1286,7 +1295,12 @@ void Runtime::set(const std::string& device, const std::string& value, int64_t t
     put_trace_cell(m.global.data(), m.glayout, p, value);
     return;
   }
-  if (!m.at_boundary(t, [&] { put_trace_cell(t.mem.data(), t.prog->image.layout, p, value); }, timeout_ms))
+  auto put = [&] {
+    const Layout& L = t.prog->image.layout;
+    put_trace_cell(t.mem.data(), L, p, value);
+    t.prog->engine->written(L.addr(p.area, p.index), probe_width(p, L));  // a change-driven engine runs what depends on it
+  };
+  if (!m.at_boundary(t, put, timeout_ms))
     throw std::runtime_error("task '" + t.spec.name + "' did not reach a scan boundary in time");
 }
 

@@ -48,6 +48,13 @@ struct ScanContext {
   size_t task;         // task index
   uint64_t scan;       // scans of this task since the last (re)start, this one included
   std::span<const Run> runs;  // read_inputs: the task's X/WX runs; write_outputs: its Y/WY runs
+  // before_scan: the task's engine, told of every write a driver makes to
+  // the task's memory (Engine::written: the change-driven scan runs what
+  // depends on it; docs/change-driven.md)
+  Engine* engine = nullptr;
+  void written(const Layout& L, Area a, uint32_t index) const {
+    if (engine) engine->written(L.addr(a, index), L.elem_size(a));
+  }
 };
 
 // An I/O driver: the world outside.  All calls but before_scan/after_scan

@@ -955,13 +955,21 @@ struct Monitor::Impl {
     for (auto& [k, bits] : forced) c.items.push_back({Area(k.first), k.second, bits, ~0u});
     c.version = forced_version.load(std::memory_order_relaxed);
   }
-  void apply(ForcedCopy& fc, WriteShadow& shadow, WriteShadow::Batch& batch, uint8_t* mem, const Layout& L) {
+  // `c`: the task's scan, whose engine is told of each write (none for the global image)
+  void apply(ForcedCopy& fc, WriteShadow& shadow, WriteShadow::Batch& batch, uint8_t* mem, const Layout& L,
+             const ScanContext* c = nullptr) {
     if (any_forced.load(std::memory_order_relaxed) || !fc.items.empty()) {
       refresh(fc);
-      for (const ElementWrite& w : fc.items) apply_element(w, mem, L);
+      for (const ElementWrite& w : fc.items) {
+        apply_element(w, mem, L);
+        if (c) c->written(L, w.area, w.index);
+      }
     }
     if (shadow.take(batch))
-      for (const ElementWrite& w : batch.writes) apply_element(w, mem, L);
+      for (const ElementWrite& w : batch.writes) {
+        apply_element(w, mem, L);
+        if (c) c->written(L, w.area, w.index);
+      }
   }
   void apply_shared(uint8_t* global) { apply(forced_shared, *shared_writes, shared_batch, global, glayout); }
   // The runtime's generation of a task: that of the memory its thread holds.
@@ -969,11 +977,11 @@ struct Monitor::Impl {
   // A task's own writes go into its memory only with the layout of the
   // program that memory belongs to: after a download, from the scan on that
   // the monitor has the new program (until then they wait in the shadow).
-  void apply_private(size_t task, uint8_t* mem) {
-    if (task >= tasks.size()) return;
-    TaskView& t = *tasks[task];
+  void apply_private(const ScanContext& c, uint8_t* mem) {
+    if (c.task >= tasks.size()) return;
+    TaskView& t = *tasks[c.task];
     if (!t.snap_mu.try_lock()) return;  // the server reads the picture: the next scan
-    if (t.gen == generation(task)) apply(t.forced, *t.writes, t.batch, mem, t.layout);
+    if (t.gen == generation(c.task)) apply(t.forced, *t.writes, t.batch, mem, t.layout, &c);
     t.snap_mu.unlock();
   }
   // The global image is copied by whichever task reaches its boundary first
@@ -1343,7 +1351,7 @@ class MonitorDriver : public IoDriver {
   void state_changed(State s) override { inner_->state_changed(s); }
   void before_scan(const ScanContext& c, uint8_t* mem, std::optional<int32_t>& dt) override {
     inner_->before_scan(c, mem, dt);
-    m_->apply_private(c.task, mem);
+    m_->apply_private(c, mem);
   }
   void after_scan(const ScanContext& c, const uint8_t* mem, const uint8_t* global) override {
     inner_->after_scan(c, mem, global);
