@@ -4,9 +4,12 @@
 // watching) and applies client writes (merged in write shadows,
 // runtime/write_shadow.h) and forced inputs at the next boundary,
 // and an HTTP server (runtime/net/http.h) that serves one built-in page, the rungs
-// as grids (ir/ladder.h), their power flow evaluated on the snapshot off the
-// scan thread, a device table, statistics and, with --monitor-write, RUN/STOP,
-// writes and forcing.
+// as grids (ir/ladder.h) drawn with the IEC 61131-3 symbols, their power flow
+// evaluated on the snapshot off the scan thread, a device table, trends,
+// statistics and, with --monitor-write, RUN/STOP, writes and forcing (also by
+// clicking a contact).  After an online download (IoDriver::program_replaced)
+// it shows the new program; snapshots and writes follow Runtime::generation,
+// and every value the page gets carries the generation of its program.
 #pragma once
 
 #include <cstdint>
