@@ -233,6 +233,7 @@ struct Task {
   std::atomic<bool> finished{false};
   std::atomic<bool> held{false};     // stopped alone (stop_task); changed under glock
   std::atomic<bool> restart{false};  // run_task: warm restart at the next scan
+  std::atomic<uint64_t> generation{0};  // online downloads run (Runtime::generation)
 
   // the task thread's own
   uint64_t epoch = 0;
@@ -1007,6 +1008,7 @@ void Runtime::run_task(size_t i) {
 }
 
 bool Runtime::task_held(size_t i) const { return impl_->tasks.at(i)->held.load(); }
+uint64_t Runtime::generation(size_t i) const { return impl_->tasks.at(i)->generation.load(std::memory_order_acquire); }
 
 void Runtime::shutdown() {
   Impl& m = *impl_;
@@ -1196,6 +1198,7 @@ SwapReport Runtime::replace(const std::string& task, Image img, const std::strin
           std::swap(t.retain_tmp, pr->tmp);
           std::swap(t.prog, pr->prog);  // the old program leaves with pr, freed by the caller
         }
+        t.generation.fetch_add(1, std::memory_order_release);
         pr->at_scan = t.scans.load() + 1;
         pr->t_done = now_ns();
         pr->work = pr->t_done - w0;
@@ -1213,6 +1216,7 @@ SwapReport Runtime::replace(const std::string& task, Image img, const std::strin
     std::lock_guard<ImageLock> g(m.glock);
     m.add_global_ranges(new_shared);
   }
+  m.io->program_replaced(ti, t.prog->image);
   SwapReport rep;
   rep.task = task;
   rep.at_scan = pr->at_scan;

@@ -183,6 +183,8 @@ class ModbusDriver : public IoDriver {
       if (fd >= 0) ::close(fd);
   }
 
+  void program_replaced(size_t task, const Image& image) override { inner_->program_replaced(task, image); }
+
   void attach(uint8_t* global, const Layout& layout, uint32_t block_size) override {
     inner_->attach(global, layout, block_size);
     layout_ = layout;
