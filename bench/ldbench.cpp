@@ -1407,9 +1407,10 @@ struct Report {
   void levels() {
     Csv c({"program", "n_exe", "p_basic", "o0_ns", "o1_ns", "o2_ns", "c_ns", "o0_p99_ns", "o1_p99_ns", "o2_p99_ns",
            "c_p99_ns", "o0_bytes", "o1_bytes", "o2_bytes", "o0_build_s", "o1_build_s", "o2_build_s", "c_build_s",
-           "c40_o0_cycles", "c40_o1_cycles", "c40_o2_cycles", "c40_o0_bytes", "c40_o1_bytes", "c40_o2_bytes"});
+           "c40_o0_cycles", "c40_o1_cycles", "c40_o2_cycles", "c40_o0_bytes", "c40_o1_bytes", "c40_o2_bytes", "cd_ns",
+           "cd_p99_ns"});
     md += "## Optimization levels: -O0, -O1, -O2 against the C route\n\n";
-    md += md_head({"program", "N_exe", "-O0", "-O1", "-O2", "C -O2", "C/-O2", "-O0/-O2", "-O2 ns/IL",
+    md += md_head({"program", "N_exe", "-O0", "-O1", "-O2", "change-driven", "C -O2", "C/-O2", "-O0/-O2", "-O2 ns/IL",
                    "bytes/IL -O0 · -O1 · -O2", "build ms -O0 · -O1 · -O2", "cc -O2 build"});
     std::vector<Subject*> lv = headline_subjects();
     for (Subject* s : R.of("files")) lv.push_back(s);  // `ldbench FILE...`: their code sizes per level
@@ -1426,15 +1427,17 @@ struct Report {
              std::to_string(s->native_bytes_at[0]), std::to_string(s->native_bytes_at[1]),
              std::to_string(s->native_bytes_at[2]), fmt(bt[0], 4), fmt(bt[1], 4), fmt(bt[2], 4), fmt(s->c_build_s, 4),
              fmt(s->c40_cycles_at[0], 10), fmt(s->c40_cycles_at[1], 10), fmt(s->c40_cycles_at[2], 10),
-             std::to_string(s->c40_bytes_at[0]), std::to_string(s->c40_bytes_at[1]), std::to_string(s->c40_bytes_at[2])});
+             std::to_string(s->c40_bytes_at[0]), std::to_string(s->c40_bytes_at[1]), std::to_string(s->c40_bytes_at[2]),
+             fmt(s->t[kChange].median, 6), fmt(s->t[kChange].p99, 6)});
       md += md_row({s->name, std::to_string(s->n), cell(s->t[kNative]), cell(s->t[kNativeO1]), cell(s->t[kNativeO2]),
-                    cell(s->t[kC]), ratio(s->t[kC].median, s->t[kNativeO2].median),
+                    cell(s->t[kChange]), cell(s->t[kC]), ratio(s->t[kC].median, s->t[kNativeO2].median),
                     ratio(s->t[kNative].median, s->t[kNativeO2].median), fixed(s->t[kNativeO2].median / s->n, 3),
                     per(s->native_bytes_at),
                     fixed(bt[0] * 1e3, 1) + " · " + fixed(bt[1] * 1e3, 1) + " · " + fixed(bt[2] * 1e3, 1),
                     std::isfinite(s->c_build_s) ? fixed(s->c_build_s * 1e3, 0) + " ms" : "–"});
     }
-    md += "\nMedian / p99 per scan as above; C/-O2 above 1.0× means -O2 is faster than the C route.  bytes/IL: "
+    md += "\nMedian / p99 per scan as above; change-driven: the image of `ldc --change-driven -O2` (regions of up to "
+          "8 rungs, adaptive: docs/change-driven.md); C/-O2 above 1.0× means -O2 is faster than the C route.  bytes/IL: "
           "machine code bytes per IL instruction.  build: `build_x86` (generate and assemble, no listing notes) at "
           "each level, one run; cc -O2 build: `ldc --emit=c` and the system C compiler making the shared object.  "
           "The one-class programs (the last rows) are powered; their C cells are subject to the note under the "
