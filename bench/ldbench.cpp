@@ -85,7 +85,7 @@ enum EngineKind { kClassic, kFast, kNative, kNativeO1, kNativeO2, kC, kChange, k
 const char* const kEngineName[] = {"classic", "fast", "native", "native-O1", "native-O2", "c", "native-cd"};
 const char* const kEngineTitle[] = {"classic interpreter", "fast interpreter", "native x86-64 -O0",
                                     "native x86-64 -O1",   "native x86-64 -O2", "C route (cc -O2)",
-                                    "native x86-64 change-driven"};
+                                    "native change-driven"};
 constexpr int kLevels = 3;
 constexpr uint32_t kChangeRungs = 8;
 constexpr EngineKind kNativeAt[kLevels] = {kNative, kNativeO1, kNativeO2};
@@ -397,6 +397,7 @@ struct Subject {
   int n_target = 0;
   std::string klass;  // class programs: the class name; "" otherwise
   bool powered = true;
+  int activity = -1;  // the "activity" experiment: inputs changing per scan, per mille
 };
 
 void prepare(Subject& s, const Options& o) {
@@ -871,6 +872,26 @@ void run_typed(Run& R) {
   }
 }
 
+// Issue 28: scan time against the share of inputs changing each scan, on the
+// plant: the full scan, the change-driven scan and the fast interpreter.
+void run_activity(Run& R) {
+  const int rungs = R.o.smoke ? 40 : 20000;
+  say("scan time against input activity\n");
+  const Program prog = lower_to_il(parse_ld(synth::synth_plant_ld(rungs, 1), "plant.ld"));
+  bool c = R.o.c_route;
+  R.o.c_route = false;  // the C route is the levels table's
+  for (int pm : {0, 10, 20, 50, 100, 200, 500, 1000}) {
+    auto s = std::make_unique<Subject>();
+    s->experiment = "activity";
+    s->name = "plant " + std::to_string(rungs) + " rungs (inputs " + fixed(pm / 10.0, 0) + "% a scan)";
+    s->prog = prog;
+    s->trace = synth_trace(s->prog.layout(), 1024, 5, pm);
+    s->activity = pm;
+    R.add(std::move(s), 16);
+  }
+  R.o.c_route = c;
+}
+
 void run_large(Run& R) {
   int plant = R.o.smoke ? 40 : 20000, gen = R.o.smoke ? 20 : 2000;
   say("large programs\n");
@@ -1255,6 +1276,7 @@ struct Report {
     headline();
     levels();
     scaling();
+    activity();
     classes();
     fig10();
     code_size();
@@ -1472,6 +1494,40 @@ struct Report {
   }
 
   // scaling.csv and plot
+  // scan time against input activity (issue 28)
+  void activity() {
+    std::vector<Subject*> v = R.of("activity");
+    if (v.empty()) return;
+    Csv c({"inputs_changing_permille", "fast_ns", "native_o2_ns", "native_cd_ns", "fast_p99_ns", "native_o2_p99_ns",
+           "native_cd_p99_ns"});
+    plot::LinePlot lp;
+    lp.title = "Time per scan vs inputs changing per scan (" + v.front()->name.substr(0, v.front()->name.find(" (")) + ")";
+    lp.xlabel = "inputs changing per scan (%)";
+    lp.ylabel = "median time per scan (ns)";
+    lp.logy = true;
+    lp.note = note;
+    const int show[] = {kFast, kNativeO2, kChange};
+    std::vector<plot::Series> ser;
+    for (int e : show) ser.push_back(plot::Series{kEngineTitle[e], {}, {}, "", false, true, true});
+    md += "## Scan time against input activity (issue 28)\n\n";
+    md += md_head({"program", "fast interpreter", "native -O2 (full)", "native change-driven", "change-driven / full"});
+    for (Subject* s : v) {
+      c.row({std::to_string(s->activity), fmt(s->t[kFast].median, 6), fmt(s->t[kNativeO2].median, 6),
+             fmt(s->t[kChange].median, 6), fmt(s->t[kFast].p99, 6), fmt(s->t[kNativeO2].p99, 6), fmt(s->t[kChange].p99, 6)});
+      md += md_row({s->name, cell(s->t[kFast]), cell(s->t[kNativeO2]), cell(s->t[kChange]),
+                    fixed(s->t[kChange].median / s->t[kNativeO2].median, 2) + "×"});
+      for (size_t k = 0; k < ser.size(); k++) {
+        ser[k].x.push_back(s->activity / 10.0);
+        ser[k].y.push_back(s->t[show[k]].ok ? s->t[show[k]].median : NAN);
+      }
+    }
+    md += "\nThe plant's inputs (X, WX, F) each change with the given probability per scan (synth_trace); the "
+          "change-driven scan is the adaptive engine of docs/change-driven.md.  Plot: activity.svg.\n\n";
+    lp.series = ser;
+    R.write("activity.csv", c.text());
+    R.write("activity.svg", plot::render(lp));
+  }
+
   void scaling() {
     Csv c({"n_exe", "p_basic", "classic_ns", "fast_ns", "native_ns", "c_ns", "classic_p99_ns", "fast_p99_ns",
            "native_p99_ns", "c_p99_ns", "c40_cycles", "c40_interp_cycles", "classic_over_native", "fast_over_native",
@@ -2021,7 +2077,7 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
 
 const char kUsage[] =
     "usage: ldbench [--out DIR] [--smoke] [--samples N] [--batch-us US] [--no-c] [--c-max-il N]\n"
-    "               [--only examples,classes,fig10,scaling,large,typed,compile,memory] [--c40|--no-c40] [--source DIR]\n"
+    "               [--only examples,classes,fig10,scaling,large,activity,typed,compile,memory] [--c40|--no-c40] [--source DIR]\n"
     "               [--doc FILE.md]   (also put the tables between FILE.md's generated-region markers)\n"
     "       ldbench --synth N_EXE P_BASIC [SEED]   (a synthetic program's IL text, to stdout)\n"
     "       ldbench --plant RUNGS                  (the synthetic plant's .ld text, to stdout)\n"
@@ -2106,6 +2162,7 @@ int main(int argc, char** argv) {
     if (o.want("fig10")) run_fig10(R);
     if (o.want("scaling")) run_scaling(R);
     if (o.want("large")) run_large(R);
+    if (o.want("activity")) run_activity(R);
     if (o.want("typed")) run_typed(R);
     if (o.want("examples")) run_examples(R);
     if (o.want("scaling")) {  // the same program as at the start of the scaling run: the drift over the run
