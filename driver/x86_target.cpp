@@ -4,6 +4,7 @@
 #include "driver/x86_target.h"
 
 #include <cstdio>
+#include <cstdlib>
 
 #include "driver/targets.h"
 #include "runtime/change_driven.h"
@@ -115,7 +116,10 @@ const as::TargetInfo& assembler() { return as::x86::target(); }
 
 std::unique_ptr<Engine> native_engine(const Image& img) {
   std::unique_ptr<Engine> full = make_native_engine(map_checked_code(img.code, img.entry, img.layout));
-  if (img.regions) return make_change_driven_engine(img, std::move(full));
+  // LDC_REGIONS=walk: the regions every scan, never the full scan (the tests
+  // that compare what the regions compute use it; docs/change-driven.md)
+  const char* how = std::getenv("LDC_REGIONS");
+  if (img.regions) return make_change_driven_engine(img, how && std::string(how) == "walk" ? nullptr : std::move(full));
   return full;
 }
 
@@ -169,10 +173,11 @@ std::unique_ptr<Engine> make_change_driven_native(const Program& p, int opt_leve
   const Layout L = p.layout();
   RegionPlan plan = plan_regions(p, L, max_rungs);
   RegionCode rc = build_x86_regions(p, plan, opt_level);
-  auto code = std::make_shared<const CheckedRegions>(map_checked_regions(rc.code, rc.start, rc.size, L));
+  std::vector<std::unique_ptr<Engine>> parts;
+  if (!rc.start.empty()) parts = make_native_region_engines(std::make_shared<const CheckedRegions>(map_checked_regions(rc.code, rc.start, rc.size, L)));
   std::unique_ptr<Engine> full;
   if (adaptive) full = make_native_engine(map_checked_code(build_x86(p, p.source, as::Mode::Blockwise, opt_level, false).asm_result.code, 0, L));
-  return std::make_unique<ChangeDrivenEngine>(plan, L, make_native_region_engines(code), std::move(full));
+  return std::make_unique<ChangeDrivenEngine>(plan, L, std::move(parts), std::move(full));
 }
 
 // An image with a region table (ldc --change-driven): the regions are found
@@ -191,6 +196,8 @@ std::unique_ptr<Engine> make_change_driven_engine(const Image& img, std::unique_
     throw std::runtime_error("the image's region table (" + std::to_string(t.first.size()) +
                              " regions) is not the program's (" + std::to_string(first.size()) + " regions of up to " +
                              std::to_string(t.max_rungs) + " rungs)");
+  if (t.first.empty())  // a program of no rungs (the loader saw no code either)
+    return std::make_unique<ChangeDrivenEngine>(plan, img.layout, std::vector<std::unique_ptr<Engine>>{}, std::move(full));
   auto code = std::make_shared<const CheckedRegions>(map_checked_regions(t.code, t.start, t.size, img.layout));
   return std::make_unique<ChangeDrivenEngine>(plan, img.layout, make_native_region_engines(code), std::move(full));
 }

@@ -675,8 +675,8 @@ class ImageReader {
     RegionTable t;
     t.max_rungs = r.u32("region size");
     const uint32_t n = r.u32("region count");
-    if (r.error.empty() && (n == 0 || n > (r.data.size() - r.pos) / 12))
-      r.error = "region count " + std::to_string(n) + " is 0 or does not fit in the section";
+    if (r.error.empty() && n > (r.data.size() - r.pos) / 12)
+      r.error = "region count " + std::to_string(n) + " does not fit in the section";
     for (uint32_t i = 0; i < n && r.error.empty(); i++) {
       t.first.push_back(r.u32("region"));
       t.start.push_back(r.u32("region"));
@@ -810,6 +810,10 @@ class ImageReader {
       throw sfail(s, "a region table needs the 'lines' section with an entry for each of the IL's " + std::to_string(instrs) +
                          " instructions (their rungs); it has " + std::to_string(im_.lines.size()));
     if (t.max_rungs == 0) throw sfail(s, "region size 0");
+    if (t.first.empty()) {  // a program of no rungs: no region, no code
+      if (instrs || !t.code.empty()) throw sfail(s, "no regions, but the IL has " + std::to_string(instrs) + " instructions");
+      return;
+    }
     const uint64_t rungs = im_.lines.empty() ? 0 : uint64_t(im_.lines.back().rung) + 1;
     if (t.first.back() >= rungs && rungs)
       throw sfail(s, "region " + std::to_string(t.first.size() - 1) + " starts at rung " + std::to_string(t.first.back()) +

@@ -271,6 +271,18 @@ TEST(ChangeDriven, TheImageRegionTableIsCheckedWhereItIsRead) {
   bad = img;
   bad.regions->max_rungs = 2;  // the runtime's plan: other regions
   refused(bad, "is not the program's");
+  bad = img;  // no regions for a program that has rungs
+  bad.regions->first.clear(), bad.regions->start.clear(), bad.regions->size.clear(), bad.regions->code.clear();
+  refused(bad, "no regions, but the IL has 12 instructions");  // the 12 of kPlanIl
+  {  // a program of no rungs: no region, nothing to run, accepted
+    Program none;
+    Image e = target_image(x86, none, "none.il", 1);
+    e.regions = x86_region_table(none, 1, 1);
+    EXPECT_TRUE(e.regions->first.empty());
+    Image back = read_image(write_image(e), "none.bin");
+    Memory m(back.layout);
+    EXPECT_NO_THROW(find_engine("native").engine->make(back)->scan(m.bytes));
+  }
   bad = img;  // a region that joins rungs the plan keeps apart
   bad.regions->first = {0, 3, 4, 5};
   bad.regions->start.erase(bad.regions->start.begin() + 1), bad.regions->size.erase(bad.regions->size.begin() + 1);

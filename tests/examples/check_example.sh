@@ -18,6 +18,7 @@ if [ "$engine" = source ]; then
   "$bindir/ldrun" "$src" --engine=interp --trace "$base.csv" --watch "$watch" > "$tmp/out"
 elif [ "$engine" = native-cd ] || [ "$engine" = native-cd-plc ]; then
   "$bindir/ldc" "$src" -O2 --change-driven=1 -o "$tmp/prog.bin"
+  export LDC_REGIONS=walk  # the regions every scan (docs/change-driven.md), not the full scan
   if [ "$engine" = native-cd ]; then
     "$bindir/ldrun" "$tmp/prog.bin" --trace "$base.csv" --watch "$watch" > "$tmp/out"
   else

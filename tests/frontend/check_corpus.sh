@@ -2,7 +2,8 @@
 # check_corpus.sh BINDIR SOURCE [EXPECTED_ERROR]
 # Without EXPECTED_ERROR: SOURCE compiles to images that run 300 scans of a
 # pseudo-random input trace on the interpreter, on native code at -O0/-O1/-O2,
-# on the C40 simulator and the C40-hosted interpreter, and through the C route,
+# on the change-driven image (its regions walked), on the C40 simulator and
+# the C40-hosted interpreter, and through the C route,
 # with the same values for every alias.
 # With it: ldc refuses SOURCE with exactly that message (the file named as in
 # its own directory) and leaves no output behind.
@@ -61,8 +62,11 @@ c40_refused() {  # c40_refused NAME: ran, or refused by name (then 0 and nothing
   fi
   return 1
 }
+# native-cd: the change-driven image (ldc --change-driven), its regions walked
+# every scan (LDC_REGIONS=walk, docs/change-driven.md)
+export LDC_REGIONS=walk
 for v in "native-O0 -O0 native" "native-O1 -O1 native" "native-O2 -O2 native" "fast -O0 fast" \
-         "c40sim --target=c40 c40sim" "c40interp -O0 c40interp"; do
+         "native-cd --change-driven=1 native" "c40sim --target=c40 c40sim" "c40interp -O0 c40interp"; do
   set -- $v
   if ! (run $1 $2 $3) 2> "$tmp/$1.err"; then
     case $1 in c40*) c40_refused $1 && continue ;; esac
