@@ -6,6 +6,8 @@
 #include <cstring>
 #include <deque>
 #include <map>
+#include <optional>
+#include <set>
 #include <tuple>
 
 namespace ldc::plc {
@@ -129,43 +131,85 @@ std::vector<std::pair<size_t, size_t>> match_edges(const EdgeSites& nw, const Ed
 
 // ---------------------------------------------------------------- variables
 
-// A named variable's cells.  I/O points (X Y WX WY), S, and timers and
-// counters (carried by their device) are not variables here.
+// A named variable's cells: one byte range (an alias), or a whole variable of
+// the image's `vars` section (its bits in M or K, its cells in D or F).  I/O
+// points (X Y WX WY), S, and timers and counters (carried by their device)
+// are not variables here.
+struct Range {
+  bool shared;  // M, K: in the global image
+  uint32_t off, size;
+};
 struct VarSite {
   std::string name;
-  bool shared;
-  uint32_t off, size;
   std::string type;
+  std::vector<Range> ranges;
   std::string where;  // "D3"
+  bool whole = false;  // from the `vars` section
 };
 
-std::vector<VarSite> var_sites(const Image& img) {
-  std::vector<VarSite> out;
-  std::map<std::string, bool> seen;
-  const Layout& L = img.layout;
-  for (const Alias& a : img.aliases) {
-    Dev d = a.dev.dev;
-    if (d != Dev::M && d != Dev::K && d != Dev::D && d != Dev::F) continue;
-    if (!seen.emplace(a.name, true).second) continue;
-    Area area = d == Dev::M ? Area::M : d == Dev::K ? Area::K : d == Dev::D ? Area::D : Area::F;
-    VarSite v;
-    v.name = a.name;
-    v.shared = area_is_bit(area);
-    uint32_t cells = area_is_bit(area) ? 1 : a.ty == Ty::None ? 1 : uint32_t(std::max(1, ty_info(a.ty).cells));
-    if (uint64_t(a.dev.index) + cells > L.count[int(area)]) continue;  // not a place of this layout
-    v.off = L.addr(area, a.dev.index);
-    v.size = cells * L.elem_size(area);
-    // An untyped word is a DINT (REAL in F), an untyped bit a BOOL.
-    v.type = a.ty != Ty::None ? ty_info(a.ty).name : area_is_bit(area) ? "BOOL" : area == Area::F ? "REAL" : "DINT";
-    v.type += area_is_bit(area) ? "" : area == Area::F ? " in F" : " in D";
-    v.where = point_name(area, a.dev.index);
-    out.push_back(v);
-  }
-  return out;
+bool overlaps(const VarSite& a, const VarSite& b) {
+  for (const Range& x : a.ranges)
+    for (const Range& y : b.ranges)
+      if (x.off < y.off + y.size && y.off < x.off + x.size) return true;
+  return false;
 }
 
-bool overlaps(const VarSite& a, const VarSite& b) {
-  return a.shared == b.shared && a.off < b.off + b.size && b.off < a.off + a.size;
+// Is alias `leaf` a part of variable `var` (var.x, var[1], var itself)?
+bool part_of(const std::string& leaf, const std::string& var) {
+  return leaf.size() >= var.size() && leaf.compare(0, var.size(), var) == 0 &&
+         (leaf.size() == var.size() || leaf[var.size()] == '.' || leaf[var.size()] == '[');
+}
+
+std::optional<VarSite> alias_site(const Alias& a, const Layout& L) {
+  Dev d = a.dev.dev;
+  if (d != Dev::M && d != Dev::K && d != Dev::D && d != Dev::F) return std::nullopt;
+  Area area = d == Dev::M ? Area::M : d == Dev::K ? Area::K : d == Dev::D ? Area::D : Area::F;
+  uint32_t cells = area_is_bit(area) ? 1 : a.ty == Ty::None ? 1 : uint32_t(std::max(1, ty_info(a.ty).cells));
+  if (uint64_t(a.dev.index) + cells > L.count[int(area)]) return std::nullopt;  // not a place of this layout
+  VarSite v;
+  v.name = a.name;
+  v.ranges.push_back({area_is_bit(area), L.addr(area, a.dev.index), cells * L.elem_size(area)});
+  // An untyped word is a DINT (REAL in F), an untyped bit a BOOL.
+  v.type = a.ty != Ty::None ? ty_info(a.ty).name : area_is_bit(area) ? "BOOL" : area == Area::F ? "REAL" : "DINT";
+  v.type += area_is_bit(area) ? "" : area == Area::F ? " in F" : " in D";
+  v.where = point_name(area, a.dev.index);
+  return v;
+}
+
+VarSite whole_site(const VarPlace& p, const Layout& L) {
+  VarSite v;
+  v.name = p.name, v.type = p.type, v.whole = true;
+  if (p.cells != Area::Count) {
+    v.ranges.push_back({false, L.addr(p.cells, p.cell_first), p.cell_count * L.elem_size(p.cells)});
+    v.where = point_name(p.cells, p.cell_first);
+  }
+  if (p.bits != Area::Count) {
+    v.ranges.push_back({true, L.addr(p.bits, p.bit_first), p.bit_count});
+    if (v.where.empty()) v.where = point_name(p.bits, p.bit_first);
+  }
+  return v;
+}
+
+// The variables: the `vars` section's wholes when `wholes` (both images have
+// one), and the aliases that are not part of one; `parts` gets the aliases
+// that are (a whole whose type changed carries its parts one by one).
+std::vector<VarSite> var_sites(const Image& img, bool wholes, std::vector<VarSite>* parts) {
+  std::vector<VarSite> out;
+  std::set<std::string> seen;
+  if (wholes)
+    for (const VarPlace& p : img.vars)
+      if (seen.insert(p.name).second) out.push_back(whole_site(p, img.layout));
+  for (const Alias& a : img.aliases) {
+    std::optional<VarSite> v = alias_site(a, img.layout);
+    if (!v) continue;
+    bool in_whole = wholes && std::any_of(img.vars.begin(), img.vars.end(), [&](const VarPlace& p) { return part_of(a.name, p.name); });
+    if (in_whole) {
+      if (parts) parts->push_back(std::move(*v));
+    } else if (seen.insert(a.name).second) {
+      out.push_back(std::move(*v));
+    }
+  }
+  return out;
 }
 
 // ---------------------------------------------------------------- initial memory
@@ -259,30 +303,55 @@ CarryPlan plan_carry(const Image& old_img, const Image& new_img) {
   for (size_t j = 0; j < oe.sites.size(); j++)
     if (!old_matched[j]) rep.dropped.push_back(oe.sites[j].text());
   // Named variables.
-  std::vector<VarSite> nv = var_sites(new_img), ov = var_sites(old_img);
-  std::map<std::string, const VarSite*> old_by_name;
+  const bool wholes = !old_img.vars.empty() && !new_img.vars.empty();
+  std::vector<VarSite> new_parts, old_parts;
+  std::vector<VarSite> nv = var_sites(new_img, wholes, &new_parts), ov = var_sites(old_img, wholes, &old_parts);
+  std::map<std::string, const VarSite*> old_by_name, old_part_by_name;
   for (const VarSite& v : ov) old_by_name.emplace(v.name, &v);
+  for (const VarSite& v : old_parts) old_part_by_name.emplace(v.name, &v);
   std::vector<uint8_t> init = initial_memory(new_img);
   std::vector<bool> written = initialised_bytes(new_img);
   auto fill = [&](const VarSite& v) {
-    plan.fills.push_back({v.shared, v.off, std::vector<uint8_t>(init.begin() + v.off, init.begin() + v.off + v.size)});
+    for (const Range& r : v.ranges)
+      plan.fills.push_back({r.shared, r.off, std::vector<uint8_t>(init.begin() + r.off, init.begin() + r.off + r.size)});
+  };
+  auto copy = [&](const VarSite& from, const VarSite& to) {
+    for (size_t i = 0; i < to.ranges.size(); i++)
+      if (from.ranges[i].off != to.ranges[i].off)
+        plan.copies.push_back({to.ranges[i].shared, from.ranges[i].off, to.ranges[i].off, to.ranges[i].size});
+  };
+  auto same_shape = [](const VarSite& a, const VarSite& b) {
+    if (a.type != b.type || a.ranges.size() != b.ranges.size()) return false;
+    for (size_t i = 0; i < a.ranges.size(); i++)
+      if (a.ranges[i].size != b.ranges[i].size || a.ranges[i].shared != b.ranges[i].shared) return false;
+    return true;
   };
   std::vector<const VarSite*> carried;
-  std::map<std::string, bool> in_new;
+  std::set<std::string> in_new;
   for (const VarSite& v : nv) {
-    in_new[v.name] = true;
+    in_new.insert(v.name);
     auto it = old_by_name.find(v.name);
     if (it == old_by_name.end()) continue;
     const VarSite& o = *it->second;
-    if (o.type != v.type || o.size != v.size || o.shared != v.shared) {
+    if (!same_shape(o, v)) {
       fill(v);
-      rep.reset.push_back(v.name + " (" + o.type + " -> " + v.type + ": initial value)");
+      // A whole whose type changed: its parts of the same name and type are carried.
+      size_t kept = 0;
+      for (const VarSite& np : new_parts) {
+        if (!v.whole || !part_of(np.name, v.name)) continue;
+        auto op = old_part_by_name.find(np.name);
+        if (op == old_part_by_name.end() || !part_of(op->first, o.name) || !same_shape(*op->second, np)) continue;
+        plan.copies.push_back({np.ranges[0].shared, op->second->ranges[0].off, np.ranges[0].off, np.ranges[0].size});
+        kept++;
+      }
+      rep.reset.push_back(v.name + " (" + o.type + " -> " + v.type + ": initial value" +
+                          (kept ? ", " + std::to_string(kept) + " parts of the same name and type carried" : std::string()) + ")");
       continue;
     }
     rep.vars_kept++;
     carried.push_back(&v);
-    if (o.off != v.off) {
-      plan.copies.push_back({v.shared, o.off, v.off, v.size});
+    if (o.ranges.empty() || o.ranges[0].off != v.ranges[0].off || (o.ranges.size() > 1 && o.ranges[1].off != v.ranges[1].off)) {
+      copy(o, v);
       rep.moved.push_back(v.name + " " + o.where + " -> " + v.where);
     }
   }
@@ -291,7 +360,9 @@ CarryPlan plan_carry(const Image& old_img, const Image& new_img) {
     // A new variable: its initial value where its cells were another
     // variable's or the program initialises them; else the device as it is.
     bool other = std::any_of(ov.begin(), ov.end(), [&](const VarSite& o) { return overlaps(o, v); });
-    bool inits = std::any_of(written.begin() + v.off, written.begin() + v.off + v.size, [](bool b) { return b; });
+    bool inits = std::any_of(v.ranges.begin(), v.ranges.end(), [&](const Range& r) {
+      return std::any_of(written.begin() + r.off, written.begin() + r.off + r.size, [](bool b) { return b; });
+    });
     bool shares = std::any_of(carried.begin(), carried.end(), [&](const VarSite* c) { return overlaps(*c, v); });
     if ((other || inits) && !shares) fill(v);
     rep.added.push_back(v.name);

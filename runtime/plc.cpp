@@ -133,7 +133,7 @@ struct Ring {
 Image control_copy(const Image& img) {
   Image c;
   c.target = img.target, c.source = img.source, c.layout = img.layout, c.il = img.il, c.lines = img.lines;
-  c.rung_titles = img.rung_titles, c.aliases = img.aliases, c.retentive = img.retentive;
+  c.rung_titles = img.rung_titles, c.aliases = img.aliases, c.vars = img.vars, c.retentive = img.retentive;
   return c;
 }
 
