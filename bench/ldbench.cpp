@@ -85,7 +85,7 @@ enum EngineKind { kClassic, kFast, kNative, kNativeO1, kNativeO2, kC, kChange, k
 const char* const kEngineName[] = {"classic", "fast", "native", "native-O1", "native-O2", "c", "native-cd"};
 const char* const kEngineTitle[] = {"classic interpreter", "fast interpreter", "native x86-64 -O0",
                                     "native x86-64 -O1",   "native x86-64 -O2", "C route (cc -O2)",
-                                    "native x86-64 change-driven"};
+                                    "native change-driven"};
 constexpr int kLevels = 3;
 constexpr uint32_t kChangeRungs = 8;
 constexpr EngineKind kNativeAt[kLevels] = {kNative, kNativeO1, kNativeO2};
@@ -397,6 +397,7 @@ struct Subject {
   int n_target = 0;
   std::string klass;  // class programs: the class name; "" otherwise
   bool powered = true;
+  int activity = -1;  // the "activity" experiment: inputs changing per scan, per mille
 };
 
 void prepare(Subject& s, const Options& o) {
@@ -871,6 +872,26 @@ void run_typed(Run& R) {
   }
 }
 
+// Issue 28: scan time against the share of inputs changing each scan, on the
+// plant: the full scan, the change-driven scan and the fast interpreter.
+void run_activity(Run& R) {
+  const int rungs = R.o.smoke ? 40 : 20000;
+  say("scan time against input activity\n");
+  const Program prog = lower_to_il(parse_ld(synth::synth_plant_ld(rungs, 1), "plant.ld"));
+  bool c = R.o.c_route;
+  R.o.c_route = false;  // the C route is the levels table's
+  for (int pm : {0, 10, 20, 50, 100, 200, 500, 1000}) {
+    auto s = std::make_unique<Subject>();
+    s->experiment = "activity";
+    s->name = "plant " + std::to_string(rungs) + " rungs (inputs " + fixed(pm / 10.0, 0) + "% a scan)";
+    s->prog = prog;
+    s->trace = synth_trace(s->prog.layout(), 1024, 5, pm);
+    s->activity = pm;
+    R.add(std::move(s), 16);
+  }
+  R.o.c_route = c;
+}
+
 void run_large(Run& R) {
   int plant = R.o.smoke ? 40 : 20000, gen = R.o.smoke ? 20 : 2000;
   say("large programs\n");
@@ -1162,6 +1183,21 @@ std::string first_line_of(const std::string& cmd) {
   return s;
 }
 
+// CPU 0's caches from sysfs, as "L1d 48K, L1i 64K, L2 2048K, L3 ..." (the
+// sizes that decide when code falls out of a cache, issue 28), or "unknown".
+std::string cache_sizes() {
+  std::string out;
+  for (int i = 0; i < 8; i++) {
+    const std::string dir = "/sys/devices/system/cpu/cpu0/cache/index" + std::to_string(i) + "/";
+    std::ifstream lv(dir + "level"), ty(dir + "type"), sz(dir + "size");
+    std::string level, type, size;
+    if (!std::getline(lv, level) || !std::getline(ty, type) || !std::getline(sz, size)) break;
+    const char* kind = type == "Data" ? "d" : type == "Instruction" ? "i" : "";
+    out += (out.empty() ? "" : ", ") + std::string("L") + level + kind + " " + size;
+  }
+  return out.empty() ? "unknown" : out;
+}
+
 std::map<std::string, std::string> machine_info() {
   std::map<std::string, std::string> m;
   std::ifstream cpu("/proc/cpuinfo");
@@ -1173,6 +1209,7 @@ std::map<std::string, std::string> machine_info() {
     if (l.rfind("cache size", 0) == 0 && !m.count("cache")) m["cache"] = l.substr(l.find(':') + 2);
   }
   m["logical_cpus"] = std::to_string(procs);
+  m["caches"] = cache_sizes();
   m["online_cpus"] = std::to_string(sysconf(_SC_NPROCESSORS_ONLN));
   utsname u{};
   if (uname(&u) == 0) m["kernel"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
@@ -1239,6 +1276,7 @@ struct Report {
     headline();
     levels();
     scaling();
+    activity();
     classes();
     fig10();
     code_size();
@@ -1391,9 +1429,10 @@ struct Report {
   void levels() {
     Csv c({"program", "n_exe", "p_basic", "o0_ns", "o1_ns", "o2_ns", "c_ns", "o0_p99_ns", "o1_p99_ns", "o2_p99_ns",
            "c_p99_ns", "o0_bytes", "o1_bytes", "o2_bytes", "o0_build_s", "o1_build_s", "o2_build_s", "c_build_s",
-           "c40_o0_cycles", "c40_o1_cycles", "c40_o2_cycles", "c40_o0_bytes", "c40_o1_bytes", "c40_o2_bytes"});
+           "c40_o0_cycles", "c40_o1_cycles", "c40_o2_cycles", "c40_o0_bytes", "c40_o1_bytes", "c40_o2_bytes", "cd_ns",
+           "cd_p99_ns"});
     md += "## Optimization levels: -O0, -O1, -O2 against the C route\n\n";
-    md += md_head({"program", "N_exe", "-O0", "-O1", "-O2", "C -O2", "C/-O2", "-O0/-O2", "-O2 ns/IL",
+    md += md_head({"program", "N_exe", "-O0", "-O1", "-O2", "change-driven", "C -O2", "C/-O2", "-O0/-O2", "-O2 ns/IL",
                    "bytes/IL -O0 · -O1 · -O2", "build ms -O0 · -O1 · -O2", "cc -O2 build"});
     std::vector<Subject*> lv = headline_subjects();
     for (Subject* s : R.of("files")) lv.push_back(s);  // `ldbench FILE...`: their code sizes per level
@@ -1410,15 +1449,17 @@ struct Report {
              std::to_string(s->native_bytes_at[0]), std::to_string(s->native_bytes_at[1]),
              std::to_string(s->native_bytes_at[2]), fmt(bt[0], 4), fmt(bt[1], 4), fmt(bt[2], 4), fmt(s->c_build_s, 4),
              fmt(s->c40_cycles_at[0], 10), fmt(s->c40_cycles_at[1], 10), fmt(s->c40_cycles_at[2], 10),
-             std::to_string(s->c40_bytes_at[0]), std::to_string(s->c40_bytes_at[1]), std::to_string(s->c40_bytes_at[2])});
+             std::to_string(s->c40_bytes_at[0]), std::to_string(s->c40_bytes_at[1]), std::to_string(s->c40_bytes_at[2]),
+             fmt(s->t[kChange].median, 6), fmt(s->t[kChange].p99, 6)});
       md += md_row({s->name, std::to_string(s->n), cell(s->t[kNative]), cell(s->t[kNativeO1]), cell(s->t[kNativeO2]),
-                    cell(s->t[kC]), ratio(s->t[kC].median, s->t[kNativeO2].median),
+                    cell(s->t[kChange]), cell(s->t[kC]), ratio(s->t[kC].median, s->t[kNativeO2].median),
                     ratio(s->t[kNative].median, s->t[kNativeO2].median), fixed(s->t[kNativeO2].median / s->n, 3),
                     per(s->native_bytes_at),
                     fixed(bt[0] * 1e3, 1) + " · " + fixed(bt[1] * 1e3, 1) + " · " + fixed(bt[2] * 1e3, 1),
                     std::isfinite(s->c_build_s) ? fixed(s->c_build_s * 1e3, 0) + " ms" : "–"});
     }
-    md += "\nMedian / p99 per scan as above; C/-O2 above 1.0× means -O2 is faster than the C route.  bytes/IL: "
+    md += "\nMedian / p99 per scan as above; change-driven: the image of `ldc --change-driven -O2` (regions of up to "
+          "8 rungs, adaptive: docs/change-driven.md); C/-O2 above 1.0× means -O2 is faster than the C route.  bytes/IL: "
           "machine code bytes per IL instruction.  build: `build_x86` (generate and assemble, no listing notes) at "
           "each level, one run; cc -O2 build: `ldc --emit=c` and the system C compiler making the shared object.  "
           "The one-class programs (the last rows) are powered; their C cells are subject to the note under the "
@@ -1453,6 +1494,40 @@ struct Report {
   }
 
   // scaling.csv and plot
+  // scan time against input activity (issue 28)
+  void activity() {
+    std::vector<Subject*> v = R.of("activity");
+    if (v.empty()) return;
+    Csv c({"inputs_changing_permille", "fast_ns", "native_o2_ns", "native_cd_ns", "fast_p99_ns", "native_o2_p99_ns",
+           "native_cd_p99_ns"});
+    plot::LinePlot lp;
+    lp.title = "Time per scan vs inputs changing per scan (" + v.front()->name.substr(0, v.front()->name.find(" (")) + ")";
+    lp.xlabel = "inputs changing per scan (%)";
+    lp.ylabel = "median time per scan (ns)";
+    lp.logy = true;
+    lp.note = note;
+    const int show[] = {kFast, kNativeO2, kChange};
+    std::vector<plot::Series> ser;
+    for (int e : show) ser.push_back(plot::Series{kEngineTitle[e], {}, {}, "", false, true, true});
+    md += "## Scan time against input activity (issue 28)\n\n";
+    md += md_head({"program", "fast interpreter", "native -O2 (full)", "native change-driven", "change-driven / full"});
+    for (Subject* s : v) {
+      c.row({std::to_string(s->activity), fmt(s->t[kFast].median, 6), fmt(s->t[kNativeO2].median, 6),
+             fmt(s->t[kChange].median, 6), fmt(s->t[kFast].p99, 6), fmt(s->t[kNativeO2].p99, 6), fmt(s->t[kChange].p99, 6)});
+      md += md_row({s->name, cell(s->t[kFast]), cell(s->t[kNativeO2]), cell(s->t[kChange]),
+                    fixed(s->t[kChange].median / s->t[kNativeO2].median, 2) + "×"});
+      for (size_t k = 0; k < ser.size(); k++) {
+        ser[k].x.push_back(s->activity / 10.0);
+        ser[k].y.push_back(s->t[show[k]].ok ? s->t[show[k]].median : NAN);
+      }
+    }
+    md += "\nThe plant's inputs (X, WX, F) each change with the given probability per scan (synth_trace); the "
+          "change-driven scan is the adaptive engine of docs/change-driven.md.  Plot: activity.svg.\n\n";
+    lp.series = ser;
+    R.write("activity.csv", c.text());
+    R.write("activity.svg", plot::render(lp));
+  }
+
   void scaling() {
     Csv c({"n_exe", "p_basic", "classic_ns", "fast_ns", "native_ns", "c_ns", "classic_p99_ns", "fast_p99_ns",
            "native_p99_ns", "c_p99_ns", "c40_cycles", "c40_interp_cycles", "classic_over_native", "fast_over_native",
@@ -2002,7 +2077,7 @@ void report(Run& R, const std::vector<CompileRow>& compile, const std::vector<Me
 
 const char kUsage[] =
     "usage: ldbench [--out DIR] [--smoke] [--samples N] [--batch-us US] [--no-c] [--c-max-il N]\n"
-    "               [--only examples,classes,fig10,scaling,large,typed,compile,memory] [--c40|--no-c40] [--source DIR]\n"
+    "               [--only examples,classes,fig10,scaling,large,activity,typed,compile,memory] [--c40|--no-c40] [--source DIR]\n"
     "               [--doc FILE.md]   (also put the tables between FILE.md's generated-region markers)\n"
     "       ldbench --synth N_EXE P_BASIC [SEED]   (a synthetic program's IL text, to stdout)\n"
     "       ldbench --plant RUNGS                  (the synthetic plant's .ld text, to stdout)\n"
@@ -2075,7 +2150,8 @@ int main(int argc, char** argv) {
     struct stat st;
     if (stat(o.out.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) throw std::runtime_error("cannot create " + o.out);
     auto machine = machine_info();
-    say("ldbench: %s, %s cpus, %s\n", machine["cpu"].c_str(), machine["logical_cpus"].c_str(), machine["date"].c_str());
+    say("ldbench: %s, %s cpus, %s; caches per core: %s\n", machine["cpu"].c_str(), machine["logical_cpus"].c_str(),
+        machine["date"].c_str(), machine["caches"].c_str());
     auto t0 = Clock::now();
     // the one-class programs first: eq. (2) needs them
     if (!o.files.empty()) {  // only the given programs
@@ -2086,6 +2162,7 @@ int main(int argc, char** argv) {
     if (o.want("fig10")) run_fig10(R);
     if (o.want("scaling")) run_scaling(R);
     if (o.want("large")) run_large(R);
+    if (o.want("activity")) run_activity(R);
     if (o.want("typed")) run_typed(R);
     if (o.want("examples")) run_examples(R);
     if (o.want("scaling")) {  // the same program as at the start of the scaling run: the drift over the run

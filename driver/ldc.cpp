@@ -4,6 +4,7 @@
 
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -11,6 +12,7 @@
 #include "driver/driver.h"
 #include "driver/project.h"
 #include "driver/targets.h"
+#include "driver/x86_target.h"
 #include "frontend/frontend.h"
 #include "ir/ladder.h"
 #include "driver/version.h"
@@ -26,6 +28,8 @@ static std::string usage() {
   return "usage: ldc FILE [-o OUT] [--emit=tree|il|iec-il|ld|asm|listing|hex|c] [--target=" + targets + "] [-O0|-O1|-O2]\n"
          "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .st (Structured Text), .xml (PLCopen TC6), .rtsp (paper 000), .sfc (SFC chart)\n"
          "       -O0 templates (paper 003), -O1 peephole, -O2 bit stack in registers; for every target\n"
+         "       --change-driven[=N]   x86-64: also regions of up to N rungs (default 8), each run only when what it\n"
+         "                             reads or writes changed (docs/change-driven.md); recorded in the image\n"
          "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n"
          "       ldc FILE.xml|FILE.st [-o DIR]   (a configuration of several tasks, PLCopen or ST, is a project, the same way)\n"
          "       ldc FILE.xml --task NAME ...   (one task's program of such a configuration)\n"
@@ -69,6 +73,7 @@ static int build_project_main(const std::string& project, const std::string& out
 static int ldc_main(int argc, char** argv) {
   std::string input, output, emit, target(targets().front().name), project, task;
   int opt = 0;
+  uint32_t change_rungs = 0;  // --change-driven: regions of up to this many rungs
   bool syntax_only = false;
   DiagOptions dopt;
   for (int i = 1; i < argc; i++) {
@@ -86,6 +91,16 @@ static int ldc_main(int argc, char** argv) {
     else if (a == "--task" && i + 1 < argc) task = argv[++i];
     else if (a.rfind("--task=", 0) == 0) task = a.substr(7);
     else if (a == "-O0" || a == "-O1" || a == "-O2") opt = a[2] - '0';
+    else if (a == "--change-driven") change_rungs = 8;
+    else if (a.rfind("--change-driven=", 0) == 0) {
+      char* end = nullptr;
+      const long n = std::strtol(a.c_str() + 16, &end, 10);
+      if (*end || end == a.c_str() + 16 || n < 1 || n > 65536) {
+        std::fprintf(stderr, "ldc: error: --change-driven=N takes a number of rungs from 1 to 65536, not '%s'\n", a.c_str() + 16);
+        return 1;
+      }
+      change_rungs = uint32_t(n);
+    }
     else if (a == "-h" || a == "--help") { std::fputs(usage().c_str(), stdout); return 0; }
     else if (a == "--version") return print_version("ldc");
     else if (!a.empty() && a[0] == '-') { std::fprintf(stderr, "ldc: error: unknown option '%s'\n%s", a.c_str(), usage().c_str()); return 1; }
@@ -138,6 +153,10 @@ static int ldc_main(int argc, char** argv) {
   } else if (emit.empty() || emit == "hex") {              // + loader
     Image image;  // a backend's refusal (the C40's of a 64-bit type) at its place in the source
     at_source([&] { image = target_image(*t, c.il, input, opt); return std::string(); });
+    if (change_rungs) {
+      if (std::string(t->name) != "x86-64") throw UserError("ldc: error: --change-driven is for the x86-64 target, not " + std::string(t->name));
+      image.regions = x86_region_table(c.il, change_rungs, opt);
+    }
     if (emit == "hex") text = write_intel_hex(write_image(image));
     else {
       if (output.empty()) return 0;  // `ldc FILE`: compiled and checked, nothing written (docs/diagnostics.md)

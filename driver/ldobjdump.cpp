@@ -42,6 +42,20 @@ Image image_of(const Args& a, std::string& what) {
   return target_image(*t, c.il, a.file, opt);
 }
 
+// The change-driven region table (ldc --change-driven): which rungs each
+// region holds and where its scan function lies in the region code.
+std::string region_table_text(const RegionTable& t) {
+  std::string s = "\nchange-driven scan (docs/change-driven.md): " + std::to_string(t.first.size()) + " regions of up to " +
+                  std::to_string(t.max_rungs) + " rungs, region code " + std::to_string(t.code.size()) + " bytes\n";
+  for (size_t i = 0; i < t.first.size(); i++) {
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "  region %zu: rungs %u..%s  code %08x +%u\n", i, t.first[i],
+                  i + 1 < t.first.size() ? std::to_string(t.first[i + 1] - 1).c_str() : "end", t.start[i], t.size[i]);
+    s += buf;
+  }
+  return s;
+}
+
 int ldobjdump_main(int argc, char** argv) {
   Args a;
   for (int i = 1; i < argc; i++) {
@@ -62,6 +76,7 @@ int ldobjdump_main(int argc, char** argv) {
   const Target& t = target_of(img.target);
   std::string out = "\n" + a.file + ":     file format ldc-" + std::string(t.assembler().name) + " (" + what + ")\n\n" +
                     t.disassemble(img);
+  if (img.regions) out += region_table_text(*img.regions);
   std::fwrite(out.data(), 1, out.size(), stdout);
   return 0;
 }

@@ -435,8 +435,11 @@ class SoftPlcRun {
   // a source this ldrun compiled as it is, an image's source only if it still
   // compiles to the image's IL and line map (a source edited since would put
   // values on the wrong lines); else `note` says why and the rungs are drawn.
-  void monitor_source(const TaskSpec& s, std::string& text, std::string& note) {
-    const std::string& path = s.image.source;
+  // `file` is where the image came from ("" when not known: the source is
+  // then always compiled and compared).
+  static void monitor_source(const Image& image, const std::string& file, const std::string& task, std::string& text,
+                             std::string& note) {
+    const std::string& path = image.source;
     auto ends = [&](const char* e) { size_t n = std::strlen(e); return path.size() >= n && path.compare(path.size() - n, n, e) == 0; };
     if (!ends(".st") && !ends(".il")) return;
     constexpr off_t kMax = off_t(4) << 20;  // as the monitor's bound (runtime/net/monitor.cpp)
@@ -451,7 +454,7 @@ class SoftPlcRun {
     }
     try {
       std::string t = read_file(path);
-      if (s.file == path && !is_image_file(path)) {  // compiled from it just now, in this process
+      if (file == path && !is_image_file(path)) {  // compiled from it just now, in this process
         text = std::move(t);
         return;
       }
@@ -459,9 +462,9 @@ class SoftPlcRun {
       try {
         c = compile_source(path, false, g_task);
       } catch (const UserError&) {  // one task of a configuration
-        c = compile_source(path, false, s.name);
+        c = compile_source(path, false, task);
       }
-      if (!same_code(c.il, s.image)) {
+      if (!same_code(c.il, image)) {
         note = "the source " + path + " has changed since this program was compiled: the rungs of its code are shown instead";
         return;
       }
@@ -512,8 +515,14 @@ class SoftPlcRun {
     std::vector<MonitorTask> mts;
     for (const TaskSpec& s : specs_) {
       mts.push_back({s.name, s.period_us, s.image, "", ""});
-      monitor_source(s, mts.back().source_text, mts.back().source_note);
+      monitor_source(s.image, s.file, s.name, mts.back().source_text, mts.back().source_note);
     }
+    // after an online download: the new image's source, if it still compiles to it
+    std::vector<std::string> names;
+    for (const TaskSpec& s : specs_) names.push_back(s.name);
+    mo.source_of = [names](size_t task, const Image& img, std::string& text, std::string& note) {
+      monitor_source(img, "", task < names.size() ? names[task] : "", text, note);
+    };
     monitor_ = std::make_unique<Monitor>(std::move(mts), mo);
     driver_ = monitor_->wrap(std::move(driver_));
   }

@@ -114,7 +114,9 @@ std::string disassemble(const Image& img) {
 const as::TargetInfo& assembler() { return as::x86::target(); }
 
 std::unique_ptr<Engine> native_engine(const Image& img) {
-  return make_native_engine(map_checked_code(img.code, img.entry, img.layout));
+  std::unique_ptr<Engine> full = make_native_engine(map_checked_code(img.code, img.entry, img.layout));
+  if (img.regions) return make_change_driven_engine(img, std::move(full));
+  return full;
 }
 
 const TargetEngine kEngines[] = {{"native", true, native_engine}};
@@ -153,6 +155,16 @@ RegionCode build_x86_regions(const Program& p, const RegionPlan& plan, int opt_l
   return rc;
 }
 
+RegionTable x86_region_table(const Program& p, uint32_t max_rungs, int opt_level) {
+  RegionPlan plan = plan_regions(p, p.layout(), max_rungs);
+  RegionCode rc = build_x86_regions(p, plan, opt_level);
+  RegionTable t;
+  t.max_rungs = max_rungs;
+  for (const Region& r : plan.regions) t.first.push_back(r.first);
+  t.start = std::move(rc.start), t.size = std::move(rc.size), t.code = std::move(rc.code);
+  return t;
+}
+
 std::unique_ptr<Engine> make_change_driven_native(const Program& p, int opt_level, uint32_t max_rungs, bool adaptive) {
   const Layout L = p.layout();
   RegionPlan plan = plan_regions(p, L, max_rungs);
@@ -161,6 +173,26 @@ std::unique_ptr<Engine> make_change_driven_native(const Program& p, int opt_leve
   std::unique_ptr<Engine> full;
   if (adaptive) full = make_native_engine(map_checked_code(build_x86(p, p.source, as::Mode::Blockwise, opt_level, false).asm_result.code, 0, L));
   return std::make_unique<ChangeDrivenEngine>(plan, L, make_native_region_engines(code), std::move(full));
+}
+
+// An image with a region table (ldc --change-driven): the regions are found
+// again from its IL (plan_regions of the program the IL and the line map
+// make) and must be the table's, so what each region reads and writes is
+// this runtime's finding, not the image's word; the full scan is its code.
+std::unique_ptr<Engine> make_change_driven_engine(const Image& img, std::unique_ptr<Engine> full) {
+  const RegionTable& t = *img.regions;
+  std::vector<uint32_t> rung_of;
+  for (const LineEntry& l : img.lines) rung_of.push_back(l.rung);
+  const Program p = program_of_il(img.il, rung_of, img.layout.count[int(Area::E)]);
+  RegionPlan plan = plan_regions(p, img.layout, t.max_rungs);
+  std::vector<uint32_t> first;
+  for (const Region& r : plan.regions) first.push_back(r.first);
+  if (first != t.first)
+    throw std::runtime_error("the image's region table (" + std::to_string(t.first.size()) +
+                             " regions) is not the program's (" + std::to_string(first.size()) + " regions of up to " +
+                             std::to_string(t.max_rungs) + " rungs)");
+  auto code = std::make_shared<const CheckedRegions>(map_checked_regions(t.code, t.start, t.size, img.layout));
+  return std::make_unique<ChangeDrivenEngine>(plan, img.layout, make_native_region_engines(code), std::move(full));
 }
 
 }  // namespace ldc

@@ -35,6 +35,13 @@ struct RegionCode {
   std::vector<uint32_t> start, size;
 };
 RegionCode build_x86_regions(const Program& p, const RegionPlan& plan, int opt_level);
+// The same as an image's region table (loader.h RegionTable).
+RegionTable x86_region_table(const Program& p, uint32_t max_rungs, int opt_level);
+// The change-driven engine of an image with a region table: its regions
+// found again from its IL and line map (refused unless they are the
+// table's), its region code checked region by region; adaptive with `full`
+// (what ldrun's native engine does), walking the regions every scan without.
+std::unique_ptr<Engine> make_change_driven_engine(const Image& img, std::unique_ptr<Engine> full);
 // The change-driven engine (runtime/change_driven.h) on that code, checked
 // region by region (map_checked_regions); adaptive, with the program's full
 // scan at the same level, unless `adaptive` is false.

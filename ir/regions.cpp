@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <map>
+#include <stdexcept>
 
 namespace ldc {
 
@@ -204,6 +205,38 @@ RegionPlan plan_regions(const Program& p, const Layout& L, uint32_t max_rungs) {
     plan.regions.assign(1, std::move(all));
   }
   return plan;
+}
+
+Program program_of_il(std::span<const uint8_t> il, std::span<const uint32_t> rung_of, uint32_t edge_slots) {
+  Program p;
+  p.edge_slots = edge_slots;
+  std::map<uint32_t, size_t> rung_at;  // IL offset of each rung's first instruction -> rung
+  size_t k = 0;
+  for (uint32_t off = 0; off < il.size(); k++) {
+    if (k >= rung_of.size()) throw std::runtime_error("the line map has fewer entries than the IL has instructions");
+    const uint32_t r = rung_of[k];
+    if (r != p.rungs.size() - 1) {
+      if (r != p.rungs.size()) throw std::runtime_error("the line map's rungs are not in order");
+      p.rungs.emplace_back();
+      rung_at[off] = r;
+    }
+    Instr in;
+    const uint32_t next = decode_instr(il, off, in);
+    p.rungs.back().code.push_back(in);
+    off = next;
+  }
+  for (Rung& r : p.rungs)
+    for (Instr& in : r.code) {
+      if (in.op != Op::JMP && in.op != Op::LOOP) continue;
+      const uint32_t t = in.a[0].index;
+      const std::string name = "@" + std::to_string(t);
+      in.a[0].label = name;
+      std::vector<std::string>& at = t == il.size() ? p.end_labels
+                                   : rung_at.count(t) ? p.rungs[rung_at[t]].labels
+                                   : throw std::runtime_error("a jump lands at IL offset " + std::to_string(t) + ", inside a rung");
+      if (std::find(at.begin(), at.end(), name) == at.end()) at.push_back(name);
+    }
+  return p;
 }
 
 Program region_program(const Program& p, const Region& r) {

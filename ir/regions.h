@@ -21,6 +21,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -68,6 +69,12 @@ RegionPlan plan_regions(const Program& p, const Layout& L, uint32_t max_rungs = 
 // The program of rungs [r.first, r.end) of p, with p's edge slots (so the
 // same layout), to be compiled as a scan function of its own.
 Program region_program(const Program& p, const Region& r);
+
+// The program again from an image's binary IL and each instruction's rung
+// (the line map), its jumps' targets as labels "@OFFSET" on the rungs they
+// land on: what plan_regions needs.  Throws std::runtime_error if a jump
+// lands inside a rung.
+Program program_of_il(std::span<const uint8_t> il, std::span<const uint32_t> rung_of, uint32_t edge_slots);
 
 // Sorted, disjoint, with touching or overlapping spans merged.
 std::vector<Span> merge_spans(std::vector<Span> v);

@@ -37,8 +37,8 @@ constexpr uint32_t kOffSections = kOffLayout + kLayoutSize;
 constexpr uint32_t kSectionEntrySize = 12;
 constexpr uint32_t kMaxSections = 64;
 
-enum SectionId : uint32_t { kCode = 1, kIl, kLines, kStrings, kAliases, kRetentive, kEntry, kConfig, kVars, kSectionIdEnd };
-constexpr const char* kSectionNames[] = {"?", "code", "il", "lines", "strings", "aliases", "retentive", "entry", "config", "vars"};
+enum SectionId : uint32_t { kCode = 1, kIl, kLines, kStrings, kAliases, kRetentive, kEntry, kConfig, kRegions, kVars, kSectionIdEnd };
+constexpr const char* kSectionNames[] = {"?", "code", "il", "lines", "strings", "aliases", "retentive", "entry", "config", "regions", "vars"};
 
 constexpr uint32_t kLineEntrySize = 16;
 constexpr uint8_t kAliasTyped = 0x80;  // in an alias's device kind: a type byte follows its name
@@ -285,16 +285,19 @@ static size_t image_size_hint(const Image& im) {
   for (const Alias& a : im.aliases) n += 10 + a.name.size();
   for (const VarPlace& v : im.vars) n += 8 + 18 + v.name.size() + v.type.size();
   if (im.config) n += 64 + 3 * 256 + 16 * im.config->rows.size();
+  if (im.regions) n += 16 + 12 * im.regions->first.size() + im.regions->code.size();
   return n;
 }
 
 // Sections 1..7 always; 'config' only when the image has a configuration
-// table and 'vars' only when it lists variables, so images without them are
-// byte for byte what they always were.
+// table, 'regions' only when it has a region table and 'vars' only when it
+// lists variables, so images without them are byte for byte what they
+// always were.
 static std::vector<uint32_t> section_ids(const Image& im) {
   std::vector<uint32_t> ids;
-  for (uint32_t id = kCode; id <= kEntry; id++) ids.push_back(id);
+  for (uint32_t id = 1; id < kConfig; id++) ids.push_back(id);
   if (im.config) ids.push_back(kConfig);
+  if (im.regions) ids.push_back(kRegions);
   if (!im.vars.empty()) ids.push_back(kVars);
   return ids;
 }
@@ -375,6 +378,15 @@ static void put_section(Writer& w, const Image& im, uint32_t id) {
         w.u8(uint8_t(r.area)), w.u8(r.flags), w.u16(0);
         w.u32(r.block), w.u32(r.writer), w.u32(r.period_us);
       }
+      break;
+    }
+    case kRegions: {
+      const RegionTable& t = *im.regions;
+      w.u32(t.max_rungs);
+      w.u32(count32(t.first.size(), "regions"));
+      for (size_t i = 0; i < t.first.size(); i++) w.u32(t.first[i]), w.u32(t.start[i]), w.u32(t.size[i]);
+      w.u32(count32(t.code.size(), "region code bytes"));
+      w.bytes(t.code);
       break;
     }
     case kVars:
@@ -628,6 +640,7 @@ class ImageReader {
     im_.il.assign(i.begin(), i.end());
     if (const SectionEntry* s = by_id_[kEntry]) entry(*s);
     if (const SectionEntry* s = by_id_[kConfig]) config(*s);
+    if (const SectionEntry* s = by_id_[kRegions]) regions(*s);
     if (const SectionEntry* s = by_id_[kLines]) lines(*s);
     if (const SectionEntry* s = by_id_[kStrings]) strings(*s);
     if (const SectionEntry* s = by_id_[kAliases]) aliases(*s);
@@ -719,6 +732,26 @@ class ImageReader {
     }
     finish(r, s);
     im_.config = std::move(c);
+  }
+
+  void regions(const SectionEntry& s) {
+    SectionReader r = reader(s);
+    RegionTable t;
+    t.max_rungs = r.u32("region size");
+    const uint32_t n = r.u32("region count");
+    if (r.error.empty() && (n == 0 || n > (r.data.size() - r.pos) / 12))
+      r.error = "region count " + std::to_string(n) + " is 0 or does not fit in the section";
+    for (uint32_t i = 0; i < n && r.error.empty(); i++) {
+      t.first.push_back(r.u32("region"));
+      t.start.push_back(r.u32("region"));
+      t.size.push_back(r.u32("region"));
+    }
+    const uint32_t bytes = r.u32("region code size");
+    if (r.error.empty() && bytes > r.data.size() - r.pos)
+      r.error = "region code of " + std::to_string(bytes) + " bytes does not fit in the section";
+    if (r.error.empty()) t.code.assign(r.data.begin() + r.pos, r.data.begin() + r.pos + bytes), r.pos += bytes;
+    finish(r, s);
+    im_.regions = std::move(t);
   }
 
   void lines(const SectionEntry& s) {
@@ -822,6 +855,42 @@ class ImageReader {
         throw sfail(entry ? *entry : code, std::string(kind_->name) + " entry point " + hex(im_.entry) + " is not word-aligned");
     }
     if (std::string why = kind_->check(im_.code, im_.entry, im_.layout, &code_starts_); !why.empty()) throw sfail(code, why);
+    if (im_.regions) check_regions(*by_id_[kRegions]);
+  }
+
+  // The region table (docs/change-driven.md, docs/image-format.md): x86-64
+  // only, with the line map (the rungs), regions starting at rung 0 in
+  // ascending rung order, their code in ascending order without overlap,
+  // each region's bytes a scan function that passes the code check alone.
+  void check_regions(const SectionEntry& s) {
+    const RegionTable& t = *im_.regions;
+    if (im_.target != ImageTarget::X86_64) throw sfail(s, std::string("a region table on a ") + kind_->name + " image (x86-64 only)");
+    size_t instrs = 0;
+    for (uint32_t off = 0; off < im_.il.size(); instrs++) {
+      Instr in;
+      off = decode_instr(im_.il, off, in);
+    }
+    if (!by_id_[kLines] || im_.lines.size() != instrs)
+      throw sfail(s, "a region table needs the 'lines' section with an entry for each of the IL's " + std::to_string(instrs) +
+                         " instructions (their rungs); it has " + std::to_string(im_.lines.size()));
+    if (t.max_rungs == 0) throw sfail(s, "region size 0");
+    const uint64_t rungs = im_.lines.empty() ? 0 : uint64_t(im_.lines.back().rung) + 1;
+    if (t.first.back() >= rungs && rungs)
+      throw sfail(s, "region " + std::to_string(t.first.size() - 1) + " starts at rung " + std::to_string(t.first.back()) +
+                         ", past the program's " + std::to_string(rungs) + " rungs");
+    uint64_t code_end = 0;
+    for (size_t i = 0; i < t.first.size(); i++) {
+      const std::string at = "region " + std::to_string(i) + ": ";
+      if (i == 0 ? t.first[0] != 0 : t.first[i] <= t.first[i - 1])
+        throw sfail(s, at + "first rung " + std::to_string(t.first[i]) + (i == 0 ? " (the first region starts at rung 0)" : " is not after the region before's"));
+      if (t.start[i] < code_end || t.size[i] == 0 || uint64_t(t.start[i]) + t.size[i] > t.code.size())
+        throw sfail(s, at + "code [" + std::to_string(t.start[i]) + ", +" + std::to_string(t.size[i]) +
+                           ") is empty, overlaps the region before, or lies outside the region code (" + std::to_string(t.code.size()) + " bytes)");
+      code_end = uint64_t(t.start[i]) + t.size[i];
+      const std::span<const uint8_t> bytes(t.code.data() + t.start[i], t.size[i]);
+      if (std::string why = kind_->check(bytes, 0, im_.layout, nullptr); !why.empty())
+        throw sfail(s, at + "its code (region code offset " + std::to_string(t.start[i]) + "): " + why);
+    }
   }
 
   bool code_boundary(uint32_t off) const { return code_starts_.has(off); }

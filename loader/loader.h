@@ -76,6 +76,17 @@ struct RetentiveRange {
   bool operator==(const RetentiveRange&) const = default;
 };
 
+// The change-driven scan's native code (ldc --change-driven, docs/change-driven.md):
+// the program cut into regions of up to max_rungs rungs (ir/regions.h,
+// plan_regions), region i starting at rung first[i], its scan function the
+// bytes [start[i], start[i] + size[i]) of `code`.  x86-64 only.
+struct RegionTable {
+  uint32_t max_rungs = 1;
+  std::vector<uint32_t> first, start, size;
+  std::vector<uint8_t> code;
+  bool operator==(const RegionTable&) const = default;
+};
+
 struct Image {
   ImageTarget target = ImageTarget::X86_64;
   std::string source;                    // source file name
@@ -89,6 +100,7 @@ struct Image {
   std::vector<VarPlace> vars;            // variables as wholes, for online change; section written only if any
   std::vector<RetentiveRange> retentive = {{Area::K, 0, 8192}};  // the K area by default
   std::optional<IoConfig> config;        // the configuration table (ldc --project); section written only if set
+  std::optional<RegionTable> regions;    // ldc --change-driven; section 'regions' written only if set
   bool operator==(const Image&) const = default;
 };
 

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstring>
 #include <stdexcept>
+#include <string>
 
 namespace ldc {
 
@@ -15,7 +16,8 @@ constexpr uint32_t kReads = 0x80000000u;
 constexpr uint32_t kNoUnit = 0xffffffffu;
 // the adaptive choice: scans a probe settles, then measures; full scans
 // before the next probe, doubled by each probe the regions lose
-constexpr uint64_t kSettle = 3, kProbe = 12, kMinWait = 64, kMaxWait = 16384;
+constexpr uint64_t kSettle = 3, kProbe = 12, kMinWait = 256, kMaxWait = 16384;
+constexpr double kKeep = 0.9;
 
 }  // namespace
 
@@ -27,17 +29,16 @@ ChangeDrivenEngine::ChangeDrivenEngine(const RegionPlan& plan, const Layout& lay
   // per byte: who reads it, who writes it (counted, then placed)
   std::vector<uint32_t> count(size + 1, 0);
   std::vector<uint8_t> written_by_any(size, 0), read_by_any(size, 0);
-  size_t snap = 0;
   for (size_t r = 0; r < n; r++) {
     const Region& g = plan.regions[r];
+    for (const std::vector<Span>* v : {&g.reads, &g.writes})
+      for (const Span& s : *v)
+        if (uint64_t(s.off) + s.len > size)
+          throw std::invalid_argument("change-driven scan: region " + std::to_string(r) + "'s memory reaches past the image");
     for (const Span& s : g.reads)
       for (uint32_t b = s.off; b < s.off + s.len && b < size; b++) count[b]++, read_by_any[b] = 1;
-    for (const Span& s : g.writes) {
+    for (const Span& s : g.writes)
       for (uint32_t b = s.off; b < s.off + s.len && b < size; b++) count[b]++, written_by_any[b] = 1;
-      snap += s.len;
-    }
-    snap_.resize(std::max(snap_.size(), snap));
-    snap = 0;
   }
   // per byte, then bytes in a row with the same list made one unit (a word's
   // four bytes, an array), so a changed word marks its regions once
@@ -75,9 +76,56 @@ ChangeDrivenEngine::ChangeDrivenEngine(const RegionPlan& plan, const Layout& lay
   size_t ext = 0;
   for (const Span& s : external_) ext += s.len;
   shadow_.resize(ext);
-  for (size_t r = 0; r < n; r++) parts_.push_back(Part{std::move(parts[r]), plan.regions[r].writes, plan.regions[r].uses_time, plan.regions[r].time_always, plan.regions[r].il_offset});
+  for (size_t r = 0; r < n; r++)
+    parts_.push_back(Part{std::move(parts[r]), observed_writes(plan.regions[r].writes, r), plan.regions[r].uses_time,
+                          plan.regions[r].time_always, plan.regions[r].il_offset});
+  size_t most = 0;
+  for (const Part& p : parts_) {
+    size_t k = 0;
+    for (const Span& s : p.writes) k += s.len;
+    most = std::max(most, k);
+  }
+  snap_.assign(most, 0);
   dirty_.assign((n + 63) / 64, 0);
 }
+
+// The bytes of region r's writes whose change marks some region: read by
+// any region (r too), or written by another.  A change of the others (a
+// coil nothing in the program reads) marks nothing, so it is not looked for.
+std::vector<Span> ChangeDrivenEngine::observed_writes(const std::vector<Span>& writes, size_t r) const {
+  std::vector<Span> out;
+  for (const Span& s : writes)
+    for (uint32_t b = s.off; b < s.off + s.len; b++) {
+      const uint32_t u = unit_of_[b];
+      bool seen = false;
+      for (uint32_t k = touch_at_[u]; k < touch_at_[u + 1] && !seen; k++) seen = (touch_[k] & ~kReads) != r || (touch_[k] & kReads);
+      if (!seen) continue;
+      if (!out.empty() && out.back().off + out.back().len == b) out.back().len++;
+      else out.push_back({b, 1});
+    }
+  return out;
+}
+
+// Copies and compares of the few bytes a region writes: a call to memcpy
+// or memcmp costs more than the bytes.
+namespace {
+void copy_small(uint8_t* to, const uint8_t* from, uint32_t n) {
+  switch (n) {
+    case 1: *to = *from; return;
+    case 4: std::memcpy(to, from, 4); return;
+    case 8: std::memcpy(to, from, 8); return;
+    default: std::memcpy(to, from, n);
+  }
+}
+bool same_small(const uint8_t* a, const uint8_t* b, uint32_t n) {
+  switch (n) {
+    case 1: return *a == *b;
+    case 4: { uint32_t x, y; std::memcpy(&x, a, 4), std::memcpy(&y, b, 4); return x == y; }
+    case 8: { uint64_t x, y; std::memcpy(&x, a, 8), std::memcpy(&y, b, 8); return x == y; }
+    default: return std::memcmp(a, b, n) == 0;
+  }
+}
+}  // namespace
 
 void ChangeDrivenEngine::written(uint32_t off, uint32_t len) {
   if (full_ && in_full_) return;  // a probe marks every region
@@ -108,16 +156,19 @@ size_t ChangeDrivenEngine::next_dirty(size_t pos) const {
   return SIZE_MAX;
 }
 
-void ChangeDrivenEngine::run(size_t r, uint8_t* m) {
+// No vptr check on the call of a region's engine: UBSan's check, on a type it
+// has not seen, probes memory with pipe2 and write, which the sandbox's child
+// (runtime/sandbox.cpp, ldrun --sandbox) refuses.
+__attribute__((no_sanitize("vptr"))) void ChangeDrivenEngine::run(size_t r, uint8_t* m) {
   Part& p = parts_[r];
   size_t k = 0;
-  for (const Span& s : p.writes) std::memcpy(snap_.data() + k, m + s.off, s.len), k += s.len;
+  for (const Span& s : p.writes) copy_small(snap_.data() + k, m + s.off, s.len), k += s.len;
   ran_++;
   p.engine->scan(*image_);
   k = 0;
   last_unit_ = kNoUnit;
   for (const Span& s : p.writes) {
-    if (std::memcmp(snap_.data() + k, m + s.off, s.len) != 0)
+    if (!same_small(snap_.data() + k, m + s.off, s.len))
       for (uint32_t i = 0; i < s.len; i++)
         if (snap_[k + i] != m[s.off + i]) mark_byte(s.off + i, r);
     k += s.len;
@@ -149,31 +200,42 @@ void ChangeDrivenEngine::choose(double ns) {
     return;
   }
   // a mode's first timed scan after a switch (cold code, the probe's marked
-  // regions) is left out of its mean
+  // regions) is left out; a mode is judged by the median of its last 16
+  // timed scans (a scan the system interrupted does not decide)
   auto add = [&](double x) {
-    if (sum_n_++ > 0) sum_ += x;
+    if (timed_seen_++ == 0) return;
+    times_.push_back(x);
+    if (times_.size() > 16) times_.erase(times_.begin());
   };
-  auto mean = [&] { return sum_n_ > 1 ? sum_ / double(sum_n_ - 1) : 0.0; };
+  auto median = [&] {
+    std::vector<double> v = times_;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  auto switch_to = [&](bool full) {
+    in_full_ = full, since_ = 0;
+    times_.clear(), timed_seen_ = 0;
+  };
   if (in_full_) {
     if (ns >= 0) add(ns);
-    if (since_ < wait_ || sum_n_ < 3) return;
-    full_ns_ = mean();
-    in_full_ = false, since_ = 0, sum_ = 0, sum_n_ = 0;
+    if (since_ < wait_ || times_.size() < 2) return;
+    full_ns_ = median();
+    switch_to(false);
     all_ = true;  // nothing is known of the regions after full scans
     return;
   }
   if (ns < 0 || since_ <= kSettle) return;
   add(ns);
-  const double walk = mean();
-  if (walk == 0) return;
-  const bool losing = walk > full_ns_, clearly = walk > 2 * full_ns_;
-  if (since_ < kProbe && !clearly) return;
-  if (since_ >= kProbe) sum_ = 0, sum_n_ = 0;  // the next decision on fresh scans
-  if (losing) {
-    in_full_ = true, since_ = 0, sum_ = 0, sum_n_ = 0;
+  if (times_.size() < 3) return;
+  const double walk = median();
+  // walking must win by a margin (kKeep) to be kept: the two are measured
+  // at different times; a probe decides after kProbe scans, or at once if the
+  // walk is clearly slower
+  if (walk > 2 * full_ns_ || (since_ >= kProbe && walk > kKeep * full_ns_)) {
+    switch_to(true);
     wait_ = std::min<uint64_t>(wait_ * 2, kMaxWait);
-  } else {
-    wait_ = kMinWait;
+  } else if (since_ >= kProbe) {
+    wait_ = kMinWait;  // the next time the regions lose, a probe comes soon again
   }
 }
 

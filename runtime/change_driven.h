@@ -21,13 +21,14 @@
 // reference interpreter's, or checked native code's) do the work.
 //
 // Adaptive (`full` given): when most regions run anyway, walking them costs
-// more than the full scan's code.  The engine then runs `full` instead, and
-// every `probe` scans tries the regions again: a scan with every region
-// marked (nothing is known after full scans), two more to settle, then
-// scans that measure (8, fewer if the regions are clearly slower).  It keeps
-// whichever measured faster (the mean of a phase's timed scans: every 8th,
-// and every scan of a probe); each probe that loses doubles the wait for the next (64
-// up to 16384 full scans).
+// more than the full scan's code.  The engine starts with `full`, measured,
+// and after `wait_` full scans probes the regions: a scan with every region
+// marked (nothing is known after full scans), two more to settle, then scans
+// that measure (8, fewer if the regions are clearly slower).  It keeps the
+// regions while the median of their last 16 timed scans stays under 0.9
+// times the full scan's (timed: every 8th scan, and every scan of a probe);
+// each probe that loses doubles the wait for the next (256 up to 16384 full
+// scans).
 // Either way the scan's result is the full scan's.
 #pragma once
 
@@ -48,8 +49,10 @@ class ChangeDrivenEngine : public Engine {
   void scan(ImageBytes& mem) override;
   // Bytes [off, off + len) changed between scans by someone else.
   void written(uint32_t off, uint32_t len) override;
-  // Every region runs in the next scan (a download, a restart, forcing).
+  // Every region runs in the next scan (a download, a restart).
   void mark_all();
+  void written_all() override { mark_all(); }
+  bool tracks_writes() const override { return true; }
   size_t regions() const { return parts_.size(); }
   size_t ran_last_scan() const { return ran_; }  // SIZE_MAX: the last scan ran `full`
   bool walking() const { return !full_ || !in_full_; }  // the next scan walks the regions
@@ -63,11 +66,12 @@ class ChangeDrivenEngine : public Engine {
   size_t next_dirty(size_t pos) const;
   void run(size_t r, uint8_t* m);
   void walk(ImageBytes& mem);
+  std::vector<Span> observed_writes(const std::vector<Span>& writes, size_t r) const;
   void choose(double ns);
 
   struct Part {
     std::unique_ptr<Engine> engine;
-    std::vector<Span> writes;
+    std::vector<Span> writes;  // the bytes whose change marks some region (observed_writes)
     bool uses_time = false, time_always = false;
     uint32_t il_offset = 0;  // its IL's place in the program's: a fault record names the program's offset
   };
@@ -86,10 +90,10 @@ class ChangeDrivenEngine : public Engine {
   std::unique_ptr<Engine> full_;
   bool in_full_ = true;             // the first scans run `full`, measured
   uint64_t scans_ = 0, since_ = 0;  // scans, and scans since the last switch
-  uint64_t wait_ = 64;              // full scans before the next probe (kMinWait)
-  double full_ns_ = 0;     // the last full phase's mean scan time
-  double sum_ = 0;          // this phase's timed scans
-  uint64_t sum_n_ = 0;
+  uint64_t wait_ = 256;             // full scans before the next probe (kMinWait)
+  double full_ns_ = 0;         // the last full phase's median scan time
+  std::vector<double> times_;  // this mode's last 16 timed scans (not its first)
+  uint64_t timed_seen_ = 0;
   uint64_t fixed_full_ = 0, fixed_walk_ = 0;  // alternate(): 0 = measure
   bool all_ = true;
   size_t ran_ = 0;

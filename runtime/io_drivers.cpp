@@ -57,7 +57,11 @@ class TraceDriver : public IoDriver {
       for (size_t i = 0; i < row.size(); i++) {
         if (row[i].empty()) continue;
         if (int(i) == trace_->dt_column) dt_ = int32_t(trace_cell_int(row[i]));
-        else if (!area_is_shared(trace_->columns[i].area)) put_trace_cell(mem, layout_, trace_->columns[i], row[i]);
+        else if (!area_is_shared(trace_->columns[i].area)) {
+          const Probe& pr = trace_->columns[i];
+          put_trace_cell(mem, layout_, pr, row[i]);
+          if (c.engine) c.engine->written(layout_.addr(pr.area, pr.index), probe_width(pr, layout_));
+        }
       }
     }
     if (dt_) dt = dt_;

@@ -216,6 +216,7 @@ struct Task {
   std::atomic<bool> finished{false};
   std::atomic<bool> held{false};     // stopped alone (stop_task); changed under glock
   std::atomic<bool> restart{false};  // run_task: warm restart at the next scan
+  std::atomic<uint64_t> generation{0};  // online downloads run (Runtime::generation)
 
   // the task thread's own
   uint64_t epoch = 0;
@@ -518,13 +519,22 @@ struct Runtime::Impl {
         std::lock_guard<ImageLock> g(glock);
         if (state.load() == State::Run && epoch.load() == t.epoch && !t.held.load()) {
           io->read_inputs(global.data(), ScanContext{ti, scan_no, p.input_runs});
-          for (const Run& r : p.in_runs) std::memcpy(mem + r.offset, global.data() + r.offset, r.size);
+          if (!p.engine->tracks_writes()) {
+            for (const Run& r : p.in_runs) std::memcpy(mem + r.offset, global.data() + r.offset, r.size);
+          } else {  // a change-driven engine hears of each byte that a client's write or another task changed
+            for (const Run& r : p.in_runs)
+              for (uint32_t b = r.offset; b < r.offset + r.size; b++)
+                if (mem[b] != global[b]) mem[b] = global[b], p.engine->written(b, 1);
+          }
         }
       }
       size_t k = 0;
       for (const Run& r : p.out_runs) std::memcpy(t.snapshot.data() + k, mem + r.offset, r.size), k += r.size;
       std::optional<int32_t> dt;
-      io->before_scan(ScanContext{ti, scan_no, {}}, mem, dt);
+      // what a driver writes into the task's memory it announces
+      // (ScanContext::written), for a change-driven engine
+      if (t.first) p.engine->written_all();  // a (re)start: memory cleared, retentive memory put back
+      io->before_scan(ScanContext{ti, scan_no, {}, p.engine.get()}, mem, dt);
       int32_t dtv = dt ? *dt : int32_t(dt_ms);
       std::memcpy(mem + kSysDt, &dtv, 4);
       mem[t.prog->image.layout.addr(Area::S, kBitFirstScan)] = t.first ? 1 : 0;
@@ -1007,6 +1017,7 @@ void Runtime::restart_task(size_t i) {
 }
 
 bool Runtime::task_held(size_t i) const { return impl_->tasks.at(i)->held.load(); }
+uint64_t Runtime::generation(size_t i) const { return impl_->tasks.at(i)->generation.load(std::memory_order_acquire); }
 
 void Runtime::shutdown() {
   Impl& m = *impl_;
@@ -1193,6 +1204,7 @@ SwapReport Runtime::replace(const std::string& task, Image img, const std::strin
           std::swap(t.retain_tmp, pr->tmp);
           std::swap(t.prog, pr->prog);  // the old program leaves with pr, freed by the caller
         }
+        t.generation.fetch_add(1, std::memory_order_release);
         pr->at_scan = t.scans.load() + 1;
         pr->t_done = now_ns();
         pr->work = pr->t_done - w0;
@@ -1208,6 +1220,7 @@ SwapReport Runtime::replace(const std::string& task, Image img, const std::strin
     std::lock_guard<ImageLock> g(m.glock);
     m.add_global_ranges(new_shared);
   }
+  m.io->program_replaced(ti, t.prog->image);
   SwapReport rep;
   rep.task = task;
   rep.at_scan = pr->at_scan;
@@ -1287,7 +1300,12 @@ void Runtime::set(const std::string& device, const std::string& value, int64_t t
     put_trace_cell(m.global.data(), m.glayout, p, value);
     return;
   }
-  if (!m.at_boundary(t, [&] { put_trace_cell(t.mem.data(), t.prog->image.layout, p, value); }, timeout_ms))
+  auto put = [&] {
+    const Layout& L = t.prog->image.layout;
+    put_trace_cell(t.mem.data(), L, p, value);
+    t.prog->engine->written(L.addr(p.area, p.index), probe_width(p, L));  // a change-driven engine runs what depends on it
+  };
+  if (!m.at_boundary(t, put, timeout_ms))
     throw std::runtime_error("task '" + t.spec.name + "' did not reach a scan boundary in time");
 }
 

@@ -49,6 +49,13 @@ struct ScanContext {
   size_t task;         // task index
   uint64_t scan;       // scans of this task since the last (re)start, this one included
   std::span<const Run> runs;  // read_inputs: the task's X/WX runs; write_outputs: its Y/WY runs
+  // before_scan: the task's engine, told of every write a driver makes to
+  // the task's memory (Engine::written: the change-driven scan runs what
+  // depends on it; docs/change-driven.md)
+  Engine* engine = nullptr;
+  void written(const Layout& L, Area a, uint32_t index) const {
+    if (engine) engine->written(L.addr(a, index), L.elem_size(a));
+  }
 };
 
 // An I/O driver: the world outside.  All calls but before_scan/after_scan
@@ -71,6 +78,10 @@ class IoDriver {
   // (after the inputs were copied in; may set dt), and after (global locked).
   virtual void before_scan(const ScanContext& c, uint8_t* mem, std::optional<int32_t>& dt) { (void)c, (void)mem, (void)dt; }
   virtual void after_scan(const ScanContext& c, const uint8_t* mem, const uint8_t* global) { (void)c, (void)mem, (void)global; }
+  // After an online download switched task `task` to `image` (Runtime::
+  // replace, on the caller's thread, once the task runs it): the monitor
+  // redraws the program.  Runtime::generation(task) already counts it.
+  virtual void program_replaced(size_t task, const Image& image) { (void)task, (void)image; }
   // Called once when the runtime shuts down (outputs are safe by then).
   virtual void detach() {}
 };
@@ -154,6 +165,10 @@ class Runtime {
   // a held task is released.
   void restart_task(size_t i);
   bool task_held(size_t i) const;
+  // How many online downloads task i has run (0: the program it started
+  // with).  Bumped at the switch, on the task's thread, so that its I/O
+  // driver's before_scan/after_scan see the generation of the memory they get.
+  uint64_t generation(size_t i) const;
   State state() const;
   bool faulted() const { return state() == State::Fault; }
   std::string fault_message() const;

@@ -42,6 +42,11 @@ class Engine {
   // the image says so: the change-driven engine (runtime/change_driven.h)
   // runs what depends on them; the others need not know.
   virtual void written(uint32_t off, uint32_t len) { (void)off, (void)len; }
+  // The whole image may have changed (a cold restart, retentive memory put
+  // back): the same for every byte.
+  virtual void written_all() {}
+  // Does written() matter to this engine (so a host compares before it copies)?
+  virtual bool tracks_writes() const { return false; }
 };
 
 // The reference interpreter over an image's binary IL.

@@ -183,6 +183,8 @@ class ModbusDriver : public IoDriver {
       if (fd >= 0) ::close(fd);
   }
 
+  void program_replaced(size_t task, const Image& image) override { inner_->program_replaced(task, image); }
+
   void attach(uint8_t* global, const Layout& layout, uint32_t block_size) override {
     inner_->attach(global, layout, block_size);
     layout_ = layout;
@@ -221,7 +223,7 @@ class ModbusDriver : public IoDriver {
     std::unique_lock<std::timed_mutex> l(w.mu, std::try_to_lock);
     if (!l.owns_lock() || !w.inflight || w.private_applied) return;  // not applied: not done, given back next scan
     for (const Write& e : w.batch.writes)
-      if (!area_is_shared(e.area)) plc::apply_element(e, mem, layout_);
+      if (!area_is_shared(e.area)) plc::apply_element(e, mem, layout_), c.written(layout_, e.area, e.index);
     w.private_applied = true;
   }
   void write_outputs(const uint8_t* global, const ScanContext& c) override { inner_->write_outputs(global, c); }

@@ -317,16 +317,42 @@ struct ForcedCopy {
   std::vector<ElementWrite> items;
 };
 
+// One pin of a drawn function-block box (or compare box): its name, the
+// operand it is wired to as spelled (an alias, a device, a constant), its
+// side, and where its live value comes from.
+struct Pin {
+  enum class From : uint8_t { None, Operand, Elapsed, PowerIn, Result, TimerQ, CounterQ };
+  std::string name, text;
+  bool right = false;
+  From from = From::None;
+  Operand opd;  // From::Operand (TimerQ/CounterQ: its index)
+};
+
+// How an element is drawn with the IEC 61131-3 symbols: kind "no" -| |-,
+// "nc" -|/|-, "p" -|P|-, "n" -|N|-, "true", "cmp" (a compare box), "coil"
+// -( )-, "ncoil" -(/)-, "set" -(S)-, "reset" -(R)-, "jmp", "end", "fb" (a
+// box: timers, counters, moves, arithmetic); `dev` the operand as spelled,
+// `device` its device name as the table names it (a contact is forced or
+// written by it), `fn` a box's function, `inst` a timer's or counter's instance.
+struct ElemSymbol {
+  std::string kind, dev, device, fn, inst;
+  std::vector<Pin> pins;
+};
+
 struct RungView {
   bool drawn = false;
   LadderRung g;
+  std::vector<ElemSymbol> syms;    // one per element of g
   std::string why;                 // no ladder form: the reason
   std::vector<std::string> il;     // ... and its instructions
   int line = 0;
   std::string title;
 };
 
-struct TaskView {
+// One program as the monitor shows it: built once per program (at start and
+// after each online download), never changed, shared by the server's
+// requests through a shared_ptr.
+struct ProgramView {
   std::string name;
   uint32_t period_us = 0;
   Layout layout;
@@ -336,11 +362,27 @@ struct TaskView {
   std::string source_note;  // an ST or IL program whose source is not shown: why
   std::vector<SourceLine> source;    // its source, when shown (then no rungs are drawn)
   std::vector<Dev> source_watches;   // the variables shown in it
+  uint64_t gen = 0;          // Runtime::generation of the task when it was built
+  int64_t switched_ms = 0;   // the download that brought it (ms since 1970, UTC); 0: the program ldrun started with
+  std::string json;          // its part of /api/program
+};
 
-  // the snapshot of its memory, written by the task thread at its scan boundary
+struct TaskView {
+  std::string name;
+  // The program shown: replaced whole by an online download (view_mu, then
+  // snap_mu, so that a picture and its program always go together).
+  std::mutex view_mu;
+  std::shared_ptr<const ProgramView> view;
+
+  // the snapshot of its memory, written by the task thread at its scan
+  // boundary -- only while the runtime's generation of the task is `gen`,
+  // the program's whose layout the buffer has
   std::mutex snap_mu;
   std::vector<uint8_t> mem;
+  Layout layout;       // of generation gen (the task thread applies writes with it)
+  uint64_t gen = 0;
   uint64_t scan = 0;
+  bool taken = false;  // a scan of generation gen was copied
   std::atomic<bool> want{false};
 
   // its own devices written by clients, and what its thread took of them
@@ -349,7 +391,7 @@ struct TaskView {
   ForcedCopy forced;
 };
 
-void collect_devices(TaskView& t, const Program& p) {
+void collect_devices(ProgramView& t, const Program& p) {
   std::set<std::pair<int, uint32_t>> seen;
   auto add = [&](Area a, uint32_t i) {
     if (a == Area::Sys || a == Area::E || a == Area::TI || a == Area::Count) return;
@@ -381,6 +423,142 @@ void collect_devices(TaskView& t, const Program& p) {
   std::sort(t.devs.begin(), t.devs.end(), [](const Dev& a, const Dev& b) {
     return a.area != b.area ? a.area < b.area : a.index < b.index;
   });
+}
+
+// ---------------------------------------------------------------- IEC symbols
+
+// The first alias of each device, by the area an operand names it with.
+using AliasNames = std::map<std::pair<int, uint32_t>, std::string>;
+AliasNames alias_names(const std::vector<Alias>& aliases) {
+  AliasNames n;
+  for (const Alias& al : aliases) {
+    Area b = bit_area(al.dev.dev), w = word_area(al.dev.dev);
+    if (b != Area::Count) n.emplace(std::make_pair(int(b), al.dev.index), al.name);
+    if (w != Area::Count) n.emplace(std::make_pair(int(w), al.dev.index), al.name);
+  }
+  return n;
+}
+
+// Operand k as the program spells it: its alias, else the device or constant.
+std::string spelled(const Instr& in, int k, const AliasNames& names) {
+  const Operand& o = in.a[k];
+  Area a = o.area;
+  if (o.kind == OpdKind::Timer) a = Area::TW;
+  else if (o.kind == OpdKind::Counter) a = Area::CW;
+  else if (o.kind != OpdKind::Bit && o.kind != OpdKind::Int && o.kind != OpdKind::Real) return operand_text(in, k);
+  auto it = names.find({int(a), o.index});
+  return it != names.end() ? it->second : operand_text(in, k);
+}
+
+// A device as the device table names it (X1, T0.Q, D5).
+std::string table_name(Area a, uint32_t i) {
+  return device_prefix_of(a) + std::to_string(i) + (a == Area::TQ || a == Area::CQ ? ".Q" : "");
+}
+
+// A timer preset in ms as an IEC duration: T#1m30s, T#1s500ms, T#0ms.
+std::string iec_duration(int64_t ms) {
+  if (ms < 0) return std::to_string(ms) + " ms";
+  std::string s = "T#";
+  static const std::pair<int64_t, const char*> units[] = {{86400000, "d"}, {3600000, "h"}, {60000, "m"}, {1000, "s"}, {1, "ms"}};
+  for (auto [u, name] : units)
+    if (ms >= u) s += std::to_string(ms / u) + name, ms %= u;
+  return s == "T#" ? "T#0ms" : s;
+}
+
+const char* rel_fn(Rel r) {
+  switch (r) {
+    case Rel::Eq: return "EQ";
+    case Rel::Ne: return "NE";
+    case Rel::Lt: return "LT";
+    case Rel::Le: return "LE";
+    case Rel::Gt: return "GT";
+    case Rel::Ge: return "GE";
+    default: return "CMP";
+  }
+}
+
+Pin operand_pin(const char* name, const Instr& in, int k, bool right, const AliasNames& names) {
+  Pin p{name, spelled(in, k, names), right, Pin::From::Operand, in.a[k]};
+  if (in.a[k].kind != OpdKind::Bit && in.a[k].kind != OpdKind::Int && in.a[k].kind != OpdKind::Real) p.from = Pin::From::None;
+  return p;
+}
+
+// A box of any other output instruction: EN, its inputs IN (IN1, IN2, ...)
+// and outputs OUT (OUT1, ...) in operand order, by the op table's letters.
+void generic_box(ElemSymbol& s, const Instr& in, const AliasNames& names) {
+  const OpInfo& oi = op_info(in.op);
+  std::string fn = oi.name;
+  if (oi.klass == OpClass::Typed && fn.size() > 1 && fn[0] == 'T') fn = fn.substr(1);  // TADD -> ADD
+  if (fn == "WAND" || fn == "WOR" || fn == "WXOR" || fn == "WNOT") fn = fn.substr(1);
+  s.kind = "fb", s.fn = fn;
+  s.pins.push_back(Pin{"EN", "", false, Pin::From::PowerIn, {}});
+  int ins = 0, outs = 0;
+  for (int k = 0; k < in.nopd() && oi.operands[k]; k++) {
+    char c = oi.operands[k];
+    if (std::strchr("wdr", c)) outs++;
+    else if (!std::strchr("etcl", c)) ins++;
+  }
+  int ki = 0, ko = 0;
+  for (int k = 0; k < in.nopd() && oi.operands[k]; k++) {
+    char c = oi.operands[k];
+    bool out = std::strchr("wdr", c) != nullptr;
+    if (!out && std::strchr("etcl", c)) continue;
+    int& nth = out ? ko : ki;
+    std::string name = std::string(out ? "OUT" : "IN") + ((out ? outs : ins) > 1 ? std::to_string(++nth) : "");
+    s.pins.push_back(operand_pin(name.c_str(), in, k, out, names));
+  }
+}
+
+ElemSymbol symbol_of(const LadderElem& e, const AliasNames& names) {
+  const Instr& in = e.elem;
+  ElemSymbol s;
+  auto bit_dev = [&](int k) {
+    s.dev = spelled(in, k, names);
+    if (in.a[k].kind == OpdKind::Bit) s.device = table_name(in.a[k].area, in.a[k].index);
+  };
+  switch (in.op) {
+    case Op::TRUE: s.kind = "true"; return s;
+    case Op::LOAD: s.kind = "no", bit_dev(0); return s;
+    case Op::LOADN: s.kind = "nc", bit_dev(0); return s;
+    case Op::LOADP: s.kind = "p", bit_dev(0); return s;
+    case Op::LOADF: s.kind = "n", bit_dev(0); return s;
+    case Op::OUT: s.kind = "coil", bit_dev(0); return s;
+    case Op::OUTN: s.kind = "ncoil", bit_dev(0); return s;
+    case Op::SET: s.kind = "set", bit_dev(0); return s;
+    case Op::RST: s.kind = "reset", bit_dev(0); return s;
+    case Op::RSTT: case Op::RSTC: s.kind = "reset", s.dev = spelled(in, 0, names); return s;
+    case Op::JMP: s.kind = "jmp", s.dev = operand_text(in, 0); return s;
+    case Op::END: s.kind = "end"; return s;
+    case Op::TON: case Op::TOF: case Op::TP: case Op::MTON: case Op::MTOF: case Op::MTP: {
+      bool matiec = in.op == Op::MTON || in.op == Op::MTOF || in.op == Op::MTP;  // drawn as the IEC timer they are
+      s.kind = "fb", s.fn = op_info(in.op).name + (matiec ? 1 : 0), s.inst = spelled(in, 0, names);
+      Pin pt = operand_pin("PT", in, 1, false, names);
+      if (in.a[1].kind == OpdKind::ConstInt) pt.text = iec_duration(in.a[1].ival);
+      Operand q;
+      q.index = in.a[0].index;
+      s.pins = {Pin{"IN", "", false, Pin::From::PowerIn, {}}, pt, Pin{"Q", "", true, Pin::From::TimerQ, q},
+                Pin{"ET", "", true, Pin::From::Elapsed, in.a[0]}};
+      return s;
+    }
+    case Op::CTU: case Op::CTD: {
+      bool up = in.op == Op::CTU;
+      s.kind = "fb", s.fn = up ? "CTU" : "CTD", s.inst = spelled(in, 0, names);
+      Operand q;
+      q.index = in.a[0].index;
+      s.pins = {Pin{up ? "CU" : "CD", "", false, Pin::From::PowerIn, {}}, operand_pin("PV", in, 1, false, names),
+                Pin{"Q", "", true, Pin::From::CounterQ, q}, Pin{"CV", "", true, Pin::From::Operand, in.a[0]}};
+      return s;
+    }
+    default: break;
+  }
+  if (!e.output) {  // a compare: IN1, IN2 and its result
+    s.kind = "cmp", s.fn = rel_fn(op_info(in.op).rel);
+    s.pins = {operand_pin("IN1", in, 0, false, names), operand_pin("IN2", in, 1, false, names),
+              Pin{"Q", "", true, Pin::From::Result, {}}};
+    return s;
+  }
+  generic_box(s, in, names);
+  return s;
 }
 
 // ---------------------------------------------------------------- values
@@ -475,6 +653,23 @@ std::string elem_value(const LadderElem& e, const View& v) {
   return "";
 }
 
+// A pin's live value: "" where the drawing says it (a constant).
+std::string pin_value(const Pin& p, const View& v, bool power_in, bool result) {
+  switch (p.from) {
+    case Pin::From::Operand: return v.opd_text(p.opd);
+    case Pin::From::Elapsed: return v.opd_text(p.opd) + " ms";
+    case Pin::From::PowerIn: return power_in ? "1" : "0";
+    case Pin::From::Result: return result ? "1" : "0";
+    case Pin::From::TimerQ: return v.bit(Area::TQ, p.opd.index) ? "1" : "0";
+    case Pin::From::CounterQ: return v.bit(Area::CQ, p.opd.index) ? "1" : "0";
+    case Pin::From::None: break;
+  }
+  return "";
+}
+
+// A rung's state: "n" the power of each net, "e" each element conducting
+// (an input) or energised (an output), "v" the value shown beside an
+// element, "p" the values of a box's pins, in the order of its "p" in /api/program.
 std::string rung_state(const RungView& r, const View& v) {
   if (!r.drawn) return "{}";
   const LadderRung& g = r.g;
@@ -492,15 +687,21 @@ std::string rung_state(const RungView& r, const View& v) {
       changed = true;
     }
   }
-  std::string n, e, vals;
+  std::string n, e, vals, pins;
   for (char p : power) n += p ? '1' : '0';
   for (size_t i = 0; i < g.elems.size(); i++) {
     const LadderElem& el = g.elems[i];
     e += (el.output ? power[size_t(el.in_net)] : shut[i]) ? '1' : '0';
     std::string t = elem_value(el, v);
     if (!t.empty()) vals += (vals.empty() ? "" : ",") + jstr(std::to_string(i)) + ":" + jstr(t);
+    if (i >= r.syms.size() || r.syms[i].pins.empty()) continue;
+    pins += (pins.empty() ? "" : ",") + jstr(std::to_string(i)) + ":[";
+    const std::vector<Pin>& ps = r.syms[i].pins;
+    for (size_t k = 0; k < ps.size(); k++)
+      pins += (k ? "," : "") + jstr(pin_value(ps[k], v, power[size_t(el.in_net)] != 0, shut[i] != 0));
+    pins += "]";
   }
-  return "{\"n\":\"" + n + "\",\"e\":\"" + e + "\",\"v\":{" + vals + "}}";
+  return "{\"n\":\"" + n + "\",\"e\":\"" + e + "\",\"v\":{" + vals + "},\"p\":{" + pins + "}}";
 }
 
 // ---------------------------------------------------------------- writes
@@ -589,6 +790,132 @@ class ControlThread {
   std::thread th_;
 };
 
+// ---------------------------------------------------------------- /api/program
+
+std::string symbol_json(const ElemSymbol& y) {
+  std::string s = ",\"k\":" + jstr(y.kind);
+  if (!y.dev.empty()) s += ",\"d\":" + jstr(y.dev);
+  if (!y.device.empty()) s += ",\"dv\":" + jstr(y.device);
+  if (!y.fn.empty()) s += ",\"f\":" + jstr(y.fn);
+  if (!y.inst.empty()) s += ",\"inst\":" + jstr(y.inst);
+  if (y.pins.empty()) return s;
+  s += ",\"p\":[";
+  for (size_t k = 0; k < y.pins.size(); k++)
+    s += std::string(k ? "," : "") + "[" + jstr(y.pins[k].name) + "," + jstr(y.pins[k].text) + "," +
+         (y.pins[k].right ? "1" : "0") + "]";
+  return s + "]";
+}
+
+// "source": one array a line, its text pieces and between them the
+// indexes (in "watch") of the values shown there: ["  n",[0]," := n + 1;"]
+std::string source_json(const ProgramView& t) {
+  std::string s = ",\"watch\":[";
+  for (size_t k = 0; k < t.source_watches.size(); k++) s += (k ? "," : "") + jstr(t.source_watches[k].alias);
+  s += "],\"source\":[";
+  for (size_t l = 0; l < t.source.size(); l++) {
+    const SourceLine& sl = t.source[l];
+    s += l ? ",[" : "[";
+    for (size_t k = 0; k < sl.text.size(); k++) {
+      s += (k ? "," : "") + jstr(sl.text[k]);
+      if (k >= sl.marks.size()) continue;
+      s += ",[";
+      for (size_t m = 0; m < sl.marks[k].size(); m++) s += (m ? "," : "") + std::to_string(sl.marks[k][m]);
+      s += "]";
+    }
+    s += "]";
+  }
+  return s + "]";
+}
+
+// A program's part of /api/program: "gen" and "switched_ms" say which
+// download brought it (0, 0: the program ldrun started with); each drawn
+// element its IEC symbol ("k", "d", "dv", "f", "inst", and a box's pins "p").
+std::string view_json(const ProgramView& t) {
+  std::string s = "{\"name\":" + jstr(t.name) + ",\"period_us\":" + std::to_string(t.period_us) +
+                  ",\"gen\":" + std::to_string(t.gen) + ",\"switched_ms\":" + std::to_string(t.switched_ms);
+  if (!t.source_note.empty()) s += ",\"source_note\":" + jstr(t.source_note);
+  if (!t.source.empty()) s += source_json(t);
+  s += ",\"rungs\":[";
+  for (size_t r = 0; r < t.rungs.size(); r++) {
+    const RungView& rv = t.rungs[r];
+    s += std::string(r ? "," : "") + "{\"title\":" + jstr(rv.title) + ",\"line\":" + std::to_string(rv.line);
+    if (!rv.drawn) {
+      s += ",\"why\":" + jstr(rv.why) + ",\"il\":[";
+      for (size_t k = 0; k < rv.il.size(); k++) s += (k ? "," : "") + jstr(rv.il[k]);
+      s += "]}";
+      continue;
+    }
+    const LadderRung& g = rv.g;
+    s += ",\"labels\":[";
+    for (size_t k = 0; k < g.labels.size(); k++) s += (k ? "," : "") + jstr(g.labels[k]);
+    s += "],\"rows\":[";
+    for (size_t k = 0; k < g.rows.size(); k++) s += (k ? "," : "") + jstr(g.rows[k]);
+    s += "],\"elems\":[";
+    for (size_t k = 0; k < g.elems.size(); k++) {
+      const LadderElem& e = g.elems[k];
+      s += std::string(k ? "," : "") + "{\"r\":" + std::to_string(e.row) + ",\"c\":" + std::to_string(e.col) +
+           ",\"w\":" + std::to_string(e.width) + ",\"o\":" + (e.output ? "1" : "0") + ",\"t\":" + jstr(e.text) +
+           ",\"i\":" + std::to_string(e.in_net) + ",\"j\":" + std::to_string(e.out_net) + symbol_json(rv.syms.at(k)) + "}";
+    }
+    s += "],\"wires\":[";
+    for (size_t k = 0; k < g.wires.size(); k++)
+      s += std::string(k ? "," : "") + "[" + std::to_string(g.wires[k].row) + "," + std::to_string(g.wires[k].col0) + "," +
+           std::to_string(g.wires[k].col1) + "," + std::to_string(g.wires[k].net) + "]";
+    s += "],\"links\":[";
+    for (size_t k = 0; k < g.links.size(); k++)
+      s += std::string(k ? "," : "") + "[" + std::to_string(g.links[k].col) + "," + std::to_string(g.links[k].row0) + "," +
+           std::to_string(g.links[k].row1) + "," + std::to_string(g.links[k].net) + "]";
+    s += "]}";
+  }
+  s += "],\"devices\":[";
+  for (size_t d = 0; d < t.devs.size(); d++)
+    s += std::string(d ? "," : "") + "[" + jstr(t.devs[d].name) + "," + jstr(t.devs[d].alias) + "]";
+  return s + "]}";
+}
+
+// A program as the monitor shows it: its rungs drawn (or its source with
+// the variables each line writes), its devices, its part of /api/program.
+std::shared_ptr<const ProgramView> build_view(const MonitorTask& mt, uint64_t gen, int64_t switched_ms) {
+  auto t = std::make_shared<ProgramView>();
+  t->name = mt.name;
+  t->period_us = mt.period_us;
+  t->layout = mt.image.layout;
+  t->aliases = mt.image.aliases;
+  t->gen = gen;
+  t->switched_ms = switched_ms;
+  Program p = program_of(mt.image);
+  collect_devices(*t, p);
+  t->source_note = mt.source_note;
+  if (!mt.source_text.empty()) {
+    SourceView sv = source_view(mt.source_text, p, t->aliases);
+    t->source_note = sv.note;
+    t->source = std::move(sv.lines);
+    for (SourceWatch& w : sv.watches) t->source_watches.push_back(std::move(w.dev));
+  }
+  const AliasNames names = alias_names(t->aliases);
+  const std::vector<Rung> none;  // a program shown as its source draws no rungs
+  for (const Rung& r : t->source.empty() ? p.rungs : none) {
+    RungView rv;
+    rv.line = r.line;
+    rv.title = r.title;
+    Program one;
+    one.aliases = p.aliases;
+    one.rungs.push_back(r);
+    try {
+      Ladder l = draw_ladder(raise_to_tree(one));
+      rv.g = std::move(l.rungs.at(0));
+      rv.drawn = true;
+      for (const LadderElem& e : rv.g.elems) rv.syms.push_back(symbol_of(e, names));
+    } catch (std::exception& e) {
+      rv.why = e.what();
+      for (const Instr& in : r.code) rv.il.push_back(instr_text(in));
+    }
+    t->rungs.push_back(std::move(rv));
+  }
+  t->json = view_json(*t);
+  return t;
+}
+
 }  // namespace
 
 struct Monitor::Impl {
@@ -598,7 +925,6 @@ struct Monitor::Impl {
   Runtime* rt = nullptr;
   std::unique_ptr<http::Server> server;
   ControlThread control;  // RUN/STOP off the server's thread
-  std::string program_json;
   std::vector<TaskStats> stats;  // the server thread's
   std::mutex global_mu;          // the global image's snapshot
   std::vector<uint8_t> global_snap;
@@ -629,19 +955,34 @@ struct Monitor::Impl {
     for (auto& [k, bits] : forced) c.items.push_back({Area(k.first), k.second, bits, ~0u});
     c.version = forced_version.load(std::memory_order_relaxed);
   }
-  void apply(ForcedCopy& fc, WriteShadow& shadow, WriteShadow::Batch& batch, uint8_t* mem, const Layout& L) {
+  // `c`: the task's scan, whose engine is told of each write (none for the global image)
+  void apply(ForcedCopy& fc, WriteShadow& shadow, WriteShadow::Batch& batch, uint8_t* mem, const Layout& L,
+             const ScanContext* c = nullptr) {
     if (any_forced.load(std::memory_order_relaxed) || !fc.items.empty()) {
       refresh(fc);
-      for (const ElementWrite& w : fc.items) apply_element(w, mem, L);
+      for (const ElementWrite& w : fc.items) {
+        apply_element(w, mem, L);
+        if (c) c->written(L, w.area, w.index);
+      }
     }
     if (shadow.take(batch))
-      for (const ElementWrite& w : batch.writes) apply_element(w, mem, L);
+      for (const ElementWrite& w : batch.writes) {
+        apply_element(w, mem, L);
+        if (c) c->written(L, w.area, w.index);
+      }
   }
   void apply_shared(uint8_t* global) { apply(forced_shared, *shared_writes, shared_batch, global, glayout); }
-  void apply_private(size_t task, uint8_t* mem) {
-    if (task >= tasks.size()) return;
-    TaskView& t = *tasks[task];
-    apply(t.forced, *t.writes, t.batch, mem, t.layout);
+  // The runtime's generation of a task: that of the memory its thread holds.
+  uint64_t generation(size_t task) const { return rt ? rt->generation(task) : 0; }
+  // A task's own writes go into its memory only with the layout of the
+  // program that memory belongs to: after a download, from the scan on that
+  // the monitor has the new program (until then they wait in the shadow).
+  void apply_private(const ScanContext& c, uint8_t* mem) {
+    if (c.task >= tasks.size()) return;
+    TaskView& t = *tasks[c.task];
+    if (!t.snap_mu.try_lock()) return;  // the server reads the picture: the next scan
+    if (t.gen == generation(c.task)) apply(t.forced, *t.writes, t.batch, mem, t.layout, &c);
+    t.snap_mu.unlock();
   }
   // The global image is copied by whichever task reaches its boundary first
   // (a held task does not scan, yet its shared devices stay current).
@@ -649,10 +990,13 @@ struct Monitor::Impl {
     if (task >= tasks.size()) return;
     TaskView& t = *tasks[task];
     if (t.want.load(std::memory_order_relaxed) && t.snap_mu.try_lock()) {  // busy: the next scan
-      std::memcpy(t.mem.data(), mem, t.mem.size());
-      t.scan = scan;
+      if (t.gen == generation(task)) {  // else the memory of a program the monitor does not show yet
+        std::memcpy(t.mem.data(), mem, t.mem.size());
+        t.scan = scan;
+        t.taken = true;
+        t.want.store(false, std::memory_order_relaxed);
+      }
       t.snap_mu.unlock();
-      t.want.store(false, std::memory_order_relaxed);
     }
     if (global && want_global.load(std::memory_order_relaxed) && global_mu.try_lock()) {
       std::memcpy(global_snap.data(), global, global_snap.size());
@@ -677,22 +1021,36 @@ struct Monitor::Impl {
     }
     want_global.store(true, std::memory_order_relaxed);
     for (size_t ti = 0; ti < tasks.size(); ti++) {
-      TaskView& t = *tasks[ti];
-      uint64_t scan;
+      TaskView& tv = *tasks[ti];
+      std::shared_ptr<const ProgramView> pv;
+      uint64_t scan, gen;
+      bool taken;
       {
-        std::lock_guard<std::mutex> l(t.snap_mu);
-        mem = t.mem, scan = t.scan;
+        std::lock_guard<std::mutex> lv(tv.view_mu);
+        std::lock_guard<std::mutex> ls(tv.snap_mu);
+        pv = tv.view;
+        mem = tv.mem, scan = tv.scan, gen = tv.gen, taken = tv.taken;
       }
-      t.want.store(true, std::memory_order_relaxed);
+      tv.want.store(true, std::memory_order_relaxed);
+      const ProgramView& t = *pv;
       View v{t.layout, mem.data(), global.data()};
-      s += std::string(ti ? "," : "") + "{\"name\":" + jstr(t.name) + ",\"scan\":" + std::to_string(scan) +
-           ",\"held\":" + (rt && rt->task_held(ti) ? "true" : "false");
+      // "gen": the program these values belong to (a page showing another
+      // one fetches /api/program again); "pending": a download brought it
+      // and no scan of it was seen yet: no values, rather than zeros.
+      bool pending = gen > 0 && !taken;
+      s += std::string(ti ? "," : "") + "{\"name\":" + jstr(t.name) + ",\"gen\":" + std::to_string(gen) +
+           ",\"scan\":" + std::to_string(scan) + ",\"held\":" + (rt && rt->task_held(ti) ? "true" : "false") +
+           (pending ? ",\"pending\":true" : "");
       if (ti < st.size()) {
         const TaskStats& x = st[ti];
         s += ",\"scans\":" + std::to_string(x.scans) + ",\"overruns\":" + std::to_string(x.overruns) +
              ",\"scan_us\":{\"median\":" + jnum(x.scan_us.median) + ",\"p99\":" + jnum(x.scan_us.p99) +
              ",\"max\":" + jnum(x.scan_us.max) + "},\"jitter_us\":{\"median\":" + jnum(x.jitter_us.median) +
              ",\"p99\":" + jnum(x.jitter_us.p99) + ",\"max\":" + jnum(x.jitter_us.max) + "}";
+      }
+      if (pending) {
+        s += ",\"rungs\":[],\"dev\":[]}";
+        continue;
       }
       s += ",\"rungs\":[";
       for (size_t r = 0; r < t.rungs.size(); r++) s += (r ? "," : "") + rung_state(t.rungs[r], v);
@@ -705,83 +1063,33 @@ struct Monitor::Impl {
       s += "]}";
     }
     std::lock_guard<std::mutex> l(fmu);
-    s += "],\"forced\":[";
-    bool first = true;
+    // "forced": the inputs held, "fv": the value each is held at
+    std::string names, values;
     for (auto& [k, bits] : forced) {
-      s += std::string(first ? "" : ",") + jstr(device_prefix_of(Area(k.first)) + std::to_string(k.second));
-      first = false;
+      names += std::string(names.empty() ? "" : ",") + jstr(device_prefix_of(Area(k.first)) + std::to_string(k.second));
+      values += std::string(values.empty() ? "" : ",") + std::to_string(int32_t(bits));
     }
-    return s + "]}";
+    return s + "],\"forced\":[" + names + "],\"fv\":[" + values + "]}";
   }
 
-  // "source": one array a line, its text pieces and between them the
-  // indexes (in "watch") of the values shown there: ["  n",[0]," := n + 1;"]
-  static std::string source_json(const TaskView& t) {
-    std::string s = ",\"watch\":[";
-    for (size_t k = 0; k < t.source_watches.size(); k++) s += (k ? "," : "") + jstr(t.source_watches[k].alias);
-    s += "],\"source\":[";
-    for (size_t l = 0; l < t.source.size(); l++) {
-      const SourceLine& sl = t.source[l];
-      s += l ? ",[" : "[";
-      for (size_t k = 0; k < sl.text.size(); k++) {
-        s += (k ? "," : "") + jstr(sl.text[k]);
-        if (k >= sl.marks.size()) continue;
-        s += ",[";
-        for (size_t m = 0; m < sl.marks[k].size(); m++) s += (m ? "," : "") + std::to_string(sl.marks[k][m]);
-        s += "]";
-      }
-      s += "]";
-    }
-    return s + "]";
+  std::shared_ptr<const ProgramView> view_of(size_t ti) {
+    std::lock_guard<std::mutex> l(tasks[ti]->view_mu);
+    return tasks[ti]->view;
   }
 
-  std::string build_program_json() const {
+  // /api/program: every task's program as shown now.  A page compares each
+  // task's "gen" with the "gen" of the values it gets.
+  std::string program_json() {
     std::string s = "{\"write\":" + std::string(opt.write ? "true" : "false") +
                     ",\"token\":" + std::string(opt.token.empty() ? "false" : "true") + ",\"tasks\":[";
-    for (size_t ti = 0; ti < tasks.size(); ti++) {
-      const TaskView& t = *tasks[ti];
-      s += std::string(ti ? "," : "") + "{\"name\":" + jstr(t.name) + ",\"period_us\":" + std::to_string(t.period_us);
-      if (!t.source_note.empty()) s += ",\"source_note\":" + jstr(t.source_note);
-      if (!t.source.empty()) s += source_json(t);
-      s += ",\"rungs\":[";
-      for (size_t r = 0; r < t.rungs.size(); r++) {
-        const RungView& rv = t.rungs[r];
-        s += std::string(r ? "," : "") + "{\"title\":" + jstr(rv.title) + ",\"line\":" + std::to_string(rv.line);
-        if (!rv.drawn) {
-          s += ",\"why\":" + jstr(rv.why) + ",\"il\":[";
-          for (size_t k = 0; k < rv.il.size(); k++) s += (k ? "," : "") + jstr(rv.il[k]);
-          s += "]}";
-          continue;
-        }
-        const LadderRung& g = rv.g;
-        s += ",\"labels\":[";
-        for (size_t k = 0; k < g.labels.size(); k++) s += (k ? "," : "") + jstr(g.labels[k]);
-        s += "],\"rows\":[";
-        for (size_t k = 0; k < g.rows.size(); k++) s += (k ? "," : "") + jstr(g.rows[k]);
-        s += "],\"elems\":[";
-        for (size_t k = 0; k < g.elems.size(); k++) {
-          const LadderElem& e = g.elems[k];
-          s += std::string(k ? "," : "") + "{\"r\":" + std::to_string(e.row) + ",\"c\":" + std::to_string(e.col) +
-               ",\"w\":" + std::to_string(e.width) + ",\"o\":" + (e.output ? "1" : "0") + ",\"t\":" + jstr(e.text) +
-               ",\"i\":" + std::to_string(e.in_net) + ",\"j\":" + std::to_string(e.out_net) + "}";
-        }
-        s += "],\"wires\":[";
-        for (size_t k = 0; k < g.wires.size(); k++)
-          s += std::string(k ? "," : "") + "[" + std::to_string(g.wires[k].row) + "," + std::to_string(g.wires[k].col0) + "," +
-               std::to_string(g.wires[k].col1) + "," + std::to_string(g.wires[k].net) + "]";
-        s += "],\"links\":[";
-        for (size_t k = 0; k < g.links.size(); k++)
-          s += std::string(k ? "," : "") + "[" + std::to_string(g.links[k].col) + "," + std::to_string(g.links[k].row0) + "," +
-               std::to_string(g.links[k].row1) + "," + std::to_string(g.links[k].net) + "]";
-        s += "]}";
-      }
-      s += "],\"devices\":[";
-      for (size_t d = 0; d < t.devs.size(); d++)
-        s += std::string(d ? "," : "") + "[" + jstr(t.devs[d].name) + "," + jstr(t.devs[d].alias) + "]";
-      s += "]}";
-    }
+    for (size_t ti = 0; ti < tasks.size(); ti++) s += (ti ? "," : "") + view_of(ti)->json;
     return s + "]}";
   }
+
+  // An online download switched task `ti` to `img` (IoDriver::program_replaced,
+  // on the thread that asked for it): the new program's view replaces the old
+  // one together with an empty picture of the new layout, taken at its first scan.
+  void program_replaced(size_t ti, const Image& img);
 
   // The Host values this monitor answers to, once its port is known: its
   // listen address; the loopback names when it listens on loopback or on
@@ -871,7 +1179,7 @@ struct Monitor::Impl {
     if (!device || device->empty()) return text(400, "missing device=");
     Probe p;
     try {
-      p = resolve_probe(*device, tasks[ti]->aliases);
+      p = resolve_probe(*device, view_of(ti)->aliases);
     } catch (std::exception& e) { return text(400, e.what()); }
     bool writable = p.area == Area::X || p.area == Area::Y || p.area == Area::M || p.area == Area::K || p.area == Area::WX ||
                     p.area == Area::WY || p.area == Area::D || p.area == Area::F || p.area == Area::TW ||
@@ -922,7 +1230,7 @@ struct Monitor::Impl {
   http::Response write_typed(size_t ti, const Probe& p, const std::string& v) {
     if (v.empty()) return text(400, "missing value=");
     if (std::string why = trace_cell_problem(p, v); !why.empty()) return text(400, why);
-    const Layout& L = tasks[ti]->layout;
+    const Layout L = view_of(ti)->layout;
     Memory scratch(L);
     put_trace_cell(scratch.data(), L, p, v);
     std::vector<ElementWrite> ws;
@@ -999,7 +1307,7 @@ struct Monitor::Impl {
       if (!get) return text(405, "use GET");
       if (p == "/monitor.js") return {200, "text/javascript; charset=utf-8", kMonitorJs, false};
       if (p == "/monitor.css") return {200, "text/css; charset=utf-8", kMonitorCss, false};
-      if (p == "/api/program") return {200, "application/json", program_json, false};
+      if (p == "/api/program") return {200, "application/json", program_json(), false};
       if (p == "/api/state") return state_reply(r);
       if (p == "/api/events") {
         for (auto& t : tasks) t->want.store(true);
@@ -1043,13 +1351,24 @@ class MonitorDriver : public IoDriver {
   void state_changed(State s) override { inner_->state_changed(s); }
   void before_scan(const ScanContext& c, uint8_t* mem, std::optional<int32_t>& dt) override {
     inner_->before_scan(c, mem, dt);
-    m_->apply_private(c.task, mem);
+    m_->apply_private(c, mem);
   }
   void after_scan(const ScanContext& c, const uint8_t* mem, const uint8_t* global) override {
     inner_->after_scan(c, mem, global);
     m_->snapshot(c.task, c.scan, mem, global);
   }
   void detach() override { inner_->detach(); }
+  // The download has happened: a failure here must not undo it, only be said.
+  void program_replaced(size_t task, const Image& image) override {
+    inner_->program_replaced(task, image);
+    try {
+      m_->program_replaced(task, image);
+    } catch (const std::exception& e) {
+      if (m_->opt.log)
+        m_->opt.log(std::string("ldrun: monitor: cannot show the new program of task ") + std::to_string(task) + ": " + e.what() +
+                    "; the page shows the old one without values");
+    }
+  }
 
  private:
   std::unique_ptr<IoDriver> inner_;
@@ -1148,41 +1467,36 @@ Monitor::Monitor(std::vector<MonitorTask> tasks, MonitorOptions opt) : impl_(std
   for (MonitorTask& mt : tasks) {
     auto t = std::make_unique<TaskView>();
     t->name = mt.name;
-    t->period_us = mt.period_us;
-    t->layout = mt.image.layout;
-    t->aliases = mt.image.aliases;
+    t->view = build_view(mt, 0, 0);
+    t->layout = t->view->layout;
     t->mem.assign(t->layout.size, 0);
     t->writes = std::make_unique<WriteShadow>(impl_->opt.write_backlog);
-    Program p = program_of(mt.image);
-    collect_devices(*t, p);
-    t->source_note = mt.source_note;
-    if (!mt.source_text.empty()) {
-      SourceView sv = source_view(mt.source_text, p, t->aliases);
-      t->source_note = sv.note;
-      t->source = std::move(sv.lines);
-      for (SourceWatch& w : sv.watches) t->source_watches.push_back(std::move(w.dev));
-    }
-    const std::vector<Rung> none;  // a program shown as its source draws no rungs
-    for (const Rung& r : t->source.empty() ? p.rungs : none) {
-      RungView rv;
-      rv.line = r.line;
-      rv.title = r.title;
-      Program one;
-      one.aliases = p.aliases;
-      one.rungs.push_back(r);
-      try {
-        Ladder l = draw_ladder(raise_to_tree(one));
-        rv.g = std::move(l.rungs.at(0));
-        rv.drawn = true;
-      } catch (std::exception& e) {
-        rv.why = e.what();
-        for (const Instr& in : r.code) rv.il.push_back(instr_text(in));
-      }
-      t->rungs.push_back(std::move(rv));
-    }
     impl_->tasks.push_back(std::move(t));
   }
-  impl_->program_json = impl_->build_program_json();
+}
+
+void Monitor::Impl::program_replaced(size_t ti, const Image& img) {
+  if (ti >= tasks.size()) return;
+  TaskView& t = *tasks[ti];
+  std::shared_ptr<const ProgramView> old;
+  {
+    std::lock_guard<std::mutex> l(t.view_mu);
+    old = t.view;
+  }
+  MonitorTask mt{t.name, old->period_us, img, "", ""};
+  if (opt.source_of) opt.source_of(ti, img, mt.source_text, mt.source_note);
+  const int64_t now_ms =
+      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+  std::shared_ptr<const ProgramView> v = build_view(mt, generation(ti), now_ms);
+  std::lock_guard<std::mutex> lv(t.view_mu);
+  std::lock_guard<std::mutex> ls(t.snap_mu);
+  t.view = v;
+  t.layout = v->layout;
+  t.mem.assign(v->layout.size, 0);
+  t.gen = v->gen;
+  t.scan = 0;
+  t.taken = false;
+  t.want.store(true, std::memory_order_relaxed);
 }
 
 Monitor::~Monitor() { stop(); }

@@ -4,9 +4,12 @@
 // watching) and applies client writes (merged in write shadows,
 // runtime/write_shadow.h) and forced inputs at the next boundary,
 // and an HTTP server (runtime/net/http.h) that serves one built-in page, the rungs
-// as grids (ir/ladder.h), their power flow evaluated on the snapshot off the
-// scan thread, a device table, statistics and, with --monitor-write, RUN/STOP,
-// writes and forcing.
+// as grids (ir/ladder.h) drawn with the IEC 61131-3 symbols, their power flow
+// evaluated on the snapshot off the scan thread, a device table, trends,
+// statistics and, with --monitor-write, RUN/STOP, writes and forcing (also by
+// clicking a contact).  After an online download (IoDriver::program_replaced)
+// it shows the new program; snapshots and writes follow Runtime::generation,
+// and every value the page gets carries the generation of its program.
 #pragma once
 
 #include <cstdint>
@@ -44,6 +47,9 @@ struct MonitorOptions {
   size_t max_forced = 256;      // inputs forced at once
   int tick_ms = 50;             // event stream period (20 updates/s)
   std::function<void(const std::string&)> log;  // throttled server messages (stderr in ldrun)
+  // After an online download: the source text of task `task`'s new image
+  // (as MonitorTask::source_text / source_note), or nothing.
+  std::function<void(size_t task, const Image& image, std::string& text, std::string& note)> source_of;
 };
 
 // --monitor-host NAME[,NAME...]: host names (or IP literals) with an

@@ -16,21 +16,15 @@
 #include "bench/rng.h"
 #include "ir/regions.h"
 #include "runtime/change_driven.h"
+#include "driver/targets.h"
 #include "driver/x86_target.h"
+#include "loader/loader.h"
 #include "tests/diff/harness.h"
 
 namespace {
 
 using namespace ldc;
 using namespace ldc::diff;
-
-long env_long(const char* name, long def) {
-  const char* v = std::getenv(name);
-  if (!v || !*v) return def;
-  char* end = nullptr;
-  long x = std::strtol(v, &end, 10);
-  return *end ? def : x;
-}
 
 // The share of input cells that change from one scan to the next, per seed:
 // 0%, 2%, 10%, 50% or every cell written again (100%).
@@ -40,7 +34,9 @@ int activity_permille(uint64_t seed) {
 }
 
 // The trace with each cell after the first row left empty (the device keeps
-// its value) unless a draw of `permille` says it changes; dt is kept.
+// its value) unless a draw of `permille` says it changes; dt is kept.  Two
+// columns more, Y1 and M1, written on one row in ten: a client or the
+// monitor forcing cells the rungs drive (the reference gets the same writes).
 std::string thin_trace(uint64_t seed, const std::string& csv, int permille) {
   std::istringstream in(csv);
   std::string line, out;
@@ -61,12 +57,32 @@ std::string thin_trace(uint64_t seed, const std::string& csv, int permille) {
     if (row >= 2)
       for (size_t i = 0; i < cells.size(); i++)
         if (int(i) != dt_col && rng.below(1000) >= permille) cells[i].clear();
+    if (row == 0) cells.push_back("Y1"), cells.push_back("M1");
+    else
+      for (int k = 0; k < 2; k++) cells.push_back(rng.below(10) == 0 ? std::to_string(rng.below(2)) : "");
     for (size_t i = 0; i < cells.size(); i++) out += (i ? "," : "") + cells[i];
     out += "\n";
     row++;
   }
   return out;
 }
+
+// The engine under test told, every 7th scan, that the whole image may have
+// changed (as after an online download or a restart that keeps memory): it
+// runs every region, and the result stays the full scan's.
+class Redownloaded : public Engine {
+ public:
+  explicit Redownloaded(std::unique_ptr<Engine> e) : e_(std::move(e)) {}
+  void scan(ImageBytes& mem) override {
+    if (++n_ % 7 == 0) e_->written_all();
+    e_->scan(mem);
+  }
+  void written(uint32_t off, uint32_t len) override { e_->written(off, len); }
+
+ private:
+  std::unique_ptr<Engine> e_;
+  int n_ = 0;
+};
 
 GenOptions options_for(uint64_t s) {
   GenOptions o;
@@ -208,6 +224,59 @@ TEST(ChangeDriven, TheRegionTableIsChecked) {
   refused(start, size, "region 0 (its bytes");
 }
 
+// The image's 'regions' section (docs/image-format.md): written and read back,
+// and each broken promise refused by the loader or, for a table that is not
+// the program's plan, by the runtime making the engine.
+TEST(ChangeDriven, TheImageRegionTableIsCheckedWhereItIsRead) {
+  Program p = parse_il_text(kPlanIl, "plan.il");
+  const Target& x86 = *find_target("x86-64");
+  Image img = target_image(x86, p, "plan.il", 1);
+  img.regions = x86_region_table(p, 1, 1);
+  ASSERT_EQ(img.regions->first, (std::vector<uint32_t>{0, 1, 3, 4, 5}));
+  EXPECT_EQ(read_image(write_image(img), "plan.bin"), img);
+  EXPECT_NO_THROW(find_engine("native").engine->make(img));
+  auto refused = [&](Image bad, const std::string& want) {
+    try {
+      Image back = read_image(write_image(bad), "plan.bin");
+      find_engine("native").engine->make(back);
+      ADD_FAILURE() << "accepted; wanted: " << want;
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(want), std::string::npos) << e.what();
+    }
+  };
+  Image bad = img;
+  bad.regions->first[0] = 1;
+  refused(bad, "section 'regions' at offset");
+  bad = img;
+  std::swap(bad.regions->first[1], bad.regions->first[2]);
+  refused(bad, "is not after the region before");
+  bad = img;
+  bad.regions->first[4] = 9;
+  refused(bad, "past the program's 6 rungs");
+  bad = img;
+  bad.regions->start[2] = bad.regions->start[1];
+  refused(bad, "overlaps the region before");
+  bad = img;
+  bad.regions->size[4] += 1;
+  refused(bad, "outside the region code");
+  bad = img;
+  bad.regions->size[1] -= 1;  // the last byte (a ret) cut off
+  refused(bad, "region 1: its code");
+  bad = img;
+  bad.regions->max_rungs = 0;
+  refused(bad, "region size 0");
+  bad = img;
+  bad.lines.clear();
+  refused(bad, "needs the 'lines' section with an entry for each");
+  bad = img;
+  bad.regions->max_rungs = 2;  // the runtime's plan: other regions
+  refused(bad, "is not the program's");
+  bad = img;  // a region that joins rungs the plan keeps apart
+  bad.regions->first = {0, 3, 4, 5};
+  bad.regions->start.erase(bad.regions->start.begin() + 1), bad.regions->size.erase(bad.regions->size.begin() + 1);
+  refused(bad, "is not the program's");
+}
+
 TEST(ChangeDriven, RegionsOnTheInterpreterMatchTheFullScan) {
   run("change-driven (interp regions)", [](const Program& p) { return make_change_driven(p, make_interp); }, 120);
 }
@@ -218,6 +287,12 @@ TEST(ChangeDriven, RegionsOfSeveralRungsMatchTheFullScan) {
 
 TEST(ChangeDriven, NativeRegionsMatchTheFullScan) {
   run("change-driven (native -O1 regions)", [](const Program& p) { return make_change_driven_native(p, 1, 1, false); }, 60);
+}
+
+TEST(ChangeDriven, EveryRegionMarkedNowAndThenMatchesTheFullScan) {
+  run("change-driven (interp regions, all marked every 7th scan)", [](const Program& p) {
+    return std::make_unique<Redownloaded>(make_change_driven(p, make_interp));
+  }, 60);
 }
 
 TEST(ChangeDriven, NativeO2RegionsOfSeveralRungsMatchTheFullScan) {

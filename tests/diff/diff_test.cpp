@@ -33,19 +33,11 @@ constexpr int kDefaultRungs = 50;
 constexpr int kShards = 8;
 static_assert(kDefaultPrograms * kDefaultRungs >= 10000, "the default run covers at least 10,000 rungs");
 
-long env_int(const char* name, long def) {
-  const char* v = std::getenv(name);
-  if (!v || !*v) return def;
-  char* end = nullptr;
-  long x = std::strtol(v, &end, 10);
-  return *end ? def : x;
-}
-
 // The options and scan count of seed `s` (depth and scans vary with it).
 GenOptions options_for(uint64_t s) {
   GenOptions o;
-  o.rungs = int(env_int("LDC_DIFF_RUNGS", kDefaultRungs));
-  o.max_depth = int(env_int("LDC_DIFF_DEPTH", 2 + long(s % 5)));
+  o.rungs = int(env_long("LDC_DIFF_RUNGS", kDefaultRungs));
+  o.max_depth = int(env_long("LDC_DIFF_DEPTH", 2 + long(s % 5)));
   if (const char* c = std::getenv("LDC_DIFF_CLASSES"); c && *c) {
     std::string err;
     if (!parse_gen_classes(c, o.classes, err)) throw std::invalid_argument("LDC_DIFF_CLASSES: " + err);
@@ -341,10 +333,10 @@ class DiffShard : public ::testing::TestWithParam<int> {};
 // One shard of the seeds: `test` against the interpreter after every scan.
 void run_shard(int shard, EngineFactory test, const std::string& what) {
   SeedRun run;
-  run.seed0 = env_int("LDC_DIFF_SEED0", 1);
+  run.seed0 = env_long("LDC_DIFF_SEED0", 1);
   run.first = shard;
   run.step = kShards;
-  run.count = env_int("LDC_DIFF_SEEDS", kDefaultPrograms);
+  run.count = env_long("LDC_DIFF_SEEDS", kDefaultPrograms);
   run.options = options_for;
   run.scans = scans_for;
   run.test = std::move(test);

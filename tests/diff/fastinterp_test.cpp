@@ -42,14 +42,6 @@ std::filesystem::path source_root() {
   return std::filesystem::path(__FILE__).parent_path().parent_path().parent_path();
 }
 
-long env_long(const char* name, long def) {
-  const char* v = std::getenv(name);
-  if (!v || !*v) return def;
-  char* end = nullptr;
-  long x = std::strtol(v, &end, 10);
-  return *end ? def : x;
-}
-
 // ------------------------------------------------------------------ examples and ldgen
 
 TEST(FastInterp, MatchesOnEveryExample) {

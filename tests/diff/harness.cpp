@@ -650,6 +650,14 @@ SeedTotals run_seeds(const SeedRun& run, const std::function<void(const std::str
 
 // ------------------------------------------------------------------ reproducers
 
+long env_long(const char* name, long def) {
+  const char* v = std::getenv(name);
+  if (!v || !*v) return def;
+  char* end = nullptr;
+  long x = std::strtol(v, &end, 10);
+  return *end ? def : x;
+}
+
 std::string output_dir() {
   const char* d = std::getenv("LDC_DIFF_OUT");
   std::error_code ec;

@@ -126,6 +126,10 @@ struct SeedTotals {
 // `fail` gets each failure's text (a generator bug, a reproducer, the stop).
 SeedTotals run_seeds(const SeedRun& run, const std::function<void(const std::string&)>& fail);
 
+// The number in environment variable `name` (LDC_DIFF_SEEDS ...), or `def`
+// if it is unset, empty or not a whole number.
+long env_long(const char* name, long def);
+
 // `ldgen ...` arguments that make this case again.
 std::string ldgen_command(uint64_t seed, const GenOptions& opt, int scans);
 

@@ -20,10 +20,6 @@ namespace {
 using namespace ldc;
 using namespace ldc::diff;
 
-long env_long(const char* name, long def) {
-  const char* v = std::getenv(name);
-  return v && *v ? std::strtol(v, nullptr, 10) : def;
-}
 
 
 // Runs `p` for `scans` scans on the reference and on `test`: the memory images

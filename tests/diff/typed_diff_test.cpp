@@ -32,17 +32,9 @@ namespace {
 using namespace ldc;
 using namespace ldc::diff;
 
-long env_int(const char* name, long def) {
-  const char* v = std::getenv(name);
-  if (!v || !*v) return def;
-  char* end = nullptr;
-  long x = std::strtol(v, &end, 10);
-  return *end ? def : x;
-}
-
 GenOptions typed_options(uint64_t seed, bool narrow) {
   GenOptions o;
-  o.rungs = int(env_int("LDC_DIFF_TYPED_RUNGS", 30));
+  o.rungs = int(env_long("LDC_DIFF_TYPED_RUNGS", 30));
   o.max_depth = int(seed % 4);
   o.classes = kGenTyped;
   if (const char* c = std::getenv("LDC_DIFF_TYPED_CLASSES"); c && *c) {
@@ -238,8 +230,8 @@ void run_typed(const EngineFactory& test, const std::string& what, const std::st
     if (c == ' ' || c == '-') c = '_';
   stem.erase(std::unique(stem.begin(), stem.end(), [](char a, char b) { return a == '_' && b == '_'; }), stem.end());
   SeedRun run;
-  run.seed0 = env_int("LDC_DIFF_TYPED_SEED0", 1);
-  run.count = env_int("LDC_DIFF_TYPED_SEEDS", def);
+  run.seed0 = env_long("LDC_DIFF_TYPED_SEED0", 1);
+  run.count = env_long("LDC_DIFF_TYPED_SEEDS", def);
   run.options = [=](uint64_t seed) { return options(seed, narrow); };
   run.scans = typed_scans;
   run.test = test;
@@ -274,7 +266,7 @@ TEST(TypedDiff, C40SimMatchesInterpreter) { run_typed(make_c40sim, "c40sim", "c4
 // wrote a source or the destination in between, a gated instruction, an STX,
 // an IDX that ended the scan; native -O2 against the interpreter, every scan.
 TEST(TypedDiff, NativeO2MatchesInterpreterOnRepeatedRungs) {
-  const long total = env_int("LDC_DIFF_TYPED_SEEDS", 40);
+  const long total = env_long("LDC_DIFF_TYPED_SEEDS", 40);
   size_t held = 0, programs = 0;
   for (long seed = 1; seed <= total; seed++) {
     GenOptions o = typed_options(uint64_t(seed), false);
@@ -321,7 +313,7 @@ namespace {
 // (bench/ldgen_iec.cpp); LDC_DIFF_TYPED_RUNGS statements; the C40 without t64.
 GenOptions pou_options(uint64_t, bool narrow) {
   GenOptions o;
-  o.rungs = int(env_int("LDC_DIFF_TYPED_RUNGS", 30));
+  o.rungs = int(env_long("LDC_DIFF_TYPED_RUNGS", 30));
   o.max_depth = 0;
   o.classes = kGenTPou | (narrow ? 0u : uint32_t(kGenT64));
   return o;

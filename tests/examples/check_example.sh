@@ -5,7 +5,9 @@
 # watched devices.  ENGINE "source" runs the .ld directly on the interpreter;
 # "c" is the C route (ldc --emit=c compiled by the system cc -O2; for a chart,
 # the switch form of docs/sfc.md);
-# "native-O1", "native-O2" compile at that level.
+# "native-O1", "native-O2" compile at that level; "native-cd" is the
+# change-driven image (ldc --change-driven=1 -O2) and "native-cd-plc" the
+# same run by the PLC runtime with the trace driver.
 set -eu
 bindir=$1 src=$2 engine=$3
 base=${src%.*}
@@ -14,6 +16,13 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 if [ "$engine" = source ]; then
   "$bindir/ldrun" "$src" --engine=interp --trace "$base.csv" --watch "$watch" > "$tmp/out"
+elif [ "$engine" = native-cd ] || [ "$engine" = native-cd-plc ]; then
+  "$bindir/ldc" "$src" -O2 --change-driven=1 -o "$tmp/prog.bin"
+  if [ "$engine" = native-cd ]; then
+    "$bindir/ldrun" "$tmp/prog.bin" --trace "$base.csv" --watch "$watch" > "$tmp/out"
+  else
+    "$bindir/ldrun" "$tmp/prog.bin" --io=trace --clock=virtual --free-run --trace "$base.csv" --watch "$watch" > "$tmp/out"
+  fi
 elif [ "$engine" = c ]; then
   "$bindir/ldrun" "$src" --engine=c --trace "$base.csv" --watch "$watch" > "$tmp/out"
 else

@@ -24,6 +24,13 @@
 // check's bitmaps) at an instruction boundary, moving everything after it.
 // One mutant in 500 starts from a large body of either target.
 //
+// Change-driven images (ldc --change-driven, docs/change-driven.md): every
+// x86-64 base also comes with a region table (regions of two rungs), and a
+// mutant of such a base mutates one region's code instead (its size and the
+// starts after it follow the mutation); refused, it must name the 'regions'
+// section; accepted, its regions all run (the engine walks them) in the
+// sandbox.
+//
 //   mutant_fuzz [--count N] [--seed S] [--target all|x86|c40] [--large] [--save DIR] [--quiet]
 //
 // --large: every mutant starts from a large body.
@@ -115,8 +122,13 @@ std::vector<Base> bases(const std::vector<Program>& ps, const std::string& only)
         if (only != "all" && c40 != (only == "c40")) continue;
         Image im = c40 ? make_c40_image(p, build_c40(p, p.source, level))
                        : make_x86_image(p, build_x86(p, p.source, as::Mode::Blockwise, level, false));
-        im.lines.clear();  // so that only the code check decides
         std::string name = p.source + (c40 ? " c40" : "") + " -O" + std::to_string(level);
+        if (!c40) {  // the same with a region table (which needs the line map)
+          Image rim = im;
+          rim.regions = x86_region_table(p, 2, level);
+          out.push_back({name + " regions", read_image(write_image(rim), name)});
+        }
+        im.lines.clear();  // so that only the code check decides
         out.push_back({name, read_image(write_image(im), name)});
       }
   return out;
@@ -410,12 +422,33 @@ class Mutator {
   const std::vector<x86::Decoded>* insts_ = nullptr;
 };
 
+// Mutates one region's code of a change-driven image: the region's bytes
+// through the same mutator, its size and the starts after it moved by the
+// change of length.
+std::string mutate_region(Image& im, Mutator&& mut, std::mt19937_64& rng) {
+  RegionTable& t = *im.regions;
+  const size_t r = rng() % t.first.size();
+  std::vector<uint8_t> bytes(t.code.begin() + t.start[r], t.code.begin() + t.start[r] + t.size[r]);
+  uint32_t entry = 0;
+  std::string what = "region " + std::to_string(r) + ": " + mut.mutate(bytes, entry);
+  const int64_t delta = int64_t(bytes.size()) - int64_t(t.size[r]);
+  t.code.erase(t.code.begin() + t.start[r], t.code.begin() + t.start[r] + t.size[r]);
+  t.code.insert(t.code.begin() + t.start[r], bytes.begin(), bytes.end());
+  t.size[r] = uint32_t(bytes.size());
+  for (size_t k = r + 1; k < t.start.size(); k++) t.start[k] = uint32_t(int64_t(t.start[k]) + delta);
+  return what;
+}
+
 // Three scans of an accepted mutant in the sandbox; "" if they ran and ended.
+// A change-driven image's regions all run in the first (its engine walks
+// them: no full scan to fall back on).
 std::string run_confined(const Image& im, std::mt19937_64& rng) {
   Memory m(im.layout);
   std::unique_ptr<Engine> e;
   try {
-    e = make_sandboxed_engine(make_native_engine(map_checked_code(im.code, im.entry, im.layout)), im.layout, 5000);
+    std::unique_ptr<Engine> inner = im.regions ? make_change_driven_engine(im, nullptr)
+                                               : make_native_engine(map_checked_code(im.code, im.entry, im.layout));
+    e = make_sandboxed_engine(std::move(inner), im.layout, 5000);
     for (int scan = 0; scan < 3; scan++) {
       for (uint32_t i = 0; i < 32; i++) m.data()[im.layout.addr(Area::X, i)] = rng() & 1;
       int32_t dt = int32_t(rng() % 100);
@@ -501,8 +534,9 @@ int main(int argc, char** argv) {
     large_mutants += big;
     Image im = b.image;
     const bool c40 = im.target == ImageTarget::C40;
-    std::string what = c40 ? test::C40Mutator(rng(), pool, im.layout).mutate(im.code, im.entry)
-                           : Mutator(rng(), im.layout.size).mutate(im.code, im.entry);
+    std::string what = c40          ? test::C40Mutator(rng(), pool, im.layout).mutate(im.code, im.entry)
+                       : im.regions ? mutate_region(im, Mutator(rng(), im.layout.size), rng)
+                                    : Mutator(rng(), im.layout.size).mutate(im.code, im.entry);
     std::vector<uint8_t> bytes = write_image(im);  // a well-formed file: the CRC fixed
     std::string escape;
     try {
@@ -513,7 +547,8 @@ int main(int argc, char** argv) {
     } catch (const ImageError& e) {
       refused++;
       std::string why = e.what();
-      if (why.rfind("mutant.bin: section 'code'", 0) != 0 && why.rfind("mutant.bin: section 'entry'", 0) != 0)
+      if (why.rfind("mutant.bin: section 'code'", 0) != 0 && why.rfind("mutant.bin: section 'entry'", 0) != 0 &&
+          why.rfind("mutant.bin: section 'regions'", 0) != 0)
         escape = "refused without naming the code: " + why;
       else
         reasons[reason_class(why)]++;

@@ -1,4 +1,4 @@
-// The image's `vars` section (id 9, docs/image-format.md): what an online
+// The image's `vars` section (id 10, docs/image-format.md): what an online
 // download carries variables by.  It round-trips, an image without it is
 // what it always was, and the validator refuses every field out of place:
 // its version, counts, names, areas and rows, with the section and offset.
@@ -23,21 +23,21 @@ TEST(VarsSection, RoundTripsAndKeepsImagesWithoutOne) {
   Image plain = tiny_image();
   std::vector<uint8_t> a = write_image(plain);
   EXPECT_EQ(get32(a, 20), 7u);  // seven sections, as before the section existed
-  EXPECT_EQ(find_section(a, 9), -1);
+  EXPECT_EQ(find_section(a, 10), -1);
   Image im = with_vars();
   std::vector<uint8_t> b = write_image(im);
   EXPECT_EQ(get32(b, 20), 8u);
-  EXPECT_EQ(get32(b, entry_at(7)), 9u);  // the 8th entry is `vars` (no config)
+  EXPECT_EQ(get32(b, entry_at(7)), 10u);  // the 8th entry is `vars` (no config, no regions)
   EXPECT_EQ(read_image(b, "t.bin"), im);
   EXPECT_TRUE(read_image(a, "t.bin").vars.empty());
-  // With a configuration table too: ids 1..9 in order.
+  // With a configuration table too: ids 1..8 and 10 in order.
   im.config = IoConfig{};
   im.config->block_size = 16;
   im.config->rows = {{Area::X, 0, kBlockRead, kNoProcessor, 0}, {Area::Y, 0, kBlockWrite | kBlockWritten, 0, 0}};
   std::vector<uint8_t> c = write_image(im);
   EXPECT_EQ(get32(c, 20), 9u);
   EXPECT_EQ(get32(c, entry_at(7)), 8u);
-  EXPECT_EQ(get32(c, entry_at(8)), 9u);
+  EXPECT_EQ(get32(c, entry_at(8)), 10u);
   EXPECT_EQ(read_image(c, "t.bin"), im);
 }
 
@@ -79,7 +79,7 @@ TEST(VarsSection, RefusesEveryFieldOutOfPlace) {
 // truncated entry, trailing bytes, an unknown area byte.
 TEST(VarsSection, RefusesBadVersionCountsAndLengths) {
   std::vector<uint8_t> b = write_image(with_vars());
-  int e = find_section(b, 9);
+  int e = find_section(b, 10);
   ASSERT_GE(e, 0);
   uint32_t off = get32(b, entry_at(e) + 4), size = get32(b, entry_at(e) + 8);
   auto refusal = [&](const std::function<void(std::vector<uint8_t>&)>& edit) -> std::string {
@@ -114,7 +114,7 @@ TEST(VarsSection, RefusesBadVersionCountsAndLengths) {
 // image that passes the checks again (no crash, no half-read section).
 TEST(VarsSection, EveryByteFlipIsRefusedOrConsistent) {
   std::vector<uint8_t> b = write_image(with_vars());
-  int e = find_section(b, 9);
+  int e = find_section(b, 10);
   uint32_t off = get32(b, entry_at(e) + 4), size = get32(b, entry_at(e) + 8);
   size_t refused = 0, accepted = 0;
   for (uint32_t i = off; i < off + size; i++)

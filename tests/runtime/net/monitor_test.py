@@ -581,6 +581,87 @@ def case_project():
     m.stop()
 
 
+IEC = "tests/runtime/net/monitor/iec.ld"
+IEC_APPENDED = '\nrung "appended online: the tank is full"\n|--[level >= 500]--(Y3)\n'
+
+
+def ladder_rows(path):
+    grid = subprocess.run([os.path.join(LDC_DIR, "ldc"), path, "--emit=ld"], cwd=ROOT,
+                          capture_output=True, text=True, check=True).stdout
+    return [l for l in grid.split("\n") if l.startswith("|")]
+
+
+def case_online_download():
+    # ldrun iec.ld with the monitor open; the line protocol's `load` switches
+    # to iec.ld with a rung appended, then to examples/eq1.ld (no edge slots:
+    # a smaller memory).  The event stream, read across both switches, must
+    # carry each program's values only with its generation: gen 0 with the
+    # 7 rungs of iec.ld, gen 1 with 8, gen 2 with eq1's, never going back; a
+    # page opened after a download gets the new rungs (ldc --emit=ld of the
+    # new file) and the time of the switch.
+    import threading
+    tmp = os.path.join(os.environ.get("TMPDIR", "/tmp"), "ldc_monitor_online_%d" % os.getpid())
+    os.makedirs(tmp, exist_ok=True)
+    v2 = os.path.join(tmp, "iec_v2.ld")
+    open(v2, "w").write(open(os.path.join(ROOT, IEC)).read() + IEC_APPENDED)
+    try:
+        m = Ldrun([IEC, "--io=none", "--period", "5ms", "--monitor", "127.0.0.1:0", "--monitor-write",
+                   "--control=stdin"], stdout=subprocess.PIPE, stdin=subprocess.PIPE)
+        p = m.port
+        prog = get_json(p, "/api/program")
+        t = prog["tasks"][0]
+        if (t["gen"], t["switched_ms"]) != (0, 0) or [r for rg in t["rungs"] for r in rg["rows"]] != ladder_rows(IEC):
+            fail("before the download: %s" % {k: t[k] for k in ("gen", "switched_ms")})
+        seen = []
+        th = threading.Thread(target=lambda: seen.extend(events(p, 2.5)))
+        th.start()
+        time.sleep(0.5)
+
+        def load(path):
+            before = time.time()
+            m.p.stdin.write("load %s\n" % path)
+            m.p.stdin.flush()
+            reply = m.p.stdout.readline()
+            if not reply.startswith("ok task main switched"):
+                fail("load %s: %r" % (path, reply))
+            return before, time.time()
+
+        t0, t1 = load(v2)
+        prog = get_json(p, "/api/program")["tasks"][0]
+        if prog["gen"] != 1 or [r for rg in prog["rungs"] for r in rg["rows"]] != ladder_rows(v2):
+            fail("a page opened after the download gets gen %d, rows %s" % (prog["gen"], prog["rungs"][-1].get("rows")))
+        if not t0 * 1000 - 5 <= prog["switched_ms"] <= t1 * 1000 + 5:
+            fail("switched at %d ms, the download ran from %d to %d" % (prog["switched_ms"], t0 * 1000, t1 * 1000))
+        time.sleep(0.7)
+        load("examples/eq1.ld")
+        th.join()
+        rungs = {0: 7, 1: 8, 2: len(get_json(p, "/api/program")["tasks"][0]["rungs"])}
+        gens = [e["tasks"][0]["gen"] for e in seen]
+        if gens != sorted(gens) or set(gens) != {0, 1, 2}:
+            fail("generations in the event stream: %s" % gens)
+        for e in seen:
+            ts = e["tasks"][0]
+            if not ts.get("pending") and len(ts["rungs"]) != rungs[ts["gen"]]:
+                fail("values of gen %d carry %d rungs, its program has %d" % (ts["gen"], len(ts["rungs"]), rungs[ts["gen"]]))
+        # writes reach the new program: Y1 (eq1's coil) from X1..X4
+        for d in ("X1", "X2"):
+            code, _, text = post(p, "/api/write", "device=%s&value=1" % d)
+            if code != 200:
+                fail("write %s: %d %s" % (d, code, text))
+        time.sleep(0.2)
+        st = get_json(p, "/api/state")
+        names = [d[0] for d in get_json(p, "/api/program")["tasks"][0]["devices"]]
+        if st["tasks"][0]["gen"] != 2 or st["tasks"][0]["dev"][names.index("Y1")] != "1":
+            fail("after the second download: %s" % st["tasks"][0])
+        m.p.stdin.write("quit\n")
+        m.p.stdin.flush()
+        m.stop()
+    finally:
+        for f in os.listdir(tmp):
+            os.unlink(os.path.join(tmp, f))
+        os.rmdir(tmp)
+
+
 # ---------------------------------------------------------------- attacks (issue #24)
 
 def rss_kb(pid):
@@ -1049,5 +1130,5 @@ if __name__ == "__main__":
      "token": case_token, "state_flood_stop": case_state_flood_stop, "write_backlog": case_write_backlog,
      "minor_http": case_minor_http, "fd_exhaustion": case_fd_exhaustion,
      "stop_not_blocking": case_stop_not_blocking, "typed_names": case_typed_names,
-     "st_source": case_st_source}[CASE]()
+     "st_source": case_st_source, "online_download": case_online_download}[CASE]()
     print("ok")
