@@ -1,5 +1,5 @@
 // runtime/online_carry.cpp -- state carried by identity across an online
-// download (runtime/online_carry.h, docs/runtime.md "What is carried").
+// download (runtime/online_carry.h, docs/runtime.md "What a download carries").
 #include "runtime/online_carry.h"
 
 #include <algorithm>

@@ -1,10 +1,11 @@
 // runtime/online_carry.h -- what an online download carries from the running
 // program's memory into the new one's, by identity and not by position
-// (docs/runtime.md, "Online download: what is carried").
+// (docs/runtime.md, "What a download carries").
 //
 //   devices          by address: X Y M K S D F T C keep their values (timers
 //                    and counters with their hidden state: TI, the done bits)
-//   named variables  by name (the image's aliases): a variable the new program
+//   named variables  by name (the image's `vars` section as wholes, and its
+//                    aliases outside them): a variable the new program
 //                    places elsewhere is moved there; one whose type changed is
 //                    reset to its initial value; a new one starts from its
 //                    initial value where its cells belonged to another variable
@@ -45,7 +46,7 @@ struct CarryPlan {
     bool shared;
     uint32_t from, to, size;
   };
-  // Bytes written last: a variable's initial value.
+  // A variable's initial value (written before the copies).
   struct Fill {
     bool shared;
     uint32_t off;
@@ -70,7 +71,9 @@ CarryPlan plan_carry(const Image& old_img, const Image& new_img);
 
 // Makes the new program's memory from the running one's: every area but the
 // edge memory by address, then the plan's edge slots (slots without a match
-// start at 0, as at a fresh start), copies and fills.  `global` is the
+// start at 0, as at a fresh start), its fills (initial values), then its
+// copies (moved variables; the old values are read before anything is
+// written).  `global` is the
 // global image (the caller holds its lock), where shared copies read and
 // write, the new memory getting the same bytes; null: both in the memories.
 void apply_carry(const CarryPlan& plan, const Layout& old_layout, const uint8_t* old_mem, const Layout& new_layout,
