@@ -39,7 +39,7 @@ std::string lower(std::string s) {
 }
 
 constexpr const char* kHelp =
-    "commands: set [TASK.]NAME VALUE | get [TASK.]NAME | run | stop | status | stats | load [--strict] [TASK] FILE | restart TASK | wait N | save | quit";
+    "commands: set [TASK.]NAME VALUE | get [TASK.]NAME | run | stop | status | stats | load [--strict] [TASK] FILE | restart [TASK] | wait N | save | quit";
 
 }  // namespace
 
