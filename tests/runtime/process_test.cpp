@@ -308,6 +308,34 @@ TEST(OnlineDownload, AMovedEdgeStartsNewAndACorruptImageIsRefused) {
   EXPECT_EQ(p.wait(), 0) << p.err();
 }
 
+// ldrun --strict: every load that would reset a variable is refused, the
+// task keeps running and keeps the value; without --strict the same load is
+// accepted and says what it reset.
+TEST(OnlineDownload, StrictRefusesAResetAndTheReplySaysWhatWasReset) {
+  TmpDir d;
+  spit(d / "v1.ld", "alias x = D0 : INT\n|--[P X0]--(ADD x 1 x)\n");
+  spit(d / "v2.ld", "alias x = D0 : DINT\n|--[P X0]--(ADD x 1 x)\n");
+  for (bool strict : {true, false}) {
+    std::vector<std::string> args = {LDRUN, d / "v1.ld", "--io=stdio", "--period", "1ms"};
+    if (strict) args.push_back("--strict");
+    Proc p = Proc::spawn(args, d / "err");
+    EXPECT_EQ(p.ask("set x 41"), "ok");
+    EXPECT_EQ(p.ask("wait 2"), "ok");
+    std::string r = p.ask("load " + d / "v2.ld");
+    if (strict) {
+      EXPECT_NE(r.find("error: " + d / "v2.ld" + ": refused for task 'main': --strict: it would reset x (INT in D -> DINT in D: initial value)"),
+                std::string::npos) << r;
+      EXPECT_EQ(p.ask("get x"), "x = 41");
+    } else {
+      EXPECT_NE(r.find("; carried 1 edge slot and 0 variables, devices by address; reset: x (INT in D -> DINT in D: initial value)"),
+                std::string::npos) << r;
+      EXPECT_EQ(p.ask("get x"), "x = 0");
+    }
+    EXPECT_EQ(p.ask("quit"), "ok bye");
+    EXPECT_EQ(p.wait(), 0) << p.err();
+  }
+}
+
 TEST(OnlineDownload, ReloadsAWatchedProgramFile) {
   TmpDir d;
   spit(d / "p.ld", "|--[X0]--(Y0)\n");
