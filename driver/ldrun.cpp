@@ -51,7 +51,7 @@ std::string usage() {
     "usage: ldrun FILE [--engine=" + engines + "] [-O0|-O1|-O2] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms] [--cycles] [--sandbox] [--fault=stop|continue]\n"
     "       ldrun FILE|--project P.ldp --io=stdio|shm[:/NAME]|trace|none [--period 1ms|500us] [--clock=real|virtual]\n"
     "             [--free-run] [--rt] [--watchdog 200ms] [--retain FILE] [--retain-every 1s] [--cold] [--stop]\n"
-    "             [--control=stdin|none] [--reload] [--load-budget 128M] [--stats] [--out FILE] [--block 16] [--scans N]\n"
+    "             [--control=stdin|none] [--reload] [--strict] [--load-budget 128M] [--stats] [--out FILE] [--block 16] [--scans N]\n"
     "             [--modbus [HOST:]PORT] [--modbus-connections 16]   a Modbus TCP server (127.0.0.1 unless HOST is given; also with --trace)\n"
     "             [--modbus-per-address 8] [--modbus-frame-timeout 2s] [--modbus-idle-timeout 60s]\n"
     "             [--modbus-write-timeout 1s] [--modbus-pending-writes 8192]   its limits (docs/faults.md)\n"
@@ -74,6 +74,7 @@ struct RtArgs {
   std::string modbus_map;  // --modbus-map FILE: named variables' coils and registers
   std::string load_budget;                 // --load-budget SIZE: the memory an online load may take
   bool free_run = false, rt = false, cold = false, stop = false, stats = false, reload = false;
+  bool strict = false;   // --strict: an online download that would reset a variable is refused (docs/runtime.md)
   bool sandbox = false;  // also in trace mode: it does not select the runtime
   std::string monitor;   // --monitor HOST:PORT (runtime/net/monitor.h)
   bool monitor_write = false, monitor_remote = false;
@@ -656,7 +657,7 @@ class SoftPlcRun {
 
   // The line protocol on stdin (docs/runtime.md), replies on stdout.
   void serve_control() {
-    Control c{*rt_, [this](const std::string& f) { return load_program_online(f, load_budget_, load_budget_text_); }};
+    Control c{*rt_, [this](const std::string& f) { return load_program_online(f, load_budget_, load_budget_text_); }, a_.strict};
     LineReader in;
     std::string line;
     while (!done_.load()) {
@@ -715,7 +716,8 @@ class SoftPlcRun {
         if (!stat_of(seen[i].file, mt, sz) || (mt == seen[i].mtime_ns && sz == seen[i].size)) continue;
         seen[i].mtime_ns = mt, seen[i].size = sz;
         try {
-          SwapReport r = rt_->replace(rt_->task_name(i), load_program_online(seen[i].file, load_budget_, load_budget_text_), seen[i].file);
+          SwapReport r = rt_->replace(rt_->task_name(i), load_program_online(seen[i].file, load_budget_, load_budget_text_), seen[i].file,
+                                     5000, a_.strict);
           std::fprintf(stderr, "ldrun: reloaded %s: %s\n", seen[i].file.c_str(), r.text().c_str());
         } catch (std::exception& e) {
           std::fprintf(stderr, "ldrun: reload of %s refused: %s\n", seen[i].file.c_str(), e.what());
@@ -940,7 +942,7 @@ int ldrun_main(int argc, char** argv) {
       return true;
     };
     if (flag("--free-run", rta.free_run) || flag("--rt", rta.rt) || flag("--cold", rta.cold) || flag("--stop", rta.stop) ||
-        flag("--stats", rta.stats) || flag("--reload", rta.reload) || opt_value("--project", rta.project) ||
+        flag("--stats", rta.stats) || flag("--reload", rta.reload) || flag("--strict", rta.strict) || opt_value("--project", rta.project) ||
         opt_value("--io", rta.io) || opt_value("--control", rta.control) || opt_value("--clock", rta.clock) ||
         opt_value("--watchdog", rta.watchdog) || opt_value("--retain-every", rta.retain_every) ||
         opt_value("--retain", rta.retain) || opt_value("--out", rta.out) || opt_value("--block", rta.block) ||

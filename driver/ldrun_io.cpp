@@ -18,6 +18,7 @@ Image il_image(const Program& p) {
       img.lines.push_back({0, b.instr_offset[k++], in.loc.line ? in.loc.line : p.rungs[r].line, r});
   }
   img.aliases = p.aliases;
+  img.vars = p.vars;
   img.retentive = retentive_ranges(p);
   if (std::string why = validate_il(img.il, img.layout); !why.empty()) throw UserError("ldrun: error: IL " + why);
   return img;

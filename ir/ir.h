@@ -427,9 +427,25 @@ struct Alias {
 // a word device (T and C their word), all of them inside the device's range.
 std::string alias_type_problem(const Alias& a);
 
+// A variable's whole place, for an online download that carries it by name
+// (the image's `vars` section, docs/image-format.md): its BOOL parts in a row
+// of bits and its other parts in a row of word cells (model.h, Size), either
+// row possibly empty, and a text that changes when its layout does.  A typed
+// front end lists its program's unlocated variables and its hidden state.
+struct VarPlace {
+  std::string name;   // "tank", "p1", "__rtc_clock"
+  std::string type;   // "INT", "Tank#3f2a9c0e11d4b726" (a composite's name and the hash of its layout)
+  Area bits = Area::Count;   // M (K); Count: no bits
+  uint32_t bit_first = 0, bit_count = 0;
+  Area cells = Area::Count;  // D or F; Count: no cells
+  uint32_t cell_first = 0, cell_count = 0;
+  bool operator==(const VarPlace&) const = default;
+};
+
 struct Program {
   std::string source;                   // file name, for messages
   std::vector<Alias> aliases;
+  std::vector<VarPlace> vars;           // a typed program's variables as wholes (VarPlace)
   std::vector<Rung> rungs;
   std::vector<std::string> end_labels;  // labels after the last rung
   uint32_t edge_slots = 0;
@@ -467,6 +483,7 @@ struct TreeRung {
 struct TreeProgram {
   std::string source;
   std::vector<Alias> aliases;
+  std::vector<VarPlace> vars;  // as Program::vars
   std::vector<TreeRung> rungs;
   std::vector<std::string> end_labels;
   std::vector<DeviceRef> retain;  // D words kept across restarts

@@ -524,6 +524,7 @@ TreeProgram raise_to_tree(const Program& p) {
   TreeProgram t;
   t.source = p.source;
   t.aliases = p.aliases;
+  t.vars = p.vars;
   t.retain = p.retain;
   t.end_labels = p.end_labels;
   for (size_t i = 0; i < p.rungs.size(); i++) {

@@ -200,6 +200,7 @@ Program lower_to_il(const TreeProgram& tp) {
   p.source = tp.source;
   p.end_labels = tp.end_labels;
   p.aliases = tp.aliases;
+  p.vars = tp.vars;
   p.retain = tp.retain;
   p.rungs.reserve(tp.rungs.size());
   for (const auto& tr : tp.rungs) lower_rung(tr, p);

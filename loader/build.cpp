@@ -49,6 +49,7 @@ Image make_image(ImageTarget target, const Program& p, std::vector<uint8_t> code
                                 std::to_string(bin.instr_offset.size()) + " IL instructions");
   img.il = std::move(bin.code);
   img.aliases = p.aliases;
+  img.vars = p.vars;
   img.retentive = retentive_ranges(p);
   size_t k = 0;
   img.rung_titles.reserve(p.rungs.size());

@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <set>
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
 #endif
@@ -36,8 +37,8 @@ constexpr uint32_t kOffSections = kOffLayout + kLayoutSize;
 constexpr uint32_t kSectionEntrySize = 12;
 constexpr uint32_t kMaxSections = 64;
 
-enum SectionId : uint32_t { kCode = 1, kIl, kLines, kStrings, kAliases, kRetentive, kEntry, kConfig, kRegions, kSectionIdEnd };
-constexpr const char* kSectionNames[] = {"?", "code", "il", "lines", "strings", "aliases", "retentive", "entry", "config", "regions"};
+enum SectionId : uint32_t { kCode = 1, kIl, kLines, kStrings, kAliases, kRetentive, kEntry, kConfig, kRegions, kVars, kSectionIdEnd };
+constexpr const char* kSectionNames[] = {"?", "code", "il", "lines", "strings", "aliases", "retentive", "entry", "config", "regions", "vars"};
 
 constexpr uint32_t kLineEntrySize = 16;
 constexpr uint8_t kAliasTyped = 0x80;  // in an alias's device kind: a type byte follows its name
@@ -282,19 +283,22 @@ static size_t image_size_hint(const Image& im) {
              4 + im.source.size() + 4 + 12 * im.retentive.size() + 4 + 4 + 64;
   for (const std::string& t : im.rung_titles) n += 4 + t.size();
   for (const Alias& a : im.aliases) n += 10 + a.name.size();
+  for (const VarPlace& v : im.vars) n += 8 + 18 + v.name.size() + v.type.size();
   if (im.config) n += 64 + 3 * 256 + 16 * im.config->rows.size();
   if (im.regions) n += 16 + 12 * im.regions->first.size() + im.regions->code.size();
   return n;
 }
 
 // Sections 1..7 always; 'config' only when the image has a configuration
-// table and 'regions' only when it has a region table, so images without
-// them are byte for byte what they always were.
+// table, 'regions' only when it has a region table and 'vars' only when it
+// lists variables, so images without them are byte for byte what they
+// always were.
 static std::vector<uint32_t> section_ids(const Image& im) {
   std::vector<uint32_t> ids;
   for (uint32_t id = 1; id < kConfig; id++) ids.push_back(id);
   if (im.config) ids.push_back(kConfig);
   if (im.regions) ids.push_back(kRegions);
+  if (!im.vars.empty()) ids.push_back(kVars);
   return ids;
 }
 static uint32_t section_count(const Image& im) { return uint32_t(section_ids(im).size()); }
@@ -385,6 +389,15 @@ static void put_section(Writer& w, const Image& im, uint32_t id) {
       w.bytes(t.code);
       break;
     }
+    case kVars:
+      w.u32(kImageVarsVersion);
+      w.u32(count32(im.vars.size(), "variables", kImageMaxVars));
+      for (const VarPlace& v : im.vars) {
+        w.str(v.name), w.str(v.type);
+        w.u8(uint8_t(v.bits)), w.u32(v.bit_first), w.u32(v.bit_count);
+        w.u8(uint8_t(v.cells)), w.u32(v.cell_first), w.u32(v.cell_count);
+      }
+      break;
     case kSectionIdEnd: break;
   }
 }
@@ -632,6 +645,57 @@ class ImageReader {
     if (const SectionEntry* s = by_id_[kStrings]) strings(*s);
     if (const SectionEntry* s = by_id_[kAliases]) aliases(*s);
     if (const SectionEntry* s = by_id_[kRetentive]) retentive(*s);
+    if (const SectionEntry* s = by_id_[kVars]) vars(*s);
+  }
+
+  // The variables as wholes (docs/image-format.md, `vars`): its own version
+  // first, then the entries; every row inside its area, names unique.
+  void vars(const SectionEntry& s) {
+    SectionReader r = reader(s);
+    uint32_t version = r.u32("version");
+    if (r.error.empty() && version != kImageVarsVersion)
+      throw sfail(s, "version " + std::to_string(version) + ", this loader reads version " + std::to_string(kImageVarsVersion));
+    uint32_t n = r.u32("variable count");
+    // Each entry takes at least its 26 fixed bytes: n can never exceed what is left.
+    if (r.error.empty() && n > (r.data.size() - r.pos) / 26)
+      r.error = "variable count " + std::to_string(n) + " does not fit in the section";
+    // An entry held costs two strings (80 bytes with its fields) for its 26 in the file: the limit bounds that.
+    if (r.error.empty() && n > kImageMaxVars)
+      r.error = "variable count " + std::to_string(n) + " exceeds the limit " + std::to_string(kImageMaxVars);
+    std::set<std::string> names;
+    for (uint32_t i = 0; i < n && r.error.empty(); i++) {
+      size_t at = r.pos;
+      VarPlace v;
+      v.name = r.str("variable name");
+      v.type = r.str("variable type");
+      uint8_t bits = r.u8("variable");
+      v.bit_first = r.u32("variable"), v.bit_count = r.u32("variable");
+      uint8_t cells = r.u8("variable");
+      v.cell_first = r.u32("variable"), v.cell_count = r.u32("variable");
+      if (!r.error.empty()) break;
+      std::string where = "variable " + std::to_string(i) + " at file offset " + hex(uint64_t(s.offset) + at) + ": ";
+      if (v.name.empty()) throw sfail(s, where + "empty name");
+      if (!names.insert(v.name).second) throw sfail(s, where + "second variable named '" + v.name + "'");
+      if (v.type.empty()) throw sfail(s, where + "'" + v.name + "' has an empty type");
+      auto row = [&](uint8_t area, uint32_t first, uint32_t count, bool bit, const char* what) {
+        if (area == uint8_t(Area::Count)) {
+          if (first || count) throw sfail(s, where + "'" + v.name + "': no " + what + " area but a row " + std::to_string(first) + "+" + std::to_string(count));
+          return Area::Count;
+        }
+        bool ok = bit ? area == uint8_t(Area::M) || area == uint8_t(Area::K) : area == uint8_t(Area::D) || area == uint8_t(Area::F);
+        if (!ok) throw sfail(s, where + "'" + v.name + "': area " + std::to_string(area) + " cannot hold its " + what + " (" + (bit ? "M or K" : "D or F") + ")");
+        if (count == 0 || uint64_t(first) + count > im_.layout.count[area])
+          throw sfail(s, where + "'" + v.name + "': " + what + " " + area_name(Area(area)) + std::to_string(first) + "+" +
+                             std::to_string(count) + " outside " + area_name(Area(area)) + "0.." + area_name(Area(area)) +
+                             std::to_string(im_.layout.count[area] - 1));
+        return Area(area);
+      };
+      v.bits = row(bits, v.bit_first, v.bit_count, true, "bits");
+      v.cells = row(cells, v.cell_first, v.cell_count, false, "cells");
+      if (v.bits == Area::Count && v.cells == Area::Count) throw sfail(s, where + "'" + v.name + "' has no place");
+      im_.vars.push_back(std::move(v));
+    }
+    finish(r, s);
   }
 
   void entry(const SectionEntry& s) {

@@ -97,6 +97,7 @@ struct Image {
   std::vector<LineEntry> lines;          // rung/line/address map for listings
   std::vector<std::string> rung_titles;  // one per rung ("" if none)
   std::vector<Alias> aliases;            // so traces and --watch can use the program's names
+  std::vector<VarPlace> vars;            // variables as wholes, for online change; section written only if any
   std::vector<RetentiveRange> retentive = {{Area::K, 0, 8192}};  // the K area by default
   std::optional<IoConfig> config;        // the configuration table (ldc --project); section written only if set
   std::optional<RegionTable> regions;    // ldc --change-driven; section 'regions' written only if set
@@ -195,5 +196,7 @@ constexpr uint32_t kImageMaxEdgeSlots = 1u << 20;  // count of the E area
 // the loader allocates").
 constexpr uint32_t kImageMaxRungTitles = 1u << 20;
 constexpr uint32_t kImageMaxAliases = 1u << 16;
+constexpr uint32_t kImageMaxVars = 1u << 16;        // entries of the `vars` section (two strings each)
+constexpr uint32_t kImageVarsVersion = 1;           // the `vars` section's own version
 
 }  // namespace ldc

@@ -39,7 +39,7 @@ std::string lower(std::string s) {
 }
 
 constexpr const char* kHelp =
-    "commands: set [TASK.]NAME VALUE | get [TASK.]NAME | run | stop | status | stats | load [TASK] FILE | wait N | save | quit";
+    "commands: set [TASK.]NAME VALUE | get [TASK.]NAME | run | stop | status | stats | load [--strict] [TASK] FILE | restart [TASK] | wait N | save | quit";
 
 }  // namespace
 
@@ -87,7 +87,9 @@ std::string Control::execute(const std::string& line, bool& quit) {
       return s;
     }
     if (cmd == "load") {
-      args(1, 2, "load [TASK] FILE");
+      bool strict_here = w.size() > 1 && w[1] == "--strict";
+      if (strict_here) w.erase(w.begin() + 1);
+      args(1, 2, "load [--strict] [TASK] FILE");
       std::string task = w.size() == 3 ? w[1] : "", file = w.back();
       if (task.empty()) {
         if (rt.task_count() != 1) throw std::runtime_error("the project has several tasks: load TASK FILE");
@@ -95,7 +97,19 @@ std::string Control::execute(const std::string& line, bool& quit) {
       }
       if (rt.find_task(task) == SIZE_MAX) throw std::runtime_error("no task named '" + task + "'");
       Image img = loader(file);  // read and checked in full before anything changes
-      return "ok " + rt.replace(task, std::move(img), file).text();
+      return "ok " + rt.replace(task, std::move(img), file, 5000, strict || strict_here).text();
+    }
+    if (cmd == "restart") {
+      args(0, 1, "restart [TASK]");
+      std::string task = w.size() == 2 ? w[1] : "";
+      if (task.empty()) {
+        if (rt.task_count() != 1) throw std::runtime_error("the project has several tasks: restart TASK");
+        task = rt.task_name(0);
+      }
+      size_t i = rt.find_task(task);
+      if (i == SIZE_MAX) throw std::runtime_error("no task named '" + task + "'");
+      rt.restart_task(i);
+      return "ok task " + task + " restarted";
     }
     if (cmd == "wait") {
       args(1, 1, "wait N");

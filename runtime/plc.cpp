@@ -33,6 +33,7 @@
 #include <thread>
 
 #include "runtime/failsafe.h"
+#include "runtime/online_carry.h"
 
 namespace ldc::plc {
 
@@ -55,7 +56,7 @@ std::string format_us(double us) {
 
 std::string SwapReport::text() const {
   return "task " + task + " switched at scan " + std::to_string(at_scan) + ": latency " + format_us(latency_us) +
-         " (switch " + format_us(work_us) + ")";
+         " (switch " + format_us(work_us) + "); " + carry.text();
 }
 
 namespace {
@@ -127,31 +128,13 @@ struct Ring {
   }
 };
 
-// Edge slot identities: what each slot remembers (the last value of a bit,
-// or the last input of a counter).  Two programs may share edge memory only
-// where they agree.
-struct EdgeUse {
-  std::string what;
-  uint32_t il_offset;
-};
-std::map<uint32_t, EdgeUse> edge_uses(std::span<const uint8_t> il) {
-  std::map<uint32_t, EdgeUse> m;
-  for (uint32_t off = 0; off < il.size();) {
-    Instr in;
-    uint32_t next = decode_instr(il, off, in);
-    if (in.op == Op::LOADP || in.op == Op::LOADF)
-      m[in.a[1].index] = {"the last value of " + point_name(in.a[0].area, in.a[0].index), off};
-    else if (in.op == Op::CTU || in.op == Op::CTD)
-      m[in.a[2].index] = {"the last input of counter C" + std::to_string(in.a[0].index), off};
-    off = next;
-  }
-  return m;
-}
-
-int line_of(const Image& img, uint32_t il_offset) {
-  for (const LineEntry& e : img.lines)
-    if (e.il_offset == il_offset) return e.line;
-  return 0;
+// What the control thread keeps of a task's image (for messages and for
+// planning an online download): everything but the code.
+Image control_copy(const Image& img) {
+  Image c;
+  c.target = img.target, c.source = img.source, c.layout = img.layout, c.il = img.il, c.lines = img.lines;
+  c.rung_titles = img.rung_titles, c.aliases = img.aliases, c.vars = img.vars, c.retentive = img.retentive;
+  return c;
 }
 
 // A program ready to run: its engine and the runs its configuration rows give.
@@ -245,9 +228,8 @@ struct Task {
   // control-side copies (under Impl::ctl_mu), so control never reads prog
   std::string ctl_file;
   std::vector<IoAccess> ctl_accesses;
-  std::map<uint32_t, EdgeUse> ctl_edges;
   std::vector<Alias> ctl_aliases;
-  Image ctl_image;  // for messages (lines), without code
+  Image ctl_image;  // the running image without its code (control_copy)
 };
 
 void clear_shared_outputs(uint8_t* g, const Layout& L) {
@@ -590,7 +572,8 @@ struct Runtime::Impl {
       std::memcpy(mem + kSysScan, &n32, 4);
       {
         std::lock_guard<ImageLock> g(glock);
-        if (state.load() == State::Run && epoch.load() == t.epoch && !t.held.load()) {
+        // A restart pending (restart_task) drops the scan under way.
+        if (state.load() == State::Run && epoch.load() == t.epoch && !t.held.load() && !t.restart.load()) {
           // Changed bytes only: another task on this processor may write
           // other points of a block this task writes.
           size_t j = 0;
@@ -866,10 +849,8 @@ struct Runtime::Impl {
     t.retain_tmp.assign(p->retain_bytes, 0);
     t.ctl_file = p->file;
     t.ctl_accesses = p->accesses;
-    t.ctl_edges = edge_uses(p->image.il);
     t.ctl_aliases = p->image.aliases;
-    t.ctl_image.lines = p->image.lines;
-    t.ctl_image.source = p->image.source;
+    t.ctl_image = control_copy(p->image);
     t.prog = std::move(p);
   }
 };
@@ -1007,6 +988,34 @@ void Runtime::run_task(size_t i) {
   t.req_cv.notify_all();
 }
 
+void Runtime::restart_task(size_t i) {
+  Impl& m = *impl_;
+  Task& t = *m.tasks.at(i);
+  {
+    std::lock_guard<std::mutex> c(m.ctl_mu);  // ctl_accesses
+    std::lock_guard<ImageLock> g(m.glock);
+    // As STOP -> RUN does for the whole image, for the task's own points:
+    // its outputs to the safe state (published), the relays it writes to 0
+    // but for the retentive ranges; the scan under way, if any, publishes
+    // nothing (a restart is pending), the next is a first scan.
+    std::vector<Run> runs;
+    for (const IoAccess& a : t.ctl_accesses) {
+      if (!a.write) continue;
+      uint32_t size = m.glayout.elem_size(a.area), off = m.glayout.addr(a.area, a.index);
+      bool retained = std::any_of(m.global_ranges.begin(), m.global_ranges.end(), [&](const RetentiveRange& r) {
+        return r.area == a.area && a.index >= r.first && a.index - r.first < r.count;
+      });
+      if (a.area == Area::Y || a.area == Area::WY) runs.push_back(Run{off, size});
+      else if ((a.area != Area::M && a.area != Area::K) || retained) continue;
+      std::memset(m.global.data() + off, 0, size);
+    }
+    t.restart.store(true);
+    t.held.store(false);
+    m.io->write_outputs(m.global.data(), ScanContext{i, t.scans.load(), runs});
+  }
+  t.req_cv.notify_all();
+}
+
 bool Runtime::task_held(size_t i) const { return impl_->tasks.at(i)->held.load(); }
 uint64_t Runtime::generation(size_t i) const { return impl_->tasks.at(i)->generation.load(std::memory_order_acquire); }
 
@@ -1107,7 +1116,7 @@ size_t Runtime::find_task(const std::string& name) const {
   return SIZE_MAX;
 }
 
-SwapReport Runtime::replace(const std::string& task, Image img, const std::string& file, int64_t timeout_ms) {
+SwapReport Runtime::replace(const std::string& task, Image img, const std::string& file, int64_t timeout_ms, bool strict) {
   Impl& m = *impl_;
   std::lock_guard<std::mutex> cl(m.ctl_mu);
   size_t ti = find_task(task);
@@ -1125,16 +1134,13 @@ SwapReport Runtime::replace(const std::string& task, Image img, const std::strin
       throw refuse("configured for processor " + std::to_string(img.config->processor) + ", the task runs on processor " +
                    std::to_string(t.spec.processor));
   }
-  // Edge memory is kept across the switch: a slot must mean the same in both.
-  std::map<uint32_t, EdgeUse> edges = edge_uses(img.il);
-  for (auto& [slot, use] : edges) {
-    auto it = t.ctl_edges.find(slot);
-    if (it == t.ctl_edges.end() || it->second.what == use.what) continue;
-    int lo = line_of(t.ctl_image, it->second.il_offset), ln = line_of(img, use.il_offset);
-    throw refuse("its memory layout would corrupt state: edge slot E" + std::to_string(slot) + " holds " + it->second.what +
-                 " in the running program" + (lo ? " (line " + std::to_string(lo) + ")" : std::string()) + " but " +
-                 use.what + " in the new one" + (ln ? " (line " + std::to_string(ln) + ")" : std::string()) +
-                 "; keep edge contacts and counters in the same order, or stop and restart");
+  // State is carried by identity (runtime/online_carry.h); --strict refuses
+  // a download that would reset something the running program has.
+  CarryPlan plan = plan_carry(t.ctl_image, img);
+  if (strict && !plan.report.reset.empty()) {
+    std::string items;
+    for (const std::string& r : plan.report.reset) items += (items.empty() ? "" : ", ") + r;
+    throw refuse("--strict: it would reset " + items);
   }
   std::vector<IoAccess> acc = io_accesses(img.il);
   {
@@ -1170,22 +1176,22 @@ SwapReport Runtime::replace(const std::string& task, Image img, const std::strin
   pr->prog = std::move(np);
   std::vector<RetentiveRange> new_shared = pr->prog->shared_ranges;
   std::vector<IoAccess> new_acc = pr->prog->accesses;
-  std::map<uint32_t, EdgeUse> new_edges = edge_uses(pr->prog->image.il);
-  std::vector<LineEntry> new_lines = pr->prog->image.lines;
+  Image new_ctl = control_copy(pr->prog->image);
   std::vector<Alias> new_aliases = pr->prog->image.aliases;
-  std::string new_source = pr->prog->image.source;
+  auto carry = std::make_shared<const CarryPlan>(std::move(plan));
   const int64_t t0 = now_ns();
   bool ok = m.at_boundary(
       t,
-      [&m, &t, pr] {
+      [&m, &t, pr, carry] {
         const int64_t w0 = now_ns();
         Prog& op = *t.prog;
-        const Layout &ol = op.image.layout, &nl2 = pr->prog->image.layout;
-        // Every area but the edge memory sits at the same offset in both.
-        uint32_t e_old = ol.offset[int(Area::E)], e_new = nl2.offset[int(Area::E)];
-        std::memcpy(pr->mem.data(), t.mem.data(), std::min(e_old, e_new));
-        std::memcpy(pr->mem.data() + e_new, t.mem.data() + e_old,
-                    std::min(ol.count[int(Area::E)], nl2.count[int(Area::E)]));
+        if (carry->touches_shared()) {
+          // Shared variables (M, K) that moved are moved in the global image.
+          std::lock_guard<ImageLock> g(m.glock);
+          apply_carry(*carry, op.image.layout, t.mem.data(), pr->prog->image.layout, pr->mem.data(), m.global.data());
+        } else {
+          apply_carry(*carry, op.image.layout, t.mem.data(), pr->prog->image.layout, pr->mem.data(), nullptr);
+        }
         size_t k = 0;
         for (const Run& r : pr->prog->private_retain)
           std::memcpy(pr->shadow.data() + k, pr->mem.data() + r.offset, r.size), k += r.size;
@@ -1208,9 +1214,7 @@ SwapReport Runtime::replace(const std::string& task, Image img, const std::strin
     throw refuse("the task did not reach a scan boundary within " + std::to_string(timeout_ms) + " ms");
   t.ctl_file = file;
   t.ctl_accesses = std::move(new_acc);
-  t.ctl_edges = std::move(new_edges);
-  t.ctl_image.lines = std::move(new_lines);
-  t.ctl_image.source = std::move(new_source);
+  t.ctl_image = std::move(new_ctl);
   t.ctl_aliases = std::move(new_aliases);
   {
     std::lock_guard<ImageLock> g(m.glock);
@@ -1222,6 +1226,7 @@ SwapReport Runtime::replace(const std::string& task, Image img, const std::strin
   rep.at_scan = pr->at_scan;
   rep.latency_us = double(pr->t_done - t0) / 1000;
   rep.work_us = double(pr->work) / 1000;
+  rep.carry = carry->report;
   pr.reset();  // the old engine and memory are released here, not on the task's thread
   return rep;
 }

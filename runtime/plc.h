@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "loader/loader.h"
+#include "runtime/online_carry.h"
 #include "runtime/runtime.h"
 
 namespace ldc::plc {
@@ -132,6 +133,7 @@ struct SwapReport {
   uint64_t at_scan = 0;      // the first scan that ran the new image
   double latency_us = 0;     // request to the new image in place (waiting for the boundary included)
   double work_us = 0;        // the switch itself, on the task's thread
+  CarryReport carry;         // what the new program got of the running one's state
   std::string text() const;
 };
 
@@ -156,6 +158,12 @@ class Runtime {
   // The runtime's state does not change.  Throws std::out_of_range for a bad index.
   void stop_task(size_t i);
   void run_task(size_t i);
+  // `restart TASK`: task i alone from its initial state, as STOP -> RUN
+  // does for the whole PLC: its Y and WY points to the safe state and
+  // published (stop_task), then its memory cleared but for its retentive
+  // ranges and its next scan a first scan (S1 set).  The other tasks run on;
+  // a held task is released.
+  void restart_task(size_t i);
   bool task_held(size_t i) const;
   // How many online downloads task i has run (0: the program it started
   // with).  Bumped at the switch, on the task's thread, so that its I/O
@@ -175,10 +183,13 @@ class Runtime {
   bool quit_requested() const;
 
   // Online download: validates `img` against the running task (target,
-  // edge memory, I/O write conflicts), prepares it, and switches at the
-  // task's next scan boundary; waits for the switch.  Throws
-  // std::runtime_error with the reason if refused.
-  SwapReport replace(const std::string& task, Image img, const std::string& file, int64_t timeout_ms = 5000);
+  // I/O write conflicts), prepares it, and switches at the task's next scan
+  // boundary, carrying the running program's state by identity
+  // (runtime/online_carry.h); waits for the switch.  With `strict`, a
+  // download that would reset a variable (its type changed) is refused.
+  // Throws std::runtime_error with the reason if refused.
+  SwapReport replace(const std::string& task, Image img, const std::string& file, int64_t timeout_ms = 5000,
+                     bool strict = false);
 
   // Reads a device or a variable by name: shared ones from the global image,
   // private ones from the task's memory at its next scan boundary.  "T.D5"
@@ -234,6 +245,7 @@ std::string write_retain_file(const std::string& path, const RetainSnapshot& s);
 struct Control {
   Runtime& rt;
   std::function<Image(const std::string& file)> loader;
+  bool strict = false;  // every `load` as `load --strict` (ldrun --strict)
   // Executes one line; returns the reply (without newline), or "" for a
   // blank or comment line.  Sets quit on `quit`.
   std::string execute(const std::string& line, bool& quit);

@@ -748,10 +748,46 @@ class Reader {
         r.at = m_.place(m_.type(v.type).size, v.loc);
       }
       globals_[upper(v.name)] = r;
+      if (!v.at) {  // a located variable is its device; the others are carried by name online
+        Size sz = m_.type(v.type).size;
+        p_.vars.push_back({v.name, layout_text(v.type), sz.bits ? r.bits : Area::Count, sz.bits ? r.at.bit : 0, sz.bits,
+                           sz.cells ? r.cells : Area::Count, sz.cells ? r.at.cell : 0, sz.cells});
+      }
       if (v.retain)
         for (uint32_t c = 0; c < m_.type(v.type).size.cells && r.cells == Area::D; c++) p_.retain.push_back({Dev::D, r.at.cell + c});
       aliases(v.name, r);
     }
+  }
+  // The text of a type that changes when its layout does (VarPlace::type): an
+  // elementary type's name; an enumeration's, a composite's name (or kind)
+  // and a hash (FNV-1a, 64 bits) of its enumerators, dimensions, members'
+  // names, offsets and types -- a hash, so that types nested many times do
+  // not make the text grow with every use.
+  std::map<TypeId, std::string> layout_texts_;
+  std::string layout_text(TypeId id) {
+    if (auto it = layout_texts_.find(id); it != layout_texts_.end()) return it->second;
+    const Type& t = m_.type(id);
+    std::string text;
+    if (t.kind == TypeKind::Elem || t.kind == TypeKind::Subrange) {
+      text = ty_info(t.elem).name;
+    } else {
+      uint64_t h = 1469598103934665603ull;
+      auto mix = [&](const std::string& part) {
+        for (unsigned char c : part + '\x1f') h = (h ^ c) * 1099511628211ull;
+      };
+      mix(std::to_string(int(t.kind)));
+      for (const std::string& e : t.enumerators) mix(e);
+      for (const Dim& d : t.dims) mix(std::to_string(d.lo) + ".." + std::to_string(d.hi));
+      if (t.of != kNoType) mix(layout_text(t.of));
+      for (const Member& mb : t.members)
+        if (mb.type != kNoType)
+          mix(mb.name + ":" + layout_text(mb.type) + "@" + std::to_string(mb.offset.bits) + "," + std::to_string(mb.offset.cells));
+      static const char* kinds[] = {"ELEM", "ENUM", "SUBRANGE", "ARRAY", "STRUCT", "BLOCK"};
+      char hex[17];
+      std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+      text = (t.name.empty() ? std::string(kinds[int(t.kind)]) : t.name) + "#" + hex;
+    }
+    return layout_texts_[id] = text;
   }
   // --watch names: the variable, and the scalars of a structured one (p.x, a[1], a[1].on)
   void aliases(const std::string& name, const model::Ref& r) {
@@ -2233,6 +2269,8 @@ class Reader {
     pt.ival = INT32_MAX;
     emit(Op::TON, Operand{OpdKind::Timer, Area::Sys, n}, pt);
     Operand et{OpdKind::Int, Area::TW, n}, ns = scratch("rtc_dt", Ty::LINT);
+    Operand clock = clock_cell();  // hidden state: carried online under its own name
+    p_.vars.push_back({"__rtc_clock", "DT", Area::Count, 0, 0, clock.area, clock.index, uint32_t(ty_info(Ty::DT).cells)});
     typed(Op::TCONV, Ty::LINT, et, ns, {}, Ty::DINT);
     typed(Op::TMUL, Ty::LINT, ns, Operand::typed_const(1000000), ns);
     typed(Op::TADD, Ty::LINT, clock_cell(), ns, clock_cell());

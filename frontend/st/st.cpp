@@ -1366,6 +1366,7 @@ namespace {
 TreeProgram raw_tree(Program p) {
   TreeProgram t;
   t.source = p.source, t.aliases = std::move(p.aliases), t.end_labels = std::move(p.end_labels), t.retain = std::move(p.retain);
+  t.vars = std::move(p.vars);
   for (Rung& r : p.rungs) {
     TreeRung tr;
     tr.labels = std::move(r.labels), tr.title = std::move(r.title), tr.line = r.line;
