@@ -879,7 +879,7 @@ class ImageReader {
       return;
     }
     const uint64_t rungs = im_.lines.empty() ? 0 : uint64_t(im_.lines.back().rung) + 1;
-    if (t.first.back() >= rungs && rungs)
+    if (t.first.back() >= rungs)
       throw sfail(s, "region " + std::to_string(t.first.size() - 1) + " starts at rung " + std::to_string(t.first.back()) +
                          ", past the program's " + std::to_string(rungs) + " rungs");
     uint64_t code_end = 0;
