@@ -107,6 +107,11 @@ static int ldc_main(int argc, char** argv) {
     else if (input.empty()) input = a;
     else { std::fprintf(stderr, "ldc: error: more than one input file\n%s", usage().c_str()); return 1; }
   }
+  if (change_rungs && (!project.empty() || (!emit.empty() && emit != "hex"))) {
+    std::fprintf(stderr, "ldc: error: --change-driven makes an image: it goes with -o FILE.bin or --emit=hex, not with %s\n",
+                 project.empty() ? ("--emit=" + emit).c_str() : "--project");
+    return 1;
+  }
   if (!project.empty()) {
     if (!input.empty() || !emit.empty() || !task.empty()) { std::fprintf(stderr, "ldc: error: --project takes no input file, --emit or --task\n%s", usage().c_str()); return 1; }
     return build_project_main(project, output, dopt, syntax_only);

@@ -122,5 +122,17 @@ grep -q "Ctrl-C" "$tmp/err" && fail "banner with --scans"
 expect 0 "" "$bin/ldrun" "$src/examples/motor.ld" --io=trace --trace "$src/examples/motor.csv" --watch Y0 --clock=virtual --free-run
 grep -q "Ctrl-C" "$tmp/err" && fail "banner in trace mode"
 
+# --change-driven (docs/change-driven.md) makes an image: other outputs, a bad N and
+# the C40 are refused by name, and nothing is written.
+expect 1 "ldc: error: --change-driven makes an image: it goes with -o FILE.bin or --emit=hex, not with --emit=il" \
+  "$bin/ldc" "$src/examples/motor.ld" --change-driven --emit=il
+expect 1 "--change-driven=N takes a number of rungs from 1 to 65536, not '0'" "$bin/ldc" "$src/examples/motor.ld" --change-driven=0 -o "$tmp/cd.bin"
+expect 1 "--change-driven is for the x86-64 target, not c40" "$bin/ldc" "$src/examples/motor.ld" --change-driven --target=c40 -o "$tmp/cd.bin"
+[ -e "$tmp/cd.bin" ] && fail "a refused --change-driven left cd.bin"
+expect 0 "" "$bin/ldc" "$src/examples/motor.ld" --change-driven=3 -O2 -o "$tmp/cd.bin"
+checks=$((checks + 1))
+"$bin/ldobjdump" "$tmp/cd.bin" | grep -q "change-driven scan (docs/change-driven.md): [0-9]* regions of up to 3 rungs" ||
+  fail "ldobjdump does not list the region table"
+
 echo "$((checks - fails)) passed, $fails failed"
 [ $fails -eq 0 ]
