@@ -1597,7 +1597,7 @@ struct Report {
            "c40_cycles_per_instr", "c40_interp_cycles_per_instr", "classic_over_native", "fast_over_native",
            "c_over_native", "c40_interp_over_native", "native_code_bytes_per_instr", "c40_code_bytes_per_instr",
            "native_o1_ns_per_instr", "native_o2_ns_per_instr", "native_o2_code_bytes_per_instr"});
-    md += "## Per class (paper 003, Fig. 8): time per instruction\n\n";
+    md += "## Per class (Kim, Chang and Kwon, Fig. 8): time per instruction\n\n";
     md += "One-class programs of " + std::to_string(o.smoke ? 60 : 3000) +
           " instructions; *off*: the same with no power (application instructions skipped).\n\n";
     md += md_head({"class", "classic ns", "fast ns", "native ns", "-O2 ns", "C ns", "classic/native", "fast/native",
@@ -1761,7 +1761,7 @@ struct Report {
     pp.ylabel = "ns per IL instruction";
     pp.logy = true;
     pp.note = note;
-    md += "## Time vs P_basic (paper 003, Fig. 10) at N_exe = " + std::to_string(nmax) + "\n\n";
+    md += "## Time vs P_basic (Kim, Chang and Kwon, Fig. 10) at N_exe = " + std::to_string(nmax) + "\n\n";
     md += md_head({"P_basic", "classic", "fast", "native", "C -O2", "classic/native", "fast/native", "C/native",
                    "native eq. (2)", "native ns/IL", "C40 interp", "C40 native", "C40 interp/native"});
     for (int e = 0; e < kEngines; e++) {
@@ -1817,7 +1817,7 @@ struct Report {
         if (s->c40_bytes) { kx.push_back(s->n); kb.push_back(double(s->c40_bytes)); }
       }
       Csv c({"quantity", "slope_bytes_per_il", "intercept_bytes", "r2", "slope_through_origin", "points"});
-      md += "## Memory: bytes vs N_exe (paper 003, eq. 3 and 4)\n\n";
+      md += "## Memory: bytes vs N_exe (Kim, Chang and Kwon, eq. 3 and 4)\n\n";
       md += "Least squares over the typical-mix programs (P_basic = 0.689: the Fig. 10 row and the scaling programs, "
             "N_exe 300 to 100,000); per P_basic below.  Bytes, except where words are said.\n\n";
       md += md_head({"quantity", "fit (bytes)", "R²", "through 0", "paper"});

@@ -26,8 +26,8 @@ static std::string usage() {
   for (const WarningInfo& w : warning_table())
     warnings += std::string("         -W") + w.name + (w.by_default ? " (on)" : " (-Wall)") + ": " + w.about + "\n";
   return "usage: ldc FILE [-o OUT] [--emit=tree|il|iec-il|ld|asm|listing|hex|c] [--target=" + targets + "] [-O0|-O1|-O2]\n"
-         "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .st (Structured Text), .xml (PLCopen TC6), .rtsp (paper 000), .sfc (SFC chart)\n"
-         "       -O0 templates (paper 003), -O1 peephole, -O2 bit stack in registers; for every target\n"
+         "       FILE: .ld (ladder grid, or LDmicro), .il (ldc IL, or IEC 61131-3 IL), .st (Structured Text), .xml (PLCopen TC6), .rtsp (the RTSP language of Y.-S. Kim), .sfc (SFC chart)\n"
+         "       -O0 the macro templates of Kim, Chang and Kwon, -O1 peephole, -O2 bit stack in registers; for every target\n"
          "       --change-driven[=N]   x86-64: also regions of up to N rungs (default 8), each run only when what it\n"
          "                             reads or writes changed (docs/change-driven.md); recorded in the image\n"
          "       ldc --project PROJECT.ldp [-o DIR]   (check a project; with -o write DIR/TASK.bin and DIR/NAME.ldp)\n"
