@@ -463,6 +463,12 @@ void check_project_output(const Project& p, const std::string& outdir, bool task
     size_t n = std::strlen(e);
     return outdir.size() >= n && same_name(outdir.substr(outdir.size() - n), e);
   };
+  // DIR/NAME.ldp must not be the project file being read (ldc --project p.ldp -o .)
+  std::error_code ec;
+  const std::filesystem::path written = std::filesystem::path(outdir) / (p.name + ".ldp");
+  if (std::filesystem::equivalent(written, p.path, ec))
+    throw UserError("ldc: error: -o " + outdir + " would write " + written.string() + " over the project file " + p.path +
+                    " itself: give -o another folder (-o build/" + p.name + ")");
   struct stat st;
   bool not_folder = ::stat(outdir.c_str(), &st) == 0 && !S_ISDIR(st.st_mode);
   if (!ends(".bin") && !ends(".hex") && !not_folder) return;

@@ -43,6 +43,14 @@ expect 1 "-o $tmp/plainfile is a file, but" "$bin/ldc" --project "$src/tests/run
 expect 0 "" "$bin/ldc" "$src/tests/frontend/tasks/st_tasks.st" -o "$tmp/tasks"
 [ -f "$tmp/tasks/plant.ldp" ] || [ -n "$(ls "$tmp/tasks"/*.ldp 2>/dev/null)" ] || fail "ldc st_tasks.st -o DIR wrote no project file"
 
+# -o naming the project file's own folder would overwrite the project file: refused,
+# the file untouched (docs/runtime.md, "The project file")
+mkdir -p "$tmp/own" && cp "$src/tests/runtime/projects/shared.ldp" "$tmp/own/plant.ldp"  # configuration plant: plant.ldp is written
+sed -i "s|program \([a-z]*\) \([a-z_]*\.ld\)|program \1 $src/tests/runtime/projects/\2|" "$tmp/own/plant.ldp"
+cp "$tmp/own/plant.ldp" "$tmp/own.before"
+expect 1 "would write $tmp/own/./plant.ldp over the project file" "$bin/ldc" --project "$tmp/own/plant.ldp" -o "$tmp/own/."
+cmp -s "$tmp/own/plant.ldp" "$tmp/own.before" || fail "ldc --project p.ldp -o . changed p.ldp"
+
 # ldobjdump takes a source as ldrun does: compiled in memory, the listing that of
 # the image ldc writes (but the header line, which says where the code came from).
 checks=$((checks + 1))
