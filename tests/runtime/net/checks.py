@@ -1,5 +1,6 @@
 """What the Modbus client tests share: a named check that records its failure,
-and the end of the run (exit 1 with the failures listed, else 0)."""
+the end of the run (exit 1 with the failures listed, else 0), starting ldrun
+with its Modbus server, and a read or write with mbpoll."""
 import re
 import select
 import subprocess
@@ -38,3 +39,17 @@ def start_modbus(argv):
         p.kill()
         sys.exit("ldrun did not listen: " + line + p.stderr.read())
     return p, port
+
+
+def mbpoll(port, *args):
+    """mbpoll's reply to a request on 127.0.0.1:port: the values read, "written",
+    or its last line of text (an exception, an error)."""
+    out = subprocess.run(["mbpoll", "-m", "tcp", "-p", str(port), "-0", "-1", "-o", "5"] + list(args),
+                         capture_output=True, text=True, timeout=30)
+    values = re.findall(r"^\[\d+\]:\s+(-?[0-9]+)", out.stdout, re.M)
+    if values:
+        return [int(v) for v in values]
+    if "Written" in out.stdout:
+        return "written"
+    text = (out.stdout + out.stderr).strip()
+    return text.splitlines()[-1] if text else "?"

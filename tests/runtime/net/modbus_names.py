@@ -14,7 +14,6 @@ A register outside the device map and the named ones is exception 02; a map
 naming a located variable, or an address inside the device map, is refused.
 """
 import os
-import re
 import shutil
 import subprocess
 import sys
@@ -27,19 +26,8 @@ if not shutil.which("mbpoll"):
 LDRUN, SRC = sys.argv[1], sys.argv[2]
 NAMES = os.path.join(SRC, "tests/runtime/names.st")
 MAP = os.path.join(SRC, "tests/runtime/names.map")
-from checks import check, failures, finish, start_modbus  # noqa: E402 (beside this file)
+from checks import check, failures, finish, mbpoll, start_modbus  # noqa: E402 (beside this file)
 
-
-def mbpoll(port, *args):
-    out = subprocess.run(["mbpoll", "-m", "tcp", "-p", str(port), "-0", "-1", "-o", "5"] + list(args),
-                         capture_output=True, text=True, timeout=30)
-    values = re.findall(r"^\[\d+\]:\s+(-?[0-9]+)", out.stdout, re.M)
-    if values:
-        return [int(v) for v in values]
-    if "Written" in out.stdout:
-        return "written"
-    text = (out.stdout + out.stderr).strip()
-    return text.splitlines()[-1] if text else "?"
 
 
 assert 3723500000000 == (866 << 32) + (61925 << 16) + 4864

@@ -12,9 +12,7 @@ Modbus writes no input register or discrete input (no function code does), so
 they are read-only; holding register 1026 stays D1 (0), and 2048 is exception 02.
 """
 import os
-import re
 import shutil
-import subprocess
 import sys
 import time
 
@@ -25,19 +23,8 @@ if not shutil.which("mbpoll"):
 LDRUN, SRC = sys.argv[1], sys.argv[2]
 PROG = os.path.join(SRC, "tests/runtime/net/modbus/timers.ld")
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from checks import check, finish, start_modbus  # noqa: E402 (beside this file)
+from checks import check, finish, mbpoll, start_modbus  # noqa: E402 (beside this file)
 
-
-def mbpoll(port, *args):
-    out = subprocess.run(["mbpoll", "-m", "tcp", "-p", str(port), "-0", "-1", "-o", "5"] + list(args),
-                         capture_output=True, text=True, timeout=30)
-    values = re.findall(r"^\[\d+\]:\s+(-?[0-9]+)", out.stdout, re.M)
-    if values:
-        return [int(v) for v in values]
-    if "Written" in out.stdout:
-        return "written"
-    text = (out.stdout + out.stderr).strip()
-    return text.splitlines()[-1] if text else "?"
 
 
 p, port = start_modbus([LDRUN, PROG, "--io=none", "--period", "1ms", "--clock=virtual", "--modbus", "127.0.0.1:0"])
