@@ -2081,6 +2081,7 @@ const char kUsage[] =
     "               [--doc FILE.md]   (also put the tables between FILE.md's generated-region markers)\n"
     "       ldbench --synth N_EXE P_BASIC [SEED]   (a synthetic program's IL text, to stdout)\n"
     "       ldbench --plant RUNGS                  (the synthetic plant's .ld text, to stdout)\n"
+    "       ldbench --typed INSTANCES              (the typed benchmark's IL text, to stdout)\n"
     "       ldbench [options] FILE...              (every engine on these programs only; FILE.csv beside\n"
     "                                               a program is its trace, else random inputs)\n";
 
@@ -2108,6 +2109,12 @@ int main(int argc, char** argv) {
     int rungs = std::atoi(argv[2]);
     if (rungs < 1 || rungs > int(kMaxRungs)) return usage();
     std::fputs(synth::synth_plant_ld(rungs, 1).c_str(), stdout);
+    return 0;
+  }
+  if (argc == 3 && std::string(argv[1]) == "--typed") {
+    int k = std::atoi(argv[2]);
+    if (k < 1 || k > synth::kTypedMaxInstances) return usage();
+    std::fputs(synth::synth_typed_il(k).c_str(), stdout);
     return 0;
   }
   if (argc == 3 && std::string(argv[1]) == "--compile-child") {

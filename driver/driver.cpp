@@ -222,7 +222,7 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
       c.il = lower_to_il(c.tree);
     } else if (ends_with(path, ".xml")) {
       c.from_ld = true;
-      PlcopenImport im = import_plcopen(text, path);
+      PlcopenImport im = import_plcopen(text, path, d);
       if (im.tasks.empty() && !task.empty()) throw UserError(path + ": error: --task " + task + ": the file has one program, not a configuration of several tasks");
       if (im.tasks.empty()) {
         c.tree = std::move(im.single);

@@ -77,6 +77,13 @@ struct PlcopenImport {
 // (then the actions' rungs).  At most one task: `single` is parse_plcopen's program.  Several tasks: one
 // program per task.  Throws CompileError.
 PlcopenImport import_plcopen(std::string_view text, const std::string& filename);
+// The same with error recovery (docs/diagnostics.md): the errors of each
+// variable, interface section, body statement and POU body go to `diag`, the
+// import goes on with the next, and one with errors ends with ErrorsReported.
+// The XML itself, the data types and the configuration stop at their first
+// error, thrown as a CompileError as above.
+PlcopenImport import_plcopen(std::string_view text, const std::string& filename, Diagnostics& diag);
+TreeProgram parse_plcopen(std::string_view text, const std::string& filename, Diagnostics& diag);
 // A Structured Text file (docs/st.md) as a PLCopen import is: one program
 // (`single`, as raw rungs), or a CONFIGURATION of several tasks, one program
 // instance each, compiled one by one over the same layout of the globals.

@@ -27,6 +27,7 @@
 #include <optional>
 #include <set>
 
+#include "frontend/diag.h"
 #include "frontend/frontend.h"
 #include "frontend/operands.h"
 #include "frontend/treebuild.h"
@@ -211,6 +212,7 @@ struct Var {
   std::set<std::string> inouts;
   std::string section;   // the interface section it is declared in (inputVars ...)
   bool frame = false;    // a member of a function call's frame: no alias
+  bool refused = false;  // its location was refused (error recovery): its uses say nothing more
   const Element* init_el = nullptr;    // <initialValue> (or a structValue's <value>)
   const Element* struct_el = nullptr;  // a structure's <struct> (its type in <dataTypes>)
   bool container() const { return struct_el || !members.empty() || !inouts.empty(); }
@@ -287,15 +289,53 @@ struct Out {  // a block output as its consumers see it
 
 // ------------------------------------------------------------------ importer
 
+// A use of something whose error was reported (error recovery): nothing more
+// is reported for it.
+struct Refused : CompileError {
+  Refused() : CompileError(1, 1, "follows from an error already reported") {}
+};
+// An error after which everything would fail the same way (the devices or
+// the variables ran out): the import stops there, recovery or not.
+struct Fatal : CompileError {
+  using CompileError::CompileError;
+};
+
 class Importer {
  public:
-  Importer(std::string_view text, std::string file) : text_(text), file_(std::move(file)) {}
+  Importer(std::string_view text, std::string file, Diagnostics* diag = nullptr)
+      : text_(text), file_(std::move(file)), diag_(diag), errors0_(diag ? diag->errors() : 0) {}
   TreeProgram run();
 
  private:
   std::string_view text_;
   std::string file_;
   xml::Document doc_;
+
+  // Error recovery (docs/diagnostics.md): with a Diagnostics, an error in a
+  // variable declaration, an interface section, a variable's location or
+  // initial value, a statement of an LD/FBD body (a coil, an output variable,
+  // a block, with all that feeds it) or a POU body is reported there, and the
+  // import goes on with the next one.  A use of what was refused throws
+  // Refused: it follows from an error already reported, so nothing more is.
+  Diagnostics* diag_;
+  std::set<const Element*> failed_blocks_;                 // blocks whose statement was refused
+  std::set<std::string> failed_names_;                     // upper names whose declaration was refused
+  std::set<std::pair<std::string, std::string>> unknown_;  // (POU, upper name) reported unknown
+  std::set<std::pair<int, int>> reported_;                 // one report per place (an XML element)
+  template <class F>
+  bool recover(F&& f);
+  void report(const CompileError& e);
+  // A block whose error was reported: it failed, or an error was reported at its element.
+  bool block_refused(const Node& b) const {
+    return failed_blocks_.count(b.el) || (diag_ && reported_.count({b.el->line, b.el->col}));
+  }
+  [[noreturn]] void unknown_name(const Element* el, const std::string& name, const std::string& msg);
+  int errors0_;
+  // Ends the import when errors were reported (before checks that what was
+  // refused would fail too, such as "no coils").
+  void end_of_recovery() const {
+    if (diag_ && errors0_ < diag_->errors()) throw ErrorsReported();
+  }
 
   // declarations
   std::vector<std::unique_ptr<Var>> vars_;
@@ -370,7 +410,7 @@ class Importer {
   static constexpr size_t kMaxVars = 65536;
   void keep(std::unique_ptr<Var> u) {
     if (vars_.size() >= kMaxVars)
-      fail_at(u->el, "more than " + std::to_string(kMaxVars) + " variables, counting every member of every instance, structure and array ('" +
+      throw Fatal(u->el ? u->el->line : 1, u->el ? u->el->col : 1, "more than " + std::to_string(kMaxVars) + " variables, counting every member of every instance, structure and array ('" +
                          u->name + "' is one too many); ldc's devices hold fewer");
     vars_.push_back(std::move(u));
   }
@@ -385,6 +425,36 @@ class Importer {
   Var& element_member(Var& e, const std::string& member, const std::string& expr, const Element* el);
   std::function<void()> pending_store_;  // a write at a variable index: the statement's last rung
   void statement_of(const Node& n);
+  void recovered_statement(const Node& n);
+  void interface_section(const Element* sec, const std::string& pou);
+  void block_of(const Node& b);
+  // The state of the body being translated, kept aside while a callee's body
+  // is, and put back however that ends (an error recovered from too).
+  struct CallerState {
+    Importer& im;
+    std::map<int, Node> nodes;
+    std::map<std::string, int> connectors;
+    std::set<int> computed;
+    std::map<std::pair<int, std::string>, Out> outs;
+    std::set<std::pair<int, std::string>> consumed;
+    std::set<int> generating;
+    std::map<std::string, Var*> scope;
+    std::string pou;
+    size_t calls;
+    bool sfc;
+    explicit CallerState(Importer& i)
+        : im(i), nodes(std::move(i.nodes_)), connectors(std::move(i.connectors_)), computed(std::move(i.computed_)),
+          outs(std::move(i.outs_)), consumed(std::move(i.consumed_)), generating(std::move(i.generating_)),
+          scope(std::move(i.scope_)), pou(i.pou_), calls(i.call_stack_.size()), sfc(i.sfc_mode_) {
+      i.nodes_.clear(), i.connectors_.clear(), i.computed_.clear(), i.outs_.clear(), i.consumed_.clear(), i.generating_.clear();
+    }
+    ~CallerState() {
+      im.nodes_ = std::move(nodes), im.connectors_ = std::move(connectors), im.computed_ = std::move(computed);
+      im.outs_ = std::move(outs), im.consumed_ = std::move(consumed), im.generating_ = std::move(generating);
+      im.scope_ = std::move(scope), im.pou_ = pou, im.sfc_mode_ = sfc;
+      im.call_stack_.resize(calls);
+    }
+  };
   bool eno_gated(const Node& n);
   std::string eno_skip(const Node& n);
   std::map<std::string, const Element*> data_types_;  // upper name -> <dataType>
@@ -564,7 +634,8 @@ class Importer {
 uint32_t Importer::take(Dev d, const Element* el) {
   uint32_t& n = next_[int(d)];
   while (n < device_count(d) && used_.count({int(d), n})) n++;
-  if (n >= device_count(d)) fail_at(el, std::string("out of ") + dev_name(d) + " devices for this project");
+  if (n >= device_count(d))
+    throw Fatal(el ? el->line : 1, el ? el->col : 1, std::string("out of ") + dev_name(d) + " devices for this project");
   used_.insert({int(d), n});
   return n++;
 }
@@ -939,23 +1010,35 @@ void Importer::instantiate(Var& inst, const Element* fb, std::vector<std::string
 void Importer::declare(const Element* list, const std::string& pou, bool global) {
   bool constant = list->attr("constant") && (*list->attr("constant") == "true" || *list->attr("constant") == "1");
   for (const Element* v : list->children_named("variable")) {
-    const std::string* nm = v->attr("name");
-    if (!nm || nm->empty()) fail_at(v, "variable without a name (" + v->path() + ")");
-    auto u = make_var(v, *nm, global ? "" : pou, constant);
-    u->section = std::string(list->local_name());
-    Var* raw = u.get();
-    keep(std::move(u));
-    std::string key = upper(*nm);
-    if (global) {
-      if (globals_.count(key)) fail_at(v, "global variable '" + *nm + "' is declared twice");
-      globals_[key] = raw;
-    } else {
-      if (scope_.count(key)) fail_at(v, "variable '" + *nm + "' is declared twice in POU '" + pou + "'");
-      scope_[key] = raw;
+    size_t kept = vars_.size();
+    Var* raw = nullptr;
+    bool ok = recover([&] {
+      const std::string* nm = v->attr("name");
+      if (!nm || nm->empty()) fail_at(v, "variable without a name (" + v->path() + ")");
+      auto u = make_var(v, *nm, global ? "" : pou, constant);
+      u->section = std::string(list->local_name());
+      keep(std::move(u));
+      std::string key = upper(*nm);
+      if (global) {
+        if (globals_.count(key)) fail_at(v, "global variable '" + *nm + "' is declared twice");
+        globals_[key] = raw = vars_.back().get();
+      } else {
+        if (scope_.count(key)) fail_at(v, "variable '" + *nm + "' is declared twice in POU '" + pou + "'");
+        scope_[key] = raw = vars_.back().get();
+      }
+      std::vector<std::string> stack;
+      if (!global) stack.push_back(upper(pou));
+      expand(*raw, stack);
+    });
+    if (ok) continue;
+    // refused: forget it and what it made, and keep its uses quiet
+    if (const std::string* nm = v->attr("name")) {
+      std::string key = upper(*nm);
+      auto& names = global ? globals_ : scope_;
+      if (raw && names.count(key) && names[key] == raw) names.erase(key);
+      failed_names_.insert(key);
     }
-    std::vector<std::string> stack;
-    if (!global) stack.push_back(upper(pou));
-    expand(*raw, stack);
+    vars_.resize(kept);
   }
 }
 
@@ -985,11 +1068,14 @@ void Importer::allocate() {
   // located variables first, so the rest avoid their devices
   for (auto& v : vars_) {
     if (v->address.empty() || v->constant) continue;
-    if (v->ty == Ty::None) fail_at(v->el, "variable '" + v->name + "' of type " + v->type + " cannot be located at " + v->address);
-    v->dev = location(*v);
-    used_.insert({int(v->dev->dev), v->dev->index});
+    v->refused = !recover([&] {
+      if (v->ty == Ty::None) fail_at(v->el, "variable '" + v->name + "' of type " + v->type + " cannot be located at " + v->address);
+      v->dev = location(*v);
+      used_.insert({int(v->dev->dev), v->dev->index});
+    });
   }
-  for (auto& v : vars_) place(*v);
+  for (auto& v : vars_)
+    if (!v->refused) place(*v);
 }
 
 // An unlocated variable's devices (a standard FB instance: its T, C or M).
@@ -1179,7 +1265,7 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
       Var* c = member_path(base, el, &last);
       if (c && c->container() && c->members.count(upper(last))) a = c->members.at(upper(last));
     }
-    if (!a) fail_at(el, "unknown variable '" + base + "' in " + where(el));
+    if (!a) unknown_name(el, base, "unknown variable '" + base + "' in " + where(el));
     if (a->elems.empty()) fail_at(el, "'" + base + "' is not an array; '" + e + "' indexes it (" + where(el) + ")");
     return element(*a, e.substr(lb + 1, rb - lb - 1), e.substr(rb + 1), el, write);
   }
@@ -1206,6 +1292,8 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
     std::string m;
     Var* inst = member_path(e, el, &m);
     m = upper(m);
+    if (!inst)  // member_path found no variable named as the path's first part
+      unknown_name(el, e.substr(0, dot), "'" + e + "' is not a variable ldc knows (structures and arrays are not supported) in " + where(el));
     if (!inst || !inst->derived || fb_kind(inst->type) == FbKind::None || !inst->dev)
       fail_at(el, "'" + e + "' is not a variable ldc knows (structures and arrays are not supported) in " + where(el));
     if (write) fail_at(el, "'" + e + "' is a function block output; it cannot be written (" + where(el) + ")");
@@ -1230,7 +1318,8 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
     fail_at(el, "'" + e + "': " + inst->type + " has no output " + m);
   }
   if (!v) v = lookup(e);
-  if (!v) fail_at(el, "unknown variable '" + e + "' in " + where(el));
+  if (!v) unknown_name(el, e, "unknown variable '" + e + "' in " + where(el));
+  if (v->refused) throw Refused();
   if (v->constant) {
     if (write) fail_at(el, "'" + e + "' is a constant; it cannot be written (" + where(el) + ")");
     auto c = literal(v->init, v->el);
@@ -1916,6 +2005,7 @@ Val Importer::value_expr(const std::vector<Conn>& conns, bool order, const Eleme
 // A block output, generating the block first (Beremiz: on demand, unless the
 // reading statement has its own execution order).
 Out Importer::block_out(const Node& b, const Conn& c, bool order) {
+  if (block_refused(b)) throw Refused();
   if (!order && !computed_.count(b.id)) {
     if (generating_.count(b.id)) fail_at(b.el, "block " + b.type + " localId " + std::to_string(b.id) + " feeds its own input through a loop of blocks");
     block(b);
@@ -2048,7 +2138,7 @@ void Importer::user_call(const Node& b, const Element* callee) {
   Var* inst = nullptr;
   if (is_fb) {
     inst = b.instance.empty() ? nullptr : lookup(b.instance);
-    if (!inst) fail_at(el, what + " calls function block '" + cname + "' and needs an instance declared in the POU ('" + b.instance + "' is not) (" + el->path() + ")");
+    if (!inst) unknown_name(el, b.instance, what + " calls function block '" + cname + "' and needs an instance declared in the POU ('" + b.instance + "' is not) (" + el->path() + ")");
     if (!inst->derived || upper(inst->type) != upper(cname))
       fail_at(el, "instance '" + b.instance + "' is declared as " + inst->type + ", but " + what + " is a " + cname);
   } else {
@@ -2141,33 +2231,15 @@ void Importer::user_call(const Node& b, const Element* callee) {
   {
     Nest leave{nest_ += kBlockNest, kBlockNest};
     if (nest_ > kMaxNest) fail_at(el, "calls nested too deeply at " + where(el));
-    auto nodes = std::move(nodes_);
-    auto connectors = std::move(connectors_);
-    auto computed = std::move(computed_);
-    auto outs = std::move(outs_);
-    auto consumed = std::move(consumed_);
-    auto generating = std::move(generating_);
-    auto scope = std::move(scope_);
-    std::string pou = pou_;
+    CallerState caller(*this);
     scope_.clear();
     for (auto& [k, m] : inst->members) scope_[k] = m;
     for (auto& [k, v] : bound) scope_[k] = v;
     call_stack_.push_back(cname);
     pou_ = cname;
-    bool sfc = sfc_mode_;
     sfc_mode_ = false;
     if (graph) body(graph, "call of " + cname + (is_fb ? " " + inst->name : ""));
     else st_call(b, callee, *inst, bound);
-    sfc_mode_ = sfc;
-    call_stack_.pop_back();
-    pou_ = pou;
-    nodes_ = std::move(nodes);
-    connectors_ = std::move(connectors);
-    computed_ = std::move(computed);
-    outs_ = std::move(outs);
-    consumed_ = std::move(consumed);
-    generating_ = std::move(generating);
-    scope_ = std::move(scope);
   }
   if (!skip.empty()) pending_labels_.push_back(skip);
   // the outputs: the instance's variables after the call
@@ -2399,6 +2471,16 @@ void Importer::splice(const iecil::Unit& u, const Element* at) {
 }
 
 void Importer::block(const Node& b) {
+  if (block_refused(b)) throw Refused();
+  try {
+    block_of(b);
+  } catch (const CompileError&) {
+    failed_blocks_.insert(b.el);  // its outputs' readers follow from this error
+    throw;
+  }
+}
+
+void Importer::block_of(const Node& b) {
   Nest leave{nest_ += kBlockNest, kBlockNest};
   if (nest_ > kMaxNest)
     fail_at(b.el, "blocks feed each other too deeply (more than " + std::to_string(kMaxNest / kBlockNest) + ", less with power flow between them) at " + where(b.el));
@@ -2407,7 +2489,7 @@ void Importer::block(const Node& b) {
   std::string t = upper(b.type);
   if (fb_kind(t) != FbKind::None) {
     Var* inst = b.instance.empty() ? nullptr : lookup(b.instance);
-    if (!inst) fail_at(b.el, t + " block localId " + std::to_string(b.id) + " needs an instance declared in the POU ('" + b.instance + "' is not) (" + b.el->path() + ")");
+    if (!inst) unknown_name(b.el, b.instance, t + " block localId " + std::to_string(b.id) + " needs an instance declared in the POU ('" + b.instance + "' is not) (" + b.el->path() + ")");
     if (!inst->derived || upper(inst->type) != t)
       fail_at(b.el, "instance '" + b.instance + "' is declared as " + inst->type + ", but block localId " + std::to_string(b.id) + " is a " + t);
     if (!b.inouts.empty())
@@ -3207,6 +3289,15 @@ void Importer::fn_block(const Node& b) {
   if (consumed_.count({b.id, "ENO"})) outs_[{b.id, "ENO"}] = Out{true, materialize(eno, el), {}};
 }
 
+// A statement of the body being translated; in a POU's own body (not a
+// callee's, expanded inside a statement) an error is recovered from here.
+void Importer::recovered_statement(const Node& n) {
+  if (!call_stack_.empty()) return statement(n);
+  if (recover([&] { statement(n); })) return;
+  pending_store_ = nullptr;  // what the refused statement left half done
+  generating_.clear();
+}
+
 // A statement, then the store of an array element it wrote at a variable index.
 void Importer::statement(const Node& n) {
   auto outer = std::move(pending_store_);  // a statement of a callee's body, expanded inside another statement
@@ -3299,6 +3390,10 @@ bool saved_by_python2(const Element* project) {
 // The namespace an element's name is in, from the declarations on it (the
 // root: enough for <project>).
 constexpr const char* kTc6V1Namespace = "http://www.plcopen.org/xml/tc6.xsd";
+// What an error in such a file adds.
+std::string tc6_v1_note() {
+  return std::string(" (this is a PLCopen TC6 XML 1.0 file, namespace ") + kTc6V1Namespace + "; ldc reads it where it agrees with TC6 XML 2.01)";
+}
 std::string namespace_of(const Element* e) {
   size_t colon = e->name.find(':');
   std::string decl = colon == std::string::npos ? "xmlns" : "xmlns:" + e->name.substr(0, colon);
@@ -3358,9 +3453,8 @@ void Importer::body(const Element* ld, const std::string& title) {
   size_t first = rungs_.size();
   std::string before_title = pending_title_;
   pending_title_ = before_title.empty() ? title : before_title + "; " + title;
-  for (const Node* n : ordered) statement(*n);
-  for (const Node* n : stmts) statement(*n);
-  for (const Node* n : blocks) statement(*n);
+  for (auto* list : {&ordered, &stmts, &blocks})
+    for (const Node* n : *list) recovered_statement(*n);
   if (rungs_.size() == first) pending_title_ = before_title;
 }
 
@@ -3703,6 +3797,39 @@ void Importer::tasks(const Element* root) {
   }
 }
 
+// One section of a translated POU's interface: its variables into scope_.
+void Importer::interface_section(const Element* sec, const std::string& name) {
+  std::string s(sec->local_name());
+  if (s == "returnType") {
+    if (sec->children.empty()) return;
+    auto u = std::make_unique<Var>();
+    u->name = name;
+    u->el = sec;
+    u->pou = name;
+    const Element* te = sec->children[0].get();
+    u->derived = te->local_name() == "derived";
+    u->type = u->derived ? (te->attr("name") ? *te->attr("name") : "") : upper(te->local_name());
+    u->it = u->derived ? IT::None : iec_type_named(u->type);
+    u->ty = kind_of(u->it);
+    scope_[upper(name)] = u.get();
+    keep(std::move(u));
+  } else if (s == "externalVars") {
+    for (const Element* v : sec->children_named("variable"))
+      if (!recover([&] {
+            const std::string* nm = v->attr("name");
+            if (!nm) fail_at(v, "variable without a name (" + v->path() + ")");
+            auto it = globals_.find(upper(*nm));
+            if (it == globals_.end()) fail_at(v, "external variable '" + *nm + "' of POU '" + name + "' is not a global variable of the project");
+            scope_[upper(*nm)] = it->second;
+          }) && v->attr("name"))
+        failed_names_.insert(upper(*v->attr("name")));
+  } else if (s == "localVars" || s == "inputVars" || s == "outputVars" || s == "inOutVars" || s == "tempVars") {
+    declare(sec, name, false);
+  } else if (s != "documentation" && s != "addData" && s != "accessVars" && s != "globalVars") {
+    fail_at(sec, "unknown interface section <" + sec->name + "> (" + sec->path() + ")");
+  }
+}
+
 void Importer::prepare() {
   if (text_.size() > kMaxSourceBytes) fail_at(nullptr, "source file too large (at most 64 MiB)");
   doc_ = xml::parse(text_);
@@ -3794,37 +3921,8 @@ void Importer::prepare() {
     scope_.clear();
     std::string name = *p->attr("name");
     if (st_pou(name)) continue;  // its variables are its unit's (st_program)
-    if (const Element* itf = p->child("interface")) {
-      for (const auto& sec : itf->children) {
-        std::string s(sec->local_name());
-        if (s == "returnType") {
-          if (sec->children.empty()) continue;
-          auto u = std::make_unique<Var>();
-          u->name = name;
-          u->el = sec.get();
-          u->pou = name;
-          const Element* te = sec->children[0].get();
-          u->derived = te->local_name() == "derived";
-          u->type = u->derived ? (te->attr("name") ? *te->attr("name") : "") : upper(te->local_name());
-          u->it = u->derived ? IT::None : iec_type_named(u->type);
-    u->ty = kind_of(u->it);
-          scope_[upper(name)] = u.get();
-          keep(std::move(u));
-        } else if (s == "externalVars") {
-          for (const Element* v : sec->children_named("variable")) {
-            const std::string* nm = v->attr("name");
-            if (!nm) fail_at(v, "variable without a name (" + v->path() + ")");
-            auto it = globals_.find(upper(*nm));
-            if (it == globals_.end()) fail_at(v, "external variable '" + *nm + "' of POU '" + name + "' is not a global variable of the project");
-            scope_[upper(*nm)] = it->second;
-          }
-        } else if (s == "localVars" || s == "inputVars" || s == "outputVars" || s == "inOutVars" || s == "tempVars") {
-          declare(sec.get(), name, false);
-        } else if (s != "documentation" && s != "addData" && s != "accessVars" && s != "globalVars") {
-          fail_at(sec.get(), "unknown interface section <" + sec->name + "> (" + sec->path() + ")");
-        }
-      }
-    }
+    if (const Element* itf = p->child("interface"))
+      for (const auto& sec : itf->children) recover([&] { interface_section(sec.get(), name); });
     scopes_[p] = scope_;
   }
   allocate();
@@ -3838,14 +3936,16 @@ void Importer::emit_init(const std::function<bool(const Var&)>& which, const Ele
   for (auto& v : vars_) {
     if (!v->dev || v->init.empty() || v->derived || v->constant || v->frame || !which(*v)) continue;
     if (v->dev->dev == Dev::X || v->dev->dev == Dev::WX) continue;  // inputs belong to the I/O
-    auto c = literal(v->init, v->el);
-    if (!c) fail_at(v->el, "initial value '" + v->init + "' of '" + v->name + "' is not a literal");
-    Val k = const_val(*c, v->it);
-    if (v->ty == Ty::Bool) {
-      if (k.o.ival) init_.push_back(out(Op::SET, {bit_opd(bit_area(v->dev->dev), v->dev->index)}, v->el));
-    } else if (const_bits(k) != 0) {
-      init_.push_back(assign_node(k, var_val(*v), v->el));
-    }
+    recover([&] {
+      auto c = literal(v->init, v->el);
+      if (!c) fail_at(v->el, "initial value '" + v->init + "' of '" + v->name + "' is not a literal");
+      Val k = const_val(*c, v->it);
+      if (v->ty == Ty::Bool) {
+        if (k.o.ival) init_.push_back(out(Op::SET, {bit_opd(bit_area(v->dev->dev), v->dev->index)}, v->el));
+      } else if (const_bits(k) != 0) {
+        init_.push_back(assign_node(k, var_val(*v), v->el));
+      }
+    });
   }
   if (init_.empty()) return;
   TreeRung r;
@@ -3862,14 +3962,19 @@ void Importer::emit_bodies(const std::vector<const Element*>& pous) {
     pou_ = *pe->attr("name");
     scope_ = scopes_[pe];
     const Element* b = pe->child("body");
-    if (const Element* sfc = b->child("SFC")) sfc_body(pe, sfc);
-    else if (st_pou(pou_)) st_program(pe);
-    else body(b->child("LD") ? b->child("LD") : b->child("FBD"), "POU " + pou_);
+    bool ok = recover([&] {
+      if (const Element* sfc = b->child("SFC")) sfc_body(pe, sfc);
+      else if (st_pou(pou_)) st_program(pe);
+      else body(b->child("LD") ? b->child("LD") : b->child("FBD"), "POU " + pou_);
+    });
+    if (!ok) sfc_mode_ = false, pending_store_ = nullptr, generating_.clear();
   }
+  end_of_recovery();
 }
 
 // The copies of the inputs the program writes first, then labels and aliases.
 void Importer::finish(TreeProgram& p, const Element* root) {
+  end_of_recovery();
   std::vector<TreeRung> copies;
   auto copy = [&](TreeNode root_node) {
     TreeRung r;
@@ -3910,6 +4015,44 @@ void Importer::finish(TreeProgram& p, const Element* root) {
   shadow_.clear();
   shadow_w_.clear();
   aliases(p);
+}
+
+// ------------------------------------------------------------------ error recovery
+
+template <class F>
+bool Importer::recover(F&& f) {
+  if (!diag_) {
+    f();
+    return true;
+  }
+  try {
+    f();
+    return true;
+  } catch (const Refused&) {
+  } catch (const Fatal&) {
+    throw;
+  } catch (const CompileError& e) {
+    report(e);
+  }
+  return false;
+}
+
+// An error recovered from, once per place: an XML element (a callee's body
+// is expanded at each call, and an FB that contains itself is found again
+// from each of its instances).
+void Importer::report(const CompileError& e) {
+  if (!reported_.insert({e.line, e.col}).second) return;
+  if (!tc6_v1_) return diag_->error(file_, e);
+  diag_->error(file_, CompileError(e.line, e.col, std::string(e.what()) + tc6_v1_note()));
+}
+
+// An unknown name, reported once per POU (as gcc reports an undeclared
+// identifier once per function) and not at all when its declaration was
+// refused.
+void Importer::unknown_name(const Element* el, const std::string& name, const std::string& msg) {
+  std::string key = upper(name);
+  if (diag_ && (failed_names_.count(key) || !unknown_.insert({upper(pou_), key}).second)) throw Refused();
+  fail_at(el, msg);
 }
 
 TreeProgram Importer::run() {
@@ -4019,26 +4162,37 @@ PlcopenImport Importer::import() {
   return r;
 }
 
-// Runs an import; an error in a TC6 1.0 file says which format it is.
+// Runs an import; an error in a TC6 1.0 file says which format it is.  With
+// `diag`, the errors recovered from are reported there (the import ends with
+// ErrorsReported); one the import cannot go on from is thrown as before.
 template <class F>
-auto importing(std::string_view text, const std::string& filename, F run) {
-  Importer im(text, filename);
+auto importing(std::string_view text, const std::string& filename, Diagnostics* diag, F run) {
+  Importer im(text, filename, diag);
   try {
     return run(im);
+  } catch (const Refused&) {  // outside any recovery: its cause is reported
+    throw ErrorsReported();
   } catch (const CompileError& e) {
     if (!im.tc6_v1_) throw;
-    throw CompileError(e.line, e.col, std::string(e.what()) + " (this is a PLCopen TC6 XML 1.0 file, namespace " + kTc6V1Namespace +
-                                          "; ldc reads it where it agrees with TC6 XML 2.01)");
+    throw CompileError(e.line, e.col, std::string(e.what()) + tc6_v1_note());
   }
 }
 }  // namespace
 
 TreeProgram parse_plcopen(std::string_view text, const std::string& filename) {
-  return importing(text, filename, [](Importer& im) { return im.run(); });
+  return importing(text, filename, nullptr, [](Importer& im) { return im.run(); });
 }
 
 PlcopenImport import_plcopen(std::string_view text, const std::string& filename) {
-  return importing(text, filename, [](Importer& im) { return im.import(); });
+  return importing(text, filename, nullptr, [](Importer& im) { return im.import(); });
+}
+
+TreeProgram parse_plcopen(std::string_view text, const std::string& filename, Diagnostics& diag) {
+  return importing(text, filename, &diag, [](Importer& im) { return im.run(); });
+}
+
+PlcopenImport import_plcopen(std::string_view text, const std::string& filename, Diagnostics& diag) {
+  return importing(text, filename, &diag, [](Importer& im) { return im.import(); });
 }
 
 }  // namespace ldc

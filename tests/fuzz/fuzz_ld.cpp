@@ -9,22 +9,7 @@
 #include "frontend/diag.h"
 #include "frontend/frontend.h"
 #include "tests/fuzz/fuzz_common.h"
-
-namespace {
-
-constexpr int kMaxErrors = 5;
-
-// Every "error:" line of the report is one counted error (the cascade stays
-// within the limit: at most kMaxErrors, then the fatal line).
-void check_report(const ldc::Diagnostics& d) {
-  const std::string& t = d.text();
-  int lines = 0;
-  for (size_t p = t.find(": error: "); p != std::string::npos; p = t.find(": error: ", p + 1)) lines++;
-  bool fatal = t.ends_with("fatal error: too many errors emitted, stopping now [-fmax-errors=" + std::to_string(kMaxErrors) + "]\n");
-  if (d.errors() < 1 || d.errors() > kMaxErrors || lines < d.errors() || (fatal && d.errors() != kMaxErrors)) std::abort();
-}
-
-}  // namespace
+#include "tests/fuzz/fuzz_recovery.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::string_view text = LDC_FUZZ_TEXT(data, size);
@@ -37,10 +22,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   } catch (const ldc::CompileError&) {
     first_error = true;
   }
-  ldc::DiagOptions o;
-  o.all = true;
-  o.max_errors = kMaxErrors;
-  ldc::Diagnostics d(o);
+  ldc::Diagnostics d(ldc_fuzz::recovery_options());
   try {
     ldc::Program p = ldc::parse_ld_to_il(text, "fuzz.ld", d);
     ldc::warn_ladder(p, d);
@@ -49,7 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (first_error || d.errors() != 0) std::abort();
   } catch (const ldc::ErrorsReported&) {
     if (!first_error) std::abort();
-    check_report(d);
+    ldc_fuzz::check_report(d);
   } catch (const ldc::CompileError&) {
     // lower_rung's refusal, thrown from the sink (the reader reports it as an error too)
     if (!first_error) std::abort();

@@ -1,5 +1,5 @@
 #!/bin/sh
-# check_diag.sh BINDIR CASE.ld|CASE.ldp -- one diagnostics case (docs/diagnostics.md);
+# check_diag.sh BINDIR CASE.ld|CASE.ldp|CASE.xml -- one diagnostics case (docs/diagnostics.md);
 # a project (.ldp) is compiled with `ldc --project`, its -o a directory.
 # The case's `# ARGS: ...` line gives ldc's options; stderr must be CASE.err
 # exactly (LDC_UPDATE=1 rewrites it, to be reviewed as a diff).  The exit
