@@ -614,15 +614,16 @@ struct View {  // a task's snapshot
   }
 };
 
-// Does an input element conduct, judged from the image after the scan?
-// Edge contacts show their bit (the edge itself is gone by then).
+// Is an input element lit, judged from the image after the scan?  Edge
+// contacts, -|P|- and -|N|-, show their device's state (a PLC's online view
+// does so: the edge itself lasted one scan and is gone by then), lit while
+// the bit is 1; they pass no power in the drawing (edge_contact).
 bool closed(const Instr& in, const View& v) {
   auto b = [&] { return v.bit(in.a[0].area, in.a[0].index); };
   switch (in.op) {
     case Op::TRUE: return true;
-    case Op::LOAD: case Op::LOADP: return b();
+    case Op::LOAD: case Op::LOADP: case Op::LOADF: return b();
     case Op::LOADN: return !b();
-    case Op::LOADF: return !b();
     default: break;
   }
   double x = v.num(in.a[0]), y = v.num(in.a[1]);
@@ -667,8 +668,10 @@ std::string pin_value(const Pin& p, const View& v, bool power_in, bool result) {
   return "";
 }
 
-// A rung's state: "n" the power of each net, "e" each element conducting
-// (an input) or energised (an output), "v" the value shown beside an
+bool edge_contact(const Instr& in) { return in.op == Op::LOADP || in.op == Op::LOADF; }
+
+// A rung's state: "n" the power of each net, "e" each element lit (an
+// input: conducting, or an edge contact's bit set) or energised (an output), "v" the value shown beside an
 // element, "p" the values of a box's pins, in the order of its "p" in /api/program.
 std::string rung_state(const RungView& r, const View& v) {
   if (!r.drawn) return "{}";
@@ -682,7 +685,7 @@ std::string rung_state(const RungView& r, const View& v) {
     changed = false;
     for (size_t i = 0; i < g.elems.size(); i++) {
       const LadderElem& e = g.elems[i];
-      if (e.output || !shut[i] || !power[size_t(e.in_net)] || power[size_t(e.out_net)]) continue;
+      if (e.output || !shut[i] || edge_contact(e.elem) || !power[size_t(e.in_net)] || power[size_t(e.out_net)]) continue;
       power[size_t(e.out_net)] = 1;
       changed = true;
     }

@@ -333,6 +333,47 @@ def case_write_and_force():
     m.stop()
 
 
+def case_edge_contacts():
+    """-|P|- and -|N|- are lit while their bit is 1 and pass no power in the
+    picture (docs/runtime.md: the edge lasted one scan).  tests/runtime/net/
+    monitor/iec.ld: rung 4 [P part]--(CTU C0 10), rung 5 [N part]--(S alarm);
+    part = X2, alarm = Y1.  Expected values by hand: forcing X2 to 1 gives one
+    rising edge (C0 = 1), back to 0 one falling edge (alarm set)."""
+    m = Ldrun([os.path.join("tests", "runtime", "net", "monitor", "iec.ld"), "--io=none", "--period", "10ms",
+               "--monitor", "127.0.0.1:0", "--monitor-write"])
+    p = m.port
+    prog = get_json(p, "/api/program")
+    rungs = prog["tasks"][0]["rungs"]
+
+    def edge(rung, kind):  # (index of the edge contact, the coil's input net)
+        elems = rungs[rung]["elems"]
+        i = [k for k, e in enumerate(elems) if e.get("k") == kind][0]
+        coil = [k for k, e in enumerate(elems) if e["o"]][0]
+        return i, elems[coil]["i"]
+
+    def picture(x2):
+        code, _, text = post(p, "/api/write", "device=X2&value=%d&force=1" % x2)
+        if code != 200:
+            fail("force X2=%d: %d %s" % (x2, code, text))
+        time.sleep(0.2)
+        return get_json(p, "/api/state")
+
+    for x2 in (1, 0):
+        st = picture(x2)
+        for rung, kind in ((3, "p"), (4, "n")):
+            i, coil_in = edge(rung, kind)
+            r = st["tasks"][0]["rungs"][rung]
+            if r["e"][i] != str(x2):
+                fail("-|%s|- with its bit %d shown %s: %s" % (kind.upper(), x2, r["e"][i], r))
+            if r["n"][coil_in] != "0":
+                fail("power shown through -|%s|- after the edge's scan: %s" % (kind.upper(), r))
+        if x2 == 1 and dev_value(st, prog, "C0") != "1":
+            fail("one rising edge, C0 = %s" % dev_value(st, prog, "C0"))
+    if dev_value(st, prog, "Y1") != "1":
+        fail("the falling edge did not set the alarm: %s" % st["tasks"][0]["dev"])
+    m.stop()
+
+
 def case_typed_names():
     # tests/runtime/names.st: variables written by name (a member, an array
     # element, a TIME as an IEC literal, all cells of it in one post) and shown
@@ -1125,6 +1166,7 @@ def case_stop_not_blocking():
 
 if __name__ == "__main__":
     {"page_and_stream": case_page_and_stream, "refusals": case_refusals, "write_and_force": case_write_and_force,
+     "edge_contacts": case_edge_contacts,
      "load": case_load, "project": case_project, "trace_output": case_trace_output,
      "connection_caps": case_connection_caps, "pipelined_flood": case_pipelined_flood, "rebinding": case_rebinding,
      "token": case_token, "state_flood_stop": case_state_flood_stop, "write_backlog": case_write_backlog,
