@@ -48,7 +48,7 @@ std::string usage() {
   std::string engines;
   for (const std::string& e : all_engines()) engines += (engines.empty() ? "" : "|") + e;
   return
-    "usage: ldrun FILE [--engine=" + engines + "] [-O0|-O1|-O2] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms] [--cycles] [--sandbox] [--fault=stop|continue]\n"
+    "usage: ldrun FILE [--engine=" + engines + "] [-O0|-O1|-O2] [--trace in.csv] [--watch Y0,D3,...] [--scans N] [--period 10ms] [--cycles] [--sandbox] [--fault=stop|continue] [-W...]\n"
     "       ldrun FILE|--project P.ldp --io=stdio|shm[:/NAME]|trace|none [--period 1ms|500us] [--clock=real|virtual]\n"
     "             [--free-run] [--rt] [--watchdog 200ms] [--retain FILE] [--retain-every 1s] [--cold] [--stop]\n"
     "             [--control=stdin|none] [--reload] [--strict] [--load-budget 128M] [--stats] [--out FILE] [--block 16] [--scans N]\n"
@@ -924,6 +924,7 @@ int ldrun_main(int argc, char** argv) {
   RunOptions opt;
   RtArgs rta;
   std::string period_text;
+  DiagOptions warnings;
   for (int i = 1; i < argc; i++) {
     std::string a = argv[i];
     auto value = [&](const std::string& name) -> std::string {
@@ -979,10 +980,13 @@ int ldrun_main(int argc, char** argv) {
       period_text = value("--period");
     } else if (a == "-h" || a == "--help") { std::fputs(usage().c_str(), stdout); return 0; }
     else if (a == "--version") return print_version("ldrun");
-    else if (!a.empty() && a[0] == '-') throw UserError("ldrun: error: unknown option '" + a + "'\n" + usage());
+    else if (auto why = warnings.parse(a)) {  // -W..., -w, as ldc's (docs/diagnostics.md)
+      if (!why->empty()) throw UserError("ldrun: error: " + *why);
+    } else if (!a.empty() && a[0] == '-') throw UserError("ldrun: error: unknown option '" + a + "'\n" + usage());
     else if (input.empty()) input = a;
     else throw UserError("ldrun: error: more than one program");
   }
+  set_ldrun_warnings(warnings);
   if (rta.on) {
     rta.period = period_text;
     return run_runtime(input, engine, trace_file, watch, opt.scans, rta);
@@ -997,6 +1001,7 @@ int ldrun_main(int argc, char** argv) {
                                    : why));
     }
     opt.period_ms = *p;
+    if (*p == 0) ldrun_option_warning("period", "--period " + period_text + ": dt is 0 in every scan, so no timer advances");
   }
   if (input.empty()) throw UserError("ldrun: error: no program\n" + usage());
   return run_trace_mode({input, engine, trace_file, watch, opt_level, cycles, rta.sandbox}, opt);

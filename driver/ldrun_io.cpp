@@ -35,10 +35,44 @@ std::vector<Probe> parse_watch(const std::string& watch, const std::vector<Alias
   return probes;
 }
 
+namespace {
+DiagOptions g_warnings;
+
+// Warning `name` at a place in `file` (its line quoted, a caret), on stderr,
+// or a UserError under -Werror.
+void ldrun_warning(const char* name, const std::string& file, std::string_view text, int line, int col, const std::string& msg) {
+  Diagnostics d(g_warnings);
+  d.source(file, text);
+  if (!d.warning(name, file, line, col, msg)) return;
+  std::string t = d.text();
+  if (d.errors()) throw UserError(t.substr(0, t.size() - 1));
+  std::fputs(t.c_str(), stderr);
+}
+}  // namespace
+
+void set_ldrun_warnings(const DiagOptions& o) { g_warnings = o; }
+
+void ldrun_option_warning(const char* name, const std::string& msg) {
+  if (!g_warnings.enabled(name)) return;
+  if (g_warnings.is_error(name)) throw UserError("ldrun: error: " + msg + " [-Werror=" + name + "]");
+  std::fprintf(stderr, "ldrun: warning: %s [-W%s]\n", msg.c_str(), name);
+}
+
 Trace load_trace(const std::string& path, const std::vector<Alias>& aliases) {
+  std::string text = read_file(path);
+  Trace t;
   try {
-    return read_trace(read_file(path), path, aliases);
+    t = read_trace(text, path, aliases);
   } catch (UserError&) { throw; } catch (std::exception& ex) { throw UserError(ex.what()); }
+  for (size_t i = 0; i < t.columns.size() && i < t.column_col.size(); i++) {
+    const Probe& p = t.columns[i];
+    if (p.area != Area::Y && p.area != Area::WY) continue;
+    std::string dev = std::string(p.area == Area::Y ? "Y" : "WY") + std::to_string(p.index);
+    ldrun_warning("trace-output", path, text, t.header_line, t.column_col[i],
+                  "column '" + p.name + "' writes the output " + dev +
+                      " before every scan; outputs are the program's: its coils write them too, and the last write of a scan is what the outputs show");
+  }
+  return t;
 }
 
 }  // namespace ldc

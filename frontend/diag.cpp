@@ -13,6 +13,8 @@ const std::vector<WarningInfo>& warning_table() {
       {"undriven", true, "a timer's or counter's done bit read, but no timer or counter element drives it"},
       {"unreachable", true, "rungs that an unconditional (JMP) or (END) always skips"},
       {"shared-output", true, "an output or relay written by two programs of a project that run on one processor"},
+      {"trace-output", true, "ldrun: a trace column that writes an output (Y, WY), which the program's coils write too"},
+      {"period", true, "ldrun: a period of 0 in trace mode: dt is 0 in every scan, so no timer advances"},
       {"unused", false, "an alias that no rung, declaration or label uses"},
       {"unused-label", false, "a label that no (JMP) targets"},
   };

@@ -147,6 +147,8 @@ struct Trace {
   // one row per scan; std::nullopt-like empty string = keep the previous value
   std::vector<std::vector<std::string>> rows;
   std::vector<int> row_line;  // source line of each row, for messages
+  int header_line = 0;          // the line naming the columns
+  std::vector<int> column_col;  // each column's name: its column on that line
 };
 // Reads the CSV input trace; errors are "file:line:col: error: ...".
 Trace read_trace(std::string_view text, const std::string& file, const std::vector<Alias>& aliases);

@@ -275,7 +275,9 @@ Trace read_trace(std::string_view text, const std::string& file, const std::vect
     std::vector<std::pair<std::string, int>> cells = split_cells(l);
     if (!header) {
       header = true;
+      t.header_line = line;
       for (size_t i = 0; i < cells.size(); i++) {
+        t.column_col.push_back(cells[i].second);
         if (upper(cells[i].first) == "DT") {
           if (t.dt_column >= 0) fail(cells[i].second, "two dt columns");
           t.dt_column = int(i);

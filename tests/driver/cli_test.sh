@@ -142,5 +142,25 @@ checks=$((checks + 1))
 "$bin/ldobjdump" "$tmp/cd.bin" | grep -q "change-driven scan (docs/change-driven.md): [0-9]* regions of up to 3 rungs" ||
   fail "ldobjdump does not list the region table"
 
+# ldrun's warnings (docs/diagnostics.md): a trace column writing an output, --period 0 in
+# trace mode; -Wno-NAME and -w silence them, -Werror makes them errors (exit 1).
+printf 'X1,Y0,dt\n1,0,10\n' > "$tmp/yout.csv"
+expect 0 "yout.csv:1:4: warning: column 'Y0' writes the output Y0 before every scan" \
+  "$bin/ldrun" "$src/examples/eq1.ld" --trace "$tmp/yout.csv"
+checks=$((checks + 1))
+grep -q '^X1,Y0,dt$' "$tmp/err" && grep -q '^   \^$' "$tmp/err" || fail "-Wtrace-output: no quoted line and caret"
+expect 0 "" "$bin/ldrun" "$src/examples/eq1.ld" --trace "$tmp/yout.csv" -Wno-trace-output
+checks=$((checks + 1))
+[ -s "$tmp/err" ] && fail "-Wno-trace-output still warns"
+expect 1 "error: column 'Y0' writes the output Y0 before every scan" "$bin/ldrun" "$src/examples/eq1.ld" --trace "$tmp/yout.csv" -Werror
+checks=$((checks + 1))
+[ -s "$tmp/out" ] && fail "-Werror ran the trace anyway"
+expect 0 "ldrun: warning: --period 0: dt is 0 in every scan, so no timer advances [-Wperiod]" \
+  "$bin/ldrun" "$src/examples/eq1.ld" --period 0 --scans 1
+expect 0 "" "$bin/ldrun" "$src/examples/eq1.ld" --period 0 --scans 1 -w
+checks=$((checks + 1))
+[ -s "$tmp/err" ] && fail "-w still warns"
+expect 1 "ldrun: error: unknown warning option '-Wperod'" "$bin/ldrun" "$src/examples/eq1.ld" -Wperod
+
 echo "$((checks - fails)) passed, $fails failed"
 [ $fails -eq 0 ]
