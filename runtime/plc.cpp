@@ -587,6 +587,7 @@ struct Runtime::Impl {
           }
           size_t q = 0;
           for (const Run& r : p.private_retain) std::memcpy(t.retain_shadow.data() + q, mem + r.offset, r.size), q += r.size;
+          io->hold_outputs(global.data(), mem, ScanContext{ti, scan_no, p.output_runs, p.engine.get()});
           io->write_outputs(global.data(), ScanContext{ti, scan_no, p.output_runs});
           io->after_scan(ScanContext{ti, scan_no, {}}, mem, global.data());
           published = true;

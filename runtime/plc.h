@@ -69,6 +69,11 @@ class IoDriver {
   }
   // Before a task's scan: refresh its input blocks (X, WX) of the global image.
   virtual void read_inputs(uint8_t* global, const ScanContext& c) { (void)global, (void)c; }
+  // After a task's scan was copied out, before write_outputs: put back what
+  // must hold whatever the scan wrote (the monitor's forced outputs and
+  // relays), in the global image and the task's memory `mem` (announced to
+  // c.engine).
+  virtual void hold_outputs(uint8_t* global, uint8_t* mem, const ScanContext& c) { (void)global, (void)mem, (void)c; }
   // After a task's scan was copied out: publish its output blocks (Y, WY).
   virtual void write_outputs(const uint8_t* global, const ScanContext& c) { (void)global, (void)c; }
   // Outputs to the safe state: the global Y and WY are already all zero.

@@ -226,6 +226,7 @@ class ModbusDriver : public IoDriver {
       if (!area_is_shared(e.area)) plc::apply_element(e, mem, layout_), c.written(layout_, e.area, e.index);
     w.private_applied = true;
   }
+  void hold_outputs(uint8_t* global, uint8_t* mem, const ScanContext& c) override { inner_->hold_outputs(global, mem, c); }
   void write_outputs(const uint8_t* global, const ScanContext& c) override { inner_->write_outputs(global, c); }
   // Reads of Y and WY show the safe state until the next published scan.
   void safe_outputs(const uint8_t* global) override {

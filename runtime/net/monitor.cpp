@@ -975,6 +975,19 @@ struct Monitor::Impl {
       }
   }
   void apply_shared(uint8_t* global) { apply(forced_shared, *shared_writes, shared_batch, global, glayout); }
+  // Forced outputs and relays (Y, M, K, WY) hold their value at every scan
+  // boundary: put back after the scan, before the outputs are published, in
+  // the global image and in the task's memory (whose shared areas have the
+  // global image's offsets); the next scan reads them so.  Global image locked.
+  void hold_forced(uint8_t* global, uint8_t* mem, const ScanContext& c) {
+    if (!any_forced.load(std::memory_order_relaxed) && forced_shared.items.empty()) return;
+    for (const ElementWrite& w : forced_shared.items) {
+      if (w.area == Area::X || w.area == Area::WX) continue;  // inputs: the scan does not write them
+      apply_element(w, global, glayout);
+      apply_element(w, mem, glayout);
+      c.written(glayout, w.area, w.index);
+    }
+  }
   // The runtime's generation of a task: that of the memory its thread holds.
   uint64_t generation(size_t task) const { return rt ? rt->generation(task) : 0; }
   // A task's own writes go into its memory only with the layout of the
@@ -1191,8 +1204,8 @@ struct Monitor::Impl {
     bool release = force && *force == "0";
     bool hold = force && *force == "1";
     if (force && !release && !hold) return text(400, "force= is 1 (hold) or 0 (release)");
-    if ((hold || release) && p.area != Area::X && p.area != Area::WX)
-      return text(400, "only inputs (X, WX) are forced; write other devices once");
+    if ((hold || release) && !is_shared(p.area))
+      return text(400, "only inputs, outputs and relays (X, WX, Y, WY, M, K) are forced; write " + *device + " once");
     if (p.ty != Ty::None && !hold && !release) return write_typed(ti, p, value.value_or(""));
     uint32_t bits = 0;
     if (!release) {
@@ -1257,7 +1270,7 @@ struct Monitor::Impl {
       forced.erase(key);
     } else {
       if (!forced.count(key) && forced.size() >= opt.max_forced)
-        return text(503, "busy: " + std::to_string(opt.max_forced) + " inputs are forced already; release one first");
+        return text(503, "busy: " + std::to_string(opt.max_forced) + " devices are forced already; release one first");
       forced[key] = bits;
     }
     forced_version.fetch_add(1, std::memory_order_release);
@@ -1348,6 +1361,10 @@ class MonitorDriver : public IoDriver {
   void read_inputs(uint8_t* global, const ScanContext& c) override {
     inner_->read_inputs(global, c);
     m_->apply_shared(global);
+  }
+  void hold_outputs(uint8_t* global, uint8_t* mem, const ScanContext& c) override {
+    inner_->hold_outputs(global, mem, c);
+    m_->hold_forced(global, mem, c);
   }
   void write_outputs(const uint8_t* global, const ScanContext& c) override { inner_->write_outputs(global, c); }
   void safe_outputs(const uint8_t* global) override { inner_->safe_outputs(global); }

@@ -2,7 +2,7 @@
 // (docs/runtime.md, "The monitor"): an I/O driver decorator that copies a
 // snapshot of each task's memory at its scan boundary (only when a page is
 // watching) and applies client writes (merged in write shadows,
-// runtime/write_shadow.h) and forced inputs at the next boundary,
+// runtime/write_shadow.h) and forced devices at every boundary,
 // and an HTTP server (runtime/net/http.h) that serves one built-in page, the rungs
 // as grids (ir/ladder.h) drawn with the IEC 61131-3 symbols, their power flow
 // evaluated on the snapshot off the scan thread, a device table, trends,
@@ -44,7 +44,7 @@ struct MonitorOptions {
   size_t max_per_address = 32;  // --monitor-per-address
   size_t max_streams = 32;      // --monitor-streams
   size_t write_backlog = 8192;  // distinct devices written and not yet taken by a scan (per shadow)
-  size_t max_forced = 256;      // inputs forced at once
+  size_t max_forced = 256;      // devices forced at once
   int tick_ms = 50;             // event stream period (20 updates/s)
   std::function<void(const std::string&)> log;  // throttled server messages (stderr in ldrun)
   // After an online download: the source text of task `task`'s new image

@@ -187,9 +187,10 @@ function drawRung(task, ti, rung, ri, parent) {
 }
 
 // ---------------------------------------------------------------- clicking a contact
-// With --monitor-write a click on an input's contact forces it to the other
-// value, a second click releases it; a relay or output is written once (only
-// inputs are forced); a timer's or counter's bit is set by its block.
+// With --monitor-write a click on the contact or coil of an input, output or
+// relay forces it to the other value, a second click releases it (a forced
+// output or relay holds its value at every scan boundary, docs/runtime.md);
+// a timer's or counter's bit is set by its block.
 
 function say(text) { document.getElementById('reply').textContent = text; }
 function currentBit(ti, dv) {
@@ -206,12 +207,9 @@ function clickContact(e, g) {
   const task = '&task=' + encodeURIComponent(t.name);
   const cur = currentBit(ti, dv);
   const other = cur === '1' ? '0' : '1';
-  if (/^X\d+$/.test(dv)) {
+  if (/^(X|Y|M|K)\d+$/.test(dv)) {
     if (forced.has(dv)) post('/api/write', 'device=' + dv + '&force=0' + task);
     else post('/api/write', 'device=' + dv + '&value=' + other + '&force=1' + task);
-  } else if (/^(Y|M|K)\d+$/.test(dv)) {
-    post('/api/write', 'device=' + dv + '&value=' + other + task,
-         dv + ' is not an input: written once to ' + other + ' (only inputs X are forced)');
   } else {
     say(dv + (/\.Q$/.test(dv) ? ' is the done bit of its ' + (dv[0] === 'T' ? 'timer' : 'counter') +
               ': its block sets it, it cannot be forced' : ' cannot be forced from the monitor'));

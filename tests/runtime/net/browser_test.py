@@ -341,10 +341,29 @@ def sections_iec(b):
     if not reply.startswith("200") or mt.get_json(m.port, "/api/state")["forced"]:
         mt.fail("a second click did not release X0: %r" % reply)
     wait_for(b, "!document.querySelectorAll('g.elem[data-forced]').length", "the marker stayed after the release")
-    # a relay is written once, a timer's bit said to be its block's
+    # a relay is forced too: with start written 0 (released, it kept its 1), run
+    # (M0) is latched at 1; a click forces it to 0, which breaks the latch
+    # ([start] or [run], and not [stop]), so pump (Y0) goes off; released, run
+    # stays 0 (nothing closes the latch again)
+    mt.post(m.port, "/api/write", "device=X0&value=0")
+    time.sleep(0.2)
+    if mt.dev_value(mt.get_json(m.port, "/api/state"), mt.get_json(m.port, "/api/program"), "M0") != "1":
+        mt.fail("run did not stay latched after start went to 0")
     reply = click(b, coil_run[0], coil_run[1])
-    if "written once" not in reply:
-        mt.fail("a click on the relay run: %r" % reply)
+    st = mt.get_json(m.port, "/api/state")
+    if not reply.startswith("200") or st["forced"] != ["M0"] or st["fv"] != [0]:
+        mt.fail("a click on the relay run did not force M0 to 0: %r %s" % (reply, st["forced"]))
+    wait_for(b, "!document.querySelector('#%s g.elem[data-elem=\"%d\"]').classList.contains('on')" % tuple(coil_run[:2]),
+             "the coil run stayed lit while forced to 0")
+    time.sleep(0.2)
+    if mt.dev_value(mt.get_json(m.port, "/api/state"), mt.get_json(m.port, "/api/program"), "Y0") != "0":
+        mt.fail("pump stayed on with run forced to 0")
+    reply = click(b, coil_run[0], coil_run[1])
+    if not reply.startswith("200") or mt.get_json(m.port, "/api/state")["forced"]:
+        mt.fail("a second click did not release M0: %r" % reply)
+    time.sleep(0.2)
+    if mt.dev_value(mt.get_json(m.port, "/api/state"), mt.get_json(m.port, "/api/program"), "M0") != "0":
+        mt.fail("the latch closed again after M0 was released")
     # start forced (from 0: a click forces the other value), the latch and the
     # timer running, two trends: the picture of docs/runtime.md once the download below ran
     mt.post(m.port, "/api/write", "device=X0&value=0")

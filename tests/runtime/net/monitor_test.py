@@ -323,6 +323,21 @@ def case_write_and_force():
     code, _, text = post(p, "/api/write", "device=X1&force=0")
     if code != 200 or "X1" in get_json(p, "/api/state")["forced"]:
         fail("release: %d %s" % (code, text))
+    # an output forced holds against its coil (docs/runtime.md, forcing): X1 is 0, so
+    # the program computes Y1 = 0 every scan; forced to 1 it reads 1 in every picture
+    # (taken after the scan, when the forced value is back), released it is 0 again
+    code, _, text = post(p, "/api/write", "device=Y1&value=1&force=1")
+    if code != 200:
+        fail("forcing the output Y1: %d %s" % (code, text))
+    for _ in range(3):
+        time.sleep(0.1)
+        st = get_json(p, "/api/state")
+        if dev_value(st, prog, "Y1") != "1" or st["forced"] != ["Y1"]:
+            fail("Y1 forced to 1 shows %s (forced %s)" % (dev_value(st, prog, "Y1"), st["forced"]))
+    post(p, "/api/write", "device=Y1&force=0")
+    time.sleep(0.2)
+    if dev_value(get_json(p, "/api/state"), prog, "Y1") != "0":
+        fail("Y1 released did not go back to the program's 0")
     # STOP and RUN
     code, _, text = post(p, "/api/stop", "")
     if code != 200 or get_json(p, "/api/state")["state"] != "STOP":
