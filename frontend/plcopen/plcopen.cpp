@@ -425,6 +425,13 @@ class Importer {
   Var& element_member(Var& e, const std::string& member, const std::string& expr, const Element* el);
   std::function<void()> pending_store_;  // a write at a variable index: the statement's last rung
   void statement_of(const Node& n);
+  Val fb_output(Var& inst, const std::string& e, const std::string& m, const Element* el, bool write);
+  Var* instance_named(const std::string& name, const Element* el);
+  Var& instance_element(Var& a, const std::string& idx, const Element* el);
+  bool fb_instance_type(const std::string& type) const {
+    const Element* u = user_pou(type);
+    return fb_kind(upper(type)) != FbKind::None || (u && pou_type(u) == "functionBlock");
+  }
   void recovered_statement(const Node& n);
   void interface_section(const Element* sec, const std::string& pou);
   void block_of(const Node& b);
@@ -807,8 +814,18 @@ void Importer::array_elements(Var& a, std::vector<std::string>& stack) {
       expand(*raw, stack);
       continue;
     }
+    if (e->derived && fb_instance_type(e->type)) {  // an array of FB instances: each an instance, a[k].Q
+      if (k < inits.size() || (k < struct_inits.size() && struct_inits[k]))
+        fail_at(a.array_el, "array '" + a.name + "' of " + e->type + " has initial values; an instance has none (" + a.array_el->path() + ")");
+      Var* raw = e.get();
+      a.elems.push_back(raw);
+      keep(std::move(e));
+      expand(*raw, stack);
+      continue;
+    }
     if (e->ty == Ty::None || e->derived)
-      fail_at(a.array_el, "array '" + a.name + "' of " + e->type + ": ldc takes arrays of elementary types and of structures (" + a.array_el->path() + ")");
+      fail_at(a.array_el, "array '" + a.name + "' of " + e->type + ": ldc takes arrays of elementary types, structures and function-block instances (" +
+                              a.array_el->path() + ")");
     if (k < inits.size()) e->init = inits[k];
     a.elems.push_back(e.get());
     keep(std::move(e));
@@ -844,6 +861,12 @@ Val Importer::element(Var& a, const std::string& idx, const std::string& member,
   const std::string expr = a.name + "[" + idx + "]" + member;
   if (member.empty() && !a.elems.empty() && a.elems[0]->struct_el)
     fail_at(el, "'" + expr + "' is a whole structure; name one of its members (" + where(el) + ")");
+  if (!a.elems.empty() && a.elems[0]->derived && !a.elems[0]->struct_el) {  // an array of FB instances: a[i].OUT at constant indices
+    if (member.empty()) fail_at(el, "'" + expr + "' is a whole instance; name one of its outputs (" + where(el) + ")");
+    Var& inst = instance_element(a, idx, el);
+    if (inst.container()) return var_val(element_member(inst, member, expr, el));
+    return fb_output(inst, expr, upper(member.substr(1)), el, write);
+  }
   if (!member.empty() && !a.elems.empty() && !a.elems[0]->struct_el)
     fail_at(el, "'" + expr + "': the elements of '" + a.name + "' are " + a.elems[0]->type + ", not structures (" + where(el) + ")");
   std::vector<std::string> parts;
@@ -1081,6 +1104,7 @@ void Importer::allocate() {
 // An unlocated variable's devices (a standard FB instance: its T, C or M).
 void Importer::place(Var& v) {
   if (!v.elems.empty() && v.elems[0]->struct_el) return place_struct_elements(v);
+  if (!v.elems.empty() && v.elems[0]->derived) return;  // FB instances: each placed as a variable of its own
   if (!v.elems.empty() && !v.elems[0]->dev) {  // an array: its elements in a row
     Var& e0 = *v.elems[0];
     uint32_t n = uint32_t(v.elems.size()), w = e0.ty == Ty::Wide ? 2 : 1;
@@ -1293,29 +1317,8 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
     Var* inst = member_path(e, el, &m);
     m = upper(m);
     if (!inst)  // member_path found no variable named as the path's first part
-      unknown_name(el, e.substr(0, dot), "'" + e + "' is not a variable ldc knows (structures and arrays are not supported) in " + where(el));
-    if (!inst || !inst->derived || fb_kind(inst->type) == FbKind::None || !inst->dev)
-      fail_at(el, "'" + e + "' is not a variable ldc knows (structures and arrays are not supported) in " + where(el));
-    if (write) fail_at(el, "'" + e + "' is a function block output; it cannot be written (" + where(el) + ")");
-    FbKind k = fb_kind(inst->type);
-    uint32_t i = inst->dev->index;
-    if (k == FbKind::Timer && m == "Q") return {bit_opd(Area::TQ, i), Ty::Bool};
-    if (k == FbKind::Timer && m == "ET") return {Operand{OpdKind::Int, Area::TW, i}, Ty::Int, IT::TIME, true};
-    if (k == FbKind::Counter && m == "CV") return {Operand{OpdKind::Int, Area::CW, i}, Ty::Int, IT::INT};
-    if (k == FbKind::Counter && (m == "Q" || m == "QU") && inst->type != "CTUD") return {bit_opd(Area::CQ, i), Ty::Bool};
-    if (inst->type == "CTUD" && m == "QU") return {bit_opd(Area::M, inst->aux), Ty::Bool};
-    if (inst->type == "CTUD" && m == "QD") return {bit_opd(Area::M, inst->aux2), Ty::Bool};
-    if ((k == FbKind::Latch && m == "Q1") || (k == FbKind::Trig && m == "Q") || (inst->type == "SEMA" && m == "BUSY"))
-      return {bit_opd(Area::M, i), Ty::Bool};
-    if (inst->type == "RTC" && m == "Q") return {bit_opd(Area::M, inst->aux), Ty::Bool};
-    if (inst->type == "RTC" && m == "CDT") return {Operand{OpdKind::Int, Area::D, i}, Ty::Wide, IT::DT};
-    if (IT w = counter_width(inst->type); w != IT::None) {
-      bool updown = inst->type.rfind("CTUD", 0) == 0;
-      if (m == "CV") return {Operand{OpdKind::Int, Area::D, i}, kind_of(w), w};
-      if (m == (updown ? "QU" : "Q")) return {bit_opd(Area::M, inst->aux), Ty::Bool};
-      if (updown && m == "QD") return {bit_opd(Area::M, inst->aux2), Ty::Bool};
-    }
-    fail_at(el, "'" + e + "': " + inst->type + " has no output " + m);
+      unknown_name(el, e.substr(0, dot), "'" + e + "' is not a variable ldc knows, nor an output of a function block instance, in " + where(el));
+    return fb_output(*inst, e, m, el, write);
   }
   if (!v) v = lookup(e);
   if (!v) unknown_name(el, e, "unknown variable '" + e + "' in " + where(el));
@@ -1331,6 +1334,72 @@ Val Importer::read_of(const std::string& expr, const Element* el, bool write) {
   Val r = var_val(*v);
   r.o = shadowed(r.o);
   return r;
+}
+
+// Output `m` (upper case) of a standard FB instance, read as `e` (tmr.Q, ts[2].ET).
+Val Importer::fb_output(Var& inst, const std::string& e, const std::string& m, const Element* el, bool write) {
+  if (!inst.derived || fb_kind(inst.type) == FbKind::None || !inst.dev)
+    fail_at(el, "'" + e + "' is not a variable ldc knows, nor an output of a function block instance, in " + where(el));
+  if (write) fail_at(el, "'" + e + "' is a function block output; it cannot be written (" + where(el) + ")");
+  FbKind k = fb_kind(inst.type);
+  uint32_t i = inst.dev->index;
+  if (k == FbKind::Timer && m == "Q") return {bit_opd(Area::TQ, i), Ty::Bool};
+  if (k == FbKind::Timer && m == "ET") return {Operand{OpdKind::Int, Area::TW, i}, Ty::Int, IT::TIME, true};
+  if (k == FbKind::Counter && m == "CV") return {Operand{OpdKind::Int, Area::CW, i}, Ty::Int, IT::INT};
+  if (k == FbKind::Counter && (m == "Q" || m == "QU") && inst.type != "CTUD") return {bit_opd(Area::CQ, i), Ty::Bool};
+  if (inst.type == "CTUD" && m == "QU") return {bit_opd(Area::M, inst.aux), Ty::Bool};
+  if (inst.type == "CTUD" && m == "QD") return {bit_opd(Area::M, inst.aux2), Ty::Bool};
+  if ((k == FbKind::Latch && m == "Q1") || (k == FbKind::Trig && m == "Q") || (inst.type == "SEMA" && m == "BUSY"))
+    return {bit_opd(Area::M, i), Ty::Bool};
+  if (inst.type == "RTC" && m == "Q") return {bit_opd(Area::M, inst.aux), Ty::Bool};
+  if (inst.type == "RTC" && m == "CDT") return {Operand{OpdKind::Int, Area::D, i}, Ty::Wide, IT::DT};
+  if (IT w = counter_width(inst.type); w != IT::None) {
+    bool updown = inst.type.rfind("CTUD", 0) == 0;
+    if (m == "CV") return {Operand{OpdKind::Int, Area::D, i}, kind_of(w), w};
+    if (m == (updown ? "QU" : "Q")) return {bit_opd(Area::M, inst.aux), Ty::Bool};
+    if (updown && m == "QD") return {bit_opd(Area::M, inst.aux2), Ty::Bool};
+  }
+  fail_at(el, "'" + e + "': " + inst.type + " has no output " + m);
+}
+
+// The instance a block names: a variable, or an element of an array of
+// instances at constant indices (ts[2], grid[1, 3]); nullptr for an unknown name.
+Var* Importer::instance_named(const std::string& name, const Element* el) {
+  size_t lb = name.find('[');
+  if (lb == std::string::npos) return lookup(name);
+  Var* a = lookup(trim(name.substr(0, lb)));
+  if (!a) return nullptr;
+  size_t rb = name.rfind(']');
+  if (rb == std::string::npos || rb < lb || trim(name.substr(rb + 1)) != "")
+    fail_at(el, "instance '" + name + "' is not a variable or an element of an array (" + where(el) + ")");
+  if (a->elems.empty() || !a->elems[0]->derived || a->elems[0]->struct_el)
+    fail_at(el, "instance '" + name + "': '" + a->name + "' is not an array of function-block instances (" + where(el) + ")");
+  return &instance_element(*a, name.substr(lb + 1, rb - lb - 1), el);
+}
+
+// Element `idx` ("2", "1, 3": constants only) of an array of instances.
+Var& Importer::instance_element(Var& a, const std::string& idx, const Element* el) {
+  uint64_t k = 0;
+  size_t j = 0;
+  for (size_t p = 0;; j++) {
+    size_t c = idx.find(',', p);
+    std::string part = trim(idx.substr(p, c == std::string::npos ? std::string::npos : c - p));
+    auto lit = literal(part, el);
+    if (!lit || !is_const(lit->o) || lit->ty != Ty::Int || !is_int_type(type_of(*lit)))
+      fail_at(el, "'" + a.name + "[" + idx + "]': an instance of an array is chosen by constant indices in LD and FBD ('" + part +
+                      "' is not one; ST takes a variable index) (" + where(el) + ")");
+    if (j >= a.dims.size()) break;
+    int64_t i = int64_t(const_bits(*lit));
+    auto [lo, hi] = a.dims[j];
+    if (i < lo || i > hi)
+      fail_at(el, "index " + std::to_string(i) + " is outside " + std::to_string(lo) + ".." + std::to_string(hi) + " of array '" + a.name + "' (" + where(el) + ")");
+    k = k * uint64_t(int64_t(hi) - lo + 1) + uint64_t(i - lo);
+    if (c == std::string::npos) break;
+    p = c + 1;
+  }
+  if (j + 1 != a.dims.size())
+    fail_at(el, "'" + a.name + "[" + idx + "]': the array has " + std::to_string(a.dims.size()) + " dimension" + (a.dims.size() == 1 ? "" : "s") + " (" + where(el) + ")");
+  return *a.elems[k];
 }
 
 // The instance whose member `expr` (A.B.C) names, following the members of
@@ -2017,7 +2086,7 @@ Out Importer::block_out(const Node& b, const Conn& c, bool order) {
   const Element* callee = fb_kind(upper(b.type)) == FbKind::None ? user_pou(b.type) : nullptr;
   if (it == outs_.end() && (!computed_.count(b.id) || in_loop) && callee && pou_type(callee) == "functionBlock" && name != "ENO") {
     // the same for an instance of the project's own FB: its output variable
-    Var* inst = b.instance.empty() ? nullptr : lookup(b.instance);
+    Var* inst = b.instance.empty() ? nullptr : instance_named(b.instance, b.el);
     if (inst && inst->members.count(upper(name)) && inst->members.at(upper(name))->dev) {
       Val v = var_val(*inst->members.at(upper(name)));
       outs_[{b.id, name}] = v.ty == Ty::Bool ? Out{true, bit_leaf(Op::LOAD, v.o, b.el), {}} : Out{false, {}, v};
@@ -2028,9 +2097,9 @@ Out Importer::block_out(const Node& b, const Conn& c, bool order) {
     // read before its execution order runs it, or where a loop of blocks closes
     // (Beremiz reads the instance's output there): a function block's outputs
     // are its devices, as they stand from the previous scan
-    Var* inst = b.instance.empty() ? nullptr : lookup(b.instance);
+    Var* inst = b.instance.empty() ? nullptr : instance_named(b.instance, b.el);
     if (inst && inst->dev) {
-      Val v = value_of(b.instance + "." + name, b.el);
+      Val v = fb_output(*inst, b.instance + "." + name, upper(name), b.el, false);
       outs_[{b.id, name}] = v.ty == Ty::Bool ? Out{true, bit_leaf(Op::LOAD, v.o, b.el), {}} : Out{false, {}, v};
       it = outs_.find({b.id, name});
     }
@@ -2137,7 +2206,7 @@ void Importer::user_call(const Node& b, const Element* callee) {
   // the instance, or a fresh frame for this call of a FUNCTION
   Var* inst = nullptr;
   if (is_fb) {
-    inst = b.instance.empty() ? nullptr : lookup(b.instance);
+    inst = b.instance.empty() ? nullptr : instance_named(b.instance, b.el);
     if (!inst) unknown_name(el, b.instance, what + " calls function block '" + cname + "' and needs an instance declared in the POU ('" + b.instance + "' is not) (" + el->path() + ")");
     if (!inst->derived || upper(inst->type) != upper(cname))
       fail_at(el, "instance '" + b.instance + "' is declared as " + inst->type + ", but " + what + " is a " + cname);
@@ -2488,7 +2557,7 @@ void Importer::block_of(const Node& b) {
   generating_.insert(b.id);
   std::string t = upper(b.type);
   if (fb_kind(t) != FbKind::None) {
-    Var* inst = b.instance.empty() ? nullptr : lookup(b.instance);
+    Var* inst = b.instance.empty() ? nullptr : instance_named(b.instance, b.el);
     if (!inst) unknown_name(b.el, b.instance, t + " block localId " + std::to_string(b.id) + " needs an instance declared in the POU ('" + b.instance + "' is not) (" + b.el->path() + ")");
     if (!inst->derived || upper(inst->type) != t)
       fail_at(b.el, "instance '" + b.instance + "' is declared as " + inst->type + ", but block localId " + std::to_string(b.id) + " is a " + t);
@@ -4050,7 +4119,7 @@ void Importer::report(const CompileError& e) {
 // identifier once per function) and not at all when its declaration was
 // refused.
 void Importer::unknown_name(const Element* el, const std::string& name, const std::string& msg) {
-  std::string key = upper(name);
+  std::string key = upper(trim(name.substr(0, name.find_first_of("[."))));
   if (diag_ && (failed_names_.count(key) || !unknown_.insert({upper(pou_), key}).second)) throw Refused();
   fail_at(el, msg);
 }
