@@ -1133,7 +1133,9 @@ TreeProgram Parser::program(const std::function<void(TreeRung&&)>& sink) {
       continue;
     }
     split_words(t, col0, words_);
-    if (iequals(words_[0].text, "LABEL")) labels.push_back(str(words_[1].text));
+    if (iequals(words_[0].text, "LABEL")) {
+      if (words_.size() == 2) labels.push_back(str(words_[1].text));  // else declarations() reported it
+    }
     else if (iequals(words_[0].text, "RUNG")) {
       size_t q1 = text.find('"'), q2 = text.rfind('"');
       if (q1 == std::string_view::npos || q2 == q1 || !trim(text.substr(q2 + 1)).empty() ||
