@@ -503,7 +503,7 @@ inline Str date_to_string(Ty u, int64_t ns) {
   const double frac = double(t.sec) + double(nsec) / 1e9;
   if (u == Ty::DATE) return str_printf("D#%d-%2.2d-%2.2d", t.year, t.mon, t.day);
   if (u == Ty::TOD) {
-    if (sec >= 86400) return str_printf("TOD#ERROR");
+    if (sec >= 86400) return str_printf("%s", "TOD#ERROR");
     if (nsec == 0) return str_printf("TOD#%2.2d:%2.2d:%2.2d", t.hour, t.min, t.sec);
     return str_printf("TOD#%2.2d:%2.2d:%09.6f", t.hour, t.min, frac);
   }
