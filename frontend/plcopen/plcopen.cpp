@@ -4112,7 +4112,8 @@ bool Importer::recover(F&& f) {
 void Importer::report(const CompileError& e) {
   if (!reported_.insert({e.line, e.col}).second) return;
   if (!tc6_v1_) return diag_->error(file_, e);
-  diag_->error(file_, CompileError(e.line, e.col, std::string(e.what()) + tc6_v1_note()));
+  const auto* noted = dynamic_cast<const NotedError*>(&e);
+  diag_->error(file_, NotedError(e.line, e.col, std::string(e.what()) + tc6_v1_note(), noted ? noted->notes : std::vector<DiagNote>{}));
 }
 
 // An unknown name, reported once per POU (as gcc reports an undeclared
@@ -4121,7 +4122,18 @@ void Importer::report(const CompileError& e) {
 void Importer::unknown_name(const Element* el, const std::string& name, const std::string& msg) {
   std::string key = upper(trim(name.substr(0, name.find_first_of("[."))));
   if (diag_ && (failed_names_.count(key) || !unknown_.insert({upper(pou_), key}).second)) throw Refused();
-  fail_at(el, msg);
+  // "did you mean": a variable of the POU's scope or a global, by edit distance (frontend/diag.h)
+  std::vector<std::string> names;
+  std::vector<const Var*> vars;
+  for (const auto* m : {&scope_, &globals_})
+    for (const auto& [k, v] : *m)
+      if (v->name.find_first_of(".[") == std::string::npos) names.push_back(v->name), vars.push_back(v);
+  std::string near = closest_name(name.substr(0, name.find_first_of("[.")), names);
+  if (near.empty() || !el) fail_at(el, msg);
+  const Var* v = vars[size_t(std::find(names.begin(), names.end(), near) - names.begin())];
+  std::vector<DiagNote> notes;
+  if (v->el) notes.push_back({v->el->line, v->el->col, "'" + near + "' is declared here"});
+  throw NotedError(el->line, el->col, msg + "; did you mean '" + near + "'?", notes);
 }
 
 TreeProgram Importer::run() {
