@@ -305,6 +305,14 @@ class Importer {
   Importer(std::string_view text, std::string file, Diagnostics* diag = nullptr)
       : text_(text), file_(std::move(file)), diag_(diag), errors0_(diag ? diag->errors() : 0) {}
   TreeProgram run();
+  // -Wunused (docs/diagnostics.md): a VAR or VAR_TEMP of a translated LD,
+  // FBD or SFC POU that no element, block or action names.
+  void warn_unused() const {
+    if (!diag_ || !diag_->wants("unused")) return;
+    for (const Var* v : locals_)
+      if (!used_vars_.count(v) && v->el)
+        diag_->warning("unused", file_, v->el->line, v->el->col, "variable '" + v->name + "' of POU '" + v->pou + "' is never used");
+  }
 
  private:
   std::string_view text_;
@@ -322,6 +330,8 @@ class Importer {
   std::set<std::string> failed_names_;                     // upper names whose declaration was refused
   std::set<std::pair<std::string, std::string>> unknown_;  // (POU, upper name) reported unknown
   std::set<std::pair<int, int>> reported_;                 // one report per place (an XML element)
+  std::vector<const Var*> locals_;                         // VAR and VAR_TEMP of the translated POUs (-Wunused)
+  std::set<const Var*> used_vars_;                         // every variable a name found
   template <class F>
   bool recover(F&& f);
   void report(const CompileError& e);
@@ -1053,7 +1063,10 @@ void Importer::declare(const Element* list, const std::string& pou, bool global)
       if (!global) stack.push_back(upper(pou));
       expand(*raw, stack);
     });
-    if (ok) continue;
+    if (ok) {
+      if (!global && (list->local_name() == "localVars" || list->local_name() == "tempVars")) locals_.push_back(raw);
+      continue;
+    }
     // refused: forget it and what it made, and keep its uses quiet
     if (const std::string* nm = v->attr("name")) {
       std::string key = upper(*nm);
@@ -1167,6 +1180,7 @@ Var* Importer::lookup(const std::string& name) {
   if (auto it = scope_.find(k); it != scope_.end()) v = it->second;
   else if (auto it = globals_.find(k); it != globals_.end()) v = it->second;
   if (v && v->pou.empty() && task_ >= 0) global_users_[v].insert(task_);
+  if (v) used_vars_.insert(v);
   return v;
 }
 
@@ -4250,7 +4264,9 @@ template <class F>
 auto importing(std::string_view text, const std::string& filename, Diagnostics* diag, F run) {
   Importer im(text, filename, diag);
   try {
-    return run(im);
+    auto r = run(im);
+    im.warn_unused();
+    return r;
   } catch (const Refused&) {  // outside any recovery: its cause is reported
     throw ErrorsReported();
   } catch (const CompileError& e) {
