@@ -200,6 +200,7 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
   int errors0 = d.errors();
   bool ladder = false;  // a ladder program: the ladder warnings apply
   bool ldmicro = false;
+  bool named_only = false;  // the ladder warnings of the devices the file names only (an importer's own relays are not)
   Compiled c;
   try {
     if (ends_with(path, ".il")) {
@@ -225,6 +226,7 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
       PlcopenImport im = import_plcopen(text, path, d);
       if (im.tasks.empty() && !task.empty()) throw UserError(path + ": error: --task " + task + ": the file has one program, not a configuration of several tasks");
       if (im.tasks.empty()) {
+        ladder = named_only = !im.single_chart;  // LD and FBD bodies: a chart's actions drive their variables from several steps
         c.tree = std::move(im.single);
         c.il = plcopen_il(c.tree, im.single_chart);
       } else {
@@ -239,7 +241,7 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
         c.il = parse_ld_to_il(text, path, d);
       }
     }
-    if (ladder && !c.project) warn_ladder(c.il, d, ldmicro);
+    if (ladder && !c.project) warn_ladder(c.il, d, ldmicro || named_only);
   } catch (CompileError& e) {
     try {
       d.error(path, e);
