@@ -51,6 +51,8 @@ bool classic_operator(const std::string& u) {
 
 bool needs_typed_reader(const std::vector<Tok>& t) {
   bool in_vars = false, line_start = true;
+  // the typed reader reads POUs (PROGRAM ... END_PROGRAM); the classic one takes bare IL too
+  bool pou = std::any_of(t.begin(), t.end(), [](const Tok& k) { return k.kind == Tok::Word && upper(k.text) == "PROGRAM"; });
   for (size_t i = 0; i < t.size(); i++) {
     const Tok& k = t[i];
     if (k.kind == Tok::Eol) { line_start = true; continue; }
@@ -59,7 +61,16 @@ bool needs_typed_reader(const std::vector<Tok>& t) {
     // an operator of the typed reader only (INT_TO_REAL, LIMIT, a FUNCTION ...), after an optional label
     bool labelled = !in_vars && line_start && k.kind == Tok::Word && i + 1 < t.size() && t[i + 1].kind == Tok::Punct && t[i + 1].text == ":";
     if (!in_vars && line_start && k.kind == Tok::Word && !labelled && !classic_operator(u)) return true;
-    if (labelled) { i++; continue; }
+    if (labelled) {  // a label whose code goes on with the CR it is reached with: the typed reader carries it
+      size_t j = i + 2;
+      while (j < t.size() && t[j].kind == Tok::Eol) j++;
+      static const std::set<std::string> anew = {"LD", "LDN", "CAL", "JMP", "RET", "END_PROGRAM"};
+      if (pou && j < t.size() && t[j].kind == Tok::Word && !anew.count(upper(t[j].text)) &&
+          !(j + 1 < t.size() && t[j + 1].kind == Tok::Punct && t[j + 1].text == ":"))
+        return true;
+      i++;
+      continue;
+    }
     if (line_start && (u == "TYPE" || u == "FUNCTION_BLOCK" || u == "FUNCTION" || u == "VAR_IN_OUT" || u == "VAR_TEMP" ||
                        u == "VAR_EXTERNAL"))
       return true;
@@ -854,6 +865,14 @@ class Reader {
   std::vector<std::string> pending_labels_;
   struct Jump { std::string label; SrcLoc at; size_t rung; };
   std::vector<Jump> jumps_;
+  // The CR a forward jump takes to its label (MatIEC keeps the CR in one
+  // variable, so the code after a label goes on with the value it was
+  // reached with): where the jump is (its JMP's rung and index: a store goes
+  // right before it, so it runs exactly when the jump is taken) and the CR.
+  struct CrJump { size_t rung, index; Cr cr; };
+  std::map<std::string, std::vector<CrJump>> cr_jumps_;
+  std::map<std::string, Cr> carried_;  // labels placed whose code goes on with the CR: its place
+  bool dead_ = false;                  // after an unconditional JMP or RET: no way on from above
   std::set<std::string> labels_;
   SrcLoc here_;
   size_t instructions_ = 0;
@@ -1291,9 +1310,11 @@ class Reader {
       if (!parens_.empty()) fail(first, "a label inside parentheses");
       std::string l = scope_->prefix + first.text;
       if (!labels_.insert(l).second) fail(first, "duplicate label '" + first.text + "'");
-      label_here(l);
-      cr_ = Cr{};
       pos_ += 2;
+      Cr in = carry_to(l);  // before label_here: the way in from above stores into the current rung
+      label_here(l);
+      cr_ = in;
+      dead_ = false;
       if (peek().kind == Tok::Eol || peek().kind == Tok::End) { end_line(); return; }
     }
     const Tok& op = next();
@@ -1304,8 +1325,61 @@ class Reader {
       return;
     }
     if (op.kind != Tok::Word) fail(op, "expected an IL operator" + found(op));
+    dead_ = false;
     instruction(op);
     end_line();
+  }
+
+  // Does the line at pos_ go on with the CR (an operator other than a load, a
+  // call, a jump or a return, which start anew)?
+  bool uses_cr_next() const {
+    size_t i = pos_;
+    while (i < t_.size() && t_[i].kind == Tok::Eol) i++;
+    if (i >= t_.size() || t_[i].kind != Tok::Word) return false;
+    if (i + 1 < t_.size() && t_[i + 1].kind == Tok::Punct && t_[i + 1].text == ":") return false;  // another label
+    std::string u = upper(t_[i].text);
+    static const std::set<std::string> anew = {"LD", "LDN", "CAL", "JMP", "RET", "LOOP", "END_FUNCTION_BLOCK", "END_FUNCTION",
+                                               "END_PROGRAM"};
+    return !anew.count(u);
+  }
+  // Label `l` is placed here: the CR its code goes on with, when every way in
+  // (the forward jumps to it and the line above, unless it jumped or
+  // returned) brings a CR of one type.  Each way stores its CR into the
+  // label's place (docs/iec-il.md, "The current result at a label").
+  Cr carry_to(const std::string& l) {
+    auto js = cr_jumps_.find(l);
+    if (js == cr_jumps_.end() || !uses_cr_next()) return Cr{};
+    std::vector<Cr> ways;
+    for (const CrJump& j : js->second) ways.push_back(j.cr);
+    if (!dead_) ways.push_back(cr_);
+    for (const Cr& w : ways)
+      if (!w.defined || w.lit || w.type != ways[0].type) return Cr{};  // "needs a current result" at its use
+    Ty t = ty_of(ways[0].type);
+    Operand place = scratch("cr." + l, t);
+    if (!dead_) typed(Op::TMOVE, t, cr_.o, place);
+    std::map<size_t, std::vector<const CrJump*>> by_rung;  // stores before each jump, the last first
+    for (const CrJump& j : js->second) by_rung[j.rung].push_back(&j);
+    for (auto& [r, list] : by_rung) {
+      std::sort(list.begin(), list.end(), [](const CrJump* a, const CrJump* b) { return a->index > b->index; });
+      for (const CrJump* j : list) {
+        std::vector<Instr>& code = p_.rungs[r].code;
+        Instr st;
+        st.op = Op::TMOVE, st.ty = t, st.a[0] = j->cr.o, st.a[1] = place, st.loc = code.empty() ? here_ : code[std::min(j->index, code.size() - 1)].loc;
+        code.insert(code.begin() + std::ptrdiff_t(std::min(j->index, code.size())), st);
+      }
+    }
+    carried_[l] = Cr{true, ways[0].type, place, {}};
+    return carried_[l];
+  }
+  // A jump back to label `l` placed above, whose code goes on with the CR:
+  // this way in stores its CR there too, of the label's type.
+  void carry_back(const std::string& l, const Cr& cr, const Tok& op) {
+    auto it = carried_.find(l);
+    if (it == carried_.end()) return;
+    if (!cr.defined || cr.lit || cr.type != it->second.type)
+      fail(op, "the code at label '" + l.substr(scope_->prefix.size()) + "' goes on with the current result of type " +
+                   ty_info(ty_of(it->second.type)).name + ", which this jump does not bring");
+    typed(Op::TMOVE, ty_of(it->second.type), cr.o, it->second.o);
   }
 
   void instruction(const Tok& op) {
@@ -1776,27 +1850,35 @@ class Reader {
     if (!parens_.empty()) fail(op, "a jump inside parentheses");
     std::string target = scope_->prefix + k.text;
     // to a label already placed: a loop, the IL's LOOP (docs/il.md "Loops")
-    auto go = [&] {
-      if (!labels_.count(target)) return jump_to(target);
+    auto go = [&](Cr at_target) {
+      if (!labels_.count(target)) {
+        jump_to(target);
+        cr_jumps_[target].push_back({p_.rungs.size() - 1, rung_->code.size() - 1, at_target});
+        return;
+      }
+      carry_back(target, at_target, op);
       Operand o{OpdKind::Label};
       o.label = target;
       emit(Op::LOOP, o);
     };
+    // taken, JMPC's CR is TRUE and JMPCN's FALSE
+    auto known = [&](bool v) { return Cr{true, m_.elem(Ty::BOOL), Operand::typed_const(v ? 1 : 0), {}}; };
     if (u == "JMP") {
       ensure_rung();
-      go();
+      go(cr_);
       rung_ = nullptr;
       cr_ = Cr{};
+      dead_ = true;
       return;
     }
     need_bool(op);
     if (fuse_compare(u == "JMPC")) {
-      go();
+      go(known(u == "JMPC"));
       emit(Op::MPP);
       return;
     }
     emit(u == "JMPC" ? Op::LOAD : Op::LOADN, cr_bit());
-    go();
+    go(known(u == "JMPC"));
     emit(Op::MPP);
   }
   // A conditional jump or return right after the compare that made the CR
