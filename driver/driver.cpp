@@ -204,7 +204,12 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
   Compiled c;
   try {
     if (ends_with(path, ".il")) {
-      c.il = looks_like_ldc_il(text) ? parse_il_text(text, path) : parse_iec_il(text, path);
+      if (looks_like_ldc_il(text)) {
+        c.il = parse_il_text(text, path, [&](const CompileError& e) { d.error(path, e); });
+        if (d.errors() > errors0) throw ErrorsReported();  // errors were reported: the program read is not one
+      } else {
+        c.il = parse_iec_il(text, path);
+      }
     } else if (ends_with(path, ".st")) {
       PlcopenImport im = import_st(text, path);
       if (im.tasks.empty() && !task.empty()) throw UserError(path + ": error: --task " + task + ": the file has one program, not a configuration of several tasks");

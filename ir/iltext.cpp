@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <deque>
 #include <iterator>
+#include <set>
 #include <unordered_map>
 
 #include "ir/ir.h"
@@ -274,7 +275,9 @@ static size_t rungs_in(std::string_view text) {
   return n;
 }
 
-Program parse_il_text(std::string_view text, const std::string& filename) {
+Program parse_il_text(std::string_view text, const std::string& filename) { return parse_il_text(text, filename, nullptr); }
+
+Program parse_il_text(std::string_view text, const std::string& filename, const std::function<void(const CompileError&)>& report) {
   Program p;
   p.source = filename;
   p.rungs.reserve(rungs_in(text));
@@ -291,7 +294,7 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
     cur = nullptr;
   };
   Line ln;
-  bool ended = false;
+  bool ended = false, skip_after_end = false, in_refused_rung = false;
   int lineno = 0;
   size_t pos = 0;
   while (pos <= text.size()) {
@@ -299,7 +302,21 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
     std::string_view line = text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
     pos = nl == std::string_view::npos ? text.size() + 1 : nl + 1;
     lineno++;
-    split(line, lineno, ln);
+    // With `report`, a line's error is reported and the reader goes on with
+    // the next line; the instructions after a refused .rung line are skipped
+    // (they would be outside a rung, or in the one before).
+    bool refused = false;
+    auto line_of = [&](auto&& f) {
+      if (!report) return f();
+      try {
+        f();
+      } catch (const CompileError& e) {
+        report(e);
+        refused = true;
+      }
+    };
+    line_of([&] { split(line, lineno, ln); });
+    if (refused) continue;
     const std::vector<Tok>& toks = ln.toks;
     if (toks.empty()) continue;
     const Tok& head = toks[0];
@@ -321,76 +338,91 @@ Program parse_il_text(std::string_view text, const std::string& filename) {
         in.a[i] = op_info(*op).typed ? parse_typed_operand(sig[i], operand_type(in, i), toks[i + 1], lineno)
                                      : parse_operand(sig[i], toks[i + 1], lineno, p.edge_slots);
     };
-    if (ended) throw CompileError(lineno, head.col, "text after .end");
-    if (!head.text.starts_with('.')) {  // every directive starts with '.', no mnemonic does
-      instruction();
-    } else if (head.text == ".end") {
-      if (toks.size() > 1) throw CompileError(lineno, toks[1].col, "unexpected text after .end");
-      end_rung();
-      ended = true;
-    } else if (head.text == ".edges") {
-      Operand n;
-      if (toks.size() != 2 || !parse_number(toks[1].text, n) || n.kind != OpdKind::ConstInt || n.ival < 0)
-        throw CompileError(lineno, head.col, ".edges needs a count");
-      p.edge_slots = uint32_t(n.ival);
-    } else if (head.text == ".alias") {
-      std::optional<DeviceRef> d;
-      if (toks.size() < 3 || toks.size() > 4 || !is_alias_name(toks[1].text) || !(d = parse_device(toks[2].text)) ||
-          d->index >= device_count(d->dev))
-        throw CompileError(lineno, head.col, ".alias needs a name, a device and optionally a type");
-      Alias a{std::string(toks[1].text), *d};
-      if (toks.size() == 4) {
-        auto t = ty_from_name(toks[3].text);
-        if (!t) throw CompileError(lineno, toks[3].col, "unknown type '" + std::string(toks[3].text) + "'");
-        a.ty = *t;
-        if (std::string why = alias_type_problem(a); !why.empty()) throw CompileError(lineno, toks[3].col, why);
+    if (ended && skip_after_end) continue;
+    if (in_refused_rung && !head.text.starts_with('.')) continue;
+    line_of([&] {
+      if (ended) throw CompileError(lineno, head.col, "text after .end");
+      if (!head.text.starts_with('.')) {  // every directive starts with '.', no mnemonic does
+        instruction();
+      } else if (head.text == ".end") {
+        if (toks.size() > 1) throw CompileError(lineno, toks[1].col, "unexpected text after .end");
+        end_rung();
+        ended = true;
+      } else if (head.text == ".edges") {
+        Operand n;
+        if (toks.size() != 2 || !parse_number(toks[1].text, n) || n.kind != OpdKind::ConstInt || n.ival < 0)
+          throw CompileError(lineno, head.col, ".edges needs a count");
+        p.edge_slots = uint32_t(n.ival);
+      } else if (head.text == ".alias") {
+        std::optional<DeviceRef> d;
+        if (toks.size() < 3 || toks.size() > 4 || !is_alias_name(toks[1].text) || !(d = parse_device(toks[2].text)) ||
+            d->index >= device_count(d->dev))
+          throw CompileError(lineno, head.col, ".alias needs a name, a device and optionally a type");
+        Alias a{std::string(toks[1].text), *d};
+        if (toks.size() == 4) {
+          auto t = ty_from_name(toks[3].text);
+          if (!t) throw CompileError(lineno, toks[3].col, "unknown type '" + std::string(toks[3].text) + "'");
+          a.ty = *t;
+          if (std::string why = alias_type_problem(a); !why.empty()) throw CompileError(lineno, toks[3].col, why);
+        }
+        p.aliases.push_back(std::move(a));
+      } else if (head.text == ".retain") {
+        std::optional<DeviceRef> d;
+        if (toks.size() != 2 || !(d = parse_device(toks[1].text)) || d->dev != Dev::D || d->index >= device_count(Dev::D))
+          throw CompileError(lineno, head.col, ".retain needs a D word (D0..D" + std::to_string(device_count(Dev::D) - 1) + ")");
+        if (std::find(p.retain.begin(), p.retain.end(), *d) == p.retain.end()) p.retain.push_back(*d);
+      } else if (head.text == ".label") {
+        if (toks.size() != 2 || !is_name(toks[1].text)) throw CompileError(lineno, head.col, ".label needs a name");
+        std::string name(toks[1].text);
+        if (!label_rung.emplace(name, p.rungs.size()).second)
+          throw CompileError(lineno, toks[1].col, "duplicate label '" + name + "'");
+        pending_labels.push_back(std::move(name));
+        end_rung();
+      } else if (head.text == ".rung") {
+        Operand n;
+        if (toks.size() < 3 || toks[1].text != "line" || !parse_number(toks[2].text, n) || n.kind != OpdKind::ConstInt)
+          throw CompileError(lineno, head.col, "expected .rung line N [\"title\"]");
+        Rung r;
+        r.line = n.ival;
+        r.labels = std::move(pending_labels);
+        pending_labels.clear();
+        if (toks.size() >= 4) {
+          if (!toks[3].quoted || toks.size() > 4) throw CompileError(lineno, toks[3].col, "expected a quoted rung title");
+          r.title = std::string(toks[3].text);
+        }
+        end_rung();
+        p.rungs.push_back(std::move(r));
+        cur = &p.rungs.back();
+      } else {
+        instruction();
       }
-      p.aliases.push_back(std::move(a));
-    } else if (head.text == ".retain") {
-      std::optional<DeviceRef> d;
-      if (toks.size() != 2 || !(d = parse_device(toks[1].text)) || d->dev != Dev::D || d->index >= device_count(Dev::D))
-        throw CompileError(lineno, head.col, ".retain needs a D word (D0..D" + std::to_string(device_count(Dev::D) - 1) + ")");
-      if (std::find(p.retain.begin(), p.retain.end(), *d) == p.retain.end()) p.retain.push_back(*d);
-    } else if (head.text == ".label") {
-      if (toks.size() != 2 || !is_name(toks[1].text)) throw CompileError(lineno, head.col, ".label needs a name");
-      std::string name(toks[1].text);
-      if (!label_rung.emplace(name, p.rungs.size()).second)
-        throw CompileError(lineno, toks[1].col, "duplicate label '" + name + "'");
-      pending_labels.push_back(std::move(name));
-      end_rung();
-    } else if (head.text == ".rung") {
-      Operand n;
-      if (toks.size() < 3 || toks[1].text != "line" || !parse_number(toks[2].text, n) || n.kind != OpdKind::ConstInt)
-        throw CompileError(lineno, head.col, "expected .rung line N [\"title\"]");
-      Rung r;
-      r.line = n.ival;
-      r.labels = std::move(pending_labels);
-      pending_labels.clear();
-      if (toks.size() >= 4) {
-        if (!toks[3].quoted || toks.size() > 4) throw CompileError(lineno, toks[3].col, "expected a quoted rung title");
-        r.title = std::string(toks[3].text);
-      }
-      end_rung();
-      p.rungs.push_back(std::move(r));
-      cur = &p.rungs.back();
-    } else {
-      instruction();
-    }
+    });
+    if (refused && !ended && head.text == ".end") ended = true;  // a .end with text after it ends the program all the same
+    if (refused && ended) skip_after_end = true;                 // "text after .end": once
+    if (head.text == ".rung") in_refused_rung = refused;
+    else if (head.text == ".label" || head.text == ".end") in_refused_rung = false;
   }
-  if (!ended) throw CompileError(lineno, 1, "missing .end");
+  auto fail = [&](const CompileError& e) {
+    if (!report) throw e;
+    report(e);
+  };
+  if (!ended) fail(CompileError(lineno, 1, "missing .end"));
   p.end_labels = std::move(pending_labels);
   // Every jump goes forward to a defined label; a LOOP back to one.
+  std::set<std::string> undefined;  // each said once
   for (size_t r = 0; r < p.rungs.size(); r++)
     for (const Instr& in : p.rungs[r].code)
       for (int i = 0; i < in.nopd(); i++)
         if (in.a[i].kind == OpdKind::Label) {
           const std::string& name = in.a[i].label;
           auto it = label_rung.find(name);
-          if (it == label_rung.end()) throw CompileError(in.loc.line, in.loc.col, "undefined label '" + name + "'");
-          if (in.op == Op::LOOP && it->second > r)
-            throw CompileError(in.loc.line, in.loc.col, "LOOP to '" + name + "', which does not come before it");
-          if (in.op != Op::LOOP && it->second <= r)
-            throw CompileError(in.loc.line, in.loc.col, "backward jump to '" + name + "' (only a LOOP goes back)");
+          if (it == label_rung.end()) {
+            if (undefined.insert(name).second) fail(CompileError(in.loc.line, in.loc.col, "undefined label '" + name + "'"));
+          } else if (in.op == Op::LOOP && it->second > r) {
+            fail(CompileError(in.loc.line, in.loc.col, "LOOP to '" + name + "', which does not come before it"));
+          } else if (in.op != Op::LOOP && it->second <= r) {
+            fail(CompileError(in.loc.line, in.loc.col, "backward jump to '" + name + "' (only a LOOP goes back)"));
+          }
         }
   return p;
 }

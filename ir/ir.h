@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -608,6 +609,11 @@ std::string real_text(float f);           // %.9g, with ".0" added when needed
 std::string print_il_text(const Program& p);
 
 Program parse_il_text(std::string_view text, const std::string& filename);  // throws CompileError
+// The same with error recovery: each line's error goes to `report` and the
+// reader goes on with the next line (the instructions of a rung whose .rung
+// line was refused are skipped; an undefined label is said once); the
+// program is meaningful only when nothing was reported.
+Program parse_il_text(std::string_view text, const std::string& filename, const std::function<void(const CompileError&)>& report);
 // An alias's name: a name, or a member path INSTANCE.MEMBER, a[3], grid[1,-2].
 bool is_alias_name(std::string_view s);
 
