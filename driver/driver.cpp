@@ -214,7 +214,7 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
       c.il = lower_chart(*c.chart);
     } else if (text.compare(text.compare(0, 3, "\xEF\xBB\xBF") ? 0 : 3, 7, "LDmicro") == 0) {
       c.from_ld = ladder = ldmicro = true;
-      c.tree = parse_ldmicro(text, path);
+      c.tree = parse_ldmicro(text, path, d);
       c.il = lower_to_il(c.tree);
     } else if (ends_with(path, ".rtsp")) {
       c.from_ld = true;

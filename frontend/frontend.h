@@ -48,6 +48,10 @@ constexpr size_t kMaxRungs = 65536;  // rungs in one program (every reader)
 // its rungs become trees over ldc devices, its names aliases (docs/ldmicro.md).
 // Throws CompileError (line, col, message).
 TreeProgram parse_ldmicro(std::string_view text, const std::string& filename);
+// The same with error recovery (docs/diagnostics.md): an error in a setting or
+// I/O-list line, or in a rung, goes to `diag` and the import goes on with the
+// next line or rung; a program with errors ends with ErrorsReported.
+TreeProgram parse_ldmicro(std::string_view text, const std::string& filename, Diagnostics& diag);
 
 // Imports the LD bodies of a PLCopen TC6 XML project (docs/plcopen.md).
 // Throws CompileError (line, col, message naming the XML element path).
