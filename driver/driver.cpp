@@ -218,7 +218,7 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
       c.il = lower_to_il(c.tree);
     } else if (ends_with(path, ".rtsp")) {
       c.from_ld = true;
-      c.tree = parse_rtsp(text, path);
+      c.tree = parse_rtsp(text, path, d);
       c.il = lower_to_il(c.tree);
     } else if (ends_with(path, ".xml")) {
       c.from_ld = true;

@@ -106,6 +106,10 @@ Program parse_st(std::string_view text, const std::string& filename);
 // statements and data groups, as rung trees over ldc devices.
 // Throws CompileError (line, col, message).
 TreeProgram parse_rtsp(std::string_view text, const std::string& filename);
+// The same with error recovery (docs/diagnostics.md, docs/rtsp.md): an error in
+// a line, a directive, a statement or an argument goes to `diag` and the reader
+// goes on with the next one; a program with errors ends with ErrorsReported.
+TreeProgram parse_rtsp(std::string_view text, const std::string& filename, Diagnostics& diag);
 
 // Reads a sequential function chart (docs/sfc.md): steps, transitions,
 // selections, simultaneous sequences, jumps, and actions in ladder or IL text.
