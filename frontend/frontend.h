@@ -118,5 +118,9 @@ TreeProgram parse_rtsp(std::string_view text, const std::string& filename, Diagn
 constexpr size_t kMaxSfcSteps = 1024;  // steps and simultaneous sequences
 constexpr int kMaxSfcNesting = 32;     // select/parallel inside each other
 Chart parse_sfc(std::string_view text, const std::string& filename);
+// The same with error recovery (docs/diagnostics.md, docs/sfc.md): a wrong
+// declaration, step, transition, action, jump, condition or body goes to `diag`
+// and the reader goes on; a chart with errors ends with ErrorsReported.
+Chart parse_sfc(std::string_view text, const std::string& filename, Diagnostics& diag);
 
 }  // namespace ldc
