@@ -105,6 +105,10 @@ struct ProjectReader {
   bool resource_refused = false, task_refused = false;
   int task_lines = 0;                  // task lines read, refused ones too
   int program_lines = 0;               // ... program lines of the current task
+  bool after_unknown = false;          // the line above had an unknown keyword (a lost resource or task line?)
+  struct Quiet : CompileError {        // follows from an error reported: said nothing
+    Quiet() : CompileError(0, 0, "follows from an error reported") {}
+  };
 
   // Reading one line goes on past an error with `diag`; without, the first
   // error is thrown.
@@ -112,6 +116,7 @@ struct ProjectReader {
     if (!diag) return read();
     try {
       read();
+    } catch (const Quiet&) {
     } catch (const CompileError& e) {
       diag->error(p.path, e);
     }
@@ -212,6 +217,7 @@ struct ProjectReader {
     in_task = true, task_refused = true, task_has_program = false, program_lines = 0;  // until the line is read
     if (resource.empty()) {
       resource = "?", resource_refused = true;  // said once: the next tasks are refused quietly
+      if (after_unknown && diag) throw Quiet();  // the unknown line was the resource, most likely
       throw fail(w[0].col, "a task belongs to a resource: 'resource NAME processor N' first");
     }
     need(4, "task NAME period DURATION");
@@ -227,6 +233,10 @@ struct ProjectReader {
     task_refused = false, task_line = line, task_col = w[1].col;
   }
   void read_program() {
+    if (!in_task && after_unknown && diag) {  // the unknown line was its task, most likely
+      in_task = true, task_refused = true, task_lines++, program_lines = 1;
+      throw Quiet();
+    }
     if (!in_task) throw fail(w[0].col, "a program is bound to a task: 'task NAME period DURATION' first");
     program_lines++;  // a wrong program line is its task's program line still
     need(3, "program NAME FILE");
@@ -257,13 +267,22 @@ struct ProjectReader {
   }
   void read_words() {
     std::string kw = lower(w[0].text);
+    bool unknown = kw != "configuration" && kw != "block" && kw != "retain" && kw != "resource" && kw != "task" && kw != "program";
+    struct Note {  // after this line: whether its keyword was unknown
+      bool& to;
+      bool v;
+      ~Note() { to = v; }
+    } note{after_unknown, unknown};
     if (kw == "configuration") read_configuration();
     else if (kw == "block") read_block();
     else if (kw == "retain") read_retain();
     else if (kw == "resource") read_resource();
     else if (kw == "task") read_task();
     else if (kw == "program") read_program();
-    else throw fail(w[0].col, "unknown keyword '" + w[0].text + "' (configuration, block, retain, resource, task, program)");
+    else {
+      if (in_task) program_lines++;  // in a task: its misspelled program line, most likely ("no program" is not said)
+      throw fail(w[0].col, "unknown keyword '" + w[0].text + "' (configuration, block, retain, resource, task, program)");
+    }
   }
   void read_all() {
     std::string_view text = p.text;

@@ -424,9 +424,15 @@ size_t Importer::header() {
     if (t == "IO LIST" || t == "VAR LIST" || t == "PULL-UP LIST") {
       bool io = t == "IO LIST";
       size_t j = i + 1;
+      bool unclosed = false;  // the PROGRAM line came first: the list ends there
+      bool refused_entry = false;  // (then a refused entry was its END, most likely)
       for (; j < lines_.size(); j++) {
         std::string u = trim(lines_[j].text);
         if (u == "END") break;
+        if (u == "PROGRAM") {
+          unclosed = true;
+          break;
+        }
         if (u.empty()) continue;
         if (!io) {
           if (t == "VAR LIST") var_list_entry(u);
@@ -436,12 +442,16 @@ size_t Importer::header() {
         size_t sp = u.find_first_of(" \t");
         std::string name = u.substr(0, sp);
         std::string after = sp == std::string::npos ? "" : trim(u.substr(sp));
-        unit([&] {
+        refused_entry |= !unit([&] {
           if (after.rfind("at", 0) != 0) fail(lines_[j].no, int(lines_[j].text.find(u)) + 1, "expected 'name at pin' in the IO LIST");
           io_list_.push_back({name, lines_[j].no});
         });
       }
       if (j == lines_.size()) fail(l.no, 1, t + " is not closed by END");
+      if (unclosed) {  // reported, and the PROGRAM line read next
+        if (!refused_entry) unit([&] { fail(l.no, 1, t + " is not closed by END (before PROGRAM on line " + std::to_string(lines_[j].no) + ")"); });
+        j--;
+      }
       i = j;
       continue;
     }

@@ -220,7 +220,7 @@ struct Preprocessor {
       int args_col = int(first + 1 + we);  // column offset of args[0] minus one
       directive(name, dir, args, args_col, lineno, groups);
     }
-    if (!groups.empty()) rec.report(groups.back().at, "#" + groups.back().at.text + " without #endif");
+    if (!groups.empty() && !groups.back().refused) rec.report(groups.back().at, "#" + groups.back().at.text + " without #endif");
   }
 
   // One directive.  With recovery, a refused one is reported and its meaning
@@ -252,7 +252,10 @@ struct Preprocessor {
       groups.push_back({parent, v || !read, v && read, false, dir, !read});
       refused_groups += !read;
     } else if (name == "elif" || name == "else") {
-      if (groups.empty()) return rec.report(dir, "#" + name + " without #if");
+      if (groups.empty()) {  // a lost #if: a refused group, skipped to its #endif
+        if (rec.diag) groups.push_back({active(), true, false, name == "else", dir, true}), refused_groups++;
+        return rec.report(dir, "#" + name + " without #if");
+      }
       Group& g = groups.back();
       if (g.seen_else) return rec.report(dir, "#" + name + " after #else");
       if (name == "else") {
@@ -485,6 +488,14 @@ struct Parser {
   Recovery rec;
   std::set<std::string> refused_macros;
   int refused_ifs = 0;  // ifs refused before their body: their 'fi' is still to come
+  int refused = 0;      // statements refused so far
+  std::set<std::string> unknown_names;  // reported once (as gcc does), later uses quiet
+
+  // An unknown name: said at its first use only.
+  [[noreturn]] void unknown(const Tok& k, const std::string& m) {
+    if (refused_macros.count(k.text) || (rec.diag && !unknown_names.insert(k.text).second)) throw Cascade();
+    fail(k, m);
+  }
 
   bool bad_in(size_t from, size_t to) const {
     for (size_t i = from; i <= to && i < t.size(); i++)
@@ -513,12 +524,22 @@ struct Parser {
   }
   // After a refused statement that began at `start`: on past its ';' (or the
   // 'then' of an if's header), stopping before what begins another statement.
+  // An if, or what looks like a misspelled one (an unknown word before a condition).
+  bool if_header(size_t start) const {
+    if (is_kw(t[start], "if") || is_kw(t[start], "ifbecome")) return true;
+    const FuncInfo* f = start + 1 < t.size() && t[start + 1].kind == Tok::Ident ? find_func(t[start + 1].text) : nullptr;
+    return t[start].kind == Tok::Ident && !find_func(t[start].text) && f && f->cond;
+  }
   void sync(size_t start) {
+    int depth = 0;  // parentheses open since the statement's start
+    for (size_t i = start; i < p; i++)
+      if (t[i].kind == Tok::Punct) depth += t[i].text == "(" ? 1 : t[i].text == ")" ? -1 : 0;
     if (p == start) next();
-    bool header = is_kw(t[start], "if") || is_kw(t[start], "ifbecome");
+    bool header = if_header(start);
     while (peek().kind != Tok::End) {
       const Tok& k = peek();
-      if ((k.kind == Tok::Punct && k.text == ";") || is_kw(k, "then")) return void(next());
+      if (k.kind == Tok::Punct) depth += k.text == "(" ? 1 : k.text == ")" ? -1 : 0;
+      if ((k.kind == Tok::Punct && k.text == ";" && depth <= 0) || is_kw(k, "then")) return void(next());
       bool call = k.kind == Tok::Ident && find_func(k.text) && p + 1 < t.size() && t[p + 1].text == "(";
       if (starts_statement(k) || (call && !(header && p == start + 1))) return;  // (an if's own condition is not)
       next();
@@ -528,7 +549,8 @@ struct Parser {
   void one(std::vector<Stmt>& out, const std::function<Stmt()>& read) {
     size_t start = p;
     if (attempt([&] { out.push_back(read()); })) return;
-    if (is_kw(t[start], "if") || is_kw(t[start], "ifbecome")) refused_ifs++;
+    refused++;
+    if (if_header(start)) refused_ifs++;
     sync(start);
   }
 
@@ -568,17 +590,22 @@ struct Parser {
       if (!is_kw(peek(), "then")) fail(peek(), "expected 'then' after the condition, found " + shown(peek()));
       next();
       std::vector<Stmt>* branch = &s.then_;
+      int refused0 = refused;
       for (;;) {
         if (is_kw(peek(), "fi")) { next(); break; }
         if (is_kw(peek(), "else")) {
           // a second else: reported (unless a refused if's else), and read as this one's
-          if (branch == &s.else_ && !refused_ifs) rec.report(peek(), "second 'else' of one if");
+          if (branch == &s.else_ && !refused_ifs && refused == refused0) {
+            refused_ifs++;  // a lost if's else, most likely: its 'fi' says nothing
+            rec.report(peek(), "second 'else' of one if");
+          }
           next();
           branch = &s.else_;
           continue;
         }
         if (peek().kind == Tok::End) {
           if (refused_ifs) refused_ifs--, throw Cascade();  // a refused if's body took this one's 'fi'
+          if (refused > refused0) throw Cascade();  // the refused statement may have been the 'fi'
           fail(s.at, "'" + s.at.text + "' without 'fi'");
         }
         if (is_kw(peek(), "init")) {  // reported, and its action read as a statement of the if
@@ -595,6 +622,7 @@ struct Parser {
         if (is_kw(next(), "fi")) refused_ifs--;
         throw Cascade();
       }
+      if (!is_kw(peek(), "fi")) refused_ifs++;  // a lost if header: its 'else' and 'fi' say nothing
       fail(peek(), "'" + peek().text + "' without 'if'");
     }
     s.call = call(false);
@@ -607,11 +635,10 @@ struct Parser {
     c.at = next();
     if (c.at.kind != Tok::Ident) fail(c.at, std::string("expected ") + (cond ? "a condition" : "an action") + ", found " + shown(c.at));
     const FuncInfo* f = find_func(c.at.text);
-    if (!f && refused_macros.count(c.at.text)) throw Cascade();  // a refused #define's name
     if (!f) {
       if (c.at.text.size() > 4 && c.at.text.compare(0, 4, "Func") == 0)
-        fail(c.at, "user functions (" + c.at.text + ") are not supported: ldc has no FuncN table");
-      fail(c.at, "unknown function '" + c.at.text + "'" + (peek().text == "(" ? "" : " (a macro not defined?)"));
+        unknown(c.at, "user functions (" + c.at.text + ") are not supported: ldc has no FuncN table");
+      unknown(c.at, "unknown function '" + c.at.text + "'" + (peek().text == "(" ? "" : " (a macro not defined?)"));
     }
     if (f->cond != cond)
       fail(c.at, std::string("'") + f->name + "' is " + (f->cond ? "a condition: use it after if or ifbecome" : "an action, not a condition"));
@@ -669,7 +696,11 @@ struct Parser {
   }
   Item item(const Tok& k) {
     Item it;
-    if (!item_text(k, it)) fail(k, "expected a group item (D0, A1, B2, I3, F4, T5), found " + shown(k));
+    if (!item_text(k, it)) {
+      std::string m = "expected a group item (D0, A1, B2, I3, F4, T5), found " + shown(k);
+      if (k.kind == Tok::Ident) unknown(k, m);
+      fail(k, m);
+    }
     uint32_t max = kGroupSize[std::strchr(kGroups, it.g) - kGroups];
     if (it.n >= max) fail(k, "group item " + k.text + " out of range (" + std::string(1, it.g) + "0.." + std::string(1, it.g) + std::to_string(max - 1) + ")");
     return it;
@@ -767,8 +798,7 @@ struct Parser {
     }
     Item it;
     if (item_text(k, it)) fail(k, "group item " + k.text + " inside an expression: an argument is one item or constants only");
-    if (k.kind == Tok::Ident && refused_macros.count(k.text)) throw Cascade();  // a refused #define's name
-    if (k.kind == Tok::Ident) fail(k, "unknown name '" + k.text + "' (not a macro, item or bitN)");
+    if (k.kind == Tok::Ident) unknown(k, "unknown name '" + k.text + "' (not a macro, item or bitN)");
     fail(k, "expected a value, found " + shown(k));
   }
 };

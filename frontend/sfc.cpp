@@ -83,6 +83,21 @@ std::vector<Tok> tokens(const std::string& line, int lineno) {
   return out;
 }
 
+// The tokens of a line whose unexpected characters are read as blanks (error
+// recovery: the line's error is reported; its words still say what it is).
+std::vector<Tok> tokens_blanking(std::string line, int lineno) {
+  for (int tries = 0; tries < 64; tries++) {
+    std::vector<Tok> out;
+    try {
+      tokens_into(line, lineno, out);
+      return out;
+    } catch (const CompileError& e) {
+      line[size_t(e.col - 1)] = ' ';
+    }
+  }
+  return {};
+}
+
 struct Line {
   std::string text;
   int no;
@@ -222,6 +237,7 @@ void SfcParser::declarations() {
   for (size_t i = 0; i < lines_.size(); i++) {
     Line& l = lines_[i];
     l.refused = !unit([&] { tokens_into(l.text, l.no, l.toks); });
+    if (l.refused) l.toks = tokens_blanking(l.text, l.no);  // the line keeps its place in the chart
     if (l.toks.empty()) continue;
     l.kw = upper(l.toks[0].text);
     if (opens_body(l)) {
@@ -404,9 +420,12 @@ void SfcParser::action(uint32_t s, const Line& l) {
   pos_ = skip_line();  // its body too: a wrong header does not make the body's lines the chart's
   if (l.refused) return;  // its error is said
   if (l.kw != "N" && l.kw != "S" && l.kw != "R" && l.kw != "P") {
+    bool run = unknown_line_;  // the lines after a refused one (a body whose '{' was lost, say): quiet
     unknown_line_ = true;
+    if (run) throw Cascade();
     fail(l.no, t[0].col, "expected an action (N, S, R or P), a transition, or a step; found '" + t[0].text + "'");
   }
+  unknown_line_ = false;
   if (opens_body(l)) {
     std::string kind = t.size() == 3 ? upper(t[1].text) : "";
     if (t.size() != 3 || (kind != "LADDER" && kind != "IL") || l.kw == "S" || l.kw == "R")
@@ -443,9 +462,17 @@ SfcParser::SeqEnd SfcParser::sequence(uint32_t scope, int depth, int prev, bool 
     if (at_end_of_block()) {
       const Line* l = peek();
       if (!top || !l) break;
-      // a 'branch' or 'end' outside select and parallel: reported, skipped
+      // a 'branch' or 'end' outside select and parallel: reported, skipped; after a
+      // 'branch' (its 'select' or 'parallel' lost) the rest of that block is skipped
+      // too, and it stands for the transition or step the chart needs there
       report(l->no, l->toks[0].col, "'" + l->toks[0].text + "' outside 'select' or 'parallel'");
+      bool lost = l->kw == "BRANCH";
       pos_++;
+      if (lost) {
+        while (peek() && peek()->kw == "BRANCH") pos_++, skip_block();
+        if (peek()) pos_++;  // its 'end'
+        unknown_line_ = true;
+      }
       continue;
     }
     const Line& l = *peek();
@@ -471,13 +498,22 @@ SfcParser::SeqEnd SfcParser::sequence(uint32_t scope, int depth, int prev, bool 
         continue;
       } else if (l.kw == "TRANSITION" || l.kw == "SELECT") {
         // reported; a step stands in for the missing one (the line is read next)
-        report(l.no, h.col, first ? "a simultaneous branch starts with a step"
-                                  : "expected a step or a jump: steps and transitions alternate");
+        if (!unknown_line_)  // (else the block refused above was the step)
+          report(l.no, h.col, first ? "a simultaneous branch starts with a step"
+                                    : "expected a step or a jump: steps and transitions alternate");
+        unknown_line_ = false;
         s = stand_in_step(scope, l.no);
       } else {
         // reported; the line stands for a step, the action lines below are its
+        // (before the first step: a wrong declaration, skipped)
         report(l.no, h.col, "expected a step, 'parallel' or 'jump'; found '" + h.text + "'");
         pos_ = skip_line();
+        bool action = l.kw == "N" || l.kw == "S" || l.kw == "R" || l.kw == "P";
+        if (top && first && !action) {  // a wrong declaration, most likely: its name's uses say nothing
+          if (l.toks.size() >= 2 && is_identifier(l.toks[1].text) && !names_.count(upper(l.toks[1].text)))
+            refused_names_.insert(upper(l.toks[1].text));
+          continue;
+        }
         s = stand_in_step(scope, l.no);
         step_actions(s);
       }
