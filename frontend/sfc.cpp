@@ -469,6 +469,7 @@ SfcParser::SeqEnd SfcParser::sequence(uint32_t scope, int depth, int prev, bool 
       bool lost = l->kw == "BRANCH";
       pos_++;
       if (lost) {
+        skip_block();
         while (peek() && peek()->kw == "BRANCH") pos_++, skip_block();
         if (peek()) pos_++;  // its 'end'
         unknown_line_ = true;
