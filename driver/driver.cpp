@@ -216,15 +216,15 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
       if (im.tasks.empty()) c.il = lower_to_il(im.single);
       else configuration(c, im, path, text, allow_project, task);
     } else if (ends_with(path, ".sfc")) {
-      c.chart = parse_sfc(text, path);
+      c.chart = parse_sfc(text, path, d);
       c.il = lower_chart(*c.chart);
     } else if (text.compare(text.compare(0, 3, "\xEF\xBB\xBF") ? 0 : 3, 7, "LDmicro") == 0) {
       c.from_ld = ladder = ldmicro = true;
-      c.tree = parse_ldmicro(text, path);
+      c.tree = parse_ldmicro(text, path, d);
       c.il = lower_to_il(c.tree);
     } else if (ends_with(path, ".rtsp")) {
       c.from_ld = true;
-      c.tree = parse_rtsp(text, path);
+      c.tree = parse_rtsp(text, path, d);
       c.il = lower_to_il(c.tree);
     } else if (ends_with(path, ".xml")) {
       c.from_ld = true;

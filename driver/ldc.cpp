@@ -67,7 +67,7 @@ static int write_project(const Project& p, const std::string& outdir, Diagnostic
 static int build_project_main(const std::string& project, const std::string& outdir, const DiagOptions& dopt,
                               bool syntax_only) {
   Diagnostics diag(dopt);
-  return write_project(parse_project(project), outdir, diag, syntax_only, false);
+  return write_project(parse_project(project, diag), outdir, diag, syntax_only, false);
 }
 
 static int ldc_main(int argc, char** argv) {

@@ -290,7 +290,8 @@ class SoftPlcRun {
     std::shared_ptr<Project> proj;
     std::optional<Image> single;
     if (!a_.project.empty()) {
-      proj = std::make_shared<Project>(parse_project(a_.project));
+      Diagnostics pd;  // every wrong line of the project, as ldc --project reports them
+      proj = std::make_shared<Project>(parse_project(a_.project, pd));
     } else if (!input_.empty() && !is_image_file(input_)) {
       Compiled c = compile_source(input_, g_task.empty(), g_task);
       if (c.project) proj = c.project;

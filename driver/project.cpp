@@ -9,6 +9,7 @@
 #include <map>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <sys/stat.h>
 
 #include "driver/driver.h"
@@ -95,15 +96,36 @@ struct ProjectReader {
   std::vector<std::pair<uint32_t, std::string>> processors;
   bool in_task = false, task_has_program = false;
   int task_line = 0, task_col = 0;
+  // Error recovery (docs/diagnostics.md): with `diag`, a wrong line is
+  // reported and the next one read.  What follows from a refused line says
+  // nothing: the tasks of a refused resource, the program of a refused task,
+  // "no program" of a task whose program line was refused, "no task" when a
+  // task line was refused.
+  Diagnostics* diag = nullptr;
+  bool resource_refused = false, task_refused = false;
+  int task_lines = 0;                  // task lines read, refused ones too
+  int program_lines = 0;               // ... program lines of the current task
+  bool after_unknown = false;          // the line above had an unknown keyword (a lost resource or task line?)
+  struct Quiet : CompileError {        // follows from an error reported: said nothing
+    Quiet() : CompileError(0, 0, "follows from an error reported") {}
+  };
+
+  // Reading one line goes on past an error with `diag`; without, the first
+  // error is thrown.
+  void recover(const std::function<void()>& read) {
+    if (!diag) return read();
+    try {
+      read();
+    } catch (const Quiet&) {
+    } catch (const CompileError& e) {
+      diag->error(p.path, e);
+    }
+  }
 
   std::string resolve(const std::string& f) const {
     return f.empty() || f[0] == '/' || p.dir.empty() ? f : p.dir + "/" + f;
   }
-  UserError fail(int col, const std::string& msg) const {
-    std::string m = format_error(p.path, p.text, line, col, msg);
-    if (!m.empty() && m.back() == '\n') m.pop_back();
-    return UserError(m);
-  }
+  CompileError fail(int col, const std::string& msg) const { return CompileError(line, col, msg); }
   void need(size_t n, const char* form) const {
     if (w.size() < n) throw fail(w.back().col + int(w.back().text.size()), std::string("expected '") + form + "'");
   }
@@ -126,10 +148,8 @@ struct ProjectReader {
     return *parse_duration_us(w[i].text);
   }
   void end_task() {
-    if (in_task && !task_has_program) {
-      line = task_line;
-      throw fail(task_col, "task '" + p.tasks.back().name + "' has no program (a task runs one program)");
-    }
+    if (in_task && !task_has_program && program_lines == 0 && !task_refused)
+      throw CompileError(task_line, task_col, "task '" + p.tasks.back().name + "' has no program (a task runs one program)");
   }
 
   void read_configuration() {
@@ -158,8 +178,10 @@ struct ProjectReader {
     }
   }
   void read_resource() {
-    end_task();
+    recover([&] { end_task(); });  // the task above's mistake, not this line's
     in_task = false;
+    resource_refused = true;  // until the line is read
+    resource = "?";           // its tasks do not ask for a resource
     need(4, "resource NAME processor N");
     resource = name_at(1, "resource");
     if (lower(w[2].text) != "processor") throw fail(w[2].col, "expected 'processor N'");
@@ -169,6 +191,7 @@ struct ProjectReader {
       if (n == processor) throw fail(w[3].col, "processor " + std::to_string(n) + " already belongs to resource '" + r + "'");
     }
     processors.emplace_back(processor, resource);
+    resource_refused = false;
     nothing_after(4);
   }
   // period, priority, watchdog and exclusive after "task NAME"
@@ -189,8 +212,14 @@ struct ProjectReader {
     if (t.period_us > 10000000) throw fail(w[0].col, "task period above 10 s");
   }
   void read_task() {
-    end_task();
-    if (resource.empty()) throw fail(w[0].col, "a task belongs to a resource: 'resource NAME processor N' first");
+    recover([&] { end_task(); });
+    task_lines++;
+    in_task = true, task_refused = true, task_has_program = false, program_lines = 0;  // until the line is read
+    if (resource.empty()) {
+      resource = "?", resource_refused = true;  // said once: the next tasks are refused quietly
+      if (after_unknown && diag) throw Quiet();  // the unknown line was the resource, most likely
+      throw fail(w[0].col, "a task belongs to a resource: 'resource NAME processor N' first");
+    }
     need(4, "task NAME period DURATION");
     ProjectTask t;
     t.name = name_at(1, "task");
@@ -199,15 +228,26 @@ struct ProjectReader {
     t.resource = resource;
     t.processor = processor;
     task_attributes(t);
+    if (resource_refused) return;  // its resource was refused: so is the task, quietly
     p.tasks.push_back(t);
-    in_task = true, task_has_program = false, task_line = line, task_col = w[1].col;
+    task_refused = false, task_line = line, task_col = w[1].col;
   }
   void read_program() {
+    if (!in_task && after_unknown && diag) {  // the unknown line was its task, most likely
+      in_task = true, task_refused = true, task_lines++, program_lines = 1;
+      throw Quiet();
+    }
     if (!in_task) throw fail(w[0].col, "a program is bound to a task: 'task NAME period DURATION' first");
+    program_lines++;  // a wrong program line is its task's program line still
     need(3, "program NAME FILE");
     if (task_has_program)
       throw fail(w[0].col, "task '" + p.tasks.back().name + "' already runs program '" + p.tasks.back().program +
                                "' (one program, one image per task)");
+    if (task_refused) {  // the program of a refused task: its own mistakes only
+      name_at(1, "program");
+      nothing_after(3);
+      return;
+    }
     ProjectTask& t = p.tasks.back();
     t.program = name_at(1, "program");
     for (const ProjectTask& o : p.tasks)
@@ -223,14 +263,26 @@ struct ProjectReader {
     line++;
     w = split_words(l);
     if (w.empty()) return;
+    recover([&] { read_words(); });
+  }
+  void read_words() {
     std::string kw = lower(w[0].text);
+    bool unknown = kw != "configuration" && kw != "block" && kw != "retain" && kw != "resource" && kw != "task" && kw != "program";
+    struct Note {  // after this line: whether its keyword was unknown
+      bool& to;
+      bool v;
+      ~Note() { to = v; }
+    } note{after_unknown, unknown};
     if (kw == "configuration") read_configuration();
     else if (kw == "block") read_block();
     else if (kw == "retain") read_retain();
     else if (kw == "resource") read_resource();
     else if (kw == "task") read_task();
     else if (kw == "program") read_program();
-    else throw fail(w[0].col, "unknown keyword '" + w[0].text + "' (configuration, block, retain, resource, task, program)");
+    else {
+      if (in_task) program_lines++;  // in a task: its misspelled program line, most likely ("no program" is not said)
+      throw fail(w[0].col, "unknown keyword '" + w[0].text + "' (configuration, block, retain, resource, task, program)");
+    }
   }
   void read_all() {
     std::string_view text = p.text;
@@ -240,17 +292,17 @@ struct ProjectReader {
       read_line(text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos));
       pos = nl == std::string_view::npos ? text.size() : nl + 1;
     }
-    end_task();
-    if (p.tasks.empty()) {
+    recover([&] { end_task(); });
+    if (task_lines == 0) {
       line = std::max(line, 1);
-      throw fail(1, "the project has no task");
+      recover([&] { throw fail(1, "the project has no task"); });
     }
   }
 };
 
 }  // namespace
 
-Project parse_project(const std::string& path) {
+static Project read_project(const std::string& path, Diagnostics* diag) {
   Project p;
   p.path = path;
   p.text = read_file(path);
@@ -258,8 +310,40 @@ Project parse_project(const std::string& path) {
   p.dir = slash == std::string::npos ? "" : path.substr(0, slash);
   std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
   p.name = base.substr(0, base.rfind('.'));
-  ProjectReader{p}.read_all();
+  ProjectReader r{p};
+  r.diag = diag;
+  r.read_all();
   return p;
+}
+
+Project parse_project(const std::string& path) {
+  try {
+    return read_project(path, nullptr);
+  } catch (const CompileError& e) {  // the first error, as "file:line:col: error: ..." with its line and a caret
+    std::string text = read_file(path);
+    std::string m = format_error(path, text, e.line, e.col, e.what());
+    if (!m.empty() && m.back() == '\n') m.pop_back();
+    throw UserError(m);
+  }
+}
+
+Project parse_project(const std::string& path, Diagnostics& diag) {
+  size_t from = diag.text().size();
+  int errors0 = diag.errors();
+  std::optional<Project> p;
+  std::string text = read_file(path);
+  diag.source(path, text);
+  try {
+    p = read_project(path, &diag);
+  } catch (const ErrorsReported&) {  // -fmax-errors reached
+  }
+  diag.forget(path);
+  if (diag.errors() > errors0) {
+    std::string m = diag.text().substr(from);
+    if (!m.empty() && m.back() == '\n') m.pop_back();
+    throw UserError(m);
+  }
+  return std::move(*p);
 }
 
 namespace {

@@ -55,6 +55,10 @@ struct Project {
 };
 // Reads a project file; errors are UserError "file:line:col: error: ..." with a caret.
 Project parse_project(const std::string& path);
+// ... with error recovery (docs/diagnostics.md): every wrong line is reported
+// to `diag` and the next one read; a project with errors is a UserError with
+// every error `diag` reported (up to -fmax-errors).
+Project parse_project(const std::string& path, Diagnostics& diag);
 // The project file text for a project (canonical form; programs as given in `files`, one per task),
 // to be written into the folder `outdir` ("" = the current one): its `retain` line names the
 // project's retentive file as seen from there, so the written project keeps the same retentive

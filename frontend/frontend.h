@@ -48,6 +48,10 @@ constexpr size_t kMaxRungs = 65536;  // rungs in one program (every reader)
 // its rungs become trees over ldc devices, its names aliases (docs/ldmicro.md).
 // Throws CompileError (line, col, message).
 TreeProgram parse_ldmicro(std::string_view text, const std::string& filename);
+// The same with error recovery (docs/diagnostics.md): an error in a setting or
+// I/O-list line, or in a rung, goes to `diag` and the import goes on with the
+// next line or rung; a program with errors ends with ErrorsReported.
+TreeProgram parse_ldmicro(std::string_view text, const std::string& filename, Diagnostics& diag);
 
 // Imports the LD bodies of a PLCopen TC6 XML project (docs/plcopen.md).
 // Throws CompileError (line, col, message naming the XML element path).
@@ -109,6 +113,10 @@ Program parse_st(std::string_view text, const std::string& filename);
 // statements and data groups, as rung trees over ldc devices.
 // Throws CompileError (line, col, message).
 TreeProgram parse_rtsp(std::string_view text, const std::string& filename);
+// The same with error recovery (docs/diagnostics.md, docs/rtsp.md): an error in
+// a line, a directive, a statement or an argument goes to `diag` and the reader
+// goes on with the next one; a program with errors ends with ErrorsReported.
+TreeProgram parse_rtsp(std::string_view text, const std::string& filename, Diagnostics& diag);
 
 // Reads a sequential function chart (docs/sfc.md): steps, transitions,
 // selections, simultaneous sequences, jumps, and actions in ladder or IL text.
@@ -117,5 +125,9 @@ TreeProgram parse_rtsp(std::string_view text, const std::string& filename);
 constexpr size_t kMaxSfcSteps = 1024;  // steps and simultaneous sequences
 constexpr int kMaxSfcNesting = 32;     // select/parallel inside each other
 Chart parse_sfc(std::string_view text, const std::string& filename);
+// The same with error recovery (docs/diagnostics.md, docs/sfc.md): a wrong
+// declaration, step, transition, action, jump, condition or body goes to `diag`
+// and the reader goes on; a chart with errors ends with ErrorsReported.
+Chart parse_sfc(std::string_view text, const std::string& filename, Diagnostics& diag);
 
 }  // namespace ldc

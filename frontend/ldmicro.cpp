@@ -23,6 +23,7 @@
 #include <optional>
 #include <set>
 
+#include "frontend/diag.h"
 #include "frontend/frontend.h"
 #include "frontend/operands.h"
 #include "frontend/ldmicro_format.h"
@@ -36,6 +37,13 @@ using K = TreeNode::Kind;
 using namespace treebuild;
 
 [[noreturn]] void fail(int line, int col, const std::string& msg) { throw CompileError(line, col, msg); }
+
+// An error that follows from one already reported (docs/diagnostics.md): the
+// unit it is in is refused, and nothing more is said.  Only error recovery
+// reaches one (without it, the first error ends the import).
+struct Cascade : CompileError {
+  Cascade() : CompileError(0, 0, "follows from an error reported") {}
+};
 
 std::string trim(std::string_view s) {
   size_t a = s.find_first_not_of(" \t"), b = s.find_last_not_of(" \t");
@@ -59,6 +67,7 @@ struct SrcRung {
   int line = 0;
   int ldm_index = 0;  // LDmicro's rung number - 1, comment rungs counted
   std::vector<Elem> series;
+  bool refused = false;  // an error was reported in it: not translated
 };
 
 // ------------------------------------------------------------------ conditions
@@ -245,7 +254,8 @@ int format_max(const ldmicro_format::Format& f) {
 
 class Importer {
  public:
-  Importer(std::string_view text, std::string file) : text_(text), file_(std::move(file)) {}
+  Importer(std::string_view text, std::string file, Diagnostics* diag = nullptr)
+      : text_(text), file_(std::move(file)), diag_(diag) {}
   TreeProgram run();
 
  private:
@@ -255,6 +265,13 @@ class Importer {
   };
   std::string_view text_;
   std::string file_;
+  // Error recovery (docs/diagnostics.md): with diag_, an error in a setting
+  // or I/O-list line, or in a rung, is reported and the import goes on with
+  // the next line or rung.
+  Diagnostics* diag_;
+  bool cycle_refused_ = false;  // the CYCLE= line was refused: the timers say nothing about it
+  bool rung_refused_ = false;   // a rung was refused: its labels and names are unknown
+  bool unit(const std::function<void()>& read);
   std::vector<Line> lines_;
   bool v01_ = false;          // "LDmicro0.1": the classic semantics (docs/ldmicro.md)
   int64_t cycle_us_ = 10000;  // LDmicro's default
@@ -384,12 +401,14 @@ size_t Importer::header() {
     if (t.empty()) continue;
     if (t == "PROGRAM") return i;
     if (t.rfind("CYCLE=", 0) == 0) {
-      size_t e = 6;
-      while (e < t.size() && std::isdigit((unsigned char)t[e])) e++;
-      if (e == 6 || e - 6 > 12) fail(l.no, 7, "expected the cycle time in microseconds after CYCLE=");
-      cycle_us_ = std::stoll(t.substr(6, e - 6));
-      if (cycle_us_ > 2000000000) fail(l.no, 7, "cycle time too long (at most 2000000000 us)");
-      cycle_line_ = l.no;
+      cycle_refused_ = !unit([&] {
+        size_t e = 6;
+        while (e < t.size() && std::isdigit((unsigned char)t[e])) e++;
+        if (e == 6 || e - 6 > 12) fail(l.no, 7, "expected the cycle time in microseconds after CYCLE=");
+        cycle_us_ = std::stoll(t.substr(6, e - 6));
+        if (cycle_us_ > 2000000000) fail(l.no, 7, "cycle time too long (at most 2000000000 us)");
+        cycle_line_ = l.no;
+      });
       continue;
     }
     if (t.rfind("CRYSTAL=", 0) == 0) {
@@ -405,9 +424,15 @@ size_t Importer::header() {
     if (t == "IO LIST" || t == "VAR LIST" || t == "PULL-UP LIST") {
       bool io = t == "IO LIST";
       size_t j = i + 1;
+      bool unclosed = false;  // the PROGRAM line came first: the list ends there
+      bool refused_entry = false;  // (then a refused entry was its END, most likely)
       for (; j < lines_.size(); j++) {
         std::string u = trim(lines_[j].text);
         if (u == "END") break;
+        if (u == "PROGRAM") {
+          unclosed = true;
+          break;
+        }
         if (u.empty()) continue;
         if (!io) {
           if (t == "VAR LIST") var_list_entry(u);
@@ -417,10 +442,16 @@ size_t Importer::header() {
         size_t sp = u.find_first_of(" \t");
         std::string name = u.substr(0, sp);
         std::string after = sp == std::string::npos ? "" : trim(u.substr(sp));
-        if (after.rfind("at", 0) != 0) fail(lines_[j].no, int(lines_[j].text.find(u)) + 1, "expected 'name at pin' in the IO LIST");
-        io_list_.push_back({name, lines_[j].no});
+        refused_entry |= !unit([&] {
+          if (after.rfind("at", 0) != 0) fail(lines_[j].no, int(lines_[j].text.find(u)) + 1, "expected 'name at pin' in the IO LIST");
+          io_list_.push_back({name, lines_[j].no});
+        });
       }
       if (j == lines_.size()) fail(l.no, 1, t + " is not closed by END");
+      if (unclosed) {  // reported, and the PROGRAM line read next
+        if (!refused_entry) unit([&] { fail(l.no, 1, t + " is not closed by END (before PROGRAM on line " + std::to_string(lines_[j].no) + ")"); });
+        j--;
+      }
       i = j;
       continue;
     }
@@ -599,6 +630,11 @@ void Importer::check_leaf(const Elem& e) {
   else fail(e.line, e.col, "unknown LDmicro element '" + k + "'");
 }
 
+// "RUNG" or "RUNG n": the first line of a rung
+static bool is_rung_line(const std::string& t) {
+  return t.rfind("RUNG", 0) == 0 && (t.size() == 4 || t[4] == ' ' || t[4] == '\t');
+}
+
 // program = { "RUNG" [n] series "END" }
 void Importer::program(size_t i) {
   std::string title;
@@ -608,12 +644,21 @@ void Importer::program(size_t i) {
     std::string t = trim(l.text);
     if (t.empty() || t[0] == ';') continue;
     int col = int(l.text.find_first_not_of(" \t")) + 1;
-    if (t.rfind("RUNG", 0) != 0 || (t.size() > 4 && t[4] != ' ' && t[4] != '\t'))
-      fail(l.no, col, "expected RUNG, found '" + t + "'");
     SrcRung r;
-    r.line = l.no;
-    r.ldm_index = count++;
-    i = series(i + 1, r.series, l);
+    size_t first = i;
+    bool read = unit([&] {
+      if (!is_rung_line(t)) fail(l.no, col, "expected RUNG, found '" + t + "'");
+      r.line = l.no;
+      r.ldm_index = count++;
+      i = series(i + 1, r.series, l);
+    });
+    if (!read) {  // on to the next RUNG line
+      rung_refused_ = true;
+      for (i = first + 1; i < lines_.size() && !is_rung_line(trim(lines_[i].text)); i++) {
+      }
+      i--;
+      continue;
+    }
     if (r.series.size() == 1 && r.series[0].kw == "COMMENT") {
       // a comment rung: its first line titles the next rung
       std::string c = r.series[0].rest;
@@ -788,8 +833,10 @@ void Importer::allocate() {
   for (const std::string& nm : order_) {
     Name& n = names_[nm];
     if (n.kind == NK::Bit && std::string_view("XYRIM").find(nm[0]) == std::string_view::npos)
-      fail(n.line, n.col, "bit '" + nm + "' must be named X... (input), Y... (output), R... (internal relay), "
-                          "I... (Modbus contact) or M... (Modbus coil)");
+      unit([&] {
+        fail(n.line, n.col, "bit '" + nm + "' must be named X... (input), Y... (output), R... (internal relay), "
+                            "I... (Modbus contact) or M... (Modbus coil)");
+      });
   }
   // names that already spell an ldc device of their kind keep it
   std::set<std::string> placed;
@@ -988,6 +1035,7 @@ std::optional<Cond> Importer::pure(const Elem& e) {
 }
 
 int32_t Importer::cycle_ms(const Elem& e) {
+  if (cycle_refused_) throw Cascade();  // what the refused CYCLE= line would have said is unknown
   if (cycle_us_ <= 0) fail(e.line, e.col, e.kw + " needs a cycle time, and this file has CYCLE=" + std::to_string(cycle_us_));
   if (cycle_us_ % 1000)
     fail(e.line, e.col, e.kw + " counts cycles of CYCLE=" + std::to_string(cycle_us_) +
@@ -1903,6 +1951,7 @@ void Importer::element(const Elem& e, bool need_out) {
   }
   if (k == "RES") {
     auto it = names_.find(e.args[0]);
+    if (it == names_.end() && rung_refused_) throw Cascade();  // it may be used in the refused rung
     if (it == names_.end()) fail(e.line, e.cols[0], "RES of '" + e.args[0] + "', which no element uses");
     const Name& n = it->second;
     if (n.kind == NK::Timer) {
@@ -1921,7 +1970,8 @@ void Importer::element(const Elem& e, bool need_out) {
             find(x.kids);
           }
         };
-        for (const SrcRung& r : rungs_) find(r.series);
+        for (const SrcRung& r : rungs_)
+          if (!r.refused) find(r.series);
         rb_.add(out_node(Op::MOV, {init, int_opd(Area::CW, n.dev.index)}, e));
       }
     } else if (n.kind == NK::Var) {
@@ -2121,6 +2171,7 @@ size_t Importer::goto_target(const Elem& e) {
       if (rungs_[i].ldm_index >= n - 1) { t = i; break; }
   } else {
     auto it = labels_.find(l);
+    if (it == labels_.end() && rung_refused_) throw Cascade();  // it may be in the refused rung
     if (it == labels_.end()) fail(e.line, e.cols[0], "GOTO: LABEL '" + l + "' not found (LDmicro refuses it too)");
     t = it->second;
   }
@@ -2146,10 +2197,12 @@ TreeProgram Importer::run() {
     fail(1, 1, "not an LDmicro file: the first line should be LDmicro0.1, LDmicro0.2 or LDmicro");
   size_t prog = header();
   program(prog);
-  for (const auto& [nm, line] : io_list_) {
+  for (const auto& io : io_list_) {
+    const std::string& nm = io.first;
+    int line = io.second;
     char c = nm.empty() ? 0 : nm[0];
     NK k = c == 'X' || c == 'Y' ? NK::Bit : c == 'A' ? NK::Adc : c == 'P' ? NK::Pwm : NK::Var;
-    if (k != NK::Var) note(nm, k, line, 1);
+    if (k != NK::Var) unit([&] { note(nm, k, line, 1); });
   }
   std::function<void(const std::vector<Elem>&)> walk = [&](const std::vector<Elem>& s) {
     for (const Elem& e : s) {
@@ -2175,8 +2228,12 @@ TreeProgram Importer::run() {
       find_strings(e.kids);
     }
   };
-  for (const SrcRung& r : rungs_) find_strings(r.series);
-  for (const SrcRung& r : rungs_) walk(r.series), find_uart(r.series), find_bus(r.series);
+  // each rung's names: a rung with an error is refused, and not translated
+  auto in_rung = [&](SrcRung& r, const std::function<void()>& read) {
+    if (!r.refused && !unit(read)) r.refused = rung_refused_ = true;
+  };
+  for (SrcRung& r : rungs_) in_rung(r, [&] { find_strings(r.series); });
+  for (SrcRung& r : rungs_) in_rung(r, [&] { walk(r.series), find_uart(r.series), find_bus(r.series); });
   if (!bus_words_.empty()) used_.insert({int(Dev::D), kBusSeq});
   if (uart_used_)
     for (DeviceRef r : {DeviceRef{Dev::WX, kUartRx}, DeviceRef{Dev::WY, kUartTx}, DeviceRef{Dev::D, kUartSeen}, DeviceRef{Dev::M, kUartBusy}})
@@ -2226,10 +2283,10 @@ TreeProgram Importer::run() {
       find_labels(e.kids, i);
     }
   };
-  for (size_t i = 0; i < rungs_.size(); i++) find_labels(rungs_[i].series, i);
+  for (size_t i = 0; i < rungs_.size(); i++) unit([&] { find_labels(rungs_[i].series, i); });
   std::vector<std::string> pending;  // labels waiting for the next rung that makes code
   for (size_t i = 0; i < rungs_.size(); i++) {
-    translate(rungs_[i], i);
+    if (rungs_[i].refused || !unit([&] { translate(rungs_[i], i); })) continue;
     if (targets_.count(i)) pending.push_back("rung" + std::to_string(i + 1));
     if (rb_.top.empty()) continue;  // only conditions: nothing to do
     TreeRung tr;
@@ -2254,8 +2311,40 @@ TreeProgram Importer::run() {
   return p;
 }
 
+// Reads one unit (a setting or I/O-list line, a rung, a name): without
+// diagnostics its error is thrown; with them it is reported (not a Cascade),
+// and false says the unit was refused.
+bool Importer::unit(const std::function<void()>& read) {
+  if (!diag_) {
+    read();
+    return true;
+  }
+  try {
+    read();
+    return true;
+  } catch (const Cascade&) {
+    return false;
+  } catch (const CompileError& e) {
+    diag_->error(file_, e);
+    return false;
+  }
+}
+
 }  // namespace
 
 TreeProgram parse_ldmicro(std::string_view text, const std::string& filename) { return Importer(text, filename).run(); }
+
+TreeProgram parse_ldmicro(std::string_view text, const std::string& filename, Diagnostics& diag) {
+  int errors0 = diag.errors();
+  TreeProgram p;
+  try {
+    p = Importer(text, filename, &diag).run();
+  } catch (const Cascade&) {
+  } catch (const CompileError& e) {  // an error the import cannot go on after (no PROGRAM line, out of devices)
+    diag.error(filename, e);
+  }
+  if (diag.errors() > errors0) throw ErrorsReported();
+  return p;
+}
 
 }  // namespace ldc

@@ -20,9 +20,11 @@
 #include <cmath>
 #include <cstring>
 #include <cstdlib>
+#include <functional>
 #include <map>
 #include <set>
 
+#include "frontend/diag.h"
 #include "frontend/frontend.h"
 #include "frontend/treebuild.h"
 
@@ -43,7 +45,9 @@ constexpr uint32_t kAnalogIo = 256;  // An is WX(256+n) / WY(256+n)
 // ---------------------------------------------------------------- tokens
 
 struct Tok {
-  enum Kind { Ident, Int, Real, Punct, End } kind = End;
+  // Bad: where a line refused by the preprocessor was (error recovery); the
+  // statement it falls in is refused without a word
+  enum Kind { Ident, Int, Real, Punct, End, Bad } kind = End;
   std::string text;
   int line = 0, col = 0;
   uint64_t ival = 0;
@@ -51,6 +55,46 @@ struct Tok {
 };
 
 [[noreturn]] void fail(const Tok& t, const std::string& m) { throw CompileError(t.line, t.col, m); }
+
+// ---------------------------------------------------------------- error recovery
+
+// An error that follows from one already reported (docs/diagnostics.md): its
+// unit is refused and nothing more is said.  Only error recovery reaches one.
+struct Cascade : CompileError {
+  Cascade() : CompileError(0, 0, "follows from an error reported") {}
+};
+// An error after which nothing more can be read (a limit of the whole program):
+// with recovery too it ends the reading.
+struct Stop : CompileError {
+  using CompileError::CompileError;
+};
+[[noreturn]] void stop(const Tok& t, const std::string& m) { throw Stop(t.line, t.col, m); }
+
+// With `diag`, a unit (a line, a directive, a statement, an argument) that
+// fails is reported and the reader goes on; without, the first error is thrown.
+struct Recovery {
+  Diagnostics* diag = nullptr;
+  std::string file;
+  // false: the unit was refused (its error reported, or a Cascade)
+  bool unit(const std::function<void()>& read) const {
+    if (!diag) return read(), true;
+    try {
+      read();
+      return true;
+    } catch (const Stop&) {
+      throw;
+    } catch (const Cascade&) {
+      return false;
+    } catch (const CompileError& e) {
+      diag->error(file, e);
+      return false;
+    }
+  }
+  // an error that does not stop the unit (it is reported, and the unit goes on)
+  void report(const Tok& t, const std::string& m) const {
+    unit([&] { fail(t, m); });
+  }
+};
 
 // Tokens of one line (comments already blanked); `col0` is the column of line[0].
 std::vector<Tok> tokenize(std::string_view line, int lineno) {
@@ -109,6 +153,9 @@ std::vector<Tok> tokenize(std::string_view line, int lineno) {
 struct Preprocessor {
   std::map<std::string, std::vector<Tok>> macros;
   std::vector<Tok> out;
+  Recovery rec;
+  std::set<std::string> refused_macros;  // names of refused #define lines: their uses say nothing
+  int refused_groups = 0;                // #if groups whose directive was refused, open
 
   // Expands object-like macros in `in` into `dst`; `at` is the use site.
   void expand(const std::vector<Tok>& in, std::vector<Tok>& dst, std::vector<std::string>& active, const Tok* at) {
@@ -122,7 +169,7 @@ struct Preprocessor {
         active.pop_back();
         continue;
       }
-      if (dst.size() >= kMaxTokens) fail(site, "the program is too large after macro expansion");
+      if (dst.size() >= kMaxTokens) stop(site, "the program is too large after macro expansion");
       Tok c = t;
       c.line = site.line, c.col = site.col;
       dst.push_back(c);
@@ -132,6 +179,7 @@ struct Preprocessor {
   struct Group {
     bool parent_active, taken, active, seen_else;
     Tok at;
+    bool refused = false;  // its #if was refused: the group is skipped, its #else too
   };
 
   void run(std::string_view text) {
@@ -150,7 +198,13 @@ struct Preprocessor {
       if (line[first] != '#') {
         if (!active()) continue;
         std::vector<std::string> stack;
-        expand(tokenize(line, lineno), out, stack, nullptr);
+        size_t at = out.size();
+        if (!rec.unit([&] { expand(tokenize(line, lineno), out, stack, nullptr); })) {
+          out.resize(at);  // the refused line: a Bad token in its place
+          Tok bad;
+          bad.kind = Tok::Bad, bad.line = lineno, bad.col = int(first) + 1;
+          out.push_back(bad);
+        }
         continue;
       }
       // a directive
@@ -164,50 +218,90 @@ struct Preprocessor {
       dir.line = lineno, dir.col = int(first + 1 + ws) + 1, dir.text = name;
       std::string_view args = rest.substr(we);
       int args_col = int(first + 1 + we);  // column offset of args[0] minus one
-      auto arg_tokens = [&] {
-        std::vector<Tok> a = tokenize(args, lineno);
-        for (Tok& t : a) t.col += args_col;
-        return a;
-      };
-      if (name == "if" || name == "ifdef" || name == "ifndef") {
-        if (int(groups.size()) >= kMaxNesting) fail(dir, "#if groups nested deeper than " + std::to_string(kMaxNesting));
-        bool parent = active();
-        bool v = parent && (name == "if" ? eval_if(arg_tokens(), dir) : defined_arg(arg_tokens(), dir) == (name == "ifdef"));
-        groups.push_back({parent, v, v, false, dir});
-      } else if (name == "elif" || name == "else") {
-        if (groups.empty()) fail(dir, "#" + name + " without #if");
-        Group& g = groups.back();
-        if (g.seen_else) fail(dir, "#" + name + " after #else");
-        if (name == "else") {
-          if (!arg_tokens().empty()) fail(arg_tokens()[0], "unexpected text after #else");
-          g.seen_else = true;
-          g.active = g.parent_active && !g.taken;
-        } else {
-          g.active = g.parent_active && !g.taken && eval_if(arg_tokens(), dir);
-        }
-        g.taken |= g.active;
-      } else if (name == "endif") {
-        if (groups.empty()) fail(dir, "#endif without #if");
-        if (!arg_tokens().empty()) fail(arg_tokens()[0], "unexpected text after #endif");
-        groups.pop_back();
-      } else if (!active()) {
-        continue;  // other directives in a skipped group are not read
-      } else if (name == "define") {
+      directive(name, dir, args, args_col, lineno, groups);
+    }
+    if (!groups.empty() && !groups.back().refused) rec.report(groups.back().at, "#" + groups.back().at.text + " without #endif");
+  }
+
+  // One directive.  With recovery, a refused one is reported and its meaning
+  // kept where it is plain (#else and #endif with text after them), a refused
+  // #if opens a group that is skipped whole, and the name of a refused #define
+  // (or of an unknown directive) is remembered: its uses say nothing.
+  void directive(const std::string& name, const Tok& dir, std::string_view args, int args_col, int lineno,
+                 std::vector<Group>& groups) {
+    auto active = [&] { return groups.empty() || groups.back().active; };
+    auto arg_tokens = [&] {
+      std::vector<Tok> a = tokenize(args, lineno);
+      for (Tok& t : a) t.col += args_col;
+      return a;
+    };
+    // tokens that a directive does not take: reported, the directive done
+    auto nothing_after = [&] {
+      rec.unit([&] {
         std::vector<Tok> a = arg_tokens();
+        if (!a.empty()) fail(a[0], "unexpected text after #" + name);
+      });
+    };
+    if (name == "if" || name == "ifdef" || name == "ifndef") {
+      bool parent = active(), v = false;
+      bool read = rec.unit([&] {
+        if (int(groups.size()) >= kMaxNesting && !refused_groups)
+          fail(dir, "#if groups nested deeper than " + std::to_string(kMaxNesting));
+        v = parent && (name == "if" ? eval_if(arg_tokens(), dir) : defined_arg(arg_tokens(), dir) == (name == "ifdef"));
+      });
+      groups.push_back({parent, v || !read, v && read, false, dir, !read});
+      refused_groups += !read;
+    } else if (name == "elif" || name == "else") {
+      if (groups.empty()) {  // a lost #if: a refused group, skipped to its #endif
+        if (rec.diag) groups.push_back({active(), true, false, name == "else", dir, true}), refused_groups++;
+        return rec.report(dir, "#" + name + " without #if");
+      }
+      Group& g = groups.back();
+      if (g.seen_else) return rec.report(dir, "#" + name + " after #else");
+      if (name == "else") {
+        nothing_after();
+        g.seen_else = true;
+        g.active = g.parent_active && !g.taken;
+      } else {
+        bool v = false;
+        if (!rec.unit([&] { v = g.parent_active && !g.taken && eval_if(arg_tokens(), dir); })) g.taken = true;  // skipped
+        g.active = v;
+      }
+      g.taken |= g.active;
+    } else if (name == "endif") {
+      if (groups.empty()) return rec.report(dir, "#endif without #if");
+      nothing_after();
+      refused_groups -= groups.back().refused;
+      groups.pop_back();
+    } else if (!active()) {
+      return;  // other directives in a skipped group are not read
+    } else if (name == "define") {
+      std::vector<Tok> a;
+      rec.unit([&] {
+        a = arg_tokens();
         if (a.empty() || a[0].kind != Tok::Ident) fail(a.empty() ? dir : a[0], "#define needs a macro name");
         size_t after = size_t(a[0].col - 1 - args_col) + a[0].text.size();
-        if (after < args.size() && args[after] == '(')
+        if (after < args.size() && args[after] == '(') {
+          refused_macros.insert(a[0].text);
           fail(a[0], "function-like macros are not supported (docs/rtsp.md): #define " + a[0].text + " has a '(' right after its name");
+        }
         macros[a[0].text] = std::vector<Tok>(a.begin() + 1, a.end());
-      } else if (name == "undef") {
+        refused_macros.erase(a[0].text);
+      });
+    } else if (name == "undef") {
+      rec.unit([&] {
         std::vector<Tok> a = arg_tokens();
         if (a.size() != 1 || a[0].kind != Tok::Ident) fail(a.empty() ? dir : a[0], "#undef needs one macro name");
         macros.erase(a[0].text);
-      } else {
-        fail(dir, "unknown directive '#" + name + "' (#define #undef #ifdef #ifndef #if #elif #else #endif)");
+      });
+    } else {
+      try {  // `#defin X 1`: X's uses are quiet
+        std::vector<Tok> a = arg_tokens();
+        if (!a.empty() && a[0].kind == Tok::Ident) refused_macros.insert(a[0].text);
+      } catch (const CompileError&) {  // the directive's own error is the one said
       }
+      rec.report(dir, "unknown directive '#" + name + "' (#define #undef #ifdef #ifndef #if #elif #else #endif)");
     }
-    if (!groups.empty()) fail(groups.back().at, "#" + groups.back().at.text + " without #endif");
   }
 
   // Comments become blanks (newlines kept), so columns stay those of the file.
@@ -387,6 +481,78 @@ bool is_kw(const Tok& t, const char* kw) {
 struct Parser {
   std::vector<Tok> t;
   size_t p = 0;
+  // Error recovery: a statement (and an argument of a call) is the unit; a
+  // refused one is skipped to its end (sync).  Said nothing more: an error in a
+  // statement holding a line the preprocessor refused (a Bad token), the uses of
+  // a refused macro, and the 'fi' (or 'else') of an if whose header was refused.
+  Recovery rec;
+  std::set<std::string> refused_macros;
+  int refused_ifs = 0;  // ifs refused before their body: their 'fi' is still to come
+  int refused = 0;      // statements refused so far
+  std::set<std::string> unknown_names;  // reported once (as gcc does), later uses quiet
+
+  // An unknown name: said at its first use only.
+  [[noreturn]] void unknown(const Tok& k, const std::string& m) {
+    if (refused_macros.count(k.text) || (rec.diag && !unknown_names.insert(k.text).second)) throw Cascade();
+    fail(k, m);
+  }
+
+  bool bad_in(size_t from, size_t to) const {
+    for (size_t i = from; i <= to && i < t.size(); i++)
+      if (t[i].kind == Tok::Bad) return true;
+    return false;
+  }
+  // Reads a unit starting at token p; false if it was refused (reported unless
+  // it holds a Bad token).
+  bool attempt(const std::function<void()>& read) {
+    size_t start = p;
+    if (!rec.diag) return read(), true;
+    try {
+      read();
+      return true;
+    } catch (const Stop&) {
+      throw;
+    } catch (const Cascade&) {
+      return false;
+    } catch (const CompileError& e) {
+      if (!bad_in(start, p)) rec.diag->error(rec.file, e);
+      return false;
+    }
+  }
+  static bool starts_statement(const Tok& k) {
+    return is_kw(k, "if") || is_kw(k, "ifbecome") || is_kw(k, "else") || is_kw(k, "fi") || is_kw(k, "init");
+  }
+  // After a refused statement that began at `start`: on past its ';' (or the
+  // 'then' of an if's header), stopping before what begins another statement.
+  // An if, or what looks like a misspelled one (an unknown word before a condition).
+  bool if_header(size_t start) const {
+    if (is_kw(t[start], "if") || is_kw(t[start], "ifbecome")) return true;
+    const FuncInfo* f = start + 1 < t.size() && t[start + 1].kind == Tok::Ident ? find_func(t[start + 1].text) : nullptr;
+    return t[start].kind == Tok::Ident && !find_func(t[start].text) && f && f->cond;
+  }
+  void sync(size_t start) {
+    int depth = 0;  // parentheses open since the statement's start
+    for (size_t i = start; i < p; i++)
+      if (t[i].kind == Tok::Punct) depth += t[i].text == "(" ? 1 : t[i].text == ")" ? -1 : 0;
+    if (p == start) next();
+    bool header = if_header(start);
+    while (peek().kind != Tok::End) {
+      const Tok& k = peek();
+      if (k.kind == Tok::Punct) depth += k.text == "(" ? 1 : k.text == ")" ? -1 : 0;
+      if ((k.kind == Tok::Punct && k.text == ";" && depth <= 0) || is_kw(k, "then")) return void(next());
+      bool call = k.kind == Tok::Ident && find_func(k.text) && p + 1 < t.size() && t[p + 1].text == "(";
+      if (starts_statement(k) || (call && !(header && p == start + 1))) return;  // (an if's own condition is not)
+      next();
+    }
+  }
+  // One statement into `out`; with recovery a refused one is skipped.
+  void one(std::vector<Stmt>& out, const std::function<Stmt()>& read) {
+    size_t start = p;
+    if (attempt([&] { out.push_back(read()); })) return;
+    refused++;
+    if (if_header(start)) refused_ifs++;
+    sync(start);
+  }
 
   const Tok& peek() const { return t[p]; }
   const Tok& next() { return t[p < t.size() - 1 ? p++ : p]; }
@@ -400,15 +566,14 @@ struct Parser {
   std::vector<Stmt> program() {
     std::vector<Stmt> out;
     while (peek().kind != Tok::End) {
-      if (is_kw(peek(), "init")) {
+      one(out, [&] {
+        if (!is_kw(peek(), "init")) return stmt(0);
         Stmt s;
         s.kind = Stmt::Init;
         s.at = next();
         s.call = call(false);
-        out.push_back(std::move(s));
-      } else {
-        out.push_back(stmt(0));
-      }
+        return s;
+      });
     }
     return out;
   }
@@ -425,22 +590,41 @@ struct Parser {
       if (!is_kw(peek(), "then")) fail(peek(), "expected 'then' after the condition, found " + shown(peek()));
       next();
       std::vector<Stmt>* branch = &s.then_;
+      int refused0 = refused;
       for (;;) {
         if (is_kw(peek(), "fi")) { next(); break; }
         if (is_kw(peek(), "else")) {
-          if (branch == &s.else_) fail(peek(), "second 'else' of one if");
+          // a second else: reported (unless a refused if's else), and read as this one's
+          if (branch == &s.else_ && !refused_ifs && refused == refused0) {
+            refused_ifs++;  // a lost if's else, most likely: its 'fi' says nothing
+            rec.report(peek(), "second 'else' of one if");
+          }
           next();
           branch = &s.else_;
           continue;
         }
-        if (peek().kind == Tok::End) fail(s.at, "'" + s.at.text + "' without 'fi'");
-        if (is_kw(peek(), "init")) fail(peek(), "'init' only at the top of the program, not inside an if");
-        branch->push_back(stmt(depth + 1));
+        if (peek().kind == Tok::End) {
+          if (refused_ifs) refused_ifs--, throw Cascade();  // a refused if's body took this one's 'fi'
+          if (refused > refused0) throw Cascade();  // the refused statement may have been the 'fi'
+          fail(s.at, "'" + s.at.text + "' without 'fi'");
+        }
+        if (is_kw(peek(), "init")) {  // reported, and its action read as a statement of the if
+          rec.report(peek(), "'init' only at the top of the program, not inside an if");
+          next();
+          continue;
+        }
+        one(*branch, [&] { return stmt(depth + 1); });
       }
       return s;
     }
-    if (is_kw(peek(), "then") || is_kw(peek(), "else") || is_kw(peek(), "fi"))
+    if (is_kw(peek(), "then") || is_kw(peek(), "else") || is_kw(peek(), "fi")) {
+      if (refused_ifs) {  // the 'fi' (or 'then', 'else') of an if whose header was refused
+        if (is_kw(next(), "fi")) refused_ifs--;
+        throw Cascade();
+      }
+      if (!is_kw(peek(), "fi")) refused_ifs++;  // a lost if header: its 'else' and 'fi' say nothing
       fail(peek(), "'" + peek().text + "' without 'if'");
+    }
     s.call = call(false);
     return s;
   }
@@ -453,20 +637,25 @@ struct Parser {
     const FuncInfo* f = find_func(c.at.text);
     if (!f) {
       if (c.at.text.size() > 4 && c.at.text.compare(0, 4, "Func") == 0)
-        fail(c.at, "user functions (" + c.at.text + ") are not supported: ldc has no FuncN table");
-      fail(c.at, "unknown function '" + c.at.text + "'" + (peek().text == "(" ? "" : " (a macro not defined?)"));
+        unknown(c.at, "user functions (" + c.at.text + ") are not supported: ldc has no FuncN table");
+      unknown(c.at, "unknown function '" + c.at.text + "'" + (peek().text == "(" ? "" : " (a macro not defined?)"));
     }
     if (f->cond != cond)
       fail(c.at, std::string("'") + f->name + "' is " + (f->cond ? "a condition: use it after if or ifbecome" : "an action, not a condition"));
     c.name = f->name;
     expect("(");
-    c.item = item(next());
+    // each argument is a unit: a wrong one is reported and the next one read
+    bool refused = !attempt([&] { c.item = item(next()); });
     for (int i = 0; i < f->nargs; i++) {
-      if (peek().text != "," || peek().kind != Tok::Punct)
+      if (peek().text != "," || peek().kind != Tok::Punct) {
+        if (refused) throw Cascade();  // the refused argument's end was not found
         fail(peek(), std::string(f->name) + " takes " + std::to_string(f->nargs + 1) + " arguments");
+      }
       next();
-      c.args.push_back(data());
+      size_t from = p;
+      if (!attempt([&] { c.args.push_back(data()); })) refused = true, skip_argument(from);
     }
+    if (refused) throw Cascade();  // the statement is refused, its arguments' errors said
     if (peek().text == ",") fail(peek(), std::string(f->name) + " takes " + std::to_string(f->nargs + 1) + " arguments");
     expect(")");
     if (!cond) {
@@ -474,6 +663,23 @@ struct Parser {
       next();
     }
     return c;
+  }
+  // After a refused argument that began at token `from`: to the ',' or ')'
+  // that ends it (back to the call's ')' if the error took it).
+  void skip_argument(size_t from) {
+    int depth = 0;
+    for (size_t i = from; i < p; i++) {
+      if (t[i].kind != Tok::Punct) continue;
+      if (t[i].text == "(") depth++;
+      else if (t[i].text == ")" && depth-- == 0) return void(p = i);
+    }
+    for (; peek().kind != Tok::End && !starts_statement(peek()) && !is_kw(peek(), "then"); next()) {
+      const Tok& k = peek();
+      if (k.kind != Tok::Punct) continue;
+      if (k.text == "(") depth++;
+      else if (k.text == ")" && depth-- == 0) return;
+      else if ((k.text == "," && depth == 0) || k.text == ";") return;
+    }
   }
 
   static bool item_text(const Tok& k, Item& it) {
@@ -490,7 +696,11 @@ struct Parser {
   }
   Item item(const Tok& k) {
     Item it;
-    if (!item_text(k, it)) fail(k, "expected a group item (D0, A1, B2, I3, F4, T5), found " + shown(k));
+    if (!item_text(k, it)) {
+      std::string m = "expected a group item (D0, A1, B2, I3, F4, T5), found " + shown(k);
+      if (k.kind == Tok::Ident) unknown(k, m);
+      fail(k, m);
+    }
     uint32_t max = kGroupSize[std::strchr(kGroups, it.g) - kGroups];
     if (it.n >= max) fail(k, "group item " + k.text + " out of range (" + std::string(1, it.g) + "0.." + std::string(1, it.g) + std::to_string(max - 1) + ")");
     return it;
@@ -588,7 +798,7 @@ struct Parser {
     }
     Item it;
     if (item_text(k, it)) fail(k, "group item " + k.text + " inside an expression: an argument is one item or constants only");
-    if (k.kind == Tok::Ident) fail(k, "unknown name '" + k.text + "' (not a macro, item or bitN)");
+    if (k.kind == Tok::Ident) unknown(k, "unknown name '" + k.text + "' (not a macro, item or bitN)");
     fail(k, "expected a value, found " + shown(k));
   }
 };
@@ -596,6 +806,7 @@ struct Parser {
 // ---------------------------------------------------------------- code
 
 struct Gen {
+  Recovery rec;  // a statement is the unit: a refused one makes no rungs, its branches are still read
   TreeProgram tp;
   std::set<uint32_t> written_d, timers;
   std::set<std::pair<char, uint32_t>> used;  // items for aliases
@@ -604,7 +815,7 @@ struct Gen {
   int line = 0;
 
   Operand new_bit() {
-    if (next_m >= device_count(Dev::M)) throw CompileError(line, 1, "too many if statements and timers (no hidden M bit left)");
+    if (next_m >= device_count(Dev::M)) throw Stop(line, 1, "too many if statements and timers (no hidden M bit left)");
     return bit_opd(Area::M, next_m++);
   }
   static Operand scratch(int k) { return int_opd(Area::D, kScratch + uint32_t(k)); }
@@ -662,7 +873,7 @@ struct Gen {
 
   void rung(const Cond& path, std::vector<TreeNode> actions, const Tok& at) {
     if (actions.empty() || path.k == Cond::False) return;
-    if (tp.rungs.size() >= kMaxRungs) fail(at, "the program needs more than " + std::to_string(kMaxRungs) + " rungs");
+    if (tp.rungs.size() >= kMaxRungs) stop(at, "the program needs more than " + std::to_string(kMaxRungs) + " rungs");
     TreeRung r;
     r.line = at.line;
     TreeNode act = fork_of(std::move(actions));
@@ -793,35 +1004,47 @@ struct Gen {
   void stmts(const std::vector<Stmt>& ss, const Cond& path) {
     for (const Stmt& s : ss) {
       line = s.at.line;
-      if (s.kind == Stmt::Init) {
-        rung(Cond::of(leaf(Op::LOAD, loc(s.at), bit_opd(Area::S, kBitFirstScan))), action(s.call), s.at);
-      } else if (s.kind == Stmt::Action) {
-        rung(path, action(s.call), s.at);
-      } else {
-        SrcLoc at = loc(s.at);
-        TreeNode lf = condition(s.call, path);
-        Operand t = new_bit();
-        if (!s.become) {
-          rung(c_and(path, Cond::of(lf)), {out(Op::OUT, at, t)}, s.at);
-        } else {
-          // fires when the condition is true and was false when this if last ran
-          Operand now = new_bit(), before = new_bit();
-          rung(c_and(path, Cond::of(lf)), {out(Op::OUT, at, now)}, s.at);
-          rung(c_and(Cond::of(leaf(Op::LOAD, at, now)), Cond::of(leaf(Op::LOADN, at, before))), {out(Op::OUT, at, t)}, s.at);
-          if (path.k == Cond::True) {
-            rung(Cond::of(leaf(Op::LOAD, at, now)), {out(Op::OUT, at, before)}, s.at);
-          } else {
-            TreeNode set_b, rst_b;
-            set_b.kind = rst_b.kind = TreeNode::Kind::Then;
-            set_b.kids = {leaf(Op::LOAD, at, now), out(Op::SET, at, before)};
-            rst_b.kids = {leaf(Op::LOADN, at, now), out(Op::RST, at, before)};
-            rung(path, {set_b, rst_b}, s.at);
-          }
-        }
-        stmts(s.then_, Cond::of(leaf(Op::LOAD, at, t)));
-        stmts(s.else_, c_and(path, Cond::of(leaf(Op::LOADN, at, t))));
-      }
+      Operand t;  // an if's hidden bit
+      bool made = rec.unit([&] { t = statement(s, path); });
+      refused |= !made;
+      if (s.kind != Stmt::If) continue;
+      SrcLoc at = loc(s.at);
+      // a refused condition: its branches are still checked, under no condition
+      stmts(s.then_, made ? Cond::of(leaf(Op::LOAD, at, t)) : Cond::yes());
+      stmts(s.else_, made ? c_and(path, Cond::of(leaf(Op::LOADN, at, t))) : Cond::yes());
     }
+  }
+  // The rungs of one statement (an if's: its condition into the hidden bit it returns).
+  Operand statement(const Stmt& s, const Cond& path) {
+    if (s.kind == Stmt::Init) {
+      rung(Cond::of(leaf(Op::LOAD, loc(s.at), bit_opd(Area::S, kBitFirstScan))), action(s.call), s.at);
+      return {};
+    }
+    if (s.kind == Stmt::Action) {
+      rung(path, action(s.call), s.at);
+      return {};
+    }
+    SrcLoc at = loc(s.at);
+    TreeNode lf = condition(s.call, path);
+    Operand t = new_bit();
+    if (!s.become) {
+      rung(c_and(path, Cond::of(lf)), {out(Op::OUT, at, t)}, s.at);
+      return t;
+    }
+    // fires when the condition is true and was false when this if last ran
+    Operand now = new_bit(), before = new_bit();
+    rung(c_and(path, Cond::of(lf)), {out(Op::OUT, at, now)}, s.at);
+    rung(c_and(Cond::of(leaf(Op::LOAD, at, now)), Cond::of(leaf(Op::LOADN, at, before))), {out(Op::OUT, at, t)}, s.at);
+    if (path.k == Cond::True) {
+      rung(Cond::of(leaf(Op::LOAD, at, now)), {out(Op::OUT, at, before)}, s.at);
+    } else {
+      TreeNode set_b, rst_b;
+      set_b.kind = rst_b.kind = TreeNode::Kind::Then;
+      set_b.kids = {leaf(Op::LOAD, at, now), out(Op::SET, at, before)};
+      rst_b.kids = {leaf(Op::LOADN, at, now), out(Op::RST, at, before)};
+      rung(path, {set_b, rst_b}, s.at);
+    }
+    return t;
   }
 
   void program(const std::vector<Stmt>& ss, const Tok& first) {
@@ -844,18 +1067,25 @@ struct Gen {
         default: break;  // Fn and Tn are ldc's own Fn and Tn
       }
     }
-    if (tp.rungs.empty()) fail(first, "the program has no statements");
+    if (tp.rungs.empty() && !refused) fail(first, "the program has no statements");
   }
+  bool refused = false;  // a line or statement was refused: "no statements" is not said
 };
 
-}  // namespace
 
-TreeProgram parse_rtsp(std::string_view text, const std::string& filename) {
+// Reads a program; with `diag`, every error is reported there (a Stop ends the
+// reading) and a program with errors ends with ErrorsReported.
+TreeProgram read_rtsp(std::string_view text, const std::string& filename, Diagnostics* diag) {
   if (text.size() > kMaxSourceBytes)
     throw CompileError(1, 1, "source file too large (at most " + std::to_string(kMaxSourceBytes >> 20) + " MiB)");
+  Recovery rec{diag, filename};
+  int errors0 = diag ? diag->errors() : 0;
   Preprocessor pp;
+  pp.rec = rec;
   pp.run(text);
   Parser ps;
+  ps.rec = rec;
+  ps.refused_macros = std::move(pp.refused_macros);
   ps.t = std::move(pp.out);
   Tok end;  // just after the last token
   if (!ps.t.empty()) end.line = ps.t.back().line, end.col = ps.t.back().col + int(ps.t.back().text.size());
@@ -865,9 +1095,27 @@ TreeProgram parse_rtsp(std::string_view text, const std::string& filename) {
   Tok first = ps.t.front();
   std::vector<Stmt> prog = ps.program();
   Gen g;
+  g.rec = rec;
   g.tp.source = filename;
+  g.refused = diag && diag->errors() > errors0;
   g.program(prog, first);
+  if (diag && diag->errors() > errors0) throw ErrorsReported();
   return std::move(g.tp);
+}
+
+}  // namespace
+
+TreeProgram parse_rtsp(std::string_view text, const std::string& filename) { return read_rtsp(text, filename, nullptr); }
+
+TreeProgram parse_rtsp(std::string_view text, const std::string& filename, Diagnostics& diag) {
+  try {
+    return read_rtsp(text, filename, &diag);
+  } catch (const ErrorsReported&) {
+    throw;
+  } catch (const CompileError& e) {  // a Stop (a limit of the whole program), or the file too large
+    diag.error(filename, e);
+    throw ErrorsReported();
+  }
 }
 
 }  // namespace ldc

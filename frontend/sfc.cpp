@@ -6,8 +6,11 @@
 // through parse_il_text) and lowers them to IL.
 #include <algorithm>
 #include <cstring>
+#include <functional>
 #include <map>
+#include <set>
 
+#include "frontend/diag.h"
 #include "frontend/frontend.h"
 #include "frontend/operands.h"
 #include "frontend/treebuild.h"
@@ -19,6 +22,16 @@ using namespace treebuild;
 
 [[noreturn]] void fail(int line, int col, const std::string& msg) { throw CompileError(line, col, msg); }
 
+// An error that follows from one already reported (docs/diagnostics.md): its
+// unit is refused and nothing more is said.  Only error recovery reaches one.
+struct Cascade : CompileError {
+  Cascade() : CompileError(0, 0, "follows from an error reported") {}
+};
+// A limit of the whole chart: with recovery too it ends the reading.
+struct Stop : CompileError {
+  using CompileError::CompileError;
+};
+
 struct Tok {
   std::string text;
   int col = 0;
@@ -29,8 +42,8 @@ bool word_char(char c) {
 }
 
 // Words and operators of one line; `#` or `//` at the start of a token begins a comment.
-std::vector<Tok> tokens(const std::string& line, int lineno) {
-  std::vector<Tok> out;
+// An unexpected character is thrown, after `out` holds the tokens before it.
+void tokens_into(const std::string& line, int lineno, std::vector<Tok>& out) {
   size_t i = 0;
   while (i < line.size()) {
     char c = line[i];
@@ -62,7 +75,27 @@ std::vector<Tok> tokens(const std::string& line, int lineno) {
     }
     out.push_back(std::move(t));
   }
+}
+
+std::vector<Tok> tokens(const std::string& line, int lineno) {
+  std::vector<Tok> out;
+  tokens_into(line, lineno, out);
   return out;
+}
+
+// The tokens of a line whose unexpected characters are read as blanks (error
+// recovery: the line's error is reported; its words still say what it is).
+std::vector<Tok> tokens_blanking(std::string line, int lineno) {
+  for (int tries = 0; tries < 64; tries++) {
+    std::vector<Tok> out;
+    try {
+      tokens_into(line, lineno, out);
+      return out;
+    } catch (const CompileError& e) {
+      line[size_t(e.col - 1)] = ' ';
+    }
+  }
+  return {};
 }
 
 struct Line {
@@ -70,6 +103,7 @@ struct Line {
   int no;
   std::vector<Tok> toks;
   std::string kw;  // the first token, upper case
+  bool refused = false;  // an error was reported on it: its condition or action is not read
 };
 
 struct PendingT {  // a transition waiting for its target
@@ -99,12 +133,30 @@ struct Jump {
 
 class SfcParser {
  public:
-  SfcParser(std::string_view text, std::string file) : text_(text), file_(std::move(file)) {}
+  SfcParser(std::string_view text, std::string file, Diagnostics* diag = nullptr)
+      : text_(text), file_(std::move(file)), diag_(diag) {}
   Chart chart();
 
  private:
   std::string_view text_;
   std::string file_;
+  // Error recovery (docs/diagnostics.md): with diag_, a wrong declaration,
+  // step, transition, action, jump, condition or body is reported and the
+  // reader goes on with the next line; the structure is kept (a wrong step is
+  // still a step, a missing transition is supplied) so that one mistake gives
+  // one error.  Said nothing more: the uses of a refused alias or step name,
+  // what the step flags of a refused `flags` line would have said, the end of
+  // a chart whose `select` or `parallel` was not closed.
+  Diagnostics* diag_;
+  std::set<std::string> refused_names_;  // upper case
+  bool flags_refused_ = false, unclosed_ = false;
+  bool unit(const std::function<void()>& read);
+  void report(int line, int col, const std::string& msg) {
+    unit([&] { fail(line, col, msg); });
+  }
+  void quiet_if_refused(const CompileError& e) const;
+  size_t skip_line();
+  void skip_block();
   std::vector<Line> lines_;
   size_t pos_ = 0;  // next line of pass 2
   Chart c_;
@@ -121,6 +173,8 @@ class SfcParser {
 
   void read_lines();
   void declarations();
+  void alias(const Line& l);
+  void flags(const Line& l);
   int col_of(int line) const {  // the first word of a line
     const Line& l = lines_[size_t(line - 1)];
     return l.toks.empty() ? 1 : l.toks[0].col;
@@ -135,13 +189,19 @@ class SfcParser {
   };
   SeqEnd sequence(uint32_t scope, int depth, int prev, bool expect_step, bool top);
   uint32_t step(uint32_t scope, bool top_first);
+  void step_timer(uint32_t s, const Line& l, size_t k);
+  void step_actions(uint32_t s);
+  bool unknown_line_ = false;  // a line refused as no action: it may have been the missing transition
   uint32_t parallel(uint32_t scope, int depth);
+  uint32_t stand_in_step(uint32_t scope, int line);
   std::vector<PendingT> select(uint32_t scope, int depth, int prev);
   uint32_t new_step(const std::string& name, int line, uint32_t scope);
   uint32_t new_scope();
   void action(uint32_t s, const Line& l);
   void resolve_jumps();
   void read_conditions();
+  void read_condition(const Cond_& cd);
+  void read_body(const Body& bd, const std::vector<Alias>& known);
   void read_bodies();
   void check_writes();
 
@@ -164,14 +224,20 @@ void SfcParser::read_lines() {
   }
 }
 
-bool opens_body(const Line& l) { return !l.toks.empty() && l.toks.back().text == "{"; }
+bool opens_body(const Line& l) {
+  if (!l.toks.empty() && l.toks.back().text == "{") return true;
+  if (!l.refused) return false;  // a refused line (its tokens cut short): by its text
+  size_t e = l.text.find_last_not_of(" \t\r");
+  return e != std::string::npos && l.text[e] == '{';
+}
 
 // Pass 1.  decl = "alias" NAME "=" DEVICE | "flags" Mn ;  body lines are skipped.
 void SfcParser::declarations() {
   c_.flag_base = 4096;
   for (size_t i = 0; i < lines_.size(); i++) {
     Line& l = lines_[i];
-    l.toks = tokens(l.text, l.no);
+    l.refused = !unit([&] { tokens_into(l.text, l.no, l.toks); });
+    if (l.refused) l.toks = tokens_blanking(l.text, l.no);  // the line keeps its place in the chart
     if (l.toks.empty()) continue;
     l.kw = upper(l.toks[0].text);
     if (opens_body(l)) {
@@ -183,36 +249,48 @@ void SfcParser::declarations() {
         if (t == "}") break;
         j++;
       }
-      if (j == lines_.size()) fail(l.no, l.toks.back().col, "action body not closed: a line with '}' alone ends it");
+      if (j == lines_.size()) throw Stop(l.no, l.toks.back().col, "action body not closed: a line with '}' alone ends it");
       i = j;
       lines_[j].kw = "}";
       continue;
     }
     if (l.kw == "ALIAS") {
       const auto& t = l.toks;
-      if (t.size() != 4 || t[2].text != "=") fail(l.no, t[0].col, "expected: alias NAME = DEVICE");
-      std::string why;
-      if (!is_identifier(t[1].text)) fail(l.no, t[1].col, "alias name '" + t[1].text + "' must be letters, digits and _");
-      if (parse_device(t[1].text) || parse_iec_address(t[1].text, why))
-        fail(l.no, t[1].col, "'" + t[1].text + "' cannot be an alias name: it is a device");
-      if (names_.count(upper(t[1].text))) fail(l.no, t[1].col, "alias '" + t[1].text + "' is already defined");
-      DeviceRef d;
-      try {
-        d = device(t[3]);
-      } catch (CompileError& e) { fail(l.no, e.col, e.what()); }
-      names_[upper(t[1].text)] = d;
-      aliases_.push_back({t[1].text, d});
+      if (unit([&] { alias(l); }) || t.size() < 2 || names_.count(upper(t[1].text))) continue;
+      refused_names_.insert(upper(t[1].text));  // its uses say nothing
     } else if (l.kw == "FLAGS") {
-      if (have_flags_) fail(l.no, l.toks[0].col, "the step flags are already placed (line " + std::to_string(flags_line_) + ")");
-      if (l.toks.size() != 2) fail(l.no, l.toks[0].col, "expected: flags Mn (the first of the step flags)");
-      auto d = parse_device(l.toks[1].text);
-      if (!d || d->dev != Dev::M || d->index >= device_count(Dev::M))
-        fail(l.no, l.toks[1].col, "expected an M device (M0..M8191) for the step flags");
-      c_.flag_base = d->index;
-      have_flags_ = true;
-      flags_line_ = l.no;
+      flags_refused_ = !unit([&] { flags(l); });
     }
   }
+}
+
+// alias = "alias" NAME "=" DEVICE
+void SfcParser::alias(const Line& l) {
+  const auto& t = l.toks;
+  if (t.size() != 4 || t[2].text != "=") fail(l.no, t[0].col, "expected: alias NAME = DEVICE");
+  std::string why;
+  if (!is_identifier(t[1].text)) fail(l.no, t[1].col, "alias name '" + t[1].text + "' must be letters, digits and _");
+  if (parse_device(t[1].text) || parse_iec_address(t[1].text, why))
+    fail(l.no, t[1].col, "'" + t[1].text + "' cannot be an alias name: it is a device");
+  if (names_.count(upper(t[1].text))) fail(l.no, t[1].col, "alias '" + t[1].text + "' is already defined");
+  DeviceRef d;
+  try {
+    d = device(t[3]);
+  } catch (CompileError& e) { fail(l.no, e.col, e.what()); }
+  names_[upper(t[1].text)] = d;
+  aliases_.push_back({t[1].text, d});
+}
+
+// flags = "flags" Mn
+void SfcParser::flags(const Line& l) {
+  if (have_flags_) fail(l.no, l.toks[0].col, "the step flags are already placed (line " + std::to_string(flags_line_) + ")");
+  if (l.toks.size() != 2) fail(l.no, l.toks[0].col, "expected: flags Mn (the first of the step flags)");
+  auto d = parse_device(l.toks[1].text);
+  if (!d || d->dev != Dev::M || d->index >= device_count(Dev::M))
+    fail(l.no, l.toks[1].col, "expected an M device (M0..M8191) for the step flags");
+  c_.flag_base = d->index;
+  have_flags_ = true;
+  flags_line_ = l.no;
 }
 
 DeviceRef SfcParser::device(const Tok& t) { return resolve_device(t.text, t.col, names_, "device, alias or step"); }
@@ -258,11 +336,11 @@ uint32_t SfcParser::new_scope() {
 
 uint32_t SfcParser::new_step(const std::string& name, int line, uint32_t scope) {
   if (c_.steps.size() >= kMaxSfcSteps)
-    fail(line, 1, "too many steps (at most " + std::to_string(kMaxSfcSteps) + ", simultaneous sequences included)");
+    throw Stop(line, 1, "too many steps (at most " + std::to_string(kMaxSfcSteps) + ", simultaneous sequences included)");
   uint32_t s = uint32_t(c_.steps.size());
   if (c_.flag_base + 3 * (s + 1) > device_count(Dev::M))
-    fail(line, 1, "the step flags do not fit: 3 M bits per step from M" + std::to_string(c_.flag_base) +
-                      " pass M8191 (lower 'flags')");
+    throw Stop(line, 1, "the step flags do not fit: 3 M bits per step from M" + std::to_string(c_.flag_base) +
+                            " pass M8191 (lower 'flags')");
   SfcStep st;
   st.name = name;
   st.line = line;
@@ -274,64 +352,85 @@ uint32_t SfcParser::new_step(const std::string& name, int line, uint32_t scope) 
 }
 
 // step = [ "initial" ] "step" NAME [ "timer" Tn ] { action }
+// With recovery a wrong step line is still a step (named after its line when
+// its name is refused, the name then remembered as refused).
 uint32_t SfcParser::step(uint32_t scope, bool top_first) {
   const Line& l = lines_[pos_++];
   const auto& t = l.toks;
   size_t k = 0;
   if (l.kw == "INITIAL") {
-    if (!top_first) fail(l.no, t[0].col, "only the chart's first step is initial");
+    if (!top_first) report(l.no, t[0].col, "only the chart's first step is initial");
     k = 1;
   } else if (top_first) {
-    fail(l.no, t[0].col, "the chart starts with its initial step: 'initial step NAME'");
+    report(l.no, t[0].col, "the chart starts with its initial step: 'initial step NAME'");
   }
-  if (k >= t.size() || upper(t[k].text) != "STEP") fail(l.no, t[0].col, "expected: initial step NAME");
-  if (k + 1 >= t.size()) fail(l.no, t[k].col, "expected a step name after 'step'");
-  const Tok& name = t[k + 1];
-  std::string why;
-  if (!is_identifier(name.text)) fail(l.no, name.col, "step name '" + name.text + "' must be letters, digits and _");
-  if (parse_device(name.text) || parse_iec_address(name.text, why))
-    fail(l.no, name.col, "'" + name.text + "' cannot be a step name: it is a device");
-  std::string key = upper(name.text);
-  if (auto it = step_names_.find(key); it != step_names_.end())
-    fail(l.no, name.col, "duplicate step '" + name.text + "' (first defined on line " +
-                             std::to_string(c_.steps[it->second].line) + ")");
-  if (names_.count(key)) fail(l.no, name.col, "'" + name.text + "' is already an alias");
-  uint32_t s = new_step(name.text, l.no, scope);
-  step_names_[key] = s;
-  names_[key] = DeviceRef{Dev::M, c_.flag(s)};
-  if (k + 2 < t.size()) {
-    if (upper(t[k + 2].text) != "TIMER" || k + 4 != t.size())
-      fail(l.no, t[k + 2].col, "expected: step NAME [timer Tn]");
-    auto d = parse_device(t[k + 3].text);
-    if (!d || d->dev != Dev::T || d->index >= device_count(Dev::T))
-      fail(l.no, t[k + 3].col, "expected a timer T0..T255 for the step's time");
-    if (auto it = timers_.find(d->index); it != timers_.end())
-      fail(l.no, t[k + 3].col, "timer " + t[k + 3].text + " already times step '" + c_.steps[it->second].name + "'");
-    timers_[d->index] = s;
-    c_.steps[s].timer = int32_t(d->index);
+  std::string key;
+  bool named = unit([&] {
+    if (k >= t.size() || upper(t[k].text) != "STEP") fail(l.no, t[0].col, "expected: initial step NAME");
+    if (k + 1 >= t.size()) fail(l.no, t[k].col, "expected a step name after 'step'");
+    const Tok& name = t[k + 1];
+    std::string why;
+    if (!is_identifier(name.text)) fail(l.no, name.col, "step name '" + name.text + "' must be letters, digits and _");
+    if (parse_device(name.text) || parse_iec_address(name.text, why))
+      fail(l.no, name.col, "'" + name.text + "' cannot be a step name: it is a device");
+    key = upper(name.text);
+    if (auto it = step_names_.find(key); it != step_names_.end())
+      fail(l.no, name.col, "duplicate step '" + name.text + "' (first defined on line " +
+                               std::to_string(c_.steps[it->second].line) + ")");
+    if (names_.count(key)) fail(l.no, name.col, "'" + name.text + "' is already an alias");
+  });
+  if (!named && k + 1 < t.size() && !names_.count(upper(t[k + 1].text)) && !step_names_.count(upper(t[k + 1].text)))
+    refused_names_.insert(upper(t[k + 1].text));  // jumps to it and conditions on it say nothing
+  uint32_t s = new_step(named ? t[k + 1].text : "step_line_" + std::to_string(l.no), l.no, scope);
+  if (named) {
+    step_names_[key] = s;
+    names_[key] = DeviceRef{Dev::M, c_.flag(s)};
   }
+  if (named && k + 2 < t.size()) unit([&] { step_timer(s, l, k + 2); });
+  step_actions(s);
+  return s;
+}
+
+// "timer" Tn after the step's name (toks[k] is "timer")
+void SfcParser::step_timer(uint32_t s, const Line& l, size_t k) {
+  const auto& t = l.toks;
+  if (upper(t[k].text) != "TIMER" || k + 2 != t.size()) fail(l.no, t[k].col, "expected: step NAME [timer Tn]");
+  auto d = parse_device(t[k + 1].text);
+  if (!d || d->dev != Dev::T || d->index >= device_count(Dev::T))
+    fail(l.no, t[k + 1].col, "expected a timer T0..T255 for the step's time");
+  if (auto it = timers_.find(d->index); it != timers_.end())
+    fail(l.no, t[k + 1].col, "timer " + t[k + 1].text + " already times step '" + c_.steps[it->second].name + "'");
+  timers_[d->index] = s;
+  c_.steps[s].timer = int32_t(d->index);
+}
+
+// The action lines under step s, up to the next structure line.
+void SfcParser::step_actions(uint32_t s) {
   static const char* structure[] = {"STEP", "INITIAL", "TRANSITION", "SELECT", "PARALLEL", "BRANCH", "END", "JUMP"};
   while (const Line* a = peek()) {
     if (std::find(std::begin(structure), std::end(structure), a->kw) != std::end(structure)) break;
-    action(s, *a);
+    unit([&] { action(s, *a); });
   }
-  return s;
 }
 
 // action = ("N" | "S" | "R") BIT | ("N" | "P") ("ladder" | "il") "{" lines "}"
 void SfcParser::action(uint32_t s, const Line& l) {
   const auto& t = l.toks;
-  size_t here = pos_++;
-  if (l.kw != "N" && l.kw != "S" && l.kw != "R" && l.kw != "P")
+  size_t here = pos_;
+  pos_ = skip_line();  // its body too: a wrong header does not make the body's lines the chart's
+  if (l.refused) return;  // its error is said
+  if (l.kw != "N" && l.kw != "S" && l.kw != "R" && l.kw != "P") {
+    bool run = unknown_line_;  // the lines after a refused one (a body whose '{' was lost, say): quiet
+    unknown_line_ = true;
+    if (run) throw Cascade();
     fail(l.no, t[0].col, "expected an action (N, S, R or P), a transition, or a step; found '" + t[0].text + "'");
+  }
+  unknown_line_ = false;
   if (opens_body(l)) {
     std::string kind = t.size() == 3 ? upper(t[1].text) : "";
     if (t.size() != 3 || (kind != "LADDER" && kind != "IL") || l.kw == "S" || l.kw == "R")
       fail(l.no, t[0].col, "expected: N ladder {, N il {, P ladder { or P il {");
-    size_t last = here + 1;
-    while (lines_[last].kw != "}") last++;
-    bodies_.push_back({s, l.kw == "P", kind == "LADDER", here + 1, last, l.no});
-    pos_ = last + 1;
+    bodies_.push_back({s, l.kw == "P", kind == "LADDER", here + 1, pos_ - 1, l.no});
     return;
   }
   if (l.kw == "P") fail(l.no, t[0].col, "P takes a body: P ladder { ... } or P il { ... }");
@@ -359,29 +458,65 @@ void SfcParser::action(uint32_t s, const Line& l) {
 SfcParser::SeqEnd SfcParser::sequence(uint32_t scope, int depth, int prev, bool expect_step, bool top) {
   SeqEnd e;
   bool first = true;
-  while (!at_end_of_block()) {
+  for (;;) {
+    if (at_end_of_block()) {
+      const Line* l = peek();
+      if (!top || !l) break;
+      // a 'branch' or 'end' outside select and parallel: reported, skipped; after a
+      // 'branch' (its 'select' or 'parallel' lost) the rest of that block is skipped
+      // too, and it stands for the transition or step the chart needs there
+      report(l->no, l->toks[0].col, "'" + l->toks[0].text + "' outside 'select' or 'parallel'");
+      bool lost = l->kw == "BRANCH";
+      pos_++;
+      if (lost) {
+        skip_block();
+        while (peek() && peek()->kw == "BRANCH") pos_++, skip_block();
+        if (peek()) pos_++;  // its 'end'
+        unknown_line_ = true;
+      }
+      continue;
+    }
     const Line& l = *peek();
     const Tok& h = l.toks[0];
     e.empty = false;
-    if (e.jumped) fail(l.no, h.col, "unreachable: nothing can follow a jump, or a selection whose branches all jump");
+    if (e.jumped) {  // reported, and the rest of the block skipped
+      report(l.no, h.col, "unreachable: nothing can follow a jump, or a selection whose branches all jump");
+      skip_block();
+      continue;
+    }
     if (expect_step) {
       uint32_t s;
       if (l.kw == "STEP" || l.kw == "INITIAL") s = step(scope, top && first);
       else if (l.kw == "PARALLEL") {
-        if (top && first) fail(l.no, h.col, "the chart starts with its initial step: 'initial step NAME'");
+        if (top && first) report(l.no, h.col, "the chart starts with its initial step: 'initial step NAME'");
         s = parallel(scope, depth + 1);
       } else if (l.kw == "JUMP") {
-        if (l.toks.size() != 2) fail(l.no, h.col, "expected: jump STEP");
-        jumps_.push_back({e.pending, scope, l.toks[1], l.no});
+        if (l.toks.size() != 2) report(l.no, h.col, "expected: jump STEP");
+        else jumps_.push_back({e.pending, scope, l.toks[1], l.no});
         e.pending.clear();
         e.jumped = true;
         pos_++;
         continue;
       } else if (l.kw == "TRANSITION" || l.kw == "SELECT") {
-        fail(l.no, h.col, first ? "a simultaneous branch starts with a step"
-                                : "expected a step or a jump: steps and transitions alternate");
+        // reported; a step stands in for the missing one (the line is read next)
+        if (!unknown_line_)  // (else the block refused above was the step)
+          report(l.no, h.col, first ? "a simultaneous branch starts with a step"
+                                    : "expected a step or a jump: steps and transitions alternate");
+        unknown_line_ = false;
+        s = stand_in_step(scope, l.no);
       } else {
-        fail(l.no, h.col, "expected a step, 'parallel' or 'jump'; found '" + h.text + "'");
+        // reported; the line stands for a step, the action lines below are its
+        // (before the first step: a wrong declaration, skipped)
+        report(l.no, h.col, "expected a step, 'parallel' or 'jump'; found '" + h.text + "'");
+        pos_ = skip_line();
+        bool action = l.kw == "N" || l.kw == "S" || l.kw == "R" || l.kw == "P";
+        if (top && first && !action) {  // a wrong declaration, most likely: its name's uses say nothing
+          if (l.toks.size() >= 2 && is_identifier(l.toks[1].text) && !names_.count(upper(l.toks[1].text)))
+            refused_names_.insert(upper(l.toks[1].text));
+          continue;
+        }
+        s = stand_in_step(scope, l.no);
+        step_actions(s);
       }
       for (const PendingT& p : e.pending) c_.steps[p.step].out[p.index].target = s;
       e.pending.clear();
@@ -400,23 +535,33 @@ SfcParser::SeqEnd SfcParser::sequence(uint32_t scope, int depth, int prev, bool 
           bool glued = k == 1 || w == ")" || l.toks[k - 1].text == "(" || l.toks[k - 1].text == "!";
           t.text += (glued ? "" : " ") + w;
         }
-        if (l.toks.size() < 2) fail(l.no, h.col, "a transition needs a condition (TRUE for none)");
+        bool has_cond = l.toks.size() >= 2 || l.refused;
+        if (!has_cond) report(l.no, h.col, "a transition needs a condition (TRUE for none)");
         c_.steps[uint32_t(prev)].out.push_back(std::move(t));
         size_t idx = c_.steps[uint32_t(prev)].out.size() - 1;
-        conds_.push_back({uint32_t(prev), idx, pos_});
+        if (has_cond && !l.refused) conds_.push_back({uint32_t(prev), idx, pos_});
         e.pending = {{uint32_t(prev), idx}};
         pos_++;
       } else if (l.kw == "SELECT") {
         e.pending = select(scope, depth + 1, prev);
         if (e.pending.empty()) e.jumped = true;
-      } else if (l.kw == "JUMP") {
-        fail(l.no, h.col, "a jump follows a transition");
-      } else if (l.kw == "STEP" || l.kw == "INITIAL" || l.kw == "PARALLEL") {
-        fail(l.no, h.col, first ? "a selection branch starts with its transition"
-                                : "expected a transition between two steps");
       } else {
-        fail(l.no, h.col, "expected a transition or 'select'; found '" + h.text + "'");
+        if (l.kw == "JUMP") {
+          report(l.no, h.col, "a jump follows a transition");
+        } else if (l.kw == "STEP" || l.kw == "INITIAL" || l.kw == "PARALLEL") {
+          if (!unknown_line_)  // (else the line refused above was the transition)
+            report(l.no, h.col, first ? "a selection branch starts with its transition"
+                                      : "expected a transition between two steps");
+        } else {
+          report(l.no, h.col, "expected a transition or 'select'; found '" + h.text + "'");
+          pos_ = skip_line();  // the line stands for the transition
+        }
+        // a transition stands in for the missing one (a jump or step line is read next)
+        c_.steps[uint32_t(prev)].out.push_back(SfcTransition{});
+        c_.steps[uint32_t(prev)].out.back().line = l.no;
+        e.pending = {{uint32_t(prev), c_.steps[uint32_t(prev)].out.size() - 1}};
       }
+      unknown_line_ = false;
       e.last_is_plain_step = e.last_is_parallel = false;
       expect_step = true;
     }
@@ -425,34 +570,65 @@ SfcParser::SeqEnd SfcParser::sequence(uint32_t scope, int depth, int prev, bool 
   return e;
 }
 
+// A step in place of a missing or refused one (error recovery only).
+uint32_t SfcParser::stand_in_step(uint32_t scope, int line) {
+  return new_step("step_line_" + std::to_string(line), line, scope);
+}
+
+// The line after the one at pos_ (after its body, if it opens one).
+size_t SfcParser::skip_line() {
+  size_t i = pos_;
+  if (opens_body(lines_[i])) {
+    i++;
+    while (lines_[i].kw != "}") i++;
+  }
+  return i + 1;
+}
+
+// Skips the rest of a block: up to its 'branch' or 'end' (those of nested
+// selections and simultaneous sequences skipped with them).
+void SfcParser::skip_block() {
+  int depth = 0;
+  while (const Line* l = peek()) {
+    if (depth == 0 && (l->kw == "BRANCH" || l->kw == "END")) return;
+    if (l->kw == "SELECT" || l->kw == "PARALLEL") depth++;
+    else if (l->kw == "END") depth--;
+    pos_ = skip_line();
+  }
+}
+
 // parallel = "parallel" branch { branch } "end" ;  branch = "branch" sequence
 uint32_t SfcParser::parallel(uint32_t scope, int depth) {
   const Line& l = lines_[pos_++];
   if (depth > kMaxSfcNesting)
-    fail(l.no, l.toks[0].col, "selections and simultaneous sequences nested too deeply (at most " +
-                                  std::to_string(kMaxSfcNesting) + ")");
-  if (l.toks.size() != 1) fail(l.no, l.toks[1].col, "unexpected text after 'parallel'");
+    throw Stop(l.no, l.toks[0].col, "selections and simultaneous sequences nested too deeply (at most " +
+                                        std::to_string(kMaxSfcNesting) + ")");
+  if (l.toks.size() != 1) report(l.no, l.toks[1].col, "unexpected text after 'parallel'");
   uint32_t s = new_step("parallel_line_" + std::to_string(l.no), l.no, scope);
   c_.steps[s].parallel = true;
   const Line* b;
   while ((b = peek()) && b->kw == "BRANCH") {
-    if (b->toks.size() != 1) fail(b->no, b->toks[1].col, "unexpected text after 'branch'");
+    if (b->toks.size() != 1) report(b->no, b->toks[1].col, "unexpected text after 'branch'");
     int bline = b->no, bcol = b->toks[0].col;
     pos_++;
     uint32_t sc = new_scope();
     c_.steps[s].branches.push_back(sc);
     SeqEnd e = sequence(sc, depth, -1, true, false);
-    if (e.empty) fail(bline, bcol, "empty simultaneous branch: a branch needs at least one step");
-    if (!e.last_is_plain_step)
-      fail(e.pending.empty() ? bline : c_.steps[e.pending[0].step].out[e.pending[0].index].line,
-           e.pending.empty() ? bcol : col_of(c_.steps[e.pending[0].step].out[e.pending[0].index].line),
-           "unbalanced join: a simultaneous branch must end with a step (the join waits for it)");
+    if (e.empty) report(bline, bcol, "empty simultaneous branch: a branch needs at least one step");
+    else if (!e.last_is_plain_step)
+      report(e.pending.empty() ? bline : c_.steps[e.pending[0].step].out[e.pending[0].index].line,
+             e.pending.empty() ? bcol : col_of(c_.steps[e.pending[0].step].out[e.pending[0].index].line),
+             "unbalanced join: a simultaneous branch must end with a step (the join waits for it)");
     c_.scopes[sc].last = e.last_step;
   }
-  if (!b || b->kw != "END") fail(l.no, l.toks[0].col, "unbalanced join: 'parallel' is not closed by 'end'");
+  if (!b || b->kw != "END") {
+    unclosed_ = true;
+    report(l.no, l.toks[0].col, "unbalanced join: 'parallel' is not closed by 'end'");
+    return s;
+  }
   if (c_.steps[s].branches.size() < 2)
-    fail(b->no, b->toks[0].col, "a simultaneous sequence needs at least two branches");
-  if (b->toks.size() != 1) fail(b->no, b->toks[1].col, "unexpected text after 'end'");
+    report(b->no, b->toks[0].col, "a simultaneous sequence needs at least two branches");
+  if (b->toks.size() != 1) report(b->no, b->toks[1].col, "unexpected text after 'end'");
   pos_++;
   return s;
 }
@@ -461,40 +637,53 @@ uint32_t SfcParser::parallel(uint32_t scope, int depth) {
 std::vector<PendingT> SfcParser::select(uint32_t scope, int depth, int prev) {
   const Line& l = lines_[pos_++];
   if (depth > kMaxSfcNesting)
-    fail(l.no, l.toks[0].col, "selections and simultaneous sequences nested too deeply (at most " +
-                                  std::to_string(kMaxSfcNesting) + ")");
-  if (l.toks.size() != 1) fail(l.no, l.toks[1].col, "unexpected text after 'select'");
+    throw Stop(l.no, l.toks[0].col, "selections and simultaneous sequences nested too deeply (at most " +
+                                        std::to_string(kMaxSfcNesting) + ")");
+  if (l.toks.size() != 1) report(l.no, l.toks[1].col, "unexpected text after 'select'");
   std::vector<PendingT> all;
   int branches = 0;
   const Line* b;
   while ((b = peek()) && b->kw == "BRANCH") {
-    if (b->toks.size() != 1) fail(b->no, b->toks[1].col, "unexpected text after 'branch'");
+    if (b->toks.size() != 1) report(b->no, b->toks[1].col, "unexpected text after 'branch'");
     int bline = b->no, bcol = b->toks[0].col;
     pos_++;
     branches++;
     SeqEnd e = sequence(scope, depth, prev, false, false);
-    if (e.empty) fail(bline, bcol, "empty selection branch: a branch starts with its transition");
-    if (!e.jumped && e.pending.empty())
-      fail(e.last_line, col_of(e.last_line), "a selection branch must end with a transition (the selection joins after 'end') or a jump");
+    if (e.empty) report(bline, bcol, "empty selection branch: a branch starts with its transition");
+    else if (!e.jumped && e.pending.empty())
+      report(e.last_line, col_of(e.last_line), "a selection branch must end with a transition (the selection joins after 'end') or a jump");
     all.insert(all.end(), e.pending.begin(), e.pending.end());
   }
-  if (!b || b->kw != "END") fail(l.no, l.toks[0].col, "'select' is not closed by 'end'");
-  if (branches < 2) fail(b->no, b->toks[0].col, "a selection needs at least two branches");
-  if (b->toks.size() != 1) fail(b->no, b->toks[1].col, "unexpected text after 'end'");
+  if (!b || b->kw != "END") {
+    unclosed_ = true;
+    report(l.no, l.toks[0].col, "'select' is not closed by 'end'");
+    return all;
+  }
+  if (branches < 2) report(b->no, b->toks[0].col, "a selection needs at least two branches");
+  if (b->toks.size() != 1) report(b->no, b->toks[1].col, "unexpected text after 'end'");
   pos_++;
   return all;
 }
 
 void SfcParser::resolve_jumps() {
-  for (const Jump& j : jumps_) {
+  for (const Jump& j : jumps_) unit([&] {
     auto it = step_names_.find(upper(j.name.text));
+    if (it == step_names_.end() && refused_names_.count(upper(j.name.text))) throw Cascade();  // its step line was refused
     if (it == step_names_.end()) fail(j.line, j.name.col, "unknown step '" + j.name.text + "'");
     uint32_t s = it->second;
     if (c_.steps[s].scope != j.scope)
       fail(j.line, j.name.col, "jump to step '" + j.name.text +
                                    "' in another sequence: a jump stays in its own sequence or simultaneous branch");
     for (const PendingT& p : j.from) c_.steps[p.step].out[p.index].target = s;
-  }
+  });
+}
+
+// An error that names a refused alias or step ('NAME') follows from that
+// refusal: a Cascade.
+void SfcParser::quiet_if_refused(const CompileError& e) const {
+  std::string m = upper(e.what());
+  for (const std::string& n : refused_names_)
+    if (m.find("'" + n + "'") != std::string::npos) throw Cascade();
 }
 
 // cond   = term { ("OR" | "|" | "||") term }
@@ -577,7 +766,18 @@ Cond SfcParser::factor(const std::vector<Tok>& t, size_t& i, bool neg, int line,
 }
 
 void SfcParser::read_conditions() {
-  for (const Cond_& cd : conds_) {
+  for (const Cond_& cd : conds_) unit([&] {
+    try {
+      read_condition(cd);
+    } catch (const CompileError& e) {
+      quiet_if_refused(e);
+      throw;
+    }
+  });
+}
+
+void SfcParser::read_condition(const Cond_& cd) {
+  {
     const Line& l = lines_[cd.line];
     size_t i = 1;
     if (l.toks.size() < 2) fail(l.no, l.toks[0].col, "a transition needs a condition");
@@ -640,7 +840,18 @@ void SfcParser::read_bodies() {
   std::vector<Alias> known = aliases_;
   for (const SfcStep& s : c_.steps)
     if (!s.parallel) known.push_back({s.name, DeviceRef{Dev::M, c_.flag(uint32_t(&s - c_.steps.data()))}});
-  for (const Body& bd : bodies_) {
+  for (const Body& bd : bodies_) unit([&] {
+    try {
+      read_body(bd, known);
+    } catch (const CompileError& e) {
+      quiet_if_refused(e);
+      throw;
+    }
+  });
+}
+
+void SfcParser::read_body(const Body& bd, const std::vector<Alias>& known) {
+  {
     int first_no = bd.first < lines_.size() ? lines_[bd.first].no : bd.header_line + 1;
     int shift = first_no - 1;  // body line 1 is file line first_no
     std::string text;
@@ -706,20 +917,21 @@ void SfcParser::check_writes() {
         fail(in.loc.line, in.loc.col, "M" + std::to_string(in.a[k].index) + " is a step flag (M" + std::to_string(lo) +
                                           "..M" + std::to_string(hi - 1) + "): actions may read it, not write it");
   };
-  for (const SfcStep& s : c_.steps) {
+  if (flags_refused_) return;  // where the flags would have been is not known
+  for (const SfcStep& s : c_.steps) unit([&] {  // a step's first such write
     for (const Instr& in : s.bits) check(in);
     for (const SfcBody* b : {&s.on_entry, &s.body})
       for (const Rung& r : b->rungs)
         for (const Instr& in : r.code) check(in);
-  }
+  });
   for (const SfcNBit& n : c_.nbits)
-    if (n.bit.area == Area::M && n.bit.index >= lo && n.bit.index < hi) {
+    if (n.bit.area == Area::M && n.bit.index >= lo && n.bit.index < hi) unit([&] {
       Instr in;
       in.op = Op::OUT;
       in.a[0] = n.bit;
       in.loc = {c_.steps[n.steps[0]].line, 1};
       check(in);
-    }
+    });
 }
 
 // chart = { decl } sequence EOF    (the sequence starts with the initial step)
@@ -728,15 +940,15 @@ Chart SfcParser::chart() {
   declarations();
   c_.source = file_;
   new_scope();
+  int errors0 = diag_ ? diag_->errors() : 0;
   SeqEnd e = sequence(0, 0, -1, true, true);
-  if (const Line* l = peek())
-    fail(l->no, l->toks[0].col, "'" + l->toks[0].text + "' outside 'select' or 'parallel'");
-  if (c_.steps.empty()) fail(std::max(1, int(lines_.size())), 1, "no steps: a chart starts with 'initial step NAME'");
-  if (!e.pending.empty())
-    fail(c_.steps[e.pending[0].step].out[e.pending[0].index].line,
-         col_of(c_.steps[e.pending[0].step].out[e.pending[0].index].line), "transition to nowhere: a step or a jump must follow it");
-  if (e.last_is_parallel)
-    fail(e.last_line, col_of(e.last_line), "unbalanced join: this simultaneous sequence is never joined (add a transition after its 'end')");
+  if (c_.steps.empty() && !(diag_ && diag_->errors() > errors0))
+    fail(std::max(1, int(lines_.size())), 1, "no steps: a chart starts with 'initial step NAME'");
+  if (!e.pending.empty() && !unclosed_)
+    report(c_.steps[e.pending[0].step].out[e.pending[0].index].line,
+           col_of(c_.steps[e.pending[0].step].out[e.pending[0].index].line), "transition to nowhere: a step or a jump must follow it");
+  if (e.last_is_parallel && !unclosed_)
+    report(e.last_line, col_of(e.last_line), "unbalanced join: this simultaneous sequence is never joined (add a transition after its 'end')");
   resolve_jumps();
   read_conditions();
   read_bodies();
@@ -748,8 +960,38 @@ Chart SfcParser::chart() {
   return c_;
 }
 
+// Reads one unit (a declaration, a step line, an action, a jump, a condition,
+// a body): without diagnostics its error is thrown; with them it is reported
+// (not a Cascade), and false says the unit was refused.  A Stop goes on up.
+bool SfcParser::unit(const std::function<void()>& read) {
+  if (!diag_) return read(), true;
+  try {
+    read();
+    return true;
+  } catch (const Stop&) {
+    throw;
+  } catch (const Cascade&) {
+    return false;
+  } catch (const CompileError& e) {
+    diag_->error(file_, e);
+    return false;
+  }
+}
+
 }  // namespace
 
 Chart parse_sfc(std::string_view text, const std::string& filename) { return SfcParser(text, filename).chart(); }
+
+Chart parse_sfc(std::string_view text, const std::string& filename, Diagnostics& diag) {
+  int errors0 = diag.errors();
+  Chart c;
+  try {
+    c = SfcParser(text, filename, &diag).chart();
+  } catch (const CompileError& e) {  // a Stop: a limit of the whole chart, or a body not closed
+    diag.error(filename, e);
+  }
+  if (diag.errors() > errors0) throw ErrorsReported();
+  return c;
+}
 
 }  // namespace ldc

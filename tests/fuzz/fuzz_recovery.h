@@ -22,13 +22,25 @@ inline ldc::DiagOptions recovery_options() {
 }
 
 // A refused input's report: every "error:" line is one counted error, and the
-// cascade stays within the limit (at most kMaxErrors, then the fatal line).
+// cascade stays within the limit (at most kMaxErrors, then the fatal line: the
+// report's last line -- an error's quoted source line may hold the same words).
 inline void check_report(const ldc::Diagnostics& d) {
   const std::string& t = d.text();
   int lines = 0;
   for (size_t p = t.find(": error: "); p != std::string::npos; p = t.find(": error: ", p + 1)) lines++;
   bool fatal = t.ends_with("fatal error: too many errors emitted, stopping now [-fmax-errors=" + std::to_string(kMaxErrors) + "]\n");
   if (d.errors() < 1 || d.errors() > kMaxErrors || lines < d.errors() || (fatal && d.errors() != kMaxErrors)) std::abort();
+}
+
+// `first_error`: the reader without recovery refused the input; `refused`:
+// with recovery it did (ErrorsReported, or the reader's own error type).
+inline void check_recovery(bool first_error, bool refused, const ldc::Diagnostics& d) {
+  if (first_error != refused) std::abort();
+  if (!refused) {
+    if (d.errors() != 0) std::abort();
+    return;
+  }
+  check_report(d);
 }
 
 }  // namespace ldc_fuzz

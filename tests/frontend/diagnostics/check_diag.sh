@@ -1,7 +1,7 @@
 #!/bin/sh
-# check_diag.sh BINDIR CASE.ld|CASE.ldp|CASE.xml -- one diagnostics case (docs/diagnostics.md);
+# check_diag.sh BINDIR CASE.ld|ldp|xml|sfc|rtsp|il -- one diagnostics case (docs/diagnostics.md);
 # a project (.ldp) is compiled with `ldc --project`, its -o a directory.
-# The case's `# ARGS: ...` line gives ldc's options; stderr must be CASE.err
+# The case's `# ARGS: ...` line (`// ARGS: ...` in RTSP, `; ARGS: ...` in ldc IL text) gives ldc's options; stderr must be CASE.err
 # exactly (LDC_UPDATE=1 rewrites it, to be reviewed as a diff).  The exit
 # status is 1 when CASE.err reports an error and 0 otherwise, and the image
 # (-o) exists exactly when the status is 0 and ARGS has no -fsyntax-only.
@@ -18,7 +18,7 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fails=0
 bad() { fails=$((fails + 1)); echo "FAIL: $name: $*" >&2; }
-args=$(sed -n 's/^# ARGS: *//p' "$case" | head -n 1)
+args=$(sed -n 's@^\(#\|//\|;\) ARGS: *@@p' "$case" | head -n 1)
 cd "$dir" || exit 1
 # shellcheck disable=SC2086  # ARGS is a list of options
 "$bin/ldc" $input $args -o "$tmp/$out" > "$tmp/stdout" 2> "$tmp/stderr"
