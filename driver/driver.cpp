@@ -203,9 +203,9 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
   Compiled c;
   try {
     if (ends_with(path, ".il")) {
-      c.il = looks_like_ldc_il(text) ? parse_il_text(text, path) : parse_iec_il(text, path);
+      c.il = looks_like_ldc_il(text) ? parse_il_text(text, path) : parse_iec_il(text, path, d);
     } else if (ends_with(path, ".st")) {
-      PlcopenImport im = import_st(text, path);
+      PlcopenImport im = import_st(text, path, d);
       if (im.tasks.empty() && !task.empty()) throw UserError(path + ": error: --task " + task + ": the file has one program, not a configuration of several tasks");
       if (im.tasks.empty()) c.il = lower_to_il(im.single);
       else configuration(c, im, path, text, allow_project, task);
