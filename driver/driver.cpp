@@ -208,10 +208,10 @@ Compiled compile_source(const std::string& path, bool allow_project, const std::
         c.il = parse_il_text(text, path, [&](const CompileError& e) { d.error(path, e); });
         if (d.errors() > errors0) throw ErrorsReported();  // errors were reported: the program read is not one
       } else {
-        c.il = parse_iec_il(text, path);
+        c.il = parse_iec_il(text, path, d);
       }
     } else if (ends_with(path, ".st")) {
-      PlcopenImport im = import_st(text, path);
+      PlcopenImport im = import_st(text, path, d);
       if (im.tasks.empty() && !task.empty()) throw UserError(path + ": error: --task " + task + ": the file has one program, not a configuration of several tasks");
       if (im.tasks.empty()) c.il = lower_to_il(im.single);
       else configuration(c, im, path, text, allow_project, task);

@@ -93,6 +93,12 @@ TreeProgram parse_plcopen(std::string_view text, const std::string& filename, Di
 // instance each, compiled one by one over the same layout of the globals.
 // Throws CompileError.
 PlcopenImport import_st(std::string_view text, const std::string& filename);
+// The same with error recovery (docs/diagnostics.md): each statement, each
+// declaration, each IL line the statements become is reported on its own and
+// the reader goes on; one with errors ends with ErrorsReported.  The lexer
+// and the file's structure (its POUs and blocks, the CONFIGURATION) stop at
+// their first error, thrown as a CompileError as above.
+PlcopenImport import_st(std::string_view text, const std::string& filename, Diagnostics& diag);
 
 // IEC 61131-3 Instruction List (docs/iec-il.md).  A `.il` file is ldc's own IL
 // text when its first character other than blanks and `;` comment lines is
@@ -100,6 +106,12 @@ PlcopenImport import_st(std::string_view text, const std::string& filename);
 bool looks_like_ldc_il(std::string_view text);
 // Reads IEC IL straight into ldc IL.  Throws CompileError (line, col, message).
 Program parse_iec_il(std::string_view text, const std::string& filename);
+// The same with error recovery: each line of the body and each declaration
+// is reported on its own and the reader goes on (a line that goes on with
+// the value of a refused one is passed over with it); one with errors ends
+// with ErrorsReported.  The lexer and the file's structure stop at their
+// first error, thrown as a CompileError.
+Program parse_iec_il(std::string_view text, const std::string& filename, Diagnostics& diag);
 // Prints any program as IEC IL that parse_iec_il reads back to the same
 // behaviour (`ldc --emit=iec-il`).  Throws std::runtime_error naming the rung
 // and the instruction when the program has no IEC IL form.
@@ -108,6 +120,7 @@ std::string print_iec_il(const Program& p);
 // Reads IEC 61131-3 Structured Text (docs/st.md) through the typed IEC IL
 // reader.  Throws CompileError.
 Program parse_st(std::string_view text, const std::string& filename);
+Program parse_st(std::string_view text, const std::string& filename, Diagnostics& diag);  // as import_st's recovery
 
 // The RTSP language of paper 000 (`.rtsp`, docs/rtsp.md): its preprocessor,
 // statements and data groups, as rung trees over ldc devices.

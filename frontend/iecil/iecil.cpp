@@ -23,6 +23,7 @@
 #include <map>
 #include <set>
 
+#include "frontend/diag.h"
 #include "frontend/frontend.h"
 #include "frontend/iecil/iecil.h"
 
@@ -269,6 +270,28 @@ struct Reader {
   std::vector<Tok> t;
   size_t pos = 0;
   Program p;
+  // Error recovery (docs/diagnostics.md): each declaration and line on its
+  // own; names whose declaration was refused, and unknown names reported,
+  // say nothing more (upper-case).
+  iecil::Recovery* rec = nullptr;
+  std::set<std::string> refused, unknown;
+
+  // Runs `read` (a declaration or a line); with recovery, its error is
+  // reported and false returned (the caller skips what it covers).
+  template <class F>
+  bool recover(F read) {
+    if (!rec) {
+      read();
+      return true;
+    }
+    try {
+      read();
+      return true;
+    } catch (const CompileError& e) {
+      rec->report(e);
+    }
+    return false;
+  }
   std::vector<Var> vars;
   std::vector<Instance> insts;
   std::map<std::string, size_t> var_of, inst_of;  // upper-case name -> index
@@ -342,19 +365,44 @@ struct Reader {
     }
     for (size_t i = 0; i < insts.size(); i++) alias_of(insts[i].name, DeviceRef{insts[i].dev(), insts[i].index});
     initial_values();
-    bool ended = false;
+    bool ended = false, skipping = false;
     while (peek().kind != Tok::End) {
       if (peek().kind == Tok::Eol) { next(); continue; }
       if (ended) fail(peek(), "text after END_PROGRAM");
       if (is_kw(peek(), "END_PROGRAM")) {
         next();
-        end_line();
+        if (!recover([&] { end_line(); })) skip_line();
         ended = true;
         continue;
       }
-      line();
+      if (!rec) { line(); continue; }
+      size_t start = pos;
+      if (skipping && !sync_line()) { skip_line(); continue; }
+      skipping = false;
+      if (recover([&] { line(); })) continue;
+      // the line refused: the ones after it that go on with its value are
+      // skipped too, up to the next that starts anew
+      pos = start;
+      skip_line();
+      rung = nullptr;
+      cr = Ty::None;
+      parens.clear();
+      skipping = true;
     }
+    if (rec) rec->check();  // the labels of lines refused: their jumps would be reported again
     finish();
+  }
+  void skip_line() {
+    while (peek().kind != Tok::Eol && peek().kind != Tok::End) next();
+  }
+  // Does the line at pos start anew, not going on with the value of the line
+  // before it: a label, or a line that loads a value, calls a block, or jumps
+  // or returns unconditionally.
+  bool sync_line() const {
+    if (peek().kind != Tok::Word) return false;
+    if (pos + 1 < t.size() && is_punct(t[pos + 1], ":")) return true;
+    std::string u = upper(peek().text);
+    return u == "LD" || u == "LDN" || u == "CAL" || u == "JMP" || u == "RET";
   }
 
   void end_line() {
@@ -370,8 +418,24 @@ struct Reader {
       skip_eols();
       if (is_kw(peek(), "END_VAR")) { next(); end_line(); return; }
       if (peek().kind == Tok::End) fail(head, "'" + head.text + "' block without END_VAR");
-      decl();
+      size_t start = pos;
+      if (!recover([&] { decl(); })) skip_decl(start);
     }
+  }
+  // After a refused declaration: the names it declares that are not declared
+  // (what comes before its ':' or AT) are remembered, so that their uses say
+  // nothing; the reader goes on after its ';' (or at the END_VAR of one
+  // without it).
+  void skip_decl(size_t start) {
+    pos = start;
+    bool naming = true;
+    while (peek().kind != Tok::End && !is_kw(peek(), "END_VAR")) {
+      const Tok& k = next();
+      if (is_punct(k, ":") || is_kw(k, "AT")) naming = false;
+      if (naming && k.kind == Tok::Word && !var_of.count(upper(k.text)) && !inst_of.count(upper(k.text))) refused.insert(upper(k.text));
+      if (is_punct(k, ";")) break;
+    }
+    if (pos == start) next();
   }
 
   // decl = NAME { "," NAME } [ "AT" location ] ":" TYPE [ ":=" literal ] ";"
@@ -520,6 +584,8 @@ struct Reader {
     if (dot != std::string::npos) {
       std::string base = u.substr(0, dot), field = u.substr(dot + 1);
       auto it = inst_of.find(base);
+      if (it == inst_of.end() && rec && (refused.count(base) || !unknown.insert(base).second))
+        throw iecil::Quiet(k.line, k.col, "unknown instance again");
       if (it == inst_of.end()) fail(k, "'" + k.text.substr(0, dot) + "' is not a declared timer or counter");
       const Instance& in = insts[it->second];
       if (field == "Q" && in.trig()) v.o = Operand{OpdKind::Bit, Area::M, in.index};
@@ -544,12 +610,14 @@ struct Reader {
       v.inst = int(it->second);
       return v;
     }
+    if (rec && refused.count(u)) throw iecil::Quiet(k.line, k.col, "refused");  // even where its name spells a device (F1)
     if (auto d = parse_device(k.text)) {
       if (d->dev == Dev::T || d->dev == Dev::C)
         fail(k, "declare timer/counter '" + k.text + "' as an instance (" + k.text + " : " + (d->dev == Dev::T ? "TON" : "CTU") +
                     ";) and use " + k.text + ".Q, " + k.text + (d->dev == Dev::T ? ".ET" : ".CV"));
       return device(k, *d);
     }
+    if (rec && (refused.count(u) || !unknown.insert(u).second)) throw iecil::Quiet(k.line, k.col, "unknown variable again");
     fail(k, "unknown variable '" + k.text + "'");
   }
 
@@ -920,6 +988,8 @@ struct Reader {
   void call(const Tok& op, const Tok& k) {
     if (!parens.empty()) fail(op, "CAL inside parentheses");
     auto it = inst_of.find(upper(k.text));
+    if (it == inst_of.end() && rec && (refused.count(upper(k.text)) || !unknown.insert(upper(k.text)).second))
+      throw iecil::Quiet(k.line, k.col, "unknown instance again");
     if (it == inst_of.end()) fail(k, "'" + k.text + "' is not a declared TON, TOF, TP, CTU, CTD, R_TRIG or F_TRIG instance");
     const Instance in = insts[it->second];
     std::map<std::string, std::pair<Val, Tok>> args;
@@ -1092,6 +1162,26 @@ Program parse_iec_il(std::string_view text, const std::string& filename) {
   r.p.source = filename;
   r.t = std::move(toks);
   r.program();
+  return std::move(r.p);
+}
+
+Program parse_iec_il(std::string_view text, const std::string& filename, Diagnostics& diag) {
+  if (text.size() > kMaxSourceBytes) throw CompileError(1, 1, "source larger than " + std::to_string(kMaxSourceBytes >> 20) + " MiB");
+  diag.source(filename, text);
+  iecil::Recovery rec(diag, filename);
+  std::vector<Tok> toks = lex(text);
+  if (iecil::needs_typed_reader(toks)) return iecil::parse_typed_il(toks, filename, false, rec);
+  Reader r;
+  r.p.source = filename;
+  r.t = std::move(toks);
+  r.rec = &rec;
+  try {
+    r.program();
+  } catch (const CompileError& e) {  // the file's structure: the reader stops
+    if (!rec.failed()) throw;
+    rec.report(e);  // after errors reported: it is one more of them
+  }
+  rec.check();
   return std::move(r.p);
 }
 

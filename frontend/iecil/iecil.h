@@ -5,17 +5,51 @@
 
 #include <set>
 #include <string>
+#include <utility>
 #include <string_view>
 #include <vector>
 
 #include "ir/ir.h"
 
+namespace ldc {
+class Diagnostics;
+}
+
 namespace ldc::iecil {
+
+// Error recovery of the IEC IL and ST readers (docs/diagnostics.md, "Errors:
+// every independent one"): with a Diagnostics, a reader reports an error and
+// goes on with its next line, declaration or statement.  An error that
+// follows from one reported already is thrown as a Quiet one and not
+// reported; nor is a second error at the place of one reported (a function
+// block's body is read again at each of its calls, an ST file once per task,
+// and a block that lacks its END_ word is refused by each block around it).
+struct Quiet : CompileError {
+  using CompileError::CompileError;
+};
+class Recovery {
+ public:
+  Recovery(Diagnostics& d, std::string file) : diag_(d), file_(std::move(file)) {}
+  // Reports `e` (its notes too) unless it is Quiet or reported already;
+  // throws ErrorsReported at -fmax-errors.
+  void report(const CompileError& e);
+  // Has anything been reported (errors of this run only)?
+  bool failed() const { return reported_ > 0; }
+  // Throws ErrorsReported if anything was reported.
+  void check() const;
+
+ private:
+  Diagnostics& diag_;
+  std::string file_;
+  std::set<std::pair<int, int>> seen_;  // the places reported (line, col)
+  int reported_ = 0;
+};
 
 struct Tok {
   enum Kind { Word, Punct, Eol, End } kind = End;
   std::string text;
   int line = 0, col = 0;
+  bool statement = false;  // an Eol after which frontend/st writes an ST statement (error recovery starts there)
 };
 std::string upper(std::string_view s);
 // Words (names, numbers, literals, %addresses), punctuation ( ) [ ] : , ;
@@ -37,6 +71,12 @@ bool needs_typed_reader(const std::vector<Tok>& t);
 // (frontend/st), whose temporaries __Tn/__Sn take the type of the value
 // stored into them.  Throws CompileError.
 Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename, bool from_st = false);
+// The same with error recovery: each declaration and each line of a POU's
+// body is reported on its own (in `from_st` text, each ST statement: the
+// lines after an Eol token marked `statement`); the file's
+// structure (its TYPEs and POUs) and the layout stop at their first error.
+// A program with errors ends with ErrorsReported.
+Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename, bool from_st, Recovery& rec);
 
 // A POU body compiled for another reader (the PLCopen reader's calls of ST and
 // IL POUs, docs/plcopen.md "ST and IL POUs"): a program whose variable area

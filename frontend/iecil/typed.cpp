@@ -99,7 +99,14 @@ struct PouSrc {           // where a POU is written
   size_t body = 0, end = 0;  // its body's tokens, its END_ keyword
   int pou = -1;           // in the model, once declared
   bool declaring = false;
+  bool failed = false;     // its heading was refused (reported): its uses say nothing
   std::string kind, name;  // "FUNCTION_BLOCK", as written
+};
+
+// A limit of the whole program (rungs, instructions): no line after it can be
+// read either, so error recovery stops there.
+struct Exhausted : CompileError {
+  using CompileError::CompileError;
 };
 
 // A name in a POU's scope.
@@ -129,18 +136,32 @@ struct Val {
 
 class Reader {
  public:
-  Reader(const std::vector<Tok>& toks, const std::string& file, bool from_st, std::optional<UnitBase> unit = std::nullopt)
-      : t_(toks), from_st_(from_st), unit_(unit) {
+  Reader(const std::vector<Tok>& toks, const std::string& file, bool from_st, std::optional<UnitBase> unit = std::nullopt,
+         Recovery* rec = nullptr)
+      : t_(toks), from_st_(from_st), unit_(unit), rec_(rec) {
     p_.source = file;
   }
 
   Program run() {
+    if (!rec_) return run_all();
+    Program out;
+    try {
+      out = run_all();
+    } catch (const CompileError& e) {  // the file's structure, the layout, a limit: the reader stops
+      // one found after others were reported may follow from them: it says nothing then
+      if (!rec_->failed()) rec_->report(e);
+    }
+    rec_->check();
+    return out;
+  }
+  Program run_all() {
     try {
       find_en_calls();
       scan_top();
       declare_all();
       lay_out();
       lower_program();
+      if (rec_ && rec_->failed()) return {};  // the labels of lines refused: their jumps would be reported again
       finish();
     } catch (const ModelError& e) {
       throw CompileError(e.loc.line, e.loc.col, e.message);
@@ -158,6 +179,34 @@ class Reader {
   const std::vector<Tok>& t_;
   bool from_st_ = false;
   std::optional<UnitBase> unit_;
+  Recovery* rec_ = nullptr;  // error recovery: errors are reported and the reader goes on
+  // Names whose declaration was refused (reported), and unknown names
+  // reported, per POU (upper-case POU name, then name): their uses say nothing.
+  std::map<std::string, std::set<std::string>> refused_, unknown_;
+  std::set<std::string> failed_types_;  // TYPE entries refused (reported)
+  std::set<std::string> unknown_ops_;    // unknown operators reported (upper-case): said once
+  std::set<std::string> unknown_types_;  // unknown type names reported (upper-case): their uses, even as a name, say nothing
+
+  // Runs `read` (one declaration or line); with recovery, its error is
+  // reported and false returned (the caller skips what it covers).
+  template <class F>
+  bool recover(F read) {
+    if (!rec_) {
+      read();
+      return true;
+    }
+    try {
+      read();
+      return true;
+    } catch (const Exhausted&) {
+      throw;
+    } catch (const CompileError& e) {
+      rec_->report(e);
+    } catch (const ModelError& e) {
+      rec_->report(CompileError(e.loc.line, e.loc.col, e.message));
+    }
+    return false;
+  }
   size_t init_rungs_ = 0;
   size_t pos_ = 0;
   Model m_;
@@ -309,34 +358,50 @@ class Reader {
   // ---------------------------------------------------------------- declarations
 
   void declare_all() {
-    for (auto& [u, at] : type_src_) resolve_type_name(u, t_[at]);
-    for (auto& [u, s] : pou_src_) declare_pou(u);
+    for (const auto& entry : type_src_) recover([&] { resolve_type_name(entry.first, t_[entry.second]); });
+    for (const auto& entry : pou_src_) recover([&] { declare_pou(entry.first); });
     program_ = pou_src_.at(program_name_).pou;
+    if (program_ < 0) rec_->check();  // its heading was refused (reported): nothing to lower
   }
 
+  // The TYPE entry whose name is token `at`.
+  TypeId declare_type(size_t at) {
+    pos_ = at;
+    const Tok& n = next();
+    expect(":");
+    skip_eols();
+    Spec sp = type_spec();
+    Type ty = sp.id == kNoType ? sp.fresh : m_.type(sp.id);  // a derived type: a copy of its base, named anew
+    if (sp.id != kNoType && ty.kind == TypeKind::Block) fail(n, "a TYPE of a FUNCTION_BLOCK: declare its instances directly");
+    ty.name = n.text;
+    TypeId id = m_.add_type(ty, loc(n));  // before its initial value, which may name its enumerators
+    skip_eols();
+    if (punct(peek(), ":=")) {
+      next();
+      m_.types[size_t(id)].init = init_value();
+    }
+    expect(";");
+    return id;
+  }
   // A type by name, declaring it (or the FB) first if it is written later.
   TypeId resolve_type_name(const std::string& u, const Tok& at) {
     TypeId id = m_.find_type(u);
     if (id != kNoType) return id;
     if (auto it = type_src_.find(u); it != type_src_.end()) {
+      if (failed_types_.count(u)) throw Quiet(at.line, at.col, "type '" + at.text + "' was refused");
       if (types_declaring_.count(u)) fail(at, "type '" + at.text + "' contains itself");
       types_declaring_.insert(u);
       size_t save = pos_;
-      pos_ = it->second;
-      const Tok& n = next();
-      expect(":");
-      skip_eols();
-      Spec sp = type_spec();
-      Type ty = sp.id == kNoType ? sp.fresh : m_.type(sp.id);  // a derived type: a copy of its base, named anew
-      if (sp.id != kNoType && ty.kind == TypeKind::Block) fail(n, "a TYPE of a FUNCTION_BLOCK: declare its instances directly");
-      ty.name = n.text;
-      TypeId id = m_.add_type(ty, loc(n));  // before its initial value, which may name its enumerators
-      skip_eols();
-      if (punct(peek(), ":=")) {
-        next();
-        m_.types[size_t(id)].init = init_value();
+      TypeId id = kNoType;
+      try {
+        id = declare_type(it->second);
+      } catch (...) {  // with recovery, reported by the caller: the uses of the type say nothing more
+        if (!rec_) throw;
+        pos_ = save;
+        types_declaring_.erase(u);
+        failed_types_.insert(u);
+        throw;
       }
-      expect(";");
       pos_ = save;
       types_declaring_.erase(u);
       return id;
@@ -352,6 +417,7 @@ class Reader {
     if (u.rfind("CTU_", 0) == 0 || u.rfind("CTD_", 0) == 0 || u.rfind("CTUD_", 0) == 0)
       fail(at, "unknown type '" + at.text + "': MatIEC's counters are " + u.substr(0, u.find('_')) + " (INT) and " +
                    u.substr(0, u.find('_')) + "_DINT, _LINT, _UDINT, _ULINT (docs/stdlib.md)");
+    if (rec_ && !unknown_types_.insert(u).second) throw Quiet(at.line, at.col, "unknown type again");  // reported once
     fail(at, "unknown type '" + at.text + "'");
   }
 
@@ -589,7 +655,20 @@ class Reader {
   int declare_pou(const std::string& u) {
     PouSrc& s = pou_src_.at(u);
     if (s.pou >= 0) return s.pou;
+    if (s.failed) throw Quiet(t_[s.head].line, t_[s.head].col, "POU '" + s.name + "' was refused");
     if (s.declaring) fail(t_[s.head], "'" + t_[s.head + 1].text + "' contains an instance of itself");
+    size_t save = pos_;
+    if (!rec_) return declare_pou(s);
+    try {
+      return declare_pou(s);
+    } catch (...) {  // reported by the caller: the uses of the POU say nothing more
+      pos_ = save;
+      s.declaring = false;
+      s.failed = true;
+      throw;
+    }
+  }
+  int declare_pou(PouSrc& s) {
     s.declaring = true;
     size_t save = pos_;
     pos_ = s.head;
@@ -656,8 +735,29 @@ class Reader {
       skip_eols();
       if (kw(peek(), "END_VAR")) { next(); end_line(); return; }
       if (peek().kind == Tok::End) fail(head, "'" + head.text + "' block without END_VAR");
-      decl(p, cls, constant, retain);
+      size_t start = pos_;
+      if (!recover([&] { decl(p, cls, constant, retain); })) skip_decl(start, p.name);
     }
+  }
+  // After a refused declaration: the names it declares (what comes before
+  // its ':' or AT) are remembered, so that their uses say nothing, and the
+  // reader goes on after its ';' (or at the END_VAR of a declaration
+  // without one).
+  void skip_decl(size_t start, const std::string& pou) {
+    pos_ = start;
+    bool naming = true;
+    int depth = 0;
+    for (;;) {
+      const Tok& k = peek();
+      if (k.kind == Tok::End || (depth == 0 && kw(k, "END_VAR"))) break;
+      next();
+      if (punct(k, ":") || kw(k, "AT")) naming = false;
+      if (naming && k.kind == Tok::Word) refused_[upper(pou)].insert(upper(k.text));
+      if (kw(k, "STRUCT") || punct(k, "(") || punct(k, "[")) depth++;
+      else if ((kw(k, "END_STRUCT") || punct(k, ")") || punct(k, "]")) && depth > 0) depth--;
+      else if (punct(k, ";") && depth == 0) break;
+    }
+    if (pos_ == start) next();
   }
 
   // decl = NAME { "," NAME } [ "AT" location ] ":" type_spec [ ":=" init ] ";"
@@ -881,7 +981,7 @@ class Reader {
   int paren_base_ = 0;          // parentheses open in the callers
 
   void start_rung() {
-    if (p_.rungs.size() >= kMaxRungs) fail(here_, "more than " + std::to_string(kMaxRungs) + " rungs (after expanding the calls inline)");
+    if (p_.rungs.size() >= kMaxRungs) throw Exhausted(here_.line, here_.col, "more than " + std::to_string(kMaxRungs) + " rungs (after expanding the calls inline)");
     Rung r;
     r.line = here_.line;
     r.labels = std::move(pending_labels_);
@@ -904,7 +1004,7 @@ class Reader {
     in.loc = here_;
     depth_ += op_info(op).push - op_info(op).pop;
     if (++instructions_ > kMaxInstructions)
-      fail(here_, "more than " + std::to_string(kMaxInstructions) + " IL instructions after expanding the calls inline");
+      throw Exhausted(here_.line, here_.col, "more than " + std::to_string(kMaxInstructions) + " IL instructions after expanding the calls inline");
     rung_->code.push_back(in);
   }
   void typed(Op op, Ty t, Operand a, Operand b = {}, Operand c = {}, Ty u = Ty::None) {
@@ -1071,6 +1171,11 @@ class Reader {
   // declaration of the variable of the scope the name is a typo of
   // (docs/diagnostics.md); the compiler's own temporaries (__...) are not offered.
   [[noreturn]] void unknown_variable(const Tok& k, const std::string& name) {
+    if (rec_) {
+      const std::string& pou = upper(m_.pous[size_t(scope_->pou)].name);
+      if (refused_[pou].count(upper(name)) || unknown_types_.count(upper(name)) || !unknown_[pou].insert(upper(name)).second)
+        throw Quiet(k.line, k.col, "unknown variable '" + name + "' again");
+    }
     std::string msg = "unknown variable '" + name + "'" + (scope_->pou == program_ ? "" : " in " + m_.pous[size_t(scope_->pou)].name);
     std::vector<std::string> names;
     for (const auto& [n, r] : scope_->names)
@@ -1096,6 +1201,8 @@ class Reader {
     std::string head = upper(parts[0]);
     if (auto it = scope_->names.find(head); it != scope_->names.end()) {
       r = it->second;
+    } else if (rec_ && refused_[upper(m_.pous[size_t(scope_->pou)].name)].count(head)) {
+      throw Quiet(k.line, k.col, "'" + parts[0] + "' was refused");  // even where its name spells a device (F1)
     } else if (text[0] == '%' || (parse_device(text) && parts.size() == 1)) {
       return device(k);
     } else {
@@ -1269,10 +1376,11 @@ class Reader {
       const bool input = v.at && (r.bits == Area::X || r.cells == Area::WX);
       if (unit_ && v.at && unit_->callers.count(upper(v.name))) continue;  // the caller initialises it
       if (input && v.init.kind != Init::None && !from_st_)
-        fail(v.init.loc, "an input (" + v.name + ") has no initial value: the I/O writes it");
+        recover([&] { fail(v.init.loc, "an input (" + v.name + ") has no initial value: the I/O writes it"); });
       if (input) continue;  // ST as OpenPLC Editor writes it gives inputs one (:= 0): the I/O overwrites it before the first scan
       std::vector<Model::Store> one;
-      m_.initial_stores(v.type, r.at, v.init.kind == Init::None ? nullptr : &v.init, one);
+      // with recovery, a variable whose initial value is refused has none
+      if (!recover([&] { m_.initial_stores(v.type, r.at, v.init.kind == Init::None ? nullptr : &v.init, one); })) continue;
       for (auto& st : one) stores.push_back({st.ty, operand_at(st.ty, st.at, r.bits, r.cells), st.bits});
     }
     if (stores.empty()) return;
@@ -1289,12 +1397,38 @@ class Reader {
     pos_ = s.body;
     cr_ = Cr{};
     rung_ = nullptr;
+    bool skipping = false, refused = false;
     while (pos_ < s.end) {
       if (peek().kind == Tok::Eol) { next(); continue; }
-      line();
+      if (!rec_) { line(); continue; }
+      size_t start = pos_;
+      if (skipping && !sync_line()) { skip_line(s.end); continue; }
+      skipping = false;
+      if (recover([&] { line(); })) continue;
+      // the line refused: the ones after it that go on with its value are
+      // skipped too, up to the next that starts anew
+      pos_ = start;
+      skip_line(s.end);
+      cr_ = Cr{};
+      parens_.clear();
+      rung_ = nullptr;
+      skipping = refused = true;
     }
-    if (!parens_.empty()) fail(parens_.back().at, "'(' is never closed");
+    if (!parens_.empty() && !refused) fail(parens_.back().at, "'(' is never closed");
+    parens_.clear();
     pos_ = save;
+  }
+  void skip_line(size_t end) {
+    while (pos_ < end && peek().kind != Tok::Eol && peek().kind != Tok::End) next();
+  }
+  // Does the line at pos_ start anew, not going on with the value of the line
+  // before it: a label; in ST, the first line of a statement; in IL, a line
+  // that loads a value, calls a block, or jumps or returns unconditionally.
+  bool sync_line() const {
+    if (peek().kind == Tok::Word && punct(peek(1), ":")) return true;
+    if (from_st_) return pos_ > 0 && t_[pos_ - 1].kind == Tok::Eol && t_[pos_ - 1].statement;
+    std::string u = upper(peek().text);
+    return peek().kind == Tok::Word && (u == "LD" || u == "LDN" || u == "CAL" || u == "JMP" || u == "RET");
   }
   PouSrc& src_of(int pou) {
     for (auto& [u, s] : pou_src_)
@@ -1416,6 +1550,7 @@ class Reader {
     if (u == "MIN" || u == "MAX" || u == "LIMIT" || u == "SEL" || u == "MUX") return selection(op, u);
     if (is_function(u)) return user_function(op, u);
     static const std::set<std::string> ldc_ops = {"LOAD", "LOADN", "OUT", "OUTN", "SET", "RST", "ANDBLK", "ORBLK", "MPS", "MRD", "MPP"};
+    if (rec_ && !unknown_ops_.insert(u).second) throw Quiet(op.line, op.col, "unknown operator again");  // reported once
     fail(op, "unknown IL operator '" + op.text + "'" +
                  (ldc_ops.count(u) ? std::string(" (this file is read as IEC IL; ldc's own IL starts with a '.rung' line)") : ""));
   }
@@ -1667,6 +1802,8 @@ class Reader {
   }
   Val temp_val(const Tok& k) const {
     auto it = temps_.find(scope_->prefix + k.text);
+    // with recovery, a temporary whose store was refused (reported) says nothing more
+    if (it == temps_.end() && rec_ && rec_->failed()) throw Quiet(k.line, k.col, "temporary not written");
     if (it == temps_.end()) fail(k, "'" + k.text + "' is read before it is written (a name beginning with two underscores is an ST temporary of ldc's)");
     Val v;
     v.kind = Val::Ref_;
@@ -2799,6 +2936,22 @@ class Reader {
 
 Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename, bool from_st) {
   return Reader(t, filename, from_st).run();
+}
+
+Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename, bool from_st, Recovery& rec) {
+  return Reader(t, filename, from_st, std::nullopt, &rec).run();
+}
+
+void Recovery::report(const CompileError& e) {
+  // a Quiet error follows from one reported; were there none, it is reported itself
+  if (dynamic_cast<const Quiet*>(&e) && reported_ > 0) return;
+  if (!seen_.insert({e.line, e.col}).second) return;  // one error per place
+  reported_++;
+  diag_.error(file_, e);
+}
+
+void Recovery::check() const {
+  if (reported_ > 0) throw ErrorsReported();
 }
 
 Unit parse_typed_unit(const std::vector<Tok>& t, const std::string& filename, UnitBase base) {

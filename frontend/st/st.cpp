@@ -20,6 +20,7 @@
 
 #include "frontend/st/st.h"
 
+#include "frontend/diag.h"
 #include "frontend/frontend.h"
 #include "ir/model.h"
 
@@ -42,6 +43,13 @@ struct Nest {
     if (++d > kMaxNesting) throw CompileError(at.line, at.col, "nested deeper than " + std::to_string(kMaxNesting));
   }
   ~Nest() { d--; }
+};
+
+// An error after which the rest of the file cannot be read as ST (a chart
+// written as text: its STEP ... END_STEP are no statements), even with error
+// recovery: the reader stops there.
+struct Unreadable : CompileError {
+  using CompileError::CompileError;
 };
 
 // ---------------------------------------------------------------- syntax tree
@@ -77,8 +85,8 @@ struct Stmt {
 
 class Parser {
  public:
-  Parser(const std::vector<Tok>& t, size_t pos, std::set<std::string> functions)
-      : t_(t), pos_(pos), functions_(std::move(functions)) {}
+  Parser(const std::vector<Tok>& t, size_t pos, std::set<std::string> functions, iecil::Recovery* rec = nullptr)
+      : t_(t), pos_(pos), functions_(std::move(functions)), rec_(rec) {}
   size_t pos() const { return pos_; }
 
   // statement_list = { statement } up to one of the words `ends`
@@ -94,9 +102,19 @@ class Parser {
         if (kw(k, e)) return out;
       if (punct(k, ";")) { next(); continue; }
       std::string u = upper(k.text);
-      if (k.kind == Tok::Word && (u.rfind("END_", 0) == 0 || u == "ELSE" || u == "ELSIF" || u == "UNTIL" || u == "THEN" || u == "DO"))
-        fail(k, std::string("expected ") + *ends.begin() + found(k));
-      out.push_back(statement());
+      if (k.kind == Tok::Word && (u.rfind("END_", 0) == 0 || u == "ELSE" || u == "ELSIF" || u == "UNTIL" || u == "THEN" || u == "DO")) {
+        // with recovery: the end of the POU ends this list's block too (its
+        // statement is refused, in the list around it); another END_ word
+        // ends a block's list as if it were the right one (END_REPEAT closing
+        // a WHILE); a word out of place elsewhere is reported and passed over
+        std::string why = std::string("expected ") + *ends.begin() + found(k);
+        if (!rec_ || pou_end(k)) fail(k, why);
+        rec_->report(CompileError(k.line, k.col, why));
+        if (!to_eof && u.rfind("END_", 0) == 0 && std::string(*ends.begin()).rfind("END_", 0) == 0) return out;
+        next();
+        continue;
+      }
+      recover_statement(out);
     }
   }
 
@@ -104,7 +122,59 @@ class Parser {
   const std::vector<Tok>& t_;
   size_t pos_;
   std::set<std::string> functions_;
+  iecil::Recovery* rec_;
   int depth_ = 0;
+
+  static bool pou_end(const Tok& k) {
+    return k.kind == Tok::End || kw(k, "END_PROGRAM") || kw(k, "END_FUNCTION_BLOCK") || kw(k, "END_FUNCTION");
+  }
+  // One statement into `out`; with recovery, a refused one is reported and
+  // passed over (skip_statement).
+  void recover_statement(std::vector<Stmt>& out) {
+    if (!rec_) {
+      out.push_back(statement());
+      return;
+    }
+    size_t start = pos_;
+    try {
+      out.push_back(statement());
+    } catch (const Unreadable&) {
+      throw;
+    } catch (const CompileError& e) {
+      rec_->report(e);
+      skip_statement(start);
+    }
+  }
+  // Passes over the statement that starts at `start`: up to its ';', or to
+  // the END_IF ... that closes it when it opens a block (the blocks inside it
+  // counted), or to the word that closes the block around it (ELSE, ELSIF,
+  // UNTIL, END_..., left for that block).
+  void skip_statement(size_t start) {
+    pos_ = start;
+    int depth = 0;
+    for (;;) {
+      const Tok& k = peek();
+      std::string u = k.kind == Tok::Word ? upper(k.text) : "";
+      if (pou_end(k)) break;
+      if (u == "IF" || u == "CASE" || u == "FOR" || u == "WHILE" || u == "REPEAT") {
+        depth++;
+      } else if (u == "END_IF" || u == "END_CASE" || u == "END_FOR" || u == "END_WHILE" || u == "END_REPEAT") {
+        if (depth == 0) break;
+        if (--depth == 0) {
+          next();
+          if (punct(peek(), ";")) next();
+          return;
+        }
+      } else if (depth == 0 && (u == "ELSE" || u == "ELSIF" || u == "UNTIL" || u.rfind("END_", 0) == 0)) {
+        break;
+      } else if (depth == 0 && punct(k, ";")) {
+        next();
+        return;
+      }
+      next();
+    }
+    if (pos_ == start && peek().kind != Tok::End && !pou_end(peek())) next();
+  }
 
   const Tok& peek(size_t k = 0) const { return t_[std::min(pos_ + k, t_.size() - 1)]; }
   const Tok& next() { return t_[pos_ < t_.size() - 1 ? pos_++ : pos_]; }
@@ -145,7 +215,7 @@ class Parser {
       if (u == "FOR") return for_stmt();
       if (u == "WHILE" || u == "REPEAT") return loop_stmt(u);
       if ((u == "INITIAL_STEP" || u == "STEP" || u == "TRANSITION") && peek(1).kind == Tok::Word)
-        fail(k, "'" + k.text + "': a sequential function chart written as text (IEC 61131-3 SFC in ST); ldc reads SFC from PLCopen XML and .sfc files, not from ST (docs/st.md)");
+        throw Unreadable(k.line, k.col, "'" + k.text + "': a sequential function chart written as text (IEC 61131-3 SFC in ST); ldc reads SFC from PLCopen XML and .sfc files, not from ST (docs/st.md)");
       if (u == "EXIT" || u == "CONTINUE" || u == "RETURN") {
         Stmt s;
         s.kind = u == "EXIT" ? Stmt::Exit : u == "CONTINUE" ? Stmt::Continue : Stmt::Return;
@@ -213,7 +283,8 @@ class Parser {
     s.tok = next();
     s.value = expression();
     expect_kw("OF");
-    while (!kw(peek(), "ELSE") && !kw(peek(), "END_CASE")) {
+    // (any END_ word ends the branches: END_CASE is then expected)
+    while (!kw(peek(), "ELSE") && !(peek().kind == Tok::Word && upper(peek().text).rfind("END_", 0) == 0)) {
       if (peek().kind == Tok::End) fail(s.tok, "CASE without END_CASE");
       std::vector<std::pair<Expr, std::optional<Expr>>> items;
       for (;;) {
@@ -242,10 +313,10 @@ class Parser {
     std::vector<Stmt> out;
     for (;;) {
       const Tok& k = peek();
-      if (k.kind == Tok::End || kw(k, "ELSE") || kw(k, "END_CASE")) return out;
+      if (k.kind == Tok::End || kw(k, "ELSE") || (k.kind == Tok::Word && upper(k.text).rfind("END_", 0) == 0)) return out;
       if (punct(k, ";")) { next(); continue; }
       if (starts_case_label()) return out;
-      out.push_back(statement());
+      recover_statement(out);
     }
   }
   bool starts_case_label() const {
@@ -451,15 +522,34 @@ bool comparison(const std::string& u) {
 
 class Writer {
  public:
-  Writer(std::vector<Tok>& out, const std::set<std::string>& functions) : out_(out), functions_(functions) {}
+  Writer(std::vector<Tok>& out, const std::set<std::string>& functions, iecil::Recovery* rec = nullptr)
+      : out_(out), functions_(functions), rec_(rec) {}
 
+  // Each statement's lines start after an Eol marked `statement`:
+  // with error recovery the typed reader goes on at the next statement after
+  // a line it refused.  A statement refused here is reported and not written.
   void body(const std::vector<Stmt>& stmts) {
-    for (const Stmt& s : stmts) statement(s);
+    for (const Stmt& s : stmts) {
+      if (!out_.empty() && out_.back().kind == Tok::Eol) out_.back().statement = true;
+      if (!rec_) {
+        statement(s);
+        continue;
+      }
+      size_t written = out_.size(), loops = loops_.size();
+      try {
+        statement(s);
+      } catch (const CompileError& e) {
+        rec_->report(e);
+        out_.resize(written);
+        loops_.resize(loops);
+      }
+    }
   }
 
  private:
   std::vector<Tok>& out_;
   const std::set<std::string>& functions_;  // the file's FUNCTIONs (upper-case); any other call is standard
+  iecil::Recovery* rec_;
   int labels_ = 0, selectors_ = 0, temps_ = 0;
   std::map<const Expr*, std::string> temp_;  // hoisted values of the current statement
   struct Loop { std::string exit, next; };
@@ -806,7 +896,8 @@ class Writer {
     if (e.kind != Expr::Var) return false;
     for (const Sel& s : e.sels)
       for (const Expr& i : s.index)
-        if (!(i.kind == Expr::Lit || (i.kind == Expr::Var && i.sels.empty()) || temp_.count(&i))) return false;
+        // a constant index expression (arr[(10 MOD 5) + 1]) is folded, not hoisted: operand() writes its value
+        if (!(i.kind == Expr::Lit || foldable(i) || (i.kind == Expr::Var && i.sels.empty()) || temp_.count(&i))) return false;
     return true;
   }
   // Computes e into a temporary unless IL takes it as an operand.
@@ -1001,6 +1092,7 @@ class Writer {
       return;
     }
     if (comparison(u)) {  // IEC 61131-3's extensible compare: GT(a, b, c) = a > b AND b > c (MatIEC's too)
+      if (in.size() < 2) fail(c.tok, c.tok.text + "() compares two inputs or more, this call has one");
       line(c.tok, u, operand(*in[1]));
       for (size_t i = 2; i < in.size(); i++) {
         out_.push_back(word(c.tok, "AND"));
@@ -1057,7 +1149,7 @@ class Writer {
 class File {
  public:
   // instance: which program instance of a CONFIGURATION of several to write (-1: it must have one)
-  explicit File(const std::vector<Tok>& t, int instance = -1) : t_(t), instance_(instance) {}
+  explicit File(const std::vector<Tok>& t, int instance = -1, iecil::Recovery* rec = nullptr) : t_(t), instance_(instance), rec_(rec) {}
   const Configuration& config() const { return config_; }
   // Only the CONFIGURATION: its tasks and program instances.
   void read_configuration() {
@@ -1088,6 +1180,7 @@ class File {
  private:
   const std::vector<Tok>& t_;
   int instance_ = -1;
+  iecil::Recovery* rec_ = nullptr;  // the statements recover from their errors
   Configuration config_;
   std::string resource_ = "resource";  // the RESOURCE being read
   size_t pos_ = 0;
@@ -1271,10 +1364,10 @@ class File {
       else var_block();
     }
     std::string end = "END_" + kind;
-    Parser p(t_, pos_, functions_);
+    Parser p(t_, pos_, functions_, rec_);
     std::vector<Stmt> body = p.statement_list({end.c_str()}, true);
     pos_ = p.pos();
-    Writer(out_, functions_).body(body);
+    Writer(out_, functions_, rec_).body(body);
     if (peek().kind == Tok::End) out_.push_back({Tok::Word, end, peek().line, peek().col});  // END_... left out at the end
     else out_.push_back(next());
     eol();
@@ -1344,6 +1437,9 @@ std::vector<Tok> pragmas(const std::vector<Tok>& t) {
 }
 
 std::vector<Tok> to_il_tokens(const std::vector<Tok>& st, int instance) { return File(pragmas(st), instance).run(); }
+std::vector<Tok> to_il_tokens(const std::vector<Tok>& st, int instance, iecil::Recovery& rec) {
+  return File(pragmas(st), instance, &rec).run();
+}
 
 Configuration configuration(const std::vector<Tok>& st) {
   File f(st);
@@ -1357,6 +1453,13 @@ namespace ldc {
 
 Program parse_st(std::string_view text, const std::string& filename) {
   return iecil::parse_typed_il(st::to_il_tokens(st::lex(text)), filename, true);
+}
+
+Program parse_st(std::string_view text, const std::string& filename, Diagnostics& diag) {
+  diag.source(filename, text);
+  iecil::Recovery rec(diag, filename);
+  std::vector<iecil::Tok> toks = st::lex(text);
+  return iecil::parse_typed_il(st::to_il_tokens(toks, -1, rec), filename, true, rec);
 }
 
 namespace {
@@ -1429,41 +1532,89 @@ void check_shared_globals(const std::vector<iecil::Tok>& toks, const st::Configu
   }
 }
 
-}  // namespace
+// The task of program instance k of the configuration.
+PlcopenTask task_of(const st::Configuration& cfg, size_t k) {
+  const st::ConfigInstance& ci = cfg.instances[k];
+  auto t = std::find_if(cfg.tasks.begin(), cfg.tasks.end(), [&](const st::ConfigTask& x) { return iecil::upper(x.name) == iecil::upper(ci.task); });
+  if (ci.task.empty() || t == cfg.tasks.end())
+    throw CompileError(ci.line, ci.col, "program instance '" + ci.name + "' has no task (PROGRAM " + ci.name + " WITH TASK : TYPE); ldc runs each program of a configuration in its task");
+  for (size_t j = 0; j < k; j++)
+    if (iecil::upper(cfg.instances[j].task) == iecil::upper(ci.task))
+      throw CompileError(ci.line, ci.col, "task '" + ci.task + "' runs a second program ('" + ci.name + "' after '" + cfg.instances[j].name + "'); ldc runs one program per task of an ST configuration");
+  PlcopenTask pt;
+  pt.name = t->name, pt.resource = t->resource, pt.program = ci.name;
+  pt.line = t->line, pt.col = t->col;
+  pt.period_us = period_us(*t);
+  if (!t->priority.empty()) {
+    if (t->priority.find_first_not_of("0123456789") != std::string::npos || t->priority.size() > 2)
+      throw CompileError(t->line, t->col, "task '" + t->name + "': priority '" + t->priority + "' is not one ldc has (0, the highest, .. 99)");
+    pt.priority = uint32_t(std::stoul(t->priority));
+  }
+  return pt;
+}
 
-PlcopenImport import_st(std::string_view text, const std::string& filename) {
+// Has `d` stopped at -fmax-errors (no error after this one is reported)?
+bool at_limit(const Diagnostics& d) { return d.options().max_errors > 0 && d.errors() >= d.options().max_errors; }
+
+// One program of the file (the instance of a configuration of several, or -1).
+Program read_program(const std::vector<iecil::Tok>& toks, int instance, const std::string& filename, iecil::Recovery* rec) {
+  if (!rec) return iecil::parse_typed_il(st::to_il_tokens(toks, instance), filename, true);
+  return iecil::parse_typed_il(st::to_il_tokens(toks, instance, *rec), filename, true, *rec);
+}
+
+PlcopenImport read_st(std::string_view text, const std::string& filename, Diagnostics* diag) {
+  std::optional<iecil::Recovery> rec;
+  if (diag) {
+    diag->source(filename, text);
+    rec.emplace(*diag, filename);
+  }
+  iecil::Recovery* r = rec ? &*rec : nullptr;
   std::vector<iecil::Tok> toks = st::lex(text);
   st::Configuration cfg = st::configuration(toks);
   PlcopenImport im;
   im.configuration = cfg.name;
   if (cfg.instances.size() <= 1 && cfg.tasks.size() <= 1) {
-    im.single = raw_tree(iecil::parse_typed_il(st::to_il_tokens(toks), filename, true));
+    im.single = raw_tree(read_program(toks, -1, filename, r));
     return im;
   }
+  // with recovery, every program is read (an error in a FUNCTION_BLOCK they
+  // share is reported once: Recovery), then the tasks are checked
   std::vector<Program> progs;
-  for (size_t k = 0; k < cfg.instances.size(); k++) progs.push_back(iecil::parse_typed_il(st::to_il_tokens(toks, int(k)), filename, true));
   for (size_t k = 0; k < cfg.instances.size(); k++) {
-    const st::ConfigInstance& ci = cfg.instances[k];
-    auto t = std::find_if(cfg.tasks.begin(), cfg.tasks.end(), [&](const st::ConfigTask& x) { return iecil::upper(x.name) == iecil::upper(ci.task); });
-    if (ci.task.empty() || t == cfg.tasks.end())
-      throw CompileError(ci.line, ci.col, "program instance '" + ci.name + "' has no task (PROGRAM " + ci.name + " WITH TASK : TYPE); ldc runs each program of a configuration in its task");
-    for (size_t j = 0; j < k; j++)
-      if (iecil::upper(cfg.instances[j].task) == iecil::upper(ci.task))
-        throw CompileError(ci.line, ci.col, "task '" + ci.task + "' runs a second program ('" + ci.name + "' after '" + cfg.instances[j].name + "'); ldc runs one program per task of an ST configuration");
-    PlcopenTask pt;
-    pt.name = t->name, pt.resource = t->resource, pt.program = ci.name;
-    pt.line = t->line, pt.col = t->col;
-    pt.period_us = period_us(*t);
-    if (!t->priority.empty()) {
-      if (t->priority.find_first_not_of("0123456789") != std::string::npos || t->priority.size() > 2)
-        throw CompileError(t->line, t->col, "task '" + t->name + "': priority '" + t->priority + "' is not one ldc has (0, the highest, .. 99)");
-      pt.priority = uint32_t(std::stoul(t->priority));
+    if (!r) {
+      progs.push_back(read_program(toks, int(k), filename, r));
+      continue;
     }
-    im.tasks.push_back(std::move(pt));
+    try {
+      progs.push_back(read_program(toks, int(k), filename, r));
+    } catch (const ErrorsReported&) {
+      if (at_limit(*diag)) throw;
+      progs.emplace_back();
+    }
   }
+  for (size_t k = 0; k < cfg.instances.size(); k++) {
+    if (!r) {
+      im.tasks.push_back(task_of(cfg, k));
+      continue;
+    }
+    try {
+      im.tasks.push_back(task_of(cfg, k));
+    } catch (const CompileError& e) {
+      r->report(e);
+      im.tasks.emplace_back();
+    }
+  }
+  if (r) r->check();  // the programs of tasks refused are not checked further
   check_shared_globals(toks, cfg, progs, im);
   for (size_t k = 0; k < progs.size(); k++) im.tasks[k].tree = raw_tree(std::move(progs[k]));
   return im;
+}
+
+}  // namespace
+
+PlcopenImport import_st(std::string_view text, const std::string& filename) { return read_st(text, filename, nullptr); }
+PlcopenImport import_st(std::string_view text, const std::string& filename, Diagnostics& diag) {
+  return read_st(text, filename, &diag);
 }
 
 }  // namespace ldc

@@ -22,6 +22,11 @@ std::vector<iecil::Tok> lex(std::string_view s);
 // of them, `instance` (its index in the configuration); with -1 it must run
 // one.  Throws CompileError.
 std::vector<iecil::Tok> to_il_tokens(const std::vector<iecil::Tok>& st, int instance = -1);
+// The same with error recovery: a statement refused is reported to `rec`
+// and left out (the typed reader then reads what remains with `rec`).  The
+// file's structure (its POUs, VAR blocks, CONFIGURATION) stops at its first
+// error, thrown as above.
+std::vector<iecil::Tok> to_il_tokens(const std::vector<iecil::Tok>& st, int instance, iecil::Recovery& rec);
 
 // The file's CONFIGURATION: its tasks and program instances, as written
 // (instances empty: none).

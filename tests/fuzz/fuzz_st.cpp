@@ -1,8 +1,16 @@
 // Fuzz the Structured Text reader (frontend/st, docs/st.md) as the driver
 // calls it: import_st (one program, or a CONFIGURATION of several tasks, one
-// program each), then encode and validate every program it accepts.
+// program each), then encode and validate every program it accepts.  Then
+// import_st with error recovery (docs/diagnostics.md): accepted exactly when
+// accepted without recovery, and a refused input reports 1..5 errors, each a
+// located "error:" line, the fatal line only at the limit
+// (tests/fuzz/fuzz_recovery.h).
+#include <cstdlib>
+
+#include "frontend/diag.h"
 #include "frontend/frontend.h"
 #include "tests/fuzz/fuzz_common.h"
+#include "tests/fuzz/fuzz_recovery.h"
 
 namespace {
 void check(const ldc::TreeProgram& t) {
@@ -13,13 +21,27 @@ void check(const ldc::TreeProgram& t) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  std::string_view text = LDC_FUZZ_TEXT(data, size);
   ldc::PlcopenImport im;
+  bool refused = false;
   try {
-    im = ldc::import_st(LDC_FUZZ_TEXT(data, size), "fuzz.st");
+    im = ldc::import_st(text, "fuzz.st");
   } catch (const ldc::CompileError&) {
-    return 0;
+    refused = true;
   }
-  if (im.tasks.empty()) check(im.single);
-  for (const ldc::PlcopenTask& t : im.tasks) check(t.tree);
+  if (!refused) {
+    if (im.tasks.empty()) check(im.single);
+    for (const ldc::PlcopenTask& t : im.tasks) check(t.tree);
+  }
+  ldc::Diagnostics d(ldc_fuzz::recovery_options());
+  try {
+    (void)ldc::import_st(text, "fuzz.st", d);
+    if (refused || d.errors() != 0) std::abort();
+  } catch (const ldc::ErrorsReported&) {
+    if (!refused) std::abort();
+    ldc_fuzz::check_report(d);
+  } catch (const ldc::CompileError&) {  // an error the reader cannot go on from (the lexer, the file's structure)
+    if (!refused) std::abort();
+  }
   return 0;
 }
