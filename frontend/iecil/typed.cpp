@@ -2254,6 +2254,15 @@ class Reader {
     parens_.clear();
     int base = paren_base_;
     paren_base_ += int(caller_parens.size()) + 1;
+    // the caller's scope is back however the body ends: an error of the body
+    // thrown out of it is the calling line's, which error recovery goes on after
+    struct Back {
+      Reader& r;
+      Scope* scope;
+      int base;
+      size_t expanding;
+      ~Back() { r.scope_ = scope, r.paren_base_ = base, r.expanding_.resize(expanding); }
+    } back{*this, caller, base, expanding_.size()};
     expanding_.push_back(pou);
     scope_ = &s;
     SrcLoc call_at = here_;
