@@ -515,7 +515,7 @@ inline Str date_to_string(Ty u, int64_t ns) {
 // of the LREAL value; __time_to_string; the dates above.
 inline Str to_string(Ty u, uint64_t v) {
   switch (ty_info(u).kind) {
-    case TyKind::Bool: return v ? str_printf("TRUE") : str_printf("FALSE");
+    case TyKind::Bool: return str_printf("%s", v ? "TRUE" : "FALSE");
     case TyKind::Bits: return str_printf("16#%llx", (unsigned long long)v);
     case TyKind::Signed: return str_printf("%lld", (long long)int64_t(v));
     case TyKind::Unsigned: return str_printf("%llu", (unsigned long long)v);
