@@ -173,6 +173,21 @@ size_t edit_distance(std::string_view a, std::string_view b) {
   return prev[m];
 }
 
+bool recover_unit(Diagnostics* diag, const std::string& file, const std::function<void()>& read) {
+  if (!diag) return read(), true;
+  try {
+    read();
+    return true;
+  } catch (const Stop&) {
+    throw;
+  } catch (const Cascade&) {
+    return false;
+  } catch (const CompileError& e) {
+    diag->error(file, e);
+    return false;
+  }
+}
+
 std::string closest_name(std::string_view word, const std::vector<std::string>& names) {
   size_t limit = word.size() <= 3 ? 1 : 2;
   size_t best = limit + 1;

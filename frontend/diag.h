@@ -6,6 +6,7 @@
 // and reports the next one.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -102,6 +103,24 @@ class Diagnostics {
   void emit(Severity s, const std::string& file, int line, int col, const std::string& msg);
   void count_error();
 };
+
+// Error recovery's two exceptions (docs/diagnostics.md, "Errors"): a
+// Cascade follows from an error already reported -- its unit is refused and
+// nothing more is said (only recovery reaches one: without it the first error
+// ends the reading); a Stop is an error after which nothing more can be read
+// (a limit of the whole program) -- it ends the reading with recovery too.
+struct Cascade : CompileError {
+  Cascade() : CompileError(0, 0, "follows from an error reported") {}
+};
+struct Stop : CompileError {
+  using CompileError::CompileError;
+};
+
+// Reads one unit (a line, a declaration, a statement, a rung) of a reader
+// that recovers: without `diag` its error is thrown as before; with it an
+// error is reported to `diag` as `file`'s and false returned, a Cascade
+// returns false unreported, and a Stop goes on up.
+bool recover_unit(Diagnostics* diag, const std::string& file, const std::function<void()>& read);
 
 // "file:line:col: KIND: message", the source line (from `text`) and a caret
 // under the column; only the first line when the line is not in the text.

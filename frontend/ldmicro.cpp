@@ -38,13 +38,6 @@ using namespace treebuild;
 
 [[noreturn]] void fail(int line, int col, const std::string& msg) { throw CompileError(line, col, msg); }
 
-// An error that follows from one already reported (docs/diagnostics.md): the
-// unit it is in is refused, and nothing more is said.  Only error recovery
-// reaches one (without it, the first error ends the import).
-struct Cascade : CompileError {
-  Cascade() : CompileError(0, 0, "follows from an error reported") {}
-};
-
 std::string trim(std::string_view s) {
   size_t a = s.find_first_not_of(" \t"), b = s.find_last_not_of(" \t");
   return a == std::string_view::npos ? std::string() : std::string(s.substr(a, b - a + 1));
@@ -2314,21 +2307,7 @@ TreeProgram Importer::run() {
 // Reads one unit (a setting or I/O-list line, a rung, a name): without
 // diagnostics its error is thrown; with them it is reported (not a Cascade),
 // and false says the unit was refused.
-bool Importer::unit(const std::function<void()>& read) {
-  if (!diag_) {
-    read();
-    return true;
-  }
-  try {
-    read();
-    return true;
-  } catch (const Cascade&) {
-    return false;
-  } catch (const CompileError& e) {
-    diag_->error(file_, e);
-    return false;
-  }
-}
+bool Importer::unit(const std::function<void()>& read) { return recover_unit(diag_, file_, read); }
 
 }  // namespace
 

@@ -58,16 +58,6 @@ struct Tok {
 
 // ---------------------------------------------------------------- error recovery
 
-// An error that follows from one already reported (docs/diagnostics.md): its
-// unit is refused and nothing more is said.  Only error recovery reaches one.
-struct Cascade : CompileError {
-  Cascade() : CompileError(0, 0, "follows from an error reported") {}
-};
-// An error after which nothing more can be read (a limit of the whole program):
-// with recovery too it ends the reading.
-struct Stop : CompileError {
-  using CompileError::CompileError;
-};
 [[noreturn]] void stop(const Tok& t, const std::string& m) { throw Stop(t.line, t.col, m); }
 
 // With `diag`, a unit (a line, a directive, a statement, an argument) that
@@ -76,20 +66,7 @@ struct Recovery {
   Diagnostics* diag = nullptr;
   std::string file;
   // false: the unit was refused (its error reported, or a Cascade)
-  bool unit(const std::function<void()>& read) const {
-    if (!diag) return read(), true;
-    try {
-      read();
-      return true;
-    } catch (const Stop&) {
-      throw;
-    } catch (const Cascade&) {
-      return false;
-    } catch (const CompileError& e) {
-      diag->error(file, e);
-      return false;
-    }
-  }
+  bool unit(const std::function<void()>& read) const { return recover_unit(diag, file, read); }
   // an error that does not stop the unit (it is reported, and the unit goes on)
   void report(const Tok& t, const std::string& m) const {
     unit([&] { fail(t, m); });

@@ -22,15 +22,7 @@ using namespace treebuild;
 
 [[noreturn]] void fail(int line, int col, const std::string& msg) { throw CompileError(line, col, msg); }
 
-// An error that follows from one already reported (docs/diagnostics.md): its
-// unit is refused and nothing more is said.  Only error recovery reaches one.
-struct Cascade : CompileError {
-  Cascade() : CompileError(0, 0, "follows from an error reported") {}
-};
-// A limit of the whole chart: with recovery too it ends the reading.
-struct Stop : CompileError {
-  using CompileError::CompileError;
-};
+// (Cascade and Stop: frontend/diag.h; a Stop here is a limit of the whole chart.)
 
 struct Tok {
   std::string text;
@@ -963,20 +955,7 @@ Chart SfcParser::chart() {
 // Reads one unit (a declaration, a step line, an action, a jump, a condition,
 // a body): without diagnostics its error is thrown; with them it is reported
 // (not a Cascade), and false says the unit was refused.  A Stop goes on up.
-bool SfcParser::unit(const std::function<void()>& read) {
-  if (!diag_) return read(), true;
-  try {
-    read();
-    return true;
-  } catch (const Stop&) {
-    throw;
-  } catch (const Cascade&) {
-    return false;
-  } catch (const CompileError& e) {
-    diag_->error(file_, e);
-    return false;
-  }
-}
+bool SfcParser::unit(const std::function<void()>& read) { return recover_unit(diag_, file_, read); }
 
 }  // namespace
 

@@ -289,16 +289,12 @@ struct Out {  // a block output as its consumers see it
 
 // ------------------------------------------------------------------ importer
 
-// A use of something whose error was reported (error recovery): nothing more
-// is reported for it.
-struct Refused : CompileError {
-  Refused() : CompileError(1, 1, "follows from an error already reported") {}
-};
-// An error after which everything would fail the same way (the devices or
-// the variables ran out): the import stops there, recovery or not.
-struct Fatal : CompileError {
-  using CompileError::CompileError;
-};
+// Error recovery (frontend/diag.h): a use of something whose error was
+// reported throws a Cascade (nothing more is said); an error after which
+// everything would fail the same way (the devices or the variables ran out)
+// is a Stop, which ends the import, recovery or not.
+using Refused = Cascade;
+using Fatal = Stop;
 
 class Importer {
  public:
