@@ -38,15 +38,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   } catch (const ldc::CompileError&) {
     refused = true;
   }
-  ldc::Diagnostics d(ldc_fuzz::recovery_options());
-  try {
-    (void)ldc::parse_iec_il(text, "fuzz.il", d);
-    if (refused || d.errors() != 0) std::abort();
-  } catch (const ldc::ErrorsReported&) {
-    if (!refused) std::abort();
-    ldc_fuzz::check_report(d);
-  } catch (const ldc::CompileError&) {  // an error the reader cannot go on from (the lexer, the file's structure)
-    if (!refused) std::abort();
-  }
+  ldc_fuzz::check_reading(refused, [&](ldc::Diagnostics& d) { (void)ldc::parse_iec_il(text, "fuzz.il", d); });
   return 0;
 }

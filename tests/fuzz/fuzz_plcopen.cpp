@@ -29,15 +29,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     refused_import = true;
   }
   if (refused_import && !refused) std::abort();  // parse_plcopen accepts only what import_plcopen does
-  ldc::Diagnostics d(ldc_fuzz::recovery_options());
-  try {
-    (void)ldc::import_plcopen(text, "fuzz.xml", d);
-    if (refused_import || d.errors() != 0) std::abort();
-  } catch (const ldc::ErrorsReported&) {
-    if (!refused_import) std::abort();
-    ldc_fuzz::check_report(d);
-  } catch (const ldc::CompileError&) {  // an error the import cannot go on from (the XML, the configuration)
-    if (!refused_import) std::abort();
-  }
+  ldc_fuzz::check_reading(refused_import, [&](ldc::Diagnostics& d) { (void)ldc::import_plcopen(text, "fuzz.xml", d); });
   return 0;
 }

@@ -43,4 +43,24 @@ inline void check_recovery(bool first_error, bool refused, const ldc::Diagnostic
   check_report(d);
 }
 
+// Reads the input again with recovery (`read(d)`) and checks the result
+// against `refused`, the verdict without it: accepted, or refused with a
+// report as above, or refused by an error the reader cannot go on from
+// (thrown as without recovery: the lexer, the file's structure).
+template <class F>
+void check_reading(bool refused, F&& read) {
+  ldc::Diagnostics d(recovery_options());
+  try {
+    read(d);
+  } catch (const ldc::ErrorsReported&) {
+    if (!refused) std::abort();
+    check_report(d);
+    return;
+  } catch (const ldc::CompileError&) {
+    if (!refused) std::abort();
+    return;
+  }
+  if (refused || d.errors() != 0) std::abort();
+}
+
 }  // namespace ldc_fuzz

@@ -33,15 +33,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (im.tasks.empty()) check(im.single);
     for (const ldc::PlcopenTask& t : im.tasks) check(t.tree);
   }
-  ldc::Diagnostics d(ldc_fuzz::recovery_options());
-  try {
-    (void)ldc::import_st(text, "fuzz.st", d);
-    if (refused || d.errors() != 0) std::abort();
-  } catch (const ldc::ErrorsReported&) {
-    if (!refused) std::abort();
-    ldc_fuzz::check_report(d);
-  } catch (const ldc::CompileError&) {  // an error the reader cannot go on from (the lexer, the file's structure)
-    if (!refused) std::abort();
-  }
+  ldc_fuzz::check_reading(refused, [&](ldc::Diagnostics& d) { (void)ldc::import_st(text, "fuzz.st", d); });
   return 0;
 }
