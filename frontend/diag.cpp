@@ -46,7 +46,8 @@ std::optional<std::string> DiagOptions::parse(std::string_view a) {
     for (const WarningInfo& w : warning_table()) names.push_back(w.name);
     std::string near = closest_name(name, names);
     return "unknown warning option '" + std::string(spelled) + "'" +
-           (near.empty() ? " (ldc --help lists them)" : "; did you mean '-W" + near + "'?");
+           (near.empty() ? " (ldc --help lists them)"
+                         : "; did you mean '" + std::string(spelled.substr(0, spelled.size() - name.size())) + near + "'?");  // -Wno-NAME: -Wno-
   };
   if (a == "-Wall") return all = true, "";
   if (a == "-Werror") return werror = true, "";

@@ -41,6 +41,9 @@ TEST(Diag, Options) {
   EXPECT_FALSE(o.enabled("double-coil"));
   EXPECT_EQ(o.parse("-O2"), std::nullopt);
   EXPECT_EQ(o.parse("-Wdouble-coils"), "unknown warning option '-Wdouble-coils'; did you mean '-Wdouble-coil'?");
+  // the suggestion keeps the option's own prefix
+  EXPECT_EQ(o.parse("-Wno-doubl-coil"), "unknown warning option '-Wno-doubl-coil'; did you mean '-Wno-double-coil'?");
+  EXPECT_EQ(o.parse("-Werror=shared-timers"), "unknown warning option '-Werror=shared-timers'; did you mean '-Werror=shared-timer'?");
   EXPECT_EQ(o.parse("-Werror=unused"), "");
   EXPECT_TRUE(o.is_error("unused"));
   EXPECT_FALSE(o.is_error("undriven"));
