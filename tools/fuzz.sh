@@ -16,7 +16,13 @@ build=${LDC_FUZZ_BUILD:-$root/build-fuzz}
 if [ ! -f "$build/CMakeCache.txt" ]; then
   CXX=clang++ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLDC_FUZZ=ON -DLDC_SANITIZE=ON >/dev/null
 fi
-cmake --build "$build" --target "fuzz_$name" -j"${LDC_FUZZ_JOBS:-2}" >/dev/null
+# one build of $build at a time: two at once (a run restarted while the last
+# one still built) can leave an object older than its source yet newer in time
+if command -v flock >/dev/null; then
+  flock "$build/.build-lock" cmake --build "$build" --target "fuzz_$name" -j"${LDC_FUZZ_JOBS:-2}" >/dev/null
+else
+  cmake --build "$build" --target "fuzz_$name" -j"${LDC_FUZZ_JOBS:-2}" >/dev/null
+fi
 corpora=${LDC_FUZZ_CORPUS:-$root/fuzz-corpus}
 corpus=$corpora/$name
 crashes=$corpora/$name-crashes
