@@ -174,7 +174,8 @@ size_t edit_distance(std::string_view a, std::string_view b) {
   return prev[m];
 }
 
-bool recover_unit(Diagnostics* diag, const std::string& file, const std::function<void()>& read) {
+bool recover_unit(Diagnostics* diag, const std::string& file, const std::function<void()>& read,
+                  const std::function<bool()>& quiet) {
   if (!diag) return read(), true;
   try {
     read();
@@ -184,7 +185,7 @@ bool recover_unit(Diagnostics* diag, const std::string& file, const std::functio
   } catch (const Cascade&) {
     return false;
   } catch (const CompileError& e) {
-    diag->error(file, e);
+    if (!quiet || !quiet()) diag->error(file, e);
     return false;
   }
 }

@@ -119,8 +119,10 @@ struct Stop : CompileError {
 // Reads one unit (a line, a declaration, a statement, a rung) of a reader
 // that recovers: without `diag` its error is thrown as before; with it an
 // error is reported to `diag` as `file`'s and false returned, a Cascade
-// returns false unreported, and a Stop goes on up.
-bool recover_unit(Diagnostics* diag, const std::string& file, const std::function<void()>& read);
+// returns false unreported, and a Stop goes on up.  `quiet`, if given, says
+// after an error whether it follows from one reported already (not reported).
+bool recover_unit(Diagnostics* diag, const std::string& file, const std::function<void()>& read,
+                  const std::function<bool()>& quiet = nullptr);
 
 // "file:line:col: KIND: message", the source line (from `text`) and a caret
 // under the column; only the first line when the line is not in the text.

@@ -483,18 +483,7 @@ struct Parser {
   // it holds a Bad token).
   bool attempt(const std::function<void()>& read) {
     size_t start = p;
-    if (!rec.diag) return read(), true;
-    try {
-      read();
-      return true;
-    } catch (const Stop&) {
-      throw;
-    } catch (const Cascade&) {
-      return false;
-    } catch (const CompileError& e) {
-      if (!bad_in(start, p)) rec.diag->error(rec.file, e);
-      return false;
-    }
+    return recover_unit(rec.diag, rec.file, read, [&] { return bad_in(start, p); });
   }
   static bool starts_statement(const Tok& k) {
     return is_kw(k, "if") || is_kw(k, "ifbecome") || is_kw(k, "else") || is_kw(k, "fi") || is_kw(k, "init");
