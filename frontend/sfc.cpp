@@ -69,12 +69,6 @@ void tokens_into(const std::string& line, int lineno, std::vector<Tok>& out) {
   }
 }
 
-std::vector<Tok> tokens(const std::string& line, int lineno) {
-  std::vector<Tok> out;
-  tokens_into(line, lineno, out);
-  return out;
-}
-
 // The tokens of a line whose unexpected characters are read as blanks (error
 // recovery: the line's error is reported; its words still say what it is).
 std::vector<Tok> tokens_blanking(std::string line, int lineno) {

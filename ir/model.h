@@ -245,6 +245,9 @@ class Model {
   // (M and D hold 8192 each).
   void set_area(uint32_t bit_base, uint32_t cell_base);
   Place place(Size s, SrcLoc at);
+  // The next bits placed lie at `bit` or later (a program of a project
+  // keeps its own relays apart from the other tasks' programs').
+  void skip_bits_to(uint32_t bit) { next_.bit = std::max(next_.bit, bit); }
   Size used() const { return {next_.bit - base_.bit, next_.cell - base_.cell}; }
   Place area_base() const { return base_; }
 

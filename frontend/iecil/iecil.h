@@ -77,6 +77,10 @@ Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename, b
 // structure (its TYPEs and POUs) and the layout stop at their first error.
 // A program with errors ends with ErrorsReported.
 Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename, bool from_st, Recovery& rec);
+// A program of a configuration of several tasks (frontend/st): the relays of
+// its own variables (all but VAR_GLOBAL) lie at M `own_m` or later, because
+// the tasks of a project share every relay (docs/st.md).  rec may be null.
+Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename, bool from_st, Recovery* rec, uint32_t own_m);
 
 // A POU body compiled for another reader (the PLCopen reader's calls of ST and
 // IL POUs, docs/plcopen.md "ST and IL POUs"): a program whose variable area

@@ -142,6 +142,7 @@ class Reader {
     p_.source = file;
   }
 
+  void own_m(uint32_t m) { own_m_ = m; }
   Program run() {
     if (!rec_) return run_all();
     Program out;
@@ -178,6 +179,7 @@ class Reader {
  private:
   const std::vector<Tok>& t_;
   bool from_st_ = false;
+  uint32_t own_m_ = 0;  // the first M of the program's own variables (parse_typed_il with own_m)
   std::optional<UnitBase> unit_;
   Recovery* rec_ = nullptr;  // error recovery: errors are reported and the reader goes on
   // Names whose declaration was refused (reported), and unknown names
@@ -856,6 +858,7 @@ class Reader {
         r.cells = Area::F;
         r.at = {0, next_f_++};
       } else {
+        if (v.cls != VarClass::Global) m_.skip_bits_to(own_m_);
         r.at = m_.place(m_.type(v.type).size, v.loc);
       }
       globals_[upper(v.name)] = r;
@@ -1771,7 +1774,8 @@ class Reader {
   // of the value stored into them; one place per name, type and inline copy.
   struct Temp { TypeId type; Operand o; };
   std::map<std::string, Temp> temps_;
-  bool st_temp(const std::string& name) const { return from_st_ && name.rfind("__", 0) == 0; }
+  // (the state of a chart written as text, __SFC..., is declared: frontend/st/sfc_text.h)
+  bool st_temp(const std::string& name) const { return from_st_ && name.rfind("__", 0) == 0 && upper(name).rfind("__SFC", 0) != 0; }
   void store_temp(const Tok& k) {
     next();
     default_cr(k);
@@ -2949,6 +2953,12 @@ Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename, b
 
 Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename, bool from_st, Recovery& rec) {
   return Reader(t, filename, from_st, std::nullopt, &rec).run();
+}
+
+Program parse_typed_il(const std::vector<Tok>& t, const std::string& filename, bool from_st, Recovery* rec, uint32_t own_m) {
+  Reader r(t, filename, from_st, std::nullopt, rec);
+  r.own_m(own_m);
+  return r.run();
 }
 
 void Recovery::report(const CompileError& e) {

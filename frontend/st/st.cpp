@@ -19,6 +19,7 @@
 #include <set>
 
 #include "frontend/st/st.h"
+#include "frontend/st/sfc_text.h"
 
 #include "frontend/diag.h"
 #include "frontend/frontend.h"
@@ -215,7 +216,7 @@ class Parser {
       if (u == "FOR") return for_stmt();
       if (u == "WHILE" || u == "REPEAT") return loop_stmt(u);
       if ((u == "INITIAL_STEP" || u == "STEP" || u == "TRANSITION") && peek(1).kind == Tok::Word)
-        throw Unreadable(k.line, k.col, "'" + k.text + "': a sequential function chart written as text (IEC 61131-3 SFC in ST); ldc reads SFC from PLCopen XML and .sfc files, not from ST (docs/st.md)");
+        throw Unreadable(k.line, k.col, "'" + k.text + "': an element of a chart among statements; a POU body is a chart written as text or statements, not both (docs/st.md)");
       if (u == "EXIT" || u == "CONTINUE" || u == "RETURN") {
         Stmt s;
         s.kind = u == "EXIT" ? Stmt::Exit : u == "CONTINUE" ? Stmt::Continue : Stmt::Return;
@@ -1346,6 +1347,7 @@ class File {
 
   // PROGRAM|FUNCTION_BLOCK|FUNCTION NAME [":" TYPE] { var_block } statements END_...
   void pou(const std::string& kind) {
+    size_t decl_start = pos_;
     const Tok& head = next();
     out_.push_back(head);
     out_.push_back(next());  // its name
@@ -1364,13 +1366,42 @@ class File {
       else var_block();
     }
     std::string end = "END_" + kind;
-    Parser p(t_, pos_, functions_, rec_);
-    std::vector<Stmt> body = p.statement_list({end.c_str()}, true);
-    pos_ = p.pos();
-    Writer(out_, functions_, rec_).body(body);
+    if (sfc_element_start(peek(), peek(1))) {
+      chart(end, decl_start, runs);
+    } else {
+      Parser p(t_, pos_, functions_, rec_);
+      std::vector<Stmt> body = p.statement_list({end.c_str()}, true);
+      pos_ = p.pos();
+      Writer(out_, functions_, rec_).body(body);
+    }
     if (peek().kind == Tok::End) out_.push_back({Tok::Word, end, peek().line, peek().col});  // END_... left out at the end
     else out_.push_back(next());
     eol();
+  }
+  // A body that is a chart written as text (frontend/st/sfc_text.h): its
+  // state declared in a VAR block of its own, its statements written as any
+  // body's.  The names the POU declares from decl_start on (a word before ':',
+  // ',' or AT), and a configuration's globals, are the variables an action
+  // association may name.
+  void chart(const std::string& end, size_t decl_start, bool runs) {
+    std::set<std::string> vars;
+    for (size_t i = decl_start; i + 1 < pos_; i++)
+      if (t_[i].kind == Tok::Word && (kw(t_[i + 1], "AT") || (t_[i + 1].kind == Tok::Punct && (t_[i + 1].text == ":" || t_[i + 1].text == ","))))
+        vars.insert(upper(t_[i].text));
+    if (runs)
+      for (const auto& [name, tok] : global_names_) vars.insert(name);
+    SfcText c = sfc_to_st(t_, pos_, end, vars);
+    out_.push_back({Tok::Word, "VAR", c.body.front().line, c.body.front().col});
+    eol();
+    for (const SfcText::Var& v : c.vars) {  // NAME : BOOL := init ;
+      auto word = [&](Tok::Kind k, const std::string& w) { out_.push_back({k, w, v.at.line, v.at.col}); };
+      word(Tok::Word, v.name), word(Tok::Punct, ":"), word(Tok::Word, "BOOL"), word(Tok::Punct, ":="), word(Tok::Word, v.init), word(Tok::Punct, ";");
+      eol();
+    }
+    out_.push_back({Tok::Word, "END_VAR", c.body.front().line, c.body.front().col});
+    eol();
+    Parser p(c.body, 0, functions_, rec_);
+    Writer(out_, functions_, rec_).body(p.statement_list({end.c_str()}, true));
   }
   // VAR_EXTERNAL of the program a CONFIGURATION runs: its globals are the
   // program's own (global_block), so each name is checked and the block dropped
@@ -1556,10 +1587,26 @@ PlcopenTask task_of(const st::Configuration& cfg, size_t k) {
 // Has `d` stopped at -fmax-errors (no error after this one is reported)?
 bool at_limit(const Diagnostics& d) { return d.options().max_errors > 0 && d.errors() >= d.options().max_errors; }
 
-// One program of the file (the instance of a configuration of several, or -1).
-Program read_program(const std::vector<iecil::Tok>& toks, int instance, const std::string& filename, iecil::Recovery* rec) {
-  if (!rec) return iecil::parse_typed_il(st::to_il_tokens(toks, instance), filename, true);
-  return iecil::parse_typed_il(st::to_il_tokens(toks, instance, *rec), filename, true, *rec);
+// One program of the file (the instance of a configuration of several, or
+// -1), its own variables' relays from M own_m on.
+Program read_program(const std::vector<iecil::Tok>& toks, int instance, const std::string& filename, iecil::Recovery* rec,
+                     uint32_t own_m = 0) {
+  if (!rec) return iecil::parse_typed_il(st::to_il_tokens(toks, instance), filename, true, nullptr, own_m);
+  return iecil::parse_typed_il(st::to_il_tokens(toks, instance, *rec), filename, true, rec, own_m);
+}
+
+// The first relay after every one program p names or places a variable in.
+uint32_t relays_after(const Program& p) {
+  uint32_t m = 0;
+  for (const Alias& a : p.aliases)
+    if (a.dev.dev == Dev::M) m = std::max(m, a.dev.index + 1);
+  for (const VarPlace& v : p.vars)
+    if (v.bits == Area::M) m = std::max(m, v.bit_first + v.bit_count);
+  for (const Rung& r : p.rungs)
+    for (const Instr& in : r.code)
+      for (const Operand& o : in.a)
+        if (o.kind != OpdKind::None && o.area == Area::M) m = std::max(m, o.index + 1);
+  return m;
 }
 
 PlcopenImport read_st(std::string_view text, const std::string& filename, Diagnostics* diag) {
@@ -1578,15 +1625,19 @@ PlcopenImport read_st(std::string_view text, const std::string& filename, Diagno
     return im;
   }
   // with recovery, every program is read (an error in a FUNCTION_BLOCK they
-  // share is reported once: Recovery), then the tasks are checked
+  // share is reported once: Recovery), then the tasks are checked.  Each
+  // program's own relays lie after the ones before it: tasks share every relay.
   std::vector<Program> progs;
+  uint32_t own_m = 0;
   for (size_t k = 0; k < cfg.instances.size(); k++) {
     if (!r) {
-      progs.push_back(read_program(toks, int(k), filename, r));
+      progs.push_back(read_program(toks, int(k), filename, r, own_m));
+      own_m = std::max(own_m, (relays_after(progs.back()) + 15) / 16 * 16);  // a block of 16 of its own
       continue;
     }
     try {
-      progs.push_back(read_program(toks, int(k), filename, r));
+      progs.push_back(read_program(toks, int(k), filename, r, own_m));
+      own_m = std::max(own_m, (relays_after(progs.back()) + 15) / 16 * 16);  // a block of 16 of its own
     } catch (const ErrorsReported&) {
       if (at_limit(*diag)) throw;
       progs.emplace_back();

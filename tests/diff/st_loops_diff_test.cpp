@@ -64,7 +64,7 @@ void run(const EngineFactory& test, const char* what, long def) {
     faults += kind != kFaultNone;
   }
   std::printf("st loops, %s: %ld programs (%d with a LOOP, %d faulting in scan 1)\n", what, seeds, loops, faults);
-  if (seeds >= 12) EXPECT_GT(loops, int(seeds) / 2) << "too few programs with a LOOP";
+  if (seeds >= 12) { EXPECT_GT(loops, int(seeds) / 2) << "too few programs with a LOOP"; }
 }
 
 // The generator's programs compile, most have a LOOP, and its faults occur.

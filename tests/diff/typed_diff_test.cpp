@@ -139,7 +139,7 @@ TEST(TypedGenerator, DrawsEveryTypedMnemonicAndType) {
       EXPECT_TRUE(ops.count(Op(i))) << op_info(Op(i)).name << " never drawn";
     }
   for (int i = 0; i < kTyCount; i++)  // STRING runs on the interpreters only: never drawn for every engine
-    if (Ty(i) != Ty::STRING) EXPECT_TRUE(tys.count(Ty(i))) << ty_info(Ty(i)).name << " never drawn";
+    if (Ty(i) != Ty::STRING) { EXPECT_TRUE(tys.count(Ty(i))) << ty_info(Ty(i)).name << " never drawn"; }
 }
 
 // Runs seed's program on the reference interpreter over its 20-scan trace and
@@ -372,7 +372,7 @@ TEST(TypedPouGenerator, DrawsEveryTypeAndConstruct) {
         if (in.ty != Ty::None) tys.insert(in.ty);
   }
   for (int i = 0; i < kTyCount; i++)  // STRING runs on the interpreters and the C route only: not drawn
-    if (Ty(i) != Ty::STRING) EXPECT_TRUE(tys.count(Ty(i))) << ty_info(Ty(i)).name << " never drawn";
+    if (Ty(i) != Ty::STRING) { EXPECT_TRUE(tys.count(Ty(i))) << ty_info(Ty(i)).name << " never drawn"; }
   for (const char* c : {"CAL fa(", "CAL fb(", "CAL fbs[", "CAL s.fa(", "CAL subs[", "CAL a(", "CAL fc(", "VAR_IN_OUT",
                         "VAR_EXTERNAL", "ENO =>", "CALC ", "CALCN ", "hist[i]", "[k0", "[k1]", "[k2]", "inner : S0",
                         "F0(x :=", "F1 ", "LD s\n", "RETCN", "JMPCN", "_TO_", "SHL", "ROR", ".inner.m3"})

@@ -529,7 +529,7 @@ TEST(Hostile, StringLengthCellsAreClamped) {
         }
         uint32_t len;
         std::memcpy(&len, mem.data() + at, 4);
-        if (r != 0 && r != 8 && r != 9) EXPECT_LE(len, 126u);  // a string result (the others only read it)
+        if (r != 0 && r != 8 && r != 9) { EXPECT_LE(len, 126u); }  // a string result (the others only read it)
         if (r == 0) {
           int64_t n;
           std::memcpy(&n, mem.data() + d0, 8);
