@@ -88,14 +88,21 @@ static bool ends_with(const std::string& s, const std::string& suf) {
 
 namespace {
 
-// A PLCopen program: its rungs, then its chart (docs/plcopen.md, section 1b).
+// A PLCopen program: its rungs, then its chart (docs/plcopen.md, section 1b),
+// q's edge slots after p's.
 void append_il(Program& p, Program q) {
   if (!q.rungs.empty()) {
     auto& l = q.rungs[0].labels;
     l.insert(l.begin(), p.end_labels.begin(), p.end_labels.end());
     p.end_labels.clear();
   }
-  for (Rung& r : q.rungs) p.rungs.push_back(std::move(r));
+  for (Rung& r : q.rungs) {
+    for (Instr& in : r.code)
+      for (Operand& o : in.a)
+        if (o.kind == OpdKind::Edge) o.index += p.edge_slots;
+    p.rungs.push_back(std::move(r));
+  }
+  p.edge_slots += q.edge_slots;
   p.end_labels.insert(p.end_labels.end(), q.end_labels.begin(), q.end_labels.end());
   for (const Alias& a : q.aliases) {
     bool dup = false;

@@ -23,6 +23,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <set>
@@ -545,8 +546,16 @@ class Importer {
   // The project's ST and IL POUs (docs/plcopen.md, "ST and IL POUs"): compiled
   // by the typed reader as a unit of their own, behind a small ST program that
   // copies the call's values between the instance and its pins here.
+  // a POU the typed reader compiles from its text: ST, IL, or an SFC chart
+  // that is text alone (plcopen::text_chart, written as ST) in a function
+  // block, or in a program with action bodies (which a chart of section 1b
+  // does not take)
   bool st_pou(const std::string& name) const {
     auto it = pou_lang_.find(upper(name));
+    if (it != pou_lang_.end() && it->second.starts_with("SFC")) {
+      const Element* pe = pou_el_.at(upper(name));
+      return plcopen::text_chart(pe) && (pou_type(pe) == "functionBlock" || plcopen::chart_action_bodies(pe));
+    }
     return it != pou_lang_.end() && (it->second == "ST" || it->second == "IL");
   }
   void st_program(const Element* pou);
@@ -2177,7 +2186,9 @@ const Element* Importer::callee_graph(const Node& b, const Element* callee) {
   if (!graph)
     fail_at(b.el, "block '" + b.type + "' localId " + std::to_string(b.id) + (b.instance.empty() ? "" : " (instance " + b.instance + ")") + " calls " +
                       (pou_type(callee) == "function" ? "function '" : "function block '") + *callee->attr("name") + "', written in " + pou_lang_[upper(*callee->attr("name"))] +
-                      "; ldc expands calls of the project's POUs written in LD, FBD, ST or IL (" + b.el->path() + ")");
+                      (pou_lang_[upper(*callee->attr("name"))].starts_with("SFC")
+                           ? "; ldc compiles an SFC function block whose chart is text alone: conditions in inline ST, actions in ST or variables (" + b.el->path() + ")"
+                           : "; ldc expands calls of the project's POUs written in LD, FBD, SFC, ST or IL (" + b.el->path() + ")"));
   return graph;
 }
 
@@ -3561,10 +3572,17 @@ uint32_t Importer::take_run(Dev d, uint32_t n, const Element* el) {
 void Importer::sfc_body(const Element* pou, const Element* sfc) {
   std::string pname = *pou->attr("name");
   if (chart_) fail_at(pou, "POU '" + pname + "' is a second SFC program in one task (after '" + chart_pou_ + "'); ldc runs one chart per program");
-  // the LD/FBD elements: blocks and variables feeding the conditions
+  // the LD/FBD elements: blocks and variables feeding the conditions.
+  // Beremiz writes the blocks into an action of the initial step,
+  // COMPUTE_FUNCTION_BLOCKS, qualifier S (PLCGenerator, SFCComputedBlocks):
+  // it runs every scan after the chart and its other actions, so a condition
+  // reads a block's output of the scan before (and a contact's of this one)
+  size_t first_block = rungs_.size();
   sfc_mode_ = true;
   body(sfc, "POU " + pname);
   sfc_mode_ = false;
+  std::vector<TreeRung> blocks(std::make_move_iterator(rungs_.begin() + long(first_block)), std::make_move_iterator(rungs_.end()));
+  rungs_.resize(first_block);
   std::map<int, const Element*> el_of;
   for (const auto& c : sfc->children) {
     std::string k(c->local_name());
@@ -3748,15 +3766,14 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
       q = bit_leaf(Op::LOAD, stored, x.el);
     }
     for (uint32_t st : x.n) q = c_or(std::move(q), flag(st));
-    // P: the scan the step is activated in, when its entry bit is still set (the
-    // initial step: the first scan, its entry bit already cleared by its first run)
-    for (uint32_t st : x.pulse) {
-      q = c_or(std::move(q), bit_leaf(Op::LOAD, bit_opd(Area::M, c.entry(st)), x.el));
-      if (st == c.initial) q = c_or(std::move(q), bit_leaf(Op::LOAD, bit_opd(Area::S, kBitFirstScan), x.el));
-    }
+    // P: the scan the step is activated in, when its entry bit is still set.
+    // Not the initial step's first scan: MatIEC remembers every step's flag
+    // before testing anything, so the initial step is active, not activated, then
+    for (uint32_t st : x.pulse) q = c_or(std::move(q), bit_leaf(Op::LOAD, bit_opd(Area::M, c.entry(st)), x.el));
     rung(std::move(q), out(Op::OUT, {x.bit}, x.el), x.el);
   }
   after_ = std::move(rungs_);
+  after_.insert(after_.end(), std::make_move_iterator(blocks.begin()), std::make_move_iterator(blocks.end()));
   rungs_ = std::move(saved);
   pending_title_ = std::move(saved_title);
   for (uint32_t i = 0; i < c.steps.size(); i++) {
@@ -3984,11 +4001,12 @@ void Importer::prepare() {
     const std::string& lang = pou_lang_[upper(*p->attr("name"))];
     bool callee = called_.count(upper(*p->attr("name"))) && user_pou(*p->attr("name"));
     if ((lang == "LD" || lang == "FBD") && !callee) ld.push_back(p);
-    else if (st_pou(*p->attr("name")) && pou_type(p) == "program" && (cfg_tasks_.empty() || run_by_task(p))) ld.push_back(p);
+    else if (st_pou(*p->attr("name")) && pou_type(p) == "program" && (lang == "SFC" ? run_by_task(p) : cfg_tasks_.empty() || run_by_task(p)))
+      ld.push_back(p);
   }
   // SFC programs that a task runs: their charts (section 1b)
   for (const Element* p : all)
-    if (pou_lang_[upper(*p->attr("name"))] == "SFC" && run_by_task(p)) ld.push_back(p);
+    if (pou_lang_[upper(*p->attr("name"))] == "SFC" && run_by_task(p) && !st_pou(*p->attr("name"))) ld.push_back(p);
   if (ld.empty()) {
     std::string list;
     for (const Element* p : all) list += std::string(list.empty() ? "" : ", ") + "'" + *p->attr("name") + "' is " + pou_lang_[upper(*p->attr("name"))];
@@ -4042,8 +4060,8 @@ void Importer::emit_bodies(const std::vector<const Element*>& pous) {
     scope_ = scopes_[pe];
     const Element* b = pe->child("body");
     bool ok = recover([&] {
-      if (const Element* sfc = b->child("SFC")) sfc_body(pe, sfc);
-      else if (st_pou(pou_)) st_program(pe);
+      if (st_pou(pou_)) st_program(pe);
+      else if (const Element* sfc = b->child("SFC")) sfc_body(pe, sfc);
       else body(b->child("LD") ? b->child("LD") : b->child("FBD"), "POU " + pou_);
     });
     if (!ok) sfc_mode_ = false, pending_store_ = nullptr, generating_.clear();

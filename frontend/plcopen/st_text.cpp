@@ -2,6 +2,9 @@
 #include "frontend/plcopen/st_text.h"
 
 #include <algorithm>
+#include <cstdlib>
+#include <functional>
+#include <map>
 #include <set>
 
 #include "frontend/st/st.h"
@@ -180,6 +183,210 @@ void StText::interface(Part& p, const Element* itf) const {
   }
 }
 
+// ---------------------------------------------------------------- SFC as text
+
+namespace {
+
+// The inline ST of a condition or an action (<inline><ST>, or <inline><body><ST>), or null.
+const Element* inline_st_text(const Element* e) {
+  const Element* in = e ? e->child("inline") : nullptr;
+  if (!in) return nullptr;
+  const Element* b = in->child("body") ? in->child("body") : in;
+  const Element* st = b->child("ST");
+  return st ? body_text(st) : nullptr;
+}
+
+// The POU's action `name` written in ST (<actions><action name=...><body><ST>), or null.
+const Element* st_action(const Element* pou, const std::string& name) {
+  const Element* acts = pou->child("actions");
+  if (!acts) return nullptr;
+  for (const Element* a : acts->children_named("action"))
+    if (a->attr("name") && iecil::upper(*a->attr("name")) == iecil::upper(name)) {
+      const Element* b = a->child("body");
+      return b && b->child("ST") ? body_text(b->child("ST")) : nullptr;
+    }
+  return nullptr;
+}
+
+bool pou_action(const Element* pou, const std::string& name) {
+  const Element* acts = pou->child("actions");
+  if (acts)
+    for (const Element* a : acts->children_named("action"))
+      if (a->attr("name") && iecil::upper(*a->attr("name")) == iecil::upper(name)) return true;
+  return false;
+}
+
+// The chart's elements by localId, and what each follows (its connections in).
+struct ChartGraph {
+  std::map<int, const Element*> el;
+  std::map<int, std::vector<int>> in;
+  std::vector<int> order;  // localIds in document order
+  explicit ChartGraph(const Element* sfc) {
+    for (const auto& c : sfc->children) {
+      const std::string* id = c->attr("localId");
+      if (!id) continue;
+      int n = std::atoi(id->c_str());
+      el[n] = c.get(), order.push_back(n);
+      for (const Element* cpi : c->children_named("connectionPointIn"))
+        for (const Element* cn : cpi->children_named("connection"))
+          if (auto r = cn->attr("refLocalId")) in[n].push_back(std::atoi(r->c_str()));
+    }
+  }
+  std::string kind(int id) const { auto it = el.find(id); return it == el.end() ? "" : std::string(it->second->local_name()); }
+  std::vector<int> after(int id) const {
+    std::vector<int> v;
+    for (int n : order)
+      if (auto i = in.find(n); i != in.end() && kind(n) != "actionBlock" && std::count(i->second.begin(), i->second.end(), id)) v.push_back(n);
+    return v;
+  }
+};
+
+}  // namespace
+
+bool text_chart(const Element* pou) {
+  const Element* body = pou->child("body");
+  const Element* sfc = body ? body->child("SFC") : nullptr;
+  if (!sfc) return false;
+  static const std::set<std::string> chart = {"step", "transition", "selectionDivergence", "selectionConvergence",
+                                              "simultaneousDivergence", "simultaneousConvergence", "jumpStep", "actionBlock",
+                                              "comment", "documentation", "addData"};
+  for (const auto& c : sfc->children) {
+    std::string k(c->local_name());
+    if (!chart.count(k)) return false;  // an LD/FBD element: a condition drawn in the graph
+    if (k == "transition" && !inline_st_text(c->child("condition"))) return false;
+  }
+  return true;
+}
+
+bool chart_action_bodies(const Element* pou) {
+  const Element* body = pou->child("body");
+  const Element* sfc = body ? body->child("SFC") : nullptr;
+  if (!sfc) return false;
+  for (const Element* ab : sfc->children_named("actionBlock"))
+    for (const Element* a : ab->children_named("action")) {
+      const Element* ref = a->child("reference");
+      if (inline_st_text(a) || a->child("inline") || (ref && ref->attr("name") && pou_action(pou, *ref->attr("name")))) return true;
+    }
+  return false;
+}
+
+// The chart as text (frontend/st/sfc_text.h), in Beremiz's order
+// (PLCGenerator.ComputeSFCStep): from each initial step, the step with its
+// associations, its actions' bodies, then its transitions (in document order),
+// each followed by the steps it leads to.  A step no transition reaches is
+// not written (nor run), as there.
+void StText::chart(Part& p, const Element* pou, const Element* sfc) const {
+  ChartGraph g(sfc);
+  auto name_of = [&](int id) { return *g.el.at(id)->attr("name"); };
+  std::map<std::string, int> step_named;
+  for (int id : g.order)
+    if (g.kind(id) == "step") {
+      if (!g.el[id]->attr("name")) fail_at(g.el[id], "step without a name (" + g.el[id]->path() + ")");
+      step_named[iecil::upper(name_of(id))] = id;
+    }
+  // a transition's source steps (back through divergences and simultaneous convergences)
+  std::function<void(int, std::vector<int>&, int)> sources = [&](int id, std::vector<int>& out, int depth) {
+    if (depth > 64) fail_at(g.el[id], "a loop of divergences (" + g.el[id]->path() + ")");
+    for (int r : g.in[id]) {
+      std::string k = g.kind(r);
+      if (k == "step") out.push_back(r);
+      else if (k == "selectionDivergence" || k == "simultaneousConvergence") sources(r, out, depth + 1);
+      else fail_at(g.el[id], "localId " + std::to_string(id) + " follows " + (k.empty() ? "nothing" : k) + "; a transition follows steps (" + g.el[id]->path() + ")");
+    }
+  };
+  // the steps a transition leads to (forward through convergences, simultaneous divergences, jumps)
+  std::function<void(int, std::vector<int>&, int)> targets = [&](int id, std::vector<int>& out, int depth) {
+    if (depth > 64) fail_at(g.el[id], "a loop of convergences (" + g.el[id]->path() + ")");
+    for (int n : g.after(id)) {
+      std::string k = g.kind(n);
+      if (k == "step") out.push_back(n);
+      else if (k == "selectionConvergence" || k == "simultaneousDivergence") targets(n, out, depth + 1);
+      else if (k == "jumpStep") {
+        const std::string* t = g.el[n]->attr("targetName");
+        if (!t || !step_named.count(iecil::upper(*t))) fail_at(g.el[n], "a jump to an unknown step (" + g.el[n]->path() + ")");
+        out.push_back(step_named[iecil::upper(*t)]);
+      } else if (k != "transition") {
+        fail_at(g.el[n], k + " after a transition (" + g.el[n]->path() + ")");
+      }
+    }
+  };
+  std::map<int, std::vector<int>> from, to, of_step;  // transition -> steps; step -> its transitions
+  for (int id : g.order)
+    if (g.kind(id) == "transition") {
+      sources(id, from[id], 0), targets(id, to[id], 0);
+      if (from[id].empty() || to[id].empty()) fail_at(g.el[id], "transition localId " + std::to_string(id) + " without a step before and after it (" + g.el[id]->path() + ")");
+      for (int s : from[id]) of_step[s].push_back(id);
+    }
+  auto step_list = [&](const std::vector<int>& v) {
+    if (v.size() == 1) return name_of(v[0]);
+    std::string s;
+    for (int x : v) s += (s.empty() ? "(" : ", ") + name_of(x);
+    return s + ")";
+  };
+  std::set<int> done_steps, done_trs;
+  std::set<std::string> done_actions;
+  int inline_no = 0;
+  std::map<const Element*, std::string> inline_name;  // an inline <action>: STEP_INLINEn, numbered in document order
+  for (int id : g.order)
+    if (g.kind(id) == "actionBlock")
+      for (const Element* a : g.el[id]->children_named("action"))
+        if (inline_st_text(a) && !g.in[id].empty() && g.kind(g.in[id][0]) == "step")
+          inline_name[a] = iecil::upper(name_of(g.in[id][0])) + "_INLINE" + std::to_string(++inline_no);
+  std::function<void(int)> step = [&](int s) {
+    if (!done_steps.insert(s).second) return;
+    const Element* se = g.el[s];
+    add(p, std::string(is_true(se->attr("initialStep")) ? "INITIAL_STEP " : "STEP ") + name_of(s) + ":", se);
+    std::vector<std::pair<std::string, const Element*>> bodies;  // ACTIONs to write after the step
+    for (int ab : g.order) {
+      if (g.kind(ab) != "actionBlock" || g.in[ab].size() != 1 || g.in[ab][0] != s) continue;
+      for (const Element* a : g.el[ab]->children_named("action")) {
+        std::string q = a->attr("qualifier") ? *a->attr("qualifier") : "N";
+        std::string n;
+        if (inline_name.count(a)) {
+          n = inline_name[a];
+          bodies.push_back({n, inline_st_text(a)});
+        } else if (const Element* ref = a->child("reference"); ref && ref->attr("name")) {
+          n = *ref->attr("name");
+          if (pou_action(pou, n)) {
+            const Element* text = st_action(pou, n);
+            if (!text) fail_at(a, "action '" + n + "' of step '" + name_of(s) + "' is not written in ST; ldc reads a chart's action bodies written in ST (" + a->path() + ")");
+            bodies.push_back({n, text});
+          }
+        } else {
+          fail_at(a, "an action of step '" + name_of(s) + "' that is neither inline ST nor a reference (" + a->path() + ")");
+        }
+        std::string args = q;
+        if (const std::string* d = a->attr("duration")) args += ", " + *d;
+        if (const std::string* ind = a->attr("indicator")) args += ", " + *ind;
+        add(p, "  " + n + "(" + args + ");", a);
+      }
+    }
+    add(p, "END_STEP", se);
+    for (const auto& [n, text] : bodies) {
+      if (!done_actions.insert(iecil::upper(n)).second) continue;
+      add(p, "ACTION " + n + ":", text);
+      add_body(p, text);
+      add(p, "END_ACTION", text);
+    }
+    for (int t : of_step[s]) {
+      if (!done_trs.insert(t).second) continue;
+      const Element* te = g.el[t];
+      std::string head = "TRANSITION";
+      if (const std::string* pr = te->attr("priority")) head += " (PRIORITY := " + *pr + ")";
+      add(p, head + " FROM " + step_list(from[t]) + " TO " + step_list(to[t]), te);
+      add(p, ":=", te);
+      add_body(p, inline_st_text(te->child("condition")));
+      add(p, ";", te);
+      add(p, "END_TRANSITION", te);
+      for (int n : to[t]) step(n);
+    }
+  };
+  bool initial = false;
+  for (int id : g.order)
+    if (g.kind(id) == "step" && is_true(g.el[id]->attr("initialStep"))) step(id), initial = true;
+  if (!initial) fail_at(sfc, "the SFC body of POU '" + *pou->attr("name") + "' has no initial step (" + sfc->path() + ")");
+}
+
 void StText::data_types(const Element* dts) {
   if (!dts || dts->children_named("dataType").empty()) return;
   add(st_, "TYPE", dts);
@@ -197,9 +404,10 @@ void StText::pou(const Element* pou) {
   const std::string& name = *pou->attr("name");
   std::string kind = pou->attr("pouType") ? *pou->attr("pouType") : "program";
   const Element* body = pou->child("body");
+  const Element* sfc = body && text_chart(pou) ? body->child("SFC") : nullptr;
   const Element* lang = body ? (body->child("ST") ? body->child("ST") : body->child("IL")) : nullptr;
-  if (!lang) fail_at(pou, "POU '" + name + "' has no ST or IL body (" + pou->path() + ")");
-  Part& p = lang->local_name() == "ST" ? st_ : il_;
+  if (!lang && !sfc) fail_at(pou, "POU '" + name + "' has no ST or IL body (" + pou->path() + ")");
+  Part& p = sfc || lang->local_name() == "ST" ? st_ : il_;
   const Element* itf = pou->child("interface");
   if (kind == "functionBlock") {
     add(p, "FUNCTION_BLOCK " + name, pou);
@@ -211,7 +419,8 @@ void StText::pou(const Element* pou) {
     add(p, "PROGRAM " + name, pou);
   }
   interface(p, itf);
-  add_body(p, body_text(lang));
+  if (sfc) chart(p, pou, sfc);
+  else add_body(p, body_text(lang));
   add(p, kind == "functionBlock" ? "END_FUNCTION_BLOCK" : kind == "function" ? "END_FUNCTION" : "END_PROGRAM", pou);
 }
 

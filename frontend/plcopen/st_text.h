@@ -50,6 +50,7 @@ class StText {
   void add(Part& p, const std::string& text, const xml::Element* at) const;
   void add_body(Part& p, const xml::Element* text_el) const;
   void interface(Part& p, const xml::Element* itf) const;
+  void chart(Part& p, const xml::Element* pou, const xml::Element* sfc) const;
   std::string value(const xml::Element* v) const;
   std::string declaration(const xml::Element* var) const;
   void place(const Part& p, iecil::Tok& k) const;
@@ -58,5 +59,14 @@ class StText {
 
 // The element holding an <ST> or <IL> body's text (its <xhtml:p>, or itself).
 const xml::Element* body_text(const xml::Element* lang);
+
+// Is `pou`'s body an SFC chart written in text alone -- steps, transitions
+// whose conditions are inline ST, actions that are variables, inline ST or
+// the POU's ST actions, and no LD/FBD element -- which StText writes as the
+// chart as text that the ST reader takes (docs/plcopen.md, "SFC function blocks")?
+bool text_chart(const xml::Element* pou);
+// Has the chart of `pou` an action that is a body (inline, or one of the
+// POU's <actions>) rather than a variable?
+bool chart_action_bodies(const xml::Element* pou);
 
 }  // namespace ldc::plcopen
