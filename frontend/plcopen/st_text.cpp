@@ -284,9 +284,11 @@ void StText::chart(Part& p, const Element* pou, const Element* sfc) const {
       if (!g.el[id]->attr("name")) fail_at(g.el[id], "step without a name (" + g.el[id]->path() + ")");
       step_named[iecil::upper(name_of(id))] = id;
     }
-  // a transition's source steps (back through divergences and simultaneous convergences)
+  // a transition's source steps (back through divergences and simultaneous
+  // convergences); `work` bounds the walks of a hostile graph of many branches
+  long work = 0;
   std::function<void(int, std::vector<int>&, int)> sources = [&](int id, std::vector<int>& out, int depth) {
-    if (depth > 64) fail_at(g.el[id], "a loop of divergences (" + g.el[id]->path() + ")");
+    if (depth > 64 || ++work > 100000) fail_at(g.el[id], "divergences nested past 64, or looping (" + g.el[id]->path() + ")");
     for (int r : g.in[id]) {
       std::string k = g.kind(r);
       if (k == "step") out.push_back(r);
@@ -296,7 +298,7 @@ void StText::chart(Part& p, const Element* pou, const Element* sfc) const {
   };
   // the steps a transition leads to (forward through convergences, simultaneous divergences, jumps)
   std::function<void(int, std::vector<int>&, int)> targets = [&](int id, std::vector<int>& out, int depth) {
-    if (depth > 64) fail_at(g.el[id], "a loop of convergences (" + g.el[id]->path() + ")");
+    if (depth > 64 || ++work > 100000) fail_at(g.el[id], "convergences nested past 64, or looping (" + g.el[id]->path() + ")");
     for (int n : g.after(id)) {
       std::string k = g.kind(n);
       if (k == "step") out.push_back(n);

@@ -1367,6 +1367,7 @@ class File {
     }
     std::string end = "END_" + kind;
     if (sfc_element_start(peek(), peek(1))) {
+      if (kind == "FUNCTION") fail(peek(), "a chart in a FUNCTION, which keeps nothing from one call to the next; IEC 61131-3 charts structure programs and function blocks");
       chart(end, decl_start, runs);
     } else {
       Parser p(t_, pos_, functions_, rec_);
