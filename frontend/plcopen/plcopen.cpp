@@ -565,6 +565,8 @@ class Importer {
   static constexpr const char* kInlineText = "\x01";
   bool inline_st(const Element* cond);
   void st_condition(const Element* in, uint32_t m);
+  void st_action(const Element* text, uint32_t m, const Element* at);
+  std::vector<std::string> unit_header(const std::string& flag, uint32_t m);
   void splice(const iecil::Unit& u, const Element* at);
   void unit_init(const iecil::Unit& u, const std::string& whose, const Element* at);
   uint32_t first_free(Dev d) const;
@@ -597,6 +599,7 @@ class Importer {
  private:
   std::optional<Chart> chart_;
   std::vector<TreeRung> after_;  // the chart's actions, after its steps
+  std::vector<std::string> after_end_labels_;  // labels after its last rung
   std::string chart_pou_;
   void take_chart(std::optional<PlcopenChart>& into) {
     if (!chart_) return;
@@ -604,8 +607,10 @@ class Importer {
     into->chart = std::move(*chart_);
     into->after.source = file_;
     into->after.rungs = std::move(after_);
+    into->after.end_labels = std::move(after_end_labels_);
     chart_.reset();
     after_.clear();
+    after_end_labels_.clear();
   }
   static const std::set<std::string>& sfc_kinds() {
     static const std::set<std::string> k = {"step", "transition", "selectionDivergence", "selectionConvergence",
@@ -2466,6 +2471,18 @@ bool Importer::inline_st(const Element* cond) {
 // names are the POU's variables, located where this reader holds them.
 void Importer::st_condition(const Element* in, uint32_t m) {
   const Element* b = in->child("body") ? in->child("body") : in;
+  std::vector<std::string> lines = unit_header("ldc__c", m);
+  lines.push_back("ldc__c :=");
+  lines.push_back(kInlineText);
+  lines.push_back(";");
+  lines.push_back("END_PROGRAM");
+  iecil::Unit u = st_unit(lines, in, nullptr, plcopen::body_text(b->child("ST")));
+  splice(u, in);
+}
+
+// The head of a unit of our own over the POU's variables, located where this
+// reader holds them, and a BOOL `flag` at relay m.
+std::vector<std::string> Importer::unit_header(const std::string& flag, uint32_t m) {
   std::vector<std::string> lines{"PROGRAM ldc__call", "VAR"};
   for (const auto& [key, v] : scope_) {
     if (!v->dev || v->derived || v->frame || !v->el) continue;
@@ -2474,14 +2491,19 @@ void Importer::st_condition(const Element* in, uint32_t m) {
     lines.push_back(v->name.substr(v->name.rfind('.') + 1) + " AT " + dev_name(v->dev->dev) + std::to_string(v->dev->index) + " : " +
                     plcopen::StText(text_).type(te->children[0].get()) + ";");
   }
-  lines.push_back("ldc__c AT M" + std::to_string(m) + " : BOOL;");
+  lines.push_back(flag + " AT M" + std::to_string(m) + " : BOOL;");
   lines.push_back("END_VAR");
-  lines.push_back("ldc__c :=");
+  return lines;
+}
+
+// An SFC action body written in ST (`text`), run while relay m (its state) is on.
+void Importer::st_action(const Element* text, uint32_t m, const Element* at) {
+  std::vector<std::string> lines = unit_header("ldc__a", m);
+  lines.push_back("IF ldc__a THEN");
   lines.push_back(kInlineText);
-  lines.push_back(";");
+  lines.push_back("END_IF;");
   lines.push_back("END_PROGRAM");
-  iecil::Unit u = st_unit(lines, in, nullptr, plcopen::body_text(b->child("ST")));
-  splice(u, in);
+  splice(st_unit(lines, at, nullptr, text), at);
 }
 
 // The first device of area d above every one this reader has taken.
@@ -3715,9 +3737,17 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
   for (Tr& tr : trs) c.steps[tr.from].out.push_back(std::move(tr.t));
   // actions: as MatIEC runs them, after the steps have moved: a variable action
   // is TRUE while a step naming it N is active, or from an S step's activation
-  // to an R step's (its stored state, a relay)
+  // to an R step's (its stored state, a relay); an action body written in ST
+  // (inline, or one of the POU's <actions>) has such a state in a relay of its
+  // own and runs while it is on
   const Element* actions = pou->child("actions");
-  struct Act { Operand bit; std::vector<uint32_t> n, set, reset, pulse; const Element* el; };
+  struct Act {
+    Operand bit;
+    std::vector<uint32_t> n, set, reset, pulse;
+    const Element* el;
+    const Element* text = nullptr;  // a body's ST
+    uint32_t step = 0;              // the first step naming it
+  };
   std::vector<Act> acts;
   for (const auto& ch : sfc->children) {
     if (ch->local_name() != "actionBlock") continue;
@@ -3728,15 +3758,33 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
     for (const Element* a : ab->children_named("action")) {
       std::string q = a->attr("qualifier") ? upper(*a->attr("qualifier")) : "N";
       const Element* ref = a->child("reference");
-      if (!ref || !ref->attr("name"))
-        fail_at(a, "an inline action in step '" + c.steps[s].name + "'; ldc translates actions that are BOOL variables (" + a->path() + ")");
-      std::string name = *ref->attr("name");
-      if (actions)
-        for (const Element* an : actions->children_named("action"))
-          if (an->attr("name") && upper(*an->attr("name")) == upper(name))
-            fail_at(a, "action '" + name + "' of step '" + c.steps[s].name + "' is an action body of the POU; ldc translates actions that are BOOL variables (" + a->path() + ")");
+      const Element* text = nullptr;  // an action body's ST
+      std::string name;
+      auto st_of = [&](const Element* body, const std::string& what) {
+        if (!body || !body->child("ST"))
+          fail_at(a, what + " of step '" + c.steps[s].name + "' is not written in ST; ldc translates action bodies written in ST and actions that are BOOL variables (" + a->path() + ")");
+        return plcopen::body_text(body->child("ST"));
+      };
+      if (const Element* in = a->child("inline")) {
+        name = "an inline action";
+        text = st_of(in->child("body") ? in->child("body") : in, name);
+      } else {
+        if (!ref || !ref->attr("name")) fail_at(a, "an action of step '" + c.steps[s].name + "' with neither a reference nor a body (" + a->path() + ")");
+        name = *ref->attr("name");
+        if (actions)
+          for (const Element* an : actions->children_named("action"))
+            if (an->attr("name") && upper(*an->attr("name")) == upper(name)) text = st_of(an->child("body"), "action '" + name + "'");
+      }
       if (q != "N" && q != "S" && q != "R" && q != "P")
         fail_at(a, "qualifier " + q + " of action '" + name + "' in step '" + c.steps[s].name + "' is not supported: ldc translates N, S, R and P (" + a->path() + ")");
+      if (text) {
+        Act* act = nullptr;
+        for (Act& x : acts)
+          if (x.text == text) act = &x;  // one of the POU's actions, named by several steps: one state
+        if (!act) acts.push_back(Act{bit_opd(Area::M, take(Dev::M, a)), {}, {}, {}, {}, a, text, s}), act = &acts.back();
+        (q == "N" ? act->n : q == "S" ? act->set : q == "R" ? act->reset : act->pulse).push_back(s);
+        continue;
+      }
       Var* v = lookup(name);
       if (!v) fail_at(a, "action '" + name + "' of step '" + c.steps[s].name + "' is neither a variable nor an action of POU '" + pname + "' (" + a->path() + ")");
       if (v->ty != Ty::Bool) fail_at(a, "action '" + name + "' of step '" + c.steps[s].name + "' is a " + v->type + " variable; an action variable is BOOL (" + a->path() + ")");
@@ -3772,8 +3820,23 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
     for (uint32_t st : x.pulse) q = c_or(std::move(q), bit_leaf(Op::LOAD, bit_opd(Area::M, c.entry(st)), x.el));
     rung(std::move(q), out(Op::OUT, {x.bit}, x.el), x.el);
   }
+  // the bodies, after every state: the initial step's first, then the blocks
+  // (Beremiz's COMPUTE_FUNCTION_BLOCKS comes after the initial step's own
+  // actions), then the others in document order
+  for (const Act& x : acts)
+    if (x.text && x.step == c.initial) st_action(x.text, x.bit.index, x.el);
+  if (!blocks.empty() && !pending_labels_.empty()) {  // a body's labels after its last rung: the blocks' first
+    blocks[0].labels.insert(blocks[0].labels.begin(), pending_labels_.begin(), pending_labels_.end());
+    pending_labels_.clear();
+  }
   after_ = std::move(rungs_);
   after_.insert(after_.end(), std::make_move_iterator(blocks.begin()), std::make_move_iterator(blocks.end()));
+  rungs_.clear();
+  for (const Act& x : acts)
+    if (x.text && x.step != c.initial) st_action(x.text, x.bit.index, x.el);
+  after_.insert(after_.end(), std::make_move_iterator(rungs_.begin()), std::make_move_iterator(rungs_.end()));
+  after_end_labels_ = std::move(pending_labels_);  // the last body's
+  pending_labels_.clear();
   rungs_ = std::move(saved);
   pending_title_ = std::move(saved_title);
   for (uint32_t i = 0; i < c.steps.size(); i++) {
