@@ -29,6 +29,10 @@ crashes=$corpora/$name-crashes
 mkdir -p "$corpus" "$crashes"
 # seeds: the directories tests/fuzz/CMakeLists.txt lists for this reader
 seeds=$(sed -n "s/^set(_fuzz_seeds_$name \(.*\))$/\1/p" "$root/tests/fuzz/CMakeLists.txt")
+if grep -q "^set(_fuzz_seeds_$name " "$root/tests/fuzz/CMakeLists.txt" && [ -z "$seeds" ]; then
+  echo "tools/fuzz.sh: the seed list of $name in tests/fuzz/CMakeLists.txt is not on one line" >&2
+  exit 2
+fi
 for d in $seeds "tests/fuzz/regressions/$name"; do
   [ -d "$root/$d" ] || continue
   find "$root/$d" -type f ! -name '*.md' | while read -r f; do
