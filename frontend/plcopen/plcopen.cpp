@@ -4064,7 +4064,7 @@ void Importer::prepare() {
     const std::string& lang = pou_lang_[upper(*p->attr("name"))];
     bool callee = called_.count(upper(*p->attr("name"))) && user_pou(*p->attr("name"));
     if ((lang == "LD" || lang == "FBD") && !callee) ld.push_back(p);
-    else if (st_pou(*p->attr("name")) && pou_type(p) == "program" && (lang == "SFC" ? run_by_task(p) : cfg_tasks_.empty() || run_by_task(p)))
+    else if (st_pou(*p->attr("name")) && pou_type(p) == "program" && (lang.starts_with("SFC") ? run_by_task(p) : cfg_tasks_.empty() || run_by_task(p)))
       ld.push_back(p);
   }
   // SFC programs that a task runs: their charts (section 1b)
