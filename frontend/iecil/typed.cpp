@@ -1789,8 +1789,11 @@ class Reader {
   // of the value stored into them; one place per name, type and inline copy.
   struct Temp { TypeId type; Operand o; };
   std::map<std::string, Temp> temps_;
-  // (the state of a chart written as text, __SFC..., is declared: frontend/st/sfc_text.h)
-  bool st_temp(const std::string& name) const { return from_st_ && name.rfind("__", 0) == 0 && upper(name).rfind("__SFC", 0) != 0; }
+  // A name of two leading underscores that the scope declares is a variable
+  // (the state of a chart written as text, frontend/st/sfc_text.h).
+  bool st_temp(const std::string& name) const {
+    return from_st_ && name.rfind("__", 0) == 0 && !scope_->names.count(upper(name));
+  }
   void store_temp(const Tok& k) {
     next();
     default_cr(k);
