@@ -563,8 +563,7 @@ class Importer {
   // `lines` of ST placed at `at`; a line kInlineText is the text of `text`.
   iecil::Unit st_unit(const std::vector<std::string>& lines, const Element* at, const Element* program = nullptr, const Element* text = nullptr);
   static constexpr const char* kInlineText = "\x01";
-  bool inline_st(const Element* cond);
-  void st_condition(const Element* in, uint32_t m);
+  void st_condition(const Element* cond, uint32_t m);
   void st_action(const Element* text, uint32_t m, const Element* at);
   std::vector<std::string> unit_header(const std::string& flag, uint32_t m);
   void splice(const iecil::Unit& u, const Element* at);
@@ -2460,24 +2459,16 @@ void Importer::st_program(const Element* pou) {
 }
 
 // An inline ST condition of an SFC transition (<inline><ST>).
-bool Importer::inline_st(const Element* cond) {
+// A condition written inline in ST computed into relay m by a unit of its
+// own, whose names are the POU's variables, located where this reader holds them.
+void Importer::st_condition(const Element* cond, uint32_t m) {
   const Element* in = cond->child("inline");
-  if (!in) return false;
-  const Element* b = in->child("body") ? in->child("body") : in;
-  return b->child("ST") != nullptr;
-}
-
-// An inline ST condition computed into relay m by a unit of its own, whose
-// names are the POU's variables, located where this reader holds them.
-void Importer::st_condition(const Element* in, uint32_t m) {
-  const Element* b = in->child("body") ? in->child("body") : in;
   std::vector<std::string> lines = unit_header("ldc__c", m);
   lines.push_back("ldc__c :=");
   lines.push_back(kInlineText);
   lines.push_back(";");
   lines.push_back("END_PROGRAM");
-  iecil::Unit u = st_unit(lines, in, nullptr, plcopen::body_text(b->child("ST")));
-  splice(u, in);
+  splice(st_unit(lines, in, nullptr, plcopen::inline_st_text(cond)), in);
 }
 
 // The head of a unit of our own over the POU's variables, located where this
@@ -3696,7 +3687,7 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
     if (!cond) fail_at(t, what + " has no condition (" + t->path() + ")");
     const Element* ci = cond->child("connectionPointIn");
     if (!ci && cond->child("connection")) ci = cond;  // TC6 1.0: the connections directly in <condition>
-    if (!ci && !inline_st(cond)) {
+    if (!ci && !plcopen::inline_st_text(cond)) {
       auto inline_lang = [](const Element* in) {  // <inline><ST> (TC6 2.01), or <inline><body><ST>
         const Element* b = in->child("body") ? in->child("body") : in;
         for (const auto& ch : b->children)
@@ -3715,7 +3706,7 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
       Cond cc = bool_expr(conns, false, cond);
       rung(std::move(cc), out(Op::OUT, {bit_opd(Area::M, m)}, t), t);
     } else {
-      st_condition(cond->child("inline"), m);
+      st_condition(cond, m);
     }
     Tr tr;
     tr.from = source_step(t);
@@ -3740,7 +3731,6 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
   // to an R step's (its stored state, a relay); an action body written in ST
   // (inline, or one of the POU's <actions>) has such a state in a relay of its
   // own and runs while it is on
-  const Element* actions = pou->child("actions");
   struct Act {
     Operand bit;
     std::vector<uint32_t> n, set, reset, pulse;
@@ -3760,20 +3750,20 @@ void Importer::sfc_body(const Element* pou, const Element* sfc) {
       const Element* ref = a->child("reference");
       const Element* text = nullptr;  // an action body's ST
       std::string name;
-      auto st_of = [&](const Element* body, const std::string& what) {
-        if (!body || !body->child("ST"))
-          fail_at(a, what + " of step '" + c.steps[s].name + "' is not written in ST; ldc translates action bodies written in ST and actions that are BOOL variables (" + a->path() + ")");
-        return plcopen::body_text(body->child("ST"));
+      auto not_st = [&](const std::string& what) {
+        fail_at(a, what + " of step '" + c.steps[s].name + "' is not written in ST; ldc translates action bodies written in ST and actions that are BOOL variables (" + a->path() + ")");
       };
-      if (const Element* in = a->child("inline")) {
+      if (a->child("inline")) {
         name = "an inline action";
-        text = st_of(in->child("body") ? in->child("body") : in, name);
+        if (!(text = plcopen::inline_st_text(a))) not_st(name);
       } else {
         if (!ref || !ref->attr("name")) fail_at(a, "an action of step '" + c.steps[s].name + "' with neither a reference nor a body (" + a->path() + ")");
         name = *ref->attr("name");
-        if (actions)
-          for (const Element* an : actions->children_named("action"))
-            if (an->attr("name") && upper(*an->attr("name")) == upper(name)) text = st_of(an->child("body"), "action '" + name + "'");
+        if (const Element* an = plcopen::pou_action(pou, name)) {
+          const Element* body = an->child("body");
+          if (!body || !body->child("ST")) not_st("action '" + name + "'");
+          text = plcopen::body_text(body->child("ST"));
+        }
       }
       if (q != "N" && q != "S" && q != "R" && q != "P")
         fail_at(a, "qualifier " + q + " of action '" + name + "' in step '" + c.steps[s].name + "' is not supported: ldc translates N, S, R and P (" + a->path() + ")");

@@ -185,9 +185,6 @@ void StText::interface(Part& p, const Element* itf) const {
 
 // ---------------------------------------------------------------- SFC as text
 
-namespace {
-
-// The inline ST of a condition or an action (<inline><ST>, or <inline><body><ST>), or null.
 const Element* inline_st_text(const Element* e) {
   const Element* in = e ? e->child("inline") : nullptr;
   if (!in) return nullptr;
@@ -196,24 +193,18 @@ const Element* inline_st_text(const Element* e) {
   return st ? body_text(st) : nullptr;
 }
 
-// The POU's action `name` written in ST (<actions><action name=...><body><ST>), or null.
-const Element* st_action(const Element* pou, const std::string& name) {
-  const Element* acts = pou->child("actions");
-  if (!acts) return nullptr;
-  for (const Element* a : acts->children_named("action"))
-    if (a->attr("name") && iecil::upper(*a->attr("name")) == iecil::upper(name)) {
-      const Element* b = a->child("body");
-      return b && b->child("ST") ? body_text(b->child("ST")) : nullptr;
-    }
+const Element* pou_action(const Element* pou, const std::string& name) {
+  if (const Element* acts = pou->child("actions"))
+    for (const Element* a : acts->children_named("action"))
+      if (a->attr("name") && iecil::upper(*a->attr("name")) == iecil::upper(name)) return a;
   return nullptr;
 }
 
-bool pou_action(const Element* pou, const std::string& name) {
-  const Element* acts = pou->child("actions");
-  if (acts)
-    for (const Element* a : acts->children_named("action"))
-      if (a->attr("name") && iecil::upper(*a->attr("name")) == iecil::upper(name)) return true;
-  return false;
+namespace {
+
+const Element* sfc_body(const Element* pou) {
+  const Element* body = pou->child("body");
+  return body ? body->child("SFC") : nullptr;
 }
 
 // The chart's elements by localId, and what each follows (its connections in).
@@ -244,8 +235,7 @@ struct ChartGraph {
 }  // namespace
 
 bool text_chart(const Element* pou) {
-  const Element* body = pou->child("body");
-  const Element* sfc = body ? body->child("SFC") : nullptr;
+  const Element* sfc = sfc_body(pou);
   if (!sfc) return false;
   static const std::set<std::string> chart = {"step", "transition", "selectionDivergence", "selectionConvergence",
                                               "simultaneousDivergence", "simultaneousConvergence", "jumpStep", "actionBlock",
@@ -259,13 +249,12 @@ bool text_chart(const Element* pou) {
 }
 
 bool chart_action_bodies(const Element* pou) {
-  const Element* body = pou->child("body");
-  const Element* sfc = body ? body->child("SFC") : nullptr;
+  const Element* sfc = sfc_body(pou);
   if (!sfc) return false;
   for (const Element* ab : sfc->children_named("actionBlock"))
     for (const Element* a : ab->children_named("action")) {
       const Element* ref = a->child("reference");
-      if (inline_st_text(a) || a->child("inline") || (ref && ref->attr("name") && pou_action(pou, *ref->attr("name")))) return true;
+      if (a->child("inline") || (ref && ref->attr("name") && pou_action(pou, *ref->attr("name")))) return true;
     }
   return false;
 }
@@ -349,10 +338,10 @@ void StText::chart(Part& p, const Element* pou, const Element* sfc) const {
           bodies.push_back({n, inline_st_text(a)});
         } else if (const Element* ref = a->child("reference"); ref && ref->attr("name")) {
           n = *ref->attr("name");
-          if (pou_action(pou, n)) {
-            const Element* text = st_action(pou, n);
-            if (!text) fail_at(a, "action '" + n + "' of step '" + name_of(s) + "' is not written in ST; ldc reads a chart's action bodies written in ST (" + a->path() + ")");
-            bodies.push_back({n, text});
+          if (const Element* act = pou_action(pou, n)) {
+            const Element* b = act->child("body");
+            if (!b || !b->child("ST")) fail_at(a, "action '" + n + "' of step '" + name_of(s) + "' is not written in ST; ldc reads a chart's action bodies written in ST (" + a->path() + ")");
+            bodies.push_back({n, body_text(b->child("ST"))});
           }
         } else {
           fail_at(a, "an action of step '" + name_of(s) + "' that is neither inline ST nor a reference (" + a->path() + ")");
@@ -406,7 +395,7 @@ void StText::pou(const Element* pou) {
   const std::string& name = *pou->attr("name");
   std::string kind = pou->attr("pouType") ? *pou->attr("pouType") : "program";
   const Element* body = pou->child("body");
-  const Element* sfc = body && text_chart(pou) ? body->child("SFC") : nullptr;
+  const Element* sfc = text_chart(pou) ? sfc_body(pou) : nullptr;
   const Element* lang = body ? (body->child("ST") ? body->child("ST") : body->child("IL")) : nullptr;
   if (!lang && !sfc) fail_at(pou, "POU '" + name + "' has no ST or IL body (" + pou->path() + ")");
   Part& p = sfc || lang->local_name() == "ST" ? st_ : il_;

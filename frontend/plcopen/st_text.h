@@ -60,6 +60,12 @@ class StText {
 // The element holding an <ST> or <IL> body's text (its <xhtml:p>, or itself).
 const xml::Element* body_text(const xml::Element* lang);
 
+// The text of the inline ST of an SFC condition or action (<inline><ST>, or
+// <inline><body><ST>), or null.
+const xml::Element* inline_st_text(const xml::Element* e);
+// The POU's action `name` (<actions><action name=...>), or null.
+const xml::Element* pou_action(const xml::Element* pou, const std::string& name);
+
 // Is `pou`'s body an SFC chart written in text alone -- steps, transitions
 // whose conditions are inline ST, actions that are variables, inline ST or
 // the POU's ST actions, and no LD/FBD element -- which StText writes as the
