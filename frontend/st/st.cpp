@@ -1287,8 +1287,7 @@ class File {
     for (size_t i = from + 1; i + 1 < out_.size(); i++) {
       const Tok &before = out_[i - 1], &after = out_[i + 1];
       bool starts = before.kind == Tok::Eol || (before.kind == Tok::Punct && before.text == ",");
-      bool ends = (after.kind == Tok::Punct && (after.text == ":" || after.text == ",")) || kw(after, "AT");
-      if (out_[i].kind == Tok::Word && starts && ends) global_names_[upper(out_[i].text)] = out_[i];
+      if (out_[i].kind == Tok::Word && starts && ends_name(after)) global_names_[upper(out_[i].text)] = out_[i];
     }
     std::swap(out_, globals_);
   }
@@ -1297,6 +1296,10 @@ class File {
   const Tok& next() { return t_[pos_ < t_.size() - 1 ? pos_++ : pos_]; }
   [[noreturn]] static void fail(const Tok& k, const std::string& m) { throw CompileError(k.line, k.col, m); }
   static bool kw(const Tok& k, const char* w) { return k.kind == Tok::Word && upper(k.text) == w; }
+  // Does `after` end a declared name (NAME : ..., NAME, ..., NAME AT ...)?
+  static bool ends_name(const Tok& after) {
+    return (after.kind == Tok::Punct && (after.text == ":" || after.text == ",")) || kw(after, "AT");
+  }
   void eol() { out_.push_back({Tok::Eol, "", peek().line, peek().col}); }
 
   void collect_functions() {
@@ -1387,8 +1390,7 @@ class File {
   void chart(const std::string& end, size_t decl_start, bool runs) {
     std::set<std::string> vars;
     for (size_t i = decl_start; i + 1 < pos_; i++)
-      if (t_[i].kind == Tok::Word && (kw(t_[i + 1], "AT") || (t_[i + 1].kind == Tok::Punct && (t_[i + 1].text == ":" || t_[i + 1].text == ","))))
-        vars.insert(upper(t_[i].text));
+      if (t_[i].kind == Tok::Word && ends_name(t_[i + 1])) vars.insert(upper(t_[i].text));
     if (runs)
       for (const auto& [name, tok] : global_names_) vars.insert(name);
     SfcText c = sfc_to_st(t_, pos_, end, vars);
