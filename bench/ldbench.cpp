@@ -846,13 +846,7 @@ Program plant_program(int rungs) {
     for (int k = 0; k < piece && end != std::string::npos; k++) end = text.find("\nrung \"", end + 1);
     std::string part = text.substr(pos, end == std::string::npos ? std::string::npos : end + 1 - pos);
     Program p = lower_to_il(parse_ld(part, "plant.ld"));
-    for (Rung& r : p.rungs) {
-      for (Instr& in : r.code)
-        for (Operand& o : in.a)
-          if (o.kind == OpdKind::Edge) o.index += all.edge_slots;
-      all.rungs.push_back(std::move(r));
-    }
-    all.edge_slots += p.edge_slots;
+    append_rungs(all, p);
     pos = end == std::string::npos ? end : end + 1;
   }
   return all;

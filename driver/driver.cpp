@@ -96,13 +96,7 @@ void append_il(Program& p, Program q) {
     l.insert(l.begin(), p.end_labels.begin(), p.end_labels.end());
     p.end_labels.clear();
   }
-  for (Rung& r : q.rungs) {
-    for (Instr& in : r.code)
-      for (Operand& o : in.a)
-        if (o.kind == OpdKind::Edge) o.index += p.edge_slots;
-    p.rungs.push_back(std::move(r));
-  }
-  p.edge_slots += q.edge_slots;
+  append_rungs(p, q);
   p.end_labels.insert(p.end_labels.end(), q.end_labels.begin(), q.end_labels.end());
   for (const Alias& a : q.aliases) {
     bool dup = false;

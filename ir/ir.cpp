@@ -486,6 +486,17 @@ bool has_loop(const Program& p) {
   return false;
 }
 
+void append_rungs(Program& p, Program& q) {
+  for (Rung& r : q.rungs) {
+    for (Instr& in : r.code)
+      for (Operand& o : in.a)
+        if (o.kind == OpdKind::Edge) o.index += p.edge_slots;
+    p.rungs.push_back(std::move(r));
+  }
+  q.rungs.clear();
+  p.edge_slots += q.edge_slots;
+}
+
 uint32_t decode_instr(std::span<const uint8_t> code, uint32_t off, Instr& out) {
   out = Instr{};
   out.op = Op(code[off]);

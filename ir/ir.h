@@ -455,6 +455,9 @@ struct Program {
 };
 // Does the program have a LOOP (a backward jump, docs/il.md "Loops")?
 bool has_loop(const Program& p);
+// q's rungs moved after p's, q's edge slots numbered after p's (a program
+// lowered in pieces: a PLCopen program and its chart, ldbench's large plant).
+void append_rungs(Program& p, Program& q);
 
 // ---------------------------------------------------------------- the rung tree
 // The series/parallel tree of one rung (paper 003, Fig. 5), built by a front end
