@@ -49,6 +49,19 @@ bool classic_operator(const std::string& u) {
   return k.count(u) > 0 || u.rfind("VAR", 0) == 0;
 }
 
+// Does the CAL at t[i] pass its arguments as the classic reader takes them,
+// each `NAME := operand`?  (Non-formal arguments and `=>` outputs are the
+// typed reader's.)
+static bool classic_call_args(const std::vector<Tok>& t, size_t i) {
+  auto punct_at = [&](size_t j, const char* p) { return j < t.size() && t[j].kind == Tok::Punct && t[j].text == p; };
+  if (!punct_at(i + 2, "(")) return true;
+  for (size_t j = i + 3; j < t.size() && !punct_at(j, ")"); j += 4) {
+    if (!(t[j].kind == Tok::Word && punct_at(j + 1, ":=") && j + 2 < t.size() && t[j + 2].kind == Tok::Word)) return false;
+    if (!punct_at(j + 3, ",")) return true;  // the classic reader reports what follows
+  }
+  return true;
+}
+
 bool needs_typed_reader(const std::vector<Tok>& t) {
   bool in_vars = false, line_start = true;
   // the typed reader reads POUs (PROGRAM ... END_PROGRAM); the classic one takes bare IL too
@@ -71,6 +84,7 @@ bool needs_typed_reader(const std::vector<Tok>& t) {
       i++;
       continue;
     }
+    if (!in_vars && u == "CAL" && !classic_call_args(t, i)) return true;
     if (line_start && (u == "TYPE" || u == "FUNCTION_BLOCK" || u == "FUNCTION" || u == "VAR_IN_OUT" || u == "VAR_TEMP" ||
                        u == "VAR_EXTERNAL"))
       return true;
@@ -2125,7 +2139,8 @@ class Reader {
     std::vector<std::pair<Tok, size_t>> out;
     if (punct(peek(), "(")) {
       next();
-      args(in, out);
+      std::vector<Param> params = bistable ? std_params(bistables_.at(iv.ref.type)) : pou_params(m_.pous[size_t(pou)]);
+      args(in, out, &params, k.text);
     }
     auto one = [&](const model::Ref& r) {
       if (bistable) std_call(bistables_.at(iv.ref.type), r, in, out, en_called_.count(upper(k.text)) > 0);
@@ -2167,9 +2182,50 @@ class Reader {
     }
   }
   int skips_ = 0;
-  void args(std::vector<std::pair<Tok, Val>>& in, std::vector<std::pair<Tok, size_t>>& out) {
+  // A block's parameters in their declared order, as MatIEC's
+  // function_param_iterator takes them for a non-formal call: the inputs,
+  // outputs, in-outs and externals as written (EN and ENO, implicit, left out).
+  struct Param {
+    std::string name;
+    VarClass cls;
+  };
+  static std::vector<Param> pou_params(const Pou& p) {
+    std::vector<Param> r;
+    for (const Var& v : p.vars)
+      if (v.cls == VarClass::Input || v.cls == VarClass::Output || v.cls == VarClass::InOut || v.cls == VarClass::External)
+        r.push_back({v.name, v.cls});
+    return r;
+  }
+  static std::vector<Param> std_params(const std::string& kind) {
+    const StdFb& fb = std_fbs().at(kind);
+    std::vector<Param> r;
+    for (size_t i = 0; i < fb.inputs + fb.outputs; i++)
+      r.push_back({fb.vars[i].first, i < fb.inputs ? VarClass::Input : VarClass::Output});
+    return r;
+  }
+  // arg = NAME ":=" operand | NAME "=>" variable | operand.  Operands alone
+  // (a non-formal call of an instance, `CAL t(x, T#1s, done)`) go to `params`
+  // in order, as MatIEC's generated C assigns them: an input or in-out takes
+  // the value, an output's variable takes the output after the call.  A call
+  // is all formal or all non-formal, as MatIEC's grammar has it.
+  void args(std::vector<std::pair<Tok, Val>>& in, std::vector<std::pair<Tok, size_t>>& out,
+            const std::vector<Param>* params = nullptr, const std::string& callee = "") {
     skip_eols();
+    size_t positional = 0, named = 0;
     while (!punct(peek(), ")")) {
+      skip_eols();
+      size_t ahead = 1;
+      while (peek(ahead).kind == Tok::Eol) ahead++;
+      if (params && !(peek().kind == Tok::Word && (punct(peek(ahead), ":=") || punct(peek(ahead), "=>")))) {
+        if (named) fail(peek(), "a call mixes formal (NAME := x) and non-formal arguments");
+        non_formal(in, out, *params, positional++, callee);
+        skip_eols();
+        if (punct(peek(), ",")) { next(); skip_eols(); continue; }
+        if (!punct(peek(), ")")) fail(peek(), "expected ',' or ')'" + found(peek()));
+        continue;
+      }
+      if (positional) fail(peek(), "a call mixes formal (NAME := x) and non-formal arguments");
+      named++;
       const Tok& n = name_tok("a parameter name");
       skip_eols();
       if (punct(peek(), ":=")) {
@@ -2190,6 +2246,32 @@ class Reader {
       if (!punct(peek(), ")")) fail(peek(), "expected ',' or ')'" + found(peek()));
     }
     next();
+  }
+  // The k-th argument of a non-formal call, bound to the k-th parameter.
+  void non_formal(std::vector<std::pair<Tok, Val>>& in, std::vector<std::pair<Tok, size_t>>& out,
+                  const std::vector<Param>& params, size_t k, const std::string& callee) {
+    Tok at = peek();
+    if (k >= params.size())
+    {
+      std::string names;
+      for (const Param& q : params) names += (names.empty() ? "" : ", ") + q.name;
+      fail(at, "'" + callee + "' is called with more than its " + std::to_string(params.size()) + " parameters (" + names + ")");
+    }
+    const Param& p = params[k];
+    at.text = p.name;  // the argument stands for its parameter by name from here on
+    if (p.cls == VarClass::External)
+      fail(peek(), "argument " + std::to_string(k + 1) + " of '" + callee + "' falls on its VAR_EXTERNAL '" + p.name +
+                       "', which takes no argument: name the parameters (NAME := x)");
+    if (p.cls != VarClass::Output) {
+      in.push_back({at, operand("arg" + std::to_string(in.size()))});
+      return;
+    }
+    const Tok& v = peek();
+    std::string why;
+    if (v.kind != Tok::Word || st_temp(v.text) || parse_literal(v.text, why))
+      fail(v, "argument " + std::to_string(k + 1) + " of '" + callee + "' is its output '" + p.name + "': it needs a variable");
+    out.push_back({at, pos_});
+    skip_path();  // read in the caller's scope after the call
   }
   // The token position of an output argument's variable, to read it again in the caller's scope.
   void expand(int pou, const model::Ref& inst, const std::vector<std::pair<Tok, Val>>& in,
@@ -2558,12 +2640,36 @@ class Reader {
       typed(Op::TCONV, Ty::DINT, ns, ms, {}, Ty::LINT);
     }
     emit(Op::LOAD, mem("IN"));
-    emit(kind == "TON" ? Op::TON : kind == "TOF" ? Op::TOF : Op::TP, Operand{OpdKind::Timer, Area::Sys, n}, ms);
+    emit(kind == "TON" ? Op::MTON : kind == "TOF" ? Op::MTOF : Op::MTP, Operand{OpdKind::Timer, Area::Sys, n}, ms);
     emit(Op::MPP);
+    timer_et(kind, n, mem);
     typed(Op::TMOVE, Ty::BOOL, Operand{OpdKind::Bit, Area::TQ, n}, mem("Q"));
-    Operand et = scratch("etns", Ty::LINT);  // ET: the timer's ms as ns
+  }
+  // The instance's ET as MatIEC's state machines leave it: the device's ms as
+  // ns while timing or reset; PT itself on the scan the timer completes (TON:
+  // Q rises; TOF: Q falls with IN off; TP: the pulse ends with IN on), which
+  // a PT of part of a ms (T#3.5ms) shows; then held, whatever PT becomes.
+  // The instance's Q, not yet copied, is the Q of the scan before.
+  template <class Mem>
+  void timer_et(const std::string& kind, uint32_t n, Mem mem) {
+    Operand tq{OpdKind::Bit, Area::TQ, n}, et = scratch("etns", Ty::LINT);
     typed(Op::TCONV, Ty::LINT, Operand{OpdKind::Int, Area::TW, n}, et, {}, Ty::DINT);
-    typed(Op::TMUL, Ty::LINT, et, Operand::typed_const(1000000), mem("ET"));
+    typed(Op::TMUL, Ty::LINT, et, Operand::typed_const(1000000), et);
+    auto under = [&](std::initializer_list<std::pair<Op, Operand>> conds, const Operand& from) {
+      for (const auto& [op, o] : conds) emit(op, o);
+      typed(Op::TMOVE, Ty::TIME, from, mem("ET"));
+      emit(Op::MPP);
+    };
+    if (kind == "TON") {
+      under({{Op::LOADN, tq}}, et);
+      under({{Op::LOAD, tq}, {Op::ANDN, mem("Q")}}, mem("PT"));
+    } else if (kind == "TOF") {
+      under({{Op::LOAD, tq}}, et);
+      under({{Op::LOADN, tq}, {Op::ANDN, mem("IN")}, {Op::AND, mem("Q")}}, mem("PT"));
+    } else {
+      under({{Op::LOAD, tq}, {Op::ORN, mem("IN")}}, et);
+      under({{Op::LOADN, tq}, {Op::AND, mem("IN")}, {Op::AND, mem("Q")}}, mem("PT"));
+    }
   }
 
   // The constant the open rung surely moved into `cell` (a typed MOVE of a

@@ -606,21 +606,23 @@ class Writer {
     line(s.tok, "ST", operand(s.target));
   }
 
-  // inst(IN := x, PT := T#1s, Q => done): CAL inst(IN := ..., Q => done)
+  // inst(IN := x, PT := T#1s, Q => done): CAL inst(IN := ..., Q => done).
+  // Non-formal, inst(x, T#1s, done): CAL inst(x, T#1s, done), each argument
+  // a variable or a constant (an expression computed first), which the IL
+  // reader binds to the block's parameters in order (outputs included).
   void call_fb(const Stmt& s) {
     const Expr& c = s.value;
     std::vector<Tok> args;
     for (size_t i = 0; i < c.kids.size(); i++) {
-      if (c.names[i].kind == Tok::End)
-        fail(c.kids[i].tok, "a call of function block instance '" + c.tok.text + "' names its inputs (IN := x); '" +
-                                c.tok.text + "' is not a FUNCTION of this file");
       if (!c.outs[i]) hoist_unless_simple(c.kids[i]);
       else prepare_var(c.kids[i]);
     }
     for (size_t i = 0; i < c.kids.size(); i++) {
       if (i) args.push_back(punct(c.tok, ","));
-      args.push_back(word(c.names[i], c.names[i].text));
-      args.push_back(punct(c.names[i], c.outs[i] ? "=>" : ":="));
+      if (c.names[i].kind != Tok::End) {
+        args.push_back(word(c.names[i], c.names[i].text));
+        args.push_back(punct(c.names[i], c.outs[i] ? "=>" : ":="));
+      }
       append(args, operand(c.kids[i]));
     }
     std::vector<Tok> opd = operand_var_name(c);
