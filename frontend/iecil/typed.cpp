@@ -138,6 +138,11 @@ struct Cr {
   TypeId type = kNoType;
   Operand o;
   std::optional<ParsedLit> lit;  // an untyped number, not yet typed
+  // ST's C arithmetic (Reader::promote_cr): the CR is a DINT that stands for
+  // an expression of this narrower integer type, computed as C's int
+  TypeId narrow = kNoType;
+  // where the CR's C arithmetic began (rung, instruction): Reader::narrow_back
+  size_t promo_rung = SIZE_MAX, promo_at = 0;
 };
 
 // An operand as written.
@@ -146,6 +151,7 @@ struct Val {
   ParsedLit lit;
   TypeId lit_type = kNoType;  // an enumerator's type, or a typed literal's
   model::Ref ref;             // Ref_ and Device (a device's Ref has its area)
+  TypeId narrow = kNoType;    // a DINT temporary of ST standing for this type (Cr::narrow)
 };
 
 class Reader {
@@ -1160,11 +1166,11 @@ class Reader {
   Scope* scope_ = nullptr;
 
   // An operand: a literal, an enumerator, a variable path (a.b[i, 2].c), a device.
-  Val operand(const std::string& key) {
+  Val operand(const std::string& key, bool raw = false) {
     skip_eols();
     const Tok& k = next();
     if (k.kind != Tok::Word) fail(k, "expected an operand" + found(k));
-    if (st_temp(k.text)) return temp_val(k);
+    if (st_temp(k.text)) return raw ? temp_val(k) : demoted(temp_val(k), key);
     Val v;
     std::string why;
     if (auto p = parse_literal(k.text, why)) {
@@ -1550,6 +1556,13 @@ class Reader {
 
   void instruction(const Tok& op) {
     std::string u = upper(op.text);
+    // ST's C arithmetic: what does not compute on C's int gets the value cut
+    // to its type first (an ST into an expression's temporary __Tn keeps it;
+    // a CASE's selector __Sn is cut, as MatIEC's __case_expression of the
+    // selector's type; LD replaces it)
+    if (cr_.narrow != kNoType && !c_int_op(u) && u != "LD" && u != "LDN" && !punct(peek(), "(") &&
+        !(u == "ST" && st_temp(peek().text) && upper(peek().text).rfind("__T", 0) == 0))
+      demote();
     if (punct(peek(), "(") && u != "CAL" && u != "CALC" && u != "CALCN" && !is_function(u)) {
       next();
       return open_paren(op, u);
@@ -1564,7 +1577,7 @@ class Reader {
     if (binary_op(u)) {
       need_cr(op);
       Tok k = peek();
-      Val v = operand("b");
+      Val v = operand("b", c_int_op(u));
       return binary(op, u, v, k);
     }
     if (u == "MOVE") { need_cr(op); return; }
@@ -1721,7 +1734,7 @@ class Reader {
     if (!parens_.empty() && cr_.defined) fail(op, "LD inside parentheses: write it after the opening operator (AND( x)");
     if (from_st_ && peek().text == "__ZERO") return zero_temp(op);
     Tok k = peek();
-    Val v = operand("ld");
+    Val v = operand("ld", true);
     load_val(op, neg, v, k);
   }
   void load_val(const Tok& op, bool neg, const Val& v, const Tok& k) {
@@ -1745,6 +1758,8 @@ class Reader {
     Operand o = v.kind != Val::Lit ? load(v.ref, "ld")
               : v.lit.lit.ty == Ty::STRING ? string_literal(v.lit.str, "ld") : Operand::typed_const(v.lit.lit.bits);
     set_cr(t, o);
+    cr_.narrow = v.narrow;
+    if (neg && v.narrow != kNoType) return not_op(op);
     if (neg) {
       Ty st = ty_of(t);
       if (st != Ty::BOOL && ty_info(st).kind != TyKind::Bits) fail(op, "LDN needs a BOOL or a bit string, '" + k.text + "' is " + a_type(t));
@@ -1801,7 +1816,7 @@ class Reader {
   }
   // ---- the temporaries of ST (frontend/st): __T1, __S1 ... take the type
   // of the value stored into them; one place per name, type and inline copy.
-  struct Temp { TypeId type; Operand o; };
+  struct Temp { TypeId type; Operand o; TypeId narrow = kNoType; };
   std::map<std::string, Temp> temps_;
   // A name of two leading underscores that the scope declares is a variable
   // (the state of a chart written as text, frontend/st/sfc_text.h).
@@ -1815,7 +1830,7 @@ class Reader {
     Ty t = ty_of(cr_.type);
     Operand d = scratch("st" + scope_->prefix + k.text, t);
     typed(Op::TMOVE, t, cr_.o, d);
-    temps_[scope_->prefix + k.text] = {cr_.type, d};
+    temps_[scope_->prefix + k.text] = {cr_.type, d, cr_.narrow};
     cr_.o = d;
   }
   // LD __ZERO / ST x (ST's EN, frontend/st): x, a temporary already typed
@@ -1847,6 +1862,7 @@ class Reader {
     v.ref.at = {it->second.o.index, it->second.o.index};
     v.ref.bits = Area::M;
     v.ref.cells = Area::D;
+    v.narrow = it->second.narrow;
     return v;
   }
 
@@ -1880,6 +1896,14 @@ class Reader {
   void not_op(const Tok& op) {
     need_cr(op);
     default_cr(op);
+    if (c_int_cr()) {  // C's ~ of an int: the bits of the DINT, as a DWORD
+      mark_promotion();
+      promote_cr();
+      Operand d = acc(Ty::DINT);
+      typed(Op::TNOT, Ty::DWORD, cr_.o, d);
+      cr_.o = d;
+      return;
+    }
     Ty t = cr_ty();
     if (t != Ty::BOOL && ty_info(t).kind != TyKind::Bits) fail(op, "NOT needs a BOOL or bit-string result, this one is " + m_.type_name(cr_.type));
     Operand d = acc(t);
@@ -1887,9 +1911,173 @@ class Reader {
     cr_.o = d;
   }
 
+  // ---- ST's arithmetic on C's int.  MatIEC writes an ST expression as the
+  // same C expression (generate_c_base.cc, print_binary_expression), and C
+  // computes SINT INT USINT UINT BYTE WORD operands as int: `a * b / c` of
+  // INTs divides the whole product, `u - 201 < 0` of a USINT 200 is TRUE,
+  // `NOT w` of a WORD is negative; the value is cut to its type where it is
+  // stored or passed to a function or block (a function's result is of its
+  // type).  So from ST, an operator on one of those types computes in DINT
+  // (C's int on every target MatIEC runs) and the CR remembers the type it
+  // stands for (Cr::narrow); IL keeps IEC's one type per result.
+  bool c_int_type(TypeId t) const {
+    if (!from_st_ || t == kNoType || m_.type(t).kind == TypeKind::Enum) return false;
+    Ty st = ty_of(t);
+    return st == Ty::SINT || st == Ty::INT || st == Ty::USINT || st == Ty::UINT || st == Ty::BYTE || st == Ty::WORD;
+  }
+  bool c_int_cr() const { return cr_.defined && !cr_.lit && (cr_.narrow != kNoType || c_int_type(cr_.type)); }
+  static bool c_int_op(const std::string& u) {
+    static const std::set<std::string> k = {"ADD", "SUB", "MUL", "DIV", "MOD", "GT", "GE", "EQ", "NE", "LT", "LE",
+                                            "AND", "ANDN", "OR", "ORN", "XOR", "XORN", "NOT", "NEG"};
+    return k.count(u) > 0;
+  }
+  // an operand of narrow type t as C's int
+  Operand widen(const Operand& o, Ty t) {
+    if (o.kind == OpdKind::ConstT) return Operand::typed_const(typed::conv(Ty::DINT, t, o.bits()));
+    Operand d = scratch("cint" + std::to_string(paren_base_ + int(parens_.size())), Ty::DINT);
+    typed(Op::TCONV, Ty::DINT, o, d, {}, t);
+    return d;
+  }
+  // Where the CR's C arithmetic begins: before an operation's first code.
+  void mark_promotion() {
+    if (cr_.narrow != kNoType) return;
+    ensure_rung();
+    cr_.promo_rung = p_.rungs.size() - 1, cr_.promo_at = rung_->code.size();
+  }
+  void promote_cr() {
+    if (cr_.narrow != kNoType) return;
+    Ty t = ty_of(cr_.type);
+    Operand d = acc(Ty::DINT);
+    if (cr_.o.kind == OpdKind::ConstT) d = widen(cr_.o, t);
+    else typed(Op::TCONV, Ty::DINT, cr_.o, d, {}, t);
+    cr_.narrow = cr_.type, cr_.type = m_.elem(Ty::DINT), cr_.o = d;
+  }
+  // the CR cut to the type it stands for
+  void demote() {
+    if (cr_.narrow == kNoType) return;
+    if (narrow_back()) return;
+    Ty t = ty_of(cr_.narrow);
+    Operand d = acc(t);
+    typed(Op::TCONV, t, cr_.o, d, {}, Ty::DINT);
+    cr_.type = cr_.narrow, cr_.narrow = kNoType, cr_.o = d;
+  }
+  // ADD SUB MUL NEG and the bit logic give the same bits of the narrow type
+  // on int as on the type itself (arithmetic modulo 2^n): a CR computed by
+  // them alone from the narrow operands, cut now, is computed in its own type
+  // instead, with no conversion (`x := a + 1` of INTs stays ADD.INT).  Only
+  // the CR's own code since its promotion, in its rung, is rewritten.
+  bool narrow_back() {
+    if (!rung_ || cr_.promo_rung != p_.rungs.size() - 1 || cr_.promo_at > rung_->code.size()) return false;
+    std::vector<Instr>& code = rung_->code;
+    Ty t = ty_of(cr_.narrow);
+    auto ring = [](const Instr& in) {
+      if (in.ty == Ty::DINT) return in.op == Op::TADD || in.op == Op::TSUB || in.op == Op::TMUL || in.op == Op::TNEG;
+      return in.ty == Ty::DWORD && (in.op == Op::TAND || in.op == Op::TOR || in.op == Op::TXOR || in.op == Op::TNOT);
+    };
+    for (size_t i = cr_.promo_at; i < code.size(); i++) {
+      const Instr& in = code[i];
+      bool widen = in.op == Op::TCONV && in.ty == Ty::DINT && in.src == t;
+      if (!widen && !ring(in)) return false;
+    }
+    std::vector<std::pair<Operand, Operand>> was;  // a widened cell and its narrow source
+    auto source = [&](const Operand& o) {
+      if (o.kind == OpdKind::ConstT) return Operand::typed_const(typed::norm(t, o.bits()));
+      for (const auto& [cell, src] : was)
+        if (cell == o) return src;
+      return o;
+    };
+    std::vector<Instr> out;
+    for (size_t i = cr_.promo_at; i < code.size(); i++) {
+      Instr in = code[i];
+      if (in.op == Op::TCONV) {
+        std::erase_if(was, [&](const auto& w) { return w.first == in.a[1]; });
+        was.push_back({in.a[1], source(in.a[0])});
+        continue;
+      }
+      int n = in.nopd();
+      for (int k = 0; k + 1 < n; k++) in.a[k] = source(in.a[k]);
+      std::erase_if(was, [&](const auto& w) { return w.first == in.a[n - 1]; });
+      in.ty = t;
+      out.push_back(in);
+    }
+    if (out.empty()) return false;  // the CR was only widened: a cut is a move
+    for (const Instr& in : out)
+      if (!op_takes(in.op, t, Ty::None)) return false;
+    code.resize(cr_.promo_at);
+    code.insert(code.end(), out.begin(), out.end());
+    cr_.type = cr_.narrow, cr_.narrow = kNoType, cr_.o = out.back().a[out.back().nopd() - 1];
+    return true;
+  }
+  // v cut to the type it stands for, into a place of its own (key: the operand's)
+  Val demoted(const Val& v, const std::string& key) {
+    if (v.narrow == kNoType) return v;
+    Ty t = ty_of(v.narrow);
+    Operand d = scratch("cut." + key, t);
+    typed(Op::TCONV, t, load(v.ref, "cut"), d, {}, Ty::DINT);
+    Val r;
+    r.kind = Val::Ref_;
+    r.ref.type = v.narrow;
+    r.ref.at = {d.index, d.index};
+    r.ref.bits = Area::M;
+    r.ref.cells = Area::D;
+    return r;
+  }
+  // CR := CR op v on C's int, where ST's C computes it so; false: not such an operation
+  bool c_int_binary(const Tok& op, const std::string& u, const Val& v, const Tok& k) {
+    if (!from_st_ || !c_int_op(u) || u == "NOT" || u == "NEG") return false;
+    if (cr_.lit) {
+      TypeId vt = v.narrow != kNoType ? v.narrow : val_type(v);
+      if (vt == kNoType || !m_.type(vt).scalar()) return false;
+      type_cr(vt, op);
+    }
+    TypeId t = cr_.narrow != kNoType ? cr_.narrow : cr_.type;
+    bool bitwise = u.rfind("AND", 0) == 0 || u.rfind("OR", 0) == 0 || u.rfind("XOR", 0) == 0;
+    // Of two values that are their type's own (not yet C's int), AND OR XOR,
+    // the compares and MOD are the same either way, and so is DIV but for a
+    // signed type's least value by -1 (its quotient is one past the type)
+    bool exact = cr_.narrow == kNoType && v.narrow == kNoType;
+    bool same = bitwise || u == "MOD" || (u != "ADD" && u != "SUB" && u != "MUL" && u != "DIV") ||
+                (u == "DIV" && !typed::is_signed(ty_of(t)));
+    if (!c_int_type(t) || (exact && same)) return false;
+    mark_promotion();
+    Operand b;
+    if (v.narrow != kNoType) {
+      if (!m_.same_type(v.narrow, t))
+        fail(k, std::string(op.text) + " of " + a_type(t) + " and '" + k.text + "', " + a_type(v.narrow) + ": convert it first (" +
+                    m_.type_name(v.narrow) + "_TO_" + m_.type_name(t) + ")");
+      b = load(v.ref, "b");
+    } else {
+      b = widen(value_as(v, t, k, "b", op.text.c_str()), ty_of(t));
+    }
+    promote_cr();
+    bool neg = u == "ANDN" || u == "ORN" || u == "XORN";
+    if (bitwise) {  // C's & | ^ of ints: the bits of the DINTs, as DWORDs
+      if (b.kind == OpdKind::ConstT) b = Operand::typed_const(typed::norm(Ty::DWORD, b.bits()));
+      if (neg) {
+        Operand nb = scratch("nb", Ty::DWORD);
+        typed(Op::TNOT, Ty::DWORD, b, nb);
+        b = nb;
+      }
+      Operand d = acc(Ty::DINT);
+      Op o = u[0] == 'A' ? Op::TAND : u[0] == 'O' ? Op::TOR : Op::TXOR;
+      typed(o, Ty::DWORD, cr_.o, b, d);
+      cr_.o = d;
+      return true;
+    }
+    static const std::map<std::string, Op> ops = {
+        {"AND", Op::TAND}, {"OR", Op::TOR}, {"XOR", Op::TXOR}, {"ADD", Op::TADD}, {"SUB", Op::TSUB}, {"MUL", Op::TMUL},
+        {"DIV", Op::TDIV}, {"MOD", Op::TMOD}, {"GT", Op::TGT}, {"GE", Op::TGE}, {"EQ", Op::TEQ}, {"NE", Op::TNE},
+        {"LT", Op::TLT}, {"LE", Op::TLE}};
+    apply(op, ops.at(neg ? u.substr(0, u.size() - 1) : u), b, neg);
+    return true;
+  }
+
   // The binary operators: CR := CR op v
-  void binary(const Tok& op, const std::string& u, const Val& v, const Tok& k) {
+  void binary(const Tok& op, const std::string& u, const Val& v_in, const Tok& k) {
     if (cr_whole()) fail(op, "'" + op.text + "' of " + a_type(cr_.type));
+    if (c_int_binary(op, u, v_in, k)) return;
+    if (cr_.narrow != kNoType) demote();
+    const Val v = demoted(v_in, "b");
     bool shift = u == "SHL" || u == "SHR" || u == "ROL" || u == "ROR";
     if (cr_.lit) {
       TypeId vt = val_type(v);
@@ -1976,7 +2164,7 @@ class Reader {
     cr_ = Cr{};
     if (peek().kind == Tok::Word) {
       Tok k = peek();
-      Val v = operand("p");
+      Val v = operand("p", true);
       load_val(op, false, v, k);
       // a number in the group takes the outer type (ADD( 5 ...), but not
       // in a BOOL group, where it is compared first (AND( 5 GT x ))
@@ -1988,7 +2176,7 @@ class Reader {
       if (!kw(ld, "LD") && !kw(ld, "LDN")) fail(ld, "after '" + op.text + "(' comes its first operand, or LD/LDN on the next line");
       here_ = loc(ld);
       Tok k = peek();
-      Val v = operand("p");
+      Val v = operand("p", true);
       load_val(ld, kw(ld, "LDN"), v, k);
     }
   }
@@ -2013,6 +2201,7 @@ class Reader {
       v.ref.at = {tmp.index, tmp.index};
       v.ref.bits = tmp.area == Area::M ? Area::M : Area::M;
       v.ref.cells = Area::D;
+      v.narrow = inner.narrow;
     }
     binary(pr.tok, pr.op, v, k);
   }
@@ -2812,6 +3001,7 @@ class Reader {
       set_cr(m_.elem(Ty::DINT), d);
       return;
     }
+    if (u == "NEG" && c_int_cr()) mark_promotion(), promote_cr(), t = Ty::DINT;  // C's unary - of an int
     static const std::map<std::string, Op> fns = {{"ABS", Op::TABS}, {"NEG", Op::TNEG}, {"SQRT", Op::TSQRT}, {"LN", Op::TLN},
                                                   {"LOG", Op::TLOG}, {"EXP", Op::TEXP}, {"SIN", Op::TSIN}, {"COS", Op::TCOS},
                                                   {"TAN", Op::TTAN}, {"ASIN", Op::TASIN}, {"ACOS", Op::TACOS}, {"ATAN", Op::TATAN}};

@@ -1090,8 +1090,13 @@ class Writer {
     std::vector<const Expr*> in = inputs(c);
     if (in.empty()) fail(c.tok, c.tok.text + "() without inputs");
     value(*in[0]);
+    // a standard function's result is of its type: MatIEC's ADD__INT__INT
+    // returns an INT, where the operator + computes on C's int (the typed
+    // reader's C arithmetic): the IL's MOVE cuts it there
+    static const std::set<std::string> cut = {"ADD", "SUB", "MUL", "DIV", "MOD", "AND", "OR", "XOR", "NOT", "NEG"};
     if (extensible(u) || (comparison(u) && in.size() == 2)) {
       for (size_t i = 1; i < in.size(); i++) line(c.tok, u, operand(*in[i]));
+      if (cut.count(u)) line(c.tok, "MOVE");
       return;
     }
     if (comparison(u)) {  // IEC 61131-3's extensible compare: GT(a, b, c) = a > b AND b > c (MatIEC's too)
@@ -1114,6 +1119,7 @@ class Writer {
       append(opd, operand(*in[i]));
     }
     line(c.tok, c.tok.text, opd);
+    if (cut.count(u)) line(c.tok, "MOVE");
   }
 
   static void append(std::vector<Tok>& a, const std::vector<Tok>& b) { a.insert(a.end(), b.begin(), b.end()); }
