@@ -143,6 +143,10 @@ struct Cr {
   TypeId narrow = kNoType;
   // where the CR's C arithmetic began (rung, instruction): Reader::narrow_back
   size_t promo_rung = SIZE_MAX, promo_at = 0;
+  // the variable LD read, while the CR is still its value (o == var_o): a
+  // FUNCTION's first input that is a VAR_IN_OUT binds to it
+  std::optional<model::Ref> var;
+  Operand var_o;
 };
 
 // An operand as written.
@@ -1571,6 +1575,7 @@ class Reader {
     if (u == "ST" || u == "STN") return store_op(op, u == "STN");
     if (u == "S" || u == "R") return set_reset(op, u == "S");
     if (u == "JMP" || u == "JMPC" || u == "JMPCN") return jump(op, u);
+    if (from_st_ && (u == "__ANDTHEN" || u == "__ORELSE")) return short_circuit(op, u == "__ANDTHEN");
     if (u == "LOOP" && from_st_) return loop(op);
     if (u == "RET" || u == "RETC" || u == "RETCN") return ret(op, u);
     if (u == "CAL" || u == "CALC" || u == "CALCN") return call(op, u);
@@ -1759,6 +1764,7 @@ class Reader {
               : v.lit.lit.ty == Ty::STRING ? string_literal(v.lit.str, "ld") : Operand::typed_const(v.lit.lit.bits);
     set_cr(t, o);
     cr_.narrow = v.narrow;
+    if (v.kind == Val::Ref_ && v.narrow == kNoType && !neg) cr_.var = v.ref, cr_.var_o = o;
     if (neg && v.narrow != kNoType) return not_op(op);
     if (neg) {
       Ty st = ty_of(t);
@@ -2206,6 +2212,14 @@ class Reader {
     binary(pr.tok, pr.op, v, k);
   }
 
+  // ST's AND / OR whose right side may fault (frontend/st, short_circuit):
+  // on a BOOL CR, C's && and || -- jump past the right side where the CR
+  // decides (AND: FALSE, OR: TRUE); on a bit string, C's & and |, nothing.
+  void short_circuit(const Tok& op, bool and_then) {
+    need_cr(op);
+    if (!cr_.lit && cr_ty() == Ty::BOOL) return jump(op, and_then ? "JMPCN" : "JMPC");
+    next();  // the label: both sides are computed
+  }
   void jump(const Tok& op, const std::string& u) {
     const Tok& k = next();
     if (k.kind != Tok::Word || !ident(k.text)) fail(k, "expected a label name" + found(k));
@@ -2941,9 +2955,13 @@ class Reader {
       for (const Var& v : p.vars)
         if ((v.cls == VarClass::Input || v.cls == VarClass::InOut) && upper(v.name) != "EN") inputs.push_back(&v);
       if (inputs.empty()) fail(op, p.name + " has no input for the current result");
-      // the CR is the first input
+      // the CR is the first input; a VAR_IN_OUT binds to the variable LD read
       Val first;
-      if (cr_.lit) {
+      if (inputs[0]->cls == VarClass::InOut) {
+        if (!cr_.var || !(cr_.o == cr_.var_o))
+          fail(op, "the VAR_IN_OUT " + inputs[0]->name + " of " + p.name + " needs a variable, not a computed value");
+        first.kind = Val::Ref_, first.ref = *cr_.var;
+      } else if (cr_.lit) {
         first.lit = *cr_.lit;
       } else if (cr_whole()) {
         first.kind = Val::Ref_, first.ref = whole_;

@@ -850,6 +850,38 @@ class Writer {
 
   // ---- expressions
 
+  // Could computing e fault or do more than give a value: an element at a
+  // computed index (an index fault), a call (a FUNCTION's VAR_IN_OUT and
+  // externals, and its own elements)?
+  bool may_fault(const Expr& e) const {
+    if (e.kind == Expr::Call) return true;
+    for (const Expr& k : e.kids)
+      if (may_fault(k)) return true;
+    for (const Sel& s : e.sels)
+      for (const Expr& i : s.index)
+        if (!(i.kind == Expr::Lit || foldable(i)) || may_fault(i)) return true;
+    return false;
+  }
+  // l AND r, l OR r where r may fault: MatIEC writes BOOL's AND and OR as C's
+  // && and ||, which compute r only when l does not decide (the guard of
+  // `WHILE (i <= 5) AND (a[i] <> x)` keeps a[6] unread).  Into a temporary:
+  //   <l>; ST __Tn; LD __Tn; __ANDTHEN skip (OR: __ORELSE); <r>; AND __Tn; ST __Tn; skip:
+  // The typed reader's __ANDTHEN jumps when a BOOL CR is FALSE and does
+  // nothing for a bit string (C's &, which computes both).
+  void short_circuit(const Expr& e) {
+    std::string skip = new_label(), t = "__T" + std::to_string(++temps_);
+    prepare(e.kids[0]);
+    value(e.kids[0]);
+    line(e.tok, "ST", {word(e.tok, t)});
+    line(e.tok, "LD", {word(e.tok, t)});
+    line(e.tok, e.op == "AND" ? "__ANDTHEN" : "__ORELSE", {word(e.tok, skip)});
+    prepare(e.kids[1]);
+    value(e.kids[1]);
+    line(e.tok, e.op, {word(e.tok, t)});
+    line(e.tok, "ST", {word(e.tok, t)});
+    label(e.tok, skip);
+    temp_[&e] = t;
+  }
   static bool has_call(const Expr& e) {
     if (e.kind == Expr::Call) return true;
     for (const Expr& k : e.kids)
@@ -926,6 +958,7 @@ class Writer {
       case Expr::Var: return prepare_var(e);
       case Expr::Unary: return prepare(e.kids[0]);
       case Expr::Binary: {
+        if ((e.op == "AND" || e.op == "OR") && may_fault(e.kids[1])) return short_circuit(e);
         prepare(e.kids[0]);
         const Expr& r = e.kids[1];
         if (simple(r) || r.kind == Expr::Var) return prepare_var(r);
