@@ -116,8 +116,10 @@ class Gen : public ClassGen<Gen> {
  public:
   // known: the rung's (empty), storage the caller keeps from rung to rung
   // o1: -O1 (its typed runs skip the power test where the power is on for certain)
-  Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used, KnownStack& known, bool o1 = false)
-      : L_(l), items_(items), slots_(slots), gate_(gate), bases_(gate), known_(known), o1_(o1), used_(used) {}
+  Gen(const Layout& l, std::vector<Item>& items, bool slots, bool gate, std::bitset<8>* used, KnownStack& known, bool o1 = false,
+      bool base_regs = true)
+      : L_(l), items_(items), slots_(slots), gate_(gate), bases_(gate), reload_bases_(gate && base_regs), known_(known), o1_(o1),
+        used_(used) {}
 
   // facts: ScanFlag bits (ir/scanopt.h); reuse: the earlier division it takes,
   // quotient_to: where a MOD also stores its quotient (ScanFacts), if any
@@ -130,7 +132,8 @@ class Gen : public ClassGen<Gen> {
   int next_label_ = 0;
   bool slots_;     // -O2: the stack in kSlots; else the -O0 shift register in ebp
   bool gate_;      // -O2: branch-free power gating (cmov) instead of `je skip`
-  bool bases_;     // -O2: the frame sets the base registers (rdi is reloaded after a REAL call)
+  bool bases_;     // -O2 (its frame, its facts)
+  bool reload_bases_;  // -O2 with the base registers set: rdi is reloaded after a REAL call (none in a program with loops)
   KnownStack& known_;  // -O2: the stack's values known at compile time
   // -O1: the same for its typed runs alone (-O2's known_ also folds timers, gates ...)
   KnownStack power_;
@@ -732,7 +735,7 @@ void Gen::real_fn(Op op, const ldc::Operand& a, const ldc::Operand& d) {
     // the call may clobber the caller-saved base registers (rdi): point them
     // back (their K is filled in with the region's, BasePlan::rewrite), from
     // rbx, which to_o2_frame makes the -O2 frame's image register
-    if (bases_)
+    if (reload_bases_)
       for (RegNum r : as::x86::kBaseRegs)
         if (as::x86::caller_saved(r)) emit(M::Lea, {R(r64(r)), Operand::m(mem_at(Size::None, 0))});
   } else if (fn == RealFn::Sqrt) {
@@ -1488,7 +1491,7 @@ void Gen::call_table(int32_t disp) {
   emit(M::Call, {Operand::m(mem_at(Size::Qword, uint32_t(disp)))});
   // the callee may clobber the caller-saved base registers (rdi): point them
   // back, as real_fn does
-  if (bases_)
+  if (reload_bases_)
     for (RegNum r : as::x86::kBaseRegs)
       if (as::x86::caller_saved(r)) emit(M::Lea, {R(r64(r)), Operand::m(mem_at(Size::None, 0))});
 }
@@ -2449,12 +2452,13 @@ class Regions {
 // epilogue, the shared routines if any are called), each handed to `sink`.
 class Blocks {
  public:
-  // A program with a LOOP is compiled at -O1 when -O2 is asked: the -O2
-  // facts and base-register plans assume that every jump goes forward
-  // (docs/x86.md, "Loops").
+  // A program with a LOOP gets -O2 without its base registers: their plans
+  // carry each register's K forward only, and the loader's code check proves
+  // a back edge only where no base register is set (docs/x86.md, "Loops").
+  // The facts are loop-proof: a LOOP forgets as a JMP does, its head is a
+  // label, which forgets what was known.
   Blocks(const Program& p, const Layout& layout, int opt_level, bool notes)
-      : p_(p), layout_(layout), loops_(has_loop(p)), opt_(loops_ ? std::min(opt_level, 1) : opt_level), o2_(opt_ >= 2),
-        notes_(notes) {
+      : p_(p), layout_(layout), loops_(has_loop(p)), opt_(opt_level), o2_(opt_ >= 2), notes_(notes) {
     if (o2_) facts_ = scan_facts(p_, layout_, kNumSlots);
     shared_ = facts_ ? facts_->shared : shares_stack(p);
   }
@@ -2466,8 +2470,12 @@ class Blocks {
     pro.items.push_back(Item::note(o2_ ? "scan(image): rbp = image+" + std::to_string(kImageBias) + ", bit stack in bl r12b r13b (or ebx), bases rdi r15 r14 (-O2)"
                                          : "scan(image): rbx = image, ebp = bit stack"));
     for (const Instruction& i : scan_prologue(o2_)) pro.items.push_back(Item::instr(i));
-    if (loops_) pro.items.push_back(Item::instr(make(M::Mov, {Dw(kSysLoops), I(0)})));  // no loop taken yet
-    if (o2_)
+    if (loops_) {  // no loop taken yet
+      std::vector<Item> reset{Item::instr(make(M::Mov, {Dw(kSysLoops), I(0)}))};
+      if (o2_) to_o2_frame(reset);
+      pro.items.push_back(reset[0]);
+    }
+    if (o2_ && !loops_)
       for (RegNum r : as::x86::kBaseRegs) pro.items.push_back(Item::instr(as::x86::base_lea(r, 0)));  // K: Regions::flush
     return pro;
   }
@@ -2483,7 +2491,7 @@ class Blocks {
     if (notes_) b.items.push_back(Item::note("rung, line " + std::to_string(r.line) + (r.title.empty() ? "" : ": " + r.title)));
     bool slots = o2_ && facts_->fits[ri];  // the rung's stack in the slot registers (none where shared_)
     known_.reset();
-    Gen g(layout_, b.items, slots, o2_, &used_, known_, opt_ == 1);
+    Gen g(layout_, b.items, slots, o2_, &used_, known_, opt_ == 1, !loops_);
     uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into ebp
     for (size_t k = 0; k < r.code.size(); k++) {
       const ldc::Instr& in = r.code[k];
@@ -2530,7 +2538,7 @@ class Blocks {
     il_items.reserve(p_.rungs.size());
     as::Block<Instruction> b;
     std::vector<uint32_t> starts;
-    if (o2_) {
+    if (o2_ && !loops_) {
       Regions regions(layout_.size, prologue(), il_items, sink);
       for (size_t r = 0; r < p_.rungs.size(); r++) {
         rung(r, b, starts);
