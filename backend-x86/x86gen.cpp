@@ -125,6 +125,10 @@ class Gen : public ClassGen<Gen> {
   // quotient_to: where a MOD also stores its quotient (ScanFacts), if any
   void instr(const ldc::Instr& in, uint8_t facts = 0, const ldc::DivReuse* reuse = nullptr,
              const ldc::Operand* quotient_to = nullptr);
+  // `LOAD g; MOVE.T a d; MPP` (SEL's lowering, and ST's two-armed IF on one
+  // variable): d := g ? a : d without a branch; false: not that shape
+  static bool is_select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Instr& mpp);
+  void select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Instr& mpp);
 
  private:
   const Layout& L_;
@@ -1056,6 +1060,34 @@ bool is_tconst(const ldc::Operand& o) { return o.kind == OpdKind::ConstT || o.ki
 uint64_t tconst(const ldc::Operand& o) { return o.kind == OpdKind::ConstT ? o.bits() : uint64_t(int64_t(o.ival)); }
 constexpr uint64_t kSignBit64 = uint64_t(1) << 63;
 }  // namespace
+
+bool Gen::is_select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Instr& mpp) {
+  if (load.op != Op::LOAD || move.op != Op::TMOVE || mpp.op != Op::MPP) return false;
+  const Ty t = move.ty;
+  if (t == Ty::BOOL || typed::is_string_instr(move.op, t, move.src)) return false;
+  return ty_bits(t) == 32 || ty_bits(t) == 64 || ty_bits(t) == 16 || ty_bits(t) == 8;
+}
+// `mov eax, a` (a's value extended as MOVE.T stores it); `cmp byte g, 0;
+// cmove eax, d; mov d, eax`: d's cell rewritten as it was where g is 0 (rax
+// for two cells).
+// LOAD pushes g as the top and MPP pops it: the stack is as before.
+void Gen::select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Instr& mpp) {
+  close_typed_run();
+  const Ty t = move.ty;
+  const ldc::Operand &a = move.a[0], &d = move.a[1];
+  const bool wide = two_cells(t);
+  const Reg r = wide ? rax : eax;
+  if (wide) load64(t, a, rax);
+  else load32(t, a, eax);  // canonical, as MOVE.T stores it (a D word an untyped instruction wrote may not be)
+  emit(M::Cmp, {B(addr(load.a[0])), I(0)});
+  emit(make_cc(M::Cmovcc, Cond::E, {R(r), wide ? Q(taddr(d)) : Dw(taddr(d))}));
+  emit(M::Mov, {wide ? Q(taddr(d)) : Dw(taddr(d)), R(r)});
+  for (const ldc::Instr* in : {&load, &move, &mpp}) {
+    if (bases_) known_.step(*in);
+    if (o1_) power_.step(*in);
+    depth_ += op_info(in->op).push - op_info(in->op).pop;
+  }
+}
 
 // r (64-bit) = v, in the shortest form
 void Gen::mov_imm(Reg r, uint64_t v) {
@@ -2495,6 +2527,15 @@ class Blocks {
     uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into ebp
     for (size_t k = 0; k < r.code.size(); k++) {
       const ldc::Instr& in = r.code[k];
+      if (k + 2 < r.code.size() && Gen::is_select(in, r.code[k + 1], r.code[k + 2]) && plain(ri, k, 3)) {
+        starts.push_back(uint32_t(b.items.size()));
+        if (notes_) b.items.push_back(Item::note(instr_text(in) + "; " + instr_text(r.code[k + 1]) + "; " + instr_text(r.code[k + 2])));
+        g.select(in, r.code[k + 1], r.code[k + 2]);
+        starts.push_back(uint32_t(b.items.size()));
+        starts.push_back(uint32_t(b.items.size()));
+        k += 2;
+        continue;
+      }
       if (in.op == ldc::Op::TIDX || in.op == ldc::Op::LOOP) g.set_il_offset(il_offset(ri, k));
       starts.push_back(uint32_t(b.items.size()));
       if (notes_) b.items.push_back(Item::note(instr_text(in)));
@@ -2571,6 +2612,14 @@ class Blocks {
       for (const Rung& r : p_.rungs) rung_first_.push_back(n), n += r.code.size();
     }
     return il_offsets_[rung_first_[ri] + k];
+  }
+
+  // no -O2 fact and no replacement for rung ri's instructions k .. k+n-1
+  bool plain(size_t ri, size_t k, size_t n) const {
+    if (!facts_) return true;
+    for (size_t i = k; i < k + n; i++)
+      if (facts_->at(ri, i) || facts_->replacement(ri, i) || facts_->reuse(ri, i) || facts_->quotient_to(ri, i)) return false;
+    return true;
   }
 
   const Program& p_;

@@ -641,8 +641,59 @@ class Writer {
     return operand(inst);
   }
 
+  // IF c THEN x := a; ELSE x := b; END_IF, a and b computed without an
+  // effect or a fault: x := SEL(c, b, a), straight-line code that native code
+  // computes without a branch on c (a branch on data, a CRC's bit, is
+  // mispredicted half the time).  The same values: both arms are pure, and
+  // the assignment and SEL's inputs cut alike to x's type.
+  static bool pure(const Expr& e) {
+    static const std::set<std::string> fns = {"SHL", "SHR", "ROL", "ROR", "MIN", "MAX", "ABS", "SEL", "LIMIT"};
+    if (e.kind == Expr::Binary && (e.op == "DIV" || e.op == "MOD" || e.op == "EXPT")) return false;  // S0 on a zero divisor
+    if (e.kind == Expr::Call) {
+      std::string u = upper(e.tok.text);
+      if (!fns.count(u) && !int_conversion(u)) return false;
+      for (size_t i = 0; i < e.kids.size(); i++)
+        if (e.names[i].kind != Tok::End || e.outs[i]) return false;
+    }
+    for (const Expr& k : e.kids)
+      if (!pure(k)) return false;
+    for (const Sel& sl : e.sels)
+      for (const Expr& i : sl.index)
+        if (!(i.kind == Expr::Lit || foldable(i))) return false;  // a computed index may fault
+    return true;
+  }
+  // X_TO_Y between integers and bit strings (no REAL, TIME or STRING: their conversions may flag)
+  static bool int_conversion(const std::string& u) {
+    static const std::set<std::string> ints = {"SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT",
+                                               "BYTE", "WORD", "DWORD", "LWORD", "BOOL"};
+    size_t p = u.find("_TO_");
+    return p != std::string::npos && ints.count(u.substr(0, p)) && ints.count(u.substr(p + 4));
+  }
+  static const Stmt* lone_assignment(const std::vector<Stmt>& b) {
+    return b.size() == 1 && b[0].kind == Stmt::Assign && b[0].target.kind == Expr::Var && b[0].target.sels.empty() ? &b[0] : nullptr;
+  }
+  bool if_as_select(const Stmt& s) {
+    if (s.conds.size() != 1 || !s.has_else) return false;
+    const Stmt *a = lone_assignment(s.blocks[0]), *b = lone_assignment(s.blocks[1]);
+    if (!a || !b || upper(a->target.tok.text) != upper(b->target.tok.text)) return false;
+    if (!pure(s.conds[0]) || !pure(a->value) || !pure(b->value)) return false;
+    Stmt sel;
+    sel.kind = Stmt::Assign;
+    sel.tok = a->tok;
+    sel.target = a->target;
+    sel.value.kind = Expr::Call;
+    sel.value.tok = word(s.tok, "SEL");
+    sel.value.kids = {s.conds[0], b->value, a->value};
+    sel.value.names.assign(3, Tok{});
+    sel.value.outs.assign(3, false);
+    temp_.clear();
+    assign(sel);
+    return true;
+  }
+
   // IF: each condition jumps past its block when FALSE
   void if_stmt(const Stmt& s) {
+    if (if_as_select(s)) return;
     std::string end = new_label();
     for (size_t i = 0; i < s.conds.size(); i++) {
       std::string skip = new_label();
