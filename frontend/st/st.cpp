@@ -642,7 +642,7 @@ class Writer {
   }
 
   // IF c THEN x := a; ELSE x := b; END_IF, a and b computed without an
-  // effect or a fault: x := SEL(c, b, a), straight-line code that native code
+  // effect or a fault, not both a bare variable: x := SEL(c, b, a), straight-line code that native code
   // computes without a branch on c (a branch on data, a CRC's bit, is
   // mispredicted half the time).  The same values: both arms are pure, and
   // the assignment and SEL's inputs cut alike to x's type.
@@ -676,6 +676,9 @@ class Writer {
     if (s.conds.size() != 1 || !s.has_else) return false;
     const Stmt *a = lone_assignment(s.blocks[0]), *b = lone_assignment(s.blocks[1]);
     if (!a || !b || upper(a->target.tok.text) != upper(b->target.tok.text)) return false;
+    // a structure or an array is assigned only as a bare variable: one arm that
+    // is not one makes x elementary, which SEL takes
+    if (a->value.kind == Expr::Var && b->value.kind == Expr::Var) return false;
     if (!pure(s.conds[0]) || !pure(a->value) || !pure(b->value)) return false;
     Stmt sel;
     sel.kind = Stmt::Assign;
