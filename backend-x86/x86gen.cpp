@@ -81,7 +81,7 @@ Mem mem_at(Size size, uint32_t addr) {
 Operand B(uint32_t addr) { return Operand::m(mem_at(Size::Byte, addr)); }
 Operand Dw(uint32_t addr) { return Operand::m(mem_at(Size::Dword, addr)); }
 const Reg eax = r32(AX), ecx = r32(CX), edx = r32(DX), ebp = r32(BP), esi = r32(SI), edi = r32(DI), al = r8(AX), cl = r8(CX);
-const Reg r8d = r32(R8), r9d = r32(R9), r10d = r32(R10);
+const Reg r8d = r32(R8), r9d = r32(R9), r10d = r32(R10), r11d = r32(R11);
 const Reg xmm0 = xmm(0), xmm1 = xmm(1), xmm2 = xmm(2);
 
 uint32_t float_bits(float f) {
@@ -126,7 +126,8 @@ class Gen : public ClassGen<Gen> {
   void instr(const ldc::Instr& in, uint8_t facts = 0, const ldc::DivReuse* reuse = nullptr,
              const ldc::Operand* quotient_to = nullptr);
   // `LOAD g; MOVE.T a d; MPP` (SEL's lowering, and ST's two-armed IF on one
-  // variable): d := g ? a : d without a branch; false: not that shape
+  // variable; LOADN g: where g is 0): d := g ? a : d without a branch; false:
+  // not that shape
   static bool is_select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Instr& mpp);
   void select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Instr& mpp);
 
@@ -330,6 +331,7 @@ class Gen : public ClassGen<Gen> {
   bool divide_by_constant(const ldc::Instr& in);
   bool gated_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
   void ton_on(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
+  void mton_slots(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti);
   bool gated_counter(const ldc::Instr& in, uint32_t cw, uint32_t cq);
   void put_word(uint32_t a, int32_t v) { emit(M::Mov, {Dw(a), I(v)}); }
   void put_flag(uint32_t a, int32_t v) { emit(M::Mov, {B(a), I(v)}); }
@@ -829,13 +831,40 @@ void Gen::ton_on(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti) {
   emit(M::Mov, {B(ti), I(1)});
 }
 
+// -O2 with the stack in the slots, MTON (MatIEC's TON, docs/il.md) without a
+// branch: running = IN and TI (not the rising scan, not off); done before
+// (Q): ET and Q held, else ET advanced and Q = ET >= PT; not running: ET = 0,
+// Q = 0; then TI = IN.  (ST's timers are MTON: a branch on each of IN, TI and
+// Q is mispredicted wherever they change.)
+void Gen::mton_slots(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti) {
+  power_to_esi();
+  preset(in.a[1]);
+  advance_edx(tw);  // eax = ET, edx = advanced
+  emit(M::Movzx, {R(r10d), B(tq)});
+  emit(M::Test, {R(r10d), R(r10d)});
+  emit(make_cc(M::Cmovcc, Cond::NE, {R(edx), R(eax)}));  // done: ET held
+  emit(M::Cmp, {R(edx), R(ecx)});
+  emit(make_cc(M::Setcc, Cond::GE, {R(al)}));
+  emit(M::Movzx, {R(eax), R(al)});
+  emit(M::Or, {R(eax), R(r10d)});  // done, or done now
+  emit(M::Xor, {R(r10d), R(r10d)});
+  emit(M::Movzx, {R(r11d), B(ti)});
+  emit(M::And, {R(r11d), R(esi)});  // running (its flags: the cmove's)
+  emit(make_cc(M::Cmovcc, Cond::E, {R(edx), R(r10d)}));  // not running: ET = 0
+  emit(M::And, {R(eax), R(r11d)});
+  emit(M::Mov, {Dw(tw), R(edx)});
+  emit(M::Mov, {B(tq), R(al)});
+  remember_input(ti);
+}
+
 // -O2: RSTT gated by a mask, TON TOF TP by the shared routines (they have
-// ldc's own rules; MatIEC's timers stay inline)
+// ldc's own rules; MTON inline without a branch, MTOF and MTP inline)
 bool Gen::gated_timer(const ldc::Instr& in, uint32_t tw, uint32_t tq, uint32_t ti) {
   if (!gate_) return false;
   // power on for certain: TON straight-line (ton_on); TOF and TP inline without
   // their power tests (TOF is three stores, TP branches on flags that change rarely)
   if (in.op == Op::TON && known_.on()) return ton_on(in, tw, tq, ti), true;
+  if (in.op == Op::MTON && slots_) return mton_slots(in, tw, tq, ti), true;
   if (in.op != Op::RSTT && known_.on()) return false;
   if (in.op == Op::RSTT) reset_masked({Dw(tw)}, {B(tq), B(ti)});
   else if (in.op == Op::TON || in.op == Op::TOF || in.op == Op::TP) timer_gated(in);
@@ -1062,7 +1091,7 @@ constexpr uint64_t kSignBit64 = uint64_t(1) << 63;
 }  // namespace
 
 bool Gen::is_select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Instr& mpp) {
-  if (load.op != Op::LOAD || move.op != Op::TMOVE || mpp.op != Op::MPP) return false;
+  if ((load.op != Op::LOAD && load.op != Op::LOADN) || move.op != Op::TMOVE || mpp.op != Op::MPP) return false;
   const Ty t = move.ty;
   if (t == Ty::BOOL || typed::is_string_instr(move.op, t, move.src)) return false;
   return ty_bits(t) == 32 || ty_bits(t) == 64 || ty_bits(t) == 16 || ty_bits(t) == 8;
@@ -1080,7 +1109,7 @@ void Gen::select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Inst
   if (wide) load64(t, a, rax);
   else load32(t, a, eax);  // canonical, as MOVE.T stores it (a D word an untyped instruction wrote may not be)
   emit(M::Cmp, {B(addr(load.a[0])), I(0)});
-  emit(make_cc(M::Cmovcc, Cond::E, {R(r), wide ? Q(taddr(d)) : Dw(taddr(d))}));
+  emit(make_cc(M::Cmovcc, load.op == Op::LOAD ? Cond::E : Cond::NE, {R(r), wide ? Q(taddr(d)) : Dw(taddr(d))}));
   emit(M::Mov, {wide ? Q(taddr(d)) : Dw(taddr(d)), R(r)});
   for (const ldc::Instr* in : {&load, &move, &mpp}) {
     if (bases_) known_.step(*in);

@@ -2858,8 +2858,19 @@ class Reader {
     Operand tq{OpdKind::Bit, Area::TQ, n}, et = scratch("etns", Ty::LINT);
     typed(Op::TCONV, Ty::LINT, Operand{OpdKind::Int, Area::TW, n}, et, {}, Ty::DINT);
     typed(Op::TMUL, Ty::LINT, et, Operand::typed_const(1000000), et);
+    // ET := from where the conditions hold: `LOAD g; MOVE; MPP` (a condition
+    // of several in a BOOL of its own first), which native code selects
+    // without a branch (docs/x86.md, "Select")
     auto under = [&](std::initializer_list<std::pair<Op, Operand>> conds, const Operand& from) {
-      for (const auto& [op, o] : conds) emit(op, o);
+      if (conds.size() > 1) {
+        Operand h = scratch("etcond", Ty::BOOL);
+        for (const auto& [op, o] : conds) emit(op, o);
+        emit(Op::OUT, h);
+        emit(Op::MPP);
+        emit(Op::LOAD, h);
+      } else {
+        emit(conds.begin()->first, conds.begin()->second);
+      }
       typed(Op::TMOVE, Ty::TIME, from, mem("ET"));
       emit(Op::MPP);
     };
