@@ -614,7 +614,7 @@ class Writer {
     const Expr& c = s.value;
     std::vector<Tok> args;
     for (size_t i = 0; i < c.kids.size(); i++) {
-      if (!c.outs[i]) hoist_unless_simple(c.kids[i]);
+      if (!c.outs[i]) hoist_unless_simple(c.kids[i], true);
       else prepare_var(c.kids[i]);
     }
     for (size_t i = 0; i < c.kids.size(); i++) {
@@ -641,62 +641,8 @@ class Writer {
     return operand(inst);
   }
 
-  // IF c THEN x := a; ELSE x := b; END_IF, a and b computed without an
-  // effect or a fault, not both a bare variable: x := SEL(c, b, a), straight-line code that native code
-  // computes without a branch on c (a branch on data, a CRC's bit, is
-  // mispredicted half the time).  The same values: both arms are pure, and
-  // the assignment and SEL's inputs cut alike to x's type.
-  static bool pure(const Expr& e) {
-    static const std::set<std::string> fns = {"SHL", "SHR", "ROL", "ROR", "MIN", "MAX", "ABS", "SEL", "LIMIT"};
-    if (e.kind == Expr::Binary && (e.op == "DIV" || e.op == "MOD" || e.op == "EXPT")) return false;  // S0 on a zero divisor
-    if (e.kind == Expr::Call) {
-      std::string u = upper(e.tok.text);
-      if (!fns.count(u) && !int_conversion(u)) return false;
-      for (size_t i = 0; i < e.kids.size(); i++)
-        if (e.names[i].kind != Tok::End || e.outs[i]) return false;
-    }
-    for (const Expr& k : e.kids)
-      if (!pure(k)) return false;
-    for (const Sel& sl : e.sels)
-      for (const Expr& i : sl.index)
-        if (!(i.kind == Expr::Lit || foldable(i))) return false;  // a computed index may fault
-    return true;
-  }
-  // X_TO_Y between integers and bit strings (no REAL, TIME or STRING: their conversions may flag)
-  static bool int_conversion(const std::string& u) {
-    static const std::set<std::string> ints = {"SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT",
-                                               "BYTE", "WORD", "DWORD", "LWORD", "BOOL"};
-    size_t p = u.find("_TO_");
-    return p != std::string::npos && ints.count(u.substr(0, p)) && ints.count(u.substr(p + 4));
-  }
-  static const Stmt* lone_assignment(const std::vector<Stmt>& b) {
-    return b.size() == 1 && b[0].kind == Stmt::Assign && b[0].target.kind == Expr::Var && b[0].target.sels.empty() ? &b[0] : nullptr;
-  }
-  bool if_as_select(const Stmt& s) {
-    if (s.conds.size() != 1 || !s.has_else) return false;
-    const Stmt *a = lone_assignment(s.blocks[0]), *b = lone_assignment(s.blocks[1]);
-    if (!a || !b || upper(a->target.tok.text) != upper(b->target.tok.text)) return false;
-    // a structure or an array is assigned only as a bare variable: one arm that
-    // is not one makes x elementary, which SEL takes
-    if (a->value.kind == Expr::Var && b->value.kind == Expr::Var) return false;
-    if (!pure(s.conds[0]) || !pure(a->value) || !pure(b->value)) return false;
-    Stmt sel;
-    sel.kind = Stmt::Assign;
-    sel.tok = a->tok;
-    sel.target = a->target;
-    sel.value.kind = Expr::Call;
-    sel.value.tok = word(s.tok, "SEL");
-    sel.value.kids = {s.conds[0], b->value, a->value};
-    sel.value.names.assign(3, Tok{});
-    sel.value.outs.assign(3, false);
-    temp_.clear();
-    assign(sel);
-    return true;
-  }
-
   // IF: each condition jumps past its block when FALSE
   void if_stmt(const Stmt& s) {
-    if (if_as_select(s)) return;
     std::string end = new_label();
     for (size_t i = 0; i < s.conds.size(); i++) {
       std::string skip = new_label();
@@ -989,20 +935,24 @@ class Writer {
         if (!(i.kind == Expr::Lit || foldable(i) || (i.kind == Expr::Var && i.sels.empty()) || temp_.count(&i))) return false;
     return true;
   }
-  // Computes e into a temporary unless IL takes it as an operand.
-  void hoist_unless_simple(const Expr& e) {
+  // Computes e into a temporary unless IL takes it as an operand.  `cut`:
+  // its use cuts it to its type (a function's or block's input, an index),
+  // so the typed reader stores it cut (__Un), where C's int is computed
+  // with no more than the type's own arithmetic (Reader::narrow_back); an
+  // operator's operand (__Tn) keeps C's int.
+  void hoist_unless_simple(const Expr& e, bool cut = false) {
     if (e.kind == Expr::Var) prepare_var(e);
     if (simple(e)) return;
     prepare(e);
     value(e);
-    std::string t = "__T" + std::to_string(++temps_);
+    std::string t = (cut ? "__U" : "__T") + std::to_string(++temps_);
     line(e.tok, "ST", {word(e.tok, t)});
     temp_[&e] = t;
   }
   void prepare_var(const Expr& v) {
     for (const Sel& s : v.sels)
       for (const Expr& i : s.index)
-        if (!(i.kind == Expr::Lit || (i.kind == Expr::Var && i.sels.empty()))) hoist_unless_simple(i);
+        if (!(i.kind == Expr::Lit || (i.kind == Expr::Var && i.sels.empty()))) hoist_unless_simple(i, true);
   }
   // What value(e) needs computed first.
   void prepare(const Expr& e) {
@@ -1025,7 +975,7 @@ class Writer {
         bool formal = formal_user_call(e);
         for (size_t i = 0; i < in.size(); i++) {
           if (i == 0 && !formal) prepare(*in[0]);
-          else hoist_unless_simple(*in[i]);
+          else hoist_unless_simple(*in[i], true);
         }
         for (size_t i = 0; i < e.kids.size(); i++)
           if (e.outs[i]) prepare_var(e.kids[i]);

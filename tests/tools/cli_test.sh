@@ -49,19 +49,19 @@ grep -Eq '^; [0-9]+ bytes, [0-9]+ instructions, [0-9]+ IL; branch sites: [0-9]+ 
 # ... and, where it can read the source, the source line of the code that follows (objdump -S)
 "$bin/ldc" "$src/tests/frontend/st/st_loops.st" -o "$tmp/st.bin" && "$bin/ldobjdump" "$tmp/st.bin" > "$tmp/stdump" && ok || bad "ldobjdump of ST"
 grep -q '^; 22:     a\[i\] := i \* i;$' "$tmp/stdump" && grep -q '^;   LOOP @' "$tmp/stdump" && ok || bad "ldobjdump lacks the ST source lines or the LOOP"
-# ST's two-armed IF on one variable with pure arms is a select: at -O2 no branch
-# on its condition (the only jcc left is the first scan's initial values), and
-# a program with loops is -O2 code with no base registers (docs/x86.md, "Loops")
+# SEL is a select: at -O2 no branch on its condition (the only jcc left is
+# the first scan's initial values), and a program with loops is -O2 code with
+# no base registers (docs/x86.md, "Select" and "Loops")
 cat > "$tmp/sel.st" <<'EOS'
 PROGRAM p
 VAR crc : WORD := 16#FFFF; x : DINT; g : BOOL; END_VAR
-IF (crc AND 16#0001) <> 0 THEN crc := SHR(crc, 1) XOR 16#A001; ELSE crc := SHR(crc, 1); END_IF;
-IF g THEN x := x + 1; ELSE x := x - 1; END_IF;
+crc := SEL((crc AND 16#0001) <> 0, SHR(crc, 1), SHR(crc, 1) XOR 16#A001);
+x := SEL(g, x - 1, x + 1);
 g := NOT g;
 END_PROGRAM
 EOS
-"$bin/ldc" "$tmp/sel.st" -O2 -o "$tmp/sel.bin" && "$bin/ldobjdump" "$tmp/sel.bin" > "$tmp/seldump" && ok || bad "ldc of a two-armed IF"
-grep -q 'branch sites: 1 jcc, 0 jmp' "$tmp/seldump" && grep -q 'cmove' "$tmp/seldump" && ok || bad "a two-armed IF is not branch-free at -O2"
+"$bin/ldc" "$tmp/sel.st" -O2 -o "$tmp/sel.bin" && "$bin/ldobjdump" "$tmp/sel.bin" > "$tmp/seldump" && ok || bad "ldc of SEL"
+grep -q 'branch sites: 1 jcc, 0 jmp' "$tmp/seldump" && grep -q 'cmove' "$tmp/seldump" && ok || bad "SEL is not branch-free at -O2"
 "$bin/ldc" "$src/tests/frontend/st/st_loops.st" -O2 -o "$tmp/st2.bin" && "$bin/ldobjdump" "$tmp/st2.bin" > "$tmp/st2dump" && ok || bad "ldc -O2 of loops"
 grep -q 'lea rbp, \[rdi+0x40\]' "$tmp/st2dump" && ! grep -q 'lea rdi, \[rbp' "$tmp/st2dump" && ok || bad "-O2 of a program with loops: not the -O2 frame, or base registers set"
 
