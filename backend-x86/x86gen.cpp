@@ -125,9 +125,9 @@ class Gen : public ClassGen<Gen> {
   // quotient_to: where a MOD also stores its quotient (ScanFacts), if any
   void instr(const ldc::Instr& in, uint8_t facts = 0, const ldc::DivReuse* reuse = nullptr,
              const ldc::Operand* quotient_to = nullptr);
-  // `LOAD g; MOVE.T a d; MPP` (SEL's lowering, and ST's two-armed IF on one
-  // variable; LOADN g: where g is 0): d := g ? a : d without a branch; false:
-  // not that shape
+  // `LOAD g; MOVE.T a d; MPP` (SEL's lowering, and the typed reader's update
+  // of a timer instance's ET; LOADN g: where g is 0): d := g ? a : d without
+  // a branch; false: not that shape
   static bool is_select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Instr& mpp);
   void select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Instr& mpp);
 
