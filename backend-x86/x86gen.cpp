@@ -130,6 +130,7 @@ class Gen : public ClassGen<Gen> {
   // a branch; false: not that shape
   static bool is_select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Instr& mpp);
   void select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Instr& mpp);
+  void follow(const ldc::Instr& in);
 
  private:
   const Layout& L_;
@@ -970,6 +971,11 @@ void Gen::instr(const ldc::Instr& in, uint8_t facts, const ldc::DivReuse* reuse,
   on_ = false;
   reuse_ = nullptr;
   quotient_to_ = nullptr;
+  follow(in);
+}
+
+// What `in` does to the stack, followed at compile time (its code made or not)
+void Gen::follow(const ldc::Instr& in) {
   if (bases_) known_.step(in);
   if (o1_) power_.step(in);
   depth_ += op_info(in.op).push - op_info(in.op).pop;
@@ -1111,11 +1117,7 @@ void Gen::select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Inst
   emit(M::Cmp, {B(addr(load.a[0])), I(0)});
   emit(make_cc(M::Cmovcc, load.op == Op::LOAD ? Cond::E : Cond::NE, {R(r), wide ? Q(taddr(d)) : Dw(taddr(d))}));
   emit(M::Mov, {wide ? Q(taddr(d)) : Dw(taddr(d)), R(r)});
-  for (const ldc::Instr* in : {&load, &move, &mpp}) {
-    if (bases_) known_.step(*in);
-    if (o1_) power_.step(*in);
-    depth_ += op_info(in->op).push - op_info(in->op).pop;
-  }
+  for (const ldc::Instr* in : {&load, &move, &mpp}) follow(*in);
 }
 
 // r (64-bit) = v, in the shortest form

@@ -1862,13 +1862,17 @@ class Reader {
     // with recovery, a temporary whose store was refused (reported) says nothing more
     if (it == temps_.end() && rec_ && rec_->failed()) throw Quiet(k.line, k.col, "temporary not written");
     if (it == temps_.end()) fail(k, "'" + k.text + "' is read before it is written (a name beginning with two underscores is an ST temporary of ldc's)");
+    return cell_val(it->second.type, it->second.o, it->second.narrow);
+  }
+  // A value of type t in the compiler's own cell o (a temporary, a scratch).
+  static Val cell_val(TypeId t, const Operand& o, TypeId narrow = kNoType) {
     Val v;
     v.kind = Val::Ref_;
-    v.ref.type = it->second.type;
-    v.ref.at = {it->second.o.index, it->second.o.index};
+    v.ref.type = t;
+    v.ref.at = {o.index, o.index};
     v.ref.bits = Area::M;
     v.ref.cells = Area::D;
-    v.narrow = it->second.narrow;
+    v.narrow = narrow;
     return v;
   }
 
@@ -2020,13 +2024,7 @@ class Reader {
     Ty t = ty_of(v.narrow);
     Operand d = scratch("cut." + key, t);
     typed(Op::TCONV, t, load(v.ref, "cut"), d, {}, Ty::DINT);
-    Val r;
-    r.kind = Val::Ref_;
-    r.ref.type = v.narrow;
-    r.ref.at = {d.index, d.index};
-    r.ref.bits = Area::M;
-    r.ref.cells = Area::D;
-    return r;
+    return cell_val(v.narrow, d);
   }
   // CR := CR op v on C's int, where ST's C computes it so; false: not such an operation
   bool c_int_binary(const Tok& op, const std::string& u, const Val& v, const Tok& k) {
@@ -2057,6 +2055,7 @@ class Reader {
     }
     promote_cr();
     bool neg = u == "ANDN" || u == "ORN" || u == "XORN";
+    const Op o = typed_binary_op(neg ? u.substr(0, u.size() - 1) : u);
     if (bitwise) {  // C's & | ^ of ints: the bits of the DINTs, as DWORDs
       if (b.kind == OpdKind::ConstT) b = Operand::typed_const(typed::norm(Ty::DWORD, b.bits()));
       if (neg) {
@@ -2065,17 +2064,20 @@ class Reader {
         b = nb;
       }
       Operand d = acc(Ty::DINT);
-      Op o = u[0] == 'A' ? Op::TAND : u[0] == 'O' ? Op::TOR : Op::TXOR;
       typed(o, Ty::DWORD, cr_.o, b, d);
       cr_.o = d;
       return true;
     }
+    apply(op, o, b, neg);
+    return true;
+  }
+  // the typed instruction of a binary IL operator (ANDN ORN XORN: their base)
+  static Op typed_binary_op(const std::string& base) {
     static const std::map<std::string, Op> ops = {
         {"AND", Op::TAND}, {"OR", Op::TOR}, {"XOR", Op::TXOR}, {"ADD", Op::TADD}, {"SUB", Op::TSUB}, {"MUL", Op::TMUL},
-        {"DIV", Op::TDIV}, {"MOD", Op::TMOD}, {"GT", Op::TGT}, {"GE", Op::TGE}, {"EQ", Op::TEQ}, {"NE", Op::TNE},
-        {"LT", Op::TLT}, {"LE", Op::TLE}};
-    apply(op, ops.at(neg ? u.substr(0, u.size() - 1) : u), b, neg);
-    return true;
+        {"DIV", Op::TDIV}, {"MOD", Op::TMOD}, {"EXPT", Op::TEXPT}, {"GT", Op::TGT}, {"GE", Op::TGE}, {"EQ", Op::TEQ},
+        {"NE", Op::TNE}, {"LT", Op::TLT}, {"LE", Op::TLE}};
+    return ops.at(base);
   }
 
   // The binary operators: CR := CR op v
@@ -2121,12 +2123,7 @@ class Reader {
       return;
     }
     Operand b = value_as(v, t, k, "b", op.text.c_str());
-    static const std::map<std::string, Op> ops = {
-        {"AND", Op::TAND}, {"OR", Op::TOR}, {"XOR", Op::TXOR}, {"ADD", Op::TADD}, {"SUB", Op::TSUB}, {"MUL", Op::TMUL},
-        {"DIV", Op::TDIV}, {"MOD", Op::TMOD}, {"EXPT", Op::TEXPT}, {"GT", Op::TGT}, {"GE", Op::TGE}, {"EQ", Op::TEQ},
-        {"NE", Op::TNE}, {"LT", Op::TLT}, {"LE", Op::TLE}};
-    Op o = ops.at(base);
-    apply(op, o, b, neg);
+    apply(op, typed_binary_op(base), b, neg);
   }
   // CR := CR o b (b already an operand of the CR's type); a compare gives a BOOL
   void apply(const Tok& op, Op o, Operand b, bool neg_b) {
@@ -2202,12 +2199,7 @@ class Reader {
       // move the inner value out of the accumulator of the outer depth, which apply writes
       Operand tmp = scratch("rparen" + std::to_string(paren_base_ + int(parens_.size())), ty_of(inner.type));
       typed(Op::TMOVE, ty_of(inner.type), inner.o, tmp);
-      v.kind = Val::Ref_;
-      v.ref.type = inner.type;
-      v.ref.at = {tmp.index, tmp.index};
-      v.ref.bits = tmp.area == Area::M ? Area::M : Area::M;
-      v.ref.cells = Area::D;
-      v.narrow = inner.narrow;
+      v = cell_val(inner.type, tmp, inner.narrow);
     }
     binary(pr.tok, pr.op, v, k);
   }
