@@ -112,6 +112,10 @@ struct Ungated {
   ~Ungated() { flag = saved; }
 };
 
+bool is_reg(const Operand& o, uint8_t num);
+bool reads_reg(const Instruction& i, uint8_t num);
+bool writes_reg(const Instruction& i, uint8_t num);
+
 class Gen : public ClassGen<Gen> {
  public:
   // known: the rung's (empty), storage the caller keeps from rung to rung
@@ -187,17 +191,54 @@ class Gen : public ClassGen<Gen> {
   // moves; one built in place is zeroed by `rep stos`, slow to start)
   Instruction& next_instr() { return items_.emplace_back(kEmptyInstr).inst; }
   static inline const Item kEmptyInstr = Item::instr({});
-  void emit(const Instruction& i) { next_instr() = i; }
+  void emit(const Instruction& i) {
+    next_instr() = i;
+    if (any_held_) forget_written(i);
+  }
   void emit(M m, std::initializer_list<Operand> ops) {
     if (ops.size() > 3) throw std::logic_error("x86 backend: more than 3 operands");
     Instruction& in = next_instr();
     in.mnemonic = m;
     in.num_operands = uint8_t(ops.size());  // set once: a count bumped in memory is reloaded after each operand stored
     for (size_t k = 0; k < ops.size(); k++) in.ops[k] = ops.begin()[k];
+    if (any_held_) forget_written(in);
   }
   void jcc(Cond c, const std::string& label) { emit(make_cc(M::Jcc, c, {L(label)})); }
   void jump(const std::string& label) { emit(M::Jmp, {L(label)}); }
-  void label(const std::string& l) { items_.push_back(Item::label_def(l)); }
+  void label(const std::string& l) {
+    items_.push_back(Item::label_def(l));
+    forget_all();  // a jump may arrive with anything in the registers
+  }
+
+  // ---- -O2: the cells the registers hold (docs/x86.md, "Values held in registers")
+  //
+  // After a typed store `mov [d], reg` or a typed load of d into reg, reg holds
+  // d's value (as load32 / load64 of d's type makes it) until an instruction
+  // writes reg or d's bytes, a call, or a label.  A later load of d then reads
+  // the register: store-to-load forwarding through memory costs 4 to 7 cycles a
+  // hop on the chains of temporaries an ST expression makes (`sequence.st`).
+  struct Held {
+    uint32_t addr = 0;
+    Ty ty = Ty::BOOL;
+    bool exact = false;  // the register's low bytes are the cell's bytes (BOOL: 1, two cells: 8, else 4)
+    bool valid = false;
+  };
+  std::array<Held, 16> held_{};
+  bool any_held_ = false;
+  static uint32_t held_width(Ty t) { return t == Ty::BOOL ? 1 : ty_info(t).cells == 2 ? 8 : 4; }
+  void forget_all() {
+    if (any_held_) held_.fill({}), any_held_ = false;
+  }
+  void forget_written(const Instruction& i);
+  void hold(unsigned n, Ty t, uint32_t addr, bool exact) {
+    if (!slots_ || n == SP || n == BX) return;  // only the -O2 frame's rungs (no later peephole); never the image base
+    held_[n] = {addr, t, exact, true};
+    any_held_ = true;
+  }
+  // the register holding cell `addr` as type t would load it, or -1
+  int holder(Ty t, uint32_t addr) const;
+  // the register whose low `width` bytes are the cell's, or -1
+  int raw_holder(uint32_t addr, uint32_t width) const;
   std::string fresh() { return "L" + std::to_string(next_label_++); }
 
   uint32_t addr(const ldc::Operand& o) const {
@@ -403,6 +444,8 @@ class Gen : public ClassGen<Gen> {
   void mov_imm(Reg r64, uint64_t v);
   void load32(Ty t, const ldc::Operand& o, Reg r);
   void load_raw32(const ldc::Operand& o, Reg r);
+  Operand src32(const ldc::Operand& o) const;
+  void load_pair(Ty t, const ldc::Operand& a, const ldc::Operand& b);
   void load64(Ty t, const ldc::Operand& o, Reg r);
   void normalize(Ty t, Reg r);
   void store_int_reg(Ty t, RegNum n, const ldc::Operand& d);
@@ -989,16 +1032,19 @@ void Gen::bit_slots(const ldc::Instr& in) {
   Reg d = slot(depth_), t = slot(depth_ - 1), u = slot(depth_ - 2);
   Reg dw = wide(d), tw = wide(t), uw = wide(u);
   Operand b0 = in.nopd() > 0 ? B(addr(in.a[0])) : Operand{}, b1 = in.nopd() > 1 ? B(addr(in.a[1])) : Operand{};
+  // a byte a register holds as it is in memory (a BOOL stored): read from there
+  const int h = in.nopd() > 0 && in.a[0].kind == OpdKind::Bit ? holder(Ty::BOOL, addr(in.a[0])) : -1;
+  const Operand r0 = h >= 0 && held_[size_t(h)].exact ? R(r8(uint8_t(h))) : b0;
   switch (in.op) {
-    case Op::LOAD: return emit(M::Movzx, {R(dw), b0});
-    case Op::LOADN: emit(M::Movzx, {R(dw), b0}); return emit(M::Xor, {R(dw), I(1)});
-    case Op::AND: return emit(M::And, {R(t), b0});
-    case Op::OR: return emit(M::Or, {R(t), b0});
+    case Op::LOAD: return emit(M::Movzx, {R(dw), r0});
+    case Op::LOADN: emit(M::Movzx, {R(dw), r0}); return emit(M::Xor, {R(dw), I(1)});
+    case Op::AND: return emit(M::And, {R(t), r0});
+    case Op::OR: return emit(M::Or, {R(t), r0});
     case Op::ANDN:  // top & !b of two 0/1 bytes is top > b
-      emit(M::Cmp, {R(t), b0});
+      emit(M::Cmp, {R(t), r0});
       return emit(make_cc(M::Setcc, Cond::A, {R(t)}));
     case Op::ORN:  // top | !b is top >= b
-      emit(M::Cmp, {R(t), b0});
+      emit(M::Cmp, {R(t), r0});
       return emit(make_cc(M::Setcc, Cond::AE, {R(t)}));
     case Op::LOADP:  // d = b & !e (of 0/1 bytes: b > e); e = b (mov keeps the flags)
     case Op::LOADF:  // d = !b & e (b < e); e = b
@@ -1012,7 +1058,9 @@ void Gen::bit_slots(const ldc::Instr& in) {
     case Op::MPS: return emit(M::Mov, {R(dw), R(tw)});
     case Op::MRD: return emit(M::Mov, {R(tw), R(uw)});
     case Op::MPP: return;
-    case Op::OUT: return emit(M::Mov, {b0, R(t)});
+    case Op::OUT:
+      emit(M::Mov, {b0, R(t)});
+      return in.a[0].kind == OpdKind::Bit ? hold(t.num, Ty::BOOL, addr(in.a[0]), true) : void();
     case Op::SET: return emit(M::Or, {b0, R(t)});
     case Op::OUTN: case Op::RST:
       emit(M::Mov, {R(eax), R(tw)});
@@ -1126,33 +1174,103 @@ void Gen::mov_imm(Reg r, uint64_t v) {
   else emit(M::Mov, {R(r), I(int64_t(v))});  // imm32 sign-extended, or movabs
 }
 
+// What an instruction ends: the registers it writes, the cells whose bytes
+// it may write (all of them for a call or an indexed or unknown operand).
+void Gen::forget_written(const Instruction& i) {
+  if (i.mnemonic == M::Call) return forget_all();
+  if (i.num_operands && i.ops[0].kind == OperandKind::Mem && i.mnemonic != M::Cmp && i.mnemonic != M::Test) {
+    const Mem& m = i.ops[0].mem;
+    if (m.index.valid() || !(m.base == r64(BX)) || m.size == Size::None) return forget_all();
+    const uint32_t first = uint32_t(m.disp), end = first + (m.size == Size::Byte ? 1 : m.size == Size::Word ? 2 : m.size == Size::Dword ? 4 : 8);
+    for (Held& h : held_)
+      if (h.valid && h.addr < end && first < h.addr + held_width(h.ty)) h.valid = false;
+  }
+  for (uint8_t n = 0; n < held_.size(); n++)
+    if (held_[n].valid && writes_reg(i, n)) held_[n].valid = false;
+}
+
+// A value: the same type, or integer types whose loads extend alike (a
+// 32-bit cell is its value whatever its type).
+int Gen::holder(Ty t, uint32_t addr) const {
+  if (!any_held_) return -1;
+  for (int n = 0; n < int(held_.size()); n++) {
+    const Held& h = held_[size_t(n)];
+    if (!h.valid || h.addr != addr) continue;
+    if (h.ty == t) return n;
+    if (t == Ty::BOOL || h.ty == Ty::BOOL || two_cells(t) || two_cells(h.ty)) continue;
+    if (ty_bits(t) == 32 && ty_bits(h.ty) == 32) return n;
+    if (ty_bits(t) == ty_bits(h.ty) && typed::is_signed(t) == typed::is_signed(h.ty)) return n;
+  }
+  return -1;
+}
+
+// The cell's first `width` bytes (4 or 8) as they are in memory.
+int Gen::raw_holder(uint32_t addr, uint32_t width) const {
+  if (!any_held_) return -1;
+  for (int n = 0; n < int(held_.size()); n++) {
+    const Held& h = held_[size_t(n)];
+    if (h.valid && h.exact && h.addr == addr && h.ty != Ty::BOOL && held_width(h.ty) >= width) return n;
+  }
+  return -1;
+}
+
 // r (32-bit) = o's value of type t (up to 32 bits), extended to 32 bits as its cell holds it
 void Gen::load32(Ty t, const ldc::Operand& o, Reg r) {
   if (is_tconst(o)) return emit(M::Mov, {R(r), I(int64_t(uint32_t(tconst(o))))});
   const uint32_t a = taddr(o);
   const bool sgn = typed::is_signed(t);
+  if (int n = holder(t, a); n >= 0) {
+    const Held h = held_[size_t(n)];
+    // its low byte is 0 or 1 / a 32-bit move clears bits 63..32, which a 64-bit value cut at its store left set
+    if (t == Ty::BOOL) emit(M::Movzx, {R(r), R(r8(uint8_t(n)))});
+    else emit(M::Mov, {R(r), R(r32(uint8_t(n)))});
+    return hold(r.num, h.ty, a, h.exact);
+  }
   if (t == Ty::BOOL) {  // any byte but 0 is 1 (typed::load)
+    emit(M::Xor, {R(r), R(r)});
     emit(M::Cmp, {B(a), I(0)});
     emit(make_cc(M::Setcc, Cond::NE, {R(r8(r.num))}));
-    return emit(M::Movzx, {R(r), R(r8(r.num))});
+  } else {
+    switch (ty_bits(t)) {
+      case 8: emit(sgn ? M::Movsx : M::Movzx, {R(r), B(a)}); break;
+      case 16: emit(sgn ? M::Movsx : M::Movzx, {R(r), W16(a)}); break;
+      default: emit(M::Mov, {R(r), Dw(a)}); break;
+    }
   }
-  switch (ty_bits(t)) {
-    case 8: return emit(sgn ? M::Movsx : M::Movzx, {R(r), B(a)});
-    case 16: return emit(sgn ? M::Movsx : M::Movzx, {R(r), W16(a)});
-    default: return emit(M::Mov, {R(r), Dw(a)});
-  }
+  hold(r.num, t, a, t != Ty::BOOL && ty_bits(t) == 32);
+}
+
+// eax = a, ecx = b (load32): b first where eax holds it
+void Gen::load_pair(Ty t, const ldc::Operand& a, const ldc::Operand& b) {
+  if (!is_tconst(b) && holder(t, taddr(b)) == AX) return load32(t, b, ecx), load32(t, a, eax);
+  load32(t, a, eax), load32(t, b, ecx);
 }
 
 // r (32-bit) = o's cell as it is (the low bits of a wrapping operation)
 void Gen::load_raw32(const ldc::Operand& o, Reg r) {
   if (is_tconst(o)) return emit(M::Mov, {R(r), I(int64_t(uint32_t(tconst(o))))});
-  emit(M::Mov, {R(r), Dw(taddr(o))});
+  emit(M::Mov, {R(r), src32(o)});
+  hold(r.num, Ty::DWORD, taddr(o), true);
+}
+
+// the second operand of `op r32, <o>`: the register holding o's 32-bit cell exactly, or the cell
+Operand Gen::src32(const ldc::Operand& o) const {
+  if (int n = raw_holder(taddr(o), 4); n >= 0) return R(r32(uint8_t(n)));
+  return Dw(taddr(o));
 }
 
 // r (64-bit) = o's canonical value of type t (typed.h: sign- or zero-extended)
 void Gen::load64(Ty t, const ldc::Operand& o, Reg r) {
   if (is_tconst(o)) return mov_imm(r, tconst(o));
-  if (two_cells(t)) return emit(M::Mov, {R(r), Q(taddr(o))});
+  if (two_cells(t)) {
+    const uint32_t a = taddr(o);
+    if (int n = raw_holder(a, 8); n >= 0) {
+      if (n != r.num) emit(M::Mov, {R(r), R(r64(uint8_t(n)))});
+    } else {
+      emit(M::Mov, {R(r), Q(a)});
+    }
+    return hold(r.num, t, a, true);
+  }
   load32(t, o, r32(r.num));  // a 32-bit write clears bits 63..32: zero-extended
   if (!typed::is_signed(t)) return;
   if (r.num == AX) return emit(M::Cdqe, {});
@@ -1173,10 +1291,10 @@ void Gen::normalize(Ty t, Reg r) {
 
 // d = register n's value of type t (BOOL: its low byte, 0 or 1)
 void Gen::store_int_reg(Ty t, RegNum n, const ldc::Operand& d) {
-  if (t == Ty::BOOL) return emit(M::Mov, {B(taddr(d)), R(r8(n))});
-  if (two_cells(t)) return emit(M::Mov, {Q(taddr(d)), R(r64(n))});
-  normalize(t, r32(n));
-  emit(M::Mov, {Dw(taddr(d)), R(r32(n))});
+  if (t == Ty::BOOL) emit(M::Mov, {B(taddr(d)), R(r8(n))});
+  else if (two_cells(t)) emit(M::Mov, {Q(taddr(d)), R(r64(n))});
+  else normalize(t, r32(n)), emit(M::Mov, {Dw(taddr(d)), R(r32(n))});
+  hold(n, t, taddr(d), true);
 }
 
 // x = o (REAL or LREAL), its bits as they are
@@ -1282,11 +1400,10 @@ void Gen::typed_compare(const ldc::Instr& in) {
     else if (is_tconst(b)) mov_imm(rcx, tconst(b)), emit(M::Cmp, {R(rax), R(rcx)});
     else emit(M::Cmp, {R(rax), Q(taddr(b))});
   } else {
-    load32(t, in.a[0], eax);
     const ldc::Operand& b = in.a[1];
-    if (is_tconst(b)) emit(M::Cmp, {R(eax), I(int64_t(uint32_t(tconst(b))))});
-    else if (ty_bits(t) == 32 && t != Ty::BOOL) emit(M::Cmp, {R(eax), Dw(taddr(b))});
-    else load32(t, b, ecx), emit(M::Cmp, {R(eax), R(ecx)});
+    if (is_tconst(b)) load32(t, in.a[0], eax), emit(M::Cmp, {R(eax), I(int64_t(uint32_t(tconst(b))))});
+    else if (ty_bits(t) == 32 && t != Ty::BOOL) load32(t, in.a[0], eax), emit(M::Cmp, {R(eax), src32(b)});
+    else load_pair(t, in.a[0], b), emit(M::Cmp, {R(eax), R(ecx)});
   }
   emit(make_cc(M::Setcc, cc, {R(al)}));
   push_al();
@@ -1298,9 +1415,11 @@ void Gen::typed_move(const ldc::Instr& in) {
   const ldc::Operand &a = in.a[0], &d = in.a[1];
   if (is_tconst(a) && t != Ty::BOOL) {
     const uint64_t v = tconst(a);
-    emit(M::Mov, {Dw(taddr(d)), I(int64_t(uint32_t(v)))});
-    if (two_cells(t)) emit(M::Mov, {Dw(taddr(d) + 4), I(int64_t(uint32_t(v >> 32)))});
-    return;
+    if (!two_cells(t)) return emit(M::Mov, {Dw(taddr(d)), I(int64_t(uint32_t(v)))});
+    // one 64-bit store: a later 64-bit load of two 32-bit stores is not forwarded (it waits for both to retire)
+    if (int64_t(v) == int64_t(int32_t(v))) return emit(M::Mov, {Q(taddr(d)), I(int64_t(v))});
+    mov_imm(rax, v);
+    return emit(M::Mov, {Q(taddr(d)), R(rax)});
   }
   if (is_tconst(a)) return emit(M::Mov, {B(taddr(d)), I(int64_t(tconst(a) & 1))});
   if (two_cells(t)) {
@@ -1344,7 +1463,7 @@ void Gen::typed_arith(const ldc::Instr& in) {
     if (m == M::Imul) emit(M::Imul, {R(eax), R(eax), I(v)});
     else emit(m, {R(eax), I(v)});
   } else {
-    emit(m, {R(eax), Dw(taddr(b))});
+    emit(m, {R(eax), src32(b)});
   }
   store_int_reg(t, AX, d);
 }
@@ -1455,7 +1574,7 @@ void Gen::typed_logic(const ldc::Instr& in) {
   const ldc::Operand &b = in.a[1], &d = in.a[2];
   const M m = in.op == Op::TAND ? M::And : in.op == Op::TOR ? M::Or : M::Xor;
   if (t == Ty::BOOL) {
-    load32(t, a, eax), load32(t, b, ecx);
+    load_pair(t, a, b);
     emit(m, {R(eax), R(ecx)});
   } else if (two_cells(t)) {
     load64(t, a, rax), load64(t, b, rcx);
@@ -1463,7 +1582,7 @@ void Gen::typed_logic(const ldc::Instr& in) {
   } else {
     load_raw32(a, eax);
     if (is_tconst(b)) emit(m, {R(eax), I(int64_t(int32_t(uint32_t(tconst(b)))))});
-    else emit(m, {R(eax), Dw(taddr(b))});
+    else emit(m, {R(eax), src32(b)});
   }
   store_int_reg(t, AX, d);
 }
