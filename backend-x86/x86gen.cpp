@@ -221,18 +221,28 @@ class Gen : public ClassGen<Gen> {
     uint32_t addr = 0;
     Ty ty = Ty::BOOL;
     bool exact = false;  // the register's low bytes are the cell's bytes (BOOL: 1, two cells: 8, else 4)
+    bool upper_zero = false;  // bits 63..32 are 0: a load32 may take the register as it is
     bool valid = false;
   };
   std::array<Held, 16> held_{};
   bool any_held_ = false;
+  // r11 holds the last IDX's index (minus its lo) of the cell `addr`, checked against lo..hi
+  struct HeldIndex {
+    uint32_t addr = 0;
+    Ty ty = Ty::BOOL;
+    int64_t lo = 0, hi = 0;
+    bool valid = false;
+  } idx_held_;
   static uint32_t held_width(Ty t) { return t == Ty::BOOL ? 1 : ty_info(t).cells == 2 ? 8 : 4; }
   void forget_all() {
-    if (any_held_) held_.fill({}), any_held_ = false;
+    if (any_held_) held_.fill({}), idx_held_.valid = false, any_held_ = false;
   }
   void forget_written(const Instruction& i);
-  void hold(unsigned n, Ty t, uint32_t addr, bool exact) {
+  bool upper_zero_now(uint8_t n) const;
+  // upper_zero: bits 63..32 of the register are 0 (its last writer wrote 32 bits)
+  void hold(unsigned n, Ty t, uint32_t addr, bool exact, bool upper_zero = false) {
     if (!slots_ || n == SP || n == BX) return;  // only the -O2 frame's rungs (no later peephole); never the image base
-    held_[n] = {addr, t, exact, true};
+    held_[n] = {addr, t, exact, upper_zero, true};
     any_held_ = true;
   }
   // the register holding cell `addr` as type t would load it, or -1
@@ -1184,13 +1194,32 @@ void Gen::forget_written(const Instruction& i) {
     const uint32_t first = uint32_t(m.disp), end = first + (m.size == Size::Byte ? 1 : m.size == Size::Word ? 2 : m.size == Size::Dword ? 4 : 8);
     for (Held& h : held_)
       if (h.valid && h.addr < end && first < h.addr + held_width(h.ty)) h.valid = false;
+    if (idx_held_.valid && idx_held_.addr < end && first < idx_held_.addr + held_width(idx_held_.ty)) idx_held_.valid = false;
   }
   for (uint8_t n = 0; n < held_.size(); n++)
     if (held_[n].valid && writes_reg(i, n)) held_[n].valid = false;
+  if (idx_held_.valid && writes_reg(i, R11)) idx_held_.valid = false;
 }
 
 // A value: the same type, or integer types whose loads extend alike (a
 // 32-bit cell is its value whatever its type).
+// Are bits 63..32 of register n zero: did its last writer in this straight
+// line write its 32-bit form (a `setcc` of its low byte keeps them)?
+bool Gen::upper_zero_now(uint8_t n) const {
+  for (size_t k = items_.size(), seen = 0; k-- > 0 && seen < 16;) {
+    const Item& it = items_[k];
+    if (it.kind == as::ItemKind::Label) return false;
+    if (it.kind != as::ItemKind::Instruction) continue;
+    seen++;
+    const Instruction& i = it.inst;
+    if (!writes_reg(i, n)) continue;
+    if (i.mnemonic == M::Setcc) continue;
+    if (i.mnemonic == M::Cwde) return n == AX;
+    return i.mnemonic != M::Call && i.num_operands && i.ops[0].kind == OperandKind::Reg && i.ops[0].reg == r32(n);
+  }
+  return false;
+}
+
 int Gen::holder(Ty t, uint32_t addr) const {
   if (!any_held_) return -1;
   for (int n = 0; n < int(held_.size()); n++) {
@@ -1223,8 +1252,8 @@ void Gen::load32(Ty t, const ldc::Operand& o, Reg r) {
     const Held h = held_[size_t(n)];
     // its low byte is 0 or 1 / a 32-bit move clears bits 63..32, which a 64-bit value cut at its store left set
     if (t == Ty::BOOL) emit(M::Movzx, {R(r), R(r8(uint8_t(n)))});
-    else emit(M::Mov, {R(r), R(r32(uint8_t(n)))});
-    return hold(r.num, h.ty, a, h.exact);
+    else if (n != r.num || !h.upper_zero) emit(M::Mov, {R(r), R(r32(uint8_t(n)))});
+    return hold(r.num, h.ty, a, h.exact, true);
   }
   if (t == Ty::BOOL) {  // any byte but 0 is 1 (typed::load)
     emit(M::Xor, {R(r), R(r)});
@@ -1237,7 +1266,7 @@ void Gen::load32(Ty t, const ldc::Operand& o, Reg r) {
       default: emit(M::Mov, {R(r), Dw(a)}); break;
     }
   }
-  hold(r.num, t, a, t != Ty::BOOL && ty_bits(t) == 32);
+  hold(r.num, t, a, t != Ty::BOOL && ty_bits(t) == 32, true);
 }
 
 // eax = a, ecx = b (load32): b first where eax holds it
@@ -1250,7 +1279,7 @@ void Gen::load_pair(Ty t, const ldc::Operand& a, const ldc::Operand& b) {
 void Gen::load_raw32(const ldc::Operand& o, Reg r) {
   if (is_tconst(o)) return emit(M::Mov, {R(r), I(int64_t(uint32_t(tconst(o))))});
   emit(M::Mov, {R(r), src32(o)});
-  hold(r.num, Ty::DWORD, taddr(o), true);
+  hold(r.num, Ty::DWORD, taddr(o), true, true);
 }
 
 // the second operand of `op r32, <o>`: the register holding o's 32-bit cell exactly, or the cell
@@ -1294,7 +1323,7 @@ void Gen::store_int_reg(Ty t, RegNum n, const ldc::Operand& d) {
   if (t == Ty::BOOL) emit(M::Mov, {B(taddr(d)), R(r8(n))});
   else if (two_cells(t)) emit(M::Mov, {Q(taddr(d)), R(r64(n))});
   else normalize(t, r32(n)), emit(M::Mov, {Dw(taddr(d)), R(r32(n))});
-  hold(n, t, taddr(d), true);
+  hold(n, t, taddr(d), true, t != Ty::BOOL && !two_cells(t) && upper_zero_now(n));
 }
 
 // x = o (REAL or LREAL), its bits as they are
@@ -1898,6 +1927,12 @@ void Gen::typed_conv(const ldc::Instr& in) {
 void Gen::typed_idx(const ldc::Instr& in) {
   const Ty t = in.ty;
   const int64_t lo = int32_t(tconst(in.a[1])), hi = int32_t(tconst(in.a[2])), span = hi - lo;
+  const bool cell = !is_tconst(in.a[0]);
+  const HeldIndex& h = idx_held_;
+  if (cell && h.valid && h.addr == taddr(in.a[0]) && h.ty == t && h.lo == lo && h.hi == hi) {
+    idx_span_ = span;  // -O2: r11 holds this index, checked already (nothing wrote it or its cell since)
+    return;
+  }
   std::string ok = fresh(), fault = fresh();
   load64(t, in.a[0], rax);
   if (!typed::is_signed(t) && two_cells(t) && lo < 0) {  // above INT64_MAX: outside, whatever lo is
@@ -1910,6 +1945,7 @@ void Gen::typed_idx(const ldc::Instr& in) {
   else mov_imm(rcx, uint64_t(span)), emit(M::Cmp, {R(r11), R(rcx)});
   jcc(Cond::BE, ok);
   label(fault);
+  const std::array<Held, 16> at_jump = held_;  // `ok` is reached from the jbe alone: what was held there still is
   emit(M::Mov, {Dw(kSysFault), I(kFaultIndex)});
   emit(M::Mov, {Dw(kSysFaultAt), I(int64_t(il_offset_))});
   emit(M::Mov, {Q(kSysFaultValue), R(rax)});
@@ -1918,6 +1954,9 @@ void Gen::typed_idx(const ldc::Instr& in) {
   emit(std::move(j));
   label(ok);
   idx_span_ = span;
+  if (!slots_ || !cell) return;
+  held_ = at_jump, any_held_ = true;
+  idx_held_ = {taddr(in.a[0]), t, lo, hi, true};
 }
 
 // LDX / STX: element base + r11 * stride.  The access is right after its own

@@ -468,7 +468,9 @@ TEST(TypedNative, ChainsThroughHeldRegisters) {
 // (the typed run's power test, its label), an indexed store over the cell,
 // a wider store over part of it, a bit instruction that changes the slot
 // register holding it (ANDN's seta), one that writes the cell (SET, RST), an
-// indexed store of a held LINT over its own upper half.
+// indexed store of a held LINT over its own upper half; and an IDX taken again
+// from r11 ends when its index cell is written (then 9, outside: the scan ends
+// at the second IDX) or r11 is (MTON's scratch).
 TEST(TypedNative, HeldValuesEndWhereTheyMust) {
   Program p = parse_il_text(
       ".rung line 1\nLOAD M100\nMOVE.INT D0 D1\nTRUE\nADD.INT D1 1 D30\nMPP\nMPP\n"
@@ -476,15 +478,19 @@ TEST(TypedNative, HeldValuesEndWhereTheyMust) {
       ".rung line 3\nTRUE\nMOVE.DINT D6 D7\nMOVE.LINT D8 D6\nADD.DINT D7 1 D32\nMOVE.INT D9 D7\nADD.DINT D7 0 D33\n"
       ".rung line 4\nLOAD M0\nOUT M5\nANDN M6\nTRUE\nMOVE.BOOL M5 M7\nMPP\nOUT M11\nMPP\n"
       ".rung line 6\nTRUE\nIDX.INT D20 0 8\nSTX.LINT D4 D0 1\nADD.LINT D4 1 D34\n"
+      ".rung line 7\nTRUE\nIDX.INT D20 0 8\nLDX.DINT D0 1 D35\nMOVE.INT D21 D20\nIDX.INT D20 0 8\nLDX.DINT D0 1 D36\n"
+      "LOAD M2\nMTON T1 D22\nMPP\nIDX.INT D20 0 8\nLDX.DINT D0 1 D37\nIDX.INT D20 0 8\nLDX.DINT D0 1 D38\n"
       ".rung line 5\nTRUE\nMOVE.BOOL M1 M8\nLOAD M2\nSET M8\nMPP\nMOVE.BOOL M8 M9\nLOAD M3\nRST M8\nMPP\nMOVE.BOOL M8 M10\n"
       ".end\n",
       "held_ends.il");
   p.source = "held_ends";
   const Layout l = p.layout();
   auto inputs = [&](ImageBytes& a, ImageBytes& b, std::mt19937_64& rng) {
-    const int32_t v = int32_t(rng() % 10);
-    std::memcpy(a.data() + l.addr(Area::D, 20), &v, 4);
-    std::memcpy(b.data() + l.addr(Area::D, 20), &v, 4);
+    for (uint32_t d : {20u, 21u}) {  // indices: 9 is outside 0..8, the scan ends there
+      const int32_t v = int32_t(rng() % (d == 20 ? 9 : 10));
+      std::memcpy(a.data() + l.addr(Area::D, d), &v, 4);
+      std::memcpy(b.data() + l.addr(Area::D, d), &v, 4);
+    }
     for (uint32_t m = 0; m < 8; m++) a[l.addr(Area::M, m)] = b[l.addr(Area::M, m)] = a[l.addr(Area::M, m)] != 0;
   };
   for (int opt = 0; opt <= 2; opt++) {
