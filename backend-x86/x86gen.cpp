@@ -1422,6 +1422,10 @@ void Gen::typed_compare(const ldc::Instr& in) {
   // signed: the INT32 conditions; unsigned (bits, BOOL): below / above
   static constexpr Cond kUnsigned[] = {Cond::E, Cond::NE, Cond::B, Cond::BE, Cond::A, Cond::AE};
   const Cond cc = typed::is_signed(t) ? x.int_cc : kUnsigned[int(op_info(in.op).rel)];
+  // -O2: the result straight into its slot, zeroed before the compare; eax
+  // keeps the operand it was loaded with (a CASE compares one value again and again)
+  const Reg slot8 = slots_ ? slot(depth_) : al;
+  if (slots_) emit(M::Xor, {R(wide(slot8)), R(wide(slot8))});
   if (two_cells(t)) {
     load64(t, in.a[0], rax);
     const ldc::Operand& b = in.a[1];
@@ -1429,13 +1433,20 @@ void Gen::typed_compare(const ldc::Instr& in) {
     else if (is_tconst(b)) mov_imm(rcx, tconst(b)), emit(M::Cmp, {R(rax), R(rcx)});
     else emit(M::Cmp, {R(rax), Q(taddr(b))});
   } else {
-    const ldc::Operand& b = in.a[1];
-    if (is_tconst(b)) load32(t, in.a[0], eax), emit(M::Cmp, {R(eax), I(int64_t(uint32_t(tconst(b))))});
-    else if (ty_bits(t) == 32 && t != Ty::BOOL) load32(t, in.a[0], eax), emit(M::Cmp, {R(eax), src32(b)});
-    else load_pair(t, in.a[0], b), emit(M::Cmp, {R(eax), R(ecx)});
+    const ldc::Operand &a = in.a[0], &b = in.a[1];
+    if (is_tconst(b) || (ty_bits(t) == 32 && t != Ty::BOOL)) {
+      // a held in a register (its 32 bits as load32 makes them): compared there
+      const int n = t == Ty::BOOL || is_tconst(a) ? -1 : holder(t, taddr(a));
+      Reg ra = eax;
+      if (n >= 0) ra = r32(uint8_t(n));
+      else load32(t, a, eax);
+      emit(M::Cmp, {R(ra), is_tconst(b) ? I(int64_t(uint32_t(tconst(b)))) : src32(b)});
+    } else {
+      load_pair(t, a, b), emit(M::Cmp, {R(eax), R(ecx)});
+    }
   }
-  emit(make_cc(M::Setcc, cc, {R(al)}));
-  push_al();
+  emit(make_cc(M::Setcc, cc, {R(slot8)}));
+  if (!slots_) push_al();
 }
 
 // d = a: the value loaded in its type (narrow cells made canonical), stored whole
@@ -1451,6 +1462,13 @@ void Gen::typed_move(const ldc::Instr& in) {
     return emit(M::Mov, {Q(taddr(d)), R(rax)});
   }
   if (is_tconst(a)) return emit(M::Mov, {B(taddr(d)), I(int64_t(tconst(a) & 1))});
+  // -O2: from the register that holds a (as load32 / load64 would leave it), eax untouched
+  if (const int n = two_cells(t) ? raw_holder(taddr(a), 8) : typed::is_real(t) ? -1 : holder(t, taddr(a)); n >= 0) {
+    const Held h = held_[size_t(n)];
+    const uint8_t r = uint8_t(n);
+    emit(M::Mov, {t == Ty::BOOL ? B(taddr(d)) : two_cells(t) ? Q(taddr(d)) : Dw(taddr(d)), R(t == Ty::BOOL ? r8(r) : two_cells(t) ? r64(r) : r32(r))});
+    return hold(r, t, taddr(d), true, h.upper_zero);
+  }
   if (two_cells(t)) {
     emit(M::Mov, {R(rax), Q(taddr(a))});
     return emit(M::Mov, {Q(taddr(d)), R(rax)});
