@@ -134,6 +134,8 @@ class Gen : public ClassGen<Gen> {
   // a branch; false: not that shape
   static bool is_select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Instr& mpp);
   void select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Instr& mpp);
+  static bool is_compare_jump(const ldc::Instr& cmp, const ldc::Instr& jmp, const ldc::Instr& mpp);
+  void compare_jump(const ldc::Instr& cmp, const ldc::Instr& jmp, const ldc::Instr& mpp);
   void follow(const ldc::Instr& in);
 
  private:
@@ -438,6 +440,7 @@ class Gen : public ClassGen<Gen> {
   int64_t idx_span_ = -1;   // the last IDX's hi - lo: the bound of the LDX / STX right after it
   void typed(const ldc::Instr& in);
   void typed_compare(const ldc::Instr& in);
+  Cond int_compare(const ldc::Instr& in);
   void typed_move(const ldc::Instr& in);
   void typed_arith(const ldc::Instr& in);
   void typed_divmod(const ldc::Instr& in);
@@ -1419,13 +1422,20 @@ void Gen::typed_compare(const ldc::Instr& in) {
     }
     return push_al();
   }
-  // signed: the INT32 conditions; unsigned (bits, BOOL): below / above
-  static constexpr Cond kUnsigned[] = {Cond::E, Cond::NE, Cond::B, Cond::BE, Cond::A, Cond::AE};
-  const Cond cc = typed::is_signed(t) ? x.int_cc : kUnsigned[int(op_info(in.op).rel)];
   // -O2: the result straight into its slot, zeroed before the compare; eax
   // keeps the operand it was loaded with (a CASE compares one value again and again)
   const Reg slot8 = slots_ ? slot(depth_) : al;
   if (slots_) emit(M::Xor, {R(wide(slot8)), R(wide(slot8))});
+  emit(make_cc(M::Setcc, int_compare(in), {R(slot8)}));
+  if (!slots_) push_al();
+}
+
+// The flags of an integer compare (a REL b), and the condition that is its result:
+// signed: the INT32 conditions; unsigned (bits, BOOL): below / above
+Cond Gen::int_compare(const ldc::Instr& in) {
+  const Ty t = in.ty;
+  static constexpr Cond kUnsigned[] = {Cond::E, Cond::NE, Cond::B, Cond::BE, Cond::A, Cond::AE};
+  const Cond cc = typed::is_signed(t) ? x86_rel(op_info(in.op).rel).int_cc : kUnsigned[int(op_info(in.op).rel)];
   if (two_cells(t)) {
     load64(t, in.a[0], rax);
     const ldc::Operand& b = in.a[1];
@@ -1445,8 +1455,23 @@ void Gen::typed_compare(const ldc::Instr& in) {
       load_pair(t, a, b), emit(M::Cmp, {R(eax), R(ecx)});
     }
   }
-  emit(make_cc(M::Setcc, cc, {R(slot8)}));
-  if (!slots_) push_al();
+  return cc;
+}
+
+// `CMP.T a b; JMP l; MPP` (an ST IF or CASE arm, a loop's test, after the typed
+// reader's fuse_compare): -O2 jumps on the compare's flags, the result never
+// made a bit (the push and the pop cancel, as the JMP leaves the stack alone).
+bool Gen::is_compare_jump(const ldc::Instr& cmp, const ldc::Instr& jmp, const ldc::Instr& mpp) {
+  const OpInfo& oi = op_info(cmp.op);
+  return oi.klass == OpClass::Typed && oi.push == 1 && !typed::is_real(cmp.ty) && cmp.ty != Ty::STRING &&
+         !typed::is_string_instr(cmp.op, cmp.ty, cmp.src) && jmp.op == Op::JMP && mpp.op == Op::MPP;
+}
+void Gen::compare_jump(const ldc::Instr& cmp, const ldc::Instr& jmp, const ldc::Instr& mpp) {
+  close_typed_run();
+  Instruction j = make_cc(M::Jcc, int_compare(cmp), {L(x86_label_name(jmp.a[0].label))});
+  j.long_branch = true;
+  emit(std::move(j));
+  for (const ldc::Instr* in : {&cmp, &jmp, &mpp}) follow(*in);
 }
 
 // d = a: the value loaded in its type (narrow cells made canonical), stored whole
@@ -2734,10 +2759,12 @@ class Blocks {
     uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into ebp
     for (size_t k = 0; k < r.code.size(); k++) {
       const ldc::Instr& in = r.code[k];
-      if (k + 2 < r.code.size() && Gen::is_select(in, r.code[k + 1], r.code[k + 2]) && plain(ri, k, 3)) {
+      const bool cj = slots && k + 2 < r.code.size() && Gen::is_compare_jump(in, r.code[k + 1], r.code[k + 2]);
+      if (k + 2 < r.code.size() && (cj || Gen::is_select(in, r.code[k + 1], r.code[k + 2])) && plain(ri, k, 3)) {
         starts.push_back(uint32_t(b.items.size()));
         if (notes_) b.items.push_back(Item::note(instr_text(in) + "; " + instr_text(r.code[k + 1]) + "; " + instr_text(r.code[k + 2])));
-        g.select(in, r.code[k + 1], r.code[k + 2]);
+        if (cj) g.compare_jump(in, r.code[k + 1], r.code[k + 2]);
+        else g.select(in, r.code[k + 1], r.code[k + 2]);
         starts.push_back(uint32_t(b.items.size()));
         starts.push_back(uint32_t(b.items.size()));
         k += 2;
