@@ -1103,8 +1103,14 @@ void Gen::basic(const ldc::Instr& in) {
 
 void Gen::flow(const ldc::Instr& in) {
   if (in.op == Op::LOOP) return loop(in);
+  const std::string to = in.op == Op::JMP ? x86_label_name(in.a[0].label) : kX86ExitLabel;
+  if (bases_ && known_.on()) {  // -O2, `TRUE; JMP l` (an ST ELSIF arm's end): taken for certain
+    Instruction j = make(M::Jmp, {L(to)});
+    j.long_branch = true;
+    return emit(std::move(j));
+  }
   test_top();
-  Instruction j = make_cc(M::Jcc, Cond::NE, {L(in.op == Op::JMP ? x86_label_name(in.a[0].label) : kX86ExitLabel)});
+  Instruction j = make_cc(M::Jcc, Cond::NE, {L(to)});
   j.long_branch = true;
   emit(std::move(j));
 }
