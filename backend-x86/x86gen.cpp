@@ -461,7 +461,7 @@ class Gen : public ClassGen<Gen> {
   void load_pair(Ty t, const ldc::Operand& a, const ldc::Operand& b);
   void load64(Ty t, const ldc::Operand& o, Reg r);
   void normalize(Ty t, Reg r);
-  void store_int_reg(Ty t, RegNum n, const ldc::Operand& d);
+  void store_int_reg(Ty t, RegNum n, const ldc::Operand& d, bool canonical = false);
   void load_x(Ty t, const ldc::Operand& o, Reg x);
   void load_xd(Ty t, const ldc::Operand& o, Reg x);
   Operand real_src(Ty t, const ldc::Operand& o, Reg x);
@@ -1287,6 +1287,7 @@ void Gen::load_pair(Ty t, const ldc::Operand& a, const ldc::Operand& b) {
 // r (32-bit) = o's cell as it is (the low bits of a wrapping operation)
 void Gen::load_raw32(const ldc::Operand& o, Reg r) {
   if (is_tconst(o)) return emit(M::Mov, {R(r), I(int64_t(uint32_t(tconst(o))))});
+  if (const int n = raw_holder(taddr(o), 4); n == r.num && held_[size_t(n)].upper_zero) return;  // there, as a load leaves it
   emit(M::Mov, {R(r), src32(o)});
   hold(r.num, Ty::DWORD, taddr(o), true, true);
 }
@@ -1327,11 +1328,12 @@ void Gen::normalize(Ty t, Reg r) {
   emit(M::Sar, {R(r), I(16)});
 }
 
-// d = register n's value of type t (BOOL: its low byte, 0 or 1)
-void Gen::store_int_reg(Ty t, RegNum n, const ldc::Operand& d) {
+// d = register n's value of type t (BOOL: its low byte, 0 or 1); canonical:
+// the register holds t's canonical value already (no cut at the store)
+void Gen::store_int_reg(Ty t, RegNum n, const ldc::Operand& d, bool canonical) {
   if (t == Ty::BOOL) emit(M::Mov, {B(taddr(d)), R(r8(n))});
   else if (two_cells(t)) emit(M::Mov, {Q(taddr(d)), R(r64(n))});
-  else normalize(t, r32(n)), emit(M::Mov, {Dw(taddr(d)), R(r32(n))});
+  else (canonical ? void() : normalize(t, r32(n))), emit(M::Mov, {Dw(taddr(d)), R(r32(n))});
   hold(n, t, taddr(d), true, t != Ty::BOOL && !two_cells(t) && upper_zero_now(n));
 }
 
@@ -1661,6 +1663,8 @@ void Gen::typed_logic(const ldc::Instr& in) {
     load_raw32(a, eax);
     if (is_tconst(b)) emit(m, {R(eax), I(int64_t(int32_t(uint32_t(tconst(b)))))});
     else emit(m, {R(eax), src32(b)});
+    // AND with a constant of t (a bit string: from 0 to t's largest value) leaves one too
+    return store_int_reg(t, AX, d, in.op == Op::TAND && is_tconst(b) && !typed::is_signed(t));
   }
   store_int_reg(t, AX, d);
 }
@@ -1681,9 +1685,11 @@ void Gen::typed_shift(const ldc::Instr& in) {
   const bool rotate = in.op == Op::TROL || in.op == Op::TROR;
   if (is_tconst(n) && !rotate) {
     const uint64_t c = tconst(n);
-    if ((typed::is_signed(u) && int64_t(c) < 0) || c >= uint64_t(w)) emit(M::Xor, {R(eax), R(eax)});
+    const bool zero = (typed::is_signed(u) && int64_t(c) < 0) || c >= uint64_t(w);
+    if (zero) emit(M::Xor, {R(eax), R(eax)});
     else if (c > 0) emit(in.op == Op::TSHL ? M::Shl : M::Shr, {R(A), I(int64_t(c))});
-    return store_int_reg(t, AX, d);
+    // 0, or a zero-extended value shifted right: still t's canonical value
+    return store_int_reg(t, AX, d, zero || (in.op == Op::TSHR && !typed::is_signed(t)));
   }
   // the count in rcx: canonical, so a negative signed count is a huge unsigned one
   if (two_cells(u)) load64(u, n, rcx);

@@ -499,6 +499,23 @@ TEST(TypedNative, HeldValuesEndWhereTheyMust) {
   }
 }
 
+// The store cuts a narrow result to its type unless the operation cannot
+// leave it: a constant shift left (cut), right (of a zero-extended value: not
+// cut), an AND with a constant of the type (not cut), OR / XOR of the raw cell
+// (cut).  D0 holds random 64-bit cells, not canonical for these types.
+TEST(TypedNative, NarrowResultsCutWhereTheyMayOverflow) {
+  Program p = parse_il_text(
+      ".rung line 1\nTRUE\nSHL.WORD.INT D0 1 D1000\nSHL.BYTE.INT D0 3 D1001\nSHR.WORD.INT D0 1 D1002\n"
+      "SHR.BYTE.DINT D0 2 D1003\nAND.WORD D0 65535 D1004\nAND.WORD D0 255 D1005\nAND.BYTE D0 127 D1006\n"
+      "OR.WORD D0 1 D1007\nXOR.BYTE D0 255 D1008\nSHL.WORD.INT D0 15 D1009\n.end\n",
+      "narrow_cut.il");
+  p.source = "narrow_cut";
+  for (int opt = 0; opt <= 2; opt++) {
+    std::string why = compare(p, opt, 200, 41 + opt, 1.0);
+    EXPECT_TRUE(why.empty()) << why;
+  }
+}
+
 // The registers are read: in the -O2 code of a chain of BOOL temporaries, one
 // byte is loaded back from memory (M100: eax, which held it, took D4 for the
 // next compare); -O1 loads every one.
