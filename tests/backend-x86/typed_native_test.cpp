@@ -226,6 +226,29 @@ std::string compare(const Program& p, int opt, int scans, uint64_t seed, double 
   return "";
 }
 
+// compare() at every -O level from `first` on, each its own seed.
+void expect_levels(const Program& p, int first, int scans, uint64_t seed, double power_on,
+                   const std::function<void(ImageBytes&, ImageBytes&, std::mt19937_64&)>& extra = nullptr) {
+  for (int opt = first; opt <= 2; opt++) {
+    std::string why = compare(p, opt, scans, seed + uint64_t(opt), power_on, extra);
+    EXPECT_TRUE(why.empty()) << why;
+  }
+}
+
+// Inputs for the held-value tests: each index cell D<d> drawn from 0..below-1,
+// and M0..M7 made 0 or 1 (the bit instructions read them too, as bit devices).
+std::function<void(ImageBytes&, ImageBytes&, std::mt19937_64&)> index_inputs(const Layout& l,
+                                                                            std::vector<std::pair<uint32_t, uint32_t>> cells) {
+  return [l, cells](ImageBytes& a, ImageBytes& b, std::mt19937_64& rng) {
+    for (auto [d, below] : cells) {
+      const int32_t v = int32_t(rng() % below);
+      std::memcpy(a.data() + l.addr(Area::D, d), &v, 4);
+      std::memcpy(b.data() + l.addr(Area::D, d), &v, 4);
+    }
+    for (uint32_t m = 0; m < 8; m++) a[l.addr(Area::M, m)] = b[l.addr(Area::M, m)] = a[l.addr(Area::M, m)] != 0;
+  };
+}
+
 TEST(TypedNative, EveryOpEveryTypeAtTheLimits) {
   Program p = every_op(20261128, 3);
   ASSERT_GT(p.rungs.size(), 800u);
@@ -448,14 +471,7 @@ TEST(TypedNative, ChainsThroughHeldRegisters) {
     const std::string text = chains_program(seed);
     Program p = parse_il_text(text, "chains.il");
     p.source = "typed_chains";
-    const Layout l = p.layout();
-    auto index = [&](ImageBytes& a, ImageBytes& b, std::mt19937_64& rng) {
-      const int32_t v = int32_t(rng() % 10);
-      std::memcpy(a.data() + l.addr(Area::D, 20), &v, 4);
-      std::memcpy(b.data() + l.addr(Area::D, 20), &v, 4);
-      for (uint32_t m = 0; m < 8; m++)  // the bit instructions read these too: 0 or 1, as every bit device
-        a[l.addr(Area::M, m)] = b[l.addr(Area::M, m)] = a[l.addr(Area::M, m)] != 0;
-    };
+    auto index = index_inputs(p.layout(), {{20, 10}});
     for (int opt = 1; opt <= 2; opt++) {
       std::string why = compare(p, opt, 200, 100 * seed + uint64_t(opt), 0.7, index);
       EXPECT_TRUE(why.empty()) << "seed " << seed << ": " << why << "\n" << text;
@@ -484,19 +500,7 @@ TEST(TypedNative, HeldValuesEndWhereTheyMust) {
       ".end\n",
       "held_ends.il");
   p.source = "held_ends";
-  const Layout l = p.layout();
-  auto inputs = [&](ImageBytes& a, ImageBytes& b, std::mt19937_64& rng) {
-    for (uint32_t d : {20u, 21u}) {  // indices: 9 is outside 0..8, the scan ends there
-      const int32_t v = int32_t(rng() % (d == 20 ? 9 : 10));
-      std::memcpy(a.data() + l.addr(Area::D, d), &v, 4);
-      std::memcpy(b.data() + l.addr(Area::D, d), &v, 4);
-    }
-    for (uint32_t m = 0; m < 8; m++) a[l.addr(Area::M, m)] = b[l.addr(Area::M, m)] = a[l.addr(Area::M, m)] != 0;
-  };
-  for (int opt = 0; opt <= 2; opt++) {
-    std::string why = compare(p, opt, 300, 31 + opt, 0.5, inputs);
-    EXPECT_TRUE(why.empty()) << why;
-  }
+  expect_levels(p, 0, 300, 31, 0.5, index_inputs(p.layout(), {{20, 9}, {21, 10}}));  // 9 is outside 0..8: the scan ends there
 }
 
 // The store cuts a narrow result to its type unless the operation cannot
@@ -510,10 +514,7 @@ TEST(TypedNative, NarrowResultsCutWhereTheyMayOverflow) {
       "OR.WORD D0 1 D1007\nXOR.BYTE D0 255 D1008\nSHL.WORD.INT D0 15 D1009\n.end\n",
       "narrow_cut.il");
   p.source = "narrow_cut";
-  for (int opt = 0; opt <= 2; opt++) {
-    std::string why = compare(p, opt, 200, 41 + opt, 1.0);
-    EXPECT_TRUE(why.empty()) << why;
-  }
+  expect_levels(p, 0, 200, 41, 1.0);
 }
 
 // The registers are read: in the -O2 code of a chain of BOOL temporaries, one
@@ -543,10 +544,7 @@ TEST(TypedNative, HeldBoolsAreNotLoadedBack) {
   p.source = "held_bools";
   EXPECT_EQ(byte_loads(p, 2), 1u);
   EXPECT_GE(byte_loads(p, 1), 5u);
-  for (int opt = 0; opt <= 2; opt++) {
-    std::string why = compare(p, opt, 100, 5, 0.7);
-    EXPECT_TRUE(why.empty()) << why;
-  }
+  expect_levels(p, 0, 100, 5, 0.7);
 }
 
 // Hand-written: the examples of docs/il.md run to the same images, and an IDX
