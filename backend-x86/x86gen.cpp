@@ -1235,7 +1235,7 @@ int Gen::holder(Ty t, uint32_t addr) const {
     const Held& h = held_[size_t(n)];
     if (!h.valid || h.addr != addr) continue;
     if (h.ty == t) return n;
-    if (t == Ty::BOOL || h.ty == Ty::BOOL || two_cells(t) || two_cells(h.ty)) continue;
+    if (t == Ty::BOOL || h.ty == Ty::BOOL || two_cells(t) || two_cells(h.ty) || typed::is_real(t) || typed::is_real(h.ty)) continue;
     if (ty_bits(t) == 32 && ty_bits(h.ty) == 32) return n;
     if (ty_bits(t) == ty_bits(h.ty) && typed::is_signed(t) == typed::is_signed(h.ty)) return n;
   }
@@ -1470,13 +1470,26 @@ Cond Gen::int_compare(const ldc::Instr& in) {
 // reader's fuse_compare): -O2 jumps on the compare's flags, the result never
 // made a bit (the push and the pop cancel, as the JMP leaves the stack alone).
 bool Gen::is_compare_jump(const ldc::Instr& cmp, const ldc::Instr& jmp, const ldc::Instr& mpp) {
+  if ((cmp.op == Op::LOAD || cmp.op == Op::LOADN) && cmp.a[0].kind == OpdKind::Bit)  // `LOAD x; JMP l; MPP`
+    return jmp.op == Op::JMP && mpp.op == Op::MPP;
   const OpInfo& oi = op_info(cmp.op);
   return oi.klass == OpClass::Typed && oi.push == 1 && !typed::is_real(cmp.ty) && cmp.ty != Ty::STRING &&
          !typed::is_string_instr(cmp.op, cmp.ty, cmp.src) && jmp.op == Op::JMP && mpp.op == Op::MPP;
 }
 void Gen::compare_jump(const ldc::Instr& cmp, const ldc::Instr& jmp, const ldc::Instr& mpp) {
   close_typed_run();
-  Instruction j = make_cc(M::Jcc, int_compare(cmp), {L(x86_label_name(jmp.a[0].label))});
+  Cond cc;
+  if (cmp.op == Op::LOAD || cmp.op == Op::LOADN) {
+    // the bit's byte as the slot would have it: LOAD jumps on byte != 0, LOADN on (byte ^ 1) != 0
+    const uint32_t a = addr(cmp.a[0]);
+    const int h = holder(Ty::BOOL, a);
+    if (h >= 0 && held_[size_t(h)].exact) emit(M::Cmp, {R(r8(uint8_t(h))), I(cmp.op == Op::LOAD ? 0 : 1)});
+    else emit(M::Cmp, {B(a), I(cmp.op == Op::LOAD ? 0 : 1)});
+    cc = Cond::NE;
+  } else {
+    cc = int_compare(cmp);
+  }
+  Instruction j = make_cc(M::Jcc, cc, {L(x86_label_name(jmp.a[0].label))});
   j.long_branch = true;
   emit(std::move(j));
   for (const ldc::Instr* in : {&cmp, &jmp, &mpp}) follow(*in);
@@ -2064,19 +2077,20 @@ void Gen::typed_indexed(const ldc::Instr& in) {
     return emit(M::Mov, {Operand::m(m), R(two_cells(t) ? rax : eax)});
   }
   const ldc::Operand& d = in.a[2];
-  if (t == Ty::BOOL) {
+  if (t == Ty::BOOL) {  // (the indexed operand right after its bounds check: no xor between)
     emit(M::Cmp, {Operand::m(m), I(0)});
     emit(make_cc(M::Setcc, Cond::NE, {R(al)}));
-    return emit(M::Mov, {B(taddr(d)), R(al)});
-  }
-  if (two_cells(t)) {
+    emit(M::Mov, {B(taddr(d)), R(al)});
+  } else if (two_cells(t)) {
     emit(M::Mov, {R(rax), Operand::m(m)});
-    return emit(M::Mov, {Q(taddr(d)), R(rax)});
+    emit(M::Mov, {Q(taddr(d)), R(rax)});
+  } else {
+    const bool sgn = typed::is_signed(t);
+    if (ty_bits(t) < 32) emit(sgn ? M::Movsx : M::Movzx, {R(eax), Operand::m(m)});
+    else emit(M::Mov, {R(eax), Operand::m(m)});
+    emit(M::Mov, {Dw(taddr(d)), R(eax)});
   }
-  const bool sgn = typed::is_signed(t);
-  if (ty_bits(t) < 32) emit(sgn ? M::Movsx : M::Movzx, {R(eax), Operand::m(m)});
-  else emit(M::Mov, {R(eax), Operand::m(m)});
-  emit(M::Mov, {Dw(taddr(d)), R(eax)});
+  hold(AX, t, taddr(d), true, t != Ty::BOOL);  // the element as load32 / load64 makes it, stored whole (a BOOL: al)
 }
 
 // ------------------------------------------------------------ -O1 peephole
