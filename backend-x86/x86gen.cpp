@@ -112,8 +112,6 @@ struct Ungated {
   ~Ungated() { flag = saved; }
 };
 
-bool is_reg(const Operand& o, uint8_t num);
-bool reads_reg(const Instruction& i, uint8_t num);
 bool writes_reg(const Instruction& i, uint8_t num);
 
 class Gen : public ClassGen<Gen> {
@@ -1210,8 +1208,6 @@ void Gen::forget_written(const Instruction& i) {
   if (idx_held_.valid && writes_reg(i, R11)) idx_held_.valid = false;
 }
 
-// A value: the same type, or integer types whose loads extend alike (a
-// 32-bit cell is its value whatever its type).
 // Are bits 63..32 of register n zero: did its last writer in this straight
 // line write its 32-bit form (a `setcc` of its low byte keeps them)?
 bool Gen::upper_zero_now(uint8_t n) const {
@@ -1229,6 +1225,8 @@ bool Gen::upper_zero_now(uint8_t n) const {
   return false;
 }
 
+// A value: the same type, or integer types whose loads extend alike (a
+// 32-bit cell is its value whatever its type).
 int Gen::holder(Ty t, uint32_t addr) const {
   if (!any_held_) return -1;
   for (int n = 0; n < int(held_.size()); n++) {
@@ -2012,8 +2010,8 @@ void Gen::typed_idx(const ldc::Instr& in) {
   if (span <= INT32_MAX) emit(M::Cmp, {R(r11), I(span)});
   else mov_imm(rcx, uint64_t(span)), emit(M::Cmp, {R(r11), R(rcx)});
   jcc(Cond::BE, ok);
-  label(fault);
   const std::array<Held, 16> at_jump = held_;  // `ok` is reached from the jbe alone: what was held there still is
+  label(fault);
   emit(M::Mov, {Dw(kSysFault), I(kFaultIndex)});
   emit(M::Mov, {Dw(kSysFaultAt), I(int64_t(il_offset_))});
   emit(M::Mov, {Q(kSysFaultValue), R(rax)});
