@@ -7,6 +7,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -161,8 +162,16 @@ class ShmDriver : public IoDriver {
       }
       k = 0;
       for (const Run& r : c.runs) std::memcpy(global + r.offset, scratch_.data() + k, r.size), k += r.size;
+      bits_as_zero_or_one(global, c);
       return;
     }
+  }
+  // An input point is a byte the client may set to anything: any byte but 0
+  // is 1 (a bit device holds 0 or 1, and the engines' bit instructions read it so)
+  void bits_as_zero_or_one(uint8_t* global, const ScanContext& c) const {
+    const uint32_t lo = layout_.offset[int(Area::X)], hi = lo + layout_.count[int(Area::X)];
+    for (const Run& r : c.runs)
+      for (uint32_t a = std::max(r.offset, lo), end = std::min(r.offset + r.size, hi); a < end; a++) global[a] = global[a] != 0;
   }
   void write_outputs(const uint8_t* global, const ScanContext& c) override {
     failsafe::inject("io");

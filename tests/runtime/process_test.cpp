@@ -471,7 +471,7 @@ TEST(Retentive, LdmicroPersistVariableSurvivesARestart) {
 
 TEST(SharedMemory, ClientWritesInputsAndReadsOutputsWithoutTornUpdates) {
   TmpDir d;
-  std::string prog = "|--[X5]--(Y5)\n\n";
+  std::string prog = "|--[X5]--(Y5)\n\n|--[/X6]--(Y6)\n\n";
   for (int i = 0; i < 16; i++) prog += "|--(MOV WX" + std::to_string(i) + " WY" + std::to_string(i) + ")\n\n";
   write_image_file(d / "copy.bin", compile_text(d, "copy.ld", prog));
   std::string name = "/ldc-test-" + std::to_string(getpid());
@@ -507,6 +507,19 @@ TEST(SharedMemory, ClientWritesInputsAndReadsOutputsWithoutTornUpdates) {
 
   EXPECT_EQ(client({"set", "WX3", "0"}), "0:");
   EXPECT_EQ(client({"wait", "WY3", "0", "5000"}), "0:WY3 0");
+
+  // An input byte of 2 (a client writing its own encoding) is the input on:
+  // the normally closed contact on X6 opens (read as it lies, the NC contact's
+  // `xor 1` left it closed, and the bit stack took a stray bit)
+  EXPECT_EQ(client({"wait", "Y6", "1", "5000"}), "0:Y6 1");
+  {
+    ASSERT_TRUE(shm::lock_inputs(h, int32_t(getpid())));
+    shm::begin_write(h->in_seq);
+    shm::base(h)[shm::kXOffset + 6] = 2;
+    shm::end_write(h->in_seq);
+    shm::unlock_inputs(h, int32_t(getpid()));
+  }
+  EXPECT_EQ(client({"wait", "Y6", "0", "5000"}), "0:Y6 0");
 
   // Torn-update stress: a writer sets WX0..WX15 to one value per update; the
   // program copies them to WY0..WY15; every snapshot a reader takes must
