@@ -34,6 +34,7 @@ static std::string usage() {
          "       ldc FILE.xml|FILE.st [-o DIR]   (a configuration of several tasks, PLCopen or ST, is a project, the same way)\n"
          "       ldc FILE.xml --task NAME ...   (one task's program of such a configuration)\n"
          "       ldc FILE   (no -o, no --emit: compile and check only; nothing is written, nothing said on success)\n"
+         "       -o -   standard output (the image, or the --emit text; one program, not a project)\n"
          "       -fsyntax-only   read and check the source (errors and warnings), no code generated, nothing written\n"
          "       -Wall -Wname -Wno-name -Werror -Werror=name -w   warnings (docs/diagnostics.md):\n" + warnings +
          "       -fmax-errors=N   stop after N errors (default 20, 0: no limit)\n";
@@ -121,6 +122,9 @@ static int ldc_main(int argc, char** argv) {
   if (!t) throw UserError("ldc: error: unknown target '" + target + "' (" + target_names() + ")");
   Diagnostics diag(dopt);
   Compiled c = compile_source(input, emit.empty() && t->host, task, emit == "tree", &diag);  // parse + lower
+  if (c.project && output == "-")
+    throw UserError("ldc: error: -o - (standard output) takes one program, but " + input + " is a project of " +
+                    std::to_string(c.project->tasks.size()) + " tasks: give -o a folder, or --task NAME");
   if (c.project) {  // a PLCopen configuration of several tasks
     Diagnostics pdiag(dopt);  // the reader's warnings are printed with the project's
     std::fputs(diag.text().c_str(), stderr);
@@ -165,6 +169,12 @@ static int ldc_main(int argc, char** argv) {
     if (emit == "hex") text = write_intel_hex(write_image(image));
     else {
       if (output.empty()) return 0;  // `ldc FILE`: compiled and checked, nothing written (docs/diagnostics.md)
+      if (output == "-") {  // -o -: the image on standard output (made in memory: its checksum is not patched in place)
+        const std::vector<uint8_t> bytes = write_image(image);
+        if (std::fwrite(bytes.data(), 1, bytes.size(), stdout) != bytes.size() || std::fflush(stdout) != 0)
+          throw UserError("ldc: error: cannot write the image to standard output");
+        return 0;
+      }
       // straight into the file: no copy of the image in memory
       write_file_atomic(output, [&](std::FILE* f) { return write_image_file(image, f) != 0; });
       return 0;
@@ -173,7 +183,7 @@ static int ldc_main(int argc, char** argv) {
     throw UserError("ldc: error: " + (emit.empty() ? std::string("image output (-o FILE.bin)") : "--emit=" + emit) +
                     " is not available in this build (for this target)");
   }
-  if (output.empty()) std::fwrite(text.data(), 1, text.size(), stdout);
+  if (output.empty() || output == "-") std::fwrite(text.data(), 1, text.size(), stdout);  // -o -: standard output
   else write_file_atomic(output, text);
   return 0;
 }

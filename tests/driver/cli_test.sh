@@ -51,6 +51,16 @@ cp "$tmp/own/plant.ldp" "$tmp/own.before"
 expect 1 "would write $tmp/own/./plant.ldp over the project file" "$bin/ldc" --project "$tmp/own/plant.ldp" -o "$tmp/own/."
 cmp -s "$tmp/own/plant.ldp" "$tmp/own.before" || fail "ldc --project p.ldp -o . changed p.ldp"
 
+# -o - is standard output: the image byte for byte as -o FILE writes it, the --emit
+# text; no file named '-'; a project (several images) refused by name.
+checks=$((checks + 1))
+(cd "$tmp" && "$bin/ldc" "$src/examples/motor.ld" -o motor_file.bin && "$bin/ldc" "$src/examples/motor.ld" -o - > motor_out.bin &&
+  cmp -s motor_file.bin motor_out.bin && "$bin/ldc" "$src/examples/motor.ld" --emit=il -o - | grep -q '^; ldc IL' &&
+  [ ! -e ./- ]) || fail "ldc -o - (the image and the IL on standard output, no file '-')"
+expect 1 "-o - (standard output) takes one program, but $src/tests/frontend/tasks/st_tasks.st is a project of 2 tasks" \
+  "$bin/ldc" "$src/tests/frontend/tasks/st_tasks.st" -o -
+expect 1 "ldc: error: cannot write the image to standard output" sh -c "\"$bin/ldc\" \"$src/examples/motor.ld\" -o - > /dev/full"
+
 # ldobjdump takes a source as ldrun does: compiled in memory, the listing that of
 # the image ldc writes (but the header line, which says where the code came from).
 checks=$((checks + 1))
