@@ -183,8 +183,9 @@ static int ldc_main(int argc, char** argv) {
     throw UserError("ldc: error: " + (emit.empty() ? std::string("image output (-o FILE.bin)") : "--emit=" + emit) +
                     " is not available in this build (for this target)");
   }
-  if (output.empty() || output == "-") std::fwrite(text.data(), 1, text.size(), stdout);  // -o -: standard output
-  else write_file_atomic(output, text);
+  if (!output.empty() && output != "-") write_file_atomic(output, text);
+  else if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size() || std::fflush(stdout) != 0)  // -o -: the same
+    throw UserError("ldc: error: cannot write the " + (emit.empty() ? std::string("output") : "--emit=" + emit) + " text to standard output");
   return 0;
 }
 

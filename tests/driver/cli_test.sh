@@ -60,6 +60,7 @@ checks=$((checks + 1))
 expect 1 "-o - (standard output) takes one program, but $src/tests/frontend/tasks/st_tasks.st is a project of 2 tasks" \
   "$bin/ldc" "$src/tests/frontend/tasks/st_tasks.st" -o -
 expect 1 "ldc: error: cannot write the image to standard output" sh -c "\"$bin/ldc\" \"$src/examples/motor.ld\" -o - > /dev/full"
+expect 1 "ldc: error: cannot write the --emit=il text to standard output" sh -c "\"$bin/ldc\" \"$src/examples/motor.ld\" --emit=il > /dev/full"
 
 # ldobjdump takes a source as ldrun does: compiled in memory, the listing that of
 # the image ldc writes (but the header line, which says where the code came from).
