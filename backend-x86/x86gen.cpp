@@ -113,6 +113,13 @@ struct Ungated {
 };
 
 bool writes_reg(const Instruction& i, uint8_t num);
+// Does `in`, which writes register n, leave its upper half zero?  Every write of
+// its 32-bit form does (and cwde, of eax); 8- and 16-bit writes keep it, 64-bit
+// ones and calls may set it: unknown.
+bool zero_extends(const Instruction& in, uint8_t n) {
+  if (in.mnemonic == M::Cwde) return n == AX;
+  return in.mnemonic != M::Call && in.num_operands > 0 && in.ops[0].kind == OperandKind::Reg && in.ops[0].reg == r32(n);
+}
 
 class Gen : public ClassGen<Gen> {
  public:
@@ -249,6 +256,12 @@ class Gen : public ClassGen<Gen> {
   int holder(Ty t, uint32_t addr) const;
   // the register whose low `width` bytes are the cell's, or -1
   int raw_holder(uint32_t addr, uint32_t width) const;
+  // bit byte `addr` as the bit instructions read it: the low byte of a register
+  // that holds it as it is in memory (a BOOL stored), else the byte
+  Operand held_byte(uint32_t addr) const {
+    const int h = holder(Ty::BOOL, addr);
+    return h >= 0 && held_[size_t(h)].exact ? R(r8(uint8_t(h))) : B(addr);
+  }
   std::string fresh() { return "L" + std::to_string(next_label_++); }
 
   uint32_t addr(const ldc::Operand& o) const {
@@ -1043,9 +1056,7 @@ void Gen::bit_slots(const ldc::Instr& in) {
   Reg d = slot(depth_), t = slot(depth_ - 1), u = slot(depth_ - 2);
   Reg dw = wide(d), tw = wide(t), uw = wide(u);
   Operand b0 = in.nopd() > 0 ? B(addr(in.a[0])) : Operand{}, b1 = in.nopd() > 1 ? B(addr(in.a[1])) : Operand{};
-  // a byte a register holds as it is in memory (a BOOL stored): read from there
-  const int h = in.nopd() > 0 && in.a[0].kind == OpdKind::Bit ? holder(Ty::BOOL, addr(in.a[0])) : -1;
-  const Operand r0 = h >= 0 && held_[size_t(h)].exact ? R(r8(uint8_t(h))) : b0;
+  const Operand r0 = in.nopd() > 0 && in.a[0].kind == OpdKind::Bit ? held_byte(addr(in.a[0])) : b0;
   switch (in.op) {
     case Op::LOAD: return emit(M::Movzx, {R(dw), r0});
     case Op::LOADN: emit(M::Movzx, {R(dw), r0}); return emit(M::Xor, {R(dw), I(1)});
@@ -1217,10 +1228,8 @@ bool Gen::upper_zero_now(uint8_t n) const {
     if (it.kind != as::ItemKind::Instruction) continue;
     seen++;
     const Instruction& i = it.inst;
-    if (!writes_reg(i, n)) continue;
-    if (i.mnemonic == M::Setcc) continue;
-    if (i.mnemonic == M::Cwde) return n == AX;
-    return i.mnemonic != M::Call && i.num_operands && i.ops[0].kind == OperandKind::Reg && i.ops[0].reg == r32(n);
+    if (!writes_reg(i, n) || i.mnemonic == M::Setcc) continue;  // a setcc keeps bits 63..8: the writer before it decides
+    return zero_extends(i, n);
   }
   return false;
 }
@@ -1331,7 +1340,10 @@ void Gen::normalize(Ty t, Reg r) {
 void Gen::store_int_reg(Ty t, RegNum n, const ldc::Operand& d, bool canonical) {
   if (t == Ty::BOOL) emit(M::Mov, {B(taddr(d)), R(r8(n))});
   else if (two_cells(t)) emit(M::Mov, {Q(taddr(d)), R(r64(n))});
-  else (canonical ? void() : normalize(t, r32(n))), emit(M::Mov, {Dw(taddr(d)), R(r32(n))});
+  else {
+    if (!canonical) normalize(t, r32(n));
+    emit(M::Mov, {Dw(taddr(d)), R(r32(n))});
+  }
   hold(n, t, taddr(d), true, t != Ty::BOOL && !two_cells(t) && upper_zero_now(n));
 }
 
@@ -1479,10 +1491,7 @@ void Gen::compare_jump(const ldc::Instr& cmp, const ldc::Instr& jmp, const ldc::
   Cond cc;
   if (cmp.op == Op::LOAD || cmp.op == Op::LOADN) {
     // the bit's byte as the slot would have it: LOAD jumps on byte != 0, LOADN on (byte ^ 1) != 0
-    const uint32_t a = addr(cmp.a[0]);
-    const int h = holder(Ty::BOOL, a);
-    if (h >= 0 && held_[size_t(h)].exact) emit(M::Cmp, {R(r8(uint8_t(h))), I(cmp.op == Op::LOAD ? 0 : 1)});
-    else emit(M::Cmp, {B(a), I(cmp.op == Op::LOAD ? 0 : 1)});
+    emit(M::Cmp, {held_byte(addr(cmp.a[0])), I(cmp.op == Op::LOAD ? 0 : 1)});
     cc = Cond::NE;
   } else {
     cc = int_compare(cmp);
@@ -2342,15 +2351,8 @@ class WordInEax {
   void after(const Instruction& in) {
     if (in.mnemonic == M::Mov && image_dword(in.ops[0]) && eax32(in.ops[1])) { word_ = in.ops[0].mem.disp; return; }
     if (loads(in)) { word_ = in.ops[1].mem.disp, upper_zero_ = true; return; }
-    if (writes_reg(in, AX) || in.mnemonic == M::Call) upper_zero_ = zero_extends(in);
+    if (writes_reg(in, AX) || in.mnemonic == M::Call) upper_zero_ = zero_extends(in, AX);
     if (word_ >= 0 && (writes_reg(in, AX) || in.mnemonic == M::Call || hits(in))) forget();  // (held: else nothing to forget)
-  }
-  // Does `in`, which writes rax, leave its upper half zero?  Every write of
-  // the 32-bit eax does (and cwde); 8- and 16-bit writes keep it, 64-bit
-  // ones and calls may set it: unknown.
-  static bool zero_extends(const Instruction& in) {
-    if (in.mnemonic == M::Cwde) return true;
-    return in.mnemonic != M::Call && in.num_operands > 0 && eax32(in.ops[0]);
   }
 
   // xmm0: movss / movsd between xmm0 and an image operand of their size

@@ -71,6 +71,13 @@ static int build_project_main(const std::string& project, const std::string& out
   return write_project(parse_project(project, diag), outdir, diag, syntax_only, false);
 }
 
+// n bytes on standard output (no -o, or -o -); a failed write is an error, not lost output
+static int to_stdout(const void* p, size_t n, const std::string& what) {
+  if (std::fwrite(p, 1, n, stdout) != n || std::fflush(stdout) != 0)
+    throw UserError("ldc: error: cannot write " + what + " to standard output");
+  return 0;
+}
+
 static int ldc_main(int argc, char** argv) {
   std::string input, output, emit, target(targets().front().name), project, task;
   int opt = 0;
@@ -171,9 +178,7 @@ static int ldc_main(int argc, char** argv) {
       if (output.empty()) return 0;  // `ldc FILE`: compiled and checked, nothing written (docs/diagnostics.md)
       if (output == "-") {  // -o -: the image on standard output (made in memory: its checksum is not patched in place)
         const std::vector<uint8_t> bytes = write_image(image);
-        if (std::fwrite(bytes.data(), 1, bytes.size(), stdout) != bytes.size() || std::fflush(stdout) != 0)
-          throw UserError("ldc: error: cannot write the image to standard output");
-        return 0;
+        return to_stdout(bytes.data(), bytes.size(), "the image");
       }
       // straight into the file: no copy of the image in memory
       write_file_atomic(output, [&](std::FILE* f) { return write_image_file(image, f) != 0; });
@@ -183,9 +188,8 @@ static int ldc_main(int argc, char** argv) {
     throw UserError("ldc: error: " + (emit.empty() ? std::string("image output (-o FILE.bin)") : "--emit=" + emit) +
                     " is not available in this build (for this target)");
   }
-  if (!output.empty() && output != "-") write_file_atomic(output, text);
-  else if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size() || std::fflush(stdout) != 0)  // -o -: the same
-    throw UserError("ldc: error: cannot write the " + (emit.empty() ? std::string("output") : "--emit=" + emit) + " text to standard output");
+  if (output.empty() || output == "-") return to_stdout(text.data(), text.size(), "the --emit=" + emit + " text");
+  write_file_atomic(output, text);
   return 0;
 }
 
