@@ -2919,7 +2919,8 @@ class Reader {
           break;
         }
         case Op::OUT: case Op::OUTN: case Op::SET: case Op::RST: break;  // bits: not a typed cell
-        case Op::TON: case Op::TOF: case Op::TP: break;  // the top is their input; they write their T cells only
+        case Op::TON: case Op::TOF: case Op::TP:  // the top is their input; they write their T cells only
+        case Op::MTON: case Op::MTOF: case Op::MTP: break;
         default: return std::nullopt;
       }
     }
