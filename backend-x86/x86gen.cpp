@@ -2393,6 +2393,150 @@ class WordInEax {
   std::vector<char> drop_;  // run's, kept from rung to rung
 };
 
+
+// ------------------------------------------------------------ -O2: bytes read back from registers
+//
+// A byte stored from a register, `mov byte ptr [b], r8`, and read again further
+// down the straight line (the BOOL temporaries of an ST expression: each
+// operator stores its result, the next reads it back) is read from a register
+// instead: store-to-load forwarding of a byte costs about 2 ns a hop on the AMD
+// EPYC (docs/BENCHMARKS.md, "Where sequence.st's time goes"), a register
+// nothing.  The register is the store's own source while nothing writes it;
+// after that, a spare scratch register (kSpares) that nothing touches from the
+// store to the last read and whose value nothing reads afterwards in the rung,
+// given the byte by `mov spare32, source32` right after the store.  A read is a
+// byte operand [b] of cmp, test, movzx, movsx, mov, and, or, xor, add, sub
+// (every such form takes a register there).  The store stays: memory is
+// exact for everything else.  Forwarding ends at a label (a jump may arrive
+// from anywhere), an unconditional jump, a call, any write that may reach b,
+// a read of b of another shape, or after kReach instructions.
+//
+// Sound because the generator's code never reads a scratch register after a
+// label that it did not write since (every label forgets what registers
+// hold), except what an IDX's own label keeps; the check of "nothing reads it
+// afterwards" runs to the end of the rung, across labels, so it sees those.
+// eax is never a spare: WordInEax carries it from rung to rung.
+class BytesFromRegisters {
+ public:
+  static void run(std::vector<Item>& items, std::vector<uint32_t>& starts) {
+    for (size_t i = 0; i < items.size(); i++)
+      if (stored_byte(items[i])) forward(items, starts, i);
+  }
+
+ private:
+  static constexpr uint8_t kSpares[] = {R9, R8, R10, R11, SI, DX, CX};
+  static constexpr size_t kReach = 400;
+  static bool image_byte(const Operand& o) {
+    return o.kind == OperandKind::Mem && o.mem.size == Size::Byte && o.mem.base == kO2Image && !o.mem.index.valid();
+  }
+  static bool stored_byte(const Item& it) {
+    return it.kind == as::ItemKind::Instruction && it.inst.mnemonic == M::Mov && it.inst.num_operands == 2 &&
+           image_byte(it.inst.ops[0]) && it.inst.ops[1].kind == OperandKind::Reg && it.inst.ops[1].reg.cls == RegClass::Gp8;
+  }
+  // the operand of `in` that reads byte b and may be a register instead, or -1
+  static int byte_read(const Instruction& in, int32_t b) {
+    auto at = [&](unsigned k) { return in.num_operands > k && image_byte(in.ops[k]) && in.ops[k].mem.disp == b; };
+    switch (in.mnemonic) {
+      case M::Cmp: case M::Test:
+        if (at(0) && in.ops[1].kind != OperandKind::Mem) return 0;
+        [[fallthrough]];
+      case M::Movzx: case M::Movsx: case M::Mov: case M::And: case M::Or: case M::Xor: case M::Add: case M::Sub:
+        return at(1) && in.ops[0].kind == OperandKind::Reg ? 1 : -1;
+      default: return -1;
+    }
+  }
+  // may `in` write any byte of b, or read it other than as byte_read takes?
+  static bool touches_byte(const Instruction& in, int32_t b, const as::x86::Effects& e) {
+    for (unsigned k = 0; k < in.num_operands; k++) {
+      const Operand& o = in.ops[k];
+      if (o.kind != OperandKind::Mem || e.ops[k] == as::x86::Use::Addr) continue;
+      if (!(o.mem.base == kO2Image) || o.mem.index.valid()) {
+        if (as::x86::writes_operand(e.ops[k])) return true;  // anywhere
+        continue;
+      }
+      const int32_t width = o.mem.size == Size::Byte ? 1 : o.mem.size == Size::Word ? 2 : o.mem.size == Size::Dword ? 4 : 8;
+      if (o.mem.disp <= b && b < o.mem.disp + width) return true;
+    }
+    return false;
+  }
+  // register n: does `in` read it (a write of its low byte keeps the rest: a read), write all of it?
+  static bool reads(const Instruction& in, const as::x86::Effects& e, uint8_t n) {
+    if (e.stack == as::x86::StackUse::Call || (e.reads >> n & 1)) return true;
+    for (unsigned k = 0; k < in.num_operands; k++) {
+      const Operand& o = in.ops[k];
+      if (o.kind == OperandKind::Mem && ((o.mem.base.cls == RegClass::Gp64 && o.mem.base.num == n) ||
+                                         (o.mem.index.valid() && o.mem.index.num == n)))
+        return true;
+      if (o.kind == OperandKind::Reg && o.reg.cls != RegClass::Xmm && o.reg.num == n &&
+          (as::x86::reads_operand(e.ops[k]) || o.reg.cls == RegClass::Gp8))
+        return true;
+    }
+    return false;
+  }
+  static bool writes(const Instruction& in, const as::x86::Effects& e, uint8_t n) {
+    if (e.stack == as::x86::StackUse::Call || (e.writes >> n & 1)) return true;
+    for (unsigned k = 0; k < in.num_operands; k++)
+      if (in.ops[k].kind == OperandKind::Reg && in.ops[k].reg.cls != RegClass::Xmm && in.ops[k].reg.num == n &&
+          as::x86::writes_operand(e.ops[k]))
+        return true;
+    return false;
+  }
+  // nothing in the rung after item `from` reads register n before writing it
+  // (within kReach * 4 instructions: else taken as read)
+  static bool dead_after(const std::vector<Item>& items, size_t from, uint8_t n) {
+    for (size_t j = from + 1, seen = 0; j < items.size(); j++) {
+      if (++seen > kReach * 4) return false;
+      if (items[j].kind != as::ItemKind::Instruction) continue;
+      const as::x86::Effects e = as::x86::effects(items[j].inst);
+      if (reads(items[j].inst, e, n)) return false;
+      if (writes(items[j].inst, e, n)) return true;
+    }
+    return true;
+  }
+  static void forward(std::vector<Item>& items, std::vector<uint32_t>& starts, size_t i) {
+    const int32_t b = items[i].inst.ops[0].mem.disp;
+    const uint8_t src = items[i].inst.ops[1].reg.num;
+    std::vector<std::pair<size_t, int>> direct, late;  // (item, operand): reads while src holds b / after
+    size_t last = i;
+    bool src_kept = true;
+    for (size_t j = i + 1, seen = 0; j < items.size() && seen < kReach; j++) {
+      const Item& it = items[j];
+      if (it.kind == as::ItemKind::Label) break;
+      if (it.kind != as::ItemKind::Instruction) continue;
+      seen++;
+      const Instruction& in = it.inst;
+      const as::x86::Effects e = as::x86::effects(in);
+      if (e.stack == as::x86::StackUse::Call) break;
+      if (const int k = byte_read(in, b); k >= 0) {
+        (src_kept ? direct : late).push_back({j, k});
+        last = j;
+      } else if (touches_byte(in, b, e)) {
+        break;
+      }
+      if (writes(in, e, src)) src_kept = false;
+      if (in.mnemonic == M::Jmp) break;
+    }
+    for (auto [j, k] : direct) items[j].inst.ops[size_t(k)] = Operand::r(r8(src));
+    if (late.empty()) return;
+    for (uint8_t t : kSpares) {
+      if (t == src || !untouched_until(items, i, last, t) || !dead_after(items, last, t)) continue;
+      for (auto [j, k] : late) items[j].inst.ops[size_t(k)] = Operand::r(r8(t));
+      items.insert(items.begin() + ptrdiff_t(i) + 1, Item::instr(as::x86::make(M::Mov, {Operand::r(r32(t)), Operand::r(r32(src))})));
+      for (uint32_t& s : starts)
+        if (s > i) s++;
+      return;
+    }
+  }
+  static bool untouched_until(const std::vector<Item>& items, size_t i, size_t last, uint8_t n) {
+    for (size_t j = i + 1; j <= last; j++) {
+      if (items[j].kind != as::ItemKind::Instruction) continue;
+      const as::x86::Effects e = as::x86::effects(items[j].inst);
+      if (reads(items[j].inst, e, n) || writes(items[j].inst, e, n)) return false;
+    }
+    return true;
+  }
+};
+
 }  // namespace
 
 std::string x86_label_name(const std::string& il_label) { return std::string(kLabelPrefix) + il_label; }
@@ -2809,6 +2953,7 @@ class Blocks {
     to_o2_frame(b.items);
     drop_unreachable(b.items, starts);
     eax_.run(b.items, starts);
+    BytesFromRegisters::run(b.items, starts);
   }
 
   as::Block<Instruction> epilogue() const {
