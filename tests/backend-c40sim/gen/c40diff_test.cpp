@@ -26,10 +26,16 @@ using namespace ldc;
 using namespace ldc::diff;
 using namespace ldc::c40gen;
 
-constexpr int kDefaultPrograms = 240;
 constexpr int kDefaultRungs = 60;
 constexpr int kShards = 8;
+#ifdef LDC_SANITIZED
+// Under the sanitizers (the Debug + ASan simulator is ~50 times slower) a
+// quarter: there the run is about memory safety; the plain build runs them all.
+constexpr int kDefaultPrograms = 64;
+#else
+constexpr int kDefaultPrograms = 240;
 static_assert(kDefaultPrograms * kDefaultRungs >= 10000, "the default run covers over ten thousand rungs");
+#endif
 
 long env_int(const char* name, long def) {
   const char* v = std::getenv(name);
