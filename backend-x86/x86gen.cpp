@@ -2409,7 +2409,7 @@ class WordInEax {
 // (every such form takes a register there).  The store stays: memory is
 // exact for everything else.  Forwarding ends at a label (a jump may arrive
 // from anywhere), an unconditional jump, a call, any write that may reach b,
-// a read of b of another shape, or after kReach instructions.
+// or after kReach instructions (a read of b of another shape stays a load).
 //
 // Sound because the generator's code never reads a scratch register after a
 // label that it did not write since (every label forgets what registers
@@ -2445,15 +2445,12 @@ class BytesFromRegisters {
       default: return -1;
     }
   }
-  // may `in` write any byte of b, or read it other than as byte_read takes?
-  static bool touches_byte(const Instruction& in, int32_t b, const as::x86::Effects& e) {
+  // may `in` write byte b?
+  static bool writes_byte(const Instruction& in, int32_t b, const as::x86::Effects& e) {
     for (unsigned k = 0; k < in.num_operands; k++) {
       const Operand& o = in.ops[k];
-      if (o.kind != OperandKind::Mem || e.ops[k] == as::x86::Use::Addr) continue;
-      if (!(o.mem.base == kO2Image) || o.mem.index.valid()) {
-        if (as::x86::writes_operand(e.ops[k])) return true;  // anywhere
-        continue;
-      }
+      if (o.kind != OperandKind::Mem || !as::x86::writes_operand(e.ops[k])) continue;
+      if (!(o.mem.base == kO2Image) || o.mem.index.valid()) return true;  // anywhere
       const int32_t width = o.mem.size == Size::Byte ? 1 : o.mem.size == Size::Word ? 2 : o.mem.size == Size::Dword ? 4 : 8;
       if (o.mem.disp <= b && b < o.mem.disp + width) return true;
     }
@@ -2510,9 +2507,8 @@ class BytesFromRegisters {
       if (const int k = byte_read(in, b); k >= 0) {
         (src_kept ? direct : late).push_back({j, k});
         last = j;
-      } else if (touches_byte(in, b, e)) {
-        break;
       }
+      if (writes_byte(in, b, e)) break;
       if (writes(in, e, src)) src_kept = false;
       if (in.mnemonic == M::Jmp) break;
     }
