@@ -2393,7 +2393,6 @@ class WordInEax {
   std::vector<char> drop_;  // run's, kept from rung to rung
 };
 
-
 // ------------------------------------------------------------ -O2: bytes read back from registers
 //
 // A byte stored from a register, `mov byte ptr [b], r8`, and read again further
