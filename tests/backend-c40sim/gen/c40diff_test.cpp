@@ -29,8 +29,9 @@ using namespace ldc::c40gen;
 constexpr int kDefaultRungs = 60;
 constexpr int kShards = 8;
 #ifdef LDC_SANITIZED
-// Under the sanitizers (the Debug + ASan simulator is ~50 times slower) a
-// quarter: there the run is about memory safety; the plain build runs them all.
+// Under the sanitizers (a shard there took 50-90 s, against 3 s in the Debug
+// build) a quarter: there the run is about memory safety; the plain build runs
+// them all.
 constexpr int kDefaultPrograms = 64;
 #else
 constexpr int kDefaultPrograms = 240;
