@@ -121,6 +121,11 @@ bool zero_extends(const Instruction& in, uint8_t n) {
   return in.mnemonic != M::Call && in.num_operands > 0 && in.ops[0].kind == OperandKind::Reg && in.ops[0].reg == r32(n);
 }
 
+// The bytes a memory operand covers.
+uint32_t mem_width(const Mem& m) {
+  return m.size == Size::Dword ? 4 : m.size == Size::Qword ? 8 : m.size == Size::Word ? 2 : 1;
+}
+
 class Gen : public ClassGen<Gen> {
  public:
   // known: the rung's (empty), storage the caller keeps from rung to rung
@@ -1209,7 +1214,7 @@ void Gen::forget_written(const Instruction& i) {
   if (i.num_operands && i.ops[0].kind == OperandKind::Mem && i.mnemonic != M::Cmp && i.mnemonic != M::Test) {
     const Mem& m = i.ops[0].mem;
     if (m.index.valid() || !(m.base == r64(BX)) || m.size == Size::None) return forget_all();
-    const uint32_t first = uint32_t(m.disp), end = first + (m.size == Size::Byte ? 1 : m.size == Size::Word ? 2 : m.size == Size::Dword ? 4 : 8);
+    const uint32_t first = uint32_t(m.disp), end = first + mem_width(m);
     for (Held& h : held_)
       if (h.valid && h.addr < end && first < h.addr + held_width(h.ty)) h.valid = false;
     if (idx_held_.valid && idx_held_.addr < end && first < idx_held_.addr + held_width(idx_held_.ty)) idx_held_.valid = false;
@@ -2450,8 +2455,7 @@ class BytesFromRegisters {
       const Operand& o = in.ops[k];
       if (o.kind != OperandKind::Mem || !as::x86::writes_operand(e.ops[k])) continue;
       if (!(o.mem.base == kO2Image) || o.mem.index.valid()) return true;  // anywhere
-      const int32_t width = o.mem.size == Size::Byte ? 1 : o.mem.size == Size::Word ? 2 : o.mem.size == Size::Dword ? 4 : 8;
-      if (o.mem.disp <= b && b < o.mem.disp + width) return true;
+      if (o.mem.disp <= b && b < o.mem.disp + int32_t(mem_width(o.mem))) return true;
     }
     return false;
   }
@@ -2560,10 +2564,6 @@ bool rewritable(const Instruction& in, const as::x86::Operand& o) {
   return o.kind == OperandKind::Mem && in.mnemonic != M::Call && in.mnemonic != M::Lea && o.mem.base == kO2Image &&
          !o.mem.index.valid() && (o.mem.disp < -128 || o.mem.disp > 127);
 }
-uint32_t mem_width(const Mem& m) {
-  return m.size == Size::Dword ? 4 : m.size == Size::Qword ? 8 : m.size == Size::Word ? 2 : 1;
-}
-
 namespace {
 
 struct Op {
