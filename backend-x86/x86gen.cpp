@@ -126,6 +126,50 @@ uint32_t mem_width(const Mem& m) {
   return m.size == Size::Dword ? 4 : m.size == Size::Qword ? 8 : m.size == Size::Word ? 2 : 1;
 }
 
+// -O2: the REAL and LREAL constants of the typed instructions that the
+// program uses more than once (the eight most used; 0 is `xorps`), each kept
+// in a register of its own, xmm8..xmm15, for the whole scan.  The prologue
+// loads them, and so does every call into the C library (the math functions,
+// STRING), which may write every xmm register, right after it; nothing else
+// writes xmm8..xmm15 (the shared timer routines use no xmm register), so at
+// every label, whatever jumps there, each holds its constant.  A typed
+// instruction reads the register where it would have loaded the constant
+// (`mulsd xmm0, xmm8` for `mov rdx, imm64; movq xmm1, rdx; mulsd xmm0, xmm1`).
+class RealConsts {
+ public:
+  static constexpr int kRegs = 8, kFirst = 8;
+  static RealConsts of(const Program& p);
+  // the register that holds the constant of these bits (a REAL's in the low 32
+  // and `single`), if one does
+  std::optional<Reg> reg(uint64_t bits, bool single) const {
+    for (size_t k = 0; k < keys_.size(); k++)
+      if (keys_[k].bits == bits && keys_[k].single == single) return as::x86::xmm(unsigned(kFirst + k));
+    return std::nullopt;
+  }
+  // the instructions that load every register (rdx written)
+  std::vector<Instruction> loads() const {
+    std::vector<Instruction> v;
+    for (size_t k = 0; k < keys_.size(); k++) {
+      const Key& c = keys_[k];
+      const Reg x = as::x86::xmm(unsigned(kFirst + k));
+      if (c.single || c.bits <= UINT32_MAX) v.push_back(make(M::Mov, {Operand::r(r32(DX)), Operand::i(int64_t(uint32_t(c.bits)))}));
+      else v.push_back(make(M::Mov, {Operand::r(r64(DX)), Operand::i(int64_t(c.bits))}));
+      v.push_back(make(c.single ? M::Movd : M::Movq, {Operand::r(x), Operand::r(c.single ? r32(DX) : r64(DX))}));
+    }
+    return v;
+  }
+  bool empty() const { return keys_.empty(); }
+
+ private:
+  struct Key {
+    uint64_t bits;
+    bool single;
+  };
+  std::vector<Key> keys_;  // keys_[k] in xmm(kFirst + k)
+  static void count(std::vector<std::pair<Key, int>>& n, Key c);
+  static bool rounds_to_int(Ty to);
+};
+
 class Gen : public ClassGen<Gen> {
  public:
   // known: the rung's (empty), storage the caller keeps from rung to rung
@@ -147,6 +191,7 @@ class Gen : public ClassGen<Gen> {
   static bool is_compare_jump(const ldc::Instr& cmp, const ldc::Instr& jmp, const ldc::Instr& mpp);
   void compare_jump(const ldc::Instr& cmp, const ldc::Instr& jmp, const ldc::Instr& mpp);
   void follow(const ldc::Instr& in);
+  void use_consts(const RealConsts* c) { consts_ = c && !c->empty() ? c : nullptr; }
 
  private:
   const Layout& L_;
@@ -156,6 +201,7 @@ class Gen : public ClassGen<Gen> {
   bool gate_;      // -O2: branch-free power gating (cmov) instead of `je skip`
   bool bases_;     // -O2 (its frame, its facts)
   bool reload_bases_;  // -O2 with the base registers set: rdi is reloaded after a REAL call (none in a program with loops)
+  const RealConsts* consts_ = nullptr;  // -O2: the constants in xmm8..xmm15
   KnownStack& known_;  // -O2: the stack's values known at compile time
   // -O1: the same for its typed runs alone (-O2's known_ also folds timers, gates ...)
   KnownStack power_;
@@ -481,6 +527,14 @@ class Gen : public ClassGen<Gen> {
   void load_x(Ty t, const ldc::Operand& o, Reg x);
   void load_xd(Ty t, const ldc::Operand& o, Reg x);
   Operand real_src(Ty t, const ldc::Operand& o, Reg x);
+  Reg real_reg(Ty t, const ldc::Operand& o, Reg x);
+  std::optional<Reg> const_reg(uint64_t bits, bool single) const {
+    return consts_ ? consts_->reg(bits, single) : std::nullopt;
+  }
+  void reload_consts() {
+    if (consts_)
+      for (const Instruction& i : consts_->loads()) emit(Instruction(i));
+  }
   void store_x(Ty t, Reg x, const ldc::Operand& d);
   void store_xd(Ty t, Reg x, const ldc::Operand& d);
   void double_const(Reg x, double d);
@@ -817,6 +871,7 @@ void Gen::real_fn(Op op, const ldc::Operand& a, const ldc::Operand& d) {
     if (reload_bases_)
       for (RegNum r : as::x86::kBaseRegs)
         if (as::x86::caller_saved(r)) emit(M::Lea, {R(r64(r)), Operand::m(mem_at(Size::None, 0))});
+    reload_consts();
   } else if (fn == RealFn::Sqrt) {
     emit(M::Sqrtss, {R(xmm0), R(xmm0)});
   } else {  // Abs: the sign bit cleared
@@ -1177,6 +1232,48 @@ uint64_t tconst(const ldc::Operand& o) { return o.kind == OpdKind::ConstT ? o.bi
 constexpr uint64_t kSignBit64 = uint64_t(1) << 63;
 }  // namespace
 
+void RealConsts::count(std::vector<std::pair<Key, int>>& n, Key c) {
+  auto it = std::find_if(n.begin(), n.end(), [&](const auto& e) { return e.first.bits == c.bits && e.first.single == c.single; });
+  if (it == n.end()) n.push_back({c, 1});
+  else it->second++;
+}
+
+// A CONV from REAL / LREAL to an integer or bit string type (real_round_to_int)?
+bool RealConsts::rounds_to_int(Ty to) {
+  const TyKind k = ty_info(to).kind;
+  return k != TyKind::Bool && k != TyKind::Real && k != TyKind::Time && k != TyKind::Date && k != TyKind::String;
+}
+
+// The operands counted are those load_x / real_src would load: both sources
+// of a REAL / LREAL ADD SUB MUL DIV MIN MAX or compare; and 0.5 and the sign
+// bit for each CONV that real_round_to_int makes.
+RealConsts RealConsts::of(const Program& p) {
+  std::vector<std::pair<Key, int>> n;
+  for (const Rung& r : p.rungs)
+    for (const ldc::Instr& in : r.code) {
+      const OpInfo& oi = op_info(in.op);
+      if (in.op == Op::TCONV && typed::is_real(in.src) && rounds_to_int(in.ty)) {  // real_round_to_int's s
+        count(n, {typed::bits_of(0.5), false});
+        if (typed::is_signed(in.ty)) count(n, {kSignBit64, false});
+      }
+      if (oi.klass != OpClass::Typed || !typed::is_real(in.ty)) continue;
+      const bool binary = in.op == Op::TADD || in.op == Op::TSUB || in.op == Op::TMUL || in.op == Op::TDIV ||
+                          in.op == Op::TMIN || in.op == Op::TMAX;
+      if (!binary && !oi.push) continue;
+      const bool single = ty_bits(in.ty) == 32;
+      for (int k = 0; k < 2; k++) {
+        if (!is_tconst(in.a[k])) continue;
+        const Key c{single ? tconst(in.a[k]) & UINT32_MAX : tconst(in.a[k]), single};
+        if (c.bits != 0) count(n, c);  // (0 is xorps)
+      }
+    }
+  std::stable_sort(n.begin(), n.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+  RealConsts rc;
+  for (const auto& [c, uses] : n)
+    if (uses >= 2 && int(rc.keys_.size()) < kRegs) rc.keys_.push_back(c);
+  return rc;
+}
+
 bool Gen::is_select(const ldc::Instr& load, const ldc::Instr& move, const ldc::Instr& mpp) {
   if ((load.op != Op::LOAD && load.op != Op::LOADN) || move.op != Op::TMOVE || mpp.op != Op::MPP) return false;
   const Ty t = move.ty;
@@ -1358,6 +1455,7 @@ void Gen::load_x(Ty t, const ldc::Operand& o, Reg x) {
   if (is_tconst(o)) {
     uint64_t v = tconst(o);
     if (v == 0) return emit(M::Xorps, {R(x), R(x)});
+    if (auto k = const_reg(single ? v & UINT32_MAX : v, single)) return emit(single ? M::Movss : M::Movsd, {R(x), R(*k)});
     if (single) return emit(M::Mov, {R(edx), I(int64_t(uint32_t(v)))}), emit(M::Movd, {R(x), R(edx)});
     mov_imm(rdx, v);
     return emit(M::Movq, {R(x), R(rdx)});
@@ -1376,6 +1474,7 @@ void Gen::load_xd(Ty t, const ldc::Operand& o, Reg x) {
 void Gen::double_const(Reg x, double d) {
   uint64_t v = typed::bits_of(d);
   if (v == 0) return emit(M::Xorps, {R(x), R(x)});
+  if (auto k = const_reg(v, false)) return emit(M::Movsd, {R(x), R(*k)});
   mov_imm(rdx, v);
   emit(M::Movq, {R(x), R(rdx)});
 }
@@ -1383,8 +1482,16 @@ void Gen::double_const(Reg x, double d) {
 // the second operand of an SSE operation on type t: o's memory, or x loaded with the constant
 Operand Gen::real_src(Ty t, const ldc::Operand& o, Reg x) {
   if (!is_tconst(o)) return ty_bits(t) == 32 ? Dw(taddr(o)) : Q(taddr(o));
+  return R(real_reg(t, o, x));
+}
+
+// the register that holds o (REAL or LREAL): its constant's register, else x loaded with it
+Reg Gen::real_reg(Ty t, const ldc::Operand& o, Reg x) {
+  const bool single = ty_bits(t) == 32;
+  if (is_tconst(o))
+    if (auto k = const_reg(single ? tconst(o) & UINT32_MAX : tconst(o), single)) return *k;
   load_x(t, o, x);
-  return R(x);
+  return x;
 }
 
 void Gen::store_x(Ty t, Reg x, const ldc::Operand& d) {
@@ -1433,11 +1540,10 @@ void Gen::typed_compare(const ldc::Instr& in) {
   const X86Rel& x = x86_rel(op_info(in.op).rel);
   if (typed::is_real(t)) {
     const bool single = ty_bits(t) == 32;
-    load_x(t, in.a[0], xmm0);
-    load_x(t, in.a[1], xmm1);
+    const Reg a = real_reg(t, in.a[0], xmm0), b = real_reg(t, in.a[1], xmm1);
     const M ucom = single ? M::Ucomiss : M::Ucomisd;
-    if (x.swap) emit(ucom, {R(xmm1), R(xmm0)});
-    else emit(ucom, {R(xmm0), R(xmm1)});
+    if (x.swap) emit(ucom, {R(b), R(a)});
+    else emit(ucom, {R(a), R(b)});
     emit(make_cc(M::Setcc, x.real_cc, {R(al)}));
     if (x.parity) {
       emit(make_cc(M::Setcc, x.parity_cc, {R(cl)}));
@@ -1785,6 +1891,7 @@ void Gen::call_table(int32_t disp) {
   if (reload_bases_)
     for (RegNum r : as::x86::kBaseRegs)
       if (as::x86::caller_saved(r)) emit(M::Lea, {R(r64(r)), Operand::m(mem_at(Size::None, 0))});
+  reload_consts();
 }
 
 // A STRING instruction: a call of native_string through its slot below the
@@ -1829,33 +1936,43 @@ void Gen::typed_math(const ldc::Instr& in) {
 }
 
 // rax = xmm0 (a double) to an integer as typed::real_to_int, MatIEC's
-// __real_to_sint / __real_to_uint: y = x + 0.5 (x - 0.5 below 0; to an
-// unsigned type 0 there, NaN too), rounded in double, then __real_round(y):
-// (LINT) y, made even toward zero where y is an integer.  For a signed type
-// the ±0.5 is 0.5 with x's sign (x = -0.0 gives 0 either way, NaN INT64_MIN).
-// (LINT) y is cvttsd2si (INT64_MIN for NaN and out of range, as typed::to_i64);
-// y is an integer exactly where converting that back gives y.  Clobbers rcx,
-// rdx, xmm0..xmm2.
+// __real_to_sint / __real_to_uint: y = x + s, s = 0.5 with x's sign (to an
+// unsigned type +0.5, and 0 below 0 or NaN), rounded in double, then
+// __real_round(y): (LINT) y, made even toward zero where y is an integer.
+// That is y - s, rounded to the nearest integer with ties to even
+// (cvtsd2si, the default MXCSR), which the code computes:
+// * y not an integer, n < |y| < n + 1: |y - s| lies in (n - 1/2, n + 1/2)
+//   (the subtraction is exact: y, s and y - s are multiples of y's ulp), so
+//   n, the (LINT) y;
+// * y an integer m below 2^53: y - s is m -+ 1/2 exactly, a tie, which goes
+//   to the even one of m and its neighbour toward zero: MatIEC's;
+// * |y| from 2^52 on (an integer, even where x + s rounded, by ties to even):
+//   y - s rounds back to y, even: (LINT) y as MatIEC;
+// * NaN, or |y| from 2^63 on: INT64_MIN, as typed::to_i64.
+// x = -0.0 gives 0 with either sign of s.  s is built from xmm8.. where
+// RealConsts keeps the sign bit and 0.5.  Clobbers rcx, rdx, xmm0..xmm2.
 void Gen::real_round_to_int(bool is_signed) {
-  emit(M::Movsd, {R(xmm2), R(xmm0)});  // x
-  emit(M::Mov, {R(rcx), I(int64_t(typed::bits_of(0.5)))});
-  if (is_signed) {
+  const std::optional<Reg> half = const_reg(typed::bits_of(0.5), false), sign = const_reg(kSignBit64, false);
+  Reg s = xmm1;
+  if (!is_signed) {
+    emit(M::Movsd, {R(xmm2), R(xmm0)});  // x
+    if (half) s = *half;
+    else mov_imm(rcx, typed::bits_of(0.5)), emit(M::Movq, {R(xmm1), R(rcx)});
+  } else if (half && sign) {
+    emit(M::Movsd, {R(xmm1), R(xmm0)});
+    emit(M::Andps, {R(xmm1), R(*sign)});
+    emit(M::Xorps, {R(xmm1), R(*half)});  // copysign(0.5, x): disjoint bits
+  } else {
+    mov_imm(rcx, typed::bits_of(0.5));
     emit(M::Movq, {R(rdx), R(xmm0)});
     mov_imm(rax, kSignBit64);
     emit(M::And, {R(rdx), R(rax)});
-    emit(M::Or, {R(rcx), R(rdx)});  // copysign(0.5, x)
+    emit(M::Or, {R(rcx), R(rdx)});
+    emit(M::Movq, {R(xmm1), R(rcx)});
   }
-  emit(M::Movq, {R(xmm1), R(rcx)});
-  emit(M::Addsd, {R(xmm0), R(xmm1)});  // y
-  emit(M::Cvttsd2si, {R(rax), R(xmm0)});
-  emit(M::Mov, {R(rdx), R(rax)});
-  emit(M::Shr, {R(rdx), I(63)});
-  emit(M::Add, {R(rdx), R(rax)});
-  emit(M::Sar, {R(rdx), I(1)});
-  emit(M::Add, {R(rdx), R(rdx)});  // (y / 2) * 2, C's division toward zero
-  emit(M::Cvtsi2sd, {R(xmm1), R(rax)});
-  emit(M::Ucomisd, {R(xmm1), R(xmm0)});
-  emit(make_cc(M::Cmovcc, Cond::E, {R(rax), R(rdx)}));  // y an integer (unordered: INT64_MIN either way)
+  emit(M::Addsd, {R(xmm0), R(s)});  // y
+  emit(M::Subsd, {R(xmm0), R(s)});
+  emit(M::Cvtsd2si, {R(rax), R(xmm0)});
   if (is_signed) return;
   emit(M::Xor, {R(ecx), R(ecx)});
   emit(M::Xorps, {R(xmm1), R(xmm1)});
@@ -2357,7 +2474,7 @@ class WordInEax {
     if (in.mnemonic == M::Mov && image_dword(in.ops[0]) && eax32(in.ops[1])) { word_ = in.ops[0].mem.disp; return; }
     if (loads(in)) { word_ = in.ops[1].mem.disp, upper_zero_ = true; return; }
     if (writes_reg(in, AX) || in.mnemonic == M::Call) upper_zero_ = zero_extends(in, AX);
-    if (word_ >= 0 && (writes_reg(in, AX) || in.mnemonic == M::Call || hits(in))) forget();  // (held: else nothing to forget)
+    if (word_ >= 0 && (writes_reg(in, AX) || in.mnemonic == M::Call || hits(in))) word_ = -1;  // (xmm0's word stays: xafter)
   }
 
   // xmm0: movss / movsd between xmm0 and an image operand of their size
@@ -2888,7 +3005,7 @@ class Blocks {
   // label, which forgets what was known.
   Blocks(const Program& p, const Layout& layout, int opt_level, bool notes)
       : p_(p), layout_(layout), loops_(has_loop(p)), opt_(opt_level), o2_(opt_ >= 2), notes_(notes) {
-    if (o2_) facts_ = scan_facts(p_, layout_, kNumSlots);
+    if (o2_) facts_ = scan_facts(p_, layout_, kNumSlots), consts_ = RealConsts::of(p_);
     shared_ = facts_ ? facts_->shared : shares_stack(p);
   }
 
@@ -2906,6 +3023,7 @@ class Blocks {
     }
     if (o2_ && !loops_)
       for (RegNum r : as::x86::kBaseRegs) pro.items.push_back(Item::instr(as::x86::base_lea(r, 0)));  // K: Regions::flush
+    for (const Instruction& i : consts_.loads()) pro.items.push_back(Item::instr(i));
     return pro;
   }
 
@@ -2921,6 +3039,7 @@ class Blocks {
     bool slots = o2_ && facts_->fits[ri];  // the rung's stack in the slot registers (none where shared_)
     known_.reset();
     Gen g(layout_, b.items, slots, o2_, &used_, known_, opt_ == 1, !loops_);
+    g.use_consts(&consts_);
     uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into ebp
     for (size_t k = 0; k < r.code.size(); k++) {
       const ldc::Instr& in = r.code[k];
@@ -3032,6 +3151,7 @@ class Blocks {
   bool shared_;  // shares_stack(p): the stack lives in ebp from rung to rung
   std::bitset<8> used_;
   std::optional<ScanFacts> facts_;  // -O2: what the scan cannot observe
+  RealConsts consts_;  // -O2: the constants kept in xmm8..xmm15
   WordInEax eax_;                   // -O2: the word eax holds, from rung to rung
   KnownStack known_;                // a rung's Gen's (its storage kept)
 };

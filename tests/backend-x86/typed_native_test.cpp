@@ -559,6 +559,37 @@ TEST(TypedNative, HeldBoolsAreNotLoadedBack) {
   expect_levels(p, 0, 100, 5, 0.7);
 }
 
+// REAL and LREAL constants used more than once live in xmm8..xmm15 at -O2
+// (RealConsts, docs/x86.md "Constants in registers"): every use reads the
+// register, which must hold its constant after a call into the C library
+// (SIN, EXPT, which may write every xmm register), at a label a JMP skips to,
+// and in the rounding of CONV to an integer (0.5 and the sign bit).  The
+// interpreter's values are ir/typed.h's.
+TEST(TypedNative, ConstantsInRegistersSurviveCallsAndJumps) {
+  Program p = parse_il_text(
+      ".rung line 1\nTRUE\nMUL.LREAL D0 0.0125 D1000\nADD.LREAL D2 2.5 D1002\nGT.LREAL D4 2.5\nOUT Y0\nMPP\n"
+      "MUL.REAL D6 1.5 D1004\nCONV.INT.LREAL D8 D1005\nCONV.UDINT.LREAL D10 D1006\n"
+      "SIN.LREAL D12 D1008\nMUL.LREAL D1008 0.0125 D1010\nSUB.REAL D1004 1.5 D1012\nCONV.DINT.LREAL D14 D1013\n"
+      "EXPT.LREAL D16 D18 D1014\nLT.LREAL 2.5 D1014\nOUT Y1\nMPP\nMAX.LREAL D20 0.0125 D1016\n"
+      "LOAD M100\nJMP skip\n"
+      ".rung line 2\nTRUE\nSIN.LREAL D22 D1018\n"
+      ".label skip\n.rung line 3\nTRUE\nDIV.LREAL D24 2.5 D1020\nCONV.LINT.LREAL D26 D1022\nADD.REAL D28 1.5 D1024\n"
+      "MIN.LREAL 0.0125 D30 D1026\nCONV.SINT.LREAL D32 D1028\n.end\n",
+      "consts.il");
+  p.source = "consts";
+  X86Code code = generate_x86(p, p.layout(), 2, /*notes=*/false);
+  size_t reads = 0;
+  for (const auto& b : code.program.blocks)
+    for (const auto& it : b.items)
+      if (it.kind == as::ItemKind::Instruction)
+        for (unsigned k = 1; k < it.inst.num_operands; k++)
+          if (it.inst.ops[k].kind == as::x86::OperandKind::Reg && it.inst.ops[k].reg.cls == as::x86::RegClass::Xmm &&
+              it.inst.ops[k].reg.num >= 8)
+            reads++;
+  EXPECT_GE(reads, 15u);  // the constants' uses, and CONV's 0.5 and sign bit
+  expect_levels(p, 0, 300, 11, 0.5);
+}
+
 // Hand-written: the examples of docs/il.md run to the same images, and an IDX
 // fault's record names the IDX's IL offset (encode_il's instr_offset).
 TEST(TypedNative, FaultRecordNamesTheIdx) {

@@ -69,7 +69,8 @@ const uint64_t k64d[] = {0, dbits(1.5), dbits(2.5), dbits(-2.5), dbits(3.5), dbi
                          dbits(INFINITY), dbits(-INFINITY), dbits(NAN), dbits(9223372036854775808.0),
                          dbits(-9223372036854775808.0), dbits(18446744073709551616.0), dbits(1e300), dbits(1e-310),
                          dbits(0.1), dbits(2.0), dbits(-1e10), dbits(123456789.125), dbits(4503599627370497.5),
-                         dbits(-0.75), dbits(1e-3), dbits(1.0), dbits(-1.0)};
+                         dbits(-0.75), dbits(1e-3), dbits(1.0), dbits(-1.0), dbits(0.5000000000000001),
+                         dbits(-0.5000000000000001), dbits(4503599627370497.0), dbits(-4503599627370497.0)};
 // Dates for DT_TO_DATE / DT_TO_TOD: typed.h's day arithmetic overflows INT64
 // within a day of INT64_MIN (docs/runtime.md), so the day-taking conversions
 // read these instead.
