@@ -292,8 +292,10 @@ class Gen : public ClassGen<Gen> {
     bool valid = false;
   } idx_held_;
   static uint32_t held_width(Ty t) { return t == Ty::BOOL ? 1 : ty_info(t).cells == 2 ? 8 : 4; }
+  // r10 holds r11 * scaled_ (an LDX / STX's element offset), where not 0
+  int64_t scaled_ = 0;
   void forget_all() {
-    if (any_held_) held_.fill({}), idx_held_.valid = false, any_held_ = false;
+    if (any_held_) held_.fill({}), idx_held_.valid = false, scaled_ = 0, any_held_ = false;
   }
   void forget_written(const Instruction& i);
   bool upper_zero_now(uint8_t n) const;
@@ -1319,6 +1321,7 @@ void Gen::forget_written(const Instruction& i) {
   for (uint8_t n = 0; n < held_.size(); n++)
     if (held_[n].valid && writes_reg(i, n)) held_[n].valid = false;
   if (idx_held_.valid && writes_reg(i, R11)) idx_held_.valid = false;
+  if (scaled_ && (writes_reg(i, R10) || writes_reg(i, R11))) scaled_ = 0;
 }
 
 // Are bits 63..32 of register n zero: did its last writer in this straight
@@ -1460,6 +1463,8 @@ void Gen::load_x(Ty t, const ldc::Operand& o, Reg x) {
     mov_imm(rdx, v);
     return emit(M::Movq, {R(x), R(rdx)});
   }
+  if (const int n = holder(t, taddr(o)); n >= 0 && held_[size_t(n)].exact)  // -O2: an LDX's element in eax, say
+    return emit(single ? M::Movd : M::Movq, {R(x), R(single ? r32(uint8_t(n)) : r64(uint8_t(n)))});
   if (single) return emit(M::Movss, {R(x), Dw(taddr(o))});
   emit(M::Movsd, {R(x), Q(taddr(o))});
 }
@@ -2191,7 +2196,8 @@ void Gen::typed_indexed(const ldc::Instr& in) {
     if (bytes == 1 || bytes == 2 || bytes == 4 || bytes == 8) {
       m.scale = uint8_t(bytes);
     } else {
-      emit(M::Imul, {R(r10), R(r11), I(bytes)});
+      if (scaled_ != bytes) emit(M::Imul, {R(r10), R(r11), I(bytes)});  // -O2: else r10 holds it already
+      if (slots_) scaled_ = bytes, any_held_ = true;
       idx = r10;
       bound = span * bytes;
     }

@@ -508,6 +508,11 @@ TEST(TypedNative, HeldValuesEndWhereTheyMust) {
       ".rung line 7\nTRUE\nIDX.INT D20 0 8\nLDX.DINT D0 1 D35\nMOVE.INT D21 D20\nIDX.INT D20 0 8\nLDX.DINT D0 1 D36\n"
       "LOAD M2\nMTON T1 D22\nMPP\nIDX.INT D20 0 8\nLDX.DINT D0 1 D37\nIDX.INT D20 0 8\nLDX.DINT D0 1 D38\n"
       ".rung line 5\nTRUE\nMOVE.BOOL M1 M8\nLOAD M2\nSET M8\nMPP\nMOVE.BOOL M8 M9\nLOAD M3\nRST M8\nMPP\nMOVE.BOOL M8 M10\n"
+      // r10 = r11 * 12 kept for the next element of that stride, not another's,
+      // nor after r11 is written (an IDX of a changed cell) or a call
+      ".rung line 8\nTRUE\nIDX.INT D20 0 8\nLDX.DINT D40 3 D39\nIDX.INT D20 0 8\nLDX.DINT D41 3 D50\n"
+      "IDX.INT D20 0 8\nLDX.DINT D42 5 D56\nMOVE.INT D21 D20\nIDX.INT D20 0 8\nLDX.DINT D40 3 D51\n"
+      "LOAD M2\nMTON T2 D22\nMPP\nIDX.INT D20 0 8\nLDX.DINT D42 3 D52\nIDX.INT D21 0 9\nLDX.DINT D40 3 D53\n"
       ".end\n",
       "held_ends.il");
   p.source = "held_ends";
