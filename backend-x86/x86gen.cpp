@@ -2421,7 +2421,8 @@ void to_o2_frame(std::vector<Item>& items) {
 // `movss dword ptr [w], xmm0` / `movsd qword ptr [w], xmm0` (or the load),
 // xmm0 holds w until something writes xmm0 or w, a call, or a label, and a
 // `movss` / `movsd xmm0, [w]` of the same size is dropped (a chain of LREAL
-// instructions, each reading what the one before stored).
+// instructions, each reading what the one before stored), and a `mov eax, [w]`
+// of the REAL it holds becomes `movd eax, xmm0`.
 class WordInEax {
  public:
   void forget() { word_ = -1, xword_ = -1; }
@@ -2441,6 +2442,12 @@ class WordInEax {
         continue;
       }
       if (xloads(it.inst) && xheld(it.inst.ops[1])) { drop_[i] = 1, any = true; continue; }
+      if (loads(it.inst) && xsize_ == Size::Dword && xheld(it.inst.ops[1])) {  // a REAL xmm0 holds: its bits
+        const int64_t w = it.inst.ops[1].mem.disp;
+        it.inst = as::x86::make(M::Movd, {Operand::r(r32(AX)), Operand::r(xmm(0))});
+        word_ = w, upper_zero_ = true;
+        continue;
+      }
       if (word_ >= 0) use_eax(it.inst);
       xafter(it.inst);
       after(it.inst);
