@@ -56,6 +56,8 @@ const OpTemplate kBitTemplates[] = {
 
 constexpr int32_t kMark[2] = {0x10000000, 0x20000000};
 constexpr const char* kLabelPrefix = "lbl_";  // x86_label_name
+// the global label of the k-th out-of-line IDX fault record (x86_globals declares one per IDX)
+std::string idx_fault_label(int k) { return "idx_fault_" + std::to_string(k); }
 
 // The templates, parsed once; %k becomes the placeholder [rbx+kMark[k]].
 const std::vector<Instruction>* bit_template(Op op) {
@@ -497,11 +499,26 @@ class Gen : public ClassGen<Gen> {
  public:
   // ends a run of typed instructions: the label its power test skips to
   void close_typed_run() {
+    flush_idx_check();
     if (!typed_skip_.empty()) label(typed_skip_), typed_skip_.clear();
   }
+  // -O2: an IDX right before the LDX / STX `next` (to be compiled next) leaves
+  // its check to that access's own (`cmp r11, n; ja` to the IDX's fault
+  // record, which goes to `cold`, named from `*count`)
+  void set_next(const ldc::Instr* next) { next_ = next; }
+  void use_cold(std::vector<Item>* cold, int* count) { cold_ = cold, cold_count_ = count; }
 
  private:
   int64_t idx_span_ = -1;   // the last IDX's hi - lo: the bound of the LDX / STX right after it
+  const ldc::Instr* next_ = nullptr;
+  std::vector<Item>* cold_ = nullptr;
+  int* cold_count_ = nullptr;
+  std::string idx_fault_;  // an IDX's fault record (in cold_) that the access right after it checks against, or ""
+  bool hold_idx_after_check_ = false;  // idx_held_ becomes valid when the deferred check is made
+  bool defers_check() const;
+  std::string cold_fault(int64_t lo);
+  void flush_idx_check();
+  void idx_checked();
   void typed(const ldc::Instr& in);
   void typed_compare(const ldc::Instr& in);
   Cond int_compare(const ldc::Instr& in);
@@ -1084,6 +1101,8 @@ void Gen::count(const ldc::Instr& in, uint32_t cw, uint32_t cq) {
 // already holds its result, an unread stack entry none but an edge
 // contact's edge update (ir/scanopt.h); the stack is followed all the same.
 void Gen::instr(const ldc::Instr& in, uint8_t facts, const ldc::DivReuse* reuse, const ldc::Operand* quotient_to) {
+  if (!idx_fault_.empty() && ((in.op != Op::TLDX && in.op != Op::TSTX) || (facts & (kDeadStore | kUnread | kHeld))))
+    flush_idx_check();  // (Blocks sets next_ only where the access comes and is compiled: a safety net)
   OpClass k = op_info(in.op).klass;
   if (k != OpClass::Typed || op_info(in.op).push) close_typed_run();
   reuse_ = reuse;
@@ -2135,6 +2154,22 @@ void Gen::typed_idx(const ldc::Instr& in) {
     idx_span_ = span;  // -O2: r11 holds this index, checked already (nothing wrote it or its cell since)
     return;
   }
+  if (defers_check()) {
+    load64(t, in.a[0], rax);
+    emit(M::Mov, {R(r11), R(rax)});
+    if (lo != 0) emit(M::Sub, {R(r11), I(lo)});
+    idx_fault_ = cold_fault(lo);
+    if (!typed::is_signed(t) && two_cells(t) && lo < 0) {  // above INT64_MAX: outside, whatever lo is
+      emit(M::Test, {R(rax), R(rax)});
+      Instruction j = make_cc(M::Jcc, Cond::S, {L(idx_fault_)});
+      j.long_branch = true;
+      emit(std::move(j));
+    }
+    idx_span_ = span;
+    idx_held_ = {taddr(in.a[0]), t, lo, hi, false};
+    hold_idx_after_check_ = slots_ && cell;  // (typed_indexed, flush_idx_check)
+    return;
+  }
   std::string ok = fresh(), fault = fresh();
   load64(t, in.a[0], rax);
   if (!typed::is_signed(t) && two_cells(t) && lo < 0) {  // above INT64_MAX: outside, whatever lo is
@@ -2159,6 +2194,51 @@ void Gen::typed_idx(const ldc::Instr& in) {
   if (!slots_ || !cell) return;
   held_ = at_jump, any_held_ = true;
   idx_held_ = {taddr(in.a[0]), t, lo, hi, true};
+}
+
+// Does the IDX leave its check to the LDX / STX right after it (-O2, set_next)?
+// Only where that access scales r11 itself (a stride of 1, 2, 4 or 8 bytes):
+// r10 = r11 * stride of an unchecked index could wrap into range.
+bool Gen::defers_check() const {
+  if (!cold_ || !next_ || (next_->op != Op::TLDX && next_->op != Op::TSTX)) return false;
+  const bool ldx = next_->op == Op::TLDX;
+  const int64_t stride = int32_t(tconst(next_->a[ldx ? 1 : 2]));
+  const int64_t bytes = stride * int64_t(L_.elem_size(next_->a[ldx ? 0 : 1].area));
+  return bytes == 1 || bytes == 2 || bytes == 4 || bytes == 8;
+}
+
+// An IDX's fault record out of line (in cold_, after the last rung): the
+// index back in rax (r11 + lo: the access may have loaded its value into
+// rax), kind, this IDX's IL offset, the index; then the scan ends.  Its label.
+std::string Gen::cold_fault(int64_t lo) {
+  const std::string name = idx_fault_label((*cold_count_)++);
+  std::vector<Item>& c = *cold_;
+  c.push_back(Item::label_def(name, true));
+  c.push_back(Item::instr(make(M::Mov, {R(rax), R(r11)})));
+  if (lo != 0) c.push_back(Item::instr(make(M::Add, {R(rax), I(lo)})));
+  c.push_back(Item::instr(make(M::Mov, {Dw(kSysFault), I(kFaultIndex)})));
+  c.push_back(Item::instr(make(M::Mov, {Dw(kSysFaultAt), I(int64_t(il_offset_))})));
+  c.push_back(Item::instr(make(M::Mov, {Q(kSysFaultValue), R(rax)})));
+  Instruction j = make(M::Jmp, {L(kX86ExitLabel)});
+  j.long_branch = true;
+  c.push_back(Item::instr(j));
+  return name;
+}
+
+// The check an IDX left to an access that did not come: `cmp r11, span; ja fault`.
+void Gen::flush_idx_check() {
+  if (idx_fault_.empty()) return;
+  if (idx_span_ <= INT32_MAX) emit(M::Cmp, {R(r11), I(idx_span_)});
+  else mov_imm(rcx, uint64_t(idx_span_)), emit(M::Cmp, {R(r11), R(rcx)});
+  Instruction j = make_cc(M::Jcc, Cond::A, {L(idx_fault_)});
+  j.long_branch = true;
+  emit(std::move(j));
+  idx_checked();
+}
+void Gen::idx_checked() {
+  idx_fault_.clear();
+  if (hold_idx_after_check_) idx_held_.valid = true, any_held_ = true;
+  hold_idx_after_check_ = false;
 }
 
 // LDX / STX: element base + r11 * stride.  The access is right after its own
@@ -2203,9 +2283,10 @@ void Gen::typed_indexed(const ldc::Instr& in) {
     }
     m.index = idx;
     emit(M::Cmp, {R(idx), I(bound)});
-    Instruction j = make_cc(M::Jcc, Cond::A, {L(kX86ExitLabel)});
+    Instruction j = make_cc(M::Jcc, Cond::A, {L(idx_fault_.empty() ? kX86ExitLabel : idx_fault_)});
     j.long_branch = true;
     emit(std::move(j));
+    if (!idx_fault_.empty()) idx_checked();  // the IDX's own check, done: r11 is in 0 .. span
   }
   if (!ldx) {
     if (t == Ty::BOOL) return emit(M::Mov, {Operand::m(m), R(al)});
@@ -3053,6 +3134,7 @@ class Blocks {
     known_.reset();
     Gen g(layout_, b.items, slots, o2_, &used_, known_, opt_ == 1, !loops_);
     g.use_consts(&consts_);
+    if (o2_) g.use_cold(&cold_, &cold_count_);
     uint8_t keep = slots ? 0xff : uint8_t(~kUnread);  // an unread entry is still shifted into ebp
     for (size_t k = 0; k < r.code.size(); k++) {
       const ldc::Instr& in = r.code[k];
@@ -3068,6 +3150,7 @@ class Blocks {
         continue;
       }
       if (in.op == ldc::Op::TIDX || in.op == ldc::Op::LOOP) g.set_il_offset(il_offset(ri, k));
+      g.set_next(in.op == ldc::Op::TIDX && compiled_access(ri, k + 1) ? &r.code[k + 1] : nullptr);
       starts.push_back(uint32_t(b.items.size()));
       if (notes_) b.items.push_back(Item::note(instr_text(in)));
       if (!facts_) { g.instr(in); continue; }
@@ -3081,6 +3164,29 @@ class Blocks {
     drop_unreachable(b.items, starts);
     eax_.run(b.items, starts);
     BytesFromRegisters::run(b.items, starts);
+  }
+
+  // Is instruction k of rung ri an LDX / STX compiled as it stands (no fact
+  // drops or replaces it)?  An IDX right before it leaves it its check.
+  bool compiled_access(size_t ri, size_t k) const {
+    const Rung& r = p_.rungs[ri];
+    if (k >= r.code.size() || (r.code[k].op != ldc::Op::TLDX && r.code[k].op != ldc::Op::TSTX)) return false;
+    return !facts_ || (!(facts_->at(ri, k) & (kDeadStore | kUnread | kHeld)) && !facts_->replacement(ri, k));
+  }
+
+  // -O2: the IDX fault records out of line (Gen::cold_fault), after the last
+  // rung, which jumps over them to the epilogue
+  std::optional<as::Block<Instruction>> cold() {
+    if (cold_.empty()) return std::nullopt;
+    as::Block<Instruction> c;
+    c.source_line = p_.rungs.empty() ? 0 : p_.rungs.back().line;
+    Instruction j = make(M::Jmp, {Operand::l(kX86ExitLabel)});
+    j.long_branch = true;
+    c.items.push_back(Item::instr(j));
+    for (Item& it : cold_) c.items.push_back(std::move(it));
+    cold_.clear();
+    to_o2_frame(c.items);
+    return c;
   }
 
   as::Block<Instruction> epilogue() const {
@@ -3128,6 +3234,7 @@ class Blocks {
         if (il_items.back().empty()) starts = std::move(il_items.back());  // the sink is done with it
       }
     }
+    if (auto c = cold()) sink(*c);
     b = epilogue();
     sink(b);
     if (auto rt = routines()) sink(*rt);
@@ -3165,6 +3272,8 @@ class Blocks {
   std::bitset<8> used_;
   std::optional<ScanFacts> facts_;  // -O2: what the scan cannot observe
   RealConsts consts_;  // -O2: the constants kept in xmm8..xmm15
+  std::vector<Item> cold_;  // -O2: the IDX fault records out of line (Gen::cold_fault)
+  int cold_count_ = 0;
   WordInEax eax_;                   // -O2: the word eax holds, from rung to rung
   KnownStack known_;                // a rung's Gen's (its storage kept)
 };
@@ -3179,6 +3288,10 @@ std::vector<std::string> x86_globals(const Program& p) {
   for (const Rung& r : p.rungs)
     for (const auto& l : r.labels) g.push_back(x86_label_name(l));
   for (const auto& l : p.end_labels) g.push_back(x86_label_name(l));
+  int idx = 0;  // at most one out-of-line fault record per IDX (Gen::cold_fault)
+  for (const Rung& r : p.rungs)
+    for (const ldc::Instr& in : r.code) idx += in.op == ldc::Op::TIDX;
+  for (int k = 0; k < idx; k++) g.push_back(idx_fault_label(k));
   return g;
 }
 
