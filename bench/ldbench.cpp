@@ -1177,8 +1177,27 @@ std::string first_line_of(const std::string& cmd) {
   return s;
 }
 
+// Where sysfs has no cache directory (some virtual machines): the sizes the C
+// library reads from CPUID (sysconf's _SC_LEVEL*, a glibc extension), said so,
+// or "unknown".
+std::string cache_sizes_cpuid() {
+  std::string out;
+#if defined(_SC_LEVEL1_DCACHE_SIZE) && defined(_SC_LEVEL1_ICACHE_SIZE) && defined(_SC_LEVEL2_CACHE_SIZE) && \
+    defined(_SC_LEVEL3_CACHE_SIZE)
+  const std::pair<const char*, int> levels[] = {{"L1d", _SC_LEVEL1_DCACHE_SIZE},
+                                                {"L1i", _SC_LEVEL1_ICACHE_SIZE},
+                                                {"L2", _SC_LEVEL2_CACHE_SIZE},
+                                                {"L3", _SC_LEVEL3_CACHE_SIZE}};
+  for (const auto& [name, key] : levels) {
+    const long b = sysconf(key);
+    if (b > 0) out += (out.empty() ? "" : ", ") + std::string(name) + " " + std::to_string(b / 1024) + "K";
+  }
+#endif
+  return out.empty() ? "unknown" : out + " (CPUID, as the C library reads it: no sysfs cache directory)";
+}
+
 // CPU 0's caches from sysfs, as "L1d 48K, L1i 64K, L2 2048K, L3 ..." (the
-// sizes that decide when code falls out of a cache, issue 28), or "unknown".
+// sizes that decide when code falls out of a cache, issue 28), else from CPUID.
 std::string cache_sizes() {
   std::string out;
   for (int i = 0; i < 8; i++) {
@@ -1189,7 +1208,7 @@ std::string cache_sizes() {
     const char* kind = type == "Data" ? "d" : type == "Instruction" ? "i" : "";
     out += (out.empty() ? "" : ", ") + std::string("L") + level + kind + " " + size;
   }
-  return out.empty() ? "unknown" : out;
+  return out.empty() ? cache_sizes_cpuid() : out;
 }
 
 std::map<std::string, std::string> machine_info() {
