@@ -3180,6 +3180,7 @@ class Blocks {
     if (cold_.empty()) return std::nullopt;
     as::Block<Instruction> c;
     c.source_line = p_.rungs.empty() ? 0 : p_.rungs.back().line;
+    if (notes_) c.items.push_back(Item::note("out of line: the fault records of the IDX instructions"));
     Instruction j = make(M::Jmp, {Operand::l(kX86ExitLabel)});
     j.long_branch = true;
     c.items.push_back(Item::instr(j));
