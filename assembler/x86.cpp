@@ -139,6 +139,9 @@ constexpr Form kForms[] = {
     // the typed instructions' forms (docs/x86.md, "Typed instructions")
     F2(M::Movzx, OT::R32, OT::M16, kMove, 0xB7, Enc::RM),
     F2(M::Movsx, OT::R32, OT::M16, kMove, 0xBF, Enc::RM),
+    F2W(M::Movsx, OT::R64, OT::RM8, N, kMove, 0xBE, Enc::RM),   // an index sign-extended to 64 bits at once
+    F2W(M::Movsx, OT::R64, OT::M16, N, kMove, 0xBF, Enc::RM),
+    F1(M::Movsxd, OT::R64, OT::RM32, kMove, 0x63, Enc::RM, -1, true),
     F1(M::Mov, OT::RM64, OT::I32, kMove, 0xC7, Enc::M, 0, true),   // sign-extended: before the imm64 form
     F1(M::Mov, OT::R64, OT::I64, kMove, 0xB8, Enc::O, -1, true),   // movabs
     F1(M::Cwde, N, N, implicit(fx(), kEax, kEax), 0x98, Enc::ZO),            // eax = the sign extension of ax
@@ -164,6 +167,7 @@ constexpr Form kForms[] = {
     FS(M::Cvtss2sd, 0xF3, OT::X, OT::XM32, kMove, 0x5A, Enc::RM),
     FS(M::Cvtsd2ss, 0xF2, OT::X, OT::XM64, kMove, 0x5A, Enc::RM),
     FS(M::Cvtsi2sd, 0xF2, OT::X, OT::RM64, kMove, 0x2A, Enc::RM, true),
+    FS(M::Cvtsi2sd, 0xF2, OT::X, OT::RM32, kMove, 0x2A, Enc::RM),  // a signed 32-bit value
     FS(M::Cvtsi2ss, 0xF3, OT::X, OT::RM64, kMove, 0x2A, Enc::RM, true),
     FS(M::Cvttsd2si, 0xF2, OT::R64, OT::XM64, kMove, 0x2C, Enc::RM, true),
     FS(M::Cvtsd2si, 0xF2, OT::R64, OT::XM64, kMove, 0x2D, Enc::RM, true),  // rounds by MXCSR: to nearest, ties to even

@@ -72,7 +72,7 @@ enum class Mnemonic : uint8_t {
   // integers, binary64, the conversions, unsigned division, rotations
   Movsd, Addsd, Subsd, Mulsd, Divsd, Sqrtsd, Minsd, Maxsd, Ucomisd,
   Cvtss2sd, Cvtsd2ss, Cvtsi2sd, Cvttsd2si, Cvtsd2si, Movq,
-  Cwde, Cdqe, Cqo, Div, Rol, Ror,
+  Cwde, Cdqe, Cqo, Div, Rol, Ror, Movsxd,
   Count_
 };
 

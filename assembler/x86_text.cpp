@@ -28,7 +28,7 @@ constexpr std::string_view kMnemonics[] = {
     "sqrtss", "minss", "maxss", "ucomiss", "andps", "xorps",
     "movsd", "addsd", "subsd", "mulsd", "divsd", "sqrtsd", "minsd", "maxsd", "ucomisd",
     "cvtss2sd", "cvtsd2ss", "cvtsi2sd", "cvttsd2si", "cvtsd2si", "movq",
-    "cwde", "cdqe", "cqo", "div", "rol", "ror"};
+    "cwde", "cdqe", "cqo", "div", "rol", "ror", "movsxd"};
 static_assert(std::size(kMnemonics) == size_t(Mnemonic::Count_));
 
 constexpr std::string_view kConds[] = {"o", "no", "b", "ae", "e", "ne", "be", "a",

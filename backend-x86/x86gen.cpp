@@ -1441,11 +1441,16 @@ void Gen::load64(Ty t, const ldc::Operand& o, Reg r) {
     }
     return hold(r.num, t, a, true);
   }
+  if (typed::is_signed(t) && r.num != AX) {  // SINT INT DINT sign-extended at once (an IDX's index into r11)
+    const uint32_t a = taddr(o);
+    if (int n = holder(t, a); n >= 0) emit(M::Movsxd, {R(r), R(r32(uint8_t(n)))});  // (as load32 would have it)
+    else if (ty_bits(t) == 8) emit(M::Movsx, {R(r), B(a)});
+    else if (ty_bits(t) == 16) emit(M::Movsx, {R(r), W16(a)});
+    else emit(M::Movsxd, {R(r), Dw(a)});
+    return hold(r.num, t, a, ty_bits(t) == 32, false);
+  }
   load32(t, o, r32(r.num));  // a 32-bit write clears bits 63..32: zero-extended
-  if (!typed::is_signed(t)) return;
-  if (r.num == AX) return emit(M::Cdqe, {});
-  emit(M::Shl, {R(r), I(32)});
-  emit(M::Sar, {R(r), I(32)});
+  if (typed::is_signed(t)) emit(M::Cdqe, {});  // (rax)
 }
 
 // r (32-bit) cut to t's width and extended as t's cell holds it
@@ -2092,6 +2097,11 @@ void Gen::typed_conv(const ldc::Instr& in) {
     real_round_to_int(typed::is_signed(to));
     return store_int_reg(to, AX, d);
   }
+  if (tk == TyKind::Real && typed::is_signed(from) && !two_cells(from)) {  // a signed value of up to 32 bits
+    load32(from, a, eax);
+    emit(ty_bits(to) == 32 ? M::Cvtsi2ss : M::Cvtsi2sd, {R(xmm0), R(eax)});
+    return store_x(to, xmm0, d);
+  }
   load64(from, a, rax);
   if (time_like(fk)) {  // MatIEC's timespec: seconds and nanoseconds, both toward zero
     if (tk == TyKind::Time) return store_int_reg(to, AX, d);
@@ -2154,12 +2164,13 @@ void Gen::typed_idx(const ldc::Instr& in) {
     idx_span_ = span;  // -O2: r11 holds this index, checked already (nothing wrote it or its cell since)
     return;
   }
-  if (defers_check()) {
-    load64(t, in.a[0], rax);
-    emit(M::Mov, {R(r11), R(rax)});
+  if (cold_) {  // -O2: the fault record out of line, no label in the rung
+    const bool sign_test = !typed::is_signed(t) && two_cells(t) && lo < 0;
+    if (sign_test) load64(t, in.a[0], rax), emit(M::Mov, {R(r11), R(rax)});
+    else load64(t, in.a[0], r11);  // (the fault record takes the index back from r11)
     if (lo != 0) emit(M::Sub, {R(r11), I(lo)});
     idx_fault_ = cold_fault(lo);
-    if (!typed::is_signed(t) && two_cells(t) && lo < 0) {  // above INT64_MAX: outside, whatever lo is
+    if (sign_test) {  // above INT64_MAX: outside, whatever lo is
       emit(M::Test, {R(rax), R(rax)});
       Instruction j = make_cc(M::Jcc, Cond::S, {L(idx_fault_)});
       j.long_branch = true;
@@ -2168,6 +2179,7 @@ void Gen::typed_idx(const ldc::Instr& in) {
     idx_span_ = span;
     idx_held_ = {taddr(in.a[0]), t, lo, hi, false};
     hold_idx_after_check_ = slots_ && cell;  // (typed_indexed, flush_idx_check)
+    if (!defers_check()) flush_idx_check();  // the check here: the access after it multiplies r11
     return;
   }
   std::string ok = fresh(), fault = fresh();
