@@ -82,6 +82,12 @@ Mem mem_at(Size size, uint32_t addr) {
 }
 Operand B(uint32_t addr) { return Operand::m(mem_at(Size::Byte, addr)); }
 Operand Dw(uint32_t addr) { return Operand::m(mem_at(Size::Dword, addr)); }
+// a branch in its rel32 form (`{disp32}`): its target lies in another block
+// (a global label, scan_exit, a fault record out of line)
+Instruction far(Instruction j) {
+  j.long_branch = true;
+  return j;
+}
 const Reg eax = r32(AX), ecx = r32(CX), edx = r32(DX), ebp = r32(BP), esi = r32(SI), edi = r32(DI), al = r8(AX), cl = r8(CX);
 const Reg r8d = r32(R8), r9d = r32(R9), r10d = r32(R10), r11d = r32(R11);
 const Reg xmm0 = xmm(0), xmm1 = xmm(1), xmm2 = xmm(2);
@@ -144,9 +150,9 @@ class RealConsts {
   // the register that holds the constant of these bits (a REAL's in the low 32
   // and `single`), if one does
   std::optional<Reg> reg(uint64_t bits, bool single) const {
-    for (size_t k = 0; k < keys_.size(); k++)
-      if (keys_[k].bits == bits && keys_[k].single == single) return as::x86::xmm(unsigned(kFirst + k));
-    return std::nullopt;
+    auto k = std::find(keys_.begin(), keys_.end(), Key{bits, single});
+    if (k == keys_.end()) return std::nullopt;
+    return as::x86::xmm(unsigned(kFirst + (k - keys_.begin())));
   }
   // the instructions that load every register (rdx written)
   std::vector<Instruction> loads() const {
@@ -166,6 +172,7 @@ class RealConsts {
   struct Key {
     uint64_t bits;
     bool single;
+    bool operator==(const Key&) const = default;
   };
   std::vector<Key> keys_;  // keys_[k] in xmm(kFirst + k)
   static void count(std::vector<std::pair<Key, int>>& n, Key c);
@@ -516,7 +523,10 @@ class Gen : public ClassGen<Gen> {
   std::string idx_fault_;  // an IDX's fault record (in cold_) that the access right after it checks against, or ""
   bool hold_idx_after_check_ = false;  // idx_held_ becomes valid when the deferred check is made
   bool defers_check() const;
+  int64_t element_bytes(const ldc::Instr& access) const;
+  static bool scales(int64_t bytes);
   std::string cold_fault(int64_t lo);
+  std::array<Instruction, 4> fault_record(uint32_t kind, const Operand& value) const;
   void flush_idx_check();
   void idx_checked();
   void typed(const ldc::Instr& in);
@@ -1194,15 +1204,9 @@ void Gen::basic(const ldc::Instr& in) {
 void Gen::flow(const ldc::Instr& in) {
   if (in.op == Op::LOOP) return loop(in);
   const std::string to = in.op == Op::JMP ? x86_label_name(in.a[0].label) : kX86ExitLabel;
-  if (bases_ && known_.on()) {  // -O2, `TRUE; JMP l` (an ST ELSIF arm's end): taken for certain
-    Instruction j = make(M::Jmp, {L(to)});
-    j.long_branch = true;
-    return emit(std::move(j));
-  }
+  if (bases_ && known_.on()) return emit(far(make(M::Jmp, {L(to)})));  // -O2, `TRUE; JMP l` (an ST ELSIF arm's end): taken for certain
   test_top();
-  Instruction j = make_cc(M::Jcc, Cond::NE, {L(to)});
-  j.long_branch = true;
-  emit(std::move(j));
+  emit(far(make_cc(M::Jcc, Cond::NE, {L(to)})));
 }
 
 // LOOP (docs/il.md "Loops"): with power, the back edge counted in Sys
@@ -1215,19 +1219,10 @@ void Gen::loop(const ldc::Instr& in) {
   jcc(Cond::E, skip);
   emit(M::Add, {Dw(kSysLoops), I(1)});
   emit(M::Cmp, {Dw(kSysLoops), I(kLoopBudget)});
-  Instruction f = make_cc(M::Jcc, Cond::AE, {L(fault)});
-  f.long_branch = true;
-  emit(std::move(f));
-  Instruction back = make(M::Jmp, {L(x86_label_name(in.a[0].label))});
-  back.long_branch = true;
-  emit(std::move(back));
+  emit(far(make_cc(M::Jcc, Cond::AE, {L(fault)})));
+  emit(far(make(M::Jmp, {L(x86_label_name(in.a[0].label))})));
   label(fault);
-  emit(M::Mov, {Dw(kSysFault), I(kFaultLoop)});
-  emit(M::Mov, {Dw(kSysFaultAt), I(int64_t(il_offset_))});
-  emit(M::Mov, {Operand::m(mem_at(Size::Qword, kSysFaultValue)), I(kLoopBudget)});
-  Instruction j = make(M::Jmp, {L(kX86ExitLabel)});
-  j.long_branch = true;
-  emit(std::move(j));
+  for (const Instruction& i : fault_record(kFaultLoop, I(kLoopBudget))) emit(i);
   label(skip);
 }
 
@@ -1254,7 +1249,7 @@ constexpr uint64_t kSignBit64 = uint64_t(1) << 63;
 }  // namespace
 
 void RealConsts::count(std::vector<std::pair<Key, int>>& n, Key c) {
-  auto it = std::find_if(n.begin(), n.end(), [&](const auto& e) { return e.first.bits == c.bits && e.first.single == c.single; });
+  auto it = std::find_if(n.begin(), n.end(), [&](const auto& e) { return e.first == c; });
   if (it == n.end()) n.push_back({c, 1});
   else it->second++;
 }
@@ -1636,9 +1631,7 @@ void Gen::compare_jump(const ldc::Instr& cmp, const ldc::Instr& jmp, const ldc::
   } else {
     cc = int_compare(cmp);
   }
-  Instruction j = make_cc(M::Jcc, cc, {L(x86_label_name(jmp.a[0].label))});
-  j.long_branch = true;
-  emit(std::move(j));
+  emit(far(make_cc(M::Jcc, cc, {L(x86_label_name(jmp.a[0].label))})));
   for (const ldc::Instr* in : {&cmp, &jmp, &mpp}) follow(*in);
 }
 
@@ -2172,9 +2165,7 @@ void Gen::typed_idx(const ldc::Instr& in) {
     idx_fault_ = cold_fault(lo);
     if (sign_test) {  // above INT64_MAX: outside, whatever lo is
       emit(M::Test, {R(rax), R(rax)});
-      Instruction j = make_cc(M::Jcc, Cond::S, {L(idx_fault_)});
-      j.long_branch = true;
-      emit(std::move(j));
+      emit(far(make_cc(M::Jcc, Cond::S, {L(idx_fault_)})));
     }
     idx_span_ = span;
     idx_held_ = {taddr(in.a[0]), t, lo, hi, false};
@@ -2195,12 +2186,7 @@ void Gen::typed_idx(const ldc::Instr& in) {
   jcc(Cond::BE, ok);
   const std::array<Held, 16> at_jump = held_;  // `ok` is reached from the jbe alone: what was held there still is
   label(fault);
-  emit(M::Mov, {Dw(kSysFault), I(kFaultIndex)});
-  emit(M::Mov, {Dw(kSysFaultAt), I(int64_t(il_offset_))});
-  emit(M::Mov, {Q(kSysFaultValue), R(rax)});
-  Instruction j = make(M::Jmp, {L(kX86ExitLabel)});
-  j.long_branch = true;
-  emit(std::move(j));
+  for (const Instruction& i : fault_record(kFaultIndex, R(rax))) emit(i);
   label(ok);
   idx_span_ = span;
   if (!slots_ || !cell) return;
@@ -2212,12 +2198,15 @@ void Gen::typed_idx(const ldc::Instr& in) {
 // Only where that access scales r11 itself (a stride of 1, 2, 4 or 8 bytes):
 // r10 = r11 * stride of an unchecked index could wrap into range.
 bool Gen::defers_check() const {
-  if (!cold_ || !next_ || (next_->op != Op::TLDX && next_->op != Op::TSTX)) return false;
-  const bool ldx = next_->op == Op::TLDX;
-  const int64_t stride = int32_t(tconst(next_->a[ldx ? 1 : 2]));
-  const int64_t bytes = stride * int64_t(L_.elem_size(next_->a[ldx ? 0 : 1].area));
-  return bytes == 1 || bytes == 2 || bytes == 4 || bytes == 8;
+  return cold_ && next_ && (next_->op == Op::TLDX || next_->op == Op::TSTX) && scales(element_bytes(*next_));
 }
+
+// An LDX's / STX's stride in bytes; an x86 index scales by 1, 2, 4 or 8 alone
+int64_t Gen::element_bytes(const ldc::Instr& access) const {
+  const bool ldx = access.op == Op::TLDX;
+  return int64_t(int32_t(tconst(access.a[ldx ? 1 : 2]))) * int64_t(L_.elem_size(access.a[ldx ? 0 : 1].area));
+}
+bool Gen::scales(int64_t bytes) { return bytes == 1 || bytes == 2 || bytes == 4 || bytes == 8; }
 
 // An IDX's fault record out of line (in cold_, after the last rung): the
 // index back in rax (r11 + lo: the access may have loaded its value into
@@ -2228,13 +2217,15 @@ std::string Gen::cold_fault(int64_t lo) {
   c.push_back(Item::label_def(name, true));
   c.push_back(Item::instr(make(M::Mov, {R(rax), R(r11)})));
   if (lo != 0) c.push_back(Item::instr(make(M::Add, {R(rax), I(lo)})));
-  c.push_back(Item::instr(make(M::Mov, {Dw(kSysFault), I(kFaultIndex)})));
-  c.push_back(Item::instr(make(M::Mov, {Dw(kSysFaultAt), I(int64_t(il_offset_))})));
-  c.push_back(Item::instr(make(M::Mov, {Q(kSysFaultValue), R(rax)})));
-  Instruction j = make(M::Jmp, {L(kX86ExitLabel)});
-  j.long_branch = true;
-  c.push_back(Item::instr(j));
+  for (const Instruction& i : fault_record(kFaultIndex, R(rax))) c.push_back(Item::instr(i));
   return name;
+}
+
+// The fault record of this IDX or LOOP (Sys+8 kind, Sys+12 its IL offset,
+// Sys+16 the value: the index, the budget), then the scan's end.
+std::array<Instruction, 4> Gen::fault_record(uint32_t kind, const Operand& value) const {
+  return {make(M::Mov, {Dw(kSysFault), I(kind)}), make(M::Mov, {Dw(kSysFaultAt), I(int64_t(il_offset_))}),
+          make(M::Mov, {Q(kSysFaultValue), value}), far(make(M::Jmp, {L(kX86ExitLabel)}))};
 }
 
 // The check an IDX left to an access that did not come: `cmp r11, span; ja fault`.
@@ -2242,9 +2233,7 @@ void Gen::flush_idx_check() {
   if (idx_fault_.empty()) return;
   if (idx_span_ <= INT32_MAX) emit(M::Cmp, {R(r11), I(idx_span_)});
   else mov_imm(rcx, uint64_t(idx_span_)), emit(M::Cmp, {R(r11), R(rcx)});
-  Instruction j = make_cc(M::Jcc, Cond::A, {L(idx_fault_)});
-  j.long_branch = true;
-  emit(std::move(j));
+  emit(far(make_cc(M::Jcc, Cond::A, {L(idx_fault_)})));
   idx_checked();
 }
 void Gen::idx_checked() {
@@ -2262,7 +2251,6 @@ void Gen::typed_indexed(const ldc::Instr& in) {
   const Ty t = in.ty;
   const bool ldx = in.op == Op::TLDX;
   const ldc::Operand& base = in.a[ldx ? 0 : 1];
-  const int64_t stride = int32_t(tconst(in.a[ldx ? 1 : 2]));
   // the IL validator puts an LDX / STX right after an IDX; native code keeps the
   // index in r11 from one to the other, so both must be in one rung (with the
   // same power): a rung that starts with the LDX is refused by name
@@ -2270,7 +2258,7 @@ void Gen::typed_indexed(const ldc::Instr& in) {
     throw CompileError(in.loc.line, in.loc.col,
                        "x86-64: " + op_spelling(in) + " must follow its IDX in the same rung (native code keeps the index in a register)");
   const int64_t span = idx_span_;
-  const int64_t bytes = stride * int64_t(L_.elem_size(base.area));
+  const int64_t bytes = element_bytes(in);
   if (!ldx) {  // the value first
     if (t == Ty::BOOL) load32(t, in.a[0], eax);
     else if (two_cells(t)) load64(t, in.a[0], rax);
@@ -2285,7 +2273,7 @@ void Gen::typed_indexed(const ldc::Instr& in) {
   if (bytes != 0) {
     Reg idx = r11;
     int64_t bound = span;
-    if (bytes == 1 || bytes == 2 || bytes == 4 || bytes == 8) {
+    if (scales(bytes)) {
       m.scale = uint8_t(bytes);
     } else {
       if (scaled_ != bytes) emit(M::Imul, {R(r10), R(r11), I(bytes)});  // -O2: else r10 holds it already
@@ -2295,9 +2283,7 @@ void Gen::typed_indexed(const ldc::Instr& in) {
     }
     m.index = idx;
     emit(M::Cmp, {R(idx), I(bound)});
-    Instruction j = make_cc(M::Jcc, Cond::A, {L(idx_fault_.empty() ? kX86ExitLabel : idx_fault_)});
-    j.long_branch = true;
-    emit(std::move(j));
+    emit(far(make_cc(M::Jcc, Cond::A, {L(idx_fault_.empty() ? kX86ExitLabel : idx_fault_)})));
     if (!idx_fault_.empty()) idx_checked();  // the IDX's own check, done: r11 is in 0 .. span
   }
   if (!ldx) {
@@ -3193,9 +3179,7 @@ class Blocks {
     as::Block<Instruction> c;
     c.source_line = p_.rungs.empty() ? 0 : p_.rungs.back().line;
     if (notes_) c.items.push_back(Item::note("out of line: the fault records of the IDX instructions"));
-    Instruction j = make(M::Jmp, {Operand::l(kX86ExitLabel)});
-    j.long_branch = true;
-    c.items.push_back(Item::instr(j));
+    c.items.push_back(Item::instr(far(make(M::Jmp, {Operand::l(kX86ExitLabel)}))));
     for (Item& it : cold_) c.items.push_back(std::move(it));
     cold_.clear();
     to_o2_frame(c.items);
