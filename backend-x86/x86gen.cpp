@@ -2509,6 +2509,14 @@ class WordInEax {
     drop_.assign(items.size(), 0);
     bool any = false;
     for (size_t i = 0, n = items.size(); i < n; i++) {  // (n read once: for all the compiler knows, the stores change it)
+      if (second_in_xmm0(items, i)) {  // b to xmm1 first: `movsd xmm1, xmm0; movsd xmm0, [a]; addsd xmm0, xmm1`
+        const bool single = xsize_ == Size::Dword;
+        items.insert(items.begin() + ptrdiff_t(i), Item::instr(as::x86::make(single ? M::Movss : M::Movsd, {Operand::r(xmm(1)), Operand::r(xmm(0))})));
+        drop_.insert(drop_.begin() + ptrdiff_t(i), 0);
+        for (uint32_t& s : starts)
+          if (s > i) s++;
+        n++, i++;
+      }
       Item& it = items[i];
       if (it.kind == as::ItemKind::Label) forget();
       if (it.kind != as::ItemKind::Instruction) continue;
@@ -2569,6 +2577,26 @@ class WordInEax {
     if (word_ >= 0 && (writes_reg(in, AX) || in.mnemonic == M::Call || hits(in))) word_ = -1;  // (xmm0's word stays: xafter)
   }
 
+  // Item i loads xmm0 with a, and the next instruction is `op xmm0, [b]` (add,
+  // sub, mul, div, min, max) of the b xmm0 holds now: b can be read from xmm1
+  // instead (the operands' order, which decides a NaN's sign or min/max of a
+  // NaN, stays).  A store of b and a reload of it then never wait on each other.
+  bool second_in_xmm0(std::vector<Item>& items, size_t i) {
+    if (xword_ < 0 || items[i].kind != as::ItemKind::Instruction || !xloads(items[i].inst) || xheld(items[i].inst.ops[1]))
+      return false;
+    size_t j = i + 1;
+    while (j < items.size() && items[j].kind == as::ItemKind::Comment) j++;
+    if (j == items.size() || items[j].kind != as::ItemKind::Instruction) return false;
+    Instruction& op = items[j].inst;
+    switch (op.mnemonic) {
+      case M::Addss: case M::Subss: case M::Mulss: case M::Divss: case M::Minss: case M::Maxss:
+      case M::Addsd: case M::Subsd: case M::Mulsd: case M::Divsd: case M::Minsd: case M::Maxsd: break;
+      default: return false;
+    }
+    if (op.num_operands != 2 || !xmm0(op.ops[0]) || !xheld(op.ops[1])) return false;
+    op.ops[1] = Operand::r(xmm(1));
+    return true;
+  }
   // xmm0: movss / movsd between xmm0 and an image operand of their size
   static bool xmm0(const Operand& o) { return o.kind == OperandKind::Reg && o.reg == xmm(0); }
   static bool image_plain(const Operand& o) {
@@ -2742,6 +2770,73 @@ class BytesFromRegisters {
       if (reads(items[j].inst, e, n) || writes(items[j].inst, e, n)) return false;
     }
     return true;
+  }
+};
+
+// ------------------------------------------------------------ -O2: stores nothing reads
+//
+// A store to a cell of the image (`mov`, `movss`, `movsd`, `movd`, `movq` or
+// `setcc` with a plain image operand as destination) that a later store of the
+// same straight line writes over whole, with nothing in between that may read
+// any of its bytes, is dropped: a chain of typed instructions each storing its
+// result where the next overwrites it (`MUL.LREAL d 0.25 d` after `SUB.LREAL
+// a b d`: the first result is read from xmm0, never from d).  The line ends at
+// a jump or branch (the code at its target may read the cell), a call, any use
+// of the stack, or after kReach instructions: the store then stays.  A label
+// does not end it: the paths from the store all run on to the second store,
+// whatever else arrives at the label.  A read that may reach the bytes is an operand read through any base
+// but the image's, an indexed one, or an image operand overlapping them.
+// Memory after the line is what it would have been: every byte dropped is
+// written again before anything can read it.  It runs after the passes that
+// turn loads into register reads (WordInEax, BytesFromRegisters), so a store
+// whose every reader now reads a register may go.
+class DeadStores {
+ public:
+  static void run(std::vector<Item>& items, std::vector<uint32_t>& starts) {
+    std::vector<char> drop(items.size(), 0);
+    bool any = false;
+    for (size_t i = 0; i < items.size(); i++)
+      if (plain_store(items[i]) && overwritten(items, i)) drop[i] = 1, any = true;
+    if (any) as::remove_items(items, drop, starts);
+  }
+
+ private:
+  static constexpr size_t kReach = 64;
+  static bool image_plain(const Operand& o) {
+    return o.kind == OperandKind::Mem && o.mem.base == kO2Image && !o.mem.index.valid();
+  }
+  static bool plain_store(const Item& it) {
+    if (it.kind != as::ItemKind::Instruction || it.inst.num_operands == 0 || !image_plain(it.inst.ops[0])) return false;
+    switch (it.inst.mnemonic) {
+      case M::Mov: case M::Movss: case M::Movsd: case M::Movd: case M::Movq: case M::Setcc:
+        return as::x86::effects(it.inst).ops[0] == as::x86::Use::W;
+      default: return false;
+    }
+  }
+  // is the store at item i written over whole before anything may read it?
+  static bool overwritten(const std::vector<Item>& items, size_t i) {
+    const Mem& c = items[i].inst.ops[0].mem;
+    const int64_t lo = c.disp, hi = lo + int64_t(mem_width(c));
+    for (size_t j = i + 1, seen = 0; j < items.size() && seen < kReach; j++) {
+      const Item& it = items[j];
+      if (it.kind != as::ItemKind::Instruction) continue;
+      seen++;
+      const Instruction& in = it.inst;
+      if (in.mnemonic == M::Jcc || in.mnemonic == M::Jmp || in.mnemonic == M::Call || in.mnemonic == M::Ret) return false;
+      const as::x86::Effects e = as::x86::effects(in);
+      if (e.stack != as::x86::StackUse::None) return false;
+      bool covers = false;
+      for (unsigned k = 0; k < in.num_operands; k++) {
+        const Operand& o = in.ops[k];
+        if (o.kind != OperandKind::Mem) continue;
+        const bool plain = image_plain(o);
+        const int64_t olo = o.mem.disp, ohi = olo + int64_t(mem_width(o.mem));
+        if (as::x86::reads_operand(e.ops[k]) && (!plain || (olo < hi && lo < ohi))) return false;
+        if (e.ops[k] == as::x86::Use::W && plain && olo <= lo && hi <= ohi) covers = true;
+      }
+      if (covers) return true;
+    }
+    return false;
   }
 };
 
@@ -3162,6 +3257,7 @@ class Blocks {
     drop_unreachable(b.items, starts);
     eax_.run(b.items, starts);
     BytesFromRegisters::run(b.items, starts);
+    DeadStores::run(b.items, starts);
   }
 
   // Is instruction k of rung ri an LDX / STX compiled as it stands (no fact

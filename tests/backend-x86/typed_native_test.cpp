@@ -553,6 +553,82 @@ size_t byte_loads(const Program& p, int opt) {
   return n;
 }
 
+// Stores to memory in the -O2 code of p (an operand the form writes whole).
+size_t memory_stores(const Program& p) {
+  X86Code code = generate_x86(p, p.layout(), 2, /*notes=*/false);
+  size_t n = 0;
+  for (const auto& b : code.program.blocks)
+    for (const auto& it : b.items)
+      if (it.kind == as::ItemKind::Instruction && it.inst.num_operands > 0 &&
+          it.inst.ops[0].kind == as::x86::OperandKind::Mem &&
+          as::x86::effects(it.inst).ops[0] == as::x86::Use::W)
+        n++;
+  return n;
+}
+
+// -O2 drops a store that the same straight line writes over before anything
+// may read it (DeadStores, docs/x86.md "Stores nothing reads"): a chain of
+// three results into D10 stores once.  Each rung after the first tempts it
+// where the store must stay, and the image after every scan is compared
+// with the interpreter's: a read of the cell between the two stores (rung 2),
+// a read of a wider operand that overlaps it at another address (3), a second
+// store that covers only half of the first (4), a jump that skips the second
+// store (5); rung 6, a timer whose preset is the cell, reads it from a
+// register.  Rung 7: a label between the stores does not keep the first
+// (every path from it reaches the second).  A call or any use of the stack
+// between the two also keeps the first store (a routine may read any cell):
+// no rung here makes such a call.
+TEST(TypedNative, StoresDroppedOnlyWhereNothingReadsThem) {
+  Program chain = parse_il_text(
+      ".rung line 1\nTRUE\nMUL.LREAL D0 0.5 D10\nMUL.LREAL D10 0.25 D10\nADD.LREAL D10 1.0 D10\n.end\n", "chain.il");
+  EXPECT_EQ(memory_stores(chain), 1u);
+  Program p = parse_il_text(
+      ".rung line 1\nTRUE\nMUL.LREAL D0 0.5 D10\nMUL.LREAL D10 0.25 D10\nADD.LREAL D10 1.0 D10\n"
+      ".rung line 2\nTRUE\nADD.DINT D1 1 D2\nMOVE.DINT D5 D6\nADD.DINT D7 D2 D8\nMOVE.DINT D9 D2\n"
+      ".rung line 3\nTRUE\nADD.DINT D11 1 D12\nMOVE.LINT D11 D30\nMOVE.DINT D9 D12\n"
+      ".rung line 4\nTRUE\nMOVE.LINT D40 D14\nMOVE.DINT D16 D14\nADD.DINT D15 0 D17\n"
+      ".rung line 5\nTRUE\nADD.DINT D18 1 D19\nLOAD M0\nJMP over\nMPP\nMOVE.DINT D5 D19\n"
+      ".label over\n.rung line 6\nTRUE\nADD.DINT D20 3 D22\nLOAD M2\nMTON T1 D22\nMPP\nMOVE.DINT D5 D22\n"
+      ".rung line 7\nLOAD M3\nADD.DINT D23 1 D24\nMPP\nTRUE\nMOVE.DINT D5 D24\n"
+      ".end\n",
+      "dead_stores.il");
+  p.source = "dead_stores";
+  expect_levels(p, 0, 300, 61, 0.5, index_inputs(p.layout(), {{20, 40}}));
+}
+
+// Memory operands read in the -O2 code of p (loads and read operands alike).
+size_t memory_reads(const Program& p) {
+  X86Code code = generate_x86(p, p.layout(), 2, /*notes=*/false);
+  size_t n = 0;
+  for (const auto& b : code.program.blocks)
+    for (const auto& it : b.items) {
+      if (it.kind != as::ItemKind::Instruction) continue;
+      const as::x86::Effects e = as::x86::effects(it.inst);
+      for (unsigned k = 0; k < it.inst.num_operands; k++)
+        if (it.inst.ops[k].kind == as::x86::OperandKind::Mem && as::x86::reads_operand(e.ops[k])) n++;
+    }
+  return n;
+}
+
+// An operation whose second operand is the result xmm0 holds (stored by the
+// instruction before) reads it from xmm0 by way of xmm1, in the operands'
+// order (WordInEax, docs/x86.md "a word kept in eax"): SUB and DIV give
+// other values swapped, MIN and MAX of a NaN and of signed zeros (the
+// random cells hold NaNs and zeros of both signs) another.  The operands
+// read from memory: D2, D0 / D4, D6 / D8, D9 and D20 (MAX's first, which
+// xmm0 no longer holds) / D30, D32; never the result just stored.
+TEST(TypedNative, SecondOperandHeldInXmm0KeepsItsPlace) {
+  Program p = parse_il_text(
+      ".rung line 1\nTRUE\nMUL.LREAL D2 0.5 D10\nSUB.LREAL D0 D10 D12\n"
+      ".rung line 2\nTRUE\nMUL.LREAL D4 -0.0 D14\nMIN.LREAL D6 D14 D16\n"
+      ".rung line 3\nTRUE\nADD.REAL D8 0.0 D20\nDIV.REAL D9 D20 D21\nMAX.REAL D20 D21 D22\n"
+      ".rung line 4\nTRUE\nSUB.LREAL D30 0.5 D34\nMAX.LREAL D32 D34 D36\n.end\n",
+      "second_xmm0.il");
+  p.source = "second_xmm0";
+  EXPECT_EQ(memory_reads(p), 9u);
+  expect_levels(p, 0, 300, 71, 1.0);
+}
+
 TEST(TypedNative, HeldBoolsAreNotLoadedBack) {
   Program p = parse_il_text(
       ".rung line 1\nTRUE\nEQ.DINT D4 2\nOUT M99\nMPP\nMOVE.BOOL M99 M100\nEQ.DINT D4 3\nOUT M101\nMPP\n"
