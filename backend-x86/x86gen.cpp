@@ -1503,9 +1503,18 @@ void Gen::double_const(Reg x, double d) {
   emit(M::Movq, {R(x), R(rdx)});
 }
 
-// the second operand of an SSE operation on type t: o's memory, or x loaded with the constant
+// the second operand of an SSE operation on type t: o's memory, or x loaded
+// with the constant, or with the cell's bits from the general register that
+// holds them (-O2: an LDX's element in eax; no reload of the store just made)
 Operand Gen::real_src(Ty t, const ldc::Operand& o, Reg x) {
-  if (!is_tconst(o)) return ty_bits(t) == 32 ? Dw(taddr(o)) : Q(taddr(o));
+  if (!is_tconst(o)) {
+    const bool single = ty_bits(t) == 32;
+    if (const int n = holder(t, taddr(o)); n >= 0 && held_[size_t(n)].exact) {
+      emit(single ? M::Movd : M::Movq, {R(x), R(single ? r32(uint8_t(n)) : r64(uint8_t(n)))});
+      return R(x);
+    }
+    return single ? Dw(taddr(o)) : Q(taddr(o));
+  }
   return R(real_reg(t, o, x));
 }
 

@@ -616,17 +616,22 @@ size_t memory_reads(const Program& p) {
 // other values swapped, MIN and MAX of a NaN and of signed zeros (the
 // random cells hold NaNs and zeros of both signs) another.  The operands
 // read from memory: D2, D0 / D4, D6 / D8, D9 and D20 (MAX's first, which
-// xmm0 no longer holds) / D30, D32; never the result just stored.
+// xmm0 no longer holds) / D30, D32; never the result just stored.  Rungs 5
+// and 6: an LDX's element, held in a general register, is the second operand
+// (`movd xmm1, eax` / `movq xmm1, rax`): their reads are the index, the
+// element and the first operand, 3 each (Gen::real_src).
 TEST(TypedNative, SecondOperandHeldInXmm0KeepsItsPlace) {
   Program p = parse_il_text(
       ".rung line 1\nTRUE\nMUL.LREAL D2 0.5 D10\nSUB.LREAL D0 D10 D12\n"
       ".rung line 2\nTRUE\nMUL.LREAL D4 -0.0 D14\nMIN.LREAL D6 D14 D16\n"
       ".rung line 3\nTRUE\nADD.REAL D8 0.0 D20\nDIV.REAL D9 D20 D21\nMAX.REAL D20 D21 D22\n"
-      ".rung line 4\nTRUE\nSUB.LREAL D30 0.5 D34\nMAX.LREAL D32 D34 D36\n.end\n",
+      ".rung line 4\nTRUE\nSUB.LREAL D30 0.5 D34\nMAX.LREAL D32 D34 D36\n"
+      ".rung line 5\nTRUE\nIDX.INT D60 0 3\nLDX.REAL D40 1 D50\nSUB.REAL D51 D50 D52\n"
+      ".rung line 6\nTRUE\nIDX.INT D60 0 3\nLDX.LREAL D42 2 D54\nDIV.LREAL D56 D54 D58\n.end\n",
       "second_xmm0.il");
   p.source = "second_xmm0";
-  EXPECT_EQ(memory_reads(p), 9u);
-  expect_levels(p, 0, 300, 71, 1.0);
+  EXPECT_EQ(memory_reads(p), 15u);
+  expect_levels(p, 0, 300, 71, 1.0, index_inputs(p.layout(), {{60, 4}}));
 }
 
 TEST(TypedNative, HeldBoolsAreNotLoadedBack) {
