@@ -2793,8 +2793,9 @@ class BytesFromRegisters {
 // a jump or branch (the code at its target may read the cell), a call, any use
 // of the stack, or after kReach instructions: the store then stays.  A label
 // does not end it: the paths from the store all run on to the second store,
-// whatever else arrives at the label.  A read that may reach the bytes is an operand read through any base
-// but the image's, an indexed one, or an image operand overlapping them.
+// whatever else arrives at the label.  A read that may reach the bytes is an
+// operand read through any base but the image's, an indexed one, or an image
+// operand overlapping them.
 // Memory after the line is what it would have been: every byte dropped is
 // written again before anything can read it.  It runs after the passes that
 // turn loads into register reads (WordInEax, BytesFromRegisters), so a store
