@@ -593,6 +593,7 @@ TEST(TypedNative, StoresDroppedOnlyWhereNothingReadsThem) {
       ".end\n",
       "dead_stores.il");
   p.source = "dead_stores";
+  // D20, rung 6's input, kept small (a preset that times out now and then); M0..M7 made bits
   expect_levels(p, 0, 300, 61, 0.5, index_inputs(p.layout(), {{20, 40}}));
 }
 
