@@ -556,6 +556,7 @@ class Gen : public ClassGen<Gen> {
   void load_x(Ty t, const ldc::Operand& o, Reg x);
   void load_xd(Ty t, const ldc::Operand& o, Reg x);
   Operand real_src(Ty t, const ldc::Operand& o, Reg x);
+  bool from_held(Ty t, const ldc::Operand& o, Reg x);
   Reg real_reg(Ty t, const ldc::Operand& o, Reg x);
   std::optional<Reg> const_reg(uint64_t bits, bool single) const {
     return consts_ ? consts_->reg(bits, single) : std::nullopt;
@@ -1482,10 +1483,19 @@ void Gen::load_x(Ty t, const ldc::Operand& o, Reg x) {
     mov_imm(rdx, v);
     return emit(M::Movq, {R(x), R(rdx)});
   }
-  if (const int n = holder(t, taddr(o)); n >= 0 && held_[size_t(n)].exact)  // -O2: an LDX's element in eax, say
-    return emit(single ? M::Movd : M::Movq, {R(x), R(single ? r32(uint8_t(n)) : r64(uint8_t(n)))});
+  if (from_held(t, o, x)) return;
   if (single) return emit(M::Movss, {R(x), Dw(taddr(o))});
   emit(M::Movsd, {R(x), Q(taddr(o))});
+}
+
+// -O2: x = the bits of cell o from the general register that holds them
+// exactly (an LDX's element in eax, say), if one does
+bool Gen::from_held(Ty t, const ldc::Operand& o, Reg x) {
+  const int n = holder(t, taddr(o));
+  if (n < 0 || !held_[size_t(n)].exact) return false;
+  const bool single = ty_bits(t) == 32;
+  emit(single ? M::Movd : M::Movq, {R(x), R(single ? r32(uint8_t(n)) : r64(uint8_t(n)))});
+  return true;
 }
 
 // x = o's value as a double (a REAL widened: exact)
@@ -1507,15 +1517,9 @@ void Gen::double_const(Reg x, double d) {
 // with the constant, or with the cell's bits from the general register that
 // holds them (-O2: an LDX's element in eax; no reload of the store just made)
 Operand Gen::real_src(Ty t, const ldc::Operand& o, Reg x) {
-  if (!is_tconst(o)) {
-    const bool single = ty_bits(t) == 32;
-    if (const int n = holder(t, taddr(o)); n >= 0 && held_[size_t(n)].exact) {
-      emit(single ? M::Movd : M::Movq, {R(x), R(single ? r32(uint8_t(n)) : r64(uint8_t(n)))});
-      return R(x);
-    }
-    return single ? Dw(taddr(o)) : Q(taddr(o));
-  }
-  return R(real_reg(t, o, x));
+  if (is_tconst(o)) return R(real_reg(t, o, x));
+  if (from_held(t, o, x)) return R(x);
+  return ty_bits(t) == 32 ? Dw(taddr(o)) : Q(taddr(o));
 }
 
 // the register that holds o (REAL or LREAL): its constant's register, else x loaded with it
@@ -2494,6 +2498,11 @@ void to_o2_frame(std::vector<Item>& items) {
   }
 }
 
+// An operand of the -O2 frame that names image bytes by a plain displacement
+// from the image register (no index): the operands the passes below follow
+// byte by byte; any other memory operand may be anywhere.
+bool image_at(const Operand& o) { return o.kind == OperandKind::Mem && o.mem.base == kO2Image && !o.mem.index.valid(); }
+
 // ------------------------------------------------------------ -O2: a word kept in eax
 //
 // After `mov dword ptr [w], eax` (every gated store ends so) or `mov eax,
@@ -2518,8 +2527,9 @@ class WordInEax {
     drop_.assign(items.size(), 0);
     bool any = false;
     for (size_t i = 0, n = items.size(); i < n; i++) {  // (n read once: for all the compiler knows, the stores change it)
-      if (second_in_xmm0(items, i)) {  // b to xmm1 first: `movsd xmm1, xmm0; movsd xmm0, [a]; addsd xmm0, xmm1`
+      if (const size_t j = second_in_xmm0(items, i)) {  // b to xmm1 first: `movsd xmm1, xmm0; movsd xmm0, [a]; addsd xmm0, xmm1`
         const bool single = xsize_ == Size::Dword;
+        items[j].inst.ops[1] = Operand::r(xmm(1));
         items.insert(items.begin() + ptrdiff_t(i), Item::instr(as::x86::make(single ? M::Movss : M::Movsd, {Operand::r(xmm(1)), Operand::r(xmm(0))})));
         drop_.insert(drop_.begin() + ptrdiff_t(i), 0);
         for (uint32_t& s : starts)
@@ -2554,7 +2564,7 @@ class WordInEax {
  private:
   static bool eax32(const Operand& o) { return o.kind == OperandKind::Reg && o.reg == r32(AX); }
   static bool image_dword(const Operand& o) {
-    return o.kind == OperandKind::Mem && o.mem.size == Size::Dword && o.mem.base == kO2Image && !o.mem.index.valid();
+    return image_at(o) && o.mem.size == Size::Dword;
   }
   bool held(const Operand& o) const { return word_ >= 0 && image_dword(o) && o.mem.disp == word_; }
   static bool loads(const Instruction& in) { return in.mnemonic == M::Mov && eax32(in.ops[0]) && image_dword(in.ops[1]); }
@@ -2575,8 +2585,8 @@ class WordInEax {
   bool hits(const Instruction& in) const {
     if (in.num_operands == 0 || in.ops[0].kind != OperandKind::Mem || in.mnemonic == M::Cmp || in.mnemonic == M::Test)
       return false;
+    if (!image_at(in.ops[0])) return true;
     const Mem& m = in.ops[0].mem;
-    if (!(m.base == kO2Image) || m.index.valid()) return true;
     return m.disp < word_ + 4 && word_ < m.disp + 8;
   }
   void after(const Instruction& in) {
@@ -2586,30 +2596,29 @@ class WordInEax {
     if (word_ >= 0 && (writes_reg(in, AX) || in.mnemonic == M::Call || hits(in))) word_ = -1;  // (xmm0's word stays: xafter)
   }
 
-  // Item i loads xmm0 with a, and the next instruction is `op xmm0, [b]` (add,
-  // sub, mul, div, min, max) of the b xmm0 holds now: b can be read from xmm1
-  // instead (the operands' order, which decides a NaN's sign or min/max of a
-  // NaN, stays).  A store of b and a reload of it then never wait on each other.
-  bool second_in_xmm0(std::vector<Item>& items, size_t i) {
+  // Item i loads xmm0 with a, and the next instruction, item j (returned; else
+  // 0), is `op xmm0, [b]` (add, sub, mul, div, min, max) of the b xmm0 holds
+  // now: b can be read from xmm1 instead (the operands' order, which decides a
+  // NaN's sign or min/max of a NaN, stays).  A store of b and a reload of it
+  // then never wait on each other.
+  size_t second_in_xmm0(const std::vector<Item>& items, size_t i) const {
     if (xword_ < 0 || items[i].kind != as::ItemKind::Instruction || !xloads(items[i].inst) || xheld(items[i].inst.ops[1]))
-      return false;
+      return 0;
     size_t j = i + 1;
     while (j < items.size() && items[j].kind == as::ItemKind::Comment) j++;
-    if (j == items.size() || items[j].kind != as::ItemKind::Instruction) return false;
-    Instruction& op = items[j].inst;
+    if (j == items.size() || items[j].kind != as::ItemKind::Instruction) return 0;
+    const Instruction& op = items[j].inst;
     switch (op.mnemonic) {
       case M::Addss: case M::Subss: case M::Mulss: case M::Divss: case M::Minss: case M::Maxss:
       case M::Addsd: case M::Subsd: case M::Mulsd: case M::Divsd: case M::Minsd: case M::Maxsd: break;
-      default: return false;
+      default: return 0;
     }
-    if (op.num_operands != 2 || !xmm0(op.ops[0]) || !xheld(op.ops[1])) return false;
-    op.ops[1] = Operand::r(xmm(1));
-    return true;
+    return op.num_operands == 2 && xmm0(op.ops[0]) && xheld(op.ops[1]) ? j : 0;
   }
   // xmm0: movss / movsd between xmm0 and an image operand of their size
   static bool xmm0(const Operand& o) { return o.kind == OperandKind::Reg && o.reg == xmm(0); }
   static bool image_plain(const Operand& o) {
-    return o.kind == OperandKind::Mem && o.mem.base == kO2Image && !o.mem.index.valid() &&
+    return image_at(o) &&
            (o.mem.size == Size::Dword || o.mem.size == Size::Qword);
   }
   static bool xmove(M m) { return m == M::Movss || m == M::Movsd; }
@@ -2625,7 +2634,7 @@ class WordInEax {
     const Operand& o = in.ops[0];
     if (o.kind == OperandKind::Reg) return o.reg.cls == RegClass::Xmm && o.reg.num == 0;
     if (o.kind != OperandKind::Mem) return in.mnemonic == M::Call || in.mnemonic == M::Jmp || in.mnemonic == M::Jcc;
-    if (!(o.mem.base == kO2Image) || o.mem.index.valid()) return true;
+    if (!image_at(o)) return true;
     return o.mem.disp < xword_ + 8 && xword_ < o.mem.disp + 8;
   }
   void xafter(const Instruction& in) {
@@ -2677,7 +2686,7 @@ class BytesFromRegisters {
   static constexpr uint8_t kSpares[] = {R9, R8, R10, R11, SI, DX, CX};
   static constexpr size_t kReach = 400;
   static bool image_byte(const Operand& o) {
-    return o.kind == OperandKind::Mem && o.mem.size == Size::Byte && o.mem.base == kO2Image && !o.mem.index.valid();
+    return image_at(o) && o.mem.size == Size::Byte;
   }
   static bool stored_byte(const Item& it) {
     return it.kind == as::ItemKind::Instruction && it.inst.mnemonic == M::Mov && it.inst.num_operands == 2 &&
@@ -2700,7 +2709,7 @@ class BytesFromRegisters {
     for (unsigned k = 0; k < in.num_operands; k++) {
       const Operand& o = in.ops[k];
       if (o.kind != OperandKind::Mem || !as::x86::writes_operand(e.ops[k])) continue;
-      if (!(o.mem.base == kO2Image) || o.mem.index.valid()) return true;  // anywhere
+      if (!image_at(o)) return true;  // anywhere
       if (o.mem.disp <= b && b < o.mem.disp + int32_t(mem_width(o.mem))) return true;
     }
     return false;
@@ -2812,11 +2821,8 @@ class DeadStores {
 
  private:
   static constexpr size_t kReach = 64;
-  static bool image_plain(const Operand& o) {
-    return o.kind == OperandKind::Mem && o.mem.base == kO2Image && !o.mem.index.valid();
-  }
   static bool plain_store(const Item& it) {
-    if (it.kind != as::ItemKind::Instruction || it.inst.num_operands == 0 || !image_plain(it.inst.ops[0])) return false;
+    if (it.kind != as::ItemKind::Instruction || it.inst.num_operands == 0 || !image_at(it.inst.ops[0])) return false;
     switch (it.inst.mnemonic) {
       case M::Mov: case M::Movss: case M::Movsd: case M::Movd: case M::Movq: case M::Setcc:
         return as::x86::effects(it.inst).ops[0] == as::x86::Use::W;
@@ -2832,14 +2838,13 @@ class DeadStores {
       if (it.kind != as::ItemKind::Instruction) continue;
       seen++;
       const Instruction& in = it.inst;
-      if (in.mnemonic == M::Jcc || in.mnemonic == M::Jmp || in.mnemonic == M::Call || in.mnemonic == M::Ret) return false;
       const as::x86::Effects e = as::x86::effects(in);
-      if (e.stack != as::x86::StackUse::None) return false;
+      if (in.mnemonic == M::Jcc || in.mnemonic == M::Jmp || e.stack != as::x86::StackUse::None) return false;  // (call, ret)
       bool covers = false;
       for (unsigned k = 0; k < in.num_operands; k++) {
         const Operand& o = in.ops[k];
         if (o.kind != OperandKind::Mem) continue;
-        const bool plain = image_plain(o);
+        const bool plain = image_at(o);
         const int64_t olo = o.mem.disp, ohi = olo + int64_t(mem_width(o.mem));
         if (as::x86::reads_operand(e.ops[k]) && (!plain || (olo < hi && lo < ohi))) return false;
         if (e.ops[k] == as::x86::Use::W && plain && olo <= lo && hi <= ohi) covers = true;
@@ -2875,8 +2880,7 @@ as::x86::RoutineAreas x86_routine_areas(const Layout& l) {
 // (Displacements from rbp, which points kImageBias bytes into the image: the
 // frame swap biases them, to_o2_frame, and K is counted from rbp too.)
 bool rewritable(const Instruction& in, const as::x86::Operand& o) {
-  return o.kind == OperandKind::Mem && in.mnemonic != M::Call && in.mnemonic != M::Lea && o.mem.base == kO2Image &&
-         !o.mem.index.valid() && (o.mem.disp < -128 || o.mem.disp > 127);
+  return image_at(o) && in.mnemonic != M::Call && in.mnemonic != M::Lea && (o.mem.disp < -128 || o.mem.disp > 127);
 }
 namespace {
 

@@ -533,37 +533,39 @@ TEST(TypedNative, NarrowResultsCutWhereTheyMayOverflow) {
   expect_levels(p, 0, 200, 41, 1.0);
 }
 
+// The sum of count(instruction) over the code of p at -O`opt`.
+template <class Count>
+size_t count_in_code(const Program& p, int opt, Count count) {
+  X86Code code = generate_x86(p, p.layout(), opt, /*notes=*/false);
+  size_t n = 0;
+  for (const auto& b : code.program.blocks)
+    for (const auto& it : b.items)
+      if (it.kind == as::ItemKind::Instruction) n += count(it.inst);
+  return n;
+}
+
 // The registers are read: in the -O2 code of a chain of BOOL temporaries no
 // byte is loaded back from memory (M100, whose register eax took D4 for the
 // next compare, is read from a spare register: BytesFromRegisters); -O1 loads
 // every one.
 size_t byte_loads(const Program& p, int opt) {
-  X86Code code = generate_x86(p, p.layout(), opt, /*notes=*/false);
-  size_t n = 0;
-  for (const auto& b : code.program.blocks)
-    for (const auto& it : b.items) {
-      if (it.kind != as::ItemKind::Instruction) continue;
-      const as::x86::Instruction& in = it.inst;
-      for (unsigned k = 0; k < in.num_operands; k++) {
-        const as::x86::Operand& o = in.ops[k];
-        const bool read = k > 0 || in.mnemonic == as::x86::Mnemonic::Cmp || in.mnemonic == as::x86::Mnemonic::Test;
-        if (o.kind == as::x86::OperandKind::Mem && o.mem.size == as::x86::Size::Byte && read) n++;
-      }
+  return count_in_code(p, opt, [](const as::x86::Instruction& in) {
+    size_t n = 0;
+    for (unsigned k = 0; k < in.num_operands; k++) {
+      const as::x86::Operand& o = in.ops[k];
+      const bool read = k > 0 || in.mnemonic == as::x86::Mnemonic::Cmp || in.mnemonic == as::x86::Mnemonic::Test;
+      if (o.kind == as::x86::OperandKind::Mem && o.mem.size == as::x86::Size::Byte && read) n++;
     }
-  return n;
+    return n;
+  });
 }
 
 // Stores to memory in the -O2 code of p (an operand the form writes whole).
 size_t memory_stores(const Program& p) {
-  X86Code code = generate_x86(p, p.layout(), 2, /*notes=*/false);
-  size_t n = 0;
-  for (const auto& b : code.program.blocks)
-    for (const auto& it : b.items)
-      if (it.kind == as::ItemKind::Instruction && it.inst.num_operands > 0 &&
-          it.inst.ops[0].kind == as::x86::OperandKind::Mem &&
-          as::x86::effects(it.inst).ops[0] == as::x86::Use::W)
-        n++;
-  return n;
+  return count_in_code(p, 2, [](const as::x86::Instruction& in) {
+    return size_t(in.num_operands > 0 && in.ops[0].kind == as::x86::OperandKind::Mem &&
+                  as::x86::effects(in).ops[0] == as::x86::Use::W);
+  });
 }
 
 // -O2 drops a store that the same straight line writes over before anything
@@ -599,16 +601,13 @@ TEST(TypedNative, StoresDroppedOnlyWhereNothingReadsThem) {
 
 // Memory operands read in the -O2 code of p (loads and read operands alike).
 size_t memory_reads(const Program& p) {
-  X86Code code = generate_x86(p, p.layout(), 2, /*notes=*/false);
-  size_t n = 0;
-  for (const auto& b : code.program.blocks)
-    for (const auto& it : b.items) {
-      if (it.kind != as::ItemKind::Instruction) continue;
-      const as::x86::Effects e = as::x86::effects(it.inst);
-      for (unsigned k = 0; k < it.inst.num_operands; k++)
-        if (it.inst.ops[k].kind == as::x86::OperandKind::Mem && as::x86::reads_operand(e.ops[k])) n++;
-    }
-  return n;
+  return count_in_code(p, 2, [](const as::x86::Instruction& in) {
+    const as::x86::Effects e = as::x86::effects(in);
+    size_t n = 0;
+    for (unsigned k = 0; k < in.num_operands; k++)
+      if (in.ops[k].kind == as::x86::OperandKind::Mem && as::x86::reads_operand(e.ops[k])) n++;
+    return n;
+  });
 }
 
 // An operation whose second operand is the result xmm0 holds (stored by the
